@@ -1,0 +1,42 @@
+# tengfield: `make run` sets everything up and runs the default scene;
+# `make test` sets everything up and runs the whole test suite.
+SHELL := /bin/bash
+VENV ?= .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.tengfield-installed
+OUT ?= out
+export OMPI_ALLOW_RUN_AS_ROOT := 1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
+export OMPI_MCA_rmaps_base_oversubscribe := 1
+export PYVISTA_OFF_SCREEN := true
+export MPLBACKEND := Agg
+
+.PHONY: setup system run test test-serial test-mpi bench clean
+
+setup: $(STAMP)
+
+system:
+	bash scripts/install-system.sh
+
+$(STAMP): pyproject.toml scripts/install-system.sh
+	bash scripts/install-system.sh
+	test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
+	$(PY) -m pip install -q --disable-pip-version-check "numpy<2" -e ".[dev]"
+	touch $(STAMP)
+
+run: setup
+	$(VENV)/bin/tengfield run -o $(OUT)
+
+test: setup test-serial test-mpi
+
+test-serial: setup
+	$(PY) -m pytest -q -p no:cacheprovider tests
+
+test-mpi: setup
+	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
+
+bench: setup
+	for b in benchmarks/*.py; do $(PY) $$b || exit 1; done
+
+clean:
+	rm -rf $(VENV) $(OUT) build src/*.egg-info

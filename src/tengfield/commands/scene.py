@@ -1,0 +1,27 @@
+"""``tengfield scene``: write out or check a scene file."""
+from __future__ import annotations
+
+import json
+import sys
+
+
+def register(sub) -> None:
+    p = sub.add_parser("scene", help="print the default scene, or check a scene file",
+                       description="`tengfield scene --default > my.toml` writes the embedded "
+                                   "default scene with its comments; `tengfield scene FILE` "
+                                   "checks FILE and prints every key in SI-free file units.")
+    p.add_argument("scene", nargs="?", help="scene file to check")
+    p.add_argument("--default", action="store_true", help="print the commented default scene")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    from ..scene import default_text, load_scene
+
+    if args.default or args.scene is None:
+        sys.stdout.write(default_text())
+        return 0
+    scene = load_scene(args.scene)
+    print(json.dumps(scene.to_dict(), indent=2))
+    print(f"# field hash {scene.field_hash()}", file=sys.stderr)
+    return 0
