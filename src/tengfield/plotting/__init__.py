@@ -1,0 +1,1 @@
+"""Plots (matplotlib, Agg). Each stage has its own module."""
