@@ -1,0 +1,94 @@
+"""Electrostatics of the BB-TENG at one ball position (dolfinx + gmsh).
+
+Public entry point: :func:`solve_position`. It returns a
+:class:`~tengfield.field.result.PositionResult` (capacitance matrix, induced
+charges, error estimate), see that module for the sign conventions.
+
+Importing this package loads neither dolfinx nor gmsh: the solvers are
+imported lazily, when a solve is asked for.
+
+Example::
+
+    from mpi4py import MPI
+    from tengfield.scene import default_scene
+    from tengfield.field import solve_position
+    res = solve_position(default_scene(), 1.5e-3, comm=MPI.COMM_SELF)
+    res.capacitance, res.induced_charge, res.terminal_capacitance("floating")
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import FieldError
+from .result import PositionResult
+
+__all__ = ["PositionResult", "solve_position", "resolve_method", "check_position"]
+
+#: ``[field]`` scene keys (file-level names) that :func:`solve_position` accepts
+#: as keyword overrides, e.g. ``mesh_size_mm=0.3, degree=1, far_field="robin"``.
+FIELD_OVERRIDES = ("degree", "mesh_size_mm", "tolerance", "domain_radius_mm", "environment",
+                   "far_field")
+
+
+def check_position(scene, position: float) -> None:
+    """Raise :class:`FieldError` unless ``0 <= position <= Δh`` (the free stroke)."""
+    stroke = scene.device.gap
+    try:
+        value = float(position)
+    except (TypeError, ValueError):
+        raise FieldError(f"position_mm = {position!r}: expected a number") from None
+    if not math.isfinite(value) or value < 0.0 or value > stroke * (1.0 + 1e-12):
+        raise FieldError(f"position_mm = {value * 1e3:g} is out of range: allowed "
+                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] gap_mm)")
+
+
+def resolve_method(scene, method: str | None = None, offset: float = 0.0) -> str:
+    """"axisymmetric" or "3d": ``None`` takes ``[field] method``; "auto" picks
+    the axisymmetric solver whenever the ball is on the axis (``offset == 0``)."""
+    method = scene.field.method if method is None else method
+    if method == "auto":
+        return "axisymmetric" if offset == 0.0 else "3d"
+    if method == "axisymmetric" and offset != 0.0:
+        raise FieldError(f"method = 'axisymmetric' needs offset_mm = 0 (got {offset * 1e3:g}); "
+                         "use method = '3d' or 'auto' for an off-axis ball")
+    if method not in ("axisymmetric", "3d"):
+        raise FieldError(f"method = {method!r} is not allowed: choose one of "
+                         "'auto', 'axisymmetric', '3d'")
+    return method
+
+
+def solve_position(scene, position: float, *, comm, offset: float | None = None,
+                   method: str | None = None, **overrides) -> PositionResult:
+    """Capacitance matrix and induced charges with the ball at gap ``position`` [m].
+
+    Parameters
+    ----------
+    scene:
+        A validated :class:`tengfield.scene.Scene`.
+    position:
+        z [m], gap between the ball's bottom and the lower electrode, in [0, Δh].
+    comm:
+        MPI communicator of the solve (``MPI.COMM_SELF`` for one serial solve).
+    offset:
+        Lateral ball offset [m]; ``None`` takes ``[field] ball_offset_mm``.
+    method:
+        "auto", "axisymmetric" or "3d"; ``None`` takes ``[field] method``.
+    overrides:
+        ``[field]`` keys in file units (``degree``, ``mesh_size_mm``,
+        ``domain_radius_mm``, ``far_field``, ``environment``, ``tolerance``),
+        validated like the scene file; any other keyword goes to the
+        solver (axisymmetric: ``estimate_error``, ``keep_solution``).
+    """
+    field_values = {k: overrides.pop(k) for k in list(overrides) if k in FIELD_OVERRIDES}
+    if offset is not None:
+        field_values["ball_offset_mm"] = offset * 1e3
+    if field_values:
+        scene = scene.with_values(field=field_values)
+    offset = scene.field.ball_offset
+    check_position(scene, position)
+    chosen = resolve_method(scene, method, offset)
+    if chosen == "axisymmetric":
+        from .axisymmetric import solve_position_axisymmetric
+        return solve_position_axisymmetric(scene, position, comm=comm, **overrides)
+    from .solver3d import solve_position_3d
+    return solve_position_3d(scene, position, offset=offset, comm=comm, **overrides)
