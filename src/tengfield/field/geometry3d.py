@@ -1,0 +1,349 @@
+"""3D gmsh geometries of one BB-TENG cell (OCC kernel), SI units.
+
+Two cells are built here:
+
+* :class:`CylindricalCell`: the paper's device (Table 1): a dielectric ball
+  between two thin disk electrodes on the inner faces of two PMMA end
+  plates, inside a PMMA tube. Built from ``scene.device`` with
+  :func:`cylindrical_cell`.
+* :class:`HexagonalCell`: one cell of the Fig. 10 honeycomb (PLA walls,
+  hexagonal tube and plates, hexagonal electrodes covering the cell floor,
+  a 5 mm ball and Δh = 2 mm).
+
+Coordinates: the origin is the centre of the cell, z is the tube axis, the
+lower electrode lies in the plane ``z = -h/2`` and the upper one in
+``z = +h/2`` (``h = d + Δh``, the electrode spacing). The ball centre is at
+``(offset, 0, -h/2 + z_gap + d/2)``; ``z_gap`` is the gap between the
+ball's bottom and the lower electrode, clamped by :func:`meshed_gap` (the
+z → 0 / z → Δh rule). The air fills a sphere of radius ``domain_radius``
+centred at the origin; the far-field condition lives on that sphere.
+
+Electrodes are zero-thickness conductor surfaces embedded in the mesh
+(the copper foil is thin compared with everything else). Physical groups
+(names, never point groups): volumes ``ball``, ``walls`` (absent when the
+walls have εr = 1), ``air``; surfaces ``ball_surface``,
+``electrode_lower``, ``electrode_upper``, ``far_boundary``.
+
+gmsh is imported inside the functions that need it.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import FieldError
+
+#: Smallest ball-electrode gap that is meshed, as a fraction of the ball
+#: diameter. A position closer than this to either electrode is meshed at
+#: this gap (the contact point itself is not meshed). The induced charges
+#: are smooth in z, so the clamp changes q by O(MIN_GAP_FRACTION · d / h)
+#: relative (≈ 2e-4 for the paper's device); see docs/field3d.md.
+MIN_GAP_FRACTION = 1.0e-3
+
+VOLUME_GROUPS = ("ball", "walls", "air")
+SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
+
+_model_counter = itertools.count()
+
+
+@dataclass(frozen=True)
+class CylindricalCell:
+    """The paper's device: round tube, round plates, disk electrodes (SI)."""
+    ball_diameter: float        # d [m]
+    stroke: float               # Δh = h - d [m]
+    electrode_radius: float     # [m]
+    tube_inner_radius: float    # [m]
+    tube_outer_radius: float    # [m], also the plates' radius
+    plate_thickness: float      # [m]
+    ball_permittivity: float    # relative
+    wall_permittivity: float    # relative; 1 leaves tube and plates out
+
+    @property
+    def electrode_spacing(self) -> float:
+        """h = d + Δh [m]."""
+        return self.ball_diameter + self.stroke
+
+    @property
+    def bounding_radius(self) -> float:
+        """Radius of the smallest origin-centred sphere holding the device [m]."""
+        return math.hypot(self.tube_outer_radius, 0.5 * self.electrode_spacing + self.plate_thickness)
+
+    @property
+    def max_offset(self) -> float:
+        """Largest lateral ball offset that keeps the ball inside the tube [m]."""
+        return self.tube_inner_radius - 0.5 * self.ball_diameter
+
+
+@dataclass(frozen=True)
+class HexagonalCell:
+    """One cell of the Fig. 10 honeycomb (SI).
+
+    Hexagons have two flats parallel to the x axis; "apothem" is the
+    distance from the axis to a flat. The electrodes cover the cell floor
+    and ceiling (the inner hexagon). Defaults: the paper's shipboard
+    honeycomb (5 mm PTFE ball, Δh = 2 mm, 3D-printed PLA, εr ≈ 3); the
+    cell's lateral size and wall/plate thickness are not given in the paper
+    and are chosen here (0.5 mm lateral clearance, 1 mm walls, 2 mm plates).
+    """
+    ball_diameter: float = 5.0e-3
+    stroke: float = 2.0e-3
+    inner_apothem: float = 3.0e-3
+    wall_thickness: float = 1.0e-3
+    plate_thickness: float = 2.0e-3
+    ball_permittivity: float = 2.1
+    wall_permittivity: float = 3.0
+
+    @property
+    def electrode_spacing(self) -> float:
+        return self.ball_diameter + self.stroke
+
+    @property
+    def outer_apothem(self) -> float:
+        return self.inner_apothem + self.wall_thickness
+
+    @property
+    def bounding_radius(self) -> float:
+        corner = self.outer_apothem / math.cos(math.pi / 6)
+        return math.hypot(corner, 0.5 * self.electrode_spacing + self.plate_thickness)
+
+    @property
+    def max_offset(self) -> float:
+        return self.inner_apothem - 0.5 * self.ball_diameter
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """Element sizes [m] and order of a 3D mesh.
+
+    ``size`` is the characteristic size inside the device; refined zones
+    use fractions of it: electrode rims ``rim_factor·size`` (graded
+    linearly in the distance, i.e. geometrically), the ball surface
+    ``ball_factor·size``, the contact gap down to half the gap. Outside the
+    device the size grows by ``growth`` per unit distance up to the
+    far-field sphere.
+    """
+    size: float
+    domain_radius: float
+    order: int = 1
+    rim_factor: float = 0.25
+    ball_factor: float = 0.5
+    growth: float = 0.3
+
+    def __post_init__(self):
+        if not (self.size > 0 and math.isfinite(self.size)):
+            raise FieldError(f"mesh_size_mm = {self.size * 1e3!r} is out of range: allowed (0, 100] mm")
+        if self.order not in (1, 2):
+            raise FieldError(f"degree = {self.order!r}: the 3D mesh order must be 1 or 2")
+
+
+def cylindrical_cell(device) -> CylindricalCell:
+    """The paper's device from a scene's ``[device]`` section (:class:`tengfield.scene.Device`)."""
+    return CylindricalCell(
+        ball_diameter=device.ball_diameter, stroke=device.gap,
+        electrode_radius=device.electrode_radius, tube_inner_radius=device.tube_inner_radius,
+        tube_outer_radius=device.tube_outer_radius, plate_thickness=device.plate_thickness,
+        ball_permittivity=device.ball_permittivity, wall_permittivity=device.wall_permittivity)
+
+
+def meshed_gap(position: float, stroke: float, ball_diameter: float) -> float:
+    """The ball-lower-electrode gap [m] that is meshed for ``position`` z [m].
+
+    Rule (z → 0 and z → Δh): the gap to either electrode is at least
+    ``g_min = MIN_GAP_FRACTION · d``; ``z`` is clamped to
+    ``[g_min, Δh - g_min]`` (the midpoint if Δh < 2 g_min). ``position``
+    must lie in ``[0, Δh]``.
+    """
+    if not (math.isfinite(position) and -1e-12 * stroke <= position <= stroke * (1 + 1e-12)):
+        raise FieldError(f"position_mm = {position * 1e3:g} is out of range: allowed "
+                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] gap_mm)")
+    g_min = MIN_GAP_FRACTION * ball_diameter
+    if stroke < 2 * g_min:
+        return 0.5 * stroke
+    return min(max(position, g_min), stroke - g_min)
+
+
+def meshed_offset(offset: float, max_offset: float, ball_diameter: float) -> float:
+    """The lateral offset [m] that is meshed: at most ``max_offset - g_min``
+    (the ball never touches the tube wall in the mesh, same rule as :func:`meshed_gap`)."""
+    if not (math.isfinite(offset) and 0.0 <= offset <= max_offset * (1 + 1e-12) + 1e-15):
+        raise FieldError(f"offset_mm = {offset * 1e3:g} is out of range: allowed "
+                         f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
+    g_min = MIN_GAP_FRACTION * ball_diameter
+    return min(offset, max(max_offset - g_min, 0.0))
+
+
+def ball_centre(cell, position: float, offset: float) -> np.ndarray:
+    """Ball centre [m] for the meshed gap and offset (see module docstring)."""
+    z_gap = meshed_gap(position, cell.stroke, cell.ball_diameter)
+    off = meshed_offset(offset, cell.max_offset, cell.ball_diameter)
+    return np.array([off, 0.0, -0.5 * cell.electrode_spacing + z_gap + 0.5 * cell.ball_diameter])
+
+
+# ---------------------------------------------------------------------------
+# gmsh model construction (rank 0 only)
+
+def unique_model_name(prefix: str) -> str:
+    """A gmsh model name that no other model in this process uses."""
+    return f"{prefix}-{next(_model_counter)}"
+
+
+def build_model(cell, position: float, offset: float, settings: MeshSettings) -> dict:
+    """Build and mesh ``cell`` in the current gmsh model.
+
+    The caller owns the gmsh session and the model (see
+    :func:`tengfield.field.solver3d.gmsh_model`). Returns a dict with the
+    physical group tags by name, the meshed gap and offset [m], and the
+    ball centre [m].
+    """
+    import gmsh
+
+    occ = gmsh.model.occ
+    if settings.domain_radius <= 1.2 * (cell.bounding_radius + offset):
+        raise FieldError(
+            f"domain_radius_mm = {settings.domain_radius * 1e3:g} is too small: it must exceed "
+            f"{1.2e3 * (cell.bounding_radius + offset):.3g} mm (1.2 x the device's bounding radius)")
+    centre = ball_centre(cell, position, offset)
+    half = 0.5 * cell.electrode_spacing
+    radius = 0.5 * cell.ball_diameter
+    walls_present = cell.wall_permittivity != 1.0
+
+    domain = occ.addSphere(0, 0, 0, settings.domain_radius)
+    ball = occ.addSphere(*centre, radius)
+    if isinstance(cell, CylindricalCell):
+        rim = cell.electrode_radius
+        electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in (-half, half)]
+        walls = []
+        if walls_present:
+            t = cell.plate_thickness
+            walls.append(occ.addCylinder(0, 0, -half - t, 0, 0, t, cell.tube_outer_radius))
+            walls.append(occ.addCylinder(0, 0, half, 0, 0, t, cell.tube_outer_radius))
+            outer = occ.addCylinder(0, 0, -half, 0, 0, 2 * half, cell.tube_outer_radius)
+            inner = occ.addCylinder(0, 0, -half, 0, 0, 2 * half, cell.tube_inner_radius)
+            tube, _ = occ.cut([(3, outer)], [(3, inner)])
+            walls.extend(tag for _, tag in tube)
+    elif isinstance(cell, HexagonalCell):
+        electrodes = [_hexagon(occ, cell.inner_apothem, z) for z in (-half, half)]
+        walls = []
+        if walls_present:
+            t = cell.plate_thickness
+            walls.append(_hex_prism(occ, cell.outer_apothem, -half - t, t))
+            walls.append(_hex_prism(occ, cell.outer_apothem, half, t))
+            outer = _hex_prism(occ, cell.outer_apothem, -half, 2 * half)
+            inner = _hex_prism(occ, cell.inner_apothem, -half, 2 * half)
+            tube, _ = occ.cut([(3, outer)], [(3, inner)])
+            walls.extend(tag for _, tag in tube)
+    else:  # pragma: no cover - programming error
+        raise TypeError(f"unknown cell type {type(cell).__name__}")
+
+    objects = [(3, domain)]
+    tools = [(3, ball)] + [(3, w) for w in walls] + [(2, e) for e in electrodes]
+    _, piece_map = occ.fragment(objects, tools)
+    occ.synchronize()
+    # piece_map follows the order objects + tools
+    ball_vols = [tag for _, tag in piece_map[1]]
+    wall_vols = sorted({tag for pieces in piece_map[2:2 + len(walls)] for _, tag in pieces})
+    lower_surfs = [tag for _, tag in piece_map[2 + len(walls)]]
+    upper_surfs = [tag for _, tag in piece_map[3 + len(walls)]]
+    all_vols = [tag for _, tag in gmsh.model.getEntities(3)]
+    air_vols = [v for v in all_vols if v not in ball_vols and v not in wall_vols]
+    ball_surfs = [tag for _, tag in gmsh.model.getBoundary([(3, v) for v in ball_vols],
+                                                           combined=True, oriented=False)]
+    far_surfs = [tag for _, tag in gmsh.model.getBoundary([(3, v) for v in all_vols],
+                                                          combined=True, oriented=False)]
+
+    groups = {}
+    for name, dim, tags in (("ball", 3, ball_vols), ("walls", 3, wall_vols), ("air", 3, air_vols),
+                            ("ball_surface", 2, ball_surfs), ("electrode_lower", 2, lower_surfs),
+                            ("electrode_upper", 2, upper_surfs), ("far_boundary", 2, far_surfs)):
+        if tags:
+            groups[name] = gmsh.model.addPhysicalGroup(dim, tags, name=name)
+    missing = [n for n in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper",
+                           "far_boundary") if n not in groups]
+    if missing:  # pragma: no cover - would be a gmsh/OCC regression
+        raise FieldError(f"3D geometry: gmsh produced no entities for {', '.join(missing)}")
+
+    _size_fields(cell, centre, settings, ball_surfs,
+                 [c for s in lower_surfs + upper_surfs
+                  for _, c in gmsh.model.getBoundary([(2, s)], oriented=False)])
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+    gmsh.model.mesh.generate(3)
+    if settings.order == 2:
+        gmsh.model.mesh.setOrder(2)
+    return {"groups": groups, "ball_centre": centre,
+            "meshed_gap": meshed_gap(position, cell.stroke, cell.ball_diameter),
+            "meshed_offset": float(centre[0])}
+
+
+def _hexagon(occ, apothem: float, z: float) -> int:
+    """A plane hexagonal surface in the plane ``z`` (flats parallel to x)."""
+    corner = apothem / math.cos(math.pi / 6)
+    pts = [occ.addPoint(corner * math.cos(a), corner * math.sin(a), z)
+           for a in np.arange(6) * math.pi / 3]
+    lines = [occ.addLine(pts[i], pts[(i + 1) % 6]) for i in range(6)]
+    return occ.addPlaneSurface([occ.addCurveLoop(lines)])
+
+
+def _hex_prism(occ, apothem: float, z0: float, height: float) -> int:
+    out = occ.extrude([(2, _hexagon(occ, apothem, z0))], 0, 0, height)
+    return next(tag for dim, tag in out if dim == 3)
+
+
+def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -> None:
+    """Background size: min of rim, ball-surface, gap and far-field gradings."""
+    import gmsh
+
+    fld = gmsh.model.mesh.field
+    h = settings.size
+    fields = []
+
+    rim_dist = fld.add("Distance")
+    fld.setNumbers(rim_dist, "CurvesList", sorted(set(rim_curves)))
+    fld.setNumber(rim_dist, "Sampling", 200)
+    rim = fld.add("Threshold")
+    fld.setNumber(rim, "InField", rim_dist)
+    fld.setNumber(rim, "SizeMin", settings.rim_factor * h)
+    fld.setNumber(rim, "SizeMax", h)
+    fld.setNumber(rim, "DistMin", 0.5 * settings.rim_factor * h)
+    fld.setNumber(rim, "DistMax", 2.0 * h)
+    fld.setNumber(rim, "StopAtDistMax", 1)
+    fields.append(rim)
+
+    ball_dist = fld.add("Distance")
+    fld.setNumbers(ball_dist, "SurfacesList", ball_surfs)
+    fld.setNumber(ball_dist, "Sampling", 60)
+    ball = fld.add("Threshold")
+    fld.setNumber(ball, "InField", ball_dist)
+    fld.setNumber(ball, "SizeMin", settings.ball_factor * h)
+    fld.setNumber(ball, "SizeMax", h)
+    fld.setNumber(ball, "DistMin", 0.25 * h)
+    fld.setNumber(ball, "DistMax", 2.0 * h)
+    fld.setNumber(ball, "StopAtDistMax", 1)
+    fields.append(ball)
+
+    # contact gaps: size grows linearly with the distance from the ball's poles
+    radius = 0.5 * cell.ball_diameter
+    half = 0.5 * cell.electrode_spacing
+    x0, y0, zc = (float(c) for c in centre)
+    for z_pole, z_plane in ((zc - radius, -half), (zc + radius, half)):
+        gap = abs(z_pole - z_plane)
+        s_min = min(max(0.5 * gap, 0.02 * h), settings.ball_factor * h)
+        z_mid = 0.5 * (z_pole + z_plane)
+        expr = f"{s_min!r} + 0.35*sqrt((x-({x0!r}))^2+(y-({y0!r}))^2+(z-({z_mid!r}))^2)"
+        gap_field = fld.add("MathEval")
+        fld.setString(gap_field, "F", expr)
+        fields.append(gap_field)
+
+    device_r = cell.bounding_radius
+    far = fld.add("MathEval")
+    fld.setString(far, "F", f"max({h}, {h} + {settings.growth}*(sqrt(x^2+y^2+z^2) - {device_r}))")
+    fields.append(far)
+
+    total = fld.add("Min")
+    fld.setNumbers(total, "FieldsList", fields)
+    fld.setAsBackgroundMesh(total)

@@ -1,0 +1,407 @@
+"""3D electrostatics of one BB-TENG cell (dolfinx 0.5.2, gmsh OCC), SI units.
+
+For a ball position the two weighting potentials ψ_lower, ψ_upper solve
+
+    ∇·(εr ∇ψ_k) = 0,   ψ_k = 1 on electrode k, 0 on the other electrode,
+
+with ε0 scaled out of the matrix (it multiplies the results). Both share one
+operator: it is assembled once and preconditioned once (CG + hypre
+BoomerAMG); the two right-hand sides differ only in the Dirichlet values.
+
+Far field (the air is a sphere of radius R centred on the cell):
+
+* ``"robin"`` (also used for ``"kelvin"``, which the 3D path does not
+  implement): the asymptotic condition ∂ψ/∂n + ψ/R = 0, exact for the
+  monopole part of the exterior field. Its weak form adds ``(1/R)∮ψ v dS``,
+  and the same term (the energy of the monopole exterior field) enters C.
+* ``"dirichlet"``: ψ = 0 on the sphere (a grounded enclosure).
+
+Results (sign conventions of :mod:`tengfield.terminals`):
+
+* ``C_jk = ε0 [∫ εr ∇ψ_j·∇ψ_k dΩ + (1/R)∮ ψ_j ψ_k dS]`` [F] (symmetric by
+  construction, positive definite).
+* ``q_k = -∮_ball σ ψ_k dS`` [C]: evaluated as ``-q_ball · <ψ_k>_ball``,
+  the mean of ψ_k over the meshed ball surface times the exact ball charge
+  ``q_ball = σ π d²`` (the meshed sphere's area error cancels).
+* ``relative_error_estimate``: the same position is also solved on a mesh
+  twice as coarse; the estimate is the largest relative change of C_ll,
+  C_lu, C_uu, q_lower, q_upper divided by ``2^p - 1`` with ``p`` the
+  observed convergence order (1 for degree 1, 1.5 for degree 2, measured in
+  docs/field3d.md; the electrode rims limit the rate).
+
+Every function takes the MPI communicator explicitly; the gmsh model is
+built on rank 0 of that communicator and distributed by dolfinx.
+"""
+from __future__ import annotations
+
+import contextlib
+import itertools
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import FieldError
+from ..scene import EPS0
+from .geometry3d import (CylindricalCell, HexagonalCell, MeshSettings, build_model,
+                         cylindrical_cell, unique_model_name)
+from .result import PositionResult
+
+#: Observed convergence order of C and q under uniform refinement, by degree
+#: (used to turn the coarse/fine difference into an error estimate).
+OBSERVED_ORDER = {1: 1.0, 2: 1.5}
+
+FAR_FIELDS = ("robin", "dirichlet", "kelvin")
+
+_prefix_counter = itertools.count()
+
+
+@dataclass
+class CellMesh:
+    """A distributed dolfinx mesh of one cell with its physical groups."""
+    mesh: Any
+    cell_tags: Any
+    facet_tags: Any
+    groups: dict[str, int]        # physical group name -> tag
+    ball_centre: np.ndarray       # [m]
+    meshed_gap: float             # [m]
+    meshed_offset: float          # [m]
+    mesh_time: float              # [s]
+
+
+@dataclass
+class WeightingPotentials:
+    """ψ_lower, ψ_upper on one mesh, plus what the solve cost."""
+    lower: Any
+    upper: Any
+    dofs: int
+    cells: int
+    iterations: tuple[int, int]
+    assembly_time: float          # [s]
+    solve_time: float             # [s] (preconditioner setup + both solves)
+
+
+# ---------------------------------------------------------------------------
+@contextlib.contextmanager
+def gmsh_model(name: str):
+    """A fresh gmsh model named ``name`` (gmsh initialised if needed, removed after)."""
+    import gmsh
+
+    started = not gmsh.isInitialized()
+    if started:
+        gmsh.initialize(interruptible=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add(name)
+    try:
+        yield gmsh.model
+    finally:
+        gmsh.model.setCurrent(name)
+        gmsh.model.remove()
+        if started:
+            gmsh.finalize()
+
+
+def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, comm) -> CellMesh:
+    """Mesh ``cell`` with gmsh on rank 0 of ``comm`` and distribute it with dolfinx."""
+    from dolfinx.io import gmshio
+
+    start = time.perf_counter()
+    meta = None
+    error = None
+    if comm.rank == 0:
+        with gmsh_model(unique_model_name("tengfield-3d")) as model:
+            try:
+                meta = build_model(cell, position, offset, settings)
+            except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
+                error = exc
+            comm.bcast(None if error is None else str(error), root=0)
+            if error is None:
+                mesh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, 0, gdim=3)
+    else:
+        message = comm.bcast(None, root=0)
+        if message is not None:
+            error = FieldError(f"3D meshing failed on rank 0: {message}")
+        else:
+            mesh, cell_tags, facet_tags = gmshio.model_to_mesh(None, comm, 0, gdim=3)
+    if error is not None:
+        raise error
+    meta = comm.bcast(meta, root=0)
+    return CellMesh(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=meta["groups"],
+                    ball_centre=np.asarray(meta["ball_centre"]), meshed_gap=meta["meshed_gap"],
+                    meshed_offset=meta["meshed_offset"], mesh_time=time.perf_counter() - start)
+
+
+def permittivity_function(cell_mesh: CellMesh, permittivity: dict[str, float]):
+    """Piecewise-constant εr (DG0) from the volume groups (``{"ball": 2.1, ...}``; air is 1)."""
+    from dolfinx import fem
+
+    space = fem.FunctionSpace(cell_mesh.mesh, ("DG", 0))
+    eps_r = fem.Function(space, name="relative_permittivity")
+    eps_r.x.array[:] = 1.0
+    for name, value in permittivity.items():
+        if name in cell_mesh.groups:
+            cells = cell_mesh.cell_tags.find(cell_mesh.groups[name])
+            eps_r.x.array[space.dofmap.list.array[cells]] = value  # DG0: one dof per cell
+    eps_r.x.scatter_forward()
+    return eps_r
+
+
+def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, float], *,
+                               degree: int, far_field: str, domain_radius: float,
+                               rtol: float = 1e-10) -> WeightingPotentials:
+    """Both weighting potentials with one assembled, once-preconditioned operator."""
+    import ufl
+    from dolfinx import fem
+    from dolfinx.fem import petsc as fem_petsc
+    from petsc4py import PETSc
+
+    if far_field not in FAR_FIELDS:
+        raise FieldError(f"far_field = {far_field!r} is not allowed: choose one of "
+                         + ", ".join(repr(f) for f in FAR_FIELDS))
+    mesh = cell_mesh.mesh
+    comm = mesh.comm
+    start = time.perf_counter()
+    space = fem.FunctionSpace(mesh, ("Lagrange", degree))
+    eps_r = permittivity_function(cell_mesh, permittivity)
+    u, v = ufl.TrialFunction(space), ufl.TestFunction(space)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=cell_mesh.facet_tags)
+    far_tag = cell_mesh.groups["far_boundary"]
+    a = eps_r * ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
+    if far_field in ("robin", "kelvin"):
+        a = a + (1.0 / domain_radius) * u * v * ds(far_tag)
+    rhs = fem.form(ufl.inner(fem.Constant(mesh, PETSc.ScalarType(0.0)), v) * ufl.dx)
+    bilinear = fem.form(a)
+
+    fdim = mesh.topology.dim - 1
+    mesh.topology.create_connectivity(fdim, mesh.topology.dim)
+    dofs = {name: fem.locate_dofs_topological(space, fdim, cell_mesh.facet_tags.find(cell_mesh.groups[name]))
+            for name in ("electrode_lower", "electrode_upper")}
+    if far_field == "dirichlet":
+        dofs["far_boundary"] = fem.locate_dofs_topological(space, fdim, cell_mesh.facet_tags.find(far_tag))
+
+    def bcs_for(active: str):
+        return [fem.dirichletbc(PETSc.ScalarType(1.0 if name == active else 0.0), d, space)
+                for name, d in dofs.items()]
+
+    matrix = fem_petsc.assemble_matrix(bilinear, bcs=bcs_for("electrode_lower"))
+    matrix.assemble()
+    assembly_time = time.perf_counter() - start
+
+    start = time.perf_counter()
+    ksp = PETSc.KSP().create(comm)
+    prefix = f"tengfield_3d_{next(_prefix_counter)}_"
+    ksp.setOptionsPrefix(prefix)
+    opts = PETSc.Options()
+    for key, value in {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
+                       "pc_hypre_boomeramg_strong_threshold": 0.6, "ksp_rtol": rtol,
+                       "ksp_atol": 1e-30, "ksp_max_it": 2000,
+                       "ksp_error_if_not_converged": True}.items():
+        opts[prefix + key] = value
+    ksp.setOperators(matrix)
+    ksp.setFromOptions()
+    ksp.setUp()
+    potentials, iterations = [], []
+    try:
+        for active in ("electrode_lower", "electrode_upper"):
+            bcs = bcs_for(active)
+            b = fem_petsc.assemble_vector(rhs)
+            fem_petsc.apply_lifting(b, [bilinear], bcs=[bcs])
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            fem_petsc.set_bc(b, bcs)
+            psi = fem.Function(space, name=f"psi_{active.split('_')[1]}")
+            try:
+                ksp.solve(b, psi.vector)
+            except PETSc.Error as exc:
+                raise FieldError(f"3D solve for {active} did not converge "
+                                 f"(reason {ksp.getConvergedReason()}): {exc}") from None
+            psi.x.scatter_forward()
+            potentials.append(psi)
+            iterations.append(ksp.getIterationNumber())
+            b.destroy()
+    finally:
+        ksp.destroy()
+        matrix.destroy()
+        for key in list(opts.getAll()):
+            if key.startswith(prefix):
+                opts.delValue(key)
+    solve_time = time.perf_counter() - start
+    num_cells = mesh.topology.index_map(mesh.topology.dim).size_global
+    num_dofs = space.dofmap.index_map.size_global * space.dofmap.index_map_bs
+    return WeightingPotentials(lower=potentials[0], upper=potentials[1], dofs=num_dofs,
+                               cells=num_cells, iterations=tuple(iterations),
+                               assembly_time=assembly_time, solve_time=solve_time)
+
+
+def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
+                       permittivity: dict[str, float], *, far_field: str,
+                       domain_radius: float) -> np.ndarray:
+    """Maxwell capacitance matrix [[C_ll, C_lu], [C_lu, C_uu]] [F] from the field energy."""
+    import ufl
+    from dolfinx import fem
+    from mpi4py import MPI
+
+    mesh = cell_mesh.mesh
+    eps_r = permittivity_function(cell_mesh, permittivity)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=cell_mesh.facet_tags)
+    psi = (potentials.lower, potentials.upper)
+
+    def energy(a, b):
+        form = eps_r * ufl.inner(ufl.grad(a), ufl.grad(b)) * ufl.dx
+        if far_field in ("robin", "kelvin"):
+            form = form + (1.0 / domain_radius) * a * b * ds(cell_mesh.groups["far_boundary"])
+        return mesh.comm.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
+
+    c = np.empty((2, 2))
+    for j, k in ((0, 0), (0, 1), (1, 1)):
+        c[j, k] = c[k, j] = EPS0 * energy(psi[j], psi[k])
+    return c
+
+
+def ball_surface_means(cell_mesh: CellMesh, potentials: WeightingPotentials) -> np.ndarray:
+    """[<ψ_lower>, <ψ_upper>]: means of the weighting potentials over the ball surface."""
+    import ufl
+    from dolfinx import fem
+    from mpi4py import MPI
+
+    mesh = cell_mesh.mesh
+    dS = ufl.Measure("dS", domain=mesh, subdomain_data=cell_mesh.facet_tags)(
+        cell_mesh.groups["ball_surface"])
+    one = fem.Constant(mesh, 1.0)
+
+    def integral(expr):
+        return mesh.comm.allreduce(fem.assemble_scalar(fem.form(expr * dS)), op=MPI.SUM)
+
+    area = integral(one)
+    return np.array([integral(potentials.lower("+")) / area, integral(potentials.upper("+")) / area])
+
+
+def evaluate_at(function, point, comm=None) -> float:
+    """Value of a dolfinx Function at one point [m] (collective over the mesh's communicator)."""
+    from dolfinx import geometry
+    from mpi4py import MPI
+
+    mesh = function.function_space.mesh
+    comm = mesh.comm if comm is None else comm
+    point = np.asarray(point, dtype=float).reshape(1, 3)
+    tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
+    candidates = geometry.compute_collisions(tree, point)
+    cells = geometry.compute_colliding_cells(mesh, candidates, point).links(0)
+    local = function.eval(point, cells[:1])[0] if len(cells) else math.nan
+    values = [v for v in comm.allgather(local) if not math.isnan(v)]
+    if not values:
+        raise FieldError(f"point {point.ravel().tolist()} m is outside the mesh")
+    return float(values[0])
+
+
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Solve3DSettings:
+    """Discretisation of one 3D solve (SI)."""
+    degree: int = 2
+    mesh_size: float = 0.5e-3           # [m]
+    domain_radius: float = 20.0e-3      # [m]
+    far_field: str = "robin"
+    estimate_error: bool = True
+    mesh_options: dict = field(default_factory=dict)   # extra MeshSettings fields
+
+    def mesh_settings(self, coarsen: float = 1.0) -> MeshSettings:
+        return MeshSettings(size=self.mesh_size * coarsen, domain_radius=self.domain_radius,
+                            order=2 if self.degree >= 2 else 1, **self.mesh_options)
+
+
+@dataclass
+class CellSolution:
+    """Raw result of :func:`solve_cell`: numbers plus the mesh and potentials."""
+    capacitance: np.ndarray
+    induced_fraction: np.ndarray     # [q_lower, q_upper] / q_ball = -<ψ_k>_ball
+    cell_mesh: CellMesh
+    potentials: WeightingPotentials
+
+
+def solve_cell(cell, position: float, offset: float, settings: Solve3DSettings, *, comm,
+               coarsen: float = 1.0) -> CellSolution:
+    """Mesh and solve one cell at gap ``position`` [m] and lateral ``offset`` [m]."""
+    if settings.degree not in (1, 2):
+        raise FieldError(f"degree = {settings.degree!r} is out of range: the 3D solver allows 1 or 2")
+    permittivity = {"ball": cell.ball_permittivity, "walls": cell.wall_permittivity}
+    cell_mesh = mesh_cell(cell, position, offset, settings.mesh_settings(coarsen), comm=comm)
+    potentials = solve_weighting_potentials(cell_mesh, permittivity, degree=settings.degree,
+                                            far_field=settings.far_field,
+                                            domain_radius=settings.domain_radius)
+    cap = capacitance_matrix(cell_mesh, potentials, permittivity, far_field=settings.far_field,
+                             domain_radius=settings.domain_radius)
+    return CellSolution(capacitance=cap, induced_fraction=-ball_surface_means(cell_mesh, potentials),
+                        cell_mesh=cell_mesh, potentials=potentials)
+
+
+def relative_change(fine: CellSolution, coarse: CellSolution) -> float:
+    """Largest relative change of C_ll, C_lu, C_uu, q_lower, q_upper between two solutions."""
+    a = np.r_[fine.capacitance[np.triu_indices(2)], fine.induced_fraction]
+    b = np.r_[coarse.capacitance[np.triu_indices(2)], coarse.induced_fraction]
+    return float(np.max(np.abs(a - b) / np.abs(a)))
+
+
+def solve_cell_3d(cell, position: float, *, offset: float = 0.0, surface_charge: float,
+                  settings: Solve3DSettings, comm, keep_solution: bool = False) -> PositionResult:
+    """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell` or :class:`HexagonalCell`).
+
+    ``surface_charge`` σ [C/m²] on the ball; ``position`` z [m] in [0, Δh];
+    ``offset`` [m] lateral, along +x. With ``keep_solution`` the info dict
+    holds ``"solution"``: the :class:`CellSolution` (mesh and ψ functions).
+    """
+    start = time.perf_counter()
+    fine = solve_cell(cell, position, offset, settings, comm=comm)
+    estimate = math.nan
+    if settings.estimate_error:
+        coarse = solve_cell(cell, position, offset, settings, comm=comm, coarsen=2.0)
+        estimate = relative_change(fine, coarse) / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0)
+    ball_charge = surface_charge * math.pi * cell.ball_diameter**2
+    pot = fine.potentials
+    info = {
+        "geometry": type(cell).__name__,
+        "mesh_size_m": settings.mesh_size,
+        "domain_radius_m": settings.domain_radius,
+        "far_field": "robin" if settings.far_field == "kelvin" else settings.far_field,
+        "far_field_requested": settings.far_field,
+        "meshed_gap_m": fine.cell_mesh.meshed_gap,
+        "meshed_offset_m": fine.cell_mesh.meshed_offset,
+        "ball_centre_m": fine.cell_mesh.ball_centre.tolist(),
+        "ksp_iterations": list(pot.iterations),
+        "mesh_time_s": fine.cell_mesh.mesh_time,
+        "assembly_time_s": pot.assembly_time,
+        "mpi_size": comm.size,
+    }
+    if keep_solution:
+        info["solution"] = fine
+    return PositionResult(
+        position=position, offset=offset, capacitance=fine.capacitance,
+        induced_charge=fine.induced_fraction * ball_charge, ball_charge=ball_charge,
+        dofs=pot.dofs, cells=pot.cells, method="3d", degree=settings.degree,
+        wall_time=time.perf_counter() - start, relative_error_estimate=estimate,
+        solve_time=pot.solve_time, info=info)
+
+
+def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,
+                      estimate_error: bool = True, keep_solution: bool = False) -> PositionResult:
+    """3D solve of the scene's device with the ball at gap ``position`` [m].
+
+    ``offset`` [m] (lateral, along +x) defaults to ``[field] ball_offset_mm``.
+    Discretisation from ``[field]``: ``degree``, ``mesh_size_mm``,
+    ``domain_radius_mm``, ``far_field`` ("kelvin" is solved with the
+    asymptotic Robin condition in 3D). ``environment = "grounded-table"``
+    is not supported by the 3D path (FieldError).
+    """
+    fld = scene.field
+    if fld.environment != "free-space":
+        raise FieldError(f"[field] environment = {fld.environment!r} is not supported by the 3D "
+                         "solver: allowed 'free-space' (use method = 'axisymmetric' for "
+                         "'grounded-table')")
+    offset = fld.ball_offset if offset is None else offset
+    settings = Solve3DSettings(degree=fld.degree, mesh_size=fld.mesh_size,
+                               domain_radius=fld.domain_radius, far_field=fld.far_field,
+                               estimate_error=estimate_error)
+    return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
+                         surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
+                         keep_solution=keep_solution)
