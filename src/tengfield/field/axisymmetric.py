@@ -1,0 +1,330 @@
+"""Axisymmetric (r, z) electrostatics of the BB-TENG at one ball position.
+
+Formulation (SI, ε0 scaled out of every matrix): the weighting potential ψ_k
+of electrode k solves ``∇·(εr ∇ψ) = 0`` with ψ_k = 1 on electrode k, 0 on the
+other electrode (and on a grounded table) and ψ → 0 at infinity. In (r, z)
+with volume element ``2π r dr dz`` the bilinear form is
+
+    a(u, v) = ∫ εr ∇u·∇v r dr dz  +  κ/R ∮_{|x|=R} u v r ds   (+ Kelvin image part)
+
+where the last term comes from the far field (see :func:`far_field_weight`).
+``C_jk = 2π ε0 a(ψ_j, ψ_k)``, ``q_k = -2π σ ∫_ball ψ_k r ds`` and the ball
+charge is ``σ π d²``.
+
+Far field, for the sphere of radius R around the inversion centre:
+
+* ``kelvin``: the exterior |x| > R is mapped by x' = R² x/|x|² onto a second
+  half-disk meshed in the same model; there u* = (R/|x'|) u is harmonic and
+  needs no condition at the inverted origin (u → 0 at infinity makes u*
+  bounded there). On the sphere ``∂_ρ u = -u*/R - ∂_ρ' u*``, so the exterior
+  energy ``∫_{|x|>R} ∇u·∇v = ∫_{|x'|<R} ∇u*·∇v* + (1/R) ∮ u* v*``: the image
+  domain enters with weight r' (the map preserves the azimuth) plus the
+  boundary term with κ = 1. The two arcs are glued by a restriction P
+  (one unknown per pair of coincident nodes); we solve Pᵀ A P x = Pᵀ b.
+  With a grounded table the inversion centre lies on the table plane,
+  which the inversion maps onto itself (ψ* = 0 there too).
+* ``robin``: ∂ψ/∂n + κψ/R = 0, exact for a monopole (κ = 1) or, with a
+  grounded table, for the image dipole (κ = 2) far field.
+* ``dirichlet``: ψ = 0 on the sphere (naive truncation, for comparison).
+
+Dirichlet values and gluing are both expressed through P: the full vector is
+``ψ = P x + g`` (g: electrode values), so one operator ``K = Pᵀ A P`` is
+factored once (MUMPS) and reused for every right-hand side.
+
+Error estimate: the same mesh is solved again with degree p+1; the estimate is
+the largest relative change of C_ll, C_lu, C_uu, q_lower, q_upper.
+
+The problem is small: it is solved on rank 0 of ``comm`` (on COMM_SELF) and
+the result broadcast to every rank.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import FieldError
+from ..scene import EPS0
+from . import geometry_axisymmetric as geometry
+from .result import PositionResult
+
+#: options the solver accepts besides the scene (see solve_position_axisymmetric)
+SOLVER_OPTIONS = ("estimate_error", "keep_solution", "source_solve", "linear_solver")
+
+
+def far_field_weight(far_field: str, table: bool) -> float:
+    """κ in the boundary term κ/R ∮ u v of the far-field treatment (0 for Dirichlet)."""
+    if far_field == "dirichlet":
+        return 0.0
+    if far_field == "kelvin":
+        return 1.0
+    return 2.0 if table else 1.0
+
+
+def restriction(n_full: int, fixed: np.ndarray, image_pairs: np.ndarray):
+    """Restriction (prolongation) P: reduced unknowns -> full dof vector.
+
+    ``fixed``: dofs with prescribed values (removed); ``image_pairs``: rows
+    (image dof, master dof) whose values are identical. Returns
+    (indptr, indices, data, n_reduced) of the CSR matrix P (n_full × n_reduced).
+    """
+    is_fixed = np.zeros(n_full, dtype=bool)
+    is_fixed[fixed] = True
+    slave = np.zeros(n_full, dtype=bool)
+    if len(image_pairs):
+        slave[image_pairs[:, 0]] = True
+    free = np.flatnonzero(~is_fixed & ~slave)
+    column = np.full(n_full, -1, dtype=np.int64)
+    column[free] = np.arange(free.size)
+    if len(image_pairs):
+        column[image_pairs[:, 0]] = column[image_pairs[:, 1]]  # -1 if the master is fixed
+    rows_with_entry = column >= 0
+    indptr = np.concatenate([[0], np.cumsum(rows_with_entry)]).astype(np.int32)
+    indices = column[rows_with_entry].astype(np.int32)
+    data = np.ones(indices.size)
+    return indptr, indices, data, int(free.size)
+
+
+def match_image_dofs(coords: np.ndarray, image_dofs: np.ndarray, master_dofs: np.ndarray,
+                     shift: float, scale: float) -> np.ndarray:
+    """Pairs (image dof, master dof) of nodes that coincide after shifting by -shift in z."""
+    from scipy.spatial import cKDTree
+
+    image_dofs = np.unique(image_dofs)
+    master_dofs = np.unique(master_dofs)
+    tree = cKDTree(coords[master_dofs, :2])
+    shifted = coords[image_dofs, :2] - np.array([0.0, shift])
+    dist, idx = tree.query(shifted)
+    if image_dofs.size != master_dofs.size or np.max(dist, initial=0.0) > 1e-8 * scale:
+        raise FieldError(f"Kelvin gluing: {image_dofs.size} image nodes vs {master_dofs.size} "
+                         f"sphere nodes, worst mismatch {np.max(dist, initial=0.0):.3g} m")
+    return np.column_stack([image_dofs, master_dofs[idx]])
+
+
+@dataclass
+class Discretisation:
+    """Mesh, space and assembled operators of one (geometry, degree) pair (rank-local)."""
+    mesh: object
+    cell_tags: object
+    facet_tags: object
+    V: object
+    A: object            # full operator a(u, v), ε0 and 2π scaled out
+    ball_load: np.ndarray  # ∫_ball v r ds per dof (2π scaled out)
+    P: object            # restriction, PETSc
+    n_reduced: int
+    lower: np.ndarray    # electrode dofs
+    upper: np.ndarray
+    grounded: np.ndarray  # table / Dirichlet far boundary dofs
+
+
+def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str, float],
+               degree: int, far_field: str) -> Discretisation:
+    """Assemble the operator and the ball-surface load for Lagrange degree ``degree``."""
+    import ufl
+
+    comm = mesh.comm
+    V = dx_api.lagrange_space(mesh, degree)
+    eps_r = dx_api.cellwise_constant(mesh, cell_tags, {
+        geometry.CELL_TAGS[name]: value for name, value in permittivity.items()})
+    dx, ds, dS = dx_api.measures(mesh, cell_tags, facet_tags)
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    r = ufl.SpatialCoordinate(mesh)[0]
+    a = eps_r * ufl.inner(ufl.grad(u), ufl.grad(v)) * r * dx
+    kappa = far_field_weight(far_field, lay.table)
+    if kappa:
+        a += (kappa / lay.domain_radius) * u * v * r * ds(geometry.FACET_TAGS["far_boundary"])
+    A = dx_api.assemble_matrix(dx_api.form(a))
+    load = dx_api.assemble_vector(dx_api.form(
+        v("+") * r("+") * dS(geometry.FACET_TAGS["ball_surface"])))
+    ball_load = load.array.copy()
+
+    def dofs(name):
+        tags = facet_tags.values
+        if geometry.FACET_TAGS[name] not in tags:
+            return np.zeros(0, dtype=np.int32)
+        return dx_api.facet_dofs(V, facet_tags, geometry.FACET_TAGS[name])
+
+    lower, upper = dofs("electrode_lower"), dofs("electrode_upper")
+    grounded = [dofs("table"), dofs("table_image")]
+    if far_field == "dirichlet":
+        grounded.append(dofs("far_boundary"))
+    grounded = np.unique(np.concatenate(grounded)).astype(np.int64)
+    n_full = dx_api.num_dofs(V)
+    pairs = np.zeros((0, 2), dtype=np.int64)
+    if lay.kelvin:
+        pairs = match_image_dofs(dx_api.dof_coordinates(V), dofs("far_boundary_image"),
+                                 dofs("far_boundary"), lay.shift, lay.domain_radius)
+    fixed = np.unique(np.concatenate([lower, upper, grounded])).astype(np.int64)
+    indptr, indices, data, n_red = restriction(n_full, fixed, pairs)
+    P = dx_api.matrix_from_csr(comm, (n_full, n_red), indptr, indices, data)
+    return Discretisation(mesh, cell_tags, facet_tags, V, A, ball_load, P, n_red,
+                          lower.astype(np.int64), upper.astype(np.int64), grounded)
+
+
+@dataclass
+class Solution:
+    """Potentials (full dof vectors) and the quantities derived from them (SI)."""
+    capacitance: np.ndarray
+    induced_charge: np.ndarray
+    weighting: list          # [ψ_lower, ψ_upper] as numpy arrays
+    source: np.ndarray | None  # potential of the ball charge, electrodes grounded [V]
+    source_charge: np.ndarray | None  # electrode charges of the source solve (reactions) [C]
+    solve_time: float
+    ball_area: float
+
+
+def solve_discretisation(dx_api, disc: Discretisation, sigma: float, *, source_solve: bool,
+                         linear_solver: str = "direct") -> Solution:
+    """Both weighting potentials (and optionally the σ source) with one factorisation."""
+    comm = disc.mesh.comm
+    t0 = time.perf_counter()
+    K = disc.A.ptap(disc.P)
+    prefix = dx_api.unique_prefix("axisym")
+    ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver)
+    n_full = disc.ball_load.size
+
+    def full(x, lift):
+        y = disc.P.createVecLeft()
+        disc.P.mult(x, y)
+        return y.array + lift
+
+    psis = []
+    for electrode in (disc.lower, disc.upper):
+        g = np.zeros(n_full)
+        g[electrode] = 1.0
+        Ag = disc.A.createVecLeft()
+        disc.A.mult(dx_api.vector(comm, g), Ag)
+        rhs = disc.P.createVecRight()
+        disc.P.multTranspose(Ag, rhs)
+        rhs.scale(-1.0)
+        psis.append(full(dx_api.solve(ksp, rhs), g))
+    source = source_charge = None
+    if source_solve:
+        rhs = disc.P.createVecRight()
+        disc.P.multTranspose(dx_api.vector(comm, (sigma / EPS0) * disc.ball_load), rhs)
+        source = full(dx_api.solve(ksp, rhs), np.zeros(n_full))
+    solve_time = time.perf_counter() - t0
+    ksp.destroy()
+    K.destroy()
+    dx_api.clear_options(prefix)
+
+    def apply_A(x):
+        y = disc.A.createVecLeft()
+        disc.A.mult(dx_api.vector(comm, x), y)
+        return y.array.copy()
+
+    A_psi = [apply_A(p) for p in psis]
+    C = 2.0 * math.pi * EPS0 * np.array([[psis[j] @ A_psi[k] for k in range(2)] for j in range(2)])
+    C = 0.5 * (C + C.T)
+    q = -2.0 * math.pi * sigma * np.array([disc.ball_load @ p for p in psis])
+    if source is not None:
+        # electrode charge = reaction of the source solve: 2π (ε0 A φ - σ b) on the electrode dofs
+        residual = 2.0 * math.pi * (EPS0 * apply_A(source) - sigma * disc.ball_load)
+        source_charge = np.array([residual[disc.lower].sum(), residual[disc.upper].sum()])
+    ball_area = 2.0 * math.pi * float(disc.ball_load.sum())
+    return Solution(C, q, psis, source, source_charge, solve_time, ball_area)
+
+
+def relative_change(coarse: Solution, fine: Solution) -> float:
+    """max |X_coarse - X_fine| / |X_fine| over C_ll, C_lu, C_uu, q_lower, q_upper."""
+    a = np.array([*coarse.capacitance[np.triu_indices(2)], *coarse.induced_charge])
+    b = np.array([*fine.capacitance[np.triu_indices(2)], *fine.induced_charge])
+    return float(np.max(np.abs(a - b) / np.abs(b)))
+
+
+def permittivities(device, lay) -> dict[str, float]:
+    return {"ball": device.ball_permittivity, "walls": device.wall_permittivity,
+            "air": 1.0, "exterior": 1.0}
+
+
+def build_mesh(scene, position: float, comm, **layout_overrides):
+    """(layout, mesh, cell_tags, facet_tags) for the ball at ``position`` (on ``comm``)."""
+    import gmsh
+
+    from . import _dolfinx as dx_api
+
+    lay = geometry.layout(scene, position, **layout_overrides)
+    initialised_here = not gmsh.isInitialized()
+    if initialised_here:
+        gmsh.initialize(["-nt", "1"], readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        geometry.build_model(gmsh, lay, geometry_order=2)
+        mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=2)
+        gmsh.model.remove()
+    finally:
+        if initialised_here:
+            gmsh.finalize()
+    return lay, mesh, cell_tags, facet_tags
+
+
+def solve_serial(scene, position: float, comm, *, estimate_error: bool = True,
+                 keep_solution: bool = False, source_solve: bool = False,
+                 linear_solver: str = "direct") -> PositionResult:
+    """The axisymmetric solve on one process (``comm`` of size 1)."""
+    from . import _dolfinx as dx_api
+
+    t0 = time.perf_counter()
+    fld = scene.field
+    lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
+    sigma = scene.device.surface_charge
+    eps = permittivities(scene.device, lay)
+    disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, fld.degree, fld.far_field)
+    sol = solve_discretisation(dx_api, disc, sigma, source_solve=source_solve,
+                               linear_solver=linear_solver)
+    estimate = math.nan
+    if estimate_error:
+        finer = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, fld.degree + 1,
+                           fld.far_field)
+        estimate = relative_change(sol, solve_discretisation(dx_api, finer, sigma,
+                                                             source_solve=False,
+                                                             linear_solver=linear_solver))
+    info = {"mesh_size_m": lay.mesh_size, "domain_radius_m": lay.domain_radius,
+            "far_field": fld.far_field, "environment": fld.environment,
+            "effective_gap_m": lay.effective_gap, "minimum_gap_m": geometry.minimum_gap(
+                scene.device, fld.tolerance),
+            "ball_area_quadrature_m2": sol.ball_area, "error_estimate": "degree p+1, same mesh"}
+    if sol.source_charge is not None:
+        info["source_electrode_charge_C"] = sol.source_charge
+    result = PositionResult(
+        position=position, offset=0.0, capacitance=sol.capacitance,
+        induced_charge=sol.induced_charge, ball_charge=scene.device.ball_charge,
+        dofs=dx_api.num_dofs(disc.V), cells=dx_api.num_cells(mesh), method="axisymmetric",
+        degree=fld.degree, wall_time=time.perf_counter() - t0,
+        relative_error_estimate=estimate, solve_time=sol.solve_time, info=info)
+    if keep_solution:
+        result.info["_solution"] = (disc, sol)
+    return result
+
+
+def solve_position_axisymmetric(scene, position: float, *, comm, **options) -> PositionResult:
+    """:class:`PositionResult` of the axisymmetric problem; computed on rank 0 of ``comm``
+    and broadcast (an exception on rank 0 is re-raised on every rank).
+
+    Options: ``estimate_error`` (default True: solve again with degree p+1),
+    ``source_solve`` (also solve for the potential of the ball charge, needed
+    for plots), ``keep_solution`` (serial only: keep mesh and potentials in
+    ``result.info['_solution']``), ``linear_solver`` ("direct" MUMPS or "cg-amg").
+    """
+    from mpi4py import MPI
+
+    unknown = set(options) - set(SOLVER_OPTIONS)
+    if unknown:
+        raise FieldError(f"unknown axisymmetric solver option(s) {sorted(unknown)}; "
+                         f"allowed: {', '.join(SOLVER_OPTIONS)}")
+    if comm.size == 1:
+        return solve_serial(scene, position, comm, **options)
+    if options.get("keep_solution"):
+        raise FieldError("keep_solution needs a communicator of size 1")
+    outcome = None
+    if comm.rank == 0:
+        try:
+            outcome = solve_serial(scene, position, MPI.COMM_SELF, **options)
+        except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
+            outcome = exc
+    outcome = comm.bcast(outcome, root=0)
+    if isinstance(outcome, Exception):
+        raise outcome
+    return outcome

@@ -1,0 +1,308 @@
+"""gmsh model of the BB-TENG in the axisymmetric (r, z) half-plane.
+
+Coordinates: x = r ≥ 0 (radius), y = z (tube axis), origin midway between
+the electrode faces, SI (metres). The lower electrode is the segment
+``z = -h/2, 0 ≤ r ≤ a``, the upper one ``z = +h/2`` (h = plate spacing,
+a = electrode radius; zero-thickness conductors on the inner faces of the
+PMMA plates). The ball (radius d/2) sits on the axis with its bottom at gap
+``z_gap`` above the lower electrode.
+
+Far field: the computational domain is the half-disk of radius R
+(``domain_radius``) around the *inversion centre* (device centre, or the
+table point below it for a grounded table). For ``far_field = "kelvin"`` a
+second half-disk, the Kelvin image of the exterior ``|x| > R`` under
+``x' = R² x/|x|²``, is meshed in the same model, translated by ``shift``
+along z, with its arc periodic (node-for-node identical, up to the shift) to
+the domain's arc.
+
+Contact rule (z → 0, z → Δh): the gap is clamped to
+``[min_gap, Δh - min_gap]`` with ``min_gap = 0.5 · tolerance · h``; the
+charges are smooth in z with slope of order q_ball/h, so clamping moves them
+by at most about ``0.5 · tolerance · |q_ball|`` (measured in the tests).
+
+Mesh grading (all sizes scale with the base size ``mesh_size``):
+
+* radical grading toward the electrode rims and the tube corners,
+  ``s = mesh_size · (ρ/L)^(1-μ)`` (ρ = distance to the rim, L = h/4,
+  μ = α/p with α = 0.43 the strongest singular exponent observed, at the
+  rim/tube corner), which restores the optimal convergence rate of a
+  smooth problem under uniform refinement;
+* ``s = 0.4 · mesh_size`` on the ball surface, growing linearly away;
+* in the ball-electrode gaps, ``s = (mesh_size/1 mm) · w(ρ)`` where
+  ``w(ρ) ≈ g + ρ²/d`` is the local gap width;
+* far away the size grows with the distance to the device.
+
+Physical groups (no point groups): surfaces ``ball``, ``walls``, ``air``,
+``exterior`` (Kelvin image); curves ``ball_surface``, ``electrode_lower``,
+``electrode_upper``, ``far_boundary``, ``far_boundary_image``, ``table``,
+``table_image``.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import os
+from dataclasses import dataclass, field
+
+from ..errors import FieldError
+
+#: strongest singular exponent of the field (rim of an electrode meeting the tube corner)
+RIM_EXPONENT = 0.43
+#: names of the physical groups and their tags
+CELL_TAGS = {"ball": 1, "walls": 2, "air": 3, "exterior": 4}
+FACET_TAGS = {"ball_surface": 11, "electrode_lower": 12, "electrode_upper": 13,
+              "far_boundary": 14, "far_boundary_image": 15, "table": 16, "table_image": 17}
+
+_model_counter = itertools.count()
+
+
+@dataclass(frozen=True)
+class AxisymmetricLayout:
+    """Dimensions of one axisymmetric geometry (SI) and where its parts are."""
+    ball_radius: float
+    ball_centre_z: float
+    plate_spacing: float
+    plate_thickness: float
+    electrode_radius: float
+    tube_inner_radius: float
+    tube_outer_radius: float
+    walls: bool
+    table: bool
+    domain_radius: float
+    inversion_centre_z: float
+    kelvin: bool
+    shift: float
+    gap_lower: float
+    gap_upper: float
+    requested_gap: float
+    effective_gap: float
+    mesh_size: float
+    grading_exponent: float
+    info: dict = field(default_factory=dict)
+
+    @property
+    def z_lower(self) -> float:
+        return -0.5 * self.plate_spacing
+
+    @property
+    def z_upper(self) -> float:
+        return 0.5 * self.plate_spacing
+
+    @property
+    def z_table(self) -> float:
+        return self.z_lower - self.plate_thickness
+
+
+def minimum_gap(device, tolerance: float) -> float:
+    """Smallest ball–electrode gap meshed [m]: ``0.5 · tolerance · h``."""
+    return 0.5 * tolerance * device.plate_spacing
+
+
+def effective_gap(device, position: float, tolerance: float) -> float:
+    """The gap actually meshed: ``position`` clamped to [min_gap, Δh - min_gap]."""
+    g = minimum_gap(device, tolerance)
+    return min(max(position, g), device.gap - g)
+
+
+def layout(scene, position: float, *, degree: int | None = None, mesh_size: float | None = None,
+           domain_radius: float | None = None, far_field: str | None = None,
+           environment: str | None = None, tolerance: float | None = None) -> AxisymmetricLayout:
+    """Dimensions for ``scene`` with the ball at gap ``position`` [m] (pure, no gmsh)."""
+    dev, fld = scene.device, scene.field
+    degree = fld.degree if degree is None else degree
+    mesh_size = fld.mesh_size if mesh_size is None else mesh_size
+    domain_radius = fld.domain_radius if domain_radius is None else domain_radius
+    far_field = fld.far_field if far_field is None else far_field
+    environment = fld.environment if environment is None else environment
+    tolerance = fld.tolerance if tolerance is None else tolerance
+    if not (mesh_size > 0 and math.isfinite(mesh_size)):
+        raise FieldError(f"mesh_size_mm = {mesh_size * 1e3:g} is out of range: allowed (0, 100] mm")
+    if dev.electrode_radius > dev.tube_outer_radius:
+        raise FieldError(f"electrode_radius_mm = {dev.electrode_radius * 1e3:g} is larger than the "
+                         f"plate: allowed (0, {dev.tube_outer_radius * 1e3:g}] mm")
+    h = dev.plate_spacing
+    z_gap = effective_gap(dev, position, tolerance)
+    table = environment == "grounded-table"
+    z_lower = -0.5 * h
+    centre = z_lower - dev.plate_thickness if table else 0.0
+    extent = max(math.hypot(dev.tube_outer_radius, zz - centre)
+                 for zz in (z_lower - dev.plate_thickness, -z_lower + dev.plate_thickness))
+    if domain_radius <= 1.05 * extent:
+        raise FieldError(f"domain_radius_mm = {domain_radius * 1e3:g} is too small: it must exceed "
+                         f"{1.05e3 * extent:.3g} mm (the device seen from the inversion centre)")
+    return AxisymmetricLayout(
+        ball_radius=dev.ball_radius, ball_centre_z=z_lower + z_gap + dev.ball_radius,
+        plate_spacing=h, plate_thickness=dev.plate_thickness,
+        electrode_radius=dev.electrode_radius, tube_inner_radius=dev.tube_inner_radius,
+        tube_outer_radius=dev.tube_outer_radius, walls=dev.wall_permittivity != 1.0,
+        table=table, domain_radius=domain_radius, inversion_centre_z=centre,
+        kelvin=far_field == "kelvin", shift=2.5 * domain_radius,
+        gap_lower=z_gap, gap_upper=dev.gap - z_gap, requested_gap=position, effective_gap=z_gap,
+        mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
+        info={"device_extent_m": extent})
+
+
+# ---------------------------------------------------------------------------
+def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> str:
+    """Create and mesh the gmsh model of ``lay``; returns the (unique) model name.
+
+    ``gmsh`` is the initialised gmsh module; the new model is left current.
+    """
+    name = f"tengfield_axisym_{os.getpid()}_{next(_model_counter)}"
+    gmsh.model.add(name)
+    occ = gmsh.model.occ
+    R, zK = lay.domain_radius, lay.inversion_centre_z
+    rb, zb = lay.ball_radius, lay.ball_centre_z
+    zl, zu, t = lay.z_lower, lay.z_upper, lay.plate_thickness
+    a, ri, ro = lay.electrode_radius, lay.tube_inner_radius, lay.tube_outer_radius
+
+    def half_disk(zc, radius, quarter):
+        disk = occ.addDisk(0.0, zc, 0.0, radius, radius)
+        zmin = zc if quarter else zc - radius
+        box = occ.addRectangle(0.0, zmin, 0.0, radius, zc + radius - zmin)
+        out, _ = occ.intersect([(2, disk)], [(2, box)])
+        return out[0][1]
+
+    domain = half_disk(zK, R, lay.table)
+    ball = half_disk(zb, rb, False)
+    tools = [(2, ball)]
+    if lay.walls:
+        tools += [(2, occ.addRectangle(0.0, zl - t, 0.0, ro, t)),
+                  (2, occ.addRectangle(0.0, zu, 0.0, ro, t)),
+                  (2, occ.addRectangle(ri, zl, 0.0, ro - ri, zu - zl))]
+    electrodes = [(1, occ.addLine(occ.addPoint(0.0, z, 0.0), occ.addPoint(a, z, 0.0)))
+                  for z in (zl, zu)]
+    _, children = occ.fragment([(2, domain)], tools + electrodes)
+    # children[i]: the pieces of input i (domain, ball, walls..., electrodes)
+    ball_parts = {tag for _, tag in children[1]}
+    wall_parts = {tag for parts in children[2:2 + len(tools) - 1] for _, tag in parts}
+    image = half_disk(zK + lay.shift, R, lay.table) if lay.kelvin else None
+    occ.synchronize()
+
+    groups: dict[str, list[int]] = {k: [] for k in (*CELL_TAGS, *FACET_TAGS)}
+    for _, s in gmsh.model.getEntities(2):
+        if s == image:
+            groups["exterior"].append(s)
+        elif s in ball_parts:
+            groups["ball"].append(s)
+        elif s in wall_parts:
+            groups["walls"].append(s)
+        else:
+            groups["air"].append(s)
+
+    # -- classify curves by a point in their parametric middle -------------
+    tol = 1e-9 * R
+    pad = 2e-7 + 1e-6 * R  # gmsh pads bounding boxes by its tolerance (1e-7 m)
+    mids: dict[int, float] = {}
+    for _, c in gmsh.model.getEntities(1):
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        x, y, _ = gmsh.model.getValue(1, c, [0.5 * (lo[0] + hi[0])])
+        bb = gmsh.model.getBoundingBox(1, c)
+        mids[c] = y
+        if x < tol and bb[3] < pad:
+            continue  # the symmetry axis: natural condition (weight r)
+        if image is not None and y > zK + R + tol:
+            if abs(math.hypot(x, y - zK - lay.shift) - R) < 1e3 * tol:
+                groups["far_boundary_image"].append(c)
+            elif lay.table and abs(y - zK - lay.shift) < tol:
+                groups["table_image"].append(c)
+        elif abs(math.hypot(x, y - zb) - rb) < 1e3 * tol and x > tol:
+            groups["ball_surface"].append(c)
+        elif abs(math.hypot(x, y - zK) - R) < 1e3 * tol:
+            groups["far_boundary"].append(c)
+        elif lay.table and abs(y - zK) < tol:
+            groups["table"].append(c)
+        elif abs(y - zl) < tol and bb[3] <= a + pad:
+            groups["electrode_lower"].append(c)
+        elif abs(y - zu) < tol and bb[3] <= a + pad:
+            groups["electrode_upper"].append(c)
+
+    for key in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper", "far_boundary"):
+        if not groups[key]:
+            raise FieldError(f"axisymmetric geometry: no {key!r} entity found (gmsh model {name})")
+    if image is not None:
+        masters = sorted(groups["far_boundary"], key=mids.get)
+        slaves = sorted(groups["far_boundary_image"], key=mids.get)
+        if len(masters) != len(slaves):
+            raise FieldError("axisymmetric geometry: the Kelvin arcs do not pair up")
+        translation = [1, 0, 0, 0, 0, 1, 0, lay.shift, 0, 0, 1, 0, 0, 0, 0, 1]
+        gmsh.model.mesh.setPeriodic(1, slaves, masters, translation)
+    for key, tag in CELL_TAGS.items():
+        if groups[key]:
+            gmsh.model.addPhysicalGroup(2, groups[key], tag)
+            gmsh.model.setPhysicalName(2, tag, key)
+    for key, tag in FACET_TAGS.items():
+        if groups[key]:
+            gmsh.model.addPhysicalGroup(1, groups[key], tag)
+            gmsh.model.setPhysicalName(1, tag, key)
+
+    _size_fields(gmsh, lay)
+    gmsh.model.mesh.generate(2)
+    if geometry_order > 1:
+        gmsh.model.mesh.setOrder(geometry_order)
+    return name
+
+
+def _size_fields(gmsh, lay: AxisymmetricLayout) -> None:
+    """Background mesh size: radical grading at rims, ball surface, gaps, far field."""
+    fld = gmsh.model.mesh.field
+    h = lay.mesh_size
+    zl, zu = lay.z_lower, lay.z_upper
+    L = 0.25 * lay.plate_spacing
+    mu = lay.grading_exponent
+    fields = []
+
+    def distance_to_points(points):
+        """Expression: distance to the nearest of ``points``."""
+        terms = [f"Sqrt((x - ({x!r}))^2 + (y - ({y!r}))^2)" for x, y in points]
+        expr = terms[0]
+        for term in terms[1:]:
+            expr = f"Min({expr}, {term})"
+        return f"({expr})"
+
+    def math_eval(expr):
+        f = fld.add("MathEval")
+        fld.setString(f, "F", expr)
+        fields.append(f)
+        return f
+
+    # rims (and tube corners when the walls are present)
+    rims = [(lay.electrode_radius, zl), (lay.electrode_radius, zu)]
+    if lay.walls and abs(lay.tube_inner_radius - lay.electrode_radius) > 1e-12:
+        rims += [(lay.tube_inner_radius, zl), (lay.tube_inner_radius, zu)]
+    d_rim = distance_to_points(rims)
+    rho_min = L * (h / L) ** (1.0 / mu) if h < L else L
+    math_eval(f"({h!r}) * (Max({d_rim}, ({rho_min!r})) / ({L!r}))^({1.0 - mu!r})")
+
+    # ball surface
+    d_ball = f"Abs(Sqrt(x^2 + (y - ({lay.ball_centre_z!r}))^2) - ({lay.ball_radius!r}))"
+    math_eval(f"({0.4 * h!r}) + 0.3 * {d_ball}")
+
+    # ball-electrode gaps: local width g + rho^2/d (rho = distance to the axis point)
+    for gap, z0 in ((lay.gap_lower, zl), (lay.gap_upper, zu)):
+        if gap < 2.0 * h:
+            d_gap = distance_to_points([(0.0, z0)])
+            math_eval(f"({h / 1e-3!r}) * (({gap!r}) + {d_gap}^2 / ({2.0 * lay.ball_radius!r}))")
+
+    # far field: size grows with the distance from the inversion centre
+    extent = lay.info["device_extent_m"]
+    zK = lay.inversion_centre_z
+    math_eval(f"({h!r}) * Max(1, Sqrt(x^2 + (y - ({zK!r}))^2) / ({extent!r}))")
+    if lay.kelvin:
+        arc_size = h * lay.domain_radius / extent
+        box = fld.add("Box")
+        fld.setNumber(box, "VIn", arc_size)
+        fld.setNumber(box, "VOut", 1e22)
+        fld.setNumber(box, "XMin", -1.0)
+        fld.setNumber(box, "XMax", 1.0)
+        fld.setNumber(box, "YMin", zK + lay.shift - 1.5 * lay.domain_radius)
+        fld.setNumber(box, "YMax", zK + lay.shift + 1.5 * lay.domain_radius)
+        fields.append(box)
+    fmin = fld.add("Min")
+    fld.setNumbers(fmin, "FieldsList", fields)
+    fld.setAsBackgroundMesh(fmin)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25 * lay.domain_radius)
+    gmsh.option.setNumber("Mesh.Algorithm", 6)
