@@ -1,0 +1,50 @@
+"""Non-smooth dynamics of the ball between the two plates (DESIGN.md section 5).
+
+``simulate(scene)`` integrates the motion relative to the table with the
+contact model of ``scene.contact.model``:
+
+* ``"impact"``: rigid plates, Newton restitution, exact free flight between
+  events, sticking/lift-off and chatter handled exactly
+  (:mod:`tengfield.dynamics.impact`, compiled with numba);
+* ``"soft"``: the spring-dashpot contact of the paper's Eq. (1) integrated
+  by a stiff SciPy solver (:mod:`tengfield.dynamics.soft`).
+
+``regime_map(scene, frequencies_hz, amplitudes_m)`` classifies the motion on
+a grid of excitations. Importing this package never imports dolfinx or gmsh.
+"""
+from __future__ import annotations
+
+from .result import REGIMES, DynamicsResult, Impacts, Regime
+
+__all__ = ["simulate", "regime_map", "DynamicsResult", "Impacts", "Regime", "REGIMES",
+           "MapResult"]
+
+
+def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
+    """Trajectory of the ball for ``scene`` over ``duration`` [s] (default scene.run.duration).
+
+    Starts at ``scene.initial`` (time, gap, velocity relative to the table),
+    samples at ``scene.run.sample_rate_hz``; the regime is taken from the
+    window after ``scene.run.settle_periods`` excitation periods.
+    Raises :class:`tengfield.errors.DynamicsError` if the motion cannot be
+    integrated (e.g. the bound on events per period is exceeded).
+    """
+    if scene.contact.model == "soft":
+        from .soft import simulate_soft
+        return simulate_soft(scene, duration=duration)
+    from .impact import simulate_impact
+    return simulate_impact(scene, duration=duration)
+
+
+def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
+               progress: bool = True):
+    """Regime at every (frequency [Hz], amplitude [m]) pair of a grid; see :mod:`.mapping`."""
+    from .mapping import regime_map as _regime_map
+    return _regime_map(scene, frequencies_hz, amplitudes_m, jobs=jobs, progress=progress)
+
+
+def __getattr__(name):
+    if name == "MapResult":
+        from .mapping import MapResult
+        return MapResult
+    raise AttributeError(name)

@@ -1,0 +1,467 @@
+"""Compiled (numba) event-driven impact map of a ball between two moving plates.
+
+Relative coordinates: ``z`` = gap between the ball's bottom and the lower
+plate (0 <= z <= gap), ``v = dz/dt`` relative to the table, positive up.
+In flight ``z'' = -g - y''(t)``, so from a segment start (t0, z0, v0)
+
+    z(t) = z0 + v0 s - g s^2 / 2 - (y(t) - y(t0) - y'(t0) s),   s = t - t0,
+
+exactly (no time stepping error). The trajectory is stored as segments
+(start time, mode, z0, v0, y(t0), y'(t0)); ``mode`` is FLIGHT, STUCK_LOWER or
+STUCK_UPPER.
+
+Finding the FIRST contact (never skipping a grazing one): with
+``M = g + max|y''|`` >= |z''|, the distance to the lower plate obeys
+``z(s + h) >= z + v h - M h^2 / 2``, so no contact can occur before the
+positive root ``h`` of that bound (likewise for the upper plate). Marching
+with these steps is a proof that the interval is contact-free; it converges
+quadratically onto a transversal contact and like sqrt onto a grazing one.
+It stops when the distance is below ``Z_TOL`` with the ball moving towards
+the plate; two Newton steps then place the impact on the plate.
+
+Leaving a plate with zero relative velocity (lift-off, release, after a
+fully plastic impact) uses the Taylor bound
+``dist(s) >= a s^2/2 + j s^3/6 - S s^4/24`` (a, j: relative acceleration and
+jerk away from the plate, S >= max|y''''|) for the first step.
+
+Chatter (Zeno): after an impact with outgoing relative speed v_n while the
+relative acceleration a presses the ball on the plate, the remaining bounces
+on a plate with constant acceleration end at
+
+    t_inf = t_n + 2 v_n / (|a| (1 - e)),
+
+(on a still table |a| = g). The kernel jumps to t_inf and sticks when that
+time is shorter than ``CHATTER_FRACTION`` of an excitation period and the
+table acceleration changes by less than 0.1 % of |a| meanwhile
+(``jerk_bound * (t_inf - t_n) <= 1e-3 |a|``). With a speed-dependent
+restitution (no geometric series) and as a backstop, a bounce lower than
+``REST_HEIGHT`` ends in sticking after its flight time ``2 v_n / |a|``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+FLIGHT = 0
+STUCK_LOWER = 1
+STUCK_UPPER = 2
+
+LOWER = 0
+UPPER = 1
+
+# kernel status codes
+OK = 0
+CAPACITY = 1       # output arrays too small: caller retries with larger ones
+EVENT_BOUND = 2    # more events per excitation period than allowed
+STEP_BOUND = 3     # a root search did not converge (should not happen)
+
+Z_TOL = 1e-13             # [m] contact when closer than this and approaching
+A_TOL = 1e-9              # [m/s^2] relative accelerations below this count as zero
+CHATTER_FRACTION = 1e-4   # Zeno collapse when t_inf - t_n < this * period
+REST_HEIGHT = 1e-12       # [m] bounces lower than this end in sticking
+MAX_STEPS_PER_FLIGHT = 1_000_000
+
+
+@njit(cache=True)
+def _ppoly_index(x, t):
+    i = np.searchsorted(x, t, side="right") - 1
+    if i < 0:
+        i = 0
+    if i > x.size - 2:
+        i = x.size - 2
+    return i
+
+
+@njit(cache=True)
+def table_state(t, kind, par, x, c):
+    """(y, y', y'', y''') of the table at time t (SI)."""
+    if kind == 0:
+        amp = par[0]
+        w = par[1]
+        th = w * t + par[2]
+        s = math.sin(th)
+        co = math.cos(th)
+        return amp * s, amp * w * co, -amp * w * w * s, -amp * w * w * w * co
+    i = _ppoly_index(x, t)
+    dx = t - x[i]
+    c0 = c[0, i]
+    c1 = c[1, i]
+    c2 = c[2, i]
+    c3 = c[3, i]
+    c4 = c[4, i]
+    c5 = c[5, i]
+    y = ((((c0 * dx + c1) * dx + c2) * dx + c3) * dx + c4) * dx + c5
+    y1 = (((5.0 * c0 * dx + 4.0 * c1) * dx + 3.0 * c2) * dx + 2.0 * c3) * dx + c4
+    y2 = ((20.0 * c0 * dx + 12.0 * c1) * dx + 6.0 * c2) * dx + 2.0 * c3
+    y3 = (60.0 * c0 * dx + 24.0 * c1) * dx + 6.0 * c2
+    return y, y1, y2, y3
+
+
+@njit(cache=True)
+def table_state_many(times, kind, par, x, c):
+    """Vectorised :func:`table_state`: (y, y', y'') arrays."""
+    n = times.size
+    y = np.empty(n)
+    yd = np.empty(n)
+    ydd = np.empty(n)
+    for k in range(n):
+        a, b, cc, _ = table_state(times[k], kind, par, x, c)
+        y[k] = a
+        yd[k] = b
+        ydd[k] = cc
+    return y, yd, ydd
+
+
+@njit(cache=True)
+def _flight(t, t0, z0, v0, y0, yd0, g, kind, par, x, c):
+    """Relative (z, v) at t of the free flight that started at t0 from (z0, v0)."""
+    s = t - t0
+    y, yd, _, _ = table_state(t, kind, par, x, c)
+    z = z0 + v0 * s - 0.5 * g * s * s - (y - y0 - yd0 * s)
+    v = v0 - g * s - (yd - yd0)
+    return z, v
+
+
+@njit(cache=True)
+def safe_step(z, v, gap, m_bound):
+    """Largest h such that no plate can be reached in [0, h) (|z''| <= m_bound)."""
+    dl = z if z > 0.0 else 0.0
+    du = gap - z
+    if du < 0.0:
+        du = 0.0
+    if v >= 0.0:
+        hl = (v + math.sqrt(v * v + 2.0 * m_bound * dl)) / m_bound
+        den = v + math.sqrt(v * v + 2.0 * m_bound * du)
+        hu = 2.0 * du / den if den > 0.0 else 0.0
+    else:
+        den = -v + math.sqrt(v * v + 2.0 * m_bound * dl)
+        hl = 2.0 * dl / den if den > 0.0 else 0.0
+        hu = (-v + math.sqrt(v * v + 2.0 * m_bound * du)) / m_bound
+    return hl if hl < hu else hu
+
+
+@njit(cache=True)
+def departure_step(a_away, j_away, snap_bound, gap, s_max):
+    """First step off a plate with zero relative velocity, or 0 if none can be proven.
+
+    ``dist(s) >= a s^2/2 + j s^3/6 - S s^4/24`` (a = a_away >= 0, j = j_away);
+    returns s in (0, s_max] with that bound positive on (0, s] and the matching
+    upper bound below gap/2 (so neither plate is touched meanwhile).
+    """
+    a = a_away if a_away > 0.0 else 0.0
+    j = j_away
+    big = s_max
+    if snap_bound > 0.0:
+        # positive root of -S/24 s^2 + j/6 s + a/2 = 0 (the bound divided by s^2)
+        qa = -snap_bound / 24.0
+        qb = j / 6.0
+        qc = a / 2.0
+        disc = qb * qb - 4.0 * qa * qc
+        if disc < 0.0:
+            return 0.0
+        root = (-qb - math.sqrt(disc)) / (2.0 * qa)
+        if root <= 0.0:
+            return 0.0
+        s = 0.5 * root
+    elif j > 0.0 or (j == 0.0 and a > 0.0):
+        s = big
+    elif a > 0.0:
+        s = 0.5 * (-3.0 * a / j)
+    else:
+        return 0.0
+    if s > big:
+        s = big
+    for _ in range(200):
+        upper = 0.5 * a * s * s + abs(j) * s * s * s / 6.0 + snap_bound * s ** 4 / 24.0
+        if upper <= 0.5 * gap:
+            break
+        s *= 0.5
+    lower = 0.5 * a * s * s + j * s * s * s / 6.0 - snap_bound * s ** 4 / 24.0
+    if not lower > 0.0:
+        return 0.0
+    return s
+
+
+@njit(cache=True)
+def _cubic_roots_unit(p0, p1, p2, p3):
+    """Real roots in [0, 1] of p0 u^3 + p1 u^2 + p2 u + p3 (up to 3; NaN padded)."""
+    out = np.full(3, np.nan)
+    scale = max(abs(p0), abs(p1), abs(p2), abs(p3))
+    if scale == 0.0:
+        return out
+    coeffs = np.array([p0, p1, p2, p3]) / scale
+    k = 0
+    while k < 3 and abs(coeffs[k]) < 1e-14:
+        k += 1
+    if k == 3:
+        return out
+    roots = np.roots(coeffs[k:].astype(np.complex128))
+    m = 0
+    for r in roots:
+        if abs(r.imag) <= 1e-9 and -1e-12 <= r.real <= 1.0 + 1e-12:
+            out[m] = min(max(r.real, 0.0), 1.0)
+            m += 1
+    return out
+
+
+@njit(cache=True)
+def next_crossing(t, falling, g, kind, par, x, c, t_end):
+    """First time > t where g + y'' crosses zero downwards (falling) or upwards.
+
+    Falling crossings are lift-offs from the lower plate, rising crossings are
+    releases from the upper plate. Returns inf if none before t_end.
+    """
+    if kind == 0:
+        aw2 = par[0] * par[1] * par[1]
+        if aw2 <= g:
+            return math.inf
+        base = math.asin(g / aw2)   # sin(theta) = 1/Gamma with cos(theta) > 0
+        if not falling:
+            base = math.pi - base
+        w = par[1]
+        ph = par[2]
+        th = w * t + ph
+        k = math.ceil((th - base) / (2.0 * math.pi))
+        tc = (base + 2.0 * math.pi * k - ph) / w
+        if tc <= t:
+            tc = (base + 2.0 * math.pi * (k + 1) - ph) / w
+        return tc
+    # piecewise quintic: f = g + y'' is a cubic on each piece
+    i0 = _ppoly_index(x, t)
+    for i in range(i0, x.size - 1):
+        if x[i] > t_end:
+            return math.inf
+        h = x[i + 1] - x[i]
+        q0 = 20.0 * c[0, i] * h ** 3
+        q1 = 12.0 * c[1, i] * h ** 2
+        q2 = 6.0 * c[2, i] * h
+        q3 = 2.0 * c[3, i] + g
+        roots = _cubic_roots_unit(q0, q1, q2, q3)
+        best = math.inf
+        for r in roots:
+            if math.isnan(r):
+                continue
+            u = r
+            for _ in range(3):   # Newton polish on the scaled cubic
+                f = ((q0 * u + q1) * u + q2) * u + q3
+                fp = (3.0 * q0 * u + 2.0 * q1) * u + q2
+                if fp == 0.0:
+                    break
+                u -= f / fp
+            fp = (3.0 * q0 * u + 2.0 * q1) * u + q2
+            if (falling and fp < 0.0) or ((not falling) and fp > 0.0):
+                tc = x[i] + u * h
+                if tc > t and tc < best:
+                    best = tc
+        if best < math.inf:
+            return best
+    return math.inf
+
+
+@njit(cache=True)
+def _restitution(speed, e0, power_law, v_ref, exponent):
+    if not power_law or exponent == 0.0:
+        return e0
+    v = speed if speed > 1e-12 else 1e-12
+    e = e0 * (v / v_ref) ** (-exponent)
+    return e if e < 1.0 else 1.0
+
+
+@njit(cache=True)
+def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
+                   e0, power_law, v_ref, exponent, period, max_events_per_period,
+                   acc_bound, jerk_bound, snap_bound,
+                   seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
+                   imp_t, imp_plate, imp_vb, imp_va):
+    """Integrate from t_start to t_end; fill the segment and impact arrays.
+
+    Returns (status, n_segments, n_impacts, time reached).
+    """
+    m_bound = g + acc_bound
+    chatter_time = CHATTER_FRACTION * period
+    t = t_start
+    z = min(max(z_start, 0.0), gap)
+    v = v_start
+    n_seg = 0
+    n_imp = 0
+    n_events = 0
+    force_depart = False
+    while True:
+        n_events += 1
+        if n_events > max_events_per_period * ((t - t_start) / period + 1.0):
+            return EVENT_BOUND, n_seg, n_imp, t
+        if n_seg >= seg_t.size or n_imp >= imp_t.size:
+            return CAPACITY, n_seg, n_imp, t
+        y, yd, ydd, yddd = table_state(t, kind, par, x, c)
+        a = -g - ydd          # relative acceleration in free flight
+        s_begin = 0.0
+        at_lower = z <= Z_TOL and v <= 0.0
+        at_upper = z >= gap - Z_TOL and v >= 0.0
+        if at_lower or at_upper:
+            plate = LOWER if at_lower else UPPER
+            sign = 1.0 if at_lower else -1.0      # direction "away from the plate"
+            z = 0.0 if at_lower else gap
+            if v != 0.0:
+                # ---- impact (Newton restitution) ----
+                speed = abs(v)
+                e = _restitution(speed, e0, power_law, v_ref, exponent)
+                v_after = e * speed
+                imp_t[n_imp] = t
+                imp_plate[n_imp] = plate
+                imp_vb[n_imp] = speed
+                imp_va[n_imp] = v_after
+                n_imp += 1
+                v = sign * v_after
+                a_in = -sign * a             # acceleration towards the plate
+                if a_in > 0.0 and v_after > 0.0:
+                    dt_inf = -1.0
+                    if e < 1.0 and not (power_law and exponent != 0.0):
+                        zeno = 2.0 * v_after / (a_in * (1.0 - e))
+                        if zeno <= chatter_time and jerk_bound * zeno <= 1e-3 * a_in:
+                            dt_inf = zeno
+                    if dt_inf < 0.0 and v_after * v_after / (2.0 * a_in) <= REST_HEIGHT:
+                        dt_inf = 2.0 * v_after / a_in
+                        if e < 1.0 and not (power_law and exponent != 0.0):
+                            dt_inf /= 1.0 - e
+                    if dt_inf >= 0.0:
+                        # the first micro-arc is kept as a flight segment (samples are clamped)
+                        seg_t[n_seg] = t
+                        seg_mode[n_seg] = FLIGHT
+                        seg_z[n_seg] = z
+                        seg_v[n_seg] = v
+                        seg_y[n_seg] = y
+                        seg_yd[n_seg] = yd
+                        n_seg += 1
+                        t = t + dt_inf
+                        v = 0.0
+                        if t >= t_end:
+                            break
+                        continue
+                if v_after > 0.0:
+                    pass   # flies off: fall through to the flight below
+                else:
+                    continue   # fully plastic: decide stick/depart at the same time
+            else:
+                # ---- zero relative velocity on a plate: stick or depart ----
+                a_away = sign * a
+                j_away = -sign * yddd
+                s1 = 0.0
+                pressed = a_away < -A_TOL or (a_away <= A_TOL and j_away <= 0.0)
+                if force_depart or not pressed:
+                    s1 = departure_step(a_away, j_away, snap_bound, gap, 0.25 * period)
+                force_depart = False
+                if s1 <= 0.0:
+                    seg_t[n_seg] = t
+                    seg_mode[n_seg] = STUCK_LOWER if at_lower else STUCK_UPPER
+                    seg_z[n_seg] = z
+                    seg_v[n_seg] = 0.0
+                    seg_y[n_seg] = y
+                    seg_yd[n_seg] = yd
+                    n_seg += 1
+                    t_next = next_crossing(t, at_lower, g, kind, par, x, c, t_end)
+                    if t_next >= t_end:
+                        break
+                    t = t_next
+                    force_depart = True
+                    continue
+                s_begin = s1
+        # ---- free flight from (t, z, v) ----
+        seg_t[n_seg] = t
+        seg_mode[n_seg] = FLIGHT
+        seg_z[n_seg] = z
+        seg_v[n_seg] = v
+        seg_y[n_seg] = y
+        seg_yd[n_seg] = yd
+        n_seg += 1
+        t0 = t
+        z0 = z
+        v0 = v
+        s = s_begin
+        if s > 0.0:
+            if t0 + s >= t_end:
+                break
+            zc, vc = _flight(t0 + s, t0, z0, v0, y, yd, g, kind, par, x, c)
+        else:
+            zc = z0
+            vc = v0
+        steps = 0
+        ended = False
+        while True:
+            if s > 0.0 and zc <= Z_TOL and vc <= 0.0:
+                target = 0.0
+                break
+            if s > 0.0 and zc >= gap - Z_TOL and vc >= 0.0:
+                target = gap
+                break
+            h = safe_step(zc, vc, gap, m_bound)
+            if t0 + s + h >= t_end:
+                ended = True
+                break
+            s += h
+            zc, vc = _flight(t0 + s, t0, z0, v0, y, yd, g, kind, par, x, c)
+            steps += 1
+            if steps > MAX_STEPS_PER_FLIGHT:
+                return STEP_BOUND, n_seg, n_imp, t0 + s
+        if ended:
+            break
+        # Newton polish of the contact time (stays within a tiny neighbourhood)
+        for _ in range(2):
+            if vc == 0.0:
+                break
+            ds = (zc - target) / vc
+            if abs(ds) > 1e-6 * period:
+                break
+            s -= ds
+            zc, vc = _flight(t0 + s, t0, z0, v0, y, yd, g, kind, par, x, c)
+        t = t0 + s
+        z = target
+        v = vc
+        if target == 0.0 and v > 0.0:
+            v = 0.0
+        if target == gap and v < 0.0:
+            v = 0.0
+    return OK, n_seg, n_imp, t
+
+
+@njit(cache=True)
+def sample_segments(times, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
+                    g, gap, kind, par, x, c):
+    """Exact (z, v, y) at sorted or unsorted ``times`` from the stored segments.
+
+    Flight values are clamped to [0, gap] (only the first micro-arc of a
+    collapsed chatter sequence can leave that range).
+    """
+    n = times.size
+    zs = np.empty(n)
+    vs = np.empty(n)
+    ys = np.empty(n)
+    starts = seg_t[:n_seg]
+    for k in range(n):
+        t = times[k]
+        i = np.searchsorted(starts, t, side="right") - 1
+        if i < 0:
+            i = 0
+        y, yd, _, _ = table_state(t, kind, par, x, c)
+        ys[k] = y
+        mode = seg_mode[i]
+        if mode == STUCK_LOWER:
+            zs[k] = 0.0
+            vs[k] = 0.0
+        elif mode == STUCK_UPPER:
+            zs[k] = gap
+            vs[k] = 0.0
+        else:
+            s = t - seg_t[i]
+            z = seg_z[i] + seg_v[i] * s - 0.5 * g * s * s - (y - seg_y[i] - seg_yd[i] * s)
+            v = seg_v[i] - g * s - (yd - seg_yd[i])
+            if z < 0.0:
+                z = 0.0
+                v = 0.0
+            elif z > gap:
+                z = gap
+                v = 0.0
+            zs[k] = z
+            vs[k] = v
+    return zs, vs, ys

@@ -1,0 +1,106 @@
+"""Result objects of the dynamics (in the spirit of scipy's ``OdeResult``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+REGIMES = ("rest", "bounce", "chaos", "critical-contact", "regular-contact")
+
+
+@dataclass(frozen=True)
+class Impacts:
+    """Impacts in time order. Speeds are relative to the table [m/s], both >= 0.
+
+    For the soft-contact model an "impact" is one contact episode: ``time`` is
+    its entry, ``speed_before`` the entry speed, ``speed_after`` the exit speed.
+    """
+    time: np.ndarray           # [s]
+    plate: np.ndarray          # 'lower' / 'upper'
+    speed_before: np.ndarray   # [m/s]
+    speed_after: np.ndarray    # [m/s]
+
+    def __len__(self) -> int:
+        return int(self.time.size)
+
+    @classmethod
+    def empty(cls) -> "Impacts":
+        return cls(np.zeros(0), np.zeros(0, dtype="<U5"), np.zeros(0), np.zeros(0))
+
+
+@dataclass(frozen=True)
+class Regime:
+    """Motion regime of the steady window (definitions: docs/dynamics.md).
+
+    ``period`` is in excitation periods (0 if aperiodic), contacts per period
+    count impacts per excitation period at each plate, ``max_gap`` [m].
+    """
+    name: str
+    period: int
+    lower_contacts_per_period: float
+    upper_contacts_per_period: float
+    max_gap: float
+
+    def as_dict(self) -> dict:
+        return {"regime": self.name, "period": self.period,
+                "lower_contacts_per_period": self.lower_contacts_per_period,
+                "upper_contacts_per_period": self.upper_contacts_per_period,
+                "max_gap_m": self.max_gap}
+
+
+@dataclass
+class DynamicsResult:
+    """Trajectory of the ball relative to the table, SI units.
+
+    ``gap`` = z, the gap between the ball's bottom and the lower plate
+    (0 <= z <= Delta h for the impact model; the soft model may penetrate
+    slightly), ``gap_velocity`` = dz/dt (positive up, relative to the
+    table), ``table`` = y(t) the table displacement, all sampled at ``t``.
+    ``sample(times)`` evaluates the exact trajectory at any times.
+    """
+    status: int
+    message: str
+    t: np.ndarray
+    gap: np.ndarray
+    gap_velocity: np.ndarray
+    table: np.ndarray
+    impacts: Impacts
+    regime: Regime
+    n_events: int
+    wall_time: float
+    model: str = "impact"
+    stroke: float = 0.0                  # Delta h [m]
+    period: float = 0.0                  # excitation period [s]
+    window_start: float = 0.0            # start of the steady window [s]
+    _sampler: Callable | None = field(default=None, repr=False)
+
+    @property
+    def success(self) -> bool:
+        return self.status == 0
+
+    def sample(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(gap [m], gap_velocity [m/s], table [m]) exactly at ``times`` [s]."""
+        t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=float)))
+        return self._sampler(t)
+
+    def summary(self) -> dict:
+        """JSON-ready summary (the CLI's summary.json)."""
+        plates = self.impacts.plate
+        return {
+            "model": self.model,
+            "status": self.status,
+            "message": self.message,
+            "regime": self.regime.name,
+            "period": self.regime.period,
+            "max_gap_mm": self.regime.max_gap * 1e3,
+            "upper_contacts_per_period": self.regime.upper_contacts_per_period,
+            "lower_contacts_per_period": self.regime.lower_contacts_per_period,
+            "impacts": len(self.impacts),
+            "impacts_lower": int(np.sum(plates == "lower")),
+            "impacts_upper": int(np.sum(plates == "upper")),
+            "events": self.n_events,
+            "steady_window_start_s": self.window_start,
+            "duration_s": float(self.t[-1] - self.t[0]) if self.t.size else 0.0,
+            "wall_time_s": self.wall_time,
+        }

@@ -1,0 +1,120 @@
+"""Table motion y(t) in the form the compiled kernel evaluates.
+
+Two kinds, one representation (:class:`TableMotion`):
+
+* ``SINE``: ``y = A sin(w t + phase)`` with ``params = (A, w, phase)``.
+* ``PPOLY``: a C^4 piecewise quintic ``y(t)`` on breakpoints ``breaks``
+  with coefficients ``coeffs[m, i]`` of ``(t - breaks[i])**(5 - m)``
+  (scipy's ``PPoly`` layout), built from a recorded signal:
+
+  - displacement data: the interpolating quintic spline (C^4);
+  - acceleration data: the interpolating cubic spline of ``a(t)`` (C^2)
+    integrated twice, so ``y`` is C^4 and ``y'' = a`` exactly at the
+    samples. Drift removal: the mean of ``a`` is subtracted before
+    integrating (a constant offset is sensor bias or tilt, not motion), and
+    the least-squares straight line ``c0 + c1 t`` is subtracted from ``y``
+    afterwards (the unknown initial position and velocity). Neither step
+    changes the table acceleration up to the constant, which is all the
+    ball feels.
+
+The kernel also needs bounds valid on the whole record:
+``acc_bound >= max|y''|``, ``jerk_bound >= max|y'''|``,
+``snap_bound >= max|y''''|`` (SI). For the sine they are exact
+(``A w^2, A w^3, A w^4``); for a spline they are guaranteed upper bounds
+(``sum_k |c_k| h^k`` per piece).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DynamicsError
+
+SINE = 0
+PPOLY = 1
+
+
+@dataclass(frozen=True)
+class TableMotion:
+    """Table displacement y(t) [m] for the kernel (see module docstring)."""
+    kind: int
+    params: np.ndarray       # (A [m], w [rad/s], phase [rad]) for SINE
+    breaks: np.ndarray       # [s], PPOLY only (length n+1)
+    coeffs: np.ndarray       # (6, n), PPOLY only
+    acc_bound: float         # >= max |y''| [m/s^2]
+    jerk_bound: float        # >= max |y'''| [m/s^3]
+    snap_bound: float        # >= max |y''''| [m/s^4]
+    t_first: float = -math.inf   # domain of the motion [s]
+    t_last: float = math.inf
+
+    def evaluate(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(y [m], y' [m/s], y'' [m/s^2]) at ``times`` [s]."""
+        from ._kernel import table_state_many
+        t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=float)))
+        return table_state_many(t, self.kind, self.params, self.breaks, self.coeffs)
+
+
+_EMPTY_BREAKS = np.zeros(2)
+_EMPTY_COEFFS = np.zeros((6, 1))
+
+
+def sine_table(amplitude: float, omega: float, phase: float) -> TableMotion:
+    """``y = amplitude sin(omega t + phase)``; amplitude [m], omega [rad/s], phase [rad]."""
+    a = float(amplitude)
+    w = float(omega)
+    return TableMotion(kind=SINE, params=np.array([a, w, float(phase)]),
+                       breaks=_EMPTY_BREAKS, coeffs=_EMPTY_COEFFS,
+                       acc_bound=a * w**2, jerk_bound=a * w**3, snap_bound=a * w**4)
+
+
+def _piece_bound(coeffs: np.ndarray, widths: np.ndarray) -> float:
+    """Guaranteed bound of max |p_i(x)| over x in [0, h_i] for PPoly coefficients."""
+    k = coeffs.shape[0] - 1
+    powers = np.stack([widths ** (k - m) for m in range(k + 1)])
+    return float(np.max(np.sum(np.abs(coeffs) * powers, axis=0)))
+
+
+def recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> TableMotion:
+    """C^4 table motion from samples; ``signal`` is "displacement" [m] or "acceleration" [m/s^2]."""
+    from scipy.interpolate import PPoly, make_interp_spline
+
+    t = np.asarray(times, dtype=float)
+    v = np.asarray(values, dtype=float)
+    if t.size < 6:
+        raise DynamicsError(f"recorded excitation: {t.size} samples; a C^4 table motion needs >= 6")
+    if signal == "displacement":
+        pp = PPoly.from_spline(make_interp_spline(t, v, k=5))
+    elif signal == "acceleration":
+        acc = PPoly.from_spline(make_interp_spline(t, v - v.mean(), k=3))
+        pp = acc.antiderivative(2)
+        # remove the straight line (unknown initial position/velocity) fitted to y
+        y = pp(t)
+        slope, intercept = np.polyfit(t - t[0], y, 1)
+        pp.c[-1] -= intercept + slope * (pp.x[:-1] - t[0])
+        pp.c[-2] -= slope
+    else:
+        raise DynamicsError(f"recorded excitation: signal = {signal!r}; allowed 'displacement', "
+                            "'acceleration'")
+    # keep only the pieces inside the record (make_interp_spline adds none, but be explicit)
+    x = np.ascontiguousarray(pp.x, dtype=float)
+    c = np.ascontiguousarray(pp.c, dtype=float)
+    if c.shape[0] < 6:  # pad to degree 5
+        c = np.vstack([np.zeros((6 - c.shape[0], c.shape[1])), c])
+    widths = np.diff(x)
+    d2 = np.stack([(5 - m) * (4 - m) * c[m] for m in range(4)])           # degree 3
+    d3 = np.stack([(5 - m) * (4 - m) * (3 - m) * c[m] for m in range(3)])  # degree 2
+    d4 = np.stack([(5 - m) * (4 - m) * (3 - m) * (2 - m) * c[m] for m in range(2)])
+    return TableMotion(kind=PPOLY, params=np.zeros(3), breaks=x, coeffs=c,
+                       acc_bound=_piece_bound(d2, widths), jerk_bound=_piece_bound(d3, widths),
+                       snap_bound=_piece_bound(d4, widths), t_first=float(x[0]),
+                       t_last=float(x[-1]))
+
+
+def table_from_scene(scene) -> TableMotion:
+    """The table motion of ``scene.excitation`` (sine or recorded)."""
+    exc = scene.excitation
+    if exc.kind == "sine":
+        return sine_table(exc.amplitude, exc.omega, exc.phase)
+    return recorded_table(exc.times, exc.values, exc.signal)
