@@ -1,0 +1,354 @@
+"""End-to-end run: dynamics -> surrogate (cached) -> circuit (DESIGN §1).
+
+:func:`run` returns a :class:`RunResult` (waveforms as arrays, a JSON-ready
+summary); :func:`write_outputs` writes ``waveforms.csv``, ``summary.json``
+and the plots. Units are SI; sign conventions are those of
+:mod:`tengfield.terminals` (V = V_lower - V_upper, Q_SC and currents counted
+lower -> upper through the external circuit, reference state z = 0).
+
+Stages a scene does not need are left out, and ``summary["stages"]`` says
+why: no field solve (and no dolfinx/gmsh import) when a valid cached
+surrogate exists or when Q_SC is identically zero (uncharged ball, or a
+ball that never leaves the lower electrode); no load ODE unless
+``[circuit] kind = "load"``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field, is_dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from . import circuit
+from .surrogate import TerminalCurves, SurrogateTable, obtain_table
+
+WAVEFORM_COLUMNS = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m",
+                    "V_oc_V", "Q_sc_C", "I_sc_A"]
+LOAD_COLUMNS = ["V_load_V", "I_load_A", "P_load_W"]
+
+
+# ---------------------------------------------------------------------------
+# pure pieces
+def terminal_waveforms(curves: TerminalCurves | None, gap, gap_velocity, *, cells: int = 1,
+                       parallel_capacitance: float = 0.0) -> dict[str, np.ndarray]:
+    """Open-circuit voltage, short-circuit charge and current along a trajectory.
+
+    ``gap`` z(t) [m] and ``gap_velocity`` dz/dt [m/s] are samples of the
+    trajectory; ``cells`` identical cells are wired in parallel. Returns
+    ``V_oc`` [V] (= Q_SC / (C_T + C_p), the true V_OC when C_p = 0),
+    ``Q_sc`` [C], ``I_sc`` = (dQ_SC/dz) dz/dt [A], ``C_T`` [F] and
+    ``dC_T_dt`` [F/s]. ``curves = None`` means Q_SC is identically zero
+    (then C_T is unknown and reported as NaN).
+    """
+    gap = np.asarray(gap, dtype=float)
+    velocity = np.asarray(gap_velocity, dtype=float)
+    if curves is None:
+        zero = np.zeros_like(gap)
+        return {"V_oc": zero, "Q_sc": zero.copy(), "I_sc": zero.copy(),
+                "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
+    q_sc, dq_dz, c_t, dc_dz = circuit.scale_cells(
+        curves.charge(gap), curves.charge_derivative(gap), curves.capacitance(gap),
+        curves.capacitance_derivative(gap), cells)
+    return {"V_oc": circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance),
+            "Q_sc": q_sc, "I_sc": circuit.short_circuit_current(dq_dz, velocity),
+            "C_T": c_t, "dC_T_dt": dc_dz * velocity}
+
+
+def steady_window(times, scene) -> tuple[np.ndarray, str]:
+    """Boolean mask of the samples after ``[run] settle_periods`` excitation periods."""
+    t = np.asarray(times, dtype=float)
+    start = t[0] + scene.run.settle_periods * scene.excitation.period
+    mask = t >= start
+    if np.count_nonzero(mask) < 2:
+        return np.ones_like(t, dtype=bool), (f"whole run: settle_periods x period = "
+                                             f"{start - t[0]:g} s leaves fewer than 2 samples")
+    return mask, f"t >= {start:g} s (after settle_periods = {scene.run.settle_periods} periods)"
+
+
+def mean_over(times, values, mask) -> float:
+    """Time average of ``values`` over the masked samples (trapezoidal rule)."""
+    t = np.asarray(times, dtype=float)[mask]
+    v = np.asarray(values, dtype=float)[mask]
+    if t.size < 2 or t[-1] <= t[0]:
+        return float(np.mean(v)) if v.size else 0.0
+    return float(np.trapz(v, t) / (t[-1] - t[0]))
+
+
+# ---------------------------------------------------------------------------
+# the load ODE along a trajectory with impacts
+def _impact_times(dynamics, t0: float, t1: float) -> np.ndarray:
+    """Times of the impacts (velocity jumps) strictly inside (t0, t1)."""
+    impacts = getattr(dynamics, "impacts", None)
+    if impacts is None:
+        return np.empty(0)
+    if hasattr(impacts, "dtype") and impacts.dtype.names and "time" in impacts.dtype.names:
+        times = np.asarray(impacts["time"], dtype=float)
+    elif isinstance(impacts, np.ndarray):
+        times = np.asarray(impacts, dtype=float).reshape(len(impacts), -1)[:, 0] \
+            if impacts.size else np.empty(0)
+    else:
+        times = np.asarray([getattr(i, "time", getattr(i, "t", math.nan)) for i in impacts],
+                           dtype=float)
+    times = times[np.isfinite(times)]
+    return np.unique(times[(times > t0) & (times < t1)])
+
+
+def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: dict) -> dict:
+    """V_load [V], I_load [A], P_load [W] at the output samples, and the energy balance.
+
+    The exponential integrator of :func:`tengfield.circuit.load_response`
+    runs on the output times plus every impact time twice (pre- and
+    post-impact velocity), so the jumps of I_SC are resolved exactly.
+    """
+    t = np.asarray(dynamics.t, dtype=float)
+    n_cells = scene.device.cells
+    c_p = scene.circuit.parallel_capacitance
+    load = scene.circuit.load
+    if curves is None:
+        zero = np.zeros_like(t)
+        return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(),
+                "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0, "stored_energy_change_J": 0.0}
+    impacts = _impact_times(dynamics, t[0], t[-1])
+    if impacts.size:
+        eps = 1e-9 * scene.excitation.period
+        gap_pre, vel_pre, _ = dynamics.sample(impacts - eps)
+        gap_post, vel_post, _ = dynamics.sample(impacts + eps)
+        grid = np.concatenate([t, impacts, impacts])
+        gap = np.concatenate([waveforms["gap_m"], gap_pre, gap_post])
+        vel = np.concatenate([waveforms["gap_velocity_m_per_s"], vel_pre, vel_post])
+        # order: time, then pre-impact before post-impact (key 0 < 1 < 2 for sample/pre/post)
+        tag = np.concatenate([np.full(t.size, 1), np.zeros(impacts.size), np.full(impacts.size, 2)])
+        order = np.lexsort((tag, grid))
+        grid, gap, vel = grid[order], gap[order], vel[order]
+        is_output = np.isin(order, np.arange(t.size))
+        output_index = np.flatnonzero(is_output)[np.argsort(order[is_output])]
+    else:
+        grid, gap, vel = t, waveforms["gap_m"], waveforms["gap_velocity_m_per_s"]
+        output_index = np.arange(t.size)
+    fine = terminal_waveforms(curves, gap, vel, cells=n_cells, parallel_capacitance=c_p)
+    response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
+    delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+    stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+    return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
+            "P_load": response.power[output_index],
+            "delivered_energy_J": float(np.trapz(delivered, grid)),
+            "dissipated_energy_J": float(np.trapz(response.power, grid)),
+            "stored_energy_change_J": float(stored[-1] - stored[0])}
+
+
+# ---------------------------------------------------------------------------
+@dataclass
+class Stage:
+    """What one stage did: ``status`` is "ran", "cached" or "skipped"."""
+    status: str
+    reason: str = ""
+    wall_time_s: float = 0.0
+    details: dict = field(default_factory=dict)
+
+
+@dataclass
+class RunResult:
+    """Outcome of :func:`run`: waveform columns (SI, see ``WAVEFORM_COLUMNS``),
+    the summary (JSON-ready) and the pieces the plots need."""
+    scene: Any
+    waveforms: dict[str, np.ndarray]
+    summary: dict
+    dynamics: Any
+    table: SurrogateTable | None
+    curves: TerminalCurves | None
+
+
+def _jsonable(obj):
+    if is_dataclass(obj) and not isinstance(obj, type):
+        return _jsonable(asdict(obj))
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, (str, int, float, bool)) or obj is None:
+        return obj
+    if hasattr(obj, "__dict__"):
+        return _jsonable({k: v for k, v in vars(obj).items() if not k.startswith("_")})
+    return str(obj)
+
+
+def _default_simulate():
+    from .dynamics import simulate
+    return simulate
+
+
+def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
+        simulate: Callable | None = None, progress: bool = False,
+        command_line: str = "", write_cache: bool = True) -> RunResult:
+    """Dynamics, surrogate and circuit for ``scene``.
+
+    ``simulate(scene)`` defaults to :func:`tengfield.dynamics.simulate`,
+    ``solve(scene, z, comm=...)`` to :func:`tengfield.field.solve_position`
+    (only called when no valid cached surrogate exists); ``comm`` spreads
+    the field solves over its ranks.
+    """
+    stages: dict[str, Stage] = {}
+    simulate = simulate or _default_simulate()
+
+    start = time.perf_counter()
+    dynamics = simulate(scene)
+    stages["dynamics"] = Stage("ran", getattr(dynamics, "message", "") or "",
+                               time.perf_counter() - start,
+                               {"status": getattr(dynamics, "status", None),
+                                "solver_wall_time_s": getattr(dynamics, "wall_time", None)})
+    t = np.asarray(dynamics.t, dtype=float)
+    gap = np.asarray(dynamics.gap, dtype=float)
+    velocity = np.asarray(dynamics.gap_velocity, dtype=float)
+    table_motion = np.asarray(dynamics.table, dtype=float)
+
+    table = curves = None
+    needs_field, why_not = _needs_field(scene, gap)
+    if needs_field:
+        table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+                                      progress=progress, command_line=command_line,
+                                      write=write_cache)
+        if outcome.status == "cached":
+            stages["field"] = Stage("cached", outcome.reason, 0.0, {"path": outcome.path})
+        else:
+            stages["field"] = Stage("ran", outcome.reason, outcome.wall_time, {
+                "path": outcome.path, "positions": table.count,
+                "sum_of_solve_wall_times_s": table.total_solve_wall_time})
+        stages["field"].details.update({
+            "method": table.method, "degree": table.degree,
+            "max_relative_error_estimate": float(np.nanmax(table.field_error)),
+            "max_dofs": int(table.dofs.max())})
+        curves = TerminalCurves(table, scene.circuit.reference)
+        stages["surrogate"] = Stage(
+            "cached" if outcome.status == "cached" else "ran",
+            f"{table.count} positions, cubic splines of Q_SC and C_T",
+            0.0, {"interpolation_error_estimate": table.interpolation_error,
+                  "tolerance": table.tolerance, "converged": table.converged,
+                  "error_history": table.error_history})
+    else:
+        stages["field"] = Stage("skipped", why_not)
+        stages["surrogate"] = Stage("skipped", why_not)
+
+    start = time.perf_counter()
+    terminal = terminal_waveforms(curves, gap, velocity, cells=scene.device.cells,
+                                  parallel_capacitance=scene.circuit.parallel_capacitance)
+    waveforms = {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
+                 "table_m": table_motion, "V_oc_V": terminal["V_oc"],
+                 "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"]}
+    load = None
+    if scene.circuit.kind == "load":
+        load = load_waveforms(scene, dynamics, curves, waveforms)
+        waveforms.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
+                          "P_load_W": load["P_load"]})
+        stages["circuit"] = Stage("ran", f"load ODE, R = {scene.circuit.load:g} ohm",
+                                  time.perf_counter() - start)
+    else:
+        stages["circuit"] = Stage("ran", f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
+                                  "closed form; load ODE not run (no load)",
+                                  time.perf_counter() - start)
+    summary = _summary(scene, dynamics, waveforms, load, stages, table)
+    return RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
+                     table=table, curves=curves)
+
+
+def _needs_field(scene, gap) -> tuple[bool, str]:
+    if scene.device.ball_charge == 0.0:
+        return False, "ball charge is zero ([device] surface_charge_uC_per_m2 = 0): Q_SC = 0"
+    if np.all(np.asarray(gap) == 0.0):
+        return False, "the ball never leaves the lower electrode: Q_SC = 0 (reference state)"
+    return True, ""
+
+
+def _summary(scene, dynamics, waveforms, load, stages, table) -> dict:
+    t = waveforms["time_s"]
+    mask, window_reason = steady_window(t, scene)
+    p2p = {name: circuit.peak_to_peak(waveforms[name][mask])
+           for name in ("V_oc_V", "Q_sc_C", "I_sc_A")}
+    summary: dict[str, Any] = {
+        "scene": scene.source,
+        "field_hash": scene.field_hash(),
+        "reference": scene.circuit.reference,
+        "sign_convention": "V = V_lower - V_upper; Q_SC and currents lower -> upper through "
+                           "the external circuit; reference state: ball on the lower electrode",
+        "cells": scene.device.cells,
+        "circuit": {"kind": scene.circuit.kind, "load_ohm": scene.circuit.load,
+                    "parallel_capacitance_F": scene.circuit.parallel_capacitance},
+        "window": {"start_s": float(t[mask][0]), "end_s": float(t[mask][-1]),
+                   "rule": window_reason},
+        "peak_to_peak": p2p,
+        "regime": getattr(dynamics, "regime", None),
+        "load": None,
+        "stages": stages,
+    }
+    if table is not None:
+        summary["surrogate_error_estimate"] = table.interpolation_error
+    if load is not None:
+        volume = scene.device.cell_volume * scene.device.cells
+        power = mean_over(t, waveforms["P_load_W"], mask)
+        summary["load"] = {
+            "mean_power_W": power,
+            "device_volume_m3": volume,
+            "power_density_W_per_m3": power / volume,
+            "V_load_peak_to_peak_V": circuit.peak_to_peak(waveforms["V_load_V"][mask]),
+            "I_load_peak_to_peak_A": circuit.peak_to_peak(waveforms["I_load_A"][mask]),
+            "energy_balance_J": {k: load[k] for k in ("delivered_energy_J", "dissipated_energy_J",
+                                                      "stored_energy_change_J")},
+        }
+    else:
+        summary["load"] = None
+        summary["load_reason"] = f"[circuit] kind = {scene.circuit.kind!r}: no load to report"
+    return _jsonable(summary)
+
+
+# ---------------------------------------------------------------------------
+# output files
+def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
+    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS`` if present)."""
+    columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS if c in waveforms]
+    data = np.column_stack([waveforms[c] for c in columns])
+    np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="", fmt="%.10g")
+    return Path(path)
+
+
+def write_outputs(result: RunResult, out_dir: str | Path, *, plots: bool = True) -> list[Path]:
+    """Write waveforms.csv, summary.json, the dynamics outputs (if the dynamics
+    result offers ``write(dir)``) and, with ``plots``, waveforms.png and surrogate.png."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [write_waveforms_csv(out / "waveforms.csv", result.waveforms)]
+    writer = getattr(result.dynamics, "write", None)
+    if callable(writer):
+        try:
+            extra = writer(out)
+        except TypeError:
+            extra = None
+        if isinstance(extra, (list, tuple)):
+            written.extend(Path(p) for p in extra)
+    if plots:
+        from .plotting.waveforms import plot_surrogate, plot_waveforms
+        written.append(plot_waveforms(result.waveforms, out / "waveforms.png",
+                                      title=_title(result)))
+        if result.curves is not None:
+            written.append(plot_surrogate(result.table, result.curves, out / "surrogate.png",
+                                          cells=result.scene.device.cells))
+    (out / "summary.json").write_text(json.dumps(result.summary, indent=2) + "\n")
+    written.append(out / "summary.json")
+    return written
+
+
+def _title(result: RunResult) -> str:
+    exc = result.scene.excitation
+    regime = result.summary.get("regime") or {}
+    name = regime.get("name", "") if isinstance(regime, dict) else ""
+    return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
+            f"{result.scene.device.cells} cell(s), {result.scene.circuit.reference}"
+            + (f", {name}" if name else ""))
