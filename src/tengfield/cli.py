@@ -17,6 +17,10 @@ from .errors import TengfieldError
 COMMAND_MODULES = [
     "scene",
     "info",
+    "field",
+    "run",
+    "precompute",
+    "sweep",
 ]
 
 

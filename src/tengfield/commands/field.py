@@ -1,0 +1,115 @@
+"""``tengfield field``: electrostatics at one ball position (numbers, field.json,
+potential.xdmf, field.png). The only place of the field stack that uses
+``MPI.COMM_WORLD``."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "field", help="capacitance matrix, induced charges and potential at one ball position",
+        description="Solve the electrostatics of the device with the ball at gap Z above the "
+                    "lower electrode. Prints the Maxwell capacitance matrix, the induced "
+                    "charges (electrodes grounded) and C_T; writes DIR/field.json, "
+                    "DIR/potential.xdmf (open-circuit potential for ParaView) and DIR/field.png.")
+    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    p.add_argument("--position-mm", type=float, required=True, metavar="Z",
+                   help="gap between the ball's bottom and the lower electrode [mm], 0..gap_mm")
+    p.add_argument("--offset-mm", type=float, default=None, metavar="R",
+                   help="lateral ball offset from the axis [mm] (3D only; default [field] "
+                        "ball_offset_mm)")
+    p.add_argument("--method", choices=("auto", "axisymmetric", "3d"), default=None,
+                   help="solver (default [field] method)")
+    p.add_argument("--reference", choices=("floating", "grounded-lower"), default=None,
+                   help="two-terminal reference (default [circuit] reference)")
+    p.add_argument("-o", "--output", default="field-out", metavar="DIR",
+                   help="output directory (created)")
+    p.add_argument("--no-plot", action="store_true", help="skip potential.xdmf and field.png")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    import pyvista  # noqa: F401 - before dolfinx: the reverse order breaks VTK text rendering
+    from mpi4py import MPI
+
+    from ..errors import FieldError
+    from ..field import check_position, resolve_method, solve_position
+    from ..scene import load_scene
+
+    comm = MPI.COMM_WORLD
+    scene = load_scene(args.scene)
+    if args.offset_mm is not None:
+        if not (math.isfinite(args.offset_mm) and args.offset_mm >= 0):
+            raise FieldError(f"offset_mm = {args.offset_mm:g} is out of range: allowed "
+                             f"[0, {(scene.device.tube_inner_radius - scene.device.ball_radius) * 1e3:g}] mm")
+        scene = scene.with_values(field={"ball_offset_mm": args.offset_mm})
+    position = args.position_mm * 1e-3
+    check_position(scene, position)
+    reference = args.reference or scene.circuit.reference
+    method = resolve_method(scene, args.method, scene.field.ball_offset)
+    out = Path(args.output)
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+
+    if method == "axisymmetric":
+        result, potentials = _axisymmetric(scene, position, reference, out, comm,
+                                           plot=not args.no_plot)
+    else:
+        result = solve_position(scene, position, comm=comm, method="3d")
+        potentials = None
+        if comm.rank == 0 and not args.no_plot:
+            print("tengfield: potential.xdmf and field.png are written by the axisymmetric "
+                  "solver only; the 3D run writes field.json", file=sys.stderr)
+    if comm.rank == 0:
+        from ..field.output import summary_lines
+
+        data = result.to_json(reference)
+        if potentials is not None:
+            data["open_circuit_potential_V"] = {"lower": float(potentials[0]),
+                                                "upper": float(potentials[1])}
+        (out / "field.json").write_text(json.dumps(data, indent=2) + "\n")
+        for line in summary_lines(result, reference, potentials):
+            print(line)
+        print(f"wrote {out / 'field.json'}" + ("" if args.no_plot or method != "axisymmetric"
+                                              else f", {out / 'potential.xdmf'}, {out / 'field.png'}"))
+    return 0
+
+
+def _axisymmetric(scene, position, reference, out, comm, *, plot: bool):
+    """Solve on rank 0 (COMM_SELF); with ``plot`` also the reference state (z = 0) and
+    the source potential, then write the XDMF and PNG files."""
+    from mpi4py import MPI
+
+    from ..field import axisymmetric, output
+
+    outcome = None
+    if comm.rank == 0:
+        try:
+            result = axisymmetric.solve_serial(scene, position, MPI.COMM_SELF, keep_solution=plot,
+                                               source_solve=plot)
+            potentials = None
+            if plot:
+                ref = axisymmetric.solve_serial(scene, 0.0, MPI.COMM_SELF, estimate_error=False)
+                potentials = output.open_circuit_potentials(
+                    result.capacitance, result.induced_charge, ref.capacitance,
+                    ref.induced_charge, result.ball_charge, reference)
+                disc, sol = result.info.pop("_solution")
+                phi = output.potential_vector(sol, potentials)
+                output.write_potential_xdmf(out / "potential.xdmf", disc, phi, MPI.COMM_SELF)
+                from ..field.geometry_axisymmetric import layout
+                lay = layout(scene, position)
+                title = (f"open-circuit potential, z = {position * 1e3:.3g} mm, "
+                         f"{reference} reference, V_OC = {potentials[0] - potentials[1]:.4g} V")
+                output.render_potential_png(out / "field.png", disc, phi, lay, title=title)
+            outcome = (result, potentials)
+        except Exception as exc:  # noqa: BLE001 - re-raised on every rank
+            outcome = exc
+    if comm.size > 1:
+        outcome = comm.bcast(outcome, root=0)
+    if isinstance(outcome, Exception):
+        raise outcome
+    return outcome

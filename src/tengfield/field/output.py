@@ -1,0 +1,255 @@
+"""Open-circuit potential of one position, and its files (XDMF for ParaView, PNG figure).
+
+Physics (pure functions, SI): with the ball at z the electrodes float at
+potentials V = [V_lower, V_upper] that keep the charges of the reference
+state (:mod:`tengfield.terminals`): ball on the lower electrode (z = 0), the
+terminals shorted, and
+
+* ``reference = "floating"``: the pair holds total charge ``-q_ball``;
+* ``reference = "grounded-lower"``: the lower electrode stays grounded
+  (V_lower = 0) and the upper one keeps its reference charge.
+
+The physical potential is then ``φ = φ_σ + V_lower ψ_lower + V_upper ψ_upper``
+(φ_σ: potential of the ball charge with both electrodes grounded).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .. import terminals
+
+
+def reference_charges(C_ref, q_ref, ball_charge: float, reference: str = "floating") -> np.ndarray:
+    """Electrode charges [Q_lower, Q_upper] [C] of the reference state (terminals shorted)."""
+    terminals._check_reference(reference)
+    C_ref = np.asarray(C_ref, dtype=float)
+    q_ref = np.asarray(q_ref, dtype=float)
+    if reference == "grounded-lower":
+        return q_ref.copy()  # both at V = 0
+    common = (-ball_charge - q_ref.sum()) / C_ref.sum()   # shorted pair at one potential
+    return C_ref @ np.array([common, common]) + q_ref
+
+
+def open_circuit_potentials(C, q, C_ref, q_ref, ball_charge: float,
+                            reference: str = "floating") -> np.ndarray:
+    """[V_lower, V_upper] [V] with the terminals open, charges fixed at the reference state."""
+    C = np.asarray(C, dtype=float)
+    q = np.asarray(q, dtype=float)
+    Q = reference_charges(C_ref, q_ref, ball_charge, reference)
+    if reference == "grounded-lower":
+        return np.array([0.0, (Q[1] - q[1]) / C[1, 1]])
+    return np.linalg.solve(C, Q - q)
+
+
+# ---------------------------------------------------------------------------
+def potential_vector(solution, potentials) -> np.ndarray:
+    """φ as a dof vector: source potential + floating electrode potentials × weighting potentials."""
+    return solution.source + potentials[0] * solution.weighting[0] + potentials[1] * solution.weighting[1]
+
+
+def device_mesh(disc):
+    """A new dolfinx mesh of every cell but the Kelvin image (same curved geometry)."""
+    import dolfinx.mesh
+    import ufl
+
+    from . import geometry_axisymmetric as geometry
+
+    mesh = disc.mesh
+    tdim = mesh.topology.dim
+    image = disc.cell_tags.find(geometry.CELL_TAGS["exterior"])
+    n_cells = mesh.topology.index_map(tdim).size_local
+    keep = np.setdiff1d(np.arange(n_cells, dtype=np.int32), image)
+    dofmap = mesh.geometry.dofmap
+    cells = np.array([dofmap.links(c) for c in keep], dtype=np.int64)
+    used, cells = np.unique(cells, return_inverse=True)
+    cells = cells.reshape(keep.size, -1)
+    x = mesh.geometry.x[used, :2]
+    degree = mesh.geometry.cmap.degree
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", mesh.ufl_cell(), degree))
+    from mpi4py import MPI
+    return dolfinx.mesh.create_mesh(MPI.COMM_SELF, cells, x, domain)
+
+
+def write_potential_xdmf(path, disc, phi: np.ndarray, comm) -> None:
+    """``phi`` (dof vector on disc.V) on the device part of the mesh to XDMF (P2 on P2 geometry)."""
+    from scipy.spatial import cKDTree
+
+    from . import _dolfinx as dx_api
+
+    sub = device_mesh(disc)
+    W = dx_api.lagrange_space(sub, sub.geometry.cmap.degree)
+    source = dx_api.function(disc.V, phi)
+    if disc.V.element.basix_element.degree != sub.geometry.cmap.degree:
+        source = dx_api.interpolate(dx_api.lagrange_space(disc.mesh, sub.geometry.cmap.degree),
+                                    source)
+    parent_xy = source.function_space.tabulate_dof_coordinates()[:, :2]
+    sub_xy = W.tabulate_dof_coordinates()[:, :2]
+    _, idx = cKDTree(parent_xy).query(sub_xy)
+    out = dx_api.function(W, source.x.array[idx], name="potential_V")
+    dx_api.write_xdmf(path, sub, [out], comm)
+
+
+def render_potential_png(path, disc, phi: np.ndarray, lay, *, title: str,
+                         window_size=(1400, 1100)) -> None:
+    """Paper figure: φ on a meridian plane (mirrored to -r), equipotentials, field lines,
+    ball and electrodes outlined, colour bar in volts."""
+    import pyvista as pv
+
+    import dolfinx.plot
+
+    from . import geometry_axisymmetric as geometry
+
+    V = disc.V
+    topology, cell_types, points = dolfinx.plot.create_vtk_mesh(V)
+    grid = pv.UnstructuredGrid(topology, cell_types, points.copy())
+    grid.point_data["phi"] = phi
+    # keep the device part only (drop the Kelvin image)
+    image = disc.cell_tags.find(geometry.CELL_TAGS["exterior"])
+    mask = np.ones(grid.n_cells, dtype=bool)
+    mask[image] = False
+    grid = grid.extract_cells(np.flatnonzero(mask))
+    mirrored = grid.copy()
+    mirrored.points[:, 0] *= -1.0
+    full = grid.merge(mirrored)
+    mm = 1e3
+    full.points[:] *= mm  # plot in mm
+
+    zl, zu, t = lay.z_lower * mm, lay.z_upper * mm, lay.plate_thickness * mm
+    ro, ri, a = lay.tube_outer_radius * mm, lay.tube_inner_radius * mm, lay.electrode_radius * mm
+    half_w = ro + 2.0
+    z0, z1 = zl - t - 1.5, zu + t + 1.5
+    n_r = 400  # even: no sample sits exactly on the axis (the seam of the mirrored halves)
+    step = 2 * half_w / n_r
+    plane = pv.ImageData(dimensions=(n_r, int((z1 - z0) / step), 1), spacing=(step, step, 1.0),
+                         origin=(-half_w + 0.5 * step, z0, 0.0))
+    sampled = plane.sample(full)
+    sampled = sampled.compute_derivative(scalars="phi", gradient="grad")
+    lim = float(np.max(np.abs(sampled.point_data["phi"])))
+
+    plotter = pv.Plotter(off_screen=True, window_size=window_size)
+    plotter.set_background("white")
+    bar = dict(title="potential (V)", vertical=True, position_x=0.82, position_y=0.15,
+               height=0.7, width=0.05, title_font_size=24, label_font_size=20, fmt="%.0f",
+               color="black", n_labels=5)
+    plotter.add_mesh(sampled, scalars="phi", cmap="RdBu_r", clim=(-lim, lim),
+                     scalar_bar_args=bar, show_edges=False)
+    contours = sampled.contour(isosurfaces=np.linspace(-lim, lim, 25)[1:-1], scalars="phi")
+    if contours.n_points:
+        plotter.add_mesh(contours, color="black", line_width=1.0, opacity=0.35)
+    rb, zb = lay.ball_radius * mm, lay.ball_centre_z * mm
+    shape = (sampled.dimensions[1], sampled.dimensions[0])
+    grad = sampled.point_data["grad"]
+    xs = -half_w + 0.5 * step + step * np.arange(shape[1])
+    ys = z0 + step * np.arange(shape[0])
+    angles = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False) + np.pi / 32
+    seeds = np.column_stack([1.03 * rb * np.sin(angles), zb + 1.03 * rb * np.cos(angles)])
+    lines = trace_field_lines(-grad[:, 0].reshape(shape), -grad[:, 1].reshape(shape), xs, ys,
+                              seeds, step_length=0.4 * step, max_steps=3000,
+                              stop=lambda p: (np.hypot(p[:, 0], p[:, 1] - zb) < rb)
+                              | ((np.abs(np.abs(p[:, 1]) - zu) < 0.5 * step)
+                                 & (np.abs(p[:, 0]) <= a)))
+    for line in lines:
+        if len(line) > 3:
+            poly = pv.lines_from_points(np.column_stack([line, np.full(len(line), 0.02)]))
+            plotter.add_mesh(poly, color="#202020", line_width=1.8)
+            mid = int(0.3 * len(line))
+            direction = line[mid + 1] - line[mid - 1]
+            arrow = pv.Arrow(start=(*line[mid], 0.03), direction=(*direction, 0.0), scale=0.45,
+                             tip_length=0.5, tip_radius=0.25, shaft_radius=0.0)
+            plotter.add_mesh(arrow, color="#202020")
+    circle = pv.Circle(radius=rb, resolution=200)
+    circle.points[:, 1] += zb
+    plotter.add_mesh(circle.extract_feature_edges(), color="black", line_width=3)
+    for z in (zl, zu):
+        plotter.add_mesh(pv.Line((-a, z, 0.01), (a, z, 0.01)), color="#b87333", line_width=8)
+    if lay.walls:
+        for x0, x1, y0, y1 in ((-ro, ro, zl - t, zl), (-ro, ro, zu, zu + t),
+                               (ri, ro, zl, zu), (-ro, -ri, zl, zu)):
+            box = pv.Rectangle([(x0, y0, 0.01), (x1, y0, 0.01), (x1, y1, 0.01)])
+            plotter.add_mesh(box.extract_feature_edges(), color="#555555", line_width=2)
+    if lay.table:
+        plotter.add_mesh(pv.Line((-half_w, zl - t, 0.01), (half_w, zl - t, 0.01)),
+                         color="black", line_width=6)
+    plotter.add_text(title, position="upper_edge", font_size=14, color="black")
+    plotter.show_bounds(xtitle="r (mm)", ytitle="z (mm)", color="black", font_size=14,
+                        location="outer", ticks="outside", bounds=(-half_w, half_w, z0, z1, 0, 0))
+    plotter.view_xy()
+    plotter.camera.zoom(1.15)
+    plotter.screenshot(str(Path(path)))
+    plotter.close()
+
+
+def trace_field_lines(Ex, Ey, xs, ys, seeds, *, step_length: float, max_steps: int,
+                      stop=None) -> list[np.ndarray]:
+    """Field lines of the sampled field (Ex, Ey on the grid xs × ys, shape (len(ys), len(xs))).
+
+    Every seed is traced forward and backward along the unit field direction
+    (midpoint rule, fixed ``step_length``, all seeds at once) until it leaves
+    the grid, the field vanishes, or ``stop(points)`` (a boolean per point,
+    e.g. "hit a conductor") becomes true. Returns one (n, 2) array per seed.
+    """
+    from scipy.interpolate import RegularGridInterpolator
+
+    fx = RegularGridInterpolator((ys, xs), Ex, bounds_error=False, fill_value=0.0)
+    fy = RegularGridInterpolator((ys, xs), Ey, bounds_error=False, fill_value=0.0)
+    floor = 1e-9 * (float(np.max(np.hypot(Ex, Ey))) or 1.0)
+
+    def direction(p):
+        yx = p[:, ::-1]
+        e = np.column_stack([fx(yx), fy(yx)])
+        n = np.hypot(e[:, 0], e[:, 1])
+        ok = n > floor
+        e[ok] /= n[ok, None]
+        return e, ok
+
+    def trace(sign):
+        p = np.asarray(seeds, dtype=float).copy()
+        paths = [[q.copy()] for q in p]
+        active = np.ones(len(p), dtype=bool)
+        for _ in range(max_steps):
+            if not active.any():
+                break
+            idx = np.flatnonzero(active)
+            d, ok1 = direction(p[idx])
+            d_mid, ok2 = direction(p[idx] + 0.5 * sign * step_length * d)
+            q = p[idx] + sign * step_length * d_mid
+            inside_grid = ((xs[0] <= q[:, 0]) & (q[:, 0] <= xs[-1])
+                           & (ys[0] <= q[:, 1]) & (q[:, 1] <= ys[-1]))
+            alive = ok1 & ok2 & inside_grid
+            if stop is not None:
+                alive &= ~stop(q)
+            for k, i in enumerate(idx):
+                if alive[k]:
+                    paths[i].append(q[k].copy())
+            p[idx] = q
+            active[idx[~alive]] = False
+        return [np.array(path) for path in paths]
+
+    backward, forward = trace(-1.0), trace(1.0)
+    return [np.vstack([b[::-1], f[1:]]) for b, f in zip(backward, forward)]
+
+
+def summary_lines(result, reference: str, potentials=None) -> list[str]:
+    """Human-readable numbers of one position (for the CLI)."""
+    fr = result.induced_fractions()
+    lines = [
+        f"position z = {result.position * 1e3:.4g} mm, offset = {result.offset * 1e3:.3g} mm, "
+        f"method = {result.method}, degree = {result.degree}",
+        f"C_ll = {result.C_ll * 1e12:.6g} pF   C_lu = {result.C_lu * 1e12:.6g} pF   "
+        f"C_uu = {result.C_uu * 1e12:.6g} pF",
+        f"q_lower = {result.q_lower * 1e12:.6g} pC ({fr[0]:+.5f} q_ball)   "
+        f"q_upper = {result.q_upper * 1e12:.6g} pC ({fr[1]:+.5f} q_ball)   "
+        f"q_ball = {result.ball_charge * 1e12:.6g} pC",
+        f"C_T ({reference}) = {result.terminal_capacitance(reference) * 1e12:.6g} pF",
+    ]
+    if potentials is not None:
+        lines.append(f"open circuit: V_lower = {potentials[0]:.6g} V, V_upper = {potentials[1]:.6g} V, "
+                     f"V_OC = V_lower - V_upper = {potentials[0] - potentials[1]:.6g} V")
+    est = result.relative_error_estimate
+    lines.append(f"dofs = {result.dofs}, cells = {result.cells}, wall time = {result.wall_time:.3g} s "
+                 f"(solve {result.solve_time:.3g} s), relative error estimate = "
+                 + ("n/a" if math.isnan(est) else f"{est:.2g}"))
+    return lines
