@@ -17,6 +17,7 @@ from .errors import TengfieldError
 COMMAND_MODULES = [
     "scene",
     "info",
+    "dynamics",
     "field",
     "run",
     "precompute",

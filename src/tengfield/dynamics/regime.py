@@ -10,8 +10,9 @@ Definitions (also in docs/dynamics.md). The steady window is
 * contacts per period: impacts at that plate in the window / K (a chatter
   sequence collapsed to its accumulation point counts its recorded impacts).
 * max gap: the largest z at SAMPLES_PER_PERIOD samples per period in the
-  window (error below ``g (1+Gamma) (T/256)^2 / 8``), dh if the upper
-  plate was reached.
+  window, refined by a golden-section search around the largest sample
+  (error below ``g (1+Gamma) (T/64)^2 / 8`` only if two different apexes
+  differ by less than that), dh if the upper plate was reached.
 * names: ``rest`` when the ball never leaves the lower plate
   (max gap < REST_GAP and no impact); ``chaos`` when aperiodic;
   otherwise ``bounce`` without upper contacts, ``regular-contact`` with at
@@ -29,8 +30,8 @@ import numpy as np
 from .result import Regime
 
 MAX_PERIOD = 16
-PERIOD_TOL = 1e-5
-SAMPLES_PER_PERIOD = 256
+PERIOD_TOL = 1e-3
+SAMPLES_PER_PERIOD = 64
 REST_GAP = 1e-9          # [m]
 CRITICAL_OVERSHOOT = 0.1  # fraction of the stroke
 
@@ -49,6 +50,26 @@ def detect_period(z_section: np.ndarray, v_section: np.ndarray, stroke: float, g
         if np.all(dz + dv <= tol):
             return p
     return 0
+
+
+def _refined_max(sampler, t: np.ndarray, z: np.ndarray, iterations: int = 40) -> float:
+    """Max of z(t): best sample, then golden-section search on its neighbourhood."""
+    k = int(np.argmax(z))
+    lo = t[max(k - 1, 0)]
+    hi = t[min(k + 1, t.size - 1)]
+    best = float(z[k])
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = lo, hi
+    for _ in range(iterations):
+        c = b - ratio * (b - a)
+        d = a + ratio * (b - a)
+        zc, zd = sampler(np.array([c, d]))[0]
+        if zc >= zd:
+            b = d
+        else:
+            a = c
+        best = max(best, float(zc), float(zd))
+    return best
 
 
 def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
@@ -72,7 +93,7 @@ def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
     upper = in_window & (impact_plate == 1)
     n_lower = int(np.count_nonzero(lower))
     n_upper = int(np.count_nonzero(upper))
-    max_gap = float(np.max(z_dense))
+    max_gap = _refined_max(sampler, dense_t, z_dense)
     if n_upper or upper_stuck:
         max_gap = stroke
     period_p = detect_period(z_sec, v_sec, stroke, g)

@@ -1,0 +1,138 @@
+"""``tengfield dynamics`` (one trajectory) and ``tengfield map`` (regime map).
+
+Neither imports dolfinx or gmsh.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import sys
+from pathlib import Path
+
+from ..errors import SceneError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("dynamics", help="simulate the ball's motion (impact map or soft contact)",
+                       description="Writes trajectory.csv, impacts.csv, summary.json and "
+                                   "trajectory.png to DIR.")
+    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    p.add_argument("-o", "--output", default="dynamics-out", help="output directory")
+    p.add_argument("--duration-s", type=float, default=None,
+                   help="override [run] duration_s")
+    p.set_defaults(func=_run_dynamics)
+
+    m = sub.add_parser("map", help="regime map over frequency x amplitude",
+                       description="Writes map.csv and map.png to DIR. Ranges are START:STOP:N "
+                                   "(N evenly spaced values, both ends included).")
+    m.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    m.add_argument("--frequency-hz", required=True, metavar="START:STOP:N")
+    m.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N")
+    m.add_argument("--periods", type=int, default=200,
+                   help="excitation periods simulated per point (default 200)")
+    m.add_argument("--jobs", "-j", type=int, default=None,
+                   help="worker processes (default: all cores)")
+    m.add_argument("-o", "--output", default="map-out", help="output directory")
+    m.set_defaults(func=_run_map)
+
+
+def parse_range(text: str, option: str, *, positive: bool) -> "list[float]":
+    """'START:STOP:N' -> N evenly spaced floats; SceneError naming the option otherwise."""
+    import numpy as np
+
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise SceneError(f"{option} = {text!r}: expected START:STOP:N, e.g. 5:70:66")
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+        n = int(parts[2])
+    except ValueError:
+        raise SceneError(f"{option} = {text!r}: START and STOP must be numbers and N a whole "
+                         "number, e.g. 5:70:66") from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise SceneError(f"{option} = {text!r}: START and STOP must be finite")
+    if n < 1 or n > 100_000:
+        raise SceneError(f"{option} = {text!r}: N = {n} is out of range: allowed [1, 100000]")
+    low = min(start, stop)
+    if positive and low <= 0:
+        raise SceneError(f"{option} = {text!r}: values must be > 0")
+    if not positive and low < 0:
+        raise SceneError(f"{option} = {text!r}: values must be >= 0")
+    return list(np.linspace(start, stop, n))
+
+
+def _run_dynamics(args) -> int:
+    from ..dynamics import simulate
+    from ..plotting.dynamics import plot_trajectory
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene)
+    if args.duration_s is not None and not (args.duration_s > 0 and math.isfinite(args.duration_s)):
+        raise SceneError(f"--duration-s = {args.duration_s!r}: allowed (0, inf)")
+    result = simulate(scene, duration=args.duration_s)
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    write_trajectory_csv(result, out / "trajectory.csv")
+    write_impacts_csv(result, out / "impacts.csv")
+    summary = result.summary()
+    summary["scene"] = scene.source
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    plot_trajectory(result, out / "trajectory.png",
+                    title=f"{scene.excitation.amplitude * 1e3:g} mm, "
+                          f"{scene.excitation.frequency:g} Hz, e = {scene.contact.restitution:g}"
+                    if scene.excitation.kind == "sine" else "recorded excitation")
+    print(f"regime {summary['regime']}, period {summary['period']}, max gap "
+          f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
+          f"{summary['wall_time_s']:.3g} s -> {out}/")
+    return 0
+
+
+def write_trajectory_csv(result, path) -> None:
+    import numpy as np
+
+    data = np.column_stack([result.t, result.gap, result.gap_velocity, result.table])
+    np.savetxt(path, data, delimiter=",", fmt="%.12g",
+               header="time_s,gap_m,gap_velocity_m_per_s,table_m", comments="")
+
+
+def write_impacts_csv(result, path) -> None:
+    imp = result.impacts
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"])
+        for t, p, vb, va in zip(imp.time, imp.plate, imp.speed_before, imp.speed_after):
+            w.writerow([f"{t:.12g}", p, f"{vb:.12g}", f"{va:.12g}"])
+
+
+def _run_map(args) -> int:
+    import numpy as np
+
+    from ..dynamics import regime_map
+    from ..plotting.dynamics import plot_regime_map
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene)
+    freqs = parse_range(args.frequency_hz, "--frequency-hz", positive=True)
+    amps_mm = parse_range(args.amplitude_mm, "--amplitude-mm", positive=False)
+    if args.periods < 2:
+        raise SceneError(f"--periods = {args.periods}: allowed [2, inf)")
+    result = regime_map(scene, np.array(freqs), np.array(amps_mm) * 1e-3, jobs=args.jobs,
+                        progress=sys.stderr.isatty(), periods=args.periods)
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "map.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["frequency_hz", "amplitude_mm", "regime", "period", "max_gap_mm",
+                    "lower_contacts_per_period", "upper_contacts_per_period", "error"])
+        for r in result.records():
+            w.writerow([f"{r['frequency_hz']:.10g}", f"{r['amplitude_m'] * 1e3:.10g}",
+                        r["regime"], r["period"], f"{r['max_gap_m'] * 1e3:.10g}",
+                        f"{r['lower_contacts_per_period']:.6g}",
+                        f"{r['upper_contacts_per_period']:.6g}", r["error"]])
+    plot_regime_map(result, out / "map.png",
+                    title=f"regimes, e = {scene.contact.restitution:g}, "
+                          f"dh = {scene.device.gap * 1e3:g} mm, {args.periods} periods per point")
+    counts = {n: int(np.sum(result.regime == n)) for n in np.unique(result.regime)}
+    print(f"{result.regime.size} points: {counts} -> {out}/")
+    return 0

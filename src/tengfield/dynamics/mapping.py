@@ -1,0 +1,166 @@
+"""Regime maps: the impact map run on a grid of sine excitations (frequency x amplitude).
+
+Each grid point starts from ``scene.initial`` and runs ``periods`` excitation
+periods; the first ``settle_periods`` are the transient left out of the
+regime analysis (:func:`tengfield.dynamics.regime.classify`). Points are
+independent: they are spread over ``jobs`` worker processes (all cores by
+default), each running the compiled kernel.
+"""
+from __future__ import annotations
+
+import math
+import multiprocessing as mp
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DynamicsError, SceneError
+from ..scene import G
+from .impact import Restitution, integrate
+from .regime import classify
+from .result import REGIMES, Regime
+from .table import sine_table
+
+
+@dataclass(frozen=True)
+class MapResult:
+    """Regimes on the grid; 2-D arrays are indexed [amplitude, frequency]."""
+    frequency: np.ndarray        # [Hz], shape (nf,)
+    amplitude: np.ndarray        # [m], shape (na,)
+    regime: np.ndarray           # names, shape (na, nf)
+    period: np.ndarray           # excitation periods, 0 = aperiodic
+    max_gap: np.ndarray          # [m]
+    lower_contacts_per_period: np.ndarray
+    upper_contacts_per_period: np.ndarray
+    error: np.ndarray            # message where a point failed, else ''
+
+    def records(self) -> list[dict]:
+        """One dict per grid point (frequency-fastest), SI units."""
+        out = []
+        for i, amp in enumerate(self.amplitude):
+            for j, freq in enumerate(self.frequency):
+                out.append({"frequency_hz": float(freq), "amplitude_m": float(amp),
+                            "regime": str(self.regime[i, j]), "period": int(self.period[i, j]),
+                            "max_gap_m": float(self.max_gap[i, j]),
+                            "lower_contacts_per_period": float(self.lower_contacts_per_period[i, j]),
+                            "upper_contacts_per_period": float(self.upper_contacts_per_period[i, j]),
+                            "error": str(self.error[i, j])})
+        return out
+
+    def regime_index(self) -> np.ndarray:
+        """Integer code of each regime (index into REGIMES, -1 for failed points)."""
+        lookup = {name: k for k, name in enumerate(REGIMES)}
+        return np.vectorize(lambda s: lookup.get(s, -1))(self.regime)
+
+
+@dataclass(frozen=True)
+class _PointSetup:
+    stroke: float
+    restitution: Restitution
+    phase: float
+    t_start: float
+    gap0: float
+    velocity0: float
+    periods: int
+    settle_periods: int
+
+
+def point_regime(setup: _PointSetup, frequency: float, amplitude: float) -> Regime:
+    """Regime of one sine excitation (frequency [Hz], amplitude [m])."""
+    period = 1.0 / frequency
+    table = sine_table(amplitude, 2.0 * math.pi * frequency, setup.phase)
+    t_end = setup.t_start + setup.periods * period
+    traj, (it, ip, ivb, _), _ = integrate(
+        table, setup.stroke, setup.restitution, t_start=setup.t_start, t_end=t_end,
+        gap0=setup.gap0, velocity0=setup.velocity0, period=period)
+    window_start = setup.t_start + setup.settle_periods * period
+    return classify(traj, it, ip, ivb, window_start=window_start, t_end=t_end, period=period,
+                    stroke=setup.stroke, g=G,
+                    upper_stuck=traj.upper_stuck_between(window_start, t_end))
+
+
+def _row(args):
+    setup, frequencies, amplitude, row = args
+    out = []
+    for f in frequencies:
+        try:
+            reg = point_regime(setup, float(f), float(amplitude))
+            out.append((reg, ""))
+        except DynamicsError as exc:
+            out.append((None, str(exc)))
+    return row, out
+
+
+def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
+               progress: bool = True, periods: int = 200,
+               settle_periods: int | None = None) -> MapResult:
+    """Regime, period, max gap and contacts per period on a frequency x amplitude grid.
+
+    ``frequencies_hz`` [Hz] and ``amplitudes_m`` [m] are 1-D; ``jobs``
+    worker processes (default: all cores); ``periods`` excitation periods
+    per point of which ``settle_periods`` (default: the scene's, at most
+    half of ``periods``) are transient. A point whose integration fails gets
+    regime ``'error'`` and its message in ``error``.
+    """
+    freqs = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
+    amps = np.atleast_1d(np.asarray(amplitudes_m, dtype=float))
+    if freqs.ndim != 1 or freqs.size == 0 or not np.all(np.isfinite(freqs)) or np.any(freqs <= 0):
+        raise SceneError(f"map frequencies {freqs!r}: need at least one finite value > 0 Hz")
+    if amps.ndim != 1 or amps.size == 0 or not np.all(np.isfinite(amps)) or np.any(amps < 0):
+        raise SceneError(f"map amplitudes {amps!r}: need at least one finite value >= 0 m")
+    if periods < 2:
+        raise SceneError(f"map periods = {periods}: allowed [2, inf)")
+    settle = scene.run.settle_periods if settle_periods is None else int(settle_periods)
+    settle = max(0, min(settle, periods // 2))
+    setup = _PointSetup(scene.device.gap, Restitution.from_contact(scene.contact),
+                        scene.excitation.phase, scene.initial.time, scene.initial.gap,
+                        scene.initial.velocity, int(periods), settle)
+    jobs = (os.cpu_count() or 1) if jobs is None else int(jobs)
+    if jobs < 1:
+        raise SceneError(f"--jobs = {jobs}: allowed [1, {os.cpu_count()}]")
+    tasks = [(setup, freqs, a, i) for i, a in enumerate(amps)]
+    shape = (amps.size, freqs.size)
+    names = np.full(shape, "error", dtype="<U16")
+    per = np.zeros(shape, dtype=int)
+    gapmax = np.full(shape, np.nan)
+    low = np.full(shape, np.nan)
+    up = np.full(shape, np.nan)
+    errors = np.full(shape, "", dtype=object)
+
+    from tqdm import tqdm
+    bar = tqdm(total=amps.size * freqs.size, unit="pt", desc="regime map", file=sys.stderr,
+               disable=not progress or None)
+    point_regime(setup, float(freqs[0]), float(amps[0]))   # compile/load the kernel before forking
+
+    def store(row, results):
+        for j, (reg, msg) in enumerate(results):
+            if reg is None:
+                errors[row, j] = msg
+                continue
+            names[row, j] = reg.name
+            per[row, j] = reg.period
+            gapmax[row, j] = reg.max_gap
+            low[row, j] = reg.lower_contacts_per_period
+            up[row, j] = reg.upper_contacts_per_period
+        bar.update(len(results))
+
+    try:
+        if jobs == 1 or len(tasks) == 1:
+            for task in tasks:
+                store(*_row(task))
+        else:
+            ctx = mp.get_context("fork")
+            with ctx.Pool(min(jobs, len(tasks))) as pool:
+                for row, results in pool.imap_unordered(_row, tasks):
+                    store(row, results)
+    finally:
+        bar.close()
+    return MapResult(freqs, amps, names, per, gapmax, low, up, errors.astype(str))
+
+
+def liftoff_amplitude(frequency_hz, g: float = G):
+    """Analytic lift-off threshold A = g / w^2 [m] (Gamma = A w^2 / g = 1)."""
+    w = 2.0 * np.pi * np.asarray(frequency_hz, dtype=float)
+    return g / w**2

@@ -1,0 +1,208 @@
+"""Soft contact (the paper's Eq. 1): a linear spring-dashpot at each plate.
+
+Relative coordinates as everywhere (z = gap, v = dz/dt relative to the
+table). With m the ball mass,
+
+    m z'' = -m g - m y''(t) + F(z, v),
+    F = -k z - c v                 if z < 0          (lower plate)
+    F = -k (z - dh) - c v          if z > dh         (upper plate)
+    F = 0                          otherwise,
+
+``k = scene.contact.stiffness`` and ``c = 2 zeta sqrt(m k)`` with
+``zeta = -ln e / sqrt(ln^2 e + pi^2)`` (Eq. 3), for which an isolated
+contact has restitution exactly e. The force is used as written in Eq. 1
+(the dashpot may pull briefly before the ball leaves the plate).
+
+Each phase (free, lower contact, upper contact) has a smooth right-hand
+side and is integrated by SciPy's stiff ``Radau`` solver until an event
+(contact entry or exit) ends it; the next phase restarts there. The
+penetration (z < 0 or z > dh) is part of the result, so ``gap`` may leave
+[0, dh] by about m (g + |y''|) / k.
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+
+import numpy as np
+
+from ..errors import DynamicsError
+from ..scene import G
+from .regime import classify
+from .result import DynamicsResult, Impacts
+from .table import TableMotion, table_from_scene
+
+FREE, IN_LOWER, IN_UPPER = 0, 1, 2
+
+
+def damping_ratio(restitution: float) -> float:
+    """zeta of Eq. (3): the linear contact with this damping ratio has restitution e."""
+    if restitution <= 0.0:
+        return 1.0
+    if restitution >= 1.0:
+        return 0.0
+    ln_e = math.log(restitution)
+    return -ln_e / math.sqrt(ln_e**2 + math.pi**2)
+
+
+def damping_coefficient(restitution: float, mass: float, stiffness: float) -> float:
+    """c = 2 zeta sqrt(m k) [N s/m] (Eq. 3); mass [kg], stiffness [N/m]."""
+    return 2.0 * damping_ratio(restitution) * math.sqrt(mass * stiffness)
+
+
+class SoftTrajectory:
+    """Dense output of the phases: callable ``(times) -> (z, v, y)``."""
+
+    def __init__(self, table: TableMotion):
+        self.table = table
+        self.starts: list[float] = []
+        self.solutions = []
+
+    def add(self, t0: float, sol) -> None:
+        self.starts.append(t0)
+        self.solutions.append(sol)
+
+    def __call__(self, times):
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        z = np.empty(t.size)
+        v = np.empty(t.size)
+        idx = np.clip(np.searchsorted(np.asarray(self.starts), t, side="right") - 1, 0, None)
+        for k in np.unique(idx):
+            sel = idx == k
+            zv = self.solutions[k](t[sel])
+            z[sel] = zv[0]
+            v[sel] = zv[1]
+        y, _, _ = self.table.evaluate(t)
+        return z, v, y
+
+
+def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: float,
+                   stiffness: float, *, t_start: float, t_end: float, gap0: float = 0.0,
+                   velocity0: float = 0.0, period: float, g: float = G, rtol: float = 1e-10,
+                   max_phases_per_period: int = 10_000):
+    """Integrate the soft-contact model; returns (trajectory, contacts, n_phases).
+
+    contacts = (entry time [s], plate 0/1, entry speed [m/s], exit speed [m/s]).
+    """
+    from scipy.integrate import solve_ivp
+
+    omega_c = math.sqrt(stiffness / mass)
+    c_over_m = damping_coefficient(restitution, mass, stiffness) / mass
+    k_over_m = omega_c**2
+    # contact time ~ pi / omega_c: keep several steps per contact
+    max_step = min(0.05 * math.pi / omega_c * 20, 0.01 * period)
+
+    if table.kind == 0:
+        amp_w2 = table.params[0] * table.params[1] ** 2
+        w, ph = table.params[1], table.params[2]
+
+        def ydd(t):
+            return -amp_w2 * math.sin(w * t + ph)
+    else:
+        def ydd(t):
+            return table.evaluate(np.array([t]))[2][0]
+
+    def rhs_free(t, s):
+        return [s[1], -g - ydd(t)]
+
+    def rhs_lower(t, s):
+        return [s[1], -g - ydd(t) - k_over_m * s[0] - c_over_m * s[1]]
+
+    def rhs_upper(t, s):
+        return [s[1], -g - ydd(t) - k_over_m * (s[0] - stroke) - c_over_m * s[1]]
+
+    def hit_lower(t, s):
+        return s[0]
+
+    def hit_upper(t, s):
+        return s[0] - stroke
+
+    hit_lower.terminal = hit_upper.terminal = True
+    rhs = {FREE: rhs_free, IN_LOWER: rhs_lower, IN_UPPER: rhs_upper}
+
+    traj = SoftTrajectory(table)
+    contacts: list[list[float]] = []
+    t = t_start
+    state = np.array([gap0, velocity0], dtype=float)
+    phase = FREE
+    if gap0 <= 0.0:
+        # resting on the lower plate: start in contact (static penetration)
+        phase = IN_LOWER
+        state[0] = -mass * max(g + ydd(t), 0.0) / stiffness
+        contacts.append([t, 0, abs(velocity0), math.nan])
+    n_phases = 0
+    while t < t_end:
+        n_phases += 1
+        if n_phases > max_phases_per_period * ((t - t_start) / period + 1.0):
+            raise DynamicsError(f"soft contact: more than {max_phases_per_period} contact phases "
+                                f"per period near t = {t:.9g} s")
+        if phase == FREE:
+            hit_lower.direction = -1.0
+            hit_upper.direction = 1.0
+            events = [hit_lower, hit_upper]
+        elif phase == IN_LOWER:
+            hit_lower.direction = 1.0
+            events = [hit_lower]
+        else:
+            hit_upper.direction = -1.0
+            events = [hit_upper]
+        sol = solve_ivp(rhs[phase], (t, t_end), state, method="Radau", events=events,
+                        dense_output=True, rtol=rtol, atol=1e-12 * max(stroke, 1e-3),
+                        max_step=max_step if phase != FREE else 0.05 * period)
+        if sol.status < 0:
+            raise DynamicsError(f"soft contact: the stiff solver failed near t = {t:.9g} s: "
+                                f"{sol.message}")
+        traj.add(t, sol.sol)
+        if sol.status == 0:
+            break
+        # which event fired
+        fired = [k for k, te in enumerate(sol.t_events) if te.size]
+        k = fired[0]
+        t_new = float(sol.t_events[k][0])
+        state = np.array(sol.y_events[k][0], dtype=float)
+        t = t_new
+        if phase == FREE:
+            plate = 0 if events[k] is hit_lower else 1
+            state[0] = 0.0 if plate == 0 else stroke
+            contacts.append([t, plate, abs(state[1]), math.nan])
+            phase = IN_LOWER if plate == 0 else IN_UPPER
+        else:
+            state[0] = 0.0 if phase == IN_LOWER else stroke
+            if contacts:
+                contacts[-1][3] = abs(state[1])
+            phase = FREE
+    arr = np.array(contacts, dtype=float).reshape(-1, 4)
+    return traj, (arr[:, 0], arr[:, 1].astype(np.int64), arr[:, 2], arr[:, 3]), n_phases
+
+
+def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
+    """Soft-contact trajectory of ``scene`` (see :func:`tengfield.dynamics.simulate`)."""
+    wall0 = _time.perf_counter()
+    table = table_from_scene(scene)
+    period = scene.excitation.period
+    duration = scene.run.duration if duration is None else float(duration)
+    if not (duration > 0 and math.isfinite(duration)):
+        raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
+    t0 = scene.initial.time
+    t_end = t0 + duration
+    if table.kind == 1 and (t0 < table.t_first or t_end > table.t_last):
+        raise DynamicsError(
+            f"the run [{t0:g}, {t_end:g}] s is outside the recorded excitation "
+            f"[{table.t_first:g}, {table.t_last:g}] s")
+    stroke = scene.device.gap
+    traj, (ct, cp, cvb, cva), n_phases = integrate_soft(
+        table, stroke, scene.contact.restitution, scene.device.ball_mass,
+        scene.contact.stiffness, t_start=t0, t_end=t_end, gap0=scene.initial.gap,
+        velocity0=scene.initial.velocity, period=period)
+    window_start = min(t0 + scene.run.settle_periods * period, t_end)
+    regime = classify(traj, ct, cp, cvb, window_start=window_start, t_end=t_end, period=period,
+                      stroke=stroke, g=G, upper_stuck=False)
+    n_samples = int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
+    t = t0 + np.arange(n_samples) / scene.run.sample_rate
+    z, v, y = traj(t)
+    plates = np.array(["lower", "upper"])[cp] if cp.size else np.zeros(0, dtype="<U5")
+    return DynamicsResult(status=0, message="ok", t=t, gap=z, gap_velocity=v, table=y,
+                          impacts=Impacts(ct, plates, cvb, cva), regime=regime,
+                          n_events=n_phases, wall_time=_time.perf_counter() - wall0,
+                          model="soft", stroke=stroke, period=period,
+                          window_start=window_start, _sampler=traj)

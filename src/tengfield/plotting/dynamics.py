@@ -1,0 +1,118 @@
+"""Figures of the dynamics: trajectory (like the paper's Figs. 5a/6a/7a) and regime maps."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import G
+
+REGIME_COLOURS = {
+    "rest": "#d9d9d9",
+    "bounce": "#9ecae1",
+    "chaos": "#fdae6b",
+    "critical-contact": "#a1d99b",
+    "regular-contact": "#31a354",
+    "error": "#e31a1c",
+}
+
+
+def plot_trajectory(result, path, *, title: str | None = None, max_periods: float | None = None):
+    """Ball, lower and upper plate vs time (top) and the gap z(t) (bottom); impacts marked.
+
+    ``result`` is a :class:`tengfield.dynamics.DynamicsResult`; lengths in mm.
+    ``max_periods`` limits the plot to the last that many excitation periods.
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t, z, y = result.t, result.gap, result.table
+    keep = np.ones(t.size, dtype=bool)
+    if max_periods is not None and result.period > 0:
+        keep = t >= t[-1] - max_periods * result.period
+    t, z, y = t[keep], z[keep], y[keep]
+    stroke_mm = result.stroke * 1e3
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6), sharex=True,
+                                   gridspec_kw={"height_ratios": [3, 2]})
+    ax1.plot(t, y * 1e3, color="0.35", lw=1.2, label="lower plate $y(t)$")
+    ax1.plot(t, (y + result.stroke) * 1e3, color="0.6", lw=1.2, ls="--",
+             label=r"upper plate $y + \Delta h$")
+    ax1.plot(t, (y + z) * 1e3, color="#d62728", lw=1.4, label="ball bottom $y + z$")
+    ax1.fill_between(t, (y + z) * 1e3, y * 1e3, color="#d62728", alpha=0.08)
+    ax2.plot(t, z * 1e3, color="#1f77b4", lw=1.3, label="gap $z(t)$")
+    ax2.axhline(0.0, color="0.35", lw=0.8)
+    ax2.axhline(stroke_mm, color="0.6", lw=0.8, ls="--")
+    imp = result.impacts
+    if len(imp):
+        sel = (imp.time >= t[0]) & (imp.time <= t[-1])
+        zi, _, yi = result.sample(imp.time[sel]) if np.any(sel) else (None, None, None)
+        if np.any(sel):
+            lower = imp.plate[sel] == "lower"
+            upper = ~lower
+            ti = imp.time[sel]
+            ax1.plot(ti[lower], (yi[lower] + zi[lower]) * 1e3, "v", ms=4, color="k",
+                     label="impact, lower")
+            ax1.plot(ti[upper], (yi[upper] + zi[upper]) * 1e3, "^", ms=4, color="#9467bd",
+                     label="impact, upper")
+            ax2.plot(ti[lower], zi[lower] * 1e3, "v", ms=4, color="k")
+            ax2.plot(ti[upper], zi[upper] * 1e3, "^", ms=4, color="#9467bd")
+    ax1.set_ylabel("position [mm]")
+    ax2.set_ylabel("gap $z$ [mm]")
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylim(-0.05 * stroke_mm, 1.08 * stroke_mm)
+    reg = result.regime
+    head = title or "ball between two vibrating plates"
+    ax1.set_title(f"{head}\nregime: {reg.name}, period {reg.period}, max gap "
+                  f"{reg.max_gap * 1e3:.3g} mm, contacts/period lower "
+                  f"{reg.lower_contacts_per_period:.3g}, upper "
+                  f"{reg.upper_contacts_per_period:.3g}", fontsize=10)
+    ax1.legend(loc="upper right", fontsize=8, ncol=3, framealpha=0.85)
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+        if result.window_start > t[0]:
+            ax.axvspan(t[0], result.window_start, color="0.9", zorder=-1)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def plot_regime_map(map_result, path, *, title: str | None = None):
+    """Regime colours over (frequency, amplitude) with the lift-off curve A w^2 = g."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    names = list(REGIME_COLOURS)
+    code = np.vectorize(lambda s: names.index(s) if s in names else names.index("error"))(
+        map_result.regime)
+    cmap = ListedColormap([REGIME_COLOURS[n] for n in names])
+    f = map_result.frequency
+    a_mm = map_result.amplitude * 1e3
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+
+    def edges(v):
+        if v.size == 1:
+            return np.array([v[0] * 0.95, v[0] * 1.05 + 1e-12])
+        mid = 0.5 * (v[1:] + v[:-1])
+        return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
+
+    ax.pcolormesh(edges(f), edges(a_mm), code, cmap=cmap, vmin=-0.5, vmax=len(names) - 0.5,
+                  shading="flat")
+    ff = np.linspace(max(edges(f)[0], 1e-3), edges(f)[-1], 400)
+    a_lift = G / (2 * np.pi * ff) ** 2 * 1e3
+    ax.plot(ff, a_lift, color="k", lw=1.8, label=r"lift-off $A\omega^2 = g$")
+    ax.set_xlim(edges(f)[0], edges(f)[-1])
+    ax.set_ylim(edges(a_mm)[0], edges(a_mm)[-1])
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("amplitude [mm]")
+    present = [n for n in names if np.any(map_result.regime == n)]
+    handles = [Patch(color=REGIME_COLOURS[n], label=n) for n in present]
+    handles.append(ax.get_lines()[0])
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    ax.set_title(title or "motion regimes of the ball", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
