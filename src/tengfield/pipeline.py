@@ -85,7 +85,9 @@ def _impact_times(dynamics, t0: float, t1: float) -> np.ndarray:
     impacts = getattr(dynamics, "impacts", None)
     if impacts is None:
         return np.empty(0)
-    if hasattr(impacts, "dtype") and impacts.dtype.names and "time" in impacts.dtype.names:
+    if hasattr(impacts, "time"):                      # tengfield.dynamics.Impacts
+        times = np.asarray(impacts.time, dtype=float).reshape(-1)
+    elif hasattr(impacts, "dtype") and impacts.dtype.names and "time" in impacts.dtype.names:
         times = np.asarray(impacts["time"], dtype=float)
     elif isinstance(impacts, np.ndarray):
         times = np.asarray(impacts, dtype=float).reshape(len(impacts), -1)[:, 0] \
@@ -97,47 +99,74 @@ def _impact_times(dynamics, t0: float, t1: float) -> np.ndarray:
     return np.unique(times[(times > t0) & (times < t1)])
 
 
-def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: dict) -> dict:
-    """V_load [V], I_load [A], P_load [W] at the output samples, and the energy balance.
+def relaxation_times(starts, time_constant: float, output_step: float, end: float) -> np.ndarray:
+    """Extra integration times after each jump of I_SC: ``start + τ 2^k``, k = -4..6.
+
+    The load voltage relaxes in ``τ = R (C_T + C_p)`` after an impact; when τ
+    is not resolved by the output step these points let the trapezoidal
+    energy sums (mean power, energy balance) see the transient. Only offsets
+    below 4 output steps are used (longer transients are already resolved).
+    """
+    offsets = time_constant * 2.0 ** np.arange(-4, 7)
+    offsets = offsets[offsets < 4.0 * output_step]
+    if offsets.size == 0 or len(starts) == 0:
+        return np.empty(0)
+    extra = (np.asarray(starts, dtype=float)[:, None] + offsets[None, :]).ravel()
+    return extra[extra < end]
+
+
+def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: dict,
+                   window_start: float | None = None) -> dict:
+    """V_load [V], I_load [A], P_load [W] at the output samples, mean power and energy balance.
 
     The exponential integrator of :func:`tengfield.circuit.load_response`
-    runs on the output times plus every impact time twice (pre- and
-    post-impact velocity), so the jumps of I_SC are resolved exactly.
+    runs on a fine grid: the output times, every impact time twice (pre- and
+    post-impact velocity, so the jumps of I_SC are exact) and
+    :func:`relaxation_times` after the start and each impact. Energies are
+    trapezoidal sums on that grid; ``mean_power_W`` is the dissipated energy
+    after ``window_start`` [s] divided by the window length.
     """
     t = np.asarray(dynamics.t, dtype=float)
     n_cells = scene.device.cells
     c_p = scene.circuit.parallel_capacitance
     load = scene.circuit.load
+    window_start = t[0] if window_start is None else window_start
     if curves is None:
         zero = np.zeros_like(t)
-        return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(),
-                "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0, "stored_energy_change_J": 0.0}
+        return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(), "mean_power_W": 0.0,
+                "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
+                "stored_energy_change_J": 0.0, "integration_points": int(t.size)}
     impacts = _impact_times(dynamics, t[0], t[-1])
-    if impacts.size:
-        eps = 1e-9 * scene.excitation.period
-        gap_pre, vel_pre, _ = dynamics.sample(impacts - eps)
-        gap_post, vel_post, _ = dynamics.sample(impacts + eps)
-        grid = np.concatenate([t, impacts, impacts])
-        gap = np.concatenate([waveforms["gap_m"], gap_pre, gap_post])
-        vel = np.concatenate([waveforms["gap_velocity_m_per_s"], vel_pre, vel_post])
-        # order: time, then pre-impact before post-impact (key 0 < 1 < 2 for sample/pre/post)
-        tag = np.concatenate([np.full(t.size, 1), np.zeros(impacts.size), np.full(impacts.size, 2)])
-        order = np.lexsort((tag, grid))
-        grid, gap, vel = grid[order], gap[order], vel[order]
-        is_output = np.isin(order, np.arange(t.size))
-        output_index = np.flatnonzero(is_output)[np.argsort(order[is_output])]
-    else:
-        grid, gap, vel = t, waveforms["gap_m"], waveforms["gap_velocity_m_per_s"]
-        output_index = np.arange(t.size)
+    output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
+    extra = relaxation_times(np.concatenate([[t[0]], impacts]), load * c_min, output_step, t[-1])
+    eps = 1e-9 * scene.excitation.period
+    gap_pre, vel_pre, _ = dynamics.sample(impacts - eps) if impacts.size else (np.empty(0),) * 3
+    gap_post, vel_post, _ = dynamics.sample(impacts + eps) if impacts.size else (np.empty(0),) * 3
+    gap_extra, vel_extra, _ = dynamics.sample(extra) if extra.size else (np.empty(0),) * 3
+    grid = np.concatenate([t, impacts, impacts, extra])
+    gap = np.concatenate([waveforms["gap_m"], gap_pre, gap_post, gap_extra])
+    vel = np.concatenate([waveforms["gap_velocity_m_per_s"], vel_pre, vel_post, vel_extra])
+    # equal times: pre-impact (0) before an output sample (1) before post-impact (2)
+    tag = np.concatenate([np.ones(t.size), np.zeros(impacts.size), np.full(impacts.size, 2.0),
+                          np.full(extra.size, 3.0)])
+    order = np.lexsort((tag, grid))
+    grid, gap, vel = grid[order], gap[order], vel[order]
+    output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
     fine = terminal_waveforms(curves, gap, vel, cells=n_cells, parallel_capacitance=c_p)
     response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
     delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
     stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+    in_window = grid >= window_start
+    window_length = grid[in_window][-1] - grid[in_window][0] if in_window.sum() > 1 else 0.0
+    window_energy = float(np.trapz(response.power[in_window], grid[in_window]))
     return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
             "P_load": response.power[output_index],
+            "mean_power_W": window_energy / window_length if window_length > 0 else 0.0,
             "delivered_energy_J": float(np.trapz(delivered, grid)),
             "dissipated_energy_J": float(np.trapz(response.power, grid)),
-            "stored_energy_change_J": float(stored[-1] - stored[0])}
+            "stored_energy_change_J": float(stored[-1] - stored[0]),
+            "integration_points": int(grid.size)}
 
 
 # ---------------------------------------------------------------------------
@@ -246,7 +275,8 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
                  "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"]}
     load = None
     if scene.circuit.kind == "load":
-        load = load_waveforms(scene, dynamics, curves, waveforms)
+        window, _ = steady_window(t, scene)
+        load = load_waveforms(scene, dynamics, curves, waveforms, window_start=t[window][0])
         waveforms.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
                           "P_load_W": load["P_load"]})
         stages["circuit"] = Stage("ran", f"load ODE, R = {scene.circuit.load:g} ohm",
@@ -268,6 +298,14 @@ def _needs_field(scene, gap) -> tuple[bool, str]:
     return True, ""
 
 
+def _regime_dict(regime):
+    if regime is None:
+        return None
+    if hasattr(regime, "as_dict"):
+        return regime.as_dict()
+    return _jsonable(regime)
+
+
 def _summary(scene, dynamics, waveforms, load, stages, table) -> dict:
     t = waveforms["time_s"]
     mask, window_reason = steady_window(t, scene)
@@ -285,7 +323,7 @@ def _summary(scene, dynamics, waveforms, load, stages, table) -> dict:
         "window": {"start_s": float(t[mask][0]), "end_s": float(t[mask][-1]),
                    "rule": window_reason},
         "peak_to_peak": p2p,
-        "regime": getattr(dynamics, "regime", None),
+        "regime": _regime_dict(getattr(dynamics, "regime", None)),
         "load": None,
         "stages": stages,
     }
@@ -293,7 +331,7 @@ def _summary(scene, dynamics, waveforms, load, stages, table) -> dict:
         summary["surrogate_error_estimate"] = table.interpolation_error
     if load is not None:
         volume = scene.device.cell_volume * scene.device.cells
-        power = mean_over(t, waveforms["P_load_W"], mask)
+        power = load["mean_power_W"]
         summary["load"] = {
             "mean_power_W": power,
             "device_volume_m3": volume,
@@ -302,6 +340,7 @@ def _summary(scene, dynamics, waveforms, load, stages, table) -> dict:
             "I_load_peak_to_peak_A": circuit.peak_to_peak(waveforms["I_load_A"][mask]),
             "energy_balance_J": {k: load[k] for k in ("delivered_energy_J", "dissipated_energy_J",
                                                       "stored_energy_change_J")},
+            "integration_points": load["integration_points"],
         }
     else:
         summary["load"] = None
@@ -348,7 +387,86 @@ def write_outputs(result: RunResult, out_dir: str | Path, *, plots: bool = True)
 def _title(result: RunResult) -> str:
     exc = result.scene.excitation
     regime = result.summary.get("regime") or {}
-    name = regime.get("name", "") if isinstance(regime, dict) else ""
+    name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
     return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
             f"{result.scene.device.cells} cell(s), {result.scene.circuit.reference}"
             + (f", {name}" if name else ""))
+
+
+# ---------------------------------------------------------------------------
+# parameter sweeps (one surrogate, many excitations and loads)
+SWEEP_COLUMNS = ["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period",
+                 "V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A", "P_mean_W", "power_density_W_per_m3"]
+
+
+def sweep_point(scene, table: SurrogateTable, frequency: float, amplitude: float,
+                loads=(), simulate: Callable | None = None) -> list[dict]:
+    """Peak-to-peak V_OC, Q_SC, I_SC at one excitation (frequency [Hz],
+    amplitude [m]) and the mean power into each load [ohm] (steady window).
+
+    One row per load (``load_ohm`` None and no power without loads).
+    """
+    simulate = simulate or _default_simulate()
+    point = scene.with_values(excitation={"frequency_hz": float(frequency),
+                                          "amplitude_mm": float(amplitude) * 1e3})
+    dynamics = simulate(point)
+    t = np.asarray(dynamics.t, dtype=float)
+    curves = TerminalCurves(table, point.circuit.reference)
+    waveforms = {"gap_m": np.asarray(dynamics.gap), "gap_velocity_m_per_s":
+                 np.asarray(dynamics.gap_velocity)}
+    terminal = terminal_waveforms(curves, waveforms["gap_m"], waveforms["gap_velocity_m_per_s"],
+                                  cells=point.device.cells,
+                                  parallel_capacitance=point.circuit.parallel_capacitance)
+    mask, _ = steady_window(t, point)
+    regime = _regime_dict(dynamics.regime) or {}
+    base = {"frequency_hz": float(frequency), "amplitude_mm": float(amplitude) * 1e3,
+            "regime": regime.get("regime", ""), "period": regime.get("period", 0),
+            "V_oc_pp_V": circuit.peak_to_peak(terminal["V_oc"][mask]),
+            "Q_sc_pp_C": circuit.peak_to_peak(terminal["Q_sc"][mask]),
+            "I_sc_pp_A": circuit.peak_to_peak(terminal["I_sc"][mask])}
+    if not len(loads):
+        return [{**base, "load_ohm": None, "P_mean_W": None, "power_density_W_per_m3": None}]
+    rows = []
+    volume = point.device.cell_volume * point.device.cells
+    for load in loads:
+        loaded = point.with_values(circuit={"kind": "load", "load_ohm": float(load)})
+        result = load_waveforms(loaded, dynamics, curves, waveforms, window_start=t[mask][0])
+        rows.append({**base, "load_ohm": float(load), "P_mean_W": result["mean_power_W"],
+                     "power_density_W_per_m3": result["mean_power_W"] / volume})
+    return rows
+
+
+def _sweep_task(args):
+    return sweep_point(*args)
+
+
+def sweep(scene, table: SurrogateTable, frequencies, amplitudes, loads=(), *,
+          jobs: int | None = None, progress: bool = False) -> list[dict]:
+    """:func:`sweep_point` over the grid ``frequencies`` [Hz] x ``amplitudes`` [m],
+    in ``jobs`` worker processes (default: all cores), with a progress bar."""
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
+    from tqdm import tqdm
+
+    # validate every grid scene first: a bad point fails before any work starts
+    for f in frequencies:
+        for a in amplitudes:
+            scene.with_values(excitation={"frequency_hz": float(f), "amplitude_mm": float(a) * 1e3})
+    tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
+    bar = tqdm(total=len(tasks), desc="sweep", unit="point", disable=not progress)
+    rows: list[dict] = []
+    if jobs == 1:
+        for task in tasks:
+            rows.extend(_sweep_task(task))
+            bar.update()
+    else:
+        context = multiprocessing.get_context("spawn")  # safe after MPI/dolfinx initialisation
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+            for result in pool.map(_sweep_task, tasks):
+                rows.extend(result)
+                bar.update()
+    bar.close()
+    return rows

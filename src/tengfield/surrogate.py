@@ -36,6 +36,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+# h5py before anything loads dolfinx: the venv's h5py wheel bundles its own HDF5,
+# and imported after dolfinx (which loads the system HDF5 globally) it fails with
+# "Not a datatype". Importing it here, at module level, fixes the order.
+import h5py
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -340,8 +344,6 @@ _ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
 
 def write_table(path: str | Path, table: SurrogateTable) -> Path:
     """Write ``table`` to HDF5 atomically (temporary file + ``os.replace``)."""
-    import h5py
-
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -377,8 +379,6 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
 def read_table(path: str | Path, expected_hash: str | None = None) -> SurrogateTable:
     """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
     readable and (if given) made for ``expected_hash``."""
-    import h5py
-
     path = Path(path)
     if not path.is_file():
         raise SurrogateError(f"surrogate file {str(path)!r} does not exist")

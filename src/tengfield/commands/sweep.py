@@ -1,0 +1,84 @@
+"""``tengfield sweep``: peak-to-peak V_OC, Q_SC, I_SC and load power over a grid of
+excitations (and loads) with one surrogate (paper Figs. 9e-f, S13)."""
+from __future__ import annotations
+
+import csv
+import math
+import sys
+from pathlib import Path
+
+from .run import add_cache_argument, command_line
+
+
+def parse_range(text: str, name: str, *, log: bool = False):
+    """``START:STOP:N`` -> N values (linear, or logarithmic with ``log``); ``X`` -> [X]."""
+    import numpy as np
+
+    from ..errors import SceneError
+
+    parts = text.split(":")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise SceneError(f"{name} = {text!r}: expected START:STOP:N or one number") from None
+    if len(values) == 1:
+        grid = np.array(values)
+    elif len(values) == 3 and values[2] >= 1 and float(values[2]).is_integer():
+        start, stop, count = values[0], values[1], int(values[2])
+        if log:
+            if start <= 0 or stop <= 0:
+                raise SceneError(f"{name} = {text!r}: a logarithmic range needs START, STOP > 0")
+            grid = np.logspace(math.log10(start), math.log10(stop), count)
+        else:
+            grid = np.linspace(start, stop, count)
+    else:
+        raise SceneError(f"{name} = {text!r}: expected START:STOP:N with N a whole number >= 1")
+    if not np.all(np.isfinite(grid)) or np.any(grid <= 0):
+        raise SceneError(f"{name} = {text!r} is out of range: every value must be > 0")
+    return grid
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "sweep", help="peak-to-peak V_OC/Q_SC/I_SC and load power over frequency x amplitude",
+        description="One surrogate (cached), the dynamics at every grid point (in parallel), "
+                    "peak-to-peak values over the steady window and, with --load-ohm, the "
+                    "mean power into each load. Writes DIR/sweep.csv and DIR/sweep.png.")
+    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    p.add_argument("--frequency-hz", required=True, metavar="START:STOP:N",
+                   help="excitation frequencies [Hz] (linear), or one value")
+    p.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N",
+                   help="table amplitudes [mm] (linear), or one value")
+    p.add_argument("--load-ohm", default=None, metavar="START:STOP:N",
+                   help="load resistances [ohm] (logarithmic), or one value")
+    p.add_argument("-o", "--output", default="sweep-out", metavar="DIR", help="output directory")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    add_cache_argument(p)
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    from ..pipeline import SWEEP_COLUMNS, sweep
+    from ..plotting.waveforms import plot_sweep
+    from ..scene import load_scene
+    from ..surrogate import obtain_table
+
+    scene = load_scene(args.scene)
+    frequencies = parse_range(args.frequency_hz, "--frequency-hz")
+    amplitudes = parse_range(args.amplitude_mm, "--amplitude-mm") * 1e-3
+    loads = parse_range(args.load_ohm, "--load-ohm", log=True) if args.load_ohm else ()
+    table, outcome = obtain_table(scene, cache_dir=args.cache_dir, progress=True,
+                                  command_line=command_line())
+    print(f"surrogate: {outcome.status} ({table.count} positions, error estimate "
+          f"{table.interpolation_error:.2g})", file=sys.stderr)
+    rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, progress=True)
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "sweep.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=SWEEP_COLUMNS)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: ("" if row.get(k) is None else row[k]) for k in SWEEP_COLUMNS})
+    plot_sweep(rows, out / "sweep.png")
+    print(f"{len(rows)} rows; wrote {out / 'sweep.csv'}, {out / 'sweep.png'}")
+    return 0
