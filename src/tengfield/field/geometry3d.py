@@ -13,7 +13,8 @@ Two cells are built here:
 Coordinates: the origin is the centre of the cell, z is the tube axis, the
 lower electrode lies in the plane ``z = -h/2`` and the upper one in
 ``z = +h/2`` (``h = d + Δh``, the electrode spacing). The ball centre is at
-``(offset, 0, -h/2 + z_gap + d/2)``; ``z_gap`` is the gap between the
+``(offset cos φ, offset sin φ, -h/2 + z_gap + d/2)`` (φ = ``offset_angle``,
+0 by default); ``z_gap`` is the gap between the
 ball's bottom and the lower electrode, clamped by :func:`meshed_gap` (the
 z → 0 / z → Δh rule). The air fills a sphere of radius ``domain_radius``
 centred at the origin; the far-field condition lives on that sphere.
@@ -30,7 +31,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -175,11 +176,13 @@ def meshed_offset(offset: float, max_offset: float, ball_diameter: float) -> flo
     return min(offset, max(max_offset - g_min, 0.0))
 
 
-def ball_centre(cell, position: float, offset: float) -> np.ndarray:
-    """Ball centre [m] for the meshed gap and offset (see module docstring)."""
+def ball_centre(cell, position: float, offset: float, offset_angle: float = 0.0) -> np.ndarray:
+    """Ball centre [m] for the meshed gap and offset; the offset points at
+    ``offset_angle`` [rad] from the +x axis (see module docstring)."""
     z_gap = meshed_gap(position, cell.stroke, cell.ball_diameter)
     off = meshed_offset(offset, cell.max_offset, cell.ball_diameter)
-    return np.array([off, 0.0, -0.5 * cell.electrode_spacing + z_gap + 0.5 * cell.ball_diameter])
+    return np.array([off * math.cos(offset_angle), off * math.sin(offset_angle),
+                     -0.5 * cell.electrode_spacing + z_gap + 0.5 * cell.ball_diameter])
 
 
 # ---------------------------------------------------------------------------
@@ -190,7 +193,8 @@ def unique_model_name(prefix: str) -> str:
     return f"{prefix}-{next(_model_counter)}"
 
 
-def build_model(cell, position: float, offset: float, settings: MeshSettings) -> dict:
+def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
+                offset_angle: float = 0.0) -> dict:
     """Build and mesh ``cell`` in the current gmsh model.
 
     The caller owns the gmsh session and the model (see
@@ -205,7 +209,7 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings) ->
         raise FieldError(
             f"domain_radius_mm = {settings.domain_radius * 1e3:g} is too small: it must exceed "
             f"{1.2e3 * (cell.bounding_radius + offset):.3g} mm (1.2 x the device's bounding radius)")
-    centre = ball_centre(cell, position, offset)
+    centre = ball_centre(cell, position, offset, offset_angle)
     half = 0.5 * cell.electrode_spacing
     radius = 0.5 * cell.ball_diameter
     walls_present = cell.wall_permittivity != 1.0
@@ -271,13 +275,13 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings) ->
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-    gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)
     gmsh.model.mesh.generate(3)
     if settings.order == 2:
         gmsh.model.mesh.setOrder(2)
     return {"groups": groups, "ball_centre": centre,
             "meshed_gap": meshed_gap(position, cell.stroke, cell.ball_diameter),
-            "meshed_offset": float(centre[0])}
+            "meshed_offset": float(math.hypot(centre[0], centre[1]))}
 
 
 def _hexagon(occ, apothem: float, z: float) -> int:
@@ -347,3 +351,58 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     total = fld.add("Min")
     fld.setNumbers(total, "FieldsList", fields)
     fld.setAsBackgroundMesh(total)
+
+
+# ---------------------------------------------------------------------------
+# reference cases (meshes/ holds their meshes and statistics)
+
+@dataclass(frozen=True)
+class ReferenceCase:
+    """A geometry, a ball placement and mesh settings whose mesh lives in ``meshes/``."""
+    name: str
+    cell: CylindricalCell | HexagonalCell
+    position: float                 # z [m]
+    offset: float                   # [m], along +x
+    settings: MeshSettings
+    surface_charge: float = -8.0e-6  # σ [C/m²]
+
+
+def reference_cases() -> dict[str, ReferenceCase]:
+    """The reference geometries: the paper's device with an off-axis ball
+    (Table 1, z = 1.5 mm, offset 0.3 mm) and one honeycomb cell (Fig. 10,
+    z = 1 mm, on axis); coarse first-order meshes (size 2 mm, R = 20 mm)."""
+    paper = CylindricalCell(ball_diameter=7e-3, stroke=3e-3, electrode_radius=4e-3,
+                            tube_inner_radius=4e-3, tube_outer_radius=5.5e-3, plate_thickness=2e-3,
+                            ball_permittivity=2.1, wall_permittivity=2.6)
+    coarse = MeshSettings(size=2e-3, domain_radius=20e-3, order=1)
+    return {
+        "paper_device": ReferenceCase("paper_device", paper, 1.5e-3, 0.3e-3, coarse),
+        "honeycomb_cell": ReferenceCase("honeycomb_cell", HexagonalCell(), 1.0e-3, 0.0, coarse),
+    }
+
+
+def mesh_statistics() -> dict:
+    """Statistics of the current (first-order) gmsh mesh: node count, and per
+    physical group the element count and measure (volume [m³] or area [m²])."""
+    import gmsh
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    xyz = np.zeros((int(tags.max()) + 1, 3))
+    xyz[tags.astype(int)] = coords.reshape(-1, 3)
+    stats = {"nodes": int(len(tags)), "groups": {}}
+    for dim, tag in gmsh.model.getPhysicalGroups():
+        count, measure = 0, 0.0
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+            etypes, _, enodes = gmsh.model.mesh.getElements(dim, entity)
+            for etype, nodes in zip(etypes, enodes):
+                corners = dim + 1
+                per = gmsh.model.mesh.getElementProperties(etype)[3]
+                p = xyz[nodes.astype(int).reshape(-1, per)[:, :corners]]
+                edges = p[:, 1:] - p[:, :1]
+                if dim == 3:
+                    measure += float(np.abs(np.linalg.det(edges)).sum() / 6.0)
+                else:
+                    measure += float(np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1).sum() / 2)
+                count += len(p)
+        stats["groups"][gmsh.model.getPhysicalName(dim, tag)] = {"elements": count, "measure": measure}
+    return stats

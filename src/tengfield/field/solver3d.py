@@ -38,15 +38,14 @@ import contextlib
 import itertools
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..errors import FieldError
 from ..scene import EPS0
-from .geometry3d import (CylindricalCell, HexagonalCell, MeshSettings, build_model,
-                         cylindrical_cell, unique_model_name)
+from .geometry3d import MeshSettings, build_model, cylindrical_cell, unique_model_name
 from .result import PositionResult
 
 #: Observed convergence order of C and q under uniform refinement, by degree
@@ -103,8 +102,12 @@ def gmsh_model(name: str):
             gmsh.finalize()
 
 
-def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, comm) -> CellMesh:
-    """Mesh ``cell`` with gmsh on rank 0 of ``comm`` and distribute it with dolfinx."""
+def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, comm,
+              offset_angle: float = 0.0) -> CellMesh:
+    """Mesh ``cell`` with gmsh on rank 0 of ``comm`` and distribute it with dolfinx.
+
+    ``position`` z [m], ``offset`` [m] and ``offset_angle`` [rad] place the
+    ball (see :mod:`tengfield.field.geometry3d`)."""
     from dolfinx.io import gmshio
 
     start = time.perf_counter()
@@ -113,7 +116,7 @@ def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, c
     if comm.rank == 0:
         with gmsh_model(unique_model_name("tengfield-3d")) as model:
             try:
-                meta = build_model(cell, position, offset, settings)
+                meta = build_model(cell, position, offset, settings, offset_angle=offset_angle)
             except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
                 error = exc
             comm.bcast(None if error is None else str(error), root=0)
@@ -195,7 +198,10 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
     ksp.setOptionsPrefix(prefix)
     opts = PETSc.Options()
     for key, value in {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
-                       "pc_hypre_boomeramg_strong_threshold": 0.6, "ksp_rtol": rtol,
+                       "pc_hypre_boomeramg_strong_threshold": 0.6,
+                       "pc_hypre_boomeramg_coarsen_type": "HMIS",
+                       "pc_hypre_boomeramg_interp_type": "ext+i", "pc_hypre_boomeramg_P_max": 4,
+                       "pc_hypre_boomeramg_agg_nl": 1, "ksp_rtol": rtol,
                        "ksp_atol": 1e-30, "ksp_max_it": 2000,
                        "ksp_error_if_not_converged": True}.items():
         opts[prefix + key] = value
@@ -321,12 +327,24 @@ class CellSolution:
 
 
 def solve_cell(cell, position: float, offset: float, settings: Solve3DSettings, *, comm,
-               coarsen: float = 1.0) -> CellSolution:
-    """Mesh and solve one cell at gap ``position`` [m] and lateral ``offset`` [m]."""
+               coarsen: float = 1.0, offset_angle: float = 0.0) -> CellSolution:
+    """Mesh and solve one cell at gap ``position`` [m] and lateral ``offset`` [m]
+    (direction ``offset_angle`` [rad] from +x); ``coarsen`` scales the mesh size."""
     if settings.degree not in (1, 2):
         raise FieldError(f"degree = {settings.degree!r} is out of range: the 3D solver allows 1 or 2")
-    permittivity = {"ball": cell.ball_permittivity, "walls": cell.wall_permittivity}
-    cell_mesh = mesh_cell(cell, position, offset, settings.mesh_settings(coarsen), comm=comm)
+    cell_mesh = mesh_cell(cell, position, offset, settings.mesh_settings(coarsen), comm=comm,
+                          offset_angle=offset_angle)
+    return solve_on_mesh(cell_mesh, cell_permittivity(cell), settings)
+
+
+def cell_permittivity(cell) -> dict[str, float]:
+    """Relative permittivity by volume group (the air is 1)."""
+    return {"ball": cell.ball_permittivity, "walls": cell.wall_permittivity}
+
+
+def solve_on_mesh(cell_mesh: CellMesh, permittivity: dict[str, float],
+                  settings: Solve3DSettings) -> CellSolution:
+    """C and q/q_ball on an existing mesh (e.g. one of ``meshes/``, see :func:`load_cell_mesh`)."""
     potentials = solve_weighting_potentials(cell_mesh, permittivity, degree=settings.degree,
                                             far_field=settings.far_field,
                                             domain_radius=settings.domain_radius)
@@ -336,6 +354,30 @@ def solve_cell(cell, position: float, offset: float, settings: Solve3DSettings, 
                         cell_mesh=cell_mesh, potentials=potentials)
 
 
+def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float = math.nan,
+                   meshed_offset: float = math.nan) -> CellMesh:
+    """Read a ``.msh`` file written by ``meshes/generate.py`` (named physical groups)
+    on rank 0 of ``comm`` and distribute it."""
+    from dolfinx.io import gmshio
+
+    start = time.perf_counter()
+    groups = None
+    if comm.rank == 0:
+        with gmsh_model(unique_model_name("tengfield-3d-read")):
+            import gmsh
+            gmsh.merge(str(path))
+            groups = {gmsh.model.getPhysicalName(dim, tag): tag
+                      for dim, tag in gmsh.model.getPhysicalGroups() if dim >= 2}
+            groups = comm.bcast(groups, root=0)
+            mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
+    else:
+        groups = comm.bcast(None, root=0)
+        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(None, comm, 0, gdim=3)
+    return CellMesh(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=groups,
+                    ball_centre=np.asarray(ball_centre, dtype=float), meshed_gap=meshed_gap,
+                    meshed_offset=meshed_offset, mesh_time=time.perf_counter() - start)
+
+
 def relative_change(fine: CellSolution, coarse: CellSolution) -> float:
     """Largest relative change of C_ll, C_lu, C_uu, q_lower, q_upper between two solutions."""
     a = np.r_[fine.capacitance[np.triu_indices(2)], fine.induced_fraction]
@@ -343,19 +385,21 @@ def relative_change(fine: CellSolution, coarse: CellSolution) -> float:
     return float(np.max(np.abs(a - b) / np.abs(a)))
 
 
-def solve_cell_3d(cell, position: float, *, offset: float = 0.0, surface_charge: float,
-                  settings: Solve3DSettings, comm, keep_solution: bool = False) -> PositionResult:
+def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
+                  surface_charge: float, settings: Solve3DSettings, comm,
+                  keep_solution: bool = False) -> PositionResult:
     """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell` or :class:`HexagonalCell`).
 
     ``surface_charge`` σ [C/m²] on the ball; ``position`` z [m] in [0, Δh];
-    ``offset`` [m] lateral, along +x. With ``keep_solution`` the info dict
+    ``offset`` [m] lateral, at ``offset_angle`` [rad] from +x. With ``keep_solution`` the info dict
     holds ``"solution"``: the :class:`CellSolution` (mesh and ψ functions).
     """
     start = time.perf_counter()
-    fine = solve_cell(cell, position, offset, settings, comm=comm)
+    fine = solve_cell(cell, position, offset, settings, comm=comm, offset_angle=offset_angle)
     estimate = math.nan
     if settings.estimate_error:
-        coarse = solve_cell(cell, position, offset, settings, comm=comm, coarsen=2.0)
+        coarse = solve_cell(cell, position, offset, settings, comm=comm, coarsen=2.0,
+                            offset_angle=offset_angle)
         estimate = relative_change(fine, coarse) / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0)
     ball_charge = surface_charge * math.pi * cell.ball_diameter**2
     pot = fine.potentials
