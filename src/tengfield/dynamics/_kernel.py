@@ -61,6 +61,7 @@ Z_TOL = 1e-13             # [m] contact when closer than this and approaching
 A_TOL = 1e-9              # [m/s^2] relative accelerations below this count as zero
 CHATTER_FRACTION = 1e-4   # Zeno collapse when t_inf - t_n < this * period
 REST_HEIGHT = 1e-12       # [m] bounces lower than this end in sticking
+V_ZERO = 1e-9             # [m/s] rebound speeds below this are zero (fully plastic)
 MAX_STEPS_PER_FLIGHT = 1_000_000
 
 
@@ -308,6 +309,8 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
                 speed = abs(v)
                 e = _restitution(speed, e0, power_law, v_ref, exponent)
                 v_after = e * speed
+                if v_after < V_ZERO:
+                    v_after = 0.0
                 imp_t[n_imp] = t
                 imp_plate[n_imp] = plate
                 imp_vb[n_imp] = speed
