@@ -220,3 +220,22 @@ def interpolate(V, f):
     g = fem.Function(V, name=getattr(f, "name", None))
     g.interpolate(f)
     return g
+
+
+def point_values(V, values, points) -> np.ndarray:
+    """Values of the dof vector ``values`` on V at ``points`` (shape (n, 3)), serial."""
+    from dolfinx import geometry
+
+    mesh = V.mesh
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
+    candidates = geometry.compute_collisions(tree, points)
+    colliding = geometry.compute_colliding_cells(mesh, candidates, points)
+    cells = []
+    for i in range(points.shape[0]):
+        links = colliding.links(i)
+        if len(links) == 0:
+            raise ValueError(f"point {points[i]} is outside the mesh")
+        cells.append(links[0])
+    u = function(V, values)
+    return u.eval(points, np.array(cells, dtype=np.int32)).ravel()
