@@ -1,0 +1,107 @@
+"""Impact-map speed: impacts per second on one core (long two-plate run),
+a 100 x 100 regime map with 200 periods per point, and soft contact vs
+impact map run time at equal trajectory accuracy.
+
+    .venv/bin/python benchmarks/dynamics_speed.py [--quick]
+
+Prints the figures and writes benchmarks/out/dynamics_speed.csv.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tengfield.dynamics import regime_map
+from tengfield.dynamics.impact import Restitution, integrate
+from tengfield.dynamics.soft import integrate_soft
+from tengfield.dynamics.table import sine_table
+from tengfield.scene import default_scene
+
+
+def impacts_per_second(periods: int) -> dict:
+    """Two-plate run: 2 mm, 60 Hz, e = 0.9 (many impacts at both plates)."""
+    f = 60.0
+    table = sine_table(2e-3, 2 * math.pi * f, 0.0)
+    integrate(table, 3e-3, Restitution(0.9), t_start=0, t_end=1 / f, period=1 / f)  # JIT
+    t0 = time.perf_counter()
+    _, imp, n_events = integrate(table, 3e-3, Restitution(0.9), t_start=0.0,
+                                 t_end=periods / f, period=1 / f)
+    wall = time.perf_counter() - t0
+    n = len(imp[0])
+    return {"benchmark": "impacts_per_second", "value": n / wall, "unit": "impacts/s",
+            "detail": f"{n} impacts ({np.count_nonzero(imp[1] == 1)} upper) in {wall:.3f} s, "
+                      f"{periods} periods, 2 mm / 60 Hz / e = 0.9, 1 core"}
+
+
+def regime_map_time(n: int, periods: int, jobs: int) -> dict:
+    scene = default_scene()
+    freqs = np.linspace(5, 70, n)
+    amps = np.linspace(0.1e-3, 5e-3, n)
+    t0 = time.perf_counter()
+    m = regime_map(scene, freqs, amps, jobs=jobs, progress=False, periods=periods)
+    wall = time.perf_counter() - t0
+    counts = {k: int(np.sum(m.regime == k)) for k in np.unique(m.regime)}
+    return {"benchmark": f"regime_map_{n}x{n}", "value": wall, "unit": "s",
+            "detail": f"{periods} periods/point, {jobs} processes, {counts}"}
+
+
+def soft_vs_impact(tolerance: float = 2e-5) -> dict:
+    """Stiffness needed for max |z_soft - z_impact| < tolerance, and the run-time ratio."""
+    f, amp, e, stroke, mass = 20.0, 1.5e-3, 0.6, 3e-3, default_scene().device.ball_mass
+    table = sine_table(amp, 2 * math.pi * f, 0.0)
+    t_end = 0.25
+    t = np.linspace(0.0, t_end, 2000)
+    t0 = time.perf_counter()
+    for _ in range(20):
+        ref, _, _ = integrate(table, stroke, Restitution(e), t_start=0.0, t_end=t_end,
+                              period=1 / f)
+    impact_time = (time.perf_counter() - t0) / 20
+    z_ref, _, _ = ref(t)
+    rows = []
+    for k in [1e4, 1e5, 1e6, 1e7]:
+        t0 = time.perf_counter()
+        soft, _, _ = integrate_soft(table, stroke, e, mass, k, t_start=0.0, t_end=t_end,
+                                    period=1 / f, rtol=1e-9)
+        wall = time.perf_counter() - t0
+        z, _, _ = soft(t)
+        err = float(np.max(np.abs(z - z_ref)))
+        rows.append((k, err, wall))
+        print(f"  soft k = {k:.0e} N/m: max|dz| = {err:.3g} m, {wall:.3f} s")
+        if err < tolerance:
+            break
+    k, err, wall = rows[-1]
+    return {"benchmark": "soft_over_impact_time", "value": wall / impact_time, "unit": "ratio",
+            "detail": f"soft k = {k:.0e} N/m reaches max|dz| = {err:.2g} m (< {tolerance:g} m) "
+                      f"in {wall:.3f} s; impact map (exact) {impact_time * 1e3:.3f} ms; "
+                      f"{t_end} s at 1.5 mm / 20 Hz"}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
+    args = ap.parse_args()
+    results = [impacts_per_second(20_000 if args.quick else 200_000)]
+    print(results[-1])
+    results.append(regime_map_time(20 if args.quick else 100, 200, os.cpu_count() or 1))
+    print(results[-1])
+    results.append(soft_vs_impact())
+    print(results[-1])
+    load = os.getloadavg()
+    out = Path(__file__).parent / "out"
+    out.mkdir(exist_ok=True)
+    with open(out / "dynamics_speed.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=["benchmark", "value", "unit", "detail", "load"])
+        w.writeheader()
+        for r in results:
+            w.writerow({**r, "load": f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"})
+    print(f"load average during the run: {load}; wrote {out / 'dynamics_speed.csv'}")
+
+
+if __name__ == "__main__":
+    main()
