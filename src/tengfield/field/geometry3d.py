@@ -14,9 +14,10 @@ Coordinates: the origin is the centre of the cell, z is the tube axis, the
 lower electrode lies in the plane ``z = -h/2`` and the upper one in
 ``z = +h/2`` (``h = d + Δh``, the electrode spacing). The ball centre is at
 ``(offset cos φ, offset sin φ, -h/2 + z_gap + d/2)`` (φ = ``offset_angle``,
-0 by default); ``z_gap`` is the gap between the
-ball's bottom and the lower electrode, clamped by :func:`meshed_gap` (the
-z → 0 / z → Δh rule). The air fills a sphere of radius ``domain_radius``
+0 by default); ``z_gap`` is the gap between the ball's bottom and the lower
+electrode, clamped to ``[g_min, Δh - g_min]`` by :func:`meshed_gap` (the
+z → 0 / z → Δh rule shared with the axisymmetric builder; the solver
+extrapolates positions closer than ``g_min``, see :func:`contact_anchors`). The air fills a sphere of radius ``domain_radius``
 centred at the origin; the far-field condition lives on that sphere.
 
 Electrodes are zero-thickness conductor surfaces embedded in the mesh
@@ -37,12 +38,11 @@ import numpy as np
 
 from ..errors import FieldError
 
-#: Smallest ball-electrode gap that is meshed, as a fraction of the ball
-#: diameter. A position closer than this to either electrode is meshed at
-#: this gap (the contact point itself is not meshed). The induced charges
-#: are smooth in z, so the clamp changes q by O(MIN_GAP_FRACTION · d / h)
-#: relative (≈ 2e-4 for the paper's device); see docs/field3d.md.
-MIN_GAP_FRACTION = 1.0e-3
+# The z → 0 / z → Δh rule is the axisymmetric builder's (one rule for both
+# solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``
+# (20 µm for the paper's device); closer positions are extrapolated
+# linearly from the gaps g_min and 2 g_min (:func:`contact_anchors`).
+from .geometry_axisymmetric import MIN_GAP_FRACTION  # noqa: E402  (pure Python, no gmsh)
 
 VOLUME_GROUPS = ("ball", "walls", "air")
 SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
@@ -149,38 +149,58 @@ def cylindrical_cell(device) -> CylindricalCell:
         ball_permittivity=device.ball_permittivity, wall_permittivity=device.wall_permittivity)
 
 
-def meshed_gap(position: float, stroke: float, ball_diameter: float) -> float:
-    """The ball-lower-electrode gap [m] that is meshed for ``position`` z [m].
+def minimum_gap(cell) -> float:
+    """Smallest ball-electrode (and ball-tube) gap that is meshed [m]: ``MIN_GAP_FRACTION · h``."""
+    return MIN_GAP_FRACTION * cell.electrode_spacing
 
-    Rule (z → 0 and z → Δh): the gap to either electrode is at least
-    ``g_min = MIN_GAP_FRACTION · d``; ``z`` is clamped to
-    ``[g_min, Δh - g_min]`` (the midpoint if Δh < 2 g_min). ``position``
-    must lie in ``[0, Δh]``.
-    """
-    if not (math.isfinite(position) and -1e-12 * stroke <= position <= stroke * (1 + 1e-12)):
+
+def check_position(cell, position: float) -> None:
+    """Raise :class:`FieldError` unless ``0 <= position <= Δh``."""
+    stroke = cell.stroke
+    if not (math.isfinite(position) and 0.0 <= position <= stroke * (1 + 1e-12)):
         raise FieldError(f"position_mm = {position * 1e3:g} is out of range: allowed "
                          f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] gap_mm)")
-    g_min = MIN_GAP_FRACTION * ball_diameter
-    if stroke < 2 * g_min:
-        return 0.5 * stroke
-    return min(max(position, g_min), stroke - g_min)
 
 
-def meshed_offset(offset: float, max_offset: float, ball_diameter: float) -> float:
+def meshed_gap(cell, position: float) -> float:
+    """The ball-lower-electrode gap [m] that is meshed for ``position`` z [m]:
+    z clamped to ``[g_min, Δh - g_min]`` (:func:`minimum_gap`)."""
+    check_position(cell, position)
+    g_min = minimum_gap(cell)
+    if cell.stroke < 4 * g_min:
+        raise FieldError(f"[device] gap_mm = {cell.stroke * 1e3:g} is too small for the 3D mesh: "
+                         f"allowed > {4e3 * g_min:g} mm (4 x the minimum meshed gap)")
+    return min(max(position, g_min), cell.stroke - g_min)
+
+
+def contact_anchors(cell, position: float) -> tuple[float, float] | None:
+    """Two meshable positions [m] to extrapolate from when ``position`` is
+    closer than ``g_min`` to an electrode: (g, 2g) above the lower one or
+    (Δh - g, Δh - 2g) below the upper one; ``None`` when it can be meshed."""
+    check_position(cell, position)
+    g = minimum_gap(cell)
+    if position < g:
+        return g, 2.0 * g
+    if position > cell.stroke - g:
+        return cell.stroke - g, cell.stroke - 2.0 * g
+    return None
+
+
+def meshed_offset(cell, offset: float) -> float:
     """The lateral offset [m] that is meshed: at most ``max_offset - g_min``
-    (the ball never touches the tube wall in the mesh, same rule as :func:`meshed_gap`)."""
+    (the ball never touches the tube wall in the mesh)."""
+    max_offset = cell.max_offset
     if not (math.isfinite(offset) and 0.0 <= offset <= max_offset * (1 + 1e-12) + 1e-15):
         raise FieldError(f"offset_mm = {offset * 1e3:g} is out of range: allowed "
                          f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
-    g_min = MIN_GAP_FRACTION * ball_diameter
-    return min(offset, max(max_offset - g_min, 0.0))
+    return min(offset, max(max_offset - minimum_gap(cell), 0.0))
 
 
 def ball_centre(cell, position: float, offset: float, offset_angle: float = 0.0) -> np.ndarray:
     """Ball centre [m] for the meshed gap and offset; the offset points at
     ``offset_angle`` [rad] from the +x axis (see module docstring)."""
-    z_gap = meshed_gap(position, cell.stroke, cell.ball_diameter)
-    off = meshed_offset(offset, cell.max_offset, cell.ball_diameter)
+    z_gap = meshed_gap(cell, position)
+    off = meshed_offset(cell, offset)
     return np.array([off * math.cos(offset_angle), off * math.sin(offset_angle),
                      -0.5 * cell.electrode_spacing + z_gap + 0.5 * cell.ball_diameter])
 
@@ -280,7 +300,7 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
     if settings.order == 2:
         gmsh.model.mesh.setOrder(2)
     return {"groups": groups, "ball_centre": centre,
-            "meshed_gap": meshed_gap(position, cell.stroke, cell.ball_diameter),
+            "meshed_gap": meshed_gap(cell, position),
             "meshed_offset": float(math.hypot(centre[0], centre[1]))}
 
 

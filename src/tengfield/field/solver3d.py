@@ -38,14 +38,15 @@ import contextlib
 import itertools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..errors import FieldError
 from ..scene import EPS0
-from .geometry3d import MeshSettings, build_model, cylindrical_cell, unique_model_name
+from .geometry3d import (MeshSettings, build_model, contact_anchors, cylindrical_cell,
+                         unique_model_name)
 from .result import PositionResult
 
 #: Observed convergence order of C and q under uniform refinement, by degree
@@ -310,11 +311,11 @@ class Solve3DSettings:
     domain_radius: float = 20.0e-3      # [m]
     far_field: str = "robin"
     estimate_error: bool = True
-    mesh_options: dict = field(default_factory=dict)   # extra MeshSettings fields
+    mesh_options: tuple = ()            # extra MeshSettings fields, (("rim_factor", 0.2),)
 
     def mesh_settings(self, coarsen: float = 1.0) -> MeshSettings:
         return MeshSettings(size=self.mesh_size * coarsen, domain_radius=self.domain_radius,
-                            order=2 if self.degree >= 2 else 1, **self.mesh_options)
+                            order=2 if self.degree >= 2 else 1, **dict(self.mesh_options))
 
 
 @dataclass
@@ -391,19 +392,41 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
     """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell` or :class:`HexagonalCell`).
 
     ``surface_charge`` σ [C/m²] on the ball; ``position`` z [m] in [0, Δh];
-    ``offset`` [m] lateral, at ``offset_angle`` [rad] from +x. With ``keep_solution`` the info dict
-    holds ``"solution"``: the :class:`CellSolution` (mesh and ψ functions).
+    ``offset`` [m] lateral, at ``offset_angle`` [rad] from +x. A position
+    closer than ``g_min`` to an electrode is extrapolated linearly from the
+    gaps ``g_min`` and ``2 g_min`` (the contact rule of
+    :func:`tengfield.field.geometry3d.contact_anchors`). With
+    ``keep_solution`` the info dict holds ``"solution"``: the
+    :class:`CellSolution` (mesh and ψ functions) of the (first) meshed position.
     """
     start = time.perf_counter()
-    fine = solve_cell(cell, position, offset, settings, comm=comm, offset_angle=offset_angle)
-    estimate = math.nan
-    if settings.estimate_error:
-        coarse = solve_cell(cell, position, offset, settings, comm=comm, coarsen=2.0,
+
+    def solve_here(z: float, with_estimate: bool):
+        sol = solve_cell(cell, z, offset, settings, comm=comm, offset_angle=offset_angle)
+        if not with_estimate:
+            return sol, math.nan
+        coarse = solve_cell(cell, z, offset, settings, comm=comm, coarsen=2.0,
                             offset_angle=offset_angle)
-        estimate = relative_change(fine, coarse) / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0)
+        return sol, relative_change(sol, coarse) / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0)
+
+    anchors = contact_anchors(cell, position)
+    info: dict[str, Any] = {}
+    if anchors is None:
+        fine, estimate = solve_here(position, settings.estimate_error)
+        capacitance, fraction = fine.capacitance, fine.induced_fraction
+        solve_time = fine.potentials.solve_time
+    else:
+        fine, estimate = solve_here(anchors[0], settings.estimate_error)
+        second, _ = solve_here(anchors[1], False)
+        weight = (position - anchors[0]) / (anchors[1] - anchors[0])  # ≤ 0: extrapolation
+        capacitance = fine.capacitance + weight * (second.capacitance - fine.capacitance)
+        fraction = fine.induced_fraction + weight * (second.induced_fraction - fine.induced_fraction)
+        solve_time = fine.potentials.solve_time + second.potentials.solve_time
+        info["contact_rule"] = (f"linear extrapolation from gaps {anchors[0]:.6g} m and "
+                                f"{anchors[1]:.6g} m")
     ball_charge = surface_charge * math.pi * cell.ball_diameter**2
     pot = fine.potentials
-    info = {
+    info.update({
         "geometry": type(cell).__name__,
         "mesh_size_m": settings.mesh_size,
         "domain_radius_m": settings.domain_radius,
@@ -416,15 +439,15 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         "mesh_time_s": fine.cell_mesh.mesh_time,
         "assembly_time_s": pot.assembly_time,
         "mpi_size": comm.size,
-    }
+    })
     if keep_solution:
         info["solution"] = fine
     return PositionResult(
-        position=position, offset=offset, capacitance=fine.capacitance,
-        induced_charge=fine.induced_fraction * ball_charge, ball_charge=ball_charge,
+        position=position, offset=offset, capacitance=capacitance,
+        induced_charge=fraction * ball_charge, ball_charge=ball_charge,
         dofs=pot.dofs, cells=pot.cells, method="3d", degree=settings.degree,
         wall_time=time.perf_counter() - start, relative_error_estimate=estimate,
-        solve_time=pot.solve_time, info=info)
+        solve_time=solve_time, info=info)
 
 
 def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,

@@ -1,0 +1,186 @@
+"""3D field solver: exact properties, symmetries, far field, error estimate.
+
+Coarse meshes (1-1.5 mm inside the device) keep this file near a minute on
+2 cores; the tolerances are a few times the measured discretisation noise
+(docs/field3d.md).
+"""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings as hyp_settings, strategies as st
+
+pytest.importorskip("dolfinx")
+pytest.importorskip("gmsh")
+
+from tengfield.errors import FieldError  # noqa: E402
+from tengfield.field import geometry3d, solver3d  # noqa: E402
+from tengfield.scene import default_scene  # noqa: E402
+
+PAPER = geometry3d.cylindrical_cell(default_scene().device)
+HONEYCOMB = geometry3d.HexagonalCell()
+P2 = solver3d.Solve3DSettings(degree=2, mesh_size=1.0e-3, domain_radius=20e-3, far_field="robin",
+                              estimate_error=False)
+
+_cache = {}
+
+
+def solve(cell, z_mm, offset_mm=0.0, angle=0.0, settings=P2):
+    """Cached serial solve (several tests share positions)."""
+    from mpi4py import MPI
+    key = (cell, z_mm, offset_mm, angle, settings)
+    if key not in _cache:
+        _cache[key] = solver3d.solve_cell(cell, z_mm * 1e-3, offset_mm * 1e-3, settings,
+                                          comm=MPI.COMM_SELF, offset_angle=angle)
+    return _cache[key]
+
+
+def numbers(sol):
+    return np.r_[sol.capacitance[np.triu_indices(2)], sol.induced_fraction]
+
+
+def assert_physical(sol):
+    c = sol.capacitance
+    assert np.allclose(c, c.T, rtol=1e-12, atol=0)
+    assert c[0, 0] > 0 and c[1, 1] > 0 and c[0, 1] < 0
+    assert np.all(np.linalg.eigvalsh(c) > 0), "field energy must be positive"
+    assert np.all((sol.induced_fraction < 0) & (sol.induced_fraction > -1))
+    assert sol.induced_fraction.sum() > -1, "the electrodes cannot see more than the ball charge"
+
+
+def test_mean_value_property_off_axis():
+    """εr = 1 ball: ψ_k is harmonic inside it, so -q_k/q_ball = <ψ_k>_sphere = ψ_k(centre)."""
+    cell = dataclasses.replace(PAPER, ball_permittivity=1.0)
+    sol = solve(cell, 1.0, 0.4)
+    assert_physical(sol)
+    centre = sol.cell_mesh.ball_centre
+    assert centre[0] == pytest.approx(0.4e-3)
+    at_centre = [solver3d.evaluate_at(psi, centre) for psi in (sol.potentials.lower,
+                                                                 sol.potentials.upper)]
+    np.testing.assert_allclose(-sol.induced_fraction, at_centre, rtol=2e-3)
+
+
+def test_offset_direction_does_not_matter_in_a_round_tube():
+    along_x = solve(PAPER, 1.0, 0.5, 0.0)
+    along_y = solve(PAPER, 1.0, 0.5, math.pi / 2)
+    assert_physical(along_y)
+    np.testing.assert_allclose(numbers(along_y), numbers(along_x), rtol=1e-3)
+
+
+def test_off_axis_change_is_small_and_shrinks_with_the_offset():
+    """q(offset) - q(0) is even in the offset (∝ offset²): small, and 4x smaller at half the offset."""
+    q0, q_half, q_full = (solve(PAPER, 1.0, off).induced_fraction for off in (0.0, 0.25, 0.5))
+    change_full = np.abs(q_full - q0) / np.abs(q0)
+    change_half = np.abs(q_half - q0) / np.abs(q0)
+    assert np.all(change_full < 1e-2)
+    assert change_full[0] > 5e-4, "an off-axis ball must change the induced charge"
+    assert np.all(change_half < 0.6 * change_full)
+
+
+def test_honeycomb_cell_mirror_symmetry_and_sanity():
+    """Honeycomb cell: z -> Δh - z swaps lower and upper (also at the clamped ends)."""
+    bottom = solve(HONEYCOMB, 0.0)
+    top = solve(HONEYCOMB, HONEYCOMB.stroke * 1e3)
+    for sol in (bottom, top):
+        assert_physical(sol)
+    swap = np.array([[0, 1], [1, 0]])
+    np.testing.assert_allclose(top.capacitance, swap @ bottom.capacitance @ swap, rtol=1e-3)
+    np.testing.assert_allclose(top.induced_fraction[::-1], bottom.induced_fraction, rtol=1e-3)
+    # the ball resting on the lower electrode is seen mostly by it
+    assert bottom.induced_fraction[0] < 1.5 * bottom.induced_fraction[1]
+
+
+def test_honeycomb_cell_sixfold_symmetry():
+    along_flat = solve(HONEYCOMB, 1.0, 0.3, math.pi / 6)
+    rotated = solve(HONEYCOMB, 1.0, 0.3, math.pi / 6 + math.pi / 3)
+    assert_physical(rotated)
+    np.testing.assert_allclose(numbers(rotated), numbers(along_flat), rtol=1e-3)
+
+
+def test_robin_far_field_is_stable_when_the_domain_radius_doubles():
+    coarse = dict(degree=1, mesh_size=1.5e-3, estimate_error=False)
+    change = {}
+    for far_field in ("robin", "dirichlet"):
+        near, far = (solve(PAPER, 1.5, settings=solver3d.Solve3DSettings(
+            domain_radius=radius, far_field=far_field, **coarse)) for radius in (20e-3, 40e-3))
+        change[far_field] = np.max(np.abs(numbers(far) - numbers(near)) / np.abs(numbers(far)))
+    assert change["robin"] < 3e-3
+    assert change["dirichlet"] > 3 * change["robin"], change
+
+
+def test_error_estimate_bounds_the_actual_error():
+    """P1 at 1.5 mm: its estimate is at least its error against P2 at 1 mm, and not 10x larger."""
+    from mpi4py import MPI
+    settings = solver3d.Solve3DSettings(degree=1, mesh_size=1.5e-3, domain_radius=20e-3,
+                                        far_field="robin", estimate_error=True)
+    result = solver3d.solve_cell_3d(PAPER, 1.0e-3, surface_charge=-8e-6, settings=settings,
+                                    comm=MPI.COMM_SELF)
+    reference = solve(PAPER, 1.0)
+    actual = np.max(np.abs(np.r_[result.capacitance[np.triu_indices(2)],
+                                 result.induced_fractions()] - numbers(reference))
+                    / np.abs(numbers(reference)))
+    assert actual <= result.relative_error_estimate <= 10 * actual
+
+
+def test_solve_position_dispatches_to_3d_and_fills_the_result():
+    from mpi4py import MPI
+    from tengfield.field import solve_position
+    scene = default_scene()
+    res = solve_position(scene, 2.0e-3, comm=MPI.COMM_SELF, method="3d", offset=0.2e-3,
+                         degree=1, mesh_size_mm=2.0, estimate_error=False)
+    assert res.method == "3d" and res.degree == 1 and res.offset == pytest.approx(0.2e-3)
+    assert res.ball_charge == pytest.approx(-8e-6 * math.pi * 7e-3**2)
+    q = res.induced_fractions()
+    assert q[1] < q[0] < 0, "the ball above the middle is seen more by the upper electrode"
+    assert res.dofs > 0 and res.cells > res.dofs / 10 and res.info["meshed_offset_m"] == 2e-4
+
+
+@hyp_settings(max_examples=50, deadline=None)
+@given(fraction=st.floats(0.0, 1.0))
+def test_gap_rule_clamps_near_contact_only(fraction):
+    z = fraction * PAPER.stroke
+    meshed = geometry3d.meshed_gap(PAPER, z)
+    g_min = geometry3d.minimum_gap(PAPER)
+    assert g_min <= meshed <= PAPER.stroke - g_min
+    assert abs(meshed - z) <= g_min * (1 + 1e-9)
+    anchors = geometry3d.contact_anchors(PAPER, z)
+    if g_min <= z <= PAPER.stroke - g_min:
+        assert meshed == z and anchors is None
+    else:
+        assert anchors[0] == meshed and abs(anchors[1] - anchors[0]) == pytest.approx(g_min)
+
+
+def test_gap_rule_is_the_axisymmetric_one():
+    from tengfield.field import geometry_axisymmetric
+    device = default_scene().device
+    assert geometry3d.minimum_gap(PAPER) == pytest.approx(geometry_axisymmetric.minimum_gap(device))
+    for z in (0.0, 1e-5, 1.5e-3, 3e-3):
+        assert geometry3d.meshed_gap(PAPER, z) == pytest.approx(
+            geometry_axisymmetric.effective_gap(device, z))
+        assert geometry3d.contact_anchors(PAPER, z) == geometry_axisymmetric.contact_anchors(device, z)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: geometry3d.meshed_gap(PAPER, -1e-4), ["position_mm", "-0.1", "[0, 3]"]),
+    (lambda: geometry3d.meshed_gap(PAPER, 3.5e-3), ["position_mm", "3.5", "[0, 3]"]),
+    (lambda: geometry3d.meshed_offset(PAPER, 0.6e-3), ["offset_mm", "0.6", "[0, 0.5]"]),
+    (lambda: geometry3d.meshed_gap(dataclasses.replace(PAPER, stroke=5e-5), 0.0),
+     ["gap_mm", "0.05", "too small"]),
+    (lambda: geometry3d.MeshSettings(size=0.0, domain_radius=0.02), ["mesh_size_mm", "0"]),
+    (lambda: geometry3d.MeshSettings(size=-1e-3, domain_radius=0.02), ["mesh_size_mm", "-1"]),
+    (lambda: solver3d.solve_cell(PAPER, 1e-3, 0.0, dataclasses.replace(P2, degree=3), comm=None),
+     ["degree", "3"]),
+])
+def test_bad_input_names_key_value_and_range(call, words):
+    with pytest.raises(FieldError) as err:
+        call()
+    for word in words:
+        assert word in str(err.value)
+
+
+def test_grounded_table_is_refused_by_the_3d_path():
+    from mpi4py import MPI
+    scene = default_scene().with_values(field={"environment": "grounded-table"})
+    with pytest.raises(FieldError, match="environment"):
+        solver3d.solve_position_3d(scene, 1e-3, comm=MPI.COMM_SELF)
