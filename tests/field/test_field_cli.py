@@ -1,0 +1,49 @@
+"""End-to-end: ``tengfield field`` on the default scene writes the three files."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+pytest.importorskip("dolfinx")
+pytest.importorskip("pyvista")
+
+
+def run_cli(*args, cwd):
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYVISTA_OFF_SCREEN": "true"}
+    return subprocess.run([sys.executable, "-m", "tengfield.cli", "field", *args],
+                          capture_output=True, text=True, cwd=cwd, env=env)
+
+
+def test_field_command_writes_json_xdmf_png(tmp_path):
+    scene = tmp_path / "coarse.toml"
+    scene.write_text("[field]\nmesh_size_mm = 0.8\n")
+    out = tmp_path / "out"
+    done = run_cli(str(scene), "--position-mm", "1.5", "-o", str(out), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "C_T (floating)" in done.stdout and "V_OC" in done.stdout
+    data = json.loads((out / "field.json").read_text())
+    cap, q = data["capacitance_F"], data["induced_charge_C"]
+    assert set(cap) == {"lower_lower", "lower_upper", "upper_upper"}
+    assert set(q) == {"lower", "upper"}
+    assert cap["lower_lower"] > 0 > cap["lower_upper"]
+    assert data["method"] == "axisymmetric" and data["degree"] == 2
+    assert 0 < data["relative_error_estimate"] < 1e-2
+    # ball at mid-stroke of a symmetric device: equal induced charges, each < |q_ball|/2
+    assert q["lower"] == pytest.approx(q["upper"], rel=1e-3)
+    assert 0 < q["upper"] < -0.5 * data["ball_charge_C"]
+    # a negatively charged ball above its rest position: V_OC = V_lower - V_upper > 0
+    v = data["open_circuit_potential_V"]
+    assert v["lower"] - v["upper"] > 0
+    assert (out / "potential.xdmf").stat().st_size > 0
+    assert (out / "potential.h5").stat().st_size > 0
+    png = (out / "field.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 50_000
+
+
+def test_field_command_reports_bad_position_without_traceback(tmp_path):
+    done = run_cli("--position-mm", "3.5", "-o", str(tmp_path / "x"), cwd=tmp_path)
+    assert done.returncode == 2
+    assert "position_mm = 3.5 is out of range: allowed [0, 3] mm" in done.stderr
+    assert "Traceback" not in done.stderr
