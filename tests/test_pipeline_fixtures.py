@@ -18,21 +18,28 @@ from tengfield.scene import EPS0
 
 
 def plate_model(scene, z):
-    """(C_ll, C_lu, C_uu, q_l, q_u) of the analytic model at gap z [m] (arrays ok)."""
+    """(C_ll, C_lu, C_uu, q_l, q_u) of the analytic model at gap z [m] (arrays ok).
+
+    Mirror-symmetric like the real device: z -> Δh - z swaps lower and upper.
+    """
     dev = scene.device
     z = np.asarray(z, dtype=float)
     h = dev.plate_spacing
     stroke = dev.gap
     centre = z + dev.ball_radius
     c0 = EPS0 * math.pi * dev.electrode_radius**2 / h
-    decay = stroke / 6.0   # the dielectric ball near a plate raises the mutual capacitance
-    mutual = c0 * (1.0 + 0.4 * np.exp(-z / decay) + 0.25 * np.exp(-(stroke - z) / decay))
-    c_ll = mutual + 0.3 * c0
-    c_uu = mutual + 0.2 * c0
+    decay = stroke / 6.0   # the dielectric ball near a plate raises the capacitances
+    near_lower, near_upper = np.exp(-z / decay), np.exp(-(stroke - z) / decay)
+    mutual = c0 * (1.0 + 0.4 * near_lower + 0.4 * near_upper)
+    c_ll = mutual + c0 * (0.3 + 0.05 * near_lower)
+    c_uu = mutual + c0 * (0.3 + 0.05 * near_upper)
     # Shockley–Ramo share of a point charge, bent by finite electrodes
-    share = centre / h + 0.04 * np.sin(3.0 * np.pi * centre / h)
-    q_u = -dev.ball_charge * share
-    q_l = -dev.ball_charge * (1.0 - share) * 0.95
+    u = centre / h
+
+    def share(x):
+        return 0.95 * x + 0.04 * np.sin(3.0 * np.pi * x)
+    q_u = -dev.ball_charge * share(u)
+    q_l = -dev.ball_charge * share(1.0 - u)
     return c_ll, -mutual, c_uu, q_l, q_u
 
 
@@ -65,6 +72,8 @@ class FakeDynamics:
     speed, one impact on each plate per period (velocity jumps).
     """
 
+    PHASE = 0.1234   # keeps the impacts off the sample times
+
     def __init__(self, scene, kind="smooth", duration=None, sample_rate=None):
         self.scene = scene
         self.kind = kind
@@ -75,9 +84,10 @@ class FakeDynamics:
         rate = scene.run.sample_rate if sample_rate is None else sample_rate
         self.t = np.arange(int(round(duration * rate)) + 1) / rate
         self.gap, self.gap_velocity, self.table = self.sample(self.t)
-        if kind == "bounce":
-            half = 0.5 * self.period
-            self.impacts = np.arange(1, int(duration / half) + 1) * half
+        if kind == "bounce":   # impacts where the phase passes 0 (lower) and 1/2 (upper)
+            k = np.arange(1, int(2 * duration / self.period) + 2)
+            times = (0.5 * k - self.PHASE) * self.period
+            self.impacts = times[(times > 0) & (times <= duration)]
         else:
             self.impacts = np.empty(0)
         self.regime = {"name": "prescribed", "period": 1, "contacts_per_period": 1,
@@ -93,7 +103,7 @@ class FakeDynamics:
             gap = 0.5 * self.stroke * (1.0 - np.cos(self.omega * t))
             vel = 0.5 * self.stroke * self.omega * np.sin(self.omega * t)
             return gap, vel, table
-        phase = np.mod(t / self.period, 1.0)
+        phase = np.mod(t / self.period + self.PHASE, 1.0)
         speed = 2.0 * self.stroke / self.period
         rising = phase < 0.5
         gap = np.where(rising, phase, 1.0 - phase) * 2.0 * self.stroke

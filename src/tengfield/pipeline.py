@@ -100,14 +100,14 @@ def _impact_times(dynamics, t0: float, t1: float) -> np.ndarray:
 
 
 def relaxation_times(starts, time_constant: float, output_step: float, end: float) -> np.ndarray:
-    """Extra integration times after each jump of I_SC: ``start + τ 2^k``, k = -4..6.
+    """Extra integration times after each jump of I_SC: ``start + τ 2^(k/4)``, k = -16..24.
 
     The load voltage relaxes in ``τ = R (C_T + C_p)`` after an impact; when τ
     is not resolved by the output step these points let the trapezoidal
     energy sums (mean power, energy balance) see the transient. Only offsets
     below 4 output steps are used (longer transients are already resolved).
     """
-    offsets = time_constant * 2.0 ** np.arange(-4, 7)
+    offsets = time_constant * 2.0 ** (np.arange(-16, 25) / 4.0)
     offsets = offsets[offsets < 4.0 * output_step]
     if offsets.size == 0 or len(starts) == 0:
         return np.empty(0)
@@ -123,8 +123,9 @@ def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: di
     runs on a fine grid: the output times, every impact time twice (pre- and
     post-impact velocity, so the jumps of I_SC are exact) and
     :func:`relaxation_times` after the start and each impact. Energies are
-    trapezoidal sums on that grid; ``mean_power_W`` is the dissipated energy
-    after ``window_start`` [s] divided by the window length.
+    trapezoidal sums on that grid over the window after ``window_start`` [s]
+    (the steady window); ``mean_power_W`` is the dissipated energy divided by
+    the window length.
     """
     t = np.asarray(dynamics.t, dtype=float)
     n_cells = scene.device.cells
@@ -158,14 +159,16 @@ def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: di
     delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
     stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
     in_window = grid >= window_start
-    window_length = grid[in_window][-1] - grid[in_window][0] if in_window.sum() > 1 else 0.0
-    window_energy = float(np.trapz(response.power[in_window], grid[in_window]))
+    t_window = grid[in_window]
+    window_length = t_window[-1] - t_window[0] if t_window.size > 1 else 0.0
+    dissipated = float(np.trapz(response.power[in_window], t_window))
+    stored_window = stored[in_window]
     return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
             "P_load": response.power[output_index],
-            "mean_power_W": window_energy / window_length if window_length > 0 else 0.0,
-            "delivered_energy_J": float(np.trapz(delivered, grid)),
-            "dissipated_energy_J": float(np.trapz(response.power, grid)),
-            "stored_energy_change_J": float(stored[-1] - stored[0]),
+            "mean_power_W": dissipated / window_length if window_length > 0 else 0.0,
+            "delivered_energy_J": float(np.trapz(delivered[in_window], t_window)),
+            "dissipated_energy_J": dissipated,
+            "stored_energy_change_J": float(stored_window[-1] - stored_window[0]),
             "integration_points": int(grid.size)}
 
 

@@ -61,11 +61,14 @@ class SurrogateError(TengfieldError, RuntimeError):
 # ---------------------------------------------------------------------------
 # sampling
 def lobatto_positions(stroke: float, count: int) -> np.ndarray:
-    """``count`` Chebyshev–Lobatto gaps [m] on [0, stroke], ascending, ends included."""
+    """``count`` Chebyshev–Lobatto gaps [m] on [0, stroke], ascending, ends included,
+    bitwise symmetric about the middle (so mirror images land on set members)."""
     if count < 2:
         raise ValueError(f"count = {count}: at least 2 positions are needed")
     j = np.arange(count)
     z = 0.5 * stroke * (1.0 - np.cos(np.pi * j / (count - 1)))
+    upper = j >= count // 2 + count % 2
+    z[upper] = stroke - z[count - 1 - j[upper]]   # exactly symmetric: z_(n-1-j) = Δh - z_j
     z[0], z[-1] = 0.0, stroke
     return z
 
@@ -74,6 +77,35 @@ def refinement_positions(stroke: float, count: int) -> np.ndarray:
     """The ``count - 1`` positions that refine a Lobatto set of ``count`` to ``2 count - 1``."""
     finer = lobatto_positions(stroke, 2 * count - 1)
     return finer[1::2]
+
+
+def is_mirror_symmetric(scene) -> bool:
+    """True when the device is symmetric under z -> Δh - z with lower <-> upper.
+
+    Both plates are built alike (same thickness, electrode radius and
+    material), so only the environment can break the mirror symmetry: a
+    grounded table under the lower plate does, free space does not.
+    """
+    return scene.field.environment == "free-space"
+
+
+def mirrored(result, stroke: float):
+    """The solve at ``stroke - z`` implied by mirror symmetry: C_ll <-> C_uu, q_l <-> q_u."""
+    C = np.asarray(result.capacitance, dtype=float)
+    q = np.asarray(result.induced_charge, dtype=float)
+    return dataclasses.replace(result, position=stroke - result.position,
+                               capacitance=C[::-1, ::-1].copy(), induced_charge=q[::-1].copy(),
+                               info={**getattr(result, "info", {}), "mirrored_from": result.position})
+
+
+def snake_order(positions: np.ndarray, stroke: float) -> np.ndarray:
+    """Indices ordering positions by distance to the nearest plate (the solves close to
+    contact are the dearest), then interleaved 0,1,1,0,0,1,... so that a round-robin
+    over two ranks gets balanced work."""
+    order = np.argsort(np.minimum(positions, stroke - positions), kind="stable")
+    pairs = [order[i:i + 2] for i in range(0, order.size, 2)]
+    return np.concatenate([p if k % 2 == 0 else p[::-1] for k, p in enumerate(pairs)]) \
+        if pairs else order
 
 
 # ---------------------------------------------------------------------------
@@ -258,7 +290,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     ``comm`` spreads the positions of each refinement level over its ranks
     (a task farm, each solve on ``solve_comm``, by default ``COMM_SELF``);
     every rank returns the same table. ``solve(scene, position, comm=...)``
-    defaults to :func:`tengfield.field.solve_position`.
+    defaults to :func:`tengfield.field.solve_position`. When the device is
+    mirror-symmetric (:func:`is_mirror_symmetric`) only the positions
+    ``z <= Δh/2`` are solved and the others are their mirror images.
     """
     if solve is None:
         solve = _default_solver()
@@ -276,15 +310,27 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         bar = tqdm(total=count, desc="field solves", unit="position", file=sys.stderr,
                    disable=not sys.stderr.isatty())
 
-    def solve_level(positions: np.ndarray) -> SurrogateTable:
-        def work(z):
-            return solve(scene, float(z), comm=solve_comm)
+    symmetric = is_mirror_symmetric(scene)
 
-        def advance(n):
-            if bar is not None:
-                bar.update(min(n, bar.total - bar.n))
-        return table_from_results(farm(comm, list(positions), work, progress=advance),
-                                  stroke=stroke)
+    def work(z):
+        return solve(scene, float(z), comm=solve_comm)
+
+    def advance(n):
+        if bar is not None:
+            bar.update(min(n, bar.total - bar.n))
+
+    def solve_level(positions: np.ndarray) -> SurrogateTable:
+        """Solve ``positions`` (with mirror symmetry: only those in the lower half)."""
+        todo = positions[positions <= 0.5 * stroke * (1 + 1e-12)] if symmetric else positions
+        if bar is not None:
+            bar.total += todo.size - positions.size
+            bar.refresh()
+        todo = todo[snake_order(todo, stroke)]
+        results = farm(comm, list(todo), work, progress=advance)
+        if symmetric:
+            results += [mirrored(r, stroke) for r in results
+                        if not math.isclose(r.position, 0.5 * stroke, rel_tol=1e-12)]
+        return table_from_results(results, stroke=stroke)
 
     table = solve_level(lobatto_positions(stroke, count))
     history: list[tuple[int, float]] = []
@@ -312,7 +358,26 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     return dataclasses.replace(
         table, interpolation_error=estimate, tolerance=tolerance, converged=converged,
         error_history=history, field_hash=scene.field_hash(),
-        provenance=provenance(scene, command_line))
+        provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
+                    "solver_fingerprint": solver_fingerprint()})
+
+
+def solver_fingerprint() -> str:
+    """SHA-256 (16 hex digits) of the field solver's source files.
+
+    Part of the cache check on top of the scene's field hash, so that a
+    changed solver (without a ``FIELD_SCHEMA`` bump) never reuses old solves.
+    """
+    import hashlib
+    from importlib import resources
+
+    digest = hashlib.sha256()
+    package = resources.files("tengfield").joinpath("field")
+    for entry in sorted(package.iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".py"):
+            digest.update(entry.name.encode())
+            digest.update(entry.read_bytes())
+    return digest.hexdigest()[:16]
 
 
 def provenance(scene, command_line: str = "") -> dict:
@@ -376,9 +441,11 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
     return path
 
 
-def read_table(path: str | Path, expected_hash: str | None = None) -> SurrogateTable:
+def read_table(path: str | Path, expected_hash: str | None = None,
+               expected_solver: str | None = None) -> SurrogateTable:
     """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
-    readable and (if given) made for ``expected_hash``."""
+    readable and (if given) made for ``expected_hash`` by the solver with
+    fingerprint ``expected_solver`` (:func:`solver_fingerprint`)."""
     path = Path(path)
     if not path.is_file():
         raise SurrogateError(f"surrogate file {str(path)!r} does not exist")
@@ -408,6 +475,10 @@ def read_table(path: str | Path, expected_hash: str | None = None) -> SurrogateT
     except Exception as exc:  # noqa: BLE001 - any read failure means "corrupt"
         raise SurrogateError(f"surrogate file {str(path)!r} is corrupt or unreadable: "
                              f"{type(exc).__name__}: {exc}") from None
+    stored_solver = table.provenance.get("solver_fingerprint")
+    if expected_solver is not None and stored_solver != expected_solver:
+        raise SurrogateError(f"surrogate file {str(path)!r} was made by another version of the "
+                             f"field solver (fingerprint {stored_solver}, now {expected_solver})")
     if table.count < 2 or not np.all(np.isfinite(table.capacitance)) \
             or not np.all(np.isfinite(table.induced_charge)):
         raise SurrogateError(f"surrogate file {str(path)!r} holds non-finite or too few values")
@@ -456,7 +527,8 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     status, reason = "computed", f"no cached surrogate at {path}"
     if path.exists():
         try:
-            table = read_table(path, expected_hash=scene.field_hash())
+            table = read_table(path, expected_hash=scene.field_hash(),
+                               expected_solver=solver_fingerprint())
             return table, CacheOutcome("cached", f"complete surrogate with matching field hash "
                                        f"at {path}", str(path), time.perf_counter() - start)
         except SurrogateError as exc:

@@ -41,7 +41,8 @@ def _run(args) -> int:
     target = Path(args.output) if args.output else surrogate.cache_path(scene, args.cache_dir)
     if not args.force and args.output is None and target.exists():
         try:
-            table = surrogate.read_table(target, expected_hash=scene.field_hash())
+            table = surrogate.read_table(target, expected_hash=scene.field_hash(),
+                                        expected_solver=surrogate.solver_fingerprint())
         except surrogate.SurrogateError as exc:
             if rank == 0:
                 print(f"tengfield: cached surrogate not trusted ({exc}); recomputing")

@@ -1,0 +1,119 @@
+"""MPI task farm of the surrogate: 2 ranks give the serial result; a failure aborts all ranks.
+
+``make test-mpi`` runs the ``mpi``-marked tests under ``mpirun -n 2``; the
+others start ``mpirun`` themselves (the serial suite).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tengfield import surrogate
+
+sys.path.insert(0, str(Path(__file__).parent))
+import test_pipeline_fixtures as fx  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+COARSE_FIELD = {"mesh_size_mm": 1.5, "degree": 1, "tolerance": 0.05}
+
+
+def mpi_env():
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg")
+    return env
+
+
+def assert_same_table(a, b):
+    np.testing.assert_array_equal(a.positions, b.positions)
+    np.testing.assert_array_equal(a.capacitance, b.capacitance)
+    np.testing.assert_array_equal(a.induced_charge, b.induced_charge)
+    assert a.interpolation_error == b.interpolation_error
+    assert a.error_history == b.error_history
+
+
+@pytest.mark.mpi
+def test_two_ranks_equal_serial_analytic_model():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    scene = fx.scene_with(field={"tolerance": 1e-5})
+    parallel = surrogate.precompute(scene, comm=comm, solve=fx.plate_model_solve)
+    serial = surrogate.precompute(scene, comm=None, solve=fx.plate_model_solve)
+    assert_same_table(parallel, serial)
+    # every rank holds the same table
+    others = comm.allgather(parallel.capacitance)
+    for other in others:
+        np.testing.assert_array_equal(other, parallel.capacitance)
+
+
+@pytest.mark.mpi
+@pytest.mark.field
+def test_two_ranks_equal_serial_field_solver():
+    import pyvista  # noqa: F401 - before dolfinx
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    scene = fx.scene_with(field=COARSE_FIELD)
+    parallel = surrogate.precompute(scene, comm=comm)
+    # the serial reference: rank 0 alone, shared with the other rank
+    serial = surrogate.precompute(scene, comm=None) if comm.rank == 0 else None
+    serial = comm.bcast(serial, root=0)
+    assert_same_table(parallel, serial)
+    assert parallel.count >= 17
+
+
+def test_cli_precompute_under_mpirun_equals_serial(tmp_path):
+    """`mpirun -n 2 tengfield precompute` writes the same file content as a serial run."""
+    if shutil.which("mpirun") is None:
+        pytest.skip("mpirun not installed")
+    scene_file = tmp_path / "coarse.toml"
+    scene_file.write_text("[field]\n" + "".join(f"{k} = {v!r}\n".replace("'", '"')
+                                                 for k, v in COARSE_FIELD.items()))
+    cmd = [PYTHON, "-m", "tengfield.cli", "precompute", str(scene_file)]
+    serial = subprocess.run(cmd + ["-o", str(tmp_path / "serial.h5")], capture_output=True,
+                            text=True, env=mpi_env(), timeout=300)
+    assert serial.returncode == 0, serial.stderr
+    parallel = subprocess.run(["mpirun", "-n", "2"] + cmd + ["-o", str(tmp_path / "mpi.h5")],
+                              capture_output=True, text=True, env=mpi_env(), timeout=300)
+    assert parallel.returncode == 0, parallel.stderr
+    a = surrogate.read_table(tmp_path / "serial.h5")
+    b = surrogate.read_table(tmp_path / "mpi.h5")
+    assert_same_table(a, b)
+    assert "mpirun" not in a.provenance["command_line"]
+    assert a.provenance["command_line"].startswith("tengfield precompute")
+
+
+def test_failure_on_one_rank_aborts_every_rank(tmp_path):
+    """An exception on rank 1 ends the whole job with its message (no hang)."""
+    if shutil.which("mpirun") is None:
+        pytest.skip("mpirun not installed")
+    script = tmp_path / "fail.py"
+    script.write_text(textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from mpi4py import MPI
+        import test_pipeline_fixtures as fx
+        from tengfield import surrogate
+
+        def solve(scene, z, comm=None):
+            if MPI.COMM_WORLD.rank == 1:
+                raise RuntimeError(f"mesh generation failed at z = {{z:.3g}}")
+            return fx.plate_model_solve(scene, z)
+
+        surrogate.precompute(fx.scene_with(), comm=MPI.COMM_WORLD, solve=solve)
+        print("finished")
+    """))
+    proc = subprocess.run(["mpirun", "-n", "2", PYTHON, str(script)], capture_output=True,
+                          text=True, env=mpi_env(), timeout=120)
+    assert proc.returncode != 0
+    assert "error on rank 1 of 2" in proc.stderr
+    assert "mesh generation failed" in proc.stderr
+    assert "finished" not in proc.stdout

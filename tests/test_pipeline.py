@@ -1,0 +1,256 @@
+"""End-to-end pipeline: waveforms, limits, energy balance, skipped stages, CLI runs."""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import cumulative_trapezoid
+
+from tengfield import pipeline, surrogate
+
+sys.path.insert(0, str(Path(__file__).parent))
+import test_pipeline_fixtures as fx  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+SMALL_SCENE = """\
+[run]
+duration_s = 0.3
+settle_periods = 2
+sample_rate_hz = 5000.0
+
+[field]
+mesh_size_mm = 1.5
+degree = 1
+tolerance = 0.05
+"""
+
+
+def model_run(scene, tmp_path, kind="bounce", **kw):
+    return pipeline.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve,
+                        simulate=lambda s: fx.FakeDynamics(s, kind=kind, **kw))
+
+
+def cli(args, tmp_path, extra_env=None):
+    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    env.update(extra_env or {})
+    return subprocess.run([PYTHON, "-m", "tengfield.cli", *args], capture_output=True, text=True,
+                          env=env, timeout=600, cwd=tmp_path)
+
+
+# ---------------------------------------------------------------------------
+# physics through the pipeline (analytic field model, prescribed trajectories)
+def test_short_circuit_current_integrates_back_to_charge(tmp_path):
+    scene = fx.scene_with(run={"sample_rate_hz": 20000.0})
+    result = model_run(scene, tmp_path, kind="smooth", duration=0.2)
+    w = result.waveforms
+    charge = w["Q_sc_C"][0] + cumulative_trapezoid(w["I_sc_A"], w["time_s"], initial=0.0)
+    np.testing.assert_allclose(charge, w["Q_sc_C"], atol=1e-5 * np.abs(w["Q_sc_C"]).max())
+    # the real impact dynamics: integrate piecewise between impacts on a fine grid
+    from tengfield.dynamics import simulate
+    dyn = simulate(scene.with_values(run={"duration_s": 0.6}))
+    curves = result.curves
+    grid = np.linspace(dyn.t[0], dyn.t[-1], 200001)
+    hits = dyn.impacts.time
+    # each impact twice: the pre-impact state (just before) then the post-impact one
+    t_fine = np.concatenate([grid, hits, hits])
+    stamp = np.concatenate([grid, hits - 1e-12, hits + 1e-12])
+    order = np.lexsort((stamp, t_fine))
+    t_fine = t_fine[order]
+    gap, vel, _ = dyn.sample(stamp[order])
+    current = curves.charge_derivative(gap) * vel
+    charge = curves.charge(gap[0]) + cumulative_trapezoid(current, t_fine, initial=0.0)
+    scale = np.abs(curves.charge(gap)).max()
+    assert np.abs(charge - curves.charge(gap)).max() < 1e-4 * scale
+
+
+def test_load_limits_reproduce_short_and_open_circuit(tmp_path):
+    small = model_run(fx.scene_with(circuit={"kind": "load", "load_ohm": 1.0}), tmp_path)
+    w = small.waveforms
+    np.testing.assert_allclose(w["I_load_A"][5:], w["I_sc_A"][5:], rtol=0,
+                               atol=1e-6 * np.abs(w["I_sc_A"]).max())
+    huge = model_run(fx.scene_with(circuit={"kind": "load", "load_ohm": 1e18,
+                                            "parallel_capacitance_pF": 10.0}), tmp_path)
+    w = huge.waveforms
+    np.testing.assert_allclose(w["V_load_V"], w["V_oc_V"], rtol=0,
+                               atol=1e-6 * np.abs(w["V_oc_V"]).max())
+
+
+@pytest.mark.parametrize("load", [1e6, 1e9, 1e12])
+def test_energy_balance_with_impacts(tmp_path, load):
+    """Work delivered = stored + dissipated energy, with velocity jumps at impacts."""
+    scene = fx.scene_with(circuit={"kind": "load", "load_ohm": load})
+    result = model_run(scene, tmp_path)
+    e = result.summary["load"]["energy_balance_J"]
+    assert e["dissipated_energy_J"] > 0
+    assert e["delivered_energy_J"] == pytest.approx(
+        e["dissipated_energy_J"] + e["stored_energy_change_J"], rel=1e-3)
+
+
+def test_mean_power_does_not_depend_on_the_output_sampling(tmp_path):
+    powers = []
+    for rate in (4000.0, 40000.0):
+        scene = fx.scene_with(circuit={"kind": "load", "load_ohm": 3e9},
+                              run={"sample_rate_hz": rate})
+        powers.append(model_run(scene, tmp_path).summary["load"]["mean_power_W"])
+    assert powers[0] == pytest.approx(powers[1], rel=2e-3)
+
+
+def test_power_has_a_maximum_over_load(tmp_path):
+    """P(R) rises as R and falls as 1/R: an optimum load in between (Fig. S13)."""
+    loads = np.logspace(5, 13, 9)
+    powers = [model_run(fx.scene_with(circuit={"kind": "load", "load_ohm": r}), tmp_path)
+              .summary["load"]["mean_power_W"] for r in loads]
+    best = int(np.argmax(powers))
+    assert 0 < best < len(loads) - 1
+    np.testing.assert_allclose(powers[1] / powers[0], loads[1] / loads[0], rtol=0.01)
+    assert np.all(np.diff(powers[:best + 1]) > 0) and np.all(np.diff(powers[best:]) < 0)
+
+
+def test_cells_in_parallel_through_the_pipeline(tmp_path):
+    one = model_run(fx.scene_with(), tmp_path).summary["peak_to_peak"]
+    four = model_run(fx.scene_with(device={"cells": 4}), tmp_path).summary["peak_to_peak"]
+    assert four["V_oc_V"] == pytest.approx(one["V_oc_V"], rel=1e-12)
+    assert four["Q_sc_C"] == pytest.approx(4 * one["Q_sc_C"], rel=1e-12)
+    assert four["I_sc_A"] == pytest.approx(4 * one["I_sc_A"], rel=1e-12)
+
+
+def test_uncharged_ball_skips_the_field(tmp_path):
+    def no_solve(*a, **k):
+        raise AssertionError("the field must not be solved")
+    scene = fx.scene_with(device={"surface_charge_uC_per_m2": 0.0}, circuit={"kind": "load"})
+    result = pipeline.run(scene, cache_dir=tmp_path, solve=no_solve,
+                          simulate=lambda s: fx.FakeDynamics(s, kind="bounce"))
+    stages = result.summary["stages"]
+    assert stages["field"]["status"] == "skipped" and "charge is zero" in stages["field"]["reason"]
+    assert not np.any(result.waveforms["V_load_V"])
+
+
+def test_summary_says_what_ran(tmp_path):
+    scene = fx.scene_with()
+    first = model_run(scene, tmp_path).summary
+    second = model_run(scene.with_values(excitation={"frequency_hz": 25.0}), tmp_path).summary
+    assert first["stages"]["field"]["status"] == "ran"
+    assert second["stages"]["field"]["status"] == "cached"
+    assert "load ODE not run" in second["stages"]["circuit"]["reason"]
+    assert second["load"] is None and "no load" in second["load_reason"]
+    assert second["reference"] == "floating"
+    json.dumps(second)  # JSON-ready
+
+
+# ---------------------------------------------------------------------------
+# the real stack (dynamics + dolfinx), small scenes
+@pytest.mark.field
+def test_error_estimate_is_honest_against_direct_solves(tmp_path):
+    import pyvista  # noqa: F401 - before dolfinx
+    from mpi4py import MPI
+
+    from tengfield import terminals
+    from tengfield.field import solve_position
+    scene = fx.scene_with(field={"mesh_size_mm": 1.5, "degree": 1, "tolerance": 0.05})
+    table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path)
+    rng = np.random.default_rng(7)
+    extra = [solve_position(scene, float(z), comm=MPI.COMM_SELF)
+             for z in rng.uniform(0.0, scene.device.gap, 3)]
+    held = surrogate.table_from_results(extra, stroke=scene.device.gap)
+    worst = surrogate.held_out_error(table, held)
+    assert worst <= table.interpolation_error
+    for reference in terminals.REFERENCES:   # V_OC > 0 for a PTFE ball above z = 0
+        assert np.all(table.curves(reference).voltage(held.positions) > 0)
+    # the mirror symmetry the surrogate exploits holds for the solver: z <-> Δh - z
+    for direct in extra:
+        image = solve_position(scene, scene.device.gap - direct.position, comm=MPI.COMM_SELF)
+        mirrored = surrogate.mirrored(image, scene.device.gap)
+        np.testing.assert_allclose(mirrored.capacitance, direct.capacitance, rtol=5e-3)
+        np.testing.assert_allclose(mirrored.induced_charge, direct.induced_charge, rtol=5e-3)
+
+
+@pytest.mark.field
+def test_cli_run_end_to_end_then_cached(tmp_path):
+    (tmp_path / "small.toml").write_text(SMALL_SCENE + '\n[circuit]\nkind = "load"\n'
+                                         'load_ohm = 1e9\nparallel_capacitance_pF = 5.0\n')
+    first = cli(["run", "small.toml", "-o", "out1"], tmp_path)
+    assert first.returncode == 0, first.stderr
+    out = tmp_path / "out1"
+    for name in ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png"):
+        assert (out / name).stat().st_size > 0
+    with open(out / "waveforms.csv") as f:
+        header = next(csv.reader(f))
+    assert header == pipeline.WAVEFORM_COLUMNS + pipeline.LOAD_COLUMNS
+    data = np.loadtxt(out / "waveforms.csv", delimiter=",", skiprows=1)
+    assert data.shape[0] == 0.3 * 5000 + 1
+    assert np.allclose(np.diff(data[:, 0]), 1 / 5000.0)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["stages"]["field"]["status"] == "ran"
+    assert summary["load"]["power_density_W_per_m3"] > 0
+    assert summary["peak_to_peak"]["V_oc_V"] > 0 and summary["regime"]["regime"]
+    # second run: cached surrogate, dolfinx never imported
+    code = ("import sys; from tengfield.cli import main; rc = main(['run', 'small.toml', '-o', "
+            "'out2', '--no-plots']); assert 'dolfinx' not in sys.modules and 'gmsh' not in "
+            "sys.modules, 'heavy import'; sys.exit(rc)")
+    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    second = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, env=env,
+                            cwd=tmp_path, timeout=300)
+    assert second.returncode == 0, second.stderr
+    summary2 = json.loads((tmp_path / "out2" / "summary.json").read_text())
+    assert summary2["stages"]["field"]["status"] == "cached"
+    np.testing.assert_allclose(np.loadtxt(tmp_path / "out2" / "waveforms.csv", delimiter=",",
+                                          skiprows=1), data, rtol=1e-9)
+
+
+@pytest.mark.field
+def test_cli_sweep_and_precompute_cache(tmp_path):
+    (tmp_path / "small.toml").write_text(SMALL_SCENE)
+    pre = cli(["precompute", "small.toml"], tmp_path)
+    assert pre.returncode == 0, pre.stderr
+    again = cli(["precompute", "small.toml"], tmp_path)
+    assert again.returncode == 0 and "cached" in again.stdout
+    sweep = cli(["sweep", "small.toml", "--frequency-hz", "15:25:2", "--amplitude-mm", "1.5",
+                 "--load-ohm", "1e8:1e10:2", "--jobs", "2", "-o", "sw"], tmp_path)
+    assert sweep.returncode == 0, sweep.stderr
+    with open(tmp_path / "sw" / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 4 and {r["load_ohm"] for r in rows} == {"100000000.0", "10000000000.0"}
+    assert all(float(r["V_oc_pp_V"]) > 0 and float(r["P_mean_W"]) > 0 for r in rows)
+    assert (tmp_path / "sw" / "sweep.png").stat().st_size > 0
+
+
+def test_uncharged_run_never_imports_the_field_stack(tmp_path):
+    (tmp_path / "dry.toml").write_text(SMALL_SCENE + "[device]\nsurface_charge_uC_per_m2 = 0.0\n")
+    code = ("import sys; from tengfield.cli import main; rc = main(['run', 'dry.toml', '-o', "
+            "'out', '--no-plots']); assert 'dolfinx' not in sys.modules and 'gmsh' not in "
+            "sys.modules; sys.exit(rc)")
+    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    proc = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, env=env,
+                          cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["stages"]["field"]["status"] == "skipped"
+    assert not (tmp_path / "cache").exists()
+
+
+@pytest.mark.parametrize("section, key, value, expected", [
+    ("circuit", "load_ohm", "-5.0", "[circuit] load_ohm = -5.0 is out of range"),
+    ("circuit", "parallel_capacitance_pF", "-1.0", "[circuit] parallel_capacitance_pF = -1.0"),
+    ("circuit", "reference", '"grounded-upper"', "[circuit] reference = 'grounded-upper' is not allowed"),
+    ("circuit", "kind", '"resistor"', "[circuit] kind = 'resistor' is not allowed"),
+])
+def test_bad_circuit_input_is_a_clear_error(tmp_path, section, key, value, expected):
+    (tmp_path / "bad.toml").write_text(f"[{section}]\n{key} = {value}\n")
+    proc = cli(["run", "bad.toml", "-o", "out"], tmp_path)
+    assert proc.returncode == 2
+    assert expected in proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_bad_sweep_range_is_a_clear_error(tmp_path):
+    proc = cli(["sweep", "--frequency-hz", "10:20", "--amplitude-mm", "1", "-o", "o"], tmp_path)
+    assert proc.returncode == 2 and "--frequency-hz = '10:20'" in proc.stderr
+    assert "Traceback" not in proc.stderr
