@@ -72,7 +72,7 @@ def point_regime(setup: _PointSetup, frequency: float, amplitude: float) -> Regi
     period = 1.0 / frequency
     table = sine_table(amplitude, 2.0 * math.pi * frequency, setup.phase)
     t_end = setup.t_start + setup.periods * period
-    traj, (it, ip, ivb, _), _ = integrate(
+    traj, (it, ip, ivb, iva), _ = integrate(
         table, setup.stroke, setup.restitution, t_start=setup.t_start, t_end=t_end,
         gap0=setup.gap0, velocity0=setup.velocity0, period=period)
     window_start = setup.t_start + setup.settle_periods * period

@@ -7,8 +7,11 @@ Definitions (also in docs/dynamics.md). The steady window is
   The period is the smallest p in 1..MAX_PERIOD with
   ``|z_{k+p} - z_k| / dh + |v_{k+p} - v_k| / sqrt(2 g dh) <= PERIOD_TOL``
   for every section point k in the second half of the window; 0 if none.
-* contacts per period: impacts at that plate in the window / K (a chatter
-  sequence collapsed to its accumulation point counts its recorded impacts).
+* contacts per period: contacts at that plate in the window / K. A contact
+  starts with an impact; the following impacts at the same plate belong to
+  the same contact while the ball stays within CONTACT_MERGE_HEIGHT dh of
+  that plate in between (on the 64-per-period samples), so a chatter
+  sequence ending in sticking is one contact.
 * max gap: the largest z at SAMPLES_PER_PERIOD samples per period in the
   window, refined by a golden-section search around the largest sample
   (error below ``g (1+Gamma) (T/64)^2 / 8`` only if two different apexes
@@ -34,6 +37,7 @@ PERIOD_TOL = 1e-3
 SAMPLES_PER_PERIOD = 64
 REST_GAP = 1e-9          # [m]
 CRITICAL_OVERSHOOT = 0.1  # fraction of the stroke
+CONTACT_MERGE_HEIGHT = 0.01  # fraction of the stroke
 
 
 def detect_period(z_section: np.ndarray, v_section: np.ndarray, stroke: float, g: float,
@@ -72,13 +76,36 @@ def _refined_max(sampler, t: np.ndarray, z: np.ndarray, iterations: int = 40) ->
     return best
 
 
+def count_contacts(impact_time: np.ndarray, impact_plate: np.ndarray, dense_t: np.ndarray,
+                   z_dense: np.ndarray, stroke: float, plate: int, merge_height: float) -> int:
+    """Contacts at ``plate`` (0 lower, 1 upper) among time-ordered impacts.
+
+    An impact continues the previous contact when the previous impact was at
+    the same plate and the ball stayed within ``merge_height`` [m] of that
+    plate in between (judged on the samples ``z_dense`` at ``dense_t``).
+    """
+    if impact_time.size == 0:
+        return 0
+    distance = z_dense if plate == 0 else stroke - z_dense
+    cut = np.searchsorted(dense_t, impact_time)
+    count = 0
+    for k in np.flatnonzero(impact_plate == plate):
+        if k > 0 and impact_plate[k - 1] == plate:
+            between = distance[cut[k - 1]:cut[k]]
+            if between.size == 0 or float(np.max(between)) < merge_height:
+                continue
+        count += 1
+    return count
+
+
 def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
              impact_speed: np.ndarray, *, window_start: float, t_end: float, period: float,
              stroke: float, g: float, upper_stuck: bool = False) -> Regime:
     """Regime of [window_start, t_end]; ``sampler(times) -> (z, v, y)``.
 
-    ``impact_plate`` holds 0 (lower) / 1 (upper); ``upper_stuck`` says whether
-    the ball was pressed to the upper plate in the window.
+    ``impact_plate`` holds 0 (lower) / 1 (upper), ``impact_speed`` the
+    relative impact speeds [m/s]; ``upper_stuck`` says whether the ball was pressed to the upper plate in
+    the window.
     """
     n_periods = int(math.floor((t_end - window_start) / period + 1e-9))
     if n_periods < 1:
@@ -93,12 +120,17 @@ def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
     upper = in_window & (impact_plate == 1)
     n_lower = int(np.count_nonzero(lower))
     n_upper = int(np.count_nonzero(upper))
+    merge = CONTACT_MERGE_HEIGHT * stroke
+    contacts_lower = count_contacts(impact_time[in_window], impact_plate[in_window], dense_t,
+                                    z_dense, stroke, 0, merge)
+    contacts_upper = count_contacts(impact_time[in_window], impact_plate[in_window], dense_t,
+                                    z_dense, stroke, 1, merge)
     max_gap = _refined_max(sampler, dense_t, z_dense)
     if n_upper or upper_stuck:
         max_gap = stroke
     period_p = detect_period(z_sec, v_sec, stroke, g)
-    lower_pp = n_lower / n_periods
-    upper_pp = n_upper / n_periods
+    lower_pp = contacts_lower / n_periods
+    upper_pp = contacts_upper / n_periods
     if max_gap < REST_GAP and n_lower == 0 and n_upper == 0:
         name = "rest"
         period_p = 1
