@@ -55,7 +55,11 @@ ENV OMPI_ALLOW_RUN_AS_ROOT=1 \
     MPLBACKEND=Agg \
     PYTHONUNBUFFERED=1
 
-# Outputs go to /out: mount a host directory there.
+# Outputs go to /out: mount a host directory there. The caches go there too
+# (/out/cache: field surrogates, dolfinx's compiled forms, numba's compiled
+# kernels, matplotlib's font list), so later containers reuse them.
+ENV XDG_CACHE_HOME=/out/cache \
+    NUMBA_CACHE_DIR=/out/cache/numba
 WORKDIR /out
 VOLUME ["/out"]
 ENTRYPOINT ["tengfield"]
