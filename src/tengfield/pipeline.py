@@ -136,7 +136,8 @@ def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: di
         zero = np.zeros_like(t)
         return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(), "mean_power_W": 0.0,
                 "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
-                "stored_energy_change_J": 0.0, "integration_points": int(t.size)}
+                "stored_energy_change_J": 0.0, "integration_points": int(t.size),
+                "time_constant_s": 0.0}
     impacts = _impact_times(dynamics, t[0], t[-1])
     output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
@@ -169,7 +170,8 @@ def load_waveforms(scene, dynamics, curves: TerminalCurves | None, waveforms: di
             "delivered_energy_J": float(np.trapz(delivered[in_window], t_window)),
             "dissipated_energy_J": dissipated,
             "stored_energy_change_J": float(stored_window[-1] - stored_window[0]),
-            "integration_points": int(grid.size)}
+            "integration_points": int(grid.size),
+            "time_constant_s": load * (float(np.max(curves.capacitance_samples)) * n_cells + c_p)}
 
 
 # ---------------------------------------------------------------------------
@@ -250,7 +252,8 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
                                       progress=progress, command_line=command_line,
                                       write=write_cache)
         if outcome.status == "cached":
-            stages["field"] = Stage("cached", outcome.reason, 0.0, {"path": outcome.path})
+            stages["field"] = Stage("cached", outcome.reason, outcome.wall_time,
+                                    {"path": outcome.path})
         else:
             stages["field"] = Stage("ran", outcome.reason, outcome.wall_time, {
                 "path": outcome.path, "positions": table.count,
@@ -344,6 +347,11 @@ def _summary(scene, dynamics, waveforms, load, stages, table) -> dict:
             "energy_balance_J": {k: load[k] for k in ("delivered_energy_J", "dissipated_energy_J",
                                                       "stored_energy_change_J")},
             "integration_points": load["integration_points"],
+            "time_constant_s": load["time_constant_s"],
+            "settled": bool(5.0 * load["time_constant_s"] <= float(t[mask][0] - t[0])),
+            "settled_rule": "5 R (C_T + C_p) <= settle time before the window; otherwise the "
+                            "window still holds the load's start-up transient (longer run or "
+                            "more settle_periods)",
         }
     else:
         summary["load"] = None

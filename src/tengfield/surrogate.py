@@ -90,11 +90,13 @@ def is_mirror_symmetric(scene) -> bool:
 
 
 def mirrored(result, stroke: float):
-    """The solve at ``stroke - z`` implied by mirror symmetry: C_ll <-> C_uu, q_l <-> q_u."""
+    """The solve at ``stroke - z`` implied by mirror symmetry: C_ll <-> C_uu, q_l <-> q_u
+    (wall and solve times 0: nothing was solved)."""
     C = np.asarray(result.capacitance, dtype=float)
     q = np.asarray(result.induced_charge, dtype=float)
     return dataclasses.replace(result, position=stroke - result.position,
                                capacitance=C[::-1, ::-1].copy(), induced_charge=q[::-1].copy(),
+                               wall_time=0.0, solve_time=0.0,   # no solve of its own
                                info={**getattr(result, "info", {}), "mirrored_from": result.position})
 
 
@@ -110,6 +112,10 @@ def snake_order(positions: np.ndarray, stroke: float) -> np.ndarray:
 
 # ---------------------------------------------------------------------------
 # the table of solves
+_PER_POSITION = ("positions", "capacitance", "induced_charge", "dofs", "cells", "wall_time",
+                 "solve_time", "field_error")
+
+
 @dataclass
 class SurrogateTable:
     """Field solves at sampled positions (one cell, SI) and their provenance.
@@ -155,17 +161,20 @@ class SurrogateTable:
 
     @property
     def total_solve_wall_time(self) -> float:
-        """Sum of the per-position wall times [s] (CPU-side cost, all ranks)."""
+        """Sum of the per-position wall times [s] over all ranks (mirror images cost 0)."""
         return float(np.sum(self.wall_time))
 
     def curves(self, reference: str = "floating") -> "TerminalCurves":
         return TerminalCurves(self, reference)
 
+    def subset(self, mask) -> "SurrogateTable":
+        """The positions selected by the boolean ``mask``."""
+        return dataclasses.replace(self, **{name: getattr(self, name)[mask] for name in _PER_POSITION})
+
     def merged(self, other: "SurrogateTable") -> "SurrogateTable":
         """This table plus the positions of ``other`` (same scene)."""
         cat = {name: np.concatenate([getattr(self, name), getattr(other, name)])
-               for name in ("positions", "capacitance", "induced_charge", "dofs", "cells",
-                            "wall_time", "solve_time", "field_error")}
+               for name in _PER_POSITION}
         return dataclasses.replace(self, **cat)
 
 
@@ -332,21 +341,28 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
                         if not math.isclose(r.position, 0.5 * stroke, rel_tol=1e-12)]
         return table_from_results(results, stroke=stroke)
 
-    table = solve_level(lobatto_positions(stroke, count))
+    # the first refinement is always needed: solve it with the initial set in one
+    # batch (better balance over the ranks), then split coarse / held-out
+    initial = lobatto_positions(stroke, count)
+    new = refinement_positions(stroke, count)
+    if bar is not None:
+        bar.total += new.size
+    both = solve_level(np.concatenate([initial, new]))
+    table, held_out = both.subset(np.isin(both.positions, initial)), \
+        both.subset(np.isin(both.positions, new))
     history: list[tuple[int, float]] = []
-    estimate = math.inf
     while True:
-        new = refinement_positions(stroke, count)
-        if bar is not None:
-            bar.total += new.size
-            bar.refresh()
-        held_out = solve_level(new)
         estimate = held_out_error(table, held_out)
         history.append((count, estimate))
         table = table.merged(held_out)
         count = 2 * count - 1
         if estimate <= tolerance or 2 * count - 1 > max_positions:
             break
+        new = refinement_positions(stroke, count)
+        if bar is not None:
+            bar.total += new.size
+            bar.refresh()
+        held_out = solve_level(new)
     if bar is not None:
         bar.n = bar.total
         bar.close()
