@@ -78,7 +78,7 @@ class SoftTrajectory:
 
 def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: float,
                    stiffness: float, *, t_start: float, t_end: float, gap0: float = 0.0,
-                   velocity0: float = 0.0, period: float, g: float = G, rtol: float = 1e-10,
+                   velocity0: float = 0.0, period: float, g: float = G, rtol: float = 1e-8,
                    max_phases_per_period: int = 10_000):
     """Integrate the soft-contact model; returns (trajectory, contacts, n_phases).
 
@@ -89,8 +89,9 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
     omega_c = math.sqrt(stiffness / mass)
     c_over_m = damping_coefficient(restitution, mass, stiffness) / mass
     k_over_m = omega_c**2
-    # contact time ~ pi / omega_c: keep several steps per contact
-    max_step = min(0.05 * math.pi / omega_c * 20, 0.01 * period)
+    # the step control resolves the contact oscillation (period 2 pi / omega_c);
+    # the cap only keeps event detection from striding over a table period
+    max_step = 0.02 * period
 
     if table.kind == 0:
         amp_w2 = table.params[0] * table.params[1] ** 2
@@ -119,17 +120,23 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
 
     hit_lower.terminal = hit_upper.terminal = True
     rhs = {FREE: rhs_free, IN_LOWER: rhs_lower, IN_UPPER: rhs_upper}
+    jac_contact = np.array([[0.0, 1.0], [-k_over_m, -c_over_m]])
+    jacobian = {FREE: np.array([[0.0, 1.0], [0.0, 0.0]]), IN_LOWER: jac_contact,
+                IN_UPPER: jac_contact}
 
+    # absolute tolerances scaled by the stroke and the speed of a fall through it
+    atol = rtol * np.array([stroke, math.sqrt(2.0 * g * stroke)])
     traj = SoftTrajectory(table)
     contacts: list[list[float]] = []
     t = t_start
     state = np.array([gap0, velocity0], dtype=float)
     phase = FREE
-    if gap0 <= 0.0:
-        # resting on the lower plate: start in contact (static penetration)
+    open_contact = False      # is contacts[-1] the contact the ball is in now?
+    if gap0 <= 0.0 and velocity0 <= 0.0:
+        # resting on the lower plate: start in contact (static penetration); an
+        # initial resting contact is not an impact and is not listed
         phase = IN_LOWER
         state[0] = -mass * max(g + ydd(t), 0.0) / stiffness
-        contacts.append([t, 0, abs(velocity0), math.nan])
     n_phases = 0
     while t < t_end:
         n_phases += 1
@@ -146,9 +153,10 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
         else:
             hit_upper.direction = -1.0
             events = [hit_upper]
-        sol = solve_ivp(rhs[phase], (t, t_end), state, method="Radau", events=events,
-                        dense_output=True, rtol=rtol, atol=1e-12 * max(stroke, 1e-3),
-                        max_step=max_step if phase != FREE else 0.05 * period)
+        sol = solve_ivp(rhs[phase], (t, t_end), state, method="Radau", jac=jacobian[phase],
+                        events=events,
+                        dense_output=True, rtol=rtol, atol=atol,
+                        max_step=max_step)
         if sol.status < 0:
             raise DynamicsError(f"soft contact: the stiff solver failed near t = {t:.9g} s: "
                                 f"{sol.message}")
@@ -165,11 +173,13 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
             plate = 0 if events[k] is hit_lower else 1
             state[0] = 0.0 if plate == 0 else stroke
             contacts.append([t, plate, abs(state[1]), math.nan])
+            open_contact = True
             phase = IN_LOWER if plate == 0 else IN_UPPER
         else:
             state[0] = 0.0 if phase == IN_LOWER else stroke
-            if contacts:
+            if open_contact:
                 contacts[-1][3] = abs(state[1])
+            open_contact = False
             phase = FREE
     arr = np.array(contacts, dtype=float).reshape(-1, 4)
     return traj, (arr[:, 0], arr[:, 1].astype(np.int64), arr[:, 2], arr[:, 3]), n_phases
