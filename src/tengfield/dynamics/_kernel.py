@@ -271,6 +271,95 @@ def _restitution(speed, e0, power_law, v_ref, exponent):
 
 
 @njit(cache=True)
+def chatter_duration(v_after, a_in, e, constant_e, jerk_bound, chatter_time):
+    """Time from an impact to the end of its chatter sequence, or -1 to keep bouncing.
+
+    ``v_after`` rebound speed [m/s], ``a_in`` > 0 the relative acceleration
+    pressing the ball on the plate [m/s^2]. Zeno: ``2 v / (a (1 - e))`` when
+    that is shorter than ``chatter_time`` and the table acceleration changes
+    by < 0.1 % of ``a_in`` meanwhile; otherwise, a rebound lower than
+    REST_HEIGHT ends after its own flight (divided by 1 - e for a constant e).
+    """
+    if constant_e and e < 1.0:
+        zeno = 2.0 * v_after / (a_in * (1.0 - e))
+        if zeno <= chatter_time and jerk_bound * zeno <= 1e-3 * a_in:
+            return zeno
+    if v_after * v_after / (2.0 * a_in) <= REST_HEIGHT:
+        dt = 2.0 * v_after / a_in
+        if constant_e and e < 1.0:
+            dt /= 1.0 - e
+        return dt
+    return -1.0
+
+
+@njit(cache=True)
+def _store(seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd, n, t, mode, z, v, y, yd):
+    """Append a segment; returns the new count."""
+    seg_t[n] = t
+    seg_mode[n] = mode
+    seg_z[n] = z
+    seg_v[n] = v
+    seg_y[n] = y
+    seg_yd[n] = yd
+    return n + 1
+
+
+REACHED_END = 4   # internal: next_contact ran to t_end without contact
+
+
+@njit(cache=True)
+def next_contact(t0, z0, v0, y0, yd0, s_begin, t_end, g, gap, m_bound, period,
+                 kind, par, x, c):
+    """First contact of the free flight that starts at t0 from (z0, v0).
+
+    ``s_begin`` > 0 skips a first stretch already proven contact-free
+    (:func:`departure_step`). Returns (status, t, z, v): status OK with the
+    contact time, the plate's z (0 or gap) and the relative velocity there;
+    REACHED_END if no contact occurs before t_end; STEP_BOUND if the search
+    did not converge.
+    """
+    s = s_begin
+    if s > 0.0:
+        if t0 + s >= t_end:
+            return REACHED_END, t_end, z0, v0
+        zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
+    else:
+        zc = z0
+        vc = v0
+    steps = 0
+    while True:
+        if s > 0.0 and zc <= Z_TOL and vc <= 0.0:
+            target = 0.0
+            break
+        if s > 0.0 and zc >= gap - Z_TOL and vc >= 0.0:
+            target = gap
+            break
+        h = safe_step(zc, vc, gap, m_bound)
+        if t0 + s + h >= t_end:
+            return REACHED_END, t_end, zc, vc
+        s += h
+        zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
+        steps += 1
+        if steps > MAX_STEPS_PER_FLIGHT:
+            return STEP_BOUND, t0 + s, zc, vc
+    # Newton polish of the contact time (stays within a tiny neighbourhood)
+    for _ in range(2):
+        if vc == 0.0:
+            break
+        ds = (zc - target) / vc
+        if abs(ds) > 1e-6 * period:
+            break
+        s -= ds
+        zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
+    # on the plate; a velocity pointing away is a round-off touch: zero
+    if target == 0.0 and vc > 0.0:
+        vc = 0.0
+    if target == gap and vc < 0.0:
+        vc = 0.0
+    return OK, t0 + s, target, vc
+
+
+@njit(cache=True)
 def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
                    e0, power_law, v_ref, exponent, period, max_events_per_period,
                    acc_bound, jerk_bound, snap_bound,
@@ -319,24 +408,13 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
                 v = sign * v_after
                 a_in = -sign * a             # acceleration towards the plate
                 if a_in > 0.0 and v_after > 0.0:
-                    dt_inf = -1.0
-                    if e < 1.0 and not (power_law and exponent != 0.0):
-                        zeno = 2.0 * v_after / (a_in * (1.0 - e))
-                        if zeno <= chatter_time and jerk_bound * zeno <= 1e-3 * a_in:
-                            dt_inf = zeno
-                    if dt_inf < 0.0 and v_after * v_after / (2.0 * a_in) <= REST_HEIGHT:
-                        dt_inf = 2.0 * v_after / a_in
-                        if e < 1.0 and not (power_law and exponent != 0.0):
-                            dt_inf /= 1.0 - e
+                    constant_e = not (power_law and exponent != 0.0)
+                    dt_inf = chatter_duration(v_after, a_in, e, constant_e, jerk_bound,
+                                              chatter_time)
                     if dt_inf >= 0.0:
                         # the first micro-arc is kept as a flight segment (samples are clamped)
-                        seg_t[n_seg] = t
-                        seg_mode[n_seg] = FLIGHT
-                        seg_z[n_seg] = z
-                        seg_v[n_seg] = v
-                        seg_y[n_seg] = y
-                        seg_yd[n_seg] = yd
-                        n_seg += 1
+                        n_seg = _store(seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd, n_seg,
+                                       t, FLIGHT, z, v, y, yd)
                         t = t + dt_inf
                         v = 0.0
                         if t >= t_end:
@@ -356,13 +434,8 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
                     s1 = departure_step(a_away, j_away, snap_bound, gap, 0.25 * period)
                 force_depart = False
                 if s1 <= 0.0:
-                    seg_t[n_seg] = t
-                    seg_mode[n_seg] = STUCK_LOWER if at_lower else STUCK_UPPER
-                    seg_z[n_seg] = z
-                    seg_v[n_seg] = 0.0
-                    seg_y[n_seg] = y
-                    seg_yd[n_seg] = yd
-                    n_seg += 1
+                    n_seg = _store(seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd, n_seg, t,
+                                   STUCK_LOWER if at_lower else STUCK_UPPER, z, 0.0, y, yd)
                     t_next = next_crossing(t, at_lower, g, kind, par, x, c, t_end)
                     if t_next >= t_end:
                         break
@@ -371,60 +444,13 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
                     continue
                 s_begin = s1
         # ---- free flight from (t, z, v) ----
-        seg_t[n_seg] = t
-        seg_mode[n_seg] = FLIGHT
-        seg_z[n_seg] = z
-        seg_v[n_seg] = v
-        seg_y[n_seg] = y
-        seg_yd[n_seg] = yd
-        n_seg += 1
-        t0 = t
-        z0 = z
-        v0 = v
-        s = s_begin
-        if s > 0.0:
-            if t0 + s >= t_end:
-                break
-            zc, vc = _flight(t0 + s, t0, z0, v0, y, yd, g, kind, par, x, c)
-        else:
-            zc = z0
-            vc = v0
-        steps = 0
-        ended = False
-        while True:
-            if s > 0.0 and zc <= Z_TOL and vc <= 0.0:
-                target = 0.0
-                break
-            if s > 0.0 and zc >= gap - Z_TOL and vc >= 0.0:
-                target = gap
-                break
-            h = safe_step(zc, vc, gap, m_bound)
-            if t0 + s + h >= t_end:
-                ended = True
-                break
-            s += h
-            zc, vc = _flight(t0 + s, t0, z0, v0, y, yd, g, kind, par, x, c)
-            steps += 1
-            if steps > MAX_STEPS_PER_FLIGHT:
-                return STEP_BOUND, n_seg, n_imp, t0 + s
-        if ended:
+        n_seg = _store(seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd, n_seg, t, FLIGHT, z, v, y, yd)
+        status, t, z, v = next_contact(t, z, v, y, yd, s_begin, t_end, g, gap, m_bound, period,
+                                       kind, par, x, c)
+        if status == REACHED_END:
             break
-        # Newton polish of the contact time (stays within a tiny neighbourhood)
-        for _ in range(2):
-            if vc == 0.0:
-                break
-            ds = (zc - target) / vc
-            if abs(ds) > 1e-6 * period:
-                break
-            s -= ds
-            zc, vc = _flight(t0 + s, t0, z0, v0, y, yd, g, kind, par, x, c)
-        t = t0 + s
-        z = target
-        v = vc
-        if target == 0.0 and v > 0.0:
-            v = 0.0
-        if target == gap and v < 0.0:
-            v = 0.0
+        if status == STEP_BOUND:
+            return STEP_BOUND, n_seg, n_imp, t
     return OK, n_seg, n_imp, t
 
 
