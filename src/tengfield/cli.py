@@ -22,6 +22,7 @@ COMMAND_MODULES = [
     "run",
     "precompute",
     "sweep",
+    "report",
 ]
 
 

@@ -1,0 +1,689 @@
+"""Error against run time for every stage, and the cheapest settings for a target accuracy.
+
+``tengfield report [SCENE] -o DIR [--fast]`` (see ``docs/report.md``) runs
+each stage of the pipeline at several accuracy levels and measures the
+relative error of the *final waveforms* — the peak-to-peak open-circuit
+voltage V_OC, short-circuit charge Q_SC and short-circuit current I_SC over
+the steady window — against stated references:
+
+* **field** (mesh size, degree, axisymmetric vs 3D, far-field treatment):
+  every setting is solved at the same Chebyshev–Lobatto positions; the
+  reference is the Richardson extrapolation (rate h⁴ of degree 2) of the two
+  finest degree-2 axisymmetric Kelvin settings. A 3D row compares C and q at
+  mid-stroke only (``error_position``), a 3D surrogate being too dear.
+* **surrogate** (number of positions): nested Lobatto sets at the finest
+  field setting against the largest set.
+* **dynamics**: output sampling rate of the exact impact map against a
+  much finer rate (the event location itself is exact to 1e-13 m and has
+  no knob), and the soft contact of Eq. 1 at growing stiffness against the
+  impact map (its rigid limit).
+* **circuit**: the load ODE's step (the output sampling) for a stiff, a
+  medium and a slow load, against a 16× finer step.
+
+It then picks, for each target (1e-2, 1e-3), the cheapest combination whose
+parts each stay below a third of the target, *runs it* (adaptive surrogate as
+``tengfield run`` builds it, trajectory at the chosen rate) and states the
+error it really reaches against the overall reference (largest surrogate at
+the finest field setting, finest sampling). :func:`recommended_field_settings`
+turns a tolerance into the ``[field]`` keys; :func:`scene_with_recommended`
+applies them to the keys a scene file does not set.
+
+All numbers are SI; errors are relative (|x − x_ref| / |x_ref|).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from . import circuit
+from .errors import SceneError
+
+QUANTITIES = ("V_oc", "Q_sc", "I_sc")
+TARGETS = (1e-2, 1e-3)
+#: share of a target accuracy given to each of field, surrogate and sampling
+BUDGET_SHARE = 1.0 / 3.0
+
+
+# ---------------------------------------------------------------------------
+# settings and rows
+@dataclass(frozen=True)
+class FieldSetting:
+    """One discretisation of the field solve (file-level ``[field]`` units)."""
+    method: str = "axisymmetric"
+    degree: int = 2
+    mesh_size_mm: float = 0.5
+    far_field: str = "kelvin"
+    domain_radius_mm: float = 20.0
+
+    @property
+    def label(self) -> str:
+        text = f"{self.method} p{self.degree} h={self.mesh_size_mm:g}mm"
+        if self.far_field != "kelvin" or self.domain_radius_mm != 20.0:
+            text += f" {self.far_field} R={self.domain_radius_mm:g}mm"
+        return text
+
+    def overrides(self) -> dict:
+        """Keyword arguments of :func:`tengfield.field.solve_position`."""
+        return {"method": self.method, "degree": self.degree, "mesh_size_mm": self.mesh_size_mm,
+                "far_field": self.far_field, "domain_radius_mm": self.domain_radius_mm}
+
+    def field_block(self) -> dict:
+        """The ``[field]`` keys of this setting."""
+        return {"method": self.method, "degree": self.degree,
+                "mesh_size_mm": self.mesh_size_mm, "far_field": self.far_field,
+                "domain_radius_mm": self.domain_radius_mm}
+
+
+@dataclass
+class Row:
+    """One accuracy level of one stage: its cost and its errors."""
+    stage: str
+    setting: str
+    knobs: dict
+    wall_time_s: float
+    errors: dict                      # quantity -> relative error
+    reference: str
+    error_position: float = math.nan  # field only: max relative error of C, q
+    note: str = ""
+
+    @property
+    def error(self) -> float:
+        """Largest relative error over the waveform quantities (NaN if none)."""
+        values = [v for v in self.errors.values() if v is not None and math.isfinite(v)]
+        return max(values) if values else math.nan
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What :func:`build_report` measures (``fast`` is the CI-sized plan)."""
+    field_positions: int
+    field_settings: tuple
+    reference_pair: tuple               # (coarser, finer) degree-2 axisymmetric kelvin
+    far_field_settings: tuple
+    settings_3d: tuple
+    surrogate_counts: tuple
+    reference_count: int
+    sample_rates: tuple
+    reference_sample_rate: float
+    stiffnesses: tuple
+    loads: tuple
+    circuit_rates: tuple
+    circuit_refinement: int = 16
+
+
+def make_plan(fast: bool = False) -> Plan:
+    """The accuracy levels of the report; ``fast`` keeps it to about a minute."""
+    if fast:
+        ref = (FieldSetting(degree=2, mesh_size_mm=1.0), FieldSetting(degree=2, mesh_size_mm=0.5))
+        return Plan(
+            field_positions=5,
+            field_settings=(FieldSetting(degree=1, mesh_size_mm=2.0),
+                            FieldSetting(degree=1, mesh_size_mm=1.0),
+                            FieldSetting(degree=2, mesh_size_mm=2.0),
+                            FieldSetting(degree=2, mesh_size_mm=1.4)) + ref,
+            reference_pair=ref,
+            far_field_settings=(FieldSetting(degree=2, mesh_size_mm=1.0, far_field="robin"),
+                                FieldSetting(degree=2, mesh_size_mm=1.0, far_field="dirichlet")),
+            settings_3d=(FieldSetting(method="3d", degree=1, mesh_size_mm=2.5, far_field="robin"),),
+            surrogate_counts=(5, 9, 17), reference_count=33,
+            sample_rates=(5000.0, 20000.0, 80000.0, 320000.0), reference_sample_rate=1.28e6,
+            stiffnesses=(1e4, 1e5),
+            loads=(1e4, 1e8), circuit_rates=(2500.0, 5000.0, 10000.0), circuit_refinement=8)
+    ref = (FieldSetting(degree=2, mesh_size_mm=0.5), FieldSetting(degree=2, mesh_size_mm=0.25))
+    return Plan(
+        field_positions=9,
+        field_settings=(FieldSetting(degree=1, mesh_size_mm=2.0),
+                        FieldSetting(degree=1, mesh_size_mm=1.0),
+                        FieldSetting(degree=1, mesh_size_mm=0.5),
+                        FieldSetting(degree=1, mesh_size_mm=0.25),
+                        FieldSetting(degree=2, mesh_size_mm=2.0),
+                        FieldSetting(degree=2, mesh_size_mm=1.4),
+                        FieldSetting(degree=2, mesh_size_mm=1.0),
+                        FieldSetting(degree=2, mesh_size_mm=0.7)) + ref,
+        reference_pair=ref,
+        far_field_settings=(FieldSetting(degree=2, mesh_size_mm=0.5, far_field="robin"),
+                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="robin",
+                                         domain_radius_mm=40.0),
+                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="dirichlet"),
+                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="dirichlet",
+                                         domain_radius_mm=40.0)),
+        settings_3d=(FieldSetting(method="3d", degree=1, mesh_size_mm=2.0, far_field="robin"),
+                     FieldSetting(method="3d", degree=1, mesh_size_mm=1.4, far_field="robin"),
+                     FieldSetting(method="3d", degree=2, mesh_size_mm=2.0, far_field="kelvin")),
+        surrogate_counts=(5, 9, 17, 33), reference_count=65,
+        sample_rates=(2500.0, 5000.0, 10000.0, 20000.0, 40000.0, 80000.0, 160000.0, 320000.0,
+                      640000.0),
+        reference_sample_rate=2.56e6,
+        stiffnesses=(1e4, 1e5, 1e6),
+        loads=(1e4, 1e8, 1e11), circuit_rates=(2500.0, 5000.0, 10000.0, 20000.0, 40000.0))
+
+
+# ---------------------------------------------------------------------------
+# pure pieces
+def relative_error(value: float, reference: float) -> float:
+    """|value − reference| / |reference| (NaN when the reference is 0)."""
+    return abs(value - reference) / abs(reference) if reference != 0.0 else math.nan
+
+
+def waveform_peaks(curves, gap, gap_velocity, mask, *, cells: int = 1) -> dict:
+    """Peak-to-peak V_OC [V], Q_SC [C], I_SC [A] over the masked samples of a trajectory."""
+    from .pipeline import terminal_waveforms
+
+    wf = terminal_waveforms(curves, gap, gap_velocity, cells=cells)
+    return {"V_oc": circuit.peak_to_peak(wf["V_oc"][mask]),
+            "Q_sc": circuit.peak_to_peak(wf["Q_sc"][mask]),
+            "I_sc": circuit.peak_to_peak(wf["I_sc"][mask])}
+
+
+def peak_errors(peaks: dict, reference: dict) -> dict:
+    """Relative error of each peak-to-peak value against the reference's."""
+    return {k: relative_error(peaks[k], reference[k]) for k in peaks}
+
+
+def richardson(coarse, fine, ratio: float, order: float):
+    """Richardson extrapolation ``fine + (fine − coarse) / (ratio^order − 1)`` (elementwise)."""
+    coarse, fine = np.asarray(coarse, dtype=float), np.asarray(fine, dtype=float)
+    return fine + (fine - coarse) / (ratio**order - 1.0)
+
+
+def max_relative_deviation(values, reference) -> float:
+    """Largest |values − reference| / |reference| over the entries (C and q arrays)."""
+    values, reference = np.asarray(values, dtype=float), np.asarray(reference, dtype=float)
+    scale = np.abs(reference)
+    ok = scale > 0
+    return float(np.max(np.abs(values - reference)[ok] / scale[ok]))
+
+
+def cheapest(rows: Iterable[Row], target: float, *, key: Callable[[Row], float] | None = None):
+    """The row of least wall time whose error is at most ``target`` (None if none)."""
+    key = key or (lambda r: r.error)
+    good = [r for r in rows if math.isfinite(key(r)) and key(r) <= target]
+    return min(good, key=lambda r: r.wall_time_s) if good else None
+
+
+def solves_needed(count: int, symmetric: bool = True) -> int:
+    """Field solves for a Lobatto set of ``count`` positions (mirror symmetry halves it)."""
+    return (count + 1) // 2 if symmetric else count
+
+
+# ---------------------------------------------------------------------------
+# recommendations
+@dataclass
+class Recommendation:
+    """The cheapest measured combination for one ``target`` relative accuracy."""
+    target: float
+    field: dict                 # [field] keys
+    sample_rate_hz: float       # [run] sample_rate_hz
+    predicted_error: float      # sum of the parts' measured errors
+    predicted_cost_s: float     # solves x time per solve
+    measured_error: float = math.nan   # of the verification run against the overall reference
+    measured_errors: dict = field(default_factory=dict)
+    measured_wall_time_s: float = math.nan
+    positions: int = 0
+    reached: bool = False
+    note: str = ""
+
+    def scene_sections(self) -> dict:
+        return {"field": dict(self.field), "run": {"sample_rate_hz": self.sample_rate_hz}}
+
+
+def recommend(rows: list[Row], target: float, *, share: float = BUDGET_SHARE) -> Recommendation:
+    """Cheapest field setting, surrogate tolerance and sampling rate for ``target``.
+
+    Each of the three parts must stay at or below ``share × target`` on the
+    final waveforms (the errors add at worst). Only axisymmetric settings
+    with waveform errors compete (a 3D row has none). Falls back to the most
+    accurate measured level of a part when none reaches its share (``note``).
+    """
+    budget = share * target
+    notes = []
+
+    def pick(candidates, what):
+        best = cheapest(candidates, budget)
+        if best is None:
+            finite = [r for r in candidates if math.isfinite(r.error)]
+            if not finite:
+                raise ValueError(f"no measured {what} rows")
+            best = min(finite, key=lambda r: r.error)
+            notes.append(f"no {what} level reached {budget:.2g}; the most accurate one is used")
+        return best
+
+    field_rows = [r for r in rows if r.stage == "field" and r.knobs.get("method") == "axisymmetric"]
+    field_row = pick(field_rows, "field")
+    surrogate_rows = [r for r in rows if r.stage == "surrogate"]
+    surrogate_row = pick(surrogate_rows, "surrogate")
+    sampling_rows = [r for r in rows if r.stage == "dynamics" and "sample_rate_hz" in r.knobs
+                     and r.knobs.get("model") == "impact"]
+    sampling_row = pick(sampling_rows, "sampling")
+    setting = FieldSetting(**{k: field_row.knobs[k] for k in
+                              ("method", "degree", "mesh_size_mm", "far_field", "domain_radius_mm")})
+    per_solve = field_row.wall_time_s / max(1, field_row.knobs.get("solves", 1))
+    positions = int(surrogate_row.knobs["positions"])
+    tolerance = surrogate_tolerance(surrogate_rows, positions, budget)
+    block = {**setting.field_block(), "tolerance": float(f"{tolerance:.3g}")}
+    return Recommendation(
+        target=target, field=block, sample_rate_hz=float(sampling_row.knobs["sample_rate_hz"]),
+        predicted_error=field_row.error + surrogate_row.error + sampling_row.error,
+        predicted_cost_s=per_solve * solves_needed(positions), positions=positions,
+        note="; ".join(notes))
+
+
+def surrogate_tolerance(surrogate_rows: list[Row], positions: int, budget: float) -> float:
+    """``[field] tolerance`` that makes the adaptive surrogate end with at least ``positions``.
+
+    :func:`tengfield.surrogate.precompute` refines a Lobatto set of m
+    positions to 2m − 1 while the held-out estimate e(m) exceeds the
+    tolerance. The estimate measures Q_SC, C_T and V_OC, not dQ_SC/dz, so
+    I_SC can need more positions than the estimate asks for: the tolerance
+    is then set to half the estimate of the last level that must still be
+    refined (the largest m with 2m − 1 < ``positions``).
+    """
+    tolerance = budget
+    estimates = {int(r.knobs["positions"]): float(r.knobs.get("held_out_estimate", math.nan))
+                 for r in surrogate_rows}
+    must_refine = [m for m in estimates if 2 * m - 1 < positions and math.isfinite(estimates[m])]
+    if must_refine:
+        tolerance = min(tolerance, 0.5 * estimates[max(must_refine)])
+    return tolerance
+
+
+def recommended_field_settings(tolerance: float, recommendations=None) -> dict:
+    """``[field]`` keys (file units) whose final waveforms reach ``tolerance``.
+
+    ``recommendations``: a list of :class:`Recommendation` (or their dicts,
+    e.g. ``report.json → recommendations``); default: those measured by
+    ``tengfield report`` on the default scene (``tengfield.report_calibration``).
+    The loosest measured target at or below ``tolerance`` is used (so the
+    cheapest one that is accurate enough); its ``tolerance`` key (the
+    surrogate's share) is scaled to the asked tolerance. A tolerance tighter
+    than every measured target extrapolates the strictest setting with the
+    degree-2 rate h⁴: ``mesh_size × (tolerance / target)^(1/4)``.
+    """
+    if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
+        raise SceneError(f"[field] tolerance = {tolerance!r} is out of range: allowed (0, 1)")
+    if recommendations is None:
+        from .report_calibration import DEFAULT_RECOMMENDATIONS as recommendations
+    entries = sorted((_as_dict(r) for r in recommendations), key=lambda r: r["target"])
+    if not entries:
+        raise ValueError("no recommendations to choose from")
+    usable = [e for e in entries if e["target"] <= tolerance * (1 + 1e-9)]
+    if usable:
+        chosen = usable[-1]
+        block = dict(chosen["field"])
+    else:
+        chosen = entries[0]
+        block = dict(chosen["field"])
+        scale = (tolerance / chosen["target"]) ** 0.25
+        block["degree"] = 2
+        block["mesh_size_mm"] = float(f"{block['mesh_size_mm'] * scale:.3g}")
+    block["tolerance"] = float(f"{BUDGET_SHARE * tolerance:.3g}")
+    return block
+
+
+def recommended_sample_rate(tolerance: float, recommendations=None) -> float:
+    """``[run] sample_rate_hz`` paired with :func:`recommended_field_settings`."""
+    if recommendations is None:
+        from .report_calibration import DEFAULT_RECOMMENDATIONS as recommendations
+    entries = sorted((_as_dict(r) for r in recommendations), key=lambda r: r["target"])
+    usable = [e for e in entries if e["target"] <= tolerance * (1 + 1e-9)]
+    chosen = usable[-1] if usable else entries[0]
+    rate = float(chosen["sample_rate_hz"])
+    if not usable:
+        rate *= chosen["target"] / tolerance
+    return rate
+
+
+def scene_with_recommended(scene, recommendations=None):
+    """``scene`` with the recommended ``[field]`` keys for its ``[field] tolerance``
+    filled in wherever the scene file does not set them itself (explicit keys win)."""
+    block = recommended_field_settings(scene.field.tolerance, recommendations)
+    explicit = set((scene.raw.get("field") or {}).keys())
+    chosen = {k: v for k, v in block.items() if k not in explicit}
+    if "tolerance" not in explicit:
+        chosen["tolerance"] = scene.field.tolerance * BUDGET_SHARE
+    return scene.with_values(field=chosen) if chosen else scene
+
+
+def _as_dict(entry) -> dict:
+    return dataclasses.asdict(entry) if dataclasses.is_dataclass(entry) else dict(entry)
+
+
+# ---------------------------------------------------------------------------
+# the measurement
+@dataclass
+class Report:
+    """Everything :func:`build_report` measured (``rows``) and recommends."""
+    scene: Any
+    plan: Plan
+    rows: list
+    recommendations: list
+    references: dict
+    trajectory: dict
+    wall_time_s: float
+    fast: bool
+
+
+class _Solver:
+    """Field solves at (setting, position), each done once (mirror images are free)."""
+
+    def __init__(self, scene, comm, solve=None, progress=None):
+        self.scene = scene
+        self.comm = comm
+        self.stroke = scene.device.gap
+        self.symmetric = scene.field.environment == "free-space"
+        self.cache: dict = {}
+        self._solve = solve
+        self.progress = progress
+
+    def solve(self, setting: FieldSetting, z: float):
+        key = (setting, round(z / self.stroke, 12))
+        if key not in self.cache:
+            if self._solve is None:
+                from .field import solve_position
+                self._solve = solve_position
+            result = self._solve(self.scene, float(z), comm=self.comm, estimate_error=False,
+                                 **setting.overrides())
+            self.cache[key] = result
+            if self.progress is not None:
+                self.progress(1)
+        return self.cache[key]
+
+    def table(self, setting: FieldSetting, count: int):
+        """Surrogate table of ``count`` Lobatto positions and its solve wall time [s]."""
+        from .surrogate import lobatto_positions, mirrored, table_from_results
+
+        positions = lobatto_positions(self.stroke, count)
+        results, wall = [], 0.0
+        for z in positions:
+            if self.symmetric and z > 0.5 * self.stroke * (1 + 1e-12):
+                results.append(mirrored(self.solve(setting, self.stroke - z), self.stroke))
+            else:
+                res = self.solve(setting, z)
+                wall += res.wall_time
+                results.append(res)
+        return table_from_results(results, stroke=self.stroke), wall
+
+
+def _curves(table, scene):
+    from .surrogate import TerminalCurves
+    return TerminalCurves(table, scene.circuit.reference)
+
+
+def _trajectory(scene, sample_rate: float | None = None, **contact):
+    """Simulate ``scene`` (optionally at another sampling rate / contact model);
+    returns (dynamics, wall time [s])."""
+    from .dynamics import simulate
+
+    changes = {}
+    if sample_rate is not None:
+        changes["run"] = {"sample_rate_hz": float(sample_rate)}
+    if contact:
+        changes["contact"] = contact
+    run_scene = scene.with_values(**changes) if changes else scene
+    start = time.perf_counter()
+    dyn = simulate(run_scene)
+    return dyn, time.perf_counter() - start, run_scene
+
+
+def _mask(dyn, scene):
+    from .pipeline import steady_window
+    return steady_window(np.asarray(dyn.t), scene)[0]
+
+
+def _peaks(curves, dyn, scene):
+    """Peak-to-peak values over the sampled steady window (what ``tengfield run`` reports)."""
+    return waveform_peaks(curves, dyn.gap, dyn.gap_velocity, _mask(dyn, scene))
+
+
+def impact_instants(dyn, start: float, end: float) -> np.ndarray:
+    """Times [s] just before and just after every impact in (start, end)
+    (±1e-9 of an excitation period: I_SC jumps there and takes its extremes)."""
+    times = np.asarray(getattr(getattr(dyn, "impacts", None), "time", np.empty(0)), dtype=float)
+    times = times[(times > start) & (times < end)]
+    eps = 1e-9 * getattr(dyn, "period", 1.0)
+    return np.concatenate([times - eps, times + eps])
+
+
+def _exact_peaks(curves, dyn, scene):
+    """Peak-to-peak values over the samples *and* the impact instants of the
+    steady window: the exact extremes (the trajectory is exact at any time;
+    between impacts the waveforms are smooth and their extremes are
+    either at impacts or resolved by the samples)."""
+    mask = _mask(dyn, scene)
+    t = np.asarray(dyn.t)
+    extra = impact_instants(dyn, t[mask][0], t[-1])
+    gap, velocity = np.asarray(dyn.gap)[mask], np.asarray(dyn.gap_velocity)[mask]
+    if extra.size:
+        gap_e, velocity_e, _ = dyn.sample(extra)
+        gap = np.concatenate([gap, gap_e])
+        velocity = np.concatenate([velocity, velocity_e])
+    return waveform_peaks(curves, gap, velocity, np.ones(gap.size, dtype=bool))
+
+
+def field_rows(solver: _Solver, plan: Plan, scene, trajectory, progress=None) -> tuple[list, dict]:
+    """The field stage: every setting at the same Lobatto positions (see the module docstring)."""
+    rows = []
+    n = plan.field_positions
+    tables = {}
+    for setting in dict.fromkeys(plan.field_settings + plan.far_field_settings):
+        tables[setting] = solver.table(setting, n)
+    coarse, fine = plan.reference_pair
+    ratio = coarse.mesh_size_mm / fine.mesh_size_mm
+    t_coarse, t_fine = tables[coarse][0], tables[fine][0]
+    ref_table = dataclasses.replace(
+        t_fine, capacitance=richardson(t_coarse.capacitance, t_fine.capacitance, ratio, 4),
+        induced_charge=richardson(t_coarse.induced_charge, t_fine.induced_charge, ratio, 4))
+    ref_peaks = _exact_peaks(_curves(ref_table, scene), trajectory, scene)
+    reference = (f"Richardson extrapolation (h^4) of {coarse.label} and {fine.label} "
+                 f"at the same {n} Lobatto positions")
+    for setting, (table, wall) in tables.items():
+        peaks = _exact_peaks(_curves(table, scene), trajectory, scene)
+        pos_err = max(max_relative_deviation(table.capacitance, ref_table.capacitance),
+                      max_relative_deviation(table.induced_charge, ref_table.induced_charge))
+        rows.append(Row("field", setting.label,
+                        {**setting.field_block(), "positions": n,
+                         "solves": solves_needed(n, solver.symmetric),
+                         "dofs": int(np.max(table.dofs))},
+                        wall, peak_errors(peaks, ref_peaks), reference, pos_err))
+    # 3D: C and q at mid-stroke against the Richardson reference of the axisymmetric solves
+    mid = 0.5 * scene.device.gap
+    ref_mid = [solver.solve(s, mid) for s in plan.reference_pair]
+    ref_C = richardson(ref_mid[0].capacitance, ref_mid[1].capacitance, ratio, 4)
+    ref_q = richardson(ref_mid[0].induced_charge, ref_mid[1].induced_charge, ratio, 4)
+    for setting in plan.settings_3d:
+        res = solver.solve(setting, mid)
+        err = max(max_relative_deviation(res.capacitance, ref_C),
+                  max_relative_deviation(res.induced_charge, ref_q))
+        rows.append(Row("field", setting.label, {**setting.field_block(), "positions": 1,
+                                                  "solves": 1, "dofs": int(res.dofs)},
+                        res.wall_time, {k: math.nan for k in QUANTITIES},
+                        "Richardson axisymmetric reference at mid-stroke (C and q only)", err,
+                        note="3D: position-level error only"))
+    return rows, {"field": reference, "field_peaks": ref_peaks}
+
+
+def surrogate_rows(solver: _Solver, plan: Plan, scene, trajectory) -> tuple[list, Any]:
+    """The surrogate stage: nested Lobatto sets at the finest field setting."""
+    setting = plan.reference_pair[1]
+    ref_table, _ = solver.table(setting, plan.reference_count)
+    ref_curves = _curves(ref_table, scene)
+    ref_peaks = _exact_peaks(ref_curves, trajectory, scene)
+    reference = f"{plan.reference_count} Lobatto positions, {setting.label}"
+    rows = []
+    from .surrogate import held_out_error, lobatto_positions
+    for count in plan.surrogate_counts:
+        table, wall = solver.table(setting, count)
+        finer = lobatto_positions(scene.device.gap, 2 * count - 1)[1::2]
+        held = solver.table(setting, 2 * count - 1)[0]
+        held_out = held.subset(np.isin(np.round(held.positions / scene.device.gap, 12),
+                                       np.round(finer / scene.device.gap, 12)))
+        estimate = held_out_error(table, held_out)
+        peaks = _exact_peaks(_curves(table, scene), trajectory, scene)
+        rows.append(Row("surrogate", f"{count} positions",
+                        {"positions": count, "solves": solves_needed(count, solver.symmetric),
+                         "held_out_estimate": estimate, **setting.field_block()},
+                        wall, peak_errors(peaks, ref_peaks), reference))
+    return rows, ref_curves
+
+
+def dynamics_rows(plan: Plan, scene, curves, progress=None) -> tuple[list, Any]:
+    """Output sampling of the impact map, and soft contact against the impact map."""
+    ref_dyn, _, ref_scene = _trajectory(scene, plan.reference_sample_rate)
+    ref_peaks = _exact_peaks(curves, ref_dyn, ref_scene)
+    rows = []
+    for rate in plan.sample_rates:
+        dyn, wall, run_scene = _trajectory(scene, rate)
+        rows.append(Row("dynamics", f"impact map, {rate:g} Hz sampling",
+                        {"model": "impact", "sample_rate_hz": rate}, wall,
+                        peak_errors(_peaks(curves, dyn, run_scene), ref_peaks),
+                        f"impact map sampled at {plan.reference_sample_rate:g} Hz plus the "
+                        "impact instants (exact extremes)"))
+        if progress:
+            progress(1)
+    rate = scene.run.sample_rate
+    impact_dyn, _, impact_scene = _trajectory(scene, rate)
+    impact_peaks = _peaks(curves, impact_dyn, impact_scene)
+    for k in plan.stiffnesses:
+        dyn, wall, run_scene = _trajectory(scene, rate, model="soft", stiffness_N_per_m=k)
+        rows.append(Row("dynamics", f"soft contact k={k:.0e} N/m",
+                        {"model": "soft", "stiffness_N_per_m": k, "contact_sample_rate_hz": rate},
+                        wall, peak_errors(_peaks(curves, dyn, run_scene), impact_peaks),
+                        f"impact map (rigid limit), same sampling {rate:g} Hz"))
+        if progress:
+            progress(1)
+    return rows, (ref_dyn, ref_scene, ref_peaks)
+
+
+def circuit_rows(plan: Plan, scene, curves, progress=None) -> list:
+    """Step of the load integrator (output sampling) for stiff to slow loads."""
+    from .pipeline import load_waveforms, steady_window
+
+    rows = []
+    for load in plan.loads:
+        loaded = scene.with_values(circuit={"kind": "load", "load_ohm": float(load)})
+
+        def measure(rate):
+            dyn, _, run_scene = _trajectory(loaded, rate)
+            t = np.asarray(dyn.t)
+            mask = steady_window(t, run_scene)[0]
+            wf = {"gap_m": np.asarray(dyn.gap), "gap_velocity_m_per_s": np.asarray(dyn.gap_velocity)}
+            start = time.perf_counter()
+            out = load_waveforms(run_scene, dyn, curves, wf, window_start=t[mask][0])
+            wall = time.perf_counter() - start
+            return out["mean_power_W"], circuit.peak_to_peak(out["V_load"][mask]), wall
+
+        ref_rate = plan.circuit_rates[-1] * plan.circuit_refinement
+        ref_power, ref_v, _ = measure(ref_rate)
+        tau = load * float(np.max(curves.capacitance_samples))
+        for rate in plan.circuit_rates:
+            power, v, wall = measure(rate)
+            rows.append(Row("circuit", f"R={load:.0e} ohm, {rate:g} Hz step",
+                            {"load_ohm": load, "sample_rate_hz": rate,
+                             "time_constant_s": tau},
+                            wall, {"P_load": relative_error(power, ref_power),
+                                   "V_load": relative_error(v, ref_v)},
+                            f"exponential integrator at {ref_rate:g} Hz"))
+            if progress:
+                progress(1)
+    return rows
+
+
+def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Solver") -> Recommendation:
+    """Run the recommended settings the way ``tengfield run`` does and measure them.
+
+    The adaptive surrogate is built by :func:`tengfield.surrogate.precompute`
+    with the recommended ``[field]`` keys (its ``tolerance`` decides how many
+    positions); solves the report already did are reused (same setting and
+    position, hence the same numbers), and the cost counted is the sum of the
+    wall times of every solve the surrogate needed plus the dynamics.
+    """
+    import warnings
+
+    from .surrogate import TerminalCurves, precompute
+
+    f = recommendation.field
+    setting = FieldSetting(method=f["method"], degree=f["degree"], mesh_size_mm=f["mesh_size_mm"],
+                           far_field=f["far_field"], domain_radius_mm=f["domain_radius_mm"])
+
+    def solve(_scene, z, comm=None):
+        return solver.solve(setting, z)
+
+    chosen = scene.with_values(**recommendation.scene_sections())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        table = precompute(chosen, comm=None, solve=solve, solve_comm=solver.comm)
+    dyn, dyn_wall, run_scene = _trajectory(chosen)
+    wall = table.total_solve_wall_time + dyn_wall
+    peaks = _peaks(TerminalCurves(table, chosen.circuit.reference), dyn, run_scene)
+    errors = peak_errors(peaks, reference_peaks)
+    worst = max(errors.values())
+    return dataclasses.replace(recommendation, measured_error=worst, measured_errors=errors,
+                               measured_wall_time_s=wall, positions=table.count,
+                               reached=bool(worst <= recommendation.target))
+
+
+def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = None,
+                 progress: bool = False, solve=None) -> Report:
+    """Measure every stage of ``scene`` at several accuracy levels (see the module docstring).
+
+    ``comm``: communicator of each field solve (default ``MPI.COMM_SELF``);
+    ``solve``: the field solver (default :func:`tengfield.field.solve_position`,
+    called as ``solve(scene, z, comm=..., estimate_error=False, **setting)``).
+    """
+    from tqdm import tqdm
+
+    if comm is None:
+        from mpi4py import MPI
+        comm = MPI.COMM_SELF
+    plan = plan or make_plan(fast)
+    started = time.perf_counter()
+    total = _task_estimate(plan)
+    bar = tqdm(total=total, desc="report", unit="task", file=sys.stderr,
+               disable=not progress or not sys.stderr.isatty())
+
+    def advance(n=1):
+        bar.update(n)
+
+    solver = _Solver(scene, comm, solve=solve, progress=advance)
+    trajectory, _, traj_scene = _trajectory(scene)
+    rows, references = [], {}
+    f_rows, f_ref = field_rows(solver, plan, traj_scene, trajectory)
+    rows += f_rows
+    references.update(f_ref)
+    s_rows, ref_curves = surrogate_rows(solver, plan, traj_scene, trajectory)
+    rows += s_rows
+    references["surrogate"] = s_rows[0].reference
+    d_rows, (ref_dyn, ref_scene, overall_peaks) = dynamics_rows(plan, scene, ref_curves, advance)
+    rows += d_rows
+    references["dynamics"] = d_rows[0].reference
+    rows += circuit_rows(plan, scene, ref_curves, advance)
+    references["overall"] = (f"{plan.reference_count} Lobatto positions at "
+                             f"{plan.reference_pair[1].label}, impact map sampled at "
+                             f"{plan.reference_sample_rate:g} Hz")
+    references["overall_peaks"] = overall_peaks
+    recommendations = []
+    for target in TARGETS:
+        rec = recommend(rows, target)
+        rec = verify(rec, scene, overall_peaks, solver)
+        recommendations.append(rec)
+        advance()
+    bar.close()
+    return Report(scene=scene, plan=plan, rows=rows, recommendations=recommendations,
+                  references=references,
+                  trajectory={"regime": getattr(trajectory.regime, "name", ""),
+                              "sample_rate_hz": traj_scene.run.sample_rate},
+                  wall_time_s=time.perf_counter() - started, fast=fast)
+
+
+def _task_estimate(plan: Plan) -> int:
+    field_solves = len(set(plan.field_settings + plan.far_field_settings)) * \
+        solves_needed(plan.field_positions) + len(plan.settings_3d)
+    surrogate_solves = solves_needed(plan.reference_count)
+    return (field_solves + surrogate_solves + len(plan.sample_rates) + len(plan.stiffnesses)
+            + len(plan.loads) * len(plan.circuit_rates) + len(TARGETS))

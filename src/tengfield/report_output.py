@@ -1,0 +1,251 @@
+"""Files of ``tengfield report``: report.csv, report.json, report.md, PNGs, scene blocks.
+
+Kept apart from :mod:`tengfield.report` (the measurement) so that the
+measurement stays free of I/O and plotting.
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+from .report import QUANTITIES, Report, Row
+
+CSV_COLUMNS = ["stage", "setting", "wall_time_s", "error_max", "error_V_oc", "error_Q_sc",
+               "error_I_sc", "error_P_load", "error_V_load", "error_position", "knobs",
+               "reference", "note"]
+STAGE_TITLES = {
+    "field": "Field: mesh size, degree, axisymmetric vs 3D, far field",
+    "surrogate": "Surrogate: number of positions",
+    "dynamics": "Dynamics: output sampling and soft-contact stiffness",
+    "circuit": "Circuit: load-integrator step for stiff to slow loads",
+}
+
+
+def _num(x) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return ""
+    return f"{x:.4g}"
+
+
+def row_record(row: Row) -> dict:
+    """A CSV/JSON record of one row."""
+    rec = {"stage": row.stage, "setting": row.setting, "wall_time_s": row.wall_time_s,
+           "error_max": row.error, "error_position": row.error_position,
+           "knobs": json.dumps(row.knobs, sort_keys=True), "reference": row.reference,
+           "note": row.note}
+    for q in ("V_oc", "Q_sc", "I_sc", "P_load", "V_load"):
+        rec[f"error_{q}"] = row.errors.get(q, math.nan)
+    return rec
+
+
+def write_csv(path: Path, report: Report) -> Path:
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
+        writer.writeheader()
+        for row in report.rows:
+            rec = row_record(row)
+            writer.writerow({k: (_num(v) if isinstance(v, float) else v) for k, v in rec.items()})
+    return path
+
+
+def _clean(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if hasattr(obj, "item") and not isinstance(obj, (str, bytes)):
+        try:
+            return obj.item()
+        except (TypeError, ValueError):
+            return str(obj)
+    return obj
+
+
+def write_json(path: Path, report: Report) -> Path:
+    data = {"scene": report.scene.source, "fast": report.fast, "wall_time_s": report.wall_time_s,
+            "references": report.references, "trajectory": report.trajectory,
+            "rows": [row_record(r) | {"knobs": r.knobs, "errors": r.errors} for r in report.rows],
+            "recommendations": [dataclasses.asdict(r) for r in report.recommendations]}
+    path.write_text(json.dumps(_clean(data), indent=2) + "\n")
+    return path
+
+
+def toml_value(value) -> str:
+    """A TOML literal for a scalar (str, bool, int, float)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)
+    return json.dumps(str(value))
+
+
+def scene_text(scene, sections: dict, header: str) -> str:
+    """The whole scene as TOML with ``sections`` (file-level keys) replacing its values."""
+    data = scene.to_dict()
+    for sec, values in sections.items():
+        data.setdefault(sec, {}).update(values)
+    lines = [f"# {line}" for line in header.splitlines()]
+    for sec, values in data.items():
+        lines.append("")
+        lines.append(f"[{sec}]")
+        for key, value in values.items():
+            if value is None or (isinstance(value, str) and value == "" and key == "file"):
+                continue
+            lines.append(f"{key} = {toml_value(value)}")
+    return "\n".join(lines) + "\n"
+
+
+def plot_stage(path: Path, rows: list[Row], stage: str, targets=(1e-2, 1e-3)) -> Path:
+    """Log-log error against wall time for one stage (one marker series per group)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
+    groups: dict[str, list[Row]] = {}
+    for row in rows:
+        groups.setdefault(_group(row), []).append(row)
+    markers = "osD^v<>ph*"
+    for i, (name, members) in enumerate(groups.items()):
+        pts = []
+        for r in members:
+            err = r.error if math.isfinite(r.error) else r.error_position
+            if math.isfinite(err) and r.wall_time_s > 0:
+                pts.append((r.wall_time_s, max(err, 1e-12)))
+        if not pts:
+            continue
+        pts.sort()
+        xs, ys = zip(*pts)
+        ax.loglog(xs, ys, marker=markers[i % len(markers)], linestyle="-" if len(pts) > 1 else "",
+                  label=name)
+    for t in targets:
+        ax.axhline(t, color="0.6", lw=0.8, ls="--")
+        ax.text(ax.get_xlim()[0] if ax.lines else 1, t, f" {t:g}", va="bottom", fontsize=7,
+                color="0.4")
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("relative error" + (" (max of V_OC, Q_SC, I_SC peaks)"
+                                      if stage != "circuit" else " (mean power, V_load peak)"))
+    ax.set_title(STAGE_TITLES.get(stage, stage), fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _group(row: Row) -> str:
+    k = row.knobs
+    if row.stage == "field":
+        if k.get("method") == "3d":
+            return "3D (C, q at mid-stroke)"
+        if k.get("far_field") != "kelvin":
+            return f"{k.get('far_field')} far field"
+        return f"axisymmetric p{k.get('degree')}"
+    if row.stage == "dynamics":
+        return "impact map: sampling" if k.get("model") == "impact" else "soft contact vs impact map"
+    if row.stage == "circuit":
+        return f"R = {k.get('load_ohm'):.0e} ohm"
+    return row.stage
+
+
+def markdown(report: Report, images: dict) -> str:
+    """The text of report.md."""
+    sc = report.scene
+    lines = [f"# tengfield report: error against run time{' (fast mode)' if report.fast else ''}",
+             "",
+             f"Scene: `{sc.source}` — {sc.excitation.frequency:g} Hz, "
+             f"A = {sc.excitation.amplitude * 1e3:g} mm, Δh = {sc.device.gap * 1e3:g} mm, "
+             f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{sc.circuit.reference}`; "
+             f"regime {report.trajectory.get('regime', '?')}. Total wall time "
+             f"{report.wall_time_s:.0f} s.",
+             "",
+             "Errors are relative errors of the peak-to-peak V_OC, Q_SC and I_SC over the "
+             "steady window (`error_max` = the largest of the three); for the circuit, of the "
+             "mean load power and the peak-to-peak load voltage. Wall times are measured on this "
+             "machine (shared; see the uptime in the CSV header of your own run).",
+             "", "## References", ""]
+    for key in ("field", "surrogate", "dynamics", "overall"):
+        if key in report.references:
+            lines.append(f"* **{key}**: {report.references[key]}")
+    lines.append("* **soft contact**: the impact map (its rigid limit) at the same sampling")
+    lines.append("* **circuit**: the same exponential integrator with a "
+                 f"{report.plan.circuit_refinement}× finer step")
+    for stage in ("field", "surrogate", "dynamics", "circuit"):
+        rows = [r for r in report.rows if r.stage == stage]
+        if not rows:
+            continue
+        lines += ["", f"## {STAGE_TITLES[stage]}", ""]
+        if stage in images:
+            lines += [f"![{stage}]({images[stage].name})", ""]
+        if stage == "circuit":
+            lines += ["| setting | τ = R C_T [s] | wall time [s] | error P_mean | error V_load |",
+                      "|---|---|---|---|---|"]
+            for r in rows:
+                lines.append(f"| {r.setting} | {r.knobs['time_constant_s']:.2g} | "
+                             f"{r.wall_time_s:.3g} | {_num(r.errors['P_load'])} | "
+                             f"{_num(r.errors['V_load'])} |")
+            continue
+        extra = " | error C, q |" if stage == "field" else " |"
+        head = "| setting | wall time [s] | error V_OC | error Q_SC | error I_SC | max" + extra
+        lines += [head, "|" + "---|" * (head.count("|") - 1)]
+        for r in rows:
+            cells = [r.setting, f"{r.wall_time_s:.3g}"] + [_num(r.errors.get(q)) for q in QUANTITIES]
+            cells.append(_num(r.error))
+            if stage == "field":
+                cells.append(_num(r.error_position))
+            lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "## Cheapest settings for a target accuracy", "",
+              "Each part (field discretisation, surrogate tolerance, output sampling) gets a third "
+              "of the target; the combination is then *run* as `tengfield run` builds it "
+              "(adaptive surrogate driven by `[field] tolerance`) and measured against the "
+              "overall reference.", "",
+              "| target | [field] | sample_rate_hz | positions | predicted error | measured error "
+              "(V_OC, Q_SC, I_SC) | wall time [s] | reached |", "|---|---|---|---|---|---|---|---|"]
+    for rec in report.recommendations:
+        f = rec.field
+        field_text = (f"{f['method']}, degree {f['degree']}, mesh {f['mesh_size_mm']:g} mm, "
+                      f"{f['far_field']}, tolerance {f['tolerance']:g}")
+        errs = ", ".join(_num(rec.measured_errors.get(q)) for q in QUANTITIES)
+        lines.append(f"| {rec.target:g} | {field_text} | {rec.sample_rate_hz:g} | {rec.positions} | "
+                     f"{rec.predicted_error:.2g} | {errs} | {rec.measured_wall_time_s:.3g} | "
+                     f"{'yes' if rec.reached else 'NO'} |" + (f" {rec.note}" if rec.note else ""))
+    lines += ["", "Use them: `tengfield run recommended-1e-3.toml` (this scene with the block "
+              "below), or in Python `tengfield.report.recommended_field_settings(tolerance)`.", ""]
+    for rec in report.recommendations:
+        lines += [f"```toml\n# target {rec.target:g}", "[field]"]
+        lines += [f"{k} = {toml_value(v)}" for k, v in rec.field.items()]
+        lines += ["[run]", f"sample_rate_hz = {toml_value(rec.sample_rate_hz)}", "```", ""]
+    return "\n".join(lines)
+
+
+def write_report(report: Report, out_dir) -> list[Path]:
+    """Write report.csv, report.json, report.md, one PNG per stage and
+    ``recommended-<target>.toml`` scene files to ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [write_csv(out / "report.csv", report), write_json(out / "report.json", report)]
+    images = {}
+    for stage in ("field", "surrogate", "dynamics", "circuit"):
+        rows = [r for r in report.rows if r.stage == stage]
+        if rows:
+            images[stage] = plot_stage(out / f"{stage}.png", rows, stage)
+            written.append(images[stage])
+    for rec in report.recommendations:
+        path = out / f"recommended-{rec.target:g}.toml"
+        path.write_text(scene_text(report.scene, rec.scene_sections(),
+                                   f"{report.scene.source} with the cheapest settings measured by "
+                                   f"`tengfield report`\nto reach {rec.target:g} on the peak-to-peak "
+                                   f"V_OC, Q_SC, I_SC (measured: {rec.measured_error:.2g})"))
+        written.append(path)
+    md = out / "report.md"
+    md.write_text(markdown(report, images))
+    written.append(md)
+    return written
