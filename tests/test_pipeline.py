@@ -254,3 +254,29 @@ def test_bad_sweep_range_is_a_clear_error(tmp_path):
     proc = cli(["sweep", "--frequency-hz", "10:20", "--amplitude-mm", "1", "-o", "o"], tmp_path)
     assert proc.returncode == 2 and "--frequency-hz = '10:20'" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.field
+@pytest.mark.slow
+def test_cli_run_of_the_real_default_scene(tmp_path):
+    """`tengfield run` with no scene: the paper's device at 1.5 mm / 20 Hz, cold cache."""
+    proc = cli(["run", "-o", "out", "--no-plots"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    data = np.loadtxt(tmp_path / "out" / "waveforms.csv", delimiter=",", skiprows=1)
+    columns = {name: data[:, i] for i, name in enumerate(pipeline.WAVEFORM_COLUMNS)}
+    from tengfield.scene import default_scene
+    scene = default_scene()
+    q_ball = abs(scene.device.ball_charge)
+    q_sc = columns["Q_sc_C"]
+    # a negative ball above its reference position: Q_SC >= 0, V_OC >= 0 (terminals.py)
+    assert q_sc.min() >= -1e-6 * q_sc.max() and columns["V_oc_V"].min() >= -1e-6 * q_sc.max()
+    # charge conservation: no more than the ball's charge can be transferred
+    assert 0.1 * q_ball < summary["peak_to_peak"]["Q_sc_C"] < q_ball
+    # I_SC has the sign of the ball's velocity (dQ_SC/dz > 0 along the stroke)
+    current = columns["I_sc_A"]
+    clear = (np.abs(columns["gap_velocity_m_per_s"]) > 1e-3) & (np.abs(current) > 1e-3 * np.abs(current).max())
+    assert np.all(np.sign(current[clear]) == np.sign(columns["gap_velocity_m_per_s"][clear]))
+    assert summary["surrogate_error_estimate"] <= scene.field.tolerance
+    assert summary["stages"]["field"]["status"] == "ran"
+    assert data.shape[0] == round(scene.run.duration * scene.run.sample_rate) + 1
