@@ -50,7 +50,7 @@ def test_degree2_offaxis_world_equals_self():
 
     cell = cylindrical_cell(default_scene().device)
     settings = solver3d.Solve3DSettings(degree=2, mesh_size=2e-3, domain_radius=20e-3,
-                                        far_field="robin", estimate_error=False)
+                                        far_field="kelvin", estimate_error=False)
     mesh_settings = MeshSettings(size=2e-3, domain_radius=20e-3, order=2)
     world = solver3d.solve_on_mesh(
         solver3d.mesh_cell(cell, 0.7e-3, 0.4e-3, mesh_settings, comm=MPI.COMM_WORLD),

@@ -42,7 +42,7 @@ from ..errors import FieldError
 # solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``
 # (20 µm for the paper's device); closer positions are extrapolated
 # linearly from the gaps g_min and 2 g_min (:func:`contact_anchors`).
-from .geometry_axisymmetric import MIN_GAP_FRACTION  # noqa: E402  (pure Python, no gmsh)
+from .geometry_axisymmetric import MIN_GAP_FRACTION, RIM_EXPONENT  # noqa: E402  (no gmsh)
 
 VOLUME_GROUPS = ("ball", "walls", "air")
 SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
@@ -119,17 +119,23 @@ class HexagonalCell:
 class MeshSettings:
     """Element sizes [m] and order of a 3D mesh.
 
-    ``size`` is the characteristic size inside the device; refined zones
-    use fractions of it: electrode rims ``rim_factor·size`` (graded
-    linearly in the distance, i.e. geometrically), the ball surface
-    ``ball_factor·size``, the contact gap down to half the gap. Outside the
-    device the size grows by ``growth`` per unit distance up to the
-    far-field sphere.
+    ``size`` is the characteristic size inside the device. Refined zones:
+
+    * electrode rims: radical grading ``s = size · (ρ/L)^(1-μ)`` (ρ the
+      distance to the rim, L = h/4, μ = α/p with α = RIM_EXPONENT the
+      strongest singular exponent, p = ``order``, the FE degree), floored
+      at ``rim_floor · size``; this is the axisymmetric builder's rule and
+      restores the smooth convergence rate under uniform refinement;
+    * the ball surface: ``ball_factor · size``;
+    * the contact gaps: half the gap at the ball's poles, growing linearly.
+
+    Outside the device the size grows by ``growth`` per unit distance up
+    to the far-field sphere.
     """
     size: float
     domain_radius: float
     order: int = 1
-    rim_factor: float = 0.25
+    rim_floor: float = 0.05
     ball_factor: float = 0.5
     growth: float = 0.3
 
@@ -318,6 +324,20 @@ def _hex_prism(occ, apothem: float, z0: float, height: float) -> int:
     return next(tag for dim, tag in out if dim == 3)
 
 
+def _rim_distance(cell) -> str:
+    """gmsh MathEval expression of the distance [m] to the nearest electrode rim
+    (exact for the disks, exact off the corners for the hexagons)."""
+    half = 0.5 * cell.electrode_spacing
+    if isinstance(cell, CylindricalCell):
+        lateral = f"(sqrt(x*x+y*y)-{cell.electrode_radius!r})"
+    else:
+        c = math.cos(math.pi / 6)
+        lateral = (f"(max(abs(y),max(abs(0.5*y+{c!r}*x),abs(0.5*y-{c!r}*x)))"
+                   f"-{cell.inner_apothem!r})")
+    axial = f"min(abs(z-{half!r}),abs(z+{half!r}))"
+    return f"sqrt({lateral}^2+{axial}^2)"
+
+
 def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -> None:
     """Background size: min of rim, ball-surface, gap and far-field gradings."""
     import gmsh
@@ -326,16 +346,11 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     h = settings.size
     fields = []
 
-    rim_dist = fld.add("Distance")
-    fld.setNumbers(rim_dist, "CurvesList", sorted(set(rim_curves)))
-    fld.setNumber(rim_dist, "Sampling", 200)
-    rim = fld.add("Threshold")
-    fld.setNumber(rim, "InField", rim_dist)
-    fld.setNumber(rim, "SizeMin", settings.rim_factor * h)
-    fld.setNumber(rim, "SizeMax", h)
-    fld.setNumber(rim, "DistMin", 0.5 * settings.rim_factor * h)
-    fld.setNumber(rim, "DistMax", 2.0 * h)
-    fld.setNumber(rim, "StopAtDistMax", 1)
+    power = 1.0 - RIM_EXPONENT / settings.order
+    reach = 0.25 * cell.electrode_spacing
+    rim = fld.add("MathEval")
+    fld.setString(rim, "F", f"max({settings.rim_floor * h!r}, "
+                            f"{h!r}*({_rim_distance(cell)}/{reach!r})^{power!r})")
     fields.append(rim)
 
     ball_dist = fld.add("Distance")

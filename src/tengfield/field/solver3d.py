@@ -10,16 +10,23 @@ BoomerAMG); the two right-hand sides differ only in the Dirichlet values.
 
 Far field (the air is a sphere of radius R centred on the cell):
 
-* ``"robin"`` (also used for ``"kelvin"``, which the 3D path does not
-  implement): the asymptotic condition ∂ψ/∂n + ψ/R = 0, exact for the
+* ``"robin"``: the asymptotic condition ∂ψ/∂n + ψ/R = 0, exact for the
   monopole part of the exterior field. Its weak form adds ``(1/R)∮ψ v dS``,
   and the same term (the energy of the monopole exterior field) enters C.
+* ``"kelvin"`` (the scene default): in 3D this is the exact
+  Dirichlet-to-Neumann map of the exterior for the spherical harmonics of
+  degree l ≤ ``DTN_DEGREE`` (∂ψ_l/∂n = -(l+1)/R ψ_l), i.e. the Robin term
+  plus the rank-8 term ``Σ_{l=1,2} Σ_m (l/R) (∮Y_lm ψ)(∮Y_lm v) / ∮Y_lm²``.
+  It is what the Kelvin inversion gives for those modes; the remaining
+  truncation error falls as (device size / R)^7 (measured in
+  docs/field3d.md). The low-rank term is applied matrix-free on top of the
+  assembled Robin matrix, which also preconditions (BoomerAMG).
 * ``"dirichlet"``: ψ = 0 on the sphere (a grounded enclosure).
 
 Results (sign conventions of :mod:`tengfield.terminals`):
 
-* ``C_jk = ε0 [∫ εr ∇ψ_j·∇ψ_k dΩ + (1/R)∮ ψ_j ψ_k dS]`` [F] (symmetric by
-  construction, positive definite).
+* ``C_jk = ε0 [∫ εr ∇ψ_j·∇ψ_k dΩ + ∮ ψ_j DtN ψ_k dS]`` [F], the field
+  energy including the exterior (symmetric by construction, positive definite).
 * ``q_k = -∮_ball σ ψ_k dS`` [C]: evaluated as ``-q_ball · <ψ_k>_ball``,
   the mean of ψ_k over the meshed ball surface times the exact ball charge
   ``q_ball = σ π d²`` (the meshed sphere's area error cancels).
@@ -54,6 +61,8 @@ from .result import PositionResult
 OBSERVED_ORDER = {1: 1.0, 2: 1.5}
 
 FAR_FIELDS = ("robin", "dirichlet", "kelvin")
+#: Highest spherical-harmonic degree whose exterior field is exact for far_field = "kelvin".
+DTN_DEGREE = 2
 
 _prefix_counter = itertools.count()
 
@@ -81,6 +90,36 @@ class WeightingPotentials:
     iterations: tuple[int, int]
     assembly_time: float          # [s]
     solve_time: float             # [s] (preconditioner setup + both solves)
+    #: far_field = "kelvin": ∮Y_m ψ_k dS (shape 2 x M) and the weights l/(R ∮Y_m²) [1/m],
+    #: so that the exterior energy beyond Robin is Σ_m w_m moment_jm moment_km.
+    harmonic_moments: np.ndarray = None
+    harmonic_weights: np.ndarray = None
+
+
+def sphere_harmonics(x, max_degree: int = DTN_DEGREE):
+    """Real solid harmonics of degree 1..max_degree (unnormalised UFL polynomials of
+    the spatial coordinate ``x``; on an origin-centred sphere they are the real
+    spherical harmonics up to a constant), as (degree, expression) pairs."""
+    n = [x[i] for i in range(3)]
+    out = [(1, n[0]), (1, n[1]), (1, n[2])]
+    if max_degree >= 2:
+        out += [(2, n[0] * n[1]), (2, n[1] * n[2]), (2, n[0] * n[2]),
+                (2, n[0] * n[0] - n[1] * n[1]), (2, 2 * n[2] * n[2] - n[0] * n[0] - n[1] * n[1])]
+    if max_degree > 2:
+        raise ValueError("sphere_harmonics: max_degree <= 2")
+    return out
+
+
+class _LowRankUpdate:
+    """PETSc python matrix ``y = A x + Σ_m w_m (u_m·x) u_m`` (symmetric, A assembled)."""
+
+    def __init__(self, matrix, vectors, weights):
+        self.matrix, self.vectors, self.weights = matrix, vectors, weights
+
+    def mult(self, mat, x, y):
+        self.matrix.mult(x, y)
+        for u, w in zip(self.vectors, self.weights):
+            y.axpy(w * u.dot(x), u)
 
 
 # ---------------------------------------------------------------------------
@@ -174,7 +213,7 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
     far_tag = cell_mesh.groups["far_boundary"]
     a = eps_r * ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
     if far_field in ("robin", "kelvin"):
-        a = a + (1.0 / domain_radius) * u * v * ds(far_tag)
+        a = a + fem.Constant(mesh, 1.0 / domain_radius) * u * v * ds(far_tag)
     rhs = fem.form(ufl.inner(fem.Constant(mesh, PETSc.ScalarType(0.0)), v) * ufl.dx)
     bilinear = fem.form(a)
 
@@ -191,6 +230,21 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
 
     matrix = fem_petsc.assemble_matrix(bilinear, bcs=bcs_for("electrode_lower"))
     matrix.assemble()
+    operator, harmonic_vectors, weights = matrix, [], np.empty(0)
+    if far_field == "kelvin":
+        # exact exterior for the harmonics l = 1..DTN_DEGREE: a low-rank term on the far sphere
+        x = ufl.SpatialCoordinate(mesh)
+        weights = []
+        for degree_l, harmonic in sphere_harmonics(x):
+            vec = fem_petsc.assemble_vector(fem.form(harmonic * v * ds(far_tag)))
+            vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            norm = comm.allreduce(fem.assemble_scalar(fem.form(harmonic * harmonic * ds(far_tag))))
+            harmonic_vectors.append(vec)
+            weights.append(degree_l / (domain_radius * norm))
+        weights = np.array(weights)
+        operator = PETSc.Mat().createPython(matrix.getSizes(), comm=comm)
+        operator.setPythonContext(_LowRankUpdate(matrix, harmonic_vectors, weights))
+        operator.setUp()
     assembly_time = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -206,10 +260,10 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
                        "ksp_atol": 1e-30, "ksp_max_it": 2000,
                        "ksp_error_if_not_converged": True}.items():
         opts[prefix + key] = value
-    ksp.setOperators(matrix)
+    ksp.setOperators(operator, matrix)
     ksp.setFromOptions()
     ksp.setUp()
-    potentials, iterations = [], []
+    potentials, iterations, moments = [], [], []
     try:
         for active in ("electrode_lower", "electrode_upper"):
             bcs = bcs_for(active)
@@ -225,11 +279,16 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
                                  f"(reason {ksp.getConvergedReason()}): {exc}") from None
             psi.x.scatter_forward()
             potentials.append(psi)
+            moments.append([u.dot(psi.vector) for u in harmonic_vectors])
             iterations.append(ksp.getIterationNumber())
             b.destroy()
     finally:
         ksp.destroy()
+        if operator is not matrix:
+            operator.destroy()
         matrix.destroy()
+        for vec in harmonic_vectors:
+            vec.destroy()
         for key in list(opts.getAll()):
             if key.startswith(prefix):
                 opts.delValue(key)
@@ -238,7 +297,9 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
     num_dofs = space.dofmap.index_map.size_global * space.dofmap.index_map_bs
     return WeightingPotentials(lower=potentials[0], upper=potentials[1], dofs=num_dofs,
                                cells=num_cells, iterations=tuple(iterations),
-                               assembly_time=assembly_time, solve_time=solve_time)
+                               assembly_time=assembly_time, solve_time=solve_time,
+                               harmonic_moments=np.array(moments).reshape(2, -1),
+                               harmonic_weights=np.asarray(weights))
 
 
 def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
@@ -257,12 +318,15 @@ def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
     def energy(a, b):
         form = eps_r * ufl.inner(ufl.grad(a), ufl.grad(b)) * ufl.dx
         if far_field in ("robin", "kelvin"):
-            form = form + (1.0 / domain_radius) * a * b * ds(cell_mesh.groups["far_boundary"])
+            form = form + (fem.Constant(mesh, 1.0 / domain_radius) * a * b
+                           * ds(cell_mesh.groups["far_boundary"]))
         return mesh.comm.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
 
     c = np.empty((2, 2))
+    moments, weights = potentials.harmonic_moments, potentials.harmonic_weights
     for j, k in ((0, 0), (0, 1), (1, 1)):
-        c[j, k] = c[k, j] = EPS0 * energy(psi[j], psi[k])
+        exterior = float(np.sum(weights * moments[j] * moments[k])) if weights is not None else 0.0
+        c[j, k] = c[k, j] = EPS0 * (energy(psi[j], psi[k]) + exterior)
     return c
 
 
@@ -430,8 +494,8 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         "geometry": type(cell).__name__,
         "mesh_size_m": settings.mesh_size,
         "domain_radius_m": settings.domain_radius,
-        "far_field": "robin" if settings.far_field == "kelvin" else settings.far_field,
-        "far_field_requested": settings.far_field,
+        "far_field": (f"dtn-{DTN_DEGREE} (exact exterior for harmonics l <= {DTN_DEGREE})"
+                      if settings.far_field == "kelvin" else settings.far_field),
         "meshed_gap_m": fine.cell_mesh.meshed_gap,
         "meshed_offset_m": fine.cell_mesh.meshed_offset,
         "ball_centre_m": fine.cell_mesh.ball_centre.tolist(),
@@ -456,8 +520,8 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
 
     ``offset`` [m] (lateral, along +x) defaults to ``[field] ball_offset_mm``.
     Discretisation from ``[field]``: ``degree``, ``mesh_size_mm``,
-    ``domain_radius_mm``, ``far_field`` ("kelvin" is solved with the
-    asymptotic Robin condition in 3D). ``environment = "grounded-table"``
+    ``domain_radius_mm``, ``far_field`` ("kelvin" is the low-order exact
+    Dirichlet-to-Neumann condition in 3D). ``environment = "grounded-table"``
     is not supported by the 3D path (FieldError).
     """
     fld = scene.field
