@@ -385,8 +385,10 @@ def write_outputs(result: RunResult, out_dir: str | Path, *, plots: bool = True)
             written.extend(Path(p) for p in extra)
     if plots:
         from .plotting.waveforms import plot_surrogate, plot_waveforms
+        shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
         written.append(plot_waveforms(result.waveforms, out / "waveforms.png",
-                                      title=_title(result)))
+                                      title=_title(result) + ", last 5 periods",
+                                      last_seconds=shown))
         if result.curves is not None:
             written.append(plot_surrogate(result.table, result.curves, out / "surrogate.png",
                                           cells=result.scene.device.cells))
