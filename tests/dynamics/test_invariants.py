@@ -2,7 +2,7 @@
 import math
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from .conftest import run_sine
@@ -13,6 +13,11 @@ from .conftest import run_sine
        restitution=st.floats(0.0, 1.0), stroke_mm=st.floats(0.5, 8.0),
        phase=st.floats(0.0, 2 * math.pi), start=st.floats(0.0, 1.0),
        velocity0=st.floats(-1.0, 1.0))
+# cases hypothesis once found: a vanishing rebound, and a vanishing launch speed
+@example(amplitude_mm=0.0, frequency=3.0, restitution=1.3e-68, stroke_mm=1.0, phase=0.0,
+         start=0.0, velocity0=1.0)
+@example(amplitude_mm=1.0, frequency=20.5, restitution=0.0, stroke_mm=1.0, phase=0.0,
+         start=0.0, velocity0=1.2e-89)
 def test_gap_bounded_finite_and_events_ordered(amplitude_mm, frequency, restitution, stroke_mm,
                                                phase, start, velocity0):
     stroke = stroke_mm * 1e-3

@@ -327,6 +327,7 @@ def next_contact(t0, z0, v0, y0, yd0, s_begin, t_end, g, gap, m_bound, period,
         zc = z0
         vc = v0
     steps = 0
+    s_safe = s        # start of the last proven contact-free step
     while True:
         if s > 0.0 and zc <= Z_TOL and vc <= 0.0:
             target = 0.0
@@ -337,19 +338,21 @@ def next_contact(t0, z0, v0, y0, yd0, s_begin, t_end, g, gap, m_bound, period,
         h = safe_step(zc, vc, gap, m_bound)
         if t0 + s + h >= t_end:
             return REACHED_END, t_end, zc, vc
+        s_safe = s
         s += h
         zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
         steps += 1
         if steps > MAX_STEPS_PER_FLIGHT:
             return STEP_BOUND, t0 + s, zc, vc
-    # Newton polish of the contact time (stays within a tiny neighbourhood)
+    # Newton polish of the contact time (stays within a tiny neighbourhood and
+    # never before the last point known to be contact-free)
     for _ in range(2):
         if vc == 0.0:
             break
         ds = (zc - target) / vc
         if abs(ds) > 1e-6 * period:
             break
-        s -= ds
+        s = max(s - ds, s_safe)
         zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
     # on the plate; a velocity pointing away is a round-off touch: zero
     if target == 0.0 and vc > 0.0:
