@@ -300,10 +300,11 @@ def recommended_field_settings(tolerance: float, recommendations=None) -> dict:
     e.g. ``report.json → recommendations``); default: those measured by
     ``tengfield report`` on the default scene (``tengfield.report_calibration``).
     The loosest measured target at or below ``tolerance`` is used (so the
-    cheapest one that is accurate enough); its ``tolerance`` key (the
-    surrogate's share) is scaled to the asked tolerance. A tolerance tighter
-    than every measured target extrapolates the strictest setting with the
-    degree-2 rate h⁴: ``mesh_size × (tolerance / target)^(1/4)``.
+    cheapest one that is accurate enough), with its verified ``tolerance``
+    key (the surrogate's threshold, a share of the target). A tolerance
+    tighter than every measured target extrapolates the strictest setting:
+    degree 2, ``mesh_size × (tolerance / target)^(1/4)`` (the rate h⁴) and
+    the surrogate threshold scaled by ``tolerance / target``.
     """
     if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
         raise SceneError(f"[field] tolerance = {tolerance!r} is out of range: allowed (0, 1)")
@@ -314,15 +315,14 @@ def recommended_field_settings(tolerance: float, recommendations=None) -> dict:
         raise ValueError("no recommendations to choose from")
     usable = [e for e in entries if e["target"] <= tolerance * (1 + 1e-9)]
     if usable:
-        chosen = usable[-1]
-        block = dict(chosen["field"])
+        block = dict(usable[-1]["field"])
     else:
         chosen = entries[0]
         block = dict(chosen["field"])
-        scale = (tolerance / chosen["target"]) ** 0.25
+        ratio = tolerance / chosen["target"]
         block["degree"] = 2
-        block["mesh_size_mm"] = float(f"{block['mesh_size_mm'] * scale:.3g}")
-    block["tolerance"] = float(f"{BUDGET_SHARE * tolerance:.3g}")
+        block["mesh_size_mm"] = float(f"{block['mesh_size_mm'] * ratio ** 0.25:.3g}")
+        block["tolerance"] = float(f"{block['tolerance'] * ratio:.3g}")
     return block
 
 
@@ -340,14 +340,14 @@ def recommended_sample_rate(tolerance: float, recommendations=None) -> float:
 
 
 def scene_with_recommended(scene, recommendations=None):
-    """``scene`` with the recommended ``[field]`` keys for its ``[field] tolerance``
-    filled in wherever the scene file does not set them itself (explicit keys win)."""
+    """``scene`` with its ``[field] tolerance`` read as the target accuracy of the
+    final waveforms: the recommended discretisation fills in every ``[field]``
+    key the scene file does not set itself (explicit keys win), and
+    ``tolerance`` becomes the recommended surrogate threshold."""
     block = recommended_field_settings(scene.field.tolerance, recommendations)
-    explicit = set((scene.raw.get("field") or {}).keys())
+    explicit = set((scene.raw.get("field") or {}).keys()) - {"tolerance"}
     chosen = {k: v for k, v in block.items() if k not in explicit}
-    if "tolerance" not in explicit:
-        chosen["tolerance"] = scene.field.tolerance * BUDGET_SHARE
-    return scene.with_values(field=chosen) if chosen else scene
+    return scene.with_values(field=chosen)
 
 
 def _as_dict(entry) -> dict:
