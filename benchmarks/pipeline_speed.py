@@ -39,9 +39,10 @@ def timed(cmd, env, cwd) -> float:
 
 
 def schedule_efficiency(path: Path, ranks: int) -> float:
-    """Load balance of the task farm's static schedule on ``ranks`` ranks, from the
-    per-position solve times of a serial run: sum / (ranks x sum over levels of the
-    busiest rank). This is the efficiency on an otherwise idle machine."""
+    """Load balance of the task farm's dynamic schedule (next job to the first free
+    rank, dearest first) on ``ranks`` ranks, from the per-position solve times of a
+    serial run: sum / (ranks x sum over levels of the makespan). This is the parallel
+    efficiency on an otherwise idle machine, communication neglected."""
     import numpy as np
 
     from tengfield import surrogate
@@ -58,10 +59,12 @@ def schedule_efficiency(path: Path, ranks: int) -> float:
     for level in levels:
         todo = level[level <= 0.5 * stroke * (1 + 1e-12)] if table.provenance.get(
             "mirror_symmetry") else level
-        todo = todo[surrogate.snake_order(todo, stroke)]
-        times = np.array([cost[float(z)] for z in todo])
-        total += times.sum()
-        busiest += max(times[r::ranks].sum() for r in range(ranks))
+        todo = todo[surrogate.contact_first_order(todo, stroke)]
+        free_at = np.zeros(ranks)
+        for z in todo:
+            free_at[np.argmin(free_at)] += cost[float(z)]
+            total += cost[float(z)]
+        busiest += free_at.max()
     return float(total / (ranks * busiest))
 
 

@@ -55,6 +55,26 @@ def test_two_ranks_equal_serial_analytic_model():
 
 
 @pytest.mark.mpi
+@pytest.mark.parametrize("dynamic", [True, False])
+def test_farm_runs_every_item_once_and_keeps_the_order(dynamic):
+    from mpi4py import MPI
+
+    from tengfield._mpi import farm
+
+    comm = MPI.COMM_WORLD
+    done = []
+
+    def work(item):
+        done.append(item)
+        return item * item
+
+    items = list(range(23))
+    assert farm(comm, items, work, dynamic=dynamic) == [i * i for i in items]
+    everywhere = sorted(i for part in comm.allgather(done) for i in part)
+    assert everywhere == items                      # each item exactly once
+
+
+@pytest.mark.mpi
 @pytest.mark.field
 def test_two_ranks_equal_serial_field_solver():
     import pyvista  # noqa: F401 - before dolfinx

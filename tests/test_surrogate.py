@@ -206,9 +206,9 @@ def test_mirror_symmetry_halves_the_solves_and_matches_a_full_run():
     np.testing.assert_allclose(half.induced_charge, full.induced_charge, rtol=1e-12)
 
 
-def test_snake_order_balances_two_ranks():
+def test_contact_first_order():
     z = surrogate.lobatto_positions(3e-3, 17)
-    z = z[z <= 1.5e-3]
-    order = surrogate.snake_order(z, 3e-3)
+    order = surrogate.contact_first_order(z, 3e-3)
     assert sorted(order) == list(range(z.size))
-    assert z[order[0]] == 0.0          # the dearest (contact) solve starts first
+    distance = np.minimum(z, 3e-3 - z)[order]
+    assert np.all(np.diff(distance) >= 0) and distance[0] == 0.0

@@ -31,43 +31,110 @@ def abort_with_message(comm, message: str, code: int = 2) -> None:
 
 
 def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
-         progress: Callable[[int], None] | None = None) -> list:
+         progress: Callable[[int], None] | None = None, dynamic: bool = True) -> list:
     """``[work(item) for item in items]`` with the items spread over the ranks.
 
-    Rank ``r`` runs items ``r, r + size, ...`` (each job must be serial, e.g.
-    a field solve on ``COMM_SELF``); every rank returns the full result list
+    Each job must be serial (e.g. a field solve on ``COMM_SELF``). With
+    ``dynamic`` (default) the ranks take the next unstarted item from a
+    shared counter (an MPI window on rank 0, atomic ``Fetch_and_op``), so a
+    rank that drew a dear job simply takes fewer: pass the dearest items
+    first. Without it (or if the MPI library offers no RMA window) rank ``r``
+    runs items ``r, r + size, ...``. Every rank returns the full result list
     in the order of ``items`` (``allgather``), so all ranks can take the same
-    next decision. Results must be picklable.
+    next decision; results must be picklable, and do not depend on which
+    rank computed them.
 
     An exception in ``work`` on a multi-rank communicator prints the message
     with its rank and calls ``comm.Abort`` (never a hang); on one rank it is
     simply raised.
 
-    ``progress(n)`` is called on rank 0 after each of its own jobs with the
-    estimated number of jobs finished on all ranks since the last call.
+    ``progress(n)`` is called on rank 0 with the number of further jobs
+    started on all ranks (dynamic) or an estimate (static).
     """
     size = size_of(comm)
-    rank = rank_of(comm)
-    mine = list(range(rank, len(items), size))
-    results: dict[int, Any] = {}
-    for index in mine:
-        if size == 1:
-            results[index] = work(items[index])
-        else:
-            try:
-                results[index] = work(items[index])
-            except BaseException as exc:  # noqa: BLE001 - every failure must abort all ranks
-                detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-                if not isinstance(exc, Exception):
-                    detail = f"interrupted ({type(exc).__name__})"
-                abort_with_message(comm, detail)
-                raise  # only reached with a fake communicator whose Abort returns
-        if progress is not None and rank == 0:
-            progress(size)
     if size == 1:
-        return [results[i] for i in range(len(items))]
+        results = []
+        for item in items:
+            results.append(work(item))
+            if progress is not None:
+                progress(1)
+        return results
+    counter = _shared_counter(comm) if dynamic else None
+    results: dict[int, Any] = {}
+    started_seen = 0
+    if counter is None:
+        indices = iter(range(comm.rank, len(items), size))
+    else:
+        indices = iter(lambda: counter.fetch_next(), None)
+    for index in indices:
+        if index >= len(items):
+            break
+        try:
+            results[index] = work(items[index])
+        except BaseException as exc:  # noqa: BLE001 - every failure must abort all ranks
+            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            if not isinstance(exc, Exception):
+                detail = f"interrupted ({type(exc).__name__})"
+            abort_with_message(comm, detail)
+            raise  # only reached with a fake communicator whose Abort returns
+        if progress is not None and comm.rank == 0:
+            started = min(counter.peek(), len(items)) if counter is not None \
+                else min(started_seen + size, len(items))
+            progress(started - started_seen)
+            started_seen = started
+    if counter is not None:
+        counter.free()
     gathered = comm.allgather(results)
     merged: dict[int, Any] = {}
     for part in gathered:
         merged.update(part)
     return [merged[i] for i in range(len(items))]
+
+
+class _SharedCounter:
+    """An integer on rank 0 that every rank can fetch-and-increment (MPI RMA)."""
+
+    def __init__(self, comm, window):
+        import numpy as np
+
+        self._np = np
+        self.comm = comm
+        self.window = window
+        if comm.rank == 0:
+            from mpi4py import MPI
+            window.Lock(0, MPI.LOCK_EXCLUSIVE)
+            window.Put(np.zeros(1, dtype="i8"), 0)
+            window.Unlock(0)
+        comm.Barrier()
+
+    def _fetch(self, increment: int) -> int:
+        from mpi4py import MPI
+
+        np = self._np
+        result = np.zeros(1, dtype="i8")
+        op = MPI.SUM if increment else MPI.NO_OP
+        self.window.Lock(0, MPI.LOCK_SHARED)
+        self.window.Fetch_and_op(np.array([increment], dtype="i8"), result, 0, 0, op)
+        self.window.Unlock(0)
+        return int(result[0])
+
+    def fetch_next(self) -> int:
+        """The next unstarted index (each index is handed out once)."""
+        return self._fetch(1)
+
+    def peek(self) -> int:
+        """How many indices have been handed out so far."""
+        return self._fetch(0)
+
+    def free(self) -> None:
+        self.window.Free()   # collective: every rank gets here before the allgather
+
+
+def _shared_counter(comm):
+    """A :class:`_SharedCounter` on ``comm``, or None if RMA windows are unavailable."""
+    try:
+        from mpi4py import MPI
+        window = MPI.Win.Allocate(8 if comm.rank == 0 else 0, 8, comm=comm)
+    except Exception:  # noqa: BLE001 - fall back to the static schedule
+        return None
+    return _SharedCounter(comm, window)

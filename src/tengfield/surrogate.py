@@ -100,14 +100,13 @@ def mirrored(result, stroke: float):
                                info={**getattr(result, "info", {}), "mirrored_from": result.position})
 
 
-def snake_order(positions: np.ndarray, stroke: float) -> np.ndarray:
-    """Indices ordering positions by distance to the nearest plate (the solves close to
-    contact are the dearest), then interleaved 0,1,1,0,0,1,... so that a round-robin
-    over two ranks gets balanced work."""
-    order = np.argsort(np.minimum(positions, stroke - positions), kind="stable")
-    pairs = [order[i:i + 2] for i in range(0, order.size, 2)]
-    return np.concatenate([p if k % 2 == 0 else p[::-1] for k, p in enumerate(pairs)]) \
-        if pairs else order
+def contact_first_order(positions: np.ndarray, stroke: float) -> np.ndarray:
+    """Indices ordering positions by distance to the nearer plate, closest first.
+
+    Solves close to contact are the dearest; the task farm hands out jobs in
+    this order (longest first), which balances the ranks.
+    """
+    return np.argsort(np.minimum(positions, stroke - positions), kind="stable")
 
 
 # ---------------------------------------------------------------------------
@@ -334,7 +333,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         if bar is not None:
             bar.total += todo.size - positions.size
             bar.refresh()
-        todo = todo[snake_order(todo, stroke)]
+        todo = todo[contact_first_order(todo, stroke)]
         results = farm(comm, list(todo), work, progress=advance)
         if symmetric:
             results += [mirrored(r, stroke) for r in results
