@@ -61,7 +61,7 @@ Z_TOL = 1e-13             # [m] contact when closer than this and approaching
 A_TOL = 1e-9              # [m/s^2] relative accelerations below this count as zero
 CHATTER_FRACTION = 1e-4   # Zeno collapse when t_inf - t_n < this * period
 REST_HEIGHT = 1e-12       # [m] bounces lower than this end in sticking
-V_ZERO = 1e-9             # [m/s] rebound speeds below this are zero (fully plastic)
+V_ZERO = 1e-9             # [m/s] relative speeds at a plate below this are zero
 MAX_STEPS_PER_FLIGHT = 1_000_000
 
 
@@ -390,9 +390,13 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
         y, yd, ydd, yddd = table_state(t, kind, par, x, c)
         a = -g - ydd          # relative acceleration in free flight
         s_begin = 0.0
-        at_lower = z <= Z_TOL and v <= 0.0
-        at_upper = z >= gap - Z_TOL and v >= 0.0
+        # on a plate: approaching it, or leaving it slower than V_ZERO (which is
+        # below the resolution of z near the plate: treated as zero velocity)
+        at_lower = z <= Z_TOL and v <= V_ZERO
+        at_upper = z >= gap - Z_TOL and v >= -V_ZERO
         if at_lower or at_upper:
+            if abs(v) < V_ZERO:
+                v = 0.0
             plate = LOWER if at_lower else UPPER
             sign = 1.0 if at_lower else -1.0      # direction "away from the plate"
             z = 0.0 if at_lower else gap
