@@ -29,12 +29,22 @@ def env_with(cache: Path) -> dict:
                 OMPI_MCA_rmaps_base_oversubscribe="1")
 
 
-def timed(cmd, env, cwd) -> float:
+CPU_SECONDS: dict[str, float] = {}
+
+
+def timed(cmd, env, cwd, label: str = "") -> float:
+    """Wall time [s] of ``cmd``; its CPU time (user + sys, all ranks) goes to CPU_SECONDS."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     proc = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True, text=True)
     elapsed = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
         sys.exit(f"failed: {' '.join(cmd)}\n{proc.stderr[-3000:]}")
+    if label:
+        CPU_SECONDS[label] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return elapsed
 
 
@@ -90,24 +100,25 @@ def main() -> None:
         cold = work / "cold-cache"
         results["cold_run_mpirun_2_s"] = timed(
             ["mpirun", "-n", "2", *tengfield, "run", *scene, "-o", str(work / "o1")],
-            env_with(cold), work)
+            env_with(cold), work, "cold_run_mpirun_2")
         results["uptime_after_cold"] = uptime()
         results["warm_run_s"] = timed(tengfield + ["run", *scene, "-o", str(work / "o2")],
-                                      env_with(cold), work)
+                                      env_with(cold), work, "warm_run")
         summary = json.loads((work / "o1" / "summary.json").read_text())
         results["positions"] = summary["stages"]["surrogate"]["reason"]
         results["surrogate_error_estimate"] = summary.get("surrogate_error_estimate")
         results["field_stage_s"] = summary["stages"]["field"]["wall_time_s"]
         # precompute: 2 ranks vs serial
         t2 = timed(["mpirun", "-n", "2", *tengfield, "precompute", *scene, "-o",
-                    str(work / "p2.h5")], env_with(work / "c2"), work)
+                    str(work / "p2.h5")], env_with(work / "c2"), work, "precompute_mpirun_2")
         results["precompute_mpirun_2_s"] = t2
         if not args.skip_serial:
             t1 = timed(tengfield + ["precompute", *scene, "-o", str(work / "p1.h5")],
-                       env_with(work / "c1"), work)
+                       env_with(work / "c1"), work, "precompute_serial")
             results["precompute_serial_s"] = t1
             results["parallel_efficiency_2_ranks"] = t1 / (2.0 * t2)
             results["schedule_efficiency_2_ranks"] = schedule_efficiency(work / "p1.h5", 2)
+        results.update({f"{k}_cpu_s": v for k, v in CPU_SECONDS.items()})
         results["uptime_after"] = uptime()
     finally:
         shutil.rmtree(work, ignore_errors=True)

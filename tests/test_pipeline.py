@@ -178,7 +178,8 @@ def test_cli_run_end_to_end_then_cached(tmp_path):
     first = cli(["run", "small.toml", "-o", "out1"], tmp_path)
     assert first.returncode == 0, first.stderr
     out = tmp_path / "out1"
-    for name in ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png"):
+    for name in ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",
+                 "trajectory.csv", "impacts.csv", "trajectory.png"):
         assert (out / name).stat().st_size > 0
     with open(out / "waveforms.csv") as f:
         header = next(csv.reader(f))
@@ -189,6 +190,7 @@ def test_cli_run_end_to_end_then_cached(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["stages"]["field"]["status"] == "ran"
     assert summary["load"]["power_density_W_per_m3"] > 0
+    assert summary["stages"]["circuit"]["details"]["energy_balance_relative_residual"] < 1e-2
     assert summary["peak_to_peak"]["V_oc_V"] > 0 and summary["regime"]["regime"]
     # second run: cached surrogate, dolfinx never imported
     code = ("import sys; from tengfield.cli import main; rc = main(['run', 'small.toml', '-o', "

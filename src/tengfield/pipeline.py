@@ -285,8 +285,12 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         load = load_waveforms(scene, dynamics, curves, waveforms, window_start=t[window][0])
         waveforms.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
                           "P_load_W": load["P_load"]})
+        delivered = load["delivered_energy_J"]
+        residual = delivered - load["dissipated_energy_J"] - load["stored_energy_change_J"]
         stages["circuit"] = Stage("ran", f"load ODE, R = {scene.circuit.load:g} ohm",
-                                  time.perf_counter() - start)
+                                  time.perf_counter() - start,
+                                  {"energy_balance_relative_residual":
+                                   abs(residual) / max(abs(delivered), 1e-300)})
     else:
         stages["circuit"] = Stage("ran", f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
                                   "closed form; load ODE not run (no load)",
@@ -370,19 +374,11 @@ def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
 
 
 def write_outputs(result: RunResult, out_dir: str | Path, *, plots: bool = True) -> list[Path]:
-    """Write waveforms.csv, summary.json, the dynamics outputs (if the dynamics
-    result offers ``write(dir)``) and, with ``plots``, waveforms.png and surrogate.png."""
+    """Write waveforms.csv, summary.json and, with ``plots``, waveforms.png and
+    surrogate.png (the CLI adds the dynamics' own trajectory/impact files)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = [write_waveforms_csv(out / "waveforms.csv", result.waveforms)]
-    writer = getattr(result.dynamics, "write", None)
-    if callable(writer):
-        try:
-            extra = writer(out)
-        except TypeError:
-            extra = None
-        if isinstance(extra, (list, tuple)):
-            written.extend(Path(p) for p in extra)
     if plots:
         from .plotting.waveforms import plot_surrogate, plot_waveforms
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable

@@ -1,7 +1,8 @@
 """``tengfield run``: dynamics -> surrogate (cached) -> circuit, end to end.
 
-Writes DIR/waveforms.csv, DIR/summary.json, DIR/waveforms.png and
-DIR/surrogate.png. Under ``mpirun -n N`` the field solves (if the surrogate
+Writes DIR/waveforms.csv, DIR/summary.json, DIR/waveforms.png,
+DIR/surrogate.png and the dynamics' trajectory.csv, impacts.csv and
+trajectory.png. Under ``mpirun -n N`` the field solves (if the surrogate
 is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
@@ -46,9 +47,31 @@ def _run(args) -> int:
                  command_line=command_line())
     if comm is None or comm.rank == 0:
         written = write_outputs(result, args.output, plots=not args.no_plots)
+        written += write_dynamics_outputs(result, args.output, plots=not args.no_plots)
         print_summary(result.summary)
         print("wrote " + ", ".join(str(p) for p in written))
     return 0
+
+
+def write_dynamics_outputs(result, out_dir, *, plots: bool) -> list:
+    """trajectory.csv, impacts.csv (and trajectory.png) with the writers of
+    ``tengfield dynamics``."""
+    from pathlib import Path
+
+    from .dynamics import write_impacts_csv, write_trajectory_csv
+
+    out = Path(out_dir)
+    write_trajectory_csv(result.dynamics, out / "trajectory.csv")
+    write_impacts_csv(result.dynamics, out / "impacts.csv")
+    written = [out / "trajectory.csv", out / "impacts.csv"]
+    if plots:
+        from ..plotting.dynamics import plot_trajectory
+        exc = result.scene.excitation
+        plot_trajectory(result.dynamics, out / "trajectory.png", max_periods=5,
+                        title=f"{exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
+                              f"e = {result.scene.contact.restitution:g}")
+        written.append(out / "trajectory.png")
+    return written
 
 
 def world_if_parallel():
