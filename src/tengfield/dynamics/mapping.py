@@ -81,16 +81,16 @@ def point_regime(setup: _PointSetup, frequency: float, amplitude: float) -> Regi
                     upper_stuck=traj.upper_stuck_between(window_start, t_end))
 
 
-def _row(args):
-    setup, frequencies, amplitude, row = args
+def _chunk(args):
+    """Worker: regimes of a list of (row, column, frequency, amplitude) points."""
+    setup, points = args
     out = []
-    for f in frequencies:
+    for i, j, f, a in points:
         try:
-            reg = point_regime(setup, float(f), float(amplitude))
-            out.append((reg, ""))
+            out.append((i, j, point_regime(setup, float(f), float(a)), ""))
         except DynamicsError as exc:
-            out.append((None, str(exc)))
-    return row, out
+            out.append((i, j, None, str(exc)))
+    return out
 
 
 def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
@@ -120,7 +120,9 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
     jobs = (os.cpu_count() or 1) if jobs is None else int(jobs)
     if jobs < 1:
         raise SceneError(f"--jobs = {jobs}: allowed [1, {os.cpu_count()}]")
-    tasks = [(setup, freqs, a, i) for i, a in enumerate(amps)]
+    points = [(i, j, f, a) for i, a in enumerate(amps) for j, f in enumerate(freqs)]
+    chunk = max(1, min(64, len(points) // (8 * jobs)))
+    tasks = [(setup, points[k:k + chunk]) for k in range(0, len(points), chunk)]
     shape = (amps.size, freqs.size)
     names = np.full(shape, "error", dtype="<U16")
     per = np.zeros(shape, dtype=int)
@@ -132,29 +134,29 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
     from tqdm import tqdm
     bar = tqdm(total=amps.size * freqs.size, unit="pt", desc="regime map", file=sys.stderr,
                disable=not progress or None)
-    point_regime(setup, float(freqs[0]), float(amps[0]))   # compile/load the kernel before forking
+    _chunk((setup, [(0, 0, 1.0, 0.0)]))   # load the compiled kernel once, before forking
 
-    def store(row, results):
-        for j, (reg, msg) in enumerate(results):
+    def store(results):
+        for i, j, reg, msg in results:
             if reg is None:
-                errors[row, j] = msg
+                errors[i, j] = msg
                 continue
-            names[row, j] = reg.name
-            per[row, j] = reg.period
-            gapmax[row, j] = reg.max_gap
-            low[row, j] = reg.lower_contacts_per_period
-            up[row, j] = reg.upper_contacts_per_period
+            names[i, j] = reg.name
+            per[i, j] = reg.period
+            gapmax[i, j] = reg.max_gap
+            low[i, j] = reg.lower_contacts_per_period
+            up[i, j] = reg.upper_contacts_per_period
         bar.update(len(results))
 
     try:
         if jobs == 1 or len(tasks) == 1:
             for task in tasks:
-                store(*_row(task))
+                store(_chunk(task))
         else:
             ctx = mp.get_context("fork")
             with ctx.Pool(min(jobs, len(tasks))) as pool:
-                for row, results in pool.imap_unordered(_row, tasks):
-                    store(row, results)
+                for results in pool.imap_unordered(_chunk, tasks):
+                    store(results)
     finally:
         bar.close()
     return MapResult(freqs, amps, names, per, gapmax, low, up, errors.astype(str))
