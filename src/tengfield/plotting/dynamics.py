@@ -49,12 +49,12 @@ def plot_trajectory(result, path, *, title: str | None = None, max_periods: floa
             lower = imp.plate[sel] == "lower"
             upper = ~lower
             ti = imp.time[sel]
-            ax1.plot(ti[lower], (yi[lower] + zi[lower]) * 1e3, "v", ms=4, color="k",
-                     label="impact, lower")
-            ax1.plot(ti[upper], (yi[upper] + zi[upper]) * 1e3, "^", ms=4, color="#9467bd",
-                     label="impact, upper")
-            ax2.plot(ti[lower], zi[lower] * 1e3, "v", ms=4, color="k")
-            ax2.plot(ti[upper], zi[upper] * 1e3, "^", ms=4, color="#9467bd")
+            for which, marker, colour, label in ((lower, "v", "k", "impact, lower"),
+                                                 (upper, "^", "#9467bd", "impact, upper")):
+                if np.any(which):
+                    ax1.plot(ti[which], (yi[which] + zi[which]) * 1e3, marker, ms=4,
+                             color=colour, label=label)
+                    ax2.plot(ti[which], zi[which] * 1e3, marker, ms=4, color=colour)
     ax1.set_ylabel("position [mm]")
     ax2.set_ylabel("gap $z$ [mm]")
     ax2.set_xlabel("time [s]")
