@@ -73,7 +73,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
     "contact": {
         "model": ("model", str, "impact", None, _choice("impact", "soft")),
-        "restitution": ("restitution", float, 0.6, 1.0, _rng(0.0, 1.0)),
+        "restitution": ("restitution", float, 0.1, 1.0, _rng(0.0, 1.0)),
         "restitution_model": ("restitution_model", str, "constant", None,
                               _choice("constant", "power-law")),
         "restitution_reference_speed_m_per_s": ("restitution_reference_speed", float, 0.1, 1.0, _POS),
