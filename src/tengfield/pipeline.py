@@ -69,15 +69,6 @@ def steady_window(times, scene) -> tuple[np.ndarray, str]:
     return mask, f"t >= {start:g} s (after settle_periods = {scene.run.settle_periods} periods)"
 
 
-def mean_over(times, values, mask) -> float:
-    """Time average of ``values`` over the masked samples (trapezoidal rule)."""
-    t = np.asarray(times, dtype=float)[mask]
-    v = np.asarray(values, dtype=float)[mask]
-    if t.size < 2 or t[-1] <= t[0]:
-        return float(np.mean(v)) if v.size else 0.0
-    return float(np.trapz(v, t) / (t[-1] - t[0]))
-
-
 # ---------------------------------------------------------------------------
 # the load ODE along a trajectory with impacts
 def _impact_times(dynamics, t0: float, t1: float) -> np.ndarray:

@@ -36,8 +36,6 @@ def command_line() -> str:
 
 
 def _run(args) -> int:
-    import numpy as np  # noqa: F401 - cheap; the heavy stacks load inside the stages
-
     from ..pipeline import run, write_outputs
     from ..scene import load_scene
 
