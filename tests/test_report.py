@@ -274,3 +274,10 @@ def test_report_bad_scene_is_a_clear_error(tmp_path):
     proc = _cli(["report", str(bad), "--fast", "-o", str(tmp_path / "out")])
     assert proc.returncode == 2
     assert "tolerance" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_importing_the_report_loads_no_heavy_stack():
+    code = ("import sys, tengfield.report, tengfield.report_output, tengfield.commands.report; "
+            "print(any(m in sys.modules for m in ('dolfinx', 'gmsh', 'pyvista', 'petsc4py')))")
+    proc = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert proc.stdout.strip() == "False", proc.stderr

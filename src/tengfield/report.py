@@ -417,7 +417,7 @@ def _curves(table, scene):
 
 def _trajectory(scene, sample_rate: float | None = None, **contact):
     """Simulate ``scene`` (optionally at another sampling rate / contact model);
-    returns (dynamics, wall time [s])."""
+    returns (dynamics result, wall time [s], the scene that was simulated)."""
     from .dynamics import simulate
 
     changes = {}
