@@ -65,7 +65,7 @@ def main(argv=None) -> int:
     parser.add_argument("--position-mm", type=float, default=1.5)
     parser.add_argument("--sizes-mm", type=float, nargs="+",
                         default=[1.6, 1.1, 0.8, 0.56, 0.4, 0.28, 0.2])
-    parser.add_argument("--sizes-3d-mm", type=float, nargs="+", default=[2.0, 1.4, 1.0])
+    parser.add_argument("--sizes-3d-mm", type=float, nargs="+", default=[2.0, 1.5])
     parser.add_argument("--no-3d", action="store_true")
     args = parser.parse_args(argv)
 

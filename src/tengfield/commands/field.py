@@ -84,7 +84,7 @@ def _axisymmetric(scene, position, reference, out, comm, *, plot: bool):
     the source potential, then write the XDMF and PNG files."""
     from mpi4py import MPI
 
-    from ..field import axisymmetric, output
+    from ..field import _dolfinx, axisymmetric, output  # noqa: F401 - every rank: PETSc init is collective
 
     outcome = None
     if comm.rank == 0:

@@ -343,6 +343,8 @@ def solve_position_axisymmetric(scene, position: float, *, comm, **options) -> P
     """
     from mpi4py import MPI
 
+    from . import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
+
     unknown = set(options) - set(SOLVER_OPTIONS)
     if unknown:
         raise FieldError(f"unknown axisymmetric solver option(s) {sorted(unknown)}; "
