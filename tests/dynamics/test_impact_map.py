@@ -109,3 +109,31 @@ def test_event_bound_raises_clear_error():
         integrate(sine_table(0.0, 2 * math.pi * 20, 0.0), 3e-3,
                   Restitution(0.6, True, 0.1, 0.2), t_start=0.0, t_end=1.0, gap0=1e-3,
                   period=0.05, max_events_per_period=10)
+
+
+def test_power_law_restitution_applied_per_impact():
+    from tengfield.dynamics.impact import Restitution, integrate
+    from tengfield.dynamics.table import sine_table
+    rest = Restitution(0.6, True, 0.1, 0.15)
+    _, imp, _ = integrate(sine_table(0.0, 2 * math.pi * 20, 0.0), 3e-3, rest, t_start=0.0,
+                          t_end=0.5, gap0=2e-3, period=0.05)
+    expected = np.minimum(1.0, 0.6 * (imp[2] / 0.1) ** -0.15)
+    assert len(imp[0]) > 10
+    np.testing.assert_allclose(imp[3] / imp[2], expected, rtol=1e-13)
+
+
+def test_sample_is_exact_free_fall_and_matches_the_sampled_arrays():
+    scene = default_scene().with_values(
+        excitation={"amplitude_mm": 0.0}, initial={"gap_mm": 2.0},
+        run={"duration_s": 1.0, "settle_periods": 1, "sample_rate_hz": 1000.0})
+    res = simulate(scene)
+    t_hit = math.sqrt(2 * 2e-3 / G)
+    assert res.impacts.time[0] == pytest.approx(t_hit, rel=1e-13)
+    t = np.linspace(0.0, t_hit, 7)[:-1]
+    z, v, y = res.sample(t)
+    np.testing.assert_allclose(z, 2e-3 - 0.5 * G * t**2, rtol=0, atol=1e-17)
+    np.testing.assert_allclose(v, -G * t, rtol=0, atol=1e-15)
+    assert np.all(y == 0.0)
+    z_all, v_all, y_all = res.sample(res.t)
+    np.testing.assert_array_equal(z_all, res.gap)
+    np.testing.assert_array_equal(v_all, res.gap_velocity)
