@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from tengfield.dynamics.impact import Restitution
-from tengfield.dynamics.mapping import _PointSetup, point_regime
+from tengfield.dynamics.mapping import PointSetup, point_regime
 from tengfield.dynamics.onset import onset_amplitude, onset_frequency
 
 FIG5A_F = np.array([25, 30, 35, 40, 45, 50, 55, 60, 65, 70], dtype=float)
@@ -43,7 +43,7 @@ def score(e: float, stroke: float = 3e-3) -> dict:
         "f(1.5mm, 0.5mm)": (onset_frequency(1.5e-3, 0.5e-3, rest, stroke), 16.0),
         "A_contact(10Hz)": (onset_amplitude(10.0, stroke, rest, stroke), 4.1e-3),
     }
-    setup = _PointSetup(stroke, rest, 0.0, 0.0, 0.0, 0.0, 300, 100)
+    setup = PointSetup(stroke, rest, 0.0, 0.0, 0.0, 0.0, 300, 100)
     regimes = [point_regime(setup, f, 0.5e-3) for f in FIG5A_F]
     gaps = np.array([r.max_gap for r in regimes])
     irregular = [r.name == "chaos" or r.period >= 3 for f, r in zip(FIG5A_F, regimes) if f >= 45]

@@ -56,7 +56,8 @@ class MapResult:
 
 
 @dataclass(frozen=True)
-class _PointSetup:
+class PointSetup:
+    """Everything but the excitation that a map point needs (SI, from the scene)."""
     stroke: float
     restitution: Restitution
     phase: float
@@ -67,7 +68,7 @@ class _PointSetup:
     settle_periods: int
 
 
-def point_regime(setup: _PointSetup, frequency: float, amplitude: float) -> Regime:
+def point_regime(setup: PointSetup, frequency: float, amplitude: float) -> Regime:
     """Regime of one sine excitation (frequency [Hz], amplitude [m])."""
     period = 1.0 / frequency
     table = sine_table(amplitude, 2.0 * math.pi * frequency, setup.phase)
@@ -114,7 +115,7 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
         raise SceneError(f"map periods = {periods}: allowed [2, inf)")
     settle = scene.run.settle_periods if settle_periods is None else int(settle_periods)
     settle = max(0, min(settle, periods // 2))
-    setup = _PointSetup(scene.device.gap, Restitution.from_contact(scene.contact),
+    setup = PointSetup(scene.device.gap, Restitution.from_contact(scene.contact),
                         scene.excitation.phase, scene.initial.time, scene.initial.gap,
                         scene.initial.velocity, int(periods), settle)
     jobs = (os.cpu_count() or 1) if jobs is None else int(jobs)

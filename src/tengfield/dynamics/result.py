@@ -24,10 +24,6 @@ class Impacts:
     def __len__(self) -> int:
         return int(self.time.size)
 
-    @classmethod
-    def empty(cls) -> "Impacts":
-        return cls(np.zeros(0), np.zeros(0, dtype="<U5"), np.zeros(0), np.zeros(0))
-
 
 @dataclass(frozen=True)
 class Regime:
