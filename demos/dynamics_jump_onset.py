@@ -16,7 +16,6 @@ and compare with the values the paper quotes.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import numpy as np

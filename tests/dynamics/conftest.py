@@ -1,12 +1,10 @@
 import math
 
-import numpy as np
 import pytest
 
-from tengfield.dynamics import _kernel as K
 from tengfield.dynamics.impact import Restitution, integrate
 from tengfield.dynamics.table import sine_table
-from tengfield.scene import G, default_scene
+from tengfield.scene import default_scene
 
 
 def run_sine(amplitude, frequency, *, restitution=0.6, stroke=3e-3, phase=0.0, t_start=0.0,

@@ -8,7 +8,6 @@ from tengfield.dynamics import simulate
 from tengfield.dynamics.impact import Restitution, integrate
 from tengfield.dynamics.table import recorded_table, sine_table
 from tengfield.errors import DynamicsError
-from tengfield.scene import default_scene
 
 
 def _sine_record(signal, f=30.0, amplitude=3e-3, rate=4000.0, duration=0.5):
