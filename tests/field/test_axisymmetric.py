@@ -154,6 +154,15 @@ def test_contact_rule_matches_a_directly_meshed_small_gap(monkeypatch):
     assert "contact_rule" not in direct.info
     assert direct.info["meshed_gap_m"] == pytest.approx(z)
     assert max_relative_difference(rule, direct) < 2e-4
+    assert rule.info["contact_extrapolation_error"] < 1e-3      # PTFE: linear near contact
+
+
+def test_contact_rule_flags_a_nearly_conducting_ball():
+    """εr = 100: the charge varies logarithmically near contact; the extrapolation
+    error estimate must say the result is not within the 1e-3 tolerance."""
+    scene = default_scene().with_values(device={"ball_permittivity": 100.0})
+    res = solve(scene, 0.0)
+    assert res.info["contact_extrapolation_error"] > 1e-2
 
 
 def test_contact_at_both_plates_is_symmetric():

@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from tengfield import terminals
 from tengfield.errors import FieldError, SceneError
 from tengfield.field import check_position, resolve_method, solve_position
-from tengfield.field.geometry_axisymmetric import contact_anchors, layout, minimum_gap
+from tengfield.field.geometry_axisymmetric import (contact_anchors, layout, linear_extrapolation,
+                                                  minimum_gap)
 from tengfield.field.output import open_circuit_potentials, reference_charges
 from tengfield.field.result import PositionResult
 from tengfield.scene import default_scene
@@ -91,11 +92,18 @@ def test_contact_anchors_rule():
     dev = default_scene().device
     g = minimum_gap(dev)
     assert g == pytest.approx(0.002 * dev.plate_spacing)
-    assert contact_anchors(dev, 0.0) == (g, 2 * g)
-    assert contact_anchors(dev, dev.gap) == pytest.approx((dev.gap - g, dev.gap - 2 * g))
+    assert contact_anchors(dev, 0.0) == (g, 2 * g, 4 * g)
+    assert contact_anchors(dev, dev.gap) == pytest.approx((dev.gap - g, dev.gap - 2 * g,
+                                                           dev.gap - 4 * g))
     assert contact_anchors(dev, 1.5e-3) is None
     assert contact_anchors(dev, g) is None
     assert layout(default_scene(), 0.0).effective_gap == pytest.approx(g)
+
+
+def test_linear_extrapolation_is_exact_on_lines():
+    values = [np.array([1.0, -2.0]), np.array([3.0, 0.0])]
+    assert linear_extrapolation(0.0, (1.0, 2.0), values) == pytest.approx([-1.0, -4.0])
+    assert linear_extrapolation(1.5, (1.0, 2.0), values) == pytest.approx([2.0, -1.0])
 
 
 def test_domain_radius_too_small_for_the_table_centre():
