@@ -52,7 +52,8 @@ class PositionResult:
     solve_time:
         Time of the linear algebra only (factorisation + solves) [s].
     info:
-        Free-form provenance (mesh size, far-field treatment, domain radius...).
+        Free-form provenance (mesh size, far-field treatment, domain radius...);
+        keys starting with "_" hold in-memory objects and are left out of JSON.
     """
     position: float
     offset: float
@@ -122,7 +123,7 @@ class PositionResult:
             "wall_time_s": self.wall_time,
             "solve_time_s": self.solve_time,
             "relative_error_estimate": self.relative_error_estimate,
-            "info": _jsonable(self.info),
+            "info": _jsonable({k: v for k, v in self.info.items() if not k.startswith("_")}),
         }
 
     def dumps(self, reference: str = "floating") -> str:
