@@ -217,7 +217,7 @@ def markdown(report: Report, images: dict) -> str:
         lines.append(f"| {rec.target:g} | {field_text} | {rec.sample_rate_hz:g} | {rec.positions} | "
                      f"{rec.predicted_error:.2g} | {errs} | {rec.measured_wall_time_s:.3g} | "
                      f"{'yes' if rec.reached else 'NO'} |" + (f" {rec.note}" if rec.note else ""))
-    lines += ["", "Use them: `tengfield run recommended-1e-3.toml` (this scene with the block "
+    lines += ["", "Use them: `tengfield run recommended-0.001.toml` (this scene with the block "
               "below), or in Python `tengfield.report.recommended_field_settings(tolerance)`.", ""]
     for rec in report.recommendations:
         lines += [f"```toml\n# target {rec.target:g}", "[field]"]
