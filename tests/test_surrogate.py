@@ -5,12 +5,13 @@ import os
 import sys
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pytest
 
 from tengfield import surrogate, terminals
 from tengfield.surrogate import SurrogateError
+
+h5py = surrogate._import_h5py()   # the build that coexists with dolfinx if it is loaded
 
 sys.path.insert(0, str(Path(__file__).parent))
 import test_pipeline_fixtures as fx  # noqa: E402

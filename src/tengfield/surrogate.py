@@ -36,10 +36,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-# h5py before anything loads dolfinx: the venv's h5py wheel bundles its own HDF5,
-# and imported after dolfinx (which loads the system HDF5 globally) it fails with
-# "Not a datatype". Importing it here, at module level, fixes the order.
-import h5py
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -416,6 +412,51 @@ def provenance(scene, command_line: str = "") -> dict:
 
 # ---------------------------------------------------------------------------
 # HDF5 file
+def _system_hdf5_loaded() -> bool:
+    """True if a system libhdf5 (not one bundled with an h5py wheel) is mapped
+    into this process (dolfinx and PETSc load it globally)."""
+    try:
+        maps = Path("/proc/self/maps").read_text()
+    except OSError:
+        return False
+    return any("libhdf5" in line and "h5py" not in line for line in maps.splitlines())
+
+
+def _import_h5py():
+    """``h5py``, choosing a build that can live with the HDF5 already loaded.
+
+    A pip wheel of h5py bundles its own HDF5. Imported *after* dolfinx has
+    loaded the system HDF5 with global symbols, the wheel fails ("Not a
+    datatype") and leaves the process unusable. Then this imports a
+    distribution build of h5py (one without a bundled ``h5py.libs``, e.g.
+    Debian's python3-h5py, linked to the system HDF5) from further down
+    ``sys.path``. Imported before dolfinx, the wheel works and is used.
+    """
+    if "h5py" in sys.modules or not _system_hdf5_loaded():
+        import h5py
+        return h5py
+    import importlib.util
+
+    for entry in sys.path:
+        root = Path(entry or ".")
+        if (root / "h5py" / "__init__.py").is_file() and not (root / "h5py.libs").exists():
+            spec = importlib.util.spec_from_file_location(
+                "h5py", root / "h5py" / "__init__.py",
+                submodule_search_locations=[str(root / "h5py")])
+            module = importlib.util.module_from_spec(spec)
+            sys.modules["h5py"] = module
+            try:
+                spec.loader.exec_module(module)
+            except BaseException:
+                del sys.modules["h5py"]
+                raise
+            return module
+    raise SurrogateError(
+        "h5py cannot be imported after dolfinx in this environment: the installed h5py "
+        "wheel bundles its own HDF5; install the distribution's h5py (python3-h5py) or "
+        "import tengfield.surrogate before dolfinx")
+
+
 _ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
            "induced_charge": "induced_charge_C", "dofs": "dofs", "cells": "cells",
            "wall_time": "wall_time_s", "solve_time": "solve_time_s",
@@ -424,6 +465,7 @@ _ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
 
 def write_table(path: str | Path, table: SurrogateTable) -> Path:
     """Write ``table`` to HDF5 atomically (temporary file + ``os.replace``)."""
+    h5py = _import_h5py()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -447,6 +489,7 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
             f.attrs["provenance"] = json.dumps(table.provenance, default=str)
             f.attrs["scene_text"] = table.provenance.get("scene_text", "")
             f.attrs["command_line"] = table.provenance.get("command_line", "")
+            f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
             f.flush()
             f.attrs["complete"] = True
         os.replace(tmp, path)
@@ -461,6 +504,7 @@ def read_table(path: str | Path, expected_hash: str | None = None,
     """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
     readable and (if given) made for ``expected_hash`` by the solver with
     fingerprint ``expected_solver`` (:func:`solver_fingerprint`)."""
+    h5py = _import_h5py()
     path = Path(path)
     if not path.is_file():
         raise SurrogateError(f"surrogate file {str(path)!r} does not exist")
