@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
 from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
@@ -456,7 +457,8 @@ def sweep(scene, table: SurrogateTable, frequencies, amplitudes, loads=(), *,
             scene.with_values(excitation={"frequency_hz": float(f), "amplitude_mm": float(a) * 1e3})
     tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
-    bar = tqdm(total=len(tasks), desc="sweep", unit="point", disable=not progress)
+    bar = tqdm(total=len(tasks), desc="sweep", unit="point", file=sys.stderr,
+               disable=not (progress and sys.stderr.isatty()))
     rows: list[dict] = []
     if jobs == 1:
         for task in tasks:

@@ -98,9 +98,11 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
         for f in freqs:
             for amp in amps:
                 pts = sorted((r["load_ohm"], r["P_mean_W"]) for r in rows
-                             if r["frequency_hz"] == f and r["amplitude_mm"] == amp)
-                ax.loglog([p[0] for p in pts], [max(p[1], 1e-30) * 1e6 for p in pts], "o-", ms=3,
-                          label=f"{f:g} Hz, {amp:g} mm")
+                             if r["frequency_hz"] == f and r["amplitude_mm"] == amp
+                             and r["P_mean_W"] > 0)   # a ball at rest delivers nothing
+                if pts:
+                    ax.loglog([p[0] for p in pts], [p[1] * 1e6 for p in pts], "o-", ms=3,
+                              label=f"{f:g} Hz, {amp:g} mm")
         ax.set_xlabel("load [Ω]")
         ax.set_ylabel("mean power [µW]")
         ax.grid(alpha=0.3, which="both")
