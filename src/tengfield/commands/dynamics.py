@@ -18,22 +18,27 @@ def register(sub) -> None:
                        description="Writes trajectory.csv, impacts.csv, summary.json and "
                                    "trajectory.png to DIR.")
     p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    p.add_argument("-o", "--output", default="dynamics-out", help="output directory")
+    p.add_argument("-o", "--output", default="dynamics-out", metavar="DIR",
+                   help="output directory (default dynamics-out)")
     p.add_argument("--duration-s", type=float, default=None,
-                   help="override [run] duration_s")
+                   help="simulated time [s] (default: [run] duration_s)")
     p.set_defaults(func=_run_dynamics)
 
     m = sub.add_parser("map", help="regime map over frequency x amplitude",
                        description="Writes map.csv and map.png to DIR. Ranges are START:STOP:N "
                                    "(N evenly spaced values, both ends included).")
     m.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    m.add_argument("--frequency-hz", required=True, metavar="START:STOP:N")
-    m.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N")
+    m.add_argument("--frequency-hz", required=True, metavar="START:STOP:N",
+                   help="table frequencies [Hz], e.g. 5:70:100")
+    m.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N",
+                   help="table amplitudes [mm], e.g. 0.1:5:100 (a negative START needs "
+                        "--amplitude-mm=START:STOP:N)")
     m.add_argument("--periods", type=int, default=200,
                    help="excitation periods simulated per point (default 200)")
     m.add_argument("--jobs", "-j", type=int, default=None,
                    help="worker processes (default: all cores)")
-    m.add_argument("-o", "--output", default="map-out", help="output directory")
+    m.add_argument("-o", "--output", default="map-out", metavar="DIR",
+                   help="output directory (default map-out)")
     m.set_defaults(func=_run_map)
 
 
