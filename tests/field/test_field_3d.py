@@ -187,3 +187,11 @@ def test_grounded_table_is_refused_by_the_3d_path():
     scene = default_scene().with_values(field={"environment": "grounded-table"})
     with pytest.raises(FieldError, match="environment"):
         solver3d.solve_position_3d(scene, 1e-3, comm=MPI.COMM_SELF)
+
+
+def test_potentials_xdmf_is_written(tmp_path):
+    sol = solve(PAPER, 1.0, 0.5, 0.0)
+    solver3d.write_potentials_xdmf(tmp_path / "psi.xdmf", sol)
+    text = (tmp_path / "psi.xdmf").read_text()
+    assert "psi_lower" in text and "psi_upper" in text
+    assert (tmp_path / "psi.h5").stat().st_size > 0

@@ -305,9 +305,22 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
     gmsh.model.mesh.generate(3)
     if settings.order == 2:
         gmsh.model.mesh.setOrder(2)
+        _untangle_curved_elements()
     return {"groups": groups, "ball_centre": centre,
             "meshed_gap": meshed_gap(cell, position),
             "meshed_offset": float(math.hypot(centre[0], centre[1]))}
+
+
+def _untangle_curved_elements() -> None:
+    """Curving a second-order mesh onto the sphere can invert a few thin tets
+    (negative Jacobian); gmsh's high-order optimiser fixes those locally."""
+    import gmsh
+
+    _, tags, _ = gmsh.model.mesh.getElements(3)
+    quality = np.concatenate([gmsh.model.mesh.getElementQualities(t, "minSJ") for t in tags])
+    if quality.min() <= 0.0:
+        gmsh.option.setNumber("Mesh.HighOrderOptimize", 2)
+        gmsh.model.mesh.optimize("HighOrder")
 
 
 def _hexagon(occ, apothem: float, z: float) -> int:
@@ -322,6 +335,24 @@ def _hexagon(occ, apothem: float, z: float) -> int:
 def _hex_prism(occ, apothem: float, z0: float, height: float) -> int:
     out = occ.extrude([(2, _hexagon(occ, apothem, z0))], 0, 0, height)
     return next(tag for dim, tag in out if dim == 3)
+
+
+def _lateral_gap(cell, centre):
+    """(gap [m], midpoint [m]) between an off-axis ball and the tube wall it
+    approaches, or None for an on-axis ball or a cell without walls."""
+    offset = math.hypot(centre[0], centre[1])
+    if offset == 0.0 or cell.wall_permittivity == 1.0:
+        return None
+    direction = np.array([centre[0], centre[1]]) / offset
+    if isinstance(cell, CylindricalCell):
+        wall = cell.tube_inner_radius
+    else:  # distance to the hexagon's boundary along the offset direction
+        normals = [(0.0, 1.0), (math.cos(math.pi / 6), 0.5), (-math.cos(math.pi / 6), 0.5)]
+        wall = cell.inner_apothem / max(abs(direction @ np.array(n)) for n in normals)
+    radius = 0.5 * cell.ball_diameter
+    gap = wall - offset - radius
+    mid = offset + radius + 0.5 * gap
+    return gap, (float(mid * direction[0]), float(mid * direction[1]), float(centre[2]))
 
 
 def _rim_distance(cell) -> str:
@@ -374,6 +405,15 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
         s_min = min(max(0.5 * gap, 0.02 * h), settings.ball_factor * h)
         z_mid = 0.5 * (z_pole + z_plane)
         expr = f"{s_min!r} + 0.35*sqrt((x-({x0!r}))^2+(y-({y0!r}))^2+(z-({z_mid!r}))^2)"
+        gap_field = fld.add("MathEval")
+        fld.setString(gap_field, "F", expr)
+        fields.append(gap_field)
+    lateral = _lateral_gap(cell, centre)
+    if lateral is not None and lateral[0] < settings.ball_factor * h:
+        gap, mid = lateral
+        s_min = max(0.5 * gap, 0.02 * h)
+        expr = (f"{s_min!r} + 0.35*sqrt((x-({mid[0]!r}))^2+(y-({mid[1]!r}))^2"
+                f"+(z-({mid[2]!r}))^2)")
         gap_field = fld.add("MathEval")
         fld.setString(gap_field, "F", expr)
         fields.append(gap_field)

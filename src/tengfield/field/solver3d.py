@@ -536,3 +536,17 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
                          surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
                          keep_solution=keep_solution)
+
+
+def write_potentials_xdmf(path, solution: CellSolution) -> None:
+    """Write the mesh and ψ_lower, ψ_upper (dimensionless, the potentials [V] for
+    1 V on that electrode) to an XDMF file for ParaView (collective on the mesh's
+    communicator; the FE degree equals the mesh order). Volume tags are left out:
+    dolfinx 0.5.2 cannot write meshtags of a second-order mesh."""
+    from dolfinx.io import XDMFFile
+
+    mesh = solution.cell_mesh.mesh
+    with XDMFFile(mesh.comm, str(path), "w") as xdmf:
+        xdmf.write_mesh(mesh)
+        xdmf.write_function(solution.potentials.lower)
+        xdmf.write_function(solution.potentials.upper)
