@@ -71,17 +71,22 @@ def _synthetic_rows():
     ]
 
 
-def test_recommend_gives_each_part_a_third_of_the_target():
+def test_recommend_picks_the_cheapest_combination_within_the_target():
     rows = _synthetic_rows()
     loose = report.recommend(rows, 1e-2)
     assert loose.field["degree"] == 2 and loose.field["mesh_size_mm"] == 1.0
     assert loose.sample_rate_hz == 20000.0
-    assert loose.positions == 17
-    assert loose.predicted_error <= 1e-2
+    assert loose.positions == 17            # 9 positions cannot come out of the adaptive surrogate
+    assert loose.predicted_error == pytest.approx(2e-3 + 8e-4 + 2e-3)
+    assert loose.predicted_cost_s == pytest.approx(2.0 / 3 * 9 + 0.02)
     strict = report.recommend(rows, 1e-3)
+    # 0.5 mm + 17 positions + 80 kHz (9.5e-4) is cheaper than 0.5 mm + 33 positions
     assert strict.field["mesh_size_mm"] == 0.5 and strict.sample_rate_hz == 80000.0
-    assert strict.positions == 33 and strict.predicted_error <= 1e-3
+    assert strict.positions == 17 and strict.predicted_error <= 1e-3
     assert strict.note == ""
+    tighter = report.recommend(rows, 3e-4)
+    assert tighter.positions == 33 and tighter.predicted_error <= 3e-4
+    assert tighter.field["tolerance"] < 4e-3       # forces the refinement beyond 17 positions
 
 
 def test_surrogate_tolerance_forces_enough_positions():
@@ -96,8 +101,9 @@ def test_surrogate_tolerance_forces_enough_positions():
 def test_recommend_falls_back_and_says_so():
     rows = _synthetic_rows()
     rec = report.recommend(rows, 1e-5)
-    assert "no field level" in rec.note and "no surrogate level" in rec.note
-    assert rec.field["mesh_size_mm"] == 0.5
+    assert "no measured combination" in rec.note
+    assert rec.field["mesh_size_mm"] == 0.5 and rec.positions == 33
+    assert rec.sample_rate_hz == 80000.0
 
 
 def test_recommended_field_settings_choose_the_loosest_sufficient_target():

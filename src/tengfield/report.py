@@ -21,7 +21,7 @@ the steady window — against stated references:
   medium and a slow load, against a 16× finer step.
 
 It then picks, for each target (1e-2, 1e-3), the cheapest combination whose
-parts each stay below a third of the target, *runs it* (adaptive surrogate as
+measured errors add up to at most the target, *runs it* (adaptive surrogate as
 ``tengfield run`` builds it, trajectory at the chosen rate) and states the
 error it really reaches against the overall reference (largest surrogate at
 the finest field setting, finest sampling). :func:`recommended_field_settings`
@@ -46,8 +46,10 @@ from .errors import SceneError
 
 QUANTITIES = ("V_oc", "Q_sc", "I_sc")
 TARGETS = (1e-2, 1e-3)
-#: share of a target accuracy given to each of field, surrogate and sampling
+#: the surrogate's ``[field] tolerance`` is at most this share of the target
 BUDGET_SHARE = 1.0 / 3.0
+#: fewest positions the adaptive surrogate ends with (9 initial + 8 held out)
+MIN_ADAPTIVE_POSITIONS = 17
 
 
 # ---------------------------------------------------------------------------
@@ -233,45 +235,56 @@ class Recommendation:
         return {"field": dict(self.field), "run": {"sample_rate_hz": self.sample_rate_hz}}
 
 
-def recommend(rows: list[Row], target: float, *, share: float = BUDGET_SHARE) -> Recommendation:
-    """Cheapest field setting, surrogate tolerance and sampling rate for ``target``.
+def recommend(rows: list[Row], target: float) -> Recommendation:
+    """Cheapest field setting, surrogate size and sampling rate for ``target``.
 
-    Each of the three parts must stay at or below ``share × target`` on the
-    final waveforms (the errors add at worst). Only axisymmetric settings
-    with waveform errors compete (a 3D row has none). Falls back to the most
-    accurate measured level of a part when none reaches its share (``note``).
+    Every combination of a measured axisymmetric field level, a surrogate
+    level and an impact-map sampling level competes; its predicted error is
+    the sum of the three measured errors (they add at worst), its predicted
+    cost the field solves the surrogate needs times the time per solve plus
+    the dynamics. The cheapest combination whose predicted error is at most
+    ``target`` wins. The adaptive surrogate always solves at least
+    ``MIN_ADAPTIVE_POSITIONS``, so smaller levels do not compete. When no
+    combination is predicted to reach the target, the most accurate one is
+    used and ``note`` says so. A 3D row has no waveform errors and does not
+    compete.
     """
-    budget = share * target
-    notes = []
-
-    def pick(candidates, what):
-        best = cheapest(candidates, budget)
-        if best is None:
-            finite = [r for r in candidates if math.isfinite(r.error)]
-            if not finite:
-                raise ValueError(f"no measured {what} rows")
-            best = min(finite, key=lambda r: r.error)
-            notes.append(f"no {what} level reached {budget:.2g}; the most accurate one is used")
-        return best
-
-    field_rows = [r for r in rows if r.stage == "field" and r.knobs.get("method") == "axisymmetric"]
-    field_row = pick(field_rows, "field")
+    field_rows = [r for r in rows if r.stage == "field" and r.knobs.get("method") == "axisymmetric"
+                  and math.isfinite(r.error)]
     surrogate_rows = [r for r in rows if r.stage == "surrogate"]
-    surrogate_row = pick(surrogate_rows, "surrogate")
-    sampling_rows = [r for r in rows if r.stage == "dynamics" and "sample_rate_hz" in r.knobs
-                     and r.knobs.get("model") == "impact"]
-    sampling_row = pick(sampling_rows, "sampling")
-    setting = FieldSetting(**{k: field_row.knobs[k] for k in
+    usable_surrogates = [r for r in surrogate_rows if math.isfinite(r.error)
+                         and int(r.knobs["positions"]) >= MIN_ADAPTIVE_POSITIONS] or \
+        [r for r in surrogate_rows if math.isfinite(r.error)]
+    sampling_rows = [r for r in rows if r.stage == "dynamics" and r.knobs.get("model") == "impact"
+                     and "sample_rate_hz" in r.knobs and math.isfinite(r.error)]
+    if not (field_rows and usable_surrogates and sampling_rows):
+        raise ValueError("recommend needs measured field, surrogate and sampling rows")
+
+    def per_solve(f: Row) -> float:
+        return f.wall_time_s / max(1, f.knobs.get("solves", 1))
+
+    combos = []
+    for f in field_rows:
+        for s in usable_surrogates:
+            for d in sampling_rows:
+                cost = per_solve(f) * solves_needed(int(s.knobs["positions"])) + d.wall_time_s
+                combos.append((f.error + s.error + d.error, cost, f, s, d))
+    feasible = [c for c in combos if c[0] <= target]
+    note = ""
+    if feasible:
+        error, cost, f, s, d = min(feasible, key=lambda c: (c[1], c[0]))
+    else:
+        error, cost, f, s, d = min(combos, key=lambda c: (c[0], c[1]))
+        note = (f"no measured combination is predicted to reach {target:g}; the most accurate "
+                "one is used")
+    setting = FieldSetting(**{k: f.knobs[k] for k in
                               ("method", "degree", "mesh_size_mm", "far_field", "domain_radius_mm")})
-    per_solve = field_row.wall_time_s / max(1, field_row.knobs.get("solves", 1))
-    positions = int(surrogate_row.knobs["positions"])
-    tolerance = surrogate_tolerance(surrogate_rows, positions, budget)
-    block = {**setting.field_block(), "tolerance": float(f"{tolerance:.3g}")}
+    positions = int(s.knobs["positions"])
+    tolerance = surrogate_tolerance(surrogate_rows, positions, BUDGET_SHARE * target)
     return Recommendation(
-        target=target, field=block, sample_rate_hz=float(sampling_row.knobs["sample_rate_hz"]),
-        predicted_error=field_row.error + surrogate_row.error + sampling_row.error,
-        predicted_cost_s=per_solve * solves_needed(positions), positions=positions,
-        note="; ".join(notes))
+        target=target, field={**setting.field_block(), "tolerance": float(f"{tolerance:.3g}")},
+        sample_rate_hz=float(d.knobs["sample_rate_hz"]), predicted_error=error,
+        predicted_cost_s=cost, positions=positions, note=note)
 
 
 def surrogate_tolerance(surrogate_rows: list[Row], positions: int, budget: float) -> float:

@@ -203,10 +203,11 @@ def markdown(report: Report, images: dict) -> str:
                 cells.append(_num(r.error_position))
             lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "## Cheapest settings for a target accuracy", "",
-              "Each part (field discretisation, surrogate tolerance, output sampling) gets a third "
-              "of the target; the combination is then *run* as `tengfield run` builds it "
-              "(adaptive surrogate driven by `[field] tolerance`) and measured against the "
-              "overall reference.", "",
+              "Every combination of a measured field level, surrogate size and sampling rate "
+              "competes; the cheapest one whose errors add up to at most the target is chosen. "
+              "It is then *run* as `tengfield run` builds it (adaptive surrogate driven by "
+              "`[field] tolerance`, which may refine beyond the chosen size) and measured "
+              "against the overall reference.", "",
               "| target | [field] | sample_rate_hz | positions | predicted error | measured error "
               "(V_OC, Q_SC, I_SC) | wall time [s] | reached |", "|---|---|---|---|---|---|---|---|"]
     for rec in report.recommendations:
