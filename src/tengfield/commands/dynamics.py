@@ -31,8 +31,7 @@ def register(sub) -> None:
     m.add_argument("--frequency-hz", required=True, metavar="START:STOP:N",
                    help="table frequencies [Hz], e.g. 5:70:100")
     m.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N",
-                   help="table amplitudes [mm], e.g. 0.1:5:100 (a negative START needs "
-                        "--amplitude-mm=START:STOP:N)")
+                   help="table amplitudes [mm], e.g. 0.1:5:100")
     m.add_argument("--periods", type=int, default=200,
                    help="excitation periods simulated per point (default 200)")
     m.add_argument("--jobs", "-j", type=int, default=None,
