@@ -137,3 +137,19 @@ def test_sample_is_exact_free_fall_and_matches_the_sampled_arrays():
     z_all, v_all, y_all = res.sample(res.t)
     np.testing.assert_array_equal(z_all, res.gap)
     np.testing.assert_array_equal(v_all, res.gap_velocity)
+
+
+def test_chatter_on_moving_table_ends_near_first_order_accumulation_point():
+    # slowly moving table (Gamma = 0.08): |a| = g + y'' changes little during the chatter
+    e, f, amplitude = 0.5, 2.0, 5e-3
+    w = 2 * math.pi * f
+    traj, imp, _ = run_sine(amplitude, f, restitution=e, stroke=5e-3, gap0=0.2e-3, periods=0.4)
+    t1, v1 = imp[0][0], imp[3][0]
+    a1 = G - amplitude * w**2 * math.sin(w * t1)            # g + y''(t1) > 0 presses down
+    zeno = 2 * v1 / (a1 * (1 - e))
+    stuck = np.flatnonzero(traj.seg_mode == K.STUCK_LOWER)
+    t_stick = traj.seg_t[stuck[0]]
+    jerk = amplitude * w**3
+    # first order in the change of |a| over the sequence: error <~ jerk zeno^2 / |a|
+    assert abs(t_stick - (t1 + zeno)) <= 2 * jerk * zeno**2 / a1
+    assert abs(t_stick - (t1 + zeno)) > 0.0                # the table motion does matter
