@@ -22,6 +22,8 @@ $(STAMP): pyproject.toml scripts/install-system.sh
 	bash scripts/install-system.sh
 	test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
 	$(PY) -m pip install -q --disable-pip-version-check "numpy<2" -e ".[dev]"
+	@# a pip h5py (bundled HDF5) would shadow Debian's, which shares dolfinx's HDF5
+	$(PY) -m pip uninstall -y -q h5py 2>/dev/null || true
 	touch $(STAMP)
 
 run: setup
