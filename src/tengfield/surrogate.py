@@ -396,7 +396,7 @@ def provenance(scene, command_line: str = "") -> dict:
     versions = {"tengfield": __version__}
     for label, dist in (("dolfinx", "fenics-dolfinx"), ("petsc4py", "petsc4py"),
                         ("gmsh", "gmsh"), ("mpi4py", "mpi4py"), ("numpy", "numpy"),
-                        ("scipy", "scipy"), ("h5py", "h5py")):
+                        ("scipy", "scipy")):   # h5py + HDF5: the file attribute "written_with"
         try:
             versions[label] = importlib.metadata.version(dist)
         except importlib.metadata.PackageNotFoundError:
