@@ -4,7 +4,7 @@
 #   docker build -t tengfield .
 #   docker run --rm -v "$PWD/out:/out" tengfield run -o /out
 #   docker run --rm -v "$PWD/out:/out" --entrypoint mpirun tengfield \
-#       -n 2 tengfield precompute -o /out
+#       -n 2 tengfield precompute          # surrogate into /out/cache
 #
 # docs/container.md has the details; scripts/test-container builds and tests
 # this file with podman on a machine without a Docker daemon.
