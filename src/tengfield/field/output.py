@@ -124,10 +124,16 @@ def render_potential_png(path, disc, phi: np.ndarray, lay, *, title: str,
     n_r = 400  # even: no sample sits exactly on the axis (the seam of the mirrored halves)
     step = 2 * half_w / n_r
     plane = pv.ImageData(dimensions=(n_r, int((z1 - z0) / step), 1), spacing=(step, step, 1.0),
-                         origin=(-half_w + 0.5 * step, z0, 0.0))
+                         origin=(-half_w + 0.5 * step, z0 + 0.5 * step, 0.0))
     sampled = plane.sample(full)
-    sampled = sampled.compute_derivative(scalars="phi", gradient="grad")
-    lim = float(np.max(np.abs(sampled.point_data["phi"])))
+    shape = (sampled.dimensions[1], sampled.dimensions[0])
+    phi_grid = np.asarray(sampled.point_data["phi"], dtype=float).copy()
+    valid = (np.asarray(sampled.point_data["vtkValidPointMask"]).astype(bool)
+             & np.isfinite(phi_grid))
+    phi_grid[~valid] = np.nan            # outside the mesh (below a grounded table)
+    sampled.point_data["phi"] = phi_grid
+    lim = float(np.nanmax(np.abs(phi_grid))) or 1.0
+    grad_z, grad_r = np.gradient(np.nan_to_num(phi_grid).reshape(shape), step)
 
     plotter = pv.Plotter(off_screen=True, window_size=window_size)
     plotter.set_background("white")
@@ -135,43 +141,52 @@ def render_potential_png(path, disc, phi: np.ndarray, lay, *, title: str,
                height=0.7, width=0.05, title_font_size=24, label_font_size=20, fmt="%.0f",
                color="black", n_labels=5)
     plotter.add_mesh(sampled, scalars="phi", cmap="RdBu_r", clim=(-lim, lim),
-                     scalar_bar_args=bar, show_edges=False)
+                     scalar_bar_args=bar, show_edges=False, nan_opacity=0.0)
     contours = sampled.contour(isosurfaces=np.linspace(-lim, lim, 25)[1:-1], scalars="phi")
     if contours.n_points:
         plotter.add_mesh(contours, color="black", line_width=1.0, opacity=0.35)
     rb, zb = lay.ball_radius * mm, lay.ball_centre_z * mm
-    shape = (sampled.dimensions[1], sampled.dimensions[0])
-    grad = sampled.point_data["grad"]
     xs = -half_w + 0.5 * step + step * np.arange(shape[1])
-    ys = z0 + step * np.arange(shape[0])
+    ys = z0 + 0.5 * step + step * np.arange(shape[0])
+    valid_grid = valid.reshape(shape)
     angles = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False) + np.pi / 32
     seeds = np.column_stack([1.03 * rb * np.sin(angles), zb + 1.03 * rb * np.cos(angles)])
-    lines = trace_field_lines(-grad[:, 0].reshape(shape), -grad[:, 1].reshape(shape), xs, ys,
-                              seeds, step_length=0.4 * step, max_steps=3000,
+
+    def outside_mesh(p):
+        i = np.clip(np.rint((p[:, 1] - ys[0]) / step).astype(int), 0, shape[0] - 1)
+        j = np.clip(np.rint((p[:, 0] - xs[0]) / step).astype(int), 0, shape[1] - 1)
+        return ~valid_grid[i, j]
+
+    lines = trace_field_lines(-grad_r, -grad_z, xs, ys, seeds, step_length=0.4 * step,
+                              max_steps=3000,
                               stop=lambda p: (np.hypot(p[:, 0], p[:, 1] - zb) < rb)
                               | ((np.abs(np.abs(p[:, 1]) - zu) < 0.5 * step)
-                                 & (np.abs(p[:, 0]) <= a)))
+                                 & (np.abs(p[:, 0]) <= a))
+                              | outside_mesh(p))
     for line in lines:
-        if len(line) > 3:
-            poly = pv.lines_from_points(np.column_stack([line, np.full(len(line), 0.02)]))
-            plotter.add_mesh(poly, color="#202020", line_width=1.8)
+        if len(line) > 3 and np.all(np.isfinite(line)) and \
+                np.linalg.norm(line[int(0.3 * len(line)) + 1] - line[int(0.3 * len(line)) - 1]) > 0:
+            poly = pv.lines_from_points(np.column_stack([line, np.full(len(line), 0.04)]))
+            plotter.add_mesh(poly, color="#202020", line_width=2.5, render_lines_as_tubes=True)
             mid = int(0.3 * len(line))
             direction = line[mid + 1] - line[mid - 1]
-            arrow = pv.Arrow(start=(*line[mid], 0.03), direction=(*direction, 0.0), scale=0.45,
+            arrow = pv.Arrow(start=(*line[mid], 0.06), direction=(*direction, 0.0), scale=0.45,
                              tip_length=0.5, tip_radius=0.25, shaft_radius=0.0)
             plotter.add_mesh(arrow, color="#202020")
     circle = pv.Circle(radius=rb, resolution=200)
     circle.points[:, 1] += zb
-    plotter.add_mesh(circle.extract_feature_edges(), color="black", line_width=3)
+    circle.points[:, 2] = 0.05
+    plotter.add_mesh(circle.extract_feature_edges(), color="black", line_width=4,
+                     render_lines_as_tubes=True)
     for z in (zl, zu):
-        plotter.add_mesh(pv.Line((-a, z, 0.01), (a, z, 0.01)), color="#b87333", line_width=8)
+        plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333", line_width=8)  # copper
     if lay.walls:
         for x0, x1, y0, y1 in ((-ro, ro, zl - t, zl), (-ro, ro, zu, zu + t),
                                (ri, ro, zl, zu), (-ro, -ri, zl, zu)):
-            box = pv.Rectangle([(x0, y0, 0.01), (x1, y0, 0.01), (x1, y1, 0.01)])
+            box = pv.Rectangle([(x0, y0, 0.03), (x1, y0, 0.03), (x1, y1, 0.03)])
             plotter.add_mesh(box.extract_feature_edges(), color="#555555", line_width=2)
     if lay.table:
-        plotter.add_mesh(pv.Line((-half_w, zl - t, 0.01), (half_w, zl - t, 0.01)),
+        plotter.add_mesh(pv.Line((-half_w, zl - t, 0.05), (half_w, zl - t, 0.05)),
                          color="black", line_width=6)
     plotter.add_text(title, position="upper_edge", font_size=14, color="black")
     plotter.show_bounds(xtitle="r (mm)", ytitle="z (mm)", color="black", font_size=14,
