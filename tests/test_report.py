@@ -44,7 +44,8 @@ def test_relative_errors():
 
 def _row(stage, wall, error, **knobs):
     return Row(stage, f"{stage} {wall}", knobs, wall, {"V_oc": error, "Q_sc": error / 2,
-                                                         "I_sc": error / 3}, "test")
+                                                         "I_sc": error / 3}, "test",
+               error_position=2 * error if stage == "field" else math.nan)
 
 
 def test_cheapest_picks_the_least_wall_time_that_is_accurate_enough():
@@ -62,6 +63,9 @@ def _synthetic_rows():
         _row("field", 6.0, 1e-4, degree=2, mesh_size_mm=0.5, **axi),
         _row("field", 0.5, float("nan"), degree=1, mesh_size_mm=2.0,
              **{**axi, "method": "3d"}),
+        _row("field", 1.5, 1e-3, degree=2, mesh_size_mm=1.0,
+             **{**axi, "far_field": "dirichlet"}),          # cheaper, but truncated: never chosen
+        _row("surrogate", 2.0, 2e-2, positions=5, held_out_estimate=1e-1),
         _row("surrogate", 3.0, 5e-3, positions=9, held_out_estimate=4e-3),
         _row("surrogate", 6.0, 8e-4, positions=17, held_out_estimate=2e-4),
         _row("surrogate", 12.0, 1e-4, positions=33, held_out_estimate=1e-5),
@@ -96,6 +100,8 @@ def test_surrogate_tolerance_forces_enough_positions():
     assert report.surrogate_tolerance(rows, 33, 3.3e-4) == pytest.approx(3.3e-4)   # < e(9)
     assert report.surrogate_tolerance(rows, 33, 1e-2) == pytest.approx(2e-3)       # e(9) / 2
     assert report.surrogate_tolerance(rows, 65, 1e-2) == pytest.approx(1e-4)       # e(17) / 2
+    # the 5-level is below the adaptive start (9) and never constrains the tolerance
+    assert report.surrogate_tolerance(rows, 17, 1e-1) == pytest.approx(1e-1)
 
 
 def test_recommend_falls_back_and_says_so():

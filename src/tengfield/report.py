@@ -246,11 +246,16 @@ def recommend(rows: list[Row], target: float) -> Recommendation:
     ``target`` wins. The adaptive surrogate always solves at least
     ``MIN_ADAPTIVE_POSITIONS``, so smaller levels do not compete. When no
     combination is predicted to reach the target, the most accurate one is
-    used and ``note`` says so. A 3D row has no waveform errors and does not
-    compete.
+    used and ``note`` says so. Field levels compete only with the Kelvin far
+    field (exact, and no dearer than the truncated ones) and only if their
+    own C and q error (``error_position``) is within the target. A 3D row
+    has no waveform errors and does not compete.
     """
-    field_rows = [r for r in rows if r.stage == "field" and r.knobs.get("method") == "axisymmetric"
-                  and math.isfinite(r.error)]
+    kelvin = [r for r in rows if r.stage == "field" and r.knobs.get("method") == "axisymmetric"
+              and r.knobs.get("far_field") == "kelvin" and math.isfinite(r.error)]
+    # C and q themselves must be accurate: a truncated far field or a coarse mesh can
+    # hit one scene's peaks by cancellation, which would not carry over to another scene
+    field_rows = [r for r in kelvin if r.error_position <= target] or kelvin
     surrogate_rows = [r for r in rows if r.stage == "surrogate"]
     usable_surrogates = [r for r in surrogate_rows if math.isfinite(r.error)
                          and int(r.knobs["positions"]) >= MIN_ADAPTIVE_POSITIONS] or \
@@ -300,7 +305,9 @@ def surrogate_tolerance(surrogate_rows: list[Row], positions: int, budget: float
     tolerance = budget
     estimates = {int(r.knobs["positions"]): float(r.knobs.get("held_out_estimate", math.nan))
                  for r in surrogate_rows}
-    must_refine = [m for m in estimates if 2 * m - 1 < positions and math.isfinite(estimates[m])]
+    first = (MIN_ADAPTIVE_POSITIONS + 1) // 2          # the adaptive surrogate starts here
+    must_refine = [m for m in estimates if first <= m and 2 * m - 1 < positions
+                   and math.isfinite(estimates[m])]
     if must_refine:
         tolerance = min(tolerance, 0.5 * estimates[max(must_refine)])
     return tolerance
