@@ -272,9 +272,12 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
 def solve_serial(scene, position: float, comm, **options) -> PositionResult:
     """The axisymmetric solve on one process (``comm`` of size 1), with the contact rule.
 
-    A position closer than ``min_gap`` to a plate is extrapolated linearly from
-    the anchor gaps g and 2g of :func:`geometry.contact_anchors`; the same
-    extrapolation from 2g and 4g gives its error, which enters
+    A position closer than ``min_gap`` to a plate is extrapolated from the
+    anchor gaps g, 2g and 4g of :func:`geometry.contact_anchors` by the power
+    law X0 + b δ^p of :func:`geometry.power_law_extrapolation`, p from
+    :func:`geometry.contact_exponent` (the straight line through g and 2g
+    when the data are linear, as for PTFE); its difference from that
+    straight line is the extrapolation error estimate, which enters
     ``relative_error_estimate`` (and ``info['contact_extrapolation_error']``).
     The potentials kept for plots are those at gap g.
     """
@@ -286,12 +289,16 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
     options = {**options, "keep_solution": False}
     solves += [solve_meshed(scene, a, comm, **options) for a in anchors[1:]]
     result = solves[0]
+    plate = 0.0 if anchors[0] < anchors[1] else scene.device.gap
+    exponent = geometry.contact_exponent(
+        [np.concatenate([np.ravel(r.capacitance), r.induced_charge]) for r in solves])
 
     def extrapolate(get):
         values = [get(r) for r in solves]
-        best = geometry.linear_extrapolation(position, anchors[:2], values[:2])
-        check = geometry.linear_extrapolation(position, anchors[1:], values[1:])
-        return best, check
+        best = geometry.power_law_extrapolation(abs(position - plate), abs(anchors[0] - plate),
+                                                values, exponent)
+        line = geometry.linear_extrapolation(position, anchors[:2], values[:2])
+        return best, line
 
     C, C_check = extrapolate(lambda r: r.capacitance)
     q, q_check = extrapolate(lambda r: r.induced_charge)
@@ -306,9 +313,10 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
     result.position = position
     result.solve_time = sum(r.solve_time for r in solves)
     result.wall_time = time.perf_counter() - t0
-    result.info["contact_rule"] = ("linear extrapolation from gaps "
-                                   + ", ".join(f"{a:.6g}" for a in anchors[:2]) + " m")
+    result.info["contact_rule"] = ("power-law extrapolation from gaps "
+                                   + ", ".join(f"{abs(a - plate):.6g}" for a in anchors) + " m")
     result.info["contact_extrapolation_error"] = contact_error
+    result.info["contact_exponent"] = exponent
     return result
 
 

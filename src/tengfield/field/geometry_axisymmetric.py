@@ -135,6 +135,44 @@ def linear_extrapolation(position: float, anchors, values) -> np.ndarray:
     return np.asarray(values[0]) + weight * (np.asarray(values[1]) - np.asarray(values[0]))
 
 
+#: exponents of the near-contact power law X(δ) = X0 + b δ^p
+#: (:func:`contact_exponent`) are clipped to this range
+CONTACT_EXPONENT_RANGE = (0.25, 2.0)
+
+
+def contact_exponent(values) -> float:
+    """Exponent p of the near-contact law ``X(δ) = X0 + b δ^p`` from values at the
+    gaps (g, 2g, 4g): ``p = log2((X(4g) - X(2g)) / (X(2g) - X(g)))`` of the entry
+    that varies most (relative to its size), shared by every entry.
+
+    One exponent describes the local field near contact; fitting it entry by
+    entry would let a weakly varying entry (the far electrode's C) fit mesh
+    noise. p = 1 (a straight line) for a low-permittivity ball such as PTFE; a
+    high-permittivity ball gives p < 1 because its gap capacitance saturates
+    only at gaps ~ R/εr² (0.35 µm for εr = 100), far below g. If the two
+    differences of that entry do not share a sign, p = 1; p is clipped to
+    :data:`CONTACT_EXPONENT_RANGE`.
+    """
+    near, middle, far = (np.ravel(np.asarray(v, dtype=float)) for v in values)
+    first, second = middle - near, far - middle
+    scale = np.where(near != 0.0, np.abs(near), 1.0)
+    k = int(np.argmax(np.abs(first) / scale))
+    if not first[k] * second[k] > 0.0:
+        return 1.0
+    return float(np.clip(np.log2(second[k] / first[k]), *CONTACT_EXPONENT_RANGE))
+
+
+def power_law_extrapolation(distance: float, anchor_gap: float, values,
+                            exponent: float) -> np.ndarray:
+    """Value at plate distance ``distance`` [m] of ``X(δ) = X0 + b δ^p`` through the
+    values at distances (g, 2g, 4g), ``g = anchor_gap`` (arrays of any shape), with
+    ``p = exponent`` (:func:`contact_exponent`); p = 1 is the straight line
+    through the first two anchors."""
+    near, middle = (np.asarray(v, dtype=float) for v in values[:2])
+    u = distance / anchor_gap
+    return near + (middle - near) * (u**exponent - 1.0) / (2.0**exponent - 1.0)
+
+
 def layout(scene, position: float, *, degree: int | None = None, mesh_size: float | None = None,
            domain_radius: float | None = None, far_field: str | None = None,
            environment: str | None = None) -> AxisymmetricLayout:
