@@ -27,7 +27,7 @@ def versions() -> dict[str, str]:
         pass
     try:
         from mpi4py import MPI
-        out["MPI library"] = MPI.Get_library_version().splitlines()[0].strip()
+        out["MPI library"] = MPI.Get_library_version().replace("\x00", "").splitlines()[0].strip()
     except Exception:  # noqa: BLE001
         pass
     return out
