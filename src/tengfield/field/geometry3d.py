@@ -30,6 +30,7 @@ gmsh is imported inside the functions that need it.
 """
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 from dataclasses import dataclass
@@ -298,17 +299,32 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
     _size_fields(cell, centre, settings, ball_surfs,
                  [c for s in lower_surfs + upper_surfs
                   for _, c in gmsh.model.getBoundary([(2, s)], oriented=False)])
-    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-    gmsh.option.setNumber("Mesh.Algorithm3D", 10)
-    gmsh.model.mesh.generate(3)
-    if settings.order == 2:
-        gmsh.model.mesh.setOrder(2)
-        _untangle_curved_elements()
+    with _gmsh_options({"Mesh.MeshSizeFromPoints": 0, "Mesh.MeshSizeFromCurvature": 0,
+                        "Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.Algorithm3D": 10,
+                        "Mesh.HighOrderOptimize": 2}):
+        gmsh.model.mesh.generate(3)
+        if settings.order == 2:
+            gmsh.model.mesh.setOrder(2)
+            _untangle_curved_elements()
     return {"groups": groups, "ball_centre": centre,
             "meshed_gap": meshed_gap(cell, position),
             "meshed_offset": float(math.hypot(centre[0], centre[1]))}
+
+
+@contextlib.contextmanager
+def _gmsh_options(values: dict):
+    """Set gmsh numeric options for a block and restore them after (gmsh options are
+    global: other models in the same process must not inherit ours)."""
+    import gmsh
+
+    saved = {name: gmsh.option.getNumber(name) for name in values}
+    try:
+        for name, value in values.items():
+            gmsh.option.setNumber(name, value)
+        yield
+    finally:
+        for name, value in saved.items():
+            gmsh.option.setNumber(name, value)
 
 
 def _untangle_curved_elements() -> None:
@@ -319,7 +335,6 @@ def _untangle_curved_elements() -> None:
     _, tags, _ = gmsh.model.mesh.getElements(3)
     quality = np.concatenate([gmsh.model.mesh.getElementQualities(t, "minSJ") for t in tags])
     if quality.min() <= 0.0:
-        gmsh.option.setNumber("Mesh.HighOrderOptimize", 2)
         gmsh.model.mesh.optimize("HighOrder")
 
 

@@ -460,7 +460,7 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
     closer than ``g_min`` to an electrode is extrapolated linearly from the
     gaps ``g_min`` and ``2 g_min`` (the contact rule of
     :func:`tengfield.field.geometry3d.contact_anchors`). With
-    ``keep_solution`` the info dict holds ``"solution"``: the
+    ``keep_solution`` the info dict holds ``"_solution"``: the
     :class:`CellSolution` (mesh and ψ functions) of the (first) meshed position.
     """
     start = time.perf_counter()
@@ -505,7 +505,7 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         "mpi_size": comm.size,
     })
     if keep_solution:
-        info["solution"] = fine
+        info["_solution"] = fine
     return PositionResult(
         position=position, offset=offset, capacitance=capacitance,
         induced_charge=fraction * ball_charge, ball_charge=ball_charge,
