@@ -47,3 +47,34 @@ def test_field_command_reports_bad_position_without_traceback(tmp_path):
     assert done.returncode == 2
     assert "position_mm = 3.5 is out of range: allowed [0, 3] mm" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_field_command_3d_on_two_ranks_equals_serial(tmp_path):
+    """``mpirun -n 2 tengfield field --method 3d`` writes field.json and the weighting
+    potentials, with the numbers of the serial run (same gmsh mesh: gmsh runs on rank 0)."""
+    import shutil
+
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed")
+    scene = tmp_path / "coarse3d.toml"
+    scene.write_text("[field]\nmesh_size_mm = 2.0\ndegree = 1\n")
+    args = [str(scene), "--method", "3d", "--position-mm", "1.5", "--offset-mm", "0.2"]
+    serial = run_cli(*args, "-o", str(tmp_path / "serial"), cwd=tmp_path)
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1", "MPLBACKEND": "Agg"}
+    env.pop("OMPI_COMM_WORLD_SIZE", None)
+    parallel = subprocess.run([mpirun, "-n", "2", sys.executable, "-m", "tengfield.cli", "field",
+                               *args, "-o", str(tmp_path / "mpi")],
+                              capture_output=True, text=True, cwd=tmp_path, env=env)
+    assert parallel.returncode == 0, parallel.stderr[-3000:]
+    one = json.loads((tmp_path / "serial" / "field.json").read_text())
+    two = json.loads((tmp_path / "mpi" / "field.json").read_text())
+    assert one["method"] == two["method"] == "3d"
+    for group in ("capacitance_F", "induced_charge_C"):
+        for key, value in one[group].items():
+            assert two[group][key] == pytest.approx(value, rel=1e-8), (group, key)
+    for out in ("serial", "mpi"):
+        assert (tmp_path / out / "potential.xdmf").stat().st_size > 0
+        assert (tmp_path / out / "potential.h5").stat().st_size > 0

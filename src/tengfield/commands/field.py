@@ -59,11 +59,18 @@ def _run(args) -> int:
         result, potentials = _axisymmetric(scene, position, reference, out, comm,
                                            plot=not args.no_plot)
     else:
-        result = solve_position(scene, position, comm=comm, method="3d")
+        from ..field import solver3d
+
+        result = solve_position(scene, position, comm=comm, method="3d",
+                                keep_solution=not args.no_plot)
         potentials = None
-        if comm.rank == 0 and not args.no_plot:
-            print("tengfield: potential.xdmf and field.png are written by the axisymmetric "
-                  "solver only; the 3D run writes field.json", file=sys.stderr)
+        if not args.no_plot:
+            # collective on the mesh's communicator: every rank writes its part
+            solver3d.write_potentials_xdmf(out / "potential.xdmf", result.info.pop("_solution"))
+            if comm.rank == 0:
+                print("tengfield: the 3D run writes the weighting potentials psi_lower, "
+                      "psi_upper to potential.xdmf; field.png (physical potential) is drawn "
+                      "by the axisymmetric solver only", file=sys.stderr)
     if comm.rank == 0:
         from ..field.output import summary_lines
 
@@ -74,8 +81,10 @@ def _run(args) -> int:
         (out / "field.json").write_text(json.dumps(data, indent=2) + "\n")
         for line in summary_lines(result, reference, potentials):
             print(line)
-        print(f"wrote {out / 'field.json'}" + ("" if args.no_plot or method != "axisymmetric"
-                                              else f", {out / 'potential.xdmf'}, {out / 'field.png'}"))
+        written = [out / "field.json"]
+        if not args.no_plot:
+            written += [out / "potential.xdmf"] + ([out / "field.png"] if method == "axisymmetric" else [])
+        print("wrote " + ", ".join(str(w) for w in written))
     return 0
 
 
