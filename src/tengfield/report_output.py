@@ -170,7 +170,7 @@ def markdown(report: Report, images: dict) -> str:
              "Errors are relative errors of the peak-to-peak V_OC, Q_SC and I_SC over the "
              "steady window (`error_max` = the largest of the three); for the circuit, of the "
              "mean load power and the peak-to-peak load voltage. Wall times are measured on this "
-             "machine (shared; see the uptime in the CSV header of your own run).",
+             "machine, which may be shared: they vary with its load.",
              "", "## References", ""]
     for key in ("field", "surrogate", "dynamics", "overall"):
         if key in report.references:
