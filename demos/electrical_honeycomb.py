@@ -77,7 +77,7 @@ def hexagonal_table(cell, scene, cache_dir):
     cached next to tengfield's surrogates under its own name."""
     from tengfield.field.solver3d import Solve3DSettings, solve_cell_3d
     from tengfield.surrogate import (SurrogateError, cache_path, precompute, read_table,
-                                     write_table)
+                                     solver_fingerprint, write_table)
 
     settings = Solve3DSettings(degree=1, mesh_size=1.2e-3, domain_radius=20e-3,
                                far_field="robin", estimate_error=False)
@@ -86,7 +86,8 @@ def hexagonal_table(cell, scene, cache_dir):
     path = cache_path(hex_scene, cache_dir).with_name(
         "honeycomb-hexagonal-" + cache_path(hex_scene, cache_dir).name)
     try:
-        table = read_table(path, expected_hash=hex_scene.field_hash())
+        table = read_table(path, expected_hash=hex_scene.field_hash(),
+                           expected_solver=solver_fingerprint())
         print(f"  hexagonal 3D surrogate: {table.count} positions (cached)", file=sys.stderr)
         return table
     except (SurrogateError, OSError):
