@@ -186,6 +186,16 @@ def test_power_law_contact_extrapolation_is_exact_on_power_laws(exponent):
     assert geometry.contact_exponent(wiggle) == 1.0
 
 
+@pytest.mark.parametrize("exponent", [0.96, 0.987, 1.02])
+def test_contact_exponent_near_one_is_a_straight_line(exponent):
+    """Mesh noise around p = 1 (PTFE: 0.98-1.02) must not put a weak singularity into
+    Q_SC(z) inside the contact layer: such exponents are snapped to exactly 1."""
+    g = 20e-6
+    values = [1.0 + (k * g / g) ** exponent for k in (1, 2, 4)]
+    assert geometry.contact_exponent(values) == 1.0
+    assert geometry.contact_exponent([1.0 + k ** 0.9 for k in (1, 2, 4)]) == pytest.approx(0.9)
+
+
 def test_permittivity_contrast_trends(refinement):
     """A near-conducting ball (εr = 100) touching the lower electrode hands it more of
     its image charge than the PTFE ball does; εr = 100 walls couple the electrodes

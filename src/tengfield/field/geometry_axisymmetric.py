@@ -138,6 +138,11 @@ def linear_extrapolation(position: float, anchors, values) -> np.ndarray:
 #: exponents of the near-contact power law X(δ) = X0 + b δ^p
 #: (:func:`contact_exponent`) are clipped to this range
 CONTACT_EXPONENT_RANGE = (0.25, 2.0)
+#: A fitted exponent this close to 1 is mesh noise around a straight line
+#: (PTFE gives 0.98-1.02): it is snapped to 1, so Q_SC(z) has no spurious
+#: weak singularity inside the contact layer (which would bias dQ_SC/dz at
+#: contact, hence the peak I_SC, by a few per cent).
+CONTACT_EXPONENT_SNAP = 0.05
 
 
 def contact_exponent(values) -> float:
@@ -151,7 +156,7 @@ def contact_exponent(values) -> float:
     high-permittivity ball gives p < 1 because its gap capacitance saturates
     only at gaps ~ R/εr² (0.35 µm for εr = 100), far below g. If the two
     differences of that entry do not share a sign, p = 1; p is clipped to
-    :data:`CONTACT_EXPONENT_RANGE`.
+    :data:`CONTACT_EXPONENT_RANGE`; within :data:`CONTACT_EXPONENT_SNAP` of 1 it is 1.
     """
     near, middle, far = (np.ravel(np.asarray(v, dtype=float)) for v in values)
     first, second = middle - near, far - middle
@@ -159,7 +164,8 @@ def contact_exponent(values) -> float:
     k = int(np.argmax(np.abs(first) / scale))
     if not first[k] * second[k] > 0.0:
         return 1.0
-    return float(np.clip(np.log2(second[k] / first[k]), *CONTACT_EXPONENT_RANGE))
+    exponent = float(np.clip(np.log2(second[k] / first[k]), *CONTACT_EXPONENT_RANGE))
+    return 1.0 if abs(exponent - 1.0) < CONTACT_EXPONENT_SNAP else exponent
 
 
 def power_law_extrapolation(distance: float, anchor_gap: float, values,
