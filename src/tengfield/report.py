@@ -457,8 +457,17 @@ def _mask(dyn, scene):
 
 
 def _peaks(curves, dyn, scene):
-    """Peak-to-peak values over the sampled steady window (what ``tengfield run`` reports)."""
-    return waveform_peaks(curves, dyn.gap, dyn.gap_velocity, _mask(dyn, scene))
+    """Peak-to-peak values exactly as ``tengfield run`` reports them
+    (:func:`tengfield.pipeline.terminal_peak_to_peak`: the samples of the steady
+    window and the impact instants)."""
+    from .pipeline import terminal_peak_to_peak, terminal_waveforms
+
+    wf = terminal_waveforms(curves, dyn.gap, dyn.gap_velocity, cells=scene.device.cells,
+                            parallel_capacitance=scene.circuit.parallel_capacitance)
+    waveforms = {"time_s": np.asarray(dyn.t), "V_oc_V": wf["V_oc"], "Q_sc_C": wf["Q_sc"],
+                 "I_sc_A": wf["I_sc"]}
+    peaks = terminal_peak_to_peak(scene, dyn, curves, waveforms)
+    return {"V_oc": peaks["V_oc_V"], "Q_sc": peaks["Q_sc_C"], "I_sc": peaks["I_sc_A"]}
 
 
 def impact_instants(dyn, start: float, end: float) -> np.ndarray:

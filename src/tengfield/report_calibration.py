@@ -7,8 +7,9 @@ built with these ``[field]`` keys and the dynamics sampled at
 peak-to-peak V_OC, Q_SC, I_SC) against the full report's reference
 (65 positions at degree 2 / 0.25 mm, impact instants included).
 
-Measured by the full report of 2026-11-22 03:56 (idle machine, 114 s), after
-the contact rule snapped near-1 exponents to 1 (PTFE). Regenerate by copying ``DIR/report.json →
+Measured by the full report of 2026-11-22 04:10 (idle machine, 116 s), after
+the contact rule snapped near-1 exponents to 1 (PTFE) and with the peaks taken
+as `tengfield run` reports them (samples and impact instants). Regenerate by copying ``DIR/report.json →
 recommendations`` (target, field, sample_rate_hz, measured_error, positions)
 of a full ``tengfield report -o DIR`` here.
 """
@@ -18,9 +19,9 @@ DEFAULT_RECOMMENDATIONS = [
     {"target": 0.01,
      "field": {"method": "axisymmetric", "degree": 2, "mesh_size_mm": 1.0, "far_field": "kelvin",
                "domain_radius_mm": 20.0, "tolerance": 0.00333},
-     "sample_rate_hz": 20000.0, "measured_error": 0.00237, "positions": 17},
+     "sample_rate_hz": 5000.0, "measured_error": 0.00192, "positions": 17},
     {"target": 0.001,
      "field": {"method": "axisymmetric", "degree": 2, "mesh_size_mm": 0.5, "far_field": "kelvin",
                "domain_radius_mm": 20.0, "tolerance": 2.24e-05},
-     "sample_rate_hz": 80000.0, "measured_error": 0.000307, "positions": 65},
+     "sample_rate_hz": 5000.0, "measured_error": 0.000228, "positions": 65},
 ]
