@@ -7,7 +7,7 @@ built with these ``[field]`` keys and the dynamics sampled at
 peak-to-peak V_OC, Q_SC, I_SC) against the full report's reference
 (65 positions at degree 2 / 0.25 mm, impact instants included).
 
-Measured by the full report of 2026-11-22 04:10 (idle machine, 116 s), after
+Measured by the full report of 2026-11-22 04:01 (idle machine, 116 s), after
 the contact rule snapped near-1 exponents to 1 (PTFE) and with the peaks taken
 as `tengfield run` reports them (samples and impact instants). Regenerate by copying ``DIR/report.json →
 recommendations`` (target, field, sample_rate_hz, measured_error, positions)
