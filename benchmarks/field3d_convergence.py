@@ -23,7 +23,6 @@ import subprocess
 import time
 from pathlib import Path
 
-import numpy as np
 
 
 def run(out: Path, quick: bool, full: bool = False) -> None:

@@ -18,13 +18,14 @@ import json
 import math
 import sys
 import time
-from dataclasses import asdict, dataclass, field, is_dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from . import circuit
+from ._json import jsonable as _jsonable
 from .surrogate import TerminalCurves, SurrogateTable, obtain_table
 
 WAVEFORM_COLUMNS = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m",
@@ -186,26 +187,6 @@ class RunResult:
     dynamics: Any
     table: SurrogateTable | None
     curves: TerminalCurves | None
-
-
-def _jsonable(obj):
-    if is_dataclass(obj) and not isinstance(obj, type):
-        return _jsonable(asdict(obj))
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, (str, int, float, bool)) or obj is None:
-        return obj
-    if hasattr(obj, "__dict__"):
-        return _jsonable({k: v for k, v in vars(obj).items() if not k.startswith("_")})
-    return str(obj)
 
 
 def _default_simulate():

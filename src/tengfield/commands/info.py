@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import importlib
 import platform
-import sys
 
 
 def versions() -> dict[str, str]:

@@ -17,7 +17,7 @@ from ..errors import DynamicsError
 from ..scene import G
 from . import _kernel as K
 from .regime import classify
-from .result import DynamicsResult, Impacts
+from .result import DynamicsResult, Impacts, run_span
 from .table import TableMotion, table_from_scene
 
 #: More events (impacts, lift-offs, releases) per excitation period than this
@@ -118,11 +118,7 @@ def simulate_impact(scene, *, duration: float | None = None) -> DynamicsResult:
     wall0 = _time.perf_counter()
     table = table_from_scene(scene)
     period = scene.excitation.period
-    duration = scene.run.duration if duration is None else float(duration)
-    if not (duration > 0 and math.isfinite(duration)):
-        raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
-    t0 = scene.initial.time
-    t_end = t0 + duration
+    duration, t0, t_end = run_span(scene, duration)
     stroke = scene.device.gap
     traj, (it, ip, ivb, iva), n_events = integrate(
         table, stroke, Restitution.from_contact(scene.contact), t_start=t0, t_end=t_end,

@@ -100,3 +100,16 @@ class DynamicsResult:
             "duration_s": float(self.t[-1] - self.t[0]) if self.t.size else 0.0,
             "wall_time_s": self.wall_time,
         }
+
+def run_span(scene, duration: float | None) -> tuple[float, float, float]:
+    """(duration, start, end) [s] of a run: ``duration`` None means ``[run] duration_s``;
+    the run starts at ``[initial] time_s``."""
+    import math
+
+    from ..errors import DynamicsError
+
+    duration = scene.run.duration if duration is None else float(duration)
+    if not (duration > 0 and math.isfinite(duration)):
+        raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
+    t0 = scene.initial.time
+    return duration, t0, t0 + duration

@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import DynamicsError
 from ..scene import G
 from .regime import classify
-from .result import DynamicsResult, Impacts
+from .result import DynamicsResult, Impacts, run_span
 from .table import TableMotion, table_from_scene
 
 FREE, IN_LOWER, IN_UPPER = 0, 1, 2
@@ -190,11 +190,7 @@ def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
     wall0 = _time.perf_counter()
     table = table_from_scene(scene)
     period = scene.excitation.period
-    duration = scene.run.duration if duration is None else float(duration)
-    if not (duration > 0 and math.isfinite(duration)):
-        raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
-    t0 = scene.initial.time
-    t_end = t0 + duration
+    duration, t0, t_end = run_span(scene, duration)
     if table.kind == 1 and (t0 < table.t_first or t_end > table.t_last):
         raise DynamicsError(
             f"the run [{t0:g}, {t_end:g}] s is outside the recorded excitation "

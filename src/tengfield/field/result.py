@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .. import terminals
+from .._json import jsonable as _jsonable
 
 METHODS = ("axisymmetric", "3d")
 
@@ -130,13 +131,3 @@ class PositionResult:
         return json.dumps(self.to_json(reference), indent=2)
 
 
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    return obj

@@ -351,7 +351,6 @@ def ball_surface_means(cell_mesh: CellMesh, potentials: WeightingPotentials) -> 
 def evaluate_at(function, point, comm=None) -> float:
     """Value of a dolfinx Function at one point [m] (collective over the mesh's communicator)."""
     from dolfinx import geometry
-    from mpi4py import MPI
 
     mesh = function.function_space.mesh
     comm = mesh.comm if comm is None else comm
