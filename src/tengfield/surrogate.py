@@ -412,49 +412,22 @@ def provenance(scene, command_line: str = "") -> dict:
 
 # ---------------------------------------------------------------------------
 # HDF5 file
-def _system_hdf5_loaded() -> bool:
-    """True if a system libhdf5 (not one bundled with an h5py wheel) is mapped
-    into this process (dolfinx and PETSc load it globally)."""
-    try:
-        maps = Path("/proc/self/maps").read_text()
-    except OSError:
-        return False
-    return any("libhdf5" in line and "h5py" not in line for line in maps.splitlines())
-
-
 def _import_h5py():
-    """``h5py``, choosing a build that can live with the HDF5 already loaded.
+    """``h5py``, which must be the distribution's build (Debian's python3-h5py).
 
-    A pip wheel of h5py bundles its own HDF5. Imported *after* dolfinx has
-    loaded the system HDF5 with global symbols, the wheel fails ("Not a
-    datatype") and leaves the process unusable. Then this imports a
-    distribution build of h5py (one without a bundled ``h5py.libs``, e.g.
-    Debian's python3-h5py, linked to the system HDF5) from further down
-    ``sys.path``. Imported before dolfinx, the wheel works and is used.
+    A pip wheel of h5py bundles its own HDF5; imported after dolfinx has loaded
+    the system HDF5 it fails ("Not a datatype") or corrupts files. ``make setup``
+    removes such a wheel from the venv; this names the problem if one is back.
     """
-    if "h5py" in sys.modules or not _system_hdf5_loaded():
-        import h5py
-        return h5py
-    import importlib.util
+    import h5py
 
-    for entry in sys.path:
-        root = Path(entry or ".")
-        if (root / "h5py" / "__init__.py").is_file() and not (root / "h5py.libs").exists():
-            spec = importlib.util.spec_from_file_location(
-                "h5py", root / "h5py" / "__init__.py",
-                submodule_search_locations=[str(root / "h5py")])
-            module = importlib.util.module_from_spec(spec)
-            sys.modules["h5py"] = module
-            try:
-                spec.loader.exec_module(module)
-            except BaseException:
-                del sys.modules["h5py"]
-                raise
-            return module
-    raise SurrogateError(
-        "h5py cannot be imported after dolfinx in this environment: the installed h5py "
-        "wheel bundles its own HDF5; install the distribution's h5py (python3-h5py) or "
-        "import tengfield.surrogate before dolfinx")
+    bundled = Path(h5py.__file__).resolve().parents[1] / "h5py.libs"
+    if bundled.exists() and any(name.startswith("dolfinx") for name in sys.modules):
+        raise SurrogateError(
+            f"the h5py at {Path(h5py.__file__).parent} is a pip wheel with its own HDF5, "
+            "which clashes with the HDF5 dolfinx loads: `pip uninstall h5py` in the venv "
+            "(Debian's python3-h5py is used), e.g. by running `make setup`")
+    return h5py
 
 
 _ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
