@@ -35,7 +35,7 @@ test-serial: setup
 	$(PY) -m pytest -q -p no:cacheprovider tests
 
 test-mpi: setup
-	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
+	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider --color=no -m mpi tests
 
 bench: setup
 	for b in benchmarks/*.py; do $(PY) $$b || exit 1; done
