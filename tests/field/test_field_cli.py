@@ -78,3 +78,5 @@ def test_field_command_3d_on_two_ranks_equals_serial(tmp_path):
     for out in ("serial", "mpi"):
         assert (tmp_path / out / "potential.xdmf").stat().st_size > 0
         assert (tmp_path / out / "potential.h5").stat().st_size > 0
+    png = (tmp_path / "serial" / "field.png").read_bytes()   # serial 3D runs draw the section
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000

@@ -65,12 +65,19 @@ def _run(args) -> int:
                                 keep_solution=not args.no_plot)
         potentials = None
         if not args.no_plot:
+            solution = result.info.pop("_solution")
             # collective on the mesh's communicator: every rank writes its part
-            solver3d.write_potentials_xdmf(out / "potential.xdmf", result.info.pop("_solution"))
-            if comm.rank == 0:
-                print("tengfield: the 3D run writes the weighting potentials psi_lower, "
-                      "psi_upper to potential.xdmf; field.png (physical potential) is drawn "
-                      "by the axisymmetric solver only", file=sys.stderr)
+            solver3d.write_potentials_xdmf(out / "potential.xdmf", solution)
+            if comm.size == 1:
+                from ..field.output import render_weighting_png_3d
+
+                render_weighting_png_3d(
+                    out / "field.png", solution, scene.device,
+                    title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
+                           f"z = {position * 1e3:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
+            elif comm.rank == 0:
+                print("tengfield: field.png of a 3D run is drawn in serial runs only; "
+                      "potential.xdmf holds psi_lower, psi_upper", file=sys.stderr)
     if comm.rank == 0:
         from ..field.output import summary_lines
 
@@ -83,7 +90,9 @@ def _run(args) -> int:
             print(line)
         written = [out / "field.json"]
         if not args.no_plot:
-            written += [out / "potential.xdmf"] + ([out / "field.png"] if method == "axisymmetric" else [])
+            written += [out / "potential.xdmf"]
+            if method == "axisymmetric" or comm.size == 1:
+                written.append(out / "field.png")
         print("wrote " + ", ".join(str(w) for w in written))
     return 0
 

@@ -268,3 +268,64 @@ def summary_lines(result, reference: str, potentials=None) -> list[str]:
                  f"(solve {result.solve_time:.3g} s), relative error estimate = "
                  + ("n/a" if math.isnan(est) else f"{est:.2g}"))
     return lines
+
+
+def render_weighting_png_3d(path, solution, device, *, title: str,
+                            window_size=(1200, 1100)) -> None:
+    """3D runs: the weighting potential ψ_upper (dimensionless: the potential for
+    1 V on the upper electrode, 0 V on the lower one, uncharged ball) on the
+    meridian plane through the axis and the ball centre, with equipotentials,
+    the ball and the electrodes outlined. Serial meshes only (a plot needs the
+    whole mesh on one process)."""
+    import pyvista as pv
+
+    import dolfinx.plot
+
+    psi = solution.potentials.upper
+    topology, cell_types, points = dolfinx.plot.create_vtk_mesh(psi.function_space)
+    grid = pv.UnstructuredGrid(topology, cell_types, points.copy())
+    grid.point_data["psi"] = np.asarray(psi.x.array.real, dtype=float)
+    mm = 1e3
+    centre = np.asarray(solution.cell_mesh.ball_centre, dtype=float)
+    angle = math.atan2(centre[1], centre[0]) if np.hypot(centre[0], centre[1]) > 0 else 0.0
+    normal = (-math.sin(angle), math.cos(angle), 0.0)   # plane holding the axis and the ball centre
+    section = grid.slice(normal=normal, origin=(0.0, 0.0, 0.0))
+    # in-plane coordinates (s along the offset direction, z up), in mm
+    s = section.points[:, 0] * math.cos(angle) + section.points[:, 1] * math.sin(angle)
+    flat = section.copy()
+    flat.points = np.column_stack([s * mm, section.points[:, 2] * mm, np.zeros(len(s))])
+    half_h = 0.5 * device.plate_spacing * mm
+    t, ro = device.plate_thickness * mm, device.tube_outer_radius * mm
+    flat = flat.clip_box((-ro - 2.0, ro + 2.0, -half_h - t - 1.5, half_h + t + 1.5, -1.0, 1.0),
+                         invert=False)
+
+    plotter = pv.Plotter(off_screen=True, window_size=window_size)
+    plotter.set_background("white")
+    bar = dict(title="psi_upper (1)", vertical=True, position_x=0.84, position_y=0.15,
+               height=0.7, width=0.05, title_font_size=22, label_font_size=18, fmt="%.2f",
+               color="black", n_labels=6)
+    plotter.add_mesh(flat, scalars="psi", cmap="viridis", clim=(0.0, 1.0),
+                     scalar_bar_args=bar, show_edges=False)
+    contours = flat.contour(isosurfaces=np.linspace(0.05, 0.95, 19), scalars="psi")
+    if contours.n_points:
+        plotter.add_mesh(contours, color="white", line_width=1.0, opacity=0.6)
+    a = device.electrode_radius * mm
+    for z in (-half_h, half_h):
+        plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333", line_width=6)
+    ri = device.tube_inner_radius * mm
+    for x0, x1, z0, z1 in ((ri, ro, -half_h, half_h), (-ro, -ri, -half_h, half_h),
+                           (-ro, ro, half_h, half_h + t), (-ro, ro, -half_h - t, -half_h)):
+        box = pv.Rectangle([(x0, z0, 0.04), (x1, z0, 0.04), (x1, z1, 0.04)])
+        plotter.add_mesh(box.extract_feature_edges(), color="black", line_width=1.5)
+    s_ball = (centre[0] * math.cos(angle) + centre[1] * math.sin(angle)) * mm
+    ball = pv.Circle(radius=device.ball_radius * mm, resolution=128)
+    ball.points += np.array([s_ball, centre[2] * mm, 0.05])
+    plotter.add_mesh(ball.extract_feature_edges(), color="black", line_width=2.5)
+    plotter.add_text(title, position="upper_edge", font_size=11, color="black")
+    plotter.add_text(f"meridian section through the axis and the ball centre; "
+                     f"plate outer radius {ro:.3g} mm", position="lower_edge", font_size=9,
+                     color="black")
+    plotter.view_xy()
+    plotter.camera.zoom(1.15)
+    plotter.screenshot(str(path))
+    plotter.close()
