@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SceneError
+from ._ranges import parse_range
 
 
 def register(sub) -> None:
@@ -39,31 +40,6 @@ def register(sub) -> None:
     m.add_argument("-o", "--output", default="map-out", metavar="DIR",
                    help="output directory (default map-out)")
     m.set_defaults(func=_run_map)
-
-
-def parse_range(text: str, option: str, *, positive: bool) -> "list[float]":
-    """'START:STOP:N' -> N evenly spaced floats; SceneError naming the option otherwise."""
-    import numpy as np
-
-    parts = text.split(":")
-    if len(parts) != 3:
-        raise SceneError(f"{option} = {text!r}: expected START:STOP:N, e.g. 5:70:66")
-    try:
-        start, stop = float(parts[0]), float(parts[1])
-        n = int(parts[2])
-    except ValueError:
-        raise SceneError(f"{option} = {text!r}: START and STOP must be numbers and N a whole "
-                         "number, e.g. 5:70:66") from None
-    if not (math.isfinite(start) and math.isfinite(stop)):
-        raise SceneError(f"{option} = {text!r}: START and STOP must be finite")
-    if n < 1 or n > 100_000:
-        raise SceneError(f"{option} = {text!r}: N = {n} is out of range: allowed [1, 100000]")
-    low = min(start, stop)
-    if positive and low <= 0:
-        raise SceneError(f"{option} = {text!r}: values must be > 0")
-    if not positive and low < 0:
-        raise SceneError(f"{option} = {text!r}: values must be >= 0")
-    return list(np.linspace(start, stop, n))
 
 
 def _run_dynamics(args) -> int:
@@ -117,8 +93,8 @@ def _run_map(args) -> int:
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
-    freqs = parse_range(args.frequency_hz, "--frequency-hz", positive=True)
-    amps_mm = parse_range(args.amplitude_mm, "--amplitude-mm", positive=False)
+    freqs = list(parse_range(args.frequency_hz, "--frequency-hz"))
+    amps_mm = list(parse_range(args.amplitude_mm, "--amplitude-mm", positive=False))
     if args.periods < 2:
         raise SceneError(f"--periods = {args.periods}: allowed [2, inf)")
     result = regime_map(scene, np.array(freqs), np.array(amps_mm) * 1e-3, jobs=args.jobs,

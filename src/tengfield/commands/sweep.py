@@ -3,39 +3,11 @@ excitations (and loads) with one surrogate (paper Figs. 9e-f, S13)."""
 from __future__ import annotations
 
 import csv
-import math
 import sys
 from pathlib import Path
 
+from ._ranges import parse_range
 from .run import add_cache_argument, command_line
-
-
-def parse_range(text: str, name: str, *, log: bool = False):
-    """``START:STOP:N`` -> N values (linear, or logarithmic with ``log``); ``X`` -> [X]."""
-    import numpy as np
-
-    from ..errors import SceneError
-
-    parts = text.split(":")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        raise SceneError(f"{name} = {text!r}: expected START:STOP:N or one number") from None
-    if len(values) == 1:
-        grid = np.array(values)
-    elif len(values) == 3 and values[2] >= 1 and float(values[2]).is_integer():
-        start, stop, count = values[0], values[1], int(values[2])
-        if log:
-            if start <= 0 or stop <= 0:
-                raise SceneError(f"{name} = {text!r}: a logarithmic range needs START, STOP > 0")
-            grid = np.logspace(math.log10(start), math.log10(stop), count)
-        else:
-            grid = np.linspace(start, stop, count)
-    else:
-        raise SceneError(f"{name} = {text!r}: expected START:STOP:N with N a whole number >= 1")
-    if not np.all(np.isfinite(grid)) or np.any(grid <= 0):
-        raise SceneError(f"{name} = {text!r} is out of range: every value must be > 0")
-    return grid
 
 
 def register(sub) -> None:
