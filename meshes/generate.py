@@ -35,22 +35,18 @@ def generate(out_dir: Path = HERE) -> dict:
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.option.setNumber("Mesh.Binary", 0)
             gmsh.write(str(out_dir / f"{name}.msh"))
-        cell_mesh = solver3d.load_cell_mesh(out_dir / f"{name}.msh", comm=MPI.COMM_SELF,
-                                            ball_centre=meta["ball_centre"])
-        settings = solver3d.Solve3DSettings(degree=1, mesh_size=case.settings.size,
-                                            domain_radius=case.settings.domain_radius,
-                                            far_field="robin", estimate_error=False)
-        sol = solver3d.solve_on_mesh(cell_mesh, solver3d.cell_permittivity(case.cell), settings)
         reference["cases"][name] = {
             "cell": {"type": type(case.cell).__name__, **dataclasses.asdict(case.cell)},
             "position_m": case.position, "offset_m": case.offset,
             "mesh_settings": dataclasses.asdict(case.settings),
             "ball_centre_m": [float(c) for c in meta["ball_centre"]],
             "statistics": stats,
-            "solution_degree1": {"capacitance_F": sol.capacitance.tolist(),
-                                 "induced_fraction": sol.induced_fraction.tolist(),
-                                 "dofs": sol.potentials.dofs},
         }
+        sol = solver3d.solve_reference_mesh(out_dir / f"{name}.msh", reference["cases"][name],
+                                            comm=MPI.COMM_SELF)
+        reference["cases"][name]["solution_degree1"] = {
+            "capacitance_F": sol.capacitance.tolist(),
+            "induced_fraction": sol.induced_fraction.tolist(), "dofs": sol.potentials.dofs}
         print(f"{name}: {stats['nodes']} nodes, C = {sol.capacitance.ravel()[[0, 1, 3]]} F, "
               f"q/q_ball = {sol.induced_fraction}")
     (out_dir / "reference.json").write_text(json.dumps(reference, indent=2) + "\n")

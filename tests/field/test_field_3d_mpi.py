@@ -27,14 +27,7 @@ def test_stored_mesh_on_world_equals_serial_reference(name):
     from tengfield.field import solver3d
 
     case = json.loads((MESHES / "reference.json").read_text())["cases"][name]
-    cell_mesh = solver3d.load_cell_mesh(MESHES / f"{name}.msh", comm=MPI.COMM_WORLD,
-                                        ball_centre=case["ball_centre_m"])
-    settings = solver3d.Solve3DSettings(degree=1, mesh_size=case["mesh_settings"]["size"],
-                                        domain_radius=case["mesh_settings"]["domain_radius"],
-                                        far_field="robin", estimate_error=False)
-    permittivity = {"ball": case["cell"]["ball_permittivity"],
-                    "walls": case["cell"]["wall_permittivity"]}
-    sol = solver3d.solve_on_mesh(cell_mesh, permittivity, settings)
+    sol = solver3d.solve_reference_mesh(MESHES / f"{name}.msh", case, comm=MPI.COMM_WORLD)
     ref = case["solution_degree1"]
     assert sol.potentials.dofs == ref["dofs"]
     np.testing.assert_allclose(sol.capacitance, ref["capacitance_F"], rtol=1e-7)

@@ -6,6 +6,7 @@ and compared (a gmsh or geometry change shows up as a count or measure
 change), the stored ``.msh`` files are checked against the exact geometry,
 and the solver is checked to reproduce the stored numbers on them.
 """
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -60,14 +61,12 @@ def test_stored_mesh_measures_match_the_exact_geometry(name):
 def test_solver_reproduces_the_stored_numbers_on_the_stored_mesh(name):
     from mpi4py import MPI
 
-    case = CASES[name]
     stored = REFERENCE["cases"][name]
-    cell_mesh = solver3d.load_cell_mesh(MESHES / f"{name}.msh", comm=MPI.COMM_SELF,
-                                        ball_centre=stored["ball_centre_m"])
-    settings = solver3d.Solve3DSettings(degree=1, mesh_size=case.settings.size,
-                                        domain_radius=case.settings.domain_radius,
-                                        far_field="robin", estimate_error=False)
-    sol = solver3d.solve_on_mesh(cell_mesh, solver3d.cell_permittivity(case.cell), settings)
+    # the stored case is the one the code defines (settings and permittivities)
+    assert stored["mesh_settings"] == dataclasses.asdict(CASES[name].settings)
+    assert stored["cell"]["ball_permittivity"] == CASES[name].cell.ball_permittivity
+    assert stored["cell"]["wall_permittivity"] == CASES[name].cell.wall_permittivity
+    sol = solver3d.solve_reference_mesh(MESHES / f"{name}.msh", stored, comm=MPI.COMM_SELF)
     ref = stored["solution_degree1"]
     np.testing.assert_allclose(sol.capacitance, ref["capacitance_F"], rtol=1e-7)
     np.testing.assert_allclose(sol.induced_fraction, ref["induced_fraction"], rtol=1e-7)

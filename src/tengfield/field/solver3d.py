@@ -418,6 +418,19 @@ def solve_on_mesh(cell_mesh: CellMesh, permittivity: dict[str, float],
                         cell_mesh=cell_mesh, potentials=potentials)
 
 
+def solve_reference_mesh(path, case: dict, *, comm) -> CellSolution:
+    """Degree-1, Robin, no error estimate: how ``meshes/generate.py`` solves a stored
+    reference mesh ``path`` (``.msh``), from the case's entry in ``meshes/reference.json``
+    (``ball_centre_m``, ``mesh_settings``, ``cell`` permittivities)."""
+    cell_mesh = load_cell_mesh(path, comm=comm, ball_centre=case["ball_centre_m"])
+    settings = Solve3DSettings(degree=1, mesh_size=case["mesh_settings"]["size"],
+                               domain_radius=case["mesh_settings"]["domain_radius"],
+                               far_field="robin", estimate_error=False)
+    cell = case["cell"]
+    return solve_on_mesh(cell_mesh, {"ball": cell["ball_permittivity"],
+                                     "walls": cell["wall_permittivity"]}, settings)
+
+
 def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float = math.nan,
                    meshed_offset: float = math.nan) -> CellMesh:
     """Read a ``.msh`` file written by ``meshes/generate.py`` (named physical groups)
