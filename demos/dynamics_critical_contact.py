@@ -42,7 +42,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
 
     base = default_scene()
-    stroke = base.device.gap
+    stroke = base.device.stroke
     rest = Restitution.from_contact(base.contact)
 
     # --- the onset curve of Fig. 6d ------------------------------------------

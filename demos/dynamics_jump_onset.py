@@ -35,7 +35,7 @@ def main() -> None:
 
     # The device and the restitution of the embedded default scene.
     scene = default_scene()
-    stroke = scene.device.gap
+    stroke = scene.device.stroke
     rest = Restitution.from_contact(scene.contact)
 
     # --- Fig. 4c: onset amplitude vs frequency ------------------------------

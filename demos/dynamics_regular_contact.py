@@ -43,7 +43,7 @@ def main() -> None:
     n_periods = (res.t[-1] - res.window_start) * scene.excitation.frequency
     dt = 1.0 / scene.run.sample_rate
     on_lower = np.count_nonzero(res.gap[steady] == 0.0) * dt / n_periods
-    on_upper = np.count_nonzero(res.gap[steady] == scene.device.gap) * dt / n_periods
+    on_upper = np.count_nonzero(res.gap[steady] == scene.device.stroke) * dt / n_periods
     print(f"restitution e = {scene.contact.restitution:g}; 3 mm, 30 Hz (period 33.3 ms)")
     print("quantity                                   paper              tengfield")
     print(f"regime                                     regular contact    {reg.name} "

@@ -94,7 +94,7 @@ def main() -> None:
     twin.set_ylabel("max gap [mm]", color="0.45")
     ax1.set_title("Fig. 9e: 1.5 mm", fontsize=10)
     mesh = ax2.pcolormesh(freqs_f, amps * 1e3, grid, shading="nearest", cmap="viridis")
-    ax2.contour(freqs_f, amps * 1e3, gap_grid, levels=[1e-6, scene.device.gap * 0.999],
+    ax2.contour(freqs_f, amps * 1e3, gap_grid, levels=[1e-6, scene.device.stroke * 0.999],
                 colors="w", linewidths=0.8)
     fig.colorbar(mesh, ax=ax2, label="V_pp read [V]")
     ax2.set_xlabel("frequency [Hz]")

@@ -164,7 +164,7 @@ def main() -> None:
           f"{table.count} positions")
     print(f"0.5 mm, 33 Hz: regime {regime.name} (period {regime.period}), upper contacts per "
           f"period {regime.upper_contacts_per_period:.2f}, max gap {regime.max_gap * 1e3:.3f} mm "
-          f"of {scene.device.gap * 1e3:g} mm")
+          f"of {scene.device.stroke * 1e3:g} mm")
     print("quantity                                  paper          tengfield")
     print(f"V_OC pp, ideal (sigma = {sigma*1e6:g} uC/m^2)      -              {ideal['V_oc']:.4g} V")
     print(f"Q_SC pp, {n_cells} cells (sigma = {sigma*1e6:g})       -              "

@@ -53,7 +53,7 @@ def main() -> None:
 
     regime = dynamics.regime
     print(f"1.5 mm, 20 Hz: regime {regime.name} (period {regime.period}), max gap "
-          f"{regime.max_gap * 1e3:.2f} mm of {scene.device.gap * 1e3:g} mm; reference "
+          f"{regime.max_gap * 1e3:.2f} mm of {scene.device.stroke * 1e3:g} mm; reference "
           f"{scene.circuit.reference}; {table.count} field positions")
     print("quantity (peak-to-peak)               paper (measured)   tengfield")
     print(f"V_OC, ideal (sigma = {sigma * 1e6:g} uC/m^2)       -                  "

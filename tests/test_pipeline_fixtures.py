@@ -25,7 +25,7 @@ def plate_model(scene, z):
     dev = scene.device
     z = np.asarray(z, dtype=float)
     h = dev.plate_spacing
-    stroke = dev.gap
+    stroke = dev.stroke
     centre = z + dev.ball_radius
     c0 = EPS0 * math.pi * dev.electrode_radius**2 / h
     decay = stroke / 6.0   # the dielectric ball near a plate raises the capacitances
@@ -77,7 +77,7 @@ class FakeDynamics:
     def __init__(self, scene, kind="smooth", duration=None, sample_rate=None):
         self.scene = scene
         self.kind = kind
-        self.stroke = scene.device.gap
+        self.stroke = scene.device.stroke
         self.omega = scene.excitation.omega
         self.period = scene.excitation.period
         duration = scene.run.duration if duration is None else duration

@@ -10,7 +10,7 @@ def test_default_scene_is_the_paper_device():
     s = default_scene()
     d = s.device
     assert d.ball_diameter == pytest.approx(7e-3)
-    assert d.gap == pytest.approx(3e-3)
+    assert d.stroke == pytest.approx(3e-3)
     assert d.plate_spacing == pytest.approx(10e-3)
     assert d.tube_inner_radius == pytest.approx(4e-3)
     assert d.tube_outer_radius == pytest.approx(5.5e-3)

@@ -50,7 +50,7 @@ def test_error_estimate_is_honest(tolerance):
     scene = fx.scene_with(field={"tolerance": tolerance})
     table = model_table(scene, max_positions=257)
     assert table.converged and table.interpolation_error <= tolerance
-    z = np.linspace(0, scene.device.gap, 2001)
+    z = np.linspace(0, scene.device.stroke, 2001)
     for reference in terminals.REFERENCES:
         curves = table.curves(reference)
         q, c_t = model_terminals(scene, z, reference)
@@ -70,11 +70,11 @@ def test_held_out_estimate_is_tight_for_the_set_it_belongs_to():
     table = model_table(scene)
     coarse_count, coarse_estimate = table.error_history[0]
     coarse = model_table(scene.with_values(field={"tolerance": 0.5}))
-    keep = np.isin(coarse.positions, surrogate.lobatto_positions(scene.device.gap, coarse_count))
+    keep = np.isin(coarse.positions, surrogate.lobatto_positions(scene.device.stroke, coarse_count))
     coarse = surrogate.SurrogateTable(**{**coarse.__dict__, **{
         k: getattr(coarse, k)[keep] for k in ("positions", "capacitance", "induced_charge", "dofs",
                                               "cells", "wall_time", "solve_time", "field_error")}})
-    z = np.linspace(0, scene.device.gap, 4001)
+    z = np.linspace(0, scene.device.stroke, 4001)
     true = 0.0
     for reference in terminals.REFERENCES:
         curves = coarse.curves(reference)
@@ -98,7 +98,7 @@ def test_curves_reference_state_and_exact_derivative():
     curves = table.curves("floating")
     assert curves.charge(0.0) == 0.0
     # PTFE (negative) ball rising: Q_SC > 0 and V_OC > 0 (terminals.py convention)
-    z = np.linspace(0.1e-3, scene.device.gap, 50)
+    z = np.linspace(0.1e-3, scene.device.stroke, 50)
     assert np.all(curves.charge(z) > 0) and np.all(curves.voltage(z) > 0)
     # derivative of the spline vs the model's derivative (central difference of the model)
     h = 1e-9
@@ -189,7 +189,7 @@ def test_default_cache_dir_follows_environment(monkeypatch, tmp_path):
 
 def test_mirror_symmetry_halves_the_solves_and_matches_a_full_run():
     scene = fx.scene_with(field={"tolerance": 1e-5})
-    z = np.linspace(0, scene.device.gap, 7)
+    z = np.linspace(0, scene.device.stroke, 7)
     c_ll, c_lu, c_uu, q_l, q_u = fx.plate_model(scene, z)     # the model is symmetric too
     np.testing.assert_allclose(c_ll, c_uu[::-1])
     np.testing.assert_allclose(q_l, q_u[::-1])

@@ -395,7 +395,7 @@ class _Solver:
     def __init__(self, scene, comm, solve=None, progress=None):
         self.scene = scene
         self.comm = comm
-        self.stroke = scene.device.gap
+        self.stroke = scene.device.stroke
         self.symmetric = scene.field.environment == "free-space"
         self.cache: dict = {}
         self._solve = solve
@@ -521,7 +521,7 @@ def field_rows(solver: _Solver, plan: Plan, scene, trajectory, progress=None) ->
                          "dofs": int(np.max(table.dofs))},
                         wall, peak_errors(peaks, ref_peaks), reference, pos_err))
     # 3D: C and q at mid-stroke against the Richardson reference of the axisymmetric solves
-    mid = 0.5 * scene.device.gap
+    mid = 0.5 * scene.device.stroke
     ref_mid = [solver.solve(s, mid) for s in plan.reference_pair]
     ref_C = richardson(ref_mid[0].capacitance, ref_mid[1].capacitance, ratio, 4)
     ref_q = richardson(ref_mid[0].induced_charge, ref_mid[1].induced_charge, ratio, 4)
@@ -548,10 +548,10 @@ def surrogate_rows(solver: _Solver, plan: Plan, scene, trajectory) -> tuple[list
     from .surrogate import held_out_error, lobatto_positions
     for count in plan.surrogate_counts:
         table, wall = solver.table(setting, count)
-        finer = lobatto_positions(scene.device.gap, 2 * count - 1)[1::2]
+        finer = lobatto_positions(scene.device.stroke, 2 * count - 1)[1::2]
         held = solver.table(setting, 2 * count - 1)[0]
-        held_out = held.subset(np.isin(np.round(held.positions / scene.device.gap, 12),
-                                       np.round(finer / scene.device.gap, 12)))
+        held_out = held.subset(np.isin(np.round(held.positions / scene.device.stroke, 12),
+                                       np.round(finer / scene.device.stroke, 12)))
         estimate = held_out_error(table, held_out)
         peaks = _exact_peaks(_curves(table, scene), trajectory, scene)
         rows.append(Row("surrogate", f"{count} positions",

@@ -162,7 +162,7 @@ def markdown(report: Report, images: dict) -> str:
     lines = [f"# tengfield report: error against run time{' (fast mode)' if report.fast else ''}",
              "",
              f"Scene: `{sc.source}` — {sc.excitation.frequency:g} Hz, "
-             f"A = {sc.excitation.amplitude * 1e3:g} mm, Δh = {sc.device.gap * 1e3:g} mm, "
+             f"A = {sc.excitation.amplitude * 1e3:g} mm, Δh = {sc.device.stroke * 1e3:g} mm, "
              f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{sc.circuit.reference}`; "
              f"regime {report.trajectory.get('regime', '?')}. Total wall time "
              f"{report.wall_time_s:.0f} s.",

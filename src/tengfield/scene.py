@@ -50,7 +50,7 @@ _NONNEG = _rng(0.0)
 SCHEMA: dict[str, dict[str, tuple]] = {
     "device": {
         "ball_diameter_mm": ("ball_diameter", float, 7.0, 1e-3, _POS),
-        "gap_mm": ("gap", float, 3.0, 1e-3, _POS),
+        "gap_mm": ("stroke", float, 3.0, 1e-3, _POS),
         "electrode_radius_mm": ("electrode_radius", float, 4.0, 1e-3, _POS),
         "tube_inner_radius_mm": ("tube_inner_radius", float, 4.0, 1e-3, _POS),
         "tube_outer_radius_mm": ("tube_outer_radius", float, 5.5, 1e-3, _POS),
@@ -124,7 +124,7 @@ FIELD_KEYS = {
 class Device:
     """Geometry and materials, SI. The z axis is the tube axis."""
     ball_diameter: float        # [m]
-    gap: float                  # free stroke dh = h - d [m]
+    stroke: float               # free stroke dh = h - d [m] (scene key gap_mm)
     electrode_radius: float     # [m]
     tube_inner_radius: float    # [m]
     tube_outer_radius: float    # [m] (= end-plate radius)
@@ -142,7 +142,7 @@ class Device:
     @property
     def plate_spacing(self) -> float:
         """h = d + dh: distance between the electrode faces [m]."""
-        return self.ball_diameter + self.gap
+        return self.ball_diameter + self.stroke
 
     @property
     def ball_mass(self) -> float:
@@ -414,9 +414,9 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     exc = Excitation(**exc_vals, times=times, values=vals)
 
     ini = Initial(**values["initial"])
-    if ini.gap > dev.gap:
+    if ini.gap > dev.stroke:
         raise SceneError(f"[initial] gap_mm = {ini.gap * 1e3:g} is out of range: "
-                         f"allowed [0, {dev.gap * 1e3:g}] (the free stroke [device] gap_mm)")
+                         f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] gap_mm)")
     run = Run(**values["run"])
     if exc.kind == "sine" and run.settle_periods * exc.period >= run.duration:
         raise SceneError(

@@ -303,7 +303,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     if solve_comm is None:
         from mpi4py import MPI
         solve_comm = MPI.COMM_SELF
-    stroke = scene.device.gap
+    stroke = scene.device.stroke
     tolerance = scene.field.tolerance
     count = int(initial_positions)
     if count < 3 or (count - 1) & (count - 2):

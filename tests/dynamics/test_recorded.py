@@ -42,7 +42,7 @@ def test_recorded_scene_end_to_end_and_out_of_record(tmp_path):
     from tengfield.scene import load_scene
     scene = load_scene(tmp_path / "s.toml")
     res = simulate(scene)
-    assert np.all((res.gap >= 0) & (res.gap <= scene.device.gap))
+    assert np.all((res.gap >= 0) & (res.gap <= scene.device.stroke))
     assert len(res.impacts) > 5
     with pytest.raises(DynamicsError, match="outside the recorded excitation"):
         simulate(scene, duration=2.0)

@@ -33,7 +33,7 @@ def test_map_regimes_match_the_paper_examples():
     assert reg[(30.0, 3.0)] == "regular-contact"
     assert reg[(10.0, 1.0)] == "rest" and reg[(10.0, 0.5)] == "rest"
     i, j = list(m.amplitude).index(3e-3), list(m.frequency).index(30.0)
-    assert m.max_gap[i, j] == scene.device.gap
+    assert m.max_gap[i, j] == scene.device.stroke
     assert m.upper_contacts_per_period[i, j] >= 1.0
     assert len(m.records()) == 12
 
@@ -47,8 +47,8 @@ def test_soft_model_through_simulate():
     assert res.model == "soft" and res.status == 0
     assert set(res.impacts.plate) == {"lower", "upper"}
     # penetration is small: at most the impact speed / sqrt(k / m)
-    speed = 3e-3 * 2 * np.pi * 30 + np.sqrt(2 * G * scene.device.gap)
+    speed = 3e-3 * 2 * np.pi * 30 + np.sqrt(2 * G * scene.device.stroke)
     pen = speed / np.sqrt(1e6 / scene.device.ball_mass)
-    assert res.gap.min() > -pen and res.gap.max() < scene.device.gap + pen
+    assert res.gap.min() > -pen and res.gap.max() < scene.device.stroke + pen
     assert res.gap.min() < 0.0     # it does penetrate
     assert np.all(np.diff(res.impacts.time) > 0)

@@ -75,7 +75,7 @@ def test_large_electrodes_follow_shockley_ramo():
 def test_capacitance_matrix_and_charge_invariants(z_fraction, ball_eps, wall_eps, far_field):
     scene = default_scene().with_values(device={"ball_permittivity": ball_eps,
                                                 "wall_permittivity": wall_eps})
-    res = solve(scene, z_fraction * scene.device.gap, mesh_size_mm=1.0, far_field=far_field)
+    res = solve(scene, z_fraction * scene.device.stroke, mesh_size_mm=1.0, far_field=far_field)
     C = res.capacitance
     assert C[0, 1] == C[1, 0]
     assert C[0, 0] > 0 and C[1, 1] > 0 and C[0, 1] < 0
@@ -90,7 +90,7 @@ def test_capacitance_matrix_and_charge_invariants(z_fraction, ball_eps, wall_eps
 def test_mirror_symmetry_of_the_device():
     """The device is symmetric about its mid-plane: z ↔ Δh - z swaps lower and upper."""
     scene = default_scene()
-    a, b = solve(scene, 0.7e-3), solve(scene, scene.device.gap - 0.7e-3)
+    a, b = solve(scene, 0.7e-3), solve(scene, scene.device.stroke - 0.7e-3)
     assert a.C_ll == pytest.approx(b.C_uu, rel=2e-3)
     assert a.q_lower == pytest.approx(b.q_upper, rel=2e-3)
     assert a.q_upper == pytest.approx(b.q_lower, rel=2e-3)
@@ -167,7 +167,7 @@ def test_contact_rule_flags_a_nearly_conducting_ball():
 
 def test_contact_at_both_plates_is_symmetric():
     scene = default_scene()
-    bottom, top = solve(scene, 0.0), solve(scene, scene.device.gap)
+    bottom, top = solve(scene, 0.0), solve(scene, scene.device.stroke)
     assert bottom.q_lower == pytest.approx(top.q_upper, rel=2e-3)
     assert bottom.q_upper == pytest.approx(top.q_lower, rel=2e-3)
     assert -1.0 < bottom.q_lower / bottom.ball_charge < -0.5   # mostly on the touched plate

@@ -93,8 +93,8 @@ def test_contact_anchors_rule():
     g = minimum_gap(dev)
     assert g == pytest.approx(0.002 * dev.plate_spacing)
     assert contact_anchors(dev, 0.0) == (g, 2 * g, 4 * g)
-    assert contact_anchors(dev, dev.gap) == pytest.approx((dev.gap - g, dev.gap - 2 * g,
-                                                           dev.gap - 4 * g))
+    assert contact_anchors(dev, dev.stroke) == pytest.approx((dev.stroke - g, dev.stroke - 2 * g,
+                                                           dev.stroke - 4 * g))
     assert contact_anchors(dev, 1.5e-3) is None
     assert contact_anchors(dev, g) is None
     assert layout(default_scene(), 0.0).effective_gap == pytest.approx(g)

@@ -94,7 +94,7 @@ CASES = {
 def case_scene(name):
     values, z, *_ = CASES[name]
     scene = scene_with(**values)
-    return scene, (scene.device.gap if z == "stroke" else z)
+    return scene, (scene.device.stroke if z == "stroke" else z)
 
 
 @pytest.fixture(scope="module")

@@ -154,7 +154,7 @@ def test_gamma_one_thousand_first_upper_impact_is_the_exact_root():
                        run={"duration_s": 0.5, "settle_periods": 2})
     res = simulate(scene)
     assert_sane_dynamics(res, max_events=10 * 20_000)
-    amp, omega, stroke = scene.excitation.amplitude, scene.excitation.omega, scene.device.gap
+    amp, omega, stroke = scene.excitation.amplitude, scene.excitation.omega, scene.device.stroke
     t0 = math.asin(1.0 / gamma) / omega
     y0, yd0 = amp * math.sin(omega * t0), amp * omega * math.cos(omega * t0)
 

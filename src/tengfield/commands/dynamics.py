@@ -112,7 +112,7 @@ def _run_map(args) -> int:
                         f"{r['upper_contacts_per_period']:.6g}", r["error"]])
     plot_regime_map(result, out / "map.png",
                     title=f"regimes, e = {scene.contact.restitution:g}, "
-                          f"dh = {scene.device.gap * 1e3:g} mm, {args.periods} periods per point")
+                          f"dh = {scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")
     counts = {n: int(np.sum(result.regime == n)) for n in np.unique(result.regime)}
     print(f"{result.regime.size} points: {counts} -> {out}/")
     return 0

@@ -119,7 +119,7 @@ def simulate_impact(scene, *, duration: float | None = None) -> DynamicsResult:
     table = table_from_scene(scene)
     period = scene.excitation.period
     duration, t0, t_end = run_span(scene, duration)
-    stroke = scene.device.gap
+    stroke = scene.device.stroke
     traj, (it, ip, ivb, iva), n_events = integrate(
         table, stroke, Restitution.from_contact(scene.contact), t_start=t0, t_end=t_end,
         gap0=scene.initial.gap, velocity0=scene.initial.velocity, period=period)

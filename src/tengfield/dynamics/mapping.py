@@ -115,7 +115,7 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
         raise SceneError(f"map periods = {periods}: allowed [2, inf)")
     settle = scene.run.settle_periods if settle_periods is None else int(settle_periods)
     settle = max(0, min(settle, periods // 2))
-    setup = PointSetup(scene.device.gap, Restitution.from_contact(scene.contact),
+    setup = PointSetup(scene.device.stroke, Restitution.from_contact(scene.contact),
                         scene.excitation.phase, scene.initial.time, scene.initial.gap,
                         scene.initial.velocity, int(periods), settle)
     jobs = (os.cpu_count() or 1) if jobs is None else int(jobs)

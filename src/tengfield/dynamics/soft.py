@@ -195,7 +195,7 @@ def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
         raise DynamicsError(
             f"the run [{t0:g}, {t_end:g}] s is outside the recorded excitation "
             f"[{table.t_first:g}, {table.t_last:g}] s")
-    stroke = scene.device.gap
+    stroke = scene.device.stroke
     traj, (ct, cp, cvb, cva), n_phases = integrate_soft(
         table, stroke, scene.contact.restitution, scene.device.ball_mass,
         scene.contact.stiffness, t_start=t0, t_end=t_end, gap0=scene.initial.gap,

@@ -32,7 +32,7 @@ FIELD_OVERRIDES = ("degree", "mesh_size_mm", "tolerance", "domain_radius_mm", "e
 
 def check_position(scene, position: float) -> None:
     """Raise :class:`FieldError` unless ``0 <= position <= Δh`` (the free stroke)."""
-    stroke = scene.device.gap
+    stroke = scene.device.stroke
     try:
         value = float(position)
     except (TypeError, ValueError):

@@ -289,7 +289,7 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
     options = {**options, "keep_solution": False}
     solves += [solve_meshed(scene, a, comm, **options) for a in anchors[1:]]
     result = solves[0]
-    plate = 0.0 if anchors[0] < anchors[1] else scene.device.gap
+    plate = 0.0 if anchors[0] < anchors[1] else scene.device.stroke
     exponent = geometry.contact_exponent(
         [np.concatenate([np.ravel(r.capacitance), r.induced_charge]) for r in solves])
 

@@ -150,7 +150,7 @@ class MeshSettings:
 def cylindrical_cell(device) -> CylindricalCell:
     """The paper's device from a scene's ``[device]`` section (:class:`tengfield.scene.Device`)."""
     return CylindricalCell(
-        ball_diameter=device.ball_diameter, stroke=device.gap,
+        ball_diameter=device.ball_diameter, stroke=device.stroke,
         electrode_radius=device.electrode_radius, tube_inner_radius=device.tube_inner_radius,
         tube_outer_radius=device.tube_outer_radius, plate_thickness=device.plate_thickness,
         ball_permittivity=device.ball_permittivity, wall_permittivity=device.wall_permittivity)

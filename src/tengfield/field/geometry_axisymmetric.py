@@ -112,7 +112,7 @@ def minimum_gap(device) -> float:
 def effective_gap(device, position: float) -> float:
     """The gap actually meshed: ``position`` clamped to [min_gap, Δh - min_gap]."""
     g = minimum_gap(device)
-    return min(max(position, g), device.gap - g)
+    return min(max(position, g), device.stroke - g)
 
 
 def contact_anchors(device, position: float) -> tuple[float, float, float] | None:
@@ -123,8 +123,8 @@ def contact_anchors(device, position: float) -> tuple[float, float, float] | Non
     g = minimum_gap(device)
     if position < g:
         return g, 2.0 * g, 4.0 * g
-    if position > device.gap - g:
-        return device.gap - g, device.gap - 2.0 * g, device.gap - 4.0 * g
+    if position > device.stroke - g:
+        return device.stroke - g, device.stroke - 2.0 * g, device.stroke - 4.0 * g
     return None
 
 
@@ -211,7 +211,7 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
         tube_outer_radius=dev.tube_outer_radius, walls=dev.wall_permittivity != 1.0,
         table=table, domain_radius=domain_radius, inversion_centre_z=centre,
         kelvin=far_field == "kelvin", shift=2.5 * domain_radius,
-        gap_lower=z_gap, gap_upper=dev.gap - z_gap, requested_gap=position, effective_gap=z_gap,
+        gap_lower=z_gap, gap_upper=dev.stroke - z_gap, requested_gap=position, effective_gap=z_gap,
         mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
         info={"device_extent_m": extent})
 
