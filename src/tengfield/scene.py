@@ -109,6 +109,10 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
 }
 
+#: Sections passed through unvalidated to ``scene.raw`` (each is validated by
+#: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`).
+PASSTHROUGH_SECTIONS = ("fit",)
+
 # Field-relevant inputs: a change in any of these invalidates a cached surrogate.
 FIELD_KEYS = {
     "device": ["ball_diameter_mm", "gap_mm", "electrode_radius_mm", "tube_inner_radius_mm",
@@ -377,6 +381,10 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     if not isinstance(data, dict):
         raise SceneError(f"{source}: a scene is a TOML table")
     for sec in data:
+        if sec in PASSTHROUGH_SECTIONS:   # kept in scene.raw, validated by their own package
+            if not isinstance(data[sec], dict):
+                raise SceneError(f"{source}: [{sec}] must be a table")
+            continue
         if sec not in SCHEMA:
             raise SceneError(f"{source}: unknown section [{sec}]" + _suggest(sec, SCHEMA)
                              + f"; sections are {', '.join('[' + s + ']' for s in SCHEMA)}")
