@@ -1,0 +1,78 @@
+"""``tengfield fit``: calibrate a scene's unknowns to a measured trace or to scalar targets.
+
+Writes DIR/fit.json (values, standard errors, correlations, residual RMS,
+identifiability notes, iterations, wall time), DIR/fit.png (measured vs fitted
+with residuals) and DIR/fitted.toml (the scene with the fitted values).
+"""
+from __future__ import annotations
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "fit", help="fit sigma, C_p, restitution, load, time shift to a measured trace",
+        description="Least-squares calibration of the scene's [fit] parameters to a measured "
+                    "CSV (--measured) or to scalar peak values (--targets), reusing one field "
+                    "surrogate. Writes fit.json, fit.png and fitted.toml to DIR.")
+    p.add_argument("scene", nargs="?", help="scene file with a [fit] section (default: the "
+                                            "embedded default scene)")
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument("--measured", metavar="FILE.csv",
+                        help="measured trace: a header row, a time column and V / Q / I columns "
+                             "([fit.columns]; default the columns of a `tengfield run` "
+                             "waveforms.csv)")
+    source.add_argument("--targets", nargs="+", metavar="NAME=VALUE[+-SIGMA]",
+                        help="scalar targets instead of a trace, e.g. V_pp_V=4.2 Q_pp_nC=1.42 "
+                             "I_peak_uA=0.16 (pp = peak-to-peak, peak = max |x| over the steady "
+                             "window; default uncertainty 5 %%)")
+    p.add_argument("--free", metavar="NAME[,NAME...]", default=None,
+                   help="free parameters (overrides [fit.parameters]; bounds and starts from "
+                        "there or the defaults): surface_charge_uC_per_m2, "
+                        "parallel_capacitance_pF, restitution, load_ohm, time_shift_s, "
+                        "amplitude_scale")
+    p.add_argument("--loss", default=None,
+                   choices=["linear", "soft_l1", "huber", "cauchy", "arctan"],
+                   help="residual loss (overrides [fit] loss; robust losses resist outliers)")
+    p.add_argument("--profile", action="store_true",
+                   help="profile the poorly determined parameters (Δχ² ≤ 1 intervals)")
+    p.add_argument("-o", "--output", default="out", metavar="DIR",
+                   help="output directory (created; default ./out)")
+    p.add_argument("--cache-dir", default=None, metavar="DIR",
+                   help="surrogate cache (default $TENGFIELD_CACHE_DIR, else "
+                        "$XDG_CACHE_HOME/tengfield or ~/.cache/tengfield)")
+    p.add_argument("--no-plots", action="store_true", help="skip fit.png")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    from ..fit import calibrate, write_fit_outputs
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene)
+    overrides = {}
+    if args.loss:
+        overrides["loss"] = args.loss
+    if args.profile:
+        overrides["profile"] = True
+    free = [n.strip() for n in args.free.split(",") if n.strip()] if args.free else None
+    result = calibrate(scene, measured=args.measured, targets=args.targets, free=free,
+                       cache_dir=args.cache_dir, progress=True, overrides=overrides or None)
+    written = write_fit_outputs(scene, result, args.output, plots=not args.no_plots)
+    print_result(result)
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0
+
+
+def print_result(result) -> None:
+    from ..fit import PARAMETERS
+
+    print(f"fit ({result.mode}): {result.message} ({result.evaluations} evaluations, "
+          f"{result.dynamics_runs} dynamics runs, {result.wall_time:.2f} s)")
+    for name in result.names:
+        unit = PARAMETERS[name][2]
+        flag = "" if result.identifiable[name] else "   NOT identifiable"
+        print(f"  {name:26s} = {result.values[name]:12.6g} +- "
+              f"{result.standard_errors[name]:.3g} {unit}{flag}")
+    print(f"  reduced chi^2 = {result.chi2_reduced:.3g}; residual RMS: "
+          + ", ".join(f"{k} {v:.3g}" for k, v in result.residual_rms.items()) + " (SI)")
+    for note in result.notes:
+        print(f"  note: {note}")

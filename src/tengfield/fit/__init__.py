@@ -1,0 +1,75 @@
+"""Calibration: fit a scene's unknowns to a measured waveform or to scalar targets.
+
+``tengfield fit [SCENE] --measured FILE.csv`` (or ``--targets V_pp_V=4.2 ...``)
+fits the free parameters of the scene's ``[fit]`` section (σ, C_p, the
+restitution, the load, a time shift, an amplitude scale) by bounded least
+squares, reusing one field surrogate for every iteration (σ scales the charge
+linearly), and reports standard errors, correlations and which parameters the
+data cannot determine (docs/fit.md).
+
+* :func:`calibrate` - the whole chain from a scene (surrogate obtained once);
+* :func:`fit_trace`, :func:`fit_targets` - the fits given a surrogate;
+* :func:`parse_fit_section`, :func:`read_trace`, :func:`parse_targets` - input;
+* :func:`write_fit_outputs` - fit.json, fit.png, fitted.toml.
+"""
+from __future__ import annotations
+
+from .output import fitted_scene_dict, write_fit_outputs
+from .solve import FitError, FitResult, fit_targets, fit_trace
+from .spec import (PARAMETERS, FitSpec, Target, Trace, parse_fit_section, parse_targets,
+                   read_trace)
+
+__all__ = ["calibrate", "reference_surrogate", "fit_trace", "fit_targets", "FitResult",
+           "FitError", "FitSpec", "Trace", "Target", "PARAMETERS", "parse_fit_section",
+           "read_trace", "parse_targets", "write_fit_outputs", "fitted_scene_dict"]
+
+#: σ [µC/m²] of the surrogate when the scene's own σ is zero
+FALLBACK_SIGMA_UC = -1.0
+
+
+def reference_surrogate(scene, *, cache_dir=None, solve=None, comm=None, progress=False):
+    """``(curves, sigma_ref [C/m²], outcome)``: the surrogate of ``scene`` at its own σ
+    (at -1 µC/m² when that is zero), obtained once (cached by the field hash)."""
+    from ..surrogate import TerminalCurves, obtain_table
+
+    if scene.device.surface_charge == 0.0:
+        scene = scene.with_values(device={"surface_charge_uC_per_m2": FALLBACK_SIGMA_UC})
+    table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+                                  progress=progress)
+    return TerminalCurves(table, scene.circuit.reference), scene.device.surface_charge, outcome
+
+
+def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, solve=None,
+              simulate=None, comm=None, progress=False, overrides: dict | None = None) -> FitResult:
+    """Fit ``scene`` to a measured CSV (path) or to target strings (``["V_pp_V=4.2", ...]``).
+
+    ``free`` (names) overrides the free parameters of ``[fit.parameters]``;
+    ``overrides`` sets ``[fit]`` keys (e.g. ``{"loss": "huber", "profile": True}``).
+    ``solve``/``simulate`` replace the field solver and the dynamics (tests).
+    """
+    if (measured is None) == (targets is None):
+        raise FitError("give either a measured trace or targets, not both")
+    if overrides:
+        raw = dict(scene.raw.get("fit", {}) or {})
+        raw.update(overrides)
+        scene = scene.with_values(fit=raw)
+    spec = parse_fit_section(scene, free)
+    if targets is not None:
+        goal = parse_targets(targets)
+        if free is None and "parameters" not in (scene.raw.get("fit") or {}):
+            spec = parse_fit_section(scene, _default_target_parameters(goal))
+    else:
+        goal = read_trace(measured, spec)
+    curves, sigma_ref, _ = reference_surrogate(scene, cache_dir=cache_dir, solve=solve,
+                                               comm=comm, progress=progress)
+    if targets is not None:
+        return fit_targets(scene, curves, sigma_ref, goal, spec, simulate=simulate)
+    return fit_trace(scene, curves, sigma_ref, goal, spec, simulate=simulate)
+
+
+def _default_target_parameters(targets) -> list[str]:
+    """σ, and C_p when a voltage is among the targets."""
+    names = ["surface_charge_uC_per_m2"]
+    if any(t.quantity == "V" for t in targets):
+        names.append("parallel_capacitance_pF")
+    return names

@@ -1,0 +1,188 @@
+"""The forward model of a fit: one surrogate, dynamics re-run only when needed.
+
+The ONLY place :mod:`tengfield.fit` imports the electrical helpers
+(``terminal_waveforms``, ``load_waveforms``); change this import when they move.
+
+Electrostatics is linear in the ball's charge: Q_SC, I_SC and every voltage
+scale with σ while C_T does not. The surrogate is obtained once at a
+reference σ_ref and :class:`ScaledCurves` multiplies its charge by σ/σ_ref,
+so changing σ (or C_p, R, the time shift) never re-solves the field and
+changing the restitution or the amplitude only re-runs the impact map.
+"""
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from typing import Callable
+
+import numpy as np
+
+from ..pipeline import load_waveforms, terminal_waveforms
+
+#: quantities a fit compares, with the waveform key per circuit kind
+QUANTITIES = ("V", "Q", "I")
+
+
+class ScaledCurves:
+    """``TerminalCurves`` with Q_SC and dQ_SC/dz multiplied by ``scale`` (C_T unchanged)."""
+
+    def __init__(self, curves, scale: float):
+        self._curves = curves
+        self.scale = float(scale)
+        self.capacitance_samples = curves.capacitance_samples
+        self.stroke = curves.stroke
+
+    def charge(self, z):
+        return self.scale * self._curves.charge(z)
+
+    def charge_derivative(self, z):
+        return self.scale * self._curves.charge_derivative(z)
+
+    def capacitance(self, z):
+        return self._curves.capacitance(z)
+
+    def capacitance_derivative(self, z):
+        return self._curves.capacitance_derivative(z)
+
+
+class _OnGrid:
+    """A dynamics result seen on another output grid (for :func:`load_waveforms`)."""
+
+    def __init__(self, dynamics, times):
+        self.t = np.asarray(times, dtype=float)
+        self.impacts = dynamics.impacts
+        self._dynamics = dynamics
+
+    def sample(self, times):
+        return self._dynamics.sample(times)
+
+
+def _default_simulate():
+    from ..dynamics import simulate
+    return simulate
+
+
+class ForwardModel:
+    """V, Q, I of ``scene`` for a set of parameter values (file units, see ``fit.spec``).
+
+    ``curves`` is the surrogate at surface charge ``reference_sigma`` [C/m²];
+    ``span`` [s] is the longest stretch of model time asked for after the
+    steady-window start (trace length + largest time shift). Dynamics results
+    are cached by (restitution, amplitude scale).
+    """
+
+    def __init__(self, scene, curves, reference_sigma: float, *, span: float,
+                 simulate: Callable | None = None, sample_rate: float | None = None):
+        if reference_sigma == 0.0:
+            raise ValueError("reference_sigma must be non-zero")
+        self.scene = scene
+        self.curves = curves
+        self.reference_sigma = float(reference_sigma)
+        self.simulate = simulate or _default_simulate()
+        period = scene.excitation.period
+        self.window_start = scene.initial.time + scene.run.settle_periods * period
+        self.duration = scene.run.settle_periods * period + span + period
+        self.sample_rate = float(sample_rate or max(scene.run.sample_rate, 200.0 / period))
+        self._cache: OrderedDict = OrderedDict()
+        self.dynamics_runs = 0
+
+    # -- dynamics ----------------------------------------------------------
+    def dynamics(self, values: dict):
+        """The trajectory for ``values`` (restitution, amplitude_scale), cached."""
+        restitution = float(values.get("restitution", self.scene.contact.restitution))
+        amplitude_scale = float(values.get("amplitude_scale", 1.0))
+        key = (restitution, amplitude_scale)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        scene = self.dynamics_scene(values)
+        result = self.simulate(scene)
+        self.dynamics_runs += 1
+        self._cache[key] = result
+        if len(self._cache) > 16:
+            self._cache.popitem(last=False)
+        return result
+
+    def dynamics_scene(self, values: dict):
+        """The scene the dynamics runs: long enough for the trace, fitted contact/amplitude."""
+        changes = {"run": {"duration_s": self.duration, "sample_rate_hz": self.sample_rate}}
+        if "restitution" in values:
+            changes["contact"] = {"restitution": float(values["restitution"])}
+        if "amplitude_scale" in values:
+            changes["excitation"] = {"amplitude_mm": self.scene.excitation.amplitude * 1e3
+                                     * float(values["amplitude_scale"])}
+        return self.scene.with_values(**changes)
+
+    def charge_scale(self, values: dict) -> float:
+        sigma = values.get("surface_charge_uC_per_m2")
+        sigma = self.scene.device.surface_charge if sigma is None else float(sigma) * 1e-6
+        return sigma / self.reference_sigma
+
+    def circuit(self, values: dict) -> tuple[float, float]:
+        """(C_p [F], R [ohm]) for ``values``."""
+        c_p = values.get("parallel_capacitance_pF")
+        c_p = self.scene.circuit.parallel_capacitance if c_p is None else float(c_p) * 1e-12
+        load = values.get("load_ohm")
+        return c_p, self.scene.circuit.load if load is None else float(load)
+
+    # -- waveforms ---------------------------------------------------------
+    def model_times(self, times, shift: float) -> np.ndarray:
+        """Model time of measured samples ``times`` [s]: the trace starts ``shift`` [s]
+        after the steady-window start."""
+        t = np.asarray(times, dtype=float)
+        return self.window_start + (t - t[0]) + shift
+
+    def waveforms(self, values: dict, model_times, quantities=QUANTITIES) -> dict:
+        """{quantity: array [SI]} at ``model_times`` (ascending) for ``values``.
+
+        Open or short circuit: V is what an instrument of capacitance C_p reads,
+        Q_SC / (C_T + C_p); Q = Q_SC; I = I_SC. ``[circuit] kind = "load"``: V and I
+        are the load's voltage and current (the load ODE is integrated from the start
+        of the dynamics so its start-up transient has settled), Q = Q_SC.
+        """
+        dynamics = self.dynamics(values)
+        curves = ScaledCurves(self.curves, self.charge_scale(values))
+        c_p, load = self.circuit(values)
+        t = np.asarray(model_times, dtype=float)
+        gap, velocity, _ = dynamics.sample(t)
+        cells = self.scene.device.cells
+        terminal = terminal_waveforms(curves, gap, velocity, cells=cells, parallel_capacitance=c_p)
+        out = {"V": terminal["V_oc"], "Q": terminal["Q_sc"], "I": terminal["I_sc"]}
+        if self.scene.circuit.kind == "load" and ({"V", "I"} & set(quantities)):
+            out.update(self._load(dynamics, curves, c_p, load, t, gap, velocity))
+        return {q: np.asarray(out[q], dtype=float) for q in quantities}
+
+    def _load(self, dynamics, curves, c_p, load, t, gap, velocity) -> dict:
+        start = float(dynamics.t[0])
+        period = self.scene.excitation.period
+        n_before = int(math.ceil((t[0] - start) / period * 200.0))
+        before = np.linspace(start, t[0], n_before + 1)[:-1] if t[0] > start else np.empty(0)
+        grid = np.concatenate([before, t])
+        g_before, v_before, _ = dynamics.sample(before) if before.size else (np.empty(0),) * 2 + (None,)
+        waveforms = {"gap_m": np.concatenate([g_before, gap]),
+                     "gap_velocity_m_per_s": np.concatenate([v_before, velocity])}
+        scene = self.scene.with_values(circuit={"load_ohm": load,
+                                                "parallel_capacitance_pF": c_p * 1e12})
+        result = load_waveforms(scene, _OnGrid(dynamics, grid), curves, waveforms,
+                                window_start=float(t[0]))
+        return {"V": result["V_load"][before.size:], "I": result["I_load"][before.size:]}
+
+    def scalars(self, values: dict) -> dict:
+        """Peak-to-peak and peak |x| of V, Q, I over the steady window [SI].
+
+        Samples: the dynamics' own output grid in the window plus just before and
+        after every impact (where I_SC jumps and takes its extremes).
+        """
+        dynamics = self.dynamics(values)
+        t_all = np.asarray(dynamics.t, dtype=float)
+        t = t_all[t_all >= self.window_start]
+        impacts = np.asarray(dynamics.impacts.time, dtype=float)
+        impacts = impacts[(impacts > t[0]) & (impacts < t[-1])]
+        eps = 1e-9 * self.scene.excitation.period
+        grid = np.sort(np.concatenate([t, impacts - eps, impacts + eps]))
+        wave = self.waveforms(values, grid)
+        out = {}
+        for q, x in wave.items():
+            out[f"{q}_pp"] = float(np.max(x) - np.min(x))
+            out[f"{q}_peak"] = float(np.max(np.abs(x)))
+        return out

@@ -1,0 +1,491 @@
+"""Least-squares calibration of a scene to a measured trace or to scalar targets.
+
+Method (docs/fit.md): ``scipy.optimize.least_squares`` (trust-region
+reflective, bounds) on weighted residuals ``(model - measured) / noise`` in
+normalised coordinates (linear parameters scaled by a tenth of their bounds'
+width, ``load_ohm`` in decades). The Jacobian is central differences except
+for σ, whose column is exact (the model is linear in σ). The time shift starts
+from a scan of one cross-correlation-like score over its bounds (with the best
+common σ scale), so the phase does not get stuck in a local minimum.
+
+Uncertainty: covariance ``s² (JᵀJ)⁻¹`` at the optimum (s² = reduced χ² when no
+noise level is given, else max(1, reduced χ²)); standard errors, the
+correlation matrix, and identifiability notes from the column-normalised
+Jacobian (a parameter with no effect, pairs with |correlation| > 0.995, a
+near-null direction). ``profile`` re-optimises the others along a grid of
+each poorly determined parameter and reports the Δχ² ≤ 1 interval.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..errors import TengfieldError
+from ._model import ForwardModel
+from .spec import PARAMETERS, FitSpec, Parameter, Target, Trace
+
+#: |correlation| above which two parameters are reported as not separately identifiable
+NOT_SEPARABLE = 0.995
+#: |correlation| above which a pair is reported as strongly correlated
+STRONGLY_CORRELATED = 0.95
+#: normalised-Jacobian singular-value ratio below which the data are degenerate
+DEGENERATE = 1e-6
+
+
+class FitError(TengfieldError, RuntimeError):
+    """The fit could not be carried out (e.g. the model gives no signal)."""
+
+
+@dataclass
+class FitResult:
+    """Outcome of :func:`fit_trace` / :func:`fit_targets` (file units for parameters)."""
+    mode: str                                   # "trace" or "targets"
+    names: list[str]
+    values: dict[str, float]
+    start: dict[str, float]
+    bounds: dict[str, tuple[float, float]]
+    standard_errors: dict[str, float]
+    correlation: np.ndarray
+    identifiable: dict[str, bool]
+    notes: list[str]
+    residual_rms: dict[str, float]              # per column / target, SI
+    chi2_reduced: float
+    noise: dict[str, dict]                      # per column: value [SI] and "given"/"estimated"
+    evaluations: int
+    jacobian_evaluations: int
+    dynamics_runs: int
+    status: int
+    message: str
+    wall_time: float
+    alignment: dict = field(default_factory=dict)
+    profiles: dict = field(default_factory=dict)
+    measured: dict = field(default_factory=dict)    # plotting: time, values
+    fitted: dict = field(default_factory=dict)
+    loss: str = "linear"
+
+    def as_dict(self) -> dict:
+        """JSON-ready summary (fit.json)."""
+        def finite(x):
+            return None if x is None or not math.isfinite(x) else float(x)
+        return {
+            "mode": self.mode,
+            "parameters": {n: {"value": self.values[n], "standard_error": finite(
+                self.standard_errors[n]), "start": self.start[n], "min": self.bounds[n][0],
+                "max": self.bounds[n][1], "identifiable": self.identifiable[n],
+                "unit": PARAMETERS[n][2], "meaning": PARAMETERS[n][3]} for n in self.names},
+            "correlation": {"names": self.names,
+                            "matrix": [[finite(v) for v in row] for row in self.correlation]},
+            "identifiability_notes": self.notes,
+            "residual_rms": self.residual_rms,
+            "chi2_reduced": finite(self.chi2_reduced),
+            "noise": self.noise,
+            "loss": self.loss,
+            "iterations": {"function_evaluations": self.evaluations,
+                           "jacobian_evaluations": self.jacobian_evaluations,
+                           "dynamics_runs": self.dynamics_runs},
+            "status": self.status, "message": self.message,
+            "wall_time_s": self.wall_time,
+            "alignment": self.alignment,
+            "profiles": self.profiles,
+            "uncertainty_rule": "covariance s^2 (J^T J)^-1 at the optimum, J the Jacobian of the "
+                                "weighted residuals; s^2 = reduced chi^2 when the noise is "
+                                "estimated, max(1, reduced chi^2) when it is given; assumes "
+                                "independent noise between samples",
+        }
+
+
+# ---------------------------------------------------------------------------
+class _Space:
+    """Normalised coordinates u <-> parameter values (file units)."""
+
+    def __init__(self, params: list[Parameter]):
+        self.params = params
+        self.names = [p.name for p in params]
+        self.log = np.array([p.transform == "log" for p in params])
+        self.scale = np.array([1.0 if p.transform == "log" else (p.hi - p.lo) / 10.0
+                               for p in params])
+        self.origin = np.array([math.log10(p.lo) if p.transform == "log" else p.lo
+                                for p in params])
+        self.lower = self.to_u([p.lo for p in params])
+        self.upper = self.to_u([p.hi for p in params])
+
+    def to_u(self, values) -> np.ndarray:
+        v = np.asarray(values, dtype=float)
+        v = np.where(self.log, np.log10(np.where(self.log, v, 1.0)), v)
+        return (v - self.origin) / self.scale
+
+    def values(self, u) -> dict:
+        v = self.origin + self.scale * np.asarray(u, dtype=float)
+        v = np.where(self.log, 10.0 ** v, v)
+        return dict(zip(self.names, map(float, v)))
+
+    def value_per_u(self, u) -> np.ndarray:
+        """d(value)/du at ``u`` (for standard errors in file units)."""
+        vals = np.array(list(self.values(u).values()))
+        return np.where(self.log, vals * math.log(10.0), self.scale)
+
+
+class _Problem:
+    """Weighted residuals of one fit and their Jacobian."""
+
+    def __init__(self, model: ForwardModel, space: _Space, residual, fixed: dict | None = None):
+        self.model = model
+        self.space = space
+        self._residual = residual      # values -> weighted residual vector
+        self.fixed = fixed or {}
+        self.evaluations = 0
+        self.jacobians = 0
+
+    def values(self, u) -> dict:
+        return {**self.fixed, **self.space.values(u)}
+
+    def __call__(self, u) -> np.ndarray:
+        self.evaluations += 1
+        return self._residual(self.values(u))
+
+    def jacobian(self, u) -> np.ndarray:
+        self.jacobians += 1
+        u = np.asarray(u, dtype=float)
+        r0 = self._residual(self.values(u))
+        J = np.empty((r0.size, u.size))
+        h = 1e-4
+        for k, name in enumerate(self.space.names):
+            if name == "surface_charge_uC_per_m2":
+                sigma = self.values(u)[name]
+                if sigma != 0.0:
+                    # exact: the model is linear in σ (peak values in |σ|), so the secant
+                    # from σ = 0 is the derivative
+                    zero = self._residual({**self.values(u), name: 0.0})
+                    J[:, k] = (r0 - zero) / sigma * self.space.scale[k]
+                    continue
+            up, down = u.copy(), u.copy()
+            step_up = min(h, self.space.upper[k] - u[k])
+            step_down = min(h, u[k] - self.space.lower[k])
+            up[k] += step_up
+            down[k] -= step_down
+            if step_up + step_down <= 0:
+                J[:, k] = 0.0
+                continue
+            J[:, k] = (self._residual(self.values(up)) - self._residual(self.values(down))) \
+                / (step_up + step_down)
+        return J
+
+
+def _optimise(problem: _Problem, u0, spec: FitSpec, max_nfev=None):
+    return least_squares(problem, u0, jac=problem.jacobian,
+                         bounds=(problem.space.lower, problem.space.upper),
+                         loss=spec.loss, f_scale=spec.loss_scale, method="trf",
+                         max_nfev=max_nfev or spec.max_evaluations, x_scale=1.0)
+
+
+# ---------------------------------------------------------------------------
+def _uncertainty(problem: _Problem, u, residual, noise_given: bool, loss: str):
+    """(standard errors [file units], correlation, chi2_red, identifiable, notes)."""
+    space = problem.space
+    names = space.names
+    J = problem.jacobian(u)
+    n, p = J.shape
+    dof = max(n - p, 1)
+    if loss == "linear":
+        chi2_red = float(residual @ residual) / dof
+    else:   # robust: the MAD of the residuals, not their sum of squares
+        chi2_red = float((1.4826 * np.median(np.abs(residual - np.median(residual)))) ** 2)
+    s2 = max(1.0, chi2_red) if noise_given else chi2_red
+    norms = np.linalg.norm(J, axis=0)
+    notes: list[str] = []
+    identifiable = {name: True for name in names}
+    active = norms > 1e-12 * max(float(norms.max(initial=0.0)), 1e-300)
+    for k in np.flatnonzero(~active):
+        identifiable[names[k]] = False
+        notes.append(f"{names[k]} has no effect on these data: it is not identifiable "
+                     "(fix it, or measure a quantity it changes)")
+    cov_u = np.full((p, p), np.nan)
+    if active.any():
+        Jn = J[:, active] / norms[active]
+        _, sv, vt = np.linalg.svd(Jn, full_matrices=False)
+        ratio = sv[-1] / sv[0] if sv[0] > 0 else 0.0
+        inv = np.where(sv > DEGENERATE * sv[0], 1.0 / np.maximum(sv, 1e-300) ** 2, np.inf)
+        with np.errstate(invalid="ignore"):
+            cov_n = (vt.T * inv) @ vt if np.all(np.isfinite(inv)) else \
+                np.linalg.pinv(Jn.T @ Jn)
+        idx = np.flatnonzero(active)
+        cov_u[np.ix_(idx, idx)] = cov_n / np.outer(norms[active], norms[active]) * s2
+        if ratio < DEGENERATE:
+            involved = [names[idx[i]] for i in np.flatnonzero(np.abs(vt[-1]) > 0.2)]
+            for name in involved:
+                identifiable[name] = False
+                cov_u[names.index(name), :] = np.nan
+                cov_u[:, names.index(name)] = np.nan
+                cov_u[names.index(name), names.index(name)] = np.inf
+            notes.append(f"{', '.join(involved)}: the data are degenerate in this combination "
+                         f"(normalised Jacobian condition {1 / max(ratio, 1e-300):.2g}); only a "
+                         "combination is fixed")
+    variance = np.diag(cov_u)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sd = np.sqrt(variance)
+        corr = cov_u / np.outer(sd, sd)
+    np.fill_diagonal(corr, 1.0)
+    standard_errors = dict(zip(names, map(float, sd * space.value_per_u(u))))
+    for i in range(p):
+        for j in range(i + 1, p):
+            c = corr[i, j]
+            if not math.isfinite(c):
+                continue
+            pair = f"{names[i]} and {names[j]}"
+            if abs(c) > NOT_SEPARABLE:
+                identifiable[names[i]] = identifiable[names[j]] = False
+                hint = ""
+                if {names[i], names[j]} == {"surface_charge_uC_per_m2", "parallel_capacitance_pF"}:
+                    hint = (": a voltage read through C_p fixes only sigma / (C_T + C_p); "
+                            "add a charge-mode (Q) trace or fix C_p")
+                notes.append(f"{pair} are not separately identifiable from these data "
+                             f"(correlation {c:+.5f}){hint or '; fix one of them or add data'}")
+            elif abs(c) > STRONGLY_CORRELATED:
+                notes.append(f"{pair} are strongly correlated ({c:+.3f}): their standard "
+                             "errors are large together, their combination is better determined")
+    for k, par in enumerate(space.params):
+        se = standard_errors[par.name]
+        if identifiable[par.name] and math.isfinite(se) and se > 0.25 * (par.hi - par.lo) \
+                and par.transform == "linear":
+            identifiable[par.name] = False
+            notes.append(f"{par.name}: standard error {se:.3g} exceeds a quarter of its bounds "
+                         f"[{par.lo:g}, {par.hi:g}]: poorly determined by these data")
+    return standard_errors, corr, chi2_red, identifiable, notes
+
+
+def _profile(problem: _Problem, u_best, spec: FitSpec, cost_best: float, s2: float,
+             name: str, standard_error: float, points: int = 9) -> dict:
+    """Δχ² = 2 (cost - cost_best) / s² along ``name``, the others re-optimised."""
+    space = problem.space
+    k = space.names.index(name)
+    scale = space.value_per_u(u_best)[k]
+    half = 3.0 * standard_error / scale if math.isfinite(standard_error) and standard_error > 0 \
+        else np.inf
+    lo = max(space.lower[k], u_best[k] - half)
+    hi = min(space.upper[k], u_best[k] + half)
+    grid = np.linspace(lo, hi, points)
+    others = [n for n in space.names if n != name]
+    rows = []
+    for uk in grid:
+        value = space.values(np.where(np.arange(len(u_best)) == k, uk, u_best))[name]
+        if others:
+            sub = _Space([p for p in space.params if p.name != name])
+            sub_problem = _Problem(problem.model, sub, problem._residual,
+                                   fixed={**problem.fixed, name: value})
+            u0 = np.clip(np.delete(u_best, k), sub.lower, sub.upper)
+            res = _optimise(sub_problem, u0, spec, max_nfev=50)
+            cost = float(res.cost)
+        else:
+            r = problem._residual({**problem.fixed, name: value})
+            cost = 0.5 * float(r @ r)
+        rows.append({"value": value, "delta_chi2": 2.0 * (cost - cost_best) / s2})
+    delta = np.array([r["delta_chi2"] for r in rows])
+    values = np.array([r["value"] for r in rows])
+    inside = values[delta <= 1.0]
+    interval = [float(inside.min()), float(inside.max())] if inside.size else None
+    open_ends = []
+    if interval is not None:
+        if delta[0] <= 1.0:
+            open_ends.append("lower")
+        if delta[-1] <= 1.0:
+            open_ends.append("upper")
+    return {"points": rows, "interval_delta_chi2_le_1": interval,
+            "open_ends": open_ends,
+            "rule": "others re-optimised at each grid value; an open end means the data do not "
+                    "bound the parameter on that side within the scanned range"}
+
+
+# ---------------------------------------------------------------------------
+def _finish(mode, problem, res, spec, params, start, residual_parts, noise, noise_given,
+            t0, alignment) -> FitResult:
+    u = res.x
+    standard_errors, corr, chi2_red, identifiable, notes = _uncertainty(
+        problem, u, res.fun, noise_given, spec.loss)
+    values = problem.space.values(u)
+    profiles = {}
+    if spec.profile:
+        s2 = max(1.0, chi2_red) if noise_given else chi2_red
+        for name in problem.space.names:
+            if not identifiable[name] or not math.isfinite(standard_errors[name]):
+                profiles[name] = _profile(problem, u, spec, float(res.cost), max(s2, 1e-300),
+                                          name, standard_errors[name])
+    for k, par in enumerate(params):
+        if par.lo < values[par.name] < par.hi:
+            continue
+        notes.append(f"{par.name} = {values[par.name]:.6g} sits on its bound "
+                     f"[{par.lo:g}, {par.hi:g}]: widen the bound or check the model")
+    return FitResult(
+        mode=mode, names=problem.space.names, values=values, start=start,
+        bounds={p.name: (p.lo, p.hi) for p in params}, standard_errors=standard_errors,
+        correlation=corr, identifiable=identifiable, notes=notes,
+        residual_rms=residual_parts(values), chi2_reduced=chi2_red, noise=noise,
+        evaluations=problem.evaluations, jacobian_evaluations=problem.jacobians,
+        dynamics_runs=problem.model.dynamics_runs, status=int(res.status),
+        message=str(res.message), wall_time=time.perf_counter() - t0, alignment=alignment,
+        profiles=profiles, loss=spec.loss)
+
+
+def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec, *,
+              simulate=None) -> FitResult:
+    """Fit ``spec.parameters`` of ``scene`` to a measured ``trace``.
+
+    ``curves`` is the surrogate's ``TerminalCurves`` at surface charge
+    ``reference_sigma`` [C/m²] (reused for every σ).
+    """
+    t0 = time.perf_counter()
+    params = spec.parameters
+    if not params:
+        raise FitError("no free parameters: list some in [fit.parameters]")
+    if trace.time.size <= len(params):
+        raise FitError(f"{trace.time.size} samples cannot fix {len(params)} parameters")
+    shift_param = next((p for p in params if p.name == "time_shift_s"), None)
+    max_shift = shift_param.hi if shift_param else 0.0
+    if shift_param and shift_param.lo < -scene.run.settle_periods * scene.excitation.period:
+        raise FitError(f"[fit.parameters] time_shift_s.min = {shift_param.lo:g} reaches before "
+                       "the start of the dynamics: allowed >= -settle_periods / frequency_hz")
+    model = ForwardModel(scene, curves, reference_sigma, span=trace.span + max(max_shift, 0.0),
+                         simulate=simulate)
+    quantities = [c.quantity for c in trace.columns]
+    weights = {c.quantity: c.noise for c in trace.columns}
+    noise_given = all(w is not None for w in weights.values())
+    for q in quantities:       # a provisional scale for the columns without a noise level
+        if weights[q] is None:
+            y = trace.values[q]
+            weights[q] = float(np.std(y)) or float(np.max(np.abs(y))) or 1.0
+
+    start = {p.name: p.start for p in params}
+    alignment = {}
+    fixed_shift = 0.0
+    if shift_param is None:
+        alignment = {"rule": "no time shift fitted: the trace's first sample is the "
+                             "steady-window start"}
+    if shift_param is not None and not shift_param.start_given:
+        start, alignment = _align(model, trace, params, start, weights, quantities)
+
+    def residual(values):
+        shift = values.get("time_shift_s", fixed_shift)
+        wave = model.waveforms(values, model.model_times(trace.time, shift), quantities)
+        return np.concatenate([(wave[q] - trace.values[q]) / weights[q] for q in quantities])
+
+    space = _Space(params)
+    problem = _Problem(model, space, residual)
+    u0 = np.clip(space.to_u([start[p.name] for p in params]), space.lower, space.upper)
+    if not np.any(residual(problem.values(u0)) != -np.concatenate(
+            [trace.values[q] / weights[q] for q in quantities])):
+        raise FitError("the model gives no signal at the start values (ball at rest or "
+                       "zero charge): change the start values or the scene")
+    res = _optimise(problem, u0, spec)
+    noise = {}
+    estimated = [q for q in quantities if next(c for c in trace.columns
+                                                if c.quantity == q).noise is None]
+    if estimated:   # reweight: a column's noise is its residual RMS, refit from the optimum
+        values = problem.values(res.x)
+        wave = model.waveforms(values, model.model_times(
+            trace.time, values.get("time_shift_s", fixed_shift)), quantities)
+        for q in estimated:
+            rms = float(np.sqrt(np.mean((wave[q] - trace.values[q]) ** 2)))
+            weights[q] = rms if rms > 0 else weights[q]
+        res = _optimise(problem, res.x, spec)
+    for q in quantities:
+        noise[q] = {"value_SI": weights[q], "how": "estimated from the residuals"
+                    if q in estimated else "given in [fit.columns]"}
+
+    def residual_parts(values):
+        shift = values.get("time_shift_s", fixed_shift)
+        wave = model.waveforms(values, model.model_times(trace.time, shift), quantities)
+        return {q: float(np.sqrt(np.mean((wave[q] - trace.values[q]) ** 2))) for q in quantities}
+
+    result = _finish("trace", problem, res, spec, params, start, residual_parts, noise,
+                     not estimated, t0, alignment)
+    shift = result.values.get("time_shift_s", fixed_shift)
+    result.measured = {"time": trace.time, **trace.values,
+                       "units": {c.quantity: c.unit for c in trace.columns}}
+    result.fitted = model.waveforms(result.values, model.model_times(trace.time, shift),
+                                    quantities)
+    result.wall_time = time.perf_counter() - t0
+    return result
+
+
+def _align(model, trace, params, start, weights, quantities, candidates: int = 400):
+    """Start values of the time shift (and of σ's scale) from a scan over the shift bounds."""
+    shift = next(p for p in params if p.name == "time_shift_s")
+    values = {p.name: start[p.name] for p in params if p.name != "time_shift_s"}
+    period = model.scene.excitation.period
+    step = min(float(np.median(np.diff(trace.time))), period / 200.0)
+    grid = model.window_start + shift.lo + np.arange(
+        0.0, trace.span + (shift.hi - shift.lo) + step, step)
+    dense = model.waveforms(values, grid, quantities)
+    pick = np.linspace(0, trace.time.size - 1, min(trace.time.size, 2000)).round().astype(int)
+    t_rel = trace.time[pick] - trace.time[0]
+    measured = {q: trace.values[q][pick] / weights[q] for q in quantities}
+    sigma_free = any(p.name == "surface_charge_uC_per_m2" for p in params)
+    shifts = np.linspace(shift.lo, shift.hi, candidates)
+    scores = np.empty(candidates)
+    scales = np.ones(candidates)
+    for i, s in enumerate(shifts):
+        f = {q: np.interp(model.window_start + s + t_rel, grid, dense[q]) / weights[q]
+             for q in quantities}
+        mf = sum(float(measured[q] @ f[q]) for q in quantities)
+        ff = sum(float(f[q] @ f[q]) for q in quantities)
+        a = (mf / ff if ff > 0 else 1.0) if sigma_free else 1.0
+        scales[i] = a
+        scores[i] = sum(float(np.sum((measured[q] - a * f[q]) ** 2)) for q in quantities)
+    best = int(np.argmin(scores))
+    out = dict(start)
+    out["time_shift_s"] = float(shifts[best])
+    note = {"rule": f"least-squares scan of {candidates} shifts over [{shift.lo:g}, "
+                    f"{shift.hi:g}] s at the start values"
+                    + (" with the best common charge scale" if sigma_free else ""),
+            "time_shift_start_s": out["time_shift_s"]}
+    sigma = next((p for p in params if p.name == "surface_charge_uC_per_m2"), None)
+    if sigma is not None and not sigma.start_given and scales[best] != 0:
+        out[sigma.name] = float(np.clip(start[sigma.name] * scales[best], sigma.lo, sigma.hi))
+        note["surface_charge_start_uC_per_m2"] = out[sigma.name]
+    return out, note
+
+
+def fit_targets(scene, curves, reference_sigma: float, targets: list[Target], spec: FitSpec, *,
+                simulate=None) -> FitResult:
+    """Fit ``spec.parameters`` to scalar targets (peak-to-peak / peak of V, Q, I over the
+    steady window of ``scene``)."""
+    t0 = time.perf_counter()
+    params = [p for p in spec.parameters]
+    if any(p.name == "time_shift_s" for p in params):
+        raise FitError("time_shift_s needs a measured trace: scalar targets have no phase; "
+                       "drop it from the free parameters")
+    if not params:
+        raise FitError("no free parameters: list some in [fit.parameters] or --free")
+    period = scene.excitation.period
+    span = max(scene.run.duration - scene.run.settle_periods * period, 5.0 * period)
+    model = ForwardModel(scene, curves, reference_sigma, span=span - period, simulate=simulate)
+
+    def residual(values):
+        scalars = model.scalars(values)
+        return np.array([(scalars[t.key] - t.value) / t.uncertainty for t in targets])
+
+    space = _Space(params)
+    problem = _Problem(model, space, residual)
+    start = {p.name: p.start for p in params}
+    u0 = np.clip(space.to_u([start[p.name] for p in params]), space.lower, space.upper)
+    res = _optimise(problem, u0, spec)
+
+    def residual_parts(values):
+        scalars = model.scalars(values)
+        return {t.label: float(scalars[t.key] - t.value) for t in targets}
+
+    noise = {t.label: {"value_SI": t.uncertainty, "how": "given (+-)" if t.uncertainty_given
+                       else "default: 5 % of the value"} for t in targets}
+    result = _finish("targets", problem, res, spec, params, start, residual_parts, noise,
+                     True, t0, {})
+    if len(targets) <= len(params):
+        result.notes.append(f"{len(targets)} targets for {len(params)} parameters: no degrees "
+                            "of freedom left, the residual says nothing about the model's error")
+    scalars = model.scalars(result.values)
+    result.measured = {t.label: t.value / t.factor for t in targets}
+    result.fitted = {t.label: scalars[t.key] / t.factor for t in targets}
+    result.wall_time = time.perf_counter() - t0
+    return result

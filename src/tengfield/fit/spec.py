@@ -1,0 +1,380 @@
+"""The ``[fit]`` section of a scene, measured traces and scalar targets, validated.
+
+Scene syntax (every key optional)::
+
+    [fit]
+    time_column = "time_s"        # the measured CSV's time column
+    time_unit = "s"               # s, ms, us
+    loss = "linear"               # or soft_l1, huber, cauchy, arctan (robust)
+    loss_scale = 1.0              # residual (in noise units) where a robust loss turns over
+    max_evaluations = 200
+    profile = false               # profile the poorly determined parameters
+
+    [fit.columns.V]               # V, Q and/or I; each: a CSV column, its unit, its noise
+    column = "V_meas"
+    unit = "V"                    # V: uV mV V kV; Q: pC nC uC C; I: pA nA uA mA A
+    noise = 0.02                  # 1-sigma noise, in `unit` (optional: else estimated)
+
+    [fit.parameters]              # the free parameters, in scene-file units
+    surface_charge_uC_per_m2 = {start = -20.0, min = -100.0, max = 0.0}
+    parallel_capacitance_pF = {min = 0.0, max = 1000.0}
+    time_shift_s = {}             # defaults: start from cross-correlation, bounds [0, 2 periods]
+
+Without ``[fit.columns]`` the columns of a ``tengfield run`` waveforms.csv
+(``V_oc_V``, ``Q_sc_C``, ``I_sc_A``) found in the file are used; without
+``[fit.parameters]`` σ and the time shift are free.
+"""
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+
+#: the free parameters a fit knows: (default bounds, transform, unit, meaning)
+PARAMETERS = {
+    "surface_charge_uC_per_m2": ((-200.0, 200.0), "linear", "uC/m^2", "ball surface charge σ"),
+    "parallel_capacitance_pF": ((0.0, 1.0e5), "linear", "pF", "instrument + cable capacitance C_p"),
+    "restitution": ((0.0, 0.99), "linear", "", "coefficient of restitution e"),
+    "load_ohm": ((1.0, 1.0e14), "log", "ohm", "load resistance R"),
+    "time_shift_s": ((None, None), "linear", "s", "model time of the trace's first sample "
+                     "after the steady-window start"),
+    "amplitude_scale": ((0.2, 5.0), "linear", "", "excitation amplitude / scene amplitude"),
+}
+
+UNITS = {
+    "V": {"uV": 1e-6, "mV": 1e-3, "V": 1.0, "kV": 1e3},
+    "Q": {"pC": 1e-12, "nC": 1e-9, "uC": 1e-6, "C": 1.0},
+    "I": {"pA": 1e-12, "nA": 1e-9, "uA": 1e-6, "mA": 1e-3, "A": 1.0},
+}
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
+#: columns of a ``tengfield run`` waveforms.csv, used when [fit.columns] is absent
+RUN_COLUMNS = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
+LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
+MIN_SAMPLES = 8
+
+
+def _suggest(word, options) -> str:
+    close = difflib.get_close_matches(str(word), list(options), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _number(where: str, value, lo=-math.inf, hi=math.inf) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SceneError(f"{where} = {value!r}: expected a finite number in [{lo:g}, {hi:g}]")
+    if not lo <= value <= hi:
+        raise SceneError(f"{where} = {value!r} is out of range: allowed [{lo:g}, {hi:g}]")
+    return float(value)
+
+
+@dataclass
+class Parameter:
+    """A free parameter in scene-file units with bounds [lo, hi] and a start value."""
+    name: str
+    start: float | None
+    lo: float
+    hi: float
+    transform: str = "linear"
+    start_given: bool = True
+
+
+@dataclass
+class Column:
+    quantity: str           # V, Q or I
+    column: str
+    unit: str
+    noise: float | None     # SI, 1-sigma
+
+    @property
+    def factor(self) -> float:
+        return UNITS[self.quantity][self.unit]
+
+
+@dataclass
+class FitSpec:
+    time_column: str = "time_s"
+    time_unit: str = "s"
+    loss: str = "linear"
+    loss_scale: float = 1.0
+    max_evaluations: int = 200
+    profile: bool = False
+    columns: list[Column] | None = None
+    parameters: list[Parameter] = field(default_factory=list)
+
+
+def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
+    """Validate ``scene.raw["fit"]``; ``free`` (names) overrides the free parameters."""
+    raw = scene.raw.get("fit", {}) or {}
+    known = ("time_column", "time_unit", "loss", "loss_scale", "max_evaluations", "profile",
+             "columns", "parameters")
+    for key in raw:
+        if key not in known:
+            raise SceneError(f"unknown key [fit] {key}" + _suggest(key, known)
+                             + f"; keys are {', '.join(known)}")
+    spec = FitSpec()
+    for key in ("time_column", "time_unit", "loss"):
+        if key in raw:
+            if not isinstance(raw[key], str):
+                raise SceneError(f"[fit] {key} = {raw[key]!r}: expected a string")
+            setattr(spec, key, raw[key])
+    if spec.time_unit not in TIME_UNITS:
+        raise SceneError(f"[fit] time_unit = {spec.time_unit!r} is not allowed: choose one of "
+                         + ", ".join(map(repr, TIME_UNITS)))
+    if spec.loss not in LOSSES:
+        raise SceneError(f"[fit] loss = {spec.loss!r} is not allowed: choose one of "
+                         + ", ".join(map(repr, LOSSES)) + _suggest(spec.loss, LOSSES))
+    if "loss_scale" in raw:
+        spec.loss_scale = _number("[fit] loss_scale", raw["loss_scale"], 1e-12, 1e12)
+        if spec.loss_scale <= 0:
+            raise SceneError(f"[fit] loss_scale = {raw['loss_scale']!r} must be > 0")
+    if "max_evaluations" in raw:
+        value = raw["max_evaluations"]
+        if isinstance(value, bool) or not isinstance(value, int) or not 5 <= value <= 100000:
+            raise SceneError(f"[fit] max_evaluations = {value!r}: expected a whole number "
+                             "in [5, 100000]")
+        spec.max_evaluations = value
+    if "profile" in raw:
+        if not isinstance(raw["profile"], bool):
+            raise SceneError(f"[fit] profile = {raw['profile']!r}: expected true or false")
+        spec.profile = raw["profile"]
+    spec.columns = _columns(raw.get("columns")) if "columns" in raw else None
+    spec.parameters = _parameters(scene, raw.get("parameters"), free)
+    return spec
+
+
+def _columns(raw) -> list[Column]:
+    if not isinstance(raw, dict) or not raw:
+        raise SceneError("[fit.columns] must be a table with V, Q and/or I sub-tables")
+    columns = []
+    for quantity, entry in raw.items():
+        where = f"[fit.columns.{quantity}]"
+        if quantity not in UNITS:
+            raise SceneError(f"unknown quantity {where}: allowed V, Q, I" + _suggest(quantity, UNITS))
+        if not isinstance(entry, dict):
+            raise SceneError(f"{where} must be a table (column, unit, noise)")
+        for key in entry:
+            if key not in ("column", "unit", "noise"):
+                raise SceneError(f"unknown key {where} {key}; keys are column, unit, noise"
+                                 + _suggest(key, ("column", "unit", "noise")))
+        column = entry.get("column", RUN_COLUMNS[quantity][0])
+        unit = entry.get("unit", RUN_COLUMNS[quantity][1])
+        if not isinstance(column, str) or not column:
+            raise SceneError(f"{where} column = {column!r}: expected a column name")
+        if unit not in UNITS[quantity]:
+            raise SceneError(f"{where} unit = {unit!r} is not allowed: choose one of "
+                             + ", ".join(map(repr, UNITS[quantity])) + _suggest(unit, UNITS[quantity]))
+        noise = None
+        if "noise" in entry:
+            noise = _number(f"{where} noise", entry["noise"], 0.0, math.inf)
+            if noise <= 0:
+                raise SceneError(f"{where} noise = {entry['noise']!r} is out of range: allowed (0, inf)")
+            noise *= UNITS[quantity][unit]
+        columns.append(Column(quantity, column, unit, noise))
+    return columns
+
+
+def _parameters(scene, raw, free) -> list[Parameter]:
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, dict):
+        raise SceneError("[fit.parameters] must be a table: name = {start, min, max}")
+    if free is not None:
+        names = list(free)
+        raw = {name: raw.get(name, {}) for name in names}
+    elif not raw:
+        raw = {"surface_charge_uC_per_m2": {}, "time_shift_s": {}}
+    params = []
+    period = scene.excitation.period
+    for name, entry in raw.items():
+        where = f"[fit.parameters] {name}"
+        if name not in PARAMETERS:
+            raise SceneError(f"unknown fit parameter {name!r}" + _suggest(name, PARAMETERS)
+                             + f"; free parameters are {', '.join(PARAMETERS)}")
+        if not isinstance(entry, dict):
+            raise SceneError(f"{where} = {entry!r}: expected a table {{start, min, max}}")
+        for key in entry:
+            if key not in ("start", "min", "max"):
+                raise SceneError(f"unknown key {where}.{key}; keys are start, min, max"
+                                 + _suggest(key, ("start", "min", "max")))
+        (lo, hi), transform, _, _ = PARAMETERS[name]
+        if name == "time_shift_s":
+            lo, hi = 0.0, 2.0 * period
+        lo = _number(f"{where}.min", entry["min"]) if "min" in entry else lo
+        hi = _number(f"{where}.max", entry["max"]) if "max" in entry else hi
+        if not lo < hi:
+            raise SceneError(f"{where}: min = {lo:g} must be < max = {hi:g}")
+        if transform == "log" and lo <= 0:
+            raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
+        if name == "restitution":
+            if lo < 0 or hi > 1:
+                raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] are out of range: allowed [0, 1]")
+        if name == "parallel_capacitance_pF" and lo < 0:
+            raise SceneError(f"{where}.min = {lo:g} is out of range: allowed [0, inf)")
+        if name == "amplitude_scale":
+            if lo <= 0:
+                raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
+            if scene.excitation.kind != "sine":
+                raise SceneError(f"{where}: only a sine excitation can be scaled "
+                                 f"([excitation] kind = {scene.excitation.kind!r})")
+        if name == "load_ohm" and scene.circuit.kind != "load":
+            raise SceneError(f"{where}: the scene has no load ([circuit] kind = "
+                             f"{scene.circuit.kind!r}); set kind = 'load' to fit load_ohm")
+        given = "start" in entry
+        start = _number(f"{where}.start", entry["start"], lo, hi) if given else _scene_value(scene, name)
+        if start is not None:
+            start = min(max(start, lo), hi)
+        if name == "surface_charge_uC_per_m2" and start == 0.0:
+            raise SceneError(f"{where}.start = 0: a zero charge gives no signal to scale; "
+                             "start from a non-zero value in [min, max]")
+        params.append(Parameter(name, start, lo, hi, transform, given))
+    return params
+
+
+def _scene_value(scene, name: str) -> float | None:
+    """The scene's own value of a fit parameter (file units); None for the time shift."""
+    return {"surface_charge_uC_per_m2": scene.device.surface_charge * 1e6 or -1.0,
+            "parallel_capacitance_pF": scene.circuit.parallel_capacitance * 1e12,
+            "restitution": scene.contact.restitution,
+            "load_ohm": scene.circuit.load,
+            "amplitude_scale": 1.0,
+            "time_shift_s": None}[name]
+
+
+# ---------------------------------------------------------------------------
+@dataclass
+class Trace:
+    """A measured trace: times [s] and {quantity: values [SI]}, with its columns."""
+    source: str
+    time: np.ndarray
+    values: dict
+    columns: list[Column]
+
+    @property
+    def span(self) -> float:
+        return float(self.time[-1] - self.time[0])
+
+
+def read_trace(path, spec: FitSpec) -> Trace:
+    """Read the measured CSV named by ``--measured`` (header row, comma separated)."""
+    path = Path(path)
+    name = str(path)
+    if not path.is_file():
+        raise SceneError(f"--measured {name!r}: no such file")
+    with path.open(newline="", encoding="utf-8") as handle:
+        rows = [row for row in csv.reader(handle) if row and not row[0].lstrip().startswith("#")]
+    if not rows:
+        raise SceneError(f"--measured {name!r} is empty: expected a header row and at least "
+                         f"{MIN_SAMPLES} data rows")
+    header = [h.strip() for h in rows[0]]
+    data = rows[1:]
+    columns = spec.columns
+    if columns is None:
+        columns = [Column(q, c, u, None) for q, (c, u) in RUN_COLUMNS.items() if c in header]
+        if not columns:
+            raise SceneError(f"--measured {name!r} has none of the columns "
+                             f"{', '.join(c for c, _ in RUN_COLUMNS.values())}; name the columns "
+                             f"in [fit.columns] (columns are {', '.join(header)})")
+    wanted = [("[fit] time_column", spec.time_column)] + \
+             [(f"[fit.columns.{c.quantity}] column", c.column) for c in columns]
+    for where, col in wanted:
+        if col not in header:
+            raise SceneError(f"{where} = {col!r} is not a column of {name!r}; columns are "
+                             f"{', '.join(header)}" + _suggest(col, header))
+    if len(data) < MIN_SAMPLES:
+        raise SceneError(f"--measured {name!r} has {len(data)} data rows: at least "
+                         f"{MIN_SAMPLES} are needed")
+
+    def column(col: str) -> np.ndarray:
+        j = header.index(col)
+        out = np.empty(len(data))
+        for i, row in enumerate(data):
+            try:
+                out[i] = float(row[j]) if j < len(row) and row[j].strip() else math.nan
+            except ValueError:
+                raise SceneError(f"--measured {name!r}: column {col!r} holds {row[j]!r} at data "
+                                 f"row {i + 1}: expected a number") from None
+        bad = np.flatnonzero(~np.isfinite(out))
+        if bad.size:
+            raise SceneError(f"--measured {name!r}: column {col!r} holds NaN, inf or a blank at "
+                             f"data row {bad[0] + 1} ({bad.size} such rows); remove or fill them")
+        return out
+
+    time = column(spec.time_column) * TIME_UNITS[spec.time_unit]
+    step = np.diff(time)
+    if np.any(step <= 0):
+        i = int(np.flatnonzero(step <= 0)[0])
+        raise SceneError(f"--measured {name!r}: time is not strictly increasing at data row "
+                         f"{i + 2} ({time[i]:g} s then {time[i + 1]:g} s)")
+    values = {c.quantity: column(c.column) * c.factor for c in columns}
+    return Trace(name, time, values, columns)
+
+
+# ---------------------------------------------------------------------------
+_TARGET = re.compile(r"^(?P<q>[VQI])_(?P<kind>pp|peak)_(?P<unit>[A-Za-z]+)$")
+
+
+@dataclass
+class Target:
+    """A scalar target: peak-to-peak (``pp``) or peak |x| (``peak``) of V, Q or I."""
+    quantity: str
+    kind: str
+    unit: str
+    value: float        # SI
+    uncertainty: float  # SI, 1-sigma
+    uncertainty_given: bool
+
+    @property
+    def key(self) -> str:
+        return f"{self.quantity}_{self.kind}"
+
+    @property
+    def label(self) -> str:
+        return f"{self.quantity}_{self.kind}_{self.unit}"
+
+    @property
+    def factor(self) -> float:
+        return UNITS[self.quantity][self.unit]
+
+
+#: relative 1-sigma uncertainty of a target given without ``+-``
+DEFAULT_TARGET_UNCERTAINTY = 0.05
+
+
+def parse_targets(items) -> list[Target]:
+    """``["V_pp_V=4.2", "Q_pp_nC=1.42+-0.05", "I_peak_uA=0.16"]`` -> targets (SI)."""
+    targets = []
+    for item in items:
+        text = str(item).strip()
+        name, _, value = text.partition("=")
+        match = _TARGET.match(name.strip())
+        if not match or not value:
+            raise SceneError(f"--targets {text!r}: expected NAME=VALUE[+-SIGMA] with NAME like "
+                             "V_pp_V, Q_pp_nC, I_peak_uA ({V,Q,I}_{pp,peak}_{unit})")
+        q, kind, unit = match["q"], match["kind"], match["unit"]
+        if unit not in UNITS[q]:
+            raise SceneError(f"--targets {text!r}: unit {unit!r} is not allowed for {q}: choose "
+                             "one of " + ", ".join(map(repr, UNITS[q])) + _suggest(unit, UNITS[q]))
+        value, _, sigma = value.partition("+-")
+        try:
+            number = float(value)
+            spread = float(sigma) if sigma else abs(number) * DEFAULT_TARGET_UNCERTAINTY
+        except ValueError:
+            raise SceneError(f"--targets {text!r}: {value!r} or {sigma!r} is not a number") from None
+        if not math.isfinite(number) or number <= 0:
+            raise SceneError(f"--targets {text!r}: value {number!r} is out of range: allowed (0, inf)")
+        if not math.isfinite(spread) or spread <= 0:
+            raise SceneError(f"--targets {text!r}: uncertainty {spread!r} is out of range: "
+                             "allowed (0, inf)")
+        factor = UNITS[q][unit]
+        if any(t.key == f"{q}_{kind}" for t in targets):
+            raise SceneError(f"--targets {text!r}: {q}_{kind} is given twice")
+        targets.append(Target(q, kind, unit, number * factor, spread * factor, bool(sigma)))
+    if not targets:
+        raise SceneError("--targets: give at least one NAME=VALUE")
+    return targets
