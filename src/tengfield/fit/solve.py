@@ -120,7 +120,7 @@ class _Space:
 
     def values(self, u) -> dict:
         v = self.origin + self.scale * np.asarray(u, dtype=float)
-        v = np.where(self.log, 10.0 ** v, v)
+        v = np.where(self.log, 10.0 ** np.where(self.log, v, 0.0), v)
         return dict(zip(self.names, map(float, v)))
 
     def value_per_u(self, u) -> np.ndarray:
@@ -257,32 +257,77 @@ def _uncertainty(problem: _Problem, u, residual, noise_given: bool, loss: str):
     return standard_errors, corr, chi2_red, identifiable, notes
 
 
+def _best_charge_scale(problem: _Problem, u) -> np.ndarray:
+    """``u`` with σ (if free) set to its least-squares value at the other parameters
+    (closed form: the residual is affine in σ)."""
+    name = "surface_charge_uC_per_m2"
+    space = problem.space
+    if name not in space.names:
+        return u
+    values = problem.values(u)
+    if values[name] == 0.0:
+        return u
+    r = problem._residual(values)
+    r0 = problem._residual({**values, name: 0.0})
+    m = r - r0
+    mm = float(m @ m)
+    if mm == 0.0:
+        return u
+    best = values[name] * -float(r0 @ m) / mm
+    k = space.names.index(name)
+    par = space.params[k]
+    values = dict(space.values(u))
+    values[name] = float(np.clip(best, par.lo, par.hi))
+    return np.clip(space.to_u([values[n] for n in space.names]), space.lower, space.upper)
+
+
 def _profile(problem: _Problem, u_best, spec: FitSpec, cost_best: float, s2: float,
-             name: str, standard_error: float, points: int = 9) -> dict:
-    """Δχ² = 2 (cost - cost_best) / s² along ``name``, the others re-optimised."""
+             name: str, standard_error: float, points: int = 13,
+             whole_range: bool = False) -> dict:
+    """Δχ² = 2 (cost - cost_best) / s² along ``name``, the others re-optimised.
+
+    The grid spans ±3 standard errors, or the whole bounds (``whole_range``, for a
+    parameter the data do not identify; geometric for a non-negative one)."""
     space = problem.space
     k = space.names.index(name)
+    par = space.params[k]
     scale = space.value_per_u(u_best)[k]
     half = 3.0 * standard_error / scale if math.isfinite(standard_error) and standard_error > 0 \
         else np.inf
-    lo = max(space.lower[k], u_best[k] - half)
-    hi = min(space.upper[k], u_best[k] + half)
-    grid = np.linspace(lo, hi, points)
+    if whole_range or not math.isfinite(half):
+        if par.transform == "linear" and par.lo >= 0.0 and par.hi > 0.0:
+            # non-negative scale parameters (C_p): geometric grid, the decades matter
+            values = np.concatenate([[par.lo], np.geomspace(max(par.lo, 1e-3 * par.hi),
+                                                            par.hi, points - 1)])
+            grid = space.to_u(np.where(np.arange(len(u_best))[:, None] == k, values[None, :],
+                                       np.array(list(space.values(u_best).values()))[:, None]).T)[:, k]
+        else:
+            grid = np.linspace(space.lower[k], space.upper[k], points)
+    else:
+        grid = np.linspace(max(space.lower[k], u_best[k] - half),
+                           min(space.upper[k], u_best[k] + half), points)
     others = [n for n in space.names if n != name]
-    rows = []
-    for uk in grid:
-        value = space.values(np.where(np.arange(len(u_best)) == k, uk, u_best))[name]
+    sub = _Space([p for p in space.params if p.name != name])
+    # continuation: walk outwards from the optimum, each refit starting from its neighbour
+    centre = int(np.argmin(np.abs(grid - u_best[k])))
+    order = list(range(centre, -1, -1)) + list(range(centre + 1, grid.size))
+    rows: list = [None] * grid.size
+    u_prev = {}
+    for i in order:
+        value = space.values(np.where(np.arange(len(u_best)) == k, grid[i], u_best))[name]
+        fixed = {**problem.fixed, name: value}
         if others:
-            sub = _Space([p for p in space.params if p.name != name])
-            sub_problem = _Problem(problem.model, sub, problem._residual,
-                                   fixed={**problem.fixed, name: value})
-            u0 = np.clip(np.delete(u_best, k), sub.lower, sub.upper)
-            res = _optimise(sub_problem, u0, spec, max_nfev=50)
+            sub_problem = _Problem(problem.model, sub, problem._residual, fixed=fixed)
+            neighbour = i + 1 if i < centre else i - 1
+            u0 = u_prev.get(neighbour, np.delete(u_best, k))
+            u0 = _best_charge_scale(sub_problem, np.clip(u0, sub.lower, sub.upper))
+            res = _optimise(sub_problem, u0, spec, max_nfev=100)
+            u_prev[i] = res.x
             cost = float(res.cost)
         else:
-            r = problem._residual({**problem.fixed, name: value})
+            r = problem._residual(fixed)
             cost = 0.5 * float(r @ r)
-        rows.append({"value": value, "delta_chi2": 2.0 * (cost - cost_best) / s2})
+        rows[i] = {"value": value, "delta_chi2": 2.0 * (cost - cost_best) / s2}
     delta = np.array([r["delta_chi2"] for r in rows])
     values = np.array([r["value"] for r in rows])
     inside = values[delta <= 1.0]
@@ -293,10 +338,13 @@ def _profile(problem: _Problem, u_best, spec: FitSpec, cost_best: float, s2: flo
             open_ends.append("lower")
         if delta[-1] <= 1.0:
             open_ends.append("upper")
+    flat = [side for side, a, b in (("lower", delta[0], delta[1]), ("upper", delta[-1], delta[-2]))
+            if abs(a - b) < 1.0 and min(a, b) < 25.0]
     return {"points": rows, "interval_delta_chi2_le_1": interval,
-            "open_ends": open_ends,
-            "rule": "others re-optimised at each grid value; an open end means the data do not "
-                    "bound the parameter on that side within the scanned range"}
+            "open_ends": open_ends, "flat_towards": flat,
+            "rule": "others re-optimised at each grid value; an open end (delta chi^2 <= 1 at the "
+                    "scan's end) or a flat end (delta chi^2 changes by < 1 over the last grid "
+                    "step) means the data do not bound the parameter on that side"}
 
 
 # ---------------------------------------------------------------------------
@@ -312,7 +360,7 @@ def _finish(mode, problem, res, spec, params, start, residual_parts, noise, nois
         for name in problem.space.names:
             if not identifiable[name] or not math.isfinite(standard_errors[name]):
                 profiles[name] = _profile(problem, u, spec, float(res.cost), max(s2, 1e-300),
-                                          name, standard_errors[name])
+                                          name, standard_errors[name], whole_range=True)
     for k, par in enumerate(params):
         if par.lo < values[par.name] < par.hi:
             continue
@@ -363,8 +411,10 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
     if shift_param is None:
         alignment = {"rule": "no time shift fitted: the trace's first sample is the "
                              "steady-window start"}
-    if shift_param is not None and not shift_param.start_given:
-        start, alignment = _align(model, trace, params, start, weights, quantities)
+    if (shift_param is not None and not shift_param.start_given) or \
+            any(p.name in SCAN_POINTS for p in params):
+        start, scan = _start_scan(model, trace, params, start, weights, quantities)
+        alignment.update(scan)
 
     def residual(values):
         shift = values.get("time_shift_s", fixed_shift)
@@ -410,40 +460,67 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
     return result
 
 
-def _align(model, trace, params, start, weights, quantities, candidates: int = 400):
-    """Start values of the time shift (and of σ's scale) from a scan over the shift bounds."""
-    shift = next(p for p in params if p.name == "time_shift_s")
-    values = {p.name: start[p.name] for p in params if p.name != "time_shift_s"}
+#: grid sizes of the start scan over the parameters that change the dynamics
+SCAN_POINTS = {"restitution": 13, "amplitude_scale": 9}
+
+
+def _start_scan(model, trace, params, start, weights, quantities, candidates: int = 240):
+    """Start values from a scan: the time shift over its bounds (a least-squares
+    cross-correlation with the best common charge scale when σ is free) for every
+    point of a coarse grid of the restitution / amplitude scale (the impact map has
+    local minima there), keeping the best. Returns (start, description)."""
+    by_name = {p.name: p for p in params}
+    shift = by_name.get("time_shift_s")
+    scan_shift = shift is not None and not shift.start_given
+    sigma = by_name.get("surface_charge_uC_per_m2")
+    grids = []
+    for name, points in SCAN_POINTS.items():
+        if name in by_name:
+            p = by_name[name]
+            grids.append((name, np.unique(np.append(np.linspace(p.lo, p.hi, points), start[name]))))
+    combos = [dict()]
+    for name, values in grids:
+        combos = [{**c, name: float(v)} for c in combos for v in values]
     period = model.scene.excitation.period
     step = min(float(np.median(np.diff(trace.time))), period / 200.0)
-    grid = model.window_start + shift.lo + np.arange(
-        0.0, trace.span + (shift.hi - shift.lo) + step, step)
-    dense = model.waveforms(values, grid, quantities)
+    lo, hi = (shift.lo, shift.hi) if scan_shift else ((start.get("time_shift_s", 0.0),) * 2)
+    shifts = np.linspace(lo, hi, candidates) if scan_shift else np.array([lo])
+    grid = model.window_start + lo + np.arange(0.0, trace.span + (hi - lo) + step, step)
     pick = np.linspace(0, trace.time.size - 1, min(trace.time.size, 2000)).round().astype(int)
     t_rel = trace.time[pick] - trace.time[0]
     measured = {q: trace.values[q][pick] / weights[q] for q in quantities}
-    sigma_free = any(p.name == "surface_charge_uC_per_m2" for p in params)
-    shifts = np.linspace(shift.lo, shift.hi, candidates)
-    scores = np.empty(candidates)
-    scales = np.ones(candidates)
-    for i, s in enumerate(shifts):
-        f = {q: np.interp(model.window_start + s + t_rel, grid, dense[q]) / weights[q]
-             for q in quantities}
-        mf = sum(float(measured[q] @ f[q]) for q in quantities)
-        ff = sum(float(f[q] @ f[q]) for q in quantities)
-        a = (mf / ff if ff > 0 else 1.0) if sigma_free else 1.0
-        scales[i] = a
-        scores[i] = sum(float(np.sum((measured[q] - a * f[q]) ** 2)) for q in quantities)
-    best = int(np.argmin(scores))
-    out = dict(start)
-    out["time_shift_s"] = float(shifts[best])
-    note = {"rule": f"least-squares scan of {candidates} shifts over [{shift.lo:g}, "
-                    f"{shift.hi:g}] s at the start values"
-                    + (" with the best common charge scale" if sigma_free else ""),
-            "time_shift_start_s": out["time_shift_s"]}
-    sigma = next((p for p in params if p.name == "surface_charge_uC_per_m2"), None)
-    if sigma is not None and not sigma.start_given and scales[best] != 0:
-        out[sigma.name] = float(np.clip(start[sigma.name] * scales[best], sigma.lo, sigma.hi))
+    best = (math.inf, None, None, None)
+    for combo in combos:
+        values = {p.name: start[p.name] for p in params if p.name != "time_shift_s"}
+        values.update(combo)
+        try:
+            dense = model.waveforms(values, grid, quantities)
+        except TengfieldError:
+            continue
+        for s in shifts:
+            f = {q: np.interp(model.window_start + s + t_rel, grid, dense[q]) / weights[q]
+                 for q in quantities}
+            mf = sum(float(measured[q] @ f[q]) for q in quantities)
+            ff = sum(float(f[q] @ f[q]) for q in quantities)
+            a = (mf / ff if ff > 0 else 1.0) if sigma is not None else 1.0
+            score = sum(float(np.sum((measured[q] - a * f[q]) ** 2)) for q in quantities)
+            if score < best[0]:
+                best = (score, combo, float(s), a)
+    if best[1] is None:
+        return start, {"rule": "start scan failed: the given start values are used"}
+    _, combo, s, a = best
+    out = {**start, **combo}
+    note = {"rule": f"least-squares scan at the start values: {len(shifts)} time shifts in "
+                    f"[{lo:g}, {hi:g}] s" + (" x " + " x ".join(
+                        f"{len(v)} {n}" for n, v in grids) if grids else "")
+                    + (", best common charge scale" if sigma is not None else "")}
+    if scan_shift:
+        out["time_shift_s"] = s
+        note["time_shift_start_s"] = s
+    for name in combo:
+        note[f"{name}_start"] = combo[name]
+    if sigma is not None and a != 0:
+        out[sigma.name] = float(np.clip(start[sigma.name] * a, sigma.lo, sigma.hi))
         note["surface_charge_start_uC_per_m2"] = out[sigma.name]
     return out, note
 
