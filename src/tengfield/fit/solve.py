@@ -204,6 +204,8 @@ def _uncertainty(problem: _Problem, u, residual, noise_given: bool, loss: str):
         notes.append(f"{names[k]} has no effect on these data: it is not identifiable "
                      "(fix it, or measure a quantity it changes)")
     cov_u = np.full((p, p), np.nan)
+    for k in np.flatnonzero(~active):
+        cov_u[k, k] = np.inf
     if active.any():
         Jn = J[:, active] / norms[active]
         _, sv, vt = np.linalg.svd(Jn, full_matrices=False)
@@ -247,6 +249,10 @@ def _uncertainty(problem: _Problem, u, residual, noise_given: bool, loss: str):
             elif abs(c) > STRONGLY_CORRELATED:
                 notes.append(f"{pair} are strongly correlated ({c:+.3f}): their standard "
                              "errors are large together, their combination is better determined")
+    if noise_given and chi2_red > 4.0 and n > p:
+        notes.append(f"reduced chi^2 = {chi2_red:.3g} with the given noise levels: the data are "
+                     "not consistent with the model at any parameter values in the bounds (or "
+                     "the noise is understated); standard errors are scaled by sqrt(chi^2)")
     for k, par in enumerate(space.params):
         se = standard_errors[par.name]
         if identifiable[par.name] and math.isfinite(se) and se > 0.25 * (par.hi - par.lo) \
