@@ -154,3 +154,35 @@ def test_load_resistance_from_the_load_voltage(plate_scene, plate_surrogate):
         assert abs(result.values[name] - value) < 3.5 * result.standard_errors[name], \
             (name, result.values, result.standard_errors)
     assert math.isfinite(result.standard_errors["load_ohm"])
+
+
+def test_given_noise_levels_are_used_and_checked(plate_scene, plate_surrogate):
+    """White noise of a stated level: reduced χ² ≈ 1 and the SEs use that level; stating a
+    noise 10x too small is caught by χ² (and the SEs are scaled up by sqrt(χ²))."""
+    trace, clean = synthetic(plate_scene, plate_surrogate, 9, ("Q",), hum=0.0, white=0.02)
+    level = 0.02 * float(np.ptp(clean["Q"]))
+    free = {"surface_charge_uC_per_m2": {}, "time_shift_s": {}}
+    trace.columns[0].noise = level
+    honest = _fit(plate_scene, plate_surrogate, trace, free)
+    assert honest.noise["Q"]["how"].startswith("given")
+    assert honest.chi2_reduced == pytest.approx(1.0, abs=0.1)
+    trace.columns[0].noise = level / 10.0
+    understated = _fit(plate_scene, plate_surrogate, trace, free)
+    assert understated.chi2_reduced == pytest.approx(100.0, rel=0.1)
+    assert any("not consistent" in n for n in understated.notes)
+    se = "surface_charge_uC_per_m2"
+    assert understated.standard_errors[se] == pytest.approx(honest.standard_errors[se], rel=0.1)
+
+
+def test_excitation_amplitude_scale(plate_scene, plate_surrogate):
+    """The table amplitude is 8 % larger than the scene says: the amplitude scale, σ and the
+    shift come back from a Q + I trace (the dynamics re-run, the surrogate reused)."""
+    true = {"surface_charge_uC_per_m2": -30.0, "amplitude_scale": 1.08}
+    trace, _ = synthetic(plate_scene, plate_surrogate, 13, ("Q", "I"), true=true, hum=0.0)
+    free = {"surface_charge_uC_per_m2": {}, "amplitude_scale": {"min": 0.8, "max": 1.3},
+            "time_shift_s": {}}
+    result = _fit(plate_scene, plate_surrogate, trace, free)
+    for name, value in true.items():
+        assert abs(result.values[name] - value) < 3.5 * result.standard_errors[name], \
+            (name, result.values, result.standard_errors)
+    assert result.dynamics_runs > 1
