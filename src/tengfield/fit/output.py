@@ -93,10 +93,14 @@ def plot_fit(result: FitResult, path) -> Path:
         fig = Figure(figsize=(6.0, 3.2))
         ax = fig.subplots()
         x = np.arange(len(labels))
-        ax.bar(x - 0.2, [result.measured[k] for k in labels], 0.4, label="target")
-        ax.bar(x + 0.2, [result.fitted[k] for k in labels], 0.4, label="fitted")
+        ratio = [result.fitted[k] / result.measured[k] for k in labels]
+        spread = [result.noise[k].get("relative", 0.0) for k in labels]
+        ax.axhline(1.0, color="0.3", lw=0.8)
+        ax.errorbar(x, np.ones(len(labels)), yerr=spread, fmt="none", ecolor="C0", capsize=6,
+                    label="target ± 1σ")
+        ax.plot(x, ratio, "o", color="C3", label="fitted")
         ax.set_xticks(x, labels)
-        ax.set_yscale("log")
+        ax.set_ylabel("value / target")
         ax.legend(fontsize=8)
         ax.set_title(_title(result), fontsize=8)
     else:
@@ -133,4 +137,4 @@ def _title(result: FitResult) -> str:
         se = result.standard_errors[name]
         flag = "" if result.identifiable[name] else " (n.i.)"
         parts.append(f"{name} = {result.values[name]:.4g} ± {se:.2g}{flag}")
-    return "; ".join(parts)
+    return "\n".join("; ".join(parts[i:i + 2]) for i in range(0, len(parts), 2))

@@ -560,7 +560,8 @@ def fit_targets(scene, curves, reference_sigma: float, targets: list[Target], sp
         scalars = model.scalars(values)
         return {t.label: float(scalars[t.key] - t.value) for t in targets}
 
-    noise = {t.label: {"value_SI": t.uncertainty, "how": "given (+-)" if t.uncertainty_given
+    noise = {t.label: {"value_SI": t.uncertainty, "relative": t.uncertainty / t.value,
+                       "how": "given (+-)" if t.uncertainty_given
                        else "default: 5 % of the value"} for t in targets}
     result = _finish("targets", problem, res, spec, params, start, residual_parts, noise,
                      True, t0, {})
