@@ -34,6 +34,9 @@ def register(sub) -> None:
                    help="residual loss (overrides [fit] loss; robust losses resist outliers)")
     p.add_argument("--profile", action="store_true",
                    help="profile the poorly determined parameters (Δχ² ≤ 1 intervals)")
+    p.add_argument("--bootstrap", type=int, default=None, metavar="N",
+                   help="N moving-block bootstrap refits of a trace fit (overrides [fit] "
+                        "bootstrap)")
     p.add_argument("-o", "--output", default="out", metavar="DIR",
                    help="output directory (created; default ./out)")
     p.add_argument("--cache-dir", default=None, metavar="DIR",
@@ -53,6 +56,8 @@ def _run(args) -> int:
         overrides["loss"] = args.loss
     if args.profile:
         overrides["profile"] = True
+    if args.bootstrap is not None:
+        overrides["bootstrap"] = args.bootstrap
     free = [n.strip() for n in args.free.split(",") if n.strip()] if args.free else None
     result = calibrate(scene, measured=args.measured, targets=args.targets, free=free,
                        cache_dir=args.cache_dir, progress=True, overrides=overrides or None)

@@ -63,6 +63,7 @@ class FitResult:
     wall_time: float
     alignment: dict = field(default_factory=dict)
     profiles: dict = field(default_factory=dict)
+    bootstrap: dict = field(default_factory=dict)
     measured: dict = field(default_factory=dict)    # plotting: time, values
     fitted: dict = field(default_factory=dict)
     loss: str = "linear"
@@ -91,6 +92,7 @@ class FitResult:
             "wall_time_s": self.wall_time,
             "alignment": self.alignment,
             "profiles": self.profiles,
+            "bootstrap": self.bootstrap,
             "uncertainty_rule": "covariance s^2 (J^T J)^-1 at the optimum, J the Jacobian of the "
                                 "weighted residuals; s^2 = reduced chi^2 when the noise is "
                                 "estimated, max(1, reduced chi^2) when it is given; assumes "
@@ -422,10 +424,11 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
         start, scan = _start_scan(model, trace, params, start, weights, quantities)
         alignment.update(scan)
 
-    def residual(values):
+    def residual(values, data=None):
+        data = trace.values if data is None else data
         shift = values.get("time_shift_s", fixed_shift)
         wave = model.waveforms(values, model.model_times(trace.time, shift), quantities)
-        return np.concatenate([(wave[q] - trace.values[q]) / weights[q] for q in quantities])
+        return np.concatenate([(wave[q] - data[q]) / weights[q] for q in quantities])
 
     space = _Space(params)
     problem = _Problem(model, space, residual)
@@ -462,8 +465,40 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
                        "units": {c.quantity: c.unit for c in trace.columns}}
     result.fitted = model.waveforms(result.values, model.model_times(trace.time, shift),
                                     quantities)
+    if spec.bootstrap:
+        result.bootstrap = _bootstrap(problem, res.x, residual, result.fitted, trace, spec)
     result.wall_time = time.perf_counter() - t0
     return result
+
+
+def _bootstrap(problem: _Problem, u_best, residual, fitted: dict, trace: Trace,
+               spec: FitSpec, seed: int = 12345) -> dict:
+    """Moving-block residual bootstrap: ``spec.bootstrap`` refits (from the optimum, no
+    scan) to fitted + residuals resampled in blocks of a quarter period (keeps the
+    correlation of hum and drift within a block). Standard deviation and 16/84 %
+    percentiles per parameter (file units)."""
+    rng = np.random.default_rng(seed)
+    period = problem.model.scene.excitation.period
+    n = trace.time.size
+    step = float(np.median(np.diff(trace.time)))
+    block = int(min(max(1, round(0.25 * period / step)), max(1, n // 4)))
+    resid = {q: trace.values[q] - fitted[q] for q in fitted}
+    samples = []
+    for _ in range(spec.bootstrap):
+        starts = rng.integers(0, n - block + 1, size=int(np.ceil(n / block)))
+        index = (starts[:, None] + np.arange(block)[None, :]).ravel()[:n]
+        data = {q: fitted[q] + resid[q][index] for q in fitted}
+        replica = _Problem(problem.model, problem.space, lambda v, d=data: residual(v, d))
+        samples.append(_optimise(replica, u_best, spec).x)
+    values = np.array([list(problem.space.values(u).values()) for u in samples])
+    out = {"replicas": spec.bootstrap, "block_samples": block,
+           "rule": "moving-block residual bootstrap, blocks of a quarter period, refits "
+                   "started at the optimum"}
+    for k, name in enumerate(problem.space.names):
+        col = values[:, k]
+        out[name] = {"standard_deviation": float(np.std(col, ddof=1)) if col.size > 1 else None,
+                     "p16": float(np.percentile(col, 16)), "p84": float(np.percentile(col, 84))}
+    return out
 
 
 #: grid sizes of the start scan over the parameters that change the dynamics
@@ -565,6 +600,9 @@ def fit_targets(scene, curves, reference_sigma: float, targets: list[Target], sp
                        else "default: 5 % of the value"} for t in targets}
     result = _finish("targets", problem, res, spec, params, start, residual_parts, noise,
                      True, t0, {})
+    if spec.bootstrap:
+        result.notes.append("bootstrap skipped: it resamples a trace's residuals, targets have "
+                            "none (see the standard errors)")
     if len(targets) <= len(params):
         result.notes.append(f"{len(targets)} targets for {len(params)} parameters: no degrees "
                             "of freedom left, the residual says nothing about the model's error")

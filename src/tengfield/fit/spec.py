@@ -9,6 +9,7 @@ Scene syntax (every key optional)::
     loss_scale = 1.0              # residual (in noise units) where a robust loss turns over
     max_evaluations = 200
     profile = false               # profile the poorly determined parameters
+    bootstrap = 0                 # moving-block bootstrap replicas (trace fits)
 
     [fit.columns.V]               # V, Q and/or I; each: a CSV column, its unit, its noise
     column = "V_meas"
@@ -104,6 +105,7 @@ class FitSpec:
     loss_scale: float = 1.0
     max_evaluations: int = 200
     profile: bool = False
+    bootstrap: int = 0
     columns: list[Column] | None = None
     parameters: list[Parameter] = field(default_factory=list)
 
@@ -112,7 +114,7 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
     """Validate ``scene.raw["fit"]``; ``free`` (names) overrides the free parameters."""
     raw = scene.raw.get("fit", {}) or {}
     known = ("time_column", "time_unit", "loss", "loss_scale", "max_evaluations", "profile",
-             "columns", "parameters")
+             "bootstrap", "columns", "parameters")
     for key in raw:
         if key not in known:
             raise SceneError(f"unknown key [fit] {key}" + _suggest(key, known)
@@ -143,6 +145,12 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
         if not isinstance(raw["profile"], bool):
             raise SceneError(f"[fit] profile = {raw['profile']!r}: expected true or false")
         spec.profile = raw["profile"]
+    if "bootstrap" in raw:
+        value = raw["bootstrap"]
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 10000:
+            raise SceneError(f"[fit] bootstrap = {value!r}: expected a whole number of replicas "
+                             "in [0, 10000]")
+        spec.bootstrap = value
     spec.columns = _columns(raw.get("columns")) if "columns" in raw else None
     spec.parameters = _parameters(scene, raw.get("parameters"), free)
     return spec
