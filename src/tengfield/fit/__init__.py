@@ -64,7 +64,7 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
                                                comm=comm, progress=progress)
     if targets is not None:
         return fit_targets(scene, curves, sigma_ref, goal, spec, simulate=simulate)
-    return fit_trace(scene, curves, sigma_ref, goal, spec, simulate=simulate)
+    return fit_trace(scene, curves, sigma_ref, goal, spec, simulate=simulate, progress=progress)
 
 
 def _default_target_parameters(targets) -> list[str]:

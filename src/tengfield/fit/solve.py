@@ -386,7 +386,7 @@ def _finish(mode, problem, res, spec, params, start, residual_parts, noise, nois
 
 
 def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec, *,
-              simulate=None) -> FitResult:
+              simulate=None, progress: bool = False) -> FitResult:
     """Fit ``spec.parameters`` of ``scene`` to a measured ``trace``.
 
     ``curves`` is the surrogate's ``TerminalCurves`` at surface charge
@@ -466,13 +466,14 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
     result.fitted = model.waveforms(result.values, model.model_times(trace.time, shift),
                                     quantities)
     if spec.bootstrap:
-        result.bootstrap = _bootstrap(problem, res.x, residual, result.fitted, trace, spec)
+        result.bootstrap = _bootstrap(problem, res.x, residual, result.fitted, trace, spec,
+                                      progress=progress)
     result.wall_time = time.perf_counter() - t0
     return result
 
 
 def _bootstrap(problem: _Problem, u_best, residual, fitted: dict, trace: Trace,
-               spec: FitSpec, seed: int = 12345) -> dict:
+               spec: FitSpec, seed: int = 12345, progress: bool = False) -> dict:
     """Moving-block residual bootstrap: ``spec.bootstrap`` refits (from the optimum, no
     scan) to fitted + residuals resampled in blocks of a quarter period (keeps the
     correlation of hum and drift within a block). Standard deviation and 16/84 %
@@ -483,8 +484,13 @@ def _bootstrap(problem: _Problem, u_best, residual, fitted: dict, trace: Trace,
     step = float(np.median(np.diff(trace.time)))
     block = int(min(max(1, round(0.25 * period / step)), max(1, n // 4)))
     resid = {q: trace.values[q] - fitted[q] for q in fitted}
+    import sys
+
+    from tqdm import tqdm
+
     samples = []
-    for _ in range(spec.bootstrap):
+    for _ in tqdm(range(spec.bootstrap), desc="bootstrap", unit="refit", file=sys.stderr,
+                  disable=not (progress and sys.stderr.isatty())):
         starts = rng.integers(0, n - block + 1, size=int(np.ceil(n / block)))
         index = (starts[:, None] + np.arange(block)[None, :]).ravel()[:n]
         data = {q: fitted[q] + resid[q][index] for q in fitted}
