@@ -253,7 +253,7 @@ def _uncertainty(problem: _Problem, u, residual, noise_given: bool, loss: str):
                              "errors are large together, their combination is better determined")
     if noise_given and chi2_red > 4.0 and n > p:
         notes.append(f"reduced chi^2 = {chi2_red:.3g} with the given noise levels: the data are "
-                     "not consistent with the model at any parameter values in the bounds (or "
+                     "not consistent with the model at the fitted values (or "
                      "the noise is understated); standard errors are scaled by sqrt(chi^2)")
     for k, par in enumerate(space.params):
         se = standard_errors[par.name]
