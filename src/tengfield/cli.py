@@ -23,6 +23,7 @@ COMMAND_MODULES = [
     "precompute",
     "sweep",
     "report",
+    "fit",
 ]
 
 
