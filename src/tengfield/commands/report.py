@@ -25,8 +25,7 @@ def register(sub) -> None:
 def _report(args) -> int:
     from mpi4py import MPI
 
-    from ..report import build_report
-    from ..report_output import write_report
+    from ..report import build_report, write_report
     from ..scene import load_scene
 
     scene = load_scene(args.scene)

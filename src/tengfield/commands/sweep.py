@@ -2,12 +2,11 @@
 excitations (and loads) with one surrogate (paper Figs. 9e-f, S13)."""
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
+from ._common import add_cache_argument, command_line
 from ._ranges import parse_range
-from .run import add_cache_argument, command_line
 
 
 def register(sub) -> None:
@@ -30,10 +29,11 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from ..pipeline import SWEEP_COLUMNS, sweep
+    from ..io import write_sweep_csv
     from ..plotting.waveforms import plot_sweep
     from ..scene import load_scene
     from ..surrogate import obtain_table
+    from ..sweep import sweep
 
     scene = load_scene(args.scene)
     frequencies = parse_range(args.frequency_hz, "--frequency-hz")
@@ -46,11 +46,7 @@ def _run(args) -> int:
     rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, progress=True)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "sweep.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=SWEEP_COLUMNS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: ("" if row.get(k) is None else row[k]) for k in SWEEP_COLUMNS})
+    write_sweep_csv(out / "sweep.csv", rows)
     plot_sweep(rows, out / "sweep.png")
     print(f"{len(rows)} rows; wrote {out / 'sweep.csv'}, {out / 'sweep.png'}")
     return 0
