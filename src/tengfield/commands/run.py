@@ -9,10 +9,6 @@ from __future__ import annotations
 
 from ._common import add_cache_argument, command_line, world_if_parallel
 
-__all__ = ["register", "print_summary",
-           # re-exported for commands/precompute.py until it imports them from ._common
-           "add_cache_argument", "command_line", "world_if_parallel"]
-
 
 def register(sub) -> None:
     p = sub.add_parser(
