@@ -40,6 +40,11 @@ class Stage:
     details: dict = field(default_factory=dict)
 
 
+def _column(name: str, doc: str) -> property:
+    """A read-only attribute of :class:`RunResult` giving ``waveforms[name]``."""
+    return property(lambda self: self.waveforms[name], doc=doc)
+
+
 @dataclass
 class RunResult:
     """Outcome of :func:`run`.
@@ -62,25 +67,11 @@ class RunResult:
     peaks: dict[str, float] = field(default_factory=dict)
     stages: dict[str, Stage] = field(default_factory=dict)
 
-    @property
-    def t(self) -> np.ndarray:
-        """Output times [s]."""
-        return self.waveforms["time_s"]
-
-    @property
-    def V_oc(self) -> np.ndarray:
-        """Open-circuit voltage [V] (read through C_p when ``parallel_capacitance_pF`` > 0)."""
-        return self.waveforms["V_oc_V"]
-
-    @property
-    def Q_sc(self) -> np.ndarray:
-        """Short-circuit charge [C], lower -> upper, zero at the reference state."""
-        return self.waveforms["Q_sc_C"]
-
-    @property
-    def I_sc(self) -> np.ndarray:
-        """Short-circuit current [A], lower -> upper through the external circuit."""
-        return self.waveforms["I_sc_A"]
+    t = _column("time_s", "Output times [s].")
+    V_oc = _column("V_oc_V", "Open-circuit voltage [V] (read through C_p when "
+                             "``parallel_capacitance_pF`` > 0).")
+    Q_sc = _column("Q_sc_C", "Short-circuit charge [C], lower -> upper, zero at the reference.")
+    I_sc = _column("I_sc_A", "Short-circuit current [A], lower -> upper through the circuit.")
 
 
 def _default_simulate():

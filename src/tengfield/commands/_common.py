@@ -5,6 +5,16 @@ import shlex
 import sys
 
 
+def scene_command(sub, name: str, *, help: str, description: str, output: str):
+    """A subcommand taking an optional SCENE file and ``-o DIR`` (default ``output``);
+    ``description``: the command module's docstring (reST quotes dropped)."""
+    p = sub.add_parser(name, help=help, description=description.replace("``", ""))
+    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    p.add_argument("-o", "--output", default=output, metavar="DIR",
+                   help=f"output directory (created; default ./{output})")
+    return p
+
+
 def add_cache_argument(parser) -> None:
     """``--cache-dir DIR``: where surrogates are cached."""
     parser.add_argument("--cache-dir", default=None, metavar="DIR",

@@ -7,18 +7,12 @@ is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
 
-from ._common import add_cache_argument, command_line, world_if_parallel
+from ._common import add_cache_argument, command_line, scene_command, world_if_parallel
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "run", help="V_OC, Q_SC, I_SC (and load) waveforms of a scene, end to end",
-        description="Integrate the ball dynamics, build or reuse the field surrogate "
-                    "(cached by the scene's field hash) and evaluate the circuit. Writes "
-                    "waveforms.csv, summary.json, waveforms.png and surrogate.png to DIR.")
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    p.add_argument("-o", "--output", default="out", metavar="DIR",
-                   help="output directory (created; default ./out)")
+    p = scene_command(sub, "run", output="out", description=__doc__,
+                      help="V_OC, Q_SC, I_SC (and load) waveforms of a scene, end to end")
     add_cache_argument(p)
     p.add_argument("--no-plots", action="store_true", help="skip the PNG files")
     p.set_defaults(func=_run)

@@ -121,48 +121,39 @@ class Plan:
     circuit_refinement: int = 16
 
 
+def _settings(levels, **keys) -> tuple:
+    """FieldSettings of ``(degree, mesh_size_mm)`` pairs with the same other ``keys``."""
+    return tuple(FieldSetting(degree=degree, mesh_size_mm=size, **keys) for degree, size in levels)
+
+
 def make_plan(fast: bool = False) -> Plan:
     """The accuracy levels of the report; ``fast`` keeps it to about a minute."""
     if fast:
-        ref = (FieldSetting(degree=2, mesh_size_mm=1.0), FieldSetting(degree=2, mesh_size_mm=0.5))
+        ref = _settings([(2, 1.0), (2, 0.5)])
         return Plan(
             field_positions=5,
-            field_settings=(FieldSetting(degree=1, mesh_size_mm=2.0),
-                            FieldSetting(degree=1, mesh_size_mm=1.0),
-                            FieldSetting(degree=2, mesh_size_mm=2.0),
-                            FieldSetting(degree=2, mesh_size_mm=1.4)) + ref,
+            field_settings=_settings([(1, 2.0), (1, 1.0), (2, 2.0), (2, 1.4)]) + ref,
             reference_pair=ref,
-            far_field_settings=(FieldSetting(degree=2, mesh_size_mm=1.0, far_field="robin"),
-                                FieldSetting(degree=2, mesh_size_mm=1.0, far_field="dirichlet")),
-            settings_3d=(FieldSetting(method="3d", degree=1, mesh_size_mm=2.5, far_field="robin"),),
+            far_field_settings=(_settings([(2, 1.0)], far_field="robin")
+                                + _settings([(2, 1.0)], far_field="dirichlet")),
+            settings_3d=_settings([(1, 2.5)], method="3d", far_field="robin"),
             surrogate_counts=(5, 9, 17), reference_count=33,
             sample_rates=(5000.0, 20000.0, 80000.0, 320000.0), reference_sample_rate=1.28e6,
             stiffnesses=(1e4, 1e5),
             loads=(1e4, 1e8), circuit_rates=(2500.0, 5000.0, 10000.0), circuit_refinement=8)
-    ref = (FieldSetting(degree=2, mesh_size_mm=0.5), FieldSetting(degree=2, mesh_size_mm=0.25))
+    ref = _settings([(2, 0.5), (2, 0.25)])
     return Plan(
         field_positions=9,
-        field_settings=(FieldSetting(degree=1, mesh_size_mm=2.0),
-                        FieldSetting(degree=1, mesh_size_mm=1.0),
-                        FieldSetting(degree=1, mesh_size_mm=0.5),
-                        FieldSetting(degree=1, mesh_size_mm=0.25),
-                        FieldSetting(degree=2, mesh_size_mm=2.0),
-                        FieldSetting(degree=2, mesh_size_mm=1.4),
-                        FieldSetting(degree=2, mesh_size_mm=1.0),
-                        FieldSetting(degree=2, mesh_size_mm=0.7)) + ref,
+        field_settings=_settings([(1, 2.0), (1, 1.0), (1, 0.5), (1, 0.25),
+                                      (2, 2.0), (2, 1.4), (2, 1.0), (2, 0.7)]) + ref,
         reference_pair=ref,
-        far_field_settings=(FieldSetting(degree=2, mesh_size_mm=0.5, far_field="robin"),
-                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="robin",
-                                         domain_radius_mm=40.0),
-                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="dirichlet"),
-                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="dirichlet",
-                                         domain_radius_mm=40.0)),
-        settings_3d=(FieldSetting(method="3d", degree=1, mesh_size_mm=2.0, far_field="robin"),
-                     FieldSetting(method="3d", degree=1, mesh_size_mm=1.4, far_field="robin"),
-                     FieldSetting(method="3d", degree=2, mesh_size_mm=2.0, far_field="kelvin")),
+        far_field_settings=tuple(FieldSetting(degree=2, mesh_size_mm=0.5, far_field=far,
+                                              domain_radius_mm=radius)
+                                 for far in ("robin", "dirichlet") for radius in (20.0, 40.0)),
+        settings_3d=(_settings([(1, 2.0), (1, 1.4)], method="3d", far_field="robin")
+                     + _settings([(2, 2.0)], method="3d", far_field="kelvin")),
         surrogate_counts=(5, 9, 17, 33), reference_count=65,
-        sample_rates=(2500.0, 5000.0, 10000.0, 20000.0, 40000.0, 80000.0, 160000.0, 320000.0,
-                      640000.0),
+        sample_rates=tuple(2500.0 * 2 ** k for k in range(9)),       # 2.5 kHz .. 640 kHz
         reference_sample_rate=2.56e6,
         stiffnesses=(1e4, 1e5, 1e6),
         loads=(1e4, 1e8, 1e11), circuit_rates=(2500.0, 5000.0, 10000.0, 20000.0, 40000.0))
