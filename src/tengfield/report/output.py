@@ -142,11 +142,12 @@ def markdown(report: Report, images: dict) -> str:
         head = "| setting | wall time [s] | error V_OC | error Q_SC | error I_SC | max" + extra
         lines += [head, "|" + "---|" * (head.count("|") - 1)]
         for r in rows:
-            cells = [r.setting, f"{r.wall_time_s:.3g}"] + [_num(r.errors.get(q)) for q in QUANTITIES]
-            cells.append(_num(r.error))
+            entries = [r.setting, f"{r.wall_time_s:.3g}"]
+            entries += [_num(r.errors.get(q)) for q in QUANTITIES]
+            entries.append(_num(r.error))
             if stage == "field":
-                cells.append(_num(r.error_position))
-            lines.append("| " + " | ".join(cells) + " |")
+                entries.append(_num(r.error_position))
+            lines.append("| " + " | ".join(entries) + " |")
     lines += ["", "## Cheapest settings for a target accuracy", "",
               "Every combination of a measured field level, surrogate size and sampling rate "
               "competes; the cheapest one whose errors add up to at most the target is chosen. "
