@@ -10,7 +10,8 @@ from ._common import scene_command
 
 def register(sub) -> None:
     p = scene_command(sub, "report", output="report", description=__doc__,
-                      help="error against run time of every stage; cheapest settings for 1e-2 / 1e-3")
+                      help="error against run time of every stage; "
+                           "cheapest settings for 1e-2 / 1e-3")
     p.add_argument("--fast", action="store_true",
                    help="CI-sized report (coarse levels, about a minute)")
     p.set_defaults(func=_report)
