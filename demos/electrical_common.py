@@ -3,6 +3,7 @@
 * :func:`demo_arguments`: ``--fast``, ``-o DIR``, ``--cache-dir DIR``.
 * :func:`field_settings`: the ``[field]`` keys of a demo (coarse in fast mode).
 * :func:`surrogate_curves`: build (or reuse from the cache) the surrogate of a scene.
+* :func:`measure`: the peaks ``tengfield run`` reports, and the waveforms to plot.
 * :func:`electrometer`: the instrument capacitance C_p and the surface charge σ
   that reconcile the ideal model with the paper's electrometer readings.
 
@@ -19,8 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tengfield import circuit
-from tengfield.pipeline import steady_window, terminal_waveforms
+from tengfield import electrical
 
 #: The paper's measured peaks at 1.5 mm / 20 Hz (Figs. 9b-d): V_OC, Q_SC, I_SC.
 PAPER_PEAKS = {"V_oc": 4.2, "Q_sc": 1.42e-9, "I_sc": 0.16e-6}
@@ -64,15 +64,17 @@ def surrogate_curves(scene, cache_dir=None, solve=None):
     return table, TerminalCurves(table, scene.circuit.reference)
 
 
-def peaks(curves, dynamics, scene, *, cells: int = 1, parallel_capacitance: float = 0.0) -> dict:
-    """Peak-to-peak V [V] (read by an instrument of capacitance C_p), Q_SC [C], I_SC [A]
-    over the steady window, and the waveforms themselves."""
-    wf = terminal_waveforms(curves, dynamics.gap, dynamics.gap_velocity, cells=cells,
-                            parallel_capacitance=parallel_capacitance)
-    mask, _ = steady_window(np.asarray(dynamics.t), scene)
-    return {"V_oc": circuit.peak_to_peak(wf["V_oc"][mask]),
-            "Q_sc": circuit.peak_to_peak(wf["Q_sc"][mask]),
-            "I_sc": circuit.peak_to_peak(wf["I_sc"][mask]),
+def measure(curves, dynamics, scene, *, parallel_capacitance: float | None = None) -> dict:
+    """What ``tengfield run`` reports for ``scene`` read through an instrument of
+    capacitance ``parallel_capacitance`` C_p [F] (default: the scene's): peak-to-peak
+    ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] (:func:`tengfield.electrical.terminal_peaks`:
+    steady window, samples and impact instants), and for the plots the sampled
+    ``waveforms``, the steady-window ``mask`` and ``C_T_max`` [F] over it."""
+    if parallel_capacitance is not None:
+        scene = scene.with_values(circuit={"parallel_capacitance_pF": parallel_capacitance * 1e12})
+    wf = electrical.scene_terminal_waveforms(scene, curves, dynamics.gap, dynamics.gap_velocity)
+    mask, _ = electrical.steady_window(dynamics.t, scene)
+    return {**electrical.terminal_peaks(scene, dynamics, curves),
             "C_T_max": float(np.max(wf["C_T"][mask])), "waveforms": wf, "mask": mask}
 
 
@@ -126,7 +128,7 @@ def reconcile(curves, fast: bool) -> tuple[float, float]:
     from tengfield.dynamics import simulate
 
     scene = paper_scene(fast).with_values(run=run_length(20.0, fast))
-    ideal = peaks(curves, simulate(scene), scene)
+    ideal = measure(curves, simulate(scene), scene)
     scale = PAPER_PEAKS["Q_sc"] / ideal["Q_sc"]
     return scale, reconciling_capacitance(ideal["Q_sc"] * scale, PAPER_PEAKS["V_oc"],
                                           ideal["C_T_max"])

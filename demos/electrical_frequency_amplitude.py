@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from electrical_common import (demo_arguments, paper_scene, peaks, pyplot,  # noqa: E402
+from electrical_common import (demo_arguments, measure, paper_scene, pyplot,  # noqa: E402
                                reconcile, run_length, save_small_png, surrogate_curves)
 
 from tengfield.dynamics import simulate  # noqa: E402
@@ -38,7 +38,7 @@ def voltage_grid(scene, curves, frequencies, amplitudes, fast, scale, c_p):
                                                   "amplitude_mm": float(a) * 1e3},
                                       run=run_length(float(f), fast))
             dyn = simulate(point)
-            p = peaks(curves, dyn, point, parallel_capacitance=c_p)
+            p = measure(curves, dyn, point, parallel_capacitance=c_p)
             volts[i, j] = p["V_oc"] * scale
             charge[i, j] = p["Q_sc"] * scale
             max_gap[i, j] = dyn.regime.max_gap

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from electrical_common import (demo_arguments, paper_scene, peaks, pyplot,  # noqa: E402
+from electrical_common import (demo_arguments, measure, paper_scene, pyplot,  # noqa: E402
                                reconcile, run_length, save_small_png, surrogate_curves)
 
 from tengfield.dynamics import simulate  # noqa: E402
@@ -45,8 +45,8 @@ def outputs(base, ball_diameter_mm, gap_mm, fast, cache_dir, scale, c_p) -> dict
                              run=run_length(35.0, fast))
     _, curves = surrogate_curves(scene, cache_dir)
     dyn = simulate(scene)
-    p = peaks(curves, dyn, scene, parallel_capacitance=c_p)
-    ideal = peaks(curves, dyn, scene)
+    p = measure(curves, dyn, scene, parallel_capacitance=c_p)
+    ideal = measure(curves, dyn, scene)
     return {"V_read": p["V_oc"] * scale, "V_ideal": ideal["V_oc"] * scale,
             "Q": ideal["Q_sc"] * scale,
             "I_peak": float(np.max(np.abs(ideal["waveforms"]["I_sc"][ideal["mask"]]))) * scale,

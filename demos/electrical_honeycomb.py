@@ -33,10 +33,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from electrical_common import (demo_arguments, peaks, pyplot,  # noqa: E402
+from electrical_common import (demo_arguments, measure, pyplot,  # noqa: E402
                                reconciling_capacitance, save_small_png, surrogate_curves)
 
-from tengfield import pipeline  # noqa: E402
+from tengfield import electrical  # noqa: E402
 from tengfield.dynamics import simulate  # noqa: E402
 from tengfield.scene import default_scene  # noqa: E402
 
@@ -119,15 +119,13 @@ def load_sweep(scene, dynamics, table, loads, scale, c_p):
     scaled = TerminalCurves(dataclasses.replace(table, induced_charge=table.induced_charge * scale,
                                                 ball_charge=table.ball_charge * scale),
                             scene.circuit.reference)
-    t = np.asarray(dynamics.t)
-    mask, _ = pipeline.steady_window(t, scene)
-    wf = {"gap_m": np.asarray(dynamics.gap), "gap_velocity_m_per_s": np.asarray(dynamics.gap_velocity)}
+    mask, _ = electrical.steady_window(dynamics.t, scene)
     volume = scene.device.cell_volume * scene.device.cells
     mean, peak = [], []
     for load in loads:
         loaded = scene.with_values(circuit={"kind": "load", "load_ohm": float(load),
                                             "parallel_capacitance_pF": c_p * 1e12})
-        res = pipeline.load_waveforms(loaded, dynamics, scaled, wf, window_start=t[mask][0])
+        res = electrical.steady_load(loaded, dynamics, scaled)
         mean.append(res["mean_power_W"] / volume)
         peak.append(float(np.max(res["P_load"][mask])) / volume)
     return np.array(mean), np.array(peak), volume
@@ -147,11 +145,11 @@ def main() -> None:
         table = hexagonal_table(cell, scene, args.cache_dir)
         curves = TerminalCurves(table, scene.circuit.reference)
     dynamics = simulate(scene)
-    ideal = peaks(curves, dynamics, scene, cells=n_cells)
+    ideal = measure(curves, dynamics, scene)
     i_peak = float(np.max(np.abs(ideal["waveforms"]["I_sc"][ideal["mask"]])))
     scale = PAPER["Q_sc"] / ideal["Q_sc"]
     c_p = reconciling_capacitance(ideal["Q_sc"] * scale, PAPER["V_oc"], ideal["C_T_max"])
-    read = peaks(curves, dynamics, scene, cells=n_cells, parallel_capacitance=c_p)
+    read = measure(curves, dynamics, scene, parallel_capacitance=c_p)
     sigma = scene.device.surface_charge
     regime = dynamics.regime
 

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from electrical_common import (PAPER_PEAKS, demo_arguments, paper_scene, peaks,  # noqa: E402
+from electrical_common import (PAPER_PEAKS, demo_arguments, measure, paper_scene,  # noqa: E402
                                pyplot, reconciling_capacitance, reconciling_charge_density,
                                run_length, save_small_png, surrogate_curves)
 
@@ -42,14 +42,14 @@ def main() -> None:
     # 1. the trajectory (impact map) and the surrogate of the field solves
     dynamics = simulate(scene)
     table, curves = surrogate_curves(scene, args.cache_dir)
-    ideal = peaks(curves, dynamics, scene)
+    ideal = measure(curves, dynamics, scene)
 
     # 2. sigma from the charge-mode reading, C_p from the voltage-mode reading
     sigma = scene.device.surface_charge
     sigma_fit = reconciling_charge_density(sigma, ideal["Q_sc"], PAPER_PEAKS["Q_sc"])
     scale = sigma_fit / sigma          # every charge, current and V_OC scales with sigma
     c_p = reconciling_capacitance(ideal["Q_sc"] * scale, PAPER_PEAKS["V_oc"], ideal["C_T_max"])
-    measured = peaks(curves, dynamics, scene, parallel_capacitance=c_p)
+    measured = measure(curves, dynamics, scene, parallel_capacitance=c_p)
 
     regime = dynamics.regime
     print(f"1.5 mm, 20 Hz: regime {regime.name} (period {regime.period}), max gap "

@@ -124,7 +124,7 @@ def test_constant_capacitance_matches_the_phasor_steady_state(log_tau):
 def test_cells_scale_charge_current_capacitance_not_voltage():
     scene = fx.scene_with()
     from tengfield.surrogate import precompute
-    from tengfield.pipeline import terminal_waveforms
+    from tengfield.electrical import terminal_waveforms
     table = precompute(scene, solve=fx.plate_model_solve, solve_comm=object())
     curves = table.curves("floating")
     dyn = fx.FakeDynamics(scene, duration=0.1, sample_rate=2000)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from tengfield import pipeline, surrogate
+from tengfield import electrical, pipeline, surrogate
 
 sys.path.insert(0, str(Path(__file__).parent))
 import test_pipeline_fixtures as fx  # noqa: E402
@@ -183,7 +183,7 @@ def test_cli_run_end_to_end_then_cached(tmp_path):
         assert (out / name).stat().st_size > 0
     with open(out / "waveforms.csv") as f:
         header = next(csv.reader(f))
-    assert header == pipeline.WAVEFORM_COLUMNS + pipeline.LOAD_COLUMNS
+    assert header == electrical.WAVEFORM_COLUMNS + electrical.LOAD_COLUMNS
     data = np.loadtxt(out / "waveforms.csv", delimiter=",", skiprows=1)
     assert data.shape[0] == 0.3 * 5000 + 1
     assert np.allclose(np.diff(data[:, 0]), 1 / 5000.0)
@@ -266,7 +266,7 @@ def test_cli_run_of_the_real_default_scene(tmp_path):
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     data = np.loadtxt(tmp_path / "out" / "waveforms.csv", delimiter=",", skiprows=1)
-    columns = {name: data[:, i] for i, name in enumerate(pipeline.WAVEFORM_COLUMNS)}
+    columns = {name: data[:, i] for i, name in enumerate(electrical.WAVEFORM_COLUMNS)}
     from tengfield.scene import default_scene
     scene = default_scene()
     q_ball = abs(scene.device.ball_charge)

@@ -49,7 +49,8 @@ def plate_model_solve(scene, position, *, comm=None, **_):
     return PositionResult(position=float(position), offset=0.0,
                           capacitance=[[c_ll, c_lu], [c_lu, c_uu]],
                           induced_charge=[q_l, q_u], ball_charge=scene.device.ball_charge,
-                          dofs=1000, cells=2000, method="axisymmetric", degree=2,
+                          dofs=1000, cells=2000,   # mesh cells (not [device] cells)
+                          method="axisymmetric", degree=2,
                           wall_time=0.01, relative_error_estimate=1e-6, solve_time=0.005)
 
 

@@ -156,8 +156,7 @@ def test_scene_with_recommended_keeps_explicit_keys():
 
 
 def report_calibration_entries():
-    from tengfield.report_calibration import DEFAULT_RECOMMENDATIONS
-    return sorted(DEFAULT_RECOMMENDATIONS, key=lambda r: -r["target"])
+    return sorted(report.default_recommendations(), key=lambda r: -r["target"])
 
 
 def test_field_setting_labels_and_blocks():
@@ -293,7 +292,7 @@ def test_report_bad_scene_is_a_clear_error(tmp_path):
 
 
 def test_importing_the_report_loads_no_heavy_stack():
-    code = ("import sys, tengfield.report, tengfield.report_output, tengfield.commands.report; "
+    code = ("import sys, tengfield.report, tengfield.report.output, tengfield.commands.report; "
             "print(any(m in sys.modules for m in ('dolfinx', 'gmsh', 'pyvista', 'petsc4py')))")
     proc = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert proc.stdout.strip() == "False", proc.stderr

@@ -1,13 +1,55 @@
 """tengfield: predict what a bouncing-ball triboelectric nanogenerator delivers.
 
 Pipeline: scene -> impact dynamics -> field surrogate (dolfinx) -> circuit ->
-V_OC, Q_SC, I_SC. Heavy dependencies (dolfinx, gmsh, pyvista) are imported
-only by the stages that need them.
+V_OC, Q_SC, I_SC. In a notebook::
+
+    import tengfield as tf
+    scene = tf.default_scene()            # or tf.load_scene("my.toml")
+    r = tf.run(scene)                     # r.t, r.V_oc, r.Q_sc, r.I_sc, r.peaks, r.stages
+    dyn = tf.simulate(scene)              # the ball's motion alone
+    res = tf.solve_position(scene, 1e-3)  # electrostatics at one gap z [m]
+    table, outcome = tf.build_surrogate(scene)   # the cached field surrogate
+
+Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
+``simulate``, ``solve_position``, ``build_surrogate`` (and the submodules)
+are imported on first use.
 """
+from __future__ import annotations
+
+import importlib
+
 __version__ = "0.1.0"
 
 from .errors import DynamicsError, FieldError, SceneError, TengfieldError  # noqa: E402
 from .scene import Scene, default_scene, load_scene, parse_scene  # noqa: E402
 
+#: public name -> (module, attribute), imported on first access
+_LAZY = {
+    "run": ("tengfield.pipeline", "run"),
+    "RunResult": ("tengfield.pipeline", "RunResult"),
+    "simulate": ("tengfield.dynamics", "simulate"),
+    "solve_position": ("tengfield.field", "solve_position"),
+    "build_surrogate": ("tengfield.surrogate", "obtain_table"),
+}
+
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__"]
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", *_LAZY]
+
+
+def __getattr__(name: str):
+    """Import the heavy entry points (and submodules) only when first used."""
+    if name in _LAZY:
+        module, attribute = _LAZY[name]
+        value = getattr(importlib.import_module(module), attribute)
+        globals()[name] = value
+        return value
+    try:
+        return importlib.import_module(f"{__name__}.{name}")
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.{name}":
+            raise
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

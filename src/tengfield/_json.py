@@ -28,3 +28,12 @@ def jsonable(obj):
     if hasattr(obj, "__dict__"):
         return jsonable({k: v for k, v in vars(obj).items() if not k.startswith("_")})
     return str(obj)
+
+
+def regime_dict(regime) -> dict | None:
+    """A dynamics regime (:class:`tengfield.dynamics.Regime` or a dict) as a plain dict."""
+    if regime is None:
+        return None
+    if hasattr(regime, "as_dict"):
+        return regime.as_dict()
+    return jsonable(regime)

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .circuit import open_circuit_voltage  # noqa: F401 - V_OC = Q_SC / (C_T + C_p), one definition
+
 REFERENCES = ("floating", "grounded-lower")
 
 
@@ -53,8 +55,3 @@ def upper_short_circuit_charge(C_ll, C_lu, C_uu, q_l, q_u, ball_charge,
     c_u = C_lu + C_uu
     total = -ball_charge  # electrode charge fixed by the reference state
     return q_u + c_u * (total - q_l - q_u) / (c_l + c_u)
-
-
-def open_circuit_voltage(q_sc, c_t):
-    """V_OC = Q_SC / C_T [V]."""
-    return np.asarray(q_sc, dtype=float) / np.asarray(c_t, dtype=float)

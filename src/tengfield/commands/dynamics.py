@@ -44,6 +44,7 @@ def register(sub) -> None:
 
 def _run_dynamics(args) -> int:
     from ..dynamics import simulate
+    from ..io import write_impacts_csv, write_trajectory_csv
     from ..plotting.dynamics import plot_trajectory
     from ..scene import load_scene
 
@@ -66,23 +67,6 @@ def _run_dynamics(args) -> int:
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")
     return 0
-
-
-def write_trajectory_csv(result, path) -> None:
-    import numpy as np
-
-    data = np.column_stack([result.t, result.gap, result.gap_velocity, result.table])
-    np.savetxt(path, data, delimiter=",", fmt="%.12g",
-               header="time_s,gap_m,gap_velocity_m_per_s,table_m", comments="")
-
-
-def write_impacts_csv(result, path) -> None:
-    imp = result.impacts
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"])
-        for t, p, vb, va in zip(imp.time, imp.plate, imp.speed_before, imp.speed_after):
-            w.writerow([f"{t:.12g}", p, f"{vb:.12g}", f"{va:.12g}"])
 
 
 def _run_map(args) -> int:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .run import add_cache_argument, command_line, world_if_parallel
+from ._common import add_cache_argument, command_line, world_if_parallel
 
 
 def register(sub) -> None:

@@ -5,18 +5,13 @@ dynamics,circuit}.png and DIR/recommended-<target>.toml (see docs/report.md).
 """
 from __future__ import annotations
 
+from ._common import scene_command
+
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "report", help="error against run time of every stage; cheapest settings for 1e-2 / 1e-3",
-        description="Run the field, surrogate, dynamics and circuit stages at several accuracy "
-                    "levels, measure the error of the peak-to-peak V_OC, Q_SC, I_SC against "
-                    "stated references, and write report.md, report.csv, report.json, log-log "
-                    "PNGs and recommended scene files (recommended-0.01.toml, "
-                    "recommended-0.001.toml) for `tengfield run`.")
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    p.add_argument("-o", "--output", default="report", metavar="DIR",
-                   help="output directory (created; default ./report)")
+    p = scene_command(sub, "report", output="report", description=__doc__,
+                      help="error against run time of every stage; "
+                           "cheapest settings for 1e-2 / 1e-3")
     p.add_argument("--fast", action="store_true",
                    help="CI-sized report (coarse levels, about a minute)")
     p.set_defaults(func=_report)
@@ -25,8 +20,7 @@ def register(sub) -> None:
 def _report(args) -> int:
     from mpi4py import MPI
 
-    from ..report import build_report
-    from ..report_output import write_report
+    from ..report import build_report, write_report
     from ..scene import load_scene
 
     scene = load_scene(args.scene)

@@ -1,39 +1,40 @@
 """``tengfield sweep``: peak-to-peak V_OC, Q_SC, I_SC and load power over a grid of
-excitations (and loads) with one surrogate (paper Figs. 9e-f, S13)."""
+excitations (and loads) with one surrogate (paper Figs. 9e-f, S13).
+
+One surrogate (cached), the dynamics at every grid point (in parallel),
+peak-to-peak values over the steady window as ``tengfield run`` reports
+them and, with --load-ohm, the mean power into each load. Writes
+DIR/sweep.csv and DIR/sweep.png.
+"""
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
+from ._common import add_cache_argument, command_line, scene_command
 from ._ranges import parse_range
-from .run import add_cache_argument, command_line
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "sweep", help="peak-to-peak V_OC/Q_SC/I_SC and load power over frequency x amplitude",
-        description="One surrogate (cached), the dynamics at every grid point (in parallel), "
-                    "peak-to-peak values over the steady window and, with --load-ohm, the "
-                    "mean power into each load. Writes DIR/sweep.csv and DIR/sweep.png.")
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    p.add_argument("--frequency-hz", required=True, metavar="START:STOP:N",
-                   help="excitation frequencies [Hz] (linear), or one value")
-    p.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N",
-                   help="table amplitudes [mm] (linear), or one value")
-    p.add_argument("--load-ohm", default=None, metavar="START:STOP:N",
-                   help="load resistances [ohm] (logarithmic), or one value")
-    p.add_argument("-o", "--output", default="sweep-out", metavar="DIR", help="output directory")
+    p = scene_command(sub, "sweep", output="sweep-out", description=__doc__,
+                      help="peak-to-peak V_OC/Q_SC/I_SC and load power over frequency x amplitude")
+    grid = {"--frequency-hz": "excitation frequencies [Hz] (linear)",
+            "--amplitude-mm": "table amplitudes [mm] (linear)",
+            "--load-ohm": "load resistances [ohm] (logarithmic)"}
+    for option, values in grid.items():
+        p.add_argument(option, required=option != "--load-ohm", default=None,
+                       metavar="START:STOP:N", help=f"{values}, or one value")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     add_cache_argument(p)
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
-    from ..pipeline import SWEEP_COLUMNS, sweep
+    from ..io import write_sweep_csv
     from ..plotting.waveforms import plot_sweep
     from ..scene import load_scene
     from ..surrogate import obtain_table
+    from ..sweep import sweep
 
     scene = load_scene(args.scene)
     frequencies = parse_range(args.frequency_hz, "--frequency-hz")
@@ -46,11 +47,7 @@ def _run(args) -> int:
     rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, progress=True)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "sweep.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=SWEEP_COLUMNS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: ("" if row.get(k) is None else row[k]) for k in SWEEP_COLUMNS})
+    write_sweep_csv(out / "sweep.csv", rows)
     plot_sweep(rows, out / "sweep.png")
     print(f"{len(rows)} rows; wrote {out / 'sweep.csv'}, {out / 'sweep.png'}")
     return 0

@@ -1,4 +1,4 @@
-"""Plots of the electrical waveforms and of the surrogate (matplotlib, Agg).
+"""Plots of the electrical waveforms and of the surrogate (matplotlib Figure objects, saved as PNG; no pyplot).
 
 ``plot_waveforms``: V_OC, Q_SC, I_SC (and the load voltage/power when
 present) against time, each with the gap z(t) on a twin axis, in the style
@@ -13,23 +13,23 @@ from pathlib import Path
 import numpy as np
 
 
-def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+def _figure(figsize):
+    """A matplotlib Figure outside pyplot: saving it needs no backend, so the
+    caller's (a notebook's) backend is never switched."""
+    from matplotlib.figure import Figure
+    return Figure(figsize=figsize)
 
 
 def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
                    last_seconds: float | None = None) -> Path:
     """Waveform panels against time [ms] with the gap [mm] in grey (right axis)."""
-    plt = _pyplot()
     t = np.asarray(waveforms["time_s"])
     mask = np.ones_like(t, dtype=bool) if last_seconds is None else t >= t[-1] - last_seconds
     panels = [("V_oc_V", "V_OC [V]", 1.0), ("Q_sc_C", "Q_SC [nC]", 1e9), ("I_sc_A", "I_SC [nA]", 1e9)]
     if "V_load_V" in waveforms:
         panels += [("V_load_V", "V_load [V]", 1.0), ("P_load_W", "P_load [µW]", 1e6)]
-    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.1 * len(panels)), sharex=True)
+    fig = _figure((8, 2.1 * len(panels)))
+    axes = fig.subplots(len(panels), 1, sharex=True)
     for ax, (key, label, factor) in zip(np.atleast_1d(axes), panels):
         ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0)
         ax.set_ylabel(label, color="C0")
@@ -42,19 +42,18 @@ def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
         fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)
 
 
 def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1) -> Path:
     """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots."""
-    plt = _pyplot()
     z = np.linspace(0.0, curves.stroke, 400)
     nodes = curves.positions
     panels = [("V_OC [V]", curves.voltage(z), curves.charge_samples / curves.capacitance_samples, 1.0),
               ("Q_SC [nC]", curves.charge(z) * cells, curves.charge_samples * cells, 1e9),
               ("C_T [pF]", curves.capacitance(z) * cells, curves.capacitance_samples * cells, 1e12)]
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.4))
+    fig = _figure((12, 3.4))
+    axes = fig.subplots(1, 3)
     for ax, (label, line, dots, factor) in zip(axes, panels):
         ax.plot(z * 1e3, line * factor, color="C0", lw=1.2, label="cubic spline")
         ax.plot(nodes * 1e3, dots * factor, "o", ms=3.5, color="C3", label="field solves")
@@ -66,14 +65,12 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1) -> Path:
                  f"error estimate {table.interpolation_error:.2g}")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)
 
 
 def plot_sweep(rows: list[dict], path: str | Path) -> Path:
     """Peak-to-peak V_OC, Q_SC, I_SC against frequency (one line per amplitude),
     and mean load power against load resistance when the sweep has loads."""
-    plt = _pyplot()
     freqs = sorted({r["frequency_hz"] for r in rows})
     amps = sorted({r["amplitude_mm"] for r in rows})
     loads = sorted({r["load_ohm"] for r in rows if r.get("load_ohm") is not None})
@@ -81,7 +78,8 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
               ("Q_sc_pp_C", "Q_SC peak-to-peak [nC]", 1e9),
               ("I_sc_pp_A", "I_SC peak-to-peak [nA]", 1e9)]
     ncols = len(panels) + (1 if loads else 0)
-    fig, axes = plt.subplots(1, ncols, figsize=(4 * ncols, 3.4))
+    fig = _figure((4 * ncols, 3.4))
+    axes = fig.subplots(1, ncols)
     first_load = loads[0] if loads else None
     for ax, (key, label, factor) in zip(axes, panels):
         for amp in amps:
@@ -110,5 +108,4 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
             ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)

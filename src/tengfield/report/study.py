@@ -41,15 +41,17 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
-from . import circuit
-from .errors import SceneError
+from .. import circuit, electrical
+from ..errors import SceneError
+from ..surrogate import INITIAL_POSITIONS
 
 QUANTITIES = ("V_oc", "Q_sc", "I_sc")
 TARGETS = (1e-2, 1e-3)
 #: the surrogate's ``[field] tolerance`` is at most this share of the target
 BUDGET_SHARE = 1.0 / 3.0
-#: fewest positions the adaptive surrogate ends with (9 initial + 8 held out)
-MIN_ADAPTIVE_POSITIONS = 17
+#: fewest positions the adaptive surrogate ends with: its initial Lobatto set and the
+#: positions held out between them (9 + 8 = 17), see :func:`tengfield.surrogate.precompute`
+MIN_ADAPTIVE_POSITIONS = 2 * INITIAL_POSITIONS - 1
 
 
 # ---------------------------------------------------------------------------
@@ -119,48 +121,39 @@ class Plan:
     circuit_refinement: int = 16
 
 
+def _settings(levels, **keys) -> tuple:
+    """FieldSettings of ``(degree, mesh_size_mm)`` pairs with the same other ``keys``."""
+    return tuple(FieldSetting(degree=degree, mesh_size_mm=size, **keys) for degree, size in levels)
+
+
 def make_plan(fast: bool = False) -> Plan:
     """The accuracy levels of the report; ``fast`` keeps it to about a minute."""
     if fast:
-        ref = (FieldSetting(degree=2, mesh_size_mm=1.0), FieldSetting(degree=2, mesh_size_mm=0.5))
+        ref = _settings([(2, 1.0), (2, 0.5)])
         return Plan(
             field_positions=5,
-            field_settings=(FieldSetting(degree=1, mesh_size_mm=2.0),
-                            FieldSetting(degree=1, mesh_size_mm=1.0),
-                            FieldSetting(degree=2, mesh_size_mm=2.0),
-                            FieldSetting(degree=2, mesh_size_mm=1.4)) + ref,
+            field_settings=_settings([(1, 2.0), (1, 1.0), (2, 2.0), (2, 1.4)]) + ref,
             reference_pair=ref,
-            far_field_settings=(FieldSetting(degree=2, mesh_size_mm=1.0, far_field="robin"),
-                                FieldSetting(degree=2, mesh_size_mm=1.0, far_field="dirichlet")),
-            settings_3d=(FieldSetting(method="3d", degree=1, mesh_size_mm=2.5, far_field="robin"),),
+            far_field_settings=(_settings([(2, 1.0)], far_field="robin")
+                                + _settings([(2, 1.0)], far_field="dirichlet")),
+            settings_3d=_settings([(1, 2.5)], method="3d", far_field="robin"),
             surrogate_counts=(5, 9, 17), reference_count=33,
             sample_rates=(5000.0, 20000.0, 80000.0, 320000.0), reference_sample_rate=1.28e6,
             stiffnesses=(1e4, 1e5),
             loads=(1e4, 1e8), circuit_rates=(2500.0, 5000.0, 10000.0), circuit_refinement=8)
-    ref = (FieldSetting(degree=2, mesh_size_mm=0.5), FieldSetting(degree=2, mesh_size_mm=0.25))
+    ref = _settings([(2, 0.5), (2, 0.25)])
     return Plan(
         field_positions=9,
-        field_settings=(FieldSetting(degree=1, mesh_size_mm=2.0),
-                        FieldSetting(degree=1, mesh_size_mm=1.0),
-                        FieldSetting(degree=1, mesh_size_mm=0.5),
-                        FieldSetting(degree=1, mesh_size_mm=0.25),
-                        FieldSetting(degree=2, mesh_size_mm=2.0),
-                        FieldSetting(degree=2, mesh_size_mm=1.4),
-                        FieldSetting(degree=2, mesh_size_mm=1.0),
-                        FieldSetting(degree=2, mesh_size_mm=0.7)) + ref,
+        field_settings=_settings([(1, 2.0), (1, 1.0), (1, 0.5), (1, 0.25),
+                                      (2, 2.0), (2, 1.4), (2, 1.0), (2, 0.7)]) + ref,
         reference_pair=ref,
-        far_field_settings=(FieldSetting(degree=2, mesh_size_mm=0.5, far_field="robin"),
-                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="robin",
-                                         domain_radius_mm=40.0),
-                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="dirichlet"),
-                            FieldSetting(degree=2, mesh_size_mm=0.5, far_field="dirichlet",
-                                         domain_radius_mm=40.0)),
-        settings_3d=(FieldSetting(method="3d", degree=1, mesh_size_mm=2.0, far_field="robin"),
-                     FieldSetting(method="3d", degree=1, mesh_size_mm=1.4, far_field="robin"),
-                     FieldSetting(method="3d", degree=2, mesh_size_mm=2.0, far_field="kelvin")),
+        far_field_settings=tuple(FieldSetting(degree=2, mesh_size_mm=0.5, far_field=far,
+                                              domain_radius_mm=radius)
+                                 for far in ("robin", "dirichlet") for radius in (20.0, 40.0)),
+        settings_3d=(_settings([(1, 2.0), (1, 1.4)], method="3d", far_field="robin")
+                     + _settings([(2, 2.0)], method="3d", far_field="kelvin")),
         surrogate_counts=(5, 9, 17, 33), reference_count=65,
-        sample_rates=(2500.0, 5000.0, 10000.0, 20000.0, 40000.0, 80000.0, 160000.0, 320000.0,
-                      640000.0),
+        sample_rates=tuple(2500.0 * 2 ** k for k in range(9)),       # 2.5 kHz .. 640 kHz
         reference_sample_rate=2.56e6,
         stiffnesses=(1e4, 1e5, 1e6),
         loads=(1e4, 1e8, 1e11), circuit_rates=(2500.0, 5000.0, 10000.0, 20000.0, 40000.0))
@@ -171,16 +164,6 @@ def make_plan(fast: bool = False) -> Plan:
 def relative_error(value: float, reference: float) -> float:
     """|value − reference| / |reference| (NaN when the reference is 0)."""
     return abs(value - reference) / abs(reference) if reference != 0.0 else math.nan
-
-
-def waveform_peaks(curves, gap, gap_velocity, mask, *, cells: int = 1) -> dict:
-    """Peak-to-peak V_OC [V], Q_SC [C], I_SC [A] over the masked samples of a trajectory."""
-    from .pipeline import terminal_waveforms
-
-    wf = terminal_waveforms(curves, gap, gap_velocity, cells=cells)
-    return {"V_oc": circuit.peak_to_peak(wf["V_oc"][mask]),
-            "Q_sc": circuit.peak_to_peak(wf["Q_sc"][mask]),
-            "I_sc": circuit.peak_to_peak(wf["I_sc"][mask])}
 
 
 def peak_errors(peaks: dict, reference: dict) -> dict:
@@ -318,7 +301,7 @@ def recommended_field_settings(tolerance: float, recommendations=None) -> dict:
 
     ``recommendations``: a list of :class:`Recommendation` (or their dicts,
     e.g. ``report.json → recommendations``); default: those measured by
-    ``tengfield report`` on the default scene (``tengfield.report_calibration``).
+    ``tengfield report`` on the default scene (:func:`default_recommendations`).
     The loosest measured target at or below ``tolerance`` is used (so the
     cheapest one that is accurate enough), with its verified ``tolerance``
     key (the surrogate's threshold, a share of the target). A tolerance
@@ -329,7 +312,7 @@ def recommended_field_settings(tolerance: float, recommendations=None) -> dict:
     if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
         raise SceneError(f"[field] tolerance = {tolerance!r} is out of range: allowed (0, 1)")
     if recommendations is None:
-        from .report_calibration import DEFAULT_RECOMMENDATIONS as recommendations
+        recommendations = default_recommendations()
     entries = sorted((_as_dict(r) for r in recommendations), key=lambda r: r["target"])
     if not entries:
         raise ValueError("no recommendations to choose from")
@@ -349,7 +332,7 @@ def recommended_field_settings(tolerance: float, recommendations=None) -> dict:
 def recommended_sample_rate(tolerance: float, recommendations=None) -> float:
     """``[run] sample_rate_hz`` paired with :func:`recommended_field_settings`."""
     if recommendations is None:
-        from .report_calibration import DEFAULT_RECOMMENDATIONS as recommendations
+        recommendations = default_recommendations()
     entries = sorted((_as_dict(r) for r in recommendations), key=lambda r: r["target"])
     usable = [e for e in entries if e["target"] <= tolerance * (1 + 1e-9)]
     chosen = usable[-1] if usable else entries[0]
@@ -368,6 +351,16 @@ def scene_with_recommended(scene, recommendations=None):
     explicit = set((scene.raw.get("field") or {}).keys()) - {"tolerance"}
     chosen = {k: v for k, v in block.items() if k not in explicit}
     return scene.with_values(field=chosen)
+
+
+def default_recommendations() -> list[dict]:
+    """The recommendations measured by ``tengfield report`` on the embedded default
+    scene (``tengfield/report/calibration.json``; how to regenerate: its ``about``)."""
+    import json
+    from importlib import resources
+
+    text = resources.files(__package__).joinpath("calibration.json").read_text()
+    return json.loads(text)["recommendations"]
 
 
 def _as_dict(entry) -> dict:
@@ -405,7 +398,7 @@ class _Solver:
         key = (setting, round(z / self.stroke, 12))
         if key not in self.cache:
             if self._solve is None:
-                from .field import solve_position
+                from ..field import solve_position
                 self._solve = solve_position
             result = self._solve(self.scene, float(z), comm=self.comm, estimate_error=False,
                                  **setting.overrides())
@@ -416,7 +409,7 @@ class _Solver:
 
     def table(self, setting: FieldSetting, count: int):
         """Surrogate table of ``count`` Lobatto positions and its solve wall time [s]."""
-        from .surrogate import lobatto_positions, mirrored, table_from_results
+        from ..surrogate import lobatto_positions, mirrored, table_from_results
 
         positions = lobatto_positions(self.stroke, count)
         results, wall = [], 0.0
@@ -431,14 +424,14 @@ class _Solver:
 
 
 def _curves(table, scene):
-    from .surrogate import TerminalCurves
+    from ..surrogate import TerminalCurves
     return TerminalCurves(table, scene.circuit.reference)
 
 
 def _trajectory(scene, sample_rate: float | None = None, **contact):
     """Simulate ``scene`` (optionally at another sampling rate / contact model);
     returns (dynamics result, wall time [s], the scene that was simulated)."""
-    from .dynamics import simulate
+    from ..dynamics import simulate
 
     changes = {}
     if sample_rate is not None:
@@ -449,50 +442,6 @@ def _trajectory(scene, sample_rate: float | None = None, **contact):
     start = time.perf_counter()
     dyn = simulate(run_scene)
     return dyn, time.perf_counter() - start, run_scene
-
-
-def _mask(dyn, scene):
-    from .pipeline import steady_window
-    return steady_window(np.asarray(dyn.t), scene)[0]
-
-
-def _peaks(curves, dyn, scene):
-    """Peak-to-peak values exactly as ``tengfield run`` reports them
-    (:func:`tengfield.pipeline.terminal_peak_to_peak`: the samples of the steady
-    window and the impact instants)."""
-    from .pipeline import terminal_peak_to_peak, terminal_waveforms
-
-    wf = terminal_waveforms(curves, dyn.gap, dyn.gap_velocity, cells=scene.device.cells,
-                            parallel_capacitance=scene.circuit.parallel_capacitance)
-    waveforms = {"time_s": np.asarray(dyn.t), "V_oc_V": wf["V_oc"], "Q_sc_C": wf["Q_sc"],
-                 "I_sc_A": wf["I_sc"]}
-    peaks = terminal_peak_to_peak(scene, dyn, curves, waveforms)
-    return {"V_oc": peaks["V_oc_V"], "Q_sc": peaks["Q_sc_C"], "I_sc": peaks["I_sc_A"]}
-
-
-def impact_instants(dyn, start: float, end: float) -> np.ndarray:
-    """Times [s] just before and just after every impact in (start, end)
-    (±1e-9 of an excitation period: I_SC jumps there and takes its extremes)."""
-    times = np.asarray(getattr(getattr(dyn, "impacts", None), "time", np.empty(0)), dtype=float)
-    times = times[(times > start) & (times < end)]
-    eps = 1e-9 * getattr(dyn, "period", 1.0)
-    return np.concatenate([times - eps, times + eps])
-
-
-def _exact_peaks(curves, dyn, scene):
-    """Peak-to-peak values over the samples *and* the impact instants of the
-    steady window: the exact extremes (the trajectory is exact at any time;
-    between impacts the waveforms are smooth and their extremes are
-    either at impacts or resolved by the samples)."""
-    mask = _mask(dyn, scene)
-    t = np.asarray(dyn.t)
-    extra = impact_instants(dyn, t[mask][0], t[-1])
-    gap, velocity = np.asarray(dyn.gap)[mask], np.asarray(dyn.gap_velocity)[mask]
-    if extra.size:
-        gap_e, velocity_e, _ = dyn.sample(extra)
-        gap = np.concatenate([gap, gap_e])
-        velocity = np.concatenate([velocity, velocity_e])
-    return waveform_peaks(curves, gap, velocity, np.ones(gap.size, dtype=bool))
 
 
 def field_rows(solver: _Solver, plan: Plan, scene, trajectory, progress=None) -> tuple[list, dict]:
@@ -508,11 +457,11 @@ def field_rows(solver: _Solver, plan: Plan, scene, trajectory, progress=None) ->
     ref_table = dataclasses.replace(
         t_fine, capacitance=richardson(t_coarse.capacitance, t_fine.capacitance, ratio, 4),
         induced_charge=richardson(t_coarse.induced_charge, t_fine.induced_charge, ratio, 4))
-    ref_peaks = _exact_peaks(_curves(ref_table, scene), trajectory, scene)
+    ref_peaks = electrical.terminal_peaks(scene, trajectory, _curves(ref_table, scene))
     reference = (f"Richardson extrapolation (h^4) of {coarse.label} and {fine.label} "
                  f"at the same {n} Lobatto positions")
     for setting, (table, wall) in tables.items():
-        peaks = _exact_peaks(_curves(table, scene), trajectory, scene)
+        peaks = electrical.terminal_peaks(scene, trajectory, _curves(table, scene))
         pos_err = max(max_relative_deviation(table.capacitance, ref_table.capacitance),
                       max_relative_deviation(table.induced_charge, ref_table.induced_charge))
         rows.append(Row("field", setting.label,
@@ -542,10 +491,10 @@ def surrogate_rows(solver: _Solver, plan: Plan, scene, trajectory) -> tuple[list
     setting = plan.reference_pair[1]
     ref_table, _ = solver.table(setting, plan.reference_count)
     ref_curves = _curves(ref_table, scene)
-    ref_peaks = _exact_peaks(ref_curves, trajectory, scene)
+    ref_peaks = electrical.terminal_peaks(scene, trajectory, ref_curves)
     reference = f"{plan.reference_count} Lobatto positions, {setting.label}"
     rows = []
-    from .surrogate import held_out_error, lobatto_positions
+    from ..surrogate import held_out_error, lobatto_positions
     for count in plan.surrogate_counts:
         table, wall = solver.table(setting, count)
         finer = lobatto_positions(scene.device.stroke, 2 * count - 1)[1::2]
@@ -553,7 +502,7 @@ def surrogate_rows(solver: _Solver, plan: Plan, scene, trajectory) -> tuple[list
         held_out = held.subset(np.isin(np.round(held.positions / scene.device.stroke, 12),
                                        np.round(finer / scene.device.stroke, 12)))
         estimate = held_out_error(table, held_out)
-        peaks = _exact_peaks(_curves(table, scene), trajectory, scene)
+        peaks = electrical.terminal_peaks(scene, trajectory, _curves(table, scene))
         rows.append(Row("surrogate", f"{count} positions",
                         {"positions": count, "solves": solves_needed(count, solver.symmetric),
                          "held_out_estimate": estimate, **setting.field_block()},
@@ -564,25 +513,26 @@ def surrogate_rows(solver: _Solver, plan: Plan, scene, trajectory) -> tuple[list
 def dynamics_rows(plan: Plan, scene, curves, progress=None) -> tuple[list, Any]:
     """Output sampling of the impact map, and soft contact against the impact map."""
     ref_dyn, _, ref_scene = _trajectory(scene, plan.reference_sample_rate)
-    ref_peaks = _exact_peaks(curves, ref_dyn, ref_scene)
+    ref_peaks = electrical.terminal_peaks(ref_scene, ref_dyn, curves)
     rows = []
     for rate in plan.sample_rates:
         dyn, wall, run_scene = _trajectory(scene, rate)
         rows.append(Row("dynamics", f"impact map, {rate:g} Hz sampling",
                         {"model": "impact", "sample_rate_hz": rate}, wall,
-                        peak_errors(_peaks(curves, dyn, run_scene), ref_peaks),
+                        peak_errors(electrical.terminal_peaks(run_scene, dyn, curves), ref_peaks),
                         f"impact map sampled at {plan.reference_sample_rate:g} Hz plus the "
                         "impact instants (exact extremes)"))
         if progress:
             progress(1)
     rate = scene.run.sample_rate
     impact_dyn, _, impact_scene = _trajectory(scene, rate)
-    impact_peaks = _peaks(curves, impact_dyn, impact_scene)
+    impact_peaks = electrical.terminal_peaks(impact_scene, impact_dyn, curves)
     for k in plan.stiffnesses:
         dyn, wall, run_scene = _trajectory(scene, rate, model="soft", stiffness_N_per_m=k)
         rows.append(Row("dynamics", f"soft contact k={k:.0e} N/m",
                         {"model": "soft", "stiffness_N_per_m": k, "contact_sample_rate_hz": rate},
-                        wall, peak_errors(_peaks(curves, dyn, run_scene), impact_peaks),
+                        wall, peak_errors(electrical.terminal_peaks(run_scene, dyn, curves),
+                                          impact_peaks),
                         f"impact map (rigid limit), same sampling {rate:g} Hz"))
         if progress:
             progress(1)
@@ -591,19 +541,15 @@ def dynamics_rows(plan: Plan, scene, curves, progress=None) -> tuple[list, Any]:
 
 def circuit_rows(plan: Plan, scene, curves, progress=None) -> list:
     """Step of the load integrator (output sampling) for stiff to slow loads."""
-    from .pipeline import load_waveforms, steady_window
-
     rows = []
     for load in plan.loads:
         loaded = scene.with_values(circuit={"kind": "load", "load_ohm": float(load)})
 
         def measure(rate):
             dyn, _, run_scene = _trajectory(loaded, rate)
-            t = np.asarray(dyn.t)
-            mask = steady_window(t, run_scene)[0]
-            wf = {"gap_m": np.asarray(dyn.gap), "gap_velocity_m_per_s": np.asarray(dyn.gap_velocity)}
+            mask = electrical.steady_window(dyn.t, run_scene)[0]
             start = time.perf_counter()
-            out = load_waveforms(run_scene, dyn, curves, wf, window_start=t[mask][0])
+            out = electrical.steady_load(run_scene, dyn, curves)
             wall = time.perf_counter() - start
             return out["mean_power_W"], circuit.peak_to_peak(out["V_load"][mask]), wall
 
@@ -634,7 +580,7 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
     """
     import warnings
 
-    from .surrogate import TerminalCurves, precompute
+    from ..surrogate import TerminalCurves, precompute
 
     f = recommendation.field
     setting = FieldSetting(method=f["method"], degree=f["degree"], mesh_size_mm=f["mesh_size_mm"],
@@ -649,7 +595,8 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
         table = precompute(chosen, comm=None, solve=solve, solve_comm=solver.comm)
     dyn, dyn_wall, run_scene = _trajectory(chosen)
     wall = table.total_solve_wall_time + dyn_wall
-    peaks = _peaks(TerminalCurves(table, chosen.circuit.reference), dyn, run_scene)
+    peaks = electrical.terminal_peaks(run_scene, dyn,
+                                      TerminalCurves(table, chosen.circuit.reference))
     errors = peak_errors(peaks, reference_peaks)
     worst = max(errors.values())
     return dataclasses.replace(recommendation, measured_error=worst, measured_errors=errors,

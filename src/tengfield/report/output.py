@@ -1,78 +1,25 @@
-"""Files of ``tengfield report``: report.csv, report.json, report.md, PNGs, scene blocks.
+"""Files of ``tengfield report``: report.md, one PNG per stage, recommended scene files.
 
-Kept apart from :mod:`tengfield.report` (the measurement) so that the
-measurement stays free of I/O and plotting.
+Kept apart from :mod:`tengfield.report.study` (the measurement) so that the
+measurement stays free of I/O and plotting; report.csv and report.json are
+written by :mod:`tengfield.io`.
 """
 from __future__ import annotations
 
-import csv
-import dataclasses
 import json
 import math
 from pathlib import Path
 
-from .report import QUANTITIES, Report, Row
+from ..io import format_number as _num
+from ..io import write_report_csv, write_report_json
+from .study import QUANTITIES, Report, Row
 
-CSV_COLUMNS = ["stage", "setting", "wall_time_s", "error_max", "error_V_oc", "error_Q_sc",
-               "error_I_sc", "error_P_load", "error_V_load", "error_position", "knobs",
-               "reference", "note"]
 STAGE_TITLES = {
     "field": "Field: mesh size, degree, axisymmetric vs 3D, far field",
     "surrogate": "Surrogate: number of positions",
     "dynamics": "Dynamics: output sampling and soft-contact stiffness",
     "circuit": "Circuit: load-integrator step for stiff to slow loads",
 }
-
-
-def _num(x) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return ""
-    return f"{x:.4g}"
-
-
-def row_record(row: Row) -> dict:
-    """A CSV/JSON record of one row."""
-    rec = {"stage": row.stage, "setting": row.setting, "wall_time_s": row.wall_time_s,
-           "error_max": row.error, "error_position": row.error_position,
-           "knobs": json.dumps(row.knobs, sort_keys=True), "reference": row.reference,
-           "note": row.note}
-    for q in ("V_oc", "Q_sc", "I_sc", "P_load", "V_load"):
-        rec[f"error_{q}"] = row.errors.get(q, math.nan)
-    return rec
-
-
-def write_csv(path: Path, report: Report) -> Path:
-    with open(path, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        for row in report.rows:
-            rec = row_record(row)
-            writer.writerow({k: (_num(v) if isinstance(v, float) else v) for k, v in rec.items()})
-    return path
-
-
-def _clean(obj):
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if hasattr(obj, "item") and not isinstance(obj, (str, bytes)):
-        try:
-            return obj.item()
-        except (TypeError, ValueError):
-            return str(obj)
-    return obj
-
-
-def write_json(path: Path, report: Report) -> Path:
-    data = {"scene": report.scene.source, "fast": report.fast, "wall_time_s": report.wall_time_s,
-            "references": report.references, "trajectory": report.trajectory,
-            "rows": [row_record(r) | {"knobs": r.knobs, "errors": r.errors} for r in report.rows],
-            "recommendations": [dataclasses.asdict(r) for r in report.recommendations]}
-    path.write_text(json.dumps(_clean(data), indent=2) + "\n")
-    return path
 
 
 def toml_value(value) -> str:
@@ -104,11 +51,10 @@ def scene_text(scene, sections: dict, header: str) -> str:
 
 def plot_stage(path: Path, rows: list[Row], stage: str, targets=(1e-2, 1e-3)) -> Path:
     """Log-log error against wall time for one stage (one marker series per group)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure   # no pyplot: the caller's backend is left alone
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
+    fig = Figure(figsize=(6.4, 4.2), dpi=100)
+    ax = fig.subplots()
     groups: dict[str, list[Row]] = {}
     for row in rows:
         groups.setdefault(_group(row), []).append(row)
@@ -137,7 +83,6 @@ def plot_stage(path: Path, rows: list[Row], stage: str, targets=(1e-2, 1e-3)) ->
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return path
 
 
@@ -197,11 +142,12 @@ def markdown(report: Report, images: dict) -> str:
         head = "| setting | wall time [s] | error V_OC | error Q_SC | error I_SC | max" + extra
         lines += [head, "|" + "---|" * (head.count("|") - 1)]
         for r in rows:
-            cells = [r.setting, f"{r.wall_time_s:.3g}"] + [_num(r.errors.get(q)) for q in QUANTITIES]
-            cells.append(_num(r.error))
+            entries = [r.setting, f"{r.wall_time_s:.3g}"]
+            entries += [_num(r.errors.get(q)) for q in QUANTITIES]
+            entries.append(_num(r.error))
             if stage == "field":
-                cells.append(_num(r.error_position))
-            lines.append("| " + " | ".join(cells) + " |")
+                entries.append(_num(r.error_position))
+            lines.append("| " + " | ".join(entries) + " |")
     lines += ["", "## Cheapest settings for a target accuracy", "",
               "Every combination of a measured field level, surrogate size and sampling rate "
               "competes; the cheapest one whose errors add up to at most the target is chosen. "
@@ -232,7 +178,8 @@ def write_report(report: Report, out_dir) -> list[Path]:
     ``recommended-<target>.toml`` scene files to ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = [write_csv(out / "report.csv", report), write_json(out / "report.json", report)]
+    written = [write_report_csv(out / "report.csv", report),
+               write_report_json(out / "report.json", report)]
     images = {}
     for stage in ("field", "surrogate", "dynamics", "circuit"):
         rows = [r for r in report.rows if r.stage == stage]

@@ -1,0 +1,39 @@
+"""Pieces several commands share (command modules never import each other)."""
+from __future__ import annotations
+
+import shlex
+import sys
+
+
+def scene_command(sub, name: str, *, help: str, description: str, output: str):
+    """A subcommand taking an optional SCENE file and ``-o DIR`` (default ``output``);
+    ``description``: the command module's docstring (reST quotes dropped)."""
+    p = sub.add_parser(name, help=help, description=description.replace("``", ""))
+    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    p.add_argument("-o", "--output", default=output, metavar="DIR",
+                   help=f"output directory (created; default ./{output})")
+    return p
+
+
+def add_cache_argument(parser) -> None:
+    """``--cache-dir DIR``: where surrogates are cached."""
+    parser.add_argument("--cache-dir", default=None, metavar="DIR",
+                        help="surrogate cache (default $TENGFIELD_CACHE_DIR, else "
+                             "$XDG_CACHE_HOME/tengfield or ~/.cache/tengfield)")
+
+
+def command_line() -> str:
+    """The command line as typed (stored in the surrogate cache's provenance)."""
+    return shlex.join(["tengfield", *sys.argv[1:]])
+
+
+def world_if_parallel():
+    """``MPI.COMM_WORLD`` when started by mpirun with several ranks, else None
+    (a serial run never initialises MPI before it needs a field solve)."""
+    import os
+
+    launched = any(k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"))
+    if not launched:
+        return None
+    from mpi4py import MPI
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None

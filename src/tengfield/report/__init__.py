@@ -1,0 +1,29 @@
+"""Error against run time for every stage, and the cheapest settings for a target accuracy.
+
+``tengfield report`` (docs/report.md). The measurement lives in
+:mod:`tengfield.report.study` (pure: no files, no plots), the files it
+writes in :mod:`tengfield.report.output`, the default recommendations in
+``calibration.json`` (:func:`default_recommendations`). This package
+re-exports the public names::
+
+    from tengfield.report import build_report, write_report, recommended_field_settings
+"""
+from __future__ import annotations
+
+from .output import markdown, plot_stage, scene_text, toml_value, write_report
+from .study import (BUDGET_SHARE, MIN_ADAPTIVE_POSITIONS, QUANTITIES, TARGETS, FieldSetting,
+                    Plan, Recommendation, Report, Row, build_report, cheapest,
+                    circuit_rows, default_recommendations, dynamics_rows, field_rows,
+                    make_plan, max_relative_deviation, peak_errors, recommend,
+                    recommended_field_settings, recommended_sample_rate, relative_error,
+                    richardson, scene_with_recommended, solves_needed, surrogate_rows,
+                    surrogate_tolerance, verify)
+
+__all__ = ["BUDGET_SHARE", "MIN_ADAPTIVE_POSITIONS", "QUANTITIES", "TARGETS", "FieldSetting",
+           "Plan", "Recommendation", "Report", "Row", "build_report", "cheapest",
+           "circuit_rows", "default_recommendations", "dynamics_rows", "field_rows",
+           "make_plan", "markdown", "max_relative_deviation", "peak_errors", "plot_stage",
+           "recommend", "recommended_field_settings", "recommended_sample_rate",
+           "relative_error", "richardson", "scene_text", "scene_with_recommended",
+           "solves_needed", "surrogate_rows", "surrogate_tolerance", "toml_value", "verify",
+           "write_report"]
