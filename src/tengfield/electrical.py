@@ -140,6 +140,18 @@ def impact_states(scene, dynamics, impacts) -> tuple[np.ndarray, ...]:
 
 # ---------------------------------------------------------------------------
 # peaks
+def extreme_times(scene, dynamics, start: float) -> np.ndarray:
+    """Sorted times [s] at which a waveform's extremes after ``start`` are sought:
+    the dynamics' output samples from ``start`` on and just before and after
+    every impact there (``IMPACT_OFFSET_PERIODS``), the same instants as
+    :func:`terminal_peaks` uses."""
+    t = np.asarray(dynamics.t, dtype=float)
+    t = t[t >= start]
+    impacts = impact_times(dynamics, t[0], t[-1]) if t.size else np.empty(0)
+    eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+    return np.sort(np.concatenate([t, impacts - eps, impacts + eps]))
+
+
 def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> dict[str, float]:
     """Peak-to-peak ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] over the steady window.
 

@@ -1,7 +1,7 @@
 """The forward model of a fit: one surrogate, dynamics re-run only when needed.
 
 The ONLY place :mod:`tengfield.fit` imports the electrical helpers
-(``terminal_waveforms``, ``load_waveforms``); change this import when they move.
+(``terminal_waveforms``, ``load_waveforms``, ``extreme_times``).
 
 Electrostatics is linear in the ball's charge: Q_SC, I_SC and every voltage
 scale with σ while C_T does not. The surrogate is obtained once at a
@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..pipeline import load_waveforms, terminal_waveforms
+from ..electrical import extreme_times, load_waveforms, terminal_waveforms
 
 #: quantities a fit compares, with the waveform key per circuit kind
 QUANTITIES = ("V", "Q", "I")
@@ -52,6 +52,7 @@ class _OnGrid:
         self.t = np.asarray(times, dtype=float)
         self.impacts = dynamics.impacts
         self._dynamics = dynamics
+        self.gap, self.gap_velocity, self.table = dynamics.sample(self.t)
 
     def sample(self, times):
         return self._dynamics.sample(times)
@@ -149,22 +150,18 @@ class ForwardModel:
         terminal = terminal_waveforms(curves, gap, velocity, cells=cells, parallel_capacitance=c_p)
         out = {"V": terminal["V_oc"], "Q": terminal["Q_sc"], "I": terminal["I_sc"]}
         if self.scene.circuit.kind == "load" and ({"V", "I"} & set(quantities)):
-            out.update(self._load(dynamics, curves, c_p, load, t, gap, velocity))
+            out.update(self._load(dynamics, curves, c_p, load, t))
         return {q: np.asarray(out[q], dtype=float) for q in quantities}
 
-    def _load(self, dynamics, curves, c_p, load, t, gap, velocity) -> dict:
+    def _load(self, dynamics, curves, c_p, load, t) -> dict:
         start = float(dynamics.t[0])
         period = self.scene.excitation.period
         n_before = int(math.ceil((t[0] - start) / period * 200.0))
         before = np.linspace(start, t[0], n_before + 1)[:-1] if t[0] > start else np.empty(0)
         grid = np.concatenate([before, t])
-        g_before, v_before, _ = dynamics.sample(before) if before.size else (np.empty(0),) * 2 + (None,)
-        waveforms = {"gap_m": np.concatenate([g_before, gap]),
-                     "gap_velocity_m_per_s": np.concatenate([v_before, velocity])}
         scene = self.scene.with_values(circuit={"load_ohm": load,
                                                 "parallel_capacitance_pF": c_p * 1e12})
-        result = load_waveforms(scene, _OnGrid(dynamics, grid), curves, waveforms,
-                                window_start=float(t[0]))
+        result = load_waveforms(scene, _OnGrid(dynamics, grid), curves, window_start=float(t[0]))
         return {"V": result["V_load"][before.size:], "I": result["I_load"][before.size:]}
 
     def scalars(self, values: dict) -> dict:
@@ -173,13 +170,7 @@ class ForwardModel:
         Samples: the dynamics' own output grid in the window plus just before and
         after every impact (where I_SC jumps and takes its extremes).
         """
-        dynamics = self.dynamics(values)
-        t_all = np.asarray(dynamics.t, dtype=float)
-        t = t_all[t_all >= self.window_start]
-        impacts = np.asarray(dynamics.impacts.time, dtype=float)
-        impacts = impacts[(impacts > t[0]) & (impacts < t[-1])]
-        eps = 1e-9 * self.scene.excitation.period
-        grid = np.sort(np.concatenate([t, impacts - eps, impacts + eps]))
+        grid = extreme_times(self.scene, self.dynamics(values), self.window_start)
         wave = self.waveforms(values, grid)
         out = {}
         for q, x in wave.items():
