@@ -1,0 +1,590 @@
+"""Harvesting electronics on the TENG terminals: full-bridge rectifiers, a storage
+capacitor with leakage and a power-management chip with an under-voltage lockout
+(pure numerics, SI; DESIGN §6 and §8).
+
+Conventions of :mod:`tengfield.terminals` and :mod:`tengfield.circuit`: the
+terminal voltage of a cell is ``V = V_lower - V_upper`` [V]; with ``Q_SC(z)``
+[C] and ``C_T(z)`` [F] of the cell, ``C = C_T + C_p`` and ``Q_b`` the charge
+that has left the lower terminal through the bridge (lower -> upper outside
+the device), the cell's terminal law is ``V = (Q_SC - Q_b) / C``.
+
+Each cell feeds a full bridge (two conduction paths of two diodes in series);
+the bridges of all cells charge one store ``C_L`` at voltage ``U >= 0``:
+
+* path A (V > 0) carries ``i(V - U)``, path B (V < 0) carries ``i(-V - U)``,
+  with ``i(x)`` the current of two diodes in series at forward voltage ``x``
+  (:class:`Diode`): ideal with forward drop ``V_F`` and series resistance
+  ``R_s`` (``i = max(0, x - 2 V_F) / R_s``; ``R_s = 0`` is a clamp), or
+  Shockley ``x = 2 n V_T ln(1 + i / I_s) + R_s i``;
+* the store: ``C_L dU/dt = sum_cells (i_A + i_B) - U / R_leak - I_chip(U)``.
+
+Time stepping (Moreau's scheme for the non-smooth diode law, first order,
+unconditionally stable for any ``C_L``, ``R_s`` and ``I_s``), per grid step:
+
+1. *move*: the ball moves with the bridges blocked; ``Q_SC`` and ``C`` take
+   their new values, the terminal charge ``D = Q_SC - Q_b`` gains ``ΔQ_SC``.
+   The terminal energy ``D^2 / (2 C)`` then changes by exactly the mechanical
+   work done on the charges along that move (``dE/dt = V I_SC - V^2 dC/dt / 2``);
+2. *transfer*: at fixed ``C`` the bridges conduct for the step length ``h``
+   (backward Euler): per cell ``C (V - V') = h [i(V' - U') - i(-V' - U')]``
+   and ``C_L (U' - U) = h sum [i(V' - U') + i(-V' - U')]``, solved exactly
+   (monotone in ``U'``: bisection; per cell monotone in ``V'``);
+3. *store*: leakage, the chip's quiescent current and its load act on ``U``
+   over ``h`` (each exactly; the lockout switches at the exact crossing).
+
+Energy bookkeeping is exact for this scheme: mechanical work = change of the
+terminal energy + energy through the bridges; energy through the bridges =
+diode loss + stored energy gained in step 2; the store's loss in step 3 =
+leakage + quiescent + chip input. :func:`harvest` checks both balances.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SceneError
+
+BOLTZMANN_OVER_CHARGE = 8.617333262e-5   # k_B / e [V/K]
+
+DIODE_MODELS = ("ideal", "shockley")
+_IDEAL, _SHOCKLEY = 0, 1
+
+#: LTC3588-1 (Linear Technology/Analog Devices data sheet, Electrical
+#: Characteristics, typical values) with the 3.3 V output selected
+#: (D1 = 1, D0 = 0): UVLO rising 5.05 V, falling 4.04 V, input shunt 20 V,
+#: input quiescent current in UVLO 450 nA.
+LTC3588_UVLO_RISING_V = 5.05
+LTC3588_UVLO_FALLING_V = 4.04
+LTC3588_SHUNT_V = 20.0
+LTC3588_QUIESCENT_A = 450e-9
+
+
+@dataclass(frozen=True)
+class Diode:
+    """One bridge diode (the bridge's paths have two in series).
+
+    ``model`` "ideal": conducts above ``forward_voltage`` [V] through
+    ``series_resistance`` [ohm] (0: a clamp). "shockley": ``i = I_s (e^{v/(n V_T)} - 1)``
+    with ``saturation_current`` I_s [A], ``emission_coefficient`` n and
+    ``series_resistance`` (per diode) at ``temperature`` [K].
+    """
+    model: str = "ideal"
+    forward_voltage: float = 0.0
+    saturation_current: float = 1e-12
+    emission_coefficient: float = 1.0
+    series_resistance: float = 0.0
+    temperature: float = 300.0
+
+    def __post_init__(self):
+        if self.model not in DIODE_MODELS:
+            raise SceneError(f"[circuit] diode = {self.model!r} is not allowed: choose one of "
+                             + ", ".join(repr(m) for m in DIODE_MODELS))
+        _check("diode_forward_voltage_V", self.forward_voltage, 0.0, 100.0)
+        _check("diode_saturation_current_A", self.saturation_current, 1e-18, 1.0, lo_open=True)
+        _check("diode_emission_coefficient", self.emission_coefficient, 0.5, 10.0)
+        _check("diode_series_resistance_ohm", self.series_resistance, 0.0, 1e12)
+
+    @property
+    def thermal_voltage(self) -> float:
+        return BOLTZMANN_OVER_CHARGE * self.temperature
+
+    def path_current(self, x):
+        """Current [A] of two diodes in series at total forward voltage ``x`` [V]."""
+        x = np.asarray(x, dtype=float)
+        out = np.empty_like(x)
+        flat = out.reshape(-1)
+        for k, value in enumerate(x.reshape(-1)):
+            flat[k] = _path_current(value, *self._params())
+        return out
+
+    def _params(self):
+        return (_IDEAL if self.model == "ideal" else _SHOCKLEY, self.forward_voltage,
+                self.saturation_current, self.emission_coefficient * self.thermal_voltage,
+                self.series_resistance)
+
+
+@dataclass(frozen=True)
+class PowerChip:
+    """Under-voltage-lockout power chip on the store (the LTC3588-1 behaviour).
+
+    Off until the store voltage rises through ``uvlo_rising`` [V], on until it
+    falls through ``uvlo_falling`` [V]. While on it regulates ``output_voltage``
+    [V] into ``load`` [ohm] and draws ``output_voltage^2 / load / efficiency``
+    [W] from the store; always ``quiescent_current`` [A]; an input shunt holds
+    the store at or below ``shunt_voltage`` [V].
+    """
+    uvlo_rising: float = LTC3588_UVLO_RISING_V
+    uvlo_falling: float = LTC3588_UVLO_FALLING_V
+    output_voltage: float = 3.3
+    load: float = 1e5
+    efficiency: float = 0.9
+    quiescent_current: float = LTC3588_QUIESCENT_A
+    shunt_voltage: float = LTC3588_SHUNT_V
+
+    def __post_init__(self):
+        _check("uvlo_falling_V", self.uvlo_falling, 0.0, 1e6, lo_open=True)
+        if not self.uvlo_rising > self.uvlo_falling:
+            raise SceneError(f"[circuit] uvlo_rising_V = {self.uvlo_rising:g} must exceed "
+                             f"uvlo_falling_V = {self.uvlo_falling:g} (the lockout's hysteresis)")
+        _check("pmic_output_V", self.output_voltage, 0.0, self.uvlo_falling, lo_open=True,
+               note="below uvlo_falling_V (a buck converter)")
+        _check("pmic_load_ohm", self.load, 0.0, math.inf, lo_open=True)
+        _check("pmic_efficiency", self.efficiency, 0.0, 1.0, lo_open=True)
+        _check("pmic_quiescent_current_A", self.quiescent_current, 0.0, 1.0)
+        if not self.shunt_voltage > self.uvlo_rising:
+            raise SceneError(f"[circuit] pmic_shunt_V = {self.shunt_voltage:g} must exceed "
+                             f"uvlo_rising_V = {self.uvlo_rising:g}")
+
+    @property
+    def input_power(self) -> float:
+        """Power drawn from the store while on [W]."""
+        return self.output_voltage**2 / self.load / self.efficiency
+
+
+def _check(key, value, lo, hi, *, lo_open=False, note=""):
+    bad = not math.isfinite(value) if hi != math.inf else math.isnan(value)
+    bad = bad or value < lo or value > hi or (lo_open and value == lo)
+    if bad:
+        left = "(" if lo_open else "["
+        raise SceneError(f"[circuit] {key} = {value!r} is out of range: allowed {left}{lo:g}, {hi:g}]"
+                         + (f" ({note})" if note else ""))
+
+
+# ---------------------------------------------------------------------------
+# compiled kernel
+try:  # numba is a hard dependency of tengfield; the fallback keeps imports light in docs builds
+    from numba import njit
+except ImportError:  # pragma: no cover
+    def njit(*args, **kwargs):
+        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+
+
+@njit(cache=True)
+def _path_current(x, model, forward, i_sat, n_vt, r_series):
+    """Two diodes in series at total voltage x [V] -> current [A] (see :class:`Diode`)."""
+    return _path_current_slope(x, model, forward, i_sat, n_vt, r_series)[0]
+
+
+@njit(cache=True)
+def _path_current_slope(x, model, forward, i_sat, n_vt, r_series):
+    """(current [A], di/dx [S]) of two diodes in series at total voltage x [V]."""
+    if model == 0:
+        excess = x - 2.0 * forward
+        if excess <= 0.0:
+            return 0.0, 0.0
+        if r_series > 0.0:
+            return excess / r_series, 1.0 / r_series
+        return math.inf, math.inf
+    # Shockley: x = 2 n V_T ln(1 + i/I_s) + 2 R_s i  (two diodes, R_s each)
+    a = 2.0 * n_vt
+    r = 2.0 * r_series
+    if r == 0.0:
+        arg = x / a
+        if arg > 700.0:
+            return math.inf, math.inf
+        return i_sat * math.expm1(arg), i_sat * math.exp(arg) / a
+    # in y = ln(1 + i/I_s): h(y) = a y + r I_s (e^y - 1) - x is convex and increasing;
+    # Newton converges monotonically once right of the root (after at most one step)
+    ris = r * i_sat
+    if x > 0.0:
+        y = min(x / a, math.log1p(x / ris))
+    else:
+        y = x / a
+    for _ in range(100):
+        ey = math.exp(min(y, 700.0))
+        h = a * y + ris * (ey - 1.0) - x
+        new = y - h / (a + ris * ey)
+        if abs(new - y) <= 1e-15 * (abs(new) + 1.0):
+            y = new
+            break
+        y = new
+    ey = math.exp(min(y, 700.0))
+    return i_sat * math.expm1(min(y, 700.0)), i_sat * ey / (a + ris * ey)
+
+
+@njit(cache=True)
+def _cell_after(v, c, u_new, h, model, forward, i_sat, n_vt, r_series):
+    """Terminal voltage V' [V] of one cell after the transfer step, store at u_new."""
+    if model == 0:
+        if v - u_new - 2.0 * forward > 0.0:
+            target = u_new + 2.0 * forward
+        elif -v - u_new - 2.0 * forward > 0.0:
+            target = -(u_new + 2.0 * forward)
+        else:
+            return v
+        if r_series == 0.0:
+            return target
+        g = h / r_series
+        return (c * v + g * target) / (c + g)
+    # Shockley. The equations are odd in V (paths A <-> B), so solve for |V| with path A
+    # forward: i_A(V') = [C (v - V') + h i_B(V')] / h must equal i(V' - U), i.e.
+    # R(V') = (V' - U) - x(i_A(V')) = 0 with x(i) = a ln(1 + i/I_s) + r i the path's
+    # (explicit) inverse law: R is increasing and smooth, R(min(U, v) - 1) < 0 <= R(v).
+    sign = 1.0 if v >= 0.0 else -1.0
+    w = abs(v)
+    a = 2.0 * n_vt
+    r = 2.0 * r_series
+    lo = min(u_new, w) - 1.0
+    hi = w
+    x = hi
+    for it in range(300):
+        i_b, g_b = _path_current_slope(-x - u_new, model, forward, i_sat, n_vt, r_series)
+        i_a = (c * (w - x) + h * i_b) / h
+        if i_a <= -i_sat:
+            res = math.inf
+            slope = math.inf
+        else:
+            res = (x - u_new) - (a * math.log1p(i_a / i_sat) + r * i_a)
+            slope = 1.0 + (a / (i_sat + i_a) + r) * (c / h + g_b)
+        if res > 0.0:
+            hi = x
+        else:
+            lo = x
+        # safeguarded Newton: every fourth step bisects, so the bracket always shrinks
+        newton = math.isfinite(res) and math.isfinite(slope) and it % 4 != 3
+        new = x - res / slope if newton else 0.5 * (lo + hi)
+        if not (lo < new < hi):
+            new = 0.5 * (lo + hi)
+            newton = False
+        if (newton and abs(new - x) <= 1e-14 * (abs(new) + 1e-3)) \
+                or hi - lo <= 1e-14 * (abs(new) + 1e-3):
+            return sign * new
+        x = new
+    return sign * x
+
+
+@njit(cache=True)
+def _cell_charges(v, va, c, u_new, h, model, forward, i_sat, n_vt, r_series):
+    """(forward-path charge, reverse-path charge) [C] of one cell's bridge over the step,
+    from the cell's charge balance C (v - V') = h (i_fwd - i_rev) (so both are exact
+    for the computed V'); the forward path is the one V' biases forward."""
+    if model == 0:
+        return c * abs(v - va), 0.0
+    sign = 1.0 if v >= 0.0 else -1.0
+    q_rev = h * _path_current(-sign * va - u_new, model, forward, i_sat, n_vt, r_series)
+    return c * (abs(v) - sign * va) + q_rev, q_rev
+
+
+@njit(cache=True)
+def _store_charge(volts, caps, u_new, h, model, forward, i_sat, n_vt, r_series, v_after):
+    """Charge [C] into the store when it ends at u_new; fills v_after."""
+    total = 0.0
+    for k in range(volts.size):
+        va = _cell_after(volts[k], caps[k], u_new, h, model, forward, i_sat, n_vt, r_series)
+        v_after[k] = va
+        q_fwd, q_rev = _cell_charges(volts[k], va, caps[k], u_new, h, model, forward, i_sat,
+                                     n_vt, r_series)
+        total += q_fwd + q_rev
+    return total
+
+
+@njit(cache=True)
+def _transfer(volts, caps, u, c_store, h, model, forward, i_sat, n_vt, r_series, v_after):
+    """Backward-Euler bridge conduction at fixed capacitances; returns U'."""
+    # G(U') = C_L (U' - U) - Q_store(U') is increasing in U'
+    g0 = -_store_charge(volts, caps, u, h, model, forward, i_sat, n_vt, r_series, v_after)
+    if g0 == 0.0:
+        return u
+    charge = 2.0 * h * i_sat * volts.size     # bound on what the step can move [C]
+    for k in range(volts.size):
+        charge += caps[k] * abs(volts[k])
+    if g0 > 0.0:                      # net reverse leakage: the root lies in [0, U)
+        lo = max(0.0, u - charge / c_store)
+        hi = u
+    else:
+        lo = u
+        hi = u + charge / c_store
+        for _ in range(60):           # make sure G(hi) > 0
+            if c_store * (hi - u) - _store_charge(volts, caps, hi, h, model, forward, i_sat,
+                                                  n_vt, r_series, v_after) > 0.0:
+                break
+            hi = u + 2.0 * (hi - u)
+    tol = 1e-15 * (hi - lo) + 1e-300
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        g = c_store * (mid - u) - _store_charge(volts, caps, mid, h, model, forward, i_sat,
+                                                n_vt, r_series, v_after)
+        if g > 0.0:
+            hi = mid
+        else:
+            lo = mid
+        if hi - lo <= tol:
+            break
+    u_new = 0.5 * (lo + hi)
+    _store_charge(volts, caps, u_new, h, model, forward, i_sat, n_vt, r_series, v_after)
+    return u_new
+
+
+@njit(cache=True)
+def _decay(u, h, c_store, leak, quiescent, power, on, rising, falling):
+    """Store over h [s]: leakage U/R, a constant current and (while on) constant power.
+
+    Returns (U', on', leak energy, quiescent energy, chip energy, on time).
+    Each sink acts exactly over the step in turn (Lie splitting); the lockout
+    switches off at the exact instant U^2 falls through uvlo_falling^2.
+    """
+    e_leak = e_q = e_chip = on_time = 0.0
+    u0 = u
+    if leak < math.inf and leak > 0.0:
+        u = u * math.exp(-h / (leak * c_store))
+        e_leak = 0.5 * c_store * (u0 * u0 - u * u)
+    if quiescent > 0.0 and u > 0.0:
+        drop = min(u, quiescent * h / c_store)
+        u1 = u - drop
+        e_q = 0.5 * c_store * (u * u - u1 * u1)
+        u = u1
+    if on and power > 0.0:
+        # d(U^2)/dt = -2 P / C_L until U = falling
+        u2 = u * u - 2.0 * power * h / c_store
+        if u2 <= falling * falling:
+            t_off = 0.5 * c_store * (u * u - falling * falling) / power
+            t_off = min(max(t_off, 0.0), h)
+            on_time = t_off
+            e_chip = power * t_off
+            u = min(u, falling)
+            on = False
+        else:
+            u1 = math.sqrt(u2)
+            on_time = h
+            e_chip = 0.5 * c_store * (u * u - u1 * u1)
+            u = u1
+    return u, on, e_leak, e_q, e_chip, on_time
+
+
+@njit(cache=True)
+def _harvest_kernel(q_sc, c_t, times, c_store, u0, leak, model, forward, i_sat, n_vt, r_series,
+                    has_chip, rising, falling, power, quiescent, shunt,
+                    volts, store, bridge_charge, chip_on, energies, u_crossings):
+    """Step the cells (columns of q_sc, c_t) and the store along ``times``.
+
+    Fills volts[k, j], store[k], bridge_charge[k, j] (cumulative, lower -> upper),
+    chip_on[k]; energies[k, :] cumulative: mechanical work, bridge, diode loss,
+    store gain in transfer, leak, quiescent, chip input, shunt; u_crossings:
+    first times U reached (rising, falling-after-on)."""
+    n_steps, n_cells = q_sc.shape
+    deficit = np.empty(n_cells)
+    v_before = np.empty(n_cells)
+    v_after = np.empty(n_cells)
+    caps = np.empty(n_cells)
+    for j in range(n_cells):
+        deficit[j] = q_sc[0, j]          # Q_b = 0 at the start: open-circuit state
+        volts[0, j] = deficit[j] / c_t[0, j]
+        bridge_charge[0, j] = 0.0
+    u = u0
+    on = False
+    store[0] = u
+    chip_on[0] = 0
+    acc = np.zeros(9)
+    energies[0, :] = 0.0
+    u_crossings[0] = math.nan
+    u_crossings[1] = math.nan
+    for k in range(1, n_steps):
+        h = times[k] - times[k - 1]
+        # 1. move, bridges blocked
+        for j in range(n_cells):
+            e_before = 0.5 * deficit[j] * deficit[j] / c_t[k - 1, j]
+            deficit[j] += q_sc[k, j] - q_sc[k - 1, j]
+            caps[j] = c_t[k, j]
+            v_before[j] = deficit[j] / caps[j]
+            acc[0] += 0.5 * deficit[j] * deficit[j] / caps[j] - e_before
+        # 2. transfer
+        if h > 0.0:
+            u_new = _transfer(v_before, caps, u, c_store, h, model, forward, i_sat, n_vt,
+                              r_series, v_after)
+        else:
+            u_new = u
+            for j in range(n_cells):
+                v_after[j] = v_before[j]
+        gained = 0.0
+        for j in range(n_cells):
+            vm = v_before[j]
+            va = v_after[j]
+            moved = caps[j] * (vm - va)              # q: lower -> upper through the bridge
+            # mechanical work of the move, less the overshoot the blocked move added
+            # (the clamped terminal never reaches vm): W = W_move - C (vm - va)^2 / 2
+            acc[0] -= 0.5 * caps[j] * (vm - va) ** 2
+            acc[1] += va * moved                     # energy into the bridge (backward Euler)
+            q_fwd, q_rev = _cell_charges(vm, va, caps[j], u_new, h, model, forward, i_sat,
+                                         n_vt, r_series)
+            x_fwd = (va if vm >= 0.0 else -va) - u_new   # forward path voltage
+            acc[2] += q_fwd * x_fwd + q_rev * (-x_fwd - 2.0 * u_new)
+            gained += q_fwd + q_rev
+            deficit[j] = caps[j] * va
+            bridge_charge[k, j] = bridge_charge[k - 1, j] + moved
+            volts[k, j] = va
+        acc[3] += u_new * gained                     # energy into the store (backward Euler)
+        acc[8] += 0.5 * c_store * (u_new - u) ** 2   # the scheme's own dissipation
+        u = u_new
+        if has_chip:
+            if u > shunt:
+                acc[7] += 0.5 * c_store * (u * u - shunt * shunt)
+                u = shunt
+            if (not on) and u >= rising:
+                on = True
+                if math.isnan(u_crossings[0]):
+                    u_crossings[0] = times[k]
+        # 3. store sinks
+        if h > 0.0:
+            was_on = on
+            u, on, e_leak, e_q, e_chip, on_time = _decay(
+                u, h, c_store, leak, quiescent if has_chip else 0.0,
+                power if has_chip else 0.0, on, rising, falling)
+            acc[4] += e_leak
+            acc[5] += e_q
+            acc[6] += e_chip
+            if was_on and not on and math.isnan(u_crossings[1]):
+                u_crossings[1] = times[k - 1] + on_time
+        store[k] = u
+        chip_on[k] = 1 if on else 0
+        energies[k, :] = acc
+
+
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class HarvestResult:
+    """Rectifier run on a time grid (SI). Cumulative energies [J] from the start.
+
+    ``voltage[k, j]`` terminal voltage of cell j; ``bridge_charge[k, j]`` charge
+    through cell j's bridge (lower -> upper outside); ``store_voltage[k]`` U;
+    ``store_current[k]`` dQ_store/dt over the step ending at k; ``chip_on[k]``.
+    ``threshold_times``: first time U rose through the UVLO threshold
+    (``uvlo_rising_s``) and first lockout after that (``uvlo_falling_s``), NaN if never.
+    """
+    time: np.ndarray
+    voltage: np.ndarray
+    bridge_charge: np.ndarray
+    store_voltage: np.ndarray
+    store_current: np.ndarray
+    stored_energy: np.ndarray
+    chip_on: np.ndarray
+    mechanical_work: np.ndarray
+    bridge_energy: np.ndarray
+    diode_loss: np.ndarray
+    store_input: np.ndarray
+    leakage_loss: np.ndarray
+    quiescent_loss: np.ndarray
+    chip_input_energy: np.ndarray
+    shunt_loss: np.ndarray
+    numerical_dissipation: np.ndarray
+    terminal_energy: np.ndarray
+    threshold_times: dict
+
+    def balance(self) -> dict:
+        """Energy accounts at the end of the run [J] and the residuals of the three
+        balances relative to the energy delivered into the bridges.
+
+        mechanical work = Δ terminal energy + delivered; delivered = diode loss +
+        store input; store input = Δ stored + leakage + quiescent + chip + shunt +
+        the backward-Euler step's own dissipation ``C_L ΔU^2 / 2`` (reported as
+        ``numerical_dissipation_J``: the scheme's error, O(step))."""
+        delivered = float(self.bridge_energy[-1])
+        scale = max(abs(delivered), 1e-300)
+        d_term = float(self.terminal_energy[-1] - self.terminal_energy[0])
+        d_store = float(self.stored_energy[-1] - self.stored_energy[0])
+        sinks = float(self.leakage_loss[-1] + self.quiescent_loss[-1]
+                      + self.chip_input_energy[-1] + self.shunt_loss[-1])
+        return {
+            "mechanical_work_J": float(self.mechanical_work[-1]),
+            "delivered_J": delivered,
+            "diode_loss_J": float(self.diode_loss[-1]),
+            "stored_change_J": d_store,
+            "leakage_J": float(self.leakage_loss[-1]),
+            "quiescent_J": float(self.quiescent_loss[-1]),
+            "chip_input_J": float(self.chip_input_energy[-1]),
+            "shunt_J": float(self.shunt_loss[-1]),
+            "numerical_dissipation_J": float(self.numerical_dissipation[-1]),
+            "terminal_residual": abs(float(self.mechanical_work[-1]) - d_term - delivered) / scale,
+            "bridge_residual": abs(delivered - float(self.diode_loss[-1])
+                                   - float(self.store_input[-1])) / scale,
+            "store_residual": abs(float(self.store_input[-1]) - d_store - sinks
+                                  - float(self.numerical_dissipation[-1])) / scale,
+        }
+
+
+def harvest(times, q_sc, c_t, *, storage_capacitance: float, diode: Diode = Diode(),
+            parallel_capacitance: float = 0.0, leakage: float = math.inf,
+            chip: PowerChip | None = None, initial_store_voltage: float = 0.0) -> HarvestResult:
+    """Charge a store through full bridges, one per cell (columns of ``q_sc``/``c_t``).
+
+    ``times`` [s] non-decreasing; ``q_sc`` [C] and ``c_t`` [F] of each cell at
+    those times (1-D arrays for one cell); ``parallel_capacitance`` C_p [F]
+    across each cell's terminals; ``storage_capacitance`` C_L [F];
+    ``leakage`` [ohm] across the store (inf: none). All cells start in the
+    open-circuit state (no charge through the bridges).
+    """
+    t = np.ascontiguousarray(times, dtype=float)
+    q = np.asarray(q_sc, dtype=float)
+    c = np.asarray(c_t, dtype=float) + parallel_capacitance
+    if q.ndim == 1:
+        q, c = q[:, None], c[:, None]
+    if q.shape != c.shape or q.shape[0] != t.size:
+        raise ValueError(f"q_sc {q.shape} and c_t {c.shape} must have one row per time ({t.size})")
+    if np.any(np.diff(t) < 0):
+        raise ValueError("times must be non-decreasing")
+    _check("storage_capacitance_uF", storage_capacitance * 1e6, 0.0, 1e12, lo_open=True)
+    _check("storage_leakage_ohm", leakage, 0.0, math.inf, lo_open=True)
+    q = np.ascontiguousarray(q)
+    c = np.ascontiguousarray(c)
+    n_steps, n_cells = q.shape
+    volts = np.empty((n_steps, n_cells))
+    store = np.empty(n_steps)
+    bridge = np.empty((n_steps, n_cells))
+    chip_on = np.empty(n_steps, dtype=np.int8)
+    energies = np.empty((n_steps, 9))
+    crossings = np.empty(2)
+    has_chip = chip is not None
+    chip = chip or PowerChip()
+    _harvest_kernel(q, c, t, float(storage_capacitance), float(initial_store_voltage),
+                    float(leakage), *diode._params(), has_chip, chip.uvlo_rising,
+                    chip.uvlo_falling, chip.input_power, chip.quiescent_current,
+                    chip.shunt_voltage, volts, store, bridge, chip_on, energies, crossings)
+    stored = 0.5 * storage_capacitance * store**2
+    current = np.zeros(n_steps)           # bridge current into the store over each step [A]
+    dt = np.diff(t)
+    ok = dt > 0
+    into_store = np.diff(energies[:, 3])
+    current[1:][ok] = into_store[ok] / np.maximum(store[1:][ok], 1e-300) / dt[ok]
+    terminal = 0.5 * np.sum(volts**2 * c, axis=1)
+    return HarvestResult(
+        time=t, voltage=volts, bridge_charge=bridge, store_voltage=store, store_current=current,
+        stored_energy=stored, chip_on=chip_on.astype(bool), mechanical_work=energies[:, 0],
+        bridge_energy=energies[:, 1], diode_loss=energies[:, 2], store_input=energies[:, 3],
+        leakage_loss=energies[:, 4], quiescent_loss=energies[:, 5],
+        chip_input_energy=energies[:, 6], shunt_loss=energies[:, 7],
+        numerical_dissipation=energies[:, 8], terminal_energy=terminal,
+        threshold_times={"uvlo_rising_s": float(crossings[0]), "uvlo_falling_s": float(crossings[1])})
+
+
+def saturation_voltage(q_sc_max: float, c_max: float, c_min: float, forward_voltage: float = 0.0):
+    """Store voltage [V] a periodic TENG charges an ideal bridge's store to (no load).
+
+    A half stroke moves the cell from (Q_SC = 0, C(0)) to (Q_SC,max, C(x_max)) and
+    back; at saturation the terminal swings between ``±(U + 2 V_F)`` without
+    conducting: ``Q_SC,max = (C_max + C_min)(U + 2 V_F)`` with C_max, C_min the
+    terminal capacitances (C_T + C_p) at the two ends [F] (Niu et al., Nano
+    Energy 2014). Returns ``U_sat = Q_SC,max / (C_max + C_min) - 2 V_F``.
+    """
+    return q_sc_max / (c_max + c_min) - 2.0 * forward_voltage
+
+
+def max_energy_per_cycle(q_sc_max: float, c_at_max: float, c_at_zero: float) -> float:
+    """Cycles for maximised energy output (Zi et al., Nat. Commun. 6:8376, 2015) [J].
+
+    Move open-circuit 0 -> x_max (V rises to V_OC,max = Q_SC,max / C(x_max)),
+    short at x_max, move back open (V' = -Q_SC,max / C(0)), short at 0:
+    ``E_m = Q_SC,max (V_OC,max + |V'_max|) / 2``.
+    """
+    return 0.5 * q_sc_max**2 * (1.0 / c_at_max + 1.0 / c_at_zero)
+
+
+def structural_figure_of_merit(energy_per_cycle: float, surface_charge: float, area: float,
+                               max_displacement: float) -> float:
+    """FOM_S = 2 ε0 E_m / (σ² A x_max) (Zi et al. 2015), dimensionless.
+
+    ``area`` [m^2] is the charged area (tengfield uses the ball's surface π d²),
+    ``max_displacement`` x_max [m] the free stroke.
+    """
+    from .scene import EPS0
+    return 2.0 * EPS0 * energy_per_cycle / (surface_charge**2 * area * max_displacement)
