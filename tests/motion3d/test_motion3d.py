@@ -223,3 +223,27 @@ def test_default_scenes_unchanged_by_the_3d_keys():
     assert scene.contact.model == "impact"
     assert scene.field_hash() == default_scene().with_values(
         contact={"friction_static": 0.3}, device={"tilt_deg": 10.0}).field_hash()
+
+
+def test_writers_and_figure(tmp_path):
+    import matplotlib
+    matplotlib.use("Agg")   # the caller chooses the backend
+    from tengfield.motion3d.output import (EXTRA_COLUMNS, plot_trajectory3d, write_contacts_csv,
+                                           write_trajectory3d_csv)
+    scene = default_scene().with_values(
+        contact={"model": "3d"}, run={"duration_s": 0.1, "settle_periods": 1,
+                                      "sample_rate_hz": 2000.0},
+        excitation={"frequency_hz": 30.0, "amplitude_mm": 3.0, "amplitude_y_mm": 0.5})
+    r = simulate_3d(scene)
+    write_trajectory3d_csv(r, tmp_path / "trajectory.csv")
+    table = np.genfromtxt(tmp_path / "trajectory.csv", delimiter=",", names=True)
+    assert table.dtype.names[:4] == ("time_s", "gap_m", "gap_velocity_m_per_s", "table_m")
+    assert table.dtype.names[4:] == EXTRA_COLUMNS
+    np.testing.assert_allclose(table["y_m"], r.y, rtol=1e-10, atol=1e-15)
+    write_contacts_csv(r, tmp_path / "contacts.csv")
+    contacts = np.genfromtxt(tmp_path / "contacts.csv", delimiter=",", names=True, dtype=None,
+                             encoding="utf-8")
+    assert contacts.size == r.contacts["surface"].size
+    assert np.count_nonzero(contacts["surface"] == "wall") == r.wall_contacts
+    plot_trajectory3d(r, tmp_path / "trajectory3d.png")
+    assert (tmp_path / "trajectory3d.png").stat().st_size > 10_000
