@@ -247,3 +247,36 @@ def test_writers_and_figure(tmp_path):
     assert np.count_nonzero(contacts["surface"] == "wall") == r.wall_contacts
     plot_trajectory3d(r, tmp_path / "trajectory3d.png")
     assert (tmp_path / "trajectory3d.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("speed", [0.1, 0.5, 2.0])
+def test_undamped_hertz_impact_time_and_rebound(speed):
+    """e = 1: the Hertz contact time 2.943 (5 m / 4 k)^(2/5) v^(-1/5), full rebound."""
+    from tengfield.motion3d.contact import hertz_contact_time, surface_parameters
+    scene = default_scene().with_values(contact={"model": "3d", "restitution": 1.0},
+                                        excitation={"amplitude_mm": 0.0})
+    r = scene.device.ball_radius
+    status, knots, episodes, *_ = integrate_3d(
+        scene, t_start=0.0, t_end=1e-3, position0=[0.0, 0.0, r + 1e-6],
+        velocity0=[0.0, 0.0, -speed], gravity=np.zeros(3))
+    assert episodes.shape[0] == 1
+    k = surface_parameters(scene)[0, 1]
+    dwell = episodes[0, 2] - episodes[0, 1]
+    assert dwell == pytest.approx(hertz_contact_time(scene.device.ball_mass, k, speed), rel=1e-4)
+    assert knots[-1, 6] == pytest.approx(speed, rel=1e-4)
+    assert episodes[0, 5] >= 30   # steps resolving the contact
+
+
+def test_damped_rebound_falls_with_restitution():
+    """Chrono's damping: the rebound falls monotonically with e (not exactly e: docs)."""
+    rebound = []
+    for e in (0.1, 0.5, 0.9):
+        scene = default_scene().with_values(contact={"model": "3d", "restitution": e},
+                                            excitation={"amplitude_mm": 0.0})
+        r = scene.device.ball_radius
+        _, knots, _, *_ = integrate_3d(scene, t_start=0.0, t_end=2e-3,
+                                       position0=[0.0, 0.0, r + 1e-6],
+                                       velocity0=[0.0, 0.0, -0.5], gravity=np.zeros(3))
+        rebound.append(knots[-1, 6] / 0.5)
+    assert np.all(np.diff(rebound) > 0)
+    assert rebound[2] == pytest.approx(0.9, abs=0.01)

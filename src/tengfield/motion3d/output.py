@@ -42,7 +42,7 @@ def write_contacts_csv(result, path) -> None:
 
 
 def plot_trajectory3d(result, path, *, title: str | None = None):
-    """trajectory3d.png: side view (x and z of the centre vs time) and top view (x-y) [mm].
+    """trajectory3d.png: side view (gap z and radial offset r vs time) and top view (x-y) [mm].
 
     The caller chooses the matplotlib backend (Agg for files).
     """
