@@ -132,6 +132,8 @@ SCHEMA_3D: dict[str, dict[str, tuple]] = {
     },
     "contact": {
         "law": ("law", str, "hertz", None, _choice("hertz", "power")),
+        "damping_model": ("damping_model", str, "calibrated", None,
+                          _choice("calibrated", "chrono")),
         "exponent": ("exponent", float, 1.0, 1.0, _rng(1.0, 3.0)),
         "damping_N_s_per_m": ("damping", float, -1.0, 1.0, _rng(-1.0, 1e12)),
         "penetration_max_mm": ("penetration_max", float, 0.0, 1e-3, _rng(0.0, 10.0)),
@@ -250,6 +252,7 @@ class Contact:
     # 3D motion (SCHEMA_3D), SI: moduli [Pa], damping [N s/m] (< 0: from restitution),
     # penetration_max [m]
     law: str = "hertz"
+    damping_model: str = "calibrated"   # Hertz: beta fitted to rebound with e, or Chrono's closed form
     exponent: float = 1.0
     damping: float = -1.0
     penetration_max: float = 0.0
