@@ -142,13 +142,14 @@ def _contact(s, p, v, w, xi, sliding, P, S, out):
 
 
 @njit(cache=True)
-def _deriv(t, y, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz):
-    out = np.zeros(6)
+def _deriv(t, y, dy, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz):
+    """dy/dt into ``dy`` (``out``: 6 scratch values for force and torque)."""
+    for i in range(6):
+        out[i] = 0.0
     p = y[0:3]
     v = y[3:6]
     w = y[6:9]
     xi = y[9:18]
-    dy = np.zeros(N_STATE)
     R = P[1]
     for s in range(3):
         delta, nx, ny, nz = _geometry(s, p, R, P[3], P[4])
@@ -162,25 +163,47 @@ def _deriv(t, y, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz):
             dy[9 + 3 * s] = vcx - vn * nx
             dy[10 + 3 * s] = vcy - vn * ny
             dy[11 + 3 * s] = vcz - vn * nz
-    _, _, ydd = table3(t, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
+        else:
+            dy[9 + 3 * s] = 0.0
+            dy[10 + 3 * s] = 0.0
+            dy[11 + 3 * s] = 0.0
+    ax = table_state(t, kx, px, bx, cx)[2]
+    ay = table_state(t, ky, py, by, cy)[2]
+    az = table_state(t, kz, pz, bz, cz)[2]
     m = P[0]
     inertia = P[2]
     for i in range(3):
         dy[i] = v[i]
-        dy[3 + i] = P[5 + i] - ydd[i] + out[i] / m
         dy[6 + i] = out[3 + i] / inertia
-    return dy
+    dy[3] = P[5] - ax + out[0] / m
+    dy[4] = P[6] - ay + out[1] / m
+    dy[5] = P[7] - az + out[2] / m
 
 
 @njit(cache=True)
 def _rk4(t, y, h, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz):
-    k1 = _deriv(t, y, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
-    k2 = _deriv(t + 0.5 * h, y + 0.5 * h * k1, sliding, P, S,
-                kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
-    k3 = _deriv(t + 0.5 * h, y + 0.5 * h * k2, sliding, P, S,
-                kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
-    k4 = _deriv(t + h, y + h * k3, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
-    return y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    n = y.size
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    out = np.empty(6)
+    _deriv(t, y, k1, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
+    for i in range(n):
+        tmp[i] = y[i] + 0.5 * h * k1[i]
+    _deriv(t + 0.5 * h, tmp, k2, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz,
+           cz)
+    for i in range(n):
+        tmp[i] = y[i] + 0.5 * h * k2[i]
+    _deriv(t + 0.5 * h, tmp, k3, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz,
+           cz)
+    for i in range(n):
+        tmp[i] = y[i] + h * k3[i]
+    _deriv(t + h, tmp, k4, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
+    for i in range(n):
+        tmp[i] = y[i] + (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    return tmp
 
 
 @njit(cache=True)
@@ -256,7 +279,8 @@ def _contact_step(y, P, S, steps):
         cn, ktt, ctt = _coefficients(S, s, delta)
         omega2 = max(stiff, 3.5 * ktt) / m
         damp = max(cn, 3.5 * ctt) / m
-        omega = math.sqrt(omega2) + damp
+        # largest |eigenvalue| of the damped contact oscillator <= max(omega, c/m)
+        omega = max(math.sqrt(omega2), damp)
         if omega > 0.0:
             h = min(h, 2.0 * math.pi / omega / steps)
         speed = abs(y[3] * nx + y[4] * ny + y[5] * nz)
