@@ -38,6 +38,8 @@ N_STATE = 18
 KNOT_WIDTH = 11           # t, p(3), v(3), w(3), mode
 FLIGHT, CONTACT = 0.0, 1.0
 BISECTIONS = 48
+EDGE_FRACTION = 0.25
+EDGE_REFINE = 64.0
 
 
 @njit(cache=True)
@@ -266,9 +268,16 @@ def _deltas(y, P):
 
 @njit(cache=True)
 def _contact_step(y, P, S, steps):
-    """RK4 step [s] resolving every active contact with ``steps`` steps per period."""
+    """RK4 step [s] resolving every active contact with ``steps`` steps per period.
+
+    Near the edge of a Hertz contact (delta -> 0, where delta^(1/4) and
+    delta^(1/2) are not smooth) the step also stays below EDGE_FRACTION
+    delta / |d delta/dt| (never below 1/EDGE_REFINE of the bulk step), so
+    entry and exit are resolved geometrically.
+    """
     m = P[0]
     h = math.inf
+    h_edge = math.inf
     for s in range(3):
         delta, nx, ny, nz = _geometry(s, y[0:3], P[1], P[3], P[4])
         if delta <= 0.0:
@@ -288,6 +297,10 @@ def _contact_step(y, P, S, steps):
             # time to the largest penetration of an undamped impact at this speed
             dm = ((e + 1.0) * m * speed * speed / (2.0 * kn)) ** (1.0 / (e + 1.0))
             h = min(h, 2.0 * math.pi * dm / speed / steps)
+            if S[s, 0] == 0.0:
+                h_edge = min(h_edge, EDGE_FRACTION * delta / speed)
+    if h_edge < h:
+        h = max(h_edge, h / EDGE_REFINE)
     return h
 
 

@@ -5,8 +5,12 @@ Hertz (``[contact] law = "hertz"``), per surface (lower plate, upper plate, wall
 * normal ``F_n = (4/3) E* sqrt(R_e) delta^(3/2) + gamma_n d(delta)/dt`` (clamped at 0),
   ``1/E* = (1 - nu_b^2)/E_b + (1 - nu_s^2)/E_s``;
 * damping from the restitution e (Chrono's SMC form)
-  ``beta = ln e / sqrt(ln^2 e + pi^2)``, ``gamma_n = -2 sqrt(5/6) beta sqrt(S_n m)``,
-  ``S_n = 2 E* sqrt(R_e delta)``;
+  ``gamma_n = -2 sqrt(5/6) beta sqrt(S_n m)``, ``S_n = 2 E* sqrt(R_e delta)``,
+  with ``beta = ln e / sqrt(ln^2 e + pi^2)`` (``damping_model = "chrono"``) or
+  (``"calibrated"``, default) the beta for which the clamped contact rebounds
+  with exactly e: with this damping form the rebound does not depend on the
+  impact speed, so one scalar per e, found once from the dimensionless
+  contact ``x'' = -x^1.5 - a x^(1/4) x'`` (clamped) (a = 2 sqrt(5/6) sqrt(3/2) |beta|);
 * tangential spring ``k_t = 8 G* sqrt(R_e delta)``,
   ``1/G* = 2(2 - nu_b)(1 + nu_b)/E_b + 2(2 - nu_s)(1 + nu_s)/E_s``, damping
   ``gamma_t = -2 sqrt(5/6) beta sqrt(S_t m)``, ``S_t = k_t``;
@@ -24,6 +28,7 @@ as Eq. 1), ``k = stiffness_N_per_m``, ``e = exponent``; ``c_max`` =
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -52,6 +57,46 @@ def beta(restitution: float) -> float:
         return -1.0
     ln_e = math.log(restitution)
     return ln_e / math.sqrt(ln_e**2 + math.pi**2)
+
+
+MIN_CALIBRATED_RESTITUTION = 0.01
+
+
+def rebound_of_damping(a: float) -> float:
+    """Rebound speed ratio of ``x'' = -x^1.5 - a x^(1/4) x'`` (force clamped at 0), x'(0) = 1."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(_t, s):
+        x, v = s
+        xp = max(x, 0.0)
+        force = xp**1.5 + a * xp**0.25 * v
+        return [v, -max(force, 0.0)]
+
+    def leave(_t, s):
+        return s[0]
+    leave.terminal = True
+    leave.direction = -1.0
+    sol = solve_ivp(rhs, (0.0, 1e3), [1e-12, 1.0], events=leave, rtol=1e-10, atol=1e-13,
+                    method="LSODA")
+    if not sol.t_events[0].size:
+        return 0.0
+    return float(-sol.y_events[0][0][1])
+
+
+@lru_cache(maxsize=64)
+def calibrated_beta(restitution: float) -> float:
+    """beta (<= 0) for which the clamped Hertz contact with Chrono's damping form rebounds with e."""
+    from scipy.optimize import brentq
+
+    e = max(float(restitution), MIN_CALIBRATED_RESTITUTION)
+    if e >= 1.0:
+        return 0.0
+    scale = 2.0 * SQRT_5_6 * math.sqrt(1.5)
+    hi = 1.0
+    while rebound_of_damping(hi) > e:
+        hi *= 2.0
+    a = brentq(lambda x: rebound_of_damping(x) - e, 0.0, hi, xtol=1e-10, rtol=1e-10)
+    return -a / scale
 
 
 def wall_radius(ball_radius: float, tube_radius: float) -> float:
@@ -83,7 +128,10 @@ def surface_parameters(scene) -> np.ndarray:
         raise SceneError(f"[contact] restitution_model = {c.restitution_model!r} with model = '3d': "
                          "the compliant 3D contact takes a constant restitution")
     S = np.zeros((3, 10))
-    b = beta(c.restitution)
+    if c.law == "hertz" and c.damping_model == "calibrated":
+        b = calibrated_beta(c.restitution)
+    else:
+        b = beta(c.restitution)
     for s, name in enumerate(SURFACES):
         S[s, MU_S] = c.friction_static
         S[s, MU_D] = c.friction_dynamic
