@@ -40,6 +40,7 @@ FLIGHT, CONTACT = 0.0, 1.0
 BISECTIONS = 48
 EDGE_FRACTION = 0.25
 EDGE_REFINE = 64.0
+DAMPED_STEP = 0.25
 
 
 @njit(cache=True)
@@ -286,12 +287,14 @@ def _contact_step(y, P, S, steps):
         kn = S[s, 1]
         stiff = kn * e * delta ** (e - 1.0)
         cn, ktt, ctt = _coefficients(S, s, delta)
-        omega2 = max(stiff, 3.5 * ktt) / m
+        omega = math.sqrt(max(stiff, 3.5 * ktt) / m)
         damp = max(cn, 3.5 * ctt) / m
-        # largest |eigenvalue| of the damped contact oscillator <= max(omega, c/m)
-        omega = max(math.sqrt(omega2), damp)
+        # oscillation: `steps` per period; an overdamped mode (|eigenvalue| <= c/m)
+        # only has to decay stably and smoothly: h c/m <= DAMPED_STEP * 64 / steps
         if omega > 0.0:
             h = min(h, 2.0 * math.pi / omega / steps)
+        if damp > 0.0:
+            h = min(h, DAMPED_STEP * 64.0 / steps / damp)
         speed = abs(y[3] * nx + y[4] * ny + y[5] * nz)
         if speed > 0.0:
             # time to the largest penetration of an undamped impact at this speed
