@@ -6,7 +6,7 @@ plates of ~10 ms. Here the ball is the 3D compliant-contact model
 (tengfield.motion3d, Hertz with PTFE/copper/PMMA handbook moduli, friction
 0.1 / 0.05); the table moves 3 mm vertically at 30 Hz plus a lateral sine
 of growing amplitude (x axis, 45 degrees phase). For each lateral amplitude:
-upper-plate contacts per period and mean upper impact speed (the charge
+upper-plate impacts per period and mean upper impact speed (the charge
 transfer needs the ball to reach the upper electrode; the open-circuit
 voltage of an on-axis ball follows z(t)), wall contacts, mean radial offset.
 
@@ -14,10 +14,10 @@ V_OC is NOT computed here: the (z, r) field surrogate is another task; the
 vertical motion is the proxy (an on-axis surrogate at r = 0 would only
 approximate an off-axis ball anyway).
 
-Dwell times: one Hertz contact episode lasts ~0.1-0.3 ms; a ball that hits
-with restitution 0.1 chatters and rests, so the time it stays within 1 % of
-the stroke of a plate ("near-plate dwell", what a camera resolves) is also
-reported, next to the paper's ~10 ms.
+Dwell times, two ways: the mean contact episode (the compliant ball touching
+the plate, from entry to exit, including a resting phase) and the time the
+ball stays within 1 % of the stroke of the lower plate ("near-plate dwell",
+what a camera resolves), next to the paper's ~10 ms.
 
     .venv/bin/python demos/motion3d_lateral.py [--fast] [-o DIR]
 """
@@ -69,7 +69,7 @@ def main() -> None:
         dw_low = near_plate_dwell(r.t[keep], r.gap[keep], r.stroke, upper=False)
         rows.append({
             "lateral_mm": ax,
-            "upper_per_period": np.count_nonzero(upper) / periods,
+            "upper_per_period": np.count_nonzero(upper) / periods,   # impact episodes
             "upper_speed": float(np.mean(r.impacts.speed_before[upper])) if np.any(upper) else 0.0,
             "wall_per_period": np.count_nonzero(
                 (r.contacts["surface"] == "wall") & (r.contacts["time_in"] >= r.window_start))
@@ -84,10 +84,10 @@ def main() -> None:
             "wall_time": r.wall_time,
         })
         last = r
-    print("lateral  upper/period  upper speed  wall/period  mean r   regime")
+    print("lateral  upper impacts/period  upper speed  wall/period  mean r   regime")
     print("  [mm]                   [m/s]                   [mm]")
     for row in rows:
-        print(f"{row['lateral_mm']:6.2f}  {row['upper_per_period']:10.3f}  "
+        print(f"{row['lateral_mm']:6.2f}  {row['upper_per_period']:18.3f}  "
               f"{row['upper_speed']:10.3f}  {row['wall_per_period']:10.2f}  "
               f"{row['mean_r_mm']:7.3f}  {row['regime']}")
     r0 = rows[0]
@@ -106,7 +106,7 @@ def main() -> None:
     from tengfield.motion3d.output import plot_trajectory3d
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     x = [row["lateral_mm"] for row in rows]
-    a1.plot(x, [row["upper_per_period"] for row in rows], "o-", label="upper contacts / period")
+    a1.plot(x, [row["upper_per_period"] for row in rows], "o-", label="upper impacts / period")
     a1.plot(x, [row["upper_speed"] for row in rows], "s-", label="upper impact speed [m/s]")
     a1.set_xlabel("lateral amplitude [mm] (vertical 3 mm, 30 Hz)")
     a1.legend(fontsize=8)
