@@ -293,3 +293,23 @@ def test_chrono_damping_rebound_matches_its_dimensionless_contact():
         expected = rebound_of_damping(-beta(e) * 2 * SQRT_5_6 * math.sqrt(1.5))
         assert _rebound(e, 0.5, "chrono") == pytest.approx(expected, rel=2e-3)
     assert rebound_of_damping(-beta(0.1) * 2 * SQRT_5_6 * math.sqrt(1.5)) > 0.2
+
+
+def test_lateral_drive_symmetries():
+    """Mirror (x drive phase + 180 deg -> x -> -x) and rotation (x drive -> y drive)."""
+    base = default_scene().with_values(
+        contact={"model": "3d"}, run={"duration_s": 0.15, "settle_periods": 1,
+                                      "sample_rate_hz": 4000.0},
+        excitation={"frequency_hz": 30.0, "amplitude_mm": 3.0})
+    a = simulate_3d(base.with_values(excitation={"amplitude_x_mm": 0.5, "phase_x_deg": 30.0}))
+    b = simulate_3d(base.with_values(excitation={"amplitude_x_mm": 0.5, "phase_x_deg": 210.0}))
+    c = simulate_3d(base.with_values(excitation={"amplitude_y_mm": 0.5, "phase_y_deg": 30.0}))
+    assert a.wall_contacts > 0
+    np.testing.assert_allclose(b.x, -a.x, atol=1e-9)
+    np.testing.assert_allclose(b.gap, a.gap, atol=1e-9)
+    np.testing.assert_allclose(c.y, a.x, atol=1e-9)
+    np.testing.assert_allclose(c.x, 0.0, atol=1e-15)
+    np.testing.assert_allclose(c.gap, a.gap, atol=1e-9)
+    # spin about the axis perpendicular to the drive, opposite in the mirror
+    np.testing.assert_allclose(b.spin[:, 1], -a.spin[:, 1], atol=1e-6)
+    np.testing.assert_allclose(c.spin[:, 0], -a.spin[:, 1], atol=1e-6)
