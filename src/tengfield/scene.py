@@ -113,6 +113,50 @@ SCHEMA: dict[str, dict[str, tuple]] = {
 #: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`).
 PASSTHROUGH_SECTIONS = ("fit",)
 
+# ---------------------------------------------------------------------------
+# 3D motion keys (issue #13, tengfield.motion3d; used only by [contact] model = "3d").
+# Their defaults leave every impact/soft scene unchanged. Material defaults
+# (handbook values, sources in docs/motion3d.md): PTFE ball E 0.5 GPa
+# (0.4-0.8), nu 0.46; copper electrodes E 120 GPa (110-130), nu 0.34; PMMA
+# tube E 3.0 GPa (2.4-3.3), nu 0.37; Coulomb friction static 0.1 / dynamic 0.05
+# (the reference paper's multibody model).
+SCHEMA["contact"]["model"] = ("model", str, "impact", None, _choice("impact", "soft", "3d"))
+SCHEMA_3D: dict[str, dict[str, tuple]] = {
+    "device": {
+        "tilt_deg": ("tilt", float, 0.0, math.pi / 180.0, _rng(0.0, 180.0)),
+        "tilt_azimuth_deg": ("tilt_azimuth", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
+    },
+    "excitation": {
+        "amplitude_x_mm": ("amplitude_x", float, 0.0, 1e-3, _NONNEG),
+        "amplitude_y_mm": ("amplitude_y", float, 0.0, 1e-3, _NONNEG),
+        "phase_x_deg": ("phase_x", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
+        "phase_y_deg": ("phase_y", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
+        "signal_x_column": ("signal_x_column", str, "", None, None),
+        "signal_y_column": ("signal_y_column", str, "", None, None),
+    },
+    "contact": {
+        "law": ("law", str, "hertz", None, _choice("hertz", "power")),
+        "damping_model": ("damping_model", str, "calibrated", None,
+                          _choice("calibrated", "chrono")),
+        "exponent": ("exponent", float, 1.0, 1.0, _rng(1.0, 3.0)),
+        "damping_N_s_per_m": ("damping", float, -1.0, 1.0, _rng(-1.0, 1e12)),
+        "penetration_max_mm": ("penetration_max", float, 0.0, 1e-3, _rng(0.0, 10.0)),
+        "ball_youngs_modulus_GPa": ("ball_youngs_modulus", float, 0.5, 1e9, _rng(1e-6, 1e4, lo_open=True)),
+        "ball_poisson_ratio": ("ball_poisson_ratio", float, 0.46, 1.0, _rng(-1.0, 0.5, lo_open=True)),
+        "plate_youngs_modulus_GPa": ("plate_youngs_modulus", float, 120.0, 1e9, _rng(1e-6, 1e4, lo_open=True)),
+        "plate_poisson_ratio": ("plate_poisson_ratio", float, 0.34, 1.0, _rng(-1.0, 0.5, lo_open=True)),
+        "wall_youngs_modulus_GPa": ("wall_youngs_modulus", float, 3.0, 1e9, _rng(1e-6, 1e4, lo_open=True)),
+        "wall_poisson_ratio": ("wall_poisson_ratio", float, 0.37, 1.0, _rng(-1.0, 0.5, lo_open=True)),
+        "friction_static": ("friction_static", float, 0.1, 1.0, _rng(0.0, 10.0)),
+        "friction_dynamic": ("friction_dynamic", float, 0.05, 1.0, _rng(0.0, 10.0)),
+    },
+}
+for _sec, _keys in SCHEMA_3D.items():
+    SCHEMA[_sec].update(_keys)
+# (the matching dataclass fields are the "3D motion" fields at the end of
+# Device, Excitation and Contact below)
+# ---------------------------------------------------------------------------
+
 # Field-relevant inputs: a change in any of these invalidates a cached surrogate.
 FIELD_KEYS = {
     "device": ["ball_diameter_mm", "gap_mm", "electrode_radius_mm", "tube_inner_radius_mm",
@@ -138,6 +182,9 @@ class Device:
     wall_permittivity: float    # relative
     surface_charge: float       # [C/m^2], negative for PTFE
     cells: int
+    # 3D motion (SCHEMA_3D): gravity tilted by ``tilt`` from -z toward azimuth ``tilt_azimuth`` [rad]
+    tilt: float = 0.0
+    tilt_azimuth: float = 0.0
 
     @property
     def ball_radius(self) -> float:
@@ -176,6 +223,13 @@ class Excitation:
     signal: str
     times: np.ndarray | None = field(default=None, compare=False, repr=False)   # [s]
     values: np.ndarray | None = field(default=None, compare=False, repr=False)  # [m] or [m/s^2]
+    # 3D motion (SCHEMA_3D): lateral sine x = A_x sin(w t + phase_x) [m, rad]; recorded columns
+    amplitude_x: float = 0.0
+    amplitude_y: float = 0.0
+    phase_x: float = 0.0
+    phase_y: float = 0.0
+    signal_x_column: str = ""
+    signal_y_column: str = ""
 
     @property
     def omega(self) -> float:
@@ -199,6 +253,21 @@ class Contact:
     restitution_reference_speed: float   # [m/s]
     restitution_exponent: float
     stiffness: float                     # [N/m]
+    # 3D motion (SCHEMA_3D), SI: moduli [Pa], damping [N s/m] (< 0: from restitution),
+    # penetration_max [m]
+    law: str = "hertz"
+    damping_model: str = "calibrated"   # Hertz: beta fitted to rebound with e, or Chrono's closed form
+    exponent: float = 1.0
+    damping: float = -1.0
+    penetration_max: float = 0.0
+    ball_youngs_modulus: float = 0.5e9
+    ball_poisson_ratio: float = 0.46
+    plate_youngs_modulus: float = 120e9
+    plate_poisson_ratio: float = 0.34
+    wall_youngs_modulus: float = 3.0e9
+    wall_poisson_ratio: float = 0.37
+    friction_static: float = 0.1
+    friction_dynamic: float = 0.05
 
     def restitution_at(self, speed: float) -> float:
         """Restitution for an impact at relative speed ``speed`` [m/s].
