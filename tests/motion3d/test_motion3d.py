@@ -313,3 +313,15 @@ def test_lateral_drive_symmetries():
     # spin about the axis perpendicular to the drive, opposite in the mirror
     np.testing.assert_allclose(b.spin[:, 1], -a.spin[:, 1], atol=1e-6)
     np.testing.assert_allclose(c.spin[:, 0], -a.spin[:, 1], atol=1e-6)
+
+
+def test_simulate_dispatches_the_3d_model():
+    """`tengfield.simulate` (and so `tengfield run`) runs the 3D ball for model = "3d"."""
+    import tengfield as tf
+    from tengfield.motion3d import Motion3DResult
+    scene = tf.default_scene().with_values(contact={"model": "3d"},
+                                           run={"duration_s": 0.1, "settle_periods": 1,
+                                                "sample_rate_hz": 2000.0})
+    result = tf.simulate(scene)
+    assert isinstance(result, Motion3DResult)
+    assert np.all(result.gap >= -1e-4) and np.all(result.gap <= scene.device.stroke + 1e-4)
