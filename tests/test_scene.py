@@ -291,3 +291,13 @@ def test_recorded_six_rows_run(tmp_path):
     s = _recorded(tmp_path, body)
     s.write_text(s.read_text() + "[run]\nduration_s = 0.4\nsettle_periods = 1\n")
     assert simulate(load_scene(s)).regime.name == "rest"
+
+
+def test_scene_with_field_problems_travels_to_worker_processes():
+    import copy
+    import pickle
+
+    scene = parse_scene("[field]\nmesh_size_mm = 0\n")
+    for clone in (pickle.loads(pickle.dumps(scene)), copy.deepcopy(scene)):
+        assert clone == scene and clone.field_problems == scene.field_problems
+        assert clone.excitation.frequency == 20.0

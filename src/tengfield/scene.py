@@ -293,6 +293,9 @@ class _RefusedField:
     def __setattr__(self, name, value):
         raise AttributeError("a scene's field settings are read-only")
 
+    def __reduce__(self):   # pickled for worker processes (map, sweep)
+        return (_RefusedField, (self.problems,))
+
     def __eq__(self, other):
         return isinstance(other, _RefusedField) and other.problems == self.problems
 
