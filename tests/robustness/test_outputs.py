@@ -56,7 +56,13 @@ def test_read_only_place_fails_first(tmp_path, capsys):
                    "writable (read-only or no permission)\n")
 
 
-def test_precompute_output_file_checks_its_directory(tmp_path, capsys):
+def test_precompute_output_file_checks_its_directory(tmp_path, capsys, monkeypatch):
+    import tengfield.surrogate as surrogate
+
+    def never(*a, **k):
+        raise AssertionError("field solves ran before the output location was checked")
+
+    monkeypatch.setattr(surrogate, "precompute", never)
     (tmp_path / "file").write_text("x")
     code, out, err = run_main(["precompute", "-o", tmp_path / "file" / "s.h5"], capsys)
     assert code == 2 and "'file' is a file, not a directory" in err.replace(str(tmp_path) + "/", "")
