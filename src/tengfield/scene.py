@@ -11,9 +11,11 @@ import copy
 import dataclasses
 import difflib
 import hashlib
+import io
 import json
 import math
 import tomllib
+import warnings
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -95,7 +97,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "degree": ("degree", int, 2, 1, _rng(1, 3)),
         "mesh_size_mm": ("mesh_size", float, 0.5, 1e-3, _rng(0.0, 100.0, lo_open=True)),
         "tolerance": ("tolerance", float, 1e-3, 1.0, _rng(1e-8, 0.5)),
-        "domain_radius_mm": ("domain_radius", float, 20.0, 1e-3, _POS),
+        "domain_radius_mm": ("domain_radius", float, "auto", 1e-3, _POS),
         "environment": ("environment", str, "free-space", None,
                         _choice("free-space", "grounded-table")),
         "far_field": ("far_field", str, "kelvin", None, _choice("kelvin", "robin", "dirichlet")),
@@ -167,6 +169,43 @@ FIELD_KEYS = {
 }
 
 
+#: Keys that also accept the string "auto", resolved to a number at load.
+AUTO_KEYS = {("field", "domain_radius_mm")}
+
+# -- limits of work, checked at load (docs/stability.md, "bad input and faults") --
+#: Output samples per run, ``duration_s x sample_rate_hz``: 2e7 is 1000 s at 20 kHz
+#: (four float64 arrays of 0.64 GB; the CSV holds about 1 GB).
+MAX_SAMPLES = 2e7
+#: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
+MAX_PERIODS = 1e6
+#: Events per period the impact map provisions (its first allocation); with
+#: MAX_PERIODS this bounds the first allocation at 1.6e7 events (1.3 GB).
+EVENTS_PER_PERIOD_ESTIMATE = 16
+
+#: Data rows a recorded excitation needs: the table motion is a quintic spline
+#: (``tengfield.dynamics.table.recorded_table``).
+MIN_RECORDED_ROWS = 6
+
+# -- field-only ranges relative to the geometry (checked by check_field) --
+#: ``domain_radius_mm = "auto"``: this factor x the device's bounding radius,
+#: rounded up at two significant digits (the paper's device: 2.2 x 8.9 mm -> 20 mm).
+DOMAIN_AUTO_FACTOR = 2.2
+#: The far-field sphere must exceed 1.2 x (bounding radius + ball offset) ...
+DOMAIN_MIN_FACTOR = 1.2
+#: ... and stay below 50 x the bounding radius (gmsh/OpenCASCADE fail far beyond).
+DOMAIN_MAX_FACTOR = 50.0
+#: Every feature (ball, plates, tube wall, electrode) >= 1e-3 x the bounding radius.
+FEATURE_MIN_FRACTION = 1e-3
+#: Smallest base mesh size as a fraction of the device's smallest feature, per
+#: solver (the mesh is graded finer still at rims and gaps). Measured, paper's
+#: device, degree 2, one (r, z) solve: 0.5 mm 1.3e4 dofs; 0.15 mm 1.3e5 dofs,
+#: 0.4 GB; the limit 0.075 mm 5.1e5 dofs, 78 s, 1.2 GB (dofs ~ h^-2).
+MESH_MIN_FRACTION = {"axisymmetric": 1.0 / 20.0, "3d": 1.0 / 4.0}
+#: The contact rule meshes ball-electrode gaps down to min_gap and extrapolates
+#: from gaps g, 2g, 4g at both plates: the stroke must hold 8 of them.
+CONTACT_GAPS_IN_STROKE = 8
+
+
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Device:
@@ -203,6 +242,11 @@ class Device:
     def ball_charge(self) -> float:
         """Total charge on the ball, sigma * pi d^2 [C]."""
         return self.surface_charge * math.pi * self.ball_diameter**2
+
+    @property
+    def bounding_radius(self) -> float:
+        """Radius of the smallest sphere about the device centre holding one cell [m]."""
+        return math.hypot(self.tube_outer_radius, 0.5 * self.plate_spacing + self.plate_thickness)
 
     @property
     def cell_volume(self) -> float:
@@ -307,6 +351,35 @@ class Field:
     ball_offset: float     # [m]
 
 
+class _RefusedField:
+    """Stands in for :class:`Field` when ``[field]`` values are bad: a dynamics-only
+    run never looks at them, and any use of one raises the :class:`SceneError`."""
+    __slots__ = ("problems",)
+
+    def __init__(self, problems: tuple[str, ...]):
+        object.__setattr__(self, "problems", tuple(problems))
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise SceneError("; ".join(self.problems))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("a scene's field settings are read-only")
+
+    def __reduce__(self):   # pickled for worker processes (map, sweep)
+        return (_RefusedField, (self.problems,))
+
+    def __eq__(self, other):
+        return isinstance(other, _RefusedField) and other.problems == self.problems
+
+    def __hash__(self):
+        return hash(self.problems)
+
+    def __repr__(self):
+        return f"_RefusedField({self.problems!r})"
+
+
 @dataclass(frozen=True)
 class Circuit:
     kind: str
@@ -343,15 +416,23 @@ class Scene:
         for sec, values in sections.items():
             data.setdefault(sec, {}).update(values)
         base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
-        return _build(data, base_dir=base, source=self.source, text=self.text)
+        scene = _build(data, base_dir=base, source=self.source, text=self.text)
+        if "field" in sections:   # explicit field settings: refuse bad ones at once
+            check_field(scene)
+        return scene
 
     # -- provenance -------------------------------------------------------
     def field_inputs(self) -> dict:
-        """Every input the field solution depends on, as file-level values."""
+        """Every input the field solution depends on, as file-level values
+        ("auto" resolved). Raises :class:`SceneError` if a field value is bad."""
+        check_field(self)
         full = _with_defaults(self.raw)
         out: dict[str, Any] = {"schema": FIELD_SCHEMA}
         for sec, keys in FIELD_KEYS.items():
             out[sec] = {k: full[sec][k] for k in keys}
+        for sec, key in AUTO_KEYS:
+            if out[sec][key] == "auto":
+                out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key][0]))
         return out
 
     def field_hash(self) -> str:
@@ -365,6 +446,11 @@ class Scene:
 
     # -- derived ----------------------------------------------------------
     @property
+    def field_problems(self) -> tuple[str, ...]:
+        """Every bad field-only value (empty when a field stage may run)."""
+        return self.field.problems if isinstance(self.field, _RefusedField) else ()
+
+    @property
     def is_axisymmetric(self) -> bool:
         """On-axis ball in a body of revolution: the field is 2D (r, z)."""
         return self.field.ball_offset == 0.0
@@ -376,6 +462,17 @@ def default_text() -> str:
     return resources.files("tengfield").joinpath("data/default.toml").read_text()
 
 
+def check_field(scene: Scene) -> None:
+    """Raise :class:`SceneError` naming every bad field-only value of ``scene``.
+
+    Call it where a field stage starts (field solve, surrogate, ``tengfield
+    field``/``run``/``precompute``/``sweep``): field-only values (``[field]``
+    keys and the geometry ranges a mesh needs) never fail a dynamics-only run.
+    """
+    if scene.field_problems:
+        raise SceneError("; ".join(scene.field_problems))
+
+
 def default_scene() -> Scene:
     return parse_scene(default_text(), source="<default>")
 
@@ -385,12 +482,34 @@ def load_scene(path: str | Path | None) -> Scene:
     if path is None:
         return default_scene()
     p = Path(path)
+    if p.is_dir():
+        raise SceneError(f"scene file {str(p)!r} is a directory: give a .toml file")
     if not p.is_file():
         raise SceneError(f"scene file {str(p)!r} does not exist")
-    return parse_scene(p.read_text(), source=str(p), base_dir=p.parent)
+    try:
+        blob = p.read_bytes()
+    except OSError as exc:
+        raise SceneError(f"scene file {str(p)!r} could not be read: {exc.strerror or exc}") from None
+    return parse_scene(_decode_utf8(blob, f"scene file {str(p)!r}"), source=str(p),
+                       base_dir=p.parent)
+
+
+def _decode_utf8(blob: bytes, what: str) -> str:
+    """UTF-8 text (a leading byte-order mark is dropped), or one-line SceneError."""
+    if blob.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError(f"{what} is UTF-16 text: save it as UTF-8")
+    try:
+        return blob.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        kind = "binary data" if b"\x00" in blob[:4096] else "not UTF-8 text"
+        raise SceneError(f"{what} is {kind} (byte 0x{blob[exc.start]:02x} at offset "
+                         f"{exc.start}): save it as UTF-8") from None
 
 
 def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = None) -> Scene:
+    text = text.removeprefix("\ufeff")   # a UTF-8 byte-order mark is not TOML
+    if "\x00" in text:
+        raise SceneError(f"{source}: holds NUL characters (binary data, not a TOML scene)")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -419,9 +538,32 @@ def _fmt_range(c) -> str:
     return f"{left}{lo:g}, {hi:g}{right}"
 
 
+def _auto_mm(value_si: float) -> float:
+    """An SI length as the file-level millimetre number."""
+    return float(f"{value_si * 1e3:.12g}")
+
+
+def _round_up_2(x: float) -> float:
+    """``x`` > 0 rounded up at two significant digits (19.58 -> 20, 0.0213 -> 0.022)."""
+    exp = math.floor(math.log10(x)) - 1
+    return float(f"{math.ceil(x / 10.0**exp - 1e-9)}e{exp}")
+
+
+def auto_domain_radius(device: Device, offset: float = 0.0) -> float:
+    """``[field] domain_radius_mm = "auto"`` [m]: ``DOMAIN_AUTO_FACTOR`` x the
+    device's bounding radius (at least 1.3 x (bounding radius + ball offset)),
+    rounded up at two significant digits in mm; 20 mm for the paper's device."""
+    b = device.bounding_radius
+    return 1e-3 * _round_up_2(1e3 * max(DOMAIN_AUTO_FACTOR * b, 1.3 * (b + offset)))
+
+
 def _convert(sec: str, key: str, value, spec):
     attr, typ, default, factor, constraint = spec
     where = f"[{sec}] {key}"
+    if (sec, key) in AUTO_KEYS and isinstance(value, str):
+        if value != "auto":
+            raise SceneError(f"{where} = {value!r}: expected a number or 'auto'")
+        return None   # resolved by _build
     if typ is str:
         if not isinstance(value, str):
             raise SceneError(f"{where} = {value!r}: expected a string")
@@ -463,12 +605,20 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
             if key not in SCHEMA[sec]:
                 raise SceneError(f"{source}: unknown key [{sec}] {key}" + _suggest(key, SCHEMA[sec]))
     values: dict[str, dict[str, Any]] = {}
+    field_problems: list[str] = []
     for sec, keys in SCHEMA.items():
         given = data.get(sec, {})
         values[sec] = {}
         for key, spec in keys.items():
             raw = given.get(key, spec[2])
-            values[sec][spec[0]] = _convert(sec, key, raw, spec)
+            if sec != "field":
+                values[sec][spec[0]] = _convert(sec, key, raw, spec)
+                continue
+            try:   # field-only: kept for check_field, never fails a dynamics run
+                values[sec][spec[0]] = _convert(sec, key, raw, spec)
+            except SceneError as exc:
+                field_problems.append(str(exc))
+                values[sec][spec[0]] = _convert(sec, key, spec[2], spec)
 
     dev = Device(**values["device"])
     if dev.tube_outer_radius <= dev.tube_inner_radius:
@@ -495,29 +645,102 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
         raise SceneError(f"[initial] gap_mm = {ini.gap * 1e3:g} is out of range: "
                          f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] gap_mm)")
     run = Run(**values["run"])
-    if exc.kind == "sine" and run.settle_periods * exc.period >= run.duration:
+    # the same steady-window rule for every kind ("recorded": frequency_hz is the
+    # reference period of the analysis)
+    if run.settle_periods * exc.period >= run.duration:
         raise SceneError(
             f"[run] settle_periods = {run.settle_periods} leaves no steady window: "
             f"settle_periods / frequency_hz = {run.settle_periods * exc.period:g} s must be "
             f"< duration_s = {run.duration:g}")
-    fld = Field(**values["field"])
-    extent = math.hypot(dev.tube_outer_radius + fld.ball_offset,
-                        0.5 * dev.plate_spacing + dev.plate_thickness)
-    if fld.domain_radius <= 1.2 * extent:
+    _check_work(exc, run)
+    fvals = values["field"]
+    if fvals["domain_radius"] is None:
+        fvals["domain_radius"] = auto_domain_radius(dev, fvals["ball_offset"])
+    fld = Field(**fvals)
+    field_problems += _field_problems(dev, fld, explicit=set(data.get("field", {})))
+    field_value: Field | _RefusedField = _RefusedField(field_problems) if field_problems else fld
+    return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
+                 run=run, field=field_value, circuit=Circuit(**values["circuit"]),
+                 raw=copy.deepcopy(data), source=source, text=text)
+
+
+def _check_work(exc: Excitation, run: Run) -> None:
+    """Refuse runs whose sample or event count would exhaust memory (product named)."""
+    samples = run.duration * run.sample_rate
+    if samples > MAX_SAMPLES:
         raise SceneError(
-            f"[field] domain_radius_mm = {fld.domain_radius * 1e3:g} is too small: it must exceed "
-            f"{1.2e3 * extent:.3g} mm (1.2 x the device's bounding radius)")
+            f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
+            f"{samples:.3g} samples: allowed <= {MAX_SAMPLES:.3g} (lower sample_rate_hz or "
+            "split the run)")
+    periods = run.duration * exc.frequency
+    if periods > MAX_PERIODS:
+        raise SceneError(
+            f"[run] duration_s x [excitation] frequency_hz = {run.duration:g} x "
+            f"{exc.frequency:g} = {periods:.3g} excitation periods (about "
+            f"{EVENTS_PER_PERIOD_ESTIMATE * periods:.3g} impact-map events at "
+            f"{EVENTS_PER_PERIOD_ESTIMATE} per period): allowed <= {MAX_PERIODS:.3g} periods")
+
+
+def _field_problems(dev: Device, fld: Field, *, explicit: set[str]) -> list[str]:
+    """Field-only problems: ranges relative to the geometry that a mesh needs."""
+    from .field.geometry_axisymmetric import MIN_GAP_FRACTION
+
+    problems = []
+    b = dev.bounding_radius
+    b_mm = b * 1e3
     max_offset = dev.tube_inner_radius - dev.ball_radius
     if fld.ball_offset > max_offset + 1e-15:
-        raise SceneError(
+        problems.append(
             f"[field] ball_offset_mm = {fld.ball_offset * 1e3:g} is out of range: allowed "
             f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
     if fld.ball_offset > 0 and fld.method == "axisymmetric":
-        raise SceneError("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "
-                         "use method = '3d' or 'auto' for an off-axis ball")
-    return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
-                 run=run, field=fld, circuit=Circuit(**values["circuit"]),
-                 raw=copy.deepcopy(data), source=source, text=text)
+        problems.append("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "
+                        "use method = '3d' or 'auto' for an off-axis ball")
+    how = "" if "domain_radius_mm" in explicit else " ('auto')"
+    lowest = DOMAIN_MIN_FACTOR * (b + fld.ball_offset)
+    if fld.domain_radius <= lowest:
+        problems.append(
+            f"[field] domain_radius_mm = {fld.domain_radius * 1e3:g}{how} is too small: it must "
+            f"exceed {lowest * 1e3:.3g} mm ({DOMAIN_MIN_FACTOR:g} x the device's bounding radius "
+            "+ ball offset)")
+    if fld.domain_radius > DOMAIN_MAX_FACTOR * b:
+        problems.append(
+            f"[field] domain_radius_mm = {fld.domain_radius * 1e3:g} is too large for this "
+            f"device: allowed <= {DOMAIN_MAX_FACTOR * b_mm:.3g} mm ({DOMAIN_MAX_FACTOR:g} x the "
+            f"bounding radius {b_mm:.3g} mm); 'auto' picks one")
+    smallest = FEATURE_MIN_FRACTION * b
+    features = [("ball_diameter_mm", dev.ball_diameter),
+                ("plate_thickness_mm", dev.plate_thickness),
+                ("electrode_radius_mm", dev.electrode_radius),
+                ("tube_outer_radius_mm - tube_inner_radius_mm",
+                 dev.tube_outer_radius - dev.tube_inner_radius)]
+    feature_key, feature = min(features + [("gap_mm", dev.stroke)], key=lambda kv: kv[1])
+    for key, size in features:
+        if size < smallest:
+            problems.append(
+                f"[device] {key} = {size * 1e3:.3g} is too small for a field mesh: allowed >= "
+                f"{smallest * 1e3:.3g} mm ({FEATURE_MIN_FRACTION:g} x the device's bounding "
+                f"radius {b_mm:.3g} mm)")
+    gaps = CONTACT_GAPS_IN_STROKE * MIN_GAP_FRACTION * dev.plate_spacing
+    if dev.stroke < gaps * (1 - 1e-12):
+        # stroke >= n f (d + stroke)  <=>  stroke >= n f d / (1 - n f)
+        nf = CONTACT_GAPS_IN_STROKE * MIN_GAP_FRACTION
+        need = nf * dev.ball_diameter / (1.0 - nf)
+        problems.append(
+            f"[device] gap_mm = {dev.stroke * 1e3:g} is too small for a field solve: allowed >= "
+            f"{need * 1e3:.3g} mm ({CONTACT_GAPS_IN_STROKE} x the smallest meshed gap, "
+            f"{MIN_GAP_FRACTION:g} x the plate spacing); dynamics-only runs accept it")
+    method = fld.method
+    if method == "auto":
+        method = "axisymmetric" if fld.ball_offset == 0.0 else "3d"
+    finest = MESH_MIN_FRACTION[method] * feature
+    if fld.mesh_size < finest * (1 - 1e-12):
+        problems.append(
+            f"[field] mesh_size_mm = {fld.mesh_size * 1e3:g} is too fine for this device: "
+            f"allowed >= {finest * 1e3:.3g} mm (1/{1 / MESH_MIN_FRACTION[method]:g} of the "
+            f"smallest feature, [device] {feature_key} = {feature * 1e3:.3g} mm, for the "
+            f"{method} solver; finer meshes exceed memory)")
+    return problems
 
 
 def _read_recorded(exc: dict, base_dir: Path | None):
@@ -530,9 +753,22 @@ def _read_recorded(exc: dict, base_dir: Path | None):
     if not path.is_file():
         raise SceneError(f"[excitation] file = {name!r}: no such file ({path})")
     try:
-        table = np.genfromtxt(path, delimiter=",", names=True, dtype=float, encoding="utf-8")
+        blob = path.read_bytes()
+    except OSError as exc_:
+        raise SceneError(f"[excitation] file = {name!r} could not be read: "
+                         f"{exc_.strerror or exc_}") from None
+    text = _decode_utf8(blob, f"[excitation] file = {name!r}")   # BOM dropped here
+    if not text.strip():
+        raise SceneError(f"[excitation] file = {name!r} is empty: expected a header line "
+                         f"({exc['time_column']},{exc['signal_column']}) and at least "
+                         f"{MIN_RECORDED_ROWS} data rows")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")   # numpy's warnings become one-line errors
+            table = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, dtype=float)
     except Exception as exc_:  # noqa: BLE001 - reported with the file name
-        raise SceneError(f"[excitation] file = {name!r} could not be read as CSV: {exc_}") from None
+        detail = str(exc_).strip().splitlines()[0] if str(exc_).strip() else type(exc_).__name__
+        raise SceneError(f"[excitation] file = {name!r} could not be read as CSV: {detail}") from None
     names = table.dtype.names or ()
     for col_key in ("time_column", "signal_column"):
         col = exc[col_key]
@@ -541,8 +777,9 @@ def _read_recorded(exc: dict, base_dir: Path | None):
                              f"columns are {', '.join(names)}" + _suggest(col, names))
     t = np.atleast_1d(np.asarray(table[exc["time_column"]], dtype=float))
     v = np.atleast_1d(np.asarray(table[exc["signal_column"]], dtype=float))
-    if t.size < 4:
-        raise SceneError(f"[excitation] file = {name!r} has {t.size} rows: at least 4 are needed")
+    if t.size < MIN_RECORDED_ROWS:
+        raise SceneError(f"[excitation] file = {name!r} has {t.size} data rows: at least "
+                         f"{MIN_RECORDED_ROWS} are needed (the quintic spline of the table motion)")
     for label, arr in (("time", t), ("signal", v)):
         bad = np.flatnonzero(~np.isfinite(arr))
         if bad.size:
