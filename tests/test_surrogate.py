@@ -277,14 +277,17 @@ def test_field_error_is_measured_at_ends_and_middle_only(environment):
     expected = [0.0, 0.5 * stroke] + ([stroke] if environment == "grounded-table" else [])
     np.testing.assert_allclose(estimated, expected, atol=1e-15)
     # sampled positions keep their own estimate, every other one gets the largest of
-    # those: never NaN, never below what the solver would have said there
-    measured = max(solver.estimate(scene, z) for z in expected)
-    at_sample = np.isin(table.positions, [0.0, 0.5 * stroke, stroke])   # (or mirror images)
+    # those with the margin: never NaN, never below what the solver would have said there
+    measured = (1 + surrogate.refinement.FIELD_ERROR_MARGIN) * max(
+        solver.estimate(scene, z) for z in expected)
+    targets = np.array([0.0, 0.5 * stroke, stroke])                    # (or mirror images)
+    at_sample = np.min(np.abs(table.positions[:, None] - targets), axis=1) <= 1e-12 * stroke
     np.testing.assert_allclose(table.field_error[at_sample],
                                solver.estimate(scene, table.positions[at_sample]))
     np.testing.assert_array_equal(table.field_error[~at_sample], measured)
     assert np.all(table.field_error >= solver.estimate(scene, table.positions))
     assert "measured at z" in table.provenance["field_error_rule"]
+    assert np.max(table.field_error) > np.max(solver.estimate(scene, table.positions))
     # "every" asks for the estimate everywhere and stores the solver's own figures
     solver = EstimateRecordingSolver()
     every = surrogate.precompute(scene, solve=solver, solve_comm=SOLVE_COMM, field_error="every")
@@ -510,3 +513,28 @@ def test_scalar_attributes_are_checksummed(tmp_path):
         f.attrs["ball_charge_C"] = 2.0 * table.ball_charge
     with pytest.raises(SurrogateError, match="scalar"):
         surrogate.read_table(path)
+
+
+@pytest.mark.field
+@pytest.mark.slow
+@pytest.mark.parametrize("environment", ["free-space", "grounded-table"])
+def test_sampled_field_error_is_no_looser_than_every_position(environment):
+    """The real solver on a coarse device mesh: measuring the field error only at the
+    ends and the middle (the default) gives the same solves and surrogate error
+    estimate as measuring it everywhere (as before), and at every position a field
+    error estimate at least as large as that position's own."""
+    import pyvista  # noqa: F401 - before dolfinx
+
+    scene = fx.scene_with(field={"mesh_size_mm": 1.5, "degree": 1, "tolerance": 0.05,
+                                 "environment": environment})
+    every = surrogate.precompute(scene, field_error="every")
+    sampled = surrogate.precompute(scene)
+    np.testing.assert_array_equal(sampled.positions, every.positions)
+    np.testing.assert_array_equal(sampled.capacitance, every.capacitance)
+    np.testing.assert_array_equal(sampled.induced_charge, every.induced_charge)
+    assert sampled.interpolation_error == every.interpolation_error
+    assert np.all(np.isfinite(sampled.field_error))
+    assert np.all(sampled.field_error >= every.field_error)
+    # ... and not much larger: the margin, no more
+    margin = 1 + surrogate.refinement.FIELD_ERROR_MARGIN
+    assert np.max(sampled.field_error) <= margin * np.max(every.field_error)
