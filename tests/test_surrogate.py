@@ -538,3 +538,21 @@ def test_sampled_field_error_is_no_looser_than_every_position(environment):
     # ... and not much larger: the margin, no more
     margin = 1 + surrogate.refinement.FIELD_ERROR_MARGIN
     assert np.max(sampled.field_error) <= margin * np.max(every.field_error)
+
+
+@pytest.mark.parametrize("where", ["cache dir is a file", "output is a directory",
+                                   "output under a file"])
+def test_precompute_refuses_an_unwritable_target_before_any_solve(tmp_path, capsys, where):
+    """`tengfield precompute` only exists to write its file: refused up front (one line,
+    exit 2) instead of after the solves. (No solver runs: this takes milliseconds.)"""
+    from tengfield.cli import main
+
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    args = {"cache dir is a file": ["--cache-dir", str(blocker)],
+            "output is a directory": ["-o", str(tmp_path)],
+            "output under a file": ["-o", str(blocker / "s.h5")]}[where]
+    assert main(["precompute", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("tengfield: error: cannot write the surrogate")
+    assert str(blocker if where != "output is a directory" else tmp_path) in err[0]

@@ -56,6 +56,12 @@ def check_writable(target: Path) -> None:
 
     if target.is_dir():
         raise TengfieldError(f"cannot write the surrogate to {target}: it is a directory")
+    for ancestor in target.parents:
+        if ancestor.exists():
+            if not ancestor.is_dir():
+                raise TengfieldError(f"cannot write the surrogate to {target}: {ancestor} is "
+                                     "a file, not a directory")
+            break
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, probe = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe",
