@@ -11,15 +11,15 @@ conservative (it belongs to the coarser set).
 
 Field error (``field_error="sampled"``, the default): the solver's own
 error estimate (a second solve on a mesh of half the size) is dear, so it is
-measured only at the ends and the middle of the stroke (:func:`error_sample_positions`);
-every other position gets the largest of those times ``1 + FIELD_ERROR_MARGIN``
-(or its own contact extrapolation error, if the contact rule applied there and
-that is larger). The margin covers the variation of the estimate along the
-stroke, measured with every position estimated: at most 5 % above the largest
-sampled value (default scene 2.41-2.53e-4, largest at the middle; mesh 1.5 mm,
-degree 1: 0.127-0.132 free space, 0.192-0.206 grounded table, largest at
-z = 0.31 Δh, not sampled). ``field_error="every"`` measures it at every
-position (as before).
+measured only next to both ends and at the middle of the stroke
+(:func:`error_sample_positions`); every other position gets the largest of
+those times ``1 + FIELD_ERROR_MARGIN`` (or its own contact extrapolation error,
+if the contact rule applied there and that is larger). The margin covers the
+variation of the estimate along the stroke, measured with every position
+estimated: at most 5 % above the largest sampled value (default scene
+2.41-2.53e-4, largest at the middle; mesh 1.5 mm, degree 1: 0.127-0.132 free
+space, 0.192-0.206 grounded table, largest at z = 0.31 Δh, not sampled).
+``field_error="every"`` measures it at every position (as before).
 """
 from __future__ import annotations
 
@@ -59,11 +59,17 @@ def _accepts_keyword(function, name: str) -> bool:
     return any(p.name == name or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
 
 
-def error_sample_positions(stroke: float, symmetric: bool) -> np.ndarray:
+def error_sample_positions(stroke: float, symmetric: bool,
+                           count: int = INITIAL_POSITIONS) -> np.ndarray:
     """Gaps [m] where the field solver's own error estimate is measured ("sampled" mode):
-    both ends of the stroke and its middle (with mirror symmetry the upper end is the
-    image of the lower one, so only 0 and Δh/2 are solved). All are in every Lobatto set."""
-    return np.array([0.0, 0.5 * stroke] if symmetric else [0.0, 0.5 * stroke, stroke])
+    the middle of the stroke and, at each end, the first Lobatto position off the plate
+    (of the initial set of ``count``). The end positions themselves are not used: a ball
+    touching a plate is extrapolated from three meshes (the contact rule), each of which
+    would need its own estimate solve; the position next to it is meshed as it is, with a
+    gap between the contact rule's first two anchor gaps on the default device. With
+    mirror symmetry the upper one is the image of the lower one and is not solved."""
+    z = lobatto_positions(stroke, count)
+    return np.array([z[1], z[count // 2]] + ([] if symmetric else [z[-2]]))
 
 
 def _carry_field_error(result, measured: float):
@@ -112,7 +118,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
 
     symmetric = is_mirror_symmetric(scene)
     sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
-    sample_at = error_sample_positions(stroke, symmetric)
+    sample_at = error_sample_positions(stroke, symmetric, count)
 
     def estimated_here(z: float) -> bool:
         return not sampled or bool(np.any(np.abs(sample_at - z) <= 1e-12 * stroke))
