@@ -6,6 +6,7 @@ others start ``mpirun`` themselves (the serial suite).
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -113,7 +114,10 @@ def test_cli_precompute_under_mpirun_equals_serial(tmp_path):
 
 
 def test_failure_on_one_rank_aborts_every_rank(tmp_path):
-    """An exception on rank 1 ends the whole job with its message (no hang)."""
+    """An exception on one rank ends the whole job with its message (no hang).
+
+    The failing job is a position, not a rank: with the dynamic schedule a rank
+    that starts late (a loaded machine) may get no job at all."""
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")
     script = tmp_path / "fail.py"
@@ -125,7 +129,7 @@ def test_failure_on_one_rank_aborts_every_rank(tmp_path):
         from tengfield import surrogate
 
         def solve(scene, z, comm=None):
-            if MPI.COMM_WORLD.rank == 1:
+            if z == 0.0:
                 raise RuntimeError(f"mesh generation failed at z = {{z:.3g}}")
             return fx.plate_model_solve(scene, z)
 
@@ -135,7 +139,7 @@ def test_failure_on_one_rank_aborts_every_rank(tmp_path):
     proc = subprocess.run(["mpirun", "-n", "2", PYTHON, str(script)], capture_output=True,
                           text=True, env=mpi_env(), timeout=120)
     assert proc.returncode != 0
-    assert "error on rank 1 of 2" in proc.stderr
+    assert re.search(r"error on rank [01] of 2", proc.stderr)
     assert "mesh generation failed" in proc.stderr
     assert "finished" not in proc.stdout
 
