@@ -1,11 +1,15 @@
 """Pipeline speed: cold and warm `tengfield run` on the default scene, and the
-parallel efficiency of `tengfield precompute` on 2 ranks.
+parallel efficiency of `tengfield precompute` on 2 ranks; with ``--cost-split``
+instead the per-position cost of a cold surrogate (mesh, assemble, factor,
+solve) with the field error estimated at every position and at the sampled
+ones only (``precompute(field_error="every" | "sampled")``).
 
 Targets (issue 4): cold run (surrogate computed) <= 60 s on 2 cores, warm
 (cached) <= 3 s, precompute efficiency at 2 ranks >= 80 %. The machine may be
 shared: the load average is printed with every figure.
 
     .venv/bin/python benchmarks/pipeline_speed.py [--scene FILE] [--skip-serial]
+    .venv/bin/python benchmarks/pipeline_speed.py --cost-split [--scene FILE]
 """
 from __future__ import annotations
 
@@ -78,6 +82,119 @@ def schedule_efficiency(path: Path, ranks: int) -> float:
     return float(total / (ranks * busiest))
 
 
+class CostSplit:
+    """Wall time [s] of every axisymmetric field solve by phase, per surrogate position.
+
+    Wraps (in this process only) the phases of :mod:`tengfield.field.axisymmetric`:
+    ``build_mesh`` (gmsh + conversion: "mesh"), ``discretise`` ("assemble"),
+    ``_dolfinx.create_ksp`` (MUMPS analysis + factorisation: "factor") and
+    ``_dolfinx.solve`` (forward/back substitution: "solve"); the rest of each
+    position's wall time (A P products, potentials -> C and q) is "other". Meshes and
+    solves of the error estimate (half mesh size) are counted apart ("estimate").
+    """
+
+    PHASES = ("mesh", "assemble", "factor", "solve")
+
+    def __init__(self):
+        from tengfield.field import _dolfinx, axisymmetric
+
+        self.modules = (axisymmetric, _dolfinx)
+        self.rows: dict[float, dict[str, float]] = {}
+        self.position = None
+        self.coarse_size = None
+        self.fine = False
+        self.saved = []
+
+    def _timed(self, module, name, phase):
+        original = getattr(module, name)
+        self.saved.append((module, name, original))
+
+        def wrapper(*args, **kwargs):
+            if phase == "mesh":   # the estimate's mesh has half the scene's mesh size
+                self.fine = args[0].field.mesh_size < 0.75 * self.coarse_size
+            start = time.perf_counter()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                key = f"estimate {phase}" if self.fine else phase
+                row = self.rows.setdefault(self.position, {})
+                row[key] = row.get(key, 0.0) + time.perf_counter() - start
+        setattr(module, name, wrapper)
+
+    def __enter__(self):
+        axisymmetric, dx_api = self.modules
+        outer = axisymmetric.solve_serial
+        self.saved.append((axisymmetric, "solve_serial", outer))
+
+        def solve_serial(scene, position, comm, **options):
+            self.position, self.coarse_size = float(position), scene.field.mesh_size
+            start = time.perf_counter()
+            result = outer(scene, position, comm, **options)
+            row = self.rows.setdefault(self.position, {})
+            row["wall"] = time.perf_counter() - start
+            row["solves"] = 3 if "contact_rule" in result.info else 1
+            return result
+        axisymmetric.solve_serial = solve_serial
+        self._timed(axisymmetric, "build_mesh", "mesh")
+        self._timed(axisymmetric, "discretise", "assemble")
+        self._timed(dx_api, "create_ksp", "factor")
+        self._timed(dx_api, "solve", "solve")
+        return self
+
+    def __exit__(self, *exc):
+        for module, name, original in reversed(self.saved):
+            setattr(module, name, original)
+
+    def table(self) -> str:
+        keys = [*self.PHASES, *(f"estimate {p}" for p in self.PHASES)]
+        lines = [f"{'z [mm]':>8s} {'solves':>6s} " + " ".join(f"{k:>10s}" for k in
+                                                           ["wall", *keys, "other"])]
+        total = {k: 0.0 for k in ["wall", *keys, "other"]}
+        for z in sorted(self.rows):
+            row = self.rows[z]
+            other = row["wall"] - sum(row.get(k, 0.0) for k in keys)
+            values = [row["wall"], *(row.get(k, 0.0) for k in keys), other]
+            for k, v in zip(total, values):
+                total[k] += v
+            lines.append(f"{z * 1e3:8.4f} {row['solves']:6d} "
+                         + " ".join(f"{v:10.3f}" for v in values))
+        lines.append(f"{'sum':>8s} {'':6s} " + " ".join(f"{v:10.3f}" for v in total.values()))
+        return "\n".join(lines)
+
+
+def cost_split(scene_file: str | None) -> None:
+    """Cold surrogates of the scene in this process, every / sampled field error."""
+    import warnings
+
+    import numpy as np
+
+    from tengfield import surrogate
+    from tengfield.field import solve_position
+    from tengfield.scene import load_scene
+
+    scene = load_scene(scene_file)
+    from mpi4py import MPI
+    # warm the JIT (FFCx forms) and gmsh so that neither run pays for them
+    solve_position(scene, 0.5 * scene.device.stroke, comm=MPI.COMM_SELF)
+    tables = {}
+    for mode in ("every", "sampled"):
+        with CostSplit() as split, warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            start, cpu = time.perf_counter(), time.process_time()
+            tables[mode] = surrogate.precompute(scene, field_error=mode)
+            elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+        print(f"\nfield_error = {mode!r}: {elapsed:.2f} s wall, {cpu:.2f} s CPU for "
+              f"{tables[mode].count} positions ({len(split.rows)} solved), load: {uptime()}")
+        print(split.table())
+    every, sampled = tables["every"], tables["sampled"]
+    same = bool(np.array_equal(every.capacitance, sampled.capacitance)
+                and np.array_equal(every.induced_charge, sampled.induced_charge))
+    bounds = bool(np.all(sampled.field_error >= every.field_error))
+    print(f"\nsame C and q: {same}; interpolation error {every.interpolation_error:.3g} / "
+          f"{sampled.interpolation_error:.3g}; max field error {np.max(every.field_error):.4g} / "
+          f"{np.max(sampled.field_error):.4g}; sampled >= every at each position: {bounds}")
+
+
 def uptime() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
 
@@ -87,7 +204,12 @@ def main() -> None:
     parser.add_argument("--scene", default=None, help="scene file (default: embedded default)")
     parser.add_argument("--skip-serial", action="store_true",
                         help="skip the serial precompute (no efficiency figure)")
+    parser.add_argument("--cost-split", action="store_true",
+                        help="only the per-position cost split of a cold surrogate (in process)")
     args = parser.parse_args()
+    if args.cost_split:
+        cost_split(args.scene)
+        return
     scene = [str(Path(args.scene).resolve())] if args.scene else []
     tengfield = [PYTHON, "-m", "tengfield.cli"]
     work = Path(tempfile.mkdtemp(prefix="tengfield-bench-"))

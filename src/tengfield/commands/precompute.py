@@ -1,16 +1,24 @@
 """``tengfield precompute``: the field surrogate of a scene (HDF5), MPI task farm.
 
 ``mpirun -n N tengfield precompute SCENE`` spreads the field solves over the
-ranks (each solve on COMM_SELF); rank 0 writes the file.
+ranks (each solve on COMM_SELF); rank 0 decides whether the cache holds a
+trusted file (and tells the others) and writes the file.
 """
 from __future__ import annotations
 
+import os
+import tempfile
 from pathlib import Path
 
 from ._common import add_cache_argument, command_line, world_if_parallel
 
+#: --max-positions may not exceed this (2^10 + 1 field solves)
+MAX_POSITIONS_LIMIT = 1025
+
 
 def register(sub) -> None:
+    from ..surrogate import FEWEST_POSITIONS, MAX_POSITIONS
+
     p = sub.add_parser(
         "precompute", help="field solves over the stroke -> surrogate file (HDF5, cached)",
         description="Solve the electrostatics at Chebyshev-Lobatto ball positions, refining "
@@ -23,30 +31,70 @@ def register(sub) -> None:
     add_cache_argument(p)
     p.add_argument("--force", action="store_true", help="recompute even if cached")
     p.add_argument("--max-positions", type=int, default=None, metavar="N",
-                   help="stop refining at N positions (2^k + 1; default 65)")
+                   help=f"stop refining at N positions ({FEWEST_POSITIONS} <= N <= "
+                        f"{MAX_POSITIONS_LIMIT}; default {MAX_POSITIONS})")
     p.set_defaults(func=_run)
+
+
+def check_max_positions(value: int | None) -> int:
+    """``--max-positions`` (None: the default), or a one-line SceneError naming the range."""
+    from ..errors import SceneError
+    from ..surrogate import FEWEST_POSITIONS, MAX_POSITIONS
+
+    if value is None:
+        return MAX_POSITIONS
+    if not FEWEST_POSITIONS <= value <= MAX_POSITIONS_LIMIT:
+        raise SceneError(f"--max-positions = {value} is out of range: allowed "
+                         f"{FEWEST_POSITIONS} <= N <= {MAX_POSITIONS_LIMIT}")
+    return int(value)
+
+
+def check_writable(target: Path) -> None:
+    """Refuse, before any solve, a target that is a directory or whose directory
+    cannot be created or written (one-line TengfieldError naming the path)."""
+    from ..errors import TengfieldError
+
+    if target.is_dir():
+        raise TengfieldError(f"cannot write the surrogate to {target}: it is a directory")
+    for ancestor in target.parents:
+        if ancestor.exists():
+            if not ancestor.is_dir():
+                raise TengfieldError(f"cannot write the surrogate to {target}: {ancestor} is "
+                                     "a file, not a directory")
+            break
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe",
+                                     dir=target.parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise TengfieldError(f"cannot write the surrogate to {target}: "
+                             f"{exc.strerror or exc}") from None
 
 
 def _run(args) -> int:
     from .. import surrogate
-    from ..errors import SceneError
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
+    max_positions = check_max_positions(args.max_positions)
     comm = world_if_parallel()
     rank = 0 if comm is None else comm.rank
-    max_positions = args.max_positions or surrogate.MAX_POSITIONS
-    if max_positions < 17:
-        raise SceneError(f"--max-positions = {max_positions} is out of range: allowed >= 17")
     target = Path(args.output) if args.output else surrogate.cache_path(scene, args.cache_dir)
-    if not args.force and args.output is None and target.exists():
+    problem = None
+    if rank == 0:   # checked once, before any solve; every rank stops alike
         try:
-            table = surrogate.read_table(target, expected_hash=scene.field_hash(),
-                                        expected_solver=surrogate.solver_fingerprint())
-        except surrogate.SurrogateError as exc:
-            if rank == 0:
-                print(f"tengfield: cached surrogate not trusted ({exc}); recomputing")
-        else:
+            check_writable(target)
+        except Exception as exc:  # noqa: BLE001 - re-raised on every rank
+            problem = exc
+    if comm is not None:
+        problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        raise problem
+    if not args.force and args.output is None:
+        table, status, _ = surrogate.load_cached(target, scene, comm)   # rank 0 decides
+        if table is not None:
             if rank == 0:
                 print(f"cached: {target} ({table.count} positions, error estimate "
                       f"{table.interpolation_error:.2g}); use --force to recompute")

@@ -1,0 +1,75 @@
+"""Where the surrogate samples the stroke: nested Chebyshev–Lobatto sets and mirror symmetry.
+
+``z_j = Δh (1 - cos(π j / (n-1))) / 2`` with ``n = 2^k + 1`` positions
+(clustered at both ends of the stroke); each refinement adds the ``n - 1``
+angular midpoints, so ``n -> 2n - 1`` and every earlier solve is reused.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+#: the first Lobatto set has 2^INITIAL_LEVEL + 1 positions
+INITIAL_LEVEL = 3
+#: initial number of positions (a Chebyshev–Lobatto set, 2^k + 1): 9
+INITIAL_POSITIONS = 2 ** INITIAL_LEVEL + 1
+#: the adaptive surrogate always solves the first refinement too, so it never
+#: ends with fewer positions than this (17)
+FEWEST_POSITIONS = 2 * INITIAL_POSITIONS - 1
+#: the refinement stops here even if the tolerance is not met (then converged = False): 65
+MAX_POSITIONS = 2 ** (INITIAL_LEVEL + 3) + 1
+
+
+def is_lobatto_count(count: int) -> bool:
+    """True for ``count = 2^k + 1`` with k >= 1 (the sizes of nested Lobatto sets)."""
+    return count >= 3 and not (count - 1) & (count - 2)
+
+
+def lobatto_positions(stroke: float, count: int) -> np.ndarray:
+    """``count`` Chebyshev–Lobatto gaps [m] on [0, stroke], ascending, ends included,
+    bitwise symmetric about the middle (so mirror images land on set members)."""
+    if count < 2:
+        raise ValueError(f"count = {count}: at least 2 positions are needed")
+    j = np.arange(count)
+    z = 0.5 * stroke * (1.0 - np.cos(np.pi * j / (count - 1)))
+    upper = j >= count // 2 + count % 2
+    z[upper] = stroke - z[count - 1 - j[upper]]   # exactly symmetric: z_(n-1-j) = Δh - z_j
+    z[0], z[-1] = 0.0, stroke
+    return z
+
+
+def refinement_positions(stroke: float, count: int) -> np.ndarray:
+    """The ``count - 1`` positions that refine a Lobatto set of ``count`` to ``2 count - 1``."""
+    finer = lobatto_positions(stroke, 2 * count - 1)
+    return finer[1::2]
+
+
+def is_mirror_symmetric(scene) -> bool:
+    """True when the device is symmetric under z -> Δh - z with lower <-> upper.
+
+    Both plates are built alike (same thickness, electrode radius and
+    material), so only the environment can break the mirror symmetry: a
+    grounded table under the lower plate does, free space does not.
+    """
+    return scene.field.environment == "free-space"
+
+
+def mirrored(result, stroke: float):
+    """The solve at ``stroke - z`` implied by mirror symmetry: C_ll <-> C_uu, q_l <-> q_u
+    (wall and solve times 0: nothing was solved)."""
+    C = np.asarray(result.capacitance, dtype=float)
+    q = np.asarray(result.induced_charge, dtype=float)
+    return dataclasses.replace(result, position=stroke - result.position,
+                               capacitance=C[::-1, ::-1].copy(), induced_charge=q[::-1].copy(),
+                               wall_time=0.0, solve_time=0.0,   # no solve of its own
+                               info={**getattr(result, "info", {}), "mirrored_from": result.position})
+
+
+def contact_first_order(positions: np.ndarray, stroke: float) -> np.ndarray:
+    """Indices ordering positions by distance to the nearer plate, closest first.
+
+    Solves close to contact are the dearest; the task farm hands out jobs in
+    this order (longest first), which balances the ranks.
+    """
+    return np.argsort(np.minimum(positions, stroke - positions), kind="stable")

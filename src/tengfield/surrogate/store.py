@@ -1,0 +1,406 @@
+"""The surrogate on disk: HDF5 file with checksums and provenance, and the cache.
+
+:func:`write_table` writes atomically (temporary file + ``os.replace``);
+every data array is stored with HDF5's Fletcher-32 filter and the SHA-256
+of its bytes, and the scalars with a SHA-256 of their own. :func:`read_table`
+trusts a file only if it is complete, of this format, for the expected
+scene and solver, every checksum matches and the data make sense
+(:func:`check_table`: positions sorted from 0 to the stroke, consistent
+shapes, finite values, each C symmetric positive definite with C_lu < 0,
+induced charges within the ball's charge). :func:`obtain_table` is the cache
+keyed by :meth:`tengfield.scene.Scene.field_hash`: rank 0 decides hit or
+miss and broadcasts the decision and the table, so the ranks never disagree.
+A file that is not trusted is recomputed (with a warning); a cache that
+cannot be written costs a warning, never the run.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import json
+import os
+import sys
+import tempfile
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from .._mpi import rank_of, size_of
+from .refinement import SolveFunction, precompute
+from .table import SurrogateError, SurrogateTable
+
+#: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars
+FORMAT_VERSION = 2
+
+#: table attribute -> HDF5 dataset name (unit-suffixed)
+ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
+          "induced_charge": "induced_charge_C", "dofs": "dofs", "cells": "cells",
+          "wall_time": "wall_time_s", "solve_time": "solve_time_s",
+          "field_error": "field_relative_error_estimate"}
+#: table attribute -> HDF5 file attribute, covered by ``scalars_sha256``
+SCALARS = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
+           "interpolation_error": "interpolation_error_estimate", "tolerance": "tolerance",
+           "converged": "converged", "field_hash": "field_hash", "method": "method",
+           "degree": "degree"}
+_SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
+           "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
+
+
+# ---------------------------------------------------------------------------
+# provenance
+def solver_fingerprint() -> str:
+    """SHA-256 (16 hex digits) of the field solver's source files.
+
+    Part of the cache check on top of the scene's field hash, so that a
+    changed solver (without a ``FIELD_SCHEMA`` bump) never reuses old solves.
+    """
+    from importlib import resources
+
+    digest = hashlib.sha256()
+    package = resources.files("tengfield").joinpath("field")
+    for entry in sorted(package.iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".py"):
+            digest.update(entry.name.encode())
+            digest.update(entry.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def provenance(scene, command_line: str = "") -> dict:
+    """Versions, scene text and command line recorded with a surrogate."""
+    versions = {"tengfield": __version__}
+    for label, dist in (("dolfinx", "fenics-dolfinx"), ("petsc4py", "petsc4py"),
+                        ("gmsh", "gmsh"), ("mpi4py", "mpi4py"), ("numpy", "numpy"),
+                        ("scipy", "scipy")):   # h5py + HDF5: the file attribute "written_with"
+        try:
+            versions[label] = importlib.metadata.version(dist)
+        except importlib.metadata.PackageNotFoundError:
+            versions[label] = "missing"
+    petsc = sys.modules.get("petsc4py.PETSc")  # only if a solve loaded it
+    if petsc is not None:
+        versions["PETSc"] = ".".join(str(v) for v in petsc.Sys.getVersion())
+    text = scene.text or json.dumps(scene.to_dict(), indent=2, sort_keys=True)
+    return {"versions": versions, "scene_text": text, "scene_source": scene.source,
+            "field_inputs": scene.field_inputs(), "command_line": command_line,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+
+
+# ---------------------------------------------------------------------------
+# checksums and structure
+def array_digest(array) -> str:
+    """SHA-256 of an array's dtype, shape and bytes (little-endian, C order)."""
+    a = np.ascontiguousarray(array)
+    a = a.astype(a.dtype.newbyteorder("<"), copy=False)
+    digest = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
+    digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
+def _scalar_values(table: SurrogateTable) -> dict:
+    return {"ball_charge": float(table.ball_charge), "stroke": float(table.stroke),
+            "interpolation_error": float(table.interpolation_error),
+            "tolerance": float(table.tolerance), "converged": bool(table.converged),
+            "field_hash": str(table.field_hash), "method": str(table.method),
+            "degree": int(table.degree)}
+
+
+def scalars_digest(values: dict) -> str:
+    """SHA-256 of the scalar attributes (canonical JSON; NaN written as ``NaN``)."""
+    return hashlib.sha256(json.dumps(values, sort_keys=True).encode()).hexdigest()
+
+
+def check_shapes(arrays: dict) -> None:
+    """Raise :class:`SurrogateError` unless the per-position ``arrays`` (table attribute
+    -> array) have one length and the shapes of :data:`ARRAYS`."""
+    positions = np.asarray(arrays["positions"])
+    n = positions.shape[0] if positions.ndim == 1 else -1
+    for attr, tail in _SHAPES.items():
+        shape = np.shape(arrays[attr])
+        if n < 0 or shape != (n, *tail):
+            raise SurrogateError(f"array {ARRAYS[attr]!r} has shape {shape}, expected "
+                                 f"{(max(n, 0), *tail)}")
+
+
+def check_table(table: SurrogateTable) -> None:
+    """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense.
+
+    Positions strictly ascending from 0 to the stroke, arrays of one length
+    and the right shapes, finite values, each C symmetric positive definite
+    with C_lu < 0, each induced charge between 0 and minus the ball charge.
+    """
+    check_shapes({attr: getattr(table, attr) for attr in ARRAYS})
+    n = table.positions.size
+    if n < 2:
+        raise SurrogateError(f"{n} position(s): at least 2 are needed")
+    z, stroke = table.positions, float(table.stroke)
+    if not (np.isfinite(stroke) and stroke > 0.0):
+        raise SurrogateError(f"stroke {stroke!r} m is not positive")
+    if not np.all(np.isfinite(z)) or not np.all(np.diff(z) > 0.0):
+        raise SurrogateError("positions are not strictly ascending")
+    if z[0] != 0.0 or abs(z[-1] - stroke) > 1e-12 * stroke:
+        raise SurrogateError(f"positions run from {z[0]!r} to {z[-1]!r} m, not from 0 to the "
+                             f"stroke {stroke!r} m")
+    C, q, Q = table.capacitance, table.induced_charge, float(table.ball_charge)
+    if not (np.all(np.isfinite(C)) and np.all(np.isfinite(q)) and np.isfinite(Q)):
+        raise SurrogateError("non-finite capacitance or charge")
+    c_ll, c_lu, c_ul, c_uu = C[:, 0, 0], C[:, 0, 1], C[:, 1, 0], C[:, 1, 1]
+    scale = np.maximum(np.abs(c_ll), np.abs(c_uu))
+    bad = ~((np.abs(c_lu - c_ul) <= 1e-12 * scale) & (c_ll > 0) & (c_uu > 0) & (c_lu < 0)
+            & (c_ll * c_uu - c_lu * c_ul > 0))
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise SurrogateError(f"the capacitance matrix at z = {z[i]:.6g} m is not symmetric "
+                             "positive definite with C_lu < 0")
+    fractions = q / Q if Q != 0.0 else q
+    slack = 1e-2 if Q != 0.0 else 0.0
+    bad = np.any((fractions > slack) | (fractions < -1.0 - slack), axis=1)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise SurrogateError(f"the induced charges at z = {z[i]:.6g} m are not between 0 and "
+                             "minus the ball charge")
+
+
+# ---------------------------------------------------------------------------
+# HDF5 file
+def _import_h5py():
+    """``h5py``, which must be the distribution's build (Debian's python3-h5py).
+
+    A pip wheel of h5py bundles its own HDF5; imported after dolfinx has loaded
+    the system HDF5 it fails ("Not a datatype") or corrupts files. ``make setup``
+    removes such a wheel from the venv; this names the problem if one is back.
+    """
+    import h5py
+
+    bundled = Path(h5py.__file__).resolve().parents[1] / "h5py.libs"
+    if bundled.exists() and any(name.startswith("dolfinx") for name in sys.modules):
+        raise SurrogateError(
+            f"the h5py at {Path(h5py.__file__).parent} is a pip wheel with its own HDF5, "
+            "which clashes with the HDF5 dolfinx loads: `pip uninstall h5py` in the venv "
+            "(Debian's python3-h5py is used), e.g. by running `make setup`")
+    return h5py
+
+
+def _history_array(history) -> np.ndarray:
+    return np.asarray(history, dtype=float).reshape(-1, 2)
+
+
+def write_table(path: str | Path, table: SurrogateTable) -> Path:
+    """Write ``table`` to HDF5 atomically (temporary file + ``os.replace``), every
+    array with a Fletcher-32 filter and its SHA-256. Raises ``OSError`` if the
+    file cannot be written (nothing is left behind)."""
+    h5py = _import_h5py()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        with h5py.File(tmp, "w") as f:
+            f.attrs["complete"] = False
+            arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS.items()}
+            arrays["error_history"] = _history_array(table.error_history)
+            for name, data in arrays.items():
+                dataset = f.create_dataset(name, data=data, fletcher32=True,
+                                           chunks=data.shape if data.size else None)
+                dataset.attrs["sha256"] = array_digest(data)
+            scalars = _scalar_values(table)
+            for attr, name in SCALARS.items():
+                f.attrs[name] = scalars[attr]
+            f.attrs["scalars_sha256"] = scalars_digest(scalars)
+            f.attrs["format_version"] = FORMAT_VERSION
+            f.attrs["provenance"] = json.dumps(table.provenance, default=str)
+            f.attrs["scene_text"] = table.provenance.get("scene_text", "")
+            f.attrs["command_line"] = table.provenance.get("command_line", "")
+            f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
+            f.flush()
+            f.attrs["complete"] = True
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _read_checked(f, name: str) -> np.ndarray:
+    """Dataset ``name`` of open file ``f``, its SHA-256 checked (Fletcher-32 by HDF5)."""
+    if name not in f:
+        raise SurrogateError(f"array {name!r} is missing")
+    dataset = f[name]
+    data = dataset[()]
+    stored = dataset.attrs.get("sha256")
+    if stored is None or str(stored) != array_digest(data):
+        raise SurrogateError(f"array {name!r} does not match its checksum")
+    return data
+
+
+def read_table(path: str | Path, expected_hash: str | None = None,
+               expected_solver: str | None = None) -> SurrogateTable:
+    """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
+    readable, unchanged since written (checksums), sensible (:func:`check_table`)
+    and (if given) made for ``expected_hash`` by the solver with fingerprint
+    ``expected_solver`` (:func:`solver_fingerprint`)."""
+    h5py = _import_h5py()
+    path = Path(path)
+
+    def fail(reason: str):
+        return SurrogateError(f"surrogate file {str(path)!r} {reason}", path=path, reason=reason)
+
+    if path.is_dir():
+        raise fail("is a directory")
+    if not path.is_file():
+        raise fail("does not exist")
+    try:
+        with h5py.File(path, "r") as f:
+            if not bool(f.attrs.get("complete", False)):
+                raise SurrogateError("is partial (complete flag unset)")
+            version = f.attrs.get("format_version")
+            if version is None or int(version) != FORMAT_VERSION:
+                raise SurrogateError(f"has format version {version!r}, expected {FORMAT_VERSION}")
+            stored_hash = str(f.attrs["field_hash"])
+            if expected_hash is not None and stored_hash != expected_hash:
+                raise SurrogateError(f"was made for field hash {stored_hash[:12]}..., the scene "
+                                     f"has {expected_hash[:12]}...")
+            arrays = {attr: _read_checked(f, name) for attr, name in ARRAYS.items()}
+            history = _read_checked(f, "error_history")
+            scalars = {attr: f.attrs[name] for attr, name in SCALARS.items()}
+            scalars = {"ball_charge": float(scalars["ball_charge"]),
+                       "stroke": float(scalars["stroke"]),
+                       "interpolation_error": float(scalars["interpolation_error"]),
+                       "tolerance": float(scalars["tolerance"]),
+                       "converged": bool(scalars["converged"]),
+                       "field_hash": str(scalars["field_hash"]), "method": str(scalars["method"]),
+                       "degree": int(scalars["degree"])}
+            if str(f.attrs.get("scalars_sha256", "")) != scalars_digest(scalars):
+                raise SurrogateError("scalar attributes do not match their checksum")
+            provenance_text = str(f.attrs["provenance"])
+    except SurrogateError as exc:
+        raise fail(exc.reason) from None
+    except Exception as exc:  # noqa: BLE001 - any read failure means "corrupt"
+        raise fail(f"is corrupt or unreadable: {type(exc).__name__}: {exc}") from None
+    try:
+        provenance_data = json.loads(provenance_text)
+        if history.ndim != 2 or history.shape[1] != 2:
+            raise SurrogateError(f"error history has shape {history.shape}")
+        check_shapes(arrays)
+        raw = SurrogateTable(**arrays, **scalars, provenance=provenance_data,
+                             error_history=[(int(n), float(e)) for n, e in history.tolist()])
+        # __post_init__ sorts: check the order as stored, then the rest
+        z = np.asarray(arrays["positions"], dtype=float)
+        if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
+            raise SurrogateError("positions are not strictly ascending")
+        check_table(raw)
+    except SurrogateError as exc:
+        raise fail(f"holds inconsistent data: {exc.reason}") from None
+    except Exception as exc:  # noqa: BLE001 - shapes that do not even build a table
+        raise fail(f"holds inconsistent data: {type(exc).__name__}: {exc}") from None
+    stored_solver = raw.provenance.get("solver_fingerprint")
+    if expected_solver is not None and stored_solver != expected_solver:
+        raise fail(f"was made by another version of the field solver (fingerprint "
+                   f"{stored_solver}, now {expected_solver})")
+    return raw
+
+
+# ---------------------------------------------------------------------------
+# cache
+def default_cache_dir() -> Path:
+    """``$TENGFIELD_CACHE_DIR``, else ``$XDG_CACHE_HOME/tengfield``, else ``~/.cache/tengfield``."""
+    env = os.environ.get("TENGFIELD_CACHE_DIR")
+    if env:
+        return Path(env).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / "tengfield"
+
+
+def cache_path(scene, cache_dir: str | Path | None = None) -> Path:
+    """Where the surrogate of ``scene`` lives in the cache (named by its field hash)."""
+    directory = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
+    return directory / f"surrogate-{scene.field_hash()[:24]}.h5"
+
+
+@dataclass
+class CacheOutcome:
+    """How :func:`obtain_table` got its table: ``status`` is "cached",
+    "computed" (no file) or "recomputed" (an untrusted file was replaced);
+    ``stored`` is False when the new table could not be written to the cache."""
+    status: str
+    reason: str
+    path: str
+    wall_time: float
+    stored: bool = True
+
+
+def _decide(path: Path, scene) -> tuple[SurrogateTable | None, str, str]:
+    """(table or None, status, reason) for the cache file ``path`` (one process)."""
+    if path.is_dir():
+        return None, "computed", f"the cache path {path} is a directory"
+    if not path.exists():
+        return None, "computed", f"no cached surrogate at {path}"
+    try:
+        table = read_table(path, expected_hash=scene.field_hash(),
+                           expected_solver=solver_fingerprint())
+    except SurrogateError as exc:
+        return None, "recomputed", f"cached surrogate {path} not trusted ({exc.reason})"
+    return table, "cached", f"complete surrogate with matching field hash at {path}"
+
+
+def load_cached(path: str | Path, scene, comm=None) -> tuple[SurrogateTable | None, str, str]:
+    """Rank 0 of ``comm`` reads and checks the cache file ``path``; every rank gets
+    its decision ``(table or None, status, reason)`` (status "cached", "computed"
+    or "recomputed"). An untrusted file gives one warning (rank 0)."""
+    decision: object = None
+    if rank_of(comm) == 0:
+        try:
+            decision = _decide(Path(path), scene)
+        except Exception as exc:  # noqa: BLE001 - raised on every rank below, never a hang
+            decision = exc
+    if size_of(comm) > 1:
+        decision = comm.bcast(decision, root=0)
+    if isinstance(decision, Exception):
+        raise decision
+    table, status, reason = decision
+    if status == "recomputed" and rank_of(comm) == 0:
+        warnings.warn(f"{reason}, recomputing", RuntimeWarning, stacklevel=3)
+    return table, status, reason
+
+
+def store_in_cache(path: str | Path, table: SurrogateTable, comm=None) -> bool:
+    """Write ``table`` to the cache file ``path`` on rank 0 of ``comm``; if that fails
+    (cache directory a file or read-only, cache path a directory...) warn once and
+    return False on every rank, else True."""
+    stored: object = True
+    if rank_of(comm) == 0:
+        try:
+            write_table(path, table)
+        except OSError as exc:
+            why = exc.strerror or str(exc)
+            warnings.warn(f"surrogate cache {path} could not be written ({why}); the table is "
+                          "used for this run but not cached", RuntimeWarning, stacklevel=3)
+            stored = False
+    if size_of(comm) > 1:
+        stored = comm.bcast(stored, root=0)
+    return bool(stored)
+
+
+def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
+                 solve: SolveFunction | None = None, progress: bool = False,
+                 command_line: str = "", write: bool = True) -> tuple[SurrogateTable, CacheOutcome]:
+    """The cached surrogate of ``scene`` if trusted (:func:`read_table`), else a new one.
+
+    Rank 0 of ``comm`` decides hit or miss and broadcasts the decision and the
+    table (:func:`load_cached`). A partial, corrupt or mismatching file triggers
+    a warning and a recomputation (it is never trusted). The new table is
+    written by rank 0 unless ``write`` is false; a cache that cannot be
+    written gives a warning (:func:`store_in_cache`). Every rank returns the table.
+    """
+    start = time.perf_counter()
+    path = cache_path(scene, cache_dir)
+    table, status, reason = load_cached(path, scene, comm)
+    if table is not None:
+        return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
+    table = precompute(scene, comm=comm, solve=solve, progress=progress,
+                       command_line=command_line)
+    stored = store_in_cache(path, table, comm) if write else False
+    return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)
