@@ -43,7 +43,7 @@ import numpy as np
 
 from .. import circuit, electrical
 from ..errors import SceneError
-from ..surrogate import INITIAL_POSITIONS
+from ..surrogate import FEWEST_POSITIONS
 
 QUANTITIES = ("V_oc", "Q_sc", "I_sc")
 TARGETS = (1e-2, 1e-3)
@@ -51,7 +51,7 @@ TARGETS = (1e-2, 1e-3)
 BUDGET_SHARE = 1.0 / 3.0
 #: fewest positions the adaptive surrogate ends with: its initial Lobatto set and the
 #: positions held out between them (9 + 8 = 17), see :func:`tengfield.surrogate.precompute`
-MIN_ADAPTIVE_POSITIONS = 2 * INITIAL_POSITIONS - 1
+MIN_ADAPTIVE_POSITIONS = FEWEST_POSITIONS
 
 
 # ---------------------------------------------------------------------------
