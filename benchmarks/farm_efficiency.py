@@ -118,11 +118,14 @@ def main() -> None:
     busy = [sum(p) for p in par["points"]]
     count = args.frequencies * args.amplitudes
     print(f"sweep of {count} points x {len(LOADS)} loads, default scene "
-          f"(load average {load_before:.1f} before, {load_after:.1f} after; {os.cpu_count()} cores)")
+          f"(load average {load_before:.1f} before, {load_after:.1f} after; "
+          f"{os.cpu_count()} cores)")
     print(f"serial:     {t1:7.2f} s wall, {cpu1:7.2f} s CPU, {t1 / count * 1e3:.1f} ms per point")
     print(f"{n} ranks:    {tn:7.2f} s wall, {sum(par['cpu']):7.2f} s CPU (ranks: "
           + ", ".join(f"{c:.2f}" for c in par["cpu"]) + "), points per rank: "
           + ", ".join(str(len(p)) for p in par["points"]))
+    print(f"time inside the points per rank: " + ", ".join(f"{b:.2f} s" for b in busy)
+          + f" of {tn:.2f} s (the rest: MPI, waiting)")
     print(f"parallel efficiency T1 / ({n} T{n}) = {t1 / (n * tn):.1%}")
     print(f"CPU ratio serial / parallel = {cpu1 / sum(par['cpu']):.1%}")
     schedule = sum(busy) / (n * max(busy))

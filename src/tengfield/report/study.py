@@ -460,7 +460,8 @@ class _Solver:
 
 
 def planned_solves(solver: _Solver, plan: Plan) -> list:
-    """Every (setting, position) the field and surrogate stages solve (for :meth:`_Solver.prefetch`)."""
+    """Every (setting, position) the field and surrogate stages solve
+    (for :meth:`_Solver.prefetch`)."""
     pairs = []
     for setting in dict.fromkeys(plan.field_settings + plan.far_field_settings):
         pairs += [(setting, z) for z in solver.solved_positions(plan.field_positions)]
