@@ -12,8 +12,11 @@ interpreter start-up. Prints:
 * CPU time (user + sys) of the timed part: serial, and summed over the ranks
   (work the farm adds, or contention on a shared machine, shows here);
 * the schedule efficiency ``sum of point times / (N x busiest rank's time)``
-  of the dynamic schedule (1 = perfectly balanced), and schedule x CPU ratio,
-  what the wall-clock efficiency comes to on an idle machine;
+  of the dynamic schedule (1 = perfectly balanced) and the farm efficiency
+  (share of the ranks' wall time spent inside the points, the rest is MPI and
+  waiting); times the ratio of the CPU time inside the points (serial / all
+  ranks: what running N ranks side by side costs each point) it is what the
+  wall-clock efficiency comes to on an idle machine;
 * the machine's load average (other jobs make the wall clock meaningless),
   and whether the rows equal the serial ones exactly.
 """
@@ -46,13 +49,13 @@ def _cpu() -> float:
 def _timed_point(task):
     from tengfield import sweep
 
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     rows = sweep.sweep_point(*task)
-    return rows, time.perf_counter() - start
+    return rows, (time.perf_counter() - start, time.process_time() - cpu)
 
 
 def _measure(comm, args):
-    """(rows, wall [s], cpu [s] of this process, point times [s] run by this process)."""
+    """(rows, wall [s], cpu [s] of this process, (wall, cpu) [s] of each point it ran)."""
     from tengfield import sweep
     from tengfield.scene import default_scene
     from tengfield.surrogate import obtain_table
@@ -104,7 +107,7 @@ def main() -> None:
     os.environ.setdefault("MPLBACKEND", "Agg")
     n = args.ranks
     load_before = os.getloadavg()[0]
-    rows1, t1, cpu1, _ = _measure(None, args)
+    rows1, t1, cpu1, points1 = _measure(None, args)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "mpi.pickle"
         env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
@@ -115,7 +118,9 @@ def main() -> None:
         par = pickle.loads(out.read_bytes())
     load_after = os.getloadavg()[0]
     tn = par["wall"]
-    busy = [sum(p) for p in par["points"]]
+    busy = [sum(w for w, _ in p) for p in par["points"]]
+    point_cpu1 = sum(c for _, c in points1)
+    point_cpu = sum(c for p in par["points"] for _, c in p)
     count = args.frequencies * args.amplitudes
     print(f"sweep of {count} points x {len(LOADS)} loads, default scene "
           f"(load average {load_before:.1f} before, {load_after:.1f} after; "
@@ -124,14 +129,18 @@ def main() -> None:
     print(f"{n} ranks:    {tn:7.2f} s wall, {sum(par['cpu']):7.2f} s CPU (ranks: "
           + ", ".join(f"{c:.2f}" for c in par["cpu"]) + "), points per rank: "
           + ", ".join(str(len(p)) for p in par["points"]))
-    print(f"time inside the points per rank: " + ", ".join(f"{b:.2f} s" for b in busy)
+    print("time inside the points per rank: " + ", ".join(f"{b:.2f} s" for b in busy)
           + f" of {tn:.2f} s (the rest: MPI, waiting)")
-    print(f"parallel efficiency T1 / ({n} T{n}) = {t1 / (n * tn):.1%}")
-    print(f"CPU ratio serial / parallel = {cpu1 / sum(par['cpu']):.1%}")
+    print(f"parallel efficiency T1 / ({n} T{n}) = {t1 / (n * tn):.1%}  (wall clock)")
     schedule = sum(busy) / (n * max(busy))
+    inside = sum(busy) / (n * tn)
     print(f"schedule efficiency (sum of point times / ({n} x busiest rank)) = {schedule:.1%}")
-    print(f"expected on an idle machine (schedule x CPU ratio) = "
-          f"{schedule * cpu1 / sum(par['cpu']):.1%}")
+    print(f"farm efficiency (share of the {n} ranks' time spent inside the points) = {inside:.1%}")
+    print(f"CPU inside the points: serial {point_cpu1:.2f} s, {n} ranks {point_cpu:.2f} s "
+          f"(ratio {point_cpu1 / point_cpu:.1%}); whole timed part: serial {cpu1:.2f} s, "
+          f"{n} ranks {sum(par['cpu']):.2f} s")
+    print(f"expected on an idle machine (farm efficiency x point CPU ratio) = "
+          f"{inside * point_cpu1 / point_cpu:.1%}")
     print(f"rows identical to the serial run: {par['rows'] == rows1}")
 
 
