@@ -11,13 +11,16 @@
 Numbers are SI with the unit in the column name. The time column of
 ``waveforms.csv`` is written with 17 significant digits (``%.17g``, exact
 round trip) so that the samples of a long run stay distinct; the other
-waveform columns with 10, the dynamics files with 12.
+waveform columns with 10, the dynamics files with 12. JSON, ``sweep.csv`` and
+``report.csv`` are written atomically (:func:`atomic_path`).
 """
 from __future__ import annotations
 
 import csv
 import json
 import math
+import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -31,10 +34,26 @@ TIME_FORMAT = "%.17g"
 VALUE_FORMAT = "%.10g"
 
 
+@contextmanager
+def atomic_path(path: str | Path):
+    """Yield a temporary path next to ``path`` (same suffix, so plotting libraries
+    pick the format); it replaces ``path`` (``os.replace``) when the block ends
+    without an exception, else it is removed: a reader never sees half a file."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
 def write_json(path: str | Path, data) -> Path:
     """``data`` as indented strict JSON (NaN -> null, see :func:`tengfield._json.jsonable`)."""
     path = Path(path)
-    path.write_text(json.dumps(jsonable(data), indent=2) + "\n")
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(jsonable(data), indent=2) + "\n")
     return path
 
 
@@ -120,7 +139,7 @@ def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
     """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty)."""
     from .sweep import SWEEP_COLUMNS
 
-    with open(path, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=SWEEP_COLUMNS)
         writer.writeheader()
         for row in rows:
@@ -155,7 +174,7 @@ def report_row_record(row) -> dict:
 
 def write_report_csv(path: str | Path, report) -> Path:
     """``report.csv``: one line per measured row of a :class:`tengfield.report.Report`."""
-    with open(path, "w", newline="") as fh:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=REPORT_COLUMNS)
         writer.writeheader()
         for row in report.rows:

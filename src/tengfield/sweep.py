@@ -4,15 +4,17 @@
 peak-to-peak values as ``tengfield run`` (:func:`tengfield.electrical.terminal_peaks`:
 steady window, samples and impact instants) and the mean power into each
 load; :func:`sweep` runs it over a frequency x amplitude grid in worker
-processes. ``tengfield.io.write_sweep_csv`` writes the rows.
+processes, or over the ranks of an MPI job (``mpirun -n N tengfield sweep``,
+:func:`run_tasks`). ``tengfield.io.write_sweep_csv`` writes the rows.
 """
 from __future__ import annotations
 
 import sys
-from typing import Callable
+from typing import Callable, Sequence
 
 from . import electrical
 from ._json import regime_dict
+from .errors import SceneError
 
 #: columns of ``sweep.csv`` (one row per grid point and load)
 SWEEP_COLUMNS = ["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period",
@@ -60,35 +62,86 @@ def _sweep_task(args):
     return sweep_point(*args)
 
 
-def sweep(scene, table, frequencies, amplitudes, loads=(), *,
-          jobs: int | None = None, progress: bool = False) -> list[dict]:
-    """:func:`sweep_point` over the grid ``frequencies`` [Hz] x ``amplitudes`` [m],
-    in ``jobs`` worker processes (default: all cores), with a progress bar
-    (stderr, only when it is a terminal)."""
+def check_jobs(jobs: int | None, comm, option: str = "--jobs") -> None:
+    """Refuse worker processes inside an MPI job: under ``mpirun -n N`` (N > 1) every
+    rank runs its share of the points in its own process, so ``jobs`` must be None or 1."""
+    from ._mpi import size_of
+
+    if jobs is not None and jobs < 1:
+        raise SceneError(f"{option} = {jobs} is out of range: allowed >= 1")
+    if jobs is not None and jobs > 1 and size_of(comm) > 1:
+        raise SceneError(f"{option} = {jobs} cannot be combined with mpirun -n {size_of(comm)}: "
+                         f"allowed 1 or omitted (each MPI rank is one worker)")
+
+
+def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = None,
+              progress: Callable[[int], None] | None = None, mp_context: str = "spawn") -> list:
+    """``[work(task) for task in tasks]``, in order, spread over the workers at hand.
+
+    * ``comm`` with more than one rank (``mpirun -n N``): the MPI task farm
+      :func:`tengfield._mpi.farm` (dynamic schedule, every rank returns the
+      whole list, an exception on any rank aborts all ranks with its message);
+      ``jobs`` must be None or 1 (:func:`check_jobs`).
+    * otherwise ``jobs`` worker processes (default: all cores; ``work`` and
+      the tasks must be picklable, ``mp_context`` "spawn" is safe after
+      MPI/dolfinx initialisation), or a plain loop for one job or one task.
+
+    ``progress(n)``: called with the number of further tasks done (rank 0 only
+    under MPI). Used by :func:`sweep`; ``tengfield map`` can use it too.
+    """
     import multiprocessing
     import os
     from concurrent.futures import ProcessPoolExecutor
 
+    from ._mpi import farm, size_of
+
+    check_jobs(jobs, comm)
+    tasks = list(tasks)
+    if size_of(comm) > 1:
+        return farm(comm, tasks, work, progress=progress)
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
+    results = []
+    if jobs == 1:
+        for task in tasks:
+            results.append(work(task))
+            if progress is not None:
+                progress(1)
+        return results
+    context = multiprocessing.get_context(mp_context)
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        for result in pool.map(work, tasks):
+            results.append(result)
+            if progress is not None:
+                progress(1)
+    return results
+
+
+def sweep(scene, table, frequencies, amplitudes, loads=(), *,
+          jobs: int | None = None, comm=None, progress: bool = False) -> list[dict]:
+    """:func:`sweep_point` over the grid ``frequencies`` [Hz] x ``amplitudes`` [m]
+    (frequency outer, amplitude inner, loads innermost), with a progress bar
+    (stderr, only when it is a terminal).
+
+    ``comm``: an MPI communicator (``COMM_WORLD`` under ``mpirun -n N``,
+    passed by the CLI); with more than one rank the grid points are farmed
+    over the ranks (:func:`run_tasks`) and every rank returns all rows, the
+    same as a serial run. Otherwise ``jobs`` worker processes (default: all
+    cores) on this machine.
+    """
     from tqdm import tqdm
 
-    # validate every grid scene first: a bad point fails before any work starts
+    from ._mpi import rank_of
+
+    check_jobs(jobs, comm)
+    # validate every grid scene first: a bad point fails (on every rank) before any work starts
     for f in frequencies:
         for a in amplitudes:
             scene.with_values(excitation={"frequency_hz": float(f), "amplitude_mm": float(a) * 1e3})
     tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
     bar = tqdm(total=len(tasks), desc="sweep", unit="point", file=sys.stderr,
-               disable=not (progress and sys.stderr.isatty()))
-    rows: list[dict] = []
-    if jobs == 1:
-        for task in tasks:
-            rows.extend(_sweep_task(task))
-            bar.update()
-    else:
-        context = multiprocessing.get_context("spawn")  # safe after MPI/dolfinx initialisation
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-            for result in pool.map(_sweep_task, tasks):
-                rows.extend(result)
-                bar.update()
-    bar.close()
-    return rows
+               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    try:
+        results = run_tasks(_sweep_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
+    return [row for rows in results for row in rows]

@@ -22,6 +22,15 @@ def add_cache_argument(parser) -> None:
                              "$XDG_CACHE_HOME/tengfield or ~/.cache/tengfield)")
 
 
+def add_jobs_argument(parser) -> None:
+    """``--jobs N``: worker processes on this machine; under ``mpirun -n N`` (N > 1)
+    the ranks are the workers and --jobs must be omitted or 1
+    (:func:`tengfield.sweep.check_jobs`)."""
+    parser.add_argument("--jobs", "-j", type=int, default=None, metavar="N",
+                        help="worker processes on this machine (default: all cores); under "
+                             "mpirun -n N the MPI ranks are the workers: omit it or give 1")
+
+
 def command_line() -> str:
     """The command line as typed (stored in the surrogate cache's provenance)."""
     return shlex.join(["tengfield", *sys.argv[1:]])

@@ -2,10 +2,14 @@
 
 Writes DIR/report.md, DIR/report.csv, DIR/report.json, DIR/{field,surrogate,
 dynamics,circuit}.png and DIR/recommended-<target>.toml (see docs/report.md).
+
+Under ``mpirun -n N tengfield report`` the field solves and the trajectories
+are farmed over the N ranks (each solve on one rank); the errors equal a
+serial run's, and rank 0 writes the files.
 """
 from __future__ import annotations
 
-from ._common import scene_command
+from ._common import scene_command, world_if_parallel
 
 
 def register(sub) -> None:
@@ -24,7 +28,11 @@ def _report(args) -> int:
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
-    report = build_report(scene, fast=args.fast, comm=MPI.COMM_SELF, progress=True)
+    farm_comm = world_if_parallel()
+    report = build_report(scene, fast=args.fast, comm=MPI.COMM_SELF, progress=True,
+                          farm_comm=farm_comm)
+    if farm_comm is not None and farm_comm.rank != 0:
+        return 0
     written = write_report(report, args.output)
     for rec in report.recommendations:
         f = rec.field

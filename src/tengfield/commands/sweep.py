@@ -5,13 +5,19 @@ One surrogate (cached), the dynamics at every grid point (in parallel),
 peak-to-peak values over the steady window as ``tengfield run`` reports
 them and, with --load-ohm, the mean power into each load. Writes
 DIR/sweep.csv and DIR/sweep.png.
+
+On one machine --jobs worker processes share the points. Under
+``mpirun -n N tengfield sweep ...`` the points are farmed over the N ranks
+(dynamic schedule; the rows equal a serial run's) and rank 0 writes the
+files; --jobs must then be omitted or 1.
 """
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-from ._common import add_cache_argument, command_line, scene_command
+from ._common import (add_cache_argument, add_jobs_argument, command_line, scene_command,
+                      world_if_parallel)
 from ._ranges import parse_range
 
 
@@ -24,30 +30,39 @@ def register(sub) -> None:
     for option, values in grid.items():
         p.add_argument(option, required=option != "--load-ohm", default=None,
                        metavar="START:STOP:N", help=f"{values}, or one value")
-    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    add_jobs_argument(p)
     add_cache_argument(p)
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
-    from ..io import write_sweep_csv
+    from ..io import atomic_path, write_sweep_csv
     from ..plotting.waveforms import plot_sweep
     from ..scene import load_scene
     from ..surrogate import obtain_table
-    from ..sweep import sweep
+    from ..sweep import check_jobs, sweep
 
     scene = load_scene(args.scene)
     frequencies = parse_range(args.frequency_hz, "--frequency-hz")
     amplitudes = parse_range(args.amplitude_mm, "--amplitude-mm") * 1e-3
     loads = parse_range(args.load_ohm, "--load-ohm", log=True) if args.load_ohm else ()
-    table, outcome = obtain_table(scene, cache_dir=args.cache_dir, progress=True,
+    comm = world_if_parallel()
+    check_jobs(args.jobs, comm)
+    root = comm is None or comm.rank == 0
+    # a missing surrogate is computed by the same farm; rank 0 writes the cache
+    table, outcome = obtain_table(scene, cache_dir=args.cache_dir, comm=comm, progress=True,
                                   command_line=command_line())
-    print(f"surrogate: {outcome.status} ({table.count} positions, error estimate "
-          f"{table.interpolation_error:.2g})", file=sys.stderr)
-    rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, progress=True)
+    if root:
+        print(f"surrogate: {outcome.status} ({table.count} positions, error estimate "
+              f"{table.interpolation_error:.2g})", file=sys.stderr)
+    rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, comm=comm,
+                 progress=True)
+    if not root:
+        return 0
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     write_sweep_csv(out / "sweep.csv", rows)
-    plot_sweep(rows, out / "sweep.png")
+    with atomic_path(out / "sweep.png") as tmp:
+        plot_sweep(rows, tmp)
     print(f"{len(rows)} rows; wrote {out / 'sweep.csv'}, {out / 'sweep.png'}")
     return 0

@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 
 from ..io import format_number as _num
-from ..io import write_report_csv, write_report_json
+from ..io import atomic_path, write_report_csv, write_report_json
 from .study import QUANTITIES, Report, Row
 
 STAGE_TITLES = {
@@ -173,9 +173,14 @@ def markdown(report: Report, images: dict) -> str:
     return "\n".join(lines)
 
 
+def _write_text(path: Path, text: str) -> None:
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+
+
 def write_report(report: Report, out_dir) -> list[Path]:
     """Write report.csv, report.json, report.md, one PNG per stage and
-    ``recommended-<target>.toml`` scene files to ``out_dir``."""
+    ``recommended-<target>.toml`` scene files to ``out_dir`` (each atomically)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = [write_report_csv(out / "report.csv", report),
@@ -184,16 +189,18 @@ def write_report(report: Report, out_dir) -> list[Path]:
     for stage in ("field", "surrogate", "dynamics", "circuit"):
         rows = [r for r in report.rows if r.stage == stage]
         if rows:
-            images[stage] = plot_stage(out / f"{stage}.png", rows, stage)
+            with atomic_path(out / f"{stage}.png") as tmp:
+                plot_stage(tmp, rows, stage)
+            images[stage] = out / f"{stage}.png"
             written.append(images[stage])
     for rec in report.recommendations:
         path = out / f"recommended-{rec.target:g}.toml"
-        path.write_text(scene_text(report.scene, rec.scene_sections(),
+        _write_text(path, scene_text(report.scene, rec.scene_sections(),
                                    f"{report.scene.source} with the cheapest settings measured by "
                                    f"`tengfield report`\nto reach {rec.target:g} on the peak-to-peak "
                                    f"V_OC, Q_SC, I_SC (measured: {rec.measured_error:.2g})"))
         written.append(path)
     md = out / "report.md"
-    md.write_text(markdown(report, images))
+    _write_text(md, markdown(report, images))
     written.append(md)
     return written

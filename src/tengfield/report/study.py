@@ -394,18 +394,54 @@ class _Solver:
         self._solve = solve
         self.progress = progress
 
+    def key(self, setting: FieldSetting, z: float):
+        return (setting, round(z / self.stroke, 12))
+
+    def compute(self, setting: FieldSetting, z: float):
+        """One field solve, not cached (what a rank of the farm runs)."""
+        if self._solve is None:
+            from ..field import solve_position
+            self._solve = solve_position
+        return self._solve(self.scene, float(z), comm=self.comm, estimate_error=False,
+                           **setting.overrides())
+
     def solve(self, setting: FieldSetting, z: float):
-        key = (setting, round(z / self.stroke, 12))
+        key = self.key(setting, z)
         if key not in self.cache:
-            if self._solve is None:
-                from ..field import solve_position
-                self._solve = solve_position
-            result = self._solve(self.scene, float(z), comm=self.comm, estimate_error=False,
-                                 **setting.overrides())
-            self.cache[key] = result
+            self.cache[key] = self.compute(setting, z)
             if self.progress is not None:
                 self.progress(1)
         return self.cache[key]
+
+    def solved_positions(self, count: int) -> list[float]:
+        """The positions a table of ``count`` Lobatto positions solves (mirror images are free)."""
+        from ..surrogate import lobatto_positions
+
+        return [float(self.stroke - z) if self._mirror(z) else float(z)
+                for z in lobatto_positions(self.stroke, count)]
+
+    def _mirror(self, z: float) -> bool:
+        return self.symmetric and z > 0.5 * self.stroke * (1 + 1e-12)
+
+    def prefetch(self, pairs, farm_comm) -> None:
+        """Solve every (setting, z) of ``pairs`` not yet cached, farmed over the ranks of
+        ``farm_comm`` (:func:`tengfield._mpi.farm`, dearest first); every rank then holds
+        every result, so the stages that follow run the same on every rank."""
+        from .._mpi import farm, rank_of
+
+        todo = {}
+        for setting, z in pairs:
+            key = self.key(setting, z)
+            if key not in self.cache and key not in todo:
+                todo[key] = (setting, float(z))
+        # dearest first (3D, then the most cells x degree^2), so the dynamic schedule balances
+        items = sorted(todo.values(), key=lambda p: (p[0].method == "3d",
+                                                     p[0].degree**2 / p[0].mesh_size_mm**2),
+                       reverse=True)
+        progress = self.progress if rank_of(farm_comm) == 0 else None
+        results = farm(farm_comm, items, lambda item: self.compute(*item), progress=progress)
+        for (setting, z), result in zip(items, results):
+            self.cache[self.key(setting, z)] = result
 
     def table(self, setting: FieldSetting, count: int):
         """Surrogate table of ``count`` Lobatto positions and its solve wall time [s]."""
@@ -414,13 +450,28 @@ class _Solver:
         positions = lobatto_positions(self.stroke, count)
         results, wall = [], 0.0
         for z in positions:
-            if self.symmetric and z > 0.5 * self.stroke * (1 + 1e-12):
+            if self._mirror(z):
                 results.append(mirrored(self.solve(setting, self.stroke - z), self.stroke))
             else:
                 res = self.solve(setting, z)
                 wall += res.wall_time
                 results.append(res)
         return table_from_results(results, stroke=self.stroke), wall
+
+
+def planned_solves(solver: _Solver, plan: Plan) -> list:
+    """Every (setting, position) the field and surrogate stages solve
+    (for :meth:`_Solver.prefetch`)."""
+    pairs = []
+    for setting in dict.fromkeys(plan.field_settings + plan.far_field_settings):
+        pairs += [(setting, z) for z in solver.solved_positions(plan.field_positions)]
+    mid = 0.5 * solver.stroke
+    pairs += [(setting, mid) for setting in plan.reference_pair + tuple(plan.settings_3d)]
+    finest = plan.reference_pair[1]
+    for count in {plan.reference_count, *plan.surrogate_counts,
+                  *(2 * c - 1 for c in plan.surrogate_counts)}:
+        pairs += [(finest, z) for z in solver.solved_positions(count)]
+    return pairs
 
 
 def _curves(table, scene):
@@ -510,73 +561,99 @@ def surrogate_rows(solver: _Solver, plan: Plan, scene, trajectory) -> tuple[list
     return rows, ref_curves
 
 
-def dynamics_rows(plan: Plan, scene, curves, progress=None) -> tuple[list, Any]:
-    """Output sampling of the impact map, and soft contact against the impact map."""
-    ref_dyn, _, ref_scene = _trajectory(scene, plan.reference_sample_rate)
-    ref_peaks = electrical.terminal_peaks(ref_scene, ref_dyn, curves)
+def _peaks_task(scene, curves, sample_rate, contact):
+    """Peak-to-peak values of one trajectory and its wall time [s] (one farm task)."""
+    dyn, wall, run_scene = _trajectory(scene, sample_rate, **contact)
+    return electrical.terminal_peaks(run_scene, dyn, curves), wall
+
+
+def _tasks(farm_comm, tasks, work, progress):
+    """``[work(*t) for t in tasks]``, farmed over ``farm_comm``'s ranks (if any);
+    ``progress(n)`` on rank 0 only."""
+    from .._mpi import farm, rank_of
+
+    if rank_of(farm_comm) != 0:
+        progress = None
+    return farm(farm_comm, list(tasks), lambda task: work(*task), progress=progress)
+
+
+def dynamics_rows(plan: Plan, scene, curves, progress=None, farm_comm=None) -> tuple[list, Any]:
+    """Output sampling of the impact map, and soft contact against the impact map.
+
+    Returns the rows and ``(None, reference scene, reference peaks)``; the
+    trajectories are farmed over ``farm_comm``'s ranks (every rank gets every row).
+    """
+    rate = scene.run.sample_rate
+    tasks = ([(scene, curves, plan.reference_sample_rate, {})]
+             + [(scene, curves, r, {}) for r in plan.sample_rates]
+             + [(scene, curves, rate, {})]
+             + [(scene, curves, rate, {"model": "soft", "stiffness_N_per_m": k})
+                for k in plan.stiffnesses])
+    done = _tasks(farm_comm, tasks, _peaks_task, progress)
+    ref_peaks = done[0][0]
+    sampled = done[1:1 + len(plan.sample_rates)]
+    impact_peaks = done[1 + len(plan.sample_rates)][0]
+    soft = done[2 + len(plan.sample_rates):]
     rows = []
-    for rate in plan.sample_rates:
-        dyn, wall, run_scene = _trajectory(scene, rate)
-        rows.append(Row("dynamics", f"impact map, {rate:g} Hz sampling",
-                        {"model": "impact", "sample_rate_hz": rate}, wall,
-                        peak_errors(electrical.terminal_peaks(run_scene, dyn, curves), ref_peaks),
+    for r, (peaks, wall) in zip(plan.sample_rates, sampled):
+        rows.append(Row("dynamics", f"impact map, {r:g} Hz sampling",
+                        {"model": "impact", "sample_rate_hz": r}, wall,
+                        peak_errors(peaks, ref_peaks),
                         f"impact map sampled at {plan.reference_sample_rate:g} Hz plus the "
                         "impact instants (exact extremes)"))
-        if progress:
-            progress(1)
-    rate = scene.run.sample_rate
-    impact_dyn, _, impact_scene = _trajectory(scene, rate)
-    impact_peaks = electrical.terminal_peaks(impact_scene, impact_dyn, curves)
-    for k in plan.stiffnesses:
-        dyn, wall, run_scene = _trajectory(scene, rate, model="soft", stiffness_N_per_m=k)
+    for k, (peaks, wall) in zip(plan.stiffnesses, soft):
         rows.append(Row("dynamics", f"soft contact k={k:.0e} N/m",
                         {"model": "soft", "stiffness_N_per_m": k, "contact_sample_rate_hz": rate},
-                        wall, peak_errors(electrical.terminal_peaks(run_scene, dyn, curves),
-                                          impact_peaks),
+                        wall, peak_errors(peaks, impact_peaks),
                         f"impact map (rigid limit), same sampling {rate:g} Hz"))
-        if progress:
-            progress(1)
-    return rows, (ref_dyn, ref_scene, ref_peaks)
+    ref_scene = scene.with_values(run={"sample_rate_hz": float(plan.reference_sample_rate)})
+    return rows, (None, ref_scene, ref_peaks)
 
 
-def circuit_rows(plan: Plan, scene, curves, progress=None) -> list:
-    """Step of the load integrator (output sampling) for stiff to slow loads."""
+def _load_task(scene, curves, load, rate):
+    """Mean load power [W], peak-to-peak load voltage [V] and the integrator's wall
+    time [s] for one load [ohm] at one step (sampling rate [Hz]); one farm task."""
+    loaded = scene.with_values(circuit={"kind": "load", "load_ohm": float(load)})
+    dyn, _, run_scene = _trajectory(loaded, rate)
+    mask = electrical.steady_window(dyn.t, run_scene)[0]
+    start = time.perf_counter()
+    out = electrical.steady_load(run_scene, dyn, curves)
+    wall = time.perf_counter() - start
+    return out["mean_power_W"], circuit.peak_to_peak(out["V_load"][mask]), wall
+
+
+def circuit_rows(plan: Plan, scene, curves, progress=None, farm_comm=None) -> list:
+    """Step of the load integrator (output sampling) for stiff to slow loads
+    (the runs farmed over ``farm_comm``'s ranks; every rank gets every row)."""
+    ref_rate = plan.circuit_rates[-1] * plan.circuit_refinement
+    rates = (ref_rate, *plan.circuit_rates)
+    tasks = [(scene, curves, load, rate) for load in plan.loads for rate in rates]
+    done = iter(_tasks(farm_comm, tasks, _load_task, progress))
     rows = []
     for load in plan.loads:
-        loaded = scene.with_values(circuit={"kind": "load", "load_ohm": float(load)})
-
-        def measure(rate):
-            dyn, _, run_scene = _trajectory(loaded, rate)
-            mask = electrical.steady_window(dyn.t, run_scene)[0]
-            start = time.perf_counter()
-            out = electrical.steady_load(run_scene, dyn, curves)
-            wall = time.perf_counter() - start
-            return out["mean_power_W"], circuit.peak_to_peak(out["V_load"][mask]), wall
-
-        ref_rate = plan.circuit_rates[-1] * plan.circuit_refinement
-        ref_power, ref_v, _ = measure(ref_rate)
+        ref_power, ref_v, _ = next(done)
         tau = load * float(np.max(curves.capacitance_samples))
         for rate in plan.circuit_rates:
-            power, v, wall = measure(rate)
+            power, v, wall = next(done)
             rows.append(Row("circuit", f"R={load:.0e} ohm, {rate:g} Hz step",
                             {"load_ohm": load, "sample_rate_hz": rate,
                              "time_constant_s": tau},
                             wall, {"P_load": relative_error(power, ref_power),
                                    "V_load": relative_error(v, ref_v)},
                             f"exponential integrator at {ref_rate:g} Hz"))
-            if progress:
-                progress(1)
     return rows
 
 
-def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Solver") -> Recommendation:
+def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Solver",
+           farm_comm=None) -> Recommendation:
     """Run the recommended settings the way ``tengfield run`` does and measure them.
 
     The adaptive surrogate is built by :func:`tengfield.surrogate.precompute`
     with the recommended ``[field]`` keys (its ``tolerance`` decides how many
     positions); solves the report already did are reused (same setting and
     position, hence the same numbers), and the cost counted is the sum of the
-    wall times of every solve the surrogate needed plus the dynamics.
+    wall times of every solve the surrogate needed plus the dynamics. New solves
+    are farmed over ``farm_comm``'s ranks (every rank gets the same table).
     """
     import warnings
 
@@ -592,7 +669,7 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
     chosen = scene.with_values(**recommendation.scene_sections())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        table = precompute(chosen, comm=None, solve=solve, solve_comm=solver.comm)
+        table = precompute(chosen, comm=farm_comm, solve=solve, solve_comm=solver.comm)
     dyn, dyn_wall, run_scene = _trajectory(chosen)
     wall = table.total_solve_wall_time + dyn_wall
     peaks = electrical.terminal_peaks(run_scene, dyn,
@@ -605,14 +682,22 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
 
 
 def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = None,
-                 progress: bool = False, solve=None) -> Report:
+                 progress: bool = False, solve=None, farm_comm=None) -> Report:
     """Measure every stage of ``scene`` at several accuracy levels (see the module docstring).
 
     ``comm``: communicator of each field solve (default ``MPI.COMM_SELF``);
     ``solve``: the field solver (default :func:`tengfield.field.solve_position`,
     called as ``solve(scene, z, comm=..., estimate_error=False, **setting)``).
+    ``farm_comm``: with several ranks (``mpirun -n N tengfield report``, the CLI
+    passes ``COMM_WORLD``) the field solves, the trajectories of the dynamics
+    and circuit stages and the verification solves are farmed over its ranks
+    (:func:`tengfield._mpi.farm`); every rank returns the same rows and
+    recommendations, whose errors equal a serial run's (wall times are measured
+    on whichever rank ran the job).
     """
     from tqdm import tqdm
+
+    from .._mpi import rank_of
 
     if comm is None:
         from mpi4py import MPI
@@ -621,13 +706,14 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     started = time.perf_counter()
     total = _task_estimate(plan)
     bar = tqdm(total=total, desc="report", unit="task", file=sys.stderr,
-               disable=not progress or not sys.stderr.isatty())
+               disable=not progress or rank_of(farm_comm) != 0 or not sys.stderr.isatty())
 
     def advance(n=1):
         bar.update(n)
 
     solver = _Solver(scene, comm, solve=solve, progress=advance)
     trajectory, _, traj_scene = _trajectory(scene)
+    solver.prefetch(planned_solves(solver, plan), farm_comm)
     rows, references = [], {}
     f_rows, f_ref = field_rows(solver, plan, traj_scene, trajectory)
     rows += f_rows
@@ -635,10 +721,10 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     s_rows, ref_curves = surrogate_rows(solver, plan, traj_scene, trajectory)
     rows += s_rows
     references["surrogate"] = s_rows[0].reference
-    d_rows, (ref_dyn, ref_scene, overall_peaks) = dynamics_rows(plan, scene, ref_curves, advance)
+    d_rows, (_, _, overall_peaks) = dynamics_rows(plan, scene, ref_curves, advance, farm_comm)
     rows += d_rows
     references["dynamics"] = d_rows[0].reference
-    rows += circuit_rows(plan, scene, ref_curves, advance)
+    rows += circuit_rows(plan, scene, ref_curves, advance, farm_comm)
     references["overall"] = (f"{plan.reference_count} Lobatto positions at "
                              f"{plan.reference_pair[1].label}, impact map sampled at "
                              f"{plan.reference_sample_rate:g} Hz")
@@ -646,7 +732,7 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     recommendations = []
     for target in TARGETS:
         rec = recommend(rows, target)
-        rec = verify(rec, scene, overall_peaks, solver)
+        rec = verify(rec, scene, overall_peaks, solver, farm_comm)
         recommendations.append(rec)
         advance()
     bar.close()
@@ -661,5 +747,7 @@ def _task_estimate(plan: Plan) -> int:
     field_solves = len(set(plan.field_settings + plan.far_field_settings)) * \
         solves_needed(plan.field_positions) + len(plan.settings_3d)
     surrogate_solves = solves_needed(plan.reference_count)
-    return (field_solves + surrogate_solves + len(plan.sample_rates) + len(plan.stiffnesses)
-            + len(plan.loads) * len(plan.circuit_rates) + len(TARGETS))
+    # dynamics: the reference, each rate, the impact map at the run's rate, each stiffness;
+    # circuit: per load the reference step and each step
+    return (field_solves + surrogate_solves + len(plan.sample_rates) + len(plan.stiffnesses) + 2
+            + len(plan.loads) * (len(plan.circuit_rates) + 1) + len(TARGETS))

@@ -1,0 +1,230 @@
+"""`sweep` and `report` under ``mpirun -n 2``: the MPI task farm gives the serial rows,
+``--jobs`` is refused next to several ranks, and a failure on one rank ends every rank.
+
+The ``mpi``-marked tests run under ``mpirun -n 2`` (``make test-mpi``); the others
+start ``mpirun`` themselves (the serial suite). The surrogate comes from the
+analytic plate model of ``test_pipeline_fixtures`` (no dolfinx): what is tested
+here is the farm, not the field.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from tengfield import surrogate
+from tengfield import sweep as sweep_module
+from tengfield.errors import SceneError
+
+sys.path.insert(0, str(Path(__file__).parent))
+import test_pipeline_fixtures as fx  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+SHORT_RUN = {"duration_s": 2.0}
+FREQUENCIES = [15.0, 20.0, 25.0]
+AMPLITUDES = [1.0e-3, 1.5e-3]
+LOADS = [1e6, 1e9]
+
+
+def mpi_env():
+    return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
+                PYTHONPATH=os.pathsep.join(p for p in (str(ROOT / "src"),
+                                                       os.environ.get("PYTHONPATH")) if p))
+
+
+def needs_mpirun():
+    if shutil.which("mpirun") is None:
+        pytest.skip("mpirun not installed")
+
+
+def plate_table(scene):
+    return surrogate.precompute(scene, comm=None, solve=fx.plate_model_solve)
+
+
+def same_rows(a: list[dict], b: list[dict]) -> bool:
+    """Row lists equal exactly (None and NaN compare equal to themselves)."""
+    if len(a) != len(b):
+        return False
+    for x, y in zip(a, b):
+        if x.keys() != y.keys():
+            return False
+        for k in x:
+            u, v = x[k], y[k]
+            if isinstance(u, float) and isinstance(v, float) and math.isnan(u) and math.isnan(v):
+                continue
+            if u != v:
+                return False
+    return True
+
+
+# ---------------------------------------------------------------------------
+# under mpirun -n 2 (make test-mpi)
+@pytest.mark.mpi
+def test_sweep_on_two_ranks_equals_the_serial_rows():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    assert comm.size >= 2
+    scene = fx.scene_with(run=SHORT_RUN)
+    table = plate_table(scene)
+    parallel = sweep_module.sweep(scene, table, FREQUENCIES, AMPLITUDES, LOADS, comm=comm)
+    serial = sweep_module.sweep(scene, table, FREQUENCIES, AMPLITUDES, LOADS, jobs=1)
+    assert len(serial) == len(FREQUENCIES) * len(AMPLITUDES) * len(LOADS)
+    assert same_rows(parallel, serial)
+    # every rank holds every row, in the serial order
+    for other in comm.allgather(parallel):
+        assert same_rows(other, serial)
+    assert [(r["frequency_hz"], r["amplitude_mm"], r["load_ohm"]) for r in parallel] == \
+        [(f, a * 1e3, x) for f in FREQUENCIES for a in AMPLITUDES for x in LOADS]
+
+
+@pytest.mark.mpi
+def test_run_tasks_farms_each_task_once_in_order():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    done = []
+
+    def work(task):
+        done.append(task)
+        return (task, task**2)
+
+    tasks = list(range(31))
+    assert sweep_module.run_tasks(work, tasks, comm=comm) == [(t, t**2) for t in tasks]
+    everywhere = sorted(t for part in comm.allgather(done) for t in part)
+    assert everywhere == tasks
+
+
+@pytest.mark.mpi
+def test_jobs_next_to_several_ranks_is_refused_on_every_rank():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    with pytest.raises(SceneError, match=r"--jobs = 2 cannot be combined with mpirun -n 2"):
+        sweep_module.check_jobs(2, comm)
+    with pytest.raises(SceneError, match="--jobs"):
+        sweep_module.run_tasks(abs, [1, 2], comm=comm, jobs=3)
+    sweep_module.check_jobs(1, comm)          # one worker per rank is fine
+    sweep_module.check_jobs(None, comm)
+
+
+@pytest.mark.mpi
+@pytest.mark.slow
+def test_fast_report_on_two_ranks_equals_serial_where_deterministic():
+    """Every row's setting, knobs and errors equal the serial report's; the wall times
+    (and so the recommendations, which weigh them) are measurements and may differ."""
+    from mpi4py import MPI
+
+    from tengfield import report
+
+    comm = MPI.COMM_WORLD
+    scene = fx.scene_with()
+    parallel = report.build_report(scene, fast=True, solve=fx.plate_model_solve, farm_comm=comm)
+    serial = report.build_report(scene, fast=True, solve=fx.plate_model_solve) \
+        if comm.rank == 0 else None
+    serial = comm.bcast(serial, root=0)
+    assert len(parallel.rows) == len(serial.rows) > 20
+    for a, b in zip(parallel.rows, serial.rows):
+        assert (a.stage, a.setting, a.knobs, a.reference) == (b.stage, b.setting, b.knobs,
+                                                              b.reference)
+        assert same_rows([a.errors], [b.errors]), (a.setting, a.errors, b.errors)
+        assert a.error_position == b.error_position or \
+            (math.isnan(a.error_position) and math.isnan(b.error_position))
+    assert parallel.references["overall_peaks"] == serial.references["overall_peaks"]
+    # every rank took the same decisions (the same rows, hence the same recommendations)
+    mine = [(r.stage, r.setting, r.wall_time_s) for r in parallel.rows]
+    assert all(other == mine for other in comm.allgather(mine))
+    picks = [(r.field, r.sample_rate_hz, r.positions) for r in parallel.recommendations]
+    assert all(other == picks for other in comm.allgather(picks))
+
+
+# ---------------------------------------------------------------------------
+# started from the serial suite: the CLI under mpirun
+def _cached_scene(tmp_path) -> tuple[Path, Path]:
+    """A short scene file and a cache dir holding its (plate-model) surrogate."""
+    from tengfield.scene import load_scene
+
+    scene_file = tmp_path / "short.toml"
+    scene_file.write_text("[run]\nduration_s = 2.0\n")
+    cache = tmp_path / "cache"
+    scene = load_scene(scene_file)
+    surrogate.write_table(surrogate.cache_path(scene, cache), plate_table(scene))
+    return scene_file, cache
+
+
+def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path):
+    needs_mpirun()
+    scene_file, cache = _cached_scene(tmp_path)
+    args = [PYTHON, "-m", "tengfield.cli", "sweep", str(scene_file), "--cache-dir", str(cache),
+            "--frequency-hz", "15:25:3", "--amplitude-mm", "1:1.5:2", "--load-ohm", "1e6:1e9:2"]
+    serial = subprocess.run(args + ["--jobs", "1", "-o", str(tmp_path / "serial")],
+                            capture_output=True, text=True, env=mpi_env(), timeout=300)
+    assert serial.returncode == 0, serial.stderr
+    parallel = subprocess.run(["timeout", "280", "mpirun", "-n", "2"] + args
+                              + ["-o", str(tmp_path / "mpi")],
+                              capture_output=True, text=True, env=mpi_env(), timeout=300)
+    assert parallel.returncode == 0, parallel.stderr
+    text = (tmp_path / "serial" / "sweep.csv").read_text()
+    assert (tmp_path / "mpi" / "sweep.csv").read_text() == text
+    rows = list(csv.DictReader(text.splitlines()))
+    assert len(rows) == 12 and all(float(r["P_mean_W"]) >= 0 for r in rows)
+    assert sum(float(r["P_mean_W"]) > 0 for r in rows) >= 6      # the bouncing points
+    assert (tmp_path / "mpi" / "sweep.png").stat().st_size > 0
+    assert parallel.stdout.count("12 rows; wrote") == 1          # rank 0 alone writes
+    assert not list((tmp_path / "mpi").glob(".*tmp*"))           # no temporary files left
+
+
+def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path):
+    needs_mpirun()
+    scene_file, cache = _cached_scene(tmp_path)
+    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2", PYTHON, "-m", "tengfield.cli",
+                           "sweep", str(scene_file), "--cache-dir", str(cache),
+                           "--frequency-hz", "20", "--amplitude-mm", "1", "--jobs", "2",
+                           "-o", str(tmp_path / "o")],
+                          capture_output=True, text=True, env=mpi_env(), timeout=150)
+    assert proc.returncode not in (0, 124), proc.stderr      # 124: timeout (a hang)
+    assert "tengfield: error: --jobs = 2 cannot be combined with mpirun -n 2" in proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
+    """An exception in one grid point on rank 1 ends the whole job with its message (no hang)."""
+    needs_mpirun()
+    script = tmp_path / "fail.py"
+    script.write_text(textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from mpi4py import MPI
+        import test_pipeline_fixtures as fx
+        from tengfield import surrogate, sweep
+
+        comm = MPI.COMM_WORLD
+        scene = fx.scene_with(run={{"duration_s": 1.0}})
+        table = surrogate.precompute(scene, comm=None, solve=fx.plate_model_solve)
+        real = sweep.sweep_point
+
+        def point(scene, table, frequency, amplitude, loads=()):
+            if comm.rank == 1:
+                raise RuntimeError(f"impact map diverged at {{frequency:g}} Hz")
+            return real(scene, table, frequency, amplitude, loads)
+
+        sweep.sweep_point = point
+        sweep.sweep(scene, table, [15.0, 20.0, 25.0, 30.0], [1e-3, 1.5e-3], comm=comm)
+        print("finished")
+    """))
+    proc = subprocess.run(["timeout", "100", "mpirun", "-n", "2", PYTHON, str(script)],
+                          capture_output=True, text=True, env=mpi_env(), timeout=120)
+    assert proc.returncode not in (0, 124), proc.stderr
+    assert "error on rank 1 of 2" in proc.stderr
+    assert "impact map diverged at" in proc.stderr
+    assert "finished" not in proc.stdout
