@@ -6,8 +6,6 @@ trusted file (and tells the others) and writes the file.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 from ._common import add_cache_argument, command_line, world_if_parallel
@@ -49,32 +47,9 @@ def check_max_positions(value: int | None) -> int:
     return int(value)
 
 
-def check_writable(target: Path) -> None:
-    """Refuse, before any solve, a target that is a directory or whose directory
-    cannot be created or written (one-line TengfieldError naming the path)."""
-    from ..errors import TengfieldError
-
-    if target.is_dir():
-        raise TengfieldError(f"cannot write the surrogate to {target}: it is a directory")
-    for ancestor in target.parents:
-        if ancestor.exists():
-            if not ancestor.is_dir():
-                raise TengfieldError(f"cannot write the surrogate to {target}: {ancestor} is "
-                                     "a file, not a directory")
-            break
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe",
-                                     dir=target.parent)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as exc:
-        raise TengfieldError(f"cannot write the surrogate to {target}: "
-                             f"{exc.strerror or exc}") from None
-
-
 def _run(args) -> int:
     from .. import surrogate
+    from ..outputs import ensure_file_parent
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
@@ -85,7 +60,7 @@ def _run(args) -> int:
     problem = None
     if rank == 0:   # checked once, before any solve; every rank stops alike
         try:
-            check_writable(target)
+            ensure_file_parent(target, option="-o" if args.output else "--cache-dir")
         except Exception as exc:  # noqa: BLE001 - re-raised on every rank
             problem = exc
     if comm is not None:
