@@ -18,7 +18,7 @@ from ..scene import G
 from . import _kernel as K
 from .regime import classify
 from .result import DynamicsResult, Impacts, run_span
-from .table import TableMotion, table_from_scene
+from .table import PPOLY, TableMotion, table_from_scene
 
 #: More events (impacts, lift-offs, releases) per excitation period than this
 #: raise DynamicsError instead of running for ever.
@@ -80,7 +80,7 @@ def integrate(table: TableMotion, stroke: float, restitution: Restitution, *, t_
     """
     if t_end < t_start:
         raise DynamicsError(f"end time {t_end:g} s is before the start time {t_start:g} s")
-    if table.kind == 1 and (t_start < table.t_first or t_end > table.t_last):
+    if table.kind == PPOLY and (t_start < table.t_first or t_end > table.t_last):
         raise DynamicsError(
             f"the run [{t_start:g}, {t_end:g}] s is outside the recorded excitation "
             f"[{table.t_first:g}, {table.t_last:g}] s: shorten [run] duration_s or move "

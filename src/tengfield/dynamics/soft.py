@@ -30,7 +30,7 @@ from ..errors import DynamicsError
 from ..scene import G
 from .regime import classify
 from .result import DynamicsResult, Impacts, run_span
-from .table import TableMotion, table_from_scene
+from .table import PPOLY, SINE, TableMotion, table_from_scene
 
 FREE, IN_LOWER, IN_UPPER = 0, 1, 2
 
@@ -93,7 +93,7 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
     # the cap only keeps event detection from striding over a table period
     max_step = 0.02 * period
 
-    if table.kind == 0:
+    if table.kind == SINE:
         amp_w2 = table.params[0] * table.params[1] ** 2
         w, ph = table.params[1], table.params[2]
 
@@ -191,7 +191,7 @@ def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
     table = table_from_scene(scene)
     period = scene.excitation.period
     duration, t0, t_end = run_span(scene, duration)
-    if table.kind == 1 and (t0 < table.t_first or t_end > table.t_last):
+    if table.kind == PPOLY and (t0 < table.t_first or t_end > table.t_last):
         raise DynamicsError(
             f"the run [{t0:g}, {t_end:g}] s is outside the recorded excitation "
             f"[{table.t_first:g}, {table.t_last:g}] s")

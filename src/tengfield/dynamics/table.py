@@ -32,8 +32,9 @@ import numpy as np
 
 from ..errors import DynamicsError
 
-SINE = 0
-PPOLY = 1
+#: Excitation kinds of TableMotion (the compiled kernel's ``kind`` argument).
+SINE = 0     # y = A sin(w t + phase), params = (A, w, phase)
+PPOLY = 1    # piecewise quintic on breaks/coeffs (a recorded signal)
 
 
 @dataclass(frozen=True)
