@@ -66,6 +66,7 @@ REST_HEIGHT = 1e-12       # [m] bounces lower than this end in sticking
 V_ZERO = 1e-9             # [m/s] relative speeds at a plate below this are zero
 MAX_STEPS_PER_FLIGHT = 1_000_000
 LOCAL_ROUNDS = 2           # fixed-point rounds of local_safe_step
+GRID_RESTART = 64          # gap_on_grid: exact sin/cos every this many samples
 
 
 @njit(cache=True)
@@ -590,3 +591,87 @@ def sample_segments(times, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
             zs[k] = z
             vs[k] = v
     return zs, vs, ys
+
+
+@njit(cache=True)
+def gap_on_grid(start, step, count, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
+                g, gap, kind, par, x, c):
+    """z at ``start + i * step``, i = 0..count-1 (clamped like :func:`sample_segments`).
+
+    One forward pass over the segments. For the sine the table is advanced by
+    rotation (sin, cos of the phase step), restarted from an exact sin/cos
+    every GRID_RESTART samples, so the error stays at a few ulp of y.
+    """
+    zs = np.empty(count)
+    i_seg = 0
+    sin_d = math.sin(par[1] * step) if kind == SINE else 0.0
+    cos_d = math.cos(par[1] * step) if kind == SINE else 0.0
+    sn = 0.0
+    cs = 0.0
+    for k in range(count):
+        t = start + k * step
+        while i_seg + 1 < n_seg and seg_t[i_seg + 1] <= t:
+            i_seg += 1
+        if kind == SINE:
+            if k % GRID_RESTART == 0:
+                th = par[1] * t + par[2]
+                sn = math.sin(th)
+                cs = math.cos(th)
+            else:
+                sn, cs = sn * cos_d + cs * sin_d, cs * cos_d - sn * sin_d
+            y = par[0] * sn
+        else:
+            y = table_state(t, kind, par, x, c)[0]
+        mode = seg_mode[i_seg]
+        if mode == STUCK_LOWER:
+            z = 0.0
+        elif mode == STUCK_UPPER:
+            z = gap
+        else:
+            s = t - seg_t[i_seg]
+            z = seg_z[i_seg] + seg_v[i_seg] * s - 0.5 * g * s * s - (y - seg_y[i_seg]
+                                                                     - seg_yd[i_seg] * s)
+            if z < 0.0:
+                z = 0.0
+            elif z > gap:
+                z = gap
+        zs[k] = z
+    return zs
+
+
+@njit(cache=True)
+def count_contacts_on_grid(impact_time, impact_plate, start, step, z_grid, gap, merge_height):
+    """(contacts at the lower plate, at the upper plate) among time-ordered impacts.
+
+    An impact continues the previous contact when the previous impact was at
+    the same plate and, on the grid samples between the two impacts (those
+    at or after the first and before the second), the ball stayed closer to
+    that plate than ``merge_height`` [m] (no sample in between: continued).
+    """
+    n = z_grid.size
+    counts = np.zeros(2, dtype=np.int64)
+    prev_cut = 0
+    for k in range(impact_time.size):
+        # first grid index with start + i * step >= impact time (searchsorted 'left')
+        i = int(math.ceil((impact_time[k] - start) / step))
+        if i < 0:
+            i = 0
+        while i > 0 and start + (i - 1) * step >= impact_time[k]:
+            i -= 1
+        while i < n and start + i * step < impact_time[k]:
+            i += 1
+        if i > n - 1:
+            i = n - 1
+        plate = impact_plate[k]
+        continued = False
+        if k > 0 and impact_plate[k - 1] == plate:
+            far = 0.0
+            for m in range(prev_cut, i):
+                d = z_grid[m] if plate == LOWER else gap - z_grid[m]
+                if d > far:
+                    far = d
+            continued = far < merge_height
+        if not continued:
+            counts[plate] += 1
+        prev_cut = i
+    return counts

@@ -62,6 +62,14 @@ class Trajectory:
                                  self.seg_yd, self.g, self.stroke, tb.kind, tb.params,
                                  tb.breaks, tb.coeffs)
 
+    def gap_on_grid(self, start: float, step: float, count: int) -> np.ndarray:
+        """z at ``start + i * step``, i < count, in one compiled pass (same values as
+        ``self(times)[0]`` to a few ulp of the table motion)."""
+        tb = self.table
+        return K.gap_on_grid(float(start), float(step), int(count), self.seg_t.size, self.seg_t,
+                             self.seg_mode, self.seg_z, self.seg_v, self.seg_y, self.seg_yd,
+                             self.g, self.stroke, tb.kind, tb.params, tb.breaks, tb.coeffs)
+
     def upper_stuck_between(self, t_a: float, t_b: float) -> bool:
         """Was the ball pressed to the upper plate at some time in [t_a, t_b]?"""
         ends = np.append(self.seg_t[1:], np.inf)
