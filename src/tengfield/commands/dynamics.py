@@ -68,35 +68,44 @@ def _run_dynamics(args) -> int:
     return 0
 
 
-def write_trajectory_csv(result, path) -> None:
-    import numpy as np
+def write_csv(path, header: list[str], columns: list) -> None:
+    """CSV of equal-length columns; floats as their shortest round-trip decimal (full
+    double precision), strings as they are. C-level joins, no per-row Python code."""
+    texts = []
+    for col in columns:
+        values = col.tolist() if hasattr(col, "tolist") else list(col)
+        texts.append(map(repr, values) if values and isinstance(values[0], float) else
+                     map(str, values))
+    with open(path, "w", newline="") as fh:
+        fh.write(",".join(header) + "\n")
+        fh.writelines(map("{}\n".format, map(",".join, zip(*texts))))
 
-    data = np.column_stack([result.t, result.gap, result.gap_velocity, result.table])
-    np.savetxt(path, data, delimiter=",", fmt="%.12g",
-               header="time_s,gap_m,gap_velocity_m_per_s,table_m", comments="")
+
+def write_trajectory_csv(result, path) -> None:
+    """time_s, gap_m, gap_velocity_m_per_s, table_m at the sample times (full precision)."""
+    write_csv(path, ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m"],
+              [result.t, result.gap, result.gap_velocity, result.table])
 
 
 def write_impacts_csv(result, path) -> None:
+    """time_s, plate, speed_before_m_per_s, speed_after_m_per_s (full precision)."""
     imp = result.impacts
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"])
-        for t, p, vb, va in zip(imp.time, imp.plate, imp.speed_before, imp.speed_after):
-            w.writerow([f"{t:.12g}", p, f"{vb:.12g}", f"{va:.12g}"])
+    write_csv(path, ["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"],
+              [imp.time, imp.plate, imp.speed_before, imp.speed_after])
 
 
 def _run_map(args) -> int:
     import numpy as np
 
     from ..dynamics import regime_map
+    from ..dynamics.mapping import check_map_size
     from ..plotting.dynamics import plot_regime_map
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
     freqs = list(parse_range(args.frequency_hz, "--frequency-hz"))
     amps_mm = list(parse_range(args.amplitude_mm, "--amplitude-mm", positive=False))
-    if args.periods < 2:
-        raise SceneError(f"--periods = {args.periods}: allowed [2, inf)")
+    check_map_size(len(freqs) * len(amps_mm), args.periods)   # before any work
     result = regime_map(scene, np.array(freqs), np.array(amps_mm) * 1e-3, jobs=args.jobs,
                         progress=sys.stderr.isatty(), periods=args.periods)
     out = Path(args.output)
