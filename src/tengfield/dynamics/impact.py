@@ -131,9 +131,10 @@ def integrate(table: TableMotion, stroke: float, restitution: Restitution, *, t_
     if status == K.EVENT_BOUND:
         near = f"t = {t_reached + time_origin:.17g} s"
         if table.kind == PPOLY:
-            crossings = acceleration_crossings(table, t_reached - period, t_reached, g)
-            cause = (f"the recorded acceleration crosses -g {crossings} times in the period "
-                     f"before {near}: the record is noisy (rounding or measurement noise "
+            crossings = acceleration_crossings(table, max(t_reached - period, table.t_first),
+                                               min(t_reached + period, table.t_last), g)
+            cause = (f"the recorded acceleration crosses -g {crossings} times within one "
+                     f"period of {near}: the record is noisy (rounding or measurement noise "
                      "makes the ball lift off and land again and again); low-pass it with "
                      "[excitation] smoothing_hz (e.g. 10 to 50 x frequency_hz)"
                      if crossings > NOISY_CROSSINGS else

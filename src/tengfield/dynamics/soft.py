@@ -68,7 +68,7 @@ def check_stiffness(contact, device, table: TableMotion, stroke: float) -> None:
     if depth > allowed:
         # both estimates scale as 1/k or 1/sqrt(k): solve each for the allowed depth
         pressing = G + table.acc_bound
-        need = max(mass * pressing / allowed, 2.0 * pressing * stroke * mass / allowed**2)
+        need = 1.01 * max(mass * pressing / allowed, 2.0 * pressing * stroke * mass / allowed**2)
         raise SceneError(
             f"[contact] stiffness_N_per_m = {k:g}: the ball would sink about "
             f"{depth * 1e3:.3g} mm into a plate (m (g + max|y''|) / k or v sqrt(m / k)), more "

@@ -98,7 +98,8 @@ def smooth_record(times: np.ndarray, values: np.ndarray, cutoff_hz: float) -> np
     ``1 / (1 + (f / cutoff)^(2 N))`` with N = 2 SMOOTHING_ORDER and no phase shift.
 
     The samples are taken as uniform at their mean spacing; ``cutoff_hz`` must lie below
-    the Nyquist frequency of that spacing.
+    the Nyquist frequency of that spacing. The record is extended by odd reflection
+    at both ends (10 filter time constants), so a smooth signal passes unchanged.
     """
     from scipy.signal import butter, sosfiltfilt
 
@@ -108,7 +109,10 @@ def smooth_record(times: np.ndarray, values: np.ndarray, cutoff_hz: float) -> np
         raise DynamicsError(f"[excitation] smoothing_hz = {cutoff_hz:g}: allowed (0, "
                             f"{nyquist:g}) Hz (below the Nyquist frequency of the record)")
     sos = butter(SMOOTHING_ORDER, cutoff_hz / nyquist, output="sos")
-    return sosfiltfilt(sos, values)
+    # odd extension over ~10 time constants of the filter: the ends stay undistorted
+    # (the default 27 samples left edge transients of 20x the drive's acceleration)
+    pad = min(values.size - 1, int(math.ceil(10.0 / (cutoff_hz * dt))))
+    return sosfiltfilt(sos, values, padtype="odd", padlen=pad)
 
 
 def recorded_table(times: np.ndarray, values: np.ndarray, signal: str, *,
@@ -118,12 +122,19 @@ def recorded_table(times: np.ndarray, values: np.ndarray, signal: str, *,
     The table runs on the time axis ``t - origin`` (default: the record's own
     axis); the spline is built on ``times - times[0]`` (exact in floating
     point), so with ``origin`` near the record a file stamped with epoch times
-    (1.7e9 s + t) is as precise as one starting at 0. ``smoothing_hz`` > 0 low-passes the samples first
+    (1.7e9 s + t) is as precise as one starting at 0. Stamps within 4 ulp of a
+    uniform grid (rounded epoch times) are put back on that grid. ``smoothing_hz`` > 0 low-passes the samples first
     (:func:`smooth_record`).
     """
     times = np.asarray(times, dtype=float)
     first = float(times[0]) if times.size else 0.0
     rel = times - first
+    if rel.size > 2:
+        # a uniformly sampled record whose stamps were rounded (epoch times 1.7e9 s + t
+        # carry 2.4e-7 s of rounding): back onto its uniform grid
+        grid = np.arange(rel.size) * (rel[-1] / (rel.size - 1))
+        if np.max(np.abs(rel - grid)) <= 4.0 * np.spacing(max(abs(first), abs(times[-1]))):
+            rel = grid
     if smoothing_hz > 0.0 and times.size >= 6:
         values = smooth_record(rel, np.asarray(values, dtype=float), smoothing_hz)
     table = _recorded_table(rel, values, signal)
@@ -180,4 +191,4 @@ def table_from_scene(scene, origin: float = 0.0) -> TableMotion:
         return sine_table(exc.amplitude, exc.omega,
                           sine_phase_at(exc.frequency, exc.phase, origin))
     return recorded_table(exc.times, exc.values, exc.signal, origin=origin,
-                          smoothing_hz=getattr(exc, "smoothing", 0.0))
+                          smoothing_hz=exc.smoothing)
