@@ -149,9 +149,14 @@ def integrate(table: TableMotion, stroke: float, restitution: Restitution, *, t_
     if status == K.STEP_BOUND:
         raise DynamicsError(f"the contact search did not converge near "
                             f"t = {t_reached + time_origin:.17g} s")
-    traj = Trajectory(table, stroke, g, *(a[:n_seg].copy() for a in seg))
-    impacts = tuple(a[:n_imp].copy() for a in imp)
+    traj = Trajectory(table, stroke, g, *(_trimmed(a, n_seg) for a in seg))
+    impacts = tuple(_trimmed(a, n_imp) for a in imp)
     return traj, impacts, n_seg + n_imp
+
+
+def _trimmed(array: np.ndarray, count: int) -> np.ndarray:
+    """The first ``count`` entries: a view when that is most of the array, else a copy."""
+    return array[:count] if 2 * count >= array.size else array[:count].copy()
 
 
 def acceleration_crossings(table: TableMotion, t_a: float, t_b: float, g: float = G,
