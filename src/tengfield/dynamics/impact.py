@@ -7,7 +7,6 @@ motion at any time.
 """
 from __future__ import annotations
 
-import math
 import time as _time
 from dataclasses import dataclass
 
