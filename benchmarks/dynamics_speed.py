@@ -1,6 +1,9 @@
-"""Impact-map speed: impacts per second on one core (long two-plate run),
-a 100 x 100 regime map with 200 periods per point, and soft contact vs
-impact map run time at equal trajectory accuracy.
+"""Impact-map speed: impacts per second on one core (long two-plate run), impacts per
+second inside ``simulate()`` on the single-plate scene of issue #9 against the plain
+Python yardstick (benchmarks/dynamics_python_yardstick.py), the whole ``tengfield
+dynamics`` process against ``simulate()`` for 600 000 impacts, a 100 x 100 regime map
+with 200 periods per point, and soft contact vs impact map run time at equal
+trajectory accuracy.
 
     .venv/bin/python benchmarks/dynamics_speed.py [--quick]
 
@@ -39,6 +42,67 @@ def impacts_per_second(periods: int) -> dict:
             "detail": f"{n} impacts ({np.count_nonzero(imp[1] == 1)} upper) in {wall:.3f} s wall "
                       f"({n / cpu:.3g} impacts per CPU second), {periods} periods, "
                       "2 mm / 60 Hz / e = 0.9, 1 core"}
+
+
+def simulate_vs_python(python_duration: float = 100.0) -> dict:
+    """Issue #9 scene (Gamma = 1.3, e = 0.8, 20 Hz, 2000 s) inside simulate(), CPU time,
+    and the ratio to the plain-Python guaranteed-step loop with brentq."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).parent))
+    from dynamics_python_yardstick import G, python_impact_map
+
+    from tengfield.dynamics import simulate
+
+    f, gamma, e = 20.0, 1.3, 0.8
+    omega = 2 * math.pi * f
+    amplitude = gamma * G / omega**2
+    c0 = time.process_time()
+    n_py = len(python_impact_map(amplitude, omega, 0.0, 3e-3, e, python_duration))
+    py_rate = n_py / (time.process_time() - c0)
+    scene = default_scene().with_values(
+        excitation={"frequency_hz": f, "amplitude_mm": amplitude * 1e3},
+        contact={"restitution": e}, run={"duration_s": 2000.0, "sample_rate_hz": 20.0})
+    simulate(scene, duration=1.0)
+    best = math.inf
+    for _ in range(3):
+        c0 = time.process_time()
+        res = simulate(scene)
+        best = min(best, time.process_time() - c0)
+    rate = len(res.impacts) / best
+    return {"benchmark": "simulate_impacts_per_cpu_second", "value": rate, "unit": "impacts/s",
+            "detail": f"{len(res.impacts)} impacts in {best:.3f} CPU s (Gamma 1.3, e 0.8, 20 Hz, "
+                      f"2000 s, {res.regime.name} period {res.regime.period}); plain Python + "
+                      f"brentq {py_rate:.3g} /s ({n_py} impacts); ratio {rate / py_rate:.1f}"}
+
+
+def cli_vs_simulate(tmp: Path) -> dict:
+    """`tengfield dynamics` whole process (CPU s of the child) vs simulate() for 600k impacts."""
+    import subprocess
+    import sys
+
+    from tengfield.dynamics import simulate
+    from tengfield.scene import load_scene
+
+    scene_file = tmp / "impacts600k.toml"
+    scene_file.write_text("[excitation]\nfrequency_hz = 60.0\namplitude_mm = 2.0\n"
+                          "[contact]\nrestitution = 0.9\n[run]\n"
+                          "duration_s = 3333.3333333333335\nsample_rate_hz = 100.0\n")
+    scene = load_scene(scene_file)
+    simulate(scene, duration=1.0)
+    c0 = time.process_time()
+    res = simulate(scene)
+    sim = time.process_time() - c0
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    w0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "tengfield.cli", "dynamics", str(scene_file), "-o",
+                    str(tmp / "out")], check=True, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - w0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    return {"benchmark": "cli_over_simulate_600k", "value": cpu / sim, "unit": "ratio",
+            "detail": f"tengfield dynamics {cpu:.2f} CPU s ({wall:.2f} s wall) vs simulate() "
+                      f"{sim:.2f} CPU s, {len(res.impacts)} impacts, "
+                      f"{res.t.size} samples written"}
 
 
 def regime_map_time(n: int, periods: int, jobs: int) -> dict:
@@ -95,6 +159,12 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
     args = ap.parse_args()
     results = [impacts_per_second(20_000 if args.quick else 200_000)]
+    print(results[-1])
+    results.append(simulate_vs_python(20.0 if args.quick else 100.0))
+    print(results[-1])
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        results.append(cli_vs_simulate(Path(tmp)))
     print(results[-1])
     results.append(regime_map_time(20 if args.quick else 100, 200, os.cpu_count() or 1))
     print(results[-1])

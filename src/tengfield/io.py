@@ -98,23 +98,32 @@ def _run_title(result) -> str:
 
 # ---------------------------------------------------------------------------
 # dynamics
-def write_trajectory_csv(result, path: str | Path) -> Path:
-    """time_s, gap_m, gap_velocity_m_per_s, table_m of a DynamicsResult."""
-    data = np.column_stack([result.t, result.gap, result.gap_velocity, result.table])
-    np.savetxt(path, data, delimiter=",", fmt="%.12g",
-               header="time_s,gap_m,gap_velocity_m_per_s,table_m", comments="")
+def write_csv(path: str | Path, header: list[str], columns: list) -> Path:
+    """CSV of equal-length columns; floats as their shortest round-trip decimal (full
+    double precision), strings and integers as they are. C-level joins, no per-row
+    Python code (600k impacts in well under a second)."""
+    texts = []
+    for col in columns:
+        values = col.tolist() if hasattr(col, "tolist") else list(col)
+        texts.append(map(repr, values) if values and isinstance(values[0], float) else
+                     map(str, values))
+    with open(path, "w", newline="") as fh:
+        fh.write(",".join(header) + "\n")
+        fh.writelines(map("{}\n".format, map(",".join, zip(*texts))))
     return Path(path)
+
+
+def write_trajectory_csv(result, path: str | Path) -> Path:
+    """time_s, gap_m, gap_velocity_m_per_s, table_m of a DynamicsResult (full precision)."""
+    return write_csv(path, ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m"],
+                     [result.t, result.gap, result.gap_velocity, result.table])
 
 
 def write_impacts_csv(result, path: str | Path) -> Path:
-    """One row per impact: time_s, plate, speed before/after [m/s]."""
+    """One row per impact: time_s, plate, speed before/after [m/s] (full precision)."""
     imp = result.impacts
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"])
-        for t, p, vb, va in zip(imp.time, imp.plate, imp.speed_before, imp.speed_after):
-            w.writerow([f"{t:.12g}", p, f"{vb:.12g}", f"{va:.12g}"])
-    return Path(path)
+    return write_csv(path, ["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"],
+                     [imp.time, imp.plate, imp.speed_before, imp.speed_after])
 
 
 def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool) -> list[Path]:

@@ -94,10 +94,9 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
 
     start = time.perf_counter()
     dynamics = simulate(scene)
-    stages["dynamics"] = Stage("ran", getattr(dynamics, "message", "") or "",
+    stages["dynamics"] = Stage("ran", f"[contact] model = {scene.contact.model!r}",
                                time.perf_counter() - start,
-                               {"status": getattr(dynamics, "status", None),
-                                "solver_wall_time_s": getattr(dynamics, "wall_time", None)})
+                               {"solver_wall_time_s": getattr(dynamics, "wall_time", None)})
     gap = np.asarray(dynamics.gap, dtype=float)
 
     table = curves = None

@@ -72,6 +72,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "time_column": ("time_column", str, "time_s", None, None),
         "signal_column": ("signal_column", str, "displacement_m", None, None),
         "signal": ("signal", str, "displacement", None, _choice("displacement", "acceleration")),
+        "smoothing_hz": ("smoothing", float, 0.0, 1.0, _NONNEG),
     },
     "contact": {
         "model": ("model", str, "impact", None, _choice("impact", "soft")),
@@ -274,6 +275,7 @@ class Excitation:
     phase_y: float = 0.0
     signal_x_column: str = ""
     signal_y_column: str = ""
+    smoothing: float = 0.0      # [Hz] zero-phase low-pass of a recorded signal, 0 = off
 
     @property
     def omega(self) -> float:

@@ -54,7 +54,13 @@ def _run_dynamics(args) -> int:
     result = simulate(scene, duration=args.duration_s)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    write_trajectory_csv(result, out / "trajectory.csv")
+    if scene.contact.model == "3d":
+        from ..motion3d.output import plot_trajectory3d, write_contacts_csv, write_trajectory3d_csv
+        write_trajectory3d_csv(result, out / "trajectory.csv")
+        write_contacts_csv(result, out / "contacts.csv")
+        plot_trajectory3d(result, out / "trajectory3d.png")
+    else:
+        write_trajectory_csv(result, out / "trajectory.csv")
     write_impacts_csv(result, out / "impacts.csv")
     summary = result.summary()
     summary["scene"] = scene.source
@@ -73,14 +79,14 @@ def _run_map(args) -> int:
     import numpy as np
 
     from ..dynamics import regime_map
+    from ..dynamics.mapping import check_map_size
     from ..plotting.dynamics import plot_regime_map
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
     freqs = list(parse_range(args.frequency_hz, "--frequency-hz"))
     amps_mm = list(parse_range(args.amplitude_mm, "--amplitude-mm", positive=False))
-    if args.periods < 2:
-        raise SceneError(f"--periods = {args.periods}: allowed [2, inf)")
+    check_map_size(len(freqs) * len(amps_mm), args.periods)   # before any work
     result = regime_map(scene, np.array(freqs), np.array(amps_mm) * 1e-3, jobs=args.jobs,
                         progress=sys.stderr.isatty(), periods=args.periods)
     out = Path(args.output)

@@ -44,6 +44,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .table import PPOLY, SINE  # noqa: F401  (excitation kinds: compile-time constants)
+
 FLIGHT = 0
 STUCK_LOWER = 1
 STUCK_UPPER = 2
@@ -63,6 +65,8 @@ CHATTER_FRACTION = 1e-4   # Zeno collapse when t_inf - t_n < this * period
 REST_HEIGHT = 1e-12       # [m] bounces lower than this end in sticking
 V_ZERO = 1e-9             # [m/s] relative speeds at a plate below this are zero
 MAX_STEPS_PER_FLIGHT = 1_000_000
+LOCAL_ROUNDS = 2           # fixed-point rounds of local_safe_step
+GRID_RESTART = 64          # gap_on_grid: exact sin/cos every this many samples
 
 
 @njit(cache=True)
@@ -78,7 +82,7 @@ def _ppoly_index(x, t):
 @njit(cache=True)
 def table_state(t, kind, par, x, c):
     """(y, y', y'', y''') of the table at time t (SI)."""
-    if kind == 0:
+    if kind == SINE:
         amp = par[0]
         w = par[1]
         th = w * t + par[2]
@@ -117,12 +121,39 @@ def table_state_many(times, kind, par, x, c):
 
 @njit(cache=True)
 def _flight(t, t0, z0, v0, y0, yd0, g, kind, par, x, c):
-    """Relative (z, v) at t of the free flight that started at t0 from (z0, v0)."""
+    """Relative (z, v, z'', z''') at t of the free flight that started at t0 from (z0, v0)."""
     s = t - t0
-    y, yd, _, _ = table_state(t, kind, par, x, c)
+    y, yd, ydd, yddd = table_state(t, kind, par, x, c)
+    z = z0 + v0 * s - 0.5 * g * s * s - (y - y0 - yd0 * s)
+    v = v0 - g * s - (yd - yd0)
+    return z, v, -g - ydd, -yddd
+
+
+@njit(cache=True)
+def _relative(s, z0, v0, y0, yd0, g, y, yd):
+    """Relative (z, v) a time s into a free flight from (z0, v0), table (y, y') then."""
     z = z0 + v0 * s - 0.5 * g * s * s - (y - y0 - yd0 * s)
     v = v0 - g * s - (yd - yd0)
     return z, v
+
+
+@njit(cache=True)
+def first_root(d, rate, acc):
+    """First s > 0 where ``d + rate s + acc s^2 / 2`` (d >= 0) reaches zero; inf if never.
+
+    Written without cancellation (the small root as ``2 d / (sqrt(...) - rate)``).
+    """
+    if acc < 0.0:
+        sq = math.sqrt(rate * rate - 2.0 * acc * d)
+        if rate >= 0.0:
+            return (rate + sq) / (-acc)
+        return 2.0 * d / (sq - rate)
+    if rate >= 0.0:
+        return math.inf
+    disc = rate * rate - 2.0 * acc * d
+    if disc < 0.0:
+        return math.inf
+    return 2.0 * d / (math.sqrt(disc) - rate)
 
 
 @njit(cache=True)
@@ -132,15 +163,49 @@ def safe_step(z, v, gap, m_bound):
     du = gap - z
     if du < 0.0:
         du = 0.0
-    if v >= 0.0:
-        hl = (v + math.sqrt(v * v + 2.0 * m_bound * dl)) / m_bound
-        den = v + math.sqrt(v * v + 2.0 * m_bound * du)
-        hu = 2.0 * du / den if den > 0.0 else 0.0
-    else:
-        den = -v + math.sqrt(v * v + 2.0 * m_bound * dl)
-        hl = 2.0 * dl / den if den > 0.0 else 0.0
-        hu = (-v + math.sqrt(v * v + 2.0 * m_bound * du)) / m_bound
+    hl = first_root(dl, v, -m_bound)
+    hu = first_root(du, -v, -m_bound)
     return hl if hl < hu else hu
+
+
+@njit(cache=True)
+def local_safe_step(z, v, a, j, gap, m_bound, snap_bound, h_max):
+    """A step h (<= h_max) with no plate reached in [0, h), from the local motion.
+
+    On [0, H] the relative acceleration obeys ``z''(s) >= a + min(0, j H) - S H^2/2``
+    (a = z'', j = z''' now, S >= max|y''''|) and ``z'' >= -m_bound``; likewise
+    for the distance to the upper plate. With ``r(H)`` the first root of the
+    quadratic lower bound of the distance built on that acceleration,
+    ``min(H, r(H))`` is contact-free for any H. Starting from the global step
+    (:func:`safe_step`, i.e. H = inf), ``H <- r(H)`` alternates between over-
+    and under-estimates of the fixed point; the proven steps increase
+    (LOCAL_ROUNDS iterations).
+    """
+    dl = z if z > 0.0 else 0.0
+    du = gap - z
+    if du < 0.0:
+        du = 0.0
+    h = safe_step(z, v, gap, m_bound)
+    if h >= h_max:
+        return h_max
+    step = h
+    for _ in range(LOCAL_ROUNDS):
+        big = h if h < h_max else h_max
+        drop = 0.5 * snap_bound * big * big
+        al = a + min(0.0, j * big) - drop
+        if al < -m_bound:
+            al = -m_bound
+        au = -a + min(0.0, -j * big) - drop
+        if au < -m_bound:
+            au = -m_bound
+        hl = first_root(dl, v, al)
+        hu = first_root(du, -v, au)
+        r = hl if hl < hu else hu
+        proven = r if r < big else big     # the bound holds on [0, big]
+        if proven > step:
+            step = proven
+        h = r
+    return step
 
 
 @njit(cache=True)
@@ -214,7 +279,7 @@ def next_crossing(t, falling, g, kind, par, x, c, t_end):
     Falling crossings are lift-offs from the lower plate, rising crossings are
     releases from the upper plate. Returns inf if none before t_end.
     """
-    if kind == 0:
+    if kind == SINE:
         aw2 = par[0] * par[1] * par[1]
         if aw2 <= g:
             return math.inf
@@ -308,24 +373,26 @@ REACHED_END = 4   # internal: next_contact ran to t_end without contact
 
 
 @njit(cache=True)
-def next_contact(t0, z0, v0, y0, yd0, s_begin, t_end, g, gap, m_bound, period,
-                 kind, par, x, c):
-    """First contact of the free flight that starts at t0 from (z0, v0).
+def next_contact(t0, z0, v0, y0, yd0, ydd0, yddd0, s_begin, t_end, g, gap, m_bound, snap_bound,
+                 period, kind, par, x, c):
+    """First contact of the free flight that starts at t0 from (z0, v0), table (y0..y0''').
 
     ``s_begin`` > 0 skips a first stretch already proven contact-free
-    (:func:`departure_step`). Returns (status, t, z, v): status OK with the
-    contact time, the plate's z (0 or gap) and the relative velocity there;
-    REACHED_END if no contact occurs before t_end; STEP_BOUND if the search
-    did not converge.
+    (:func:`departure_step`). Marches with :func:`local_safe_step` (one table
+    evaluation per step). Returns (status, t, z, v, steps, table): status OK
+    with the contact time, the plate's z (0 or gap) and the relative velocity
+    there; REACHED_END if no contact occurs before t_end; STEP_BOUND if the
+    search did not converge; ``steps`` = table evaluations used; ``table`` =
+    (y, y', y'', y''') at the contact time (valid with status OK).
     """
     s = s_begin
     if s > 0.0:
         if t0 + s >= t_end:
-            return REACHED_END, t_end, z0, v0
-        zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
+            return REACHED_END, t_end, z0, v0, 0, (y0, yd0, 0.0, 0.0)
+        y, yd, ydd, yddd = table_state(t0 + s, kind, par, x, c)
     else:
-        zc = z0
-        vc = v0
+        y, yd, ydd, yddd = y0, yd0, ydd0, yddd0
+    zc, vc = _relative(s, z0, v0, y0, yd0, g, y, yd)
     steps = 0
     s_safe = s        # start of the last proven contact-free step
     while True:
@@ -335,35 +402,48 @@ def next_contact(t0, z0, v0, y0, yd0, s_begin, t_end, g, gap, m_bound, period,
         if s > 0.0 and zc >= gap - Z_TOL and vc >= 0.0:
             target = gap
             break
-        h = safe_step(zc, vc, gap, m_bound)
+        # beyond a period the local bound is no better than m_bound
+        h = local_safe_step(zc, vc, -g - ydd, -yddd, gap, m_bound, snap_bound, period)
         if t0 + s + h >= t_end:
-            return REACHED_END, t_end, zc, vc
+            return REACHED_END, t_end, zc, vc, steps, (y, yd, ydd, yddd)
         s_safe = s
         s += h
-        zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
+        y, yd, ydd, yddd = table_state(t0 + s, kind, par, x, c)
+        zc, vc = _relative(s, z0, v0, y0, yd0, g, y, yd)
         steps += 1
         if steps > MAX_STEPS_PER_FLIGHT:
-            return STEP_BOUND, t0 + s, zc, vc
-    # Newton polish of the contact time (stays within a tiny neighbourhood and
-    # never before the last point known to be contact-free). The linear step is
-    # accurate while the neglected curvature m_bound ds^2 / 2 is small against
-    # the distance vc ds: a scale-free test (a fixed fraction of the period
-    # skipped the polish at kHz drives, where slow impacts then carried time
-    # errors Z_TOL / v).
-    for _ in range(2):
-        if vc == 0.0:
-            break
-        ds = (zc - target) / vc
-        if m_bound * abs(ds) > 0.1 * abs(vc):
-            break
-        s = max(s - ds, s_safe)
-        zc, vc = _flight(t0 + s, t0, z0, v0, y0, yd0, g, kind, par, x, c)
+            return STEP_BOUND, t0 + s, zc, vc, steps, (y, yd, ydd, yddd)
+    # Polish of the contact time from the last state, without another table
+    # evaluation: the small root of d + v ds + a ds^2 / 2 = 0 (quadratic Taylor
+    # model, neglected j ds^3 / 6 far below Z_TOL here). Skipped when the
+    # neglected curvature is not small against the distance covered
+    # (m_bound |ds| > 0.1 |v|: grazing; a fixed fraction of the period would
+    # skip it at kHz drives, where slow impacts then carried time errors
+    # Z_TOL / v), and never before the last point known to be contact-free.
+    # The table state moves with the same Taylor step (error S ds^4 / 24).
+    if vc != 0.0:
+        d = zc - target
+        ac = -g - ydd
+        ds = -d / vc
+        if m_bound * abs(ds) <= 0.1 * abs(vc):
+            disc = vc * vc - 2.0 * ac * d
+            if disc > 0.0:
+                ds = -2.0 * d / (vc + math.copysign(math.sqrt(disc), vc))
+            s_new = s + ds
+            if s_new < s_safe:
+                s_new = s_safe
+            ds = s_new - s
+            vc = vc + ac * ds
+            y = y + ds * (yd + ds * (0.5 * ydd + ds * yddd / 6.0))
+            yd = yd + ds * (ydd + 0.5 * ds * yddd)
+            ydd = ydd + ds * yddd
+            s = s_new
     # on the plate; a velocity pointing away is a round-off touch: zero
     if target == 0.0 and vc > 0.0:
         vc = 0.0
     if target == gap and vc < 0.0:
         vc = 0.0
-    return OK, t0 + s, target, vc
+    return OK, t0 + s, target, vc, steps, (y, yd, ydd, yddd)
 
 
 @njit(cache=True)
@@ -385,13 +465,17 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
     n_imp = 0
     n_events = 0
     force_depart = False
+    have_table = False    # (y, yd, ydd, yddd) already known at t (from the contact search)
+    y = yd = ydd = yddd = 0.0
     while True:
         n_events += 1
         if n_events > max_events_per_period * ((t - t_start) / period + 1.0):
             return EVENT_BOUND, n_seg, n_imp, t
         if n_seg >= seg_t.size or n_imp >= imp_t.size:
             return CAPACITY, n_seg, n_imp, t
-        y, yd, ydd, yddd = table_state(t, kind, par, x, c)
+        if not have_table:
+            y, yd, ydd, yddd = table_state(t, kind, par, x, c)
+        have_table = False
         a = -g - ydd          # relative acceleration in free flight
         s_begin = 0.0
         # on a plate: approaching it, or leaving it slower than V_ZERO (which is
@@ -456,8 +540,10 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
                 s_begin = s1
         # ---- free flight from (t, z, v) ----
         n_seg = _store(seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd, n_seg, t, FLIGHT, z, v, y, yd)
-        status, t, z, v = next_contact(t, z, v, y, yd, s_begin, t_end, g, gap, m_bound, period,
-                                       kind, par, x, c)
+        status, t, z, v, _, state = next_contact(t, z, v, y, yd, ydd, yddd, s_begin, t_end, g,
+                                                 gap, m_bound, snap_bound, period, kind, par, x, c)
+        y, yd, ydd, yddd = state
+        have_table = status == OK
         if status == REACHED_END:
             break
         if status == STEP_BOUND:
@@ -505,3 +591,87 @@ def sample_segments(times, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
             zs[k] = z
             vs[k] = v
     return zs, vs, ys
+
+
+@njit(cache=True)
+def gap_on_grid(start, step, count, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
+                g, gap, kind, par, x, c):
+    """z at ``start + i * step``, i = 0..count-1 (clamped like :func:`sample_segments`).
+
+    One forward pass over the segments. For the sine the table is advanced by
+    rotation (sin, cos of the phase step), restarted from an exact sin/cos
+    every GRID_RESTART samples, so the error stays at a few ulp of y.
+    """
+    zs = np.empty(count)
+    i_seg = 0
+    sin_d = math.sin(par[1] * step) if kind == SINE else 0.0
+    cos_d = math.cos(par[1] * step) if kind == SINE else 0.0
+    sn = 0.0
+    cs = 0.0
+    for k in range(count):
+        t = start + k * step
+        while i_seg + 1 < n_seg and seg_t[i_seg + 1] <= t:
+            i_seg += 1
+        if kind == SINE:
+            if k % GRID_RESTART == 0:
+                th = par[1] * t + par[2]
+                sn = math.sin(th)
+                cs = math.cos(th)
+            else:
+                sn, cs = sn * cos_d + cs * sin_d, cs * cos_d - sn * sin_d
+            y = par[0] * sn
+        else:
+            y = table_state(t, kind, par, x, c)[0]
+        mode = seg_mode[i_seg]
+        if mode == STUCK_LOWER:
+            z = 0.0
+        elif mode == STUCK_UPPER:
+            z = gap
+        else:
+            s = t - seg_t[i_seg]
+            z = seg_z[i_seg] + seg_v[i_seg] * s - 0.5 * g * s * s - (y - seg_y[i_seg]
+                                                                     - seg_yd[i_seg] * s)
+            if z < 0.0:
+                z = 0.0
+            elif z > gap:
+                z = gap
+        zs[k] = z
+    return zs
+
+
+@njit(cache=True)
+def count_contacts_on_grid(impact_time, impact_plate, start, step, z_grid, gap, merge_height):
+    """(contacts at the lower plate, at the upper plate) among time-ordered impacts.
+
+    An impact continues the previous contact when the previous impact was at
+    the same plate and, on the grid samples between the two impacts (those
+    at or after the first and before the second), the ball stayed closer to
+    that plate than ``merge_height`` [m] (no sample in between: continued).
+    """
+    n = z_grid.size
+    counts = np.zeros(2, dtype=np.int64)
+    prev_cut = 0
+    for k in range(impact_time.size):
+        # first grid index with start + i * step >= impact time (searchsorted 'left')
+        i = int(math.ceil((impact_time[k] - start) / step))
+        if i < 0:
+            i = 0
+        while i > 0 and start + (i - 1) * step >= impact_time[k]:
+            i -= 1
+        while i < n and start + i * step < impact_time[k]:
+            i += 1
+        if i > n - 1:
+            i = n - 1
+        plate = impact_plate[k]
+        continued = False
+        if k > 0 and impact_plate[k - 1] == plate:
+            far = 0.0
+            for m in range(prev_cut, i):
+                d = z_grid[m] if plate == LOWER else gap - z_grid[m]
+                if d > far:
+                    far = d
+            continued = far < merge_height
+        if not continued:
+            counts[plate] += 1
+        prev_cut = i
+    return counts

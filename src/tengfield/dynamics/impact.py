@@ -7,7 +7,6 @@ motion at any time.
 """
 from __future__ import annotations
 
-import math
 import time as _time
 from dataclasses import dataclass
 
@@ -17,12 +16,20 @@ from ..errors import DynamicsError
 from ..scene import G
 from . import _kernel as K
 from .regime import classify
-from .result import DynamicsResult, Impacts, run_span
-from .table import TableMotion, table_from_scene
+from .result import DynamicsResult, Impacts, check_samples, run_span, sample_times
+from .table import PPOLY, TableMotion, table_from_scene
 
 #: More events (impacts, lift-offs, releases) per excitation period than this
 #: raise DynamicsError instead of running for ever.
 MAX_EVENTS_PER_PERIOD = 20_000
+#: More stored events (segments + impacts, 80 bytes each) than this raise
+#: DynamicsError (about 1.6 GB of trajectory).
+MAX_STORED_EVENTS = 20_000_000
+#: Runs longer than this many excitation periods are refused before integrating.
+MAX_PERIODS = 5_000_000
+#: A recorded table whose acceleration crosses -g more often than this in the
+#: period before the event bound was hit is blamed on noise in the data.
+NOISY_CROSSINGS = 20
 
 PLATE_NAMES = np.array(["lower", "upper"])
 
@@ -62,6 +69,14 @@ class Trajectory:
                                  self.seg_yd, self.g, self.stroke, tb.kind, tb.params,
                                  tb.breaks, tb.coeffs)
 
+    def gap_on_grid(self, start: float, step: float, count: int) -> np.ndarray:
+        """z at ``start + i * step``, i < count, in one compiled pass (same values as
+        ``self(times)[0]`` to a few ulp of the table motion)."""
+        tb = self.table
+        return K.gap_on_grid(float(start), float(step), int(count), self.seg_t.size, self.seg_t,
+                             self.seg_mode, self.seg_z, self.seg_v, self.seg_y, self.seg_yd,
+                             self.g, self.stroke, tb.kind, tb.params, tb.breaks, tb.coeffs)
+
     def upper_stuck_between(self, t_a: float, t_b: float) -> bool:
         """Was the ball pressed to the upper plate at some time in [t_a, t_b]?"""
         ends = np.append(self.seg_t[1:], np.inf)
@@ -71,22 +86,29 @@ class Trajectory:
 
 def integrate(table: TableMotion, stroke: float, restitution: Restitution, *, t_start: float,
               t_end: float, gap0: float = 0.0, velocity0: float = 0.0, period: float,
-              g: float = G, max_events_per_period: int = MAX_EVENTS_PER_PERIOD):
-    """Run the impact map on [t_start, t_end].
+              g: float = G, max_events_per_period: int = MAX_EVENTS_PER_PERIOD,
+              time_origin: float = 0.0):
+    """Run the impact map on [t_start, t_end] (times on the table's axis).
 
     Returns ``(trajectory, impacts_arrays, n_events)`` where impacts_arrays is
     ``(time, plate 0/1, speed_before, speed_after)``. Raises DynamicsError if
-    the event bound is exceeded.
+    the event bound is exceeded or the run would be too long (MAX_PERIODS,
+    MAX_STORED_EVENTS). ``time_origin`` [s] is added to times in messages.
     """
     if t_end < t_start:
         raise DynamicsError(f"end time {t_end:g} s is before the start time {t_start:g} s")
-    if table.kind == 1 and (t_start < table.t_first or t_end > table.t_last):
+    if table.kind == PPOLY and (t_start < table.t_first or t_end > table.t_last):
         raise DynamicsError(
-            f"the run [{t_start:g}, {t_end:g}] s is outside the recorded excitation "
-            f"[{table.t_first:g}, {table.t_last:g}] s: shorten [run] duration_s or move "
+            f"the run [{t_start + time_origin:.17g}, {t_end + time_origin:.17g}] s is outside "
+            f"the recorded excitation [{table.t_first + time_origin:.17g}, "
+            f"{table.t_last + time_origin:.17g}] s: shorten [run] duration_s or move "
             "[initial] time_s")
     n_periods = (t_end - t_start) / period
-    capacity = int(min(16 * n_periods + 64, 5e7))
+    if n_periods > MAX_PERIODS:
+        raise DynamicsError(
+            f"duration x frequency = {n_periods:.3g} excitation periods: allowed <= "
+            f"{MAX_PERIODS:.0e} (shorten [run] duration_s or lower [excitation] frequency_hz)")
+    capacity = int(min(16 * n_periods + 64, MAX_STORED_EVENTS))
     while True:
         seg = [np.empty(capacity) for _ in range(6)]
         seg[1] = np.empty(capacity, dtype=np.int64)
@@ -99,40 +121,77 @@ def integrate(table: TableMotion, stroke: float, restitution: Restitution, *, t_
             table.jerk_bound, table.snap_bound, *seg, *imp)
         if status != K.CAPACITY:
             break
-        capacity *= 4
+        if capacity >= MAX_STORED_EVENTS:
+            raise DynamicsError(
+                f"more than {MAX_STORED_EVENTS:.0e} events (impacts, lift-offs) before "
+                f"t = {t_reached + time_origin:.17g} s: allowed <= {MAX_STORED_EVENTS:.0e}; "
+                "shorten [run] duration_s")
+        capacity = min(4 * capacity, MAX_STORED_EVENTS)
     if status == K.EVENT_BOUND:
+        near = f"t = {t_reached + time_origin:.17g} s"
+        if table.kind == PPOLY:
+            crossings = acceleration_crossings(table, max(t_reached - period, table.t_first),
+                                               min(t_reached + period, table.t_last), g)
+            cause = (f"the recorded acceleration crosses -g {crossings} times within one "
+                     f"period of {near}: the record is noisy (rounding or measurement noise "
+                     "makes the ball lift off and land again and again); low-pass it with "
+                     "[excitation] smoothing_hz (e.g. 10 to 50 x frequency_hz)"
+                     if crossings > NOISY_CROSSINGS else
+                     "check [contact] restitution, and the record: noise in it shows up as "
+                     "endless micro-bounces ([excitation] smoothing_hz low-passes it)")
+        else:
+            cause = ("check [contact] restitution (power-law restitution with a tiny exponent "
+                     "behaves like e -> 1 at low speed) and [excitation]")
         raise DynamicsError(
-            f"more than {max_events_per_period} events per excitation period near "
-            f"t = {t_reached:.9g} s (unresolved chatter or grazing); the run was stopped. "
-            "Check [contact] restitution (power-law restitution with a tiny exponent behaves "
-            "like e -> 1 at low speed) and [excitation]")
+            f"more than {max_events_per_period} events per excitation period near {near} "
+            f"(unresolved chatter or grazing); the run was stopped: {cause}")
     if status == K.STEP_BOUND:
-        raise DynamicsError(f"the contact search did not converge near t = {t_reached:.9g} s")
-    traj = Trajectory(table, stroke, g, *(a[:n_seg].copy() for a in seg))
-    impacts = tuple(a[:n_imp].copy() for a in imp)
+        raise DynamicsError(f"the contact search did not converge near "
+                            f"t = {t_reached + time_origin:.17g} s")
+    traj = Trajectory(table, stroke, g, *(_trimmed(a, n_seg) for a in seg))
+    impacts = tuple(_trimmed(a, n_imp) for a in imp)
     return traj, impacts, n_seg + n_imp
+
+
+def _trimmed(array: np.ndarray, count: int) -> np.ndarray:
+    """The first ``count`` entries: a view when that is most of the array, else a copy."""
+    return array[:count] if 2 * count >= array.size else array[:count].copy()
+
+
+def acceleration_crossings(table: TableMotion, t_a: float, t_b: float, g: float = G,
+                           limit: int = 10_000) -> int:
+    """How often ``g + y''`` changes sign in [t_a, t_b] (lift-off / release instants)."""
+    count = 0
+    for falling in (True, False):
+        t = t_a
+        while count < limit:
+            t = K.next_crossing(t, falling, g, table.kind, table.params, table.breaks,
+                                table.coeffs, t_b)
+            if not t < t_b:
+                break
+            count += 1
+    return count
 
 
 def simulate_impact(scene, *, duration: float | None = None) -> DynamicsResult:
     """Impact-map trajectory of ``scene`` (see :func:`tengfield.dynamics.simulate`)."""
     wall0 = _time.perf_counter()
-    table = table_from_scene(scene)
+    duration, t0, _ = run_span(scene, duration)
+    check_samples(scene, duration)
+    table = table_from_scene(scene, origin=t0)      # integrate on t - t0
     period = scene.excitation.period
-    duration, t0, t_end = run_span(scene, duration)
     stroke = scene.device.stroke
     traj, (it, ip, ivb, iva), n_events = integrate(
-        table, stroke, Restitution.from_contact(scene.contact), t_start=t0, t_end=t_end,
-        gap0=scene.initial.gap, velocity0=scene.initial.velocity, period=period)
-    window_start = min(t0 + scene.run.settle_periods * period, t_end)
-    regime = classify(traj, it, ip, ivb, window_start=window_start, t_end=t_end, period=period,
-                      stroke=stroke, g=G,
-                      upper_stuck=traj.upper_stuck_between(window_start, t_end))
-    n_samples = int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
-    t = t0 + np.arange(n_samples) / scene.run.sample_rate
-    z, v, y = traj(t)
-    impacts = Impacts(it, PLATE_NAMES[ip] if ip.size else np.zeros(0, dtype="<U5"), ivb, iva)
-    return DynamicsResult(status=0, message="ok", t=t, gap=z, gap_velocity=v, table=y,
+        table, stroke, Restitution.from_contact(scene.contact), t_start=0.0, t_end=duration,
+        gap0=scene.initial.gap, velocity0=scene.initial.velocity, period=period, time_origin=t0)
+    window = min(scene.run.settle_periods * period, duration)
+    regime = classify(traj, it, ip, ivb, window_start=window, t_end=duration, period=period,
+                      stroke=stroke, g=G, upper_stuck=traj.upper_stuck_between(window, duration))
+    elapsed = sample_times(scene, duration)
+    z, v, y = traj(elapsed)
+    impacts = Impacts(t0 + it, PLATE_NAMES[ip] if ip.size else np.zeros(0, dtype="<U5"), ivb, iva)
+    return DynamicsResult(t=t0 + elapsed, gap=z, gap_velocity=v, table=y,
                           impacts=impacts, regime=regime, n_events=n_events,
                           wall_time=_time.perf_counter() - wall0, model="impact",
-                          stroke=stroke, period=period, window_start=window_start,
-                          _sampler=traj)
+                          stroke=stroke, period=period, window_start=t0 + window,
+                          time_origin=t0, elapsed=elapsed, _sampler=traj)

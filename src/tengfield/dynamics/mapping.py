@@ -21,7 +21,33 @@ from ..scene import G
 from .impact import Restitution, integrate
 from .regime import classify
 from .result import REGIMES, Regime
-from .table import sine_table
+
+#: At most this many worker processes per core (``--jobs``).
+MAX_JOBS_PER_CORE = 4
+#: At most this many grid points in one map (result arrays ~130 bytes per point).
+MAX_MAP_POINTS = 4_000_000
+#: At most this many excitation periods per map point.
+MAX_MAP_PERIODS = 1_000_000
+#: At most this many simulated periods in one map (points x periods; ~10 us each).
+MAX_MAP_WORK = 10_000_000_000
+
+
+def max_jobs() -> int:
+    """Largest ``jobs`` a map accepts: MAX_JOBS_PER_CORE x the cores of this machine."""
+    return MAX_JOBS_PER_CORE * (os.cpu_count() or 1)
+
+
+def check_map_size(n_points: int, periods: int) -> None:
+    """Refuse a map before anything is allocated when it is too large to finish."""
+    if not 2 <= periods <= MAX_MAP_PERIODS:
+        raise SceneError(f"map periods = {periods}: allowed [2, {MAX_MAP_PERIODS}]")
+    if n_points > MAX_MAP_POINTS:
+        raise SceneError(f"map points = {n_points:.3g} (frequencies x amplitudes): allowed <= "
+                         f"{MAX_MAP_POINTS:.0e}")
+    if n_points * periods > MAX_MAP_WORK:
+        raise SceneError(f"map points x periods = {n_points:.3g} x {periods} = "
+                         f"{n_points * periods:.3g}: allowed <= {MAX_MAP_WORK:.0e}")
+from .table import sine_phase_at, sine_table
 
 
 @dataclass(frozen=True)
@@ -69,14 +95,19 @@ class PointSetup:
 
 
 def point_regime(setup: PointSetup, frequency: float, amplitude: float) -> Regime:
-    """Regime of one sine excitation (frequency [Hz], amplitude [m])."""
+    """Regime of one sine excitation (frequency [Hz], amplitude [m]).
+
+    Integrated on the time since ``setup.t_start`` (the table phase there is
+    reduced exactly), so the absolute start time does not change the result.
+    """
     period = 1.0 / frequency
-    table = sine_table(amplitude, 2.0 * math.pi * frequency, setup.phase)
-    t_end = setup.t_start + setup.periods * period
+    table = sine_table(amplitude, 2.0 * math.pi * frequency,
+                       sine_phase_at(frequency, setup.phase, setup.t_start))
+    t_end = setup.periods * period
     traj, (it, ip, ivb, iva), _ = integrate(
-        table, setup.stroke, setup.restitution, t_start=setup.t_start, t_end=t_end,
-        gap0=setup.gap0, velocity0=setup.velocity0, period=period)
-    window_start = setup.t_start + setup.settle_periods * period
+        table, setup.stroke, setup.restitution, t_start=0.0, t_end=t_end,
+        gap0=setup.gap0, velocity0=setup.velocity0, period=period, time_origin=setup.t_start)
+    window_start = setup.settle_periods * period
     return classify(traj, it, ip, ivb, window_start=window_start, t_end=t_end, period=period,
                     stroke=setup.stroke, g=G,
                     upper_stuck=traj.upper_stuck_between(window_start, t_end))
@@ -111,16 +142,16 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
         raise SceneError(f"map frequencies {freqs!r}: need at least one finite value > 0 Hz")
     if amps.ndim != 1 or amps.size == 0 or not np.all(np.isfinite(amps)) or np.any(amps < 0):
         raise SceneError(f"map amplitudes {amps!r}: need at least one finite value >= 0 m")
-    if periods < 2:
-        raise SceneError(f"map periods = {periods}: allowed [2, inf)")
+    check_map_size(freqs.size * amps.size, int(periods))
     settle = scene.run.settle_periods if settle_periods is None else int(settle_periods)
     settle = max(0, min(settle, periods // 2))
     setup = PointSetup(scene.device.stroke, Restitution.from_contact(scene.contact),
                         scene.excitation.phase, scene.initial.time, scene.initial.gap,
                         scene.initial.velocity, int(periods), settle)
     jobs = (os.cpu_count() or 1) if jobs is None else int(jobs)
-    if jobs < 1:
-        raise SceneError(f"--jobs = {jobs}: allowed [1, {os.cpu_count()}]")
+    if not 1 <= jobs <= max_jobs():
+        raise SceneError(f"--jobs = {jobs}: allowed [1, {max_jobs()}] "
+                         f"({MAX_JOBS_PER_CORE} x the {os.cpu_count() or 1} cores)")
     points = [(i, j, f, a) for i, a in enumerate(amps) for j, f in enumerate(freqs)]
     chunk = max(1, min(64, len(points) // (8 * jobs)))
     tasks = [(setup, points[k:k + chunk]) for k in range(0, len(points), chunk)]

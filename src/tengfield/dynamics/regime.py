@@ -3,8 +3,12 @@
 Definitions (also in docs/dynamics.md). The steady window is
 ``[t0 + settle_periods T, t_end]``; it holds ``K`` whole excitation periods.
 
-* Poincare section: the state (z, dz/dt) at ``t_w + k T``, k = 0..K.
-  The period is the smallest p in 1..MAX_PERIOD with
+* Poincare section: the state (z, dz/dt) at ``t_w + theta T + k T``,
+  k = 0..K-1, at the section phase ``theta`` in the middle of the largest
+  phase interval free of impacts (impact phases ``(t_i - t_w) / T mod 1``
+  of the second half of the window; theta = 0 without impacts). A section
+  at an impact instant would see the velocity before or after the impact
+  depending on round-off. The period is the smallest p in 1..MAX_PERIOD with
   ``|z_{k+p} - z_k| / dh + |v_{k+p} - v_k| / sqrt(2 g dh) <= PERIOD_TOL``
   for every section point k in the second half of the window; 0 if none.
 * contacts per period: contacts at that plate in the window / K. A contact
@@ -33,6 +37,7 @@ import numpy as np
 from .result import Regime
 
 MAX_PERIOD = 16
+SECTION_BINS = 4096      # phase bins of section_phase
 PERIOD_TOL = 1e-3
 SAMPLES_PER_PERIOD = 64
 REST_GAP = 1e-9          # [m]
@@ -56,7 +61,7 @@ def detect_period(z_section: np.ndarray, v_section: np.ndarray, stroke: float, g
     return 0
 
 
-def _refined_max(sampler, t: np.ndarray, z: np.ndarray, rounds: int = 3,
+def _refined_max(sampler, start: float, step: float, z: np.ndarray, rounds: int = 3,
                  points: int = 33) -> float:
     """Max of z(t): the best sample, then ``rounds`` zooms of ``points`` samples around it.
 
@@ -64,8 +69,8 @@ def _refined_max(sampler, t: np.ndarray, z: np.ndarray, rounds: int = 3,
     resolve the apex to (T/64) / 16^3 in time.
     """
     k = int(np.argmax(z))
-    lo = t[max(k - 1, 0)]
-    hi = t[min(k + 1, t.size - 1)]
+    lo = start + step * max(k - 1, 0)
+    hi = start + step * min(k + 1, z.size - 1)
     best = float(z[k])
     for _ in range(rounds):
         tt = np.linspace(lo, hi, points)
@@ -76,28 +81,56 @@ def _refined_max(sampler, t: np.ndarray, z: np.ndarray, rounds: int = 3,
     return best
 
 
-def count_contacts(impact_time: np.ndarray, impact_plate: np.ndarray, dense_t: np.ndarray,
-                   z_dense: np.ndarray, stroke: float, plate: int, merge_height: float) -> int:
-    """Contacts at ``plate`` (0 lower, 1 upper) among time-ordered impacts.
+def count_contacts(impact_time: np.ndarray, impact_plate: np.ndarray, start: float,
+                   step: float, z_grid: np.ndarray, stroke: float,
+                   merge_height: float) -> tuple[int, int]:
+    """(lower, upper) contacts among time-ordered impacts (plate 0 lower, 1 upper).
 
     An impact continues the previous contact when the previous impact was at
     the same plate and the ball stayed within ``merge_height`` [m] of that
-    plate in between (judged on the samples ``z_dense`` at ``dense_t``).
+    plate in between, judged on the samples ``z_grid`` at ``start + i step``.
+    """
+    from ._kernel import count_contacts_on_grid
+    counts = count_contacts_on_grid(np.ascontiguousarray(impact_time, dtype=float),
+                                    np.ascontiguousarray(impact_plate, dtype=np.int64),
+                                    float(start), float(step), z_grid, float(stroke),
+                                    float(merge_height))
+    return int(counts[0]), int(counts[1])
+
+
+def section_phase(impact_time: np.ndarray, start: float, period: float,
+                  bins: int = SECTION_BINS) -> float:
+    """Phase in [0, 1) in the middle of the longest impact-free run of phase bins.
+
+    Impact phases ``(t - start) / period mod 1`` are counted in ``bins`` equal
+    bins (O(n), no sort); the section goes to the middle of the longest
+    circular run of empty bins, at least half a bin from every impact. 0
+    without impacts; the emptiest bin if every bin holds an impact (then the
+    motion has no repeating impact phases: it is not periodic anyway).
     """
     if impact_time.size == 0:
-        return 0
-    distance = z_dense if plate == 0 else stroke - z_dense
-    cut = np.minimum(np.searchsorted(dense_t, impact_time), dense_t.size - 1)
-    # largest distance from the plate between consecutive impacts (0 if no sample between)
-    between = np.zeros(impact_time.size)
-    if impact_time.size > 1:
-        gaps = np.maximum.reduceat(distance, cut[:-1]) if cut.size > 1 else np.zeros(0)
-        gaps = np.where(cut[1:] > cut[:-1], gaps, 0.0)
-        between[1:] = gaps
-    same = np.zeros(impact_time.size, dtype=bool)
-    same[1:] = impact_plate[1:] == impact_plate[:-1]
-    continued = same & (between < merge_height)
-    return int(np.count_nonzero((impact_plate == plate) & ~continued))
+        return 0.0
+    index = np.floor(np.mod((impact_time - start) / period, 1.0) * bins).astype(np.int64)
+    counts = np.bincount(np.minimum(index, bins - 1), minlength=bins)
+    empty = counts == 0
+    if not empty.any():
+        return (int(np.argmin(counts)) + 0.5) / bins
+    # longest circular run of empty bins: unroll twice
+    twice = np.concatenate([empty, empty]).astype(np.int8)
+    edges = np.diff(np.concatenate([[0], twice, [0]]))
+    starts = np.flatnonzero(edges == 1)
+    ends = np.flatnonzero(edges == -1)
+    k = int(np.argmax(np.minimum(ends - starts, bins)))
+    middle = 0.5 * (starts[k] + min(ends[k], starts[k] + bins))
+    return float(np.mod(middle / bins, 1.0))
+
+
+def _grid_gap(sampler, start: float, step: float, count: int) -> np.ndarray:
+    """z at ``start + i step`` (the sampler's compiled grid pass when it has one)."""
+    fast = getattr(sampler, "gap_on_grid", None)
+    if fast is not None:
+        return fast(start, step, count)
+    return sampler(start + step * np.arange(count))[0]
 
 
 def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
@@ -112,22 +145,22 @@ def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
     n_periods = int(math.floor((t_end - window_start) / period + 1e-9))
     if n_periods < 1:
         return Regime("rest", 0, 0.0, 0.0, 0.0)
-    section_t = window_start + period * np.arange(n_periods + 1)
+    window_end = window_start + n_periods * period
+    in_window = (impact_time >= window_start) & (impact_time <= window_end)
+    late = impact_time[in_window & (impact_time >= window_start + 0.5 * n_periods * period)]
+    theta = section_phase(late, window_start, period)
+    section_t = window_start + period * (theta + np.arange(n_periods))
     z_sec, v_sec, _ = sampler(section_t)
-    dense_t = np.linspace(window_start, window_start + n_periods * period,
-                          SAMPLES_PER_PERIOD * n_periods + 1)
-    z_dense, _, _ = sampler(dense_t)
-    in_window = (impact_time >= window_start) & (impact_time <= window_start + n_periods * period)
-    lower = in_window & (impact_plate == 0)
+    step = period / SAMPLES_PER_PERIOD
+    count = SAMPLES_PER_PERIOD * n_periods + 1
+    z_dense = _grid_gap(sampler, window_start, step, count)
+    n_lower = int(np.count_nonzero(in_window & (impact_plate == 0)))
     upper = in_window & (impact_plate == 1)
-    n_lower = int(np.count_nonzero(lower))
     n_upper = int(np.count_nonzero(upper))
-    merge = CONTACT_MERGE_HEIGHT * stroke
-    contacts_lower = count_contacts(impact_time[in_window], impact_plate[in_window], dense_t,
-                                    z_dense, stroke, 0, merge)
-    contacts_upper = count_contacts(impact_time[in_window], impact_plate[in_window], dense_t,
-                                    z_dense, stroke, 1, merge)
-    max_gap = _refined_max(sampler, dense_t, z_dense)
+    contacts_lower, contacts_upper = count_contacts(
+        impact_time[in_window], impact_plate[in_window], window_start, step, z_dense, stroke,
+        CONTACT_MERGE_HEIGHT * stroke)
+    max_gap = _refined_max(sampler, window_start, step, z_dense)
     if n_upper or upper_stuck:
         max_gap = stroke
     period_p = detect_period(z_sec, v_sec, stroke, g)

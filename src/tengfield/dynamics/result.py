@@ -53,10 +53,16 @@ class DynamicsResult:
     (0 <= z <= Delta h for the impact model; the soft model may penetrate
     slightly), ``gap_velocity`` = dz/dt (positive up, relative to the
     table), ``table`` = y(t) the table displacement, all sampled at ``t``.
-    ``sample(times)`` evaluates the exact trajectory at any times.
+    A result exists only for a run that reached its end: failures raise
+    :class:`tengfield.errors.DynamicsError` (there is no status code).
+
+    Runs integrate on the elapsed time ``t - time_origin`` (``time_origin`` =
+    ``[initial] time_s``), so their precision does not depend on the absolute
+    time; ``elapsed`` holds the sample times on that axis (exact even where
+    ``t`` = time_origin + elapsed is rounded, e.g. at t ~ 1e12 s).
+    ``sample(times)`` evaluates the exact trajectory at absolute times,
+    ``sample_elapsed(s)`` at elapsed times.
     """
-    status: int
-    message: str
     t: np.ndarray
     gap: np.ndarray
     gap_velocity: np.ndarray
@@ -68,25 +74,26 @@ class DynamicsResult:
     model: str = "impact"
     stroke: float = 0.0                  # Delta h [m]
     period: float = 0.0                  # excitation period [s]
-    window_start: float = 0.0            # start of the steady window [s]
+    window_start: float = 0.0            # start of the steady window [s] (absolute)
+    time_origin: float = 0.0             # [s] start of the run, [initial] time_s
+    elapsed: np.ndarray | None = None    # t - time_origin [s], exact
     _sampler: Callable | None = field(default=None, repr=False)
 
-    @property
-    def success(self) -> bool:
-        return self.status == 0
-
     def sample(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(gap [m], gap_velocity [m/s], table [m]) exactly at ``times`` [s]."""
-        t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=float)))
-        return self._sampler(t)
+        """(gap [m], gap_velocity [m/s], table [m]) exactly at absolute ``times`` [s]."""
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        return self.sample_elapsed(t - self.time_origin)
+
+    def sample_elapsed(self, elapsed) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(gap [m], gap_velocity [m/s], table [m]) at ``elapsed`` [s] after time_origin."""
+        s = np.ascontiguousarray(np.atleast_1d(np.asarray(elapsed, dtype=float)))
+        return self._sampler(s)
 
     def summary(self) -> dict:
         """JSON-ready summary (the CLI's summary.json)."""
         plates = self.impacts.plate
         return {
             "model": self.model,
-            "status": self.status,
-            "message": self.message,
             "regime": self.regime.name,
             "period": self.regime.period,
             "max_gap_mm": self.regime.max_gap * 1e3,
@@ -96,10 +103,18 @@ class DynamicsResult:
             "impacts_lower": int(np.sum(plates == "lower")),
             "impacts_upper": int(np.sum(plates == "upper")),
             "events": self.n_events,
+            "time_origin_s": self.time_origin,
             "steady_window_start_s": self.window_start,
-            "duration_s": float(self.t[-1] - self.t[0]) if self.t.size else 0.0,
+            "duration_s": (float(self.elapsed[-1]) if self.elapsed is not None
+                           and self.elapsed.size else 0.0),
             "wall_time_s": self.wall_time,
         }
+
+
+#: Sampled runs longer than this many samples (duration_s x sample_rate_hz) are
+#: refused before integrating (4 arrays of 8 bytes per sample: 1.6 GB).
+MAX_SAMPLES = 50_000_000
+
 
 def run_span(scene, duration: float | None) -> tuple[float, float, float]:
     """(duration, start, end) [s] of a run: ``duration`` None means ``[run] duration_s``;
@@ -113,3 +128,24 @@ def run_span(scene, duration: float | None) -> tuple[float, float, float]:
         raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
     t0 = scene.initial.time
     return duration, t0, t0 + duration
+
+
+def _sample_count(scene, duration: float) -> int:
+    import math
+    return int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
+
+
+def check_samples(scene, duration: float) -> None:
+    """Refuse a run whose samples would not fit (MAX_SAMPLES), before integrating."""
+    from ..errors import SceneError
+
+    count = duration * scene.run.sample_rate
+    if not count < MAX_SAMPLES:
+        raise SceneError(f"duration_s x sample_rate_hz = {duration:g} x "
+                         f"{scene.run.sample_rate:g} = {count:.3g} samples: allowed <= "
+                         f"{MAX_SAMPLES:.0e} (lower [run] sample_rate_hz or duration_s)")
+
+
+def sample_times(scene, duration: float) -> np.ndarray:
+    """Elapsed sample times [s]: 0, 1/rate, ... up to ``duration``."""
+    return np.arange(_sample_count(scene, duration)) / scene.run.sample_rate

@@ -29,10 +29,51 @@ import numpy as np
 from ..errors import DynamicsError
 from ..scene import G
 from .regime import classify
-from .result import DynamicsResult, Impacts, run_span
-from .table import TableMotion, table_from_scene
+from .result import DynamicsResult, Impacts, check_samples, run_span, sample_times
+from .table import PPOLY, SINE, TableMotion, table_from_scene
 
 FREE, IN_LOWER, IN_UPPER = 0, 1, 2
+
+#: The soft model refuses a stiffness whose estimated penetration exceeds this
+#: fraction of the stroke (the ball would pass through the plate).
+MAX_PENETRATION_FRACTION = 0.1
+#: Runs of the soft model longer than this many excitation periods are refused.
+MAX_SOFT_PERIODS = 100_000
+
+
+def penetration_estimate(mass: float, stiffness: float, acc_bound: float, stroke: float,
+                         g: float = G) -> float:
+    """Largest penetration [m] to expect from a linear contact of stiffness k [N/m].
+
+    The larger of the static sink under the largest pressing acceleration,
+    ``m (g + max|y''|) / k``, and the dynamic one of an impact at the speed of a
+    fall through the stroke under that acceleration, ``v sqrt(m / k)`` with
+    ``v = sqrt(2 (g + max|y''|) stroke)`` (an undamped spring stops a ball of
+    speed v within v / omega_c).
+    """
+    pressing = g + acc_bound
+    static = mass * pressing / stiffness
+    dynamic = math.sqrt(2.0 * pressing * stroke) * math.sqrt(mass / stiffness)
+    return max(static, dynamic)
+
+
+def check_stiffness(contact, device, table: TableMotion, stroke: float) -> None:
+    """Refuse a soft contact so weak that the ball would sink through the plate."""
+    from ..errors import SceneError
+
+    mass = device.ball_mass
+    k = contact.stiffness
+    depth = penetration_estimate(mass, k, table.acc_bound, stroke)
+    allowed = MAX_PENETRATION_FRACTION * stroke
+    if depth > allowed:
+        # both estimates scale as 1/k or 1/sqrt(k): solve each for the allowed depth
+        pressing = G + table.acc_bound
+        need = 1.01 * max(mass * pressing / allowed, 2.0 * pressing * stroke * mass / allowed**2)
+        raise SceneError(
+            f"[contact] stiffness_N_per_m = {k:g}: the ball would sink about "
+            f"{depth * 1e3:.3g} mm into a plate (m (g + max|y''|) / k or v sqrt(m / k)), more "
+            f"than {MAX_PENETRATION_FRACTION:g} x the stroke = {allowed * 1e3:.3g} mm; "
+            f"allowed >= {need:.3g} N/m for this ball, stroke and drive")
 
 
 def damping_ratio(restitution: float) -> float:
@@ -93,7 +134,7 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
     # the cap only keeps event detection from striding over a table period
     max_step = 0.02 * period
 
-    if table.kind == 0:
+    if table.kind == SINE:
         amp_w2 = table.params[0] * table.params[1] ** 2
         w, ph = table.params[1], table.params[2]
 
@@ -188,27 +229,33 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
 def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
     """Soft-contact trajectory of ``scene`` (see :func:`tengfield.dynamics.simulate`)."""
     wall0 = _time.perf_counter()
-    table = table_from_scene(scene)
+    duration, t0, _ = run_span(scene, duration)
+    check_samples(scene, duration)
+    table = table_from_scene(scene, origin=t0)      # integrate on t - t0
     period = scene.excitation.period
-    duration, t0, t_end = run_span(scene, duration)
-    if table.kind == 1 and (t0 < table.t_first or t_end > table.t_last):
+    if table.kind == PPOLY and (0.0 < table.t_first or duration > table.t_last):
         raise DynamicsError(
-            f"the run [{t0:g}, {t_end:g}] s is outside the recorded excitation "
-            f"[{table.t_first:g}, {table.t_last:g}] s")
+            f"the run [{t0:.17g}, {t0 + duration:.17g}] s is outside the recorded excitation "
+            f"[{table.t_first + t0:.17g}, {table.t_last + t0:.17g}] s")
+    if duration / period > MAX_SOFT_PERIODS:
+        raise DynamicsError(
+            f"duration x frequency = {duration / period:.3g} excitation periods: allowed <= "
+            f"{MAX_SOFT_PERIODS:.0e} with [contact] model = 'soft' (shorten [run] duration_s)")
     stroke = scene.device.stroke
+    check_stiffness(scene.contact, scene.device, table, stroke)
     traj, (ct, cp, cvb, cva), n_phases = integrate_soft(
         table, stroke, scene.contact.restitution, scene.device.ball_mass,
-        scene.contact.stiffness, t_start=t0, t_end=t_end, gap0=scene.initial.gap,
+        scene.contact.stiffness, t_start=0.0, t_end=duration, gap0=scene.initial.gap,
         velocity0=scene.initial.velocity, period=period)
-    window_start = min(t0 + scene.run.settle_periods * period, t_end)
-    regime = classify(traj, ct, cp, cvb, window_start=window_start, t_end=t_end, period=period,
+    window = min(scene.run.settle_periods * period, duration)
+    regime = classify(traj, ct, cp, cvb, window_start=window, t_end=duration, period=period,
                       stroke=stroke, g=G, upper_stuck=False)
-    n_samples = int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
-    t = t0 + np.arange(n_samples) / scene.run.sample_rate
-    z, v, y = traj(t)
+    elapsed = sample_times(scene, duration)
+    z, v, y = traj(elapsed)
     plates = np.array(["lower", "upper"])[cp] if cp.size else np.zeros(0, dtype="<U5")
-    return DynamicsResult(status=0, message="ok", t=t, gap=z, gap_velocity=v, table=y,
-                          impacts=Impacts(ct, plates, cvb, cva), regime=regime,
+    return DynamicsResult(t=t0 + elapsed, gap=z, gap_velocity=v, table=y,
+                          impacts=Impacts(t0 + ct, plates, cvb, cva), regime=regime,
                           n_events=n_phases, wall_time=_time.perf_counter() - wall0,
                           model="soft", stroke=stroke, period=period,
-                          window_start=window_start, _sampler=traj)
+                          window_start=t0 + window, time_origin=t0, elapsed=elapsed,
+                          _sampler=traj)

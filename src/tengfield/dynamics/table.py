@@ -32,8 +32,11 @@ import numpy as np
 
 from ..errors import DynamicsError
 
-SINE = 0
-PPOLY = 1
+#: Excitation kinds of TableMotion (the compiled kernel's ``kind`` argument).
+SINE = 0     # y = A sin(w t + phase), params = (A, w, phase)
+PPOLY = 1    # piecewise quintic on breaks/coeffs (a recorded signal)
+
+SMOOTHING_ORDER = 4   # Butterworth order of [excitation] smoothing_hz (run twice: zero phase)
 
 
 @dataclass(frozen=True)
@@ -76,7 +79,74 @@ def _piece_bound(coeffs: np.ndarray, widths: np.ndarray) -> float:
     return float(np.max(np.sum(np.abs(coeffs) * powers, axis=0)))
 
 
-def recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> TableMotion:
+def sine_phase_at(frequency: float, phase: float, origin: float) -> float:
+    """Phase [rad] of ``sin(2 pi f t + phase)`` at ``t = origin``, reduced exactly.
+
+    ``f * origin`` is taken modulo 1 in exact rational arithmetic, so a run
+    that starts at ``origin = 1e12 s`` sees the same table phase as the
+    product of the two doubles says (a double ``2 pi f origin`` would carry
+    an error of ~1e-2 rad there).
+    """
+    from fractions import Fraction
+    cycles = (Fraction(frequency) * Fraction(origin)) % 1
+    return math.fmod(phase + 2.0 * math.pi * float(cycles), 2.0 * math.pi)
+
+
+def smooth_record(times: np.ndarray, values: np.ndarray, cutoff_hz: float) -> np.ndarray:
+    """Zero-phase low-pass of a recorded signal: Butterworth of order SMOOTHING_ORDER run
+    forwards and backwards (``scipy.signal.sosfiltfilt``), so the amplitude response is
+    ``1 / (1 + (f / cutoff)^(2 N))`` with N = 2 SMOOTHING_ORDER and no phase shift.
+
+    The samples are taken as uniform at their mean spacing; ``cutoff_hz`` must lie below
+    the Nyquist frequency of that spacing. The record is extended by odd reflection
+    at both ends (10 filter time constants), so a smooth signal passes unchanged.
+    """
+    from scipy.signal import butter, sosfiltfilt
+
+    dt = (times[-1] - times[0]) / (times.size - 1)
+    nyquist = 0.5 / dt
+    if not 0.0 < cutoff_hz < nyquist:
+        raise DynamicsError(f"[excitation] smoothing_hz = {cutoff_hz:g}: allowed (0, "
+                            f"{nyquist:g}) Hz (below the Nyquist frequency of the record)")
+    sos = butter(SMOOTHING_ORDER, cutoff_hz / nyquist, output="sos")
+    # odd extension over ~10 time constants of the filter: the ends stay undistorted
+    # (the default 27 samples left edge transients of 20x the drive's acceleration)
+    pad = min(values.size - 1, int(math.ceil(10.0 / (cutoff_hz * dt))))
+    return sosfiltfilt(sos, values, padtype="odd", padlen=pad)
+
+
+def recorded_table(times: np.ndarray, values: np.ndarray, signal: str, *,
+                   origin: float = 0.0, smoothing_hz: float = 0.0) -> TableMotion:
+    """C^4 table motion from samples; ``signal`` is "displacement" [m] or "acceleration" [m/s^2].
+
+    The table runs on the time axis ``t - origin`` (default: the record's own
+    axis); the spline is built on ``times - times[0]`` (exact in floating
+    point), so with ``origin`` near the record a file stamped with epoch times
+    (1.7e9 s + t) is as precise as one starting at 0. Stamps within 4 ulp of a
+    uniform grid (rounded epoch times) are put back on that grid. ``smoothing_hz`` > 0 low-passes the samples first
+    (:func:`smooth_record`).
+    """
+    times = np.asarray(times, dtype=float)
+    first = float(times[0]) if times.size else 0.0
+    rel = times - first
+    if rel.size > 2:
+        # a uniformly sampled record whose stamps were rounded (epoch times 1.7e9 s + t
+        # carry 2.4e-7 s of rounding): back onto its uniform grid
+        grid = np.arange(rel.size) * (rel[-1] / (rel.size - 1))
+        if np.max(np.abs(rel - grid)) <= 4.0 * np.spacing(max(abs(first), abs(times[-1]))):
+            rel = grid
+    if smoothing_hz > 0.0 and times.size >= 6:
+        values = smooth_record(rel, np.asarray(values, dtype=float), smoothing_hz)
+    table = _recorded_table(rel, values, signal)
+    shift = first - float(origin)
+    if shift == 0.0:
+        return table
+    import dataclasses
+    x = table.breaks + shift
+    return dataclasses.replace(table, breaks=x, t_first=float(x[0]), t_last=float(x[-1]))
+
+
+def _recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> TableMotion:
     """C^4 table motion from samples; ``signal`` is "displacement" [m] or "acceleration" [m/s^2]."""
     from scipy.interpolate import PPoly, make_interp_spline
 
@@ -112,9 +182,13 @@ def recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> TableM
                        t_last=float(x[-1]))
 
 
-def table_from_scene(scene) -> TableMotion:
-    """The table motion of ``scene.excitation`` (sine or recorded)."""
+def table_from_scene(scene, origin: float = 0.0) -> TableMotion:
+    """The table motion of ``scene.excitation`` (sine or recorded) on the time axis
+    ``t - origin`` [s] (runs integrate relative to their start: precision does not
+    depend on the absolute time)."""
     exc = scene.excitation
     if exc.kind == "sine":
-        return sine_table(exc.amplitude, exc.omega, exc.phase)
-    return recorded_table(exc.times, exc.values, exc.signal)
+        return sine_table(exc.amplitude, exc.omega,
+                          sine_phase_at(exc.frequency, exc.phase, origin))
+    return recorded_table(exc.times, exc.values, exc.signal, origin=origin,
+                          smoothing_hz=exc.smoothing)

@@ -15,24 +15,47 @@ REGIME_COLOURS = {
 }
 
 
+#: plot_trajectory shows at most this many excitation periods (the last ones) ...
+MAX_PLOT_PERIODS = 200
+#: ... drawn from this many points of the exact trajectory.
+PLOT_POINTS = 4000
+
+
+def _figure(**kwargs):
+    """A matplotlib Figure drawn by Agg without pyplot (never switches a session's backend)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
+
+
 def plot_trajectory(result, path, *, title: str | None = None, max_periods: float | None = None):
     """Ball, lower and upper plate vs time (top) and the gap z(t) (bottom); impacts marked.
 
     ``result`` is a :class:`tengfield.dynamics.DynamicsResult`; lengths in mm.
-    ``max_periods`` limits the plot to the last that many excitation periods.
+    ``max_periods`` limits the plot to the last that many excitation periods
+    (at most MAX_PLOT_PERIODS); the curves are the exact trajectory at
+    PLOT_POINTS times, so the cost does not grow with the run.
     """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    t, z, y = result.t, result.gap, result.table
-    keep = np.ones(t.size, dtype=bool)
-    if max_periods is not None and result.period > 0:
-        keep = t >= t[-1] - max_periods * result.period
-    t, z, y = t[keep], z[keep], y[keep]
+    limit = MAX_PLOT_PERIODS if max_periods is None else min(max_periods, MAX_PLOT_PERIODS)
+    t_all = result.t
+    start = t_all[0]
+    if result.period > 0 and t_all[-1] - t_all[0] > limit * result.period:
+        start = t_all[-1] - limit * result.period
+    origin = getattr(result, "time_origin", t_all[0])
+    full = getattr(result, "elapsed", None)
+    elapsed_end = full[-1] if full is not None else t_all[-1] - origin
+    elapsed = np.linspace(max(start - origin, 0.0), elapsed_end, PLOT_POINTS)
+    if hasattr(result, "sample_elapsed"):
+        z, _, y = result.sample_elapsed(elapsed)
+    else:
+        z, _, y = result.sample(origin + elapsed)
+    t = origin + elapsed
     stroke_mm = result.stroke * 1e3
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6), sharex=True,
-                                   gridspec_kw={"height_ratios": [3, 2]})
+    fig = _figure(figsize=(9, 6))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     ax1.plot(t, y * 1e3, color="0.35", lw=1.2, label="lower plate $y(t)$")
     ax1.plot(t, (y + result.stroke) * 1e3, color="0.6", lw=1.2, ls="--",
              label=r"upper plate $y + \Delta h$")
@@ -72,15 +95,11 @@ def plot_trajectory(result, path, *, title: str | None = None, max_periods: floa
             ax.axvspan(t[0], result.window_start, color="0.9", zorder=-1)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
-    plt.close(fig)
     return path
 
 
 def plot_regime_map(map_result, path, *, title: str | None = None):
     """Regime colours over (frequency, amplitude) with the lift-off curve A w^2 = g."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
@@ -90,7 +109,8 @@ def plot_regime_map(map_result, path, *, title: str | None = None):
     cmap = ListedColormap([REGIME_COLOURS[n] for n in names])
     f = map_result.frequency
     a_mm = map_result.amplitude * 1e3
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    fig = _figure(figsize=(7.5, 5.5))
+    ax = fig.subplots()
 
     def edges(v):
         if v.size == 1:
@@ -114,5 +134,4 @@ def plot_regime_map(map_result, path, *, title: str | None = None):
     ax.set_title(title or "motion regimes of the ball", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
-    plt.close(fig)
     return path
