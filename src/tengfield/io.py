@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ._json import jsonable
-from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS
+from .electrical import LOAD_COLUMNS, RECTIFIER_COLUMNS, WAVEFORM_COLUMNS
 
 #: format of a time column: every double round-trips
 TIME_FORMAT = "%.17g"
@@ -41,8 +41,9 @@ def write_json(path: str | Path, data) -> Path:
 # ---------------------------------------------------------------------------
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
-    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS`` if present)."""
-    columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS if c in waveforms]
+    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS``,
+    ``RECTIFIER_COLUMNS`` if present)."""
+    columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS + RECTIFIER_COLUMNS if c in waveforms]
     data = np.column_stack([waveforms[c] for c in columns])
     np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="",
                fmt=[TIME_FORMAT] + [VALUE_FORMAT] * (len(columns) - 1))
@@ -64,7 +65,27 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True) -> lis
         if result.curves is not None:
             written.append(plot_surrogate(result.table, result.curves, out / "surrogate.png",
                                           cells=result.scene.device.cells))
+        written += write_harvest_plots(result, out)
     written.append(write_json(out / "summary.json", result.summary))
+    return written
+
+
+def write_harvest_plots(result, out: Path) -> list[Path]:
+    """charging.png (rectifier), vq.png (load or rectifier) and array.png (an
+    ``[array]`` run) of a :class:`tengfield.pipeline.RunResult`, where they apply."""
+    from .plotting import harvest as hp
+
+    extras = getattr(result, "extras", {}) or {}
+    written = []
+    if extras.get("_fine") is not None:
+        written.append(hp.plot_charging(extras["_fine"], result.scene, out / "charging.png",
+                                        title=_run_title(result)))
+    if extras.get("_vq"):
+        written.append(hp.plot_vq(extras["_vq"], result.summary.get("energy_per_cycle", {}),
+                                  out / "vq.png", title=_run_title(result)))
+    if extras.get("_array") is not None:
+        written.append(hp.plot_array(extras["_array"], result.summary.get("array", {}),
+                                     out / "array.png", title=_run_title(result)))
     return written
 
 

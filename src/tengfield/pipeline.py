@@ -66,6 +66,8 @@ class RunResult:
     curves: TerminalCurves | None
     peaks: dict[str, float] = field(default_factory=dict)
     stages: dict[str, Stage] = field(default_factory=dict)
+    #: what the harvesting plots need (V-Q loops, the fine rectifier record, the array)
+    extras: dict = field(default_factory=dict)
 
     t = _column("time_s", "Output times [s].")
     V_oc = _column("V_oc_V", "Open-circuit voltage [V] (read through C_p when "
@@ -141,6 +143,24 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
                                   time.perf_counter() - start,
                                   {"energy_balance_relative_residual":
                                    abs(residual) / max(abs(delivered), 1e-300)})
+    elif scene.circuit.kind == "rectifier":
+        if curves is None:
+            stages["circuit"] = Stage("skipped", "Q_SC = 0: nothing to rectify",
+                                      time.perf_counter() - start)
+            zero = np.zeros_like(waveforms["time_s"])
+            waveforms.update({c: zero.copy() for c in electrical.RECTIFIER_COLUMNS})
+        else:
+            rect = electrical.rectifier_waveforms(scene, dynamics, curves)
+            waveforms.update({c: rect[c] for c in electrical.RECTIFIER_COLUMNS})
+            books = rect["fine"].balance()
+            stages["circuit"] = Stage(
+                "ran", f"full bridge ({scene.circuit.diode}) into "
+                f"{scene.circuit.storage_capacitance * 1e6:g} uF, pmic = {scene.circuit.pmic!r}",
+                time.perf_counter() - start,
+                {"integration_points": int(rect["fine"].time.size),
+                 "energy_balance_relative_residual": max(
+                     books["terminal_residual"], books["bridge_residual"],
+                     books["store_residual"])})
     else:
         stages["circuit"] = Stage("ran", f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
                                   "closed form; load ODE not run (no load)",
@@ -149,8 +169,57 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     summary = _summary(scene, dynamics, waveforms, load, stages, table,
                        peaks={column: peaks[name]
                               for name, column in electrical.PEAK_QUANTITIES.items()})
-    return RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
-                     table=table, curves=curves, peaks=peaks, stages=stages)
+    extras = {}
+    if curves is not None:
+        extras = _energy_per_cycle(scene, dynamics, curves, waveforms, load,
+                                   rect if scene.circuit.kind == "rectifier" else None)
+        summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
+                       table=table, curves=curves, peaks=peaks, stages=stages)
+    result.extras = extras
+    return result
+
+
+def _energy_per_cycle(scene, dynamics, curves, waveforms, load, rect) -> dict:
+    """Summary blocks ``energy_per_cycle`` (CMEO bound, FOM_S, the V-Q loop areas of
+    the last period for the resistive load ``[circuit] load_ohm`` and, for a
+    rectifier, the bridge) and ``rectifier``; ``_vq`` holds the loops for vq.png."""
+    t = np.asarray(waveforms["time_s"], dtype=float)
+    mask, _ = electrical.steady_window(t, scene)
+    max_gap = float(np.max(np.asarray(dynamics.gap, dtype=float)[mask]))
+    out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
+    period = scene.excitation.period
+    if load is None and rect is None:
+        return out                       # open/short circuit: the CMEO bound only
+    if load is None:                     # a rectifier run: the resistive loop to compare
+        load = electrical.steady_load(scene, dynamics, curves)
+    last = electrical.last_period(t, period)
+    v_load = np.asarray(load["V_load"])[last]
+    q_load = _cumulative(t[last], np.asarray(load["I_load"])[last])
+    vq = {"load": (q_load, v_load, electrical.loop_area(v_load, q_load))}
+    out["energy_per_cycle"].update({
+        "load_ohm": scene.circuit.load,
+        "load_loop_area_J": vq["load"][2],
+        "load_mean_power_times_period_J": load["mean_power_W"] * period})
+    if rect is not None:
+        fine = rect["fine"]
+        fine_last = electrical.last_period(fine.time, period)
+        v = fine.voltage[fine_last, 0]
+        q = fine.bridge_charge[fine_last, 0]
+        vq["rectifier"] = (q - q[0], v, electrical.loop_area(v, q))
+        out["energy_per_cycle"]["rectifier_loop_area_J"] = vq["rectifier"][2]
+        start = float(t[mask][0])
+        out["rectifier"] = electrical.rectifier_summary(scene, fine, start, curves, max_gap)
+        out["_fine"] = fine
+    out["_vq"] = vq
+    return out
+
+
+def _cumulative(t, current):
+    """∫ I dt [C] from the first sample (trapezoidal)."""
+    q = np.zeros_like(t)
+    q[1:] = np.cumsum(0.5 * (current[1:] + current[:-1]) * np.diff(t))
+    return q
 
 
 def _needs_field(scene, gap) -> tuple[bool, str]:
