@@ -94,7 +94,8 @@ def _run_title(result) -> str:
     regime = result.summary.get("regime") or {}
     name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
     return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
-            f"{result.scene.device.cells} cell(s), {result.scene.circuit.reference}"
+            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
+            f"{result.scene.circuit.reference}"
             + (f", {name}" if name else ""))
 
 

@@ -130,6 +130,9 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         stages["field"] = Stage("skipped", why_not)
         stages["surrogate"] = Stage("skipped", why_not)
 
+    if scene.array.cells > 0:
+        return _run_array(scene, dynamics, curves, table, stages, comm)
+
     start = time.perf_counter()
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
     load = None
@@ -220,6 +223,44 @@ def _cumulative(t, current):
     q = np.zeros_like(t)
     q[1:] = np.cumsum(0.5 * (current[1:] + current[:-1]) * np.diff(t))
     return q
+
+
+def _run_array(scene, dynamics, curves, table, stages, comm) -> RunResult:
+    """``[array]``: every cell its own dynamics (tengfield.array), one surrogate."""
+    from .array import run_array
+
+    start = time.perf_counter()
+    arr = run_array(scene, curves, dynamics, comm=comm)
+    waveforms = arr.columns
+    block = dict(arr.summary)
+    rect = block.pop("rectifier", None)
+    stages["circuit"] = Stage(
+        "ran", f"[array] {scene.array.cells} cells, connection = {scene.array.connection!r}, "
+        f"[circuit] kind = {scene.circuit.kind!r}", time.perf_counter() - start,
+        {"dynamics_wall_time_s": block["dynamics_wall_time_s"],
+         "distinct_dynamics": block["distinct_dynamics"]})
+    t = np.asarray(waveforms["time_s"])
+    mask, _ = electrical.steady_window(t, scene)
+    peaks = {name: circuit.peak_to_peak(np.asarray(waveforms[column])[mask])
+             for name, column in electrical.PEAK_QUANTITIES.items()}
+    summary = _summary(scene, dynamics, waveforms, None, stages, table,
+                       peaks={column: peaks[name]
+                              for name, column in electrical.PEAK_QUANTITIES.items()})
+    summary["cells"] = scene.array.cells
+    summary["peak_to_peak_rule"] = "over the output samples of the steady window (array)"
+    if arr.load is not None:
+        summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
+        summary.pop("load_reason", None)
+    if arr.fine is not None and rect is None:
+        rect = electrical.rectifier_summary(scene, arr.fine, float(t[mask][0]))
+    if rect is not None:
+        summary["rectifier"] = rect
+    summary["array"] = block
+    result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
+                       dynamics=dynamics, table=table, curves=curves, peaks=peaks,
+                       stages=stages)
+    result.extras = {"_array": arr, "_fine": arr.fine}
+    return result
 
 
 def _needs_field(scene, gap) -> tuple[bool, str]:
