@@ -176,7 +176,8 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None) -> 
     else:
         result = _spread(scene, one, scaled, nominal, curves, [tr for tr, _ in trajectories],
                          weights, t)
-    phases = _phases(scene, curves, [tr for tr, _ in trajectories], t)
+    phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
+              else _phases(scene, curves, [tr for tr, _ in trajectories], t))
     cell_phases = phases[inverse.reshape(-1)]
     unit = np.exp(1j * np.deg2rad(cell_phases[np.isfinite(cell_phases)]))
     mean = np.angle(unit.mean()) if unit.size else 0.0
@@ -252,16 +253,46 @@ def _identical(scaled, nominal, curves, trajectory, n) -> dict:
 
 
 def _evaluate(curves, trajectories, times):
-    """(Q_SC, C_T, I_SC, dC_T/dt) of every trajectory at ``times``: (rows, cells) arrays."""
+    """(Q_SC, C_T, I_SC) of every trajectory at ``times``: (rows, cells) arrays."""
     z = np.empty((times.size, len(trajectories)))
     v = np.empty_like(z)
     for j, traj in enumerate(trajectories):
         z[:, j], v[:, j], _ = traj(times)
     if curves is None:
         zero = np.zeros_like(z)
-        return zero, np.full_like(z, 1e-15), zero, zero
-    return (curves.charge(z), curves.capacitance(z), curves.charge_derivative(z) * v,
-            curves.capacitance_derivative(z) * v)
+        return zero, np.full_like(z, 1e-15), zero
+    q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), curves._q.x, curves._q.c,
+                           curves._c.c, curves.stroke)
+    return q.reshape(z.shape), c.reshape(z.shape), i.reshape(z.shape)
+
+
+try:
+    from numba import njit
+except ImportError:  # pragma: no cover
+    def njit(*args, **kwargs):
+        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+
+
+@njit(cache=True)
+def _spline_eval(z, v, knots, cq, cc, stroke):
+    """Q_SC(z), C_T(z) and (dQ_SC/dz) v of the surrogate's cubic splines (their
+    piecewise coefficients ``cq``, ``cc`` on ``knots``), z clipped to [0, stroke]:
+    one interval search for the three."""
+    n = z.size
+    q = np.empty(n)
+    c = np.empty(n)
+    i = np.empty(n)
+    last = knots.size - 2
+    for k in range(n):
+        x = min(max(z[k], 0.0), stroke)
+        j = np.searchsorted(knots, x, side="right") - 1
+        j = min(max(j, 0), last)
+        d = x - knots[j]
+        q[k] = ((cq[0, j] * d + cq[1, j]) * d + cq[2, j]) * d + cq[3, j]
+        c[k] = ((cc[0, j] * d + cc[1, j]) * d + cc[2, j]) * d + cc[3, j]
+        slope = (3.0 * cq[0, j] * d + 2.0 * cq[1, j]) * d + cq[2, j]
+        i[k] = slope * v[k]
+    return q, c, i
 
 
 def _spread(scene, one, scaled, nominal, curves, trajectories, weights, t) -> dict:
@@ -274,8 +305,11 @@ def _spread(scene, one, scaled, nominal, curves, trajectories, weights, t) -> di
     c_p = scene.circuit.parallel_capacitance
     g = len(trajectories)
     rows = max(2, CHUNK_VALUES // max(g, 1))
-    sums = {k: np.empty(t.size) for k in ("Q", "C", "I", "dC")}
-    ref = {k: np.empty(t.size) for k in ("Q", "C", "I", "dC")}
+    sums = {k: np.empty(t.size) for k in ("Q", "C", "I")}
+    ref = {k: np.empty(t.size) for k in ("Q", "C", "I")}
+    window, _ = electrical.steady_window(t, scene)
+    basis = np.where(window, np.exp(-1j * scene.excitation.omega * t), 0.0)
+    fundamental = np.zeros(g, dtype=complex)
     rect_cols = {c: np.empty(t.size) for c in electrical.RECTIFIER_COLUMNS}
     rectifying = kind == "rectifier"
     options = electrical.harvester_options(scene) if rectifying else None
@@ -290,12 +324,13 @@ def _spread(scene, one, scaled, nominal, curves, trajectories, weights, t) -> di
     parts, ref_parts = [], []
     for lo in range(0, t.size, rows):
         times = t[lo:lo + rows]
-        q, c, i, dc = _evaluate(curves, trajectories, times)
-        rq, rc, ri, rdc = _evaluate(curves, [nominal.sample], times)
+        q, c, i = _evaluate(curves, trajectories, times)
+        rq, rc, ri = _evaluate(curves, [nominal.sample], times)
         block = slice(lo, lo + times.size)
-        for key, value in zip(("Q", "C", "I", "dC"), (q, c, i, dc)):
+        fundamental += basis[block] @ q
+        for key, value in zip(("Q", "C", "I"), (q, c, i)):
             sums[key][block] = value @ weights
-        for key, value in zip(("Q", "C", "I", "dC"), (rq, rc, ri, rdc)):
+        for key, value in zip(("Q", "C", "I"), (rq, rc, ri)):
             ref[key][block] = value[:, 0] * n
         if not rectifying:
             continue
@@ -331,8 +366,8 @@ def _spread(scene, one, scaled, nominal, curves, trajectories, weights, t) -> di
     columns = {"time_s": t, "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
                "table_m": np.asarray(table), "V_oc_V": sums["Q"] / (sums["C"] + c_p),
                "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
-    out = {"columns": columns, "summary": {"grid": "output samples (no per-cell impact "
-                                                   "instants)"}}
+    out = {"columns": columns, "fundamental": fundamental,
+           "summary": {"grid": "output samples (no per-cell impact instants)"}}
     if kind == "load":
         load = scene.circuit.load
         resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
@@ -374,17 +409,15 @@ def _spread(scene, one, scaled, nominal, curves, trajectories, weights, t) -> di
 
 def _phases(scene, curves, trajectories, t) -> np.ndarray:
     """Phase [deg] of the fundamental of each trajectory's Q_SC over the steady window."""
-    mask, _ = electrical.steady_window(t, scene)
-    tw = t[mask]
-    if curves is None or tw.size < 4:
+    window, _ = electrical.steady_window(t, scene)
+    if curves is None or np.count_nonzero(window) < 4:
         return np.full(len(trajectories), math.nan)
-    basis = np.exp(-1j * scene.excitation.omega * tw)
-    rows = max(2, CHUNK_VALUES // max(len(trajectories), 1))
-    acc = np.zeros(len(trajectories), dtype=complex)
-    for lo in range(0, tw.size, rows):
-        times = tw[lo:lo + rows]
-        q, _, _, _ = _evaluate(curves, trajectories, times)
-        acc += basis[lo:lo + rows] @ q
-    phase = np.rad2deg(np.angle(acc))
-    phase[np.abs(acc) == 0.0] = math.nan
+    basis = np.where(window, np.exp(-1j * scene.excitation.omega * t), 0.0)
+    q, _, _ = _evaluate(curves, trajectories, t)
+    return _phase_of(basis @ q)
+
+
+def _phase_of(fundamental) -> np.ndarray:
+    phase = np.rad2deg(np.angle(fundamental))
+    phase[np.abs(fundamental) == 0.0] = math.nan
     return phase
