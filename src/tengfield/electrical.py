@@ -360,6 +360,13 @@ def first_crossing(times, values, level: float) -> float:
     return float(times[k - 1] + (level - v0) / (v1 - v0) * (times[k] - times[k - 1]))
 
 
+def _first_of(*times) -> float:
+    """Earliest of the finite ``times`` (a chip that switches on within the step it
+    reached the level may pull the sampled U back below it), NaN if none."""
+    finite = [x for x in times if math.isfinite(x)]
+    return min(finite) if finite else math.nan
+
+
 def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=None) -> dict:
     """Numbers of a rectifier run (SI): store, time to each UVLO level, chip
     switching, average harvested power and energy per cycle over the steady
@@ -387,7 +394,9 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
         "final_stored_energy_J": float(fine.stored_energy[-1]),
         "max_store_voltage_V": float(np.max(fine.store_voltage)),
         "time_to_uvlo_falling_V_s": first_crossing(t, fine.store_voltage, c.uvlo_falling),
-        "time_to_uvlo_rising_V_s": first_crossing(t, fine.store_voltage, c.uvlo_rising),
+        "time_to_uvlo_rising_V_s": _first_of(
+            first_crossing(t, fine.store_voltage, c.uvlo_rising),
+            fine.threshold_times["uvlo_rising_s"]),
         "uvlo_levels_V": [c.uvlo_falling, c.uvlo_rising],
         "chip_first_on_s": fine.threshold_times["uvlo_rising_s"],
         "chip_first_lockout_s": fine.threshold_times["uvlo_falling_s"],
