@@ -37,6 +37,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -102,23 +103,42 @@ def _simulate_block(args):
     return [cell_trajectory(scene, d) for d in draws]
 
 
-def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None) -> list:
+def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
+                   progress: bool = False) -> list:
     """Trajectories of the distinct ``draws`` (rows), on ``jobs`` processes (default:
-    the machine's cores) or over the ranks of ``comm`` (size > 1)."""
-    from ._mpi import farm, size_of
+    the machine's cores) or over the ranks of ``comm`` (size > 1); ``progress``:
+    a tqdm bar on stderr when it is a terminal."""
+    from ._mpi import farm, rank_of, size_of
 
     n = len(draws)
-    if size_of(comm) > 1:
-        blocks = _blocks(draws, 4 * size_of(comm))
-        parts = farm(comm, [(scene, b) for b in blocks], _simulate_block)
-    else:
-        jobs = min(jobs or os.cpu_count() or 1, n)
-        if jobs <= 1 or n < 8:
-            return _simulate_block((scene, draws))
-        from concurrent.futures import ProcessPoolExecutor
-        blocks = _blocks(draws, 4 * jobs)
-        with ProcessPoolExecutor(jobs) as pool:
-            parts = list(pool.map(_simulate_block, [(scene, b) for b in blocks]))
+    bar = None
+    if progress and sys.stderr.isatty() and rank_of(comm) == 0 and n >= 8:
+        from tqdm import tqdm
+        bar = tqdm(total=n, desc="cell dynamics", unit="cell", file=sys.stderr, leave=False)
+
+    def done(block):
+        if bar is not None:
+            bar.update(len(block))
+        return block
+
+    try:
+        if size_of(comm) > 1:
+            blocks = _blocks(draws, 4 * size_of(comm))
+            parts = farm(comm, [(scene, b) for b in blocks], _simulate_block,
+                         progress=(lambda k: bar.update(k * len(blocks[0])))
+                         if bar is not None else None)
+        else:
+            jobs = min(jobs or os.cpu_count() or 1, n)
+            if jobs <= 1 or n < 8:
+                return _simulate_block((scene, draws))
+            from concurrent.futures import ProcessPoolExecutor
+            blocks = _blocks(draws, 4 * jobs)
+            with ProcessPoolExecutor(jobs) as pool:
+                parts = [done(p) for p in pool.map(_simulate_block,
+                                                   [(scene, b) for b in blocks])]
+    finally:
+        if bar is not None:
+            bar.close()
     return [cell for part in parts for cell in part]
 
 
@@ -152,7 +172,8 @@ class ArrayResult:
     stages: dict = field(default_factory=dict)
 
 
-def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None) -> ArrayResult:
+def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
+              progress: bool = False) -> ArrayResult:
     """The ``[array]`` of ``scene`` with the shared surrogate ``curves`` (None: Q_SC = 0)
     and the nominal cell's dynamics ``nominal`` (the unperturbed scene, whose
     output times are the array's grid)."""
@@ -162,7 +183,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None) -> 
     draws = draw_cells(scene)
     distinct, inverse = np.unique(draws, axis=0, return_inverse=True)
     weights = np.bincount(inverse.reshape(-1), minlength=len(distinct)).astype(float)
-    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm)
+    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress)
     dynamics_time = time.perf_counter() - start
     start = time.perf_counter()
     one = scene.with_values(device={"cells": 1}, array={"cells": 0, "connection": "parallel",
@@ -174,8 +195,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None) -> 
     if len(distinct) == 1:
         result = _identical(scaled, nominal, curves, trajectories[0][0], n)
     else:
-        result = _spread(scene, one, scaled, nominal, curves, [tr for tr, _ in trajectories],
-                         weights, t)
+        result = _spread(scene, nominal, curves, [tr for tr, _ in trajectories], weights, t)
     phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
               else _phases(scene, curves, [tr for tr, _ in trajectories], t))
     cell_phases = phases[inverse.reshape(-1)]
@@ -295,7 +315,7 @@ def _spline_eval(z, v, knots, cq, cc, stroke):
     return q, c, i
 
 
-def _spread(scene, one, scaled, nominal, curves, trajectories, weights, t) -> dict:
+def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
     """Cells with different dynamics, walked in time chunks."""
     from .harvest import Harvester
 

@@ -36,6 +36,10 @@ Energy bookkeeping is exact for this scheme: mechanical work = change of the
 terminal energy + energy through the bridges; energy through the bridges =
 diode loss + stored energy gained in step 2; the store's loss in step 3 =
 leakage + quiescent + chip input. :func:`harvest` checks both balances.
+
+:class:`Harvester` runs the same scheme in time chunks (its state carries
+over), so long runs and many-cell arrays never hold the whole record;
+:func:`harvest` is one chunk of it.
 """
 from __future__ import annotations
 

@@ -131,7 +131,7 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         stages["surrogate"] = Stage("skipped", why_not)
 
     if scene.array.cells > 0:
-        return _run_array(scene, dynamics, curves, table, stages, comm)
+        return _run_array(scene, dynamics, curves, table, stages, comm, progress)
 
     start = time.perf_counter()
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
@@ -225,12 +225,12 @@ def _cumulative(t, current):
     return q
 
 
-def _run_array(scene, dynamics, curves, table, stages, comm) -> RunResult:
+def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunResult:
     """``[array]``: every cell its own dynamics (tengfield.array), one surrogate."""
     from .array import run_array
 
     start = time.perf_counter()
-    arr = run_array(scene, curves, dynamics, comm=comm)
+    arr = run_array(scene, curves, dynamics, comm=comm, progress=progress)
     waveforms = arr.columns
     block = dict(arr.summary)
     rect = block.pop("rectifier", None)
