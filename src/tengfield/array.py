@@ -47,7 +47,7 @@ from . import circuit, electrical
 from .errors import SceneError
 
 #: cell-samples evaluated per chunk of the electrical stage (bounds the memory)
-CHUNK_VALUES = 2_000_000
+CHUNK_VALUES = 1_000_000
 
 
 # ---------------------------------------------------------------------------
@@ -358,12 +358,12 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
             res = harvesters[0].advance(times, sums["Q"][block], sums["C"][block] + c_p)
             store = (res.store_voltage, res.store_current, res.stored_energy,
                      res.chip_on.astype(float))
-            parts.append(res)
+            parts.append(_store_only(res))
         elif connection == "rectified-parallel":
             res = harvesters[0].advance(times, q * weights, c * weights + c_p * weights)
             store = (res.store_voltage, res.store_current, res.stored_energy,
                      res.chip_on.astype(float))
-            parts.append(res)
+            parts.append(_store_only(res))
         else:
             results = [h.advance(times, q[:, j], c[:, j] + c_p) for j, h in enumerate(harvesters)]
             w = weights / n
@@ -371,7 +371,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
                      sum(r.store_current * wj for r, wj in zip(results, weights)),
                      sum(r.stored_energy * wj for r, wj in zip(results, weights)),
                      sum(r.chip_on * wj for r, wj in zip(results, w)))
-            parts.append(results)
+            parts[:] = [results]             # only the last chunk's ends are used
         for col, value in zip(electrical.RECTIFIER_COLUMNS, store):
             rect_cols[col][block] = value
         if connection == "parallel":            # N x one cell, C_p once across them
@@ -425,6 +425,13 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
         out.update(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
                    output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
     return out
+
+
+def _store_only(res):
+    """A chunk's HarvestResult without its (rows, cells) arrays: an array run keeps only
+    the store's 1-D record, never N x samples."""
+    empty = np.empty((res.time.size, 0))        # not a view: the chunk's memory is freed
+    return dataclasses.replace(res, voltage=empty, bridge_charge=empty.copy())
 
 
 def _phases(scene, curves, trajectories, t) -> np.ndarray:
