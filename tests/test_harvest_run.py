@@ -80,6 +80,16 @@ def test_huge_store_charges_by_twice_q_sc_per_period(cache):
     assert charge == pytest.approx(2 * q_pp * periods, rel=0.01)
 
 
+def test_small_store_saturates_at_the_derived_voltage(cache):
+    """Ideal bridge, no load, a periodic drive: U -> U_sat = Q_SC,max / (C(x_max) + C(0))
+    (summary's saturation_voltage_V from the surrogate), within 1 %."""
+    res = rect_run(cache, lambda s: fx.FakeDynamics(s, kind="smooth"),
+                   storage_capacitance_uF=1e-7)
+    rect = res.summary["rectifier"]
+    assert rect["max_store_voltage_V"] == pytest.approx(rect["saturation_voltage_V"], rel=0.01)
+    assert rect["max_store_voltage_V"] <= rect["saturation_voltage_V"] * (1 + 1e-9)
+
+
 def test_uvlo_switching_counts_and_burst_energy(cache):
     """The chip switches on at the rising level, off at the falling one, never on twice
     in a row; each completed burst drains at least C (V_r^2 - V_f^2) / 2."""
