@@ -108,13 +108,15 @@ def test_run_tasks_farms_each_task_once_in_order():
 def test_jobs_next_to_several_ranks_is_refused_on_every_rank():
     from mpi4py import MPI
 
+    from tengfield._mpi import check_jobs
+
     comm = MPI.COMM_WORLD
     with pytest.raises(SceneError, match=r"--jobs = 2 cannot be combined with mpirun -n 2"):
-        sweep_module.check_jobs(2, comm)
+        check_jobs(2, comm)
     with pytest.raises(SceneError, match="--jobs"):
         sweep_module.run_tasks(abs, [1, 2], comm=comm, jobs=3)
-    sweep_module.check_jobs(1, comm)          # one worker per rank is fine
-    sweep_module.check_jobs(None, comm)
+    check_jobs(1, comm)          # one worker per rank is fine
+    check_jobs(None, comm)
 
 
 @pytest.mark.mpi

@@ -6,6 +6,8 @@ and ``Abort`` (``None`` means a serial run without MPI).
 """
 from __future__ import annotations
 
+import os
+
 import sys
 import traceback
 from typing import Any, Callable, Sequence
@@ -17,6 +19,30 @@ def rank_of(comm) -> int:
 
 def size_of(comm) -> int:
     return 1 if comm is None else int(comm.size)
+
+
+#: At most this many worker processes per core (``--jobs``).
+JOBS_PER_CORE_LIMIT = 4
+
+
+def max_jobs() -> int:
+    """Largest ``jobs`` accepted: ``JOBS_PER_CORE_LIMIT`` x the cores of this machine."""
+    return JOBS_PER_CORE_LIMIT * (os.cpu_count() or 1)
+
+
+def check_jobs(jobs: int | None, comm=None, option: str = "--jobs") -> None:
+    """Refuse ``jobs`` worker processes outside ``[1, max_jobs()]`` (None = all cores), and
+    more than one inside an MPI job: under ``mpirun -n N`` (N > 1) every rank is one worker."""
+    from .errors import SceneError
+
+    if jobs is None:
+        return
+    if not 1 <= jobs <= max_jobs():
+        raise SceneError(f"{option} = {jobs} is out of range: allowed [1, {max_jobs()}] "
+                         f"({JOBS_PER_CORE_LIMIT} x the {os.cpu_count() or 1} cores)")
+    if jobs > 1 and size_of(comm) > 1:
+        raise SceneError(f"{option} = {jobs} cannot be combined with mpirun -n {size_of(comm)}: "
+                         f"allowed 1 or omitted (each MPI rank is one worker)")
 
 
 def abort_with_message(comm, message: str, code: int = 2) -> None:

@@ -45,8 +45,6 @@ COMMAND_MODULES = [
     "fit",
 ]
 
-#: ``--jobs`` above this many worker processes per core only adds memory.
-JOBS_PER_CORE_LIMIT = 4
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -181,19 +179,11 @@ class _PathRewriter(io.TextIOBase):
         return getattr(self._stream, "encoding", "utf-8")
 
 
-def check_jobs(jobs: int | None, option: str = "--jobs") -> None:
-    """Refuse ``--jobs`` outside ``[1, JOBS_PER_CORE_LIMIT x cores]`` (None = all cores)."""
-    if jobs is None:
-        return
-    limit = JOBS_PER_CORE_LIMIT * (os.cpu_count() or 1)
-    if not 1 <= jobs <= limit:
-        raise SceneError(f"{option} = {jobs} is out of range: allowed [1, {limit}] "
-                         f"({JOBS_PER_CORE_LIMIT} x the {os.cpu_count() or 1} cores)")
-
-
 def _run_command(parser: argparse.ArgumentParser, args) -> int:
-    if hasattr(args, "jobs"):
-        check_jobs(args.jobs)
+    if hasattr(args, "jobs"):   # before any output directory is made
+        from ._mpi import check_jobs
+        from .commands._common import world_if_parallel
+        check_jobs(args.jobs, world_if_parallel())
     action = _output_option(parser, args.command)
     target = getattr(args, action.dest, None) if action is not None else None
     if target is None:

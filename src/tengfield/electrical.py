@@ -262,3 +262,201 @@ def steady_load(scene, dynamics, curves) -> dict:
     t = np.asarray(dynamics.t, dtype=float)
     mask, _ = steady_window(t, scene)
     return load_waveforms(scene, dynamics, curves, window_start=t[mask][0])
+
+
+# ---------------------------------------------------------------------------
+# rectifier into a store (tengfield.harvest) along a trajectory
+#: extra columns of ``waveforms.csv`` for ``[circuit] kind = "rectifier"``
+RECTIFIER_COLUMNS = ["V_store_V", "I_store_A", "E_store_J", "pmic_on"]
+#: rows per chunk of a rectifier run (times x cells), bounds its memory
+CHUNK_VALUES = 2_000_000
+
+
+def harvester_options(scene) -> dict:
+    """Keyword arguments of :class:`tengfield.harvest.Harvester` from ``[circuit]``
+    (SI): diode, store, leakage (0 in the file: none), the UVLO chip (``pmic``)."""
+    from .harvest import Diode, PowerChip
+
+    c = scene.circuit
+    diode = Diode(model=c.diode, forward_voltage=c.diode_forward_voltage,
+                  saturation_current=c.diode_saturation_current,
+                  emission_coefficient=c.diode_emission_coefficient,
+                  series_resistance=c.diode_series_resistance)
+    chip = None
+    if c.pmic == "uvlo":
+        chip = PowerChip(uvlo_rising=c.uvlo_rising, uvlo_falling=c.uvlo_falling,
+                         output_voltage=c.pmic_output, load=c.pmic_load,
+                         efficiency=c.pmic_efficiency, quiescent_current=c.pmic_quiescent_current,
+                         shunt_voltage=c.pmic_shunt)
+    return {"storage_capacitance": c.storage_capacitance, "diode": diode,
+            "parallel_capacitance": c.parallel_capacitance,
+            "leakage": c.storage_leakage if c.storage_leakage > 0 else math.inf, "chip": chip}
+
+
+def rectifier_grid(scene, dynamics) -> tuple[np.ndarray, np.ndarray]:
+    """(grid [s], indices of the output samples in it): the output times and every
+    impact instant (Q_SC(z(t)) has a kink there; the bridge steps end on it)."""
+    t = np.asarray(dynamics.t, dtype=float)
+    impacts = impact_times(dynamics, t[0], t[-1])
+    impacts = impacts[~np.isin(impacts, t)]
+    grid = np.concatenate([t, impacts])
+    order = np.argsort(grid, kind="stable")
+    return grid[order], np.flatnonzero(order < t.size)
+
+
+def rectifier_waveforms(scene, dynamics, curves) -> dict:
+    """``[device] cells`` identical cells (one bridge for them all: identical cells
+    give the same as one bridge each) charging ``[circuit]``'s store along
+    ``dynamics``. Returns the ``RECTIFIER_COLUMNS`` at the output samples, the
+    :class:`tengfield.harvest.HarvestResult` ``fine`` on the whole grid and the
+    grid's output indices ``output_index``."""
+    from .harvest import Harvester
+
+    grid, output_index = rectifier_grid(scene, dynamics)
+    n = scene.device.cells
+    run = Harvester(1, **harvester_options(scene))
+    rows = max(2, CHUNK_VALUES)
+    parts = []
+    for start in range(0, grid.size, rows):
+        times = grid[start:start + rows]
+        gap, _, _ = dynamics.sample(times)
+        q = curves.charge(gap) * n if curves is not None else np.zeros_like(gap)
+        c = curves.capacitance(gap) * n if curves is not None else np.full_like(gap, 1e-12)
+        parts.append(run.advance(times, q, c))
+    fine = concat_results(parts)
+    return {"V_store_V": fine.store_voltage[output_index],
+            "I_store_A": fine.store_current[output_index],
+            "E_store_J": fine.stored_energy[output_index],
+            "pmic_on": fine.chip_on[output_index].astype(float),
+            "fine": fine, "output_index": output_index}
+
+
+def concat_results(parts):
+    """One :class:`tengfield.harvest.HarvestResult` of consecutive chunks."""
+    import dataclasses
+
+    if len(parts) == 1:
+        return parts[0]
+    fields = {}
+    for f in dataclasses.fields(parts[0]):
+        values = [getattr(p, f.name) for p in parts]
+        fields[f.name] = (np.concatenate(values) if isinstance(values[0], np.ndarray)
+                          else getattr(parts[-1], f.name))
+    fields["initial_terminal_energy"] = parts[0].initial_terminal_energy
+    fields["initial_stored_energy"] = parts[0].initial_stored_energy
+    return type(parts[0])(**fields)
+
+
+def first_crossing(times, values, level: float) -> float:
+    """First time [s] ``values`` reach ``level`` (linear between samples); NaN if never."""
+    v = np.asarray(values, dtype=float)
+    hit = np.flatnonzero(v >= level)
+    if hit.size == 0:
+        return math.nan
+    k = int(hit[0])
+    if k == 0:
+        return float(times[0])
+    v0, v1 = v[k - 1], v[k]
+    return float(times[k - 1] + (level - v0) / (v1 - v0) * (times[k] - times[k - 1]))
+
+
+def _first_of(*times) -> float:
+    """Earliest of the finite ``times`` (a chip that switches on within the step it
+    reached the level may pull the sampled U back below it), NaN if none."""
+    finite = [x for x in times if math.isfinite(x)]
+    return min(finite) if finite else math.nan
+
+
+def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=None) -> dict:
+    """Numbers of a rectifier run (SI): store, time to each UVLO level, chip
+    switching, average harvested power and energy per cycle over the steady
+    window (from ``window_start`` [s]), the energy books and their residuals,
+    and the ideal bridge's saturation voltage (docs/harvest.md)."""
+    from .harvest import saturation_voltage
+
+    c = scene.circuit
+    t = fine.time
+    period = scene.excitation.period
+    inside = t >= window_start
+    k0 = int(np.flatnonzero(inside)[0]) if inside.any() else 0
+    length = float(t[-1] - t[k0])
+    into_store = float(fine.store_input[-1] - fine.store_input[k0])
+    bridge = float(fine.bridge_energy[-1] - fine.bridge_energy[k0])
+    on = fine.chip_on
+    switch_on = int(np.count_nonzero(on[1:] & ~on[:-1]))
+    switch_off = int(np.count_nonzero(~on[1:] & on[:-1]))
+    dt = np.diff(t)
+    on_time = float(np.sum(dt[on[1:]]))
+    books = fine.balance()
+    out = {
+        "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
+        "final_store_voltage_V": float(fine.store_voltage[-1]),
+        "final_stored_energy_J": float(fine.stored_energy[-1]),
+        "max_store_voltage_V": float(np.max(fine.store_voltage)),
+        "time_to_uvlo_falling_V_s": first_crossing(t, fine.store_voltage, c.uvlo_falling),
+        "time_to_uvlo_rising_V_s": _first_of(
+            first_crossing(t, fine.store_voltage, c.uvlo_rising),
+            fine.threshold_times["uvlo_rising_s"]),
+        "uvlo_levels_V": [c.uvlo_falling, c.uvlo_rising],
+        "chip_first_on_s": fine.threshold_times["uvlo_rising_s"],
+        "chip_first_lockout_s": fine.threshold_times["uvlo_falling_s"],
+        "chip_switch_on_count": switch_on, "chip_switch_off_count": switch_off,
+        "chip_duty_cycle": on_time / float(t[-1] - t[0]) if t[-1] > t[0] else 0.0,
+        "chip_output_energy_J": float(fine.chip_input_energy[-1]) * c.pmic_efficiency,
+        "average_harvested_power_W": into_store / length if length > 0 else 0.0,
+        "energy_per_cycle_J": bridge * period / length if length > 0 else 0.0,
+        "window_start_s": float(t[k0]),
+        "energy_books_J": {k: v for k, v in books.items() if k.endswith("_J")},
+        "energy_residuals": {k: v for k, v in books.items() if k.endswith("_residual")},
+        "energy_residuals_rule": "relative to the energy delivered into the bridges; the "
+                                 "backward-Euler step's own dissipation is booked as "
+                                 "numerical_dissipation_J",
+    }
+    if curves is not None and max_gap is not None:
+        n = scene.device.cells
+        q_max = float(curves.charge(max_gap)) * n
+        c_max = float(curves.capacitance(max_gap)) * n + c.parallel_capacitance
+        c_0 = float(curves.capacitance(0.0)) * n + c.parallel_capacitance
+        out["saturation_voltage_V"] = saturation_voltage(abs(q_max), c_max, c_0,
+                                                         c.diode_forward_voltage)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# energy per cycle: V-Q loops and the CMEO bound
+def loop_area(voltage, charge) -> float:
+    """∮ V dQ [J] of a sampled loop (trapezoidal; positive when energy leaves the TENG)."""
+    v = np.asarray(voltage, dtype=float)
+    q = np.asarray(charge, dtype=float)
+    return float(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(q)))
+
+
+def last_period(times, period: float) -> np.ndarray:
+    """Mask of the samples in the last full excitation period."""
+    t = np.asarray(times, dtype=float)
+    return t >= t[-1] - period
+
+
+def cmeo(scene, curves, max_gap: float) -> dict:
+    """Cycles for maximised energy output (Zi et al. 2015) for a stroke 0 -> ``max_gap``
+    [m] of ``[device] cells`` identical cells, and the structural figure of merit
+    (area = the ball's surface pi d^2 per cell, x_max = ``max_gap``)."""
+    from .harvest import max_energy_per_cycle, structural_figure_of_merit
+
+    n = scene.device.cells
+    c_p = scene.circuit.parallel_capacitance
+    q_max = abs(float(curves.charge(max_gap)) - float(curves.charge(0.0))) * n
+    c_max = float(curves.capacitance(max_gap)) * n + c_p
+    c_0 = float(curves.capacitance(0.0)) * n + c_p
+    energy = max_energy_per_cycle(q_max, c_max, c_0)
+    dev = scene.device
+    area = math.pi * dev.ball_diameter**2 * n
+    fom = structural_figure_of_merit(energy, dev.surface_charge, area, max_gap) \
+        if dev.surface_charge != 0 and max_gap > 0 else math.nan
+    return {"max_energy_per_cycle_J": energy, "Q_sc_max_C": q_max,
+            "V_oc_max_V": q_max / c_max, "V_return_max_V": q_max / c_0,
+            "C_at_max_gap_F": c_max, "C_at_zero_F": c_0, "max_gap_m": max_gap,
+            "figure_of_merit_structural": fom, "fom_area_m2": area,
+            "fom_rule": "FOM_S = 2 eps0 E_m / (sigma^2 A x_max), A = pi d^2 x cells (the "
+                        "charged ball surface), x_max = the largest gap reached; E_m = "
+                        "Q_SC,max (V_OC,max + |V'_max|) / 2 (Zi et al., Nat. Commun. 6:8376, 2015)"}

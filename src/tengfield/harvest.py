@@ -36,6 +36,10 @@ Energy bookkeeping is exact for this scheme: mechanical work = change of the
 terminal energy + energy through the bridges; energy through the bridges =
 diode loss + stored energy gained in step 2; the store's loss in step 3 =
 leakage + quiescent + chip input. :func:`harvest` checks both balances.
+
+:class:`Harvester` runs the same scheme in time chunks (its state carries
+over), so long runs and many-cell arrays never hold the whole record;
+:func:`harvest` is one chunk of it.
 """
 from __future__ import annotations
 
@@ -281,8 +285,46 @@ def _store_charge(volts, caps, u_new, h, model, forward, i_sat, n_vt, r_series, 
 
 
 @njit(cache=True)
+def _transfer_clamp(volts, caps, u, c_store, forward, v_after):
+    """Ideal clamping bridges (R_s = 0): ``C_L (U' - U) = sum C_j (a_j - U')_+`` with
+    ``a_j = |V_j| - 2 V_F`` is piecewise linear and increasing in U': solved
+    exactly by walking the sorted thresholds (O(n log n), no iteration)."""
+    n = volts.size
+    above = np.empty(n)
+    index = np.empty(n, dtype=np.int64)
+    m = 0
+    for j in range(n):
+        a = abs(volts[j]) - 2.0 * forward
+        v_after[j] = volts[j]
+        if a > u:
+            above[m] = a
+            index[m] = j
+            m += 1
+    if m == 0:
+        return u
+    order = np.argsort(-above[:m])
+    num = c_store * u
+    den = c_store
+    u_new = u
+    for k in range(m):
+        j = index[order[k]]
+        num += caps[j] * above[order[k]]
+        den += caps[j]
+        u_new = num / den
+        if k == m - 1 or u_new >= above[order[k + 1]]:
+            break
+    for k in range(m):
+        j = index[k]
+        if above[k] > u_new:
+            v_after[j] = (u_new + 2.0 * forward) * (1.0 if volts[j] >= 0.0 else -1.0)
+    return u_new
+
+
+@njit(cache=True)
 def _transfer(volts, caps, u, c_store, h, model, forward, i_sat, n_vt, r_series, v_after):
     """Backward-Euler bridge conduction at fixed capacitances; returns U'."""
+    if model == 0 and r_series == 0.0:
+        return _transfer_clamp(volts, caps, u, c_store, forward, v_after)
     # G(U') = C_L (U' - U) - Q_store(U') is increasing in U'
     g0 = -_store_charge(volts, caps, u, h, model, forward, i_sat, n_vt, r_series, v_after)
     if g0 == 0.0:
@@ -354,32 +396,30 @@ def _decay(u, h, c_store, leak, quiescent, power, on, rising, falling):
 
 
 @njit(cache=True)
-def _harvest_kernel(q_sc, c_t, times, c_store, u0, leak, model, forward, i_sat, n_vt, r_series,
+def _harvest_kernel(q_sc, c_t, times, c_store, leak, model, forward, i_sat, n_vt, r_series,
                     has_chip, rising, falling, power, quiescent, shunt,
-                    volts, store, bridge_charge, chip_on, energies, u_crossings):
+                    deficit, state, acc, volts, store, bridge_charge, chip_on, energies):
     """Step the cells (columns of q_sc, c_t) and the store along ``times``.
 
-    Fills volts[k, j], store[k], bridge_charge[k, j] (cumulative, lower -> upper),
-    chip_on[k]; energies[k, :] cumulative: mechanical work, bridge, diode loss,
-    store gain in transfer, leak, quiescent, chip input, shunt; u_crossings:
-    first times U reached (rising, falling-after-on)."""
+    Resumable: row 0 is the state the run is in (``deficit[j] = Q_SC - Q_b`` of
+    each cell, ``state = [U, chip on, first rising crossing, first lockout]``,
+    ``acc`` the 9 cumulative energies), all updated in place. Fills volts[k, j],
+    store[k], bridge_charge[k, j] (cumulative from row 0, lower -> upper),
+    chip_on[k] and energies[k, :] (cumulative: mechanical work, bridge, diode
+    loss, store gain in transfer, leak, quiescent, chip input, shunt, the
+    scheme's own dissipation)."""
     n_steps, n_cells = q_sc.shape
-    deficit = np.empty(n_cells)
     v_before = np.empty(n_cells)
     v_after = np.empty(n_cells)
     caps = np.empty(n_cells)
     for j in range(n_cells):
-        deficit[j] = q_sc[0, j]          # Q_b = 0 at the start: open-circuit state
         volts[0, j] = deficit[j] / c_t[0, j]
         bridge_charge[0, j] = 0.0
-    u = u0
-    on = False
+    u = state[0]
+    on = state[1] != 0.0
     store[0] = u
-    chip_on[0] = 0
-    acc = np.zeros(9)
-    energies[0, :] = 0.0
-    u_crossings[0] = math.nan
-    u_crossings[1] = math.nan
+    chip_on[0] = 1 if on else 0
+    energies[0, :] = acc
     for k in range(1, n_steps):
         h = times[k] - times[k - 1]
         # 1. move, bridges blocked
@@ -402,15 +442,17 @@ def _harvest_kernel(q_sc, c_t, times, c_store, u0, leak, model, forward, i_sat, 
             vm = v_before[j]
             va = v_after[j]
             moved = caps[j] * (vm - va)              # q: lower -> upper through the bridge
-            # mechanical work of the move, less the overshoot the blocked move added
-            # (the clamped terminal never reaches vm): W = W_move - C (vm - va)^2 / 2
-            acc[0] -= 0.5 * caps[j] * (vm - va) ** 2
-            acc[1] += va * moved                     # energy into the bridge (backward Euler)
-            q_fwd, q_rev = _cell_charges(vm, va, caps[j], u_new, h, model, forward, i_sat,
-                                         n_vt, r_series)
-            x_fwd = (va if vm >= 0.0 else -va) - u_new   # forward path voltage
-            acc[2] += q_fwd * x_fwd + q_rev * (-x_fwd - 2.0 * u_new)
-            gained += q_fwd + q_rev
+            if moved != 0.0:
+                # mechanical work of the move, less the overshoot the blocked move added
+                # (the clamped terminal never reaches vm): W = W_move - C (vm - va)^2 / 2
+                acc[0] -= 0.5 * caps[j] * (vm - va) ** 2
+                acc[1] += va * moved                 # energy into the bridge (backward Euler)
+            if moved != 0.0 or model == 1:
+                q_fwd, q_rev = _cell_charges(vm, va, caps[j], u_new, h, model, forward, i_sat,
+                                             n_vt, r_series)
+                x_fwd = (va if vm >= 0.0 else -va) - u_new   # forward path voltage
+                acc[2] += q_fwd * x_fwd + q_rev * (-x_fwd - 2.0 * u_new)
+                gained += q_fwd + q_rev
             deficit[j] = caps[j] * va
             bridge_charge[k, j] = bridge_charge[k - 1, j] + moved
             volts[k, j] = va
@@ -423,8 +465,8 @@ def _harvest_kernel(q_sc, c_t, times, c_store, u0, leak, model, forward, i_sat, 
                 u = shunt
             if (not on) and u >= rising:
                 on = True
-                if math.isnan(u_crossings[0]):
-                    u_crossings[0] = times[k]
+                if math.isnan(state[2]):
+                    state[2] = times[k]
         # 3. store sinks
         if h > 0.0:
             was_on = on
@@ -434,11 +476,13 @@ def _harvest_kernel(q_sc, c_t, times, c_store, u0, leak, model, forward, i_sat, 
             acc[4] += e_leak
             acc[5] += e_q
             acc[6] += e_chip
-            if was_on and not on and math.isnan(u_crossings[1]):
-                u_crossings[1] = times[k - 1] + on_time
+            if was_on and not on and math.isnan(state[3]):
+                state[3] = times[k - 1] + on_time
         store[k] = u
         chip_on[k] = 1 if on else 0
         energies[k, :] = acc
+    state[0] = u
+    state[1] = 1.0 if on else 0.0
 
 
 # ---------------------------------------------------------------------------
@@ -470,6 +514,8 @@ class HarvestResult:
     numerical_dissipation: np.ndarray
     terminal_energy: np.ndarray
     threshold_times: dict
+    initial_terminal_energy: float | None = None    # [J] at the run's start (chunked runs)
+    initial_stored_energy: float | None = None      # [J]
 
     def balance(self) -> dict:
         """Energy accounts at the end of the run [J] and the residuals of the three
@@ -481,8 +527,12 @@ class HarvestResult:
         ``numerical_dissipation_J``: the scheme's error, O(step))."""
         delivered = float(self.bridge_energy[-1])
         scale = max(abs(delivered), 1e-300)
-        d_term = float(self.terminal_energy[-1] - self.terminal_energy[0])
-        d_store = float(self.stored_energy[-1] - self.stored_energy[0])
+        term0 = self.terminal_energy[0] if self.initial_terminal_energy is None \
+            else self.initial_terminal_energy
+        store0 = self.stored_energy[0] if self.initial_stored_energy is None \
+            else self.initial_stored_energy
+        d_term = float(self.terminal_energy[-1] - term0)
+        d_store = float(self.stored_energy[-1] - store0)
         sinks = float(self.leakage_loss[-1] + self.quiescent_loss[-1]
                       + self.chip_input_energy[-1] + self.shunt_loss[-1])
         return {
@@ -503,6 +553,96 @@ class HarvestResult:
         }
 
 
+class Harvester:
+    """A rectifier run that goes in time chunks (long or many-cell runs never hold
+    the whole record): ``advance(times, q_sc, c_t)`` continues from where the last
+    call ended and returns that chunk's :class:`HarvestResult` (energies and
+    bridge charges cumulative from the start; ``balance()`` of any chunk covers
+    the run so far). The first chunk's first row is the start (open-circuit
+    state); later chunks continue from the last row seen (their first step goes
+    from that row's time to their first time). Parameters as :func:`harvest`.
+    """
+
+    def __init__(self, n_cells: int, *, storage_capacitance: float, diode: Diode = Diode(),
+                 parallel_capacitance: float = 0.0, leakage: float = math.inf,
+                 chip: PowerChip | None = None, initial_store_voltage: float = 0.0):
+        _check("storage_capacitance_uF", storage_capacitance * 1e6, 0.0, 1e12, lo_open=True)
+        _check("storage_leakage_ohm", leakage, 0.0, math.inf, lo_open=True)
+        self.n_cells = int(n_cells)
+        self.storage_capacitance = float(storage_capacitance)
+        self.diode = diode
+        self.parallel_capacitance = float(parallel_capacitance)
+        self.leakage = float(leakage)
+        self.chip = chip
+        self.deficit = np.zeros(self.n_cells)
+        self.state = np.array([float(initial_store_voltage), 0.0, math.nan, math.nan])
+        self.acc = np.zeros(9)
+        self.last = None            # (t, q row, c row, bridge charge row) of the last row
+        self.initial_terminal_energy = self.initial_stored_energy = None
+
+    @property
+    def store_voltage(self) -> float:
+        return float(self.state[0])
+
+    def advance(self, times, q_sc, c_t) -> "HarvestResult":
+        t = np.ascontiguousarray(np.atleast_1d(times), dtype=float)
+        q = np.asarray(q_sc, dtype=float)
+        c = np.asarray(c_t, dtype=float) + self.parallel_capacitance
+        if q.ndim == 1:
+            q, c = q[:, None], c[:, None]
+        if q.shape != c.shape or q.shape[0] != t.size or q.shape[1] != self.n_cells:
+            raise ValueError(f"q_sc {q.shape} and c_t {c.shape} must have one row per time "
+                             f"({t.size}) and {self.n_cells} columns")
+        first = self.last is None
+        if not first:
+            t = np.concatenate([[self.last[0]], t])
+            q = np.vstack([self.last[1][None, :], q])
+            c = np.vstack([self.last[2][None, :], c])
+        if np.any(np.diff(t) < 0):
+            raise ValueError("times must be non-decreasing")
+        q = np.ascontiguousarray(q)
+        c = np.ascontiguousarray(c)
+        if first:
+            self.deficit[:] = q[0]            # Q_b = 0 at the start: open-circuit state
+            self.initial_terminal_energy = float(0.5 * np.sum(q[0] ** 2 / c[0]))
+            self.initial_stored_energy = 0.5 * self.storage_capacitance * self.state[0] ** 2
+        n_steps = t.size
+        volts = np.empty((n_steps, self.n_cells))
+        store = np.empty(n_steps)
+        bridge = np.empty((n_steps, self.n_cells))
+        chip_on = np.empty(n_steps, dtype=np.int8)
+        energies = np.empty((n_steps, 9))
+        chip = self.chip or PowerChip()
+        _harvest_kernel(q, c, t, self.storage_capacitance, self.leakage, *self.diode._params(),
+                        self.chip is not None, chip.uvlo_rising, chip.uvlo_falling,
+                        chip.input_power, chip.quiescent_current, chip.shunt_voltage,
+                        self.deficit, self.state, self.acc, volts, store, bridge, chip_on,
+                        energies)
+        current = np.zeros(n_steps)           # bridge current into the store over each step [A]
+        dt = np.diff(t)
+        ok = dt > 0
+        into_store = np.diff(energies[:, 3])
+        current[1:][ok] = into_store[ok] / np.maximum(store[1:][ok], 1e-300) / dt[ok]
+        if not first:
+            bridge += self.last[3]
+        self.last = (float(t[-1]), q[-1].copy(), c[-1].copy(), bridge[-1].copy())
+        rows = slice(0 if first else 1, None)
+        terminal = 0.5 * np.sum(volts[rows] ** 2 * c[rows], axis=1)
+        e = energies[rows]
+        return HarvestResult(
+            time=t[rows], voltage=volts[rows], bridge_charge=bridge[rows],
+            store_voltage=store[rows], store_current=current[rows],
+            stored_energy=0.5 * self.storage_capacitance * store[rows] ** 2,
+            chip_on=chip_on[rows].astype(bool), mechanical_work=e[:, 0], bridge_energy=e[:, 1],
+            diode_loss=e[:, 2], store_input=e[:, 3], leakage_loss=e[:, 4],
+            quiescent_loss=e[:, 5], chip_input_energy=e[:, 6], shunt_loss=e[:, 7],
+            numerical_dissipation=e[:, 8], terminal_energy=terminal,
+            threshold_times={"uvlo_rising_s": float(self.state[2]),
+                             "uvlo_falling_s": float(self.state[3])},
+            initial_terminal_energy=self.initial_terminal_energy,
+            initial_stored_energy=self.initial_stored_energy)
+
+
 def harvest(times, q_sc, c_t, *, storage_capacitance: float, diode: Diode = Diode(),
             parallel_capacitance: float = 0.0, leakage: float = math.inf,
             chip: PowerChip | None = None, initial_store_voltage: float = 0.0) -> HarvestResult:
@@ -512,49 +652,15 @@ def harvest(times, q_sc, c_t, *, storage_capacitance: float, diode: Diode = Diod
     those times (1-D arrays for one cell); ``parallel_capacitance`` C_p [F]
     across each cell's terminals; ``storage_capacitance`` C_L [F];
     ``leakage`` [ohm] across the store (inf: none). All cells start in the
-    open-circuit state (no charge through the bridges).
+    open-circuit state (no charge through the bridges). One chunk of a
+    :class:`Harvester`.
     """
-    t = np.ascontiguousarray(times, dtype=float)
     q = np.asarray(q_sc, dtype=float)
-    c = np.asarray(c_t, dtype=float) + parallel_capacitance
-    if q.ndim == 1:
-        q, c = q[:, None], c[:, None]
-    if q.shape != c.shape or q.shape[0] != t.size:
-        raise ValueError(f"q_sc {q.shape} and c_t {c.shape} must have one row per time ({t.size})")
-    if np.any(np.diff(t) < 0):
-        raise ValueError("times must be non-decreasing")
-    _check("storage_capacitance_uF", storage_capacitance * 1e6, 0.0, 1e12, lo_open=True)
-    _check("storage_leakage_ohm", leakage, 0.0, math.inf, lo_open=True)
-    q = np.ascontiguousarray(q)
-    c = np.ascontiguousarray(c)
-    n_steps, n_cells = q.shape
-    volts = np.empty((n_steps, n_cells))
-    store = np.empty(n_steps)
-    bridge = np.empty((n_steps, n_cells))
-    chip_on = np.empty(n_steps, dtype=np.int8)
-    energies = np.empty((n_steps, 9))
-    crossings = np.empty(2)
-    has_chip = chip is not None
-    chip = chip or PowerChip()
-    _harvest_kernel(q, c, t, float(storage_capacitance), float(initial_store_voltage),
-                    float(leakage), *diode._params(), has_chip, chip.uvlo_rising,
-                    chip.uvlo_falling, chip.input_power, chip.quiescent_current,
-                    chip.shunt_voltage, volts, store, bridge, chip_on, energies, crossings)
-    stored = 0.5 * storage_capacitance * store**2
-    current = np.zeros(n_steps)           # bridge current into the store over each step [A]
-    dt = np.diff(t)
-    ok = dt > 0
-    into_store = np.diff(energies[:, 3])
-    current[1:][ok] = into_store[ok] / np.maximum(store[1:][ok], 1e-300) / dt[ok]
-    terminal = 0.5 * np.sum(volts**2 * c, axis=1)
-    return HarvestResult(
-        time=t, voltage=volts, bridge_charge=bridge, store_voltage=store, store_current=current,
-        stored_energy=stored, chip_on=chip_on.astype(bool), mechanical_work=energies[:, 0],
-        bridge_energy=energies[:, 1], diode_loss=energies[:, 2], store_input=energies[:, 3],
-        leakage_loss=energies[:, 4], quiescent_loss=energies[:, 5],
-        chip_input_energy=energies[:, 6], shunt_loss=energies[:, 7],
-        numerical_dissipation=energies[:, 8], terminal_energy=terminal,
-        threshold_times={"uvlo_rising_s": float(crossings[0]), "uvlo_falling_s": float(crossings[1])})
+    n_cells = 1 if q.ndim == 1 else q.shape[1]
+    run = Harvester(n_cells, storage_capacitance=storage_capacitance, diode=diode,
+                    parallel_capacitance=parallel_capacitance, leakage=leakage, chip=chip,
+                    initial_store_voltage=initial_store_voltage)
+    return run.advance(times, q_sc, c_t)
 
 
 def saturation_voltage(q_sc_max: float, c_max: float, c_min: float, forward_voltage: float = 0.0):

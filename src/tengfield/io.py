@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ._json import jsonable
-from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS
+from .electrical import LOAD_COLUMNS, RECTIFIER_COLUMNS, WAVEFORM_COLUMNS
 
 #: format of a time column: every double round-trips
 TIME_FORMAT = "%.17g"
@@ -60,8 +60,9 @@ def write_json(path: str | Path, data) -> Path:
 # ---------------------------------------------------------------------------
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
-    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS`` if present)."""
-    columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS if c in waveforms]
+    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS``,
+    ``RECTIFIER_COLUMNS`` if present)."""
+    columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS + RECTIFIER_COLUMNS if c in waveforms]
     data = np.column_stack([waveforms[c] for c in columns])
     np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="",
                fmt=[TIME_FORMAT] + [VALUE_FORMAT] * (len(columns) - 1))
@@ -83,7 +84,27 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True) -> lis
         if result.curves is not None:
             written.append(plot_surrogate(result.table, result.curves, out / "surrogate.png",
                                           cells=result.scene.device.cells))
+        written += write_harvest_plots(result, out)
     written.append(write_json(out / "summary.json", result.summary))
+    return written
+
+
+def write_harvest_plots(result, out: Path) -> list[Path]:
+    """charging.png (rectifier), vq.png (load or rectifier) and array.png (an
+    ``[array]`` run) of a :class:`tengfield.pipeline.RunResult`, where they apply."""
+    from .plotting import harvest as hp
+
+    extras = getattr(result, "extras", {}) or {}
+    written = []
+    if extras.get("_fine") is not None:
+        written.append(hp.plot_charging(extras["_fine"], result.scene, out / "charging.png",
+                                        title=_run_title(result)))
+    if extras.get("_vq"):
+        written.append(hp.plot_vq(extras["_vq"], result.summary.get("energy_per_cycle", {}),
+                                  out / "vq.png", title=_run_title(result)))
+    if extras.get("_array") is not None:
+        written.append(hp.plot_array(extras["_array"], result.summary.get("array", {}),
+                                     out / "array.png", title=_run_title(result)))
     return written
 
 
@@ -92,7 +113,8 @@ def _run_title(result) -> str:
     regime = result.summary.get("regime") or {}
     name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
     return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
-            f"{result.scene.device.cells} cell(s), {result.scene.circuit.reference}"
+            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
+            f"{result.scene.circuit.reference}"
             + (f", {name}" if name else ""))
 
 
@@ -124,6 +146,24 @@ def write_impacts_csv(result, path: str | Path) -> Path:
     imp = result.impacts
     return write_csv(path, ["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"],
                      [imp.time, imp.plate, imp.speed_before, imp.speed_after])
+
+
+MAP_COLUMNS = ["frequency_hz", "amplitude_mm", "regime", "period", "max_gap_mm",
+               "lower_contacts_per_period", "upper_contacts_per_period", "error"]
+
+
+def write_map_csv(result, path: str | Path) -> Path:
+    """map.csv of a :class:`tengfield.dynamics.mapping.MapResult`: one row per grid point."""
+    path = Path(path)
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(MAP_COLUMNS)
+        for r in result.records():
+            w.writerow([f"{r['frequency_hz']:.10g}", f"{r['amplitude_m'] * 1e3:.10g}",
+                        r["regime"], r["period"], f"{r['max_gap_m'] * 1e3:.10g}",
+                        f"{r['lower_contacts_per_period']:.6g}",
+                        f"{r['upper_contacts_per_period']:.6g}", r["error"]])
+    return path
 
 
 def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool) -> list[Path]:

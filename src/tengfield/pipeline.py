@@ -66,6 +66,8 @@ class RunResult:
     curves: TerminalCurves | None
     peaks: dict[str, float] = field(default_factory=dict)
     stages: dict[str, Stage] = field(default_factory=dict)
+    #: what the harvesting plots need (V-Q loops, the fine rectifier record, the array)
+    extras: dict = field(default_factory=dict)
 
     t = _column("time_s", "Output times [s].")
     V_oc = _column("V_oc_V", "Open-circuit voltage [V] (read through C_p when "
@@ -127,6 +129,9 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         stages["field"] = Stage("skipped", why_not)
         stages["surrogate"] = Stage("skipped", why_not)
 
+    if scene.array.cells > 0:
+        return _run_array(scene, dynamics, curves, table, stages, comm, progress)
+
     start = time.perf_counter()
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
     load = None
@@ -140,6 +145,24 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
                                   time.perf_counter() - start,
                                   {"energy_balance_relative_residual":
                                    abs(residual) / max(abs(delivered), 1e-300)})
+    elif scene.circuit.kind == "rectifier":
+        if curves is None:
+            stages["circuit"] = Stage("skipped", "Q_SC = 0: nothing to rectify",
+                                      time.perf_counter() - start)
+            zero = np.zeros_like(waveforms["time_s"])
+            waveforms.update({c: zero.copy() for c in electrical.RECTIFIER_COLUMNS})
+        else:
+            rect = electrical.rectifier_waveforms(scene, dynamics, curves)
+            waveforms.update({c: rect[c] for c in electrical.RECTIFIER_COLUMNS})
+            books = rect["fine"].balance()
+            stages["circuit"] = Stage(
+                "ran", f"full bridge ({scene.circuit.diode}) into "
+                f"{scene.circuit.storage_capacitance * 1e6:g} uF, pmic = {scene.circuit.pmic!r}",
+                time.perf_counter() - start,
+                {"integration_points": int(rect["fine"].time.size),
+                 "energy_balance_relative_residual": max(
+                     books["terminal_residual"], books["bridge_residual"],
+                     books["store_residual"])})
     else:
         stages["circuit"] = Stage("ran", f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
                                   "closed form; load ODE not run (no load)",
@@ -148,8 +171,95 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     summary = _summary(scene, dynamics, waveforms, load, stages, table,
                        peaks={column: peaks[name]
                               for name, column in electrical.PEAK_QUANTITIES.items()})
-    return RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
-                     table=table, curves=curves, peaks=peaks, stages=stages)
+    extras = {}
+    if curves is not None:
+        extras = _energy_per_cycle(scene, dynamics, curves, waveforms, load,
+                                   rect if scene.circuit.kind == "rectifier" else None)
+        summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
+                       table=table, curves=curves, peaks=peaks, stages=stages)
+    result.extras = extras
+    return result
+
+
+def _energy_per_cycle(scene, dynamics, curves, waveforms, load, rect) -> dict:
+    """Summary blocks ``energy_per_cycle`` (CMEO bound, FOM_S, the V-Q loop areas of
+    the last period for the resistive load ``[circuit] load_ohm`` and, for a
+    rectifier, the bridge) and ``rectifier``; ``_vq`` holds the loops for vq.png."""
+    t = np.asarray(waveforms["time_s"], dtype=float)
+    mask, _ = electrical.steady_window(t, scene)
+    max_gap = float(np.max(np.asarray(dynamics.gap, dtype=float)[mask]))
+    out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
+    period = scene.excitation.period
+    if load is None and rect is None:
+        return out                       # open/short circuit: the CMEO bound only
+    if load is None:                     # a rectifier run: the resistive loop to compare
+        load = electrical.steady_load(scene, dynamics, curves)
+    last = electrical.last_period(t, period)
+    v_load = np.asarray(load["V_load"])[last]
+    q_load = _cumulative(t[last], np.asarray(load["I_load"])[last])
+    vq = {"load": (q_load, v_load, electrical.loop_area(v_load, q_load))}
+    out["energy_per_cycle"].update({
+        "load_ohm": scene.circuit.load,
+        "load_loop_area_J": vq["load"][2],
+        "load_mean_power_times_period_J": load["mean_power_W"] * period})
+    if rect is not None:
+        fine = rect["fine"]
+        fine_last = electrical.last_period(fine.time, period)
+        v = fine.voltage[fine_last, 0]
+        q = fine.bridge_charge[fine_last, 0]
+        vq["rectifier"] = (q - q[0], v, electrical.loop_area(v, q))
+        out["energy_per_cycle"]["rectifier_loop_area_J"] = vq["rectifier"][2]
+        start = float(t[mask][0])
+        out["rectifier"] = electrical.rectifier_summary(scene, fine, start, curves, max_gap)
+        out["_fine"] = fine
+    out["_vq"] = vq
+    return out
+
+
+def _cumulative(t, current):
+    """∫ I dt [C] from the first sample (trapezoidal)."""
+    q = np.zeros_like(t)
+    q[1:] = np.cumsum(0.5 * (current[1:] + current[:-1]) * np.diff(t))
+    return q
+
+
+def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunResult:
+    """``[array]``: every cell its own dynamics (tengfield.array), one surrogate."""
+    from .array import run_array
+
+    start = time.perf_counter()
+    arr = run_array(scene, curves, dynamics, comm=comm, progress=progress)
+    waveforms = arr.columns
+    block = dict(arr.summary)
+    rect = block.pop("rectifier", None)
+    stages["circuit"] = Stage(
+        "ran", f"[array] {scene.array.cells} cells, connection = {scene.array.connection!r}, "
+        f"[circuit] kind = {scene.circuit.kind!r}", time.perf_counter() - start,
+        {"dynamics_wall_time_s": block["dynamics_wall_time_s"],
+         "distinct_dynamics": block["distinct_dynamics"]})
+    t = np.asarray(waveforms["time_s"])
+    mask, _ = electrical.steady_window(t, scene)
+    peaks = {name: circuit.peak_to_peak(np.asarray(waveforms[column])[mask])
+             for name, column in electrical.PEAK_QUANTITIES.items()}
+    summary = _summary(scene, dynamics, waveforms, None, stages, table,
+                       peaks={column: peaks[name]
+                              for name, column in electrical.PEAK_QUANTITIES.items()})
+    summary["cells"] = scene.array.cells
+    summary["peak_to_peak_rule"] = "over the output samples of the steady window (array)"
+    if arr.load is not None:
+        summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
+        summary.pop("load_reason", None)
+    if arr.fine is not None and rect is None:
+        rect = electrical.rectifier_summary(scene, arr.fine, float(t[mask][0]))
+    if rect is not None:
+        summary["rectifier"] = rect
+    summary["array"] = block
+    result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
+                       dynamics=dynamics, table=table, curves=curves, peaks=peaks,
+                       stages=stages)
+    result.extras = {"_array": arr, "_fine": arr.fine}
+    return result
 
 
 def _needs_field(scene, gap) -> tuple[bool, str]:

@@ -112,6 +112,82 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
 }
 
+
+# ---------------------------------------------------------------------------
+# harvesting electronics and arrays (issue #11; tengfield.harvest, tengfield.array).
+# [circuit] kind gains "rectifier"; defaults of the chip are the LTC3588-1's
+# (tengfield.harvest.LTC3588_*; docs/harvest.md).
+SCHEMA["circuit"]["kind"] = ("kind", str, "open", None,
+                             _choice("open", "short", "load", "rectifier"))
+SCHEMA["circuit"].update({
+    "diode": ("diode", str, "ideal", None, _choice("ideal", "shockley")),
+    "diode_forward_voltage_V": ("diode_forward_voltage", float, 0.0, 1.0, _rng(0.0, 100.0)),
+    "diode_saturation_current_A": ("diode_saturation_current", float, 1e-12, 1.0,
+                                   _rng(1e-18, 1.0)),
+    "diode_emission_coefficient": ("diode_emission_coefficient", float, 1.0, 1.0,
+                                   _rng(0.5, 10.0)),
+    "diode_series_resistance_ohm": ("diode_series_resistance", float, 0.0, 1.0, _rng(0.0, 1e12)),
+    "storage_capacitance_uF": ("storage_capacitance", float, 10.0, 1e-6,
+                               _rng(0.0, 1e12, lo_open=True)),
+    # 0: no leakage resistor across the store
+    "storage_leakage_ohm": ("storage_leakage", float, 0.0, 1.0, _rng(0.0, 1e30)),
+    "pmic": ("pmic", str, "none", None, _choice("none", "uvlo")),
+    "uvlo_rising_V": ("uvlo_rising", float, 5.05, 1.0, _rng(0.0, 1e6, lo_open=True)),
+    "uvlo_falling_V": ("uvlo_falling", float, 4.04, 1.0, _rng(0.0, 1e6, lo_open=True)),
+    "pmic_output_V": ("pmic_output", float, 3.3, 1.0, _rng(0.0, 1e6, lo_open=True)),
+    "pmic_load_ohm": ("pmic_load", float, 1e5, 1.0, _rng(0.0, 1e18, lo_open=True)),
+    "pmic_efficiency": ("pmic_efficiency", float, 0.9, 1.0, _rng(0.0, 1.0, lo_open=True)),
+    "pmic_quiescent_current_A": ("pmic_quiescent_current", float, 450e-9, 1.0, _rng(0.0, 1.0)),
+    "pmic_shunt_V": ("pmic_shunt", float, 20.0, 1.0, _rng(0.0, 1e6, lo_open=True)),
+})
+#: [array]: cells that each run their own dynamics (``cells = 0``: no array; then
+#: ``[device] cells`` identical copies). Spreads are full widths of uniform draws.
+SCHEMA["array"] = {
+    "cells": ("cells", int, 0, 1, _rng(0, 10**6)),
+    "connection": ("connection", str, "parallel", None,
+                   _choice("parallel", "rectified-per-cell", "rectified-parallel")),
+    "initial_phase_spread_deg": ("phase_spread", float, 0.0, math.pi / 180.0, _rng(0.0, 360.0)),
+    "restitution_spread": ("restitution_spread", float, 0.0, 1.0, _rng(0.0, 1.0)),
+    "initial_velocity_spread_m_per_s": ("velocity_spread", float, 0.0, 1.0, _rng(0.0, 100.0)),
+    "seed": ("seed", int, 0, 1, _rng(0, 2**32 - 1)),
+}
+
+
+@dataclass(frozen=True)
+class Array:
+    """``[array]``: ``cells`` (0: none), ``connection``, spreads (full widths:
+    ``phase_spread`` [rad], ``restitution_spread``, ``velocity_spread`` [m/s]), ``seed``."""
+    cells: int = 0
+    connection: str = "parallel"
+    phase_spread: float = 0.0
+    restitution_spread: float = 0.0
+    velocity_spread: float = 0.0
+    seed: int = 0
+
+
+def _check_harvest(dev, circ, arr) -> None:
+    """Cross-key rules of the harvesting/array block (one-line SceneErrors)."""
+    if circ.uvlo_rising <= circ.uvlo_falling:
+        raise SceneError(f"[circuit] uvlo_rising_V = {circ.uvlo_rising:g} must exceed "
+                         f"uvlo_falling_V = {circ.uvlo_falling:g} (the lockout's hysteresis)")
+    if circ.pmic_output >= circ.uvlo_falling:
+        raise SceneError(f"[circuit] pmic_output_V = {circ.pmic_output:g} is out of range: "
+                         f"allowed (0, {circ.uvlo_falling:g}) (below uvlo_falling_V)")
+    if circ.pmic_shunt <= circ.uvlo_rising:
+        raise SceneError(f"[circuit] pmic_shunt_V = {circ.pmic_shunt:g} must exceed "
+                         f"uvlo_rising_V = {circ.uvlo_rising:g}")
+    if arr.cells > 0 and dev.cells != 1:
+        raise SceneError(f"[array] cells = {arr.cells} and [device] cells = {dev.cells}: set one "
+                         "of them ([device] cells: identical copies; [array] cells: cells with "
+                         "their own dynamics)")
+    if arr.cells == 0 and (arr.phase_spread or arr.restitution_spread or arr.velocity_spread
+                           or arr.connection != "parallel"):
+        raise SceneError("[array] spreads and connection need [array] cells >= 1")
+    if arr.connection != "parallel" and circ.kind != "rectifier":
+        raise SceneError(f"[array] connection = {arr.connection!r} needs [circuit] kind = "
+                         f"'rectifier' (it is {circ.kind!r})")
+# ---------------------------------------------------------------------------
+
 #: Sections passed through unvalidated to ``scene.raw`` (each is validated by
 #: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`).
 PASSTHROUGH_SECTIONS = ("fit",)
@@ -388,6 +464,22 @@ class Circuit:
     load: float                   # [ohm]
     parallel_capacitance: float   # [F]
     reference: str
+    # harvesting (kind = "rectifier"; block "harvesting electronics" above), SI
+    diode: str = "ideal"
+    diode_forward_voltage: float = 0.0         # [V] per diode (ideal model)
+    diode_saturation_current: float = 1e-12    # [A] (shockley)
+    diode_emission_coefficient: float = 1.0    # (shockley)
+    diode_series_resistance: float = 0.0       # [ohm] per diode
+    storage_capacitance: float = 10e-6         # [F]
+    storage_leakage: float = 0.0               # [ohm], 0: none
+    pmic: str = "none"
+    uvlo_rising: float = 5.05                  # [V]
+    uvlo_falling: float = 4.04                 # [V]
+    pmic_output: float = 3.3                   # [V]
+    pmic_load: float = 1e5                     # [ohm]
+    pmic_efficiency: float = 0.9
+    pmic_quiescent_current: float = 450e-9     # [A]
+    pmic_shunt: float = 20.0                   # [V]
 
 
 @dataclass(frozen=True)
@@ -399,6 +491,7 @@ class Scene:
     run: Run
     field: Field
     circuit: Circuit
+    array: Array = Array()
     raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
     source: str = dataclasses.field(compare=False, repr=False, default="<default>")
     text: str = dataclasses.field(compare=False, repr=False, default="")
@@ -661,8 +754,11 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     fld = Field(**fvals)
     field_problems += _field_problems(dev, fld, explicit=set(data.get("field", {})))
     field_value: Field | _RefusedField = _RefusedField(field_problems) if field_problems else fld
+    circ = Circuit(**values["circuit"])
+    arr = Array(**values["array"])
+    _check_harvest(dev, circ, arr)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
-                 run=run, field=field_value, circuit=Circuit(**values["circuit"]),
+                 run=run, field=field_value, circuit=circ, array=arr,
                  raw=copy.deepcopy(data), source=source, text=text)
 
 

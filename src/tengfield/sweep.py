@@ -14,7 +14,6 @@ from typing import Callable, Sequence
 
 from . import electrical
 from ._json import regime_dict
-from .errors import SceneError
 
 #: columns of ``sweep.csv`` (one row per grid point and load)
 SWEEP_COLUMNS = ["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period",
@@ -62,18 +61,6 @@ def _sweep_task(args):
     return sweep_point(*args)
 
 
-def check_jobs(jobs: int | None, comm, option: str = "--jobs") -> None:
-    """Refuse worker processes inside an MPI job: under ``mpirun -n N`` (N > 1) every
-    rank runs its share of the points in its own process, so ``jobs`` must be None or 1."""
-    from ._mpi import size_of
-
-    if jobs is not None and jobs < 1:
-        raise SceneError(f"{option} = {jobs} is out of range: allowed >= 1")
-    if jobs is not None and jobs > 1 and size_of(comm) > 1:
-        raise SceneError(f"{option} = {jobs} cannot be combined with mpirun -n {size_of(comm)}: "
-                         f"allowed 1 or omitted (each MPI rank is one worker)")
-
-
 def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = None,
               progress: Callable[[int], None] | None = None, mp_context: str = "spawn") -> list:
     """``[work(task) for task in tasks]``, in order, spread over the workers at hand.
@@ -81,7 +68,7 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
     * ``comm`` with more than one rank (``mpirun -n N``): the MPI task farm
       :func:`tengfield._mpi.farm` (dynamic schedule, every rank returns the
       whole list, an exception on any rank aborts all ranks with its message);
-      ``jobs`` must be None or 1 (:func:`check_jobs`).
+      ``jobs`` must be None or 1 (:func:`tengfield._mpi.check_jobs`).
     * otherwise ``jobs`` worker processes (default: all cores; ``work`` and
       the tasks must be picklable, ``mp_context`` "spawn" is safe after
       MPI/dolfinx initialisation), or a plain loop for one job or one task.
@@ -93,7 +80,7 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
     import os
     from concurrent.futures import ProcessPoolExecutor
 
-    from ._mpi import farm, size_of
+    from ._mpi import check_jobs, farm, size_of
 
     check_jobs(jobs, comm)
     tasks = list(tasks)
@@ -130,7 +117,7 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
     """
     from tqdm import tqdm
 
-    from ._mpi import rank_of
+    from ._mpi import check_jobs, rank_of
 
     check_jobs(jobs, comm)
     # validate every grid scene first: a bad point fails (on every rank) before any work starts

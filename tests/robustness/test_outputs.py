@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tengfield import cli
+from tengfield import _mpi, cli
 from tengfield.outputs import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
 
 
@@ -212,10 +212,10 @@ def test_ctrl_c_while_writing_and_a_concurrent_run(tmp_path, short_scene, run_cl
 # -- #8.10: --jobs bounds -----------------------------------------------------------------
 @pytest.mark.parametrize("jobs", [0, -1, 1000])
 def test_jobs_out_of_range_is_refused(jobs, capsys):
-    limit = cli.JOBS_PER_CORE_LIMIT * (os.cpu_count() or 1)
+    limit = _mpi.JOBS_PER_CORE_LIMIT * (os.cpu_count() or 1)
     for command in (["map", "--frequency-hz", "20", "--amplitude-mm", "1"],
                     ["sweep", "--frequency-hz", "20", "--amplitude-mm", "1"]):
         code, out, err = run_main(command + ["--jobs", str(jobs)], capsys)
         assert code == 2
         assert err == (f"tengfield: error: --jobs = {jobs} is out of range: allowed [1, {limit}] "
-                       f"({cli.JOBS_PER_CORE_LIMIT} x the {os.cpu_count()} cores)\n")
+                       f"({_mpi.JOBS_PER_CORE_LIMIT} x the {os.cpu_count()} cores)\n")

@@ -25,7 +25,7 @@ def add_cache_argument(parser) -> None:
 def add_jobs_argument(parser) -> None:
     """``--jobs N``: worker processes on this machine; under ``mpirun -n N`` (N > 1)
     the ranks are the workers and --jobs must be omitted or 1
-    (:func:`tengfield.sweep.check_jobs`)."""
+    (:func:`tengfield._mpi.check_jobs`)."""
     parser.add_argument("--jobs", "-j", type=int, default=None, metavar="N",
                         help="worker processes on this machine (default: all cores); under "
                              "mpirun -n N the MPI ranks are the workers: omit it or give 1")

@@ -4,8 +4,6 @@ Neither imports dolfinx or gmsh.
 """
 from __future__ import annotations
 
-import csv
-import json
 import math
 import sys
 from pathlib import Path
@@ -44,7 +42,7 @@ def register(sub) -> None:
 
 def _run_dynamics(args) -> int:
     from ..dynamics import simulate
-    from ..io import write_impacts_csv, write_trajectory_csv
+    from ..io import write_impacts_csv, write_json, write_trajectory_csv
     from ..plotting.dynamics import plot_trajectory
     from ..scene import load_scene
 
@@ -64,7 +62,7 @@ def _run_dynamics(args) -> int:
     write_impacts_csv(result, out / "impacts.csv")
     summary = result.summary()
     summary["scene"] = scene.source
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    write_json(out / "summary.json", summary)
     plot_trajectory(result, out / "trajectory.png",
                     title=f"{scene.excitation.amplitude * 1e3:g} mm, "
                           f"{scene.excitation.frequency:g} Hz, e = {scene.contact.restitution:g}"
@@ -78,8 +76,11 @@ def _run_dynamics(args) -> int:
 def _run_map(args) -> int:
     import numpy as np
 
+    from .._mpi import check_jobs
     from ..dynamics import regime_map
     from ..dynamics.mapping import check_map_size
+    from ..io import write_map_csv
+    from ._common import world_if_parallel
     from ..plotting.dynamics import plot_regime_map
     from ..scene import load_scene
 
@@ -87,19 +88,15 @@ def _run_map(args) -> int:
     freqs = list(parse_range(args.frequency_hz, "--frequency-hz"))
     amps_mm = list(parse_range(args.amplitude_mm, "--amplitude-mm", positive=False))
     check_map_size(len(freqs) * len(amps_mm), args.periods)   # before any work
+    comm = world_if_parallel()
+    check_jobs(args.jobs, comm)
     result = regime_map(scene, np.array(freqs), np.array(amps_mm) * 1e-3, jobs=args.jobs,
-                        progress=sys.stderr.isatty(), periods=args.periods)
+                        progress=sys.stderr.isatty(), periods=args.periods, comm=comm)
+    if comm is not None and comm.rank != 0:      # every rank holds the map; rank 0 writes
+        return 0
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "map.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["frequency_hz", "amplitude_mm", "regime", "period", "max_gap_mm",
-                    "lower_contacts_per_period", "upper_contacts_per_period", "error"])
-        for r in result.records():
-            w.writerow([f"{r['frequency_hz']:.10g}", f"{r['amplitude_m'] * 1e3:.10g}",
-                        r["regime"], r["period"], f"{r['max_gap_m'] * 1e3:.10g}",
-                        f"{r['lower_contacts_per_period']:.6g}",
-                        f"{r['upper_contacts_per_period']:.6g}", r["error"]])
+    write_map_csv(result, out / "map.csv")
     plot_regime_map(result, out / "map.png",
                     title=f"regimes, e = {scene.contact.restitution:g}, "
                           f"dh = {scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")

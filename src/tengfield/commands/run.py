@@ -1,8 +1,9 @@
 """``tengfield run``: dynamics -> surrogate (cached) -> circuit, end to end.
 
 Writes DIR/waveforms.csv, DIR/summary.json, DIR/waveforms.png,
-DIR/surrogate.png and the dynamics' trajectory.csv, impacts.csv and
-trajectory.png. Under ``mpirun -n N`` the field solves (if the surrogate
+DIR/surrogate.png (charging.png and vq.png for a rectifier, vq.png for a
+load, array.png for an [array]) and the dynamics' trajectory.csv,
+impacts.csv and trajectory.png. Under ``mpirun -n N`` the field solves (if the surrogate
 is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
@@ -47,5 +48,34 @@ def print_summary(summary: dict) -> None:
         load = summary["load"]
         print(f"load {summary['circuit']['load_ohm']:.3g} ohm: mean power "
               f"{load['mean_power_W'] * 1e6:.4g} uW, {load['power_density_W_per_m3']:.4g} W/m^3")
+    energy = summary.get("energy_per_cycle")
+    if energy:
+        line = f"energy per cycle: CMEO bound {energy['max_energy_per_cycle_J']:.4g} J"
+        if "load_loop_area_J" in energy:
+            line += (f"; V-Q loop area, load {energy['load_ohm']:.3g} ohm: "
+                     f"{energy['load_loop_area_J']:.4g} J")
+        if "rectifier_loop_area_J" in energy:
+            line += f"; rectifier: {energy['rectifier_loop_area_J']:.4g} J"
+        print(line + f" (FOM_S = {energy['figure_of_merit_structural']:.4g})")
+    rect = summary.get("rectifier")
+    if rect:
+        def when(x):
+            return "never" if x is None else f"{x:.4g} s"
+        print(f"store {rect['storage_capacitance_F'] * 1e6:.4g} uF: U = "
+              f"{rect['final_store_voltage_V']:.4g} V at the end; reaches "
+              f"{rect['uvlo_levels_V'][0]:g} V at {when(rect['time_to_uvlo_falling_V_s'])}, "
+              f"{rect['uvlo_levels_V'][1]:g} V at {when(rect['time_to_uvlo_rising_V_s'])}; "
+              f"harvested {rect['average_harvested_power_W'] * 1e6:.4g} uW, "
+              f"{rect['energy_per_cycle_J']:.4g} J per cycle")
+        if rect["pmic"] != "none":
+            print(f"chip: on {rect['chip_switch_on_count']} time(s), duty cycle "
+                  f"{rect['chip_duty_cycle']:.4g}")
+        res = rect["energy_residuals"]
+        print("energy books residuals: " + ", ".join(f"{k} {v:.2g}" for k, v in res.items()))
+    arr = summary.get("array")
+    if arr:
+        print(f"array: {arr['cells']} cells ({arr['connection']}), {arr['compared']}: array / "
+              f"(N x one cell) = {arr['array_over_N_cells']:.4g}, phase std "
+              f"{arr['phase_std_deg']:.3g} deg, coherence {arr['phase_coherence']:.3g}")
     for name, stage in summary["stages"].items():
         print(f"  {name:9s} {stage['status']:8s} {stage['wall_time_s']:7.2f} s  {stage['reason']}")

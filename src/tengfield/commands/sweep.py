@@ -40,7 +40,8 @@ def _run(args) -> int:
     from ..plotting.waveforms import plot_sweep
     from ..scene import load_scene
     from ..surrogate import obtain_table
-    from ..sweep import check_jobs, sweep
+    from .._mpi import check_jobs
+    from ..sweep import sweep
 
     scene = load_scene(args.scene)
     frequencies = parse_range(args.frequency_hz, "--frequency-hz")

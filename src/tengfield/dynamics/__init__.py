@@ -41,16 +41,18 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
 
 
 def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
-               progress: bool = True, periods: int = 200, settle_periods: int | None = None):
+               progress: bool = True, periods: int = 200, settle_periods: int | None = None,
+               comm=None):
     """Regime at every (frequency [Hz], amplitude [m]) pair of a grid -> ``MapResult``.
 
     Arrays are indexed [amplitude, frequency]; ``records()`` gives one dict per
     point. Runs ``periods`` excitation periods per point on ``jobs`` processes
-    (default all cores); see :func:`tengfield.dynamics.mapping.regime_map`.
+    (default all cores) or over the ranks of ``comm`` (MPI task farm); see
+    :func:`tengfield.dynamics.mapping.regime_map`.
     """
     from .mapping import regime_map as _regime_map
     return _regime_map(scene, frequencies_hz, amplitudes_m, jobs=jobs, progress=progress,
-                       periods=periods, settle_periods=settle_periods)
+                       periods=periods, settle_periods=settle_periods, comm=comm)
 
 
 def __getattr__(name):

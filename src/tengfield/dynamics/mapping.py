@@ -17,24 +17,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DynamicsError, SceneError
+from .._mpi import check_jobs, farm, rank_of, size_of
 from ..scene import G
 from .impact import Restitution, integrate
 from .regime import classify
 from .result import REGIMES, Regime
 
-#: At most this many worker processes per core (``--jobs``).
-MAX_JOBS_PER_CORE = 4
 #: At most this many grid points in one map (result arrays ~130 bytes per point).
 MAX_MAP_POINTS = 4_000_000
 #: At most this many excitation periods per map point.
 MAX_MAP_PERIODS = 1_000_000
 #: At most this many simulated periods in one map (points x periods; ~10 us each).
 MAX_MAP_WORK = 10_000_000_000
-
-
-def max_jobs() -> int:
-    """Largest ``jobs`` a map accepts: MAX_JOBS_PER_CORE x the cores of this machine."""
-    return MAX_JOBS_PER_CORE * (os.cpu_count() or 1)
 
 
 def check_map_size(n_points: int, periods: int) -> None:
@@ -127,11 +121,13 @@ def _chunk(args):
 
 def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
                progress: bool = True, periods: int = 200,
-               settle_periods: int | None = None) -> MapResult:
+               settle_periods: int | None = None, comm=None) -> MapResult:
     """Regime, period, max gap and contacts per period on a frequency x amplitude grid.
 
     ``frequencies_hz`` [Hz] and ``amplitudes_m`` [m] are 1-D; ``jobs``
-    worker processes (default: all cores); ``periods`` excitation periods
+    worker processes (default: all cores), or the MPI task farm over ``comm``
+    when it has more than one rank (every rank gets the whole map, identical to
+    a serial run; ``jobs`` must then be None or 1); ``periods`` excitation periods
     per point of which ``settle_periods`` (default: the scene's, at most
     half of ``periods``) are transient. A point whose integration fails gets
     regime ``'error'`` and its message in ``error``.
@@ -148,12 +144,11 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
     setup = PointSetup(scene.device.stroke, Restitution.from_contact(scene.contact),
                         scene.excitation.phase, scene.initial.time, scene.initial.gap,
                         scene.initial.velocity, int(periods), settle)
+    check_jobs(jobs, comm)
     jobs = (os.cpu_count() or 1) if jobs is None else int(jobs)
-    if not 1 <= jobs <= max_jobs():
-        raise SceneError(f"--jobs = {jobs}: allowed [1, {max_jobs()}] "
-                         f"({MAX_JOBS_PER_CORE} x the {os.cpu_count() or 1} cores)")
+    workers = size_of(comm) if size_of(comm) > 1 else jobs
     points = [(i, j, f, a) for i, a in enumerate(amps) for j, f in enumerate(freqs)]
-    chunk = max(1, min(64, len(points) // (8 * jobs)))
+    chunk = max(1, min(64, len(points) // (8 * workers)))
     tasks = [(setup, points[k:k + chunk]) for k in range(0, len(points), chunk)]
     shape = (amps.size, freqs.size)
     names = np.full(shape, "error", dtype="<U16")
@@ -165,7 +160,7 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
 
     from tqdm import tqdm
     bar = tqdm(total=amps.size * freqs.size, unit="pt", desc="regime map", file=sys.stderr,
-               disable=not progress or None)
+               disable=not progress or rank_of(comm) != 0 or None)
     _chunk((setup, [(0, 0, 1.0, 0.0)]))   # load the compiled kernel once, before forking
 
     def store(results):
@@ -181,7 +176,10 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
         bar.update(len(results))
 
     try:
-        if jobs == 1 or len(tasks) == 1:
+        if size_of(comm) > 1:
+            for results in farm(comm, tasks, _chunk):
+                store(results)
+        elif jobs == 1 or len(tasks) == 1:
             for task in tasks:
                 store(_chunk(task))
         else:

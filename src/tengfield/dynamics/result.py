@@ -1,6 +1,8 @@
 """Result objects of the dynamics (in the spirit of scipy's ``OdeResult``)."""
 from __future__ import annotations
 
+from .. import scene as scene_limits
+
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -112,8 +114,9 @@ class DynamicsResult:
 
 
 #: Sampled runs longer than this many samples (duration_s x sample_rate_hz) are
-#: refused before integrating (4 arrays of 8 bytes per sample: 1.6 GB).
-MAX_SAMPLES = 50_000_000
+#: refused before integrating (the scene's limit, also applied to a ``duration``
+#: given to ``simulate``).
+MAX_SAMPLES = scene_limits.MAX_SAMPLES
 
 
 def run_span(scene, duration: float | None) -> tuple[float, float, float]:

@@ -1,0 +1,450 @@
+"""Arrays of cells that each run their own dynamics (``[array]``, issue #11).
+
+Every cell of an ``[array]`` bounces on the same table but with its own
+draw (uniform, full widths, one ``numpy.random.default_rng(seed)`` stream,
+three numbers per cell whatever is spread):
+
+* ``initial_phase_spread_deg``: the excitation phase the cell sees,
+  ``phase_deg + spread (u - 1/2)`` (cells at different places on a vibrating
+  structure; for a sine table this is a persistent phase offset);
+* ``restitution_spread``: ``restitution + spread (u - 1/2)``, clipped to [0, 1];
+* ``initial_velocity_spread_m_per_s``: ``[initial] velocity_m_per_s + spread u``
+  (upwards, so a ball starting on the lower plate leaves it).
+
+The cells' trajectories come from the compiled impact map
+(:func:`tengfield.dynamics.impact.integrate`, the kernel of
+:func:`tengfield.dynamics.simulate`), spread over processes or over the ranks
+of an MPI communicator (:func:`tengfield._mpi.farm`); only their compact
+segment lists are kept. The electrical stage then walks the output times in
+chunks (``CHUNK_VALUES`` cell-samples at a time), evaluates the one shared
+surrogate for every cell and feeds the circuit:
+
+* ``connection = "parallel"``: the cells' terminals wired in parallel
+  (Q_SC, C_T and I_SC add), then ``[circuit]`` as for one cell (open, short,
+  load, or one bridge for the whole array);
+* ``"rectified-parallel"``: a bridge per cell, all into ONE store (and chip);
+* ``"rectified-per-cell"``: a bridge, store and chip per cell (N independent
+  harvesters; energies add, ``V_store_V`` is the cells' mean).
+
+Cells with identical draws share one trajectory (weight = their count), so
+an array without spread costs one cell and is exactly ``[device] cells = N``:
+its electrical stage is then the single-cell one of :mod:`tengfield.electrical`
+with ``cells = N``. With spread, the array's grid is the output samples (the
+impact instants of the individual cells are not added to it).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import circuit, electrical
+from .errors import SceneError
+
+#: cell-samples evaluated per chunk of the electrical stage (bounds the memory)
+CHUNK_VALUES = 1_000_000
+
+
+# ---------------------------------------------------------------------------
+# draws and dynamics
+def draw_cells(scene) -> np.ndarray:
+    """(cells, 3) array: excitation phase [rad], restitution, initial velocity [m/s]."""
+    arr = scene.array
+    n = arr.cells
+    rng = np.random.default_rng(arr.seed)
+    u = rng.random((n, 3))
+    draws = np.empty((n, 3))
+    draws[:, 0] = scene.excitation.phase + arr.phase_spread * (u[:, 0] - 0.5)
+    draws[:, 1] = np.clip(scene.contact.restitution + arr.restitution_spread * (u[:, 1] - 0.5),
+                          0.0, 1.0)
+    draws[:, 2] = scene.initial.velocity + arr.velocity_spread * u[:, 2]
+    if arr.phase_spread == 0.0:
+        draws[:, 0] = scene.excitation.phase
+    if arr.restitution_spread == 0.0:
+        draws[:, 1] = scene.contact.restitution
+    if arr.velocity_spread == 0.0:
+        draws[:, 2] = scene.initial.velocity
+    return draws
+
+
+def check_array_scene(scene) -> None:
+    """One-line SceneErrors for what arrays do not support."""
+    if scene.contact.model != "impact":
+        raise SceneError(f"[contact] model = {scene.contact.model!r}: [array] runs need the "
+                         "impact map (model = 'impact')")
+    if scene.excitation.kind != "sine" and scene.array.phase_spread > 0:
+        raise SceneError("[array] initial_phase_spread_deg needs [excitation] kind = 'sine'")
+
+
+def cell_trajectory(scene, draw):
+    """(Trajectory, number of impacts) of one cell with ``draw`` = (phase, e, v0)."""
+    from .dynamics.impact import Restitution, integrate
+    from .dynamics.result import run_span
+    from .dynamics.table import sine_table, table_from_scene
+
+    exc = scene.excitation
+    table = (sine_table(exc.amplitude, exc.omega, float(draw[0])) if exc.kind == "sine"
+             else table_from_scene(scene))
+    restitution = dataclasses.replace(Restitution.from_contact(scene.contact), e=float(draw[1]))
+    _, t0, t_end = run_span(scene, None)
+    traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=t0,
+                                 t_end=t_end, gap0=scene.initial.gap,
+                                 velocity0=float(draw[2]), period=exc.period)
+    return traj, int(impacts[0].size)
+
+
+def _simulate_block(args):
+    scene, draws = args
+    return [cell_trajectory(scene, d) for d in draws]
+
+
+def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
+                   progress: bool = False) -> list:
+    """Trajectories of the distinct ``draws`` (rows), on ``jobs`` processes (default:
+    the machine's cores) or over the ranks of ``comm`` (size > 1); ``progress``:
+    a tqdm bar on stderr when it is a terminal."""
+    from ._mpi import farm, rank_of, size_of
+
+    n = len(draws)
+    bar = None
+    if progress and sys.stderr.isatty() and rank_of(comm) == 0 and n >= 8:
+        from tqdm import tqdm
+        bar = tqdm(total=n, desc="cell dynamics", unit="cell", file=sys.stderr, leave=False)
+
+    def done(block):
+        if bar is not None:
+            bar.update(len(block))
+        return block
+
+    try:
+        if size_of(comm) > 1:
+            blocks = _blocks(draws, 4 * size_of(comm))
+            parts = farm(comm, [(scene, b) for b in blocks], _simulate_block,
+                         progress=(lambda k: bar.update(k * len(blocks[0])))
+                         if bar is not None else None)
+        else:
+            jobs = min(jobs or os.cpu_count() or 1, n)
+            if jobs <= 1 or n < 8:
+                return _simulate_block((scene, draws))
+            from concurrent.futures import ProcessPoolExecutor
+            blocks = _blocks(draws, 4 * jobs)
+            with ProcessPoolExecutor(jobs) as pool:
+                parts = [done(p) for p in pool.map(_simulate_block,
+                                                   [(scene, b) for b in blocks])]
+    finally:
+        if bar is not None:
+            bar.close()
+    return [cell for part in parts for cell in part]
+
+
+def _blocks(rows, count):
+    count = max(1, min(count, len(rows)))
+    return [b for b in np.array_split(np.asarray(rows), count) if len(b)]
+
+
+# ---------------------------------------------------------------------------
+@dataclass
+class ArrayResult:
+    """Electrical outputs of an array at the output ``time`` [s] (SI).
+
+    ``columns``: the waveform columns (array sums; with a rectifier also the
+    store's); ``output``/``reference``: what ``array.png`` compares (the array
+    and N x one cell without spread, ``output_label``); ``phases_deg``: each
+    cell's phase of the fundamental of its Q_SC over the steady window minus
+    the array's mean phase; ``summary``: the JSON block; ``fine``: the store
+    record (:class:`tengfield.harvest.HarvestResult`) of a shared store.
+    """
+    time: np.ndarray
+    columns: dict
+    output: np.ndarray
+    reference: np.ndarray
+    output_label: str
+    phases_deg: np.ndarray
+    period: float
+    summary: dict
+    fine: object = None
+    load: dict | None = None
+    stages: dict = field(default_factory=dict)
+
+
+def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
+              progress: bool = False) -> ArrayResult:
+    """The ``[array]`` of ``scene`` with the shared surrogate ``curves`` (None: Q_SC = 0)
+    and the nominal cell's dynamics ``nominal`` (the unperturbed scene, whose
+    output times are the array's grid)."""
+    check_array_scene(scene)
+    n = scene.array.cells
+    start = time.perf_counter()
+    draws = draw_cells(scene)
+    distinct, inverse = np.unique(draws, axis=0, return_inverse=True)
+    weights = np.bincount(inverse.reshape(-1), minlength=len(distinct)).astype(float)
+    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress)
+    dynamics_time = time.perf_counter() - start
+    start = time.perf_counter()
+    one = scene.with_values(device={"cells": 1}, array={"cells": 0, "connection": "parallel",
+                                                      "initial_phase_spread_deg": 0.0,
+                                                      "restitution_spread": 0.0,
+                                                      "initial_velocity_spread_m_per_s": 0.0})
+    scaled = one.with_values(device={"cells": n})
+    t = np.asarray(nominal.t, dtype=float)
+    if len(distinct) == 1:
+        result = _identical(scaled, nominal, curves, trajectories[0][0], n)
+    else:
+        result = _spread(scene, nominal, curves, [tr for tr, _ in trajectories], weights, t)
+    phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
+              else _phases(scene, curves, [tr for tr, _ in trajectories], t))
+    cell_phases = phases[inverse.reshape(-1)]
+    unit = np.exp(1j * np.deg2rad(cell_phases[np.isfinite(cell_phases)]))
+    mean = np.angle(unit.mean()) if unit.size else 0.0
+    relative = np.rad2deg(np.angle(np.exp(1j * (np.deg2rad(cell_phases) - mean))))
+    coherence = float(abs(unit.mean())) if unit.size else math.nan
+    ratio = result["value"] / result["reference_value"] if result["reference_value"] else math.nan
+    arr = scene.array
+    result["summary"].update({
+        "cells": n, "connection": arr.connection,
+        "initial_phase_spread_deg": math.degrees(arr.phase_spread),
+        "restitution_spread": arr.restitution_spread,
+        "initial_velocity_spread_m_per_s": arr.velocity_spread, "seed": arr.seed,
+        "distinct_dynamics": int(len(distinct)),
+        "impacts_per_cell_mean": float(np.average([k for _, k in trajectories],
+                                                  weights=weights)),
+        "compared": result["compared"], "array_value": result["value"],
+        "N_x_one_cell_value": result["reference_value"], "array_over_N_cells": ratio,
+        "loss_to_phase_spread": 1.0 - ratio if math.isfinite(ratio) else math.nan,
+        "phase_coherence": coherence,
+        "phase_std_deg": float(np.nanstd(relative)),
+        "phases_deg": [float(p) for p in relative],
+        "phase_rule": "phase of the fundamental (excitation frequency) of each cell's Q_SC "
+                      "over the steady window, minus the array's circular mean",
+        "dynamics_wall_time_s": dynamics_time,
+        "electrical_wall_time_s": time.perf_counter() - start,
+    })
+    return ArrayResult(time=t, columns=result["columns"], output=result["output"],
+                       reference=result["reference"], output_label=result["label"],
+                       phases_deg=relative, period=scene.excitation.period,
+                       summary=result["summary"], fine=result.get("fine"),
+                       load=result.get("load"))
+
+
+class _Sampled:
+    """A trajectory with the attributes the electrical functions read."""
+
+    def __init__(self, trajectory, times, impacts=None):
+        self._traj = trajectory
+        self.t = np.asarray(times, dtype=float)
+        self.gap, self.gap_velocity, self.table = trajectory(self.t)
+        self.impacts = impacts
+
+    def sample(self, times):
+        return self._traj(np.ascontiguousarray(np.atleast_1d(times), dtype=float))
+
+
+def _identical(scaled, nominal, curves, trajectory, n) -> dict:
+    """No spread: the single-cell electrical stage with [device] cells = N."""
+    dyn = _Sampled(trajectory, nominal.t, getattr(nominal, "impacts", None))
+    waves = electrical.scene_waveforms(scaled, dyn, curves)
+    out = {"columns": waves, "summary": {}}
+    kind = scaled.circuit.kind
+    mask, _ = electrical.steady_window(waves["time_s"], scaled)
+    if kind == "load" and curves is not None:
+        load = electrical.steady_load(scaled, dyn, curves)
+        waves.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
+                      "P_load_W": load["P_load"]})
+        out.update(value=load["mean_power_W"], reference_value=load["mean_power_W"],
+                   compared="mean load power [W]", output=load["P_load"],
+                   reference=load["P_load"], label="P_load [W]", load=load)
+    elif kind == "rectifier" and curves is not None:
+        rect = electrical.rectifier_waveforms(scaled, dyn, curves)
+        waves.update({c: rect[c] for c in electrical.RECTIFIER_COLUMNS})
+        energy = float(rect["fine"].store_input[-1])
+        out.update(value=energy, reference_value=energy,
+                   compared="energy into the store(s) [J]", output=rect["E_store_J"],
+                   reference=rect["E_store_J"], label="E_store [J]", fine=rect["fine"])
+    else:
+        p2p = circuit.peak_to_peak(waves["Q_sc_C"][mask])
+        out.update(value=p2p, reference_value=p2p, compared="Q_SC peak-to-peak [C]",
+                   output=waves["Q_sc_C"], reference=waves["Q_sc_C"], label="Q_SC [C]")
+    return out
+
+
+def _evaluate(curves, trajectories, times):
+    """(Q_SC, C_T, I_SC) of every trajectory at ``times``: (rows, cells) arrays."""
+    z = np.empty((times.size, len(trajectories)))
+    v = np.empty_like(z)
+    for j, traj in enumerate(trajectories):
+        z[:, j], v[:, j], _ = traj(times)
+    if curves is None:
+        zero = np.zeros_like(z)
+        return zero, np.full_like(z, 1e-15), zero
+    q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), curves._q.x, curves._q.c,
+                           curves._c.c, curves.stroke)
+    return q.reshape(z.shape), c.reshape(z.shape), i.reshape(z.shape)
+
+
+try:
+    from numba import njit
+except ImportError:  # pragma: no cover
+    def njit(*args, **kwargs):
+        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+
+
+@njit(cache=True)
+def _spline_eval(z, v, knots, cq, cc, stroke):
+    """Q_SC(z), C_T(z) and (dQ_SC/dz) v of the surrogate's cubic splines (their
+    piecewise coefficients ``cq``, ``cc`` on ``knots``), z clipped to [0, stroke]:
+    one interval search for the three."""
+    n = z.size
+    q = np.empty(n)
+    c = np.empty(n)
+    i = np.empty(n)
+    last = knots.size - 2
+    for k in range(n):
+        x = min(max(z[k], 0.0), stroke)
+        j = np.searchsorted(knots, x, side="right") - 1
+        j = min(max(j, 0), last)
+        d = x - knots[j]
+        q[k] = ((cq[0, j] * d + cq[1, j]) * d + cq[2, j]) * d + cq[3, j]
+        c[k] = ((cc[0, j] * d + cc[1, j]) * d + cc[2, j]) * d + cc[3, j]
+        slope = (3.0 * cq[0, j] * d + 2.0 * cq[1, j]) * d + cq[2, j]
+        i[k] = slope * v[k]
+    return q, c, i
+
+
+def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
+    """Cells with different dynamics, walked in time chunks."""
+    from .harvest import Harvester
+
+    kind = scene.circuit.kind
+    connection = scene.array.connection
+    n = float(np.sum(weights))
+    c_p = scene.circuit.parallel_capacitance
+    g = len(trajectories)
+    rows = max(2, CHUNK_VALUES // max(g, 1))
+    sums = {k: np.empty(t.size) for k in ("Q", "C", "I")}
+    ref = {k: np.empty(t.size) for k in ("Q", "C", "I")}
+    window, _ = electrical.steady_window(t, scene)
+    basis = np.where(window, np.exp(-1j * scene.excitation.omega * t), 0.0)
+    fundamental = np.zeros(g, dtype=complex)
+    rect_cols = {c: np.empty(t.size) for c in electrical.RECTIFIER_COLUMNS}
+    rectifying = kind == "rectifier"
+    options = electrical.harvester_options(scene) if rectifying else None
+    harvesters = ref_harvester = None
+    if rectifying:
+        bare = dict(options, parallel_capacitance=0.0)
+        if connection == "rectified-per-cell":
+            harvesters = [Harvester(1, **bare) for _ in range(g)]
+        else:
+            harvesters = [Harvester(g if connection == "rectified-parallel" else 1, **bare)]
+        ref_harvester = Harvester(1, **bare)
+    parts, ref_parts = [], []
+    for lo in range(0, t.size, rows):
+        times = t[lo:lo + rows]
+        q, c, i = _evaluate(curves, trajectories, times)
+        rq, rc, ri = _evaluate(curves, [nominal.sample], times)
+        block = slice(lo, lo + times.size)
+        fundamental += basis[block] @ q
+        for key, value in zip(("Q", "C", "I"), (q, c, i)):
+            sums[key][block] = value @ weights
+        for key, value in zip(("Q", "C", "I"), (rq, rc, ri)):
+            ref[key][block] = value[:, 0] * n
+        if not rectifying:
+            continue
+        if connection == "parallel":
+            res = harvesters[0].advance(times, sums["Q"][block], sums["C"][block] + c_p)
+            store = (res.store_voltage, res.store_current, res.stored_energy,
+                     res.chip_on.astype(float))
+            parts.append(_store_only(res))
+        elif connection == "rectified-parallel":
+            res = harvesters[0].advance(times, q * weights, c * weights + c_p * weights)
+            store = (res.store_voltage, res.store_current, res.stored_energy,
+                     res.chip_on.astype(float))
+            parts.append(_store_only(res))
+        else:
+            results = [h.advance(times, q[:, j], c[:, j] + c_p) for j, h in enumerate(harvesters)]
+            w = weights / n
+            store = (sum(r.store_voltage * wj for r, wj in zip(results, w)),
+                     sum(r.store_current * wj for r, wj in zip(results, weights)),
+                     sum(r.stored_energy * wj for r, wj in zip(results, weights)),
+                     sum(r.chip_on * wj for r, wj in zip(results, w)))
+            parts[:] = [results]             # only the last chunk's ends are used
+        for col, value in zip(electrical.RECTIFIER_COLUMNS, store):
+            rect_cols[col][block] = value
+        if connection == "parallel":            # N x one cell, C_p once across them
+            ref_q, ref_c = rq[:, 0] * n, rc[:, 0] * n + c_p
+        elif connection == "rectified-parallel":  # N cells with C_p each, one store
+            ref_q, ref_c = rq[:, 0] * n, (rc[:, 0] + c_p) * n
+        else:                                     # one cell into its own store (x N below)
+            ref_q, ref_c = rq[:, 0], rc[:, 0] + c_p
+        ref_parts.append(ref_harvester.advance(times, ref_q, ref_c))
+    mask, _ = electrical.steady_window(t, scene)
+    gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
+    columns = {"time_s": t, "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
+               "table_m": np.asarray(table), "V_oc_V": sums["Q"] / (sums["C"] + c_p),
+               "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
+    out = {"columns": columns, "fundamental": fundamental,
+           "summary": {"grid": "output samples (no per-cell impact instants)"}}
+    if kind == "load":
+        load = scene.circuit.load
+        resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
+        ref_resp = circuit.load_response(t, ref["Q"], ref["I"], ref["C"], load, c_p)
+        columns.update({"V_load_V": resp.voltage, "I_load_A": resp.current,
+                        "P_load_W": resp.power})
+        length = t[mask][-1] - t[mask][0]
+        power = float(np.trapz(resp.power[mask], t[mask]) / length)
+        ref_power = float(np.trapz(ref_resp.power[mask], t[mask]) / length)
+        out.update(value=power, reference_value=ref_power, compared="mean load power [W]",
+                   output=resp.power, reference=ref_resp.power, label="P_load [W]",
+                   load={"mean_power_W": power, "V_load": resp.voltage, "I_load": resp.current})
+        out["summary"]["mean_load_power_W"] = power
+    elif rectifying:
+        columns.update(rect_cols)
+        ref_fine = electrical.concat_results(ref_parts)
+        ref_energy = float(ref_fine.store_input[-1]) * (n if connection == "rectified-per-cell"
+                                                        else 1.0)
+        if connection == "rectified-per-cell":
+            energy = float(sum(parts[-1][j].store_input[-1] * weights[j] for j in range(g)))
+            fine = None
+            ref_curve = ref_fine.stored_energy * n
+        else:
+            fine = electrical.concat_results(parts)
+            energy = float(fine.store_input[-1])
+            ref_curve = ref_fine.stored_energy
+            out["summary"]["rectifier"] = electrical.rectifier_summary(scene, fine,
+                                                                       float(t[mask][0]))
+        out.update(value=energy, reference_value=ref_energy,
+                   compared="energy into the store(s) [J]", output=rect_cols["E_store_J"],
+                   reference=ref_curve, label="E_store [J]", fine=fine)
+    else:
+        p2p = circuit.peak_to_peak(sums["Q"][mask])
+        ref_p2p = circuit.peak_to_peak(ref["Q"][mask])
+        out.update(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
+                   output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
+    return out
+
+
+def _store_only(res):
+    """A chunk's HarvestResult without its (rows, cells) arrays: an array run keeps only
+    the store's 1-D record, never N x samples."""
+    empty = np.empty((res.time.size, 0))        # not a view: the chunk's memory is freed
+    return dataclasses.replace(res, voltage=empty, bridge_charge=empty.copy())
+
+
+def _phases(scene, curves, trajectories, t) -> np.ndarray:
+    """Phase [deg] of the fundamental of each trajectory's Q_SC over the steady window."""
+    window, _ = electrical.steady_window(t, scene)
+    if curves is None or np.count_nonzero(window) < 4:
+        return np.full(len(trajectories), math.nan)
+    basis = np.where(window, np.exp(-1j * scene.excitation.omega * t), 0.0)
+    q, _, _ = _evaluate(curves, trajectories, t)
+    return _phase_of(basis @ q)
+
+
+def _phase_of(fundamental) -> np.ndarray:
+    phase = np.rad2deg(np.angle(fundamental))
+    phase[np.abs(fundamental) == 0.0] = math.nan
+    return phase

@@ -1,0 +1,149 @@
+"""[array]: cells with their own dynamics sharing one surrogate (tengfield.array).
+
+Field: the analytic plate model (no dolfinx); dynamics: the real impact map.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tengfield as tf
+from tengfield import array, electrical
+
+sys.path.insert(0, str(Path(__file__).parent))
+import test_pipeline_fixtures as fx  # noqa: E402
+
+SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 4000.0}
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("surrogates")
+
+
+def run(cache, circuit, **arr):
+    scene = fx.scene_with(run=SHORT_RUN, circuit=circuit, **arr)
+    return tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+
+
+@pytest.mark.parametrize("circuit", [
+    {"kind": "open"},
+    {"kind": "load", "load_ohm": 3e9, "parallel_capacitance_pF": 2.0},
+    {"kind": "rectifier", "storage_capacitance_uF": 1e-4},
+])
+def test_identical_cells_are_device_cells_exactly(cache, circuit):
+    """No spread: [array] cells = N gives today's [device] cells = N, to the last bit."""
+    arr = run(cache, circuit, array={"cells": 5})
+    dev = run(cache, circuit, device={"cells": 5})
+    assert arr.summary["array"]["distinct_dynamics"] == 1
+    assert set(dev.waveforms) <= set(arr.waveforms)
+    for key, values in dev.waveforms.items():
+        np.testing.assert_array_equal(arr.waveforms[key], values, err_msg=key)
+    assert arr.summary["array"]["array_over_N_cells"] == pytest.approx(1.0, abs=1e-15)
+    assert arr.summary["array"]["phase_coherence"] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_phase_spread_costs_parallel_cells_and_per_cell_bridges_recover_it(cache):
+    """Spread phases partly cancel in a parallel wiring (ratio < 1); per-cell bridges into
+    the same store never deliver less than one bridge on the parallel sum."""
+    spread = {"cells": 12, "initial_phase_spread_deg": 240.0, "seed": 7}
+    rect = {"kind": "rectifier", "storage_capacitance_uF": 1e-4}
+    shared = run(cache, rect, array={**spread, "connection": "parallel"})
+    per_cell = run(cache, rect, array={**spread, "connection": "rectified-parallel"})
+    opened = run(cache, {"kind": "open"}, array=spread)
+    assert opened.summary["array"]["array_over_N_cells"] < 0.9
+    assert opened.summary["array"]["phase_coherence"] < 0.9
+    a, b = shared.summary["array"], per_cell.summary["array"]
+    assert a["N_x_one_cell_value"] == pytest.approx(b["N_x_one_cell_value"], rel=1e-12)
+    assert b["array_value"] >= a["array_value"]
+    assert b["array_over_N_cells"] > 0.9 > a["array_over_N_cells"]
+    assert max(per_cell.summary["rectifier"]["energy_residuals"].values()) < 1e-9
+
+
+def test_per_cell_stores_add_up(cache):
+    """rectified-per-cell: N independent harvesters; with no spread the array is N x one."""
+    rect = {"kind": "rectifier", "storage_capacitance_uF": 1e-4}
+    one = run(cache, rect)
+    arr = run(cache, rect, array={"cells": 3, "connection": "rectified-per-cell",
+                                  "restitution_spread": 1e-9})
+    # a spread too small to change the motion visibly: the stores still add up
+    assert arr.summary["array"]["distinct_dynamics"] == 3
+    e_one = one.summary["rectifier"]["energy_books_J"]["delivered_J"]   # ideal: all stored
+    assert arr.summary["array"]["N_x_one_cell_value"] == pytest.approx(3 * e_one, rel=1e-2)
+    assert arr.summary["array"]["array_value"] == pytest.approx(
+        arr.summary["array"]["N_x_one_cell_value"], rel=1e-6)
+
+
+def test_draws_follow_the_seed_and_stay_in_range():
+    scene = fx.scene_with(array={"cells": 200, "initial_phase_spread_deg": 90.0,
+                                 "restitution_spread": 0.5, "initial_velocity_spread_m_per_s": 0.2,
+                                 "seed": 4})
+    d = array.draw_cells(scene)
+    np.testing.assert_array_equal(d, array.draw_cells(scene))
+    assert not np.array_equal(d, array.draw_cells(scene.with_values(array={"seed": 5})))
+    assert np.all(np.abs(d[:, 0] - scene.excitation.phase) <= np.pi / 4)
+    assert np.all((d[:, 1] >= 0) & (d[:, 1] <= 1)) and d[:, 1].max() > 0.3
+    assert np.all((d[:, 2] >= 0) & (d[:, 2] <= 0.2))
+
+
+def test_processes_give_the_serial_trajectories():
+    scene = fx.scene_with(run=SHORT_RUN, array={"cells": 16, "restitution_spread": 0.1,
+                                                "initial_phase_spread_deg": 30.0})
+    draws = array.draw_cells(scene)
+    serial = array.simulate_cells(scene, draws, jobs=1)
+    spread = array.simulate_cells(scene, draws, jobs=2)
+    t = np.linspace(0, 0.5, 101)
+    for (a, na), (b, nb) in zip(serial, spread):
+        assert na == nb
+        np.testing.assert_array_equal(a(t)[0], b(t)[0])
+
+
+def test_array_plot_and_csv(cache, tmp_path):
+    from tengfield import io
+    res = run(cache, {"kind": "load", "load_ohm": 3e9},
+              array={"cells": 6, "initial_velocity_spread_m_per_s": 0.3})
+    written = [p.name for p in io.write_run_outputs(res, tmp_path)]
+    assert "array.png" in written and "vq.png" not in written
+    data = np.loadtxt(tmp_path / "waveforms.csv", delimiter=",", skiprows=1)
+    assert data.shape[1] == len(electrical.WAVEFORM_COLUMNS + electrical.LOAD_COLUMNS)
+    assert res.summary["cells"] == 6 and len(res.summary["array"]["phases_deg"]) == 6
+
+
+@pytest.mark.mpi
+def test_mpi_ranks_give_the_serial_trajectories():
+    from mpi4py import MPI
+    comm = MPI.COMM_WORLD
+    scene = fx.scene_with(run=SHORT_RUN, array={"cells": 6, "restitution_spread": 0.1})
+    draws = array.draw_cells(scene)
+    farmed = array.simulate_cells(scene, draws, comm=comm)
+    serial = array.simulate_cells(scene, draws, jobs=1)
+    t = np.linspace(0, 0.5, 51)
+    for (a, _), (b, _) in zip(farmed, serial):
+        np.testing.assert_array_equal(a(t)[0], b(t)[0])
+
+
+def test_cli_array_run(tmp_path):
+    """`tengfield run` of an [array] scene (surrogate cached from the plate model)."""
+    import json
+    import os
+    import subprocess
+
+    path = tmp_path / "arr.toml"
+    path.write_text('[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 4000.0\n'
+                    '[circuit]\nkind = "rectifier"\nstorage_capacitance_uF = 1e-4\n'
+                    '[array]\ncells = 10\nconnection = "rectified-parallel"\n'
+                    'initial_phase_spread_deg = 90\n')
+    tf.run(tf.load_scene(path), cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    proc = subprocess.run([sys.executable, "-m", "tengfield.cli", "run", "arr.toml", "-o", "out"],
+                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["cells"] == 10 and summary["array"]["distinct_dynamics"] == 10
+    assert 0 < summary["array"]["array_over_N_cells"] <= 1.1
+    assert (tmp_path / "out" / "array.png").stat().st_size > 0
+    assert (tmp_path / "out" / "charging.png").stat().st_size > 0
+    assert "array: 10 cells (rectified-parallel)" in proc.stdout
