@@ -152,20 +152,19 @@ def test_gap_rule_clamps_near_contact_only(fraction):
         assert meshed == z and anchors is None
     else:
         assert anchors[0] == meshed and abs(anchors[1] - anchors[0]) == pytest.approx(g_min)
+        assert abs(anchors[2] - anchors[0]) == pytest.approx(3 * g_min)
 
 
 def test_gap_rule_is_the_axisymmetric_one():
-    """Same minimum gap and the same first two anchors (3D extrapolates linearly
-    through them; the axisymmetric solver adds a third anchor for a power law)."""
-    from tengfield.field import geometry_axisymmetric
+    """One rule (tengfield.field.contact): same minimum gap, same anchors."""
+    from tengfield.field import contact, geometry_axisymmetric
     device = default_scene().device
     assert geometry3d.minimum_gap(PAPER) == pytest.approx(geometry_axisymmetric.minimum_gap(device))
     for z in (0.0, 1e-5, 1.5e-3, 3e-3):
         assert geometry3d.meshed_gap(PAPER, z) == pytest.approx(
             geometry_axisymmetric.effective_gap(device, z))
-        axisymmetric = geometry_axisymmetric.contact_anchors(device, z)
-        assert geometry3d.contact_anchors(PAPER, z) == (None if axisymmetric is None
-                                                        else tuple(axisymmetric[:2]))
+        axisymmetric = contact.contact_anchors(z, device.stroke, device.plate_spacing)
+        assert geometry3d.contact_anchors(PAPER, z) == axisymmetric
 
 
 @pytest.mark.parametrize("call, words", [
@@ -194,8 +193,15 @@ def test_grounded_table_is_refused_by_the_3d_path():
 
 
 def test_potentials_xdmf_is_written(tmp_path):
-    sol = solve(PAPER, 1.0, 0.5, 0.0)
-    solver3d.write_potentials_xdmf(tmp_path / "psi.xdmf", sol)
+    from mpi4py import MPI
+
+    from tengfield.field import io
+    settings = solver3d.Solve3DSettings(degree=1, mesh_size=2e-3, domain_radius=20e-3,
+                                        far_field="robin", estimate_error=False)
+    res = solver3d.solve_cell_3d(PAPER, 1.0e-3, offset=0.5e-3, surface_charge=-8e-6,
+                                 settings=settings, comm=MPI.COMM_SELF, keep_solution=True)
+    assert res.solution.method == "3d" and res.solution.ball_centre[0] == pytest.approx(0.5e-3)
+    io.write_xdmf(tmp_path / "psi.xdmf", res.solution)
     text = (tmp_path / "psi.xdmf").read_text()
     assert "psi_lower" in text and "psi_upper" in text
     assert (tmp_path / "psi.h5").stat().st_size > 0

@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 from tengfield import terminals
 from tengfield.errors import FieldError, SceneError
 from tengfield.field import check_position, resolve_method, solve_position
-from tengfield.field.geometry_axisymmetric import (contact_anchors, layout, linear_extrapolation,
-                                                  minimum_gap)
-from tengfield.field.output import open_circuit_potentials, reference_charges
+from tengfield.field.contact import (contact_anchors, linear_extrapolation, minimum_gap,
+                                    relative_change, relative_difference)
+from tengfield.field.geometry_axisymmetric import layout
+from tengfield.field.potential import open_circuit_potentials, reference_charges
 from tengfield.field.result import PositionResult
 from tengfield.scene import default_scene
 
@@ -90,13 +91,16 @@ def test_method_resolution():
 
 def test_contact_anchors_rule():
     dev = default_scene().device
-    g = minimum_gap(dev)
+    g = minimum_gap(dev.plate_spacing)
     assert g == pytest.approx(0.002 * dev.plate_spacing)
-    assert contact_anchors(dev, 0.0) == (g, 2 * g, 4 * g)
-    assert contact_anchors(dev, dev.stroke) == pytest.approx((dev.stroke - g, dev.stroke - 2 * g,
-                                                           dev.stroke - 4 * g))
-    assert contact_anchors(dev, 1.5e-3) is None
-    assert contact_anchors(dev, g) is None
+
+    def anchors(z):
+        return contact_anchors(z, dev.stroke, dev.plate_spacing)
+    assert anchors(0.0) == (g, 2 * g, 4 * g)
+    assert anchors(dev.stroke) == pytest.approx((dev.stroke - g, dev.stroke - 2 * g,
+                                                 dev.stroke - 4 * g))
+    assert anchors(1.5e-3) is None
+    assert anchors(g) is None
     assert layout(default_scene(), 0.0).effective_gap == pytest.approx(g)
 
 

@@ -15,15 +15,9 @@ second half-disk, the Kelvin image of the exterior ``|x| > R`` under
 along z, with its arc periodic (node-for-node identical, up to the shift) to
 the domain's arc.
 
-Contact rule (z → 0, z → Δh): no mesh has a ball–electrode gap below
-``min_gap = 0.002 h`` (20 µm for the paper's device). The layout clamps the
-gap to ``[min_gap, Δh - min_gap]``; the solver evaluates positions closer to
-a plate than ``min_gap`` by linear extrapolation from the gaps ``min_gap`` and
-``2 min_gap`` (:func:`contact_anchors`), and estimates the error of that
-extrapolation by repeating it from ``2 min_gap`` and ``4 min_gap``. For the
-PTFE ball (εr = 2.1) C and q are linear in the gap there (extrapolation
-error ~1e-4); for a nearly conducting ball (εr ≳ 10) the charge varies
-logarithmically near contact and the estimate says so (docs/field.md).
+Contact rule (z → 0, z → Δh): the layout clamps the gap to
+``[min_gap, Δh - min_gap]``; positions closer to a plate are extrapolated by
+the solver, see :mod:`tengfield.field.contact` (one rule for both solvers).
 
 Mesh grading (all sizes scale with the base size ``mesh_size``):
 
@@ -52,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import FieldError
+from . import contact
 
 #: strongest singular exponent of the field (rim of an electrode meeting the tube corner)
 RIM_EXPONENT = 0.43
@@ -100,83 +95,14 @@ class AxisymmetricLayout:
         return self.z_lower - self.plate_thickness
 
 
-#: smallest meshed ball–electrode gap, as a fraction of the plate spacing h
-MIN_GAP_FRACTION = 2e-3
-
-
 def minimum_gap(device) -> float:
-    """Smallest ball–electrode gap meshed [m]: ``MIN_GAP_FRACTION · h``."""
-    return MIN_GAP_FRACTION * device.plate_spacing
+    """Smallest ball–electrode gap meshed [m] (:func:`tengfield.field.contact.minimum_gap`)."""
+    return contact.minimum_gap(device.plate_spacing)
 
 
 def effective_gap(device, position: float) -> float:
     """The gap actually meshed: ``position`` clamped to [min_gap, Δh - min_gap]."""
-    g = minimum_gap(device)
-    return min(max(position, g), device.stroke - g)
-
-
-def contact_anchors(device, position: float) -> tuple[float, float, float] | None:
-    """Three meshable positions to extrapolate from when ``position`` is closer than
-    ``min_gap`` to a plate: gaps (g, 2g, 4g) from that plate, i.e. positions
-    (g, 2g, 4g) or (Δh - g, Δh - 2g, Δh - 4g); ``None`` when ``position`` can be
-    meshed as it is."""
-    g = minimum_gap(device)
-    if position < g:
-        return g, 2.0 * g, 4.0 * g
-    if position > device.stroke - g:
-        return device.stroke - g, device.stroke - 2.0 * g, device.stroke - 4.0 * g
-    return None
-
-
-def linear_extrapolation(position: float, anchors, values) -> np.ndarray:
-    """Value at ``position`` of the line through (anchors[0], values[0]) and
-    (anchors[1], values[1]) (arrays of any shape)."""
-    weight = (position - anchors[0]) / (anchors[1] - anchors[0])
-    return np.asarray(values[0]) + weight * (np.asarray(values[1]) - np.asarray(values[0]))
-
-
-#: exponents of the near-contact power law X(δ) = X0 + b δ^p
-#: (:func:`contact_exponent`) are clipped to this range
-CONTACT_EXPONENT_RANGE = (0.25, 2.0)
-#: A fitted exponent this close to 1 is mesh noise around a straight line
-#: (PTFE gives 0.98-1.02): it is snapped to 1, so Q_SC(z) has no spurious
-#: weak singularity inside the contact layer (which would bias dQ_SC/dz at
-#: contact, hence the peak I_SC, by a few per cent).
-CONTACT_EXPONENT_SNAP = 0.05
-
-
-def contact_exponent(values) -> float:
-    """Exponent p of the near-contact law ``X(δ) = X0 + b δ^p`` from values at the
-    gaps (g, 2g, 4g): ``p = log2((X(4g) - X(2g)) / (X(2g) - X(g)))`` of the entry
-    that varies most (relative to its size), shared by every entry.
-
-    One exponent describes the local field near contact; fitting it entry by
-    entry would let a weakly varying entry (the far electrode's C) fit mesh
-    noise. p = 1 (a straight line) for a low-permittivity ball such as PTFE; a
-    high-permittivity ball gives p < 1 because its gap capacitance saturates
-    only at gaps ~ R/εr² (0.35 µm for εr = 100), far below g. If the two
-    differences of that entry do not share a sign, p = 1; p is clipped to
-    :data:`CONTACT_EXPONENT_RANGE`; within :data:`CONTACT_EXPONENT_SNAP` of 1 it is 1.
-    """
-    near, middle, far = (np.ravel(np.asarray(v, dtype=float)) for v in values)
-    first, second = middle - near, far - middle
-    scale = np.where(near != 0.0, np.abs(near), 1.0)
-    k = int(np.argmax(np.abs(first) / scale))
-    if not first[k] * second[k] > 0.0:
-        return 1.0
-    exponent = float(np.clip(np.log2(second[k] / first[k]), *CONTACT_EXPONENT_RANGE))
-    return 1.0 if abs(exponent - 1.0) < CONTACT_EXPONENT_SNAP else exponent
-
-
-def power_law_extrapolation(distance: float, anchor_gap: float, values,
-                            exponent: float) -> np.ndarray:
-    """Value at plate distance ``distance`` [m] of ``X(δ) = X0 + b δ^p`` through the
-    values at distances (g, 2g, 4g), ``g = anchor_gap`` (arrays of any shape), with
-    ``p = exponent`` (:func:`contact_exponent`); p = 1 is the straight line
-    through the first two anchors."""
-    near, middle = (np.asarray(v, dtype=float) for v in values[:2])
-    u = distance / anchor_gap
-    return near + (middle - near) * (u**exponent - 1.0) / (2.0**exponent - 1.0)
+    return contact.clamp_gap(position, device.stroke, device.plate_spacing)
 
 
 def layout(scene, position: float, *, degree: int | None = None, mesh_size: float | None = None,
