@@ -251,12 +251,20 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     from . import _dolfinx as dx_api
 
     lay = geometry.layout(scene, position, **layout_overrides)
+    geometry.check_mesh_budget(lay, scene.field.degree)
     initialised_here = not gmsh.isInitialized()
     if initialised_here:
-        gmsh.initialize(["-nt", "1"], readConfigFiles=False)
+        # interruptible=False: gmsh leaves Python's SIGINT handler alone (Ctrl-C
+        # raises KeyboardInterrupt instead of killing the process)
+        gmsh.initialize(["-nt", "1"], readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     try:
-        geometry.build_model(gmsh, lay, geometry_order=2)
+        try:
+            geometry.build_model(gmsh, lay, geometry_order=2)
+        except FieldError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - gmsh/OpenCASCADE: one line naming the keys
+            raise FieldError(geometry.meshing_failure(scene, exc)) from None
         mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=2)
         gmsh.model.remove()
     finally:
@@ -315,6 +323,10 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
 
     t0 = time.perf_counter()
     fld = scene.field
+    half = scene.with_values(field={"mesh_size_mm": 0.5e3 * fld.mesh_size})
+    if estimate_error:   # refuse before any meshing if the finer mesh would not fit
+        geometry.check_mesh_budget(geometry.layout(half, position, grading_size=fld.mesh_size),
+                                   fld.degree)
     lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
     sigma = scene.device.surface_charge
     eps = permittivities(scene.device, lay)
@@ -324,8 +336,8 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
                                linear_solver=linear_solver)
     estimate = math.nan
     if estimate_error:
-        half = scene.with_values(field={"mesh_size_mm": 0.5e3 * fld.mesh_size})
-        lay_half, *fine_mesh = build_mesh(half, position, comm)
+        # same grading lengths as the coarse mesh: a uniform halving of one mesh family
+        lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=fld.mesh_size)
         finer = discretise(dx_api, *fine_mesh, lay_half, eps, fld.degree, fld.far_field)
         fine = solve_discretisation(dx_api, finer, sigma, diameter, source_solve=False,
                                     linear_solver=linear_solver)
