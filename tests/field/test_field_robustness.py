@@ -42,8 +42,9 @@ def test_colour_bar_of_small_potentials_uses_a_small_unit():
 # -- size budget and gmsh failures (issue 8.7) -------------------------------------------
 def test_mesh_estimate_refuses_a_tiny_mesh_size_before_meshing():
     scene = default_scene().with_values(field={"mesh_size_mm": 0.001})
-    lay = geometry.layout(scene, 1.5e-3)
-    assert geometry.estimated_dofs(lay, 2) > geometry.MAX_DOFS_2D
+    half = geometry.layout(scene.with_values(field={"mesh_size_mm": 0.0005}), 1.5e-3,
+                           grading_size=1e-6)
+    assert geometry.estimated_dofs(half, 2) > geometry.MAX_DOFS_2D
     start = time.perf_counter()
     from mpi4py import MPI
 

@@ -251,7 +251,7 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     from . import _dolfinx as dx_api
 
     lay = geometry.layout(scene, position, **layout_overrides)
-    geometry.check_mesh_budget(lay, scene.field.degree)
+    geometry.check_mesh_budget(lay, scene.field.degree, mesh_size_mm=scene.field.mesh_size * 1e3)
     initialised_here = not gmsh.isInitialized()
     if initialised_here:
         # interruptible=False: gmsh leaves Python's SIGINT handler alone (Ctrl-C
@@ -326,7 +326,7 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     half = scene.with_values(field={"mesh_size_mm": 0.5e3 * fld.mesh_size})
     if estimate_error:   # refuse before any meshing if the finer mesh would not fit
         geometry.check_mesh_budget(geometry.layout(half, position, grading_size=fld.mesh_size),
-                                   fld.degree)
+                                   fld.degree, mesh_size_mm=fld.mesh_size * 1e3, refinement=2.0)
     lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
     sigma = scene.device.surface_charge
     eps = permittivities(scene.device, lay)
