@@ -141,6 +141,9 @@ class MeshSettings:
     growth: float = 0.3
 
     def __post_init__(self):
+        # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
+        for name in ("size", "domain_radius", "rim_floor", "ball_factor", "growth"):
+            object.__setattr__(self, name, float(getattr(self, name)))
         if not (self.size > 0 and math.isfinite(self.size)):
             raise FieldError(f"mesh_size_mm = {self.size * 1e3!r} is out of range: allowed (0, 100] mm")
         if self.order not in (1, 2):

@@ -137,6 +137,7 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
     (:data:`GRADING_REACH` times it); the error estimate's half-size mesh
     passes the coarse mesh's size, so both meshes belong to one family."""
     dev, fld = scene.device, scene.field
+    position = float(position)
     degree = fld.degree if degree is None else degree
     mesh_size = fld.mesh_size if mesh_size is None else mesh_size
     domain_radius = fld.domain_radius if domain_radius is None else domain_radius
@@ -155,6 +156,9 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
     extent = max(math.hypot(dev.tube_outer_radius, zz - centre)
                  for zz in (z_lower - dev.plate_thickness, -z_lower + dev.plate_thickness))
     grading_size = mesh_size if grading_size is None else grading_size
+    # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
+    mesh_size, grading_size, domain_radius = float(mesh_size), float(grading_size), \
+        float(domain_radius)
     # a device larger than the reference spacing gets the geometrically similar mesh
     similarity = size_scale(dev)
     mesh_size, grading_size = mesh_size * similarity, grading_size * similarity
