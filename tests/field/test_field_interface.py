@@ -1,6 +1,7 @@
 """The field package's pure-Python parts: result object, dispatch, input checks,
 open-circuit potentials (no dolfinx needed)."""
 import json
+import math
 import subprocess
 import sys
 
@@ -146,3 +147,52 @@ def test_open_circuit_potentials_agree_with_the_terminal_reduction(values, refer
     else:                               # both floating: each keeps its charge
         assert Q == pytest.approx(Q_ref, rel=1e-9, abs=1e-21)
         assert Q.sum() == pytest.approx(-qb, rel=1e-12)
+
+
+def test_only_the_version_layer_imports_dolfinx_petsc_ufl_basix():
+    """#10/#14: every dolfinx/petsc4py/ufl/basix import of tengfield is in field/_dolfinx.py."""
+    import ast
+    from pathlib import Path
+
+    import tengfield
+    root = Path(tengfield.__file__).parent
+    offenders = []
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            for name in names:
+                if name.split(".")[0] in ("dolfinx", "petsc4py", "ufl", "basix"):
+                    offenders.append(f"{path.relative_to(root)}: {name}")
+    assert offenders and all(o.startswith("field/_dolfinx.py") for o in offenders), offenders
+
+
+def test_solver_sources_exclude_io_and_plots():
+    """The surrogate's solver fingerprint hashes SOLVER_SOURCES: every file that
+    decides the numbers is in it, the writers and plots are not."""
+    from pathlib import Path
+
+    import tengfield.field as field
+    paths = field.solver_source_paths()
+    assert all(p.is_file() for p in paths)
+    names = {p.name for p in paths}
+    assert {"axisymmetric.py", "solver3d.py", "_dolfinx.py", "contact.py"} <= names
+    assert not names & {"io.py", "plot.py", "potential.py", "result.py"}
+    package = {p.name for p in Path(field.__file__).parent.glob("*.py")}
+    assert names <= package
+    assert package - names == {"io.py", "plot.py", "potential.py", "result.py"}, \
+        "a new module in field/: add it to SOLVER_SOURCES if it changes the numbers"
+
+
+def test_contact_relative_change_is_relative_to_the_reference_and_zero_safe():
+    class S:
+        def __init__(self, c, f):
+            self.capacitance, self.induced_fraction = np.array(c), np.array(f)
+    ref = S([[2.0, -1.0], [-1.0, 2.0]], [-0.5, -0.25])
+    val = S([[2.2, -1.0], [-1.0, 2.0]], [-0.5, -0.25])
+    assert relative_change(val, ref) == pytest.approx(0.1)
+    assert relative_difference([0.0, 1.0], [0.0, 1.0]) == 0.0
+    assert relative_difference([1e-3], [0.0]) == math.inf
