@@ -14,6 +14,7 @@ from mpi4py import MPI  # noqa: E402
 
 from tengfield.field import solve_position  # noqa: E402
 from tengfield.field import _dolfinx as dx_api  # noqa: E402
+from tengfield.field import contact  # noqa: E402
 from tengfield.field import geometry_axisymmetric as geometry  # noqa: E402
 from tengfield.scene import default_scene  # noqa: E402
 
@@ -42,11 +43,12 @@ def test_mean_value_property_for_a_vacuum_ball(z):
     (any electrode shape, any dielectric outside: the PMMA walls stay in)."""
     scene = default_scene().with_values(device={"ball_permittivity": 1.0})
     res = solve(scene, z, keep_solution=True)
-    disc, sol = res.info.pop("_solution")
-    lay = geometry.layout(scene, z)
-    centre = [[0.0, lay.ball_centre_z, 0.0]]
+    sol = res.solution
+    assert sol.method == "axisymmetric" and sol.source is None
+    centre = [sol.ball_centre]
+    assert sol.ball_centre[1] == pytest.approx(geometry.layout(scene, z).ball_centre_z)
     for k, psi in enumerate(sol.weighting):
-        psi_centre = dx_api.point_values(disc.V, psi, centre)[0]
+        psi_centre = dx_api.point_values(sol.space, psi.x.array, centre)[0]
         expected = -res.ball_charge * psi_centre
         assert res.induced_charge[k] == pytest.approx(expected, rel=2e-4)
 
@@ -143,13 +145,13 @@ def test_grounded_table_takes_charge_from_the_electrodes():
 
 # -- contact rule -----------------------------------------------------------------
 def test_contact_rule_matches_a_directly_meshed_small_gap(monkeypatch):
-    """Below min_gap the solver extrapolates linearly from min_gap and 2 min_gap;
-    meshing a 5 µm gap directly gives the same numbers."""
+    """Below min_gap the solver extrapolates from min_gap, 2 min_gap, 4 min_gap
+    (a straight line for PTFE); meshing a 5 µm gap directly gives the same numbers."""
     scene = default_scene()
     z = 5e-6
     rule = solve(scene, z)
     assert "extrapolation" in rule.info["contact_rule"]
-    monkeypatch.setattr(geometry, "MIN_GAP_FRACTION", 1e-4)
+    monkeypatch.setattr(contact, "MIN_GAP_FRACTION", 1e-4)
     direct = solve(scene, z)
     assert "contact_rule" not in direct.info
     assert direct.info["meshed_gap_m"] == pytest.approx(z)

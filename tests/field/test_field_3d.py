@@ -61,6 +61,7 @@ def test_mean_value_property_off_axis():
     np.testing.assert_allclose(-sol.induced_fraction, at_centre, rtol=2e-3)
 
 
+@pytest.mark.slow
 def test_offset_direction_does_not_matter_in_a_round_tube():
     along_x = solve(PAPER, 1.0, 0.5, 0.0)
     along_y = solve(PAPER, 1.0, 0.5, math.pi / 2)
@@ -68,6 +69,7 @@ def test_offset_direction_does_not_matter_in_a_round_tube():
     np.testing.assert_allclose(numbers(along_y), numbers(along_x), rtol=1e-3)
 
 
+@pytest.mark.slow
 def test_off_axis_change_is_small_and_shrinks_with_the_offset():
     """q(offset) - q(0) is even in the offset (∝ offset²): small, and 4x smaller at half the offset."""
     q0, q_half, q_full = (solve(PAPER, 1.0, off).induced_fraction for off in (0.0, 0.25, 0.5))
@@ -78,6 +80,7 @@ def test_off_axis_change_is_small_and_shrinks_with_the_offset():
     assert np.all(change_half < 0.6 * change_full)
 
 
+@pytest.mark.slow
 def test_honeycomb_cell_mirror_symmetry_and_sanity():
     """Honeycomb cell: z -> Δh - z swaps lower and upper (also at the clamped ends)."""
     bottom = solve(HONEYCOMB, 0.0)
@@ -91,6 +94,7 @@ def test_honeycomb_cell_mirror_symmetry_and_sanity():
     assert bottom.induced_fraction[0] < 1.5 * bottom.induced_fraction[1]
 
 
+@pytest.mark.slow
 def test_honeycomb_cell_sixfold_symmetry():
     along_flat = solve(HONEYCOMB, 1.0, 0.3, math.pi / 6)
     rotated = solve(HONEYCOMB, 1.0, 0.3, math.pi / 6 + math.pi / 3)
@@ -98,6 +102,7 @@ def test_honeycomb_cell_sixfold_symmetry():
     np.testing.assert_allclose(numbers(rotated), numbers(along_flat), rtol=1e-3)
 
 
+@pytest.mark.slow
 def test_far_field_is_stable_when_the_domain_radius_doubles():
     """R = 20 -> 40 mm: the low-order exact DtN condition ("kelvin") changes C and q by
     less than the coarse mesh's noise; Robin changes them more, a grounded sphere far more."""
@@ -112,6 +117,7 @@ def test_far_field_is_stable_when_the_domain_radius_doubles():
     assert change["dirichlet"] > 5 * change["robin"], change
 
 
+@pytest.mark.slow
 def test_error_estimate_bounds_the_actual_error():
     """P1 at 1.5 mm: its estimate is at least its error against P2 at 1.5 mm, and not 10x larger."""
     from mpi4py import MPI
@@ -152,20 +158,19 @@ def test_gap_rule_clamps_near_contact_only(fraction):
         assert meshed == z and anchors is None
     else:
         assert anchors[0] == meshed and abs(anchors[1] - anchors[0]) == pytest.approx(g_min)
+        assert abs(anchors[2] - anchors[0]) == pytest.approx(3 * g_min)
 
 
 def test_gap_rule_is_the_axisymmetric_one():
-    """Same minimum gap and the same first two anchors (3D extrapolates linearly
-    through them; the axisymmetric solver adds a third anchor for a power law)."""
-    from tengfield.field import geometry_axisymmetric
+    """One rule (tengfield.field.contact): same minimum gap, same anchors."""
+    from tengfield.field import contact, geometry_axisymmetric
     device = default_scene().device
     assert geometry3d.minimum_gap(PAPER) == pytest.approx(geometry_axisymmetric.minimum_gap(device))
     for z in (0.0, 1e-5, 1.5e-3, 3e-3):
         assert geometry3d.meshed_gap(PAPER, z) == pytest.approx(
             geometry_axisymmetric.effective_gap(device, z))
-        axisymmetric = geometry_axisymmetric.contact_anchors(device, z)
-        assert geometry3d.contact_anchors(PAPER, z) == (None if axisymmetric is None
-                                                        else tuple(axisymmetric[:2]))
+        axisymmetric = contact.contact_anchors(z, device.stroke, device.plate_spacing)
+        assert geometry3d.contact_anchors(PAPER, z) == axisymmetric
 
 
 @pytest.mark.parametrize("call, words", [
@@ -194,8 +199,15 @@ def test_grounded_table_is_refused_by_the_3d_path():
 
 
 def test_potentials_xdmf_is_written(tmp_path):
-    sol = solve(PAPER, 1.0, 0.5, 0.0)
-    solver3d.write_potentials_xdmf(tmp_path / "psi.xdmf", sol)
+    from mpi4py import MPI
+
+    from tengfield.field import io
+    settings = solver3d.Solve3DSettings(degree=1, mesh_size=2e-3, domain_radius=20e-3,
+                                        far_field="robin", estimate_error=False)
+    res = solver3d.solve_cell_3d(PAPER, 1.0e-3, offset=0.3e-3, surface_charge=-8e-6,
+                                 settings=settings, comm=MPI.COMM_SELF, keep_solution=True)
+    assert res.solution.method == "3d" and res.solution.ball_centre[0] == pytest.approx(0.3e-3)
+    io.write_xdmf(tmp_path / "psi.xdmf", res.solution)
     text = (tmp_path / "psi.xdmf").read_text()
     assert "psi_lower" in text and "psi_upper" in text
     assert (tmp_path / "psi.h5").stat().st_size > 0

@@ -6,6 +6,7 @@ pytest.importorskip("dolfinx")
 pytest.importorskip("gmsh")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("position_mm", [0.0, 1.0])
 def test_on_axis_3d_equals_axisymmetric_within_the_estimates(position_mm):
     """z = 0 exercises the shared contact rule (extrapolation from 20 and 40 µm)."""

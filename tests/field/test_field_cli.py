@@ -16,6 +16,7 @@ def run_cli(*args, cwd):
                           capture_output=True, text=True, cwd=cwd, env=env)
 
 
+@pytest.mark.slow
 def test_field_command_writes_json_xdmf_png(tmp_path):
     scene = tmp_path / "coarse.toml"
     scene.write_text("[field]\nmesh_size_mm = 0.8\n")

@@ -1,6 +1,7 @@
 """The field package's pure-Python parts: result object, dispatch, input checks,
 open-circuit potentials (no dolfinx needed)."""
 import json
+import math
 import subprocess
 import sys
 
@@ -12,9 +13,10 @@ from hypothesis import strategies as st
 from tengfield import terminals
 from tengfield.errors import FieldError, SceneError
 from tengfield.field import check_position, resolve_method, solve_position
-from tengfield.field.geometry_axisymmetric import (contact_anchors, layout, linear_extrapolation,
-                                                  minimum_gap)
-from tengfield.field.output import open_circuit_potentials, reference_charges
+from tengfield.field.contact import (contact_anchors, linear_extrapolation, minimum_gap,
+                                    relative_change, relative_difference)
+from tengfield.field.geometry_axisymmetric import layout
+from tengfield.field.potential import open_circuit_potentials, reference_charges
 from tengfield.field.result import PositionResult
 from tengfield.scene import default_scene
 
@@ -90,13 +92,16 @@ def test_method_resolution():
 
 def test_contact_anchors_rule():
     dev = default_scene().device
-    g = minimum_gap(dev)
+    g = minimum_gap(dev.plate_spacing)
     assert g == pytest.approx(0.002 * dev.plate_spacing)
-    assert contact_anchors(dev, 0.0) == (g, 2 * g, 4 * g)
-    assert contact_anchors(dev, dev.stroke) == pytest.approx((dev.stroke - g, dev.stroke - 2 * g,
-                                                           dev.stroke - 4 * g))
-    assert contact_anchors(dev, 1.5e-3) is None
-    assert contact_anchors(dev, g) is None
+
+    def anchors(z):
+        return contact_anchors(z, dev.stroke, dev.plate_spacing)
+    assert anchors(0.0) == (g, 2 * g, 4 * g)
+    assert anchors(dev.stroke) == pytest.approx((dev.stroke - g, dev.stroke - 2 * g,
+                                                 dev.stroke - 4 * g))
+    assert anchors(1.5e-3) is None
+    assert anchors(g) is None
     assert layout(default_scene(), 0.0).effective_gap == pytest.approx(g)
 
 
@@ -142,3 +147,57 @@ def test_open_circuit_potentials_agree_with_the_terminal_reduction(values, refer
     else:                               # both floating: each keeps its charge
         assert Q == pytest.approx(Q_ref, rel=1e-9, abs=1e-21)
         assert Q.sum() == pytest.approx(-qb, rel=1e-12)
+
+
+def test_only_the_version_layer_imports_dolfinx_petsc_ufl_basix():
+    """#10/#14: every dolfinx/petsc4py/ufl/basix import of the field stack (the field
+    package, its CLI command, and the solver callers) is in field/_dolfinx.py
+    (commands/info.py reads versions; it is not part of the field stack)."""
+    import ast
+    from pathlib import Path
+
+    import tengfield
+    root = Path(tengfield.__file__).parent
+    offenders = []
+    for path in [*root.joinpath("field").rglob("*.py"), root / "commands" / "field.py",
+                 root / "surrogate.py", root / "pipeline.py"]:
+        if not path.is_file():
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            for name in names:
+                if name.split(".")[0] in ("dolfinx", "petsc4py", "ufl", "basix"):
+                    offenders.append(f"{path.relative_to(root)}: {name}")
+    assert offenders and all(o.startswith("field/_dolfinx.py") for o in offenders), offenders
+
+
+def test_solver_sources_exclude_io_and_plots():
+    """The surrogate's solver fingerprint hashes SOLVER_SOURCES: every file that
+    decides the numbers is in it, the writers and plots are not."""
+    from pathlib import Path
+
+    import tengfield.field as field
+    paths = field.solver_source_paths()
+    assert all(p.is_file() for p in paths)
+    names = {p.name for p in paths}
+    assert {"axisymmetric.py", "solver3d.py", "_dolfinx.py", "contact.py"} <= names
+    assert not names & {"io.py", "plot.py", "potential.py", "result.py"}
+    package = {p.name for p in Path(field.__file__).parent.glob("*.py")}
+    assert names <= package
+    assert package - names == {"io.py", "plot.py", "potential.py", "result.py"}, \
+        "a new module in field/: add it to SOLVER_SOURCES if it changes the numbers"
+
+
+def test_contact_relative_change_is_relative_to_the_reference_and_zero_safe():
+    class S:
+        def __init__(self, c, f):
+            self.capacitance, self.induced_fraction = np.array(c), np.array(f)
+    ref = S([[2.0, -1.0], [-1.0, 2.0]], [-0.5, -0.25])
+    val = S([[2.2, -1.0], [-1.0, 2.0]], [-0.5, -0.25])
+    assert relative_change(val, ref) == pytest.approx(0.1)
+    assert relative_difference([0.0, 1.0], [0.0, 1.0]) == 0.0
+    assert relative_difference([1e-3], [0.0]) == math.inf

@@ -29,6 +29,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from stability_checks import assert_finite, scene_with  # noqa: E402
 
 from tengfield.errors import FieldError, SceneError  # noqa: E402
+from tengfield.field import contact  # noqa: E402
 from tengfield.field import geometry_axisymmetric as geometry  # noqa: E402
 from tengfield.field import solve_position  # noqa: E402
 
@@ -155,7 +156,7 @@ def test_high_contrast_contact_is_the_limit_of_a_closing_gap(monkeypatch):
     scene = scene_with(device={"ball_permittivity": 100.0, "wall_permittivity": 1.0})
     at_contact, rule_5um = solve(scene, 0.0), solve(scene, 5e-6)
     assert "contact_rule" in at_contact.info and "contact_rule" in rule_5um.info
-    monkeypatch.setattr(geometry, "MIN_GAP_FRACTION", 1e-4)
+    monkeypatch.setattr(contact, "MIN_GAP_FRACTION", 1e-4)
     direct_10um, direct_5um = solve(scene, 10e-6), solve(scene, 5e-6)
     assert "contact_rule" not in direct_5um.info
     trend = np.sign(quantities(direct_5um) - quantities(direct_10um))
@@ -178,12 +179,12 @@ def test_power_law_contact_extrapolation_is_exact_on_power_laws(exponent):
     def law(delta):
         return x0 + b * (delta / g) ** exponent
     values = [law(g), law(2 * g), law(4 * g)]
-    assert geometry.contact_exponent(values) == pytest.approx(exponent, rel=1e-12)
+    assert contact.contact_exponent(values) == pytest.approx(exponent, rel=1e-12)
     for delta in (0.0, 5e-6, 3 * g):
-        got = geometry.power_law_extrapolation(delta, g, values, exponent)
+        got = contact.power_law_extrapolation(delta, g, values, exponent)
         assert got == pytest.approx(law(delta), rel=1e-12, abs=1e-12)
     wiggle = [np.array([1.0, 5.0]), np.array([2.0, 5.0]), np.array([1.5, 5.0])]
-    assert geometry.contact_exponent(wiggle) == 1.0
+    assert contact.contact_exponent(wiggle) == 1.0
 
 
 @pytest.mark.parametrize("exponent", [0.96, 0.987, 1.02])
@@ -192,8 +193,8 @@ def test_contact_exponent_near_one_is_a_straight_line(exponent):
     Q_SC(z) inside the contact layer: such exponents are snapped to exactly 1."""
     g = 20e-6
     values = [1.0 + (k * g / g) ** exponent for k in (1, 2, 4)]
-    assert geometry.contact_exponent(values) == 1.0
-    assert geometry.contact_exponent([1.0 + k ** 0.9 for k in (1, 2, 4)]) == pytest.approx(0.9)
+    assert contact.contact_exponent(values) == 1.0
+    assert contact.contact_exponent([1.0 + k ** 0.9 for k in (1, 2, 4)]) == pytest.approx(0.9)
 
 
 def test_permittivity_contrast_trends(refinement):

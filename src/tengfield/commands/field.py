@@ -3,7 +3,6 @@ potential.xdmf, field.png). The only place of the field stack that uses
 ``MPI.COMM_WORLD``."""
 from __future__ import annotations
 
-import json
 import math
 import sys
 from pathlib import Path
@@ -37,7 +36,7 @@ def _run(args) -> int:
     from mpi4py import MPI
 
     from ..errors import FieldError
-    from ..field import check_position, resolve_method, solve_position
+    from ..field import check_position, resolve_method
     from ..scene import load_scene
 
     comm = MPI.COMM_WORLD
@@ -54,42 +53,21 @@ def _run(args) -> int:
     out = Path(args.output)
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
-
+    plot = not args.no_plot
     if method == "axisymmetric":
-        result, potentials = _axisymmetric(scene, position, reference, out, comm,
-                                           plot=not args.no_plot)
+        # a small problem: solved and drawn on rank 0, the outcome shared
+        result, potentials = _on_rank_zero(
+            comm, lambda: _axisymmetric(scene, position, reference, out, plot=plot))
     else:
-        from ..field import solver3d
-
-        result = solve_position(scene, position, comm=comm, method="3d",
-                                keep_solution=not args.no_plot)
-        potentials = None
-        if not args.no_plot:
-            solution = result.info.pop("_solution")
-            # collective on the mesh's communicator: every rank writes its part
-            solver3d.write_potentials_xdmf(out / "potential.xdmf", solution)
-            if comm.size == 1:
-                from ..field.output import render_weighting_png_3d
-
-                render_weighting_png_3d(
-                    out / "field.png", solution, scene.device,
-                    title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
-                           f"z = {position * 1e3:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
-            elif comm.rank == 0:
-                print("tengfield: field.png of a 3D run is drawn in serial runs only; "
-                      "potential.xdmf holds psi_lower, psi_upper", file=sys.stderr)
+        result, potentials = _three_d(scene, position, out, comm, plot=plot), None
     if comm.rank == 0:
-        from ..field.output import summary_lines
+        from ..field import io
 
-        data = result.to_json(reference)
-        if potentials is not None:
-            data["open_circuit_potential_V"] = {"lower": float(potentials[0]),
-                                                "upper": float(potentials[1])}
-        (out / "field.json").write_text(json.dumps(data, indent=2) + "\n")
-        for line in summary_lines(result, reference, potentials):
+        io.write_field_json(out / "field.json", result, reference, potentials)
+        for line in io.summary_lines(result, reference, potentials):
             print(line)
         written = [out / "field.json"]
-        if not args.no_plot:
+        if plot:
             written += [out / "potential.xdmf"]
             if method == "axisymmetric" or comm.size == 1:
                 written.append(out / "field.png")
@@ -97,33 +75,14 @@ def _run(args) -> int:
     return 0
 
 
-def _axisymmetric(scene, position, reference, out, comm, *, plot: bool):
-    """Solve on rank 0 (COMM_SELF); with ``plot`` also the reference state (z = 0) and
-    the source potential, then write the XDMF and PNG files."""
-    from mpi4py import MPI
-
-    from ..field import _dolfinx, axisymmetric, output  # noqa: F401 - every rank: PETSc init is collective
+def _on_rank_zero(comm, work):
+    """``work()`` on rank 0 of ``comm``, its outcome (or exception) on every rank."""
+    from ..field import _dolfinx  # noqa: F401 - every rank: PETSc init is collective
 
     outcome = None
     if comm.rank == 0:
         try:
-            result = axisymmetric.solve_serial(scene, position, MPI.COMM_SELF, keep_solution=plot,
-                                               source_solve=plot)
-            potentials = None
-            if plot:
-                ref = axisymmetric.solve_serial(scene, 0.0, MPI.COMM_SELF, estimate_error=False)
-                potentials = output.open_circuit_potentials(
-                    result.capacitance, result.induced_charge, ref.capacitance,
-                    ref.induced_charge, result.ball_charge, reference)
-                disc, sol = result.info.pop("_solution")
-                phi = output.potential_vector(sol, potentials)
-                output.write_potential_xdmf(out / "potential.xdmf", disc, phi, MPI.COMM_SELF)
-                from ..field.geometry_axisymmetric import layout
-                lay = layout(scene, position)
-                title = (f"open-circuit potential, z = {position * 1e3:.3g} mm, "
-                         f"{reference} reference, V_OC = {potentials[0] - potentials[1]:.4g} V")
-                output.render_potential_png(out / "field.png", disc, phi, lay, title=title)
-            outcome = (result, potentials)
+            outcome = work()
         except Exception as exc:  # noqa: BLE001 - re-raised on every rank
             outcome = exc
     if comm.size > 1:
@@ -131,3 +90,39 @@ def _axisymmetric(scene, position, reference, out, comm, *, plot: bool):
     if isinstance(outcome, Exception):
         raise outcome
     return outcome
+
+
+def _axisymmetric(scene, position, reference, out, *, plot: bool):
+    from mpi4py import MPI
+
+    from ..field import io, open_circuit, plot as field_plot
+
+    state = open_circuit(scene, position, comm=MPI.COMM_SELF, method="axisymmetric",
+                         reference=reference, keep_solution=plot)
+    result = state.result
+    if plot:
+        io.write_xdmf(out / "potential.xdmf", result.solution, state.potentials)
+        field_plot.render_potential_png(
+            out / "field.png", result.solution, state.potential_values(),
+            title=(f"open-circuit potential, z = {position * 1e3:.3g} mm, "
+                   f"{reference} reference, V_OC = {state.V_oc:.4g} V"))
+    result.solution = None   # stays on rank 0
+    return result, state.potentials
+
+
+def _three_d(scene, position, out, comm, *, plot: bool):
+    from ..field import io, plot as field_plot, solve_position
+
+    result = solve_position(scene, position, comm=comm, method="3d", keep_solution=plot)
+    if plot:
+        io.write_xdmf(out / "potential.xdmf", result.solution)   # collective
+        if comm.size == 1:
+            field_plot.render_weighting_png_3d(
+                out / "field.png", result.solution, scene.device,
+                title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
+                       f"z = {position * 1e3:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
+        elif comm.rank == 0:
+            print("tengfield: field.png of a 3D run is drawn in serial runs only; "
+                  "potential.xdmf holds psi_lower, psi_upper", file=sys.stderr)
+    result.solution = None
+    return result

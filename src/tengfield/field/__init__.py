@@ -1,8 +1,13 @@
 """Electrostatics of the BB-TENG at one ball position (dolfinx + gmsh).
 
-Public entry point: :func:`solve_position`. It returns a
+Public entry points: :func:`solve_position` returns a
 :class:`~tengfield.field.result.PositionResult` (capacitance matrix, induced
-charges, error estimate), see that module for the sign conventions.
+charges, error estimate; with ``keep_solution=True`` also ``.solution``, a
+:class:`~tengfield.field.result.FieldSolution` with the mesh and potentials),
+see that module for the sign conventions; :func:`open_circuit` gives the
+open-circuit potentials of a position. Files: :mod:`tengfield.field.io`;
+figures: :mod:`tengfield.field.plot`. dolfinx, petsc4py and ufl are imported
+only by :mod:`tengfield.field._dolfinx` (the one file that knows their version).
 
 Importing this package loads neither dolfinx nor gmsh: the solvers are
 imported lazily, when a solve is asked for.
@@ -14,15 +19,40 @@ Example::
     from tengfield.field import solve_position
     res = solve_position(default_scene(), 1.5e-3, comm=MPI.COMM_SELF)
     res.capacitance, res.induced_charge, res.terminal_capacitance("floating")
+    open_circuit(default_scene(), 1.5e-3, comm=MPI.COMM_SELF).V_oc
 """
 from __future__ import annotations
 
 import math
 
-from ..errors import FieldError
-from .result import PositionResult
+from pathlib import Path
 
-__all__ = ["PositionResult", "solve_position", "resolve_method", "check_position"]
+from ..errors import FieldError
+from .result import FieldSolution, PositionResult
+
+__all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
+           "resolve_method", "check_position", "SOLVER_SOURCES", "solver_source_paths"]
+
+#: The files of this package whose code decides the field numbers (C, q, error
+#: estimates). A cache of solves (the surrogate) should fingerprint these and
+#: only these: io.py, plot.py, potential.py and result.py write, draw or
+#: post-process and may change without invalidating stored solves.
+SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "contact.py",
+                  "geometry3d.py", "geometry_axisymmetric.py", "solver3d.py")
+
+
+def solver_source_paths() -> list[Path]:
+    """Absolute paths of :data:`SOLVER_SOURCES`, in that (sorted) order."""
+    here = Path(__file__).resolve().parent
+    return [here / name for name in SOLVER_SOURCES]
+
+
+def open_circuit(scene, position: float, *, comm, **kwargs):
+    """Open-circuit potentials of one position: see
+    :func:`tengfield.field.potential.open_circuit` (returns an ``OpenCircuit``
+    with ``potentials`` = [V_lower, V_upper] [V] and ``V_oc``)."""
+    from .potential import open_circuit as _open_circuit
+    return _open_circuit(scene, position, comm=comm, **kwargs)
 
 #: ``[field]`` scene keys (file-level names) that :func:`solve_position` accepts
 #: as keyword overrides, e.g. ``mesh_size_mm=0.3, degree=1, far_field="robin"``.
@@ -77,7 +107,8 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
         ``[field]`` keys in file units (``degree``, ``mesh_size_mm``,
         ``domain_radius_mm``, ``far_field``, ``environment``, ``tolerance``),
         validated like the scene file; any other keyword goes to the
-        solver (axisymmetric: ``estimate_error``, ``keep_solution``).
+        solver (both: ``estimate_error``, ``keep_solution`` (result.solution);
+        axisymmetric also ``source_solve``, ``linear_solver``).
     """
     field_values = {k: overrides.pop(k) for k in list(overrides) if k in FIELD_OVERRIDES}
     if offset is not None:

@@ -1,8 +1,28 @@
-"""The one place that knows the dolfinx API (supports dolfinx 0.5.2, Debian bookworm).
+"""The one place that knows the dolfinx API: dolfinx 0.5.2 (Debian 12) and 0.9 (Debian 13).
 
-Both field solvers (axisymmetric and 3D) call dolfinx only through these
-functions, so moving to a newer dolfinx touches this file alone. Importing
-this module imports dolfinx, petsc4py and ufl: import it lazily.
+Every dolfinx, petsc4py, ufl and basix import of tengfield happens here;
+the solvers, writers and plots call these functions (and use the ``ufl``
+and ``PETSc`` modules re-exported here). The version is read once, at
+import, and the names are chosen then: no version check exists anywhere
+else. Importing this module imports dolfinx, petsc4py and ufl: import it
+lazily.
+
+What differs between the two releases (checked against the 0.9.0 sources):
+
+====================  =================================  =====================================
+what                  0.5.2                              0.9
+====================  =================================  =====================================
+function space        ``fem.FunctionSpace(mesh, el)``    ``fem.functionspace(mesh, el)``
+gmsh model import     ``model_to_mesh(m, comm, r, gdim)``  same, plus a shared-facet partitioner
+                                                          under MPI (``dS`` integrals)
+PETSc vector of f     ``f.vector``                       ``f.x.petsc_vec``
+dofmap.list           AdjacencyList (``.array``)         2D ndarray
+geometry.dofmap       AdjacencyList                      2D ndarray
+bounding-box tree     ``geometry.BoundingBoxTree``       ``geometry.bb_tree``
+point collisions      ``geometry.compute_collisions``    ``geometry.compute_collisions_points``
+VTK arrays            ``plot.create_vtk_mesh``           ``plot.vtk_mesh``
+form options          ``jit_params=``                    ``jit_options=``
+====================  =================================  =====================================
 
 PETSc conventions: every KSP gets its own options prefix (pass a unique
 ``prefix``) with ``ksp_error_if_not_converged``; matrices are assembled with
@@ -16,51 +36,129 @@ import numpy as np
 
 import dolfinx
 import dolfinx.fem.petsc
+import dolfinx.geometry
+import dolfinx.io
+import dolfinx.mesh
+import dolfinx.plot
 import ufl
 from dolfinx import fem
 from dolfinx.io import XDMFFile, gmshio
 from petsc4py import PETSc
 
-SUPPORTED_DOLFINX = "0.5.2"
+__all__ = ["PETSc", "ufl", "VERSION", "LEGACY"]
+
+#: (major, minor) of the installed dolfinx
+VERSION = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
+#: True on the 0.5 line (Debian 12), False on 0.7+ (Debian 13 ships 0.9)
+LEGACY = VERSION < (0, 7)
+SUPPORTED = ((0, 5), (0, 9))
 
 _counter = itertools.count()
 
+# -- names chosen by version (the only version switch) ------------------------
+if LEGACY:
+    _function_space = fem.FunctionSpace
+    _bb_tree = dolfinx.geometry.BoundingBoxTree
+    _collisions = dolfinx.geometry.compute_collisions
+    _vtk_mesh = dolfinx.plot.create_vtk_mesh
+    _JIT_KEY = "jit_params"
 
-def check_version() -> None:
-    """Warn-free guard: raise if the installed dolfinx is not the supported one."""
-    if not dolfinx.__version__.startswith(SUPPORTED_DOLFINX.rsplit(".", 1)[0]):
-        raise RuntimeError(f"tengfield.field supports dolfinx {SUPPORTED_DOLFINX}, "
-                           f"found {dolfinx.__version__}")
+    def petsc_vector(f):
+        """The PETSc vector holding the dofs of the Function ``f`` (shares memory)."""
+        return f.vector
+
+    def _rows(adjacency, cells) -> np.ndarray:
+        # one cell type: every row has the same length
+        width = int(adjacency.offsets[1] - adjacency.offsets[0]) if adjacency.num_nodes else 0
+        return adjacency.array.reshape(-1, max(width, 1))[cells]
+
+    def _partitioner(comm):
+        return None
+
+    def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
+        """(mesh, cell_tags, facet_tags) from the gmsh model on ``rank`` of ``comm``."""
+        return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+else:
+    _function_space = fem.functionspace
+    _bb_tree = dolfinx.geometry.bb_tree
+    _collisions = dolfinx.geometry.compute_collisions_points
+    _vtk_mesh = dolfinx.plot.vtk_mesh
+    _JIT_KEY = "jit_options"
+
+    def petsc_vector(f):
+        """The PETSc vector holding the dofs of the Function ``f`` (shares memory)."""
+        return f.x.petsc_vec
+
+    def _rows(array, cells) -> np.ndarray:
+        return np.asarray(array)[cells]
+
+    def _partitioner(comm):
+        # interior-facet (dS) integrals need shared-facet ghosts across processes
+        if comm.size == 1:
+            return None
+        return dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet)
+
+    def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
+        """(mesh, cell_tags, facet_tags) from the gmsh model on ``rank`` of ``comm``."""
+        out = gmshio.model_to_mesh(model, comm, rank, gdim=gdim, partitioner=_partitioner(comm))
+        return out[0], out[1], out[2]
+
+
+def describe() -> str:
+    """"dolfinx X.Y.Z (0.5 names)" or "(0.9 names)": which branch of this layer is active."""
+    return f"dolfinx {dolfinx.__version__} ({'0.5' if LEGACY else '0.9'} names)"
 
 
 # -- mesh -------------------------------------------------------------------
-def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
-    """(mesh, cell_tags, facet_tags) from the current gmsh model (physical groups become tags).
-
-    Only entities inside a physical group of the top dimension are kept; do not
-    define point physical groups (they confuse gmshio in 0.5.2)."""
-    return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
-
-
 def num_cells(mesh) -> int:
     """Global number of cells."""
-    tdim = mesh.topology.dim
-    return int(mesh.topology.index_map(tdim).size_global)
+    return int(mesh.topology.index_map(mesh.topology.dim).size_global)
+
+
+def num_local_cells(mesh) -> int:
+    """Cells owned by this process."""
+    return int(mesh.topology.index_map(mesh.topology.dim).size_local)
+
+
+def geometry_degree(mesh) -> int:
+    """Polynomial degree of the mesh geometry (2 for curved meshes)."""
+    return int(mesh.geometry.cmap.degree)
+
+
+def submesh(mesh, cells) -> object:
+    """A new serial mesh of the local ``cells`` of ``mesh`` (same coordinate
+    element, so the same curved geometry)."""
+    from mpi4py import MPI
+
+    rows = _rows(mesh.geometry.dofmap, np.asarray(cells, dtype=np.int32))
+    used, local = np.unique(rows, return_inverse=True)
+    local = local.reshape(rows.shape).astype(np.int64)
+    gdim = mesh.geometry.dim
+    x = np.ascontiguousarray(mesh.geometry.x[used, :gdim])
+    domain = ufl.Mesh(mesh.ufl_domain().ufl_coordinate_element())
+    return dolfinx.mesh.create_mesh(MPI.COMM_SELF, local, x, domain)
 
 
 # -- spaces and functions -----------------------------------------------------
 def lagrange_space(mesh, degree: int):
-    return fem.FunctionSpace(mesh, ("Lagrange", degree))
+    """Continuous Lagrange space of ``degree`` on ``mesh``."""
+    return _function_space(mesh, ("Lagrange", degree))
 
 
-def cellwise_constant(mesh, cell_tags, values: dict[int, float], default: float = 1.0):
+def cell_dofs(V, cells) -> np.ndarray:
+    """Dofs of the local ``cells`` in V, one row per cell."""
+    return _rows(V.dofmap.list, np.asarray(cells, dtype=np.int32))
+
+
+def cellwise_constant(mesh, cell_tags, values: dict[int, float], default: float = 1.0,
+                      name: str | None = None):
     """A DG0 function equal to ``values[tag]`` on the cells tagged ``tag``."""
-    Q = fem.FunctionSpace(mesh, ("DG", 0))
-    f = fem.Function(Q)
+    Q = _function_space(mesh, ("DG", 0))
+    f = fem.Function(Q, name=name)
     f.x.array[:] = default
     for tag, value in values.items():
         cells = cell_tags.find(tag)
-        f.x.array[cells] = value
+        f.x.array[cell_dofs(Q, cells).ravel()] = value
     f.x.scatter_forward()
     return f
 
@@ -73,13 +171,13 @@ def function(V, values=None, name: str | None = None):
     return f
 
 
+def constant(mesh, value: float):
+    return fem.Constant(mesh, PETSc.ScalarType(value))
+
+
 def num_dofs(V) -> int:
     """Global number of scalar degrees of freedom."""
     return int(V.dofmap.index_map.size_global * V.dofmap.index_map_bs)
-
-
-def num_owned_dofs(V) -> int:
-    return int(V.dofmap.index_map.size_local * V.dofmap.index_map_bs)
 
 
 def dof_coordinates(V) -> np.ndarray:
@@ -107,8 +205,18 @@ def measures(mesh, cell_tags, facet_tags):
     return dx, ds, dS
 
 
+def interpolate(V, f):
+    """Interpolate the Function ``f`` (or a callable x -> values) into V."""
+    g = fem.Function(V, name=getattr(f, "name", None))
+    g.interpolate(f)
+    return g
+
+
 # -- forms and assembly -------------------------------------------------------
-def form(ufl_form):
+def form(ufl_form, jit_options: dict | None = None):
+    """Compiled form (``jit_options`` go to ffcx/cffi under the version's keyword)."""
+    if jit_options:
+        return fem.form(ufl_form, **{_JIT_KEY: jit_options})
     return fem.form(ufl_form)
 
 
@@ -133,12 +241,7 @@ def assemble_vector(L, a=None, bcs=()):
 def assemble_scalar(M, comm) -> float:
     """Global value of the compiled functional ``M``."""
     from mpi4py import MPI
-    return comm.allreduce(fem.assemble_scalar(M), op=MPI.SUM)
-
-
-def matrix_to_csr(A):
-    """(indptr, indices, data) of a serial PETSc AIJ matrix."""
-    return A.getValuesCSR()
+    return float(comm.allreduce(fem.assemble_scalar(M), op=MPI.SUM))
 
 
 def matrix_from_csr(comm, shape, indptr, indices, data):
@@ -149,9 +252,16 @@ def matrix_from_csr(comm, shape, indptr, indices, data):
 
 
 def vector(comm, values):
-    v = PETSc.Vec().createWithArray(np.ascontiguousarray(values, dtype=PETSc.ScalarType),
-                                    comm=comm)
-    return v
+    return PETSc.Vec().createWithArray(np.ascontiguousarray(values, dtype=PETSc.ScalarType),
+                                       comm=comm)
+
+
+def python_matrix(comm, sizes, context):
+    """A PETSc shell matrix whose ``mult(mat, x, y)`` is ``context.mult``."""
+    M = PETSc.Mat().createPython(sizes, comm=comm)
+    M.setPythonContext(context)
+    M.setUp()
+    return M
 
 
 # -- linear solvers -----------------------------------------------------------
@@ -160,31 +270,31 @@ def unique_prefix(stem: str) -> str:
     return f"tengfield_{stem}_{next(_counter)}_"
 
 
-def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-12):
+def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-12,
+               preconditioner_matrix=None, options: dict | None = None):
     """A KSP on operator ``A`` under options prefix ``prefix``.
 
     kind = "direct": LU factorisation with MUMPS (factored once at setUp, then
     reused for every right-hand side); kind = "cg-amg": CG preconditioned by
-    hypre BoomerAMG (set up once). ``ksp_error_if_not_converged`` is on.
+    hypre BoomerAMG (set up once, on ``preconditioner_matrix`` if given).
+    ``options`` adds or overrides PETSc options (without the prefix).
+    ``ksp_error_if_not_converged`` is on.
     """
     opts = PETSc.Options()
     if kind == "direct":
-        opts[f"{prefix}ksp_type"] = "preonly"
-        opts[f"{prefix}pc_type"] = "lu"
-        opts[f"{prefix}pc_factor_mat_solver_type"] = "mumps"
+        values = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
     elif kind == "cg-amg":
-        opts[f"{prefix}ksp_type"] = "cg"
-        opts[f"{prefix}pc_type"] = "hypre"
-        opts[f"{prefix}pc_hypre_type"] = "boomeramg"
-        opts[f"{prefix}ksp_rtol"] = rtol
-        opts[f"{prefix}ksp_atol"] = 0.0
-        opts[f"{prefix}ksp_max_it"] = 2000
+        values = {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
+                  "ksp_rtol": rtol, "ksp_atol": 0.0, "ksp_max_it": 2000}
     else:
         raise ValueError(f"kind = {kind!r}: choose 'direct' or 'cg-amg'")
-    opts[f"{prefix}ksp_error_if_not_converged"] = True
+    values.update(options or {})
+    values["ksp_error_if_not_converged"] = True
+    for key, value in values.items():
+        opts[f"{prefix}{key}"] = value
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(prefix)
-    ksp.setOperators(A)
+    ksp.setOperators(A, A if preconditioner_matrix is None else preconditioner_matrix)
     ksp.setFromOptions()
     ksp.setUp()
     return ksp
@@ -198,14 +308,42 @@ def clear_options(prefix: str) -> None:
             opts.delValue(key)
 
 
-def solve(ksp, b):
+def solve(ksp, b, x=None):
     """x with A x = b for the KSP's (already factored / preconditioned) operator."""
-    x = b.duplicate()
+    x = b.duplicate() if x is None else x
     ksp.solve(b, x)
     return x
 
 
-# -- output ---------------------------------------------------------------------
+# -- points, output, plots ------------------------------------------------------
+def colliding_cells(mesh, points) -> np.ndarray:
+    """For each point (shape (n, 3)) one local cell containing it, or -1."""
+    points = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 3))
+    tree = _bb_tree(mesh, mesh.topology.dim)
+    candidates = _collisions(tree, points)
+    colliding = dolfinx.geometry.compute_colliding_cells(mesh, candidates, points)
+    out = np.full(points.shape[0], -1, dtype=np.int32)
+    for i in range(points.shape[0]):
+        links = colliding.links(i)
+        if len(links):
+            out[i] = links[0]
+    return out
+
+
+def point_values(V, values, points) -> np.ndarray:
+    """Values of the dof vector ``values`` on V at ``points`` (shape (n, 3)), serial."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    cells = colliding_cells(V.mesh, points)
+    if np.any(cells < 0):
+        raise ValueError(f"point {points[np.argmin(cells)]} is outside the mesh")
+    return function(V, values).eval(points, cells).ravel()
+
+
+def vtk_arrays(V):
+    """(topology, cell_types, points) of V's dof layout for pyvista.UnstructuredGrid."""
+    return _vtk_mesh(V)
+
+
 def write_xdmf(path, mesh, functions, comm) -> None:
     """Mesh and functions to XDMF/HDF5 for ParaView (functions must live on a
     Lagrange space of the mesh's geometry degree, or P1)."""
@@ -213,29 +351,3 @@ def write_xdmf(path, mesh, functions, comm) -> None:
         xdmf.write_mesh(mesh)
         for f in functions:
             xdmf.write_function(f)
-
-
-def interpolate(V, f):
-    """Interpolate the function ``f`` (or a callable x -> values) into V."""
-    g = fem.Function(V, name=getattr(f, "name", None))
-    g.interpolate(f)
-    return g
-
-
-def point_values(V, values, points) -> np.ndarray:
-    """Values of the dof vector ``values`` on V at ``points`` (shape (n, 3)), serial."""
-    from dolfinx import geometry
-
-    mesh = V.mesh
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
-    candidates = geometry.compute_collisions(tree, points)
-    colliding = geometry.compute_colliding_cells(mesh, candidates, points)
-    cells = []
-    for i in range(points.shape[0]):
-        links = colliding.links(i)
-        if len(links) == 0:
-            raise ValueError(f"point {points[i]} is outside the mesh")
-        cells.append(links[0])
-    u = function(V, values)
-    return u.eval(points, np.array(cells, dtype=np.int32)).ravel()

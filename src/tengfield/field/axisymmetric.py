@@ -50,8 +50,9 @@ import numpy as np
 
 from ..errors import FieldError
 from ..scene import EPS0
+from . import contact
 from . import geometry_axisymmetric as geometry
-from .result import PositionResult
+from .result import FieldSolution, PositionResult
 
 #: options the solver accepts besides the scene (see solve_position_axisymmetric)
 SOLVER_OPTIONS = ("estimate_error", "keep_solution", "source_solve", "linear_solver")
@@ -120,13 +121,13 @@ class Discretisation:
     lower: np.ndarray    # electrode dofs
     upper: np.ndarray
     grounded: np.ndarray  # table / Dirichlet far boundary dofs
+    degree: int = 1
 
 
 def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str, float],
                degree: int, far_field: str) -> Discretisation:
     """Assemble the operator and the ball-surface load for Lagrange degree ``degree``."""
-    import ufl
-
+    ufl = dx_api.ufl
     comm = mesh.comm
     V = dx_api.lagrange_space(mesh, degree)
     eps_r = dx_api.cellwise_constant(mesh, cell_tags, {
@@ -163,14 +164,14 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     indptr, indices, data, n_red = restriction(n_full, fixed, pairs)
     P = dx_api.matrix_from_csr(comm, (n_full, n_red), indptr, indices, data)
     return Discretisation(mesh, cell_tags, facet_tags, V, A, ball_load, P, n_red,
-                          lower.astype(np.int64), upper.astype(np.int64), grounded)
+                          lower.astype(np.int64), upper.astype(np.int64), grounded, degree)
 
 
 @dataclass
 class Solution:
     """Potentials (full dof vectors) and the quantities derived from them (SI)."""
     capacitance: np.ndarray
-    induced_charge: np.ndarray
+    induced_fraction: np.ndarray  # [q_lower, q_upper] / q_ball
     weighting: list          # [ψ_lower, ψ_upper] as numpy arrays
     source: np.ndarray | None  # potential of the ball charge, electrodes grounded [V]
     source_charge: np.ndarray | None  # electrode charges of the source solve (reactions) [C]
@@ -178,8 +179,8 @@ class Solution:
     ball_area: float
 
 
-def solve_discretisation(dx_api, disc: Discretisation, sigma: float, *, source_solve: bool,
-                         linear_solver: str = "direct") -> Solution:
+def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diameter: float, *,
+                         source_solve: bool, linear_solver: str = "direct") -> Solution:
     """Both weighting potentials (and optionally the σ source) with one factorisation."""
     comm = disc.mesh.comm
     t0 = time.perf_counter()
@@ -221,25 +222,20 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, *, source_s
     A_psi = [apply_A(p) for p in psis]
     C = 2.0 * math.pi * EPS0 * np.array([[psis[j] @ A_psi[k] for k in range(2)] for j in range(2)])
     C = 0.5 * (C + C.T)
-    q = -2.0 * math.pi * sigma * np.array([disc.ball_load @ p for p in psis])
+    # q_k = -2π σ ∫_ball ψ_k r ds and q_ball = σ π d²: the fraction does not need σ
+    fraction = -2.0 * np.array([disc.ball_load @ p for p in psis]) / ball_diameter**2
     if source is not None:
         # electrode charge = reaction of the source solve: 2π (ε0 A φ - σ b) on the electrode dofs
         residual = 2.0 * math.pi * (EPS0 * apply_A(source) - sigma * disc.ball_load)
         source_charge = np.array([residual[disc.lower].sum(), residual[disc.upper].sum()])
     ball_area = 2.0 * math.pi * float(disc.ball_load.sum())
-    return Solution(C, q, psis, source, source_charge, solve_time, ball_area)
-
-
-def relative_change(coarse: Solution, fine: Solution) -> float:
-    """max |X_coarse - X_fine| / |X_fine| over C_ll, C_lu, C_uu, q_lower, q_upper."""
-    a = np.array([*coarse.capacitance[np.triu_indices(2)], *coarse.induced_charge])
-    b = np.array([*fine.capacitance[np.triu_indices(2)], *fine.induced_charge])
-    return float(np.max(np.abs(a - b) / np.abs(b)))
+    return Solution(C, fraction, psis, source, source_charge, solve_time, ball_area)
 
 
 def richardson_error(change: float, degree: int) -> float:
-    """Error of the coarse value from its change under halving h, for functionals
-    converging as h^(2p) (measured, see docs/field.md): change / (1 - 2^(-2p))."""
+    """Error of the coarse value from its change when the mesh size h is halved (same
+    degree p), for functionals converging as h^(2p) (measured, see docs/field.md):
+    change / (1 - 2^(-2p))."""
     return change / (1.0 - 2.0 ** (-2 * degree))
 
 
@@ -255,12 +251,20 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     from . import _dolfinx as dx_api
 
     lay = geometry.layout(scene, position, **layout_overrides)
+    geometry.check_mesh_budget(lay, scene.field.degree, mesh_size_mm=scene.field.mesh_size * 1e3)
     initialised_here = not gmsh.isInitialized()
     if initialised_here:
-        gmsh.initialize(["-nt", "1"], readConfigFiles=False)
+        # interruptible=False: gmsh leaves Python's SIGINT handler alone (Ctrl-C
+        # raises KeyboardInterrupt instead of killing the process)
+        gmsh.initialize(["-nt", "1"], readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     try:
-        geometry.build_model(gmsh, lay, geometry_order=2)
+        try:
+            geometry.build_model(gmsh, lay, geometry_order=2)
+        except FieldError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - gmsh/OpenCASCADE: one line naming the keys
+            raise FieldError(geometry.meshing_failure(scene, exc)) from None
         mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=2)
         gmsh.model.remove()
     finally:
@@ -270,53 +274,44 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
 
 
 def solve_serial(scene, position: float, comm, **options) -> PositionResult:
-    """The axisymmetric solve on one process (``comm`` of size 1), with the contact rule.
-
-    A position closer than ``min_gap`` to a plate is extrapolated from the
-    anchor gaps g, 2g and 4g of :func:`geometry.contact_anchors` by the power
-    law X0 + b δ^p of :func:`geometry.power_law_extrapolation`, p from
-    :func:`geometry.contact_exponent` (the straight line through g and 2g
-    when the data are linear, as for PTFE); its difference from that
-    straight line is the extrapolation error estimate, which enters
-    ``relative_error_estimate`` (and ``info['contact_extrapolation_error']``).
-    The potentials kept for plots are those at gap g.
+    """The axisymmetric solve on one process (``comm`` of size 1), with the contact
+    rule of :mod:`tengfield.field.contact` (the one the 3D solver uses too): its
+    extrapolation error enters ``relative_error_estimate`` (and
+    ``info['contact_extrapolation_error']``). The potentials kept for plots are
+    those at the nearest anchor gap g.
     """
-    anchors = geometry.contact_anchors(scene.device, position)
+    dev = scene.device
+    anchors = contact.contact_anchors(position, dev.stroke, dev.plate_spacing)
     if anchors is None:
         return solve_meshed(scene, position, comm, **options)
     t0 = time.perf_counter()
-    solves = [solve_meshed(scene, anchors[0], comm, **options)]
-    options = {**options, "keep_solution": False}
-    solves += [solve_meshed(scene, a, comm, **options) for a in anchors[1:]]
+    later = {**options, "keep_solution": False}
+
+    def solve_at(z):
+        res = solve_meshed(scene, z, comm, **(options if z == anchors[0] else later))
+        if "source_electrode_charge_C" in res.info:
+            res.extras = {"source": np.asarray(res.info["source_electrode_charge_C"])}
+        return res
+
+    rule = contact.extrapolate_to_contact(position, anchors, dev.stroke, solve_at)
+    solves = rule["solves"]
     result = solves[0]
-    plate = 0.0 if anchors[0] < anchors[1] else scene.device.stroke
-    exponent = geometry.contact_exponent(
-        [np.concatenate([np.ravel(r.capacitance), r.induced_charge]) for r in solves])
-
-    def extrapolate(get):
-        values = [get(r) for r in solves]
-        best = geometry.power_law_extrapolation(abs(position - plate), abs(anchors[0] - plate),
-                                                values, exponent)
-        line = geometry.linear_extrapolation(position, anchors[:2], values[:2])
-        return best, line
-
-    C, C_check = extrapolate(lambda r: r.capacitance)
-    q, q_check = extrapolate(lambda r: r.induced_charge)
-    contact_error = float(max(np.max(np.abs(C - C_check) / np.abs(C)),
-                              np.max(np.abs(q - q_check) / np.abs(q))))
-    if "source_electrode_charge_C" in result.info:
-        result.info["source_electrode_charge_C"] = extrapolate(
-            lambda r: np.asarray(r.info["source_electrode_charge_C"]))[0]
-    result.capacitance, result.induced_charge = C, q
+    if "source" in rule["extras"]:
+        result.info["source_electrode_charge_C"] = rule["extras"]["source"]
+    result.capacitance = rule["capacitance"]
+    result.induced_fraction = rule["induced_fraction"]
+    result.induced_charge = rule["induced_fraction"] * result.ball_charge
     result.relative_error_estimate = max(max(r.relative_error_estimate for r in solves),
-                                         contact_error)
+                                         rule["error"])
     result.position = position
     result.solve_time = sum(r.solve_time for r in solves)
     result.wall_time = time.perf_counter() - t0
     result.info["contact_rule"] = ("power-law extrapolation from gaps "
-                                   + ", ".join(f"{abs(a - plate):.6g}" for a in anchors) + " m")
-    result.info["contact_extrapolation_error"] = contact_error
-    result.info["contact_exponent"] = exponent
+                                   + ", ".join(f"{d:.6g}" for d in rule["distances"]) + " m")
+    result.info["contact_extrapolation_error"] = rule["error"]
+    result.info["contact_exponent"] = rule["exponent"]
+    for r in solves:
+        r.__dict__.pop("extras", None)
     return result
 
 
@@ -328,45 +323,67 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
 
     t0 = time.perf_counter()
     fld = scene.field
+    half = scene.with_values(field={"mesh_size_mm": 0.5e3 * fld.mesh_size})
+    if estimate_error:   # refuse before any meshing if the finer mesh would not fit
+        geometry.check_mesh_budget(geometry.layout(half, position, grading_size=fld.mesh_size),
+                                   fld.degree, mesh_size_mm=fld.mesh_size * 1e3, refinement=2.0)
     lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
     sigma = scene.device.surface_charge
     eps = permittivities(scene.device, lay)
     disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, fld.degree, fld.far_field)
-    sol = solve_discretisation(dx_api, disc, sigma, source_solve=source_solve,
+    diameter = scene.device.ball_diameter
+    sol = solve_discretisation(dx_api, disc, sigma, diameter, source_solve=source_solve,
                                linear_solver=linear_solver)
     estimate = math.nan
     if estimate_error:
-        half = scene.with_values(field={"mesh_size_mm": 0.5e3 * fld.mesh_size})
-        lay_half, *fine_mesh = build_mesh(half, position, comm)
+        # same grading lengths as the coarse mesh: a uniform halving of one mesh family
+        lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=fld.mesh_size)
         finer = discretise(dx_api, *fine_mesh, lay_half, eps, fld.degree, fld.far_field)
-        fine = solve_discretisation(dx_api, finer, sigma, source_solve=False,
+        fine = solve_discretisation(dx_api, finer, sigma, diameter, source_solve=False,
                                     linear_solver=linear_solver)
-        estimate = richardson_error(relative_change(sol, fine), fld.degree)
+        estimate = richardson_error(contact.relative_change(sol, fine), fld.degree)
     info = {"mesh_size_m": lay.mesh_size, "domain_radius_m": lay.domain_radius,
             "far_field": fld.far_field, "environment": fld.environment,
-            "meshed_gap_m": lay.effective_gap, "minimum_gap_m": geometry.minimum_gap(scene.device),
+            "meshed_gap_m": lay.effective_gap,
+            "minimum_gap_m": contact.minimum_gap(scene.device.plate_spacing),
             "ball_area_quadrature_m2": sol.ball_area, "error_estimate": "Richardson, mesh_size/2, rate h^(2p)"}
     if sol.source_charge is not None:
         info["source_electrode_charge_C"] = sol.source_charge
+    ball_charge = scene.device.ball_charge
     result = PositionResult(
         position=position, offset=0.0, capacitance=sol.capacitance,
-        induced_charge=sol.induced_charge, ball_charge=scene.device.ball_charge,
+        induced_charge=sol.induced_fraction * ball_charge, ball_charge=ball_charge,
         dofs=dx_api.num_dofs(disc.V), cells=dx_api.num_cells(mesh), method="axisymmetric",
         degree=fld.degree, wall_time=time.perf_counter() - t0,
-        relative_error_estimate=estimate, solve_time=sol.solve_time, info=info)
+        relative_error_estimate=estimate, solve_time=sol.solve_time, info=info,
+        induced_fraction=sol.induced_fraction)
     if keep_solution:
-        result.info["_solution"] = (disc, sol)
+        result.solution = field_solution(dx_api, disc, sol, lay)
     return result
+
+
+def field_solution(dx_api, disc: Discretisation, sol: Solution, lay) -> FieldSolution:
+    """The public :class:`FieldSolution` of one axisymmetric discretisation."""
+    weighting = tuple(dx_api.function(disc.V, psi, name=f"psi_{name}")
+                      for psi, name in zip(sol.weighting, ("lower", "upper")))
+    source = None if sol.source is None else dx_api.function(disc.V, sol.source,
+                                                             name="phi_source_V")
+    return FieldSolution(
+        method="axisymmetric", mesh=disc.mesh, cell_tags=disc.cell_tags,
+        facet_tags=disc.facet_tags, space=disc.V, weighting=weighting,
+        ball_centre=np.array([0.0, lay.ball_centre_z, 0.0]), geometry=lay, source=source,
+        hidden_cells=np.asarray(disc.cell_tags.find(geometry.CELL_TAGS["exterior"]),
+                                dtype=np.int32), degree=disc.degree)
 
 
 def solve_position_axisymmetric(scene, position: float, *, comm, **options) -> PositionResult:
     """:class:`PositionResult` of the axisymmetric problem; computed on rank 0 of ``comm``
     and broadcast (an exception on rank 0 is re-raised on every rank).
 
-    Options: ``estimate_error`` (default True: solve again with degree p+1),
-    ``source_solve`` (also solve for the potential of the ball charge, needed
-    for plots), ``keep_solution`` (serial only: keep mesh and potentials in
-    ``result.info['_solution']``), ``linear_solver`` ("direct" MUMPS or "cg-amg").
+    Options: ``estimate_error`` (default True: solve again with half the mesh
+    size), ``source_solve`` (also solve for the potential of the ball charge,
+    needed for plots), ``keep_solution`` (serial only: keep mesh and potentials
+    in ``result.solution``), ``linear_solver`` ("direct" MUMPS or "cg-amg").
     """
     from mpi4py import MPI
 

@@ -17,7 +17,8 @@ lower electrode lies in the plane ``z = -h/2`` and the upper one in
 0 by default); ``z_gap`` is the gap between the ball's bottom and the lower
 electrode, clamped to ``[g_min, Δh - g_min]`` by :func:`meshed_gap` (the
 z → 0 / z → Δh rule shared with the axisymmetric builder; the solver
-extrapolates positions closer than ``g_min``, see :func:`contact_anchors`). The air fills a sphere of radius ``domain_radius``
+extrapolates positions closer than ``g_min``, see :func:`contact_anchors`).
+The air fills a sphere of radius ``domain_radius``
 centred at the origin; the far-field condition lives on that sphere.
 
 Electrodes are zero-thickness conductor surfaces embedded in the mesh
@@ -39,11 +40,10 @@ import numpy as np
 
 from ..errors import FieldError
 
-# The z → 0 / z → Δh rule is the axisymmetric builder's (one rule for both
-# solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``
-# (20 µm for the paper's device); closer positions are extrapolated
-# linearly from the gaps g_min and 2 g_min (:func:`contact_anchors`).
-from .geometry_axisymmetric import MIN_GAP_FRACTION, RIM_EXPONENT  # noqa: E402  (no gmsh)
+# The z → 0 / z → Δh rule is :mod:`tengfield.field.contact` (one rule for both
+# solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``.
+from . import contact  # noqa: E402  (no gmsh)
+from .geometry_axisymmetric import RIM_EXPONENT  # noqa: E402  (no gmsh)
 
 VOLUME_GROUPS = ("ball", "walls", "air")
 SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
@@ -141,6 +141,9 @@ class MeshSettings:
     growth: float = 0.3
 
     def __post_init__(self):
+        # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
+        for name in ("size", "domain_radius", "rim_floor", "ball_factor", "growth"):
+            object.__setattr__(self, name, float(getattr(self, name)))
         if not (self.size > 0 and math.isfinite(self.size)):
             raise FieldError(f"mesh_size_mm = {self.size * 1e3!r} is out of range: allowed (0, 100] mm")
         if self.order not in (1, 2):
@@ -158,7 +161,7 @@ def cylindrical_cell(device) -> CylindricalCell:
 
 def minimum_gap(cell) -> float:
     """Smallest ball-electrode (and ball-tube) gap that is meshed [m]: ``MIN_GAP_FRACTION · h``."""
-    return MIN_GAP_FRACTION * cell.electrode_spacing
+    return contact.minimum_gap(cell.electrode_spacing)
 
 
 def check_position(cell, position: float) -> None:
@@ -180,17 +183,11 @@ def meshed_gap(cell, position: float) -> float:
     return min(max(position, g_min), cell.stroke - g_min)
 
 
-def contact_anchors(cell, position: float) -> tuple[float, float] | None:
-    """Two meshable positions [m] to extrapolate from when ``position`` is
-    closer than ``g_min`` to an electrode: (g, 2g) above the lower one or
-    (Δh - g, Δh - 2g) below the upper one; ``None`` when it can be meshed."""
+def contact_anchors(cell, position: float) -> tuple[float, float, float] | None:
+    """The anchors of :func:`tengfield.field.contact.contact_anchors` for ``cell``
+    (after checking ``0 <= position <= Δh``)."""
     check_position(cell, position)
-    g = minimum_gap(cell)
-    if position < g:
-        return g, 2.0 * g
-    if position > cell.stroke - g:
-        return cell.stroke - g, cell.stroke - 2.0 * g
-    return None
+    return contact.contact_anchors(position, cell.stroke, cell.electrode_spacing)
 
 
 def meshed_offset(cell, offset: float) -> float:

@@ -15,15 +15,9 @@ second half-disk, the Kelvin image of the exterior ``|x| > R`` under
 along z, with its arc periodic (node-for-node identical, up to the shift) to
 the domain's arc.
 
-Contact rule (z → 0, z → Δh): no mesh has a ball–electrode gap below
-``min_gap = 0.002 h`` (20 µm for the paper's device). The layout clamps the
-gap to ``[min_gap, Δh - min_gap]``; the solver evaluates positions closer to
-a plate than ``min_gap`` by linear extrapolation from the gaps ``min_gap`` and
-``2 min_gap`` (:func:`contact_anchors`), and estimates the error of that
-extrapolation by repeating it from ``2 min_gap`` and ``4 min_gap``. For the
-PTFE ball (εr = 2.1) C and q are linear in the gap there (extrapolation
-error ~1e-4); for a nearly conducting ball (εr ≳ 10) the charge varies
-logarithmically near contact and the estimate says so (docs/field.md).
+Contact rule (z → 0, z → Δh): the layout clamps the gap to
+``[min_gap, Δh - min_gap]``; positions closer to a plate are extrapolated by
+the solver, see :mod:`tengfield.field.contact` (one rule for both solvers).
 
 Mesh grading (all sizes scale with the base size ``mesh_size``):
 
@@ -52,9 +46,26 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import FieldError
+from . import contact
 
 #: strongest singular exponent of the field (rim of an electrode meeting the tube corner)
 RIM_EXPONENT = 0.43
+#: The mesh grades away from the features (ball, rims, gaps, dielectric interfaces)
+#: over lengths of at most GRADING_REACH x the base mesh size, so a large device
+#: costs what its features cost, not what its box costs. For the paper's device
+#: (h = 10 mm, extent 8.6 mm) at mesh sizes >= 0.125 mm the lengths are the
+#: device's own (h/4 and the extent) and the mesh is the one of earlier versions.
+GRADING_REACH = 20.0
+#: Electrode spacing [m] up to which ``mesh_size_mm`` is an absolute size; a
+#: larger device gets all mesh sizes scaled by ``spacing / REFERENCE_SPACING``
+#: (the mesh of a scaled-up device is the scaled mesh: same cost, same
+#: relative error as the paper's device, h = 10 mm).
+REFERENCE_SPACING = 10.0e-3
+#: growth of the element size per unit distance from a dielectric interface
+INTERFACE_GROWTH = 0.3
+#: refuse to mesh beyond this many estimated dofs (MUMPS needs ~1-2 kB per dof in 2D;
+#: the paper's device at default settings: 13k, its error-estimate mesh ~50k)
+MAX_DOFS_2D = 1_000_000
 #: names of the physical groups and their tags
 CELL_TAGS = {"ball": 1, "walls": 2, "air": 3, "exterior": 4}
 FACET_TAGS = {"ball_surface": 11, "electrode_lower": 12, "electrode_upper": 13,
@@ -100,90 +111,33 @@ class AxisymmetricLayout:
         return self.z_lower - self.plate_thickness
 
 
-#: smallest meshed ball–electrode gap, as a fraction of the plate spacing h
-MIN_GAP_FRACTION = 2e-3
+def size_scale(device) -> float:
+    """Factor applied to ``mesh_size_mm``: ``max(1, h / REFERENCE_SPACING)`` (h the
+    electrode spacing)."""
+    return max(1.0, device.plate_spacing / REFERENCE_SPACING)
 
 
 def minimum_gap(device) -> float:
-    """Smallest ball–electrode gap meshed [m]: ``MIN_GAP_FRACTION · h``."""
-    return MIN_GAP_FRACTION * device.plate_spacing
+    """Smallest ball–electrode gap meshed [m] (:func:`tengfield.field.contact.minimum_gap`)."""
+    return contact.minimum_gap(device.plate_spacing)
 
 
 def effective_gap(device, position: float) -> float:
     """The gap actually meshed: ``position`` clamped to [min_gap, Δh - min_gap]."""
-    g = minimum_gap(device)
-    return min(max(position, g), device.stroke - g)
-
-
-def contact_anchors(device, position: float) -> tuple[float, float, float] | None:
-    """Three meshable positions to extrapolate from when ``position`` is closer than
-    ``min_gap`` to a plate: gaps (g, 2g, 4g) from that plate, i.e. positions
-    (g, 2g, 4g) or (Δh - g, Δh - 2g, Δh - 4g); ``None`` when ``position`` can be
-    meshed as it is."""
-    g = minimum_gap(device)
-    if position < g:
-        return g, 2.0 * g, 4.0 * g
-    if position > device.stroke - g:
-        return device.stroke - g, device.stroke - 2.0 * g, device.stroke - 4.0 * g
-    return None
-
-
-def linear_extrapolation(position: float, anchors, values) -> np.ndarray:
-    """Value at ``position`` of the line through (anchors[0], values[0]) and
-    (anchors[1], values[1]) (arrays of any shape)."""
-    weight = (position - anchors[0]) / (anchors[1] - anchors[0])
-    return np.asarray(values[0]) + weight * (np.asarray(values[1]) - np.asarray(values[0]))
-
-
-#: exponents of the near-contact power law X(δ) = X0 + b δ^p
-#: (:func:`contact_exponent`) are clipped to this range
-CONTACT_EXPONENT_RANGE = (0.25, 2.0)
-#: A fitted exponent this close to 1 is mesh noise around a straight line
-#: (PTFE gives 0.98-1.02): it is snapped to 1, so Q_SC(z) has no spurious
-#: weak singularity inside the contact layer (which would bias dQ_SC/dz at
-#: contact, hence the peak I_SC, by a few per cent).
-CONTACT_EXPONENT_SNAP = 0.05
-
-
-def contact_exponent(values) -> float:
-    """Exponent p of the near-contact law ``X(δ) = X0 + b δ^p`` from values at the
-    gaps (g, 2g, 4g): ``p = log2((X(4g) - X(2g)) / (X(2g) - X(g)))`` of the entry
-    that varies most (relative to its size), shared by every entry.
-
-    One exponent describes the local field near contact; fitting it entry by
-    entry would let a weakly varying entry (the far electrode's C) fit mesh
-    noise. p = 1 (a straight line) for a low-permittivity ball such as PTFE; a
-    high-permittivity ball gives p < 1 because its gap capacitance saturates
-    only at gaps ~ R/εr² (0.35 µm for εr = 100), far below g. If the two
-    differences of that entry do not share a sign, p = 1; p is clipped to
-    :data:`CONTACT_EXPONENT_RANGE`; within :data:`CONTACT_EXPONENT_SNAP` of 1 it is 1.
-    """
-    near, middle, far = (np.ravel(np.asarray(v, dtype=float)) for v in values)
-    first, second = middle - near, far - middle
-    scale = np.where(near != 0.0, np.abs(near), 1.0)
-    k = int(np.argmax(np.abs(first) / scale))
-    if not first[k] * second[k] > 0.0:
-        return 1.0
-    exponent = float(np.clip(np.log2(second[k] / first[k]), *CONTACT_EXPONENT_RANGE))
-    return 1.0 if abs(exponent - 1.0) < CONTACT_EXPONENT_SNAP else exponent
-
-
-def power_law_extrapolation(distance: float, anchor_gap: float, values,
-                            exponent: float) -> np.ndarray:
-    """Value at plate distance ``distance`` [m] of ``X(δ) = X0 + b δ^p`` through the
-    values at distances (g, 2g, 4g), ``g = anchor_gap`` (arrays of any shape), with
-    ``p = exponent`` (:func:`contact_exponent`); p = 1 is the straight line
-    through the first two anchors."""
-    near, middle = (np.asarray(v, dtype=float) for v in values[:2])
-    u = distance / anchor_gap
-    return near + (middle - near) * (u**exponent - 1.0) / (2.0**exponent - 1.0)
+    return contact.clamp_gap(position, device.stroke, device.plate_spacing)
 
 
 def layout(scene, position: float, *, degree: int | None = None, mesh_size: float | None = None,
            domain_radius: float | None = None, far_field: str | None = None,
-           environment: str | None = None) -> AxisymmetricLayout:
-    """Dimensions for ``scene`` with the ball at gap ``position`` [m] (pure, no gmsh)."""
+           environment: str | None = None, grading_size: float | None = None
+           ) -> AxisymmetricLayout:
+    """Dimensions for ``scene`` with the ball at gap ``position`` [m] (pure, no gmsh).
+
+    ``grading_size`` [m] (default: the mesh size) sets the grading lengths
+    (:data:`GRADING_REACH` times it); the error estimate's half-size mesh
+    passes the coarse mesh's size, so both meshes belong to one family."""
     dev, fld = scene.device, scene.field
+    position = float(position)
     degree = fld.degree if degree is None else degree
     mesh_size = fld.mesh_size if mesh_size is None else mesh_size
     domain_radius = fld.domain_radius if domain_radius is None else domain_radius
@@ -201,6 +155,13 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
     centre = z_lower - dev.plate_thickness if table else 0.0
     extent = max(math.hypot(dev.tube_outer_radius, zz - centre)
                  for zz in (z_lower - dev.plate_thickness, -z_lower + dev.plate_thickness))
+    grading_size = mesh_size if grading_size is None else grading_size
+    # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
+    mesh_size, grading_size, domain_radius = float(mesh_size), float(grading_size), \
+        float(domain_radius)
+    # a device larger than the reference spacing gets the geometrically similar mesh
+    similarity = size_scale(dev)
+    mesh_size, grading_size = mesh_size * similarity, grading_size * similarity
     if domain_radius <= 1.05 * extent:
         raise FieldError(f"domain_radius_mm = {domain_radius * 1e3:g} is too small: it must exceed "
                          f"{1.05e3 * extent:.3g} mm (the device seen from the inversion centre)")
@@ -213,7 +174,9 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
         kelvin=far_field == "kelvin", shift=2.5 * domain_radius,
         gap_lower=z_gap, gap_upper=dev.stroke - z_gap, requested_gap=position, effective_gap=z_gap,
         mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
-        info={"device_extent_m": extent})
+        info={"device_extent_m": extent,
+              "rim_reach_m": min(0.25 * h, GRADING_REACH * grading_size),
+              "bulk_length_m": min(extent, GRADING_REACH * grading_size)})
 
 
 # ---------------------------------------------------------------------------
@@ -310,19 +273,27 @@ def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> st
             gmsh.model.addPhysicalGroup(1, groups[key], tag)
             gmsh.model.setPhysicalName(1, tag, key)
 
-    _size_fields(gmsh, lay)
+    interfaces = []
+    if wall_parts:
+        for _, c in gmsh.model.getBoundary([(2, s) for s in wall_parts], combined=False,
+                                           oriented=False):
+            x, y, _ = gmsh.model.getValue(1, abs(c), [0.5 * sum(
+                gmsh.model.getParametrizationBounds(1, abs(c))[i][0] for i in (0, 1))])
+            if x > tol:          # not the symmetry axis
+                interfaces.append(abs(c))
+    _size_fields(gmsh, lay, sorted(set(interfaces)))
     gmsh.model.mesh.generate(2)
     if geometry_order > 1:
         gmsh.model.mesh.setOrder(geometry_order)
     return name
 
 
-def _size_fields(gmsh, lay: AxisymmetricLayout) -> None:
-    """Background mesh size: radical grading at rims, ball surface, gaps, far field."""
+def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
+    """Background mesh size: radical grading at rims, ball surface, gaps, dielectric
+    interfaces, bulk and far field (the Min of all)."""
     fld = gmsh.model.mesh.field
     h = lay.mesh_size
     zl, zu = lay.z_lower, lay.z_upper
-    L = 0.25 * lay.plate_spacing
     mu = lay.grading_exponent
     fields = []
 
@@ -340,6 +311,7 @@ def _size_fields(gmsh, lay: AxisymmetricLayout) -> None:
         fields.append(f)
         return f
 
+    L = lay.info["rim_reach_m"]
     # rims (and tube corners when the walls are present)
     rims = [(lay.electrode_radius, zl), (lay.electrode_radius, zu)]
     if lay.walls and abs(lay.tube_inner_radius - lay.electrode_radius) > 1e-12:
@@ -358,8 +330,15 @@ def _size_fields(gmsh, lay: AxisymmetricLayout) -> None:
             d_gap = distance_to_points([(0.0, z0)])
             math_eval(f"({h / 1e-3!r}) * (({gap!r}) + {d_gap}^2 / ({2.0 * lay.ball_radius!r}))")
 
-    # far field: size grows with the distance from the inversion centre
-    extent = lay.info["device_extent_m"]
+    # dielectric interfaces: h on them, growing linearly away
+    if interface_curves:
+        dist = fld.add("Distance")
+        fld.setNumbers(dist, "CurvesList", interface_curves)
+        fld.setNumber(dist, "Sampling", 200)
+        math_eval(f"({h!r}) + {INTERFACE_GROWTH!r} * F{dist}")
+
+    # bulk and far field: h within bulk_length of the inversion centre, then growing
+    extent = lay.info["bulk_length_m"]
     zK = lay.inversion_centre_z
     math_eval(f"({h!r}) * Max(1, Sqrt(x^2 + (y - ({zK!r}))^2) / ({extent!r}))")
     if lay.kelvin:
@@ -380,3 +359,55 @@ def _size_fields(gmsh, lay: AxisymmetricLayout) -> None:
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25 * lay.domain_radius)
     gmsh.option.setNumber("Mesh.Algorithm", 6)
+
+
+def estimated_cells(lay: AxisymmetricLayout) -> float:
+    """Rough number of triangles of the mesh of ``lay`` (before meshing, from the
+    size fields of :func:`_size_fields`: bulk and far field, rims, ball surface,
+    dielectric interfaces; a triangle of size s covers ~0.433 s²)."""
+    h = lay.mesh_size
+    area = 0.433 * h * h
+    B, R = lay.info["bulk_length_m"], lay.domain_radius
+    bulk = 0.5 * math.pi * B * B / area * (1.0 + 2.0 * math.log(max(R / B, 1.0)))
+    L, mu = lay.info["rim_reach_m"], lay.grading_exponent
+    rims = (4 if lay.walls else 2) * math.pi * L * L / (2.0 * mu * area)
+    ball = math.pi * lay.ball_radius / (0.433 * 0.3 * 0.4 * h)
+    interfaces = 0.0
+    if lay.walls:
+        length = 2.0 * lay.tube_outer_radius + 4.0 * lay.plate_thickness + 2.0 * lay.plate_spacing \
+            + 2.0 * (lay.tube_outer_radius - lay.tube_inner_radius)
+        interfaces = length / (0.433 * INTERFACE_GROWTH * h)
+    image = bulk * 0.5 if lay.kelvin else 0.0
+    return bulk + rims + ball + interfaces + image
+
+
+def estimated_dofs(lay: AxisymmetricLayout, degree: int) -> float:
+    """Rough number of dofs: ~cells/2 vertices, plus ~1.5 cells edge midpoints for P2."""
+    cells = estimated_cells(lay)
+    return cells * (0.5 + (1.5 if degree >= 2 else 0.0))
+
+
+def check_mesh_budget(lay: AxisymmetricLayout, degree: int = 2, *,
+                      mesh_size_mm: float | None = None, refinement: float = 1.0) -> None:
+    """Raise :class:`FieldError` (one line, naming ``mesh_size_mm``) before meshing
+    when the estimated dofs exceed :data:`MAX_DOFS_2D`. ``lay`` may be the error
+    estimate's finer mesh (``refinement`` = 2): the message names the scene's
+    ``mesh_size_mm`` all the same."""
+    dofs = estimated_dofs(lay, degree)
+    if dofs > MAX_DOFS_2D:
+        named = lay.mesh_size * refinement * 1e3 if mesh_size_mm is None else mesh_size_mm
+        smallest = named * math.sqrt(dofs / MAX_DOFS_2D)
+        what = " (the error estimate's half-size mesh)" if refinement != 1.0 else ""
+        raise FieldError(f"mesh_size_mm = {named:g} needs about {dofs:.2g} dofs{what}: "
+                         f"allowed <= {MAX_DOFS_2D:.0e}, use mesh_size_mm >= {smallest:.2g} "
+                         "for this device")
+
+
+def meshing_failure(scene, exc: BaseException) -> str:
+    """One line for a gmsh/OpenCASCADE failure, naming the keys that shape the mesh."""
+    dev, fld = scene.device, scene.field
+    first = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
+    return (f"gmsh could not mesh the device ({first}): check [device] gap_mm = "
+            f"{dev.stroke * 1e3:g}, ball_diameter_mm = {dev.ball_diameter * 1e3:g} and "
+            f"[field] mesh_size_mm = {fld.mesh_size * 1e3:g}, domain_radius_mm = "
+            f"{fld.domain_radius * 1e3:g}")

@@ -24,6 +24,59 @@ METHODS = ("axisymmetric", "3d")
 
 
 @dataclass
+class FieldSolution:
+    """Mesh and potentials behind a :class:`PositionResult` (in memory only; ask
+    for it with ``solve_position(..., keep_solution=True)``). The same type for
+    both methods; the axisymmetric one lives on one process (COMM_SELF), the 3D
+    one is distributed over the solve's communicator.
+
+    Attributes
+    ----------
+    method:
+        "axisymmetric" (coordinates (r, z), metres) or "3d" (x, y, z).
+    mesh, cell_tags, facet_tags:
+        The dolfinx mesh and its physical-group tags.
+    space:
+        The Lagrange space of the potentials.
+    weighting:
+        (ψ_lower, ψ_upper): dolfinx Functions on ``space``, the potential [V]
+        for 1 V on that electrode and 0 V on the other, uncharged ball.
+    ball_centre:
+        [m], shape (3,), in the mesh's coordinates.
+    geometry:
+        The layout the mesh was built from (axisymmetric
+        :class:`~tengfield.field.geometry_axisymmetric.AxisymmetricLayout`, 3D cell).
+    source:
+        φ_σ [V]: potential of the ball charge with both electrodes grounded
+        (axisymmetric with ``source_solve``), else ``None``.
+    hidden_cells:
+        Local cells outside the physical domain (the Kelvin image), left out of
+        files and plots.
+    degree:
+        Lagrange degree of ``space``.
+    """
+    method: str
+    mesh: Any
+    cell_tags: Any
+    facet_tags: Any
+    space: Any
+    weighting: tuple
+    ball_centre: np.ndarray
+    geometry: Any
+    source: Any = None
+    hidden_cells: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
+    degree: int = 1
+
+    def potential_values(self, potentials=(0.0, 0.0)) -> np.ndarray:
+        """Local dof values of φ = φ_σ + V_lower ψ_lower + V_upper ψ_upper [V]
+        (``potentials`` = [V_lower, V_upper]; φ_σ = 0 when there is no source)."""
+        phi = potentials[0] * self.weighting[0].x.array + potentials[1] * self.weighting[1].x.array
+        if self.source is not None:
+            phi = phi + self.source.x.array
+        return np.asarray(phi, dtype=float)
+
+
+@dataclass
 class PositionResult:
     """Electrostatics of the device with the ball at one position (SI).
 
@@ -53,8 +106,12 @@ class PositionResult:
     solve_time:
         Time of the linear algebra only (factorisation + solves) [s].
     info:
-        Free-form provenance (mesh size, far-field treatment, domain radius...);
-        keys starting with "_" hold in-memory objects and are left out of JSON.
+        Free-form provenance (mesh size, far-field treatment, domain radius...).
+    induced_fraction:
+        [q_lower, q_upper] / q_ball (σ-independent; defined for an uncharged ball).
+    solution:
+        The :class:`FieldSolution` (mesh, potentials) with ``keep_solution=True``,
+        else ``None``; never written to JSON.
     """
     position: float
     offset: float
@@ -69,10 +126,16 @@ class PositionResult:
     relative_error_estimate: float
     solve_time: float = math.nan
     info: dict[str, Any] = field(default_factory=dict)
+    induced_fraction: np.ndarray | None = None
+    solution: FieldSolution | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(2, 2)
         self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(2)
+        if self.induced_fraction is None:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                self.induced_fraction = self.induced_charge / self.ball_charge
+        self.induced_fraction = np.asarray(self.induced_fraction, dtype=float).reshape(2)
         if self.method not in METHODS:
             raise ValueError(f"method = {self.method!r}: choose one of {METHODS}")
 
@@ -104,7 +167,7 @@ class PositionResult:
 
     def induced_fractions(self) -> np.ndarray:
         """[q_lower, q_upper] / q_ball: each in [-1, 0] by the maximum principle."""
-        return self.induced_charge / self.ball_charge
+        return self.induced_fraction.copy()
 
     def to_json(self, reference: str = "floating") -> dict:
         """The content of ``field.json`` (SI, keys carry the unit)."""
@@ -124,7 +187,7 @@ class PositionResult:
             "wall_time_s": self.wall_time,
             "solve_time_s": self.solve_time,
             "relative_error_estimate": self.relative_error_estimate,
-            "info": _jsonable({k: v for k, v in self.info.items() if not k.startswith("_")}),
+            "info": _jsonable(self.info),
         }
 
     def dumps(self, reference: str = "floating") -> str:

@@ -1,4 +1,4 @@
-"""3D electrostatics of one BB-TENG cell (dolfinx 0.5.2, gmsh OCC), SI units.
+"""3D electrostatics of one BB-TENG cell (dolfinx via :mod:`._dolfinx`, gmsh OCC), SI units.
 
 For a ball position the two weighting potentials ψ_lower, ψ_upper solve
 
@@ -32,7 +32,8 @@ Results (sign conventions of :mod:`tengfield.terminals`):
   ``q_ball = σ π d²`` (the meshed sphere's area error cancels).
 * ``relative_error_estimate``: the same position is also solved on a mesh
   twice as coarse; the estimate is the largest relative change of C_ll,
-  C_lu, C_uu, q_lower, q_upper divided by ``2^p - 1`` with ``p`` the
+  C_lu, C_uu, q_lower/q_ball, q_upper/q_ball
+  (:func:`tengfield.field.contact.relative_change`) divided by ``2^p - 1`` with ``p`` the
   observed convergence order (1 for degree 1, 1.5 for degree 2, measured in
   docs/field3d.md; the electrode rims limit the rate).
 
@@ -42,7 +43,6 @@ built on rank 0 of that communicator and distributed by dolfinx.
 from __future__ import annotations
 
 import contextlib
-import itertools
 import math
 import time
 from dataclasses import dataclass
@@ -52,9 +52,10 @@ import numpy as np
 
 from ..errors import FieldError
 from ..scene import EPS0
+from . import contact
 from .geometry3d import (MeshSettings, build_model, contact_anchors, cylindrical_cell,
                          unique_model_name)
-from .result import PositionResult
+from .result import FieldSolution, PositionResult
 
 #: Observed convergence order of C and q under uniform refinement, by degree
 #: (used to turn the coarse/fine difference into an error estimate).
@@ -63,8 +64,6 @@ OBSERVED_ORDER = {1: 1.0, 2: 1.5}
 FAR_FIELDS = ("robin", "dirichlet", "kelvin")
 #: Highest spherical-harmonic degree whose exterior field is exact for far_field = "kelvin".
 DTN_DEGREE = 2
-
-_prefix_counter = itertools.count()
 
 
 @dataclass
@@ -148,7 +147,7 @@ def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, c
 
     ``position`` z [m], ``offset`` [m] and ``offset_angle`` [rad] place the
     ball (see :mod:`tengfield.field.geometry3d`)."""
-    from dolfinx.io import gmshio
+    from . import _dolfinx as dx_api
 
     start = time.perf_counter()
     meta = None
@@ -161,13 +160,13 @@ def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, c
                 error = exc
             comm.bcast(None if error is None else str(error), root=0)
             if error is None:
-                mesh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, 0, gdim=3)
+                mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(model, comm, rank=0, gdim=3)
     else:
         message = comm.bcast(None, root=0)
         if message is not None:
             error = FieldError(f"3D meshing failed on rank 0: {message}")
         else:
-            mesh, cell_tags, facet_tags = gmshio.model_to_mesh(None, comm, 0, gdim=3)
+            mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(None, comm, rank=0, gdim=3)
     if error is not None:
         raise error
     meta = comm.bcast(meta, root=0)
@@ -178,108 +177,86 @@ def mesh_cell(cell, position: float, offset: float, settings: MeshSettings, *, c
 
 def permittivity_function(cell_mesh: CellMesh, permittivity: dict[str, float]):
     """Piecewise-constant εr (DG0) from the volume groups (``{"ball": 2.1, ...}``; air is 1)."""
-    from dolfinx import fem
+    from . import _dolfinx as dx_api
 
-    space = fem.FunctionSpace(cell_mesh.mesh, ("DG", 0))
-    eps_r = fem.Function(space, name="relative_permittivity")
-    eps_r.x.array[:] = 1.0
-    for name, value in permittivity.items():
-        if name in cell_mesh.groups:
-            cells = cell_mesh.cell_tags.find(cell_mesh.groups[name])
-            eps_r.x.array[space.dofmap.list.array[cells]] = value  # DG0: one dof per cell
-    eps_r.x.scatter_forward()
-    return eps_r
+    return dx_api.cellwise_constant(
+        cell_mesh.mesh, cell_mesh.cell_tags,
+        {cell_mesh.groups[name]: value for name, value in permittivity.items()
+         if name in cell_mesh.groups}, name="relative_permittivity")
+
+
+#: PETSc options of the 3D solve (CG + BoomerAMG tuned for the 3D Laplacian)
+AMG_OPTIONS = {"pc_hypre_boomeramg_strong_threshold": 0.6,
+               "pc_hypre_boomeramg_coarsen_type": "HMIS",
+               "pc_hypre_boomeramg_interp_type": "ext+i", "pc_hypre_boomeramg_P_max": 4,
+               "pc_hypre_boomeramg_agg_nl": 1, "ksp_atol": 1e-30}
 
 
 def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, float], *,
                                degree: int, far_field: str, domain_radius: float,
                                rtol: float = 1e-10) -> WeightingPotentials:
     """Both weighting potentials with one assembled, once-preconditioned operator."""
-    import ufl
-    from dolfinx import fem
-    from dolfinx.fem import petsc as fem_petsc
-    from petsc4py import PETSc
+    from . import _dolfinx as dx_api
 
+    ufl, PETSc = dx_api.ufl, dx_api.PETSc
     if far_field not in FAR_FIELDS:
         raise FieldError(f"far_field = {far_field!r} is not allowed: choose one of "
                          + ", ".join(repr(f) for f in FAR_FIELDS))
     mesh = cell_mesh.mesh
     comm = mesh.comm
     start = time.perf_counter()
-    space = fem.FunctionSpace(mesh, ("Lagrange", degree))
+    space = dx_api.lagrange_space(mesh, degree)
     eps_r = permittivity_function(cell_mesh, permittivity)
     u, v = ufl.TrialFunction(space), ufl.TestFunction(space)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=cell_mesh.facet_tags)
+    _, ds, _ = dx_api.measures(mesh, cell_mesh.cell_tags, cell_mesh.facet_tags)
     far_tag = cell_mesh.groups["far_boundary"]
     a = eps_r * ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
     if far_field in ("robin", "kelvin"):
-        a = a + fem.Constant(mesh, 1.0 / domain_radius) * u * v * ds(far_tag)
-    rhs = fem.form(ufl.inner(fem.Constant(mesh, PETSc.ScalarType(0.0)), v) * ufl.dx)
-    bilinear = fem.form(a)
+        a = a + dx_api.constant(mesh, 1.0 / domain_radius) * u * v * ds(far_tag)
+    rhs = dx_api.form(ufl.inner(dx_api.constant(mesh, 0.0), v) * ufl.dx)
+    bilinear = dx_api.form(a)
 
-    fdim = mesh.topology.dim - 1
-    mesh.topology.create_connectivity(fdim, mesh.topology.dim)
-    dofs = {name: fem.locate_dofs_topological(space, fdim, cell_mesh.facet_tags.find(cell_mesh.groups[name]))
+    dofs = {name: dx_api.facet_dofs(space, cell_mesh.facet_tags, cell_mesh.groups[name])
             for name in ("electrode_lower", "electrode_upper")}
     if far_field == "dirichlet":
-        dofs["far_boundary"] = fem.locate_dofs_topological(space, fdim, cell_mesh.facet_tags.find(far_tag))
+        dofs["far_boundary"] = dx_api.facet_dofs(space, cell_mesh.facet_tags, far_tag)
 
     def bcs_for(active: str):
-        return [fem.dirichletbc(PETSc.ScalarType(1.0 if name == active else 0.0), d, space)
+        return [dx_api.dirichlet_bc(space, 1.0 if name == active else 0.0, d)
                 for name, d in dofs.items()]
 
-    matrix = fem_petsc.assemble_matrix(bilinear, bcs=bcs_for("electrode_lower"))
-    matrix.assemble()
+    matrix = dx_api.assemble_matrix(bilinear, bcs=bcs_for("electrode_lower"))
     operator, harmonic_vectors, weights = matrix, [], np.empty(0)
     if far_field == "kelvin":
         # exact exterior for the harmonics l = 1..DTN_DEGREE: a low-rank term on the far sphere
         x = ufl.SpatialCoordinate(mesh)
         weights = []
         for degree_l, harmonic in sphere_harmonics(x):
-            vec = fem_petsc.assemble_vector(fem.form(harmonic * v * ds(far_tag)))
-            vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            norm = comm.allreduce(fem.assemble_scalar(fem.form(harmonic * harmonic * ds(far_tag))))
-            harmonic_vectors.append(vec)
+            harmonic_vectors.append(dx_api.assemble_vector(dx_api.form(harmonic * v * ds(far_tag))))
+            norm = dx_api.assemble_scalar(dx_api.form(harmonic * harmonic * ds(far_tag)), comm)
             weights.append(degree_l / (domain_radius * norm))
         weights = np.array(weights)
-        operator = PETSc.Mat().createPython(matrix.getSizes(), comm=comm)
-        operator.setPythonContext(_LowRankUpdate(matrix, harmonic_vectors, weights))
-        operator.setUp()
+        operator = dx_api.python_matrix(comm, matrix.getSizes(),
+                                        _LowRankUpdate(matrix, harmonic_vectors, weights))
     assembly_time = time.perf_counter() - start
 
     start = time.perf_counter()
-    ksp = PETSc.KSP().create(comm)
-    prefix = f"tengfield_3d_{next(_prefix_counter)}_"
-    ksp.setOptionsPrefix(prefix)
-    opts = PETSc.Options()
-    for key, value in {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
-                       "pc_hypre_boomeramg_strong_threshold": 0.6,
-                       "pc_hypre_boomeramg_coarsen_type": "HMIS",
-                       "pc_hypre_boomeramg_interp_type": "ext+i", "pc_hypre_boomeramg_P_max": 4,
-                       "pc_hypre_boomeramg_agg_nl": 1, "ksp_rtol": rtol,
-                       "ksp_atol": 1e-30, "ksp_max_it": 2000,
-                       "ksp_error_if_not_converged": True}.items():
-        opts[prefix + key] = value
-    ksp.setOperators(operator, matrix)
-    ksp.setFromOptions()
-    ksp.setUp()
+    prefix = dx_api.unique_prefix("3d")
+    ksp = dx_api.create_ksp(comm, operator, prefix=prefix, kind="cg-amg", rtol=rtol,
+                            preconditioner_matrix=matrix, options=AMG_OPTIONS)
     potentials, iterations, moments = [], [], []
     try:
         for active in ("electrode_lower", "electrode_upper"):
-            bcs = bcs_for(active)
-            b = fem_petsc.assemble_vector(rhs)
-            fem_petsc.apply_lifting(b, [bilinear], bcs=[bcs])
-            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            fem_petsc.set_bc(b, bcs)
-            psi = fem.Function(space, name=f"psi_{active.split('_')[1]}")
+            b = dx_api.assemble_vector(rhs, bilinear, bcs_for(active))
+            psi = dx_api.function(space, name=f"psi_{active.split('_')[1]}")
             try:
-                ksp.solve(b, psi.vector)
+                dx_api.solve(ksp, b, dx_api.petsc_vector(psi))
             except PETSc.Error as exc:
                 raise FieldError(f"3D solve for {active} did not converge "
                                  f"(reason {ksp.getConvergedReason()}): {exc}") from None
             psi.x.scatter_forward()
             potentials.append(psi)
-            moments.append([u.dot(psi.vector) for u in harmonic_vectors])
+            moments.append([u.dot(dx_api.petsc_vector(psi)) for u in harmonic_vectors])
             iterations.append(ksp.getIterationNumber())
             b.destroy()
     finally:
@@ -289,14 +266,11 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
         matrix.destroy()
         for vec in harmonic_vectors:
             vec.destroy()
-        for key in list(opts.getAll()):
-            if key.startswith(prefix):
-                opts.delValue(key)
+        dx_api.clear_options(prefix)
     solve_time = time.perf_counter() - start
-    num_cells = mesh.topology.index_map(mesh.topology.dim).size_global
-    num_dofs = space.dofmap.index_map.size_global * space.dofmap.index_map_bs
-    return WeightingPotentials(lower=potentials[0], upper=potentials[1], dofs=num_dofs,
-                               cells=num_cells, iterations=tuple(iterations),
+    return WeightingPotentials(lower=potentials[0], upper=potentials[1],
+                               dofs=dx_api.num_dofs(space), cells=dx_api.num_cells(mesh),
+                               iterations=tuple(iterations),
                                assembly_time=assembly_time, solve_time=solve_time,
                                harmonic_moments=np.array(moments).reshape(2, -1),
                                harmonic_weights=np.asarray(weights))
@@ -306,21 +280,20 @@ def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
                        permittivity: dict[str, float], *, far_field: str,
                        domain_radius: float) -> np.ndarray:
     """Maxwell capacitance matrix [[C_ll, C_lu], [C_lu, C_uu]] [F] from the field energy."""
-    import ufl
-    from dolfinx import fem
-    from mpi4py import MPI
+    from . import _dolfinx as dx_api
 
+    ufl = dx_api.ufl
     mesh = cell_mesh.mesh
     eps_r = permittivity_function(cell_mesh, permittivity)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=cell_mesh.facet_tags)
+    _, ds, _ = dx_api.measures(mesh, cell_mesh.cell_tags, cell_mesh.facet_tags)
     psi = (potentials.lower, potentials.upper)
 
     def energy(a, b):
         form = eps_r * ufl.inner(ufl.grad(a), ufl.grad(b)) * ufl.dx
         if far_field in ("robin", "kelvin"):
-            form = form + (fem.Constant(mesh, 1.0 / domain_radius) * a * b
+            form = form + (dx_api.constant(mesh, 1.0 / domain_radius) * a * b
                            * ds(cell_mesh.groups["far_boundary"]))
-        return mesh.comm.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
+        return dx_api.assemble_scalar(dx_api.form(form), mesh.comm)
 
     c = np.empty((2, 2))
     moments, weights = potentials.harmonic_moments, potentials.harmonic_weights
@@ -332,33 +305,28 @@ def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
 
 def ball_surface_means(cell_mesh: CellMesh, potentials: WeightingPotentials) -> np.ndarray:
     """[<ψ_lower>, <ψ_upper>]: means of the weighting potentials over the ball surface."""
-    import ufl
-    from dolfinx import fem
-    from mpi4py import MPI
+    from . import _dolfinx as dx_api
 
     mesh = cell_mesh.mesh
-    dS = ufl.Measure("dS", domain=mesh, subdomain_data=cell_mesh.facet_tags)(
-        cell_mesh.groups["ball_surface"])
-    one = fem.Constant(mesh, 1.0)
+    _, _, dS = dx_api.measures(mesh, cell_mesh.cell_tags, cell_mesh.facet_tags)
+    dS = dS(cell_mesh.groups["ball_surface"])
 
     def integral(expr):
-        return mesh.comm.allreduce(fem.assemble_scalar(fem.form(expr * dS)), op=MPI.SUM)
+        return dx_api.assemble_scalar(dx_api.form(expr * dS), mesh.comm)
 
-    area = integral(one)
+    area = integral(dx_api.constant(mesh, 1.0))
     return np.array([integral(potentials.lower("+")) / area, integral(potentials.upper("+")) / area])
 
 
 def evaluate_at(function, point, comm=None) -> float:
     """Value of a dolfinx Function at one point [m] (collective over the mesh's communicator)."""
-    from dolfinx import geometry
+    from . import _dolfinx as dx_api
 
     mesh = function.function_space.mesh
     comm = mesh.comm if comm is None else comm
     point = np.asarray(point, dtype=float).reshape(1, 3)
-    tree = geometry.BoundingBoxTree(mesh, mesh.topology.dim)
-    candidates = geometry.compute_collisions(tree, point)
-    cells = geometry.compute_colliding_cells(mesh, candidates, point).links(0)
-    local = function.eval(point, cells[:1])[0] if len(cells) else math.nan
+    cells = dx_api.colliding_cells(mesh, point)
+    local = function.eval(point, cells[:1])[0] if cells[0] >= 0 else math.nan
     values = [v for v in comm.allgather(local) if not math.isnan(v)]
     if not values:
         raise FieldError(f"point {point.ravel().tolist()} m is outside the mesh")
@@ -388,6 +356,7 @@ class CellSolution:
     induced_fraction: np.ndarray     # [q_lower, q_upper] / q_ball = -<ψ_k>_ball
     cell_mesh: CellMesh
     potentials: WeightingPotentials
+    estimate: float = math.nan       # relative error estimate (set by solve_cell_3d)
 
 
 def solve_cell(cell, position: float, offset: float, settings: Solve3DSettings, *, comm,
@@ -435,7 +404,7 @@ def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float
                    meshed_offset: float = math.nan) -> CellMesh:
     """Read a ``.msh`` file written by ``meshes/generate.py`` (named physical groups)
     on rank 0 of ``comm`` and distribute it."""
-    from dolfinx.io import gmshio
+    from . import _dolfinx as dx_api
 
     start = time.perf_counter()
     groups = None
@@ -446,20 +415,13 @@ def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float
             groups = {gmsh.model.getPhysicalName(dim, tag): tag
                       for dim, tag in gmsh.model.getPhysicalGroups() if dim >= 2}
             groups = comm.bcast(groups, root=0)
-            mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
+            mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=3)
     else:
         groups = comm.bcast(None, root=0)
-        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(None, comm, 0, gdim=3)
+        mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(None, comm, rank=0, gdim=3)
     return CellMesh(mesh=mesh, cell_tags=cell_tags, facet_tags=facet_tags, groups=groups,
                     ball_centre=np.asarray(ball_centre, dtype=float), meshed_gap=meshed_gap,
                     meshed_offset=meshed_offset, mesh_time=time.perf_counter() - start)
-
-
-def relative_change(fine: CellSolution, coarse: CellSolution) -> float:
-    """Largest relative change of C_ll, C_lu, C_uu, q_lower, q_upper between two solutions."""
-    a = np.r_[fine.capacitance[np.triu_indices(2)], fine.induced_fraction]
-    b = np.r_[coarse.capacitance[np.triu_indices(2)], coarse.induced_fraction]
-    return float(np.max(np.abs(a - b) / np.abs(a)))
 
 
 def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
@@ -469,37 +431,41 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
 
     ``surface_charge`` σ [C/m²] on the ball; ``position`` z [m] in [0, Δh];
     ``offset`` [m] lateral, at ``offset_angle`` [rad] from +x. A position
-    closer than ``g_min`` to an electrode is extrapolated linearly from the
-    gaps ``g_min`` and ``2 g_min`` (the contact rule of
-    :func:`tengfield.field.geometry3d.contact_anchors`). With
-    ``keep_solution`` the info dict holds ``"_solution"``: the
-    :class:`CellSolution` (mesh and ψ functions) of the (first) meshed position.
+    closer than ``g_min`` to an electrode follows the contact rule of
+    :mod:`tengfield.field.contact` (the axisymmetric solver's). With
+    ``keep_solution``, ``result.solution`` is the :class:`FieldSolution`
+    (mesh and ψ functions) of the (nearest) meshed position.
     """
     start = time.perf_counter()
 
     def solve_here(z: float, with_estimate: bool):
         sol = solve_cell(cell, z, offset, settings, comm=comm, offset_angle=offset_angle)
-        if not with_estimate:
-            return sol, math.nan
-        coarse = solve_cell(cell, z, offset, settings, comm=comm, coarsen=2.0,
-                            offset_angle=offset_angle)
-        return sol, relative_change(sol, coarse) / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0)
+        sol.estimate = math.nan
+        if with_estimate:
+            coarse = solve_cell(cell, z, offset, settings, comm=comm, coarsen=2.0,
+                                offset_angle=offset_angle)
+            sol.estimate = (contact.relative_change(coarse, sol)
+                            / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0))
+        return sol
 
     anchors = contact_anchors(cell, position)
     info: dict[str, Any] = {}
     if anchors is None:
-        fine, estimate = solve_here(position, settings.estimate_error)
+        fine = solve_here(position, settings.estimate_error)
         capacitance, fraction = fine.capacitance, fine.induced_fraction
-        solve_time = fine.potentials.solve_time
+        solve_time, estimate = fine.potentials.solve_time, fine.estimate
     else:
-        fine, estimate = solve_here(anchors[0], settings.estimate_error)
-        second, _ = solve_here(anchors[1], False)
-        weight = (position - anchors[0]) / (anchors[1] - anchors[0])  # ≤ 0: extrapolation
-        capacitance = fine.capacitance + weight * (second.capacitance - fine.capacitance)
-        fraction = fine.induced_fraction + weight * (second.induced_fraction - fine.induced_fraction)
-        solve_time = fine.potentials.solve_time + second.potentials.solve_time
-        info["contact_rule"] = (f"linear extrapolation from gaps {anchors[0]:.6g} m and "
-                                f"{anchors[1]:.6g} m")
+        rule = contact.extrapolate_to_contact(
+            position, anchors, cell.stroke,
+            lambda z: solve_here(z, settings.estimate_error and z == anchors[0]))
+        fine = rule["solves"][0]
+        capacitance, fraction = rule["capacitance"], rule["induced_fraction"]
+        solve_time = sum(s.potentials.solve_time for s in rule["solves"])
+        estimate = max(fine.estimate, rule["error"]) if settings.estimate_error else math.nan
+        info["contact_rule"] = ("power-law extrapolation from gaps "
+                                + ", ".join(f"{d:.6g}" for d in rule["distances"]) + " m")
+        info["contact_extrapolation_error"] = rule["error"]
+        info["contact_exponent"] = rule["exponent"]
     ball_charge = surface_charge * math.pi * cell.ball_diameter**2
     pot = fine.potentials
     info.update({
@@ -516,14 +482,19 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         "assembly_time_s": pot.assembly_time,
         "mpi_size": comm.size,
     })
+    solution = None
     if keep_solution:
-        info["_solution"] = fine
+        cm = fine.cell_mesh
+        solution = FieldSolution(method="3d", mesh=cm.mesh, cell_tags=cm.cell_tags,
+                                 facet_tags=cm.facet_tags, space=pot.lower.function_space,
+                                 weighting=(pot.lower, pot.upper), ball_centre=cm.ball_centre,
+                                 geometry=cell, degree=settings.degree)
     return PositionResult(
         position=position, offset=offset, capacitance=capacitance,
         induced_charge=fraction * ball_charge, ball_charge=ball_charge,
         dofs=pot.dofs, cells=pot.cells, method="3d", degree=settings.degree,
         wall_time=time.perf_counter() - start, relative_error_estimate=estimate,
-        solve_time=solve_time, info=info)
+        solve_time=solve_time, info=info, induced_fraction=fraction, solution=solution)
 
 
 def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,
@@ -542,23 +513,12 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
                          "solver: allowed 'free-space' (use method = 'axisymmetric' for "
                          "'grounded-table')")
     offset = fld.ball_offset if offset is None else offset
-    settings = Solve3DSettings(degree=fld.degree, mesh_size=fld.mesh_size,
+    from .geometry_axisymmetric import size_scale
+
+    # a device larger than the reference spacing gets the similar (scaled) mesh, as in 2D
+    settings = Solve3DSettings(degree=fld.degree, mesh_size=fld.mesh_size * size_scale(scene.device),
                                domain_radius=fld.domain_radius, far_field=fld.far_field,
                                estimate_error=estimate_error)
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
                          surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
                          keep_solution=keep_solution)
-
-
-def write_potentials_xdmf(path, solution: CellSolution) -> None:
-    """Write the mesh and ψ_lower, ψ_upper (dimensionless, the potentials [V] for
-    1 V on that electrode) to an XDMF file for ParaView (collective on the mesh's
-    communicator; the FE degree equals the mesh order). Volume tags are left out:
-    dolfinx 0.5.2 cannot write meshtags of a second-order mesh."""
-    from dolfinx.io import XDMFFile
-
-    mesh = solution.cell_mesh.mesh
-    with XDMFFile(mesh.comm, str(path), "w") as xdmf:
-        xdmf.write_mesh(mesh)
-        xdmf.write_function(solution.potentials.lower)
-        xdmf.write_function(solution.potentials.upper)

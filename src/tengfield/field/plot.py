@@ -1,16 +1,9 @@
-"""Open-circuit potential of one position, and its files (XDMF for ParaView, PNG figure).
-
-Physics (pure functions, SI): with the ball at z the electrodes float at
-potentials V = [V_lower, V_upper] that keep the charges of the reference
-state (:mod:`tengfield.terminals`): ball on the lower electrode (z = 0), the
-terminals shorted, and
-
-* ``reference = "floating"``: the pair holds total charge ``-q_ball``;
-* ``reference = "grounded-lower"``: the lower electrode stays grounded
-  (V_lower = 0) and the upper one keeps its reference charge.
-
-The physical potential is then ``φ = φ_σ + V_lower ψ_lower + V_upper ψ_upper``
-(φ_σ: potential of the ball charge with both electrodes grounded).
+"""Field figures (pyvista, off-screen): the open-circuit potential of an
+axisymmetric solve and the weighting potential of a 3D solve, from a
+:class:`~tengfield.field.result.FieldSolution`. Serial (a figure needs the
+whole mesh on one process). The colour bar picks its unit (kV, V, mV, ...)
+and decimals from the data (:func:`colour_bar_scale`), so its tick labels
+stay distinct at any potential.
 """
 from __future__ import annotations
 
@@ -19,97 +12,47 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import terminals
+#: units of the potential colour bar, largest first: (volts per unit, label)
+POTENTIAL_UNITS = ((1e3, "kV"), (1.0, "V"), (1e-3, "mV"), (1e-6, "uV"), (1e-9, "nV"),
+                   (1e-12, "pV"))
 
 
-def reference_charges(C_ref, q_ref, ball_charge: float, reference: str = "floating") -> np.ndarray:
-    """Electrode charges [Q_lower, Q_upper] [C] of the reference state (terminals shorted)."""
-    terminals._check_reference(reference)
-    C_ref = np.asarray(C_ref, dtype=float)
-    q_ref = np.asarray(q_ref, dtype=float)
-    if reference == "grounded-lower":
-        return q_ref.copy()  # both at V = 0
-    common = (-ball_charge - q_ref.sum()) / C_ref.sum()   # shorted pair at one potential
-    return C_ref @ np.array([common, common]) + q_ref
+def colour_bar_scale(limit: float, n_labels: int = 5) -> tuple[float, str, str]:
+    """(volts per unit, unit, printf format) for a colour bar over [-limit, limit] [V]
+    with ``n_labels`` evenly spaced labels: the unit brings ``limit`` into
+    [1, 1000) and the format has enough decimals for every label to differ."""
+    if not (math.isfinite(limit) and limit > 0.0):
+        return 1.0, "V", "%.0f"
+    factor, unit = next(((f, u) for f, u in POTENTIAL_UNITS if limit >= f), POTENTIAL_UNITS[-1])
+    step = 2.0 * (limit / factor) / max(n_labels - 1, 1)
+    decimals = max(0, 1 - math.floor(math.log10(step)))
+    return factor, unit, f"%.{decimals}f"
 
 
-def open_circuit_potentials(C, q, C_ref, q_ref, ball_charge: float,
-                            reference: str = "floating") -> np.ndarray:
-    """[V_lower, V_upper] [V] with the terminals open, charges fixed at the reference state."""
-    C = np.asarray(C, dtype=float)
-    q = np.asarray(q, dtype=float)
-    Q = reference_charges(C_ref, q_ref, ball_charge, reference)
-    if reference == "grounded-lower":
-        return np.array([0.0, (Q[1] - q[1]) / C[1, 1]])
-    return np.linalg.solve(C, Q - q)
+def colour_bar_labels(limit: float, n_labels: int = 5) -> list[str]:
+    """The labels the potential colour bar shows over [-limit, limit] [V]."""
+    factor, _, fmt = colour_bar_scale(limit, n_labels)
+    values = np.linspace(-limit, limit, n_labels) / factor
+    values[np.abs(values) < 1e-12 * max(abs(limit / factor), 1e-300)] = 0.0   # no "-0"
+    return [fmt % v for v in values]
 
 
-# ---------------------------------------------------------------------------
-def potential_vector(solution, potentials) -> np.ndarray:
-    """φ as a dof vector: source potential + floating electrode potentials × weighting potentials."""
-    return solution.source + potentials[0] * solution.weighting[0] + potentials[1] * solution.weighting[1]
-
-
-def device_mesh(disc):
-    """A new dolfinx mesh of every cell but the Kelvin image (same curved geometry)."""
-    import dolfinx.mesh
-    import ufl
-
-    from . import geometry_axisymmetric as geometry
-
-    mesh = disc.mesh
-    tdim = mesh.topology.dim
-    image = disc.cell_tags.find(geometry.CELL_TAGS["exterior"])
-    n_cells = mesh.topology.index_map(tdim).size_local
-    keep = np.setdiff1d(np.arange(n_cells, dtype=np.int32), image)
-    dofmap = mesh.geometry.dofmap
-    cells = np.array([dofmap.links(c) for c in keep], dtype=np.int64)
-    used, cells = np.unique(cells, return_inverse=True)
-    cells = cells.reshape(keep.size, -1)
-    x = mesh.geometry.x[used, :2]
-    degree = mesh.geometry.cmap.degree
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", mesh.ufl_cell(), degree))
-    from mpi4py import MPI
-    return dolfinx.mesh.create_mesh(MPI.COMM_SELF, cells, x, domain)
-
-
-def write_potential_xdmf(path, disc, phi: np.ndarray, comm) -> None:
-    """``phi`` (dof vector on disc.V) on the device part of the mesh to XDMF (P2 on P2 geometry)."""
-    from scipy.spatial import cKDTree
+def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
+                         window_size=(1400, 1100)) -> None:
+    """Paper figure of an axisymmetric ``solution``: φ [V] (local dof values on
+    ``solution.space``) on a meridian plane (mirrored to -r), equipotentials,
+    field lines, ball and electrodes outlined, colour bar in an automatic unit."""
+    import pyvista as pv
 
     from . import _dolfinx as dx_api
 
-    sub = device_mesh(disc)
-    W = dx_api.lagrange_space(sub, sub.geometry.cmap.degree)
-    source = dx_api.function(disc.V, phi)
-    if disc.V.element.basix_element.degree != sub.geometry.cmap.degree:
-        source = dx_api.interpolate(dx_api.lagrange_space(disc.mesh, sub.geometry.cmap.degree),
-                                    source)
-    parent_xy = source.function_space.tabulate_dof_coordinates()[:, :2]
-    sub_xy = W.tabulate_dof_coordinates()[:, :2]
-    _, idx = cKDTree(parent_xy).query(sub_xy)
-    out = dx_api.function(W, source.x.array[idx], name="potential_V")
-    dx_api.write_xdmf(path, sub, [out], comm)
-
-
-def render_potential_png(path, disc, phi: np.ndarray, lay, *, title: str,
-                         window_size=(1400, 1100)) -> None:
-    """Paper figure: φ on a meridian plane (mirrored to -r), equipotentials, field lines,
-    ball and electrodes outlined, colour bar in volts."""
-    import pyvista as pv
-
-    import dolfinx.plot
-
-    from . import geometry_axisymmetric as geometry
-
-    V = disc.V
-    topology, cell_types, points = dolfinx.plot.create_vtk_mesh(V)
+    lay = solution.geometry
+    topology, cell_types, points = dx_api.vtk_arrays(solution.space)
     grid = pv.UnstructuredGrid(topology, cell_types, points.copy())
     grid.point_data["phi"] = phi
     # keep the device part only (drop the Kelvin image)
-    image = disc.cell_tags.find(geometry.CELL_TAGS["exterior"])
     mask = np.ones(grid.n_cells, dtype=bool)
-    mask[image] = False
+    mask[solution.hidden_cells] = False
     grid = grid.extract_cells(np.flatnonzero(mask))
     mirrored = grid.copy()
     mirrored.points[:, 0] *= -1.0
@@ -132,17 +75,22 @@ def render_potential_png(path, disc, phi: np.ndarray, lay, *, title: str,
              & np.isfinite(phi_grid))
     phi_grid[~valid] = np.nan            # outside the mesh (below a grounded table)
     sampled.point_data["phi"] = phi_grid
-    lim = float(np.nanmax(np.abs(phi_grid))) or 1.0
+    lim = float(np.nanmax(np.abs(phi_grid), initial=0.0)) if np.any(valid) else 0.0
+    n_labels = 5
+    factor, unit, fmt = colour_bar_scale(lim, n_labels)
+    lim = lim or 1.0
+    sampled.point_data["phi"] = phi_grid / factor
     grad_z, grad_r = np.gradient(np.nan_to_num(phi_grid).reshape(shape), step)
 
     plotter = pv.Plotter(off_screen=True, window_size=window_size)
     plotter.set_background("white")
-    bar = dict(title="potential (V)", vertical=True, position_x=0.82, position_y=0.15,
-               height=0.7, width=0.05, title_font_size=24, label_font_size=20, fmt="%.0f",
-               color="black", n_labels=5)
-    plotter.add_mesh(sampled, scalars="phi", cmap="RdBu_r", clim=(-lim, lim),
+    bar = dict(title=f"potential ({unit})", vertical=True, position_x=0.82, position_y=0.15,
+               height=0.7, width=0.05, title_font_size=24, label_font_size=20, fmt=fmt,
+               color="black", n_labels=n_labels)
+    plotter.add_mesh(sampled, scalars="phi", cmap="RdBu_r", clim=(-lim / factor, lim / factor),
                      scalar_bar_args=bar, show_edges=False, nan_opacity=0.0)
-    contours = sampled.contour(isosurfaces=np.linspace(-lim, lim, 25)[1:-1], scalars="phi")
+    contours = sampled.contour(isosurfaces=np.linspace(-lim, lim, 25)[1:-1] / factor,
+                               scalars="phi")
     if contours.n_points:
         plotter.add_mesh(contours, color="black", line_width=1.0, opacity=0.35)
     rb, zb = lay.ball_radius * mm, lay.ball_centre_z * mm
@@ -247,29 +195,6 @@ def trace_field_lines(Ex, Ey, xs, ys, seeds, *, step_length: float, max_steps: i
     return [np.vstack([b[::-1], f[1:]]) for b, f in zip(backward, forward)]
 
 
-def summary_lines(result, reference: str, potentials=None) -> list[str]:
-    """Human-readable numbers of one position (for the CLI)."""
-    fr = result.induced_fractions()
-    lines = [
-        f"position z = {result.position * 1e3:.4g} mm, offset = {result.offset * 1e3:.3g} mm, "
-        f"method = {result.method}, degree = {result.degree}",
-        f"C_ll = {result.C_ll * 1e12:.6g} pF   C_lu = {result.C_lu * 1e12:.6g} pF   "
-        f"C_uu = {result.C_uu * 1e12:.6g} pF",
-        f"q_lower = {result.q_lower * 1e12:.6g} pC ({fr[0]:+.5f} q_ball)   "
-        f"q_upper = {result.q_upper * 1e12:.6g} pC ({fr[1]:+.5f} q_ball)   "
-        f"q_ball = {result.ball_charge * 1e12:.6g} pC",
-        f"C_T ({reference}) = {result.terminal_capacitance(reference) * 1e12:.6g} pF",
-    ]
-    if potentials is not None:
-        lines.append(f"open circuit: V_lower = {potentials[0]:.6g} V, V_upper = {potentials[1]:.6g} V, "
-                     f"V_OC = V_lower - V_upper = {potentials[0] - potentials[1]:.6g} V")
-    est = result.relative_error_estimate
-    lines.append(f"dofs = {result.dofs}, cells = {result.cells}, wall time = {result.wall_time:.3g} s "
-                 f"(solve {result.solve_time:.3g} s), relative error estimate = "
-                 + ("n/a" if math.isnan(est) else f"{est:.2g}"))
-    return lines
-
-
 def render_weighting_png_3d(path, solution, device, *, title: str,
                             window_size=(1200, 1100)) -> None:
     """3D runs: the weighting potential ψ_upper (dimensionless: the potential for
@@ -279,14 +204,14 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     whole mesh on one process)."""
     import pyvista as pv
 
-    import dolfinx.plot
+    from . import _dolfinx as dx_api
 
-    psi = solution.potentials.upper
-    topology, cell_types, points = dolfinx.plot.create_vtk_mesh(psi.function_space)
+    psi = solution.weighting[1]
+    topology, cell_types, points = dx_api.vtk_arrays(solution.space)
     grid = pv.UnstructuredGrid(topology, cell_types, points.copy())
     grid.point_data["psi"] = np.asarray(psi.x.array.real, dtype=float)
     mm = 1e3
-    centre = np.asarray(solution.cell_mesh.ball_centre, dtype=float)
+    centre = np.asarray(solution.ball_centre, dtype=float)
     angle = math.atan2(centre[1], centre[0]) if np.hypot(centre[0], centre[1]) > 0 else 0.0
     normal = (-math.sin(angle), math.cos(angle), 0.0)   # plane holding the axis and the ball centre
     section = grid.slice(normal=normal, origin=(0.0, 0.0, 0.0))

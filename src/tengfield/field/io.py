@@ -1,0 +1,89 @@
+"""Files and text of one field position: field.json, XDMF for ParaView, the
+summary lines the CLI prints. Writers take a
+:class:`~tengfield.field.result.PositionResult` / :class:`~tengfield.field.result.FieldSolution`;
+no physics here.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+
+def field_json(result, reference: str, potentials=None) -> dict:
+    """The content of ``field.json``: :meth:`PositionResult.to_json` plus, when
+    known, the open-circuit potentials [V]."""
+    data = result.to_json(reference)
+    if potentials is not None:
+        data["open_circuit_potential_V"] = {"lower": float(potentials[0]),
+                                            "upper": float(potentials[1])}
+    return data
+
+
+def write_field_json(path, result, reference: str, potentials=None) -> None:
+    """Write :func:`field_json` to ``path`` (call on one rank)."""
+    from pathlib import Path
+
+    Path(path).write_text(json.dumps(field_json(result, reference, potentials), indent=2) + "\n")
+
+
+def write_xdmf(path, solution, potentials=None) -> None:
+    """The potentials of ``solution`` to XDMF/HDF5 for ParaView.
+
+    Axisymmetric: φ [V] = φ_σ + V_lower ψ_lower + V_upper ψ_upper
+    (``potentials`` = [V_lower, V_upper]; zeros give φ_σ alone) as
+    ``potential_V`` on the device part of the mesh (the Kelvin image left out;
+    P2 on the P2 geometry), serial. 3D: ψ_lower, ψ_upper (the potentials for
+    1 V on that electrode) on the whole mesh, collective on the mesh's
+    communicator (the FE degree equals the mesh order; volume tags are left
+    out: dolfinx 0.5.2 cannot write meshtags of a second-order mesh).
+    """
+    from . import _dolfinx as dx_api
+
+    if solution.method == "3d":
+        dx_api.write_xdmf(path, solution.mesh, list(solution.weighting), solution.mesh.comm)
+        return
+    from mpi4py import MPI
+    from scipy.spatial import cKDTree
+
+    phi = solution.potential_values((0.0, 0.0) if potentials is None else potentials)
+    mesh = solution.mesh
+    keep = np.setdiff1d(np.arange(dx_api.num_local_cells(mesh), dtype=np.int32),
+                        solution.hidden_cells)
+    sub = dx_api.submesh(mesh, keep)
+    order = dx_api.geometry_degree(sub)
+    W = dx_api.lagrange_space(sub, order)
+    source = dx_api.function(solution.space, phi)
+    if solution.degree != order:
+        source = dx_api.interpolate(dx_api.lagrange_space(mesh, order), source)
+    parent_xy = dx_api.dof_coordinates(source.function_space)[:, :2]
+    sub_xy = dx_api.dof_coordinates(W)[:, :2]
+    _, idx = cKDTree(parent_xy).query(sub_xy)
+    out = dx_api.function(W, source.x.array[idx], name="potential_V")
+    dx_api.write_xdmf(path, sub, [out], MPI.COMM_SELF)
+
+
+def summary_lines(result, reference: str, potentials=None) -> list[str]:
+    """Human-readable numbers of one position (for the CLI)."""
+    fr = result.induced_fractions()
+    lines = [
+        f"position z = {result.position * 1e3:.4g} mm, offset = {result.offset * 1e3:.3g} mm, "
+        f"method = {result.method}, degree = {result.degree}",
+        f"C_ll = {result.C_ll * 1e12:.6g} pF   C_lu = {result.C_lu * 1e12:.6g} pF   "
+        f"C_uu = {result.C_uu * 1e12:.6g} pF",
+        f"q_lower = {result.q_lower * 1e12:.6g} pC ({fr[0]:+.5f} q_ball)   "
+        f"q_upper = {result.q_upper * 1e12:.6g} pC ({fr[1]:+.5f} q_ball)   "
+        f"q_ball = {result.ball_charge * 1e12:.6g} pC",
+        f"C_T ({reference}) = {result.terminal_capacitance(reference) * 1e12:.6g} pF",
+    ]
+    if potentials is not None:
+        lines.append(f"open circuit: V_lower = {potentials[0]:.6g} V, V_upper = {potentials[1]:.6g} V, "
+                     f"V_OC = V_lower - V_upper = {potentials[0] - potentials[1]:.6g} V")
+    est = result.relative_error_estimate
+    lines.append(f"dofs = {result.dofs}, cells = {result.cells}, wall time = {result.wall_time:.3g} s "
+                 f"(solve {result.solve_time:.3g} s), relative error estimate = "
+                 + ("n/a" if math.isnan(est) else f"{est:.2g}"))
+    return lines
+
+

@@ -1,0 +1,95 @@
+"""Open-circuit potential of one ball position (library function + pure physics).
+
+With the ball at z the electrodes float at potentials V = [V_lower, V_upper]
+that keep the charges of the reference state (:mod:`tengfield.terminals`):
+ball on the lower electrode (z = 0), the terminals shorted, and
+
+* ``reference = "floating"``: the pair holds total charge ``-q_ball``;
+* ``reference = "grounded-lower"``: the lower electrode stays grounded
+  (V_lower = 0) and the upper one keeps its reference charge.
+
+The physical potential is then ``φ = φ_σ + V_lower ψ_lower + V_upper ψ_upper``
+(φ_σ: potential of the ball charge with both electrodes grounded), see
+:meth:`tengfield.field.result.FieldSolution.potential_values`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import terminals
+from .result import PositionResult
+
+
+def reference_charges(C_ref, q_ref, ball_charge: float, reference: str = "floating") -> np.ndarray:
+    """Electrode charges [Q_lower, Q_upper] [C] of the reference state (terminals shorted)."""
+    terminals._check_reference(reference)
+    C_ref = np.asarray(C_ref, dtype=float)
+    q_ref = np.asarray(q_ref, dtype=float)
+    if reference == "grounded-lower":
+        return q_ref.copy()  # both at V = 0
+    common = (-ball_charge - q_ref.sum()) / C_ref.sum()   # shorted pair at one potential
+    return C_ref @ np.array([common, common]) + q_ref
+
+
+def open_circuit_potentials(C, q, C_ref, q_ref, ball_charge: float,
+                            reference: str = "floating") -> np.ndarray:
+    """[V_lower, V_upper] [V] with the terminals open, charges fixed at the reference state."""
+    C = np.asarray(C, dtype=float)
+    q = np.asarray(q, dtype=float)
+    Q = reference_charges(C_ref, q_ref, ball_charge, reference)
+    if reference == "grounded-lower":
+        return np.array([0.0, (Q[1] - q[1]) / C[1, 1]])
+    return np.linalg.solve(C, Q - q)
+
+
+@dataclass
+class OpenCircuit:
+    """The open-circuit state of one position (SI)."""
+    result: PositionResult          # the position (``result.solution`` with keep_solution)
+    reference_result: PositionResult  # the reference state, ball at z = 0
+    potentials: np.ndarray          # [V_lower, V_upper] [V]
+    reference: str                  # "floating" or "grounded-lower"
+
+    @property
+    def V_oc(self) -> float:
+        """V_OC = V_lower - V_upper [V]."""
+        return float(self.potentials[0] - self.potentials[1])
+
+    def potential_values(self) -> np.ndarray:
+        """Local dof values of φ [V] on ``result.solution.space`` (needs keep_solution)."""
+        if self.result.solution is None:
+            raise ValueError("open_circuit(..., keep_solution=True) keeps the potentials")
+        return self.result.solution.potential_values(self.potentials)
+
+
+def open_circuit(scene, position: float, *, comm, reference: str | None = None,
+                 keep_solution: bool = False, method: str | None = None,
+                 offset: float | None = None, **overrides) -> OpenCircuit:
+    """Open-circuit potentials [V_lower, V_upper] with the ball at gap ``position`` [m].
+
+    Solves the position and the reference state (z = 0, no error estimate);
+    ``reference`` defaults to ``[circuit] reference``. ``keep_solution`` keeps
+    the mesh and potentials (axisymmetric: also the ball charge's own potential
+    φ_σ, so :meth:`OpenCircuit.potential_values` is the full φ; 3D: φ_σ is not
+    computed). ``method``, ``offset`` and ``overrides`` as in
+    :func:`tengfield.field.solve_position`.
+    """
+    from . import FIELD_OVERRIDES, resolve_method, solve_position
+
+    reference = reference or scene.circuit.reference
+    terminals._check_reference(reference)
+    field_keys = {k: v for k, v in overrides.items() if k in FIELD_OVERRIDES}
+    options = dict(overrides)
+    chosen = resolve_method(scene, method, scene.field.ball_offset if offset is None else offset)
+    if keep_solution and chosen == "axisymmetric":
+        options["source_solve"] = True
+    result = solve_position(scene, position, comm=comm, method=chosen, offset=offset,
+                            keep_solution=keep_solution, **options)
+    ref = solve_position(scene, 0.0, comm=comm, method=chosen, offset=offset,
+                         estimate_error=False, **field_keys)
+    potentials = open_circuit_potentials(result.capacitance, result.induced_charge,
+                                         ref.capacitance, ref.induced_charge,
+                                         result.ball_charge, reference)
+    return OpenCircuit(result, ref, potentials, reference)
