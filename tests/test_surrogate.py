@@ -558,3 +558,23 @@ def test_precompute_refuses_an_unwritable_target_before_any_solve(tmp_path, caps
     option = "--cache-dir" if where == "cache dir is a file" else "-o"
     assert len(err) == 1 and err[0].startswith(f"tengfield: error: {option} ")
     assert str(blocker if where != "output is a directory" else tmp_path) in err[0]
+
+
+def test_solver_fingerprint_covers_the_solver_and_not_its_plots(tmp_path, monkeypatch):
+    """Plot or file-writing changes keep cached surrogates; a solver change does not."""
+    import shutil
+
+    import tengfield.field as field_package
+    from tengfield.surrogate.store import solver_fingerprint
+
+    names = [p.name for p in field_package.solver_source_paths()]
+    assert {"axisymmetric.py", "solver3d.py", "contact.py", "_dolfinx.py"} <= set(names)
+    assert not {"plot.py", "io.py"} & set(names)
+    copies = []
+    for path in field_package.solver_source_paths():
+        shutil.copy(path, tmp_path / path.name)
+        copies.append(tmp_path / path.name)
+    monkeypatch.setattr(field_package, "solver_source_paths", lambda: copies)
+    before = solver_fingerprint()
+    (tmp_path / "contact.py").write_text((tmp_path / "contact.py").read_text() + "\n# changed\n")
+    assert solver_fingerprint() != before

@@ -781,7 +781,7 @@ def _check_work(exc: Excitation, run: Run) -> None:
 
 def _field_problems(dev: Device, fld: Field, *, explicit: set[str]) -> list[str]:
     """Field-only problems: ranges relative to the geometry that a mesh needs."""
-    from .field.geometry_axisymmetric import MIN_GAP_FRACTION
+    from .field.contact import MIN_GAP_FRACTION
 
     problems = []
     b = dev.bounding_radius

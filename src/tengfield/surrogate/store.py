@@ -53,19 +53,18 @@ _SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs
 # ---------------------------------------------------------------------------
 # provenance
 def solver_fingerprint() -> str:
-    """SHA-256 (16 hex digits) of the field solver's source files.
+    """SHA-256 (16 hex digits) of the field solver's source files
+    (:func:`tengfield.field.solver_source_paths`: not the plotting or file-writing code).
 
     Part of the cache check on top of the scene's field hash, so that a
     changed solver (without a ``FIELD_SCHEMA`` bump) never reuses old solves.
     """
-    from importlib import resources
+    from ..field import solver_source_paths
 
     digest = hashlib.sha256()
-    package = resources.files("tengfield").joinpath("field")
-    for entry in sorted(package.iterdir(), key=lambda e: e.name):
-        if entry.name.endswith(".py"):
-            digest.update(entry.name.encode())
-            digest.update(entry.read_bytes())
+    for path in solver_source_paths():
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
 
