@@ -8,6 +8,8 @@ OUT ?= out
 export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
+# the same for OpenMPI 5 (Debian 13), whose launcher (PRRTE) ignores the line above
+export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 
