@@ -26,9 +26,9 @@ RUN DEBIAN_FRONTEND=noninteractive bash /tmp/install-system.sh \
 # (--system-site-packages, exactly as `make setup` does): those must come
 # from Debian (built against its PETSc, OpenMPI and numpy), while the rest
 # comes from PyPI; scripts/numpy-requirement keeps numpy on the system's
-# major version (numpy<2 on bookworm, numpy 2 on trixie). Debian's own python refuses `pip install` outside a venv
-# (PEP 668, externally managed), which a venv respects without
-# --break-system-packages.
+# major version (numpy<2 on bookworm, numpy 2 on trixie). Debian's own
+# python refuses `pip install` outside a venv (PEP 668, externally managed),
+# which a venv respects without --break-system-packages.
 ENV VIRTUAL_ENV=/opt/tengfield
 ENV PATH=/opt/tengfield/bin:$PATH
 
