@@ -1,29 +1,34 @@
-# tengfield in a container: Debian bookworm's FEM stack (dolfinx 0.5.2, PETSc,
-# OpenMPI) plus tengfield and its PyPI dependencies in a venv.
+# tengfield in a container: Debian's FEM stack (dolfinx, PETSc, OpenMPI)
+# plus tengfield and its PyPI dependencies in a venv. One recipe, two Debian
+# releases, chosen by the build argument DEBIAN_RELEASE:
 #
-#   docker build -t tengfield .
+#   docker build -t tengfield .                                      # Debian 12, dolfinx 0.5.2
+#   docker build --build-arg DEBIAN_RELEASE=trixie -t tengfield:trixie .   # Debian 13, dolfinx 0.9
 #   docker run --rm -v "$PWD/out:/out" tengfield run -o /out
 #   docker run --rm -v "$PWD/out:/out" --entrypoint mpirun tengfield \
 #       -n 2 tengfield precompute          # surrogate into /out/cache
 #
 # docs/container.md has the details; scripts/test-container builds and tests
-# this file with podman on a machine without a Docker daemon.
-FROM debian:bookworm-slim
+# this file for both releases with podman on a machine without a Docker daemon.
+ARG DEBIAN_RELEASE=bookworm
+FROM debian:${DEBIAN_RELEASE}-slim
 
 # System packages through the same script the Makefile uses (one source of
-# truth). It installs with --no-install-recommends; the package lists and
-# the .deb cache are dropped in the same layer.
+# truth; it reads /etc/os-release, so the same line serves both releases).
+# It installs with --no-install-recommends; the package lists and the .deb
+# cache are dropped in the same layer.
 COPY scripts/install-system.sh /tmp/install-system.sh
 RUN DEBIAN_FRONTEND=noninteractive bash /tmp/install-system.sh \
  && apt-get clean \
  && rm -rf /var/lib/apt/lists/* /tmp/install-system.sh
 
-# A venv that sees Debian's dolfinx, petsc4py, mpi4py, h5py and scipy
+# A venv that sees Debian's dolfinx, petsc4py, mpi4py, h5py, numpy and scipy
 # (--system-site-packages, exactly as `make setup` does): those must come
-# from Debian (built against its PETSc and OpenMPI), while the rest comes
-# from PyPI. Debian's own python refuses `pip install` outside a venv
-# (PEP 668, externally managed), which a venv respects without
-# --break-system-packages.
+# from Debian (built against its PETSc, OpenMPI and numpy), while the rest
+# comes from PyPI; scripts/numpy-requirement keeps numpy on the system's
+# major version (numpy<2 on bookworm, numpy 2 on trixie). Debian's own
+# python refuses `pip install` outside a venv (PEP 668, externally managed),
+# which a venv respects without --break-system-packages.
 ENV VIRTUAL_ENV=/opt/tengfield
 ENV PATH=/opt/tengfield/bin:$PATH
 
@@ -36,20 +41,25 @@ RUN --mount=type=secret,id=ca-bundle \
     if [ -s /run/secrets/ca-bundle ]; then export PIP_CERT=/run/secrets/ca-bundle; fi \
  && python3 -m venv --system-site-packages "$VIRTUAL_ENV" \
  && pip install --no-cache-dir --disable-pip-version-check \
-        "numpy<2" "/tmp/tengfield-src[field]" \
+        "$(sh /tmp/tengfield-src/scripts/numpy-requirement)" "/tmp/tengfield-src[field]" \
  && rm -rf /tmp/tengfield-src \
  && tengfield --version
 
-# MPI as root inside the container; mpirun -n 2 also on a 1-core host;
+# MPI as root inside the container; mpirun -n 2 also on a 1-core host
+# (OpenMPI 4.1 on bookworm reads OMPI_MCA_rmaps_base_oversubscribe, OpenMPI 5
+# on trixie, whose launcher is PRRTE, reads PRTE_MCA_rmaps_default_mapping_policy);
 # OpenMPI's single-copy (CMA) transport needs ptrace rights that container
-# runtimes usually withhold, so shared memory falls back to copy-in/out.
+# runtimes usually withhold, so shared memory falls back to copy-in/out
+# (btl_vader_single_copy_mechanism on 4.1, the smsc framework on 5).
 # Headless rendering: pyvista through VTK's EGL window (Mesa renders in
 # software, no X server; VTK >= 9.4 reads VTK_DEFAULT_OPENGL_WINDOW) and
 # matplotlib's Agg backend.
 ENV OMPI_ALLOW_RUN_AS_ROOT=1 \
     OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
     OMPI_MCA_rmaps_base_oversubscribe=1 \
+    PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe \
     OMPI_MCA_btl_vader_single_copy_mechanism=none \
+    OMPI_MCA_smsc=^cma \
     PYVISTA_OFF_SCREEN=true \
     VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow \
     MPLBACKEND=Agg \

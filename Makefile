@@ -8,6 +8,8 @@ OUT ?= out
 export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
+# the same for OpenMPI 5 (Debian 13), whose launcher (PRRTE) ignores the line above
+export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 
@@ -18,10 +20,14 @@ setup: $(STAMP)
 system:
 	bash scripts/install-system.sh
 
-$(STAMP): pyproject.toml scripts/install-system.sh
+# Debian 12 or 13: scripts/install-system.sh reads /etc/os-release; the venv
+# keeps the system numpy's major version (numpy<2 on Debian 12, numpy 2 on 13),
+# as printed by scripts/numpy-requirement, because Debian's petsc4py, dolfinx
+# and h5py are built against it.
+$(STAMP): pyproject.toml scripts/install-system.sh scripts/numpy-requirement
 	bash scripts/install-system.sh
 	test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
-	$(PY) -m pip install -q --disable-pip-version-check "numpy<2" -e ".[dev]"
+	$(PY) -m pip install -q --disable-pip-version-check "$$(sh scripts/numpy-requirement)" -e ".[dev]"
 	@# a pip h5py (bundled HDF5) would shadow Debian's, which shares dolfinx's HDF5
 	$(PY) -m pip uninstall -y -q h5py 2>/dev/null || true
 	touch $(STAMP)
