@@ -362,7 +362,8 @@ def test_two_ranks_equal_serial():
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    parallel = radial.precompute_radial(SCENE, comm=comm, solve=zr_model_solve, tolerance=1e-4)
+    parallel = radial.precompute_radial(SCENE, comm=comm, solve=zr_model_solve, tolerance=1e-4,
+                                        max_positions=129, max_offsets=33)
     serial = table_of(SCENE, tolerance=1e-4)
     np.testing.assert_array_equal(parallel.capacitance, serial.capacitance)
     np.testing.assert_array_equal(parallel.induced_charge, serial.induced_charge)
