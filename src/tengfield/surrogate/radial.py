@@ -304,10 +304,66 @@ class RadialTerminalCurves:
         return terminals.open_circuit_voltage(self.charge(z, r), self.capacitance(z, r))
 
 
-def terminal_waveforms_zr(curves: RadialTerminalCurves, gap, gap_velocity, radial,
+class AnchoredTerminalCurves:
+    """The (z, r) curves anchored to the axisymmetric surrogate:
+    ``F(z, r) = F_axis(z) + [F_zr(z, r) − F_zr(z, 0)]`` for F = Q_SC and C_T.
+
+    On the axis this is the 1-D surrogate exactly (its field error ~1e-4, not
+    the coarse 3D mesh's ~1e-2), and off the axis the 3D solves contribute
+    only the change with r, in which most of their discretisation error
+    cancels. So a run switches from the 1-D to the (z, r) surrogate without a
+    jump as the ball leaves the axis. Same interface as
+    :class:`RadialTerminalCurves`; ``axis`` is a
+    :class:`tengfield.surrogate.TerminalCurves` of the same reference.
+    """
+
+    def __init__(self, curves: RadialTerminalCurves, axis):
+        if axis.reference != curves.reference:
+            raise ValueError(f"references differ: {axis.reference!r} (axis) and "
+                             f"{curves.reference!r} (z, r)")
+        if not math.isclose(axis.stroke, curves.stroke, rel_tol=1e-12):
+            raise ValueError("the axisymmetric and (z, r) surrogates have different strokes")
+        self.zr, self.axis = curves, axis
+        self.reference = curves.reference
+        self.stroke, self.max_offset = curves.stroke, curves.max_offset
+        self.positions, self.offsets = curves.positions, curves.offsets
+        z = curves.positions[:, None]
+        shift_q = curves.charge_grid - curves.charge_grid[:, :1]
+        shift_c = curves.capacitance_grid - curves.capacitance_grid[:, :1]
+        self.charge_grid = axis.charge(z) + shift_q
+        self.capacitance_grid = axis.capacitance(z) + shift_c
+        self.charge_samples = self.charge_grid.ravel()
+        self.capacitance_samples = self.capacitance_grid.ravel()
+
+    def charge(self, z, r):
+        """Q_SC(z, r) [C]."""
+        return self.axis.charge(z) + self.zr.charge(z, r) - self.zr.charge(z, 0.0)
+
+    def charge_derivative(self, z, r):
+        """``(dQ_SC/dz, dQ_SC/dr)`` [C/m]."""
+        d_z, d_r = self.zr.charge_derivative(z, r)
+        return self.axis.charge_derivative(z) + d_z - self.zr.charge_derivative(z, 0.0)[0], d_r
+
+    def capacitance(self, z, r):
+        """C_T(z, r) [F]."""
+        return self.axis.capacitance(z) + self.zr.capacitance(z, r) - self.zr.capacitance(z, 0.0)
+
+    def capacitance_derivative(self, z, r):
+        """``(dC_T/dz, dC_T/dr)`` [F/m]."""
+        d_z, d_r = self.zr.capacitance_derivative(z, r)
+        return (self.axis.capacitance_derivative(z) + d_z
+                - self.zr.capacitance_derivative(z, 0.0)[0], d_r)
+
+    def voltage(self, z, r):
+        """V_OC(z, r) = Q_SC / C_T [V]."""
+        return terminals.open_circuit_voltage(self.charge(z, r), self.capacitance(z, r))
+
+
+def terminal_waveforms_zr(curves, gap, gap_velocity, radial,
                           radial_velocity, *, cells: int = 1,
                           parallel_capacitance: float = 0.0) -> dict[str, np.ndarray]:
-    """:func:`tengfield.electrical.terminal_waveforms` for an off-axis trajectory.
+    """:func:`tengfield.electrical.terminal_waveforms` for an off-axis trajectory
+    (``curves``: :class:`RadialTerminalCurves` or :class:`AnchoredTerminalCurves`).
 
     ``gap`` z(t), ``radial`` r(t) [m] and their rates [m/s] at the samples;
     ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` [A], ``dC_T_dt`` likewise; same keys.
