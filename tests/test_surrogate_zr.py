@@ -443,3 +443,29 @@ def test_anchored_curves_are_the_axis_on_the_axis_and_the_3d_change_off_it():
         np.testing.assert_allclose(out["I_sc"], d_z[:, 3])
     with pytest.raises(ValueError, match="references differ"):
         radial.AnchoredTerminalCurves(table.curves("floating"), axis.curves("grounded-lower"))
+
+
+def test_radial_motion_at_given_times_and_leaving_the_axis():
+    class Motion:
+        gap = np.zeros(3)
+        radial = np.array([0.0, 1e-7, 3e-4])
+
+        @staticmethod
+        def sample3d(times):
+            t = np.asarray(times)
+            state = np.zeros((t.size, 9))
+            state[:, 0], state[:, 1] = 3e-4 * t, -4e-4 * t      # along a ray: r = 5e-4 t
+            state[:, 3], state[:, 4] = 3e-4, -4e-4
+            return state
+    r, rate = radial.radial_motion(Motion, [0.0, 0.5, 1.0])
+    np.testing.assert_allclose(r, [0.0, 2.5e-4, 5e-4])
+    np.testing.assert_allclose(rate, [0.0, 5e-4, 5e-4])
+    assert radial.leaves_axis(SCENE, Motion)
+    Motion.radial = np.array([0.0, 0.4e-3 * R_MAX])
+    assert not radial.leaves_axis(SCENE, Motion)
+
+    class OneD:
+        gap = np.zeros(4)
+    assert not radial.leaves_axis(SCENE, OneD)
+    assert np.all(radial.radial_motion(OneD)[0] == 0) and radial.radial_motion(OneD)[0].size == 4
+    assert radial.radial_motion(OneD, [0.1, 0.2])[1].size == 2
