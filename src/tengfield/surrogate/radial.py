@@ -459,8 +459,9 @@ def radial_hash(scene, *, mesh_size_mm: float = DEFAULT_MESH_SIZE_MM,
     """SHA-256 of the scene's field inputs plus the (z, r) surrogate's own settings
     (the cache key of :func:`obtain_radial_table`)."""
     inputs = {"field": scene.field_inputs(),
-              "zr": {"format": FORMAT_VERSION_ZR, "method": "3d", "mesh_size_mm": float(mesh_size_mm),
-                     "degree": int(degree), "tolerance": float(tolerance)}}
+              "zr": {"format": FORMAT_VERSION_ZR, "method": "3d",
+                     "mesh_size_mm": float(mesh_size_mm), "degree": int(degree),
+                     "tolerance": float(tolerance)}}
     return hashlib.sha256(json.dumps(inputs, sort_keys=True, default=float).encode()).hexdigest()
 
 
