@@ -349,6 +349,14 @@ def test_bad_arguments_are_refused():
         table_of(SCENE, initial_offsets=4)
 
 
+def test_grounded_table_is_refused_before_any_solve_by_the_3d_solver():
+    from tengfield.errors import FieldError
+
+    scene = fx.scene_with(field={"environment": "grounded-table"})
+    with pytest.raises(FieldError, match="environment = 'grounded-table'.*allowed 'free-space'"):
+        radial.precompute_radial(scene)
+
+
 def test_outside_the_grid_is_clipped():
     curves = table_of(SCENE, tolerance=1e-3).curves("floating")
     assert curves.charge(-1e-3, 0.0) == curves.charge(0.0, 0.0)

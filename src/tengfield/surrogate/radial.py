@@ -491,6 +491,11 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     from .store import provenance, solver_fingerprint
 
     if solve is None:
+        if scene.field.environment != "free-space":   # before any solve, on every rank
+            from ..errors import FieldError
+            raise FieldError(f"[field] environment = {scene.field.environment!r} is not "
+                             "supported by the 3D solver of the (z, r) surrogate: allowed "
+                             "'free-space'")
         solve = _default_solver()
     if solve_comm is None:
         from mpi4py import MPI
