@@ -331,28 +331,32 @@ class CacheOutcome:
     stored: bool = True
 
 
-def _decide(path: Path, scene) -> tuple[SurrogateTable | None, str, str]:
-    """(table or None, status, reason) for the cache file ``path`` (one process)."""
+def _decide(path: Path, scene, read=None) -> tuple[SurrogateTable | None, str, str]:
+    """(table or None, status, reason) for the cache file ``path`` (one process);
+    ``read(path)`` (default: :func:`read_table` for ``scene``) reads and checks it."""
     if path.is_dir():
         return None, "computed", f"the cache path {path} is a directory"
     if not path.exists():
         return None, "computed", f"no cached surrogate at {path}"
     try:
-        table = read_table(path, expected_hash=scene.field_hash(),
-                           expected_solver=solver_fingerprint())
+        table = read(path) if read is not None else read_table(
+            path, expected_hash=scene.field_hash(), expected_solver=solver_fingerprint())
     except SurrogateError as exc:
         return None, "recomputed", f"cached surrogate {path} not trusted ({exc.reason})"
     return table, "cached", f"complete surrogate with matching field hash at {path}"
 
 
-def load_cached(path: str | Path, scene, comm=None) -> tuple[SurrogateTable | None, str, str]:
+def load_cached(path: str | Path, scene, comm=None, *,
+                read=None) -> tuple[SurrogateTable | None, str, str]:
     """Rank 0 of ``comm`` reads and checks the cache file ``path``; every rank gets
     its decision ``(table or None, status, reason)`` (status "cached", "computed"
-    or "recomputed"). An untrusted file gives one warning (rank 0)."""
+    or "recomputed"). An untrusted file gives one warning (rank 0). ``read(path)``
+    replaces :func:`read_table` (e.g. the (z, r) surrogate's reader); it raises
+    :class:`SurrogateError` for a file it does not trust."""
     decision: object = None
     if rank_of(comm) == 0:
         try:
-            decision = _decide(Path(path), scene)
+            decision = _decide(Path(path), scene, read)
         except Exception as exc:  # noqa: BLE001 - raised on every rank below, never a hang
             decision = exc
     if size_of(comm) > 1:
@@ -365,14 +369,15 @@ def load_cached(path: str | Path, scene, comm=None) -> tuple[SurrogateTable | No
     return table, status, reason
 
 
-def store_in_cache(path: str | Path, table: SurrogateTable, comm=None) -> bool:
+def store_in_cache(path: str | Path, table: SurrogateTable, comm=None, *, write=None) -> bool:
     """Write ``table`` to the cache file ``path`` on rank 0 of ``comm``; if that fails
     (cache directory a file or read-only, cache path a directory...) warn once and
-    return False on every rank, else True."""
+    return False on every rank, else True. ``write(path, table)`` replaces
+    :func:`write_table` (it raises ``OSError`` when it cannot write)."""
     stored: object = True
     if rank_of(comm) == 0:
         try:
-            write_table(path, table)
+            (write or write_table)(path, table)
         except OSError as exc:
             why = exc.strerror or str(exc)
             warnings.warn(f"surrogate cache {path} could not be written ({why}); the table is "
