@@ -42,7 +42,8 @@ IMPACT_OFFSET_PERIODS = 1e-9
 # ---------------------------------------------------------------------------
 # waveforms
 def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
-                       parallel_capacitance: float = 0.0) -> dict[str, np.ndarray]:
+                       parallel_capacitance: float = 0.0, radial=None,
+                       radial_velocity=None) -> dict[str, np.ndarray]:
     """Open-circuit voltage, short-circuit charge and current along a trajectory.
 
     ``curves``: :class:`tengfield.surrogate.TerminalCurves` of ONE cell, or
@@ -52,6 +53,9 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
     through ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V]
     (= Q_SC / (C_T + C_p), the true V_OC when C_p = 0), ``Q_sc`` [C],
     ``I_sc`` = (dQ_SC/dz) dz/dt [A], ``C_T`` [F] and ``dC_T_dt`` [F/s].
+    ``curves`` may be a (z, r) surrogate (:mod:`tengfield.surrogate.radial`):
+    then ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0)
+    enter, and ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ``.
     """
     gap = np.asarray(gap, dtype=float)
     velocity = np.asarray(gap_velocity, dtype=float)
@@ -59,6 +63,13 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
         zero = np.zeros_like(gap)
         return {"V_oc": zero, "Q_sc": zero.copy(), "I_sc": zero.copy(),
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
+    if hasattr(curves, "offsets"):   # the (z, r) surrogate
+        from .surrogate.radial import terminal_waveforms_zr
+        zero = np.zeros_like(gap)
+        return terminal_waveforms_zr(
+            curves, gap, velocity, zero if radial is None else radial,
+            zero if radial_velocity is None else radial_velocity, cells=cells,
+            parallel_capacitance=parallel_capacitance)
     q_sc, dq_dz, c_t, dc_dz = circuit.scale_cells(
         curves.charge(gap), curves.charge_derivative(gap), curves.capacitance(gap),
         curves.capacitance_derivative(gap), cells)
@@ -67,11 +78,22 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
             "C_T": c_t, "dC_T_dt": dc_dz * velocity}
 
 
-def scene_terminal_waveforms(scene, curves, gap, gap_velocity) -> dict[str, np.ndarray]:
+def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
+                             radial_velocity=None) -> dict[str, np.ndarray]:
     """:func:`terminal_waveforms` with ``[device] cells`` and ``[circuit]
     parallel_capacitance_pF`` of ``scene``."""
     return terminal_waveforms(curves, gap, gap_velocity, cells=scene.device.cells,
-                              parallel_capacitance=scene.circuit.parallel_capacitance)
+                              parallel_capacitance=scene.circuit.parallel_capacitance,
+                              radial=radial, radial_velocity=radial_velocity)
+
+
+def _radial(dynamics, curves, times=None):
+    """``(r, dr/dt)`` of ``dynamics`` (at its samples or at ``times``) when ``curves``
+    is a (z, r) surrogate, else ``(None, None)``."""
+    if not hasattr(curves, "offsets"):
+        return None, None
+    from .surrogate.radial import radial_motion
+    return radial_motion(dynamics, times)
 
 
 def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
@@ -81,7 +103,8 @@ def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
     t = np.asarray(dynamics.t, dtype=float)
     gap = np.asarray(dynamics.gap, dtype=float)
     velocity = np.asarray(dynamics.gap_velocity, dtype=float)
-    terminal = scene_terminal_waveforms(scene, curves, gap, velocity)
+    terminal = scene_terminal_waveforms(scene, curves, gap, velocity,
+                                        *_radial(dynamics, curves))
     table = getattr(dynamics, "table", None)
     return {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
             "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
@@ -171,11 +194,14 @@ def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> di
     values = {name: [np.asarray(waveforms[column])[mask]]
               for name, column in PEAK_QUANTITIES.items()}
     if curves is not None:
-        gap_pre, vel_pre, gap_post, vel_post = impact_states(
-            scene, dynamics, impact_times(dynamics, t[mask][0], t[-1]))
+        impacts = impact_times(dynamics, t[mask][0], t[-1])
+        gap_pre, vel_pre, gap_post, vel_post = impact_states(scene, dynamics, impacts)
         if gap_pre.size:
-            extra = scene_terminal_waveforms(scene, curves, np.concatenate([gap_pre, gap_post]),
-                                             np.concatenate([vel_pre, vel_post]))
+            eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+            extra = scene_terminal_waveforms(
+                scene, curves, np.concatenate([gap_pre, gap_post]),
+                np.concatenate([vel_pre, vel_post]),
+                *_radial(dynamics, curves, np.concatenate([impacts - eps, impacts + eps])))
             for name in PEAK_QUANTITIES:
                 values[name].append(extra[name])
     return {name: circuit.peak_to_peak(np.concatenate(v)) for name, v in values.items()}
@@ -238,7 +264,7 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
     order = np.lexsort((tag, grid))
     grid, gap, vel = grid[order], gap[order], vel[order]
     output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
-    fine = scene_terminal_waveforms(scene, curves, gap, vel)
+    fine = scene_terminal_waveforms(scene, curves, gap, vel, *_radial(dynamics, curves, grid))
     response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
     delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
     stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
@@ -440,9 +466,10 @@ def last_period(times, period: float) -> np.ndarray:
 def cmeo(scene, curves, max_gap: float) -> dict:
     """Cycles for maximised energy output (Zi et al. 2015) for a stroke 0 -> ``max_gap``
     [m] of ``[device] cells`` identical cells, and the structural figure of merit
-    (area = the ball's surface pi d^2 per cell, x_max = ``max_gap``)."""
+    (area = the ball's surface pi d^2 per cell, x_max = ``max_gap``), on the axis."""
     from .harvest import max_energy_per_cycle, structural_figure_of_merit
 
+    curves = getattr(curves, "axis", curves)   # a (z, r) surrogate: the stroke on the axis
     n = scene.device.cells
     c_p = scene.circuit.parallel_capacitance
     q_max = abs(float(curves.charge(max_gap)) - float(curves.charge(0.0))) * n

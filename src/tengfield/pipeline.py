@@ -119,6 +119,23 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
             "max_relative_error_estimate": float(np.nanmax(table.field_error)),
             "max_dofs": int(table.dofs.max())})
         curves = TerminalCurves(table, scene.circuit.reference)
+        from .surrogate import radial
+        if radial.leaves_axis(scene, dynamics):   # [contact] model = "3d", off the axis
+            zr_table, zr_outcome = radial.obtain_radial_table(
+                scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
+                command_line=command_line, write=write_cache)
+            curves = radial.AnchoredTerminalCurves(zr_table.curves(scene.circuit.reference),
+                                                   curves)
+            stages["field_zr"] = Stage(
+                "cached" if zr_outcome.status == "cached" else "ran", zr_outcome.reason,
+                zr_outcome.wall_time, {
+                    "path": zr_outcome.path, "grid": list(zr_table.shape),
+                    "mesh_size_mm": zr_table.mesh_size * 1e3, "degree": zr_table.degree,
+                    "interpolation_error_estimate": zr_table.interpolation_error,
+                    "converged": zr_table.converged,
+                    "max_relative_error_estimate": float(np.nanmax(zr_table.field_error)),
+                    "sum_of_solve_wall_times_s": zr_table.total_solve_wall_time,
+                    "curves": "1-D surrogate on the axis + the 3D change with r"})
         stages["surrogate"] = Stage(
             "cached" if outcome.status == "cached" else "ran",
             f"{table.count} positions, cubic splines of Q_SC and C_T",

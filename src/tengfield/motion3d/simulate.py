@@ -249,7 +249,7 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     steps_done = episodes[finished, 5]
     plates = np.array(["lower", "upper"])[cp] if cp.size else np.zeros(0, dtype="<U5")
     return Motion3DResult(
-        status=0, message="ok", t=t, gap=z, gap_velocity=v, table=yz,
+        t=t, gap=z, gap_velocity=v, table=yz,
         impacts=Impacts(ct, plates, cvb, cva), regime=regime, n_events=n_k,
         wall_time=_time.perf_counter() - wall0, model="3d", stroke=dev.stroke, period=period,
         window_start=window_start, _sampler=sampler,
