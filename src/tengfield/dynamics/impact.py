@@ -7,15 +7,13 @@ motion at any time.
 """
 from __future__ import annotations
 
-from .. import scene as scene_limits
-
 import time as _time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import DynamicsError
-from ..scene import G
+from ..scene import MAX_PERIODS, G  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
 from . import _kernel as K
 from .regime import classify
 from .result import DynamicsResult, Impacts, check_samples, run_span, sample_times
@@ -27,9 +25,6 @@ MAX_EVENTS_PER_PERIOD = 20_000
 #: More stored events (segments + impacts, 80 bytes each) than this raise
 #: DynamicsError (about 1.6 GB of trajectory).
 MAX_STORED_EVENTS = 20_000_000
-#: Runs longer than this many excitation periods are refused before integrating
-#: (the scene's limit, also applied to a ``duration`` given to ``simulate``).
-MAX_PERIODS = scene_limits.MAX_PERIODS
 #: A recorded table whose acceleration crosses -g more often than this in the
 #: period before the event bound was hit is blamed on noise in the data.
 NOISY_CROSSINGS = 20

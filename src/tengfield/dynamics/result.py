@@ -1,12 +1,12 @@
 """Result objects of the dynamics (in the spirit of scipy's ``OdeResult``)."""
 from __future__ import annotations
 
-from .. import scene as scene_limits
-
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+
+from ..scene import MAX_SAMPLES  # the scene's limit, also for simulate(duration=)
 
 REGIMES = ("rest", "bounce", "chaos", "critical-contact", "regular-contact")
 
@@ -113,10 +113,6 @@ class DynamicsResult:
         }
 
 
-#: Sampled runs longer than this many samples (duration_s x sample_rate_hz) are
-#: refused before integrating (the scene's limit, also applied to a ``duration``
-#: given to ``simulate``).
-MAX_SAMPLES = scene_limits.MAX_SAMPLES
 
 
 def run_span(scene, duration: float | None) -> tuple[float, float, float]:
