@@ -28,6 +28,7 @@ from . import circuit, electrical
 from ._json import jsonable as _jsonable
 from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
+from .scene import check_field
 from .surrogate import SurrogateTable, TerminalCurves, obtain_table
 
 
@@ -93,6 +94,8 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     """
     stages: dict[str, Stage] = {}
     simulate = simulate or _default_simulate()
+    if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
+        check_field(scene)                # before the dynamics, not after
 
     start = time.perf_counter()
     dynamics = simulate(scene)
@@ -292,7 +295,8 @@ def _summary(scene, dynamics, waveforms, load, stages, table, *, peaks) -> dict:
     mask, window_reason = electrical.steady_window(t, scene)
     summary: dict[str, Any] = {
         "scene": scene.source,
-        "field_hash": scene.field_hash(),
+        # no field stage ran for a scene whose field values are refused (uncharged ball)
+        "field_hash": None if scene.field_problems else scene.field_hash(),
         "reference": scene.circuit.reference,
         "sign_convention": "V = V_lower - V_upper; Q_SC and currents lower -> upper through "
                            "the external circuit; reference state: ball on the lower electrode",

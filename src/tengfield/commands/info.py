@@ -19,9 +19,10 @@ def versions() -> dict[str, str]:
             out[name] = str(getattr(mod, "__version__", getattr(mod, "VERSION", "?")))
         except Exception as exc:  # noqa: BLE001 - report, never fail
             out[name] = f"missing ({type(exc).__name__})"
-    try:
-        from petsc4py import PETSc
-        out["PETSc"] = ".".join(str(v) for v in PETSc.Sys.getVersion())
+    try:   # the field package's dolfinx layer: which names it uses, and PETSc
+        from ..field._dolfinx import describe, petsc_version
+        out["field layer"] = describe()
+        out["PETSc"] = petsc_version()
     except Exception:  # noqa: BLE001
         pass
     try:

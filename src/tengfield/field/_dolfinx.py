@@ -109,6 +109,11 @@ def describe() -> str:
     return f"dolfinx {dolfinx.__version__} ({'0.5' if LEGACY else '0.9'} names)"
 
 
+def petsc_version() -> str:
+    """The PETSc library version petsc4py runs on, "X.Y.Z"."""
+    return ".".join(str(v) for v in PETSc.Sys.getVersion())
+
+
 # -- mesh -------------------------------------------------------------------
 def num_cells(mesh) -> int:
     """Global number of cells."""
