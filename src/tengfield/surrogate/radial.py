@@ -40,9 +40,7 @@ import dataclasses
 import hashlib
 import json
 import math
-import os
 import sys
-import tempfile
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -56,6 +54,7 @@ from .refinement import FIELD_ERROR_MARGIN, FIELD_ERROR_MODES, _accepts_keyword,
     _carry_field_error, error_sample_positions
 from .sampling import (INITIAL_POSITIONS, contact_first_order, is_lobatto_count,
                        is_mirror_symmetric, lobatto_positions, mirrored, refinement_positions)
+from .store import SCALAR_TYPES
 from .table import SurrogateError, SurrogateTable
 
 #: format of the (z, r) HDF5 file
@@ -82,6 +81,8 @@ SCALARS_ZR = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
               "max_offset": "max_offset_m", "interpolation_error": "interpolation_error_estimate",
               "tolerance": "tolerance", "converged": "converged", "field_hash": "field_hash",
               "method": "method", "degree": "degree", "mesh_size": "mesh_size_m"}
+#: table attribute -> type of its value: the 1-D surrogate's and the 3D ones
+SCALAR_TYPES_ZR = {**SCALAR_TYPES, "max_offset": float, "mesh_size": float}
 #: per-point arrays: trailing shape after (n_z, n_r)
 _GRID_TAILS = {"capacitance": (2, 2), "induced_charge": (2,), "dofs": (), "cells": (),
                "wall_time": (), "solve_time": (), "field_error": ()}
@@ -612,6 +613,16 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
 
 # ---------------------------------------------------------------------------
 # checks, file and cache
+def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
+    """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
+    attribute -> array) has the shape ``(nz, nr, *tail)`` of :data:`_GRID_TAILS`."""
+    for attr, tail in _GRID_TAILS.items():
+        shape = np.shape(arrays[attr])
+        if shape != (nz, nr, *tail):
+            raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "
+                                 f"{(nz, nr, *tail)}")
+
+
 def check_radial_table(table: RadialTable) -> None:
     """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense:
     shapes, offsets strictly ascending from 0 to ``max_offset``, and every
@@ -619,11 +630,7 @@ def check_radial_table(table: RadialTable) -> None:
     from .store import check_table
 
     nz, nr = table.shape
-    for attr, tail in _GRID_TAILS.items():
-        shape = np.shape(getattr(table, attr))
-        if shape != (nz, nr, *tail):
-            raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "
-                                 f"{(nz, nr, *tail)}")
+    _check_grid_shapes({attr: getattr(table, attr) for attr in _GRID_TAILS}, nz, nr)
     r, largest = table.offsets, float(table.max_offset)
     if nr < 2:
         raise SurrogateError(f"{nr} offset(s): at least 2 are needed")
@@ -644,50 +651,37 @@ def check_radial_table(table: RadialTable) -> None:
             raise SurrogateError(f"at offset r = {r[j]:.6g} m: {exc.reason}") from None
 
 
-def _scalar_values(table: RadialTable) -> dict:
-    return {"ball_charge": float(table.ball_charge), "stroke": float(table.stroke),
-            "max_offset": float(table.max_offset),
-            "interpolation_error": float(table.interpolation_error),
-            "tolerance": float(table.tolerance), "converged": bool(table.converged),
-            "field_hash": str(table.field_hash), "method": str(table.method),
-            "degree": int(table.degree), "mesh_size": float(table.mesh_size)}
-
-
 def write_radial_table(path, table: RadialTable) -> Path:
-    """Write ``table`` to HDF5 atomically (temporary file + ``os.replace``) with the
-    1-D surrogate's checksums (:func:`tengfield.surrogate.store.array_digest`,
-    ``scalars_digest``). Raises ``OSError`` if it cannot (nothing is left behind)."""
-    from .store import _import_h5py, array_digest, scalars_digest
+    """Write ``table`` to HDF5 atomically with the 1-D surrogate's checksums
+    (:func:`tengfield.surrogate.store.write_checked_file`). Raises ``OSError`` if it
+    cannot (nothing is left behind)."""
+    from .store import typed_scalars, write_checked_file
 
-    h5py = _import_h5py()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["complete"] = False
-            arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
-            arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
-            for name, data in arrays.items():
-                dataset = f.create_dataset(name, data=data, fletcher32=True,
-                                           chunks=data.shape if data.size else None)
-                dataset.attrs["sha256"] = array_digest(data)
-            scalars = _scalar_values(table)
-            for attr, name in SCALARS_ZR.items():
-                f.attrs[name] = scalars[attr]
-            f.attrs["scalars_sha256"] = scalars_digest(scalars)
-            f.attrs["format_version"] = FORMAT_VERSION_ZR
-            f.attrs["kind"] = "zr"
-            f.attrs["provenance"] = json.dumps(table.provenance, default=str)
-            f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
-            f.flush()
-            f.attrs["complete"] = True
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
+    arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
+    scalars = typed_scalars(vars(table), SCALAR_TYPES_ZR)
+    return write_checked_file(path, arrays, scalars, SCALARS_ZR, {
+        "format_version": FORMAT_VERSION_ZR, "kind": "zr",
+        "provenance": json.dumps(table.provenance, default=str)})
+
+
+def _check_format_zr(attrs) -> None:
+    version = attrs.get("format_version")
+    if str(attrs.get("kind", "")) != "zr" or version is None or int(version) != FORMAT_VERSION_ZR:
+        raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
+                             f"(kind {attrs.get('kind')!r}, format {version!r})")
+
+
+def _build_radial_table(arrays: dict, history, scalars: dict,
+                        provenance_data: dict) -> RadialTable:
+    _check_grid_shapes(arrays, np.shape(arrays["positions"])[0], np.shape(arrays["offsets"])[0])
+    if history.ndim != 2 or history.shape[1] != 3:
+        raise SurrogateError(f"error history has shape {history.shape}")
+    table = RadialTable(**arrays, **scalars, provenance=provenance_data,
+                        error_history=[(int(a), int(b), float(e))
+                                       for a, b, e in history.tolist()])
+    check_radial_table(table)
+    return table
 
 
 def read_radial_table(path, expected_hash: str | None = None,
@@ -695,67 +689,14 @@ def read_radial_table(path, expected_hash: str | None = None,
     """Read a (z, r) surrogate file; raise :class:`SurrogateError` unless it is
     complete, of this format, unchanged (checksums), sensible
     (:func:`check_radial_table`) and (if given) for ``expected_hash``
-    (:func:`radial_hash`) and the solver ``expected_solver``."""
-    from .store import _import_h5py, _read_checked, scalars_digest
+    (:func:`radial_hash`) and the solver ``expected_solver``
+    (:func:`tengfield.surrogate.store.read_checked_file`)."""
+    from .store import read_checked_file
 
-    h5py = _import_h5py()
-    path = Path(path)
-
-    def fail(reason: str):
-        return SurrogateError(f"surrogate file {str(path)!r} {reason}", path=path, reason=reason)
-
-    if not path.is_file():
-        raise fail("is a directory" if path.is_dir() else "does not exist")
-    try:
-        with h5py.File(path, "r") as f:
-            if not bool(f.attrs.get("complete", False)):
-                raise SurrogateError("is partial (complete flag unset)")
-            version = f.attrs.get("format_version")
-            if str(f.attrs.get("kind", "")) != "zr" or version is None \
-                    or int(version) != FORMAT_VERSION_ZR:
-                raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
-                                     f"(kind {f.attrs.get('kind')!r}, format {version!r})")
-            stored_hash = str(f.attrs["field_hash"])
-            if expected_hash is not None and stored_hash != expected_hash:
-                raise SurrogateError(f"was made for hash {stored_hash[:12]}..., the scene "
-                                     f"has {expected_hash[:12]}...")
-            arrays = {attr: _read_checked(f, name) for attr, name in ARRAYS_ZR.items()}
-            history = _read_checked(f, "error_history")
-            raw = {attr: f.attrs[name] for attr, name in SCALARS_ZR.items()}
-            scalars = {"ball_charge": float(raw["ball_charge"]), "stroke": float(raw["stroke"]),
-                       "max_offset": float(raw["max_offset"]),
-                       "interpolation_error": float(raw["interpolation_error"]),
-                       "tolerance": float(raw["tolerance"]), "converged": bool(raw["converged"]),
-                       "field_hash": str(raw["field_hash"]), "method": str(raw["method"]),
-                       "degree": int(raw["degree"]), "mesh_size": float(raw["mesh_size"])}
-            if str(f.attrs.get("scalars_sha256", "")) != scalars_digest(scalars):
-                raise SurrogateError("scalar attributes do not match their checksum")
-            provenance_text = str(f.attrs["provenance"])
-    except SurrogateError as exc:
-        raise fail(exc.reason) from None
-    except Exception as exc:  # noqa: BLE001 - any read failure means "corrupt"
-        raise fail(f"is corrupt or unreadable: {type(exc).__name__}: {exc}") from None
-    try:
-        nz, nr = np.shape(arrays["positions"])[0], np.shape(arrays["offsets"])[0]
-        for attr, tail in _GRID_TAILS.items():
-            if np.shape(arrays[attr]) != (nz, nr, *tail):
-                raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape "
-                                     f"{np.shape(arrays[attr])}, expected {(nz, nr, *tail)}")
-        if history.ndim != 2 or history.shape[1] != 3:
-            raise SurrogateError(f"error history has shape {history.shape}")
-        table = RadialTable(**arrays, **scalars, provenance=json.loads(provenance_text),
-                            error_history=[(int(a), int(b), float(e))
-                                           for a, b, e in history.tolist()])
-        check_radial_table(table)
-    except SurrogateError as exc:
-        raise fail(f"holds inconsistent data: {exc.reason}") from None
-    except Exception as exc:  # noqa: BLE001
-        raise fail(f"holds inconsistent data: {type(exc).__name__}: {exc}") from None
-    stored_solver = table.provenance.get("solver_fingerprint")
-    if expected_solver is not None and stored_solver != expected_solver:
-        raise fail(f"was made by another version of the field solver (fingerprint "
-                   f"{stored_solver}, now {expected_solver})")
-    return table
+    return read_checked_file(path, check_format=_check_format_zr, array_names=ARRAYS_ZR,
+                             scalar_names=SCALARS_ZR, scalar_types=SCALAR_TYPES_ZR,
+                             build=_build_radial_table, expected_hash=expected_hash,
+                             expected_solver=expected_solver, hash_label="hash")
 
 
 def radial_cache_path(scene, cache_dir=None, **settings) -> Path:
