@@ -627,20 +627,12 @@ def check_radial_table(table: RadialTable) -> None:
     """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense:
     shapes, offsets strictly ascending from 0 to ``max_offset``, and every
     offset's column passing :func:`tengfield.surrogate.check_table`."""
-    from .store import check_table
+    from .store import check_axis, check_table
 
     nz, nr = table.shape
     _check_grid_shapes({attr: getattr(table, attr) for attr in _GRID_TAILS}, nz, nr)
-    r, largest = table.offsets, float(table.max_offset)
-    if nr < 2:
-        raise SurrogateError(f"{nr} offset(s): at least 2 are needed")
-    if not (math.isfinite(largest) and largest > 0.0):
-        raise SurrogateError(f"max offset {largest!r} m is not positive")
-    if not np.all(np.isfinite(r)) or not np.all(np.diff(r) > 0.0):
-        raise SurrogateError("offsets are not strictly ascending")
-    if r[0] != 0.0 or abs(r[-1] - largest) > 1e-12 * largest:
-        raise SurrogateError(f"offsets run from {r[0]!r} to {r[-1]!r} m, not from 0 to the "
-                             f"max offset {largest!r} m")
+    r = table.offsets
+    check_axis(r, float(table.max_offset), "offset", "max offset")
     z = table.positions
     if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
         raise SurrogateError("positions are not strictly ascending")

@@ -124,6 +124,22 @@ def check_shapes(arrays: dict) -> None:
                                  f"{(max(n, 0), *tail)}")
 
 
+def check_axis(values: np.ndarray, end: float, name: str, end_name: str) -> None:
+    """Raise :class:`SurrogateError` unless the sample coordinates ``values`` [m], at
+    least two, ascend strictly from 0 to ``end`` [m] > 0 (``name``: what one value is,
+    ``end_name``: what ``end`` is, for the message)."""
+    n = np.size(values)
+    if n < 2:
+        raise SurrogateError(f"{n} {name}(s): at least 2 are needed")
+    if not (np.isfinite(end) and end > 0.0):
+        raise SurrogateError(f"{end_name} {end!r} m is not positive")
+    if not np.all(np.isfinite(values)) or not np.all(np.diff(values) > 0.0):
+        raise SurrogateError(f"{name}s are not strictly ascending")
+    if values[0] != 0.0 or abs(values[-1] - end) > 1e-12 * end:
+        raise SurrogateError(f"{name}s run from {values[0]!r} to {values[-1]!r} m, not from 0 "
+                             f"to the {end_name} {end!r} m")
+
+
 def check_table(table: SurrogateTable) -> None:
     """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense.
 
@@ -132,17 +148,8 @@ def check_table(table: SurrogateTable) -> None:
     with C_lu < 0, each induced charge between 0 and minus the ball charge.
     """
     check_shapes({attr: getattr(table, attr) for attr in ARRAYS})
-    n = table.positions.size
-    if n < 2:
-        raise SurrogateError(f"{n} position(s): at least 2 are needed")
-    z, stroke = table.positions, float(table.stroke)
-    if not (np.isfinite(stroke) and stroke > 0.0):
-        raise SurrogateError(f"stroke {stroke!r} m is not positive")
-    if not np.all(np.isfinite(z)) or not np.all(np.diff(z) > 0.0):
-        raise SurrogateError("positions are not strictly ascending")
-    if z[0] != 0.0 or abs(z[-1] - stroke) > 1e-12 * stroke:
-        raise SurrogateError(f"positions run from {z[0]!r} to {z[-1]!r} m, not from 0 to the "
-                             f"stroke {stroke!r} m")
+    z = table.positions
+    check_axis(z, float(table.stroke), "position", "stroke")
     C, q, Q = table.capacitance, table.induced_charge, float(table.ball_charge)
     if not (np.all(np.isfinite(C)) and np.all(np.isfinite(q)) and np.isfinite(Q)):
         raise SurrogateError("non-finite capacitance or charge")
