@@ -101,6 +101,16 @@ def _coefficients(S, s, delta):
 
 
 @njit(cache=True)
+def _touched_set_changed(d, d_new):
+    """Whether the set of touched surfaces (penetration > 0) differs between the
+    penetrations ``d`` and ``d_new`` [m] of the three surfaces."""
+    for s in range(3):
+        if (d[s] > 0.0) != (d_new[s] > 0.0):
+            return True
+    return False
+
+
+@njit(cache=True)
 def _normal_force(s, delta, v, nx, ny, nz, S):
     """(normal force [N] of surface s at overlap delta [m] and ball velocity v, before
     any clipping at zero; tangential stiffness; tangential damping)."""
@@ -455,11 +465,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
         h = min(_contact_step(y, P, S, steps), t_end - t)
         y1 = _rk4(t, y, h, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
         d1 = _deltas(y1, P)
-        changed = False
-        for s in range(3):
-            if (d[s] > 0.0) != (d1[s] > 0.0):
-                changed = True
-        if changed:
+        if _touched_set_changed(d, d1):
             # cut the step back to the first change of the set of touched surfaces
             lo = 0.0
             hi = h
@@ -467,12 +473,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                 mid = 0.5 * (lo + hi)
                 ym = _rk4(t, y, mid, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz,
                           cz)
-                dm = _deltas(ym, P)
-                same = True
-                for s in range(3):
-                    if (d[s] > 0.0) != (dm[s] > 0.0):
-                        same = False
-                if same:
+                if not _touched_set_changed(d, _deltas(ym, P)):
                     lo = mid
                 else:
                     hi = mid
