@@ -280,15 +280,19 @@ class RadialTerminalCurves:
         z, r = self._zs(z, r)
         return spline.ev(z, r**2, dx=dz, dy=ds).reshape(z.shape), r
 
+    def _gradient(self, spline, z, r):
+        """``(d/dz, d/dr)`` of ``spline`` over (z, s = r²): d/dr = 2 r d/ds (0 on the axis)."""
+        d_z = self._eval(spline, z, r, dz=1)[0]
+        d_s, r_used = self._eval(spline, z, r, ds=1)
+        return d_z, 2.0 * r_used * d_s
+
     def charge(self, z, r):
         """Q_SC(z, r) [C]."""
         return self._eval(self._q, z, r)[0]
 
     def charge_derivative(self, z, r):
         """``(dQ_SC/dz [C/m], dQ_SC/dr [C/m])`` of the interpolant."""
-        d_z = self._eval(self._q, z, r, dz=1)[0]
-        d_s, r_used = self._eval(self._q, z, r, ds=1)
-        return d_z, 2.0 * r_used * d_s
+        return self._gradient(self._q, z, r)
 
     def capacitance(self, z, r):
         """C_T(z, r) [F]."""
@@ -296,9 +300,7 @@ class RadialTerminalCurves:
 
     def capacitance_derivative(self, z, r):
         """``(dC_T/dz [F/m], dC_T/dr [F/m])`` of the interpolant."""
-        d_z = self._eval(self._c, z, r, dz=1)[0]
-        d_s, r_used = self._eval(self._c, z, r, ds=1)
-        return d_z, 2.0 * r_used * d_s
+        return self._gradient(self._c, z, r)
 
     def voltage(self, z, r):
         """V_OC(z, r) = Q_SC / C_T [V]."""
