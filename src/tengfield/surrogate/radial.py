@@ -42,7 +42,6 @@ import json
 import math
 import sys
 import time
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -50,8 +49,8 @@ import numpy as np
 
 from .. import circuit, terminals
 from .._mpi import farm, rank_of
-from .refinement import FIELD_ERROR_MARGIN, FIELD_ERROR_MODES, _accepts_keyword, \
-    _carry_field_error, error_sample_positions
+from .refinement import FIELD_ERROR_MODES, _accepts_keyword, _converged_or_warn, \
+    _field_error_rule, _sampled_field_errors, error_sample_positions
 from .sampling import (INITIAL_POSITIONS, contact_first_order, is_lobatto_count,
                        is_mirror_symmetric, lobatto_positions, mirrored, refinement_positions)
 from .store import SCALAR_TYPES
@@ -552,13 +551,8 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
             bar.refresh()
         results = farm(comm, todo, work, progress=advance)
         if sampled:
-            if math.isnan(measured):
-                values = [res.relative_error_estimate for p, res in zip(todo, results)
-                          if _key(*p) in sample_keys]
-                finite = [v for v in values if math.isfinite(v)]
-                measured = (1.0 + FIELD_ERROR_MARGIN) * max(finite) if finite else math.nan
-            results = [res if _key(*p) in sample_keys else _carry_field_error(res, measured)
-                       for p, res in zip(todo, results)]
+            results, measured = _sampled_field_errors(
+                results, [_key(*p) in sample_keys for p in todo], measured)
         for (z, r), res in zip(todo, results):
             solved[_key(z, r)] = res
             if symmetric and not math.isclose(z, 0.5 * stroke, rel_tol=1e-12):
@@ -594,13 +588,11 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         solve_grid(z_next, r_next)
     if bar is not None:
         bar.close()
-    converged = estimate <= tolerance
-    if not converged and rank_of(comm) == 0:
-        warnings.warn(f"(z, r) surrogate: interpolation error estimate {estimate:.3g} is above "
-                      f"the tolerance {tolerance:g} after {z_now.size} x {r_now.size} points "
-                      f"(max {max_positions} x {max_offsets})", RuntimeWarning, stacklevel=2)
-    rule = (f"measured at z = {', '.join(f'{z:.6g}' for z in sample_z)} m on the axis and at "
-            f"r = {largest:.6g} m; the largest x {1.0 + FIELD_ERROR_MARGIN:g} elsewhere"
+    converged = _converged_or_warn(
+        estimate, tolerance, comm, f"(z, r) surrogate: interpolation error estimate "
+        f"{estimate:.3g} is above the tolerance {tolerance:g} after {z_now.size} x {r_now.size} "
+        f"points (max {max_positions} x {max_offsets})")
+    rule = (_field_error_rule(sample_z, f" on the axis and at r = {largest:.6g} m", "elsewhere")
             if sampled else "measured at every point")
     table = grid(z_now, r_now)
     return dataclasses.replace(
