@@ -54,7 +54,7 @@ from .refinement import FIELD_ERROR_MODES, _accepts_keyword, _converged_or_warn,
 from .sampling import (INITIAL_POSITIONS, contact_first_order, is_lobatto_count,
                        is_mirror_symmetric, lobatto_positions, mirrored, refinement_positions)
 from .store import SCALAR_TYPES
-from .table import SurrogateError, SurrogateTable
+from .table import SolveRecord, SurrogateError, SurrogateTable
 
 #: format of the (z, r) HDF5 file
 FORMAT_VERSION_ZR = 1
@@ -113,7 +113,7 @@ def _key(z: float, r: float) -> tuple[int, int]:
 # ---------------------------------------------------------------------------
 # the table
 @dataclass
-class RadialTable:
+class RadialTable(SolveRecord):
     """3D field solves on the grid ``positions`` x ``offsets`` (one cell, SI).
 
     ``capacitance[i, j]`` = [[C_ll, C_lu], [C_lu, C_uu]] [F] and
@@ -121,7 +121,7 @@ class RadialTable:
     [m] and radial offset ``offsets[j]`` [m] (both ascending, from 0).
     ``error_history`` = [(n_z, n_r, estimate), ...]; ``mesh_size`` [m] and
     ``degree`` the 3D discretisation; ``field_hash`` the cache key
-    (:func:`radial_hash`).
+    (:func:`radial_hash`). The other fields: :class:`tengfield.surrogate.table.SolveRecord`.
     """
     positions: np.ndarray
     offsets: np.ndarray
@@ -130,20 +130,8 @@ class RadialTable:
     ball_charge: float
     stroke: float
     max_offset: float
-    dofs: np.ndarray
-    cells: np.ndarray
-    wall_time: np.ndarray
-    solve_time: np.ndarray
-    field_error: np.ndarray
-    interpolation_error: float = math.nan
-    tolerance: float = math.nan
-    converged: bool = False
-    error_history: list = field(default_factory=list)
-    field_hash: str = ""
-    method: str = "3d"
-    degree: int = 0
-    mesh_size: float = math.nan
-    provenance: dict = field(default_factory=dict)
+    method: str = field(default="3d", kw_only=True)
+    mesh_size: float = field(default=math.nan, kw_only=True)
 
     def __post_init__(self) -> None:
         self.positions = np.asarray(self.positions, dtype=float)
