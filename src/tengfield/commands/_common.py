@@ -5,13 +5,15 @@ import shlex
 import sys
 
 
-def scene_command(sub, name: str, *, help: str, description: str, output: str):
-    """A subcommand taking an optional SCENE file and ``-o DIR`` (default ``output``);
-    ``description``: the command module's docstring (reST quotes dropped)."""
+def scene_command(sub, name: str, *, help: str, description: str, output: str | None):
+    """A subcommand taking an optional SCENE file and ``-o DIR`` (default ``output``;
+    ``output=None``: no ``-o``, the command adds its own); ``description``: the
+    command module's docstring or a sentence (reST quotes dropped)."""
     p = sub.add_parser(name, help=help, description=description.replace("``", ""))
     p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    p.add_argument("-o", "--output", default=output, metavar="DIR",
-                   help=f"output directory (created; default ./{output})")
+    if output is not None:
+        p.add_argument("-o", "--output", default=output, metavar="DIR",
+                       help=f"output directory (created; default ./{output})")
     return p
 
 

@@ -9,24 +9,22 @@ import sys
 from pathlib import Path
 
 from ..errors import SceneError
+from ._common import scene_command
 from ._ranges import parse_range
 
 
 def register(sub) -> None:
-    p = sub.add_parser("dynamics", help="simulate the ball's motion (impact map or soft contact)",
-                       description="Writes trajectory.csv, impacts.csv, summary.json and "
-                                   "trajectory.png to DIR.")
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
-    p.add_argument("-o", "--output", default="dynamics-out", metavar="DIR",
-                   help="output directory (default dynamics-out)")
+    p = scene_command(sub, "dynamics", output="dynamics-out",
+                      help="simulate the ball's motion (impact map or soft contact)",
+                      description="Writes trajectory.csv, impacts.csv, summary.json and "
+                                  "trajectory.png to DIR.")
     p.add_argument("--duration-s", type=float, default=None,
                    help="simulated time [s] (default: [run] duration_s)")
     p.set_defaults(func=_run_dynamics)
 
-    m = sub.add_parser("map", help="regime map over frequency x amplitude",
-                       description="Writes map.csv and map.png to DIR. Ranges are START:STOP:N "
-                                   "(N evenly spaced values, both ends included).")
-    m.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    m = scene_command(sub, "map", output="map-out", help="regime map over frequency x amplitude",
+                      description="Writes map.csv and map.png to DIR. Ranges are START:STOP:N "
+                                  "(N evenly spaced values, both ends included).")
     m.add_argument("--frequency-hz", required=True, metavar="START:STOP:N",
                    help="table frequencies [Hz], e.g. 5:70:100")
     m.add_argument("--amplitude-mm", required=True, metavar="START:STOP:N",
@@ -35,8 +33,6 @@ def register(sub) -> None:
                    help="excitation periods simulated per point (default 200)")
     m.add_argument("--jobs", "-j", type=int, default=None,
                    help="worker processes (default: all cores)")
-    m.add_argument("-o", "--output", default="map-out", metavar="DIR",
-                   help="output directory (default map-out)")
     m.set_defaults(func=_run_map)
 
 

@@ -7,15 +7,17 @@ import math
 import sys
 from pathlib import Path
 
+from ._common import scene_command
+
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "field", help="capacitance matrix, induced charges and potential at one ball position",
+    p = scene_command(
+        sub, "field", output="field-out",
+        help="capacitance matrix, induced charges and potential at one ball position",
         description="Solve the electrostatics of the device with the ball at gap Z above the "
                     "lower electrode. Prints the Maxwell capacitance matrix, the induced "
                     "charges (electrodes grounded) and C_T; writes DIR/field.json, "
                     "DIR/potential.xdmf (open-circuit potential for ParaView) and DIR/field.png.")
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
     p.add_argument("--position-mm", type=float, required=True, metavar="Z",
                    help="gap between the ball's bottom and the lower electrode [mm], 0..gap_mm")
     p.add_argument("--offset-mm", type=float, default=None, metavar="R",
@@ -25,8 +27,6 @@ def register(sub) -> None:
                    help="solver (default [field] method)")
     p.add_argument("--reference", choices=("floating", "grounded-lower"), default=None,
                    help="two-terminal reference (default [circuit] reference)")
-    p.add_argument("-o", "--output", default="field-out", metavar="DIR",
-                   help="output directory (created)")
     p.add_argument("--no-plot", action="store_true", help="skip potential.xdmf and field.png")
     p.set_defaults(func=_run)
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_cache_argument, command_line, world_if_parallel
+from ._common import add_cache_argument, command_line, scene_command, world_if_parallel
 
 #: --max-positions may not exceed this (2^10 + 1 field solves)
 MAX_POSITIONS_LIMIT = 1025
@@ -17,13 +17,13 @@ MAX_POSITIONS_LIMIT = 1025
 def register(sub) -> None:
     from ..surrogate import FEWEST_POSITIONS, MAX_POSITIONS
 
-    p = sub.add_parser(
-        "precompute", help="field solves over the stroke -> surrogate file (HDF5, cached)",
+    p = scene_command(
+        sub, "precompute", output=None,
+        help="field solves over the stroke -> surrogate file (HDF5, cached)",
         description="Solve the electrostatics at Chebyshev-Lobatto ball positions, refining "
                     "until the held-out interpolation error is below [field] tolerance, and "
                     "write the surrogate (HDF5). Without -o the file goes to the cache that "
                     "`tengfield run` reads; an existing valid cache entry is kept unless --force.")
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
     p.add_argument("-o", "--output", default=None, metavar="FILE",
                    help="write the surrogate to FILE instead of the cache")
     add_cache_argument(p)

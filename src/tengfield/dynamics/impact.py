@@ -15,9 +15,8 @@ import numpy as np
 from ..errors import DynamicsError
 from ..scene import MAX_PERIODS, G  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
 from . import _kernel as K
-from .regime import classify
-from .result import DynamicsResult, Impacts, check_samples, run_span, sample_times
-from .table import PPOLY, TableMotion, table_from_scene
+from .result import DynamicsResult, prepare_run, run_result
+from .table import PPOLY, TableMotion
 
 #: More events (impacts, lift-offs, releases) per excitation period than this
 #: raise DynamicsError instead of running for ever.
@@ -29,7 +28,6 @@ MAX_STORED_EVENTS = 20_000_000
 #: period before the event bound was hit is blamed on noise in the data.
 NOISY_CROSSINGS = 20
 
-PLATE_NAMES = np.array(["lower", "upper"])
 
 
 @dataclass(frozen=True)
@@ -174,22 +172,10 @@ def acceleration_crossings(table: TableMotion, t_a: float, t_b: float, g: float 
 def simulate_impact(scene, *, duration: float | None = None) -> DynamicsResult:
     """Impact-map trajectory of ``scene`` (see :func:`tengfield.dynamics.simulate`)."""
     wall0 = _time.perf_counter()
-    duration, t0, _ = run_span(scene, duration)
-    check_samples(scene, duration)
-    table = table_from_scene(scene, origin=t0)      # integrate on t - t0
-    period = scene.excitation.period
-    stroke = scene.device.stroke
-    traj, (it, ip, ivb, iva), n_events = integrate(
-        table, stroke, Restitution.from_contact(scene.contact), t_start=0.0, t_end=duration,
-        gap0=scene.initial.gap, velocity0=scene.initial.velocity, period=period, time_origin=t0)
-    window = min(scene.run.settle_periods * period, duration)
-    regime = classify(traj, it, ip, ivb, window_start=window, t_end=duration, period=period,
-                      stroke=stroke, g=G, upper_stuck=traj.upper_stuck_between(window, duration))
-    elapsed = sample_times(scene, duration)
-    z, v, y = traj(elapsed)
-    impacts = Impacts(t0 + it, PLATE_NAMES[ip] if ip.size else np.zeros(0, dtype="<U5"), ivb, iva)
-    return DynamicsResult(t=t0 + elapsed, gap=z, gap_velocity=v, table=y,
-                          impacts=impacts, regime=regime, n_events=n_events,
-                          wall_time=_time.perf_counter() - wall0, model="impact",
-                          stroke=stroke, period=period, window_start=t0 + window,
-                          time_origin=t0, elapsed=elapsed, _sampler=traj)
+    duration, t0, table = prepare_run(scene, duration)
+    traj, contacts, n_events = integrate(
+        table, scene.device.stroke, Restitution.from_contact(scene.contact), t_start=0.0,
+        t_end=duration, gap0=scene.initial.gap, velocity0=scene.initial.velocity,
+        period=scene.excitation.period, time_origin=t0)
+    return run_result(scene, traj, contacts, n_events, model="impact", t0=t0,
+                      duration=duration, wall0=wall0, upper_stuck=traj.upper_stuck_between)

@@ -28,9 +28,8 @@ import numpy as np
 
 from ..errors import DynamicsError
 from ..scene import G
-from .regime import classify
-from .result import DynamicsResult, Impacts, check_samples, run_span, sample_times
-from .table import PPOLY, SINE, TableMotion, table_from_scene
+from .result import DynamicsResult, prepare_run, run_result
+from .table import PPOLY, SINE, TableMotion
 
 FREE, IN_LOWER, IN_UPPER = 0, 1, 2
 
@@ -229,9 +228,7 @@ def integrate_soft(table: TableMotion, stroke: float, restitution: float, mass: 
 def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
     """Soft-contact trajectory of ``scene`` (see :func:`tengfield.dynamics.simulate`)."""
     wall0 = _time.perf_counter()
-    duration, t0, _ = run_span(scene, duration)
-    check_samples(scene, duration)
-    table = table_from_scene(scene, origin=t0)      # integrate on t - t0
+    duration, t0, table = prepare_run(scene, duration)      # integrate on t - t0
     period = scene.excitation.period
     if table.kind == PPOLY and (0.0 < table.t_first or duration > table.t_last):
         raise DynamicsError(
@@ -243,19 +240,9 @@ def simulate_soft(scene, *, duration: float | None = None) -> DynamicsResult:
             f"{MAX_SOFT_PERIODS:.0e} with [contact] model = 'soft' (shorten [run] duration_s)")
     stroke = scene.device.stroke
     check_stiffness(scene.contact, scene.device, table, stroke)
-    traj, (ct, cp, cvb, cva), n_phases = integrate_soft(
+    traj, contacts, n_phases = integrate_soft(
         table, stroke, scene.contact.restitution, scene.device.ball_mass,
         scene.contact.stiffness, t_start=0.0, t_end=duration, gap0=scene.initial.gap,
         velocity0=scene.initial.velocity, period=period)
-    window = min(scene.run.settle_periods * period, duration)
-    regime = classify(traj, ct, cp, cvb, window_start=window, t_end=duration, period=period,
-                      stroke=stroke, g=G, upper_stuck=False)
-    elapsed = sample_times(scene, duration)
-    z, v, y = traj(elapsed)
-    plates = np.array(["lower", "upper"])[cp] if cp.size else np.zeros(0, dtype="<U5")
-    return DynamicsResult(t=t0 + elapsed, gap=z, gap_velocity=v, table=y,
-                          impacts=Impacts(t0 + ct, plates, cvb, cva), regime=regime,
-                          n_events=n_phases, wall_time=_time.perf_counter() - wall0,
-                          model="soft", stroke=stroke, period=period,
-                          window_start=t0 + window, time_origin=t0, elapsed=elapsed,
-                          _sampler=traj)
+    return run_result(scene, traj, contacts, n_phases, model="soft", t0=t0, duration=duration,
+                      wall0=wall0, upper_stuck=None)

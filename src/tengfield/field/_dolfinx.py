@@ -56,52 +56,42 @@ SUPPORTED = ((0, 5), (0, 9))
 _counter = itertools.count()
 
 # -- names chosen by version (the only version switch) ------------------------
+_function_space = fem.FunctionSpace if LEGACY else fem.functionspace
+_bb_tree = dolfinx.geometry.BoundingBoxTree if LEGACY else dolfinx.geometry.bb_tree
+_collisions = (dolfinx.geometry.compute_collisions if LEGACY
+               else dolfinx.geometry.compute_collisions_points)
+_vtk_mesh = dolfinx.plot.create_vtk_mesh if LEGACY else dolfinx.plot.vtk_mesh
+_JIT_KEY = "jit_params" if LEGACY else "jit_options"
+
 if LEGACY:
-    _function_space = fem.FunctionSpace
-    _bb_tree = dolfinx.geometry.BoundingBoxTree
-    _collisions = dolfinx.geometry.compute_collisions
-    _vtk_mesh = dolfinx.plot.create_vtk_mesh
-    _JIT_KEY = "jit_params"
-
-    def petsc_vector(f):
-        """The PETSc vector holding the dofs of the Function ``f`` (shares memory)."""
-        return f.vector
-
     def _rows(adjacency, cells) -> np.ndarray:
         # one cell type: every row has the same length
         width = int(adjacency.offsets[1] - adjacency.offsets[0]) if adjacency.num_nodes else 0
         return adjacency.array.reshape(-1, max(width, 1))[cells]
 
-    def _partitioner(comm):
-        return None
-
-    def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
-        """(mesh, cell_tags, facet_tags) from the gmsh model on ``rank`` of ``comm``."""
-        return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+    def _partition_options(comm) -> dict:
+        return {}
 else:
-    _function_space = fem.functionspace
-    _bb_tree = dolfinx.geometry.bb_tree
-    _collisions = dolfinx.geometry.compute_collisions_points
-    _vtk_mesh = dolfinx.plot.vtk_mesh
-    _JIT_KEY = "jit_options"
-
-    def petsc_vector(f):
-        """The PETSc vector holding the dofs of the Function ``f`` (shares memory)."""
-        return f.x.petsc_vec
-
     def _rows(array, cells) -> np.ndarray:
         return np.asarray(array)[cells]
 
-    def _partitioner(comm):
+    def _partition_options(comm) -> dict:
         # interior-facet (dS) integrals need shared-facet ghosts across processes
         if comm.size == 1:
-            return None
-        return dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet)
+            return {"partitioner": None}
+        return {"partitioner": dolfinx.mesh.create_cell_partitioner(
+            dolfinx.mesh.GhostMode.shared_facet)}
 
-    def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
-        """(mesh, cell_tags, facet_tags) from the gmsh model on ``rank`` of ``comm``."""
-        out = gmshio.model_to_mesh(model, comm, rank, gdim=gdim, partitioner=_partitioner(comm))
-        return out[0], out[1], out[2]
+
+def petsc_vector(f):
+    """The PETSc vector holding the dofs of the Function ``f`` (shares memory)."""
+    return f.vector if LEGACY else f.x.petsc_vec
+
+
+def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
+    """(mesh, cell_tags, facet_tags) from the gmsh model on ``rank`` of ``comm``."""
+    out = gmshio.model_to_mesh(model, comm, rank, gdim=gdim, **_partition_options(comm))
+    return out[0], out[1], out[2]
 
 
 def describe() -> str:

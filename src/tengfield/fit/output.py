@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
 from .._json import jsonable
+from .._toml import toml_value
 from .solve import FitResult
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
@@ -32,29 +32,12 @@ def fitted_scene_dict(scene, result: FitResult) -> dict:
     return data
 
 
-def _toml_value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        text = repr(value)
-        return text if any(c in text for c in ".en") else text + ".0"
-    if isinstance(value, str):
-        return json.dumps(value)          # a TOML basic string is a JSON string
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise TypeError(f"cannot write {value!r} to TOML")
-
-
 def to_toml(data: dict, header: str = "") -> str:
     """TOML text of a scene dict (sections of scalars)."""
     lines = [f"# {line}" for line in header.splitlines()]
     for sec, values in data.items():
         lines += ["", f"[{sec}]"]
-        lines += [f"{key} = {_toml_value(v)}" for key, v in values.items()]
+        lines += [f"{key} = {toml_value(v)}" for key, v in values.items()]
     return "\n".join(lines).lstrip("\n") + "\n"
 
 

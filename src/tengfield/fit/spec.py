@@ -74,6 +74,21 @@ def _number(where: str, value, lo=-math.inf, hi=math.inf) -> float:
     return float(value)
 
 
+def _refuse_unknown_keys(entry: dict, keys: tuple, where: str, separator: str) -> None:
+    """SceneError "unknown key {where}{separator}{key}; keys are ..." for the first key of
+    the sub-table ``entry`` that is not in ``keys``."""
+    for key in entry:
+        if key not in keys:
+            raise SceneError(f"unknown key {where}{separator}{key}; keys are {', '.join(keys)}"
+                             + _suggest(key, keys))
+
+
+def _whole_number(where: str, value, lo: int, hi: int, what: str = "a whole number") -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise SceneError(f"{where} = {value!r}: expected {what} in [{lo}, {hi}]")
+    return value
+
+
 @dataclass
 class Parameter:
     """A free parameter in scene-file units with bounds [lo, hi] and a start value."""
@@ -136,21 +151,15 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
         if spec.loss_scale <= 0:
             raise SceneError(f"[fit] loss_scale = {raw['loss_scale']!r} must be > 0")
     if "max_evaluations" in raw:
-        value = raw["max_evaluations"]
-        if isinstance(value, bool) or not isinstance(value, int) or not 5 <= value <= 100000:
-            raise SceneError(f"[fit] max_evaluations = {value!r}: expected a whole number "
-                             "in [5, 100000]")
-        spec.max_evaluations = value
+        spec.max_evaluations = _whole_number("[fit] max_evaluations", raw["max_evaluations"],
+                                             5, 100000)
     if "profile" in raw:
         if not isinstance(raw["profile"], bool):
             raise SceneError(f"[fit] profile = {raw['profile']!r}: expected true or false")
         spec.profile = raw["profile"]
     if "bootstrap" in raw:
-        value = raw["bootstrap"]
-        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 10000:
-            raise SceneError(f"[fit] bootstrap = {value!r}: expected a whole number of replicas "
-                             "in [0, 10000]")
-        spec.bootstrap = value
+        spec.bootstrap = _whole_number("[fit] bootstrap", raw["bootstrap"], 0, 10000,
+                                       "a whole number of replicas")
     spec.columns = _columns(raw.get("columns")) if "columns" in raw else None
     spec.parameters = _parameters(scene, raw.get("parameters"), free)
     return spec
@@ -166,10 +175,7 @@ def _columns(raw) -> list[Column]:
             raise SceneError(f"unknown quantity {where}: allowed V, Q, I" + _suggest(quantity, UNITS))
         if not isinstance(entry, dict):
             raise SceneError(f"{where} must be a table (column, unit, noise)")
-        for key in entry:
-            if key not in ("column", "unit", "noise"):
-                raise SceneError(f"unknown key {where} {key}; keys are column, unit, noise"
-                                 + _suggest(key, ("column", "unit", "noise")))
+        _refuse_unknown_keys(entry, ("column", "unit", "noise"), where, " ")
         column = entry.get("column", RUN_COLUMNS[quantity][0])
         unit = entry.get("unit", RUN_COLUMNS[quantity][1])
         if not isinstance(column, str) or not column:
@@ -206,10 +212,7 @@ def _parameters(scene, raw, free) -> list[Parameter]:
                              + f"; free parameters are {', '.join(PARAMETERS)}")
         if not isinstance(entry, dict):
             raise SceneError(f"{where} = {entry!r}: expected a table {{start, min, max}}")
-        for key in entry:
-            if key not in ("start", "min", "max"):
-                raise SceneError(f"unknown key {where}.{key}; keys are start, min, max"
-                                 + _suggest(key, ("start", "min", "max")))
+        _refuse_unknown_keys(entry, ("start", "min", "max"), where, ".")
         (lo, hi), transform, _, _ = PARAMETERS[name]
         if name == "time_shift_s":
             lo, hi = 0.0, 2.0 * period

@@ -101,6 +101,37 @@ def _coefficients(S, s, delta):
 
 
 @njit(cache=True)
+def _touched_set_changed(d, d_new):
+    """Whether the set of touched surfaces (penetration > 0) differs between the
+    penetrations ``d`` and ``d_new`` [m] of the three surfaces."""
+    for s in range(3):
+        if (d[s] > 0.0) != (d_new[s] > 0.0):
+            return True
+    return False
+
+
+@njit(cache=True)
+def _normal_force(s, delta, v, nx, ny, nz, S):
+    """(normal force [N] of surface s at overlap delta [m] and ball velocity v, before
+    any clipping at zero; tangential stiffness; tangential damping)."""
+    ddot = -(v[0] * nx + v[1] * ny + v[2] * nz)
+    cn, ktt, ctt = _coefficients(S, s, delta)
+    return S[s, 1] * delta ** S[s, 2] + cn * ddot, ktt, ctt
+
+
+@njit(cache=True)
+def _slip_velocity(v, w, R, nx, ny, nz):
+    """Tangential velocity [m/s] of the ball's material point at the contact point
+    r_c = -R n (ball velocity v, angular velocity w, unit normal n pushing the ball)."""
+    rx, ry, rz = -R * nx, -R * ny, -R * nz
+    vcx = v[0] + w[1] * rz - w[2] * ry
+    vcy = v[1] + w[2] * rx - w[0] * rz
+    vcz = v[2] + w[0] * ry - w[1] * rx
+    vn = vcx * nx + vcy * ny + vcz * nz
+    return vcx - vn * nx, vcy - vn * ny, vcz - vn * nz
+
+
+@njit(cache=True)
 def _contact(s, p, v, w, xi, sliding, P, S, out):
     """Force and torque of surface s on the ball added to out[0:3], out[3:6].
 
@@ -109,18 +140,10 @@ def _contact(s, p, v, w, xi, sliding, P, S, out):
     delta, nx, ny, nz = _geometry(s, p, R, P[3], P[4])
     if delta <= 0.0:
         return delta, 0.0, 0.0
-    ddot = -(v[0] * nx + v[1] * ny + v[2] * nz)
-    cn, ktt, ctt = _coefficients(S, s, delta)
-    fn = S[s, 1] * delta ** S[s, 2] + cn * ddot
+    fn, ktt, ctt = _normal_force(s, delta, v, nx, ny, nz, S)
     if S[s, 7] != 0.0 and fn < 0.0:
         fn = 0.0
-    # contact point r_c = -R n; velocity of the ball's material point there
-    rx, ry, rz = -R * nx, -R * ny, -R * nz
-    vcx = v[0] + w[1] * rz - w[2] * ry
-    vcy = v[1] + w[2] * rx - w[0] * rz
-    vcz = v[2] + w[0] * ry - w[1] * rx
-    vn = vcx * nx + vcy * ny + vcz * nz
-    vtx, vty, vtz = vcx - vn * nx, vcy - vn * ny, vcz - vn * nz
+    vtx, vty, vtz = _slip_velocity(v, w, R, nx, ny, nz)
     k = 3 * s
     xn = xi[k] * nx + xi[k + 1] * ny + xi[k + 2] * nz
     ftx = -ktt * (xi[k] - xn * nx) - ctt * vtx
@@ -138,6 +161,7 @@ def _contact(s, p, v, w, xi, sliding, P, S, out):
     out[0] += fn * nx + ftx
     out[1] += fn * ny + fty
     out[2] += fn * nz + ftz
+    rx, ry, rz = -R * nx, -R * ny, -R * nz   # torque r_c x f_t about the centre, r_c = -R n
     out[3] += ry * ftz - rz * fty
     out[4] += rz * ftx - rx * ftz
     out[5] += rx * fty - ry * ftx
@@ -158,14 +182,7 @@ def _deriv(t, y, dy, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz,
         delta, nx, ny, nz = _geometry(s, p, R, P[3], P[4])
         if delta > 0.0:
             _contact(s, p, v, w, xi, sliding, P, S, out)
-            rx, ry, rz = -R * nx, -R * ny, -R * nz
-            vcx = v[0] + w[1] * rz - w[2] * ry
-            vcy = v[1] + w[2] * rx - w[0] * rz
-            vcz = v[2] + w[0] * ry - w[1] * rx
-            vn = vcx * nx + vcy * ny + vcz * nz
-            dy[9 + 3 * s] = vcx - vn * nx
-            dy[10 + 3 * s] = vcy - vn * ny
-            dy[11 + 3 * s] = vcz - vn * nz
+            dy[9 + 3 * s], dy[10 + 3 * s], dy[11 + 3 * s] = _slip_velocity(v, w, R, nx, ny, nz)
         else:
             dy[9 + 3 * s] = 0.0
             dy[10 + 3 * s] = 0.0
@@ -229,16 +246,9 @@ def _settle_history(y, sliding, P, S):
         y[k] -= xn * nx
         y[k + 1] -= xn * ny
         y[k + 2] -= xn * nz
-        ddot = -(v[0] * nx + v[1] * ny + v[2] * nz)
-        cn, ktt, ctt = _coefficients(S, s, delta)
-        fn = S[s, 1] * delta ** S[s, 2] + cn * ddot
+        fn, ktt, ctt = _normal_force(s, delta, v, nx, ny, nz, S)
         fpos = fn if fn > 0.0 else 0.0
-        rx, ry, rz = -R * nx, -R * ny, -R * nz
-        vcx = v[0] + w[1] * rz - w[2] * ry
-        vcy = v[1] + w[2] * rx - w[0] * rz
-        vcz = v[2] + w[0] * ry - w[1] * rx
-        vn = vcx * nx + vcy * ny + vcz * nz
-        vtx, vty, vtz = vcx - vn * nx, vcy - vn * ny, vcz - vn * nz
+        vtx, vty, vtz = _slip_velocity(v, w, R, nx, ny, nz)
         ftx = -ktt * y[k] - ctt * vtx
         fty = -ktt * y[k + 1] - ctt * vty
         ftz = -ktt * y[k + 2] - ctt * vtz
@@ -455,11 +465,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
         h = min(_contact_step(y, P, S, steps), t_end - t)
         y1 = _rk4(t, y, h, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
         d1 = _deltas(y1, P)
-        changed = False
-        for s in range(3):
-            if (d[s] > 0.0) != (d1[s] > 0.0):
-                changed = True
-        if changed:
+        if _touched_set_changed(d, d1):
             # cut the step back to the first change of the set of touched surfaces
             lo = 0.0
             hi = h
@@ -467,12 +473,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                 mid = 0.5 * (lo + hi)
                 ym = _rk4(t, y, mid, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz,
                           cz)
-                dm = _deltas(ym, P)
-                same = True
-                for s in range(3):
-                    if (d[s] > 0.0) != (dm[s] > 0.0):
-                        same = False
-                if same:
+                if not _touched_set_changed(d, _deltas(ym, P)):
                     lo = mid
                 else:
                     hi = mid

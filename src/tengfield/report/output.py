@@ -6,10 +6,10 @@ written by :mod:`tengfield.io`.
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
+from .._toml import toml_value
 from ..io import format_number as _num
 from ..io import atomic_path, write_report_csv, write_report_json
 from .study import QUANTITIES, Report, Row
@@ -20,17 +20,6 @@ STAGE_TITLES = {
     "dynamics": "Dynamics: output sampling and soft-contact stiffness",
     "circuit": "Circuit: load-integrator step for stiff to slow loads",
 }
-
-
-def toml_value(value) -> str:
-    """A TOML literal for a scalar (str, bool, int, float)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(value)
-    return json.dumps(str(value))
 
 
 def scene_text(scene, sections: dict, header: str) -> str:

@@ -40,11 +40,8 @@ import dataclasses
 import hashlib
 import json
 import math
-import os
 import sys
-import tempfile
 import time
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,11 +49,12 @@ import numpy as np
 
 from .. import circuit, terminals
 from .._mpi import farm, rank_of
-from .refinement import FIELD_ERROR_MARGIN, FIELD_ERROR_MODES, _accepts_keyword, \
-    _carry_field_error, error_sample_positions
+from .refinement import FIELD_ERROR_MODES, _accepts_keyword, _converged_or_warn, \
+    _field_error_rule, _sampled_field_errors, error_sample_positions
 from .sampling import (INITIAL_POSITIONS, contact_first_order, is_lobatto_count,
                        is_mirror_symmetric, lobatto_positions, mirrored, refinement_positions)
-from .table import SurrogateError, SurrogateTable
+from .store import SCALAR_TYPES
+from .table import SolveRecord, SurrogateError, SurrogateTable
 
 #: format of the (z, r) HDF5 file
 FORMAT_VERSION_ZR = 1
@@ -82,6 +80,8 @@ SCALARS_ZR = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
               "max_offset": "max_offset_m", "interpolation_error": "interpolation_error_estimate",
               "tolerance": "tolerance", "converged": "converged", "field_hash": "field_hash",
               "method": "method", "degree": "degree", "mesh_size": "mesh_size_m"}
+#: table attribute -> type of its value: the 1-D surrogate's and the 3D ones
+SCALAR_TYPES_ZR = {**SCALAR_TYPES, "max_offset": float, "mesh_size": float}
 #: per-point arrays: trailing shape after (n_z, n_r)
 _GRID_TAILS = {"capacitance": (2, 2), "induced_charge": (2,), "dofs": (), "cells": (),
                "wall_time": (), "solve_time": (), "field_error": ()}
@@ -113,7 +113,7 @@ def _key(z: float, r: float) -> tuple[int, int]:
 # ---------------------------------------------------------------------------
 # the table
 @dataclass
-class RadialTable:
+class RadialTable(SolveRecord):
     """3D field solves on the grid ``positions`` x ``offsets`` (one cell, SI).
 
     ``capacitance[i, j]`` = [[C_ll, C_lu], [C_lu, C_uu]] [F] and
@@ -121,7 +121,7 @@ class RadialTable:
     [m] and radial offset ``offsets[j]`` [m] (both ascending, from 0).
     ``error_history`` = [(n_z, n_r, estimate), ...]; ``mesh_size`` [m] and
     ``degree`` the 3D discretisation; ``field_hash`` the cache key
-    (:func:`radial_hash`).
+    (:func:`radial_hash`). The other fields: :class:`tengfield.surrogate.table.SolveRecord`.
     """
     positions: np.ndarray
     offsets: np.ndarray
@@ -130,20 +130,8 @@ class RadialTable:
     ball_charge: float
     stroke: float
     max_offset: float
-    dofs: np.ndarray
-    cells: np.ndarray
-    wall_time: np.ndarray
-    solve_time: np.ndarray
-    field_error: np.ndarray
-    interpolation_error: float = math.nan
-    tolerance: float = math.nan
-    converged: bool = False
-    error_history: list = field(default_factory=list)
-    field_hash: str = ""
-    method: str = "3d"
-    degree: int = 0
-    mesh_size: float = math.nan
-    provenance: dict = field(default_factory=dict)
+    method: str = field(default="3d", kw_only=True)
+    mesh_size: float = field(default=math.nan, kw_only=True)
 
     def __post_init__(self) -> None:
         self.positions = np.asarray(self.positions, dtype=float)
@@ -279,15 +267,19 @@ class RadialTerminalCurves:
         z, r = self._zs(z, r)
         return spline.ev(z, r**2, dx=dz, dy=ds).reshape(z.shape), r
 
+    def _gradient(self, spline, z, r):
+        """``(d/dz, d/dr)`` of ``spline`` over (z, s = r²): d/dr = 2 r d/ds (0 on the axis)."""
+        d_z = self._eval(spline, z, r, dz=1)[0]
+        d_s, r_used = self._eval(spline, z, r, ds=1)
+        return d_z, 2.0 * r_used * d_s
+
     def charge(self, z, r):
         """Q_SC(z, r) [C]."""
         return self._eval(self._q, z, r)[0]
 
     def charge_derivative(self, z, r):
         """``(dQ_SC/dz [C/m], dQ_SC/dr [C/m])`` of the interpolant."""
-        d_z = self._eval(self._q, z, r, dz=1)[0]
-        d_s, r_used = self._eval(self._q, z, r, ds=1)
-        return d_z, 2.0 * r_used * d_s
+        return self._gradient(self._q, z, r)
 
     def capacitance(self, z, r):
         """C_T(z, r) [F]."""
@@ -295,9 +287,7 @@ class RadialTerminalCurves:
 
     def capacitance_derivative(self, z, r):
         """``(dC_T/dz [F/m], dC_T/dr [F/m])`` of the interpolant."""
-        d_z = self._eval(self._c, z, r, dz=1)[0]
-        d_s, r_used = self._eval(self._c, z, r, ds=1)
-        return d_z, 2.0 * r_used * d_s
+        return self._gradient(self._c, z, r)
 
     def voltage(self, z, r):
         """V_OC(z, r) = Q_SC / C_T [V]."""
@@ -549,13 +539,8 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
             bar.refresh()
         results = farm(comm, todo, work, progress=advance)
         if sampled:
-            if math.isnan(measured):
-                values = [res.relative_error_estimate for p, res in zip(todo, results)
-                          if _key(*p) in sample_keys]
-                finite = [v for v in values if math.isfinite(v)]
-                measured = (1.0 + FIELD_ERROR_MARGIN) * max(finite) if finite else math.nan
-            results = [res if _key(*p) in sample_keys else _carry_field_error(res, measured)
-                       for p, res in zip(todo, results)]
+            results, measured = _sampled_field_errors(
+                results, [_key(*p) in sample_keys for p in todo], measured)
         for (z, r), res in zip(todo, results):
             solved[_key(z, r)] = res
             if symmetric and not math.isclose(z, 0.5 * stroke, rel_tol=1e-12):
@@ -591,13 +576,11 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         solve_grid(z_next, r_next)
     if bar is not None:
         bar.close()
-    converged = estimate <= tolerance
-    if not converged and rank_of(comm) == 0:
-        warnings.warn(f"(z, r) surrogate: interpolation error estimate {estimate:.3g} is above "
-                      f"the tolerance {tolerance:g} after {z_now.size} x {r_now.size} points "
-                      f"(max {max_positions} x {max_offsets})", RuntimeWarning, stacklevel=2)
-    rule = (f"measured at z = {', '.join(f'{z:.6g}' for z in sample_z)} m on the axis and at "
-            f"r = {largest:.6g} m; the largest x {1.0 + FIELD_ERROR_MARGIN:g} elsewhere"
+    converged = _converged_or_warn(
+        estimate, tolerance, comm, f"(z, r) surrogate: interpolation error estimate "
+        f"{estimate:.3g} is above the tolerance {tolerance:g} after {z_now.size} x {r_now.size} "
+        f"points (max {max_positions} x {max_offsets})")
+    rule = (_field_error_rule(sample_z, f" on the axis and at r = {largest:.6g} m", "elsewhere")
             if sampled else "measured at every point")
     table = grid(z_now, r_now)
     return dataclasses.replace(
@@ -612,28 +595,26 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
 
 # ---------------------------------------------------------------------------
 # checks, file and cache
+def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
+    """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
+    attribute -> array) has the shape ``(nz, nr, *tail)`` of :data:`_GRID_TAILS`."""
+    for attr, tail in _GRID_TAILS.items():
+        shape = np.shape(arrays[attr])
+        if shape != (nz, nr, *tail):
+            raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "
+                                 f"{(nz, nr, *tail)}")
+
+
 def check_radial_table(table: RadialTable) -> None:
     """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense:
     shapes, offsets strictly ascending from 0 to ``max_offset``, and every
     offset's column passing :func:`tengfield.surrogate.check_table`."""
-    from .store import check_table
+    from .store import check_axis, check_table
 
     nz, nr = table.shape
-    for attr, tail in _GRID_TAILS.items():
-        shape = np.shape(getattr(table, attr))
-        if shape != (nz, nr, *tail):
-            raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "
-                                 f"{(nz, nr, *tail)}")
-    r, largest = table.offsets, float(table.max_offset)
-    if nr < 2:
-        raise SurrogateError(f"{nr} offset(s): at least 2 are needed")
-    if not (math.isfinite(largest) and largest > 0.0):
-        raise SurrogateError(f"max offset {largest!r} m is not positive")
-    if not np.all(np.isfinite(r)) or not np.all(np.diff(r) > 0.0):
-        raise SurrogateError("offsets are not strictly ascending")
-    if r[0] != 0.0 or abs(r[-1] - largest) > 1e-12 * largest:
-        raise SurrogateError(f"offsets run from {r[0]!r} to {r[-1]!r} m, not from 0 to the "
-                             f"max offset {largest!r} m")
+    _check_grid_shapes({attr: getattr(table, attr) for attr in _GRID_TAILS}, nz, nr)
+    r = table.offsets
+    check_axis(r, float(table.max_offset), "offset", "max offset")
     z = table.positions
     if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
         raise SurrogateError("positions are not strictly ascending")
@@ -644,50 +625,37 @@ def check_radial_table(table: RadialTable) -> None:
             raise SurrogateError(f"at offset r = {r[j]:.6g} m: {exc.reason}") from None
 
 
-def _scalar_values(table: RadialTable) -> dict:
-    return {"ball_charge": float(table.ball_charge), "stroke": float(table.stroke),
-            "max_offset": float(table.max_offset),
-            "interpolation_error": float(table.interpolation_error),
-            "tolerance": float(table.tolerance), "converged": bool(table.converged),
-            "field_hash": str(table.field_hash), "method": str(table.method),
-            "degree": int(table.degree), "mesh_size": float(table.mesh_size)}
-
-
 def write_radial_table(path, table: RadialTable) -> Path:
-    """Write ``table`` to HDF5 atomically (temporary file + ``os.replace``) with the
-    1-D surrogate's checksums (:func:`tengfield.surrogate.store.array_digest`,
-    ``scalars_digest``). Raises ``OSError`` if it cannot (nothing is left behind)."""
-    from .store import _import_h5py, array_digest, scalars_digest
+    """Write ``table`` to HDF5 atomically with the 1-D surrogate's checksums
+    (:func:`tengfield.surrogate.store.write_checked_file`). Raises ``OSError`` if it
+    cannot (nothing is left behind)."""
+    from .store import typed_scalars, write_checked_file
 
-    h5py = _import_h5py()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["complete"] = False
-            arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
-            arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
-            for name, data in arrays.items():
-                dataset = f.create_dataset(name, data=data, fletcher32=True,
-                                           chunks=data.shape if data.size else None)
-                dataset.attrs["sha256"] = array_digest(data)
-            scalars = _scalar_values(table)
-            for attr, name in SCALARS_ZR.items():
-                f.attrs[name] = scalars[attr]
-            f.attrs["scalars_sha256"] = scalars_digest(scalars)
-            f.attrs["format_version"] = FORMAT_VERSION_ZR
-            f.attrs["kind"] = "zr"
-            f.attrs["provenance"] = json.dumps(table.provenance, default=str)
-            f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
-            f.flush()
-            f.attrs["complete"] = True
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
+    arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
+    scalars = typed_scalars(vars(table), SCALAR_TYPES_ZR)
+    return write_checked_file(path, arrays, scalars, SCALARS_ZR, {
+        "format_version": FORMAT_VERSION_ZR, "kind": "zr",
+        "provenance": json.dumps(table.provenance, default=str)})
+
+
+def _check_format_zr(attrs) -> None:
+    version = attrs.get("format_version")
+    if str(attrs.get("kind", "")) != "zr" or version is None or int(version) != FORMAT_VERSION_ZR:
+        raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
+                             f"(kind {attrs.get('kind')!r}, format {version!r})")
+
+
+def _build_radial_table(arrays: dict, history, scalars: dict,
+                        provenance_data: dict) -> RadialTable:
+    _check_grid_shapes(arrays, np.shape(arrays["positions"])[0], np.shape(arrays["offsets"])[0])
+    if history.ndim != 2 or history.shape[1] != 3:
+        raise SurrogateError(f"error history has shape {history.shape}")
+    table = RadialTable(**arrays, **scalars, provenance=provenance_data,
+                        error_history=[(int(a), int(b), float(e))
+                                       for a, b, e in history.tolist()])
+    check_radial_table(table)
+    return table
 
 
 def read_radial_table(path, expected_hash: str | None = None,
@@ -695,67 +663,14 @@ def read_radial_table(path, expected_hash: str | None = None,
     """Read a (z, r) surrogate file; raise :class:`SurrogateError` unless it is
     complete, of this format, unchanged (checksums), sensible
     (:func:`check_radial_table`) and (if given) for ``expected_hash``
-    (:func:`radial_hash`) and the solver ``expected_solver``."""
-    from .store import _import_h5py, _read_checked, scalars_digest
+    (:func:`radial_hash`) and the solver ``expected_solver``
+    (:func:`tengfield.surrogate.store.read_checked_file`)."""
+    from .store import read_checked_file
 
-    h5py = _import_h5py()
-    path = Path(path)
-
-    def fail(reason: str):
-        return SurrogateError(f"surrogate file {str(path)!r} {reason}", path=path, reason=reason)
-
-    if not path.is_file():
-        raise fail("is a directory" if path.is_dir() else "does not exist")
-    try:
-        with h5py.File(path, "r") as f:
-            if not bool(f.attrs.get("complete", False)):
-                raise SurrogateError("is partial (complete flag unset)")
-            version = f.attrs.get("format_version")
-            if str(f.attrs.get("kind", "")) != "zr" or version is None \
-                    or int(version) != FORMAT_VERSION_ZR:
-                raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
-                                     f"(kind {f.attrs.get('kind')!r}, format {version!r})")
-            stored_hash = str(f.attrs["field_hash"])
-            if expected_hash is not None and stored_hash != expected_hash:
-                raise SurrogateError(f"was made for hash {stored_hash[:12]}..., the scene "
-                                     f"has {expected_hash[:12]}...")
-            arrays = {attr: _read_checked(f, name) for attr, name in ARRAYS_ZR.items()}
-            history = _read_checked(f, "error_history")
-            raw = {attr: f.attrs[name] for attr, name in SCALARS_ZR.items()}
-            scalars = {"ball_charge": float(raw["ball_charge"]), "stroke": float(raw["stroke"]),
-                       "max_offset": float(raw["max_offset"]),
-                       "interpolation_error": float(raw["interpolation_error"]),
-                       "tolerance": float(raw["tolerance"]), "converged": bool(raw["converged"]),
-                       "field_hash": str(raw["field_hash"]), "method": str(raw["method"]),
-                       "degree": int(raw["degree"]), "mesh_size": float(raw["mesh_size"])}
-            if str(f.attrs.get("scalars_sha256", "")) != scalars_digest(scalars):
-                raise SurrogateError("scalar attributes do not match their checksum")
-            provenance_text = str(f.attrs["provenance"])
-    except SurrogateError as exc:
-        raise fail(exc.reason) from None
-    except Exception as exc:  # noqa: BLE001 - any read failure means "corrupt"
-        raise fail(f"is corrupt or unreadable: {type(exc).__name__}: {exc}") from None
-    try:
-        nz, nr = np.shape(arrays["positions"])[0], np.shape(arrays["offsets"])[0]
-        for attr, tail in _GRID_TAILS.items():
-            if np.shape(arrays[attr]) != (nz, nr, *tail):
-                raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape "
-                                     f"{np.shape(arrays[attr])}, expected {(nz, nr, *tail)}")
-        if history.ndim != 2 or history.shape[1] != 3:
-            raise SurrogateError(f"error history has shape {history.shape}")
-        table = RadialTable(**arrays, **scalars, provenance=json.loads(provenance_text),
-                            error_history=[(int(a), int(b), float(e))
-                                           for a, b, e in history.tolist()])
-        check_radial_table(table)
-    except SurrogateError as exc:
-        raise fail(f"holds inconsistent data: {exc.reason}") from None
-    except Exception as exc:  # noqa: BLE001
-        raise fail(f"holds inconsistent data: {type(exc).__name__}: {exc}") from None
-    stored_solver = table.provenance.get("solver_fingerprint")
-    if expected_solver is not None and stored_solver != expected_solver:
-        raise fail(f"was made by another version of the field solver (fingerprint "
-                   f"{stored_solver}, now {expected_solver})")
-    return table
+    return read_checked_file(path, check_format=_check_format_zr, array_names=ARRAYS_ZR,
+                             scalar_names=SCALARS_ZR, scalar_types=SCALAR_TYPES_ZR,
+                             build=_build_radial_table, expected_hash=expected_hash,
+                             expected_solver=expected_solver, hash_label="hash")
 
 
 def radial_cache_path(scene, cache_dir=None, **settings) -> Path:

@@ -82,6 +82,34 @@ def _carry_field_error(result, measured: float):
     return dataclasses.replace(result, relative_error_estimate=max(measured, contact), info=info)
 
 
+def _sampled_field_errors(results: list, sampled: list, measured: float):
+    """``(results, measured)``: the largest field error estimate of the ``sampled``
+    results times ``1 + FIELD_ERROR_MARGIN`` (``measured``, once: NaN until then),
+    carried over (:func:`_carry_field_error`) to the other results."""
+    if math.isnan(measured):
+        values = [r.relative_error_estimate for r, here in zip(results, sampled) if here]
+        finite = [v for v in values if math.isfinite(v)]
+        measured = (1.0 + FIELD_ERROR_MARGIN) * max(finite) if finite else math.nan
+    return [r if here else _carry_field_error(r, measured)
+            for r, here in zip(results, sampled)], measured
+
+
+def _field_error_rule(sample_z, where: str, others: str) -> str:
+    """The provenance's "field_error_rule" when sampled at the gaps ``sample_z`` [m]
+    (``where``: further places sampled at, ``others``: where the largest is carried)."""
+    return (f"measured at z = {', '.join(f'{z:.6g}' for z in sample_z)} m{where}; the largest "
+            f"x {1.0 + FIELD_ERROR_MARGIN:g} {others}")
+
+
+def _converged_or_warn(estimate: float, tolerance: float, comm, message: str) -> bool:
+    """``estimate <= tolerance``; if not, rank 0 of ``comm`` warns ``message``
+    (``RuntimeWarning`` pointing at the caller of the precompute function)."""
+    converged = estimate <= tolerance
+    if not converged and rank_of(comm) == 0:
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
+    return converged
+
+
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
@@ -145,12 +173,8 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         todo = todo[contact_first_order(todo, stroke)]
         results = farm(comm, list(todo), work, progress=advance)
         if sampled:
-            if math.isnan(measured):
-                values = [r.relative_error_estimate for r in results if estimated_here(r.position)]
-                finite = [v for v in values if math.isfinite(v)]
-                measured = (1.0 + FIELD_ERROR_MARGIN) * max(finite) if finite else math.nan
-            results = [r if estimated_here(r.position) else _carry_field_error(r, measured)
-                       for r in results]
+            results, measured = _sampled_field_errors(
+                results, [estimated_here(r.position) for r in results], measured)
         if symmetric:
             results += [mirrored(r, stroke) for r in results
                         if not math.isclose(r.position, 0.5 * stroke, rel_tol=1e-12)]
@@ -181,13 +205,11 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     if bar is not None:
         bar.n = bar.total
         bar.close()
-    converged = estimate <= tolerance
-    if not converged and rank_of(comm) == 0:
-        warnings.warn(f"surrogate: interpolation error estimate {estimate:.3g} is above "
-                      f"[field] tolerance = {tolerance:g} after {table.count} positions "
-                      f"(max_positions = {max_positions})", RuntimeWarning, stacklevel=2)
-    rule = (f"measured at z = {', '.join(f'{z:.6g}' for z in sample_at)} m; the largest "
-            f"x {1.0 + FIELD_ERROR_MARGIN:g} at the other positions" if sampled
+    converged = _converged_or_warn(
+        estimate, tolerance, comm, f"surrogate: interpolation error estimate {estimate:.3g} is "
+        f"above [field] tolerance = {tolerance:g} after {table.count} positions "
+        f"(max_positions = {max_positions})")
+    rule = (_field_error_rule(sample_at, "", "at the other positions") if sampled
             else "measured at every position")
     return dataclasses.replace(
         table, interpolation_error=estimate, tolerance=tolerance, converged=converged,

@@ -46,6 +46,10 @@ SCALARS = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
            "interpolation_error": "interpolation_error_estimate", "tolerance": "tolerance",
            "converged": "converged", "field_hash": "field_hash", "method": "method",
            "degree": "degree"}
+#: table attribute -> type of its value (the scalars' checksum is of the typed values)
+SCALAR_TYPES = {"ball_charge": float, "stroke": float, "interpolation_error": float,
+                "tolerance": float, "converged": bool, "field_hash": str, "method": str,
+                "degree": int}
 _SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
            "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
 
@@ -98,12 +102,9 @@ def array_digest(array) -> str:
     return digest.hexdigest()
 
 
-def _scalar_values(table: SurrogateTable) -> dict:
-    return {"ball_charge": float(table.ball_charge), "stroke": float(table.stroke),
-            "interpolation_error": float(table.interpolation_error),
-            "tolerance": float(table.tolerance), "converged": bool(table.converged),
-            "field_hash": str(table.field_hash), "method": str(table.method),
-            "degree": int(table.degree)}
+def typed_scalars(values, types: dict) -> dict:
+    """``{attr: types[attr](values[attr])}``: the scalars as written, read and checksummed."""
+    return {attr: kind(values[attr]) for attr, kind in types.items()}
 
 
 def scalars_digest(values: dict) -> str:
@@ -123,6 +124,22 @@ def check_shapes(arrays: dict) -> None:
                                  f"{(max(n, 0), *tail)}")
 
 
+def check_axis(values: np.ndarray, end: float, name: str, end_name: str) -> None:
+    """Raise :class:`SurrogateError` unless the sample coordinates ``values`` [m], at
+    least two, ascend strictly from 0 to ``end`` [m] > 0 (``name``: what one value is,
+    ``end_name``: what ``end`` is, for the message)."""
+    n = np.size(values)
+    if n < 2:
+        raise SurrogateError(f"{n} {name}(s): at least 2 are needed")
+    if not (np.isfinite(end) and end > 0.0):
+        raise SurrogateError(f"{end_name} {end!r} m is not positive")
+    if not np.all(np.isfinite(values)) or not np.all(np.diff(values) > 0.0):
+        raise SurrogateError(f"{name}s are not strictly ascending")
+    if values[0] != 0.0 or abs(values[-1] - end) > 1e-12 * end:
+        raise SurrogateError(f"{name}s run from {values[0]!r} to {values[-1]!r} m, not from 0 "
+                             f"to the {end_name} {end!r} m")
+
+
 def check_table(table: SurrogateTable) -> None:
     """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense.
 
@@ -131,17 +148,8 @@ def check_table(table: SurrogateTable) -> None:
     with C_lu < 0, each induced charge between 0 and minus the ball charge.
     """
     check_shapes({attr: getattr(table, attr) for attr in ARRAYS})
-    n = table.positions.size
-    if n < 2:
-        raise SurrogateError(f"{n} position(s): at least 2 are needed")
-    z, stroke = table.positions, float(table.stroke)
-    if not (np.isfinite(stroke) and stroke > 0.0):
-        raise SurrogateError(f"stroke {stroke!r} m is not positive")
-    if not np.all(np.isfinite(z)) or not np.all(np.diff(z) > 0.0):
-        raise SurrogateError("positions are not strictly ascending")
-    if z[0] != 0.0 or abs(z[-1] - stroke) > 1e-12 * stroke:
-        raise SurrogateError(f"positions run from {z[0]!r} to {z[-1]!r} m, not from 0 to the "
-                             f"stroke {stroke!r} m")
+    z = table.positions
+    check_axis(z, float(table.stroke), "position", "stroke")
     C, q, Q = table.capacitance, table.induced_charge, float(table.ball_charge)
     if not (np.all(np.isfinite(C)) and np.all(np.isfinite(q)) and np.isfinite(Q)):
         raise SurrogateError("non-finite capacitance or charge")
@@ -182,14 +190,14 @@ def _import_h5py():
     return h5py
 
 
-def _history_array(history) -> np.ndarray:
-    return np.asarray(history, dtype=float).reshape(-1, 2)
-
-
-def write_table(path: str | Path, table: SurrogateTable) -> Path:
-    """Write ``table`` to HDF5 atomically (temporary file + ``os.replace``), every
-    array with a Fletcher-32 filter and its SHA-256. Raises ``OSError`` if the
-    file cannot be written (nothing is left behind)."""
+def write_checked_file(path: str | Path, arrays: dict, scalars: dict, scalar_names: dict,
+                       attrs: dict) -> Path:
+    """Write a surrogate file atomically (temporary file + ``os.replace``): ``arrays``
+    (dataset name -> array) each with a Fletcher-32 filter and its SHA-256 (attribute
+    ``sha256``), ``scalars`` (table attribute -> typed value, :func:`typed_scalars`) as
+    the file attributes ``scalar_names[attr]`` with their ``scalars_sha256``, the
+    further file attributes ``attrs`` and the ``complete`` flag set last. Raises
+    ``OSError`` if it cannot be written (nothing is left behind)."""
     h5py = _import_h5py()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -198,20 +206,15 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
     try:
         with h5py.File(tmp, "w") as f:
             f.attrs["complete"] = False
-            arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS.items()}
-            arrays["error_history"] = _history_array(table.error_history)
             for name, data in arrays.items():
                 dataset = f.create_dataset(name, data=data, fletcher32=True,
                                            chunks=data.shape if data.size else None)
                 dataset.attrs["sha256"] = array_digest(data)
-            scalars = _scalar_values(table)
-            for attr, name in SCALARS.items():
+            for attr, name in scalar_names.items():
                 f.attrs[name] = scalars[attr]
             f.attrs["scalars_sha256"] = scalars_digest(scalars)
-            f.attrs["format_version"] = FORMAT_VERSION
-            f.attrs["provenance"] = json.dumps(table.provenance, default=str)
-            f.attrs["scene_text"] = table.provenance.get("scene_text", "")
-            f.attrs["command_line"] = table.provenance.get("command_line", "")
+            for name, value in attrs.items():
+                f.attrs[name] = value
             f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
             f.flush()
             f.attrs["complete"] = True
@@ -220,6 +223,20 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def write_table(path: str | Path, table: SurrogateTable) -> Path:
+    """Write ``table`` to HDF5 atomically (:func:`write_checked_file`: every array
+    with a Fletcher-32 filter and its SHA-256, checksummed scalars). Raises
+    ``OSError`` if the file cannot be written (nothing is left behind)."""
+    arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS.items()}
+    arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 2)
+    scalars = typed_scalars(vars(table), SCALAR_TYPES)
+    return write_checked_file(path, arrays, scalars, SCALARS, {
+        "format_version": FORMAT_VERSION,
+        "provenance": json.dumps(table.provenance, default=str),
+        "scene_text": table.provenance.get("scene_text", ""),
+        "command_line": table.provenance.get("command_line", "")})
 
 
 def _read_checked(f, name: str) -> np.ndarray:
@@ -234,43 +251,36 @@ def _read_checked(f, name: str) -> np.ndarray:
     return data
 
 
-def read_table(path: str | Path, expected_hash: str | None = None,
-               expected_solver: str | None = None) -> SurrogateTable:
-    """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
-    readable, unchanged since written (checksums), sensible (:func:`check_table`)
-    and (if given) made for ``expected_hash`` by the solver with fingerprint
-    ``expected_solver`` (:func:`solver_fingerprint`)."""
+def read_checked_file(path: str | Path, *, check_format, array_names: dict, scalar_names: dict,
+                      scalar_types: dict, build, expected_hash: str | None = None,
+                      expected_solver: str | None = None, hash_label: str = "field hash"):
+    """Read a file written by :func:`write_checked_file`; raise :class:`SurrogateError`
+    (naming ``path``) unless it is complete, of the format ``check_format(attrs)``
+    accepts (it raises :class:`SurrogateError` otherwise), unchanged since written
+    (checksums), sensible (``build(arrays, history, scalars, provenance)`` returns the
+    table or raises) and (if given) for ``expected_hash`` (called ``hash_label`` in the
+    message) made by the solver with fingerprint ``expected_solver``."""
     h5py = _import_h5py()
     path = Path(path)
 
     def fail(reason: str):
         return SurrogateError(f"surrogate file {str(path)!r} {reason}", path=path, reason=reason)
 
-    if path.is_dir():
-        raise fail("is a directory")
     if not path.is_file():
-        raise fail("does not exist")
+        raise fail("is a directory" if path.is_dir() else "does not exist")
     try:
         with h5py.File(path, "r") as f:
             if not bool(f.attrs.get("complete", False)):
                 raise SurrogateError("is partial (complete flag unset)")
-            version = f.attrs.get("format_version")
-            if version is None or int(version) != FORMAT_VERSION:
-                raise SurrogateError(f"has format version {version!r}, expected {FORMAT_VERSION}")
+            check_format(f.attrs)
             stored_hash = str(f.attrs["field_hash"])
             if expected_hash is not None and stored_hash != expected_hash:
-                raise SurrogateError(f"was made for field hash {stored_hash[:12]}..., the scene "
-                                     f"has {expected_hash[:12]}...")
-            arrays = {attr: _read_checked(f, name) for attr, name in ARRAYS.items()}
+                raise SurrogateError(f"was made for {hash_label} {stored_hash[:12]}..., the "
+                                     f"scene has {expected_hash[:12]}...")
+            arrays = {attr: _read_checked(f, name) for attr, name in array_names.items()}
             history = _read_checked(f, "error_history")
-            scalars = {attr: f.attrs[name] for attr, name in SCALARS.items()}
-            scalars = {"ball_charge": float(scalars["ball_charge"]),
-                       "stroke": float(scalars["stroke"]),
-                       "interpolation_error": float(scalars["interpolation_error"]),
-                       "tolerance": float(scalars["tolerance"]),
-                       "converged": bool(scalars["converged"]),
-                       "field_hash": str(scalars["field_hash"]), "method": str(scalars["method"]),
-                       "degree": int(scalars["degree"])}
+            scalars = typed_scalars({attr: f.attrs[name] for attr, name in scalar_names.items()},
+                                    scalar_types)
             if str(f.attrs.get("scalars_sha256", "")) != scalars_digest(scalars):
                 raise SurrogateError("scalar attributes do not match their checksum")
             provenance_text = str(f.attrs["provenance"])
@@ -279,26 +289,48 @@ def read_table(path: str | Path, expected_hash: str | None = None,
     except Exception as exc:  # noqa: BLE001 - any read failure means "corrupt"
         raise fail(f"is corrupt or unreadable: {type(exc).__name__}: {exc}") from None
     try:
-        provenance_data = json.loads(provenance_text)
-        if history.ndim != 2 or history.shape[1] != 2:
-            raise SurrogateError(f"error history has shape {history.shape}")
-        check_shapes(arrays)
-        raw = SurrogateTable(**arrays, **scalars, provenance=provenance_data,
-                             error_history=[(int(n), float(e)) for n, e in history.tolist()])
-        # __post_init__ sorts: check the order as stored, then the rest
-        z = np.asarray(arrays["positions"], dtype=float)
-        if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
-            raise SurrogateError("positions are not strictly ascending")
-        check_table(raw)
+        table = build(arrays, history, scalars, json.loads(provenance_text))
     except SurrogateError as exc:
         raise fail(f"holds inconsistent data: {exc.reason}") from None
     except Exception as exc:  # noqa: BLE001 - shapes that do not even build a table
         raise fail(f"holds inconsistent data: {type(exc).__name__}: {exc}") from None
-    stored_solver = raw.provenance.get("solver_fingerprint")
+    stored_solver = table.provenance.get("solver_fingerprint")
     if expected_solver is not None and stored_solver != expected_solver:
         raise fail(f"was made by another version of the field solver (fingerprint "
                    f"{stored_solver}, now {expected_solver})")
-    return raw
+    return table
+
+
+def _check_format(attrs) -> None:
+    version = attrs.get("format_version")
+    if version is None or int(version) != FORMAT_VERSION:
+        raise SurrogateError(f"has format version {version!r}, expected {FORMAT_VERSION}")
+
+
+def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) -> SurrogateTable:
+    if history.ndim != 2 or history.shape[1] != 2:
+        raise SurrogateError(f"error history has shape {history.shape}")
+    check_shapes(arrays)
+    table = SurrogateTable(**arrays, **scalars, provenance=provenance_data,
+                           error_history=[(int(n), float(e)) for n, e in history.tolist()])
+    # __post_init__ sorts: check the order as stored, then the rest
+    z = np.asarray(arrays["positions"], dtype=float)
+    if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
+        raise SurrogateError("positions are not strictly ascending")
+    check_table(table)
+    return table
+
+
+def read_table(path: str | Path, expected_hash: str | None = None,
+               expected_solver: str | None = None) -> SurrogateTable:
+    """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
+    readable, unchanged since written (checksums), sensible (:func:`check_table`)
+    and (if given) made for ``expected_hash`` by the solver with fingerprint
+    ``expected_solver`` (:func:`solver_fingerprint`)."""
+    return read_checked_file(path, check_format=_check_format, array_names=ARRAYS,
+                             scalar_names=SCALARS, scalar_types=SCALAR_TYPES,
+                             build=_build_table, expected_hash=expected_hash,
+                             expected_solver=expected_solver)
 
 
 # ---------------------------------------------------------------------------

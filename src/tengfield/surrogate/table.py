@@ -37,22 +37,14 @@ PER_POSITION = ("positions", "capacitance", "induced_charge", "dofs", "cells", "
                 "solve_time", "field_error")
 
 
-@dataclass
-class SurrogateTable:
-    """Field solves at sampled positions (one cell, SI) and their provenance.
-
-    ``capacitance[i]`` = [[C_ll, C_lu], [C_lu, C_uu]] [F] and
-    ``induced_charge[i]`` = [q_lower, q_upper] [C] at ``positions[i]`` [m]
-    (ascending). ``interpolation_error`` is the held-out relative error
-    estimate (see :mod:`tengfield.surrogate.refinement`), ``field_error`` the
-    field solver's per-position estimate (measured at a few positions and
-    carried over to the others, see ``provenance["field_error_rule"]``).
-    """
-    positions: np.ndarray
-    capacitance: np.ndarray
-    induced_charge: np.ndarray
-    ball_charge: float
-    stroke: float
+@dataclass(kw_only=True)
+class SolveRecord:
+    """What the field solves behind a surrogate cost and how it was refined (keywords only;
+    :class:`SurrogateTable` per position, :class:`tengfield.surrogate.radial.RadialTable`
+    per grid point): ``dofs``, ``cells``, ``wall_time`` [s] (per solve, all ranks),
+    ``solve_time`` [s], ``field_error`` (relative), the interpolation error estimate,
+    its ``tolerance``, whether it ``converged``, the ``error_history`` of the refinement,
+    the cache key ``field_hash``, the solver ``method`` and ``degree``, and ``provenance``."""
     dofs: np.ndarray
     cells: np.ndarray
     wall_time: np.ndarray
@@ -61,11 +53,30 @@ class SurrogateTable:
     interpolation_error: float = math.nan
     tolerance: float = math.nan
     converged: bool = False
-    error_history: list = field(default_factory=list)   # [(positions, estimate), ...]
+    error_history: list = field(default_factory=list)
     field_hash: str = ""
     method: str = ""
     degree: int = 0
     provenance: dict = field(default_factory=dict)
+
+
+@dataclass
+class SurrogateTable(SolveRecord):
+    """Field solves at sampled positions (one cell, SI) and their provenance.
+
+    ``capacitance[i]`` = [[C_ll, C_lu], [C_lu, C_uu]] [F] and
+    ``induced_charge[i]`` = [q_lower, q_upper] [C] at ``positions[i]`` [m]
+    (ascending). ``interpolation_error`` is the held-out relative error
+    estimate (see :mod:`tengfield.surrogate.refinement`), ``field_error`` the
+    field solver's per-position estimate (measured at a few positions and
+    carried over to the others, see ``provenance["field_error_rule"]``);
+    ``error_history`` = [(positions, estimate), ...]. The other fields: :class:`SolveRecord`.
+    """
+    positions: np.ndarray
+    capacitance: np.ndarray
+    induced_charge: np.ndarray
+    ball_charge: float
+    stroke: float
 
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")
