@@ -5,7 +5,6 @@ Field: the analytic plate model (no dolfinx); dynamics: the real impact map.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +12,7 @@ import pytest
 import tengfield as tf
 from tengfield import array, electrical
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 4000.0}
 

@@ -16,7 +16,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMOS = ROOT / "demos"
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+PYTHON = sys.executable
 NAMES = ["electrical_waveforms", "electrical_frequency_amplitude", "electrical_geometry",
          "electrical_honeycomb"]
 

@@ -3,7 +3,7 @@
 
 The ``mpi``-marked tests run under ``mpirun -n 2`` (``make test-mpi``); the others
 start ``mpirun`` themselves (the serial suite). The surrogate comes from the
-analytic plate model of ``test_pipeline_fixtures`` (no dolfinx): what is tested
+analytic plate model of ``plate_model`` (no dolfinx): what is tested
 here is the farm, not the field.
 """
 from __future__ import annotations
@@ -23,11 +23,10 @@ from tengfield import surrogate
 from tengfield import sweep as sweep_module
 from tengfield.errors import SceneError
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+PYTHON = sys.executable
 SHORT_RUN = {"duration_s": 2.0}
 FREQUENCIES = [15.0, 20.0, 25.0]
 AMPLITUDES = [1.0e-3, 1.5e-3]
@@ -207,7 +206,7 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         from mpi4py import MPI
-        import test_pipeline_fixtures as fx
+        import plate_model as fx
         from tengfield import surrogate, sweep
 
         comm = MPI.COMM_WORLD

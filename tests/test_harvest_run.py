@@ -1,7 +1,7 @@
 """Rectifier runs through the pipeline and the CLI: [circuit] kind = "rectifier",
 the store's columns and summary, chunked runs, the CMEO bound, bad keys.
 
-The field is the analytic plate model of ``test_pipeline_fixtures`` (no
+The field is the analytic plate model of ``plate_model`` (no
 dolfinx); the dynamics are the real impact map on short runs (or a
 prescribed trajectory where the physics needs an exactly periodic drive).
 """
@@ -21,11 +21,10 @@ import tengfield as tf
 from tengfield import electrical
 from tengfield.harvest import Diode, Harvester, PowerChip, harvest
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+PYTHON = sys.executable
 SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 5000.0}
 #: a small store and chip levels the plate model's 0.3 nC cell reaches in 0.5 s
 SMALL_CHIP = {"kind": "rectifier", "storage_capacitance_uF": 1e-4, "pmic": "uvlo",

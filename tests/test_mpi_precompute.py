@@ -19,11 +19,10 @@ import pytest
 
 from tengfield import surrogate
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+PYTHON = sys.executable
 COARSE_FIELD = {"mesh_size_mm": 1.5, "degree": 1, "tolerance": 0.05}
 
 
@@ -125,7 +124,7 @@ def test_failure_on_one_rank_aborts_every_rank(tmp_path):
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         from mpi4py import MPI
-        import test_pipeline_fixtures as fx
+        import plate_model as fx
         from tengfield import surrogate
 
         def solve(scene, z, comm=None):

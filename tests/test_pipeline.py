@@ -14,11 +14,10 @@ from scipy.integrate import cumulative_trapezoid
 
 from tengfield import electrical, pipeline, surrogate
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+PYTHON = sys.executable
 SMALL_SCENE = """\
 [run]
 duration_s = 0.3

@@ -24,7 +24,7 @@ from tengfield.report import FieldSetting, Recommendation, Row
 from tengfield.scene import default_scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
+PYTHON = sys.executable
 
 
 # ---------------------------------------------------------------------------

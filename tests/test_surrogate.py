@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,8 +12,7 @@ from tengfield.surrogate import SurrogateError
 
 h5py = surrogate._import_h5py()   # the build that coexists with dolfinx if it is loaded
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 SOLVE_COMM = object()   # the analytic model needs no communicator
 

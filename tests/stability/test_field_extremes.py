@@ -13,8 +13,6 @@ validator rejects (a ball as wide as the tube, an electrode wider than the
 plate) must fail with a message that names the key and the allowed range.
 """
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
@@ -25,7 +23,6 @@ import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).parent))
 from stability_checks import assert_finite, scene_with  # noqa: E402
 
 from tengfield.errors import FieldError, SceneError  # noqa: E402
