@@ -26,7 +26,6 @@ from tengfield.errors import SceneError
 import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = sys.executable
 SHORT_RUN = {"duration_s": 2.0}
 FREQUENCIES = [15.0, 20.0, 25.0]
 AMPLITUDES = [1.0e-3, 1.5e-3]
@@ -162,10 +161,10 @@ def _cached_scene(tmp_path) -> tuple[Path, Path]:
     return scene_file, cache
 
 
-def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path):
+def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, python):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
-    args = [PYTHON, "-m", "tengfield.cli", "sweep", str(scene_file), "--cache-dir", str(cache),
+    args = [python, "-m", "tengfield.cli", "sweep", str(scene_file), "--cache-dir", str(cache),
             "--frequency-hz", "15:25:3", "--amplitude-mm", "1:1.5:2", "--load-ohm", "1e6:1e9:2"]
     serial = subprocess.run(args + ["--jobs", "1", "-o", str(tmp_path / "serial")],
                             capture_output=True, text=True, env=mpi_env(), timeout=300)
@@ -184,10 +183,10 @@ def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path):
     assert not list((tmp_path / "mpi").glob(".*tmp*"))           # no temporary files left
 
 
-def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path):
+def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path, python):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
-    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2", PYTHON, "-m", "tengfield.cli",
+    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2", python, "-m", "tengfield.cli",
                            "sweep", str(scene_file), "--cache-dir", str(cache),
                            "--frequency-hz", "20", "--amplitude-mm", "1", "--jobs", "2",
                            "-o", str(tmp_path / "o")],
@@ -198,7 +197,7 @@ def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
+def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
     """An exception in one grid point on rank 1 ends the whole job with its message (no hang)."""
     needs_mpirun()
     script = tmp_path / "fail.py"
@@ -223,7 +222,7 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
         sweep.sweep(scene, table, [15.0, 20.0, 25.0, 30.0], [1e-3, 1.5e-3], comm=comm)
         print("finished")
     """))
-    proc = subprocess.run(["timeout", "100", "mpirun", "-n", "2", PYTHON, str(script)],
+    proc = subprocess.run(["timeout", "100", "mpirun", "-n", "2", python, str(script)],
                           capture_output=True, text=True, env=mpi_env(), timeout=120)
     assert proc.returncode not in (0, 124), proc.stderr
     assert "error on rank 1 of 2" in proc.stderr

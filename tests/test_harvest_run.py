@@ -9,9 +9,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +21,6 @@ from tengfield.harvest import Diode, Harvester, PowerChip, harvest
 import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = sys.executable
 SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 5000.0}
 #: a small store and chip levels the plate model's 0.3 nC cell reaches in 0.5 s
 SMALL_CHIP = {"kind": "rectifier", "storage_capacitance_uF": 1e-4, "pmic": "uvlo",
@@ -144,10 +140,12 @@ def test_load_run_reports_cmeo_bound_above_its_loop(cache):
     assert energy["figure_of_merit_structural"] > 0
 
 
-def cli(args, cwd, cache_dir):
-    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(cache_dir))
-    return subprocess.run([PYTHON, "-m", "tengfield.cli", *args], capture_output=True, text=True,
-                          env=env, timeout=600, cwd=cwd)
+@pytest.fixture
+def cli(run_cli, cli_env, tmp_path):
+    """``cli(args)``: the CLI run in tmp_path with the surrogate cache tmp_path/cache."""
+    return lambda args: run_cli(*args, cwd=tmp_path, timeout=600,
+                                env=cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true",
+                                            TENGFIELD_CACHE_DIR=tmp_path / "cache"))
 
 
 SCENE_TEXT = """\
@@ -167,13 +165,13 @@ pmic_shunt_V = 100.0
 """
 
 
-def test_cli_rectifier_run(tmp_path):
+def test_cli_rectifier_run(tmp_path, cli):
     """`tengfield run` of a rectifier scene (surrogate cached from the plate model)."""
     path = tmp_path / "rect.toml"
     path.write_text(SCENE_TEXT)
     scene = tf.load_scene(path)
     tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)   # fills the cache
-    proc = cli(["run", "rect.toml", "-o", "out"], tmp_path, tmp_path / "cache")
+    proc = cli(["run", "rect.toml", "-o", "out"])
     assert proc.returncode == 0, proc.stderr
     out = tmp_path / "out"
     for name in ("charging.png", "vq.png", "waveforms.csv", "summary.json"):
@@ -202,9 +200,9 @@ def test_cli_rectifier_run(tmp_path):
     ('[array]\ncells = 4\nconnection = "series"\n', "[array] connection = 'series' is not allowed"),
     ('[array]\nrestitution_spread = 0.1\n', "[array] spreads and connection need"),
 ])
-def test_bad_harvest_and_array_keys_are_one_line_errors(tmp_path, text, expected):
+def test_bad_harvest_and_array_keys_are_one_line_errors(tmp_path, cli, text, expected):
     (tmp_path / "bad.toml").write_text(text)
-    proc = cli(["run", "bad.toml", "-o", "out"], tmp_path, tmp_path / "cache")
+    proc = cli(["run", "bad.toml", "-o", "out"])
     assert proc.returncode == 2
     assert expected in proc.stderr
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
