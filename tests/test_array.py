@@ -4,7 +4,6 @@ Field: the analytic plate model (no dolfinx); dynamics: the real impact map.
 """
 from __future__ import annotations
 
-import sys
 
 import numpy as np
 import pytest
@@ -123,11 +122,9 @@ def test_mpi_ranks_give_the_serial_trajectories():
         np.testing.assert_array_equal(a(t)[0], b(t)[0])
 
 
-def test_cli_array_run(tmp_path):
+def test_cli_array_run(tmp_path, run_cli, cli_env):
     """`tengfield run` of an [array] scene (surrogate cached from the plate model)."""
     import json
-    import os
-    import subprocess
 
     path = tmp_path / "arr.toml"
     path.write_text('[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 4000.0\n'
@@ -135,9 +132,9 @@ def test_cli_array_run(tmp_path):
                     '[array]\ncells = 10\nconnection = "rectified-parallel"\n'
                     'initial_phase_spread_deg = 90\n')
     tf.run(tf.load_scene(path), cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
-    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
-    proc = subprocess.run([sys.executable, "-m", "tengfield.cli", "run", "arr.toml", "-o", "out"],
-                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    env = cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true",
+                  TENGFIELD_CACHE_DIR=tmp_path / "cache")
+    proc = run_cli("run", "arr.toml", "-o", "out", cwd=tmp_path, env=env, timeout=600)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["cells"] == 10 and summary["array"]["distinct_dynamics"] == 10
