@@ -161,11 +161,11 @@ def _cached_scene(tmp_path) -> tuple[Path, Path]:
     return scene_file, cache
 
 
-def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, python):
+def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, cli_command):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
-    args = [python, "-m", "tengfield.cli", "sweep", str(scene_file), "--cache-dir", str(cache),
-            "--frequency-hz", "15:25:3", "--amplitude-mm", "1:1.5:2", "--load-ohm", "1e6:1e9:2"]
+    args = cli_command("sweep", scene_file, "--cache-dir", cache, "--frequency-hz", "15:25:3",
+                       "--amplitude-mm", "1:1.5:2", "--load-ohm", "1e6:1e9:2")
     serial = subprocess.run(args + ["--jobs", "1", "-o", str(tmp_path / "serial")],
                             capture_output=True, text=True, env=mpi_env(), timeout=300)
     assert serial.returncode == 0, serial.stderr
@@ -183,13 +183,13 @@ def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, python):
     assert not list((tmp_path / "mpi").glob(".*tmp*"))           # no temporary files left
 
 
-def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path, python):
+def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path, cli_command):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
-    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2", python, "-m", "tengfield.cli",
-                           "sweep", str(scene_file), "--cache-dir", str(cache),
-                           "--frequency-hz", "20", "--amplitude-mm", "1", "--jobs", "2",
-                           "-o", str(tmp_path / "o")],
+    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2",
+                           *cli_command("sweep", scene_file, "--cache-dir", cache,
+                                        "--frequency-hz", "20", "--amplitude-mm", "1",
+                                        "--jobs", "2", "-o", tmp_path / "o")],
                           capture_output=True, text=True, env=mpi_env(), timeout=150)
     assert proc.returncode not in (0, 124), proc.stderr      # 124: timeout (a hang)
     assert "tengfield: error: --jobs = 2 cannot be combined with mpirun -n 2" in proc.stderr

@@ -90,14 +90,14 @@ def test_two_ranks_equal_serial_field_solver():
     assert parallel.count >= 17
 
 
-def test_cli_precompute_under_mpirun_equals_serial(tmp_path, python):
+def test_cli_precompute_under_mpirun_equals_serial(tmp_path, cli_command):
     """`mpirun -n 2 tengfield precompute` writes the same file content as a serial run."""
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")
     scene_file = tmp_path / "coarse.toml"
     scene_file.write_text("[field]\n" + "".join(f"{k} = {v!r}\n".replace("'", '"')
                                                  for k, v in COARSE_FIELD.items()))
-    cmd = [python, "-m", "tengfield.cli", "precompute", str(scene_file)]
+    cmd = cli_command("precompute", scene_file)
     serial = subprocess.run(cmd + ["-o", str(tmp_path / "serial.h5")], capture_output=True,
                             text=True, env=mpi_env(), timeout=300)
     assert serial.returncode == 0, serial.stderr

@@ -133,8 +133,8 @@ def test_uncharged_ball_skips_the_field(tmp_path):
     assert not np.any(result.waveforms["V_load_V"])
 
 
-def test_summary_says_what_ran(tmp_path):
-    scene = fx.scene_with()
+def test_summary_says_what_ran(tmp_path, plate_default_scene):
+    scene = plate_default_scene
     first = model_run(scene, tmp_path).summary
     second = model_run(scene.with_values(excitation={"frequency_hz": 25.0}), tmp_path).summary
     assert first["stages"]["field"]["status"] == "ran"

@@ -2,7 +2,6 @@
 import json
 import os
 import subprocess
-import sys
 
 import pytest
 
@@ -51,7 +50,7 @@ def test_field_command_reports_bad_position_without_traceback(tmp_path, field_cl
     assert "Traceback" not in done.stderr
 
 
-def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli):
+def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli, cli_command):
     """``mpirun -n 2 tengfield field --method 3d`` writes field.json and the weighting
     potentials, with the numbers of the serial run (same gmsh mesh: gmsh runs on rank 0)."""
     import shutil
@@ -67,8 +66,8 @@ def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli):
     env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
            "OMPI_MCA_rmaps_base_oversubscribe": "1", "MPLBACKEND": "Agg"}
     env.pop("OMPI_COMM_WORLD_SIZE", None)
-    parallel = subprocess.run([mpirun, "-n", "2", sys.executable, "-m", "tengfield.cli", "field",
-                               *args, "-o", str(tmp_path / "mpi")],
+    parallel = subprocess.run([mpirun, "-n", "2",
+                               *cli_command("field", *args, "-o", tmp_path / "mpi")],
                               capture_output=True, text=True, cwd=tmp_path, env=env)
     assert parallel.returncode == 0, parallel.stderr[-3000:]
     one = json.loads((tmp_path / "serial" / "field.json").read_text())
