@@ -29,6 +29,18 @@ def cli_environment(**extra) -> dict:
     return env
 
 
+
+def pytest_collection_modifyitems(config, items):
+    """``mpi`` tests need ``mpirun -n 2``: outside mpirun they are deselected, so that a
+    ``-m`` given on the command line (``-m "not slow"``, the fast tier) replacing the
+    ``-m 'not mpi'`` of pyproject's addopts still leaves them out of a serial run."""
+    if os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE"):
+        return
+    mpi = [item for item in items if item.get_closest_marker("mpi")]
+    if mpi:
+        config.hook.pytest_deselected(items=mpi)
+        items[:] = [item for item in items if not item.get_closest_marker("mpi")]
+
 @pytest.fixture(scope="session")
 def python() -> str:
     """The interpreter running the tests (the venv's python under ``make test``)."""
