@@ -43,6 +43,7 @@ def test_identical_cells_are_device_cells_exactly(cache, circuit):
     assert arr.summary["array"]["phase_coherence"] == pytest.approx(1.0, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_phase_spread_costs_parallel_cells_and_per_cell_bridges_recover_it(cache):
     """Spread phases partly cancel in a parallel wiring (ratio < 1); per-cell bridges into
     the same store never deliver less than one bridge on the parallel sum."""
@@ -98,6 +99,7 @@ def test_processes_give_the_serial_trajectories():
         np.testing.assert_array_equal(a(t)[0], b(t)[0])
 
 
+@pytest.mark.slow
 def test_array_plot_and_csv(cache, tmp_path):
     from tengfield import io
     res = run(cache, {"kind": "load", "load_ohm": 3e9},
@@ -122,6 +124,7 @@ def test_mpi_ranks_give_the_serial_trajectories():
         np.testing.assert_array_equal(a(t)[0], b(t)[0])
 
 
+@pytest.mark.slow
 def test_cli_array_run(tmp_path, run_cli, cli_env):
     """`tengfield run` of an [array] scene (surrogate cached from the plate model)."""
     import json

@@ -161,6 +161,7 @@ def _cached_scene(tmp_path) -> tuple[Path, Path]:
     return scene_file, cache
 
 
+@pytest.mark.slow
 def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, cli_command):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
@@ -183,6 +184,7 @@ def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, cli_command):
     assert not list((tmp_path / "mpi").glob(".*tmp*"))           # no temporary files left
 
 
+@pytest.mark.slow
 def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path, cli_command):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
@@ -197,6 +199,7 @@ def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path, cli_command):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
     """An exception in one grid point on rank 1 ends the whole job with its message (no hang)."""
     needs_mpirun()

@@ -103,6 +103,7 @@ def test_uvlo_switching_counts_and_burst_energy(cache):
     assert 0 < rect["chip_duty_cycle"] < 1
 
 
+@pytest.mark.slow
 def test_chunked_harvester_equals_one_pass():
     rng = np.random.default_rng(3)
     t = np.linspace(0, 0.2, 2001)
@@ -165,6 +166,7 @@ pmic_shunt_V = 100.0
 """
 
 
+@pytest.mark.slow
 def test_cli_rectifier_run(tmp_path, cli):
     """`tengfield run` of a rectifier scene (surrogate cached from the plate model)."""
     path = tmp_path / "rect.toml"
@@ -185,6 +187,7 @@ def test_cli_rectifier_run(tmp_path, cli):
     assert "energy per cycle" in proc.stdout and "chip: on" in proc.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text, expected", [
     ('[circuit]\nkind = "rectifier"\nstorage_capacitance_uF = 0.0\n',
      "[circuit] storage_capacitance_uF = 0.0 is out of range"),

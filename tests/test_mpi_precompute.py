@@ -90,6 +90,7 @@ def test_two_ranks_equal_serial_field_solver():
     assert parallel.count >= 17
 
 
+@pytest.mark.slow
 def test_cli_precompute_under_mpirun_equals_serial(tmp_path, cli_command):
     """`mpirun -n 2 tengfield precompute` writes the same file content as a serial run."""
     if shutil.which("mpirun") is None:
@@ -111,6 +112,7 @@ def test_cli_precompute_under_mpirun_equals_serial(tmp_path, cli_command):
     assert a.provenance["command_line"].startswith("tengfield precompute")
 
 
+@pytest.mark.slow
 def test_failure_on_one_rank_aborts_every_rank(tmp_path, python):
     """An exception on one rank ends the whole job with its message (no hang).
 
@@ -189,6 +191,7 @@ def test_ranks_with_different_caches_follow_rank_0(case, status):
         assert_same_table(other, tables[0])
 
 
+@pytest.mark.slow
 def test_ranks_with_different_caches_finish_under_mpirun(tmp_path, python):
     """The same three cases as a script under ``mpirun -n 2`` in the serial suite,
     under a timeout (a disagreement used to spin forever)."""

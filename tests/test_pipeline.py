@@ -147,6 +147,7 @@ def test_summary_says_what_ran(tmp_path, plate_default_scene):
 
 # ---------------------------------------------------------------------------
 # the real stack (dynamics + dolfinx), small scenes
+@pytest.mark.slow
 @pytest.mark.field
 def test_error_estimate_is_honest_against_direct_solves(tmp_path):
     import pyvista  # noqa: F401 - before dolfinx
@@ -172,6 +173,7 @@ def test_error_estimate_is_honest_against_direct_solves(tmp_path):
         np.testing.assert_allclose(mirrored.induced_charge, direct.induced_charge, rtol=5e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.field
 def test_cli_run_end_to_end_then_cached(tmp_path, cli, python):
     (tmp_path / "small.toml").write_text(SMALL_SCENE + '\n[circuit]\nkind = "load"\n'
@@ -207,6 +209,7 @@ def test_cli_run_end_to_end_then_cached(tmp_path, cli, python):
                                           skiprows=1), data, rtol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.field
 def test_cli_sweep_and_precompute_cache(tmp_path, cli):
     (tmp_path / "small.toml").write_text(SMALL_SCENE)
@@ -224,6 +227,7 @@ def test_cli_sweep_and_precompute_cache(tmp_path, cli):
     assert (tmp_path / "sw" / "sweep.png").stat().st_size > 0
 
 
+@pytest.mark.slow
 def test_uncharged_run_never_imports_the_field_stack(tmp_path, python):
     (tmp_path / "dry.toml").write_text(SMALL_SCENE + "[device]\nsurface_charge_uC_per_m2 = 0.0\n")
     code = ("import sys; from tengfield.cli import main; rc = main(['run', 'dry.toml', '-o', "
@@ -238,6 +242,7 @@ def test_uncharged_run_never_imports_the_field_stack(tmp_path, python):
     assert not (tmp_path / "cache").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("section, key, value, expected", [
     ("circuit", "load_ohm", "-5.0", "[circuit] load_ohm = -5.0 is out of range"),
     ("circuit", "parallel_capacitance_pF", "-1.0", "[circuit] parallel_capacitance_pF = -1.0"),
@@ -253,6 +258,7 @@ def test_bad_circuit_input_is_a_clear_error(tmp_path, cli, section, key, value, 
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_bad_sweep_range_is_a_clear_error(tmp_path, cli):
     proc = cli(["sweep", "--frequency-hz", "10:20", "--amplitude-mm", "1", "-o", "o"])
     assert proc.returncode == 2 and "--frequency-hz = '10:20'" in proc.stderr

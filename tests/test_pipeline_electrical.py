@@ -112,6 +112,7 @@ def test_importing_tengfield_loads_no_heavy_stack():
     assert proc.stdout.strip() == "[]"
 
 
+@pytest.mark.slow
 def test_plots_leave_the_callers_matplotlib_backend_alone(tmp_path):
     """A notebook's backend is not switched: the library draws on Figure objects."""
     code = ("import sys; sys.path.insert(0, 'tests'); import matplotlib; matplotlib.use('svg'); "

@@ -187,6 +187,7 @@ def _rows(data, stage, **match):
             and all(r["knobs"].get(k) == v for k, v in match.items())]
 
 
+@pytest.mark.slow
 def test_report_writes_every_file(fast_report):
     out, data, stdout = fast_report
     for name in ("report.md", "report.csv", "report.json", "field.png", "surrogate.png",
@@ -200,6 +201,7 @@ def test_report_writes_every_file(fast_report):
     assert "target 0.01" in stdout
 
 
+@pytest.mark.slow
 def test_field_errors_fall_with_refinement(fast_report):
     _, data, _ = fast_report
     for degree, min_slope in ((1, 1.0), (2, 2.5)):
@@ -222,6 +224,7 @@ def test_field_errors_fall_with_refinement(fast_report):
     assert _rows(data, "field", method="3d")          # the 3D path was measured
 
 
+@pytest.mark.slow
 def test_surrogate_dynamics_circuit_errors_fall(fast_report):
     _, data, _ = fast_report
     sur = sorted(_rows(data, "surrogate"), key=lambda r: r["knobs"]["positions"])
@@ -241,6 +244,7 @@ def test_surrogate_dynamics_circuit_errors_fall(fast_report):
         assert p_err[-1] < p_err[0] / 5, (load, p_err)
 
 
+@pytest.mark.slow
 def test_recommendations_are_verified(fast_report):
     _, data, _ = fast_report
     recs = {r["target"]: r for r in data["recommendations"]}
@@ -260,6 +264,7 @@ def test_recommendations_are_verified(fast_report):
                                                            -loose["field"]["mesh_size_mm"])
 
 
+@pytest.mark.slow
 def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report, tmp_path, cli):
     """`tengfield run recommended-0.01.toml` (a fresh cache, the real solver and its
     adaptive surrogate) lands within 1e-2 of the report's overall reference, with
@@ -282,6 +287,7 @@ def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report,
         assert err == pytest.approx(rec["measured_errors"][q], abs=1e-6), q
 
 
+@pytest.mark.slow
 def test_report_bad_scene_is_a_clear_error(tmp_path, cli):
     bad = tmp_path / "bad.toml"
     bad.write_text("[field]\ntolerance = 2.0\n")

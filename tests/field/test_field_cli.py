@@ -43,6 +43,7 @@ def test_field_command_writes_json_xdmf_png(tmp_path, field_cli):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 50_000
 
 
+@pytest.mark.slow
 def test_field_command_reports_bad_position_without_traceback(tmp_path, field_cli):
     done = field_cli("--position-mm", "3.5", "-o", str(tmp_path / "x"), cwd=tmp_path)
     assert done.returncode == 2
@@ -50,6 +51,7 @@ def test_field_command_reports_bad_position_without_traceback(tmp_path, field_cl
     assert "Traceback" not in done.stderr
 
 
+@pytest.mark.slow
 def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli, cli_command):
     """``mpirun -n 2 tengfield field --method 3d`` writes field.json and the weighting
     potentials, with the numbers of the serial run (same gmsh mesh: gmsh runs on rank 0)."""

@@ -25,6 +25,7 @@ def cache(tmp_path_factory):
     return tmp_path_factory.mktemp("surrogates")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("store_uF", [1e-3, 1.0, 1e3, 1e6])
 @pytest.mark.parametrize("diode", [
     {"diode": "ideal"},
