@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 def main(argv=None) -> dict:
     import tengfield as tf
-    import test_pipeline_fixtures as fx
+    import plate_model as fx
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--cells", type=int, default=455)

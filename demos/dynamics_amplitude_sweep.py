@@ -21,11 +21,11 @@ from tengfield.dynamics import simulate
 from tengfield.scene import default_scene
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="fewer frequencies, shorter runs")
     ap.add_argument("-o", "--output", default="demos/out", help="output directory")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -85,6 +85,9 @@ def main() -> None:
     fig.tight_layout()
     fig.savefig(out / "dynamics_amplitude_sweep.png", dpi=130)
     print(f"wrote {out / 'dynamics_amplitude_sweep.png'}")
+
+    return {"regime": {f: r.regime.name for f, r in results.items()},
+            "max_gap_mm": {f: r.regime.max_gap * 1e3 for f, r in results.items()}}
 
 
 if __name__ == "__main__":

@@ -33,11 +33,11 @@ def launch_speed_eq10(amplitude: float, frequency: float) -> float:
     return math.sqrt(max(amplitude**2 * w**4 - G**2, 0.0)) / w
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="coarse onset curve")
     ap.add_argument("-o", "--output", default="demos/out", help="output directory")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -100,6 +100,9 @@ def main() -> None:
     fig.tight_layout()
     fig.savefig(out / "dynamics_critical_contact.png", dpi=130)
     print(f"wrote {out / 'dynamics_critical_contact.png'}")
+
+    return {"onset_amplitude_mm": dict(zip(freqs.tolist(), (onset * 1e3).tolist())),
+            "launch_speed_m_per_s": v0, "flight_s": float(flight), "regime": res.regime.name}
 
 
 if __name__ == "__main__":

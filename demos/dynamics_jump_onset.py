@@ -25,11 +25,11 @@ from tengfield.dynamics.onset import onset_amplitude, onset_frequency
 from tengfield.scene import G, default_scene
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="coarse grids (a few seconds)")
     ap.add_argument("-o", "--output", default="demos/out", help="output directory")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -97,6 +97,13 @@ def main() -> None:
     fig.tight_layout()
     fig.savefig(out / "dynamics_jump_onset.png", dpi=130)
     print(f"wrote {out / 'dynamics_jump_onset.png'}")
+
+    return {"onset_amplitude_mm_at_5hz": {h * 1e3: float(c[i5] * 1e3)
+                                          for h, c in amp_curves.items()},
+            "onset_frequency_hz_0.5mm_jump": dict(zip((amps * 1e3).tolist(),
+                                                      freq_curves[0.5e-3].tolist())),
+            "min_acceleration_over_frequency": float(amax_c.min()),
+            "min_acceleration_over_amplitude": float(amax_f.min())}
 
 
 if __name__ == "__main__":

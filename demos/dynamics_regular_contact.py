@@ -24,11 +24,11 @@ from tengfield.plotting.dynamics import plot_trajectory
 from tengfield.scene import default_scene
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="shorter run")
     ap.add_argument("-o", "--output", default="demos/out", help="output directory")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -56,6 +56,12 @@ def main() -> None:
     plot_trajectory(res, out / "dynamics_regular_contact.png", max_periods=4,
                     title="Fig. 7: regular contact, 3 mm, 30 Hz")
     print(f"wrote {out / 'dynamics_regular_contact.png'}")
+
+    return {"regime": reg.name, "period": reg.period,
+            "lower_contacts_per_period": reg.lower_contacts_per_period,
+            "upper_contacts_per_period": reg.upper_contacts_per_period,
+            "time_on_lower_ms": on_lower * 1e3, "time_on_upper_ms": on_upper * 1e3,
+            "max_gap_mm": reg.max_gap * 1e3}
 
 
 if __name__ == "__main__":

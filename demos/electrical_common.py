@@ -26,13 +26,14 @@ from tengfield import electrical
 PAPER_PEAKS = {"V_oc": 4.2, "Q_sc": 1.42e-9, "I_sc": 0.16e-6}
 
 
-def demo_arguments(doc: str) -> argparse.Namespace:
+def demo_arguments(doc: str, argv: list[str] | None = None) -> argparse.Namespace:
+    """The demo's options from ``argv`` (default: the command line)."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="coarse fields and short runs (CI)")
     ap.add_argument("-o", "--output", default="demos/out", help="output directory")
     ap.add_argument("--cache-dir", default=None,
                     help="surrogate cache (default: tengfield's cache directory)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     Path(args.output).mkdir(parents=True, exist_ok=True)
     return args
 

@@ -45,8 +45,8 @@ def voltage_grid(scene, curves, frequencies, amplitudes, fast, scale, c_p):
     return volts, charge, max_gap
 
 
-def main() -> None:
-    args = demo_arguments(__doc__)
+def main(argv: list[str] | None = None) -> dict:
+    args = demo_arguments(__doc__, argv)
     out = Path(args.output)
     scene = paper_scene(args.fast)
     _, curves = surrogate_curves(scene, args.cache_dir)
@@ -104,6 +104,10 @@ def main() -> None:
     path = save_small_png(fig, out / "electrical_frequency_amplitude.png")
     plt.close(fig)
     print(f"wrote {path}")
+
+    return {"onset_hz": float(onset),
+            "V_pp_read_V": {float(f): float(v) for f, v in zip(freqs, volts)},
+            "bandwidth_above_4V_at_3mm_hz": float(band)}
 
 
 if __name__ == "__main__":

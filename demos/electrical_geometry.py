@@ -53,8 +53,8 @@ def outputs(base, ball_diameter_mm, gap_mm, fast, cache_dir, scale, c_p) -> dict
             "regime": dyn.regime.name, "upper": dyn.regime.upper_contacts_per_period}
 
 
-def main() -> None:
-    args = demo_arguments(__doc__)
+def main(argv: list[str] | None = None) -> dict:
+    args = demo_arguments(__doc__, argv)
     out = Path(args.output)
     base = paper_scene(args.fast)
     _, curves = surrogate_curves(base, args.cache_dir)
@@ -101,6 +101,11 @@ def main() -> None:
     path = save_small_png(fig, out / "electrical_geometry.png")
     plt.close(fig)
     print(f"wrote {path}")
+
+    return {"V_read_by_gap_V": dict(zip(gaps, v.tolist())),
+            "V_read_by_diameter_V": dict(zip(diameters, vd.tolist())),
+            "monotonic_in_gap": bool(np.all(np.diff(v) > 0)),
+            "monotonic_in_diameter": bool(np.all(np.diff(vd) > 0))}
 
 
 if __name__ == "__main__":

@@ -131,8 +131,8 @@ def load_sweep(scene, dynamics, table, loads, scale, c_p):
     return np.array(mean), np.array(peak), volume
 
 
-def main() -> None:
-    args = demo_arguments(__doc__)
+def main(argv: list[str] | None = None) -> dict:
+    args = demo_arguments(__doc__, argv)
     out = Path(args.output)
     cell, scene = honeycomb_scene(args.fast)
     n_cells = scene.device.cells
@@ -210,6 +210,13 @@ def main() -> None:
     path = save_small_png(fig, out / "electrical_honeycomb.png")
     plt.close(fig)
     print(f"wrote {path}")
+
+    return {"cells": n_cells, "C_p_pF": c_p * 1e12, "V_read_V": read["V_oc"] * scale,
+            "peak_power_density_W_per_m3": float(peak[best]),
+            "peak_power_load_MOhm": float(loads[best] / 1e6),
+            "mean_power_density_W_per_m3": float(mean[best_mean]),
+            "mean_power_load_MOhm": float(loads[best_mean] / 1e6),
+            "matched_load_MOhm": r_match / 1e6}
 
 
 if __name__ == "__main__":

@@ -34,8 +34,8 @@ from electrical_common import (PAPER_PEAKS, demo_arguments, measure, paper_scene
 from tengfield.dynamics import simulate  # noqa: E402
 
 
-def main() -> None:
-    args = demo_arguments(__doc__)
+def main(argv: list[str] | None = None) -> dict:
+    args = demo_arguments(__doc__, argv)
     out = Path(args.output)
     scene = paper_scene(args.fast).with_values(run=run_length(20.0, args.fast))
 
@@ -110,6 +110,11 @@ def main() -> None:
     path = save_small_png(fig, out / "electrical_waveforms.png")
     plt.close(fig)
     print(f"wrote {path}")
+
+    return {"regime": regime.name, "sigma_fit_uC_per_m2": sigma_fit * 1e6,
+            "V_oc_ideal_V": ideal["V_oc"] * scale, "Q_sc_nC": ideal["Q_sc"] * scale * 1e9,
+            "I_sc_peak_uA": i_peak * scale * 1e6, "C_T_max_pF": ideal["C_T_max"] * 1e12,
+            "C_p_pF": c_p * 1e12, "V_read_V": measured["V_oc"] * scale}
 
 
 if __name__ == "__main__":

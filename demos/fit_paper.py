@@ -49,9 +49,7 @@ CASES = {
 
 
 def main(argv: list[str] | None = None) -> dict:
-    if argv is not None:
-        sys.argv = [sys.argv[0], *argv]
-    args = demo_arguments(__doc__)
+    args = demo_arguments(__doc__, argv)
     scene = paper_scene(args.fast).with_values(
         run=run_length(20.0, args.fast),
         fit={"parameters": {"surface_charge_uC_per_m2": {"start": -8.0, "min": -200.0,

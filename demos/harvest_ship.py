@@ -68,8 +68,8 @@ def harvest_scene(base, fast: bool):
                "initial_velocity_spread_m_per_s": 0.05, "seed": 1})
 
 
-def main() -> dict:
-    args = demo_arguments(__doc__)
+def main(argv: list[str] | None = None) -> dict:
+    args = demo_arguments(__doc__, argv)
     out = Path(args.output)
     _, base = honeycomb_scene(fast=True)       # cylindrical equal-area cell, 455 cells
     if not args.fast:

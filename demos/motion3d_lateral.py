@@ -46,11 +46,11 @@ def near_plate_dwell(t, gap, stroke, upper: bool, fraction: float = 0.01) -> np.
     return t[ends[ok]] - t[starts[ok]]
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="fewer amplitudes, shorter runs")
     ap.add_argument("-o", "--output", default="demos/out", help="output directory")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     lateral_mm = [0.0, 0.5, 2.0] if args.fast else [0.0, 0.1, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0]
@@ -125,6 +125,7 @@ def main() -> None:
     plot_trajectory3d(last, out / "motion3d_lateral_trajectory3d.png",
                       title=f"lateral {lateral_mm[-1]:g} mm")
     print(f"-> {out}/motion3d_lateral.png, motion3d_lateral.csv")
+    return {"rows": rows}
 
 
 if __name__ == "__main__":

@@ -1,4 +1,97 @@
+"""Fixtures shared by the whole suite: the interpreter, the CLI in a subprocess, the
+default scene of the analytic plate model (``tests/plate_model.py``)."""
+import importlib.util
 import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
+DEMOS = ROOT / "demos"
+
+
+def cli_environment(**extra) -> dict:
+    """The environment of a CLI subprocess: this checkout's ``src`` first, MPI allowed as
+    root, and nothing set up for the CLI (no PYVISTA_OFF_SCREEN, no DISPLAY: it must cope);
+    ``extra`` overrides (e.g. ``TENGFIELD_CACHE_DIR=...``)."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYVISTA_OFF_SCREEN", "DISPLAY", "VTK_DEFAULT_OPENGL_WINDOW")}
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(SRC), env.get("PYTHONPATH")) if p)
+    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    env.update({k: str(v) for k, v in extra.items()})
+    return env
+
+
+
+def pytest_collection_modifyitems(config, items):
+    """``mpi`` tests need ``mpirun -n 2``: outside mpirun they are deselected, so that a
+    ``-m`` given on the command line (``-m "not slow"``, the fast tier) replacing the
+    ``-m 'not mpi'`` of pyproject's addopts still leaves them out of a serial run."""
+    if os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE"):
+        return
+    mpi = [item for item in items if item.get_closest_marker("mpi")]
+    if mpi:
+        config.hook.pytest_deselected(items=mpi)
+        items[:] = [item for item in items if not item.get_closest_marker("mpi")]
+
+@pytest.fixture(scope="session")
+def python() -> str:
+    """The interpreter running the tests (the venv's python under ``make test``)."""
+    return sys.executable
+
+
+@pytest.fixture(scope="session")
+def cli_env():
+    """``cli_env(**extra)`` -> dict: see :func:`cli_environment`."""
+    return cli_environment
+
+
+@pytest.fixture(scope="session")
+def cli_command(python):
+    """``cli_command(*args)``: the argv that runs ``tengfield args...``."""
+    return lambda *args: [python, "-m", "tengfield.cli", *map(str, args)]
+
+
+@pytest.fixture(scope="session")
+def run_cli(cli_command):
+    """``run_cli(*args, cwd=None, env=None, timeout=900)`` -> CompletedProcess (text,
+    captured) of ``python -m tengfield.cli args...``; ``env`` defaults to ``cli_env()``."""
+    def run(*args, cwd=None, env=None, timeout=900):
+        return subprocess.run(cli_command(*args), cwd=cwd, env=env or cli_environment(),
+                              capture_output=True, text=True, timeout=timeout)
+    return run
+
+
+@pytest.fixture(scope="session")
+def plate_default_scene():
+    """The default scene (no overrides), as ``plate_model.scene_with()`` gives it."""
+    import plate_model
+    return plate_model.scene_with()
+
+
+@pytest.fixture(scope="session")
+def plate_solve():
+    """The analytic stand-in for ``solve_position`` (``plate_model.plate_model_solve``)."""
+    import plate_model
+    return plate_model.plate_model_solve
+
+
+@pytest.fixture
+def load_demo(monkeypatch):
+    """``load_demo(name)`` -> the module ``demos/name.py``, freshly imported with ``demos/``
+    on ``sys.path`` for this test only; its ``main(argv)`` returns the demo's numbers."""
+    monkeypatch.syspath_prepend(str(DEMOS))
+
+    def load(name):
+        spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+    return load

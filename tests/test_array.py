@@ -4,8 +4,6 @@ Field: the analytic plate model (no dolfinx); dynamics: the real impact map.
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +11,7 @@ import pytest
 import tengfield as tf
 from tengfield import array, electrical
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 4000.0}
 
@@ -46,6 +43,7 @@ def test_identical_cells_are_device_cells_exactly(cache, circuit):
     assert arr.summary["array"]["phase_coherence"] == pytest.approx(1.0, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_phase_spread_costs_parallel_cells_and_per_cell_bridges_recover_it(cache):
     """Spread phases partly cancel in a parallel wiring (ratio < 1); per-cell bridges into
     the same store never deliver less than one bridge on the parallel sum."""
@@ -101,6 +99,7 @@ def test_processes_give_the_serial_trajectories():
         np.testing.assert_array_equal(a(t)[0], b(t)[0])
 
 
+@pytest.mark.slow
 def test_array_plot_and_csv(cache, tmp_path):
     from tengfield import io
     res = run(cache, {"kind": "load", "load_ohm": 3e9},
@@ -125,11 +124,10 @@ def test_mpi_ranks_give_the_serial_trajectories():
         np.testing.assert_array_equal(a(t)[0], b(t)[0])
 
 
-def test_cli_array_run(tmp_path):
+@pytest.mark.slow
+def test_cli_array_run(tmp_path, run_cli, cli_env):
     """`tengfield run` of an [array] scene (surrogate cached from the plate model)."""
     import json
-    import os
-    import subprocess
 
     path = tmp_path / "arr.toml"
     path.write_text('[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 4000.0\n'
@@ -137,9 +135,9 @@ def test_cli_array_run(tmp_path):
                     '[array]\ncells = 10\nconnection = "rectified-parallel"\n'
                     'initial_phase_spread_deg = 90\n')
     tf.run(tf.load_scene(path), cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
-    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
-    proc = subprocess.run([sys.executable, "-m", "tengfield.cli", "run", "arr.toml", "-o", "out"],
-                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    env = cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true",
+                  TENGFIELD_CACHE_DIR=tmp_path / "cache")
+    proc = run_cli("run", "arr.toml", "-o", "out", cwd=tmp_path, env=env, timeout=600)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["cells"] == 10 and summary["array"]["distinct_dynamics"] == 10

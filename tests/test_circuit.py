@@ -1,8 +1,6 @@
 """Circuit numerics: limits, energy balance, analytic steady state, N-cell scaling."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,8 +9,7 @@ from hypothesis import strategies as st
 
 from tengfield import circuit
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 PERIOD = 0.05            # 20 Hz
 OMEGA = 2 * np.pi / PERIOD

@@ -1,46 +1,35 @@
-"""Each electrical demo runs in --fast mode, writes its figure and prints its comparison.
+"""Each electrical demo runs in --fast mode, writes its figure and returns its comparison.
 
 The demos share one surrogate cache (a temporary directory for this module),
-so the paper's device is solved once. Numbers asserted are physics the
-demos exist to show, with margins for the coarse fast-mode fields.
+so the paper's device is solved once. Numbers asserted (those ``main()`` returns)
+are physics the demos exist to show, with margins for the coarse fast-mode fields.
 """
 from __future__ import annotations
 
-import os
-import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMOS = ROOT / "demos"
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
 NAMES = ["electrical_waveforms", "electrical_frequency_amplitude", "electrical_geometry",
          "electrical_honeycomb"]
-
 
 @pytest.fixture(scope="module")
 def cache_dir(tmp_path_factory):
     return tmp_path_factory.mktemp("surrogates")
 
 
-def run_demo(name, out, cache_dir):
-    env = {**os.environ, "MPLBACKEND": "Agg"}
-    proc = subprocess.run([PYTHON, str(DEMOS / f"{name}.py"), "--fast", "-o", str(out),
-                           "--cache-dir", str(cache_dir)],
-                          capture_output=True, text=True, env=env, timeout=600, cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    png = out / f"{name}.png"
-    assert png.exists() and 10_000 < png.stat().st_size < 300_000
-    return proc.stdout
-
-
-def number(pattern, text):
-    match = re.search(pattern, text)
-    assert match, f"{pattern!r} not in output:\n{text}"
-    return float(match.group(1))
+@pytest.fixture
+def run_demo(load_demo, cache_dir, tmp_path):
+    """``run_demo(name)`` -> the numbers of ``demos/name.py --fast`` (figure checked)."""
+    def run(name):
+        numbers = load_demo(name).main(["--fast", "-o", str(tmp_path),
+                                        "--cache-dir", str(cache_dir)])
+        png = tmp_path / f"{name}.png"
+        assert png.exists() and 10_000 < png.stat().st_size < 300_000
+        return numbers
+    return run
 
 
 def test_every_electrical_demo_is_tested():
@@ -48,34 +37,33 @@ def test_every_electrical_demo_is_tested():
                   if p.stem != "electrical_common") == sorted(NAMES)
 
 
-def test_waveforms_demo_reconciles_the_electrometer(tmp_path, cache_dir):
-    out = run_demo("electrical_waveforms", tmp_path, cache_dir)
+@pytest.mark.slow   # dolfinx surrogate and impact-map runs
+def test_waveforms_demo_reconciles_the_electrometer(run_demo):
+    out = run_demo("electrical_waveforms")
     # the instrument that turns the ideal V_OC into the paper's 4.2 V adds hundreds of pF
-    c_p = number(r"instrument capacitance C_p for 4\.2 V\s+hundreds of pF\s+([\d.]+) pF", out)
-    assert 100 < c_p < 1000
-    assert number(r"V read with that C_p\s+4\.2 V\s+([\d.]+) V", out) == pytest.approx(4.2, rel=0.02)
-    ideal = number(r"V_OC at that sigma, ideal\s+-\s+([\d.]+) V", out)
-    assert ideal > 100 * 4.2        # the ideal floating-pair V_OC is kV-scale
+    assert 100 < out["C_p_pF"] < 1000
+    assert out["V_read_V"] == pytest.approx(4.2, rel=0.02)
+    assert out["V_oc_ideal_V"] > 100 * 4.2        # the ideal floating-pair V_OC is kV-scale
 
 
-def test_frequency_demo_shows_lift_off_and_plateau(tmp_path, cache_dir):
-    out = run_demo("electrical_frequency_amplitude", tmp_path, cache_dir)
-    onset = number(r"lowest frequency with output\s+16-20 Hz \(none < 16\)\s+([\d.]+) Hz", out)
-    assert 12 <= onset <= 20        # lift-off at 1.5 mm: A w^2 = g at 12.9 Hz
-    rows = re.findall(r"^\s*([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)$", out, re.M)
-    volts = {float(f): float(v) for f, _, v, _ in rows}
-    assert volts[5.0] == 0.0 and volts[10.0] == 0.0
+@pytest.mark.slow   # dolfinx surrogate and impact-map runs
+def test_frequency_demo_shows_lift_off_and_plateau(run_demo):
+    out = run_demo("electrical_frequency_amplitude")
+    assert 12 <= out["onset_hz"] <= 20        # lift-off at 1.5 mm: A w^2 = g at 12.9 Hz
+    volts = out["V_pp_read_V"]
+    assert volts[5.0] < 5e-4 and volts[10.0] < 5e-4     # "0.000" V as printed
     assert min(volts[f] for f in volts if f >= 20) > 3.5
 
 
-def test_geometry_demo_trends(tmp_path, cache_dir):
-    out = run_demo("electrical_geometry", tmp_path, cache_dir)
-    assert out.count("tengfield: monotonic") == 2
+@pytest.mark.slow   # dolfinx surrogate and impact-map runs
+def test_geometry_demo_trends(run_demo):
+    out = run_demo("electrical_geometry")
+    assert out["monotonic_in_gap"] and out["monotonic_in_diameter"]
 
 
-def test_honeycomb_demo_load_optimum(tmp_path, cache_dir):
-    out = run_demo("electrical_honeycomb", tmp_path, cache_dir)
-    assert "455 cells in parallel" in out
-    best = number(r"max mean power density\s+-\s+[\d.e+-]+ W/m\^3 at ([\d.]+) MOhm", out)
-    matched = number(r"1/\(2 pi f \(C_T \+ C_p\)\)\s+-\s+([\d.]+) MOhm", out)
-    assert best == pytest.approx(matched, rel=0.6)   # impedance matching, on the sweep's grid
+@pytest.mark.slow   # dolfinx surrogate and impact-map runs
+def test_honeycomb_demo_load_optimum(run_demo):
+    out = run_demo("electrical_honeycomb")
+    assert out["cells"] == 455
+    # impedance matching, on the sweep's grid
+    assert out["mean_power_load_MOhm"] == pytest.approx(out["matched_load_MOhm"], rel=0.6)

@@ -3,7 +3,7 @@
 
 The ``mpi``-marked tests run under ``mpirun -n 2`` (``make test-mpi``); the others
 start ``mpirun`` themselves (the serial suite). The surrogate comes from the
-analytic plate model of ``test_pipeline_fixtures`` (no dolfinx): what is tested
+analytic plate model of ``plate_model`` (no dolfinx): what is tested
 here is the farm, not the field.
 """
 from __future__ import annotations
@@ -23,11 +23,9 @@ from tengfield import surrogate
 from tengfield import sweep as sweep_module
 from tengfield.errors import SceneError
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
 SHORT_RUN = {"duration_s": 2.0}
 FREQUENCIES = [15.0, 20.0, 25.0]
 AMPLITUDES = [1.0e-3, 1.5e-3]
@@ -163,11 +161,12 @@ def _cached_scene(tmp_path) -> tuple[Path, Path]:
     return scene_file, cache
 
 
-def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path):
+@pytest.mark.slow
+def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path, cli_command):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
-    args = [PYTHON, "-m", "tengfield.cli", "sweep", str(scene_file), "--cache-dir", str(cache),
-            "--frequency-hz", "15:25:3", "--amplitude-mm", "1:1.5:2", "--load-ohm", "1e6:1e9:2"]
+    args = cli_command("sweep", scene_file, "--cache-dir", cache, "--frequency-hz", "15:25:3",
+                       "--amplitude-mm", "1:1.5:2", "--load-ohm", "1e6:1e9:2")
     serial = subprocess.run(args + ["--jobs", "1", "-o", str(tmp_path / "serial")],
                             capture_output=True, text=True, env=mpi_env(), timeout=300)
     assert serial.returncode == 0, serial.stderr
@@ -185,13 +184,14 @@ def test_cli_sweep_under_mpirun_writes_the_serial_file(tmp_path):
     assert not list((tmp_path / "mpi").glob(".*tmp*"))           # no temporary files left
 
 
-def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path):
+@pytest.mark.slow
+def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path, cli_command):
     needs_mpirun()
     scene_file, cache = _cached_scene(tmp_path)
-    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2", PYTHON, "-m", "tengfield.cli",
-                           "sweep", str(scene_file), "--cache-dir", str(cache),
-                           "--frequency-hz", "20", "--amplitude-mm", "1", "--jobs", "2",
-                           "-o", str(tmp_path / "o")],
+    proc = subprocess.run(["timeout", "120", "mpirun", "-n", "2",
+                           *cli_command("sweep", scene_file, "--cache-dir", cache,
+                                        "--frequency-hz", "20", "--amplitude-mm", "1",
+                                        "--jobs", "2", "-o", tmp_path / "o")],
                           capture_output=True, text=True, env=mpi_env(), timeout=150)
     assert proc.returncode not in (0, 124), proc.stderr      # 124: timeout (a hang)
     assert "tengfield: error: --jobs = 2 cannot be combined with mpirun -n 2" in proc.stderr
@@ -199,7 +199,8 @@ def test_cli_sweep_jobs_under_mpirun_is_a_clear_error(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
+@pytest.mark.slow
+def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
     """An exception in one grid point on rank 1 ends the whole job with its message (no hang)."""
     needs_mpirun()
     script = tmp_path / "fail.py"
@@ -207,7 +208,7 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         from mpi4py import MPI
-        import test_pipeline_fixtures as fx
+        import plate_model as fx
         from tengfield import surrogate, sweep
 
         comm = MPI.COMM_WORLD
@@ -224,7 +225,7 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path):
         sweep.sweep(scene, table, [15.0, 20.0, 25.0, 30.0], [1e-3, 1.5e-3], comm=comm)
         print("finished")
     """))
-    proc = subprocess.run(["timeout", "100", "mpirun", "-n", "2", PYTHON, str(script)],
+    proc = subprocess.run(["timeout", "100", "mpirun", "-n", "2", python, str(script)],
                           capture_output=True, text=True, env=mpi_env(), timeout=120)
     assert proc.returncode not in (0, 124), proc.stderr
     assert "error on rank 1 of 2" in proc.stderr

@@ -63,6 +63,7 @@ def test_rectifier_into_a_shorted_store_carries_the_rectified_short_circuit_curr
     assert res.store_voltage[-1] * 1e3 == pytest.approx(np.sum(np.abs(np.diff(q))), rel=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("diode", [Diode(), Diode(forward_voltage=0.5, series_resistance=1e8),
                                    Diode(model="shockley", saturation_current=1e-12,
                                          series_resistance=1e3)])
@@ -167,6 +168,7 @@ def test_identical_cells_per_cell_equal_one_bridge_on_the_parallel_sum():
     assert per_cell.store_voltage == pytest.approx(shared.store_voltage, rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("c_store", [1e-9, 1e-6, 1e-3, 1.0])
 @pytest.mark.parametrize("i_sat", [1e-15, 1e-9, 1e-6])
 def test_stable_from_nanofarads_to_farads_and_any_saturation_current(c_store, i_sat):

@@ -1,21 +1,12 @@
 """demos/harvest_ship.py --fast: the ship case runs and its numbers hang together."""
-import importlib
-import sys
-from pathlib import Path
-
 import pytest
-
-DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
 @pytest.mark.field
 @pytest.mark.slow
-def test_ship_demo_fast(tmp_path, monkeypatch):
-    monkeypatch.syspath_prepend(str(DEMOS))
-    monkeypatch.setattr(sys, "argv", ["harvest_ship.py", "--fast", "-o", str(tmp_path),
-                                      "--cache-dir", str(tmp_path / "cache")])
-    demo = importlib.import_module("harvest_ship")
-    out = demo.main()
+def test_ship_demo_fast(tmp_path, load_demo):
+    out = load_demo("harvest_ship").main(["--fast", "-o", str(tmp_path),
+                                          "--cache-dir", str(tmp_path / "cache")])
     # the store reaches the falling level before the rising one, the chip then cycles
     assert 0 < out["time_to_uvlo_falling_level_s"] < out["time_to_first_uvlo_rising_s"]
     assert out["chip_bursts"] >= 1

@@ -1,7 +1,7 @@
 """Rectifier runs through the pipeline and the CLI: [circuit] kind = "rectifier",
 the store's columns and summary, chunked runs, the CMEO bound, bad keys.
 
-The field is the analytic plate model of ``test_pipeline_fixtures`` (no
+The field is the analytic plate model of ``plate_model`` (no
 dolfinx); the dynamics are the real impact map on short runs (or a
 prescribed trajectory where the physics needs an exactly periodic drive).
 """
@@ -9,9 +9,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,11 +18,9 @@ import tengfield as tf
 from tengfield import electrical
 from tengfield.harvest import Diode, Harvester, PowerChip, harvest
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
 SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 5000.0}
 #: a small store and chip levels the plate model's 0.3 nC cell reaches in 0.5 s
 SMALL_CHIP = {"kind": "rectifier", "storage_capacitance_uF": 1e-4, "pmic": "uvlo",
@@ -108,6 +103,7 @@ def test_uvlo_switching_counts_and_burst_energy(cache):
     assert 0 < rect["chip_duty_cycle"] < 1
 
 
+@pytest.mark.slow
 def test_chunked_harvester_equals_one_pass():
     rng = np.random.default_rng(3)
     t = np.linspace(0, 0.2, 2001)
@@ -145,10 +141,12 @@ def test_load_run_reports_cmeo_bound_above_its_loop(cache):
     assert energy["figure_of_merit_structural"] > 0
 
 
-def cli(args, cwd, cache_dir):
-    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(cache_dir))
-    return subprocess.run([PYTHON, "-m", "tengfield.cli", *args], capture_output=True, text=True,
-                          env=env, timeout=600, cwd=cwd)
+@pytest.fixture
+def cli(run_cli, cli_env, tmp_path):
+    """``cli(args)``: the CLI run in tmp_path with the surrogate cache tmp_path/cache."""
+    return lambda args: run_cli(*args, cwd=tmp_path, timeout=600,
+                                env=cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true",
+                                            TENGFIELD_CACHE_DIR=tmp_path / "cache"))
 
 
 SCENE_TEXT = """\
@@ -168,13 +166,14 @@ pmic_shunt_V = 100.0
 """
 
 
-def test_cli_rectifier_run(tmp_path):
+@pytest.mark.slow
+def test_cli_rectifier_run(tmp_path, cli):
     """`tengfield run` of a rectifier scene (surrogate cached from the plate model)."""
     path = tmp_path / "rect.toml"
     path.write_text(SCENE_TEXT)
     scene = tf.load_scene(path)
     tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)   # fills the cache
-    proc = cli(["run", "rect.toml", "-o", "out"], tmp_path, tmp_path / "cache")
+    proc = cli(["run", "rect.toml", "-o", "out"])
     assert proc.returncode == 0, proc.stderr
     out = tmp_path / "out"
     for name in ("charging.png", "vq.png", "waveforms.csv", "summary.json"):
@@ -188,6 +187,7 @@ def test_cli_rectifier_run(tmp_path):
     assert "energy per cycle" in proc.stdout and "chip: on" in proc.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text, expected", [
     ('[circuit]\nkind = "rectifier"\nstorage_capacitance_uF = 0.0\n',
      "[circuit] storage_capacitance_uF = 0.0 is out of range"),
@@ -203,9 +203,9 @@ def test_cli_rectifier_run(tmp_path):
     ('[array]\ncells = 4\nconnection = "series"\n', "[array] connection = 'series' is not allowed"),
     ('[array]\nrestitution_spread = 0.1\n', "[array] spreads and connection need"),
 ])
-def test_bad_harvest_and_array_keys_are_one_line_errors(tmp_path, text, expected):
+def test_bad_harvest_and_array_keys_are_one_line_errors(tmp_path, cli, text, expected):
     (tmp_path / "bad.toml").write_text(text)
-    proc = cli(["run", "bad.toml", "-o", "out"], tmp_path, tmp_path / "cache")
+    proc = cli(["run", "bad.toml", "-o", "out"])
     assert proc.returncode == 2
     assert expected in proc.stderr
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1

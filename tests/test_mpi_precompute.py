@@ -19,11 +19,9 @@ import pytest
 
 from tengfield import surrogate
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
 COARSE_FIELD = {"mesh_size_mm": 1.5, "degree": 1, "tolerance": 0.05}
 
 
@@ -92,14 +90,15 @@ def test_two_ranks_equal_serial_field_solver():
     assert parallel.count >= 17
 
 
-def test_cli_precompute_under_mpirun_equals_serial(tmp_path):
+@pytest.mark.slow
+def test_cli_precompute_under_mpirun_equals_serial(tmp_path, cli_command):
     """`mpirun -n 2 tengfield precompute` writes the same file content as a serial run."""
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")
     scene_file = tmp_path / "coarse.toml"
     scene_file.write_text("[field]\n" + "".join(f"{k} = {v!r}\n".replace("'", '"')
                                                  for k, v in COARSE_FIELD.items()))
-    cmd = [PYTHON, "-m", "tengfield.cli", "precompute", str(scene_file)]
+    cmd = cli_command("precompute", scene_file)
     serial = subprocess.run(cmd + ["-o", str(tmp_path / "serial.h5")], capture_output=True,
                             text=True, env=mpi_env(), timeout=300)
     assert serial.returncode == 0, serial.stderr
@@ -113,7 +112,8 @@ def test_cli_precompute_under_mpirun_equals_serial(tmp_path):
     assert a.provenance["command_line"].startswith("tengfield precompute")
 
 
-def test_failure_on_one_rank_aborts_every_rank(tmp_path):
+@pytest.mark.slow
+def test_failure_on_one_rank_aborts_every_rank(tmp_path, python):
     """An exception on one rank ends the whole job with its message (no hang).
 
     The failing job is a position, not a rank: with the dynamic schedule a rank
@@ -125,7 +125,7 @@ def test_failure_on_one_rank_aborts_every_rank(tmp_path):
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         from mpi4py import MPI
-        import test_pipeline_fixtures as fx
+        import plate_model as fx
         from tengfield import surrogate
 
         def solve(scene, z, comm=None):
@@ -136,7 +136,7 @@ def test_failure_on_one_rank_aborts_every_rank(tmp_path):
         surrogate.precompute(fx.scene_with(), comm=MPI.COMM_WORLD, solve=solve)
         print("finished")
     """))
-    proc = subprocess.run(["mpirun", "-n", "2", PYTHON, str(script)], capture_output=True,
+    proc = subprocess.run(["mpirun", "-n", "2", python, str(script)], capture_output=True,
                           text=True, env=mpi_env(), timeout=120)
     assert proc.returncode != 0
     assert re.search(r"error on rank [01] of 2", proc.stderr)
@@ -191,7 +191,8 @@ def test_ranks_with_different_caches_follow_rank_0(case, status):
         assert_same_table(other, tables[0])
 
 
-def test_ranks_with_different_caches_finish_under_mpirun(tmp_path):
+@pytest.mark.slow
+def test_ranks_with_different_caches_finish_under_mpirun(tmp_path, python):
     """The same three cases as a script under ``mpirun -n 2`` in the serial suite,
     under a timeout (a disagreement used to spin forever)."""
     if shutil.which("mpirun") is None:
@@ -209,7 +210,7 @@ def test_ranks_with_different_caches_finish_under_mpirun(tmp_path):
             if comm.rank == 0:
                 print(case, "->", ",".join(statuses), calls, flush=True)
     """))
-    proc = subprocess.run(["mpirun", "-n", "2", PYTHON, str(script)], capture_output=True,
+    proc = subprocess.run(["mpirun", "-n", "2", python, str(script)], capture_output=True,
                           text=True, env=mpi_env(), timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]
     lines = proc.stdout.strip().splitlines()

@@ -14,11 +14,9 @@ from scipy.integrate import cumulative_trapezoid
 
 from tengfield import electrical, pipeline, surrogate
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
 SMALL_SCENE = """\
 [run]
 duration_s = 0.3
@@ -37,11 +35,14 @@ def model_run(scene, tmp_path, kind="bounce", **kw):
                         simulate=lambda s: fx.FakeDynamics(s, kind=kind, **kw))
 
 
-def cli(args, tmp_path, extra_env=None):
-    env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
-    env.update(extra_env or {})
-    return subprocess.run([PYTHON, "-m", "tengfield.cli", *args], capture_output=True, text=True,
-                          env=env, timeout=600, cwd=tmp_path)
+@pytest.fixture
+def cli(run_cli, cli_env, tmp_path):
+    """``cli(args, extra_env=None)``: the CLI run in tmp_path with its own surrogate cache."""
+    def run(args, extra_env=None):
+        env = cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true",
+                      TENGFIELD_CACHE_DIR=tmp_path / "cache", **(extra_env or {}))
+        return run_cli(*args, cwd=tmp_path, env=env, timeout=600)
+    return run
 
 
 # ---------------------------------------------------------------------------
@@ -132,8 +133,8 @@ def test_uncharged_ball_skips_the_field(tmp_path):
     assert not np.any(result.waveforms["V_load_V"])
 
 
-def test_summary_says_what_ran(tmp_path):
-    scene = fx.scene_with()
+def test_summary_says_what_ran(tmp_path, plate_default_scene):
+    scene = plate_default_scene
     first = model_run(scene, tmp_path).summary
     second = model_run(scene.with_values(excitation={"frequency_hz": 25.0}), tmp_path).summary
     assert first["stages"]["field"]["status"] == "ran"
@@ -146,6 +147,7 @@ def test_summary_says_what_ran(tmp_path):
 
 # ---------------------------------------------------------------------------
 # the real stack (dynamics + dolfinx), small scenes
+@pytest.mark.slow
 @pytest.mark.field
 def test_error_estimate_is_honest_against_direct_solves(tmp_path):
     import pyvista  # noqa: F401 - before dolfinx
@@ -171,11 +173,12 @@ def test_error_estimate_is_honest_against_direct_solves(tmp_path):
         np.testing.assert_allclose(mirrored.induced_charge, direct.induced_charge, rtol=5e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.field
-def test_cli_run_end_to_end_then_cached(tmp_path):
+def test_cli_run_end_to_end_then_cached(tmp_path, cli, python):
     (tmp_path / "small.toml").write_text(SMALL_SCENE + '\n[circuit]\nkind = "load"\n'
                                          'load_ohm = 1e9\nparallel_capacitance_pF = 5.0\n')
-    first = cli(["run", "small.toml", "-o", "out1"], tmp_path)
+    first = cli(["run", "small.toml", "-o", "out1"])
     assert first.returncode == 0, first.stderr
     out = tmp_path / "out1"
     for name in ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",
@@ -197,7 +200,7 @@ def test_cli_run_end_to_end_then_cached(tmp_path):
             "'out2', '--no-plots']); assert 'dolfinx' not in sys.modules and 'gmsh' not in "
             "sys.modules, 'heavy import'; sys.exit(rc)")
     env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
-    second = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, env=env,
+    second = subprocess.run([python, "-c", code], capture_output=True, text=True, env=env,
                             cwd=tmp_path, timeout=300)
     assert second.returncode == 0, second.stderr
     summary2 = json.loads((tmp_path / "out2" / "summary.json").read_text())
@@ -206,15 +209,16 @@ def test_cli_run_end_to_end_then_cached(tmp_path):
                                           skiprows=1), data, rtol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.field
-def test_cli_sweep_and_precompute_cache(tmp_path):
+def test_cli_sweep_and_precompute_cache(tmp_path, cli):
     (tmp_path / "small.toml").write_text(SMALL_SCENE)
-    pre = cli(["precompute", "small.toml"], tmp_path)
+    pre = cli(["precompute", "small.toml"])
     assert pre.returncode == 0, pre.stderr
-    again = cli(["precompute", "small.toml"], tmp_path)
+    again = cli(["precompute", "small.toml"])
     assert again.returncode == 0 and "cached" in again.stdout
     sweep = cli(["sweep", "small.toml", "--frequency-hz", "15:25:2", "--amplitude-mm", "1.5",
-                 "--load-ohm", "1e8:1e10:2", "--jobs", "2", "-o", "sw"], tmp_path)
+                 "--load-ohm", "1e8:1e10:2", "--jobs", "2", "-o", "sw"])
     assert sweep.returncode == 0, sweep.stderr
     with open(tmp_path / "sw" / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
@@ -223,13 +227,14 @@ def test_cli_sweep_and_precompute_cache(tmp_path):
     assert (tmp_path / "sw" / "sweep.png").stat().st_size > 0
 
 
-def test_uncharged_run_never_imports_the_field_stack(tmp_path):
+@pytest.mark.slow
+def test_uncharged_run_never_imports_the_field_stack(tmp_path, python):
     (tmp_path / "dry.toml").write_text(SMALL_SCENE + "[device]\nsurface_charge_uC_per_m2 = 0.0\n")
     code = ("import sys; from tengfield.cli import main; rc = main(['run', 'dry.toml', '-o', "
             "'out', '--no-plots']); assert 'dolfinx' not in sys.modules and 'gmsh' not in "
             "sys.modules; sys.exit(rc)")
     env = dict(os.environ, MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
-    proc = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, env=env,
+    proc = subprocess.run([python, "-c", code], capture_output=True, text=True, env=env,
                           cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
@@ -237,32 +242,34 @@ def test_uncharged_run_never_imports_the_field_stack(tmp_path):
     assert not (tmp_path / "cache").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("section, key, value, expected", [
     ("circuit", "load_ohm", "-5.0", "[circuit] load_ohm = -5.0 is out of range"),
     ("circuit", "parallel_capacitance_pF", "-1.0", "[circuit] parallel_capacitance_pF = -1.0"),
     ("circuit", "reference", '"grounded-upper"', "[circuit] reference = 'grounded-upper' is not allowed"),
     ("circuit", "kind", '"resistor"', "[circuit] kind = 'resistor' is not allowed"),
 ])
-def test_bad_circuit_input_is_a_clear_error(tmp_path, section, key, value, expected):
+def test_bad_circuit_input_is_a_clear_error(tmp_path, cli, section, key, value, expected):
     (tmp_path / "bad.toml").write_text(f"[{section}]\n{key} = {value}\n")
-    proc = cli(["run", "bad.toml", "-o", "out"], tmp_path)
+    proc = cli(["run", "bad.toml", "-o", "out"])
     assert proc.returncode == 2
     assert expected in proc.stderr
     assert "Traceback" not in proc.stderr
     assert not (tmp_path / "out").exists()
 
 
-def test_bad_sweep_range_is_a_clear_error(tmp_path):
-    proc = cli(["sweep", "--frequency-hz", "10:20", "--amplitude-mm", "1", "-o", "o"], tmp_path)
+@pytest.mark.slow
+def test_bad_sweep_range_is_a_clear_error(tmp_path, cli):
+    proc = cli(["sweep", "--frequency-hz", "10:20", "--amplitude-mm", "1", "-o", "o"])
     assert proc.returncode == 2 and "--frequency-hz = '10:20'" in proc.stderr
     assert "Traceback" not in proc.stderr
 
 
 @pytest.mark.field
 @pytest.mark.slow
-def test_cli_run_of_the_real_default_scene(tmp_path):
+def test_cli_run_of_the_real_default_scene(tmp_path, cli):
     """`tengfield run` with no scene: the paper's device at 1.5 mm / 20 Hz, cold cache."""
-    proc = cli(["run", "-o", "out", "--no-plots"], tmp_path)
+    proc = cli(["run", "-o", "out", "--no-plots"])
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     data = np.loadtxt(tmp_path / "out" / "waveforms.csv", delimiter=",", skiprows=1)

@@ -1,6 +1,6 @@
 """One set of electrical numbers: run, sweep and report agree; peaks include the impacts.
 
-The field is the analytic plate model of ``test_pipeline_fixtures`` (no
+The field is the analytic plate model of ``plate_model`` (no
 dolfinx); the dynamics are the real impact map on a short run, so the
 velocity jumps at impacts are the real ones.
 """
@@ -18,8 +18,7 @@ import pytest
 import tengfield as tf
 from tengfield import electrical, io, report, sweep
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT_RUN = {"duration_s": 0.3, "settle_periods": 2, "sample_rate_hz": 5000.0}
@@ -113,10 +112,11 @@ def test_importing_tengfield_loads_no_heavy_stack():
     assert proc.stdout.strip() == "[]"
 
 
+@pytest.mark.slow
 def test_plots_leave_the_callers_matplotlib_backend_alone(tmp_path):
     """A notebook's backend is not switched: the library draws on Figure objects."""
     code = ("import sys; sys.path.insert(0, 'tests'); import matplotlib; matplotlib.use('svg'); "
-            "import test_pipeline_fixtures as fx; import tengfield as tf; "
+            "import plate_model as fx; import tengfield as tf; "
             f"out = {str(tmp_path)!r}; "
             "r = tf.run(fx.scene_with(run={'duration_s': 0.3, 'settle_periods': 2}), "
             "cache_dir=out, "

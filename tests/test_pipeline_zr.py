@@ -2,7 +2,7 @@
 ball leaves the axis (analytic (z, r) stand-in for the field solver)."""
 import numpy as np
 
-import test_pipeline_fixtures as fx
+import plate_model as fx
 import test_surrogate_zr as tz
 from tengfield import pipeline
 from tengfield.surrogate import radial

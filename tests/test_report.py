@@ -10,7 +10,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -24,7 +23,6 @@ from tengfield.report import FieldSetting, Recommendation, Row
 from tengfield.scene import default_scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv").exists() else sys.executable
 
 
 # ---------------------------------------------------------------------------
@@ -168,16 +166,17 @@ def test_field_setting_labels_and_blocks():
 
 # ---------------------------------------------------------------------------
 # end to end (fast mode)
-def _cli(args, env_extra=None, timeout=900):
-    env = {**os.environ, "MPLBACKEND": "Agg", **(env_extra or {})}
-    return subprocess.run([PYTHON, "-m", "tengfield.cli", *args], capture_output=True, text=True,
-                          env=env, timeout=timeout, cwd=ROOT)
+@pytest.fixture(scope="session")
+def cli(run_cli, cli_env):
+    """``cli(args)``: the CLI run from the checkout's root."""
+    return lambda args: run_cli(*args, cwd=ROOT, timeout=900,
+                                env=cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true"))
 
 
 @pytest.fixture(scope="module")
-def fast_report(tmp_path_factory):
+def fast_report(tmp_path_factory, cli):
     out = tmp_path_factory.mktemp("report")
-    proc = _cli(["report", "--fast", "-o", str(out)])
+    proc = cli(["report", "--fast", "-o", str(out)])
     assert proc.returncode == 0, proc.stderr[-3000:]
     data = json.loads((out / "report.json").read_text())
     return out, data, proc.stdout
@@ -188,6 +187,7 @@ def _rows(data, stage, **match):
             and all(r["knobs"].get(k) == v for k, v in match.items())]
 
 
+@pytest.mark.slow
 def test_report_writes_every_file(fast_report):
     out, data, stdout = fast_report
     for name in ("report.md", "report.csv", "report.json", "field.png", "surrogate.png",
@@ -201,6 +201,7 @@ def test_report_writes_every_file(fast_report):
     assert "target 0.01" in stdout
 
 
+@pytest.mark.slow
 def test_field_errors_fall_with_refinement(fast_report):
     _, data, _ = fast_report
     for degree, min_slope in ((1, 1.0), (2, 2.5)):
@@ -223,6 +224,7 @@ def test_field_errors_fall_with_refinement(fast_report):
     assert _rows(data, "field", method="3d")          # the 3D path was measured
 
 
+@pytest.mark.slow
 def test_surrogate_dynamics_circuit_errors_fall(fast_report):
     _, data, _ = fast_report
     sur = sorted(_rows(data, "surrogate"), key=lambda r: r["knobs"]["positions"])
@@ -242,6 +244,7 @@ def test_surrogate_dynamics_circuit_errors_fall(fast_report):
         assert p_err[-1] < p_err[0] / 5, (load, p_err)
 
 
+@pytest.mark.slow
 def test_recommendations_are_verified(fast_report):
     _, data, _ = fast_report
     recs = {r["target"]: r for r in data["recommendations"]}
@@ -261,7 +264,8 @@ def test_recommendations_are_verified(fast_report):
                                                            -loose["field"]["mesh_size_mm"])
 
 
-def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report, tmp_path):
+@pytest.mark.slow
+def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report, tmp_path, cli):
     """`tengfield run recommended-0.01.toml` (a fresh cache, the real solver and its
     adaptive surrogate) lands within 1e-2 of the report's overall reference, with
     exactly the errors the report's verification measured."""
@@ -271,7 +275,7 @@ def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report,
     rec = next(r for r in data["recommendations"] if r["target"] == 1e-2)
     assert scene.field.mesh_size == pytest.approx(rec["field"]["mesh_size_mm"] * 1e-3)
     assert scene.run.sample_rate == rec["sample_rate_hz"]
-    proc = _cli(["run", str(scene_file), "-o", str(tmp_path / "run"), "--no-plots",
+    proc = cli(["run", str(scene_file), "-o", str(tmp_path / "run"), "--no-plots",
                  "--cache-dir", str(tmp_path / "cache")])
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
@@ -283,16 +287,17 @@ def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report,
         assert err == pytest.approx(rec["measured_errors"][q], abs=1e-6), q
 
 
-def test_report_bad_scene_is_a_clear_error(tmp_path):
+@pytest.mark.slow
+def test_report_bad_scene_is_a_clear_error(tmp_path, cli):
     bad = tmp_path / "bad.toml"
     bad.write_text("[field]\ntolerance = 2.0\n")
-    proc = _cli(["report", str(bad), "--fast", "-o", str(tmp_path / "out")])
+    proc = cli(["report", str(bad), "--fast", "-o", str(tmp_path / "out")])
     assert proc.returncode == 2
     assert "tolerance" in proc.stderr and "Traceback" not in proc.stderr
 
 
-def test_importing_the_report_loads_no_heavy_stack():
+def test_importing_the_report_loads_no_heavy_stack(python):
     code = ("import sys, tengfield.report, tengfield.report.output, tengfield.commands.report; "
             "print(any(m in sys.modules for m in ('dolfinx', 'gmsh', 'pyvista', 'petsc4py')))")
-    proc = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    proc = subprocess.run([python, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert proc.stdout.strip() == "False", proc.stderr

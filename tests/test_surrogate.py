@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,8 +12,7 @@ from tengfield.surrogate import SurrogateError
 
 h5py = surrogate._import_h5py()   # the build that coexists with dolfinx if it is loaded
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 SOLVE_COMM = object()   # the analytic model needs no communicator
 
@@ -117,8 +115,8 @@ def test_curves_reference_state_and_exact_derivative():
                                rtol=1e-4)
 
 
-def test_grounded_lower_reference_uses_c_uu():
-    scene = fx.scene_with()
+def test_grounded_lower_reference_uses_c_uu(plate_default_scene):
+    scene = plate_default_scene
     table = model_table(scene)
     _, c_t = surrogate.terminal_samples(table, "grounded-lower")
     np.testing.assert_allclose(c_t, table.capacitance[:, 1, 1])
@@ -126,8 +124,8 @@ def test_grounded_lower_reference_uses_c_uu():
         table.curves("grounded-upper")
 
 
-def test_file_round_trip_is_atomic_and_complete(tmp_path):
-    scene = fx.scene_with()
+def test_file_round_trip_is_atomic_and_complete(tmp_path, plate_default_scene):
+    scene = plate_default_scene
     table = model_table(scene, command_line="tengfield precompute")
     path = surrogate.write_table(tmp_path / "s.h5", table)
     assert [p.name for p in tmp_path.iterdir()] == ["s.h5"]   # no temporary left behind
@@ -142,8 +140,8 @@ def test_file_round_trip_is_atomic_and_complete(tmp_path):
         assert f.attrs["complete"] and "[device]" in f.attrs["scene_text"]
 
 
-def test_cache_hit_miss_partial_and_corrupt(tmp_path):
-    scene = fx.scene_with()
+def test_cache_hit_miss_partial_and_corrupt(tmp_path, plate_default_scene):
+    scene = plate_default_scene
     solver = fx.CountingSolver()
     kw = dict(cache_dir=tmp_path, solve=solver)
     first, outcome = surrogate.obtain_table(scene, **kw)
@@ -178,8 +176,8 @@ def test_cache_hit_miss_partial_and_corrupt(tmp_path):
     assert outcome.status == "cached"
 
 
-def test_read_rejects_foreign_hash(tmp_path):
-    scene = fx.scene_with()
+def test_read_rejects_foreign_hash(tmp_path, plate_default_scene):
+    scene = plate_default_scene
     path = surrogate.write_table(tmp_path / "s.h5", model_table(scene))
     with pytest.raises(SurrogateError, match="field hash"):
         surrogate.read_table(path, expected_hash="0" * 64)
@@ -318,10 +316,11 @@ def _cache_warnings(record):
 
 @pytest.mark.parametrize("fault", ["cache dir is a file", "cache dir read-only",
                                    "cache path is a directory"])
-def test_unwritable_cache_warns_once_and_returns_the_table(tmp_path, monkeypatch, fault):
+def test_unwritable_cache_warns_once_and_returns_the_table(tmp_path, monkeypatch, fault,
+                                                           plate_default_scene):
     import warnings
 
-    scene = fx.scene_with()
+    scene = plate_default_scene
     cache_dir = tmp_path / "cache"
     if fault == "cache dir is a file":
         cache_dir.write_text("not a directory")
@@ -354,12 +353,12 @@ def test_unwritable_cache_warns_once_and_returns_the_table(tmp_path, monkeypatch
     assert not any(p.name.endswith(".tmp") for p in tmp_path.rglob("*"))
 
 
-def test_run_with_an_unwritable_cache_still_gives_waveforms(tmp_path):
+def test_run_with_an_unwritable_cache_still_gives_waveforms(tmp_path, plate_default_scene):
     from tengfield import pipeline
 
     blocked = tmp_path / "cache"
     blocked.write_text("a file where the cache directory should be")
-    scene = fx.scene_with()
+    scene = plate_default_scene
     with pytest.warns(RuntimeWarning, match="could not be written"):
         result = pipeline.run(scene, cache_dir=blocked, solve=fx.plate_model_solve,
                               simulate=lambda s: fx.FakeDynamics(s, duration=0.2,
@@ -391,10 +390,10 @@ def _rewrite(path, name, values, *, rehash):
 DATASETS = list(surrogate.store.ARRAYS.values()) + ["error_history"]
 
 
-def test_overwritten_induced_charge_is_not_trusted_and_recomputed(tmp_path):
+def test_overwritten_induced_charge_is_not_trusted_and_recomputed(tmp_path, plate_default_scene):
     """The case of the issue: a valid HDF5 file whose q array was scaled gave
     V_OC 5x too large, marked "cached"."""
-    scene = fx.scene_with()
+    scene = plate_default_scene
     solver = fx.CountingSolver()
     table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=solver)
     path = surrogate.cache_path(scene, tmp_path)
@@ -469,10 +468,10 @@ def test_flipped_bits_in_the_file_bytes_are_caught(tmp_path):
     ("C_lu positive", "positive definite"),
     ("charge above the ball's", "induced charges"),
 ])
-def test_consistent_but_wrong_data_is_not_trusted(tmp_path, damage, reason):
+def test_consistent_but_wrong_data_is_not_trusted(tmp_path, damage, reason, plate_default_scene):
     """Checksums recomputed after the damage (a writer bug, not a disk fault): the
     structure checks refuse the file, and a cached copy is recomputed."""
-    scene = fx.scene_with()
+    scene = plate_default_scene
     table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
     path = surrogate.cache_path(scene, tmp_path)
     z, C, q = table.positions.copy(), table.capacitance.copy(), table.induced_charge.copy()

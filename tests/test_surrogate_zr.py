@@ -3,7 +3,6 @@
 and one small real 3D check (r = 0 against the axisymmetric solver)."""
 from __future__ import annotations
 
-import sys
 import warnings
 from pathlib import Path
 
@@ -17,8 +16,7 @@ from tengfield.surrogate import radial
 
 h5py = surrogate._import_h5py()
 
-sys.path.insert(0, str(Path(__file__).parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
 SOLVE_COMM = object()   # the analytic model needs no communicator
 

@@ -72,6 +72,7 @@ def test_cli_map_bad_range_is_a_clear_error(bad, tmp_path, capsys):
     assert "--frequency-hz" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_console_script_dynamics(scene_file, tmp_path):
     exe = Path(sys.executable).parent / "tengfield"
     out = tmp_path / "dyn"
@@ -85,6 +86,7 @@ def test_console_script_dynamics(scene_file, tmp_path):
     assert bad.returncode == 2 and "START:STOP:N" in bad.stderr and "Traceback" not in bad.stderr
 
 
+@pytest.mark.slow
 def test_dynamics_run_does_not_import_fem_stack(scene_file, tmp_path):
     code = ("import sys; from tengfield.cli import main; "
             f"main(['dynamics', {str(scene_file)!r}, '-o', {str(tmp_path / 'o')!r}]); "

@@ -90,6 +90,7 @@ def rounded_record(tmp_path, digits):
     return path, t, np.array([float(f"{v:.{digits}g}") for v in y])
 
 
+@pytest.mark.slow
 def test_smoothing_removes_rounding_noise(tmp_path):
     """Displacement rounded to 7 digits: its spline's acceleration is noisy enough to make
     the ball hop on the plate hundreds of times; smoothing_hz = 1 kHz restores the

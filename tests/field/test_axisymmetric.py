@@ -144,6 +144,7 @@ def test_grounded_table_takes_charge_from_the_electrodes():
 
 
 # -- contact rule -----------------------------------------------------------------
+@pytest.mark.slow
 def test_contact_rule_matches_a_directly_meshed_small_gap(monkeypatch):
     """Below min_gap the solver extrapolates from min_gap, 2 min_gap, 4 min_gap
     (a straight line for PTFE); meshing a 5 µm gap directly gives the same numbers."""
@@ -167,6 +168,7 @@ def test_contact_rule_flags_a_nearly_conducting_ball():
     assert res.info["contact_extrapolation_error"] > 1e-2
 
 
+@pytest.mark.slow
 def test_contact_at_both_plates_is_symmetric():
     scene = default_scene()
     bottom, top = solve(scene, 0.0), solve(scene, scene.device.stroke)

@@ -49,6 +49,7 @@ def assert_physical(sol):
     assert sol.induced_fraction.sum() > -1, "the electrodes cannot see more than the ball charge"
 
 
+@pytest.mark.slow
 def test_mean_value_property_off_axis():
     """εr = 1 ball: ψ_k is harmonic inside it, so -q_k/q_ball = <ψ_k>_sphere = ψ_k(centre)."""
     cell = dataclasses.replace(PAPER, ball_permittivity=1.0)
@@ -132,6 +133,7 @@ def test_error_estimate_bounds_the_actual_error():
     assert actual <= result.relative_error_estimate <= 10 * actual
 
 
+@pytest.mark.slow
 def test_solve_position_dispatches_to_3d_and_fills_the_result():
     from mpi4py import MPI
     from tengfield.field import solve_position
@@ -145,6 +147,7 @@ def test_solve_position_dispatches_to_3d_and_fills_the_result():
     assert res.dofs > 0 and res.cells > res.dofs / 10 and res.info["meshed_offset_m"] == 2e-4
 
 
+@pytest.mark.slow
 @hyp_settings(max_examples=50, deadline=None)
 @given(fraction=st.floats(0.0, 1.0))
 def test_gap_rule_clamps_near_contact_only(fraction):
@@ -198,6 +201,7 @@ def test_grounded_table_is_refused_by_the_3d_path():
         solver3d.solve_position_3d(scene, 1e-3, comm=MPI.COMM_SELF)
 
 
+@pytest.mark.slow
 def test_potentials_xdmf_is_written(tmp_path):
     from mpi4py import MPI
 

@@ -2,7 +2,6 @@
 import json
 import os
 import subprocess
-import sys
 
 import pytest
 
@@ -10,18 +9,19 @@ pytest.importorskip("dolfinx")
 pytest.importorskip("pyvista")
 
 
-def run_cli(*args, cwd):
-    env = {**os.environ, "MPLBACKEND": "Agg", "PYVISTA_OFF_SCREEN": "true"}
-    return subprocess.run([sys.executable, "-m", "tengfield.cli", "field", *args],
-                          capture_output=True, text=True, cwd=cwd, env=env)
+@pytest.fixture
+def field_cli(run_cli, cli_env):
+    """``field_cli(*args, cwd)``: ``tengfield field args...`` off screen."""
+    return lambda *args, cwd: run_cli("field", *args, cwd=cwd,
+                                      env=cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true"))
 
 
 @pytest.mark.slow
-def test_field_command_writes_json_xdmf_png(tmp_path):
+def test_field_command_writes_json_xdmf_png(tmp_path, field_cli):
     scene = tmp_path / "coarse.toml"
     scene.write_text("[field]\nmesh_size_mm = 0.8\n")
     out = tmp_path / "out"
-    done = run_cli(str(scene), "--position-mm", "1.5", "-o", str(out), cwd=tmp_path)
+    done = field_cli(str(scene), "--position-mm", "1.5", "-o", str(out), cwd=tmp_path)
     assert done.returncode == 0, done.stderr[-3000:]
     assert "C_T (floating)" in done.stdout and "V_OC" in done.stdout
     data = json.loads((out / "field.json").read_text())
@@ -43,14 +43,16 @@ def test_field_command_writes_json_xdmf_png(tmp_path):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 50_000
 
 
-def test_field_command_reports_bad_position_without_traceback(tmp_path):
-    done = run_cli("--position-mm", "3.5", "-o", str(tmp_path / "x"), cwd=tmp_path)
+@pytest.mark.slow
+def test_field_command_reports_bad_position_without_traceback(tmp_path, field_cli):
+    done = field_cli("--position-mm", "3.5", "-o", str(tmp_path / "x"), cwd=tmp_path)
     assert done.returncode == 2
     assert "position_mm = 3.5 is out of range: allowed [0, 3] mm" in done.stderr
     assert "Traceback" not in done.stderr
 
 
-def test_field_command_3d_on_two_ranks_equals_serial(tmp_path):
+@pytest.mark.slow
+def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli, cli_command):
     """``mpirun -n 2 tengfield field --method 3d`` writes field.json and the weighting
     potentials, with the numbers of the serial run (same gmsh mesh: gmsh runs on rank 0)."""
     import shutil
@@ -61,13 +63,13 @@ def test_field_command_3d_on_two_ranks_equals_serial(tmp_path):
     scene = tmp_path / "coarse3d.toml"
     scene.write_text("[field]\nmesh_size_mm = 2.0\ndegree = 1\n")
     args = [str(scene), "--method", "3d", "--position-mm", "1.5", "--offset-mm", "0.2"]
-    serial = run_cli(*args, "-o", str(tmp_path / "serial"), cwd=tmp_path)
+    serial = field_cli(*args, "-o", str(tmp_path / "serial"), cwd=tmp_path)
     assert serial.returncode == 0, serial.stderr[-3000:]
     env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
            "OMPI_MCA_rmaps_base_oversubscribe": "1", "MPLBACKEND": "Agg"}
     env.pop("OMPI_COMM_WORLD_SIZE", None)
-    parallel = subprocess.run([mpirun, "-n", "2", sys.executable, "-m", "tengfield.cli", "field",
-                               *args, "-o", str(tmp_path / "mpi")],
+    parallel = subprocess.run([mpirun, "-n", "2",
+                               *cli_command("field", *args, "-o", tmp_path / "mpi")],
                               capture_output=True, text=True, cwd=tmp_path, env=env)
     assert parallel.returncode == 0, parallel.stderr[-3000:]
     one = json.loads((tmp_path / "serial" / "field.json").read_text())

@@ -89,6 +89,7 @@ def test_gmsh_failure_is_one_line_naming_the_keys(monkeypatch):
 
 
 # -- uncharged ball (issue 8.17) -----------------------------------------------------------
+@pytest.mark.slow
 def test_uncharged_ball_gives_no_warning_and_no_nan():
     pytest.importorskip("dolfinx")
     from mpi4py import MPI

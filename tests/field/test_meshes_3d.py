@@ -24,6 +24,7 @@ REFERENCE = json.loads((MESHES / "reference.json").read_text())
 CASES = geometry3d.reference_cases()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_regenerated_mesh_matches_the_stored_statistics(name):
     case = CASES[name]

@@ -1,16 +1,12 @@
 """Fixtures of the fit tests: the plate-model surrogate (no dolfinx), cached per session."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
-from tengfield.fit import reference_surrogate  # noqa: E402
+from tengfield.fit import reference_surrogate
 
 
 @pytest.fixture(scope="session")

@@ -61,6 +61,7 @@ def test_standard_errors_cover_the_truth_over_many_seeds(plate_scene, plate_surr
     assert inside / total >= 0.85, inside / total
 
 
+@pytest.mark.slow
 def test_voltage_alone_flags_sigma_and_parallel_capacitance(plate_scene, plate_surrogate):
     """With C_p >> C_T a voltage trace fixes only σ/(C_T + C_p): the pair is flagged, the
     voltage is still fitted, and the profile of C_p is flat towards its upper bound."""

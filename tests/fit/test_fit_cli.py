@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-import test_pipeline_fixtures as fx
+import plate_model as fx
 from fit_synthetic import SHIFT, TRUE, synthetic, write_csv
 
 from tengfield import cli

@@ -21,6 +21,7 @@ def base():
     return default_scene().with_values(run=SHORT, contact={"restitution": 0.6})
 
 
+@pytest.mark.slow
 def test_on_axis_reduces_to_soft_contact_at_fourth_order(base):
     """Vertical drive, ball on the axis, power law e = 1: the 1-D soft model's z(t)."""
     soft = simulate_soft(base.with_values(contact={"model": "soft"}))

@@ -79,6 +79,7 @@ def test_bad_scene_leaves_no_new_directory(tmp_path, capsys):
 
 
 # -- #8.12: all-or-nothing outputs --------------------------------------------------------
+@pytest.mark.slow
 def test_success_replaces_the_set_and_prints_the_real_directory(tmp_path, short_scene, capsys):
     out_dir = tmp_path / "out"
     code, out, err = run_main(["dynamics", short_scene, "-o", out_dir], capsys)
@@ -89,6 +90,7 @@ def test_success_replaces_the_set_and_prints_the_real_directory(tmp_path, short_
     assert no_staging_left(out_dir) and (out_dir / MANIFEST_NAME).is_file()
 
 
+@pytest.mark.slow
 def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, monkeypatch):
     import tengfield.io as writers       # the dynamics command takes its writers from here
 
@@ -112,6 +114,7 @@ def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, m
     assert no_staging_left(out_dir)
 
 
+@pytest.mark.slow
 def test_exception_and_interrupt_keep_the_previous_set(tmp_path, short_scene, capsys,
                                                        monkeypatch):
     out_dir = tmp_path / "out"
@@ -133,6 +136,7 @@ def test_exception_and_interrupt_keep_the_previous_set(tmp_path, short_scene, ca
         assert snapshot(out_dir) == before and no_staging_left(out_dir)
 
 
+@pytest.mark.slow
 def test_stale_files_of_the_previous_command_are_removed(tmp_path, short_scene, capsys):
     out_dir = tmp_path / "out"
     assert run_main(["dynamics", short_scene, "-o", out_dir], capsys)[0] == 0
@@ -159,6 +163,7 @@ def test_staged_output_unit(tmp_path):
 
 
 # -- #8.12: a lock for concurrent writers -------------------------------------------------
+@pytest.mark.slow
 def test_concurrent_writer_gets_a_clear_error(tmp_path, short_scene, capsys):
     out_dir = tmp_path / "out"
     holder = StagedOutput(out_dir)
@@ -178,6 +183,7 @@ def test_concurrent_writer_gets_a_clear_error(tmp_path, short_scene, capsys):
 
 
 # -- #8.16 CLI side and #8.12 with real processes: Ctrl-C while writing, a second writer ---
+@pytest.mark.slow
 def test_ctrl_c_while_writing_and_a_concurrent_run(tmp_path, short_scene, run_cli, cli_command,
                                                    cli_env):
     out_dir = tmp_path / "out"

@@ -9,18 +9,14 @@ energy (work in = dissipated + stored); the whole pipeline on real impact
 dynamics must reach both limits (R → 0: V = R I_SC; R → ∞: V = V_OC).
 """
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).parent.parent))
-from stability_checks import assert_finite, scene_with  # noqa: E402
-from test_pipeline_fixtures import plate_model_solve  # noqa: E402
+from stability_checks import assert_finite, scene_with
+from plate_model import plate_model_solve
 
-from tengfield import circuit, pipeline  # noqa: E402
+from tengfield import circuit, pipeline
 
 LOADS = [1.0, 1e3, 1e6, 1e9, 1e12, 1e15]
 PARALLEL = [0.0, 1e-12, 1e-9]

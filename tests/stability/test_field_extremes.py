@@ -13,8 +13,6 @@ validator rejects (a ball as wide as the tube, an electrode wider than the
 plate) must fail with a message that names the key and the allowed range.
 """
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
@@ -25,7 +23,6 @@ import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).parent))
 from stability_checks import assert_finite, scene_with  # noqa: E402
 
 from tengfield.errors import FieldError, SceneError  # noqa: E402
@@ -108,6 +105,7 @@ def refinement():
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_extreme_case_is_physical_and_converges(refinement, name):
     results = refinement[name]
@@ -120,6 +118,7 @@ def test_extreme_case_is_physical_and_converges(refinement, name):
     assert error < max_error, (p, error, diffs)
 
 
+@pytest.mark.slow
 def test_touching_either_electrode_is_mirror_symmetric(refinement):
     lower, upper = refinement["touching-lower"][-1], refinement["touching-upper"][-1]
     assert lower.C_ll == pytest.approx(upper.C_uu, rel=2e-3)
@@ -129,6 +128,7 @@ def test_touching_either_electrode_is_mirror_symmetric(refinement):
     assert abs(lower.q_lower) > 2 * abs(lower.q_upper)   # the touched electrode takes most
 
 
+@pytest.mark.slow
 def test_contact_is_the_continuous_limit_of_a_closing_gap(refinement):
     """q(z) is smooth at contact: z = 0 agrees with z = 1 µm to first order
     (docs/field.md: the lower fraction changes by ≈ 1.35e-4 per µm)."""
@@ -138,6 +138,7 @@ def test_contact_is_the_continuous_limit_of_a_closing_gap(refinement):
     assert np.max(np.abs(quantities(near) / quantities(touching) - 1)) < 1e-3
 
 
+@pytest.mark.slow
 def test_high_contrast_ball_reciprocity(refinement):
     """εr = 100 ball: the direct solve with the σ source gives the same electrode
     charges as -∮σψ_k (reciprocity survives the contrast)."""
@@ -147,6 +148,7 @@ def test_high_contrast_ball_reciprocity(refinement):
     assert direct == pytest.approx(res.induced_charge, rel=1e-7)
 
 
+@pytest.mark.slow
 def test_high_contrast_contact_is_the_limit_of_a_closing_gap(monkeypatch):
     """εr = 100 ball: C and q keep changing steeply below the smallest meshed gap
     (min_gap = 20 µm; the gap capacitance saturates only at gaps ~ R/εr² ≈ 0.35 µm).
@@ -208,6 +210,7 @@ def test_permittivity_contrast_trends(refinement):
     assert abs(walls.C_lu) > 10 * abs(default.C_lu)
 
 
+@pytest.mark.slow
 def test_tighter_and_tighter_fit_converges(refinement):
     """0.5 µm and 5 µm radial clearance differ by far less than the clearance ratio:
     the solution is continuous as the ball closes onto the tube wall."""

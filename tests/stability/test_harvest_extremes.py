@@ -8,17 +8,14 @@ voltage stays in [0, U_sat] (the ideal bridge's saturation voltage bounds any
 bridge), it only rises through ideal bridges without sinks, and the energy books close to 1e-6 of
 the delivered energy.
 """
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent.parent))
-import test_pipeline_fixtures as fx  # noqa: E402
+import plate_model as fx
 
-import tengfield as tf  # noqa: E402
-from tengfield import electrical  # noqa: E402
+import tengfield as tf
+from tengfield import electrical
 
 SHORT_RUN = {"duration_s": 0.3, "settle_periods": 2, "sample_rate_hz": 4000.0}
 
@@ -28,6 +25,7 @@ def cache(tmp_path_factory):
     return tmp_path_factory.mktemp("surrogates")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("store_uF", [1e-3, 1.0, 1e3, 1e6])
 @pytest.mark.parametrize("diode", [
     {"diode": "ideal"},

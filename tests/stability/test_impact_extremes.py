@@ -10,19 +10,16 @@ are located to 1e-13 m), so its answers are held to closed forms and to
 limits approached continuously (Γ → 1⁺: max gap → 4.5 g δ²/ω²).
 """
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-sys.path.insert(0, str(Path(__file__).parent))
-from stability_checks import (amplitude_mm_for, assert_sane_dynamics,  # noqa: E402
+from stability_checks import (amplitude_mm_for, assert_sane_dynamics,
                               scene_with, still_table_energy)
 
-from tengfield.dynamics import simulate  # noqa: E402
-from tengfield.scene import G  # noqa: E402
+from tengfield.dynamics import simulate
+from tengfield.scene import G
 
 RESTITUTIONS = [0.0, 1e-6, 0.999999, 1.0]
 FAST_RUN = {"duration_s": 1.0, "settle_periods": 2, "sample_rate_hz": 20000.0}

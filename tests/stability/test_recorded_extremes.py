@@ -9,19 +9,16 @@ record as the noise vanishes (linearly), to the exact piecewise-parabolic
 flight as the sampling of the square wave is refined.
 """
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from stability_checks import assert_sane_dynamics, fitted_slope, scene_with  # noqa: E402
+from stability_checks import assert_sane_dynamics, fitted_slope, scene_with
 
-from tengfield.dynamics import simulate  # noqa: E402
-from tengfield.dynamics.impact import Restitution, integrate  # noqa: E402
-from tengfield.dynamics.table import recorded_table  # noqa: E402
-from tengfield.scene import G  # noqa: E402
+from tengfield.dynamics import simulate
+from tengfield.dynamics.impact import Restitution, integrate
+from tengfield.dynamics.table import recorded_table
+from tengfield.scene import G
 
 FREQUENCY, AMPLITUDE, STROKE = 20.0, 1.5e-3, 3e-3
 OMEGA = 2 * math.pi * FREQUENCY

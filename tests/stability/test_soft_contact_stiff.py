@@ -9,18 +9,15 @@ mechanical energy (gravity + spring) on a still table, and converge to the
 impact map as k grows, at the expected rate k^(-1/2).
 """
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from stability_checks import (amplitude_mm_for, assert_sane_dynamics,  # noqa: E402
+from stability_checks import (amplitude_mm_for, assert_sane_dynamics,
                               fitted_slope, scene_with, still_table_energy)
 
-from tengfield.dynamics import simulate  # noqa: E402
-from tengfield.scene import G  # noqa: E402
+from tengfield.dynamics import simulate
+from tengfield.scene import G
 
 STIFFNESSES = [1e6, 1e8, 1e10, 1e12]
 DROP_HEIGHT = 1e-3
