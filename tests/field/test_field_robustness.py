@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tengfield.errors import FieldError
+from tengfield.errors import FieldError, SceneError
 from tengfield.field import geometry_axisymmetric as geometry
 from tengfield.field.plot import colour_bar_labels, colour_bar_scale
 from tengfield.scene import default_scene
@@ -40,20 +40,21 @@ def test_colour_bar_of_small_potentials_uses_a_small_unit():
 
 
 # -- size budget and gmsh failures (issue 8.7) -------------------------------------------
-def test_mesh_estimate_refuses_a_tiny_mesh_size_before_meshing():
-    scene = default_scene().with_values(field={"mesh_size_mm": 0.001})
-    half = geometry.layout(scene.with_values(field={"mesh_size_mm": 0.0005}), 1.5e-3,
-                           grading_size=1e-6)
-    assert geometry.estimated_dofs(half, 2) > geometry.MAX_DOFS_2D
-    start = time.perf_counter()
-    from mpi4py import MPI
-
-    from tengfield.field import solve_position
+def test_mesh_estimate_refuses_a_tiny_mesh_size_before_meshing(monkeypatch):
+    # the scene refuses a mesh size far below the device's features, naming the key ...
+    with pytest.raises(SceneError, match=r"mesh_size_mm = 0.001 is too fine"):
+        default_scene().with_values(field={"mesh_size_mm": 0.001})
+    # ... and the solver's own budget refuses any layout over MAX_DOFS_2D before gmsh
+    # runs (what a library caller with an unchecked size would reach)
+    scene = default_scene()
+    lay = geometry.layout(scene, 1.5e-3, mesh_size=1e-6, grading_size=1e-6)
+    assert geometry.estimated_dofs(lay, 2) > geometry.MAX_DOFS_2D
     with pytest.raises(FieldError) as err:
-        solve_position(scene, 1.5e-3, comm=MPI.COMM_SELF, method="axisymmetric")
+        geometry.check_mesh_budget(lay, 2, mesh_size_mm=0.001)
     message = str(err.value)
     assert "mesh_size_mm = 0.001" in message and "allowed" in message and "\n" not in message
-    assert time.perf_counter() - start < 30.0   # refused, not meshed
+    fine = geometry.layout(scene, 1.5e-3)
+    geometry.check_mesh_budget(fine, 2)                      # the default passes
 
 
 def test_mesh_estimate_is_close_to_the_real_mesh():
