@@ -49,30 +49,15 @@ def simulate_vs_python(python_duration: float = 100.0) -> dict:
     and the ratio to the plain-Python guaranteed-step loop with brentq."""
     import sys
     sys.path.insert(0, str(Path(__file__).parent))
-    from dynamics_python_yardstick import G, python_impact_map
+    from dynamics_python_yardstick import measure
 
-    from tengfield.dynamics import simulate
-
-    f, gamma, e = 20.0, 1.3, 0.8
-    omega = 2 * math.pi * f
-    amplitude = gamma * G / omega**2
-    c0 = time.process_time()
-    n_py = len(python_impact_map(amplitude, omega, 0.0, 3e-3, e, python_duration))
-    py_rate = n_py / (time.process_time() - c0)
-    scene = default_scene().with_values(
-        excitation={"frequency_hz": f, "amplitude_mm": amplitude * 1e3},
-        contact={"restitution": e}, run={"duration_s": 2000.0, "sample_rate_hz": 20.0})
-    simulate(scene, duration=1.0)
-    best = math.inf
-    for _ in range(3):
-        c0 = time.process_time()
-        res = simulate(scene)
-        best = min(best, time.process_time() - c0)
-    rate = len(res.impacts) / best
-    return {"benchmark": "simulate_impacts_per_cpu_second", "value": rate, "unit": "impacts/s",
-            "detail": f"{len(res.impacts)} impacts in {best:.3f} CPU s (Gamma 1.3, e 0.8, 20 Hz, "
-                      f"2000 s, {res.regime.name} period {res.regime.period}); plain Python + "
-                      f"brentq {py_rate:.3g} /s ({n_py} impacts); ratio {rate / py_rate:.1f}"}
+    m = measure(python_duration, 2000.0)
+    return {"benchmark": "simulate_impacts_per_cpu_second", "value": m["rate"],
+            "unit": "impacts/s",
+            "detail": f"{m['impacts']} impacts in {m['cpu_s']:.3f} CPU s (Gamma 1.3, e 0.8, "
+                      f"20 Hz, 2000 s, {m['regime']} period {m['period']}); plain Python + "
+                      f"brentq {m['python_rate']:.3g} /s ({m['python_impacts']} impacts); "
+                      f"ratio {m['rate'] / m['python_rate']:.1f}"}
 
 
 def cli_vs_simulate(tmp: Path) -> dict:

@@ -105,10 +105,7 @@ def main(argv: list[str] | None = None) -> dict:
           f"{r0['near_lower_ms']:.2f} ms per contact; paper (Fig. 7, multibody): ~10 ms")
     print(f"steps per contact episode {r0['steps_per_contact']:.0f}; run time "
           f"{r0['wall_time']:.2f} s for {duration:g} s of motion")
-    with open(out / "motion3d_lateral.csv", "w") as fh:
-        fh.write(",".join(rows[0]) + "\n")
-        for row in rows:
-            fh.write(",".join(str(v) for v in row.values()) + "\n")
+    write_rows(out / "motion3d_lateral.csv", rows)
 
     import matplotlib.pyplot as plt
     from tengfield.motion3d.output import plot_trajectory3d
@@ -156,11 +153,16 @@ def electrical_rows(base, lateral_mm, out: Path) -> list[dict]:
         row["Q_sc_relative"] = row["Q_sc_pp_nC"] / q0
         print(f"{row['lateral_mm']:6.2f}  {row['Q_sc_pp_nC']:9.4f}  {row['Q_sc_relative']:9.4f}  "
               f"{row['V_oc_pp_V']:9.1f}  {row['I_sc_pp_nA']:9.2f}   {row['surrogate']}")
-    with open(out / "motion3d_lateral_electrical.csv", "w") as fh:
+    write_rows(out / "motion3d_lateral_electrical.csv", rows)
+    return rows
+
+
+def write_rows(path: Path, rows: list[dict]) -> None:
+    """A CSV with one line per row dict (the keys of the first as the header)."""
+    with open(path, "w") as fh:
         fh.write(",".join(rows[0]) + "\n")
         for row in rows:
             fh.write(",".join(str(v) for v in row.values()) + "\n")
-    return rows
 
 
 if __name__ == "__main__":
