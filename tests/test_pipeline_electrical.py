@@ -141,3 +141,14 @@ def test_waveform_times_keep_full_precision(tmp_path):
     back = np.loadtxt(path, delimiter=",", skiprows=1)
     np.testing.assert_array_equal(back[:, 0], t)
     assert np.all(np.diff(back[:, 0]) > 0)
+
+
+def test_notebook_user_reaches_every_capability_by_public_names():
+    """No private names needed: the 3D ball, calibration, harvesting, arrays, (z, r)."""
+    import tengfield as tf
+
+    assert callable(tf.simulate_3d) and callable(tf.calibrate)
+    assert callable(tf.harvest.harvest) and callable(tf.array.run_array)
+    assert callable(tf.surrogate.radial.obtain_radial_table)
+    with pytest.raises(AttributeError):
+        tf.no_such_thing  # noqa: B018

@@ -9,9 +9,13 @@ V_OC, Q_SC, I_SC. In a notebook::
     dyn = tf.simulate(scene)              # the ball's motion alone
     res = tf.solve_position(scene, 1e-3)  # electrostatics at one gap z [m]
     table, outcome = tf.build_surrogate(scene)   # the cached field surrogate
+    ball = tf.simulate_3d(scene)          # the rigid ball in 3D (wall, friction, spin)
+    fit = tf.calibrate(scene, measured=trace)    # sigma, C_p, ... fitted to a trace
+    tf.harvest.harvest(t, q_sc, c_t, storage_capacitance=10e-6)   # bridges into a store
 
 Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
-``simulate``, ``solve_position``, ``build_surrogate`` (and the submodules)
+``simulate``, ``solve_position``, ``build_surrogate``, ``simulate_3d``,
+``calibrate`` (and the submodules)
 are imported on first use.
 """
 from __future__ import annotations
@@ -30,6 +34,8 @@ _LAZY = {
     "simulate": ("tengfield.dynamics", "simulate"),
     "solve_position": ("tengfield.field", "solve_position"),
     "build_surrogate": ("tengfield.surrogate", "obtain_table"),
+    "simulate_3d": ("tengfield.motion3d", "simulate_3d"),
+    "calibrate": ("tengfield.fit", "calibrate"),
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",

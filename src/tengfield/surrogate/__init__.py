@@ -33,3 +33,11 @@ __all__ = [
     "read_table", "refinement_positions", "solver_fingerprint", "store_in_cache",
     "table_from_results", "terminal_samples", "write_table",
 ]
+
+
+def __getattr__(name: str):
+    """``tengfield.surrogate.radial`` (the (z, r) surrogate) is imported on first use."""
+    if name == "radial":
+        import importlib
+        return importlib.import_module(f"{__name__}.radial")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
