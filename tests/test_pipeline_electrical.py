@@ -121,14 +121,18 @@ def test_plots_leave_the_callers_matplotlib_backend_alone(tmp_path):
             "r = tf.run(fx.scene_with(run={'duration_s': 0.3, 'settle_periods': 2}), "
             "cache_dir=out, "
             "solve=fx.plate_model_solve); tf.io.write_run_outputs(r, out); "
-            "print(matplotlib.get_backend())")
+            "from tengfield.motion3d.output import plot_trajectory3d; "
+            "m = tf.simulate_3d(fx.scene_with(contact={'model': '3d'}, "
+            "run={'duration_s': 0.1, 'settle_periods': 1})); "
+            "plot_trajectory3d(m, out + '/trajectory3d.png'); "
+            "print(matplotlib.get_backend(), 'matplotlib.pyplot' in sys.modules)")
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     env.pop("MPLBACKEND", None)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=ROOT, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip() == "svg"
-    for name in ("waveforms.png", "surrogate.png"):
+    assert proc.stdout.strip() == "svg False"          # backend kept, pyplot never loaded
+    for name in ("waveforms.png", "surrogate.png", "trajectory3d.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -69,11 +69,11 @@ _DISPLAY = {"V": ("V", 1.0), "Q": ("nC", 1e-9), "I": ("nA", 1e-9)}
 
 def plot_fit(result: FitResult, path) -> Path:
     """Measured vs fitted (and residuals) for a trace; measured vs fitted bars for targets."""
-    from matplotlib.figure import Figure   # no pyplot: no backend is chosen here
+    from ..plotting import new_figure
 
     if result.mode == "targets":
         labels = list(result.measured)
-        fig = Figure(figsize=(6.0, 3.2))
+        fig = new_figure((6.0, 3.2))
         ax = fig.subplots()
         x = np.arange(len(labels))
         ratio = [result.fitted[k] / result.measured[k] for k in labels]
@@ -88,7 +88,7 @@ def plot_fit(result: FitResult, path) -> Path:
         ax.set_title(_title(result), fontsize=8)
     else:
         quantities = [q for q in result.fitted]
-        fig = Figure(figsize=(7.0, 2.6 * len(quantities) + 0.6))
+        fig = new_figure((7.0, 2.6 * len(quantities) + 0.6))
         axes = fig.subplots(2 * len(quantities), 1, sharex=True, squeeze=False,
                             gridspec_kw={"height_ratios": [3, 1] * len(quantities)})
         axes = axes[:, 0]

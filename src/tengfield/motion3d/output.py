@@ -44,13 +44,15 @@ def write_contacts_csv(result, path) -> None:
 def plot_trajectory3d(result, path, *, title: str | None = None):
     """trajectory3d.png: side view (gap z and radial offset r vs time) and top view (x-y) [mm].
 
-    The caller chooses the matplotlib backend (Agg for files).
+    Drawn without pyplot (the caller's matplotlib backend is left alone).
     """
-    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle
+
+    from ..plotting import new_figure
 
     t = result.t
     clearance_mm = result.tube_clearance * 1e3
-    fig = plt.figure(figsize=(11, 5))
+    fig = new_figure((11, 5))
     ax_side = fig.add_subplot(1, 2, 1)
     ax_top = fig.add_subplot(1, 2, 2)
     ax_side.plot(t, result.gap * 1e3, color="#1f77b4", lw=1.2, label="gap $z$")
@@ -64,7 +66,7 @@ def plot_trajectory3d(result, path, *, title: str | None = None):
     ax_side.legend(loc="upper right", fontsize=8)
     ax_side.grid(alpha=0.3)
     ax_top.plot(result.x * 1e3, result.y * 1e3, color="#2ca02c", lw=0.8)
-    circle = plt.Circle((0.0, 0.0), clearance_mm, fill=False, color="0.3", ls="--")
+    circle = Circle((0.0, 0.0), clearance_mm, fill=False, color="0.3", ls="--")
     ax_top.add_patch(circle)
     lim = 1.15 * max(clearance_mm, float(np.max(result.radial, initial=0.0)) * 1e3)
     ax_top.set_xlim(-lim, lim)
@@ -80,5 +82,4 @@ def plot_trajectory3d(result, path, *, title: str | None = None):
                  f"{s['wall_contacts']} wall contacts", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import G
+from . import new_figure
 
 REGIME_COLOURS = {
     "rest": "#d9d9d9",
@@ -19,16 +20,6 @@ REGIME_COLOURS = {
 MAX_PLOT_PERIODS = 200
 #: ... drawn from this many points of the exact trajectory.
 PLOT_POINTS = 4000
-
-
-def _figure(**kwargs):
-    """A matplotlib Figure drawn by Agg without pyplot (never switches a session's backend)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(**kwargs)
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def plot_trajectory(result, path, *, title: str | None = None, max_periods: float | None = None):
@@ -54,7 +45,7 @@ def plot_trajectory(result, path, *, title: str | None = None, max_periods: floa
         z, _, y = result.sample(origin + elapsed)
     t = origin + elapsed
     stroke_mm = result.stroke * 1e3
-    fig = _figure(figsize=(9, 6))
+    fig = new_figure((9, 6))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     ax1.plot(t, y * 1e3, color="0.35", lw=1.2, label="lower plate $y(t)$")
     ax1.plot(t, (y + result.stroke) * 1e3, color="0.6", lw=1.2, ls="--",
@@ -109,7 +100,7 @@ def plot_regime_map(map_result, path, *, title: str | None = None):
     cmap = ListedColormap([REGIME_COLOURS[n] for n in names])
     f = map_result.frequency
     a_mm = map_result.amplitude * 1e3
-    fig = _figure(figsize=(7.5, 5.5))
+    fig = new_figure((7.5, 5.5))
     ax = fig.subplots()
 
     def edges(v):

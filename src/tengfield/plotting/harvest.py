@@ -12,14 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .waveforms import _figure
+from . import new_figure
 
 
 def plot_charging(fine, scene, path: str | Path, *, title: str = "") -> Path:
     """U(t) [V] of a :class:`tengfield.harvest.HarvestResult` with the UVLO levels."""
     c = scene.circuit
     t = np.asarray(fine.time)
-    fig = _figure((8, 3.6))
+    fig = new_figure((8, 3.6))
     ax = fig.subplots()
     ax.plot(t, fine.store_voltage, color="C0", lw=1.0, label="store U")
     for level, name in ((c.uvlo_rising, "UVLO rising"), (c.uvlo_falling, "UVLO falling")):
@@ -43,7 +43,7 @@ def plot_charging(fine, scene, path: str | Path, *, title: str = "") -> Path:
 
 def plot_vq(loops: dict, energy: dict, path: str | Path, *, title: str = "") -> Path:
     """V [V] against transferred charge Q [nC] over the last period; legend: ∮V dQ."""
-    fig = _figure((6.4, 4.8))
+    fig = new_figure((6.4, 4.8))
     ax = fig.subplots()
     for k, (name, (q, v, area)) in enumerate(loops.items()):
         label = (f"resistive load {energy.get('load_ohm', float('nan')):.3g} Ω"
@@ -68,7 +68,7 @@ def plot_vq(loops: dict, energy: dict, path: str | Path, *, title: str = "") -> 
 
 def plot_array(array, summary: dict, path: str | Path, *, title: str = "") -> Path:
     """Histogram of the per-cell phases and the array's output against N x one cell."""
-    fig = _figure((10, 4))
+    fig = new_figure((10, 4))
     ax_h, ax_t = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.6]})
     phases = np.asarray(array.phases_deg)
     ax_h.hist(phases[np.isfinite(phases)], bins=min(36, max(6, phases.size // 4)), color="C0")

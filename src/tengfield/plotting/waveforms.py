@@ -12,12 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def _figure(figsize):
-    """A matplotlib Figure outside pyplot: saving it needs no backend, so the
-    caller's (a notebook's) backend is never switched."""
-    from matplotlib.figure import Figure
-    return Figure(figsize=figsize)
+from . import new_figure
 
 
 def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
@@ -28,7 +23,7 @@ def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
     panels = [("V_oc_V", "V_OC [V]", 1.0), ("Q_sc_C", "Q_SC [nC]", 1e9), ("I_sc_A", "I_SC [nA]", 1e9)]
     if "V_load_V" in waveforms:
         panels += [("V_load_V", "V_load [V]", 1.0), ("P_load_W", "P_load [µW]", 1e6)]
-    fig = _figure((8, 2.1 * len(panels)))
+    fig = new_figure((8, 2.1 * len(panels)))
     axes = fig.subplots(len(panels), 1, sharex=True)
     for ax, (key, label, factor) in zip(np.atleast_1d(axes), panels):
         ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0)
@@ -52,7 +47,7 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1) -> Path:
     panels = [("V_OC [V]", curves.voltage(z), curves.charge_samples / curves.capacitance_samples, 1.0),
               ("Q_SC [nC]", curves.charge(z) * cells, curves.charge_samples * cells, 1e9),
               ("C_T [pF]", curves.capacitance(z) * cells, curves.capacitance_samples * cells, 1e12)]
-    fig = _figure((12, 3.4))
+    fig = new_figure((12, 3.4))
     axes = fig.subplots(1, 3)
     for ax, (label, line, dots, factor) in zip(axes, panels):
         ax.plot(z * 1e3, line * factor, color="C0", lw=1.2, label="cubic spline")
@@ -78,7 +73,7 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
               ("Q_sc_pp_C", "Q_SC peak-to-peak [nC]", 1e9),
               ("I_sc_pp_A", "I_SC peak-to-peak [nA]", 1e9)]
     ncols = len(panels) + (1 if loads else 0)
-    fig = _figure((4 * ncols, 3.4))
+    fig = new_figure((4 * ncols, 3.4))
     axes = fig.subplots(1, ncols)
     first_load = loads[0] if loads else None
     for ax, (key, label, factor) in zip(axes, panels):

@@ -40,9 +40,9 @@ def scene_text(scene, sections: dict, header: str) -> str:
 
 def plot_stage(path: Path, rows: list[Row], stage: str, targets=(1e-2, 1e-3)) -> Path:
     """Log-log error against wall time for one stage (one marker series per group)."""
-    from matplotlib.figure import Figure   # no pyplot: the caller's backend is left alone
+    from ..plotting import new_figure
 
-    fig = Figure(figsize=(6.4, 4.2), dpi=100)
+    fig = new_figure((6.4, 4.2), dpi=100)
     ax = fig.subplots()
     groups: dict[str, list[Row]] = {}
     for row in rows:
