@@ -30,7 +30,7 @@ import sys
 import warnings
 
 from . import __version__
-from .errors import SceneError, TengfieldError
+from .errors import TengfieldError
 
 # command modules, in the order `tengfield --help` lists them
 COMMAND_MODULES = [

@@ -43,8 +43,6 @@ import math
 import os
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ..errors import FieldError
 from . import contact
 

@@ -5,7 +5,6 @@ no physics here.
 """
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
@@ -22,10 +21,10 @@ def field_json(result, reference: str, potentials=None) -> dict:
 
 
 def write_field_json(path, result, reference: str, potentials=None) -> None:
-    """Write :func:`field_json` to ``path`` (call on one rank)."""
-    from pathlib import Path
+    """Write :func:`field_json` to ``path`` (call on one rank; atomic, strict JSON)."""
+    from ..io import write_json
 
-    Path(path).write_text(json.dumps(field_json(result, reference, potentials), indent=2) + "\n")
+    write_json(path, field_json(result, reference, potentials))
 
 
 def write_xdmf(path, solution, potentials=None) -> None:

@@ -1,12 +1,11 @@
 """fit.json, fit.png and fitted.toml (the scene with the fitted values, ready for ``tengfield run``)."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-from .._json import jsonable
+from ..io import write_json
 from .._toml import toml_value
 from .solve import FitResult
 
@@ -46,7 +45,7 @@ def write_fit_outputs(scene, result: FitResult, out_dir, *, plots: bool = True) 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     summary = {"scene": scene.source, **result.as_dict()}
-    (out / "fit.json").write_text(json.dumps(jsonable(summary), indent=2) + "\n")
+    write_json(out / "fit.json", summary)
     written = [out / "fit.json"]
     lines = [f"fitted by `tengfield fit` from {scene.source} ({result.mode})"]
     for name in result.names:

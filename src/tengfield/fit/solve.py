@@ -407,7 +407,6 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
                          simulate=simulate)
     quantities = [c.quantity for c in trace.columns]
     weights = {c.quantity: c.noise for c in trace.columns}
-    noise_given = all(w is not None for w in weights.values())
     for q in quantities:       # a provisional scale for the columns without a noise level
         if weights[q] is None:
             y = trace.values[q]

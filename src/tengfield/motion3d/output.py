@@ -1,7 +1,6 @@
 """Writers and the figure of a 3D run (the CLI wiring is in tengfield.commands)."""
 from __future__ import annotations
 
-import csv
 
 import numpy as np
 
@@ -19,26 +18,27 @@ def trajectory_columns(result) -> dict[str, np.ndarray]:
 
 
 def write_trajectory3d_csv(result, path) -> None:
-    """trajectory.csv: the 1-D columns then :data:`EXTRA_COLUMNS`."""
+    """trajectory.csv: the 1-D columns then :data:`EXTRA_COLUMNS` (full precision)."""
+    from ..io import write_csv
+
     extra = trajectory_columns(result)
-    data = np.column_stack([result.t, result.gap, result.gap_velocity, result.table]
-                           + [extra[k] for k in EXTRA_COLUMNS])
-    header = ",".join(("time_s", "gap_m", "gap_velocity_m_per_s", "table_m") + EXTRA_COLUMNS)
-    np.savetxt(path, data, delimiter=",", fmt="%.12g", header=header, comments="")
+    write_csv(path, ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m", *EXTRA_COLUMNS],
+              [result.t, result.gap, result.gap_velocity, result.table]
+              + [extra[k] for k in EXTRA_COLUMNS])
 
 
 def write_contacts_csv(result, path) -> None:
     """contacts.csv: every contact episode (surface, entry/exit time, normal speeds, steps)."""
+    from ..io import write_csv
+
     c = result.contacts
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["surface", "time_in_s", "time_out_s", "dwell_s", "speed_in_m_per_s",
-                    "speed_out_m_per_s", "steps", "initial_rest"])
-        for k in range(c["surface"].size):
-            dwell = c["time_out"][k] - c["time_in"][k]
-            w.writerow([c["surface"][k], f"{c['time_in'][k]:.12g}", f"{c['time_out'][k]:.12g}",
-                        f"{dwell:.6g}", f"{c['speed_in'][k]:.6g}", f"{c['speed_out'][k]:.6g}",
-                        int(c["steps"][k]), int(bool(c["initial"][k]))])
+    write_csv(path, ["surface", "time_in_s", "time_out_s", "dwell_s", "speed_in_m_per_s",
+                     "speed_out_m_per_s", "steps", "initial_rest"],
+              [c["surface"], np.asarray(c["time_in"], dtype=float),
+               np.asarray(c["time_out"], dtype=float),
+               np.asarray(c["time_out"], dtype=float) - np.asarray(c["time_in"], dtype=float),
+               np.asarray(c["speed_in"], dtype=float), np.asarray(c["speed_out"], dtype=float),
+               np.asarray(c["steps"]).astype(int), np.asarray(c["initial"]).astype(bool).astype(int)])
 
 
 def plot_trajectory3d(result, path, *, title: str | None = None):
