@@ -186,7 +186,7 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
     t0 = time.perf_counter()
     K = disc.A.ptap(disc.P)
     prefix = dx_api.unique_prefix("axisym")
-    ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver)
+    ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver, symmetric=True)
     n_full = disc.ball_load.size
 
     def full(x, lift):

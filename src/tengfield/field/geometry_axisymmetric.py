@@ -59,6 +59,9 @@ GRADING_REACH = 20.0
 #: (the mesh of a scaled-up device is the scaled mesh: same cost, same
 #: relative error as the paper's device, h = 10 mm).
 REFERENCE_SPACING = 10.0e-3
+#: relative precision of gmsh's integral of 1/size along the curves (its default,
+#: 1e-9, spends half of the meshing time of the steeply graded rims there)
+LC_INTEGRATION_PRECISION = 1e-6
 #: growth of the element size per unit distance from a dielectric interface
 INTERFACE_GROWTH = 0.3
 #: refuse to mesh beyond this many estimated dofs (MUMPS needs ~1-2 kB per dof in 2D;
@@ -303,11 +306,10 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
             expr = f"Min({expr}, {term})"
         return f"({expr})"
 
+    sizes = []   # MathEval expressions, evaluated as one (their Min)
+
     def math_eval(expr):
-        f = fld.add("MathEval")
-        fld.setString(f, "F", expr)
-        fields.append(f)
-        return f
+        sizes.append(expr)
 
     L = lay.info["rim_reach_m"]
     # rims (and tube corners when the walls are present)
@@ -349,14 +351,23 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
         fld.setNumber(box, "YMin", zK + lay.shift - 1.5 * lay.domain_radius)
         fld.setNumber(box, "YMax", zK + lay.shift + 1.5 * lay.domain_radius)
         fields.append(box)
+    # one MathEval for the Min of all the expressions: the same sizes to the bit (the
+    # same arithmetic) as one field each, and 20 % less meshing time (gmsh evaluates
+    # the size ~16 times per triangle, and each field evaluation has its overhead)
+    combined = sizes[0]
+    for expr in sizes[1:]:
+        combined = f"Min({combined}, {expr})"
+    size = fld.add("MathEval")
+    fld.setString(size, "F", combined)
     fmin = fld.add("Min")
-    fld.setNumbers(fmin, "FieldsList", fields)
+    fld.setNumbers(fmin, "FieldsList", [size, *fields])
     fld.setAsBackgroundMesh(fmin)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25 * lay.domain_radius)
     gmsh.option.setNumber("Mesh.Algorithm", 6)
+    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", LC_INTEGRATION_PRECISION)
 
 
 def estimated_cells(lay: AxisymmetricLayout) -> float:
