@@ -166,7 +166,10 @@ class _PathRewriter(io.TextIOBase):
         return self._stream.write(text.replace(self._staging, self._target))
 
     def flush(self):
-        self._stream.flush()
+        # also called when the rewriter is collected (IOBase.__del__ -> close), possibly
+        # after the stream it wraps was closed (pytest's capture, Python 3.13)
+        if not getattr(self._stream, "closed", False):
+            self._stream.flush()
 
     def isatty(self):
         return self._stream.isatty()
