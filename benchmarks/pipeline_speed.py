@@ -69,11 +69,13 @@ def schedule_efficiency(path: Path, ranks: int) -> float:
     levels = [np.concatenate([surrogate.lobatto_positions(stroke, counts[0]),
                               surrogate.refinement_positions(stroke, counts[0])])]
     levels += [surrogate.refinement_positions(stroke, n) for n in counts[1:]]
+    sampled = (surrogate.error_sample_positions(stroke, bool(table.provenance.get(
+        "mirror_symmetry")), counts[0]) if "field_error_rule" in table.provenance else ())
     busiest = total = 0.0
     for level in levels:
         todo = level[level <= 0.5 * stroke * (1 + 1e-12)] if table.provenance.get(
             "mirror_symmetry") else level
-        todo = todo[surrogate.contact_first_order(todo, stroke)]
+        todo = todo[surrogate.contact_first_order(todo, stroke, sampled)]
         free_at = np.zeros(ranks)
         for z in todo:
             free_at[np.argmin(free_at)] += cost[float(z)]

@@ -221,6 +221,24 @@ def test_contact_first_order():
     assert np.all(np.diff(distance) >= 0) and distance[0] == 0.0
 
 
+def test_positions_with_an_error_estimate_go_first():
+    """The estimate positions (a second, finer mesh: the dearest solves) are handed out
+    first, the rest closest to a plate first; an empty or unmatched set changes nothing."""
+    stroke = 3e-3
+    z = surrogate.lobatto_positions(stroke, 17)
+    sampled = surrogate.error_sample_positions(stroke, False)
+    order = surrogate.contact_first_order(z, stroke, sampled)
+    assert sorted(order) == list(range(z.size))
+    head, tail = z[order[:sampled.size]], z[order[sampled.size:]]
+    np.testing.assert_array_equal(np.sort(head), np.sort(sampled))
+    distance = np.minimum(tail, stroke - tail)
+    assert np.all(np.diff(distance) >= 0) and distance[0] == 0.0
+    np.testing.assert_array_equal(surrogate.contact_first_order(z, stroke, ()),
+                                  surrogate.contact_first_order(z, stroke))
+    np.testing.assert_array_equal(surrogate.contact_first_order(z, stroke, [1.234]),
+                                  surrogate.contact_first_order(z, stroke))
+
+
 # ---------------------------------------------------------------------------
 # one constant for the position counts
 def test_position_counts_derive_from_one_constant():

@@ -170,7 +170,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         if bar is not None:
             bar.total += todo.size - positions.size
             bar.refresh()
-        todo = todo[contact_first_order(todo, stroke)]
+        todo = todo[contact_first_order(todo, stroke, sample_at if sampled else ())]
         results = farm(comm, list(todo), work, progress=advance)
         if sampled:
             results, measured = _sampled_field_errors(

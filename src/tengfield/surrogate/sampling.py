@@ -66,10 +66,15 @@ def mirrored(result, stroke: float):
                                info={**getattr(result, "info", {}), "mirrored_from": result.position})
 
 
-def contact_first_order(positions: np.ndarray, stroke: float) -> np.ndarray:
-    """Indices ordering positions by distance to the nearer plate, closest first.
-
-    Solves close to contact are the dearest; the task farm hands out jobs in
-    this order (longest first), which balances the ranks.
-    """
-    return np.argsort(np.minimum(positions, stroke - positions), kind="stable")
+def contact_first_order(positions: np.ndarray, stroke: float, estimated=()) -> np.ndarray:
+    """Indices ordering positions dearest first, the order the task farm hands them out
+    in (longest first balances the ranks): the positions in ``estimated`` (solved again
+    on a mesh of half the size for the field error estimate: 4-8x a plain solve) first,
+    then by distance to the nearer plate, closest first (near contact the contact rule
+    meshes three gaps)."""
+    positions = np.asarray(positions, dtype=float)
+    gap = np.minimum(positions, stroke - positions)
+    marks = np.asarray(estimated, dtype=float).reshape(-1)
+    dear = (np.min(np.abs(positions[:, None] - marks[None, :]), axis=1) <= 1e-12 * stroke
+            if marks.size and positions.size else np.zeros(positions.size, dtype=bool))
+    return np.lexsort((gap, ~dear))
