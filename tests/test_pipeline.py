@@ -225,6 +225,12 @@ def test_cli_sweep_and_precompute_cache(tmp_path, cli):
     assert len(rows) == 4 and {r["load_ohm"] for r in rows} == {"100000000.0", "10000000000.0"}
     assert all(float(r["V_oc_pp_V"]) > 0 and float(r["P_mean_W"]) > 0 for r in rows)
     assert (tmp_path / "sw" / "sweep.png").stat().st_size > 0
+    bare = cli(["sweep", "small.toml", "--frequency-hz", "15:25:2", "--amplitude-mm", "1.5",
+                "--no-plots", "-o", "bare"])
+    assert bare.returncode == 0, bare.stderr
+    assert (tmp_path / "bare" / "sweep.csv").exists()
+    assert not (tmp_path / "bare" / "sweep.png").exists()
+    assert "sweep.png" not in bare.stdout
 
 
 @pytest.mark.slow

@@ -96,3 +96,26 @@ def test_dynamics_run_does_not_import_fem_stack(scene_file, tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+@pytest.mark.parametrize("spelling", ["--no-plots", "--no-plot"])
+def test_cli_dynamics_without_plots_writes_the_tables_only(scene_file, tmp_path, spelling):
+    """`--no-plots` (as `run`, `fit`, `field`, `map` and `sweep` spell it; `--no-plot` too)
+    skips the PNG and writes the same CSVs and summary as a run with the figure."""
+    with_plot, without = tmp_path / "a", tmp_path / "b"
+    assert main(["dynamics", str(scene_file), "-o", str(with_plot)]) == 0
+    assert main(["dynamics", str(scene_file), "-o", str(without), spelling]) == 0
+    assert not list(without.glob("*.png"))
+    for name in ("trajectory.csv", "impacts.csv"):
+        assert (without / name).read_bytes() == (with_plot / name).read_bytes()
+    summaries = [json.loads((d / "summary.json").read_text()) for d in (with_plot, without)]
+    for s in summaries:
+        s.pop("wall_time_s")
+    assert summaries[0] == summaries[1]
+
+
+def test_cli_map_without_plots(scene_file, tmp_path):
+    out = tmp_path / "map"
+    assert main(["map", str(scene_file), "--frequency-hz", "10:20:2", "--amplitude-mm", "1:2:2",
+                 "--periods", "20", "--jobs", "1", "--no-plots", "-o", str(out)]) == 0
+    assert (out / "map.csv").exists() and not (out / "map.png").exists()

@@ -17,9 +17,12 @@ def register(sub) -> None:
     p = scene_command(sub, "dynamics", output="dynamics-out",
                       help="simulate the ball's motion (impact map or soft contact)",
                       description="Writes trajectory.csv, impacts.csv, summary.json and "
-                                  "trajectory.png to DIR.")
+                                  "trajectory.png to DIR (3D motion: also contacts.csv and "
+                                  "trajectory3d.png).")
     p.add_argument("--duration-s", type=float, default=None,
                    help="simulated time [s] (default: [run] duration_s)")
+    p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
+                   help="skip the PNG files (the CSVs and summary.json are written)")
     p.set_defaults(func=_run_dynamics)
 
     m = scene_command(sub, "map", output="map-out", help="regime map over frequency x amplitude",
@@ -33,6 +36,8 @@ def register(sub) -> None:
                    help="excitation periods simulated per point (default 200)")
     m.add_argument("--jobs", "-j", type=int, default=None,
                    help="worker processes (default: all cores)")
+    m.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
+                   help="skip map.png")
     m.set_defaults(func=_run_map)
 
 
@@ -52,30 +57,29 @@ def _run_dynamics(args) -> int:
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
 
-    def write_tables():
-        if scene.contact.model == "3d":
-            write_trajectory3d_csv(result, out / "trajectory.csv")
-            write_contacts_csv(result, out / "contacts.csv")
-        else:
-            write_trajectory_csv(result, out / "trajectory.csv")
-        write_impacts_csv(result, out / "impacts.csv")
+    table_writers = ([(write_trajectory3d_csv, "trajectory.csv"),
+                      (write_contacts_csv, "contacts.csv")] if scene.contact.model == "3d"
+                     else [(write_trajectory_csv, "trajectory.csv")])
+    table_writers.append((write_impacts_csv, "impacts.csv"))
 
-    # the CSV writer (Arrow) runs without the GIL: the tables are written on a second
-    # thread while this one draws the figure (for 600k impacts the two take about as
-    # long); an error in either is raised here after both have ended
-    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="tengfield-csv") as pool:
-        tables = pool.submit(write_tables)
+    # the CSV writer (Arrow) runs without the GIL: the tables are written on other
+    # threads, one each, while this one draws the figure (for 600k impacts the two take
+    # about as long); an error in any is raised here after all have ended
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="tengfield-csv") as pool:
+        tables = [pool.submit(write, result, out / name) for write, name in table_writers]
         summary = result.summary()
         summary["scene"] = scene.source
         write_json(out / "summary.json", summary)
-        if scene.contact.model == "3d":
-            plot_trajectory3d(result, out / "trajectory3d.png")
-        plot_trajectory(result, out / "trajectory.png",
-                        title=f"{scene.excitation.amplitude * 1e3:g} mm, "
-                              f"{scene.excitation.frequency:g} Hz, "
-                              f"e = {scene.contact.restitution:g}"
-                        if scene.excitation.kind == "sine" else "recorded excitation")
-        tables.result()
+        if not args.no_plots:
+            if scene.contact.model == "3d":
+                plot_trajectory3d(result, out / "trajectory3d.png")
+            plot_trajectory(result, out / "trajectory.png",
+                            title=f"{scene.excitation.amplitude * 1e3:g} mm, "
+                                  f"{scene.excitation.frequency:g} Hz, "
+                                  f"e = {scene.contact.restitution:g}"
+                            if scene.excitation.kind == "sine" else "recorded excitation")
+        for table in tables:
+            table.result()
     print(f"regime {summary['regime']}, period {summary['period']}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")
@@ -106,9 +110,10 @@ def _run_map(args) -> int:
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     write_map_csv(result, out / "map.csv")
-    plot_regime_map(result, out / "map.png",
-                    title=f"regimes, e = {scene.contact.restitution:g}, "
-                          f"dh = {scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")
+    if not args.no_plots:
+        plot_regime_map(result, out / "map.png",
+                        title=f"regimes, e = {scene.contact.restitution:g}, dh = "
+                              f"{scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")
     counts = {n: int(np.sum(result.regime == n)) for n in np.unique(result.regime)}
     print(f"{result.regime.size} points: {counts} -> {out}/")
     return 0

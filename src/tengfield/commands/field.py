@@ -27,7 +27,8 @@ def register(sub) -> None:
                    help="solver (default [field] method)")
     p.add_argument("--reference", choices=("floating", "grounded-lower"), default=None,
                    help="two-terminal reference (default [circuit] reference)")
-    p.add_argument("--no-plot", action="store_true", help="skip potential.xdmf and field.png")
+    p.add_argument("--no-plots", "--no-plot", dest="no_plot", action="store_true",
+                   help="skip potential.xdmf and field.png")
     p.set_defaults(func=_run)
 
 

@@ -42,7 +42,8 @@ def register(sub) -> None:
     p.add_argument("--cache-dir", default=None, metavar="DIR",
                    help="surrogate cache (default $TENGFIELD_CACHE_DIR, else "
                         "$XDG_CACHE_HOME/tengfield or ~/.cache/tengfield)")
-    p.add_argument("--no-plots", action="store_true", help="skip fit.png")
+    p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
+                   help="skip fit.png")
     p.set_defaults(func=_run)
 
 

@@ -15,7 +15,8 @@ def register(sub) -> None:
     p = scene_command(sub, "run", output="out", description=__doc__,
                       help="V_OC, Q_SC, I_SC (and load) waveforms of a scene, end to end")
     add_cache_argument(p)
-    p.add_argument("--no-plots", action="store_true", help="skip the PNG files")
+    p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
+                   help="skip the PNG files")
     p.set_defaults(func=_run)
 
 

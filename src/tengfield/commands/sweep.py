@@ -32,6 +32,8 @@ def register(sub) -> None:
                        metavar="START:STOP:N", help=f"{values}, or one value")
     add_jobs_argument(p)
     add_cache_argument(p)
+    p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
+                   help="skip sweep.png")
     p.set_defaults(func=_run)
 
 
@@ -63,7 +65,10 @@ def _run(args) -> int:
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     write_sweep_csv(out / "sweep.csv", rows)
-    with atomic_path(out / "sweep.png") as tmp:
-        plot_sweep(rows, tmp)
-    print(f"{len(rows)} rows; wrote {out / 'sweep.csv'}, {out / 'sweep.png'}")
+    written = [out / "sweep.csv"]
+    if not args.no_plots:
+        with atomic_path(out / "sweep.png") as tmp:
+            plot_sweep(rows, tmp)
+        written.append(out / "sweep.png")
+    print(f"{len(rows)} rows; wrote {', '.join(map(str, written))}")
     return 0
