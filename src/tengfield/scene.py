@@ -740,13 +740,7 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
         raise SceneError(f"[initial] gap_mm = {ini.gap * 1e3:g} is out of range: "
                          f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] gap_mm)")
     run = Run(**values["run"])
-    # the same steady-window rule for every kind ("recorded": frequency_hz is the
-    # reference period of the analysis)
-    if run.settle_periods * exc.period >= run.duration:
-        raise SceneError(
-            f"[run] settle_periods = {run.settle_periods} leaves no steady window: "
-            f"settle_periods / frequency_hz = {run.settle_periods * exc.period:g} s must be "
-            f"< duration_s = {run.duration:g}")
+    check_steady_window(exc, run.settle_periods, run.duration)
     _check_work(exc, run)
     fvals = values["field"]
     if fvals["domain_radius"] is None:
@@ -760,6 +754,19 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
                  run=run, field=field_value, circuit=circ, array=arr,
                  raw=copy.deepcopy(data), source=source, text=text)
+
+
+def check_steady_window(exc: Excitation, settle_periods: int, duration: float,
+                        name: str = "[run] duration_s") -> None:
+    """Refuse a run of ``duration`` [s] that ends before its regime window starts (after
+    ``settle_periods`` excitation periods): the same rule for every excitation kind
+    ("recorded": frequency_hz is the reference period of the analysis). ``name`` is how
+    the message names the duration (a scene key, an option)."""
+    settle = settle_periods * exc.period
+    if settle >= duration:
+        raise SceneError(
+            f"[run] settle_periods = {settle_periods} leaves no steady window: "
+            f"settle_periods / frequency_hz = {settle:g} s must be < {name} = {duration:g}")
 
 
 def _check_work(exc: Excitation, run: Run) -> None:

@@ -175,3 +175,24 @@ def test_map_jobs_bound_is_named():
     assert max_jobs() >= 4 and MAX_MAP_WORK == 10_000_000_000
     with pytest.raises(SceneError, match="--jobs"):
         regime_map(default_scene(), [20.0], [1e-3], jobs=max_jobs() + 1, progress=False)
+
+
+@pytest.mark.parametrize("model", ["impact", "soft", "3d"])
+def test_a_duration_override_inside_the_settle_window_is_refused(model):
+    """simulate(duration=) follows the scene file's rule: a run that ends before its regime
+    window starts (10 periods at 20 Hz = 0.5 s) is refused with the numbers, not
+    classified as 'rest' over an empty window."""
+    scene = default_scene().with_values(contact={"model": model})
+    with pytest.raises(SceneError, match=r"settle_periods = 10 leaves no steady window: "
+                                         r"settle_periods / frequency_hz = 0.5 s must be < "
+                                         r"the duration asked for = 0.1"):
+        simulate(scene, duration=0.1)
+    assert simulate(scene, duration=0.6).t[-1] == pytest.approx(0.6)
+
+
+def test_cli_duration_inside_the_settle_window_exits_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["dynamics", "--duration-s", "1e-9", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "must be < --duration-s = 1e-09" in err[0]
+    assert not out.exists()

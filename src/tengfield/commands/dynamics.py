@@ -48,11 +48,14 @@ def _run_dynamics(args) -> int:
     from ..io import write_impacts_csv, write_json, write_trajectory_csv
     from ..motion3d.output import plot_trajectory3d, write_contacts_csv, write_trajectory3d_csv
     from ..plotting.dynamics import plot_trajectory
-    from ..scene import load_scene
+    from ..scene import check_steady_window, load_scene
 
     scene = load_scene(args.scene)
-    if args.duration_s is not None and not (args.duration_s > 0 and math.isfinite(args.duration_s)):
-        raise SceneError(f"--duration-s = {args.duration_s!r}: allowed (0, inf)")
+    if args.duration_s is not None:
+        if not (args.duration_s > 0 and math.isfinite(args.duration_s)):
+            raise SceneError(f"--duration-s = {args.duration_s!r}: allowed (0, inf)")
+        check_steady_window(scene.excitation, scene.run.settle_periods, args.duration_s,
+                            name="--duration-s")
     result = simulate(scene, duration=args.duration_s)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)

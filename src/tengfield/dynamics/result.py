@@ -124,10 +124,17 @@ def run_span(scene, duration: float | None) -> tuple[float, float, float]:
     import math
 
     from ..errors import DynamicsError
+    from ..scene import check_steady_window
 
-    duration = scene.run.duration if duration is None else float(duration)
-    if not (duration > 0 and math.isfinite(duration)):
-        raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
+    if duration is not None:
+        duration = float(duration)
+        if not (duration > 0 and math.isfinite(duration)):
+            raise DynamicsError(f"duration = {duration!r} s: allowed (0, inf)")
+        # the scene file's rule for [run] duration_s, for the duration asked for here
+        check_steady_window(scene.excitation, scene.run.settle_periods, duration,
+                            name="the duration asked for")
+    else:
+        duration = scene.run.duration
     t0 = scene.initial.time
     return duration, t0, t0 + duration
 
