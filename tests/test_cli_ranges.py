@@ -30,3 +30,30 @@ def test_bad_ranges_name_option_text_and_allowed(text, kw, needle):
         parse_range(text, "--frequency-hz", **kw)
     assert "--frequency-hz" in str(info.value) and repr(text) in str(info.value)
     assert needle in str(info.value)
+
+
+def test_a_bad_sweep_point_is_refused_before_the_surrogate(tmp_path, capsys, monkeypatch):
+    """10 Hz leaves no steady window in the default 1 s run (10 settle periods): the sweep
+    names the point and exits 2 before computing (or even looking for) a surrogate."""
+    from tengfield.cli import main
+
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("TENGFIELD_CACHE_DIR", str(cache))
+    out = tmp_path / "out"
+    assert main(["sweep", "--frequency-hz", "20:10:2", "--amplitude-mm", "1", "-o",
+                 str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith("tengfield: error: sweep point frequency_hz = 10, amplitude_mm = 1: "
+                             "[run] settle_periods = 10 leaves no steady window")
+    assert not cache.exists() and not out.exists()
+
+
+def test_sweep_library_names_the_bad_point():
+    from tengfield.scene import default_scene
+    from tengfield.sweep import check_grid
+
+    check_grid(default_scene(), [20.0, 30.0], [1e-3])
+    with pytest.raises(SceneError, match=r"sweep point frequency_hz = 10, amplitude_mm = 1: "
+                                         r"\[run\] settle_periods"):
+        check_grid(default_scene(), [20.0, 10.0], [1e-3, 2e-3])

@@ -103,6 +103,22 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
     return results
 
 
+def check_grid(scene, frequencies, amplitudes) -> None:
+    """Validate the scene of every grid point (frequencies [Hz] x amplitudes [m]) as a
+    scene file would be: a bad point raises :class:`SceneError` naming the point, before
+    any work (the CLI calls this before it computes a surrogate)."""
+    from .errors import SceneError
+
+    for f in frequencies:
+        for a in amplitudes:
+            try:
+                scene.with_values(excitation={"frequency_hz": float(f),
+                                              "amplitude_mm": float(a) * 1e3})
+            except SceneError as exc:
+                raise SceneError(f"sweep point frequency_hz = {float(f):g}, amplitude_mm = "
+                                 f"{float(a) * 1e3:g}: {exc}") from None
+
+
 def sweep(scene, table, frequencies, amplitudes, loads=(), *,
           jobs: int | None = None, comm=None, progress: bool = False) -> list[dict]:
     """:func:`sweep_point` over the grid ``frequencies`` [Hz] x ``amplitudes`` [m]
@@ -120,10 +136,7 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
     from ._mpi import check_jobs, rank_of
 
     check_jobs(jobs, comm)
-    # validate every grid scene first: a bad point fails (on every rank) before any work starts
-    for f in frequencies:
-        for a in amplitudes:
-            scene.with_values(excitation={"frequency_hz": float(f), "amplitude_mm": float(a) * 1e3})
+    check_grid(scene, frequencies, amplitudes)   # on every rank, before any work
     tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
     bar = tqdm(total=len(tasks), desc="sweep", unit="point", file=sys.stderr,
                disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
