@@ -585,12 +585,14 @@ def load_scene(path: str | Path | None) -> Scene:
         blob = p.read_bytes()
     except OSError as exc:
         raise SceneError(f"scene file {str(p)!r} could not be read: {exc.strerror or exc}") from None
-    return parse_scene(_decode_utf8(blob, f"scene file {str(p)!r}"), source=str(p),
+    return parse_scene(decode_utf8(blob, f"scene file {str(p)!r}"), source=str(p),
                        base_dir=p.parent)
 
 
-def _decode_utf8(blob: bytes, what: str) -> str:
-    """UTF-8 text (a leading byte-order mark is dropped), or one-line SceneError."""
+def decode_utf8(blob: bytes, what: str) -> str:
+    """UTF-8 text (a leading byte-order mark is dropped), or one-line SceneError naming
+    ``what`` (every text file tengfield reads: scenes, recorded excitations, measured
+    traces)."""
     if blob.startswith((b"\xff\xfe", b"\xfe\xff")):
         raise SceneError(f"{what} is UTF-16 text: save it as UTF-8")
     try:
@@ -862,7 +864,7 @@ def _read_recorded(exc: dict, base_dir: Path | None):
     except OSError as exc_:
         raise SceneError(f"[excitation] file = {name!r} could not be read: "
                          f"{exc_.strerror or exc_}") from None
-    text = _decode_utf8(blob, f"[excitation] file = {name!r}")   # BOM dropped here
+    text = decode_utf8(blob, f"[excitation] file = {name!r}")   # BOM dropped here
     if not text.strip():
         raise SceneError(f"[excitation] file = {name!r} is empty: expected a header line "
                          f"({exc['time_column']},{exc['signal_column']}) and at least "

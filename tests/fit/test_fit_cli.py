@@ -122,6 +122,8 @@ def _error(main, capsys, argv):
     ("empty", "has 0 data rows"),
     ("no-file", "no such file"),
     ("not-increasing", "time is not strictly increasing"),
+    ("utf-16", "is UTF-16 text: save it as UTF-8"),
+    ("binary", "is binary data (byte 0x"),
 ])
 def test_bad_traces_are_one_line_errors(setup, main, tmp_path, capsys, case, expected):
     path, cache, _, _ = setup
@@ -139,6 +141,10 @@ def test_bad_traces_are_one_line_errors(setup, main, tmp_path, capsys, case, exp
         rows = rows[:0]
     if case != "no-file":
         np.savetxt(csv, rows, delimiter=",", header=header, comments="")
+    if case == "utf-16":
+        csv.write_bytes(csv.read_text().encode("utf-16"))
+    if case == "binary":
+        csv.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff")
     err = _error(main, capsys, ["fit", str(path), "--measured", str(csv), "-o",
                                 str(tmp_path / "out"), "--cache-dir", str(cache)])
     assert expected in err

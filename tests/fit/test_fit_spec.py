@@ -39,6 +39,17 @@ def test_a_run_waveforms_csv_is_read_without_a_columns_table(tmp_path):
     assert trace.span == pytest.approx(0.1)
 
 
+def test_a_utf8_byte_order_mark_is_dropped(tmp_path):
+    """Spreadsheet exports often start with a BOM: the first column is still 'time_s'."""
+    t = np.linspace(0.0, 0.1, 50)
+    path = tmp_path / "bom.csv"
+    lines = ["time_s,V_oc_V"] + [f"{x!r},{2 * x!r}" for x in t]
+    path.write_bytes(b"\xef\xbb\xbf" + "\n".join(lines).encode())
+    trace = read_trace(path, parse_fit_section(parse_scene("")))
+    np.testing.assert_array_equal(trace.time, t)
+    np.testing.assert_array_equal(trace.values["V"], 2 * t)
+
+
 def test_columns_units_and_noise_are_converted_to_si(tmp_path):
     scene = parse_scene('[fit]\ntime_column = "t"\ntime_unit = "us"\n'
                         '[fit.columns.I]\ncolumn = "i"\nunit = "nA"\nnoise = 0.5\n')

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import io
 import math
 import re
 from dataclasses import dataclass, field
@@ -37,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
+from ..scene import decode_utf8
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
@@ -277,8 +279,14 @@ def read_trace(path, spec: FitSpec) -> Trace:
     name = str(path)
     if not path.is_file():
         raise SceneError(f"--measured {name!r}: no such file")
-    with path.open(newline="", encoding="utf-8") as handle:
-        rows = [row for row in csv.reader(handle) if row and not row[0].lstrip().startswith("#")]
+    try:
+        blob = path.read_bytes()
+    except OSError as exc:
+        raise SceneError(f"--measured {name!r} could not be read: "
+                         f"{exc.strerror or exc}") from None
+    text = decode_utf8(blob, f"--measured {name!r}")
+    rows = [row for row in csv.reader(io.StringIO(text, newline=""))
+            if row and not row[0].lstrip().startswith("#")]
     if not rows:
         raise SceneError(f"--measured {name!r} is empty: expected a header row and at least "
                          f"{MIN_SAMPLES} data rows")
