@@ -759,7 +759,7 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
 
 
 def check_steady_window(exc: Excitation, settle_periods: int, duration: float,
-                        name: str = "[run] duration_s") -> None:
+                        name: str = "duration_s") -> None:
     """Refuse a run of ``duration`` [s] that ends before its regime window starts (after
     ``settle_periods`` excitation periods): the same rule for every excitation kind
     ("recorded": frequency_hz is the reference period of the analysis). ``name`` is how
