@@ -99,6 +99,48 @@ def test_unreachable_tolerance_warns_and_flags_not_converged():
     assert not table.converged and table.count == 17
 
 
+def test_a_field_error_above_the_tolerance_warns_with_the_position_and_the_keys():
+    """The solver's own estimate above [field] tolerance (a mesh too coarse for the device)
+    is a warning naming the largest estimate, where, and what to change."""
+    import dataclasses
+
+    def coarse_solver(scene, z, *, comm=None, **_):
+        result = fx.plate_model_solve(scene, z)
+        return dataclasses.replace(result, relative_error_estimate=0.02 + 0.1 * z)
+
+    scene = fx.scene_with(field={"tolerance": 1e-2})
+    with pytest.warns(RuntimeWarning) as record:
+        table = surrogate.precompute(scene, solve=coarse_solver, solve_comm=SOLVE_COMM)
+    messages = [str(w.message) for w in record if "field error estimate" in str(w.message)]
+    assert len(messages) == 1
+    assert messages[0] == (f"surrogate: field error estimate up to "
+                           f"{np.max(table.field_error):.3g} ({table.count} of {table.count} "
+                           "positions) is above [field] tolerance = 0.01: lower [field] "
+                           "mesh_size_mm or raise degree")
+    assert np.max(table.field_error) >= 0.02 + 0.1 * 0.5 * scene.device.stroke
+    assert table.converged            # the interpolation itself met the tolerance
+
+
+def test_a_cached_table_that_misses_its_tolerance_warns_again(tmp_path):
+    """Reading an unconverged table from the cache warns as computing it did: a second run
+    is not quieter than the first."""
+    import warnings
+
+    scene = fx.scene_with(field={"tolerance": 1e-8})
+    with pytest.warns(RuntimeWarning, match="interpolation error estimate"):
+        surrogate.obtain_table(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        table, outcome = surrogate.obtain_table(scene, cache_dir=tmp_path,
+                                                solve=fx.plate_model_solve)
+    assert outcome.status == "cached" and not table.converged
+    assert [str(w.message) for w in record
+            if "interpolation error estimate" in str(w.message)] == [
+        f"surrogate: interpolation error estimate {table.interpolation_error:.3g} is above "
+        f"[field] tolerance = 1e-08 after {table.count} positions (precompute "
+        "--max-positions refines further)"]
+
+
 def test_curves_reference_state_and_exact_derivative():
     scene = fx.scene_with(field={"tolerance": 1e-6})
     table = model_table(scene, max_positions=257)

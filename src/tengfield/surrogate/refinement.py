@@ -101,6 +101,35 @@ def _field_error_rule(sample_z, where: str, others: str) -> str:
             f"x {1.0 + FIELD_ERROR_MARGIN:g} {others}")
 
 
+def accuracy_problems(table) -> list[str]:
+    """What in ``table`` misses its ``[field] tolerance`` (the relative accuracy target of
+    the field and the surrogate): the interpolation error estimate, the largest field
+    error estimate. One line each; empty when both are within it."""
+    tolerance = float(table.tolerance)
+    if not math.isfinite(tolerance):
+        return []
+    problems = []
+    if table.interpolation_error > tolerance:
+        problems.append(f"surrogate: interpolation error estimate {table.interpolation_error:.3g} "
+                        f"is above [field] tolerance = {tolerance:g} after {table.count} "
+                        f"positions (precompute --max-positions refines further)")
+    field_error = np.asarray(table.field_error, dtype=float)
+    above = np.count_nonzero(field_error > tolerance)     # NaN compares False
+    if above:
+        problems.append(f"surrogate: field error estimate up to {np.nanmax(field_error):.3g} "
+                        f"({above} of {field_error.size} positions) is above [field] tolerance "
+                        f"= {tolerance:g}: lower [field] mesh_size_mm or raise degree")
+    return problems
+
+
+def warn_accuracy(table, comm, stacklevel: int = 3) -> None:
+    """Rank 0 of ``comm`` warns each of :func:`accuracy_problems` (``RuntimeWarning``),
+    whether the table was just computed or read from the cache."""
+    if rank_of(comm) == 0:
+        for problem in accuracy_problems(table):
+            warnings.warn(problem, RuntimeWarning, stacklevel=stacklevel)
+
+
 def _converged_or_warn(estimate: float, tolerance: float, comm, message: str) -> bool:
     """``estimate <= tolerance``; if not, rank 0 of ``comm`` warns ``message``
     (``RuntimeWarning`` pointing at the caller of the precompute function)."""
@@ -205,14 +234,13 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     if bar is not None:
         bar.n = bar.total
         bar.close()
-    converged = _converged_or_warn(
-        estimate, tolerance, comm, f"surrogate: interpolation error estimate {estimate:.3g} is "
-        f"above [field] tolerance = {tolerance:g} after {table.count} positions "
-        f"(max_positions = {max_positions})")
     rule = (_field_error_rule(sample_at, "", "at the other positions") if sampled
             else "measured at every position")
-    return dataclasses.replace(
-        table, interpolation_error=estimate, tolerance=tolerance, converged=converged,
-        error_history=history, field_hash=scene.field_hash(),
+    table = dataclasses.replace(
+        table, interpolation_error=estimate, tolerance=tolerance,
+        converged=bool(estimate <= tolerance), error_history=history,
+        field_hash=scene.field_hash(),
         provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
                     "field_error_rule": rule, "solver_fingerprint": solver_fingerprint()})
+    warn_accuracy(table, comm)
+    return table

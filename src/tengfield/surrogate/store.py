@@ -435,6 +435,8 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     path = cache_path(scene, cache_dir)
     table, status, reason = load_cached(path, scene, comm)
     if table is not None:
+        from .refinement import warn_accuracy
+        warn_accuracy(table, comm)      # as when it was computed: a cache hit is no excuse
         return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
     table = precompute(scene, comm=comm, solve=solve, progress=progress,
                        command_line=command_line)
