@@ -99,7 +99,8 @@ def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, m
     before = snapshot(out_dir)
     written = []
 
-    def full_disk(result, path):   # trajectory.csv is already written when this runs
+    def full_disk(result, path):   # half a file written, then the disk is full
+        Path(path).write_text("time_s,plate\n0.0123,lo")
         written.extend(p.name for p in Path(path).parent.iterdir())
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
@@ -107,7 +108,7 @@ def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, m
     longer = short_scene.with_name("longer.toml")
     longer.write_text(short_scene.read_text().replace("0.3", "0.5"))
     code, out, err = run_main(["dynamics", longer, "-o", out_dir], capsys)
-    assert "trajectory.csv" in written                       # the failure came after a file
+    assert "impacts.csv" in written                     # the failure left a partial file
     assert code == 1
     assert err == f"tengfield: error: No space left on device: {out_dir / 'impacts.csv'}\n"
     assert snapshot(out_dir) == before                         # old set intact, nothing partial
