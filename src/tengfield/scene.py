@@ -255,6 +255,12 @@ AUTO_KEYS = {("field", "domain_radius_mm")}
 MAX_SAMPLES = 2e7
 #: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
 MAX_PERIODS = 1e6
+#: ``[array]`` cells with their own dynamics (a spread set) x excitation periods: each
+#: cell-period keeps about 1.1 kB of trajectory (455 cells x 1000 periods: 510 MB,
+#: benchmarks/harvest_array_speed.py), so 5e6 is about 5.6 GB.
+MAX_ARRAY_CELL_PERIODS = 5e6
+#: bytes of trajectory per cell-period (the estimate in the message)
+ARRAY_BYTES_PER_CELL_PERIOD = 1.1e3
 #: Events per period the impact map provisions (its first allocation); with
 #: MAX_PERIODS this bounds the first allocation at 1.6e7 events (1.3 GB).
 EVENTS_PER_PERIOD_ESTIMATE = 16
@@ -753,6 +759,7 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     circ = Circuit(**values["circuit"])
     arr = Array(**values["array"])
     _check_harvest(dev, circ, arr)
+    _check_array_work(arr, exc, run)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
                  run=run, field=field_value, circuit=circ, array=arr,
                  raw=copy.deepcopy(data), source=source, text=text)
@@ -769,6 +776,23 @@ def check_steady_window(exc: Excitation, settle_periods: int, duration: float,
         raise SceneError(
             f"[run] settle_periods = {settle_periods} leaves no steady window: "
             f"settle_periods / frequency_hz = {settle:g} s must be < {name} = {duration:g}")
+
+
+def _check_array_work(arr: Array, exc: Excitation, run: Run) -> None:
+    """Refuse an ``[array]`` whose cells' trajectories would not fit in memory: every cell
+    of a spread set has its own dynamics, kept for the electrical stage (identical cells
+    share one)."""
+    spread = arr.phase_spread > 0 or arr.restitution_spread > 0 or arr.velocity_spread > 0
+    if arr.cells == 0 or not spread:
+        return
+    cell_periods = arr.cells * run.duration * exc.frequency
+    if cell_periods > MAX_ARRAY_CELL_PERIODS:
+        raise SceneError(
+            f"[array] cells x [run] duration_s x [excitation] frequency_hz = {arr.cells} x "
+            f"{run.duration:g} x {exc.frequency:g} = {cell_periods:.3g} cell-periods: allowed "
+            f"<= {MAX_ARRAY_CELL_PERIODS:.0e} (each cell keeps its trajectory, about "
+            f"{cell_periods * ARRAY_BYTES_PER_CELL_PERIOD / 1e9:.3g} GB here; fewer cells or "
+            "a shorter run)")
 
 
 def _check_work(exc: Excitation, run: Run) -> None:
