@@ -164,3 +164,29 @@ def test_an_array_whose_trajectories_would_not_fit_is_refused_at_load():
     assert parse_scene(f"[array]\ncells = {cells}\nrestitution_spread = 0.1\n").array.cells == cells
     with pytest.raises(SceneError, match="cell-periods"):
         parse_scene(f"[array]\ncells = {cells + 1}\nrestitution_spread = 0.1\n")
+
+
+def test_trajectory_bundle_equals_each_trajectory_bit_for_bit():
+    """The compiled bundle (one call per chunk for every cell) gives exactly the values of
+    sampling each cell's trajectory, for chunks of any size and cells of any phase;
+    trajectories that differ in stroke are refused."""
+    from tengfield.dynamics.impact import TrajectoryBundle
+    from tengfield.scene import parse_scene
+
+    scene = parse_scene("[array]\ncells = 40\nrestitution_spread = 0.5\n"
+                        "initial_phase_spread_deg = 180\ninitial_velocity_spread_m_per_s = 0.3\n")
+    trajectories = [tr for tr, _ in array.simulate_cells(scene, array.draw_cells(scene), jobs=1)]
+    bundle = TrajectoryBundle(trajectories)
+    t = np.sort(np.random.default_rng(3).uniform(0.0, scene.run.duration, 3001))
+    for rows in (1, 7, 500, t.size):
+        for lo in range(0, t.size, rows):
+            times = t[lo:lo + rows]
+            z, v = bundle(times)
+            for j, tr in enumerate(trajectories):
+                zj, vj, _ = tr(times)
+                np.testing.assert_array_equal(z[:, j], zj)
+                np.testing.assert_array_equal(v[:, j], vj)
+    other = array.simulate_cells(scene.with_values(device={"gap_mm": 2.0}),
+                                 array.draw_cells(scene)[:1], jobs=1)[0][0]
+    with pytest.raises(ValueError, match="differ in stroke"):
+        TrajectoryBundle([trajectories[0], other])

@@ -273,11 +273,18 @@ def _identical(scaled, nominal, curves, trajectory, n) -> dict:
 
 
 def _evaluate(curves, trajectories, times):
-    """(Q_SC, C_T, I_SC) of every trajectory at ``times``: (rows, cells) arrays."""
-    z = np.empty((times.size, len(trajectories)))
-    v = np.empty_like(z)
-    for j, traj in enumerate(trajectories):
-        z[:, j], v[:, j], _ = traj(times)
+    """(Q_SC, C_T, I_SC) of every trajectory at ``times``: (rows, cells) arrays.
+    ``trajectories``: a :class:`TrajectoryBundle` (one compiled call) or a list of
+    callables (one call each)."""
+    from .dynamics.impact import TrajectoryBundle
+
+    if isinstance(trajectories, TrajectoryBundle):
+        z, v = trajectories(times)
+    else:
+        z = np.empty((times.size, len(trajectories)))
+        v = np.empty_like(z)
+        for j, traj in enumerate(trajectories):
+            z[:, j], v[:, j], _ = traj(times)
     if curves is None:
         zero = np.zeros_like(z)
         return zero, np.full_like(z, 1e-15), zero
@@ -317,6 +324,7 @@ def _spline_eval(z, v, knots, cq, cc, stroke):
 
 def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
     """Cells with different dynamics, walked in time chunks."""
+    from .dynamics.impact import TrajectoryBundle
     from .harvest import Harvester
 
     kind = scene.circuit.kind
@@ -342,9 +350,10 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
             harvesters = [Harvester(g if connection == "rectified-parallel" else 1, **bare)]
         ref_harvester = Harvester(1, **bare)
     parts, ref_parts = [], []
+    bundle = TrajectoryBundle(trajectories)      # every cell sampled in one call per chunk
     for lo in range(0, t.size, rows):
         times = t[lo:lo + rows]
-        q, c, i = _evaluate(curves, trajectories, times)
+        q, c, i = _evaluate(curves, bundle, times)
         rq, rc, ri = _evaluate(curves, [nominal.sample], times)
         block = slice(lo, lo + times.size)
         fundamental += basis[block] @ q

@@ -552,13 +552,31 @@ def run_impact_map(kind, par, x, c, g, gap, t_start, t_end, z_start, v_start,
 
 
 @njit(cache=True)
+def _segment_state(t, mode, t0, z0, v0, y0, yd0, y, yd, g, gap):
+    """Exact (z, v) at time ``t`` in a stored segment (mode, start t0, relative state
+    z0, v0, table y0, yd0 at t0) with the table at (y, yd) at ``t``; flight values are
+    clamped to [0, gap] (only the first micro-arc of a collapsed chatter sequence can
+    leave it). Scalars only: called per sample, an array argument would cost a
+    reference count each (3x slower)."""
+    if mode == STUCK_LOWER:
+        return 0.0, 0.0
+    if mode == STUCK_UPPER:
+        return gap, 0.0
+    s = t - t0
+    z = z0 + v0 * s - 0.5 * g * s * s - (y - y0 - yd0 * s)
+    v = v0 - g * s - (yd - yd0)
+    if z < 0.0:
+        return 0.0, 0.0
+    if z > gap:
+        return gap, 0.0
+    return z, v
+
+
+@njit(cache=True)
 def sample_segments(times, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
                     g, gap, kind, par, x, c):
-    """Exact (z, v, y) at sorted or unsorted ``times`` from the stored segments.
-
-    Flight values are clamped to [0, gap] (only the first micro-arc of a
-    collapsed chatter sequence can leave that range).
-    """
+    """Exact (z, v, y) at sorted or unsorted ``times`` from the stored segments
+    (:func:`_segment_state`)."""
     n = times.size
     zs = np.empty(n)
     vs = np.empty(n)
@@ -571,26 +589,35 @@ def sample_segments(times, n_seg, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
             i = 0
         y, yd, _, _ = table_state(t, kind, par, x, c)
         ys[k] = y
-        mode = seg_mode[i]
-        if mode == STUCK_LOWER:
-            zs[k] = 0.0
-            vs[k] = 0.0
-        elif mode == STUCK_UPPER:
-            zs[k] = gap
-            vs[k] = 0.0
-        else:
-            s = t - seg_t[i]
-            z = seg_z[i] + seg_v[i] * s - 0.5 * g * s * s - (y - seg_y[i] - seg_yd[i] * s)
-            v = seg_v[i] - g * s - (yd - seg_yd[i])
-            if z < 0.0:
-                z = 0.0
-                v = 0.0
-            elif z > gap:
-                z = gap
-                v = 0.0
-            zs[k] = z
-            vs[k] = v
+        zs[k], vs[k] = _segment_state(t, seg_mode[i], seg_t[i], seg_z[i], seg_v[i], seg_y[i],
+                                      seg_yd[i], y, yd, g, gap)
     return zs, vs, ys
+
+
+@njit(cache=True)
+def sample_many(times, offsets, seg_t, seg_mode, seg_z, seg_v, seg_y, seg_yd,
+                g, gap, kind, pars, x, c, zs, vs):
+    """(z, v) of many trajectories at the sorted ``times``, into ``zs``, ``vs`` of shape
+    (trajectories, times): trajectory j is segments ``offsets[j]:offsets[j + 1]`` of the
+    concatenated arrays with table parameters ``pars[j]`` (the values of
+    :func:`sample_segments` on each, in one call: each trajectory's segment is found
+    once, then followed forward)."""
+    n = times.size
+    m = offsets.size - 1
+    if n == 0:
+        return
+    for j in range(m):
+        lo = offsets[j]
+        hi = offsets[j + 1]
+        par = pars[j]
+        i = lo + max(np.searchsorted(seg_t[lo:hi], times[0], side="right") - 1, 0)
+        for k in range(n):
+            t = times[k]
+            while i + 1 < hi and seg_t[i + 1] <= t:
+                i += 1
+            y, yd, _, _ = table_state(t, kind, par, x, c)
+            zs[j, k], vs[j, k] = _segment_state(t, seg_mode[i], seg_t[i], seg_z[i], seg_v[i],
+                                                seg_y[i], seg_yd[i], y, yd, g, gap)
 
 
 @njit(cache=True)

@@ -80,6 +80,52 @@ class Trajectory:
         return bool(np.any(hit))
 
 
+def _same_array(a: np.ndarray, b: np.ndarray) -> bool:
+    return a is b or (a.shape == b.shape and bool(np.array_equal(a, b)))
+
+
+class TrajectoryBundle:
+    """Many :class:`Trajectory` objects sampled together: ``bundle(times)`` gives the
+    (z, dz/dt) arrays of shape (times, trajectories) in one compiled call (the same values
+    as calling each; an ``[array]`` of N cells is sampled chunk by chunk without N Python
+    calls per chunk). The trajectories must share the stroke, g and the table kind (and,
+    for a recorded table, its data); sine tables may differ in amplitude, frequency and
+    phase."""
+
+    def __init__(self, trajectories):
+        trajectories = list(trajectories)
+        if not trajectories:
+            raise ValueError("TrajectoryBundle needs at least one trajectory")
+        first = trajectories[0]
+        for tr in trajectories[1:]:
+            same = (tr.stroke == first.stroke and tr.g == first.g
+                    and tr.table.kind == first.table.kind
+                    and tr.table.params.shape == first.table.params.shape
+                    and _same_array(tr.table.breaks, first.table.breaks)
+                    and _same_array(tr.table.coeffs, first.table.coeffs))
+            if not same:
+                raise ValueError("TrajectoryBundle: the trajectories differ in stroke, g or "
+                                 "table data")
+        sizes = np.array([tr.seg_t.size for tr in trajectories], dtype=np.int64)
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        for name in ("seg_t", "seg_mode", "seg_z", "seg_v", "seg_y", "seg_yd"):
+            setattr(self, name, np.concatenate([getattr(tr, name) for tr in trajectories]))
+        self.pars = np.ascontiguousarray(np.stack([tr.table.params for tr in trajectories]))
+        self.count = len(trajectories)
+        self._first = first
+
+    def __call__(self, times: np.ndarray):
+        """(z, dz/dt) at the sorted ``times`` [s]: arrays (times, trajectories)."""
+        times = np.ascontiguousarray(times, dtype=float)
+        z = np.empty((self.count, times.size))     # filled row by row (one trajectory each)
+        v = np.empty_like(z)
+        tb = self._first.table
+        K.sample_many(times, self.offsets, self.seg_t, self.seg_mode, self.seg_z, self.seg_v,
+                      self.seg_y, self.seg_yd, self._first.g, self._first.stroke, tb.kind,
+                      self.pars, tb.breaks, tb.coeffs, z, v)
+        return z.T, v.T
+
+
 def integrate(table: TableMotion, stroke: float, restitution: Restitution, *, t_start: float,
               t_end: float, gap0: float = 0.0, velocity0: float = 0.0, period: float,
               g: float = G, max_events_per_period: int = MAX_EVENTS_PER_PERIOD,
