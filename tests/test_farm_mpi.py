@@ -231,3 +231,37 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
     assert "error on rank 1 of 2" in proc.stderr
     assert "impact map diverged at" in proc.stderr
     assert "finished" not in proc.stdout
+
+
+@pytest.mark.slow
+def test_one_process_commands_under_mpirun_are_refused_once(tmp_path, cli_command):
+    """`tengfield dynamics` (one trajectory) under mpirun -n 2 used to run on both ranks,
+    writing the same files at once: now one error line (from rank 0), a non-zero exit and
+    no output directory."""
+    needs_mpirun()
+    out = tmp_path / "out"
+    proc = subprocess.run(["timeout", "100", "mpirun", "-n", "2"]
+                          + cli_command("dynamics", "--duration-s", "2", "-o", str(out)),
+                          capture_output=True, text=True, env=mpi_env(), timeout=120)
+    assert proc.returncode != 0
+    ours = [line for line in proc.stderr.splitlines() if line.startswith("tengfield")]
+    assert ours == ["tengfield: error: tengfield dynamics runs on one process (one trajectory; "
+                    "`tengfield map` spreads many over the ranks): start it without mpirun"]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("rank, lines", [("0", 1), ("1", 0)])
+@pytest.mark.parametrize("command", [["dynamics"], ["fit", "--targets", "V_pp_V=4.2"]])
+def test_one_process_commands_see_the_launcher(tmp_path, monkeypatch, capsys, rank, lines,
+                                               command):
+    """The check reads the launcher's environment (no MPI initialised): rank 0 alone says
+    why, every rank exits 2 before any output directory exists."""
+    from tengfield.cli import main
+
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", rank)
+    out = tmp_path / "out"
+    assert main([*command, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == lines and all("start it without mpirun" in e for e in err)
+    assert not out.exists()

@@ -156,6 +156,14 @@ def _mpi_size() -> int:
     return 1
 
 
+def _mpi_rank() -> int:
+    for key in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
+        value = os.environ.get(key)
+        if value and value.isdigit():
+            return int(value)
+    return 0
+
+
 class _PathRewriter(io.TextIOBase):
     """Writes through to ``stream`` with the staging directory's path shown as DIR."""
 
@@ -183,6 +191,12 @@ class _PathRewriter(io.TextIOBase):
 
 
 def _run_command(parser: argparse.ArgumentParser, args) -> int:
+    if _mpi_size() > 1 and getattr(args, "one_process", None):
+        # one process's work: N ranks would each do it and write the same files at once
+        if _mpi_rank() == 0:
+            print(f"tengfield: error: tengfield {args.command} runs on one process "
+                  f"({args.one_process}): start it without mpirun", file=sys.stderr)
+        return 2
     if hasattr(args, "jobs"):   # before any output directory is made
         from ._mpi import check_jobs
         from .commands._common import world_if_parallel

@@ -23,7 +23,8 @@ def register(sub) -> None:
                    help="simulated time [s] (default: [run] duration_s)")
     p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
                    help="skip the PNG files (the CSVs and summary.json are written)")
-    p.set_defaults(func=_run_dynamics)
+    p.set_defaults(func=_run_dynamics, one_process="one trajectory; `tengfield map` spreads "
+                                                   "many over the ranks")
 
     m = scene_command(sub, "map", output="map-out", help="regime map over frequency x amplitude",
                       description="Writes map.csv and map.png to DIR. Ranges are START:STOP:N "

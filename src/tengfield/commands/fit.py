@@ -44,7 +44,8 @@ def register(sub) -> None:
                         "$XDG_CACHE_HOME/tengfield or ~/.cache/tengfield)")
     p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
                    help="skip fit.png")
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, one_process="the least-squares fit; compute its surrogate under "
+                                          "mpirun with `tengfield precompute` first")
 
 
 def _run(args) -> int:
