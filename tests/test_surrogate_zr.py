@@ -136,6 +136,26 @@ def test_unreachable_tolerance_warns_and_flags_not_converged():
     assert not table.converged and table.shape == (17, 3)
 
 
+def test_a_cached_unconverged_table_warns_again(tmp_path):
+    """Read back from the cache, a (z, r) table that missed its tolerance warns as it did
+    when it was computed (the same line), instead of being silent."""
+    import warnings
+
+    kw = dict(cache_dir=tmp_path, solve=zr_model_solve, tolerance=1e-9, max_positions=17,
+              max_offsets=3)
+    with pytest.warns(RuntimeWarning, match="above the tolerance") as first:
+        radial.obtain_radial_table(SCENE, **kw)
+    with warnings.catch_warnings(record=True) as again:
+        warnings.simplefilter("always")
+        table, outcome = radial.obtain_radial_table(SCENE, **kw)
+    assert outcome.status == "cached" and not table.converged
+    said = [str(w.message) for w in again if "above the tolerance" in str(w.message)]
+    assert said == [str(w.message) for w in first if "above the tolerance" in str(w.message)]
+    assert said == [f"(z, r) surrogate: interpolation error estimate "
+                    f"{table.interpolation_error:.3g} is above the tolerance 1e-09 after 17 x 3 "
+                    "points"]
+
+
 def test_axis_is_the_one_dimensional_surrogate_and_flat_in_r():
     """r = 0 reproduces the 1-D surrogate of the same solver; dQ/dr = dC/dr = 0 there."""
     table = table_of(SCENE, tolerance=1e-4)

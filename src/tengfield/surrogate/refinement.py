@@ -122,21 +122,18 @@ def accuracy_problems(table) -> list[str]:
     return problems
 
 
-def warn_accuracy(table, comm, stacklevel: int = 3) -> None:
-    """Rank 0 of ``comm`` warns each of :func:`accuracy_problems` (``RuntimeWarning``),
-    whether the table was just computed or read from the cache."""
+def warn_problems(problems: list[str], comm, stacklevel: int = 3) -> None:
+    """Rank 0 of ``comm`` warns each line of ``problems`` (``RuntimeWarning`` pointing at
+    the caller's caller): a surrogate that misses its tolerance says so whether it was
+    just computed or read from the cache."""
     if rank_of(comm) == 0:
-        for problem in accuracy_problems(table):
-            warnings.warn(problem, RuntimeWarning, stacklevel=stacklevel)
+        for problem in problems:
+            warnings.warn(problem, RuntimeWarning, stacklevel=stacklevel + 1)
 
 
-def _converged_or_warn(estimate: float, tolerance: float, comm, message: str) -> bool:
-    """``estimate <= tolerance``; if not, rank 0 of ``comm`` warns ``message``
-    (``RuntimeWarning`` pointing at the caller of the precompute function)."""
-    converged = estimate <= tolerance
-    if not converged and rank_of(comm) == 0:
-        warnings.warn(message, RuntimeWarning, stacklevel=3)
-    return converged
+def warn_accuracy(table, comm) -> None:
+    """:func:`warn_problems` of :func:`accuracy_problems` (the 1-D surrogate)."""
+    warn_problems(accuracy_problems(table), comm, stacklevel=3)
 
 
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
