@@ -148,7 +148,7 @@ def test_cli_array_run(tmp_path, run_cli, cli_env):
 
 
 def test_an_array_whose_trajectories_would_not_fit_is_refused_at_load():
-    """1e6 spread cells x 20 periods (about 22 GB of trajectories) is a one-line error when
+    """1e6 spread cells x 20 periods (about 28 GB at the peak) is a one-line error when
     the scene is read, before any field or dynamics work; identical cells share one
     trajectory and are not limited."""
     from tengfield.errors import SceneError
@@ -156,8 +156,8 @@ def test_an_array_whose_trajectories_would_not_fit_is_refused_at_load():
 
     with pytest.raises(SceneError, match=r"\[array\] cells x \[run\] duration_s x \[excitation\] "
                                          r"frequency_hz = 1000000 x 1 x 20 = 2e\+07 cell-periods: "
-                                         r"allowed <= 5e\+06 \(each cell keeps its trajectory, "
-                                         r"about 22 GB here"):
+                                         r"allowed <= 5e\+06 \(each cell keeps its trajectory: "
+                                         r"about 28 GB here"):
         parse_scene("[array]\ncells = 1000000\nrestitution_spread = 0.1\n")
     assert parse_scene("[array]\ncells = 1000000\n").array.cells == 10**6
     cells = int(MAX_ARRAY_CELL_PERIODS // 20)

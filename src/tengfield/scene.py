@@ -255,12 +255,13 @@ AUTO_KEYS = {("field", "domain_radius_mm")}
 MAX_SAMPLES = 2e7
 #: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
 MAX_PERIODS = 1e6
-#: ``[array]`` cells with their own dynamics (a spread set) x excitation periods: each
-#: cell-period keeps about 1.1 kB of trajectory (455 cells x 1000 periods: 510 MB,
-#: benchmarks/harvest_array_speed.py), so 5e6 is about 5.6 GB.
+#: ``[array]`` cells with their own dynamics (a spread set) x excitation periods: the
+#: run's peak memory is about 1.4 kB per cell-period (455 cells x 1000 periods: 642 MB,
+#: benchmarks/harvest_array_speed.py; the segments are kept twice, per cell and in one
+#: bundle), so 5e6 is about 7 GB.
 MAX_ARRAY_CELL_PERIODS = 5e6
-#: bytes of trajectory per cell-period (the estimate in the message)
-ARRAY_BYTES_PER_CELL_PERIOD = 1.1e3
+#: peak bytes per cell-period (the estimate in the message)
+ARRAY_BYTES_PER_CELL_PERIOD = 1.4e3
 #: Events per period the impact map provisions (its first allocation); with
 #: MAX_PERIODS this bounds the first allocation at 1.6e7 events (1.3 GB).
 EVENTS_PER_PERIOD_ESTIMATE = 16
@@ -790,7 +791,7 @@ def _check_array_work(arr: Array, exc: Excitation, run: Run) -> None:
         raise SceneError(
             f"[array] cells x [run] duration_s x [excitation] frequency_hz = {arr.cells} x "
             f"{run.duration:g} x {exc.frequency:g} = {cell_periods:.3g} cell-periods: allowed "
-            f"<= {MAX_ARRAY_CELL_PERIODS:.0e} (each cell keeps its trajectory, about "
+            f"<= {MAX_ARRAY_CELL_PERIODS:.0e} (each cell keeps its trajectory: about "
             f"{cell_periods * ARRAY_BYTES_PER_CELL_PERIOD / 1e9:.3g} GB here; fewer cells or "
             "a shorter run)")
 
