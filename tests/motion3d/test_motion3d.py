@@ -326,3 +326,33 @@ def test_simulate_dispatches_the_3d_model():
     result = tf.simulate(scene)
     assert isinstance(result, Motion3DResult)
     assert np.all(result.gap >= -1e-4) and np.all(result.gap <= scene.device.stroke + 1e-4)
+
+
+def test_run_writes_the_same_3d_dynamics_files_as_the_dynamics_command(tmp_path):
+    """`tengfield run` and `tengfield dynamics` write the dynamics through one function: a
+    3D scene's run now has the 3D trajectory columns, contacts.csv and trajectory3d.png
+    (it used to write the 1-D files only), identical to the dynamics command's."""
+    import csv
+
+    import plate_model as fx
+
+    import tengfield as tf
+    from tengfield.cli import main
+
+    scene_text = "[contact]\nmodel = '3d'\n[run]\nduration_s = 0.3\nsettle_periods = 2\n"
+    scene_file = tmp_path / "s.toml"
+    scene_file.write_text(scene_text)
+    scene = tf.scene.load_scene(scene_file)
+    run = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    (tmp_path / "run").mkdir()
+    written = tf.io.write_dynamics_outputs(run, tmp_path / "run", plots=True)
+    names = {p.name for p in written}
+    assert names == {"trajectory.csv", "contacts.csv", "impacts.csv", "trajectory3d.png",
+                     "trajectory.png"}
+    assert main(["dynamics", str(scene_file), "-o", str(tmp_path / "dyn"), "--no-plots"]) == 0
+    for name in ("trajectory.csv", "contacts.csv", "impacts.csv"):
+        assert (tmp_path / "run" / name).read_bytes() == (tmp_path / "dyn" / name).read_bytes()
+    with open(tmp_path / "run" / "trajectory.csv") as fh:
+        header = next(csv.reader(fh))
+    assert header[4:] == ["x_m", "y_m", "radial_m", "vx_m_per_s", "vy_m_per_s",
+                          "spin_x_rad_per_s", "spin_y_rad_per_s", "spin_z_rad_per_s"]

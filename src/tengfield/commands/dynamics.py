@@ -43,12 +43,8 @@ def register(sub) -> None:
 
 
 def _run_dynamics(args) -> int:
-    from concurrent.futures import ThreadPoolExecutor
-
     from ..dynamics import simulate
-    from ..io import write_impacts_csv, write_json, write_trajectory_csv
-    from ..motion3d.output import plot_trajectory3d, write_contacts_csv, write_trajectory3d_csv
-    from ..plotting.dynamics import plot_trajectory
+    from ..io import write_dynamics_files, write_json
     from ..scene import check_steady_window, load_scene
 
     scene = load_scene(args.scene)
@@ -60,30 +56,10 @@ def _run_dynamics(args) -> int:
     result = simulate(scene, duration=args.duration_s)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-
-    table_writers = ([(write_trajectory3d_csv, "trajectory.csv"),
-                      (write_contacts_csv, "contacts.csv")] if scene.contact.model == "3d"
-                     else [(write_trajectory_csv, "trajectory.csv")])
-    table_writers.append((write_impacts_csv, "impacts.csv"))
-
-    # the CSV writer (Arrow) runs without the GIL: the tables are written on other
-    # threads, one each, while this one draws the figure (for 600k impacts the two take
-    # about as long); an error in any is raised here after all have ended
-    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="tengfield-csv") as pool:
-        tables = [pool.submit(write, result, out / name) for write, name in table_writers]
-        summary = result.summary()
-        summary["scene"] = scene.source
-        write_json(out / "summary.json", summary)
-        if not args.no_plots:
-            if scene.contact.model == "3d":
-                plot_trajectory3d(result, out / "trajectory3d.png")
-            plot_trajectory(result, out / "trajectory.png",
-                            title=f"{scene.excitation.amplitude * 1e3:g} mm, "
-                                  f"{scene.excitation.frequency:g} Hz, "
-                                  f"e = {scene.contact.restitution:g}"
-                            if scene.excitation.kind == "sine" else "recorded excitation")
-        for table in tables:
-            table.result()
+    summary = result.summary()
+    summary["scene"] = scene.source
+    write_json(out / "summary.json", summary)
+    write_dynamics_files(result, scene, out, plots=not args.no_plots)
     print(f"regime {summary['regime']}, period {summary['period']}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")
