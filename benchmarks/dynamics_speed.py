@@ -74,9 +74,10 @@ def _child(cmd: list[str]) -> tuple[float, float]:
 
 
 def cli_vs_simulate(tmp: Path, repeats: int = 3) -> dict:
-    """`tengfield dynamics` whole process for 600k impacts (best of ``repeats``) against
-    simulate() warm in this process, and against a process that only imports tengfield
-    and calls simulate() once (what a script pays: start-up, numba cache, the run)."""
+    """`tengfield dynamics` whole process for 600k impacts (best of ``repeats``, the
+    figure drawn by the figure process) against a process that only imports tengfield
+    and calls simulate() once (what a script pays: start-up, numba cache, the run: the
+    headline ratio), and against simulate() warm in this process (best of ``repeats``)."""
     import sys
 
     from tengfield.dynamics import simulate
@@ -88,9 +89,12 @@ def cli_vs_simulate(tmp: Path, repeats: int = 3) -> dict:
                           "duration_s = 3333.3333333333335\nsample_rate_hz = 100.0\n")
     scene = load_scene(scene_file)
     simulate(scene, duration=1.0)
-    c0, w0 = time.process_time(), time.perf_counter()
-    res = simulate(scene)
-    sim_cpu, sim_wall = time.process_time() - c0, time.perf_counter() - w0
+    runs = []
+    for _ in range(repeats):
+        c0, w0 = time.process_time(), time.perf_counter()
+        res = simulate(scene)
+        runs.append((time.perf_counter() - w0, time.process_time() - c0))
+    sim_wall, sim_cpu = min(runs)
     cli = [sys.executable, "-m", "tengfield.cli", "dynamics", str(scene_file), "-o",
            str(tmp / "out")]
     script = [sys.executable, "-c", "from tengfield.dynamics import simulate; "
@@ -99,7 +103,8 @@ def cli_vs_simulate(tmp: Path, repeats: int = 3) -> dict:
     _child(cli)  # numba cache, page cache
     cli_wall, cli_cpu = min(_child(cli) for _ in range(repeats))
     only_wall, only_cpu = min(_child(script) for _ in range(repeats))
-    return {"benchmark": "cli_over_simulate_600k", "value": cli_wall / sim_wall, "unit": "ratio",
+    return {"benchmark": "cli_over_simulate_process_600k", "value": cli_wall / only_wall,
+            "unit": "ratio",
             "detail": f"tengfield dynamics {cli_wall:.2f} s wall ({cli_cpu:.2f} CPU s) vs "
                       f"simulate() warm {sim_wall:.2f} s wall ({sim_cpu:.2f} CPU s): "
                       f"{cli_wall / sim_wall:.2f}x wall, {cli_cpu / sim_cpu:.2f}x CPU; vs a "

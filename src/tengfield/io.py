@@ -136,10 +136,15 @@ def write_csv(path: str | Path, header: list[str], columns: list) -> Path:
 
     arrays = []
     for name, col in zip(header, columns, strict=True):
+        if isinstance(col, pa.Array):       # e.g. a dictionary (categorical) column
+            arrays.append(col)
+            continue
         values = np.asarray(col)
         if values.dtype == bool:
             values = values.astype(np.int8)
-        if values.dtype.kind in "OU":
+        if values.dtype.kind == "U":
+            arrays.append(pa.array(values, type=pa.string()))
+        elif values.dtype.kind == "O":
             arrays.append(pa.array([str(v) for v in values.tolist()], type=pa.string()))
         else:
             arrays.append(pa.array(values))
@@ -162,9 +167,13 @@ def write_trajectory_csv(result, path: str | Path) -> Path:
 
 def write_impacts_csv(result, path: str | Path) -> Path:
     """One row per impact: time_s, plate, speed before/after [m/s] (full precision)."""
+    import pyarrow as pa
+
     imp = result.impacts
+    plate = pa.DictionaryArray.from_arrays(   # the two names, not 600k strings
+        pa.array((imp.plate == "upper").astype(np.int8)), pa.array(["lower", "upper"]))
     return write_csv(path, ["time_s", "plate", "speed_before_m_per_s", "speed_after_m_per_s"],
-                     [imp.time, imp.plate, imp.speed_before, imp.speed_after])
+                     [imp.time, plate, imp.speed_before, imp.speed_after])
 
 
 MAP_COLUMNS = ["frequency_hz", "amplitude_mm", "regime", "period", "max_gap_mm",
@@ -186,15 +195,16 @@ def write_map_csv(result, path: str | Path) -> Path:
 
 
 def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
-                         max_periods: float | None = None) -> list[Path]:
+                         max_periods: float | None = None, figures=None) -> list[Path]:
     """The dynamics' files, for ``tengfield dynamics`` and ``tengfield run`` alike:
     trajectory.csv and impacts.csv (a 3D run: its trajectory columns and contacts.csv),
     and with ``plots`` trajectory.png (the last ``max_periods`` periods; default the
     plot's limit) and, 3D, trajectory3d.png.
 
     Arrow's writer runs without the GIL: the tables are written on other threads, one
-    each, while this one draws the figures (for 600k impacts the two take about as
-    long); an error in any is raised here after all have ended."""
+    each, while trajectory.png is drawn, by ``figures`` (a
+    :class:`tengfield.plotting.process.FigureProcess`) if given, else here. Every file
+    is complete when this returns; an error in any is raised here after all have ended."""
     from concurrent.futures import ThreadPoolExecutor
 
     out = Path(out_dir)
@@ -206,22 +216,32 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
         tables = [(write_trajectory_csv, "trajectory.csv")]
     tables.append((write_impacts_csv, "impacts.csv"))
     written = [out / name for _, name in tables]
-    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="tengfield-csv") as pool:
+    drawing = None
+    if plots:
+        from .plotting.dynamics import draw_trajectory, trajectory_figure
+        exc = scene.excitation
+        title = (f"{exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
+                 f"e = {scene.contact.restitution:g}" if exc.kind == "sine"
+                 else "recorded excitation")
+        data = trajectory_figure(dynamics, max_periods=max_periods, title=title)
+        if figures is not None:
+            drawing = figures.draw(draw_trajectory, data, out / "trajectory.png")
+    # the figure process draws on a core of its own: leave it one
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    threads = max(1, min(len(tables), (cores or 1) - (drawing is not None)))
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="tengfield-csv") as pool:
         pending = [pool.submit(write, dynamics, out / name) for write, name in tables]
         if plots:
-            from .plotting.dynamics import plot_trajectory
             if three_d:
                 plot_trajectory3d(dynamics, out / "trajectory3d.png")
                 written.append(out / "trajectory3d.png")
-            exc = scene.excitation
-            title = (f"{exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
-                     f"e = {scene.contact.restitution:g}" if exc.kind == "sine"
-                     else "recorded excitation")
-            plot_trajectory(dynamics, out / "trajectory.png", max_periods=max_periods,
-                            title=title)
+            if drawing is None:
+                draw_trajectory(data, out / "trajectory.png")
             written.append(out / "trajectory.png")
         for job in pending:
             job.result()
+    if drawing is not None:
+        drawing.result()
     return written
 
 

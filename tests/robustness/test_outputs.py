@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from tengfield import _mpi, cli
+from tengfield.plotting.process import Drawing, FigureProcess
 from tengfield.outputs import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
 
 
@@ -116,17 +117,32 @@ def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, m
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("figure_process", ["1", "0"])
 def test_exception_and_interrupt_keep_the_previous_set(tmp_path, short_scene, capsys,
-                                                       monkeypatch):
+                                                       monkeypatch, figure_process):
+    """A fault while the figure is drawn, here (TENGFIELD_FIGURE_PROCESS=0) or while this
+    process waits for the figure process: the previous set stays, nothing is left."""
+    monkeypatch.setenv("TENGFIELD_FIGURE_PROCESS", figure_process)
     out_dir = tmp_path / "out"
     assert run_main(["dynamics", short_scene, "-o", out_dir], capsys)[0] == 0
     before = snapshot(out_dir)
+    started = []
+    real_init = FigureProcess.__init__
+
+    def init(self):
+        real_init(self)
+        started.append(self._proc)
+
+    monkeypatch.setattr(FigureProcess, "__init__", init)
     for fault, code_expected, line in ((KeyboardInterrupt, 130, "tengfield: interrupted\n"),
                                        (RuntimeError("bug"), None, None)):
         def plot(*a, _fault=fault, **k):
             raise _fault
 
-        monkeypatch.setattr("tengfield.plotting.dynamics.plot_trajectory", plot)
+        if figure_process == "0":
+            monkeypatch.setattr("tengfield.plotting.dynamics.draw_trajectory", plot)
+        else:
+            monkeypatch.setattr(Drawing, "result", plot)
         if code_expected is None:
             with pytest.raises(RuntimeError, match="bug"):   # a bug keeps its traceback
                 cli.main(["dynamics", str(short_scene), "-o", str(out_dir)])
@@ -135,6 +151,12 @@ def test_exception_and_interrupt_keep_the_previous_set(tmp_path, short_scene, ca
             code, out, err = run_main(["dynamics", short_scene, "-o", out_dir], capsys)
             assert code == code_expected and err == line
         assert snapshot(out_dir) == before and no_staging_left(out_dir)
+    assert len(started) == 2
+    for child in started:               # no figure process outlives its command
+        if figure_process == "0":
+            assert child is None
+        else:
+            assert child.poll() == -signal.SIGKILL     # killed at once by the fault
 
 
 @pytest.mark.slow
@@ -214,6 +236,55 @@ def test_ctrl_c_while_writing_and_a_concurrent_run(tmp_path, short_scene, run_cl
     assert proc.returncode == 130
     assert err.endswith("tengfield: interrupted\n") and "Traceback" not in err
     assert snapshot(out_dir) == before and no_staging_left(out_dir)
+
+
+@pytest.mark.slow
+def test_ctrl_c_at_the_terminal_stops_the_figure_process_too(tmp_path, short_scene,
+                                                            cli_command, cli_env, run_cli):
+    """Ctrl-C at a terminal signals the whole process group. Exit 130 with one line, no
+    traceback, the old set kept, and neither the command nor its figure process (which
+    has a group of its own) left behind."""
+    out_dir = tmp_path / "out"
+    assert run_cli("dynamics", short_scene, "-o", out_dir, cwd=tmp_path).returncode == 0
+    before = snapshot(out_dir)
+    long_scene = tmp_path / "long.toml"
+    long_scene.write_text("[run]\nduration_s = 300\n")
+    proc = subprocess.Popen(cli_command("dynamics", long_scene, "-o", out_dir), cwd=tmp_path,
+                            env=cli_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not list(out_dir.glob(STAGING_PREFIX + "*/trajectory.csv")):
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        children = child_pids(proc.pid)
+        assert len(children) == 1                 # the figure process
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130
+    assert err == "tengfield: interrupted\n", err
+    assert snapshot(out_dir) == before and no_staging_left(out_dir)
+    deadline = time.monotonic() + 10
+    while Path(f"/proc/{children[0]}").exists():
+        assert time.monotonic() < deadline, "the figure process outlived the command"
+        time.sleep(0.05)
+
+
+def child_pids(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
 
 
 # -- #8.10: --jobs bounds -----------------------------------------------------------------

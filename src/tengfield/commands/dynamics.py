@@ -43,6 +43,16 @@ def register(sub) -> None:
 
 
 def _run_dynamics(args) -> int:
+    from contextlib import nullcontext
+
+    from ..plotting.process import FigureProcess
+
+    # matplotlib loads in a second process while this one simulates
+    with FigureProcess() if not args.no_plots else nullcontext() as figures:
+        return _dynamics(args, figures)
+
+
+def _dynamics(args, figures) -> int:
     from ..dynamics import simulate
     from ..io import write_dynamics_files, write_json
     from ..scene import check_steady_window, load_scene
@@ -59,7 +69,7 @@ def _run_dynamics(args) -> int:
     summary = result.summary()
     summary["scene"] = scene.source
     write_json(out / "summary.json", summary)
-    write_dynamics_files(result, scene, out, plots=not args.no_plots)
+    write_dynamics_files(result, scene, out, plots=not args.no_plots, figures=figures)
     print(f"regime {summary['regime']}, period {summary['period']}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")

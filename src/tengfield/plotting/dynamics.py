@@ -1,6 +1,8 @@
 """Figures of the dynamics: trajectory (like the paper's Figs. 5a/6a/7a) and regime maps."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..scene import G
@@ -22,14 +24,28 @@ MAX_PLOT_PERIODS = 200
 PLOT_POINTS = 4000
 
 
-def plot_trajectory(result, path, *, title: str | None = None, max_periods: float | None = None):
-    """Ball, lower and upper plate vs time (top) and the gap z(t) (bottom); impacts marked.
+@dataclass(frozen=True)
+class TrajectoryFigure:
+    """What trajectory.png shows, as plain numbers (small and picklable, so that a
+    figure process can draw it): the exact trajectory at PLOT_POINTS times ``t`` [s],
+    the lower plate ``y`` and the gap ``z`` [m], the impacts in that span, the plate
+    distance ``stroke`` [m], the start of the steady window [s] and the title."""
 
-    ``result`` is a :class:`tengfield.dynamics.DynamicsResult`; lengths in mm.
-    ``max_periods`` limits the plot to the last that many excitation periods
-    (at most MAX_PLOT_PERIODS); the curves are the exact trajectory at
-    PLOT_POINTS times, so the cost does not grow with the run.
-    """
+    t: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    impact_time: np.ndarray
+    impact_y: np.ndarray
+    impact_z: np.ndarray
+    impact_upper: np.ndarray     # bool: the impact is on the upper plate
+    stroke: float
+    window_start: float
+    title: str
+
+
+def trajectory_figure(result, *, title: str | None = None,
+                      max_periods: float | None = None) -> TrajectoryFigure:
+    """The numbers of :func:`plot_trajectory` (``result`` a DynamicsResult)."""
     limit = MAX_PLOT_PERIODS if max_periods is None else min(max_periods, MAX_PLOT_PERIODS)
     t_all = result.t
     start = t_all[0]
@@ -44,46 +60,71 @@ def plot_trajectory(result, path, *, title: str | None = None, max_periods: floa
     else:
         z, _, y = result.sample(origin + elapsed)
     t = origin + elapsed
-    stroke_mm = result.stroke * 1e3
+    imp = result.impacts
+    ti, yi, zi, upper = (np.zeros(0),) * 3 + (np.zeros(0, dtype=bool),)
+    if len(imp):
+        sel = (imp.time >= t[0]) & (imp.time <= t[-1])
+        if np.any(sel):
+            ti = imp.time[sel]
+            zi, _, yi = result.sample(ti)
+            upper = imp.plate[sel] != "lower"
+    reg = result.regime
+    head = title or "ball between two vibrating plates"
+    full_title = (f"{head}\nregime: {reg.name}, period {reg.period}, max gap "
+                  f"{reg.max_gap * 1e3:.3g} mm, contacts/period lower "
+                  f"{reg.lower_contacts_per_period:.3g}, upper "
+                  f"{reg.upper_contacts_per_period:.3g}")
+    return TrajectoryFigure(t=t, y=np.asarray(y), z=np.asarray(z), impact_time=ti,
+                            impact_y=np.asarray(yi), impact_z=np.asarray(zi),
+                            impact_upper=np.asarray(upper, dtype=bool),
+                            stroke=float(result.stroke),
+                            window_start=float(result.window_start), title=full_title)
+
+
+def plot_trajectory(result, path, *, title: str | None = None, max_periods: float | None = None):
+    """Ball, lower and upper plate vs time (top) and the gap z(t) (bottom); impacts marked.
+
+    ``result`` is a :class:`tengfield.dynamics.DynamicsResult`; lengths in mm.
+    ``max_periods`` limits the plot to the last that many excitation periods
+    (at most MAX_PLOT_PERIODS); the curves are the exact trajectory at
+    PLOT_POINTS times, so the cost does not grow with the run.
+    """
+    return draw_trajectory(trajectory_figure(result, title=title, max_periods=max_periods),
+                           path)
+
+
+def draw_trajectory(data: TrajectoryFigure, path):
+    """Draw a :class:`TrajectoryFigure` to the PNG ``path``."""
+    t, y, z = data.t, data.y, data.z
+    stroke_mm = data.stroke * 1e3
     fig = new_figure((9, 6))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     ax1.plot(t, y * 1e3, color="0.35", lw=1.2, label="lower plate $y(t)$")
-    ax1.plot(t, (y + result.stroke) * 1e3, color="0.6", lw=1.2, ls="--",
+    ax1.plot(t, (y + data.stroke) * 1e3, color="0.6", lw=1.2, ls="--",
              label=r"upper plate $y + \Delta h$")
     ax1.plot(t, (y + z) * 1e3, color="#d62728", lw=1.4, label="ball bottom $y + z$")
     ax1.fill_between(t, (y + z) * 1e3, y * 1e3, color="#d62728", alpha=0.08)
     ax2.plot(t, z * 1e3, color="#1f77b4", lw=1.3, label="gap $z(t)$")
     ax2.axhline(0.0, color="0.35", lw=0.8)
     ax2.axhline(stroke_mm, color="0.6", lw=0.8, ls="--")
-    imp = result.impacts
-    if len(imp):
-        sel = (imp.time >= t[0]) & (imp.time <= t[-1])
-        zi, _, yi = result.sample(imp.time[sel]) if np.any(sel) else (None, None, None)
-        if np.any(sel):
-            lower = imp.plate[sel] == "lower"
-            upper = ~lower
-            ti = imp.time[sel]
-            for which, marker, colour, label in ((lower, "v", "k", "impact, lower"),
-                                                 (upper, "^", "#9467bd", "impact, upper")):
-                if np.any(which):
-                    ax1.plot(ti[which], (yi[which] + zi[which]) * 1e3, marker, ms=4,
-                             color=colour, label=label)
-                    ax2.plot(ti[which], zi[which] * 1e3, marker, ms=4, color=colour)
+    ti, yi, zi = data.impact_time, data.impact_y, data.impact_z
+    upper = data.impact_upper
+    for which, marker, colour, label in ((~upper, "v", "k", "impact, lower"),
+                                         (upper, "^", "#9467bd", "impact, upper")):
+        if np.any(which):
+            ax1.plot(ti[which], (yi[which] + zi[which]) * 1e3, marker, ms=4,
+                     color=colour, label=label)
+            ax2.plot(ti[which], zi[which] * 1e3, marker, ms=4, color=colour)
     ax1.set_ylabel("position [mm]")
     ax2.set_ylabel("gap $z$ [mm]")
     ax2.set_xlabel("time [s]")
     ax2.set_ylim(-0.05 * stroke_mm, 1.08 * stroke_mm)
-    reg = result.regime
-    head = title or "ball between two vibrating plates"
-    ax1.set_title(f"{head}\nregime: {reg.name}, period {reg.period}, max gap "
-                  f"{reg.max_gap * 1e3:.3g} mm, contacts/period lower "
-                  f"{reg.lower_contacts_per_period:.3g}, upper "
-                  f"{reg.upper_contacts_per_period:.3g}", fontsize=10)
+    ax1.set_title(data.title, fontsize=10)
     ax1.legend(loc="upper right", fontsize=8, ncol=3, framealpha=0.85)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
-        if result.window_start > t[0]:
-            ax.axvspan(t[0], result.window_start, color="0.9", zorder=-1)
+        if data.window_start > t[0]:
+            ax.axvspan(t[0], data.window_start, color="0.9", zorder=-1)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     return path

@@ -1,0 +1,111 @@
+"""tengfield.plotting.process: figures drawn by a second process are the figures drawn
+here, errors come back as errors, and a child that is gone never loses a figure."""
+import os
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import figure_jobs
+from tengfield.dynamics import simulate
+from tengfield.plotting.dynamics import draw_trajectory, trajectory_figure
+from tengfield.plotting.process import FigureProcess
+from tengfield.scene import default_scene
+
+TESTS = Path(__file__).parent
+
+
+@pytest.fixture
+def jobs_importable(monkeypatch):
+    """The child finds tests/figure_jobs.py."""
+    path = os.environ.get("PYTHONPATH")
+    monkeypatch.setenv("PYTHONPATH", str(TESTS) + (os.pathsep + path if path else ""))
+    monkeypatch.delenv("TENGFIELD_FIGURE_PROCESS", raising=False)
+
+
+def test_the_child_draws_the_same_figure(tmp_path, monkeypatch):
+    import matplotlib.image
+
+    monkeypatch.delenv("TENGFIELD_FIGURE_PROCESS", raising=False)
+    scene = default_scene()
+    result = simulate(scene, duration=12 * scene.run.settle_periods / scene.excitation.frequency)
+    data = trajectory_figure(result, title="test")
+    assert data.t.size > 100 and data.impact_time.size > 0
+    with FigureProcess() as figures:
+        assert figures.running
+        drawing = figures.draw(draw_trajectory, data, tmp_path / "child.png")
+        assert drawing.result() == tmp_path / "child.png"
+    draw_trajectory(data, tmp_path / "here.png")
+    child = matplotlib.image.imread(tmp_path / "child.png")
+    here = matplotlib.image.imread(tmp_path / "here.png")
+    assert child.shape == here.shape and np.array_equal(child, here)
+
+
+def test_answers_in_order_and_output_kept_apart(tmp_path, jobs_importable, capfd):
+    with FigureProcess() as figures:
+        drawings = [figures.draw(figure_jobs.noisy, tmp_path / f"{k}.txt") for k in range(3)]
+        pids = [d.result() for d in reversed(drawings)]     # any order of waiting
+    assert len(set(pids)) == 1 and pids[0] != os.getpid()  # all drawn by the child
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["0.txt", "1.txt", "2.txt"]
+    err = capfd.readouterr().err
+    assert err.count("a warning") == 3 and err.count("drawing") == 3
+
+
+def test_errors_come_back_with_their_type(tmp_path, jobs_importable):
+    with FigureProcess() as figures:
+        failing = figures.draw(figure_jobs.broken, 42)
+        missing_dir = figures.draw(figure_jobs.noisy, tmp_path / "no" / "such" / "f.txt")
+        odd = figures.draw(figure_jobs.unpicklable)
+        fine = figures.draw(figure_jobs.noisy, tmp_path / "ok.txt")
+        with pytest.raises(ValueError, match="cannot draw 42") as info:
+            failing.result()
+        assert "in the figure process" in "".join(getattr(info.value, "__notes__", []))
+        with pytest.raises(FileNotFoundError):
+            missing_dir.result()
+        with pytest.raises(RuntimeError, match="figure process"):
+            odd.result()
+        assert fine.result() != os.getpid()     # the child goes on after errors
+    assert (tmp_path / "ok.txt").read_text() == "figure"
+
+
+def test_a_child_that_dies_loses_no_figure(tmp_path, jobs_importable):
+    with FigureProcess() as figures:
+        figures.draw(figure_jobs.die)                # its result() would re-run it here
+        second = figures.draw(figure_jobs.noisy, tmp_path / "after.txt")
+        assert second.result() == os.getpid()        # drawn here instead
+        assert not figures.running
+        third = figures.draw(figure_jobs.noisy, tmp_path / "later.txt")
+        assert third.result() == os.getpid()
+    assert (tmp_path / "after.txt").exists() and (tmp_path / "later.txt").exists()
+
+
+def test_a_child_killed_from_outside(tmp_path, jobs_importable):
+    """Also with SIGPIPE's default action (PETSc installs a handler that aborts): sending
+    to a child that has gone must not kill this process."""
+    previous = signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    try:
+        with FigureProcess() as figures:
+            os.kill(figures._proc.pid, signal.SIGKILL)
+            figures._proc.wait()
+            drawing = figures.draw(figure_jobs.noisy, tmp_path / "f.txt")
+            again = figures.draw(figure_jobs.noisy, tmp_path / "g.txt")
+            assert drawing.result() == os.getpid() and again.result() == os.getpid()
+    finally:
+        signal.signal(signal.SIGPIPE, previous)
+    assert (tmp_path / "f.txt").exists() and (tmp_path / "g.txt").exists()
+
+
+def test_switched_off_draws_here(tmp_path, jobs_importable, monkeypatch):
+    monkeypatch.setenv("TENGFIELD_FIGURE_PROCESS", "0")
+    with FigureProcess() as figures:
+        assert not figures.running and figures._proc is None
+        assert figures.draw(figure_jobs.noisy, tmp_path / "f.txt").result() == os.getpid()
+
+
+def test_an_exception_in_the_block_kills_the_child(jobs_importable):
+    with pytest.raises(KeyboardInterrupt):
+        with FigureProcess() as figures:
+            child = figures._proc
+            raise KeyboardInterrupt
+    assert child.poll() == -signal.SIGKILL and not figures.running
