@@ -160,6 +160,24 @@ class FigureProcess:
         self._stop(kill=exc_type is not None)
 
 
+def _warm_up() -> None:
+    """Draw a tiny figure to memory: fonts, mathtext and the PNG encoder load now, while
+    the parent computes, not in the first real figure (0.04 s of 0.3 s)."""
+    import io
+
+    from . import new_figure
+
+    fig = new_figure((2, 2))
+    ax = fig.subplots()
+    ax.plot([0, 1], [0, 1], "v", label="$y + z$")
+    ax.fill_between([0, 1], [0, 1], alpha=0.1)
+    ax.legend(fontsize=8)
+    ax.set_title("warm-up", fontsize=10)
+    ax.set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(io.BytesIO(), dpi=30)
+
+
 def _serve(stdin, stdout) -> int:
     """The child: draw each job of ``stdin`` and answer (ok, value or exception,
     traceback text) on ``stdout``, in order, until ``stdin`` ends."""
@@ -168,6 +186,7 @@ def _serve(stdin, stdout) -> int:
 
     for name in _PRELOAD:       # while the parent computes
         importlib.import_module(name)
+    _warm_up()
     while True:
         job = _receive(stdin)
         if job is None:
