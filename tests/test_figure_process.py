@@ -109,3 +109,21 @@ def test_an_exception_in_the_block_kills_the_child(jobs_importable):
             child = figures._proc
             raise KeyboardInterrupt
     assert child.poll() == -signal.SIGKILL and not figures.running
+
+
+def test_a_broken_matplotlib_is_one_clear_error(tmp_path, jobs_importable, monkeypatch, capfd):
+    """The child's start-up imports fail quietly; the figure that needs them gets the
+    ImportError, other jobs still run in the child."""
+    fake = tmp_path / "site" / "matplotlib"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError('broken matplotlib')\n")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(fake.parent), os.environ["PYTHONPATH"]]))
+    data = trajectory_figure(simulate(default_scene(), duration=4.0), title="t")
+    with FigureProcess() as figures:
+        figure = figures.draw(draw_trajectory, data, tmp_path / "t.png")
+        other = figures.draw(figure_jobs.noisy, tmp_path / "f.txt")
+        with pytest.raises(ImportError, match="broken matplotlib"):
+            figure.result()
+        assert other.result() != os.getpid()
+    assert not (tmp_path / "t.png").exists()
+    assert "Traceback" not in capfd.readouterr().err

@@ -77,7 +77,7 @@ class FigureProcess:
         self._proc: subprocess.Popen | None = None
         self._replies: list = []
         self._sent = 0
-        if not enabled():
+        if not enabled() or not sys.executable:
             return
         src = str(Path(__file__).resolve().parents[2])   # tengfield importable as here
         path = os.environ.get("PYTHONPATH")
@@ -184,9 +184,12 @@ def _serve(stdin, stdout) -> int:
     import importlib
     import traceback
 
-    for name in _PRELOAD:       # while the parent computes
-        importlib.import_module(name)
-    _warm_up()
+    try:                        # while the parent computes; a failure here comes
+        for name in _PRELOAD:   # back as the first figure's error
+            importlib.import_module(name)
+        _warm_up()
+    except Exception:  # noqa: BLE001
+        pass
     while True:
         job = _receive(stdin)
         if job is None:
