@@ -127,3 +127,43 @@ def test_a_broken_matplotlib_is_one_clear_error(tmp_path, jobs_importable, monke
         assert other.result() != os.getpid()
     assert not (tmp_path / "t.png").exists()
     assert "Traceback" not in capfd.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["rectifier", "array"])
+def test_run_figures_from_the_child_are_the_same(tmp_path, kind, monkeypatch):
+    """Every figure of a `tengfield run` result (waveforms, surrogate, trajectory and the
+    harvesting or array figures) drawn by the figure process equals the one drawn here;
+    the tables are byte-identical."""
+    import matplotlib.image
+    import plate_model as fx
+
+    import tengfield as tf
+    from tengfield import io
+
+    monkeypatch.delenv("TENGFIELD_FIGURE_PROCESS", raising=False)
+    run = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 5000.0}
+    if kind == "rectifier":
+        scene = fx.scene_with(run=run, circuit={"kind": "rectifier",
+                                                "storage_capacitance_uF": 1e-4})
+    else:
+        scene = fx.scene_with(run=run, circuit={"kind": "load", "load_ohm": 3e9},
+                              array={"cells": 4, "initial_velocity_spread_m_per_s": 0.3})
+    result = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    here, child = tmp_path / "here", tmp_path / "child"
+    names = [p.name for p in io.write_run_outputs(result, here)
+             + io.write_dynamics_outputs(result, here, plots=True)]
+    with FigureProcess() as figures:
+        sent = [p.name for p in io.write_run_outputs(result, child, figures=figures)
+                + io.write_dynamics_outputs(result, child, plots=True, figures=figures)]
+        assert figures.running
+        drawn = figures.finish()
+    assert sent == names and len(drawn) == sum(n.endswith(".png") for n in names)
+    assert {"charging.png" if kind == "rectifier" else "array.png"} < set(names)
+    for name in names:
+        if name.endswith(".png"):
+            a = matplotlib.image.imread(here / name)
+            b = matplotlib.image.imread(child / name)
+            assert a.shape == b.shape and np.array_equal(a, b), name
+        elif name != "summary.json":
+            assert (here / name).read_bytes() == (child / name).read_bytes(), name

@@ -71,42 +71,62 @@ def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
     return Path(path)
 
 
-def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True) -> list[Path]:
+def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
+                      figures=None) -> list[Path]:
     """waveforms.csv, summary.json and, with ``plots``, waveforms.png and surrogate.png
-    of a :class:`tengfield.pipeline.RunResult` (see also :func:`write_dynamics_outputs`)."""
+    of a :class:`tengfield.pipeline.RunResult` (see also :func:`write_dynamics_outputs`).
+
+    With ``figures`` (a :class:`tengfield.plotting.process.FigureProcess`) the figures
+    are sent to it and complete after ``figures.finish()``, which the caller calls."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = [write_waveforms_csv(out / "waveforms.csv", result.waveforms)]
+    written = []
     if plots:
         from .plotting.waveforms import plot_surrogate, plot_waveforms
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
-        written.append(plot_waveforms(result.waveforms, out / "waveforms.png",
-                                      title=_run_title(result) + ", last 5 periods",
-                                      last_seconds=shown))
+        t = np.asarray(result.waveforms["time_s"])
+        last = t >= t[-1] - shown                          # sent, not the whole run
+        waveforms = {k: np.asarray(v)[last] for k, v in result.waveforms.items()}
+        written.append(_figure(figures, plot_waveforms, waveforms, path=out / "waveforms.png",
+                               title=_run_title(result) + ", last 5 periods"))
         if result.curves is not None:
-            written.append(plot_surrogate(result.table, result.curves, out / "surrogate.png",
-                                          cells=result.scene.device.cells))
-        written += write_harvest_plots(result, out)
+            written.append(_figure(figures, plot_surrogate, result.table, result.curves,
+                                   path=out / "surrogate.png", cells=result.scene.device.cells))
+        written += write_harvest_plots(result, out, figures=figures)
+    written.insert(0, write_waveforms_csv(out / "waveforms.csv", result.waveforms))
     written.append(write_json(out / "summary.json", result.summary))
     return written
 
 
-def write_harvest_plots(result, out: Path) -> list[Path]:
+def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
+    """Draw ``function(*data, path, **kwargs)`` here, or send it to ``figures``; returns
+    ``path``."""
+    if figures is None:
+        function(*data, path, **kwargs)
+    else:
+        figures.draw(function, *data, path, **kwargs)
+    return Path(path)
+
+
+def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
     """charging.png (rectifier), vq.png (load or rectifier) and array.png (an
-    ``[array]`` run) of a :class:`tengfield.pipeline.RunResult`, where they apply."""
+    ``[array]`` run) of a :class:`tengfield.pipeline.RunResult`, where they apply
+    (``figures``: as for :func:`write_run_outputs`)."""
     from .plotting import harvest as hp
 
     extras = getattr(result, "extras", {}) or {}
     written = []
     if extras.get("_fine") is not None:
-        written.append(hp.plot_charging(extras["_fine"], result.scene, out / "charging.png",
-                                        title=_run_title(result)))
+        written.append(_figure(figures, hp.plot_charging, extras["_fine"], result.scene,
+                               path=out / "charging.png", title=_run_title(result)))
     if extras.get("_vq"):
-        written.append(hp.plot_vq(extras["_vq"], result.summary.get("energy_per_cycle", {}),
-                                  out / "vq.png", title=_run_title(result)))
+        written.append(_figure(figures, hp.plot_vq, extras["_vq"],
+                               result.summary.get("energy_per_cycle", {}), path=out / "vq.png",
+                               title=_run_title(result)))
     if extras.get("_array") is not None:
-        written.append(hp.plot_array(extras["_array"], result.summary.get("array", {}),
-                                     out / "array.png", title=_run_title(result)))
+        written.append(_figure(figures, hp.plot_array, extras["_array"],
+                               result.summary.get("array", {}), path=out / "array.png",
+                               title=_run_title(result)))
     return written
 
 
@@ -204,7 +224,9 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     Arrow's writer runs without the GIL: the tables are written on other threads, one
     each, while trajectory.png is drawn, by ``figures`` (a
     :class:`tengfield.plotting.process.FigureProcess`) if given, else here. Every file
-    is complete when this returns; an error in any is raised here after all have ended."""
+    is complete when this returns (with ``figures``: the figure after
+    ``figures.finish()``, which the caller calls); an error in any is raised here after
+    all have ended."""
     from concurrent.futures import ThreadPoolExecutor
 
     out = Path(out_dir)
@@ -240,16 +262,15 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
             written.append(out / "trajectory.png")
         for job in pending:
             job.result()
-    if drawing is not None:
-        drawing.result()
     return written
 
 
-def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool) -> list[Path]:
+def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool,
+                           figures=None) -> list[Path]:
     """:func:`write_dynamics_files` of a :class:`tengfield.pipeline.RunResult` (the figure
     shows the last 5 periods, as waveforms.png does)."""
     return write_dynamics_files(result.dynamics, result.scene, out_dir, plots=plots,
-                                max_periods=5)
+                                max_periods=5, figures=figures)
 
 
 # ---------------------------------------------------------------------------

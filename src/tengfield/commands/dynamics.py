@@ -70,6 +70,8 @@ def _dynamics(args, figures) -> int:
     summary["scene"] = scene.source
     write_json(out / "summary.json", summary)
     write_dynamics_files(result, scene, out, plots=not args.no_plots, figures=figures)
+    if figures is not None:
+        figures.finish()
     print(f"regime {summary['regime']}, period {summary['period']}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")

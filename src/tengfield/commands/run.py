@@ -21,17 +21,32 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
+    from contextlib import nullcontext
+
+    from ..plotting.process import FigureProcess
+
+    comm = world_if_parallel()
+    # one process: matplotlib loads in a second process while this one computes, and
+    # draws the figures while the tables are written (not under mpirun: no fork there)
+    separate = not args.no_plots and comm is None
+    with FigureProcess() if separate else nullcontext() as figures:
+        return _run_scene(args, comm, figures)
+
+
+def _run_scene(args, comm, figures) -> int:
     from ..io import write_dynamics_outputs, write_run_outputs
     from ..pipeline import run
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
-    comm = world_if_parallel()
     result = run(scene, comm=comm, cache_dir=args.cache_dir, progress=True,
                  command_line=command_line())
     if comm is None or comm.rank == 0:
-        written = write_run_outputs(result, args.output, plots=not args.no_plots)
-        written += write_dynamics_outputs(result, args.output, plots=not args.no_plots)
+        plots = not args.no_plots
+        written = write_run_outputs(result, args.output, plots=plots, figures=figures)
+        written += write_dynamics_outputs(result, args.output, plots=plots, figures=figures)
+        if figures is not None:
+            figures.finish()
         print_summary(result.summary)
         print("wrote " + ", ".join(str(p) for p in written))
     return 0

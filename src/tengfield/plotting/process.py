@@ -27,7 +27,8 @@ import sys
 from pathlib import Path
 
 _LENGTH = struct.Struct("<Q")
-_PRELOAD = ("matplotlib.figure", "matplotlib.backends.backend_agg", "tengfield.plotting.dynamics")
+_PRELOAD = ("matplotlib.figure", "matplotlib.backends.backend_agg", "tengfield.plotting.dynamics",
+            "tengfield.plotting.waveforms", "tengfield.plotting.harvest")
 
 
 def enabled() -> bool:
@@ -63,20 +64,27 @@ class Drawing:
 
     def __init__(self, owner: FigureProcess, index: int, job):
         self._owner, self._index, self._job = owner, index, job
+        self._done = False
+        self._value = None
 
     def result(self):
         """The drawing function's return value (re-raises its exception)."""
-        return self._owner._result(self._index, self._job)
+        if not self._done:
+            self._value = self._owner._result(self._index, self._job)
+            self._done = True
+        return self._value
 
 
 class FigureProcess:
     """A child process that draws figures; use it as a context manager (leaving the
-    block stops the child; an exception inside kills it at once)."""
+    block stops the child; an exception inside kills it at once). :meth:`draw` sends a
+    figure and returns at once; :meth:`finish` waits for all of them."""
 
     def __init__(self):
         self._proc: subprocess.Popen | None = None
         self._replies: list = []
         self._sent = 0
+        self._drawings: list[Drawing] = []
         if not enabled() or not sys.executable:
             return
         src = str(Path(__file__).resolve().parents[2])   # tengfield importable as here
@@ -107,14 +115,27 @@ class FigureProcess:
         or here if the child is gone. Returns at once."""
         job = (function, args, kwargs)
         index = -1
+        message = None
         if self._proc is not None:
             try:
-                self._sock.sendall(_pack((function.__module__, function.__qualname__, args,
-                                          kwargs)), socket.MSG_NOSIGNAL)
+                message = _pack((function.__module__, function.__qualname__, args, kwargs))
+            except Exception:  # noqa: BLE001 - not picklable: drawn here
+                message = None
+        if message is not None:
+            try:
+                self._sock.sendall(message, socket.MSG_NOSIGNAL)
                 index, self._sent = self._sent, self._sent + 1
             except (OSError, ValueError):   # the child has gone: draw here
                 self._stop(kill=True)
-        return Drawing(self, index, job)
+        drawing = Drawing(self, index, job)
+        self._drawings.append(drawing)
+        return drawing
+
+    def finish(self) -> list:
+        """Wait for every figure sent so far; their return values, in order (the first
+        error is raised)."""
+        drawings, self._drawings = self._drawings, []
+        return [drawing.result() for drawing in drawings]
 
     def _result(self, index: int, job):
         function, args, kwargs = job
