@@ -149,6 +149,7 @@ def test_summary_says_what_ran(tmp_path, plate_default_scene):
 # the real stack (dynamics + dolfinx), small scenes
 @pytest.mark.slow
 @pytest.mark.field
+@pytest.mark.filterwarnings("ignore:surrogate. field error estimate:RuntimeWarning")  # coarse
 def test_error_estimate_is_honest_against_direct_solves(tmp_path):
     import pyvista  # noqa: F401 - before dolfinx
     from mpi4py import MPI
