@@ -167,3 +167,16 @@ def test_run_figures_from_the_child_are_the_same(tmp_path, kind, monkeypatch):
             assert a.shape == b.shape and np.array_equal(a, b), name
         elif name != "summary.json":
             assert (here / name).read_bytes() == (child / name).read_bytes(), name
+
+
+def test_nothing_sent_or_all_answered_ends_at_once(tmp_path, jobs_importable):
+    """Leaving the block does not wait for a child still importing matplotlib: it is
+    stopped, as it is once every figure has been answered."""
+    with FigureProcess() as figures:
+        child = figures._proc
+    assert child.poll() == -signal.SIGKILL          # killed while importing
+    with FigureProcess() as figures:
+        figures.draw(figure_jobs.noisy, tmp_path / "f.txt").result()
+        child = figures._proc
+    assert child.poll() in (0, -signal.SIGKILL) and not figures.running
+    assert (tmp_path / "f.txt").exists()

@@ -10,11 +10,12 @@ results) while the command writes its tables.
 
 The child runs in a process group of its own, so Ctrl-C at a terminal reaches only
 this process, which kills the child on its way out (a child whose parent is gone
-ends when its input does). Replies come back in order; :meth:`Drawing.result` re-raises the child's exception
-(with the child's traceback as a note). If the child cannot be started, or dies
-before it answers, the figure is drawn in this process instead, so a figure never
-goes missing because of this shortcut. ``TENGFIELD_FIGURE_PROCESS=0`` draws every
-figure in this process.
+ends when its input does). Replies come back in order; :meth:`Drawing.result`
+re-raises the child's exception (with the child's traceback as a note). If the
+child cannot be started, or dies before it answers, or the arguments cannot be
+pickled, the figure is drawn in this process instead, so a figure never goes
+missing because of this shortcut. ``TENGFIELD_FIGURE_PROCESS=0`` draws every figure
+in this process.
 """
 from __future__ import annotations
 
@@ -171,14 +172,18 @@ class FigureProcess:
             self._sock.close()
 
     def close(self) -> None:
-        """Let the child finish the figures it was sent and end."""
-        self._stop(kill=False)
+        """Let the child finish the figures it was sent and end (at once if every
+        figure has been answered: it may still be importing matplotlib)."""
+        self._stop(kill=len(self._replies) >= self._sent)
 
     def __enter__(self) -> FigureProcess:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
-        self._stop(kill=exc_type is not None)
+        if exc_type is not None:
+            self._stop(kill=True)
+        else:
+            self.close()
 
 
 def _warm_up() -> None:
