@@ -206,6 +206,23 @@ def test_concurrent_writer_gets_a_clear_error(tmp_path, short_scene, capsys):
 
 
 # -- #8.16 CLI side and #8.12 with real processes: Ctrl-C while writing, a second writer ---
+def start_writing_a_long_run(tmp_path, out_dir, cli_command, cli_env, **popen):
+    """A `tengfield dynamics` of 300 s (6e6 samples: seconds of CSV) into ``out_dir``,
+    returned once it is writing trajectory.csv into its staging directory."""
+    long_scene = tmp_path / "long.toml"
+    long_scene.write_text("[run]\nduration_s = 300\n")
+    proc = subprocess.Popen(cli_command("dynamics", long_scene, "-o", out_dir), cwd=tmp_path,
+                            env=cli_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, **popen)
+    deadline = time.monotonic() + 300
+    while not list(out_dir.glob(STAGING_PREFIX + "*/trajectory.csv")):
+        if proc.poll() is not None or time.monotonic() > deadline:
+            proc.kill()
+            pytest.fail(f"the long run never wrote trajectory.csv: {proc.communicate()}")
+        time.sleep(0.05)
+    return proc
+
+
 @pytest.mark.slow
 def test_ctrl_c_while_writing_and_a_concurrent_run(tmp_path, short_scene, run_cli, cli_command,
                                                    cli_env):
@@ -213,17 +230,8 @@ def test_ctrl_c_while_writing_and_a_concurrent_run(tmp_path, short_scene, run_cl
     first = run_cli("dynamics", short_scene, "-o", out_dir, cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     before = snapshot(out_dir)
-    long_scene = tmp_path / "long.toml"
-    long_scene.write_text("[run]\nduration_s = 300\n")        # 6e6 samples: seconds of CSV
-    proc = subprocess.Popen(cli_command("dynamics", long_scene, "-o", out_dir), cwd=tmp_path,
-                            env=cli_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    proc = start_writing_a_long_run(tmp_path, out_dir, cli_command, cli_env)
     try:
-        deadline = time.monotonic() + 300
-        while not list(out_dir.glob(STAGING_PREFIX + "*/trajectory.csv")):
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
         second = run_cli("dynamics", short_scene, "-o", out_dir, cwd=tmp_path)
         assert second.returncode == 2
         assert "is being written by another tengfield command" in second.stderr
@@ -247,17 +255,9 @@ def test_ctrl_c_at_the_terminal_stops_the_figure_process_too(tmp_path, short_sce
     out_dir = tmp_path / "out"
     assert run_cli("dynamics", short_scene, "-o", out_dir, cwd=tmp_path).returncode == 0
     before = snapshot(out_dir)
-    long_scene = tmp_path / "long.toml"
-    long_scene.write_text("[run]\nduration_s = 300\n")
-    proc = subprocess.Popen(cli_command("dynamics", long_scene, "-o", out_dir), cwd=tmp_path,
-                            env=cli_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+    proc = start_writing_a_long_run(tmp_path, out_dir, cli_command, cli_env,
+                                    start_new_session=True)
     try:
-        deadline = time.monotonic() + 300
-        while not list(out_dir.glob(STAGING_PREFIX + "*/trajectory.csv")):
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
         children = child_pids(proc.pid)
         assert len(children) == 1                 # the figure process
         os.killpg(proc.pid, signal.SIGINT)
