@@ -76,6 +76,7 @@ def test_farm_runs_every_item_once_and_keeps_the_order(dynamic):
 
 @pytest.mark.mpi
 @pytest.mark.field
+@pytest.mark.filterwarnings("ignore:surrogate. field error estimate:RuntimeWarning")  # coarse
 def test_two_ranks_equal_serial_field_solver():
     import pyvista  # noqa: F401 - before dolfinx
     from mpi4py import MPI
