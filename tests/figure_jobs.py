@@ -23,3 +23,14 @@ def unpicklable():
 
 def die():
     os._exit(3)
+
+
+def chatty():
+    """What matplotlib says on a fresh machine, and a warning of a figure."""
+    import logging
+    import warnings
+
+    logging.getLogger("matplotlib.font_manager").warning(
+        "Matplotlib is building the font cache; this may take a moment.")
+    warnings.warn("odd axis limits", UserWarning)
+    return os.getpid()

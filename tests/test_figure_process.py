@@ -180,3 +180,12 @@ def test_nothing_sent_or_all_answered_ends_at_once(tmp_path, jobs_importable):
         child = figures._proc
     assert child.poll() in (0, -signal.SIGKILL) and not figures.running
     assert (tmp_path / "f.txt").exists()
+
+
+def test_the_child_speaks_as_the_command(jobs_importable, capfd):
+    """stderr holds tengfield's own lines only: matplotlib's log (the font cache message
+    of a fresh machine) is not shown, a warning is one tengfield line."""
+    with FigureProcess() as figures:
+        assert figures.draw(figure_jobs.chatty).result() != os.getpid()
+    err = capfd.readouterr().err
+    assert err == "tengfield: warning: odd axis limits\n", err

@@ -236,9 +236,12 @@ def _serve(stdin, stdout) -> int:
 
 
 def _main() -> int:
+    from ..cli import configure_output
+
     replies = os.fdopen(os.dup(1), "wb")    # the answers; what the figures print goes
     os.dup2(2, 1)                           # to stderr, not into the answers
     sys.stdout = sys.stderr
+    configure_output()      # stderr as the command's: tengfield's own lines only
     code = _serve(sys.stdin.buffer, replies)
     sys.stderr.flush()
     os._exit(code)      # every figure is written and closed: skip the interpreter's teardown
