@@ -76,3 +76,15 @@ def test_columns_of_unequal_length_are_refused_before_writing(tmp_path):
 def test_header_and_columns_must_pair_up(tmp_path):
     with pytest.raises(ValueError):
         write_csv(tmp_path / "h.csv", ["a", "b"], [np.zeros(3)])
+
+
+def test_a_write_error_names_the_file():
+    """Arrow's own message ("Error writing bytes to file. Detail: [errno 28] ...")
+    becomes the OSError a user reads: errno, its text and the path."""
+    import errno
+
+    with pytest.raises(OSError) as info:
+        write_csv("/dev/full", ["x"], [np.arange(1e5)])
+    assert info.value.errno == errno.ENOSPC
+    assert info.value.strerror == "No space left on device"
+    assert info.value.filename == "/dev/full"

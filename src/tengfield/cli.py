@@ -224,6 +224,11 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     sys.stderr = _PathRewriter(err, staging, str(target))
     try:
         code = int(args.func(args) or 0)
+    except OSError as exc:
+        staged.abort()
+        if exc.filename is None:     # e.g. a full disk while a PNG was flushed: the
+            exc.filename = target    # directory written is the one to name
+        raise
     except BaseException:
         staged.abort()
         raise

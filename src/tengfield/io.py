@@ -173,9 +173,14 @@ def write_csv(path: str | Path, header: list[str], columns: list) -> Path:
                              f"the first one {len(arrays[0])}")
     table = pa.Table.from_arrays(arrays, names=list(header))
     options = pa_csv.WriteOptions(include_header=False, quoting_style="none")
-    with pa.OSFile(str(path), "wb") as sink:
-        sink.write((",".join(header) + "\n").encode())
-        pa_csv.write_csv(table, sink, write_options=options)
+    try:
+        with pa.OSFile(str(path), "wb") as sink:
+            sink.write((",".join(header) + "\n").encode())
+            pa_csv.write_csv(table, sink, write_options=options)
+    except OSError as exc:   # Arrow's: "Error writing bytes to file. Detail: [errno 28] ..."
+        if exc.errno:
+            raise OSError(exc.errno, os.strerror(exc.errno), str(path)) from None
+        raise
     return Path(path)
 
 

@@ -117,6 +117,27 @@ def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, m
 
 
 @pytest.mark.slow
+def test_a_full_disk_without_a_file_name_names_the_directory(tmp_path, short_scene, capsys,
+                                                             monkeypatch):
+    """A write error that carries no file name (a PNG or JSON flushed onto a full disk:
+    OSError(28) only) names the output directory, not nothing."""
+    import tengfield.io as writers
+
+    out_dir = tmp_path / "out"
+    assert run_main(["dynamics", short_scene, "-o", out_dir], capsys)[0] == 0
+    before = snapshot(out_dir)
+
+    def full_disk(path, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(writers, "write_json", full_disk)
+    code, out, err = run_main(["dynamics", short_scene, "-o", out_dir], capsys)
+    assert code == 1
+    assert err == f"tengfield: error: No space left on device: {out_dir}\n"
+    assert snapshot(out_dir) == before and no_staging_left(out_dir)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("figure_process", ["1", "0"])
 def test_exception_and_interrupt_keep_the_previous_set(tmp_path, short_scene, capsys,
                                                        monkeypatch, figure_process):
