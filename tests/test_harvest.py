@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import trapezoid
 from hypothesis import given, settings, strategies as st
 
 from tengfield.errors import SceneError
@@ -99,7 +100,7 @@ def test_mechanical_work_matches_the_power_integral():
         res = harvest(t, q, c, storage_capacitance=5e-12)
         v = res.voltage[:, 0]
         power = v * np.gradient(q, t) - 0.5 * v * v * np.gradient(c, t)
-        integral = np.trapz(power, t)
+        integral = trapezoid(power, t)
         errors.append(abs(res.mechanical_work[-1] - integral) / abs(integral))
     slope = np.polyfit(np.log([500, 1000, 2000, 4000]), np.log(errors), 1)[0]
     assert errors[-1] < 2e-3

@@ -404,8 +404,8 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
         columns.update({"V_load_V": resp.voltage, "I_load_A": resp.current,
                         "P_load_W": resp.power})
         length = t[mask][-1] - t[mask][0]
-        power = float(np.trapz(resp.power[mask], t[mask]) / length)
-        ref_power = float(np.trapz(ref_resp.power[mask], t[mask]) / length)
+        power = float(electrical.trapezoid(resp.power[mask], t[mask]) / length)
+        ref_power = float(electrical.trapezoid(ref_resp.power[mask], t[mask]) / length)
         out.update(value=power, reference_value=ref_power, compared="mean load power [W]",
                    output=resp.power, reference=ref_resp.power, label="P_load [W]",
                    load={"mean_power_W": power, "V_load": resp.voltage, "I_load": resp.current})

@@ -28,6 +28,10 @@ import numpy as np
 
 from . import circuit
 
+#: ∫ y dx by the trapezoidal rule: numpy 2's name (numpy 1 has only ``trapz``, which
+#: numpy 2 deprecates)
+trapezoid = np.trapezoid if hasattr(np, "trapezoid") else np.trapz
+
 #: columns of ``waveforms.csv`` (SI units in the names)
 WAVEFORM_COLUMNS = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m",
                     "V_oc_V", "Q_sc_C", "I_sc_A"]
@@ -271,12 +275,12 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
     in_window = grid >= window_start
     t_window = grid[in_window]
     window_length = t_window[-1] - t_window[0] if t_window.size > 1 else 0.0
-    dissipated = float(np.trapz(response.power[in_window], t_window))
+    dissipated = float(trapezoid(response.power[in_window], t_window))
     stored_window = stored[in_window]
     return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
             "P_load": response.power[output_index],
             "mean_power_W": dissipated / window_length if window_length > 0 else 0.0,
-            "delivered_energy_J": float(np.trapz(delivered[in_window], t_window)),
+            "delivered_energy_J": float(trapezoid(delivered[in_window], t_window)),
             "dissipated_energy_J": dissipated,
             "stored_energy_change_J": float(stored_window[-1] - stored_window[0]),
             "integration_points": int(grid.size),

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import trapezoid
 
 from stability_checks import assert_finite, scene_with
 from plate_model import plate_model_solve
@@ -73,8 +74,8 @@ def test_exact_solution_second_order_and_conservation(load, c_p):
     # energy: ∫ V dQ_SC/dt dt = ∫ V²/R dt + Δ[(C_T + C_p) V²/2] (C_T constant)
     p_in = circuit.delivered_power(fine_res.voltage, i, np.zeros_like(t))
     stored = circuit.stored_energy(fine_res.voltage, c, c_p)
-    throughput = np.trapz(np.abs(p_in), t)
-    imbalance = np.trapz(p_in, t) - np.trapz(fine_res.power, t) - (stored[-1] - stored[0])
+    throughput = trapezoid(np.abs(p_in), t)
+    imbalance = trapezoid(p_in, t) - trapezoid(fine_res.power, t) - (stored[-1] - stored[0])
     assert abs(imbalance) <= 1e-5 * throughput
 
 
