@@ -71,3 +71,41 @@ def test_solver_reproduces_the_stored_numbers_on_the_stored_mesh(name):
     ref = stored["solution_degree1"]
     np.testing.assert_allclose(sol.capacitance, ref["capacitance_F"], rtol=1e-7)
     np.testing.assert_allclose(sol.induced_fraction, ref["induced_fraction"], rtol=1e-7)
+
+
+class _Scalar(float):
+    """A float whose repr is not a number, as numpy 2's ``np.float64(...)``."""
+
+    def __repr__(self):
+        return f"np.float64({float(self)!r})"
+
+
+def test_size_expressions_hold_plain_numbers_only():
+    """gmsh's MathEval parser aborts the whole process on ``np.float64(...)`` (numpy 2,
+    Debian 13: the honeycomb cell at an off-axis position did). Every number written
+    into an expression is the float's shortest decimal, whatever its type's repr."""
+    expr = geometry3d._gap_size(_Scalar(1e-4), (_Scalar(1.8e-20), np.float64(3e-4), -0.003))
+    assert "np" not in expr
+    assert expr == "0.0001 + 0.35*sqrt((x-(1.8e-20))^2+(y-(0.0003))^2+(z-(-0.003))^2)"
+    assert geometry3d._num(_Scalar(0.1)) == "0.1"
+
+
+@pytest.mark.slow
+def test_every_size_field_of_an_off_axis_honeycomb_mesh_parses(monkeypatch):
+    """The mesh that aborted on Debian 13: all its MathEval strings are plain."""
+    import gmsh
+
+    written = []
+    real = gmsh.model.mesh.field.setString
+
+    def record(tag, option, value):
+        written.append(value)
+        return real(tag, option, value)
+
+    monkeypatch.setattr(gmsh.model.mesh.field, "setString", record)
+    case = CASES["honeycomb_cell"]
+    with solver3d.gmsh_model(geometry3d.unique_model_name("off-axis honeycomb")):
+        model = geometry3d.build_model(case.cell, 1.0e-3, 0.3e-3, case.settings,
+                                       offset_angle=math.pi / 6 + math.pi / 3)
+    assert len(written) >= 4 and not any("np" in value for value in written)
+    assert set(model["groups"]) >= {"ball", "air", "electrode_lower", "electrode_upper"}

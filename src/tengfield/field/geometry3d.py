@@ -367,17 +367,30 @@ def _lateral_gap(cell, centre):
     return gap, (float(mid * direction[0]), float(mid * direction[1]), float(centre[2]))
 
 
+def _num(value) -> str:
+    """A number in a gmsh MathEval expression: the shortest round-trip decimal of a
+    plain float (numpy 2's repr writes ``np.float64(...)``, which gmsh's parser rejects
+    by aborting the process)."""
+    return repr(float(value))
+
+
+def _gap_size(s_min, point) -> str:
+    """MathEval size [m] growing from ``s_min`` at ``point`` (x, y, z) [m] with slope 0.35."""
+    x, y, z = (_num(c) for c in point)
+    return f"{_num(s_min)} + 0.35*sqrt((x-({x}))^2+(y-({y}))^2+(z-({z}))^2)"
+
+
 def _rim_distance(cell) -> str:
     """gmsh MathEval expression of the distance [m] to the nearest electrode rim
     (exact for the disks, exact off the corners for the hexagons)."""
     half = 0.5 * cell.electrode_spacing
     if isinstance(cell, CylindricalCell):
-        lateral = f"(sqrt(x*x+y*y)-{cell.electrode_radius!r})"
+        lateral = f"(sqrt(x*x+y*y)-{_num(cell.electrode_radius)})"
     else:
-        c = math.cos(math.pi / 6)
-        lateral = (f"(max(abs(y),max(abs(0.5*y+{c!r}*x),abs(0.5*y-{c!r}*x)))"
-                   f"-{cell.inner_apothem!r})")
-    axial = f"min(abs(z-{half!r}),abs(z+{half!r}))"
+        c = _num(math.cos(math.pi / 6))
+        lateral = (f"(max(abs(y),max(abs(0.5*y+{c}*x),abs(0.5*y-{c}*x)))"
+                   f"-{_num(cell.inner_apothem)})")
+    axial = f"min(abs(z-{_num(half)}),abs(z+{_num(half)}))"
     return f"sqrt({lateral}^2+{axial}^2)"
 
 
@@ -392,8 +405,8 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     power = 1.0 - RIM_EXPONENT / settings.order
     reach = 0.25 * cell.electrode_spacing
     rim = fld.add("MathEval")
-    fld.setString(rim, "F", f"max({settings.rim_floor * h!r}, "
-                            f"{h!r}*({_rim_distance(cell)}/{reach!r})^{power!r})")
+    fld.setString(rim, "F", f"max({_num(settings.rim_floor * h)}, "
+                            f"{_num(h)}*({_rim_distance(cell)}/{_num(reach)})^{_num(power)})")
     fields.append(rim)
 
     ball_dist = fld.add("Distance")
@@ -416,23 +429,21 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
         gap = abs(z_pole - z_plane)
         s_min = min(max(0.5 * gap, 0.02 * h), settings.ball_factor * h)
         z_mid = 0.5 * (z_pole + z_plane)
-        expr = f"{s_min!r} + 0.35*sqrt((x-({x0!r}))^2+(y-({y0!r}))^2+(z-({z_mid!r}))^2)"
         gap_field = fld.add("MathEval")
-        fld.setString(gap_field, "F", expr)
+        fld.setString(gap_field, "F", _gap_size(s_min, (x0, y0, z_mid)))
         fields.append(gap_field)
     lateral = _lateral_gap(cell, centre)
     if lateral is not None and lateral[0] < settings.ball_factor * h:
         gap, mid = lateral
         s_min = max(0.5 * gap, 0.02 * h)
-        expr = (f"{s_min!r} + 0.35*sqrt((x-({mid[0]!r}))^2+(y-({mid[1]!r}))^2"
-                f"+(z-({mid[2]!r}))^2)")
         gap_field = fld.add("MathEval")
-        fld.setString(gap_field, "F", expr)
+        fld.setString(gap_field, "F", _gap_size(s_min, mid))
         fields.append(gap_field)
 
     device_r = cell.bounding_radius
     far = fld.add("MathEval")
-    fld.setString(far, "F", f"max({h}, {h} + {settings.growth}*(sqrt(x^2+y^2+z^2) - {device_r}))")
+    fld.setString(far, "F", f"max({_num(h)}, {_num(h)} + {_num(settings.growth)}"
+                            f"*(sqrt(x^2+y^2+z^2) - {_num(device_r)}))")
     fields.append(far)
 
     total = fld.add("Min")
