@@ -188,7 +188,8 @@ def test_solver_sources_exclude_io_and_plots():
     assert not names & {"io.py", "plot.py", "potential.py", "result.py"}
     package = {p.name for p in Path(field.__file__).parent.glob("*.py")}
     assert names <= package
-    assert package - names == {"io.py", "plot.py", "potential.py", "result.py"}, \
+    # _gmsh.py starts gmsh with the arguments its callers give (stderr filtering only)
+    assert package - names == {"io.py", "plot.py", "potential.py", "result.py", "_gmsh.py"}, \
         "a new module in field/: add it to SOLVER_SOURCES if it changes the numbers"
 
 

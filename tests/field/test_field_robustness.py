@@ -141,3 +141,32 @@ def test_ctrl_c_during_a_field_solve_raises_keyboard_interrupt():
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 3, (proc.returncode, err[-2000:])
     assert "interrupted" in out
+
+
+def test_gmsh_start_drops_only_the_mixed_mpi_false_alarm(monkeypatch, capfd):
+    """Debian 13: the PETSc inside the gmsh wheel takes Open MPI 5's own symbols for
+    MPICH's and prints a false alarm at every gmsh start. That line (written by C to
+    file descriptor 2) is dropped; every other line gmsh writes there is kept, in order."""
+    import os
+
+    gmsh = pytest.importorskip("gmsh")
+    from tengfield.field import _gmsh
+
+    seen = []
+
+    def start(argv, **kwargs):
+        seen.append((argv, kwargs))
+        os.write(2, b"Info    : a line gmsh writes\n")
+        os.write(2, b"PETSc Error --- Application was linked against both OpenMPI and MPICH "
+                    b"based MPI libraries and will not run correctly\n")
+        os.write(2, b"Warning : another line\n")
+
+    monkeypatch.setattr(gmsh, "initialize", start)
+    _gmsh.initialize(("-nt", "1"), interruptible=False)
+    assert seen == [(["-nt", "1"], {"interruptible": False})]
+    assert capfd.readouterr().err == "Info    : a line gmsh writes\nWarning : another line\n"
+    with pytest.raises(RuntimeError):                   # an error still restores stderr
+        with _gmsh._without_line(b"x"):
+            raise RuntimeError("gmsh failed")
+    os.write(2, b"after\n")
+    assert capfd.readouterr().err == "after\n"

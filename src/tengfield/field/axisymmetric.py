@@ -249,6 +249,7 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     import gmsh
 
     from . import _dolfinx as dx_api
+    from ._gmsh import initialize as initialize_gmsh
 
     lay = geometry.layout(scene, position, **layout_overrides)
     geometry.check_mesh_budget(lay, scene.field.degree, mesh_size_mm=scene.field.mesh_size * 1e3)
@@ -256,7 +257,7 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     if initialised_here:
         # interruptible=False: gmsh leaves Python's SIGINT handler alone (Ctrl-C
         # raises KeyboardInterrupt instead of killing the process)
-        gmsh.initialize(["-nt", "1"], readConfigFiles=False, interruptible=False)
+        initialize_gmsh(["-nt", "1"], readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     try:
         try:

@@ -127,9 +127,11 @@ def gmsh_model(name: str):
     """A fresh gmsh model named ``name`` (gmsh initialised if needed, removed after)."""
     import gmsh
 
+    from ._gmsh import initialize
+
     started = not gmsh.isInitialized()
     if started:
-        gmsh.initialize(interruptible=False)
+        initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.model.add(name)
     try:
