@@ -43,7 +43,7 @@ def test_a_utf8_byte_order_mark_is_dropped(tmp_path):
     """Spreadsheet exports often start with a BOM: the first column is still 'time_s'."""
     t = np.linspace(0.0, 0.1, 50)
     path = tmp_path / "bom.csv"
-    lines = ["time_s,V_oc_V"] + [f"{x!r},{2 * x!r}" for x in t]
+    lines = ["time_s,V_oc_V"] + [f"{float(x)!r},{float(2 * x)!r}" for x in t]
     path.write_bytes(b"\xef\xbb\xbf" + "\n".join(lines).encode())
     trace = read_trace(path, parse_fit_section(parse_scene("")))
     np.testing.assert_array_equal(trace.time, t)

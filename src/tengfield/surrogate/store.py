@@ -131,13 +131,14 @@ def check_axis(values: np.ndarray, end: float, name: str, end_name: str) -> None
     n = np.size(values)
     if n < 2:
         raise SurrogateError(f"{n} {name}(s): at least 2 are needed")
+    # float(): numpy 2 would print np.float64(...) in the message
     if not (np.isfinite(end) and end > 0.0):
-        raise SurrogateError(f"{end_name} {end!r} m is not positive")
+        raise SurrogateError(f"{end_name} {float(end)!r} m is not positive")
     if not np.all(np.isfinite(values)) or not np.all(np.diff(values) > 0.0):
         raise SurrogateError(f"{name}s are not strictly ascending")
     if values[0] != 0.0 or abs(values[-1] - end) > 1e-12 * end:
-        raise SurrogateError(f"{name}s run from {values[0]!r} to {values[-1]!r} m, not from 0 "
-                             f"to the {end_name} {end!r} m")
+        raise SurrogateError(f"{name}s run from {float(values[0])!r} to {float(values[-1])!r} "
+                             f"m, not from 0 to the {end_name} {float(end)!r} m")
 
 
 def check_table(table: SurrogateTable) -> None:
