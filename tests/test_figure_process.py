@@ -189,3 +189,26 @@ def test_the_child_speaks_as_the_command(jobs_importable, capfd):
         assert figures.draw(figure_jobs.chatty).result() != os.getpid()
     err = capfd.readouterr().err
     assert err == "tengfield: warning: odd axis limits\n", err
+
+
+@pytest.mark.parametrize("value, expected", [("0", False), ("off", False), (" No ", False),
+                                             ("1", True), ("yes", True), ("TRUE", True)])
+def test_the_switch_reads_the_usual_spellings(monkeypatch, value, expected):
+    from tengfield.plotting import process
+
+    monkeypatch.setenv("TENGFIELD_FIGURE_PROCESS", value)
+    assert process.enabled() is expected
+
+
+def test_a_misspelt_switch_is_refused_before_any_output(tmp_path, monkeypatch, capsys):
+    """`TENGFIELD_FIGURE_PROCESS=maybe`: one error line naming the variable, the value
+    and the allowed spellings; exit 2 and no output directory."""
+    from tengfield import cli
+
+    monkeypatch.setenv("TENGFIELD_FIGURE_PROCESS", "maybe")
+    out_dir = tmp_path / "out"
+    assert cli.main(["dynamics", "-o", str(out_dir), "--duration-s", "2"]) == 2
+    err = capsys.readouterr().err
+    assert err == ("tengfield: error: TENGFIELD_FIGURE_PROCESS = 'maybe': allowed 1/0, "
+                   "yes/no, true/false, on/off\n")
+    assert not out_dir.exists()

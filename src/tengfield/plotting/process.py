@@ -32,10 +32,20 @@ _PRELOAD = ("matplotlib.figure", "matplotlib.backends.backend_agg", "tengfield.p
             "tengfield.plotting.waveforms", "tengfield.plotting.harvest")
 
 
+_SWITCH = {"1": True, "yes": True, "true": True, "on": True,
+           "0": False, "no": False, "false": False, "off": False}
+
+
 def enabled() -> bool:
-    """False when ``TENGFIELD_FIGURE_PROCESS`` is ``0``/``no``/``false``/``off``."""
-    return os.environ.get("TENGFIELD_FIGURE_PROCESS", "1").strip().lower() not in {
-        "0", "no", "false", "off"}
+    """``TENGFIELD_FIGURE_PROCESS`` (unset: on); any other value than those of
+    ``_SWITCH`` is a :class:`tengfield.errors.SceneError` naming it."""
+    raw = os.environ.get("TENGFIELD_FIGURE_PROCESS", "1")
+    value = _SWITCH.get(raw.strip().lower())
+    if value is None:
+        from ..errors import SceneError
+        raise SceneError(f"TENGFIELD_FIGURE_PROCESS = {raw!r}: allowed 1/0, yes/no, "
+                         "true/false, on/off")
+    return value
 
 
 def _pack(obj) -> bytes:
@@ -159,12 +169,12 @@ class FigureProcess:
         proc, self._proc = self._proc, None
         if proc is None:
             return
+        if kill:         # before its input ends: a child that reads the end exits by itself
+            proc.kill()
         try:
             self._sock.shutdown(socket.SHUT_WR)      # the child's input ends
         except OSError:
             pass
-        if kill:
-            proc.kill()
         try:
             proc.wait(timeout=None if not kill else 10)
         finally:
