@@ -252,7 +252,8 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     from ._gmsh import initialize as initialize_gmsh
 
     lay = geometry.layout(scene, position, **layout_overrides)
-    geometry.check_mesh_budget(lay, scene.field.degree, mesh_size_mm=scene.field.mesh_size * 1e3)
+    geometry.check_mesh_budget(lay, scene.field.degree,
+                               mesh_size_mm=geometry.base_mesh_size(scene) * 1e3)
     initialised_here = not gmsh.isInitialized()
     if initialised_here:
         # interruptible=False: gmsh leaves Python's SIGINT handler alone (Ctrl-C
@@ -324,10 +325,12 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
 
     t0 = time.perf_counter()
     fld = scene.field
-    half = scene.with_values(field={"mesh_size_mm": 0.5e3 * fld.mesh_size})
+    # the scene's mesh_size_mm as written, or its default scaled to the device's features
+    size = geometry.base_mesh_size(scene)
+    half = scene.with_values(field={"mesh_size_mm": 0.5e3 * size})
     if estimate_error:   # refuse before any meshing if the finer mesh would not fit
-        geometry.check_mesh_budget(geometry.layout(half, position, grading_size=fld.mesh_size),
-                                   fld.degree, mesh_size_mm=fld.mesh_size * 1e3, refinement=2.0)
+        geometry.check_mesh_budget(geometry.layout(half, position, grading_size=size),
+                                   fld.degree, mesh_size_mm=size * 1e3, refinement=2.0)
     lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
     sigma = scene.device.surface_charge
     eps = permittivities(scene.device, lay)
@@ -338,7 +341,7 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     estimate = math.nan
     if estimate_error:
         # same grading lengths as the coarse mesh: a uniform halving of one mesh family
-        lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=fld.mesh_size)
+        lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=size)
         finer = discretise(dx_api, *fine_mesh, lay_half, eps, fld.degree, fld.far_field)
         fine = solve_discretisation(dx_api, finer, sigma, diameter, source_solve=False,
                                     linear_solver=linear_solver)

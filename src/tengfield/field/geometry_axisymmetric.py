@@ -54,11 +54,19 @@ RIM_EXPONENT = 0.43
 #: (h = 10 mm, extent 8.6 mm) at mesh sizes >= 0.125 mm the lengths are the
 #: device's own (h/4 and the extent) and the mesh is the one of earlier versions.
 GRADING_REACH = 20.0
-#: Electrode spacing [m] up to which ``mesh_size_mm`` is an absolute size; a
-#: larger device gets all mesh sizes scaled by ``spacing / REFERENCE_SPACING``
-#: (the mesh of a scaled-up device is the scaled mesh: same cost, same
-#: relative error as the paper's device, h = 10 mm).
-REFERENCE_SPACING = 10.0e-3
+#: The features a default mesh must resolve, with their size [m] in the paper's device
+#: (data/default.toml). Without ``[field] mesh_size_mm`` in the scene, the default
+#: size is scaled by ``max(1, min over the features of size / paper's size)``
+#: (:func:`default_mesh_scale`): a device whose features are all k >= 1 times the
+#: paper's gets the paper's mesh scaled by k (same cost, same relative error); a
+#: device with one feature as small as the paper's keeps the default as it is. A
+#: ``mesh_size_mm`` written in the scene (or passed as an override) is never scaled.
+PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "gap_mm": 3.0e-3}
+#: ... and, with dielectric walls (``wall_permittivity != 1``), the walls and the
+#: ball's clearance to the tube (plate thickness also under a grounded table)
+PAPER_WALL_FEATURES = {"tube_outer_radius_mm - tube_inner_radius_mm": 1.5e-3,
+                       "plate_thickness_mm": 2.0e-3,
+                       "tube_inner_radius_mm - ball_diameter_mm / 2": 0.5e-3}
 #: relative precision of gmsh's integral of 1/size along the curves (its default,
 #: 1e-9, spends half of the meshing time of the steeply graded rims there)
 LC_INTEGRATION_PRECISION = 1e-6
@@ -112,10 +120,51 @@ class AxisymmetricLayout:
         return self.z_lower - self.plate_thickness
 
 
-def size_scale(device) -> float:
-    """Factor applied to ``mesh_size_mm``: ``max(1, h / REFERENCE_SPACING)`` (h the
-    electrode spacing)."""
-    return max(1.0, device.plate_spacing / REFERENCE_SPACING)
+def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
+    """The features [m] a mesh of ``device`` must resolve, by scene key (see
+    :data:`PAPER_FEATURES`)."""
+    features = {"ball_diameter_mm": device.ball_diameter,
+                "electrode_radius_mm": device.electrode_radius, "gap_mm": device.stroke}
+    walls = device.wall_permittivity != 1.0
+    if walls:
+        features["tube_outer_radius_mm - tube_inner_radius_mm"] = \
+            device.tube_outer_radius - device.tube_inner_radius
+        features["tube_inner_radius_mm - ball_diameter_mm / 2"] = \
+            device.tube_inner_radius - device.ball_radius
+    if walls or environment == "grounded-table":
+        features["plate_thickness_mm"] = device.plate_thickness
+    return features
+
+
+def default_mesh_scale(device, fld) -> float:
+    """Factor on the default ``mesh_size_mm``: ``max(1, min_i feature_i / paper_i)`` over
+    :func:`mesh_features` (1.0 exactly for the paper's device)."""
+    paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES}
+    ratios = [size / paper[key] for key, size in mesh_features(device, fld.environment).items()]
+    return max(1.0, min(ratios))
+
+
+def mesh_size_written(scene) -> bool:
+    """Whether ``[field] mesh_size_mm`` is in the scene (its file or an override)."""
+    return "mesh_size_mm" in ((scene.raw or {}).get("field") or {})
+
+
+def base_mesh_size(scene) -> float:
+    """The base mesh size [m] of ``scene``: ``[field] mesh_size_mm`` as written, or,
+    when the scene does not give it, the default scaled by :func:`default_mesh_scale`."""
+    size = scene.field.mesh_size
+    if mesh_size_written(scene):
+        return size
+    return size * default_mesh_scale(scene.device, scene.field)
+
+
+def mesh_size_text(scene) -> str:
+    """``mesh_size_mm = X`` for messages, saying when X is the scaled default."""
+    size_mm = base_mesh_size(scene) * 1e3
+    if mesh_size_written(scene):
+        return f"mesh_size_mm = {size_mm:g}"
+    return (f"mesh_size_mm = {size_mm:.3g} (the default {scene.field.mesh_size * 1e3:g} "
+            f"scaled by the device's smallest feature)")
 
 
 def minimum_gap(device) -> float:
@@ -134,13 +183,16 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
            ) -> AxisymmetricLayout:
     """Dimensions for ``scene`` with the ball at gap ``position`` [m] (pure, no gmsh).
 
+    ``mesh_size`` [m] (default: :func:`base_mesh_size`, the scene's ``mesh_size_mm``
+    as written or its scaled default) is used as given.
+
     ``grading_size`` [m] (default: the mesh size) sets the grading lengths
     (:data:`GRADING_REACH` times it); the error estimate's half-size mesh
     passes the coarse mesh's size, so both meshes belong to one family."""
     dev, fld = scene.device, scene.field
     position = float(position)
     degree = fld.degree if degree is None else degree
-    mesh_size = fld.mesh_size if mesh_size is None else mesh_size
+    mesh_size = base_mesh_size(scene) if mesh_size is None else mesh_size
     domain_radius = fld.domain_radius if domain_radius is None else domain_radius
     far_field = fld.far_field if far_field is None else far_field
     environment = fld.environment if environment is None else environment
@@ -160,9 +212,6 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
     # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
     mesh_size, grading_size, domain_radius = float(mesh_size), float(grading_size), \
         float(domain_radius)
-    # a device larger than the reference spacing gets the geometrically similar mesh
-    similarity = size_scale(dev)
-    mesh_size, grading_size = mesh_size * similarity, grading_size * similarity
     if domain_radius <= 1.05 * extent:
         raise FieldError(f"domain_radius_mm = {domain_radius * 1e3:g} is too small: it must exceed "
                          f"{1.05e3 * extent:.3g} mm (the device seen from the inversion centre)")
@@ -422,5 +471,5 @@ def meshing_failure(scene, exc: BaseException) -> str:
     first = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
     return (f"gmsh could not mesh the device ({first}): check [device] gap_mm = "
             f"{dev.stroke * 1e3:g}, ball_diameter_mm = {dev.ball_diameter * 1e3:g} and "
-            f"[field] mesh_size_mm = {fld.mesh_size * 1e3:g}, domain_radius_mm = "
+            f"[field] {mesh_size_text(scene)}, domain_radius_mm = "
             f"{fld.domain_radius * 1e3:g}")

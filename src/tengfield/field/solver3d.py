@@ -515,10 +515,10 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
                          "solver: allowed 'free-space' (use method = 'axisymmetric' for "
                          "'grounded-table')")
     offset = fld.ball_offset if offset is None else offset
-    from .geometry_axisymmetric import size_scale
+    from .geometry_axisymmetric import base_mesh_size
 
-    # a device larger than the reference spacing gets the similar (scaled) mesh, as in 2D
-    settings = Solve3DSettings(degree=fld.degree, mesh_size=fld.mesh_size * size_scale(scene.device),
+    # mesh_size_mm as written, or the default scaled to the device's features, as in 2D
+    settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                domain_radius=fld.domain_radius, far_field=fld.far_field,
                                estimate_error=estimate_error)
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
