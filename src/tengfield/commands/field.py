@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 from pathlib import Path
 
 from ._common import scene_command
@@ -67,6 +68,9 @@ def _run(args) -> int:
         io.write_field_json(out / "field.json", result, reference, potentials)
         for line in io.summary_lines(result, reference, potentials):
             print(line)
+        problem = io.accuracy_problem(result, scene)
+        if problem is not None:   # one line, as the surrogate's (refinement.warn_problems)
+            warnings.warn(problem, RuntimeWarning, stacklevel=1)
         written = [out / "field.json"]
         if plot:
             written += [out / "potential.xdmf"]

@@ -63,6 +63,21 @@ def write_xdmf(path, solution, potentials=None) -> None:
     dx_api.write_xdmf(path, sub, [out], MPI.COMM_SELF)
 
 
+def accuracy_problem(result, scene) -> str | None:
+    """One line when ``result``'s relative error estimate exceeds the scene's
+    ``[field] tolerance`` (naming the estimate, the tolerance and the keys to change);
+    None when it is within, or not estimated (NaN)."""
+    from .geometry_axisymmetric import mesh_size_text
+
+    estimate, tolerance = result.relative_error_estimate, scene.field.tolerance
+    if not estimate > tolerance:          # NaN: no estimate, nothing to say
+        return None
+    return (f"field: relative error estimate {estimate:.2g} at z = {result.position * 1e3:.4g} "
+            f"mm is above [field] tolerance = {tolerance:g}: the {result.method} mesh does not "
+            f"resolve the device; lower [field] {mesh_size_text(scene)} or raise degree = "
+            f"{result.degree}")
+
+
 def summary_lines(result, reference: str, potentials=None) -> list[str]:
     """Human-readable numbers of one position (for the CLI)."""
     fr = result.induced_fractions()
