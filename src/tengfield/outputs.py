@@ -17,7 +17,9 @@ change):
    removed and the previous set stays as it was.
 
 ``-o FILE`` options (``tengfield precompute``) get the checks of step 1 on the
-file's directory; the file itself is written atomically by its writer.
+file's directory, and the file must be a regular file or a new path (a FIFO,
+a device node, ``/dev/null``: refused, never replaced); the file itself is
+written atomically by its writer.
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ import errno
 import json
 import os
 import shutil
+import stat
 import tempfile
 from pathlib import Path
 
@@ -42,7 +45,27 @@ class OutputError(TengfieldError):
 def _reason(exc: OSError) -> str:
     if exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
         return "is not writable (read-only or no permission)"
+    if exc.errno == errno.ENAMETOOLONG:
+        return "is too long a name for the file system"
     return exc.strerror or str(exc)
+
+
+_KINDS = {stat.S_IFIFO: "a named pipe (FIFO)", stat.S_IFCHR: "a character device",
+          stat.S_IFBLK: "a block device", stat.S_IFSOCK: "a socket", stat.S_IFLNK: "a symlink",
+          stat.S_IFDIR: "a directory", stat.S_IFREG: "a file"}
+
+
+def _kind(mode: int) -> str:
+    """``a named pipe (FIFO)``, ``a character device``, ... of an ``st_mode``."""
+    return _KINDS.get(stat.S_IFMT(mode), "a special file")
+
+
+def _not_empty(path, option: str, what: str) -> Path:
+    """``Path(path)``, refusing "" (``Path("")`` is the current directory)."""
+    if path is None or str(path) == "":
+        raise OutputError(f"{option} '' is empty: give {what} (-o . for the current directory)"
+                          if what == "a directory" else f"{option} '' is empty: give {what}")
+    return Path(path)
 
 
 def _first_file_above(path: Path) -> Path | None:
@@ -56,13 +79,25 @@ def _first_file_above(path: Path) -> Path | None:
 def ensure_directory(path: str | Path, option: str = "-o") -> Path:
     """Create ``path`` (and its parents) or check the existing one; writable.
 
-    Raises :class:`OutputError` with one line naming the option and the path.
+    Raises :class:`OutputError` with one line naming the option and the path
+    (also for "", a FIFO or device, a name too long for the file system).
     """
-    p = Path(path)
+    p = _not_empty(path, option, "a directory")
     where = f"{option} {str(p)!r}"
-    if p.exists() and not p.is_dir():
-        raise OutputError(f"{where} is a file, not a directory")
-    blocker = _first_file_above(p)
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:     # ENAMETOOLONG, ELOOP, ENOTDIR (checked below), ...
+        st = None
+        if exc.errno != errno.ENOTDIR:
+            raise OutputError(f"{where} {_reason(exc)}") from None
+    if st is not None and not stat.S_ISDIR(st.st_mode):
+        raise OutputError(f"{where} is {_kind(st.st_mode)}, not a directory")
+    try:
+        blocker = _first_file_above(p)
+    except OSError as exc:
+        raise OutputError(f"{where} {_reason(exc)}") from None
     if blocker is not None:
         raise OutputError(f"{where}: {str(blocker)!r} is a file, not a directory")
     try:
@@ -79,11 +114,31 @@ def ensure_directory(path: str | Path, option: str = "-o") -> Path:
 
 
 def ensure_file_parent(path: str | Path, option: str = "-o") -> Path:
-    """Checks for an output FILE: not a directory, its directory created and writable."""
-    p = Path(path)
-    if p.is_dir():
-        raise OutputError(f"{option} {str(p)!r} is a directory: give a file name")
-    ensure_directory(p.parent if str(p.parent) else Path("."), option=f"{option} {str(p)!r}: directory")
+    """Checks for an output FILE: a regular file or a new path (never a directory, FIFO,
+    device node, ...: those are not replaced), its directory created and writable, and
+    room in the directory for the writer's temporary file ``.NAME.XXXXXXXX.tmp``."""
+    p = _not_empty(path, option, "a file name")
+    where = f"{option} {str(p)!r}"
+    try:
+        st = os.stat(p)          # through a symlink: what a writer would reach
+    except FileNotFoundError:
+        st = None                # a new path (or a dangling symlink, replaced as such)
+    except OSError as exc:
+        st = None
+        if exc.errno != errno.ENOTDIR:
+            raise OutputError(f"{where} {_reason(exc)}") from None
+    if st is not None and stat.S_ISDIR(st.st_mode):
+        raise OutputError(f"{where} is a directory: give a file name")
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise OutputError(f"{where} is {_kind(st.st_mode)}, not a regular file: give a file name")
+    parent = p.parent if str(p.parent) else Path(".")
+    ensure_directory(parent, option=f"{where}: directory")
+    try:   # the temporary name surrogate.store.write_checked_file uses: 14 bytes longer
+        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise OutputError(f"{where} {_reason(exc)}") from None
     return p
 
 
@@ -92,6 +147,7 @@ class StagedOutput:
     block ends without an exception, moves the files into ``DIR``; see the module doc."""
 
     def __init__(self, target: str | Path, *, option: str = "-o"):
+        self._spelled = target
         self.target = Path(target)
         self.option = option
         self.staging: Path | None = None
@@ -100,8 +156,8 @@ class StagedOutput:
 
     # -- the three steps -----------------------------------------------------------
     def open(self) -> Path:
-        self._created = not self.target.exists()
-        ensure_directory(self.target, self.option)
+        self._created = not os.path.lexists(self.target)
+        ensure_directory(self._spelled, self.option)
         self._lock()
         for leftover in self.target.glob(STAGING_PREFIX + "*"):   # of a killed run; we hold the lock
             shutil.rmtree(leftover, ignore_errors=True)
