@@ -48,6 +48,86 @@ def never_solve(monkeypatch):
     monkeypatch.setattr(surrogate, "precompute", never)
 
 
+# -- item 10: a planted manifest --------------------------------------------------------
+def plant(tmp_path: Path) -> tuple[Path, dict[Path, str]]:
+    """DIR with a planted manifest naming files outside it (relative, absolute, through
+    symlinks, nested); returns DIR and the victims with their contents."""
+    out = tmp_path / "out"
+    out.mkdir()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    victims = {tmp_path / "victim.txt": "relative victim",
+               tmp_path / "abs-victim.txt": "absolute victim",
+               elsewhere / "x.txt": "behind a symlinked directory",
+               elsewhere / "linked.txt": "behind a symlinked file",
+               elsewhere / "tmp-target.txt": "behind the manifest's temporary file",
+               elsewhere / "new.txt": "behind a symlink a new file replaces"}
+    for path, text in victims.items():
+        path.write_text(text)
+    (out / "linkdir").symlink_to(elsewhere)
+    (out / "link.txt").symlink_to(elsewhere / "linked.txt")
+    (out / "new.txt").symlink_to(elsewhere / "new.txt")
+    (out / (MANIFEST_NAME + ".tmp")).symlink_to(elsewhere / "tmp-target.txt")
+    (out / "sub").mkdir()
+    (out / MANIFEST_NAME).write_text(json.dumps({"files": [
+        "../victim.txt", str(tmp_path / "abs-victim.txt"), "link.txt", "linkdir/x.txt",
+        "sub/../../victim.txt", "./../victim.txt", "sub/../../elsewhere/x.txt", "",
+        "linkdir", "..", "/", 3, None, "linkdir/../victim.txt", "sub//x", LOCK_NAME]}))
+    return out, victims
+
+
+def test_planted_manifest_touches_nothing_outside_dir(tmp_path):
+    out, victims = plant(tmp_path)
+    with StagedOutput(out) as staging:
+        (staging / "a.txt").write_text("new a")
+        (staging / "new.txt").write_text("new file where a symlink was")
+    for path, text in victims.items():
+        assert path.read_text() == text, path
+    assert (out / "a.txt").read_text() == "new a"
+    assert (out / "new.txt").read_text() == "new file where a symlink was"
+    assert not (out / "new.txt").is_symlink()                  # the link replaced, not its target
+    assert (out / "link.txt").is_symlink() and (out / "linkdir").is_symlink()
+    assert json.loads((out / MANIFEST_NAME).read_text()) == {"files": ["a.txt", "new.txt"]}
+    assert no_staging_left(out)
+
+
+def test_planted_lock_symlink_truncates_nothing(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    (out / LOCK_NAME).symlink_to(victim)
+    with pytest.raises(OutputError, match=f"-o .*{LOCK_NAME} is a symlink, not a regular file"):
+        StagedOutput(out).open()
+    assert victim.read_text() == "keep me"
+
+
+def test_planted_leftover_journal_touches_nothing_outside(tmp_path):
+    """The journal a killed commit leaves is read by the next command: a planted one
+    must not reach outside DIR either."""
+    out, victims = plant(tmp_path)
+    leftover = out / (STAGING_PREFIX + "planted")
+    (leftover / ".tengfield-tx").mkdir(parents=True)
+    names = ["../victim.txt", str(tmp_path / "abs-victim.txt"), "linkdir/x.txt", "link.txt"]
+    (leftover / ".tengfield-tx" / "journal.json").write_text(json.dumps(
+        {"moves": [{"name": n, "staged": True} for n in names]}))
+    with StagedOutput(out) as staging:
+        (staging / "a.txt").write_text("new a")
+    for path, text in victims.items():
+        assert path.read_text() == text, path
+    assert no_staging_left(out)
+
+
+@pytest.mark.slow
+def test_planted_manifest_cli_run_succeeds(tmp_path, short_scene, capsys):
+    out, victims = plant(tmp_path)
+    code, stdout, err = run_main(["dynamics", short_scene, "--no-plots", "-o", out], capsys)
+    assert code == 0, err
+    for path, text in victims.items():
+        assert path.read_text() == text, path
+    assert set(visible(out)) == {"impacts.csv", "summary.json", "trajectory.csv"}
+
+
 # -- item 11: special files -------------------------------------------------------------
 def special_files(tmp_path: Path) -> dict[Path, str]:
     fifo = tmp_path / "fifo.h5"
@@ -100,7 +180,79 @@ def test_directory_commands_refuse_special_files(tmp_path, capsys):
         assert path.exists() and not path.is_dir()
 
 
+def test_special_file_inside_dir_is_not_replaced(tmp_path):
+    out = tmp_path / "out"
+    write_set(out, {"a.txt": "old a", "c.txt": "old c"})
+    os.mkfifo(out / "b.txt")
+    with pytest.raises(OutputError, match=r"-o .*b\.txt.* is a named pipe \(FIFO\), not a "
+                                          r"regular file"):
+        write_set(out, {"a.txt": "new a", "b.txt": "new b", "c.txt": "new c"})
+    assert stat.S_ISFIFO(os.lstat(out / "b.txt").st_mode)
+    assert visible(out) == {"a.txt": "old a", "c.txt": "old c"} and no_staging_left(out)
+
+
 # -- item 12: all-or-nothing, -o "", long names --------------------------------------------
+def test_directory_where_a_file_goes_replaces_nothing(tmp_path):
+    out = tmp_path / "out"
+    write_set(out, {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"})
+    (out / "b.txt").mkdir()
+    (out / "b.txt" / "mine").write_text("user's")
+    with pytest.raises(OutputError, match=r"-o .*b\.txt.* is a directory"):
+        write_set(out, {"a.txt": "new a", "b.txt": "new b", "c.txt": "new c"})
+    assert visible(out) == {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"}
+    assert (out / "b.txt" / "mine").read_text() == "user's" and no_staging_left(out)
+    assert json.loads((out / MANIFEST_NAME).read_text())["files"] == ["a.txt", "c.txt",
+                                                                        "gone.txt"]
+
+
+def test_a_move_failing_midway_rolls_back(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    write_set(out, {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"})
+    real_replace = os.replace
+
+    def flaky(src, dst, *a, **k):
+        if Path(dst) == out / "c.txt" and "new" in Path(src).read_text():
+            raise OSError(5, "Input/output error", str(dst))
+        return real_replace(src, dst, *a, **k)
+
+    monkeypatch.setattr(os, "replace", flaky)
+    with pytest.raises(OSError, match="Input/output error"):
+        write_set(out, {"a.txt": "new a", "b.txt": "new b", "c.txt": "new c"})
+    monkeypatch.undo()
+    assert visible(out) == {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"}
+    assert json.loads((out / MANIFEST_NAME).read_text())["files"] == ["a.txt", "c.txt",
+                                                                        "gone.txt"]
+    assert no_staging_left(out)
+
+
+def test_kill_9_in_the_middle_of_the_move_is_rolled_back_next_time(tmp_path, cli_env):
+    out = tmp_path / "out"
+    write_set(out, {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"})
+    script = textwrap.dedent(f"""
+        import os, signal
+        from pathlib import Path
+        from tengfield.outputs import StagedOutput
+        real = os.replace
+        def dying(src, dst, *a, **k):   # killed as the last new file goes into place
+            if Path(dst) == Path({str(out / "c.txt")!r}):
+                os.kill(os.getpid(), signal.SIGKILL)
+            return real(src, dst, *a, **k)
+        os.replace = dying
+        with StagedOutput({str(out)!r}) as staging:
+            for name in ("a.txt", "b.txt", "c.txt"):
+                (staging / name).write_text("new " + name[0])
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          env=cli_env())
+    assert proc.returncode == -9, proc.stderr
+    assert visible(out) != {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"}
+    following = StagedOutput(out)     # the next command: the killed move is undone first
+    following.open()
+    following.abort()
+    assert visible(out) == {"a.txt": "old a", "c.txt": "old c", "gone.txt": "old stale"}
+    assert no_staging_left(out)
+
+
 @pytest.mark.parametrize("command", [["dynamics"], ["precompute"]])
 def test_empty_output_is_refused(command, tmp_path, capsys, monkeypatch, never_solve):
     monkeypatch.chdir(tmp_path)
