@@ -9,6 +9,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tengfield import cli
@@ -275,3 +276,38 @@ def test_long_names_name_the_option(length, tmp_path, capsys, never_solve):
         assert err.startswith(f"tengfield: error: -o {str(target)!r}") and "too long" in err
         assert err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+# -- under mpirun the commands write into DIR itself: the writers' own guard ---------------
+def test_writers_never_write_through_a_symlink_or_into_a_pipe(tmp_path):
+    from types import SimpleNamespace
+
+    from tengfield import io as writers
+
+    out = tmp_path / "out"
+    out.mkdir()
+    victim = tmp_path / "victim.csv"
+    victim.write_text("keep me")
+    three = np.arange(3.0)
+    dynamics = SimpleNamespace(t=three, gap=three, gap_velocity=three, table=three,
+                               impacts=SimpleNamespace(time=three, plate=np.array(["upper"] * 3),
+                                                       speed_before=three, speed_after=three))
+    scene = SimpleNamespace(contact=SimpleNamespace(model="1d"))
+    writes = {"trajectory.csv": lambda: writers.write_dynamics_files(dynamics, scene, out,
+                                                                     plots=False),
+              "summary.json": lambda: writers.write_json(out / "summary.json", {"a": 1})}
+    for name, write in writes.items():
+        (out / name).symlink_to(victim)
+        write()
+        assert victim.read_text() == "keep me", name
+        assert (out / name).is_file() and not (out / name).is_symlink()
+        (out / name).unlink()
+        os.mkfifo(out / name)
+        reader = os.open(out / name, os.O_RDONLY | os.O_NONBLOCK)   # no hang before the fix
+        try:
+            with pytest.raises(OutputError, match=r"is a named pipe \(FIFO\), not a regular file"):
+                write()
+        finally:
+            os.close(reader)
+        assert stat.S_ISFIFO(os.lstat(out / name).st_mode)
+        (out / name).unlink()
