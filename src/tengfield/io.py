@@ -36,12 +36,37 @@ TIME_FORMAT = "%.17g"
 VALUE_FORMAT = "%.10g"
 
 
+def writable_target(path: str | Path) -> Path:
+    """``path``, made safe to write a file at: a symlink there is removed (a file is
+    written in its place, never through it to its target); a directory, FIFO or device
+    node is refused (:class:`tengfield.outputs.OutputError`: nothing is written into a
+    pipe or a device). The staging directory of ``-o DIR`` holds none of these; under
+    mpirun the commands write into DIR itself. The writers of one file (``write_csv``,
+    ...) write where they are told (``/dev/full`` included); the writers of an output
+    set (``write_run_outputs``, ``write_dynamics_files``, ``atomic_path``) check."""
+    import stat
+
+    from .outputs import OutputError, _kind
+
+    path = Path(path)
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return path
+    if stat.S_ISLNK(st.st_mode):
+        path.unlink()
+    elif not stat.S_ISREG(st.st_mode):
+        raise OutputError(f"{str(path)!r} is {_kind(st.st_mode)}, not a regular file: "
+                          "nothing was written there")
+    return path
+
+
 @contextmanager
 def atomic_path(path: str | Path):
     """Yield a temporary path next to ``path`` (same suffix, so plotting libraries
     pick the format); it replaces ``path`` (``os.replace``) when the block ends
     without an exception, else it is removed: a reader never sees half a file."""
-    path = Path(path)
+    path = writable_target(path)
     tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}")
     try:
         yield tmp
@@ -93,7 +118,8 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
                                    path=out / "surrogate.png", cells=result.scene.device.cells))
         written += write_harvest_plots(result, out, figures=figures)
-    written.insert(0, write_waveforms_csv(out / "waveforms.csv", result.waveforms))
+    written.insert(0, write_waveforms_csv(writable_target(out / "waveforms.csv"),
+                                          result.waveforms))
     written.append(write_json(out / "summary.json", result.summary))
     return written
 
@@ -101,6 +127,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
 def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
     """Draw ``function(*data, path, **kwargs)`` here, or send it to ``figures``; returns
     ``path``."""
+    writable_target(path)
     if figures is None:
         function(*data, path, **kwargs)
     else:
@@ -242,7 +269,7 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     else:
         tables = [(write_trajectory_csv, "trajectory.csv")]
     tables.append((write_impacts_csv, "impacts.csv"))
-    written = [out / name for _, name in tables]
+    written = [writable_target(out / name) for _, name in tables]
     drawing = None
     if plots:
         from .plotting.dynamics import draw_trajectory, trajectory_figure
@@ -251,6 +278,8 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
                  f"e = {scene.contact.restitution:g}" if exc.kind == "sine"
                  else "recorded excitation")
         data = trajectory_figure(dynamics, max_periods=max_periods, title=title)
+        for name in ("trajectory.png", "trajectory3d.png") if three_d else ("trajectory.png",):
+            writable_target(out / name)
         if figures is not None:
             drawing = figures.draw(draw_trajectory, data, out / "trajectory.png")
     # the figure process draws on a core of its own: leave it one

@@ -4,20 +4,29 @@ Every CLI command with ``-o DIR`` writes through :class:`StagedOutput`
 (``tengfield.cli`` does it for every command, the command modules need no
 change):
 
-1. before any computation, ``DIR`` is created or checked (a file, a path under
-   a file, a read-only place: one :class:`OutputError` line, exit 2);
+1. before any computation, ``DIR`` is created or checked (a file, a FIFO or device,
+   a path under a file, a read-only place, "" or a name too long for the file
+   system: one :class:`OutputError` line naming the option, exit 2);
 2. a lock (``DIR/.tengfield.lock``, ``flock``, released by the kernel when the
-   process dies) refuses a second tengfield command writing to the same ``DIR``;
+   process dies; never opened through a symlink) refuses a second tengfield
+   command writing to the same ``DIR``;
 3. the command writes into a staging directory inside ``DIR``; only when it
-   succeeds are its files moved into place one by one (``os.replace``, atomic
-   per file on one file system). Files the previous command wrote there and this
-   one did not are removed (``DIR/.tengfield-manifest.json`` lists them), so the
-   directory always holds one complete set;
+   succeeds are its files moved into place, all or nothing: every destination is
+   checked first (a directory, FIFO or device where a file goes: one error line,
+   nothing replaced), the files they replace are moved aside into the staging
+   directory under a journal, and a failure on the way (or a kill -9, undone by
+   the next command writing to ``DIR``) puts them back. Files the previous command
+   wrote there and this one did not are removed (``DIR/.tengfield-manifest.json``
+   lists them; only plain names inside ``DIR``, regular files reached through real
+   directories: never "../x", "/x" or a symlink's target), so the directory always
+   holds one complete set;
 4. on any failure (exception, full disk, Ctrl-C) the staging directory is
    removed and the previous set stays as it was.
 
 ``-o FILE`` options (``tengfield precompute``) get the checks of step 1 on the
-file's directory; the file itself is written atomically by its writer.
+file's directory, and the file must be a regular file or a new path (a FIFO,
+a device node, ``/dev/null``: refused, never replaced); the file itself is
+written atomically by its writer.
 """
 from __future__ import annotations
 
@@ -25,6 +34,7 @@ import errno
 import json
 import os
 import shutil
+import stat
 import tempfile
 from pathlib import Path
 
@@ -33,6 +43,10 @@ from .errors import TengfieldError
 LOCK_NAME = ".tengfield.lock"
 MANIFEST_NAME = ".tengfield-manifest.json"
 STAGING_PREFIX = ".tengfield-staging-"
+#: inside a staging directory during a commit: the journal and the files being replaced
+TX_NAME = ".tengfield-tx"
+JOURNAL_NAME = "journal.json"
+OLD_NAME = "old"
 
 
 class OutputError(TengfieldError):
@@ -42,7 +56,27 @@ class OutputError(TengfieldError):
 def _reason(exc: OSError) -> str:
     if exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
         return "is not writable (read-only or no permission)"
+    if exc.errno == errno.ENAMETOOLONG:
+        return "is too long a name for the file system"
     return exc.strerror or str(exc)
+
+
+_KINDS = {stat.S_IFIFO: "a named pipe (FIFO)", stat.S_IFCHR: "a character device",
+          stat.S_IFBLK: "a block device", stat.S_IFSOCK: "a socket", stat.S_IFLNK: "a symlink",
+          stat.S_IFDIR: "a directory", stat.S_IFREG: "a file"}
+
+
+def _kind(mode: int) -> str:
+    """``a named pipe (FIFO)``, ``a character device``, ... of an ``st_mode``."""
+    return _KINDS.get(stat.S_IFMT(mode), "a special file")
+
+
+def _not_empty(path, option: str, what: str) -> Path:
+    """``Path(path)``, refusing "" (``Path("")`` is the current directory)."""
+    if path is None or str(path) == "":
+        raise OutputError(f"{option} '' is empty: give {what} (-o . for the current directory)"
+                          if what == "a directory" else f"{option} '' is empty: give {what}")
+    return Path(path)
 
 
 def _first_file_above(path: Path) -> Path | None:
@@ -56,13 +90,25 @@ def _first_file_above(path: Path) -> Path | None:
 def ensure_directory(path: str | Path, option: str = "-o") -> Path:
     """Create ``path`` (and its parents) or check the existing one; writable.
 
-    Raises :class:`OutputError` with one line naming the option and the path.
+    Raises :class:`OutputError` with one line naming the option and the path
+    (also for "", a FIFO or device, a name too long for the file system).
     """
-    p = Path(path)
+    p = _not_empty(path, option, "a directory")
     where = f"{option} {str(p)!r}"
-    if p.exists() and not p.is_dir():
-        raise OutputError(f"{where} is a file, not a directory")
-    blocker = _first_file_above(p)
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:     # ENAMETOOLONG, ELOOP, ENOTDIR (checked below), ...
+        st = None
+        if exc.errno != errno.ENOTDIR:
+            raise OutputError(f"{where} {_reason(exc)}") from None
+    if st is not None and not stat.S_ISDIR(st.st_mode):
+        raise OutputError(f"{where} is {_kind(st.st_mode)}, not a directory")
+    try:
+        blocker = _first_file_above(p)
+    except OSError as exc:
+        raise OutputError(f"{where} {_reason(exc)}") from None
     if blocker is not None:
         raise OutputError(f"{where}: {str(blocker)!r} is a file, not a directory")
     try:
@@ -79,12 +125,65 @@ def ensure_directory(path: str | Path, option: str = "-o") -> Path:
 
 
 def ensure_file_parent(path: str | Path, option: str = "-o") -> Path:
-    """Checks for an output FILE: not a directory, its directory created and writable."""
-    p = Path(path)
-    if p.is_dir():
-        raise OutputError(f"{option} {str(p)!r} is a directory: give a file name")
-    ensure_directory(p.parent if str(p.parent) else Path("."), option=f"{option} {str(p)!r}: directory")
+    """Checks for an output FILE: a regular file or a new path (never a directory, FIFO,
+    device node, ...: those are not replaced), its directory created and writable, and
+    room in the directory for the writer's temporary file ``.NAME.XXXXXXXX.tmp``."""
+    p = _not_empty(path, option, "a file name")
+    where = f"{option} {str(p)!r}"
+    try:
+        st = os.stat(p)          # through a symlink: what a writer would reach
+    except FileNotFoundError:
+        st = None                # a new path (or a dangling symlink, replaced as such)
+    except OSError as exc:
+        st = None
+        if exc.errno != errno.ENOTDIR:
+            raise OutputError(f"{where} {_reason(exc)}") from None
+    if st is not None and stat.S_ISDIR(st.st_mode):
+        raise OutputError(f"{where} is a directory: give a file name")
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise OutputError(f"{where} is {_kind(st.st_mode)}, not a regular file: give a file name")
+    parent = p.parent if str(p.parent) else Path(".")
+    ensure_directory(parent, option=f"{where}: directory")
+    try:   # the temporary name surrogate.store.write_checked_file uses: 14 bytes longer
+        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise OutputError(f"{where} {_reason(exc)}") from None
     return p
+
+
+def _plain_name(name) -> str | None:
+    """``name`` if it is a relative path inside a directory (no "..", ".", empty, absolute
+    or reserved part), else None: what a manifest or journal may name."""
+    if not isinstance(name, str) or not name or "\0" in name or name.startswith("/"):
+        return None
+    parts = name.split("/")
+    if any(part in ("", ".", "..") for part in parts):
+        return None
+    if parts[0] in (LOCK_NAME, MANIFEST_NAME, MANIFEST_NAME + ".tmp") or \
+            parts[0].startswith((STAGING_PREFIX, ".tengfield-probe-")):
+        return None
+    return name
+
+
+def _lstat(path: Path) -> os.stat_result | None:
+    try:
+        return os.lstat(path)
+    except FileNotFoundError:
+        return None
+
+
+def _parents_are_directories(target: Path, name: str) -> bool:
+    """Every directory on the way from ``target`` to ``target/name`` exists and is a real
+    directory (no symlink): nothing is reached outside ``target``."""
+    here = target
+    for part in name.split("/")[:-1]:
+        here = here / part
+        st = _lstat(here)
+        if st is None or not stat.S_ISDIR(st.st_mode):
+            return False
+    return True
 
 
 class StagedOutput:
@@ -92,6 +191,7 @@ class StagedOutput:
     block ends without an exception, moves the files into ``DIR``; see the module doc."""
 
     def __init__(self, target: str | Path, *, option: str = "-o"):
+        self._spelled = target
         self.target = Path(target)
         self.option = option
         self.staging: Path | None = None
@@ -100,40 +200,53 @@ class StagedOutput:
 
     # -- the three steps -----------------------------------------------------------
     def open(self) -> Path:
-        self._created = not self.target.exists()
-        ensure_directory(self.target, self.option)
+        self._created = not os.path.lexists(self.target)
+        ensure_directory(self._spelled, self.option)
         self._lock()
-        for leftover in self.target.glob(STAGING_PREFIX + "*"):   # of a killed run; we hold the lock
-            shutil.rmtree(leftover, ignore_errors=True)
         try:
+            self._recover_leftovers()    # of a killed run; we hold the lock
             self.staging = Path(tempfile.mkdtemp(dir=self.target, prefix=STAGING_PREFIX))
         except OSError as exc:
             self._unlock()
             raise OutputError(f"{self.option} {str(self.target)!r} {_reason(exc)}") from None
+        except BaseException:
+            self._unlock()
+            raise
         # the path as the user spelled it, so messages that name files read naturally
         self.staging = Path(os.path.join(str(self.target), self.staging.name))
         return self.staging
 
     def commit(self) -> list[Path]:
-        """Move every staged file into place; remove the previous command's leftovers."""
+        """Move every staged file into place and the previous command's leftovers out,
+        all or nothing: every destination is checked first (a directory or a special
+        file where a file goes: :class:`OutputError`, nothing replaced); the files they
+        replace are kept in the staging directory, listed in a journal, until the last
+        one is in place, and put back on any failure (here, or by the next command
+        after a kill)."""
         assert self.staging is not None
+        keep = False
         try:
-            written = sorted(p.relative_to(self.staging) for p in self.staging.rglob("*")
-                             if not p.is_dir())
-            for rel in written:
-                dest = self.target / rel
-                dest.parent.mkdir(parents=True, exist_ok=True)
-                os.replace(self.staging / rel, dest)
-            previous = self._read_manifest()
-            names = {str(rel) for rel in written}
-            for stale in previous - names:
-                stale_path = self.target / stale
-                if stale_path.is_file() and not stale_path.is_symlink():
-                    stale_path.unlink()
-            self._write_manifest(names)
-            return [self.target / rel for rel in written]
+            staged = self._staged_names()
+            stale = sorted(self._read_manifest() - set(staged))
+            moves = self._plan(staged, stale)
+            (self.staging / MANIFEST_NAME).write_text(
+                json.dumps({"files": staged}, indent=1) + "\n")
+            tx = self.staging / TX_NAME
+            (tx / OLD_NAME).mkdir(parents=True)
+            with open(tx / JOURNAL_NAME, "w") as fh:
+                json.dump({"moves": [{"name": n, "staged": s} for n, s in moves]}, fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+            try:
+                for name, is_staged in moves:
+                    self._move(name, is_staged, tx / OLD_NAME)
+            except BaseException:
+                keep = not self._undo(self.staging)
+                raise
+            (tx / JOURNAL_NAME).unlink()     # the commit point: the new set is in place
+            return [self.target / name for name in staged]
         finally:
-            self._cleanup()
+            self._cleanup(keep=keep)
 
     def abort(self) -> None:
         """Drop everything staged; the previous set in DIR stays untouched (a DIR
@@ -159,15 +272,117 @@ class StagedOutput:
             self.abort()
         return False
 
+    # -- the move into place ----------------------------------------------------------
+    def _staged_names(self) -> list[str]:
+        """The files (and symlinks) the command wrote, relative to the staging directory."""
+        names = []
+        for p in self.staging.rglob("*"):
+            if not stat.S_ISDIR(p.lstat().st_mode):
+                name = _plain_name(p.relative_to(self.staging).as_posix())
+                if name is not None:
+                    names.append(name)
+        return sorted(names)
+
+    def _plan(self, staged: list[str], stale: list[str]) -> list[tuple[str, bool]]:
+        """``(name, staged)`` of every move, after checking every destination: a staged
+        file may replace a file or a symlink (the link, never its target), never a
+        directory or a special file; a stale file is removed only if it is a regular
+        file reached through real directories of DIR."""
+        moves = []
+        for name in [*staged, MANIFEST_NAME]:
+            here = self.target
+            for part in name.split("/"):
+                here = here / part
+                st = _lstat(here)
+                if st is None:
+                    break
+                last = here == self.target / name
+                if stat.S_ISDIR(st.st_mode) and last:
+                    raise OutputError(f"{self.option} {str(here)!r} is a directory where "
+                                      "tengfield writes a file: nothing was replaced")
+                if not last and not stat.S_ISDIR(st.st_mode):
+                    raise OutputError(f"{self.option} {str(here)!r} is {_kind(st.st_mode)}, "
+                                      "not a directory: nothing was replaced")
+                if last and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+                    raise OutputError(f"{self.option} {str(here)!r} is {_kind(st.st_mode)}, "
+                                      "not a regular file: nothing was replaced")
+            moves.append((name, True))
+        for name in stale:
+            if _parents_are_directories(self.target, name):
+                st = _lstat(self.target / name)
+                if st is not None and stat.S_ISREG(st.st_mode):
+                    moves.append((name, False))
+        return moves
+
+    def _move(self, name: str, is_staged: bool, old: Path) -> None:
+        """The file at ``DIR/name`` (if any) to ``old/name``, then the staged one in."""
+        dest = self.target / name
+        if is_staged and "/" in name:
+            dest.parent.mkdir(parents=True, exist_ok=True)
+        if _lstat(dest) is not None:
+            (old / name).parent.mkdir(parents=True, exist_ok=True)
+            os.replace(dest, old / name)
+        if is_staged:
+            os.replace(self.staging / name, dest)
+
+    def _undo(self, staging: Path) -> bool:
+        """Put back what the journal in ``staging`` says a commit moved (a commit that
+        failed, or was killed, before its end); False if something could not be."""
+        moves = _read_journal(staging)
+        if moves is None:
+            return True
+        old = staging / TX_NAME / OLD_NAME
+        st = _lstat(old)
+        old_ok = st is not None and stat.S_ISDIR(st.st_mode)
+        done = True
+        for name, is_staged in reversed(moves):
+            dest = self.target / name
+            if not _parents_are_directories(self.target, name):
+                continue
+            try:
+                if old_ok and _inside(old, name):
+                    os.replace(old / name, dest)           # the previous file back
+                elif is_staged and _parents_are_directories(staging, name) \
+                        and _lstat(staging / name) is None:
+                    st = _lstat(dest)                      # a new file where there was none
+                    if st is not None and not stat.S_ISDIR(st.st_mode):
+                        dest.unlink()
+            except OSError:
+                done = False
+        if done:
+            (staging / TX_NAME / JOURNAL_NAME).unlink()
+        return done
+
+    def _recover_leftovers(self) -> None:
+        """Undo the move of a commit that was killed, then remove its staging directory."""
+        for leftover in sorted(self.target.glob(STAGING_PREFIX + "*")):
+            st = _lstat(leftover)
+            if st is None or not stat.S_ISDIR(st.st_mode):
+                continue
+            if not self._undo(leftover):
+                raise OutputError(f"{self.option} {str(self.target)!r}: an interrupted earlier "
+                                  "write could not be undone; the files it replaced are in "
+                                  f"{str(leftover / TX_NAME / OLD_NAME)!r}")
+            shutil.rmtree(leftover, ignore_errors=True)
+
     # -- helpers --------------------------------------------------------------------
     def _lock(self) -> None:
         import fcntl
 
         path = self.target / LOCK_NAME
-        try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        where = f"{self.option} {str(self.target)!r}"
+        try:   # never through a symlink (it would truncate its target), nor a FIFO's wait
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644)
         except OSError as exc:
-            raise OutputError(f"{self.option} {str(self.target)!r} {_reason(exc)}") from None
+            if exc.errno == errno.ELOOP:
+                raise OutputError(f"{where}: {LOCK_NAME} is a symlink, not a regular file: "
+                                  "remove it") from None
+            raise OutputError(f"{where} {_reason(exc)}") from None
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            os.close(fd)
+            raise OutputError(f"{where}: {LOCK_NAME} is {_kind(mode)}, not a regular file: "
+                              "remove it")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
@@ -185,19 +400,62 @@ class StagedOutput:
             os.close(self._lock_fd)   # closing releases the flock
             self._lock_fd = None
 
-    def _cleanup(self) -> None:
+    def _cleanup(self, keep: bool = False) -> None:
+        """Remove the staging directory (``keep``: leave it, it holds files a failed
+        commit could not put back; the next command tries again) and unlock."""
         if self.staging is not None:
-            shutil.rmtree(self.staging, ignore_errors=True)
+            if not keep:
+                shutil.rmtree(self.staging, ignore_errors=True)
             self.staging = None
         self._unlock()
 
     def _read_manifest(self) -> set[str]:
-        try:
-            return set(json.loads((self.target / MANIFEST_NAME).read_text())["files"])
-        except (OSError, ValueError, KeyError, TypeError):
+        """The names the previous command wrote: only plain names inside DIR (a planted
+        manifest naming "../x", "/x" or reaching through a symlink is ignored)."""
+        data = _read_json(self.target / MANIFEST_NAME)
+        files = data.get("files") if isinstance(data, dict) else None
+        if not isinstance(files, list):
             return set()
+        return {name for name in files if _plain_name(name) is not None}
 
-    def _write_manifest(self, names: set[str]) -> None:
-        tmp = self.target / (MANIFEST_NAME + ".tmp")
-        tmp.write_text(json.dumps({"files": sorted(names)}, indent=1) + "\n")
-        os.replace(tmp, self.target / MANIFEST_NAME)
+
+def _read_json(path: Path):
+    """The JSON in the regular file ``path`` (never through a symlink), or None."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return None
+    with os.fdopen(fd, "rb") as fh:
+        try:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                return None
+            return json.loads(fh.read(1 << 24))
+        except (OSError, ValueError):
+            return None
+
+
+def _inside(base: Path, name: str) -> bool:
+    """``base/name`` exists and is reached through real directories from ``base``."""
+    return _parents_are_directories(base, name) and _lstat(base / name) is not None
+
+
+def _read_journal(staging: Path) -> list[tuple[str, bool]] | None:
+    """The moves a commit into ``staging``'s DIR had begun (None: none under way)."""
+    tx = staging / TX_NAME
+    st = _lstat(tx)
+    if st is None or not stat.S_ISDIR(st.st_mode):
+        return None
+    data = _read_json(tx / JOURNAL_NAME)
+    if data is None:
+        return None
+    moves = data.get("moves") if isinstance(data, dict) else None
+    if not isinstance(moves, list):
+        return []
+    plain = []
+    for move in moves:
+        if not isinstance(move, dict):
+            continue
+        name = move.get("name")
+        if name == MANIFEST_NAME or _plain_name(name) is not None:
+            plain.append((name, bool(move.get("staged"))))
+    return plain

@@ -84,7 +84,7 @@ def _run_map(args) -> int:
     from .._mpi import check_jobs
     from ..dynamics import regime_map
     from ..dynamics.mapping import check_map_size
-    from ..io import write_map_csv
+    from ..io import writable_target, write_map_csv
     from ._common import world_if_parallel
     from ..plotting.dynamics import plot_regime_map
     from ..scene import load_scene
@@ -103,7 +103,7 @@ def _run_map(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_map_csv(result, out / "map.csv")
     if not args.no_plots:
-        plot_regime_map(result, out / "map.png",
+        plot_regime_map(result, writable_target(out / "map.png"),
                         title=f"regimes, e = {scene.contact.restitution:g}, dh = "
                               f"{scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")
     counts = {n: int(np.sum(result.regime == n)) for n in np.unique(result.regime)}

@@ -56,17 +56,21 @@ def _run(args) -> int:
     max_positions = check_max_positions(args.max_positions)
     comm = world_if_parallel()
     rank = 0 if comm is None else comm.rank
-    target = Path(args.output) if args.output else surrogate.cache_path(scene, args.cache_dir)
+    option = "-o" if args.output is not None else "--cache-dir"
+    # "" is refused by ensure_file_parent, not taken for "no -o"
+    target = args.output if args.output is not None else surrogate.cache_path(scene,
+                                                                              args.cache_dir)
     problem = None
     if rank == 0:   # checked once, before any solve; every rank stops alike
         try:
-            ensure_file_parent(target, option="-o" if args.output else "--cache-dir")
+            ensure_file_parent(target, option=option)
         except Exception as exc:  # noqa: BLE001 - re-raised on every rank
             problem = exc
     if comm is not None:
         problem = comm.bcast(problem, root=0)
     if problem is not None:
         raise problem
+    target = Path(target)
     if not args.force and args.output is None:
         table, status, _ = surrogate.load_cached(target, scene, comm)   # rank 0 decides
         if table is not None:
@@ -77,6 +81,8 @@ def _run(args) -> int:
     table = surrogate.precompute(scene, comm=comm, progress=True, max_positions=max_positions,
                                  command_line=command_line())
     if rank == 0:
+        # again: a FIFO or device node put there during the solves is not replaced either
+        ensure_file_parent(target, option=option)
         surrogate.write_table(target, table)
         print(f"{table.count} positions, interpolation error estimate "
               f"{table.interpolation_error:.3g} (tolerance {table.tolerance:g}, "
