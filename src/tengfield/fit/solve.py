@@ -461,12 +461,12 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
 
     result = _finish("trace", problem, res, spec, params, start, residual_parts, noise,
                      not estimated, t0, alignment)
-    _explained_note(result, trace)
     shift = result.values.get("time_shift_s", fixed_shift)
     result.measured = {"time": trace.time, **trace.values,
                        "units": {c.quantity: c.unit for c in trace.columns}}
     result.fitted = model.waveforms(result.values, model.model_times(trace.time, shift),
                                     quantities)
+    _explained_note(result, trace, spec.loss)
     if spec.bootstrap:
         result.bootstrap = _bootstrap(problem, res.x, residual, result.fitted, trace, spec,
                                       progress=progress)
@@ -477,7 +477,7 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
 #: a column whose peak-to-peak is below this many noise levels carries no signal
 NO_SIGNAL_NOISE_FACTOR = 2.0
 #: residual RMS / signal RMS (about its mean) above which the fit explains nothing useful
-RESIDUAL_AS_LARGE_AS_SIGNAL = 0.7
+RESIDUAL_AS_LARGE_AS_SIGNAL = 0.9
 
 
 def _check_signal(trace: Trace) -> None:
@@ -510,16 +510,22 @@ def _check_signal(trace: Trace) -> None:
                    + "; ".join(reasons) + " (check the column names and the recording)")
 
 
-def _explained_note(result: FitResult, trace: Trace) -> None:
+def _explained_note(result: FitResult, trace: Trace, loss: str = "linear") -> None:
     """A note (and a warning) when the residual is about as large as the signal: the fitted
-    values then describe noise, or the model/units do not match the data."""
+    values then describe noise, or the model/units do not match the data. Robust losses
+    compare robust spreads (1.4826 x MAD), so a few outliers do not trigger it."""
     import warnings
 
     poor = []
     for c in trace.columns:
         y = trace.values[c.quantity]
-        signal = float(np.std(y))
-        rms = result.residual_rms.get(c.quantity, 0.0)
+        r = y - np.asarray(result.fitted[c.quantity])
+        if loss == "linear":
+            signal = float(np.std(y))
+            rms = float(np.sqrt(np.mean(r ** 2)))
+        else:
+            signal = float(1.4826 * np.median(np.abs(y - np.median(y))))
+            rms = float(1.4826 * np.median(np.abs(r - np.median(r))))
         if signal > 0 and rms >= RESIDUAL_AS_LARGE_AS_SIGNAL * signal:
             poor.append(f"{c.quantity}: residual RMS {rms:.3g} vs signal RMS {signal:.3g} (SI)")
     if len(poor) == len(trace.columns) and poor:
