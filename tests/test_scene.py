@@ -39,14 +39,14 @@ def test_field_hash_tracks_only_field_inputs():
 
 
 BAD = [
-    ("[device]\nball_diameter_mm = -7\n", ["ball_diameter_mm", "-7", "(0, inf"]),
+    ("[device]\nball_diameter_mm = -7\n", ["ball_diameter_mm", "-7", "[1e-06, 10000]"]),
     ("[device]\nball_diameter_mm = 0\n", ["ball_diameter_mm", "0"]),
     ("[device]\ngap_mm = nan\n", ["gap_mm", "nan", "not finite"]),
     ("[device]\nball_diameter_mm = 8.0\n", ["ball_diameter_mm", "8", "does not fit", "8) mm"]),
     ("[device]\nelectrode_radius_mm = 6.0\n", ["electrode_radius_mm", "6", "larger than the plate"]),
     ("[contact]\nrestitution = 1.2\n", ["restitution", "1.2", "[0, 1]"]),
     ("[contact]\nrestitution = -0.1\n", ["restitution", "-0.1"]),
-    ("[excitation]\nfrequency_hz = 0\n", ["frequency_hz", "0", "(0, inf"]),
+    ("[excitation]\nfrequency_hz = 0\n", ["frequency_hz", "0", "[1e-06, 1e+09]"]),
     ("[excitation]\nfrequency_hz = -5\n", ["frequency_hz", "-5"]),
     ("[run]\nduration_s = 0\n", ["duration_s", "0"]),
     ("[run]\nduration_s = -1\n", ["duration_s", "-1"]),

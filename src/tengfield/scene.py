@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import datetime
 import difflib
+import os
 import hashlib
 import io
 import json
@@ -38,8 +40,10 @@ FIELD_SCHEMA = 1
 _INF = math.inf
 
 
-def _rng(lo=-_INF, hi=_INF, lo_open=False, hi_open=False):
-    return ("range", lo, hi, lo_open, hi_open)
+def _rng(lo=-_INF, hi=_INF, lo_open=False, hi_open=False, why=""):
+    """A range constraint; ``why`` names the numerical limit behind a bound (quoted in
+    the error message)."""
+    return ("range", lo, hi, lo_open, hi_open, why)
 
 
 def _choice(*options):
@@ -49,15 +53,28 @@ def _choice(*options):
 _POS = _rng(0.0, _INF, lo_open=True)
 _NONNEG = _rng(0.0)
 
+# -- numerical bounds of the ranges (issue #21 item 7): every numeric key is bounded by
+# what the numerics can represent, so a value that passes validation gives finite output.
+#: lengths [mm]: 1 nm (1000 x the impact map's rest height, 1 pm) to 10 m; derived
+#: volumes, masses and the "auto" domain radius stay finite and representable
+_LENGTH = _rng(1e-6, 1e4, why="1 nm to 10 m: lengths the dynamics and the geometry resolve")
+#: table amplitude [mm]: 1 km keeps A w^4 (the kernel's snap bound) finite at every
+#: allowed frequency (1e3 m x (2 pi 1e9 Hz)^4 = 1.6e42)
+_AMPLITUDE = _rng(0.0, 1e6, why="up to 1 km: the kernel's bounds A w^2 ... A w^4 stay finite")
+#: excitation frequency [Hz]: 1 uHz to 1 GHz (A w^4 stays finite with the amplitude bound;
+#: the period count is bounded separately by MAX_PERIODS)
+_FREQUENCY = _rng(1e-6, 1e9, why="1 uHz to 1 GHz")
+
 SCHEMA: dict[str, dict[str, tuple]] = {
     "device": {
-        "ball_diameter_mm": ("ball_diameter", float, 7.0, 1e-3, _POS),
-        "gap_mm": ("stroke", float, 3.0, 1e-3, _POS),
-        "electrode_radius_mm": ("electrode_radius", float, 4.0, 1e-3, _POS),
-        "tube_inner_radius_mm": ("tube_inner_radius", float, 4.0, 1e-3, _POS),
-        "tube_outer_radius_mm": ("tube_outer_radius", float, 5.5, 1e-3, _POS),
-        "plate_thickness_mm": ("plate_thickness", float, 2.0, 1e-3, _POS),
-        "ball_density_kg_per_m3": ("ball_density", float, 2200.0, 1.0, _POS),
+        "ball_diameter_mm": ("ball_diameter", float, 7.0, 1e-3, _LENGTH),
+        "gap_mm": ("stroke", float, 3.0, 1e-3, _LENGTH),
+        "electrode_radius_mm": ("electrode_radius", float, 4.0, 1e-3, _LENGTH),
+        "tube_inner_radius_mm": ("tube_inner_radius", float, 4.0, 1e-3, _LENGTH),
+        "tube_outer_radius_mm": ("tube_outer_radius", float, 5.5, 1e-3, _LENGTH),
+        "plate_thickness_mm": ("plate_thickness", float, 2.0, 1e-3, _LENGTH),
+        "ball_density_kg_per_m3": ("ball_density", float, 2200.0, 1.0,
+                                   _rng(1e-3, 1e5, why="aerogel to twice osmium, a finite ball mass")),
         "ball_permittivity": ("ball_permittivity", float, 2.1, 1.0, _rng(1.0, 1e4)),
         "wall_permittivity": ("wall_permittivity", float, 2.6, 1.0, _rng(1.0, 1e4)),
         "surface_charge_uC_per_m2": ("surface_charge", float, -8.0, 1e-6, _rng(-1e4, 1e4)),
@@ -65,26 +82,28 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
     "excitation": {
         "kind": ("kind", str, "sine", None, _choice("sine", "recorded")),
-        "frequency_hz": ("frequency", float, 20.0, 1.0, _POS),
-        "amplitude_mm": ("amplitude", float, 1.5, 1e-3, _NONNEG),
+        "frequency_hz": ("frequency", float, 20.0, 1.0, _FREQUENCY),
+        "amplitude_mm": ("amplitude", float, 1.5, 1e-3, _AMPLITUDE),
         "phase_deg": ("phase", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
         "file": ("file", str, "", None, None),
         "time_column": ("time_column", str, "time_s", None, None),
         "signal_column": ("signal_column", str, "displacement_m", None, None),
         "signal": ("signal", str, "displacement", None, _choice("displacement", "acceleration")),
-        "smoothing_hz": ("smoothing", float, 0.0, 1.0, _NONNEG),
+        "smoothing_hz": ("smoothing", float, 0.0, 1.0, _rng(0.0, 1e9)),
     },
     "contact": {
         "model": ("model", str, "impact", None, _choice("impact", "soft")),
         "restitution": ("restitution", float, 0.1, 1.0, _rng(0.0, 1.0)),
         "restitution_model": ("restitution_model", str, "constant", None,
                               _choice("constant", "power-law")),
-        "restitution_reference_speed_m_per_s": ("restitution_reference_speed", float, 0.1, 1.0, _POS),
+        "restitution_reference_speed_m_per_s": ("restitution_reference_speed", float, 0.1, 1.0,
+                                                _rng(1e-6, 1e3, why="1 um/s to 1 km/s")),
         "restitution_exponent": ("restitution_exponent", float, 0.0, 1.0, _rng(0.0, 1.0)),
         "stiffness_N_per_m": ("stiffness", float, 1.0e5, 1.0, _rng(1.0, 1e15)),
     },
     "initial": {
-        "time_s": ("time", float, 0.0, 1.0, _rng()),
+        "time_s": ("time", float, 0.0, 1.0,
+                   _rng(-1e12, 1e12, why="|t| <= 1e12 s: the start time is carried exactly")),
         "gap_mm": ("gap", float, 0.0, 1e-3, _NONNEG),
         "velocity_m_per_s": ("velocity", float, 0.0, 1.0, _rng(-1e3, 1e3)),
     },
@@ -98,15 +117,16 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "degree": ("degree", int, 2, 1, _rng(1, 3)),
         "mesh_size_mm": ("mesh_size", float, 0.5, 1e-3, _rng(0.0, 100.0, lo_open=True)),
         "tolerance": ("tolerance", float, 1e-3, 1.0, _rng(1e-8, 0.5)),
-        "domain_radius_mm": ("domain_radius", float, "auto", 1e-3, _POS),
+        "domain_radius_mm": ("domain_radius", float, "auto", 1e-3, _rng(0.0, 1e6, lo_open=True)),
         "environment": ("environment", str, "free-space", None,
                         _choice("free-space", "grounded-table")),
         "far_field": ("far_field", str, "kelvin", None, _choice("kelvin", "robin", "dirichlet")),
-        "ball_offset_mm": ("ball_offset", float, 0.0, 1e-3, _NONNEG),
+        "ball_offset_mm": ("ball_offset", float, 0.0, 1e-3, _rng(0.0, 1e4)),
     },
     "circuit": {
         "kind": ("kind", str, "open", None, _choice("open", "short", "load")),
-        "load_ohm": ("load", float, 1.0e8, 1.0, _rng(0.0, 1e18, lo_open=True)),
+        "load_ohm": ("load", float, 1.0e8, 1.0,
+                     _rng(1e-3, 1e18, why="1 mohm to 1 Eohm: the load integrator's tested span")),
         "parallel_capacitance_pF": ("parallel_capacitance", float, 0.0, 1e-12, _rng(0.0, 1e9)),
         "reference": ("reference", str, "floating", None, _choice("floating", "grounded-lower")),
     },
@@ -128,17 +148,18 @@ SCHEMA["circuit"].update({
                                    _rng(0.5, 10.0)),
     "diode_series_resistance_ohm": ("diode_series_resistance", float, 0.0, 1.0, _rng(0.0, 1e12)),
     "storage_capacitance_uF": ("storage_capacitance", float, 10.0, 1e-6,
-                               _rng(0.0, 1e12, lo_open=True)),
+                               _rng(1e-6, 1e12, why="1 pF to 1 MF")),
     # 0: no leakage resistor across the store
     "storage_leakage_ohm": ("storage_leakage", float, 0.0, 1.0, _rng(0.0, 1e30)),
     "pmic": ("pmic", str, "none", None, _choice("none", "uvlo")),
-    "uvlo_rising_V": ("uvlo_rising", float, 5.05, 1.0, _rng(0.0, 1e6, lo_open=True)),
-    "uvlo_falling_V": ("uvlo_falling", float, 4.04, 1.0, _rng(0.0, 1e6, lo_open=True)),
-    "pmic_output_V": ("pmic_output", float, 3.3, 1.0, _rng(0.0, 1e6, lo_open=True)),
-    "pmic_load_ohm": ("pmic_load", float, 1e5, 1.0, _rng(0.0, 1e18, lo_open=True)),
+    "uvlo_rising_V": ("uvlo_rising", float, 5.05, 1.0, _rng(1e-3, 1e6)),
+    "uvlo_falling_V": ("uvlo_falling", float, 4.04, 1.0, _rng(1e-3, 1e6)),
+    "pmic_output_V": ("pmic_output", float, 3.3, 1.0, _rng(1e-3, 1e6)),
+    "pmic_load_ohm": ("pmic_load", float, 1e5, 1.0,
+                      _rng(1e-3, 1e18, why="1 mohm to 1 Eohm")),
     "pmic_efficiency": ("pmic_efficiency", float, 0.9, 1.0, _rng(0.0, 1.0, lo_open=True)),
     "pmic_quiescent_current_A": ("pmic_quiescent_current", float, 450e-9, 1.0, _rng(0.0, 1.0)),
-    "pmic_shunt_V": ("pmic_shunt", float, 20.0, 1.0, _rng(0.0, 1e6, lo_open=True)),
+    "pmic_shunt_V": ("pmic_shunt", float, 20.0, 1.0, _rng(1e-3, 1e6)),
 })
 #: [array]: cells that each run their own dynamics (``cells = 0``: no array; then
 #: ``[device] cells`` identical copies). Spreads are full widths of uniform draws.
@@ -206,8 +227,8 @@ SCHEMA_3D: dict[str, dict[str, tuple]] = {
         "tilt_azimuth_deg": ("tilt_azimuth", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
     },
     "excitation": {
-        "amplitude_x_mm": ("amplitude_x", float, 0.0, 1e-3, _NONNEG),
-        "amplitude_y_mm": ("amplitude_y", float, 0.0, 1e-3, _NONNEG),
+        "amplitude_x_mm": ("amplitude_x", float, 0.0, 1e-3, _AMPLITUDE),
+        "amplitude_y_mm": ("amplitude_y", float, 0.0, 1e-3, _AMPLITUDE),
         "phase_x_deg": ("phase_x", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
         "phase_y_deg": ("phase_y", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
         "signal_x_column": ("signal_x_column", str, "", None, None),
@@ -253,6 +274,8 @@ AUTO_KEYS = {("field", "domain_radius_mm")}
 #: Output samples per run, ``duration_s x sample_rate_hz``: 2e7 is 1000 s at 20 kHz
 #: (four float64 arrays of 0.64 GB; the CSV holds about 1 GB).
 MAX_SAMPLES = 2e7
+#: ... and at least this many (a 1e-300 s run, or a 1e-300 Hz sample rate, had none).
+MIN_SAMPLES = 2
 #: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
 MAX_PERIODS = 1e6
 #: ``[array]`` cells with their own dynamics (a spread set) x excitation periods: the
@@ -265,6 +288,13 @@ ARRAY_BYTES_PER_CELL_PERIOD = 1.4e3
 #: Events per period the impact map provisions (its first allocation); with
 #: MAX_PERIODS this bounds the first allocation at 1.6e7 events (1.3 GB).
 EVENTS_PER_PERIOD_ESTIMATE = 16
+
+#: Bytes of a scene file: the default scene is 5 kB; tomllib needs ~130 bytes of memory
+#: per byte of text (a 50 MB file took 6.7 GB), so 1 MB bounds a parse at ~150 MB.
+MAX_SCENE_BYTES = 1_000_000
+#: Nesting of tables and arrays in a scene file ([fit.columns.V] is 3 deep, an inline
+#: table of [fit.parameters] 3): deeper structures are refused (tomllib recurses).
+MAX_TOML_DEPTH = 8
 
 #: Data rows a recorded excitation needs: the table motion is a quintic spline
 #: (``tengfield.dynamics.table.recorded_table``).
@@ -589,6 +619,10 @@ def load_scene(path: str | Path | None) -> Scene:
     if not p.is_file():
         raise SceneError(f"scene file {str(p)!r} does not exist")
     try:
+        size = p.stat().st_size
+        if size > MAX_SCENE_BYTES + 4:   # before reading: a 50 MB file is refused at once
+            raise SceneError(f"scene file {str(p)!r} has {size:,} bytes: allowed at most "
+                             f"{MAX_SCENE_BYTES:,} (recorded data belong in a CSV file)")
         blob = p.read_bytes()
     except OSError as exc:
         raise SceneError(f"scene file {str(p)!r} could not be read: {exc.strerror or exc}") from None
@@ -612,13 +646,76 @@ def decode_utf8(blob: bytes, what: str) -> str:
 
 def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = None) -> Scene:
     text = text.removeprefix("\ufeff")   # a UTF-8 byte-order mark is not TOML
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(f"{source}: {len(text):,} characters: a scene file is allowed at most "
+                         f"{MAX_SCENE_BYTES:,} (recorded data belong in a CSV file)")
     if "\x00" in text:
         raise SceneError(f"{source}: holds NUL characters (binary data, not a TOML scene)")
+    _check_nesting_text(text, source)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{source}: malformed TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{source}: nested too deeply: allowed {MAX_TOML_DEPTH} levels of "
+                         "tables and arrays") from None
+    except (ValueError, OverflowError) as exc:   # e.g. an integer of more than 4300 digits
+        import re
+        long = re.search(r"[0-9_]{4000,}", text)
+        if long:
+            line = text.count("\n", 0, long.start()) + 1
+            key = text[text.rfind("\n", 0, long.start()) + 1:long.start()].split("=")[0].strip()
+            raise SceneError(f"{source}: line {line}: {key} = an integer of "
+                             f"{long.end() - long.start()} digits is out of range: numbers must "
+                             "stay within the doubles (|x| < 1.8e308)") from None
+        detail = str(exc).split(";")[0].strip()
+        raise SceneError(f"{source}: malformed TOML: {detail}") from None
+    _check_values(data, source)
     return _build(data, base_dir=base_dir, source=source, text=text)
+
+
+def _check_nesting_text(text: str, source: str) -> None:
+    """Refuse brackets nested deeper than a scene can use before tomllib recurses into
+    them (a cheap upper bound: brackets inside strings and comments count too, so the
+    text limit is generous, 4 x MAX_TOML_DEPTH)."""
+    depth = deepest = 0
+    for ch in text:
+        if ch in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+                if deepest > 4 * MAX_TOML_DEPTH:
+                    raise SceneError(f"{source}: nested too deeply: allowed {MAX_TOML_DEPTH} "
+                                     "levels of tables and arrays")
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+
+
+def _check_values(data, source: str, path: str = "", depth: int = 0) -> None:
+    """Every value of a parsed scene: no TOML dates/times (no key takes one), nesting at
+    most MAX_TOML_DEPTH, integers within the doubles."""
+    if depth > MAX_TOML_DEPTH:
+        raise SceneError(f"{source}: {path} is nested too deeply: allowed {MAX_TOML_DEPTH} "
+                         "levels of tables and arrays")
+    items = data.items() if isinstance(data, dict) else enumerate(data) \
+        if isinstance(data, list) else ()
+    for key, value in items:
+        where = f"{path}.{key}" if isinstance(key, str) and path else \
+            f"{path}[{key}]" if path else f"[{key}]"
+        if isinstance(value, (datetime.date, datetime.time)):
+            raise SceneError(f"{source}: {_where(where)} = {_show(value)}: no scene key takes a "
+                             "date or time; write a number or a string")
+        if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 2**1023:
+            raise SceneError(f"{source}: {_where(where)} = {_show(value)} is out of range: "
+                             "integers must stay within the doubles (|x| < 1.8e308)")
+        if isinstance(value, (dict, list)):
+            _check_values(value, source, where, depth + 1)
+
+
+def _where(path: str) -> str:
+    """``[run].duration_s`` -> ``[run] duration_s`` (how messages name scene keys)."""
+    sec, dot, rest = path.partition("].")
+    return f"{sec}] {rest}" if dot else path
 
 
 # ---------------------------------------------------------------------------
@@ -636,10 +733,11 @@ def _with_defaults(raw: dict) -> dict:
 
 
 def _fmt_range(c) -> str:
-    _, lo, hi, lo_open, hi_open = c
+    _, lo, hi, lo_open, hi_open = c[:5]
     left = "(" if lo_open else "["
     right = ")" if hi_open else "]"
-    return f"{left}{lo:g}, {hi:g}{right}"
+    why = c[5] if len(c) > 5 and c[5] else ""
+    return f"{left}{lo:g}, {hi:g}{right}" + (f" ({why})" if why else "")
 
 
 def _auto_mm(value_si: float) -> float:
@@ -666,30 +764,48 @@ def _convert(sec: str, key: str, value, spec):
     where = f"[{sec}] {key}"
     if (sec, key) in AUTO_KEYS and isinstance(value, str):
         if value != "auto":
-            raise SceneError(f"{where} = {value!r}: expected a number or 'auto'")
+            raise SceneError(f"{where} = {_show(value)}: expected a number or 'auto'")
         return None   # resolved by _build
     if typ is str:
         if not isinstance(value, str):
-            raise SceneError(f"{where} = {value!r}: expected a string")
+            raise SceneError(f"{where} = {_show(value)}: expected a string")
         if constraint and constraint[0] == "choice" and value not in constraint[1]:
             allowed = ", ".join(repr(o) for o in constraint[1])
             raise SceneError(f"{where} = {value!r} is not allowed: choose one of {allowed}"
                              + _suggest(value, constraint[1]))
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SceneError(f"{where} = {value!r}: expected a number")
+        raise SceneError(f"{where} = {_show(value)}: expected a number")
     if typ is int:
         if isinstance(value, float) and not value.is_integer():
             raise SceneError(f"{where} = {value!r}: expected a whole number")
         value = int(value)
-    if not math.isfinite(value):
+    elif isinstance(value, int):
+        try:   # a TOML integer beyond the doubles (1e309 written out) is out of range
+            value = float(value)
+        except OverflowError:
+            raise SceneError(f"{where} = {_show(value)} is out of range: allowed "
+                             f"{_fmt_range(constraint)}") from None
+    if isinstance(value, float) and not math.isfinite(value):
         raise SceneError(f"{where} = {value!r} is not finite: allowed range {_fmt_range(constraint)}")
     if constraint and constraint[0] == "range":
-        _, lo, hi, lo_open, hi_open = constraint
+        _, lo, hi, lo_open, hi_open = constraint[:5]
         bad = (value < lo or value > hi or (lo_open and value == lo) or (hi_open and value == hi))
         if bad:
-            raise SceneError(f"{where} = {value!r} is out of range: allowed {_fmt_range(constraint)}")
+            raise SceneError(f"{where} = {_show(value)} is out of range: allowed "
+                             f"{_fmt_range(constraint)}")
     return value * factor if typ is float else value
+
+
+def _show(value) -> str:
+    """A value for a message: repr, TOML dates as written, long integers shortened."""
+    if isinstance(value, (datetime.date, datetime.time)):
+        return f"{value.isoformat()} (a TOML date/time)"
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        digits = len(str(abs(value))) if abs(value) < 10**4000 else "> 4000"
+        return f"an integer of {digits} digits"
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene:
@@ -799,6 +915,11 @@ def _check_array_work(arr: Array, exc: Excitation, run: Run) -> None:
 def _check_work(exc: Excitation, run: Run) -> None:
     """Refuse runs whose sample or event count would exhaust memory (product named)."""
     samples = run.duration * run.sample_rate
+    if samples < MIN_SAMPLES:
+        raise SceneError(
+            f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
+            f"{samples:.3g} samples: allowed >= {MIN_SAMPLES:g} (the run's output needs "
+            "samples to report)")
     if samples > MAX_SAMPLES:
         raise SceneError(
             f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
@@ -884,42 +1005,136 @@ def _read_recorded(exc: dict, base_dir: Path | None):
         path = base_dir / path
     if not path.is_file():
         raise SceneError(f"[excitation] file = {name!r}: no such file ({path})")
+    what = f"[excitation] file = {name!r}"
     try:
+        check_file_size(path, what, MAX_RECORDED_BYTES)
         blob = path.read_bytes()
     except OSError as exc_:
-        raise SceneError(f"[excitation] file = {name!r} could not be read: "
-                         f"{exc_.strerror or exc_}") from None
-    text = decode_utf8(blob, f"[excitation] file = {name!r}")   # BOM dropped here
+        raise SceneError(f"{what} could not be read: {exc_.strerror or exc_}") from None
+    text = decode_utf8(blob, what)   # BOM dropped here
     if not text.strip():
-        raise SceneError(f"[excitation] file = {name!r} is empty: expected a header line "
+        raise SceneError(f"{what} is empty: expected a header line "
                          f"({exc['time_column']},{exc['signal_column']}) and at least "
                          f"{MIN_RECORDED_ROWS} data rows")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")   # numpy's warnings become one-line errors
-            table = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, dtype=float)
-    except Exception as exc_:  # noqa: BLE001 - reported with the file name
-        detail = str(exc_).strip().splitlines()[0] if str(exc_).strip() else type(exc_).__name__
-        raise SceneError(f"[excitation] file = {name!r} could not be read as CSV: {detail}") from None
-    names = table.dtype.names or ()
+    header, rows = read_csv_rows(text, what, MAX_RECORDED_ROWS)
     for col_key in ("time_column", "signal_column"):
         col = exc[col_key]
-        if col not in names:
+        if col not in header:
             raise SceneError(f"[excitation] {col_key} = {col!r} is not a column of {name!r}; "
-                             f"columns are {', '.join(names)}" + _suggest(col, names))
-    t = np.atleast_1d(np.asarray(table[exc["time_column"]], dtype=float))
-    v = np.atleast_1d(np.asarray(table[exc["signal_column"]], dtype=float))
-    if t.size < MIN_RECORDED_ROWS:
-        raise SceneError(f"[excitation] file = {name!r} has {t.size} data rows: at least "
+                             f"columns are {', '.join(header)}" + _suggest(col, header))
+    if len(rows) < MIN_RECORDED_ROWS:
+        raise SceneError(f"{what} has {len(rows)} data rows: at least "
                          f"{MIN_RECORDED_ROWS} are needed (the quintic spline of the table motion)")
+    t = csv_column(header, rows, exc["time_column"], what, allow_blank=True)
+    v = csv_column(header, rows, exc["signal_column"], what, allow_blank=True)
     for label, arr in (("time", t), ("signal", v)):
         bad = np.flatnonzero(~np.isfinite(arr))
         if bad.size:
-            raise SceneError(f"[excitation] file = {name!r}: {label} column holds NaN or inf "
+            raise SceneError(f"{what}: {label} column holds NaN or inf "
                              f"at data row {bad[0] + 1}")
+    limit, unit = ((MAX_RECORDED_DISPLACEMENT, "m") if exc["signal"] == "displacement"
+                   else (MAX_RECORDED_ACCELERATION, "m/s^2"))
+    check_magnitude(v, limit, what, f"{exc['signal']} column {exc['signal_column']!r}", unit)
+    check_magnitude(t, MAX_RECORDED_TIME, what, f"time column {exc['time_column']!r}", "s")
+    check_time_steps(t, what)
+    return t, v
+
+
+# -- CSV input shared by the recorded excitation and fit's measured trace ---------------
+#: Bytes and data rows of a recorded excitation (checked before reading): 2e6 rows is
+#: 100 s at 20 kHz; the quintic spline and its bounds take ~0.5 kB per row (1 GB), and
+#: Python's CSV reader ~2 s per million rows. A 30M-row file exhausted memory after 49 s.
+MAX_RECORDED_ROWS = 2_000_000
+MAX_RECORDED_BYTES = 200_000_000
+#: |displacement| [m] (1 km, the amplitude_mm bound) and |acceleration| [m/s^2] (1e8 g)
+#: of a record: the spline's bounds (up to the 4th derivative) stay finite
+MAX_RECORDED_DISPLACEMENT = 1e3
+MAX_RECORDED_ACCELERATION = 1e9
+#: |time| [s] of a record, the [initial] time_s bound (1e12 s: doubles keep 0.1 ms)
+MAX_RECORDED_TIME = 1e12
+#: a time step below this fraction of the record's median step is refused: far below the
+#: data's resolution (a near-duplicate stamp 1e-15 s apart made the spline ring)
+MIN_STEP_FRACTION = 1e-3
+
+
+def check_file_size(path: Path, what: str, limit: int) -> None:
+    """SceneError before reading when ``path`` has more than ``limit`` bytes."""
+    size = path.stat().st_size
+    if size > limit:
+        raise SceneError(f"{what} has {size:,} bytes: allowed at most {limit:,} "
+                         f"({limit / 1e6:g} MB, checked before reading; decimate or split it)")
+
+
+def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[tuple]]:
+    """(header, [(line number, fields), ...]) of a comma-separated text: blank lines and
+    ``#`` comments skipped; a row whose field count differs from the header's is refused
+    naming its line; more than ``max_rows`` data rows are refused as soon as seen."""
+    import csv
+
+    header: list[str] | None = None
+    rows: list[tuple] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        line = line.split("#", 1)[0]
+        if not line.strip():
+            continue
+        fields = next(csv.reader([line]))
+        if header is None:
+            header = [f.strip() for f in fields]
+            continue
+        if len(fields) != len(header):
+            raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
+                             f"{len(fields)} field(s): expected {len(header)} "
+                             f"({','.join(header)}): {line.strip()[:60]!r}")
+        rows.append((number, fields))
+        if len(rows) > max_rows:
+            raise SceneError(f"{what} has more than {max_rows:,} data rows: allowed at most "
+                             f"{max_rows:,} (checked while reading; decimate or split it)")
+    return header or [], rows
+
+
+def csv_column(header, rows, col: str, what: str, *, allow_blank: bool = False) -> np.ndarray:
+    """One column of :func:`read_csv_rows` as floats; a cell that is not a number is
+    refused naming its line, data row and text (blank: NaN with ``allow_blank``)."""
+    j = header.index(col)
+    out = np.empty(len(rows))
+    for i, (number, fields) in enumerate(rows):
+        cell = fields[j].strip()
+        if not cell and allow_blank:
+            out[i] = math.nan
+            continue
+        try:
+            out[i] = float(cell)
+        except ValueError:
+            raise SceneError(f"{what}: column {col!r} holds {cell[:40]!r} at line {number} "
+                             f"(data row {i + 1}): expected a number") from None
+    return out
+
+
+def check_magnitude(x: np.ndarray, limit: float, what: str, label: str, unit: str) -> None:
+    """Refuse |x| > ``limit`` naming the first such data row and its value."""
+    bad = np.flatnonzero(np.abs(x) > limit)
+    if bad.size:
+        raise SceneError(f"{what}: {label} holds {x[bad[0]]:g} {unit} at data row {bad[0] + 1}: "
+                         f"allowed |x| <= {limit:g} {unit} (beyond it the numerics overflow; "
+                         "check the column's unit)")
+
+
+def check_time_steps(t: np.ndarray, what: str, *, row_offset: int = 0) -> None:
+    """Times must increase, by steps of at least MIN_STEP_FRACTION x the median step (and
+    more than 4 ulp of the times): the message names the data row and both values."""
     step = np.diff(t)
     if np.any(step <= 0):
         i = int(np.flatnonzero(step <= 0)[0])
-        raise SceneError(f"[excitation] file = {name!r}: time is not strictly increasing "
-                         f"at data row {i + 2} ({t[i]:g} s then {t[i + 1]:g} s)")
-    return t, v
+        raise SceneError(f"{what}: time is not strictly increasing at data row "
+                         f"{i + 2 + row_offset} ({t[i]!r} s then {t[i + 1]!r} s)")
+    if step.size == 0:
+        return
+    median = float(np.median(step))
+    ulp = 4.0 * np.spacing(np.maximum(np.abs(t[:-1]), np.abs(t[1:])))
+    small = np.flatnonzero((step < MIN_STEP_FRACTION * median) | (step <= ulp))
+    if small.size:
+        i = int(small[0])
+        raise SceneError(f"{what}: time step at data row {i + 2 + row_offset} is {step[i]:.3g} s "
+                         f"({t[i]!r} s then {t[i + 1]!r} s), far below the data's resolution: "
+                         f"allowed >= {MIN_STEP_FRACTION:g} x the median step "
+                         f"{median:.3g} s (a duplicated or mistyped stamp?)")

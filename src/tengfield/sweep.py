@@ -103,14 +103,56 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
     return results
 
 
+#: Grid points (frequencies x amplitudes) of one sweep: each runs the scene's dynamics
+#: (~10 ms to 1 s), so 1e5 points is hours on one core (a 1e10-point grid ran silently).
+MAX_SWEEP_POINTS = 100_000
+#: Rows (points x loads): each row is a dict of ~1 kB kept until sweep.csv is written.
+MAX_SWEEP_ROWS = 1_000_000
+#: Output samples evaluated (points x (1 + loads) x duration_s x sample_rate_hz): the
+#: terminal values and each load's ODE touch every sample (~0.1 us each: ~20 min).
+MAX_SWEEP_WORK = 1e10
+
+
+def check_sweep_size(scene, n_frequencies: int, n_amplitudes: int, n_loads: int = 0) -> None:
+    """Refuse a sweep too large to finish, before anything is allocated, naming the limit
+    (as ``tengfield map`` does, :func:`tengfield.dynamics.mapping.check_map_size`)."""
+    from .errors import SceneError
+
+    points = n_frequencies * n_amplitudes
+    if points > MAX_SWEEP_POINTS:
+        raise SceneError(f"sweep points = {n_frequencies} frequencies x {n_amplitudes} "
+                         f"amplitudes = {points:.3g}: allowed <= {MAX_SWEEP_POINTS:.0e} (each "
+                         "point runs the dynamics; use fewer points or `tengfield map` for "
+                         "regimes only)")
+    rows = points * max(n_loads, 1)
+    if rows > MAX_SWEEP_ROWS:
+        raise SceneError(f"sweep rows = {points} points x {n_loads} loads = {rows:.3g}: allowed "
+                         f"<= {MAX_SWEEP_ROWS:.0e}")
+    samples = scene.run.duration * scene.run.sample_rate
+    work = points * (1 + n_loads) * samples
+    if work > MAX_SWEEP_WORK:
+        raise SceneError(f"sweep work = {points} points x (1 + {n_loads} loads) x {samples:.3g} "
+                         f"samples ([run] duration_s x sample_rate_hz) = {work:.3g}: allowed <= "
+                         f"{MAX_SWEEP_WORK:.0e} (fewer points or loads, or a shorter run)")
+
+
 def check_grid(scene, frequencies, amplitudes) -> None:
     """Validate the scene of every grid point (frequencies [Hz] x amplitudes [m]) as a
     scene file would be: a bad point raises :class:`SceneError` naming the point, before
-    any work (the CLI calls this before it computes a surrogate)."""
+    any work (the CLI calls this before it computes a surrogate).
+
+    Every rule a point can break is monotone in the frequency or in the amplitude (their
+    ranges, the period and sample counts, the steady window, the array's work), so the
+    grid's corners stand for all of it: the check costs four scene builds at any size."""
     from .errors import SceneError
 
-    for f in frequencies:
-        for a in amplitudes:
+    check_sweep_size(scene, len(frequencies), len(amplitudes))
+    fs = sorted({min(map(float, frequencies)), max(map(float, frequencies))}) \
+        if len(frequencies) else []
+    amps = sorted({min(map(float, amplitudes)), max(map(float, amplitudes))}) \
+        if len(amplitudes) else []
+    for f in fs:
+        for a in amps:
             try:
                 scene.with_values(excitation={"frequency_hz": float(f),
                                               "amplitude_mm": float(a) * 1e3})
@@ -136,6 +178,7 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
     from ._mpi import check_jobs, rank_of
 
     check_jobs(jobs, comm)
+    check_sweep_size(scene, len(frequencies), len(amplitudes), len(loads))
     check_grid(scene, frequencies, amplitudes)   # on every rank, before any work
     tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
     bar = tqdm(total=len(tasks), desc="sweep", unit="point", file=sys.stderr,

@@ -43,12 +43,13 @@ def _run(args) -> int:
     from ..scene import load_scene
     from ..surrogate import obtain_table
     from .._mpi import check_jobs
-    from ..sweep import check_grid, sweep
+    from ..sweep import check_grid, check_sweep_size, sweep
 
     scene = load_scene(args.scene)
     frequencies = parse_range(args.frequency_hz, "--frequency-hz")
     amplitudes = parse_range(args.amplitude_mm, "--amplitude-mm") * 1e-3
     loads = parse_range(args.load_ohm, "--load-ohm", log=True) if args.load_ohm else ()
+    check_sweep_size(scene, len(frequencies), len(amplitudes), len(loads))
     check_grid(scene, frequencies, amplitudes)      # before the surrogate is computed
     comm = world_if_parallel()
     check_jobs(args.jobs, comm)

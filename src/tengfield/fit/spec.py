@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
-from ..scene import decode_utf8
+from ..scene import check_file_size, check_magnitude, check_time_steps, decode_utf8
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
@@ -61,6 +61,15 @@ TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 RUN_COLUMNS = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
 LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
 MIN_SAMPLES = 8
+#: Bytes and data rows of a measured trace (checked before / while reading): every row
+#: costs a dynamics sample and a residual per evaluation; 2e6 rows is 100 s at 20 kHz.
+MAX_TRACE_BYTES = 200_000_000
+MAX_TRACE_ROWS = 2_000_000
+#: |value| in SI of a measured column (1 MV, 1 C, 1 kA are far beyond any TENG):
+#: a trace scaled by 1e300 overflowed the residual's squares
+MAX_TRACE_VALUE = {"V": 1e6, "Q": 1.0, "I": 1e3}
+#: |time| [s] of a trace (the [initial] time_s bound)
+MAX_TRACE_TIME = 1e12
 
 
 def _suggest(word, options) -> str:
@@ -280,13 +289,22 @@ def read_trace(path, spec: FitSpec) -> Trace:
     if not path.is_file():
         raise SceneError(f"--measured {name!r}: no such file")
     try:
+        check_file_size(path, f"--measured {name!r}", MAX_TRACE_BYTES)
         blob = path.read_bytes()
     except OSError as exc:
         raise SceneError(f"--measured {name!r} could not be read: "
                          f"{exc.strerror or exc}") from None
     text = decode_utf8(blob, f"--measured {name!r}")
-    rows = [row for row in csv.reader(io.StringIO(text, newline=""))
-            if row and not row[0].lstrip().startswith("#")]
+    rows, lines = [], []
+    reader = csv.reader(io.StringIO(text, newline=""))
+    for row in reader:
+        if row and not row[0].lstrip().startswith("#"):
+            rows.append(row)
+            lines.append(reader.line_num)
+            if len(rows) > MAX_TRACE_ROWS + 1:
+                raise SceneError(f"--measured {name!r} has more than {MAX_TRACE_ROWS:,} data "
+                                 f"rows: allowed at most {MAX_TRACE_ROWS:,} (checked while "
+                                 "reading; decimate it)")
     if not rows:
         raise SceneError(f"--measured {name!r} is empty: expected a header row and at least "
                          f"{MIN_SAMPLES} data rows")
@@ -309,6 +327,12 @@ def read_trace(path, spec: FitSpec) -> Trace:
         raise SceneError(f"--measured {name!r} has {len(data)} data rows: at least "
                          f"{MIN_SAMPLES} are needed")
 
+    for i, row in enumerate(data):
+        if len(row) != len(header):
+            raise SceneError(f"--measured {name!r}: line {lines[i + 1]} (data row {i + 1}) has "
+                             f"{len(row)} field(s): expected {len(header)} "
+                             f"({','.join(header)})")
+
     def column(col: str) -> np.ndarray:
         j = header.index(col)
         out = np.empty(len(data))
@@ -324,13 +348,15 @@ def read_trace(path, spec: FitSpec) -> Trace:
                              f"data row {bad[0] + 1} ({bad.size} such rows); remove or fill them")
         return out
 
+    what = f"--measured {name!r}"
     time = column(spec.time_column) * TIME_UNITS[spec.time_unit]
-    step = np.diff(time)
-    if np.any(step <= 0):
-        i = int(np.flatnonzero(step <= 0)[0])
-        raise SceneError(f"--measured {name!r}: time is not strictly increasing at data row "
-                         f"{i + 2} ({time[i]:g} s then {time[i + 1]:g} s)")
-    values = {c.quantity: column(c.column) * c.factor for c in columns}
+    check_magnitude(time, MAX_TRACE_TIME, what, f"time column {spec.time_column!r}", "s")
+    check_time_steps(time, what)
+    values = {}
+    for c in columns:
+        values[c.quantity] = column(c.column) * c.factor
+        check_magnitude(values[c.quantity], MAX_TRACE_VALUE[c.quantity], what,
+                        f"column {c.column!r} (SI)", RUN_COLUMNS[c.quantity][1])
     return Trace(name, time, values, columns)
 
 

@@ -212,6 +212,11 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     if status != 0:
         raise DynamicsError(f"3d motion: step budget ({MAX_STEPS_PER_SECOND:g} per second) "
                             f"exhausted near t = {knots[-1, 0]:.9g} s")
+    if not np.all(np.isfinite(knots)):   # issue #21: never a NaN trajectory with exit code 0
+        bad = int(np.flatnonzero(~np.all(np.isfinite(knots), axis=1))[0])
+        raise DynamicsError(f"3d motion: the state became NaN or inf near t = "
+                            f"{knots[max(bad - 1, 0), 0]:.9g} s (the drive or the contact "
+                            "parameters are beyond what the integrator resolves)")
     n_k = knots.shape[0]
     radius = dev.ball_radius
 
