@@ -79,6 +79,11 @@ class PSD:
         out[inside] = s
         return out
 
+    def scaled(self, rms_acceleration: float) -> "PSD":
+        """The same shape with the given rms acceleration [m/s^2]."""
+        factor = float(rms_acceleration) ** 2 / self.mean_square()
+        return PSD(self.frequencies, self.values * factor, self.flat)
+
     def mean_square(self, points: int = 20001) -> float:
         """Integral of S over its band [(m/s^2)^2] (the acceleration's variance)."""
         lo, hi = self.band
@@ -158,9 +163,11 @@ def noise_record(psd: PSD, samples: int, dt: float, seed: int
 
 
 def vibration_table(*, duration: float, seed: int = 0, harmonics: tuple[Harmonic, ...] = (),
-                    psd: PSD | None = None, origin: float = 0.0) -> TableMotion:
-    """The table motion of harmonics plus optional Gaussian noise, on the run's time
-    axis ``t - origin`` [s], covering ``[0, duration]``.
+                    psd: PSD | None = None, origin: float = 0.0,
+                    start: float = 0.0) -> TableMotion:
+    """The table motion of harmonics plus optional Gaussian noise, on the time axis
+    ``t - origin`` [s], covering ``[start, start + duration]`` (the harmonics' phases
+    refer to absolute time ``t``; the noise realisation depends only on ``seed``).
 
     One harmonic and no noise gives exactly :func:`sine_table` (bit for bit the
     sine excitation). Otherwise the displacement is sampled on the record grid
@@ -176,7 +183,7 @@ def vibration_table(*, duration: float, seed: int = 0, harmonics: tuple[Harmonic
     if psd is not None:
         freqs += list(psd.band)
     m, dt = record_grid(duration, max(freqs), min(freqs))
-    t = (np.arange(m) - LEAD_SAMPLES) * dt
+    t = start + (np.arange(m) - LEAD_SAMPLES) * dt
     y = np.zeros(m)
     for h in harmonics:
         y += h.amplitude * np.sin(2.0 * math.pi * h.frequency * t
@@ -184,3 +191,41 @@ def vibration_table(*, duration: float, seed: int = 0, harmonics: tuple[Harmonic
     if psd is not None:
         y += noise_record(psd, m, dt, seed)[0]
     return recorded_table(t, y, "displacement", origin=0.0)
+
+
+def scene_psd(exc) -> PSD | None:
+    """The noise PSD of a scene's ``[excitation]`` (None without noise): a flat band with
+    ``rms_acceleration``, or the PSD table (rescaled to ``rms_acceleration`` if > 0)."""
+    if exc.band:
+        return band_psd(exc.band, exc.rms_acceleration)
+    if exc.psd_frequencies is not None:
+        psd = tabulated_psd(exc.psd_frequencies, exc.psd_values)
+        return psd.scaled(exc.rms_acceleration) if exc.rms_acceleration > 0.0 else psd
+    return None
+
+
+def scene_vibration_table(scene, origin: float = 0.0, *, axis: str = "z") -> TableMotion:
+    """The table motion of a random or harmonics ``[excitation]`` along ``axis`` on the
+    time axis ``t - origin`` [s], covering the run (``[initial] time_s`` to
+    ``+ [run] duration_s``). Vertical: the components plus the noise. Lateral (3D
+    model): ``amplitude_x_mm``/``phase_x_deg`` at the fundamental (as for a sine) plus,
+    with ``rms_acceleration_x_m_per_s2`` > 0, noise of the same PSD shape at that rms,
+    from its own seed (the realisation's seed spawned per axis)."""
+    exc = scene.excitation
+    start = scene.initial.time - origin
+    psd = scene_psd(exc)
+    if axis == "z":
+        harmonics = tuple(Harmonic(f, a, p) for f, a, p in exc.harmonics)
+        seed = exc.seed
+    else:
+        amplitude = exc.amplitude_x if axis == "x" else exc.amplitude_y
+        phase = exc.phase_x if axis == "x" else exc.phase_y
+        rms = exc.rms_acceleration_x if axis == "x" else exc.rms_acceleration_y
+        harmonics = (Harmonic(exc.frequency, amplitude, phase),) if amplitude > 0.0 else ()
+        psd = psd.scaled(rms) if (psd is not None and rms > 0.0) else None
+        seed = int(np.random.SeedSequence([exc.seed, 1 if axis == "x" else 2])
+                   .generate_state(1, dtype=np.uint32)[0])
+        if not harmonics and psd is None:
+            return sine_table(0.0, exc.omega, 0.0)
+    return vibration_table(duration=scene.run.duration, seed=seed, harmonics=harmonics,
+                           psd=psd, origin=origin, start=start)
