@@ -217,6 +217,9 @@ MAX_PSD_ROWS = 100000
 #: samples per period of the highest frequency in a synthesised record
 #: (tengfield.dynamics.vibration.SAMPLES_PER_PERIOD; bounds its size at load)
 VIBRATION_SAMPLES_PER_PERIOD = 32
+#: samples of a synthesised record (its quintic spline: about 1 kB of memory per sample
+#: while it is built, so 2e6 samples are ~2 GB; 2 s of a 31 kHz band)
+MAX_RECORD_SAMPLES = 2e6
 
 # ---------------------------------------------------------------------------
 # 3D motion keys (issue #13, tengfield.motion3d; used only by [contact] model = "3d").
@@ -1136,9 +1139,9 @@ def _check_vibration_work(exc: Excitation, run: Run) -> None:
         return
     fmax = _vibration_max_frequency(exc)
     count = run.duration * VIBRATION_SAMPLES_PER_PERIOD * fmax
-    if not count < MAX_SAMPLES:
+    if not count < MAX_RECORD_SAMPLES:
         raise SceneError(
             f"[run] duration_s x {VIBRATION_SAMPLES_PER_PERIOD} x the highest excitation "
             f"frequency = {run.duration:g} x {VIBRATION_SAMPLES_PER_PERIOD} x {fmax:g} Hz = "
-            f"{count:.3g} record samples: allowed < {MAX_SAMPLES:.0e} (a shorter run or a "
-            "lower band)")
+            f"{count:.3g} record samples: allowed < {MAX_RECORD_SAMPLES:.0e} (a shorter run "
+            "or a lower band)")
