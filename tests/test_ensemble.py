@@ -41,7 +41,7 @@ def test_half_width_shrinks_as_one_over_sqrt_n():
 
 
 def test_seeds_are_a_prefix_and_distinct():
-    assert realisation_seeds(5, 3) == realisation_seeds(5, 10)[:3]
+    assert realisation_seeds(5, 3) == realisation_seeds(5, 10)[:3] == [5, 6, 7]
     seeds = realisation_seeds(5, 1000)
     assert len(set(seeds)) == 1000
     assert realisation_seeds(6, 3) != realisation_seeds(5, 3)

@@ -92,6 +92,8 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "duration_s": ("duration", float, 1.0, 1.0, _rng(0.0, 1e6, lo_open=True)),
         "settle_periods": ("settle_periods", int, 10, 1, _rng(0, 10**7)),
         "sample_rate_hz": ("sample_rate", float, 20000.0, 1.0, _rng(0.0, 1e9, lo_open=True)),
+        # independent realisations of a random excitation (issue #25; tengfield.ensemble)
+        "realisations": ("realisations", int, 1, 1, _rng(1, 100000)),
     },
     "field": {
         "method": ("method", str, "auto", None, _choice("auto", "axisymmetric", "3d")),
@@ -471,6 +473,7 @@ class Run:
     duration: float        # [s]
     settle_periods: int
     sample_rate: float     # [Hz]
+    realisations: int = 1  # independent seeds of a random excitation
 
 
 @dataclass(frozen=True)
@@ -815,6 +818,10 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     check_steady_window(exc, run.settle_periods, run.duration)
     _check_work(exc, run)
     _check_vibration_work(exc, run)
+    if run.realisations > 1 and not exc.has_noise:
+        raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "
+                         "([excitation] kind = 'random', or 'harmonics' with band_hz or "
+                         f"psd_file): with kind = {exc.kind!r} every realisation is the same")
     fvals = values["field"]
     if fvals["domain_radius"] is None:
         fvals["domain_radius"] = auto_domain_radius(dev, fvals["ball_offset"])
