@@ -118,6 +118,19 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
                                    path=out / "surrogate.png", cells=result.scene.device.cells))
         written += write_harvest_plots(result, out, figures=figures)
+    rows = (getattr(result, "extras", None) or {}).get("ensemble_rows")
+    if rows:
+        from .ensemble import ENSEMBLE_COLUMNS
+        columns = [[r[c] for r in rows] if c == "regime"
+                   else np.array([np.nan if r[c] is None else r[c] for r in rows], dtype=float)
+                   if c not in ("realisation", "seed") else [int(r[c]) for r in rows]
+                   for c in ENSEMBLE_COLUMNS]
+        written.append(write_csv(writable_target(out / "ensemble.csv"), ENSEMBLE_COLUMNS,
+                                 columns))
+        if plots:
+            from .plotting.ensemble import plot_ensemble
+            written.append(_figure(figures, plot_ensemble, rows, result.summary["ensemble"],
+                                   path=out / "ensemble.png"))
     written.insert(0, write_waveforms_csv(writable_target(out / "waveforms.csv"),
                                           result.waveforms))
     written.append(write_json(out / "summary.json", result.summary))

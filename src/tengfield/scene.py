@@ -111,6 +111,8 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "duration_s": ("duration", float, 1.0, 1.0, _rng(0.0, 1e6, lo_open=True)),
         "settle_periods": ("settle_periods", int, 10, 1, _rng(0, 10**7)),
         "sample_rate_hz": ("sample_rate", float, 20000.0, 1.0, _rng(0.0, 1e9, lo_open=True)),
+        # independent realisations of a random excitation (issue #25; tengfield.ensemble)
+        "realisations": ("realisations", int, 1, 1, _rng(1, 100000)),
     },
     "field": {
         "method": ("method", str, "auto", None, _choice("auto", "axisymmetric", "3d")),
@@ -214,6 +216,35 @@ def _check_harvest(dev, circ, arr) -> None:
 PASSTHROUGH_SECTIONS = ("fit",)
 
 # ---------------------------------------------------------------------------
+# Random and multi-harmonic excitation (issue #25; tengfield.dynamics.vibration).
+# kind = "harmonics": frequency_hz, amplitude_mm (or acceleration_m_per_s2) and
+# phase_deg are lists, one entry per component (a single number is a list of one);
+# kind = "random": a Gaussian table acceleration with a flat PSD on band_hz and
+# rms_acceleration_m_per_s2, or the PSD of psd_file; either may be the noise on
+# top of harmonics. seed picks the realisation.
+SCHEMA["excitation"]["kind"] = ("kind", str, "sine", None,
+                                _choice("sine", "recorded", "random", "harmonics"))
+SCHEMA["excitation"].update({
+    "acceleration_m_per_s2": ("acceleration", float, 0.0, 1.0, _rng(0.0, 1e6)),
+    "band_hz": ("band", tuple, (), 1.0, _rng(0.0, 1e6, lo_open=True)),
+    "rms_acceleration_m_per_s2": ("rms_acceleration", float, 0.0, 1.0, _rng(0.0, 1e6)),
+    "psd_file": ("psd_file", str, "", None, None),
+    "seed": ("seed", int, 0, 1, _rng(0, 2**32 - 1)),
+})
+#: keys of [excitation] that hold one entry per component with kind = "harmonics"
+HARMONIC_KEYS = ("frequency_hz", "amplitude_mm", "acceleration_m_per_s2", "phase_deg")
+#: components of a harmonics excitation
+MAX_HARMONICS = 1000
+#: points of a PSD table (psd_file)
+MAX_PSD_ROWS = 100000
+#: samples per period of the highest frequency in a synthesised record
+#: (tengfield.dynamics.vibration.SAMPLES_PER_PERIOD; bounds its size at load)
+VIBRATION_SAMPLES_PER_PERIOD = 32
+#: samples of a synthesised record (its quintic spline: about 1 kB of memory per sample
+#: while it is built, so 2e6 samples are ~2 GB; 2 s of a 31 kHz band)
+MAX_RECORD_SAMPLES = 2e6
+
+# ---------------------------------------------------------------------------
 # 3D motion keys (issue #13, tengfield.motion3d; used only by [contact] model = "3d").
 # Their defaults leave every impact/soft scene unchanged. Material defaults
 # (handbook values, sources in docs/motion3d.md): PTFE ball E 0.5 GPa
@@ -231,6 +262,8 @@ SCHEMA_3D: dict[str, dict[str, tuple]] = {
         "amplitude_y_mm": ("amplitude_y", float, 0.0, 1e-3, _AMPLITUDE),
         "phase_x_deg": ("phase_x", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
         "phase_y_deg": ("phase_y", float, 0.0, math.pi / 180.0, _rng(-360.0, 360.0)),
+        "rms_acceleration_x_m_per_s2": ("rms_acceleration_x", float, 0.0, 1.0, _rng(0.0, 1e6)),
+        "rms_acceleration_y_m_per_s2": ("rms_acceleration_y", float, 0.0, 1.0, _rng(0.0, 1e6)),
         "signal_x_column": ("signal_x_column", str, "", None, None),
         "signal_y_column": ("signal_y_column", str, "", None, None),
     },
@@ -389,6 +422,24 @@ class Excitation:
     signal_x_column: str = ""
     signal_y_column: str = ""
     smoothing: float = 0.0      # [Hz] zero-phase low-pass of a recorded signal, 0 = off
+    # random and harmonics (issue #25): components (frequency [Hz], amplitude [m],
+    # phase [rad]); noise PSD: a flat band [Hz] with rms_acceleration [m/s^2], or a
+    # table (psd_frequencies [Hz], psd_values [(m/s^2)^2/Hz]); seed of the realisation
+    acceleration: float = 0.0
+    band: tuple = ()
+    rms_acceleration: float = 0.0
+    psd_file: str = ""
+    seed: int = 0
+    rms_acceleration_x: float = 0.0
+    rms_acceleration_y: float = 0.0
+    harmonics: tuple = ()
+    psd_frequencies: np.ndarray | None = field(default=None, compare=False, repr=False)
+    psd_values: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def has_noise(self) -> bool:
+        """Random noise is part of the table motion (kind random, or harmonics + noise)."""
+        return self.kind in ("random", "harmonics") and (bool(self.band) or bool(self.psd_file))
 
     @property
     def omega(self) -> float:
@@ -452,6 +503,7 @@ class Run:
     duration: float        # [s]
     settle_periods: int
     sample_rate: float     # [Hz]
+    realisations: int = 1  # independent seeds of a random excitation
 
 
 @dataclass(frozen=True)
@@ -774,8 +826,17 @@ def _convert(sec: str, key: str, value, spec):
             raise SceneError(f"{where} = {value!r} is not allowed: choose one of {allowed}"
                              + _suggest(value, constraint[1]))
         return value
+    if typ is tuple:
+        if not isinstance(value, (list, tuple)) or isinstance(value, str):
+            raise SceneError(f"{where} = {value!r}: expected a list of numbers, e.g. [20.0, 200.0]")
+        if len(value) > MAX_HARMONICS:
+            raise SceneError(f"{where}: {len(value)} entries; allowed at most {MAX_HARMONICS}")
+        return tuple(_convert(sec, key, v, (attr, float, None, factor, constraint))
+                     for v in value)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SceneError(f"{where} = {_show(value)}: expected a number")
+        hint = (" (a list is allowed only with [excitation] kind = 'harmonics')"
+                if isinstance(value, list) and sec == "excitation" and key in HARMONIC_KEYS else "")
+        raise SceneError(f"{where} = {_show(value)}: expected a number{hint}")
     if typ is int:
         if isinstance(value, float) and not value.is_integer():
             raise SceneError(f"{where} = {value!r}: expected a whole number")
@@ -824,6 +885,9 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
         for key in data[sec]:
             if key not in SCHEMA[sec]:
                 raise SceneError(f"{source}: unknown key [{sec}] {key}" + _suggest(key, SCHEMA[sec]))
+    components = None
+    if isinstance(data.get("excitation"), dict) and data["excitation"].get("kind") == "harmonics":
+        data, components = _harmonic_components(data)
     values: dict[str, dict[str, Any]] = {}
     field_problems: list[str] = []
     for sec, keys in SCHEMA.items():
@@ -858,7 +922,9 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     times = vals = None
     if exc_vals["kind"] == "recorded":
         times, vals = _read_recorded(exc_vals, base_dir)
-    exc = Excitation(**exc_vals, times=times, values=vals)
+    psd = _vibration_inputs(exc_vals, components, base_dir)
+    exc = Excitation(**exc_vals, times=times, values=vals, harmonics=components or (),
+                     psd_frequencies=psd[0], psd_values=psd[1])
 
     ini = Initial(**values["initial"])
     if ini.gap > dev.stroke:
@@ -867,6 +933,11 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     run = Run(**values["run"])
     check_steady_window(exc, run.settle_periods, run.duration)
     _check_work(exc, run)
+    _check_vibration_work(exc, run)
+    if run.realisations > 1 and not exc.has_noise:
+        raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "
+                         "([excitation] kind = 'random', or 'harmonics' with band_hz or "
+                         f"psd_file): with kind = {exc.kind!r} every realisation is the same")
     fvals = values["field"]
     if fvals["domain_radius"] is None:
         fvals["domain_radius"] = auto_domain_radius(dev, fvals["ball_offset"])
@@ -1138,3 +1209,148 @@ def check_time_steps(t: np.ndarray, what: str, *, row_offset: int = 0) -> None:
                          f"({t[i]!r} s then {t[i + 1]!r} s), far below the data's resolution: "
                          f"allowed >= {MIN_STEP_FRACTION:g} x the median step "
                          f"{median:.3g} s (a duplicated or mistyped stamp?)")
+
+
+# ---------------------------------------------------------------------------
+# random and harmonics excitation (issue #25)
+def _harmonic_components(data: dict) -> tuple[dict, tuple]:
+    """``kind = "harmonics"``: the components ((frequency [Hz], amplitude [m], phase
+    [rad]), ...) from the list keys, each entry validated as its scalar key is; the data
+    returned carries the fundamental's (lowest frequency's) scalar values, which set the
+    analysis period (settle_periods, the regime window) as frequency_hz does for a sine."""
+    exc = dict(data["excitation"])
+    spec = SCHEMA["excitation"]
+
+    def entries(key):
+        if key not in exc:
+            return None
+        raw = exc[key]
+        items = raw if isinstance(raw, list) else [raw]
+        if not items:
+            raise SceneError(f"[excitation] {key} = []: give one entry per component")
+        if len(items) > MAX_HARMONICS:
+            raise SceneError(f"[excitation] {key}: {len(items)} components; allowed at most "
+                             f"{MAX_HARMONICS}")
+        return [_convert("excitation", key, v, spec[key]) for v in items]
+
+    freqs = entries("frequency_hz")
+    if freqs is None:
+        raise SceneError("[excitation] kind = 'harmonics' needs frequency_hz = [f1, f2, ...]")
+    amps = entries("amplitude_mm")
+    accs = entries("acceleration_m_per_s2")
+    if (amps is None) == (accs is None):
+        raise SceneError("[excitation] kind = 'harmonics' needs exactly one of amplitude_mm = "
+                         "[...] and acceleration_m_per_s2 = [...], one entry per frequency")
+    phases = entries("phase_deg") or [0.0] * len(freqs)
+    given = amps if amps is not None else accs
+    for key, got in (("amplitude_mm" if amps is not None else "acceleration_m_per_s2", given),
+                     ("phase_deg", phases)):
+        if len(got) != len(freqs):
+            raise SceneError(f"[excitation] {key} has {len(got)} entries but frequency_hz has "
+                             f"{len(freqs)}: give one per component")
+    if amps is None:   # acceleration amplitude a -> displacement a / (2 pi f)^2
+        amps = [a / (2.0 * math.pi * f) ** 2 for a, f in zip(accs, freqs)]
+    components = tuple((float(f), float(a), float(p)) for f, a, p in zip(freqs, amps, phases))
+    k = min(range(len(components)), key=lambda i: components[i][0])
+    f0, a0, p0 = components[k]
+    exc.update({"frequency_hz": f0, "amplitude_mm": a0 * 1e3, "phase_deg": p0 * 180.0 / math.pi})
+    exc.pop("acceleration_m_per_s2", None)
+    out = dict(data)
+    out["excitation"] = exc
+    return out, components
+
+
+def _vibration_inputs(exc: dict, components, base_dir: Path | None):
+    """Check the noise keys of a random or harmonics excitation; (psd frequencies [Hz],
+    psd values [(m/s^2)^2/Hz]) of psd_file, or (None, None)."""
+    kind = exc["kind"]
+    band, rms, psd_file = exc["band"], exc["rms_acceleration"], exc["psd_file"]
+    if kind not in ("random", "harmonics"):
+        for key, given in (("band_hz", band), ("psd_file", psd_file)):
+            if given:
+                raise SceneError(f"[excitation] {key} needs kind = 'random' or 'harmonics' "
+                                 f"(kind = {kind!r})")
+        return None, None
+    if band and psd_file:
+        raise SceneError("[excitation] band_hz and psd_file: give one of them (a flat band "
+                         "or a PSD table)")
+    if band:
+        if len(band) != 2 or not band[0] < band[1]:
+            shown = ", ".join(f"{b:g}" for b in band)
+            raise SceneError(f"[excitation] band_hz = [{shown}]: expected [f1, f2] with "
+                             "0 < f1 < f2 [Hz]")
+        if rms <= 0.0:
+            raise SceneError("[excitation] band_hz needs rms_acceleration_m_per_s2 > 0 "
+                             f"(it is {rms:g})")
+    elif psd_file:
+        freqs, vals = _read_psd(psd_file, base_dir)
+        if not np.any(vals > 0.0):
+            raise SceneError(f"[excitation] psd_file = {psd_file!r} holds no power (every "
+                             "PSD value is 0)")
+        return freqs, vals   # rms_acceleration_m_per_s2 > 0 rescales it (dynamics.vibration)
+    elif kind == "random":
+        raise SceneError("[excitation] kind = 'random' needs band_hz = [f1, f2] with "
+                         "rms_acceleration_m_per_s2, or psd_file = 'name.csv'")
+    return None, None
+
+
+def _read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
+    """A PSD table: header ``frequency_hz`` and one of ``psd_g2_per_hz`` or
+    ``psd_m2_per_s4_per_hz`` (the CSV reader of recorded excitations,
+    :func:`read_csv_rows`); returns (frequencies [Hz], values [(m/s^2)^2/Hz])."""
+    where = f"[excitation] psd_file = {name!r}"
+    path = Path(name)
+    if not path.is_absolute() and base_dir is not None:
+        path = base_dir / path
+    if not path.is_file():
+        raise SceneError(f"{where}: no such file ({path})")
+    try:
+        check_file_size(path, where, MAX_RECORDED_BYTES)
+        blob = path.read_bytes()
+    except OSError as exc_:
+        raise SceneError(f"{where} could not be read: {exc_.strerror or exc_}") from None
+    header, rows = read_csv_rows(decode_utf8(blob, where), where, MAX_PSD_ROWS)
+    units = {"psd_g2_per_hz": G**2, "psd_m2_per_s4_per_hz": 1.0}
+    value_cols = [h for h in header if h in units]
+    if "frequency_hz" not in header or len(value_cols) != 1:
+        raise SceneError(f"{where}: header {','.join(header)!r} needs the columns frequency_hz "
+                         "and one of psd_g2_per_hz, psd_m2_per_s4_per_hz")
+    freqs = csv_column(header, rows, "frequency_hz", where)
+    vals = csv_column(header, rows, value_cols[0], where)
+    if freqs.size < 2:
+        raise SceneError(f"{where} has {freqs.size} data rows: at least 2 are needed")
+    for i, (f, v) in enumerate(zip(freqs, vals)):
+        if not (math.isfinite(f) and math.isfinite(v)) or not 0.0 < f <= 1e6 or not 0.0 <= v <= 1e12:
+            raise SceneError(f"{where}: data row {i + 1}: frequency_hz = {f:g}, "
+                             f"{value_cols[0]} = {v:g}; allowed frequency in (0, 1e6] Hz, "
+                             "PSD in [0, 1e12]")
+        if i and f <= freqs[i - 1]:
+            raise SceneError(f"{where}: data row {i + 1}: frequency {f:g} Hz is not above the "
+                             f"previous row's {freqs[i - 1]:g} Hz")
+    return freqs, vals * units[value_cols[0]]
+
+
+def _vibration_max_frequency(exc: Excitation) -> float:
+    freqs = [c[0] for c in exc.harmonics]
+    if exc.band:
+        freqs.append(exc.band[1])
+    if exc.psd_frequencies is not None:
+        freqs.append(float(exc.psd_frequencies[-1]))
+    return max(freqs) if freqs else 0.0
+
+
+def _check_vibration_work(exc: Excitation, run: Run) -> None:
+    """Refuse a synthesised record that would not fit: duration x 32 samples per period
+    of the highest frequency must stay below MAX_SAMPLES."""
+    if exc.kind not in ("random", "harmonics") or (exc.kind == "harmonics" and len(exc.harmonics) == 1
+                                                    and not exc.has_noise):
+        return
+    fmax = _vibration_max_frequency(exc)
+    count = run.duration * VIBRATION_SAMPLES_PER_PERIOD * fmax
+    if not count < MAX_RECORD_SAMPLES:
+        raise SceneError(
+            f"[run] duration_s x {VIBRATION_SAMPLES_PER_PERIOD} x the highest excitation "
+            f"frequency = {run.duration:g} x {VIBRATION_SAMPLES_PER_PERIOD} x {fmax:g} Hz = "
+            f"{count:.3g} record samples: allowed < {MAX_RECORD_SAMPLES:.0e} (a shorter run "
+            "or a lower band)")
+

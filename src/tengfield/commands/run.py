@@ -2,19 +2,22 @@
 
 Writes DIR/waveforms.csv, DIR/summary.json, DIR/waveforms.png,
 DIR/surrogate.png (charging.png and vq.png for a rectifier, vq.png for a
-load, array.png for an [array]) and the dynamics' trajectory.csv,
+load, array.png for an [array]; ensemble.csv and ensemble.png for [run]
+realisations > 1, farmed over the ranks or --jobs workers) and the dynamics' trajectory.csv,
 impacts.csv and trajectory.png. Under ``mpirun -n N`` the field solves (if the surrogate
 is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
 
-from ._common import add_cache_argument, command_line, scene_command, world_if_parallel
+from ._common import (add_cache_argument, add_jobs_argument, command_line, scene_command,
+                      world_if_parallel)
 
 
 def register(sub) -> None:
     p = scene_command(sub, "run", output="out", description=__doc__,
                       help="V_OC, Q_SC, I_SC (and load) waveforms of a scene, end to end")
     add_cache_argument(p)
+    add_jobs_argument(p)
     p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
                    help="skip the PNG files")
     p.set_defaults(func=_run)
@@ -39,8 +42,17 @@ def _run_scene(args, comm, figures) -> int:
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
+    if scene.run.realisations > 1:   # before any work: the workers must be allowed
+        from .._mpi import check_jobs
+        check_jobs(args.jobs, comm)
     result = run(scene, comm=comm, cache_dir=args.cache_dir, progress=True,
                  command_line=command_line())
+    if scene.run.realisations > 1:
+        from ..ensemble import run_ensemble
+        rows, block = run_ensemble(scene, result, comm=comm, jobs=args.jobs,
+                                   cache_dir=args.cache_dir, progress=True)
+        result.summary["ensemble"] = block
+        result.extras["ensemble_rows"] = rows
     if comm is None or comm.rank == 0:
         plots = not args.no_plots
         written = write_run_outputs(result, args.output, plots=plots, figures=figures)
@@ -93,5 +105,20 @@ def print_summary(summary: dict) -> None:
         print(f"array: {arr['cells']} cells ({arr['connection']}), {arr['compared']}: array / "
               f"(N x one cell) = {arr['array_over_N_cells']:.4g}, phase std "
               f"{arr['phase_std_deg']:.3g} deg, coherence {arr['phase_coherence']:.3g}")
+    ens = summary.get("ensemble")
+    if ens:
+        stats = ens["quantities"]
+        parts = []
+        for key, label, scale, unit in (("V_oc_pp_V", "V_OC", 1.0, "V"),
+                                        ("Q_sc_pp_C", "Q_SC", 1e9, "nC"),
+                                        ("mean_power_W", "P", 1e6, "uW"),
+                                        ("average_harvested_power_W", "harvested", 1e6, "uW")):
+            s = stats.get(key)
+            if s and s["mean"] is not None:
+                half = s["ci95_half_width"]
+                spread = "" if half is None else f" +- {half * scale:.3g}"
+                parts.append(f"{label} {s['mean'] * scale:.4g}{spread} {unit}")
+        print(f"ensemble of {ens['realisations']} realisations (mean +- 95 % CI): "
+              + ", ".join(parts))
     for name, stage in summary["stages"].items():
         print(f"  {name:9s} {stage['status']:8s} {stage['wall_time_s']:7.2f} s  {stage['reason']}")

@@ -183,12 +183,15 @@ def _recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> Table
 
 
 def table_from_scene(scene, origin: float = 0.0) -> TableMotion:
-    """The table motion of ``scene.excitation`` (sine or recorded) on the time axis
+    """The table motion of ``scene.excitation`` (sine, recorded, random or harmonics) on the time axis
     ``t - origin`` [s] (runs integrate relative to their start: precision does not
     depend on the absolute time)."""
     exc = scene.excitation
     if exc.kind == "sine":
         return sine_table(exc.amplitude, exc.omega,
                           sine_phase_at(exc.frequency, exc.phase, origin))
+    if exc.kind in ("random", "harmonics"):
+        from .vibration import scene_vibration_table
+        return scene_vibration_table(scene, origin)
     return recorded_table(exc.times, exc.values, exc.signal, origin=origin,
                           smoothing_hz=exc.smoothing)

@@ -88,11 +88,15 @@ def gravity_vector(scene) -> np.ndarray:
 
 
 def lateral_tables(scene) -> tuple[TableMotion, TableMotion]:
-    """Table motion along x and y (sine per axis, or recorded columns of the same CSV)."""
+    """Table motion along x and y (sine per axis, recorded columns of the same CSV, or
+    for random/harmonics the fundamental's sine plus noise per axis)."""
     exc = scene.excitation
     if exc.kind == "sine":
         return (sine_table(exc.amplitude_x, exc.omega, exc.phase_x),
                 sine_table(exc.amplitude_y, exc.omega, exc.phase_y))
+    if exc.kind in ("random", "harmonics"):   # per-axis: the fundamental's sine + noise
+        from ..dynamics.vibration import scene_vibration_table
+        return (scene_vibration_table(scene, axis="x"), scene_vibration_table(scene, axis="y"))
     tables = []
     for key in ("signal_x_column", "signal_y_column"):
         column = getattr(exc, key)

@@ -1,0 +1,231 @@
+"""Random and multi-harmonic table motion (pure functions, SI units).
+
+Two excitation kinds beside the sine and the recorded trace:
+
+* **random**: a stationary Gaussian table acceleration with a one-sided
+  power spectral density ``S(f)`` [(m/s^2)^2/Hz], given either as a flat band
+  (``band_psd``: ``S = a_rms^2 / (f2 - f1)`` on ``[f1, f2]``) or as a table
+  (``tabulated_psd``: log-log interpolation between the given points, in
+  (m/s^2)^2/Hz or g^2/Hz with g = 9.80665 m/s^2). ``S`` is zero outside its
+  band: below the band's lower edge (or the table's first frequency) the
+  signal is high-passed by construction, so the displacement has no drift.
+* **harmonics**: ``y = sum_i A_i sin(2 pi f_i t + phi_i)``, optionally with
+  random noise on top.
+
+Synthesis (spectral representation, e.g. Shinozuka & Deodatis, Appl. Mech.
+Rev. 44:191, 1991, with Gaussian rather than random-phase coefficients so the
+process is Gaussian): on the FFT grid ``f_k = k / T`` of a record of length
+``T``,
+
+    a(t) = sum_k sigma_k (alpha_k cos 2 pi f_k t + beta_k sin 2 pi f_k t),
+    sigma_k = sqrt(S(f_k) df),   alpha_k, beta_k ~ N(0, 1) from ``seed``,
+
+whose variance is ``sum_k S(f_k) df`` (the requested mean square, up to the
+quadrature of S on the grid). The displacement is the exact double integral
+of each term, ``-a_k / (2 pi f_k)^2``, so displacement, velocity and
+acceleration are consistent and periodic over ``T`` (no drift). The table
+motion the kernel sees is the C^4 quintic spline through the displacement
+samples (:func:`tengfield.dynamics.table.recorded_table`), with the
+guaranteed bound ``acc_bound >= max |y''|`` that the event-exact step uses.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DynamicsError
+from .table import TableMotion, recorded_table, sine_phase_at, sine_table
+
+#: standard gravity [m/s^2] (g^2/Hz PSD tables)
+STANDARD_GRAVITY = 9.80665
+#: samples per period of the highest frequency in the synthesised record: the
+#: quintic spline's acceleration then matches the synthesised one to ~1e-6
+SAMPLES_PER_PERIOD = 32
+#: the record extends this many of the lowest-frequency periods past the run's end
+PAD_PERIODS = 1.0
+#: and starts this many samples before the run (the spline's end conditions
+#: disturb its first and last few pieces; 64 samples are 2 periods of the highest
+#: frequency, where the disturbance has decayed below 1e-7 of the amplitude)
+LEAD_SAMPLES = 64
+
+
+@dataclass(frozen=True)
+class PSD:
+    """One-sided acceleration PSD: ``frequencies`` [Hz] (increasing, > 0) and
+    ``values`` [(m/s^2)^2/Hz], interpolated log-log (``flat``: constant on the band)."""
+    frequencies: np.ndarray
+    values: np.ndarray
+    flat: bool = False
+
+    @property
+    def band(self) -> tuple[float, float]:
+        return float(self.frequencies[0]), float(self.frequencies[-1])
+
+    def __call__(self, f) -> np.ndarray:
+        """S(f) [(m/s^2)^2/Hz]; zero outside the band."""
+        f = np.asarray(f, dtype=float)
+        lo, hi = self.band
+        inside = (f >= lo) & (f <= hi)
+        out = np.zeros_like(f)
+        if self.flat:
+            out[inside] = self.values[0]
+            return out
+        logf = np.log(f[inside])
+        with np.errstate(divide="ignore"):
+            logs = np.log(self.values)
+        s = np.exp(np.interp(logf, np.log(self.frequencies), logs))
+        out[inside] = s
+        return out
+
+    def scaled(self, rms_acceleration: float) -> "PSD":
+        """The same shape with the given rms acceleration [m/s^2]."""
+        factor = float(rms_acceleration) ** 2 / self.mean_square()
+        return PSD(self.frequencies, self.values * factor, self.flat)
+
+    def mean_square(self, points: int = 20001) -> float:
+        """Integral of S over its band [(m/s^2)^2] (the acceleration's variance)."""
+        lo, hi = self.band
+        if self.flat:
+            return float(self.values[0] * (hi - lo))
+        f = np.geomspace(lo, hi, points)
+        s = self(f)
+        return float(np.sum(0.5 * (s[1:] + s[:-1]) * np.diff(f)))
+
+
+def band_psd(band_hz: tuple[float, float], rms_acceleration: float) -> PSD:
+    """Flat PSD on ``band_hz = (f1, f2)`` [Hz] with the given rms acceleration [m/s^2]."""
+    f1, f2 = float(band_hz[0]), float(band_hz[1])
+    if not 0.0 < f1 < f2:
+        raise DynamicsError(f"band_hz = [{f1:g}, {f2:g}]: needs 0 < f1 < f2")
+    level = float(rms_acceleration) ** 2 / (f2 - f1)
+    return PSD(np.array([f1, f2]), np.array([level, level]), flat=True)
+
+
+def tabulated_psd(frequencies, values, unit: str = "m2_per_s4_per_hz") -> PSD:
+    """PSD from a table: ``frequencies`` [Hz] strictly increasing and > 0, ``values``
+    >= 0 in (m/s^2)^2/Hz (``unit = "m2_per_s4_per_hz"``) or g^2/Hz (``"g2_per_hz"``)."""
+    f = np.asarray(frequencies, dtype=float)
+    v = np.asarray(values, dtype=float)
+    if f.ndim != 1 or f.size < 2 or f.shape != v.shape:
+        raise DynamicsError("a PSD table needs at least 2 (frequency, value) rows")
+    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(v))):
+        raise DynamicsError("a PSD table holds NaN or inf")
+    if f[0] <= 0.0 or np.any(np.diff(f) <= 0.0):
+        raise DynamicsError("PSD frequencies must be > 0 and strictly increasing")
+    if np.any(v < 0.0):
+        raise DynamicsError("PSD values must be >= 0")
+    if unit == "g2_per_hz":
+        v = v * STANDARD_GRAVITY**2
+    elif unit != "m2_per_s4_per_hz":
+        raise DynamicsError(f"PSD unit {unit!r}: allowed 'g2_per_hz', 'm2_per_s4_per_hz'")
+    return PSD(f, v)
+
+
+@dataclass(frozen=True)
+class Harmonic:
+    """``amplitude`` [m] sin(2 pi ``frequency`` [Hz] t + ``phase`` [rad])."""
+    frequency: float
+    amplitude: float
+    phase: float = 0.0
+
+
+def record_grid(duration: float, max_frequency: float, min_frequency: float
+                ) -> tuple[int, float]:
+    """(number of samples M (even), spacing dt [s]) of a record covering ``duration``
+    plus padding (LEAD_SAMPLES before the start, PAD_PERIODS of ``min_frequency``
+    after the end), sampled SAMPLES_PER_PERIOD times per period of ``max_frequency``."""
+    dt = 1.0 / (SAMPLES_PER_PERIOD * max_frequency)
+    span = duration + PAD_PERIODS / min_frequency
+    m = int(math.ceil(span / dt)) + 1 + LEAD_SAMPLES
+    return m + (m % 2), dt
+
+
+def noise_record(psd: PSD, samples: int, dt: float, seed: int
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """(displacement [m], acceleration [m/s^2]) of one Gaussian realisation on the
+    grid ``n dt``, n < ``samples`` (even), periodic over ``samples * dt``."""
+    m = int(samples)
+    freqs = np.fft.rfftfreq(m, dt)
+    df = freqs[1]
+    sigma = np.sqrt(psd(freqs) * df)
+    sigma[0] = 0.0            # no mean acceleration
+    sigma[-1] = 0.0           # no Nyquist term (no sine partner on the grid)
+    rng = np.random.default_rng(seed)
+    alpha = rng.standard_normal(freqs.size)
+    beta = rng.standard_normal(freqs.size)
+    acc_coeff = 0.5 * m * sigma * (alpha - 1j * beta)
+    omega = 2.0 * np.pi * freqs
+    disp_coeff = np.zeros_like(acc_coeff)
+    disp_coeff[1:] = -acc_coeff[1:] / omega[1:] ** 2
+    return np.fft.irfft(disp_coeff, m), np.fft.irfft(acc_coeff, m)
+
+
+def vibration_table(*, duration: float, seed: int = 0, harmonics: tuple[Harmonic, ...] = (),
+                    psd: PSD | None = None, origin: float = 0.0,
+                    start: float = 0.0) -> TableMotion:
+    """The table motion of harmonics plus optional Gaussian noise, on the time axis
+    ``t - origin`` [s], covering ``[start, start + duration]`` (the harmonics' phases
+    refer to absolute time ``t``; the noise realisation depends only on ``seed``).
+
+    One harmonic and no noise gives exactly :func:`sine_table` (bit for bit the
+    sine excitation). Otherwise the displacement is sampled on the record grid
+    (:func:`record_grid`) and turned into the C^4 quintic table spline.
+    """
+    if not harmonics and psd is None:
+        raise DynamicsError("a vibration needs at least one harmonic or a PSD")
+    if len(harmonics) == 1 and psd is None:
+        h = harmonics[0]
+        return sine_table(h.amplitude, 2.0 * math.pi * h.frequency,
+                          sine_phase_at(h.frequency, h.phase, origin))
+    freqs = [h.frequency for h in harmonics]
+    if psd is not None:
+        freqs += list(psd.band)
+    m, dt = record_grid(duration, max(freqs), min(freqs))
+    t = start + (np.arange(m) - LEAD_SAMPLES) * dt
+    y = np.zeros(m)
+    for h in harmonics:
+        y += h.amplitude * np.sin(2.0 * math.pi * h.frequency * t
+                                  + sine_phase_at(h.frequency, h.phase, origin))
+    if psd is not None:
+        y += noise_record(psd, m, dt, seed)[0]
+    return recorded_table(t, y, "displacement", origin=0.0)
+
+
+def scene_psd(exc) -> PSD | None:
+    """The noise PSD of a scene's ``[excitation]`` (None without noise): a flat band with
+    ``rms_acceleration``, or the PSD table (rescaled to ``rms_acceleration`` if > 0)."""
+    if exc.band:
+        return band_psd(exc.band, exc.rms_acceleration)
+    if exc.psd_frequencies is not None:
+        psd = tabulated_psd(exc.psd_frequencies, exc.psd_values)
+        return psd.scaled(exc.rms_acceleration) if exc.rms_acceleration > 0.0 else psd
+    return None
+
+
+def scene_vibration_table(scene, origin: float = 0.0, *, axis: str = "z") -> TableMotion:
+    """The table motion of a random or harmonics ``[excitation]`` along ``axis`` on the
+    time axis ``t - origin`` [s], covering the run (``[initial] time_s`` to
+    ``+ [run] duration_s``). Vertical: the components plus the noise. Lateral (3D
+    model): ``amplitude_x_mm``/``phase_x_deg`` at the fundamental (as for a sine) plus,
+    with ``rms_acceleration_x_m_per_s2`` > 0, noise of the same PSD shape at that rms,
+    from its own seed (the realisation's seed spawned per axis)."""
+    exc = scene.excitation
+    start = scene.initial.time - origin
+    psd = scene_psd(exc)
+    if axis == "z":
+        harmonics = tuple(Harmonic(f, a, p) for f, a, p in exc.harmonics)
+        seed = exc.seed
+    else:
+        amplitude = exc.amplitude_x if axis == "x" else exc.amplitude_y
+        phase = exc.phase_x if axis == "x" else exc.phase_y
+        rms = exc.rms_acceleration_x if axis == "x" else exc.rms_acceleration_y
+        harmonics = (Harmonic(exc.frequency, amplitude, phase),) if amplitude > 0.0 else ()
+        psd = psd.scaled(rms) if (psd is not None and rms > 0.0) else None
+        seed = int(np.random.SeedSequence([exc.seed, 1 if axis == "x" else 2])
+                   .generate_state(1, dtype=np.uint32)[0])
+        if not harmonics and psd is None:
+            return sine_table(0.0, exc.omega, 0.0)
+    return vibration_table(duration=scene.run.duration, seed=seed, harmonics=harmonics,
+                           psd=psd, origin=origin, start=start)

@@ -1,0 +1,135 @@
+"""Ensemble statistics over independent realisations (pure functions).
+
+For N realisations x_1..x_N of one output (a peak-to-peak value, a mean power,
+a regime fraction): the sample mean, the sample standard deviation (ddof = 1)
+and the two-sided 95 % confidence interval of the mean from Student's t with
+N - 1 degrees of freedom, ``mean +- t_{0.975, N-1} s / sqrt(N)``. The
+interval's half-width shrinks as 1/sqrt(N). With N = 1 the spread is unknown
+and reported as None.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+CONFIDENCE = 0.95
+
+
+def statistics(values) -> dict:
+    """``{"n", "mean", "std", "ci95_low", "ci95_high", "ci95_half_width"}`` of ``values``
+    (NaN entries are left out and counted in ``"missing"``)."""
+    x = np.asarray(values, dtype=float).ravel()
+    finite = x[np.isfinite(x)]
+    n = int(finite.size)
+    out = {"n": n, "missing": int(x.size - n), "mean": None, "std": None,
+           "ci95_low": None, "ci95_high": None, "ci95_half_width": None}
+    if n == 0:
+        return out
+    mean = float(finite.mean())
+    out["mean"] = mean
+    if n < 2:
+        return out
+    from scipy.stats import t as student_t
+    std = float(finite.std(ddof=1))
+    half = float(student_t.ppf(0.5 + CONFIDENCE / 2.0, n - 1)) * std / math.sqrt(n)
+    out.update(std=std, ci95_low=mean - half, ci95_high=mean + half, ci95_half_width=half)
+    return out
+
+
+def realisation_seeds(seed: int, count: int) -> list[int]:
+    """Seeds of ``count`` realisations: ``seed + k`` (mod 2^32), k = 0..count-1.
+    Realisation 0 is the scene's own run; numpy's generator hashes each seed through
+    SeedSequence, so neighbouring integers give independent streams; N realisations
+    are the first N of any larger ensemble."""
+    return [(int(seed) + k) % 2**32 for k in range(int(count))]
+
+
+#: columns of ensemble.csv (one row per realisation)
+ENSEMBLE_COLUMNS = ["realisation", "seed", "regime", "V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A",
+                    "mean_power_W", "power_density_W_per_m3", "average_harvested_power_W",
+                    "final_stored_energy_J"]
+#: the quantities whose statistics summary.json -> ensemble reports
+QUANTITIES = ENSEMBLE_COLUMNS[3:]
+
+
+def realisation_row(index: int, seed: int, summary: dict) -> dict:
+    """One row of ensemble.csv from a run's summary (None where the circuit has no such
+    number: no load, no rectifier)."""
+    p2p = summary["peak_to_peak"]
+    load = summary.get("load") or {}
+    rect = summary.get("rectifier") or {}
+    regime = summary.get("regime") or {}
+    return {"realisation": index, "seed": seed, "regime": regime.get("regime", ""),
+            "V_oc_pp_V": p2p["V_oc_V"], "Q_sc_pp_C": p2p["Q_sc_C"], "I_sc_pp_A": p2p["I_sc_A"],
+            "mean_power_W": load.get("mean_power_W"),
+            "power_density_W_per_m3": load.get("power_density_W_per_m3"),
+            "average_harvested_power_W": rect.get("average_harvested_power_W"),
+            "final_stored_energy_J": rect.get("final_stored_energy_J")}
+
+
+def ensemble_block(rows: list[dict]) -> dict:
+    """``summary.json -> ensemble``: per quantity its statistics (:func:`statistics`),
+    and per regime the fraction of realisations in it with the same statistics of the
+    0/1 indicator."""
+    block = {"realisations": len(rows), "confidence": CONFIDENCE,
+             "seeds": [r["seed"] for r in rows],
+             "seed_rule": "realisation k uses [excitation] seed + k",
+             "interval_rule": "mean +- t(0.975, N-1) s / sqrt(N) (Student); s with ddof = 1",
+             "quantities": {}, "regime_fractions": {}}
+    for name in QUANTITIES:
+        values = [r[name] for r in rows]
+        if all(v is None for v in values):
+            continue
+        block["quantities"][name] = statistics([np.nan if v is None else v for v in values])
+    for label in sorted({r["regime"] for r in rows}):
+        block["regime_fractions"][label] = statistics(
+            [1.0 if r["regime"] == label else 0.0 for r in rows])
+    return block
+
+
+def check_ensemble(scene) -> None:
+    """Refuse ``[run] realisations`` > 1 where realisations cannot differ."""
+    from .errors import SceneError
+
+    n = scene.run.realisations
+    if n > 1 and not scene.excitation.has_noise:
+        raise SceneError(f"[run] realisations = {n} needs a random excitation ([excitation] "
+                         "kind = 'random', or 'harmonics' with band_hz or psd_file): "
+                         f"with kind = {scene.excitation.kind!r} every realisation is the same")
+
+
+def _realisation_task(task):
+    from .pipeline import run
+
+    index, seed, scene, cache_dir = task
+    result = run(scene.with_values(excitation={"seed": seed}), cache_dir=cache_dir,
+                 write_cache=False)
+    return realisation_row(index, seed, result.summary)
+
+
+def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=None,
+                 progress: bool = False) -> tuple[list[dict], dict]:
+    """Rows of ensemble.csv and the ``ensemble`` block for ``[run] realisations`` = N:
+    ``first`` is the run of realisation 0 (the scene's own seed, already done); the other
+    N - 1 are farmed over the ranks of ``comm`` (``mpirun -n N``) or ``jobs`` worker
+    processes, each reading the surrogate the first run left in the cache. The rows and
+    the block do not depend on how the work was spread."""
+    import sys
+
+    from tqdm import tqdm
+
+    from ._mpi import rank_of
+    from .sweep import run_tasks
+
+    check_ensemble(scene)
+    seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
+    rows = [realisation_row(0, seeds[0], first.summary)]
+    tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
+    bar = tqdm(total=len(seeds), initial=1, desc="realisations", unit="run", file=sys.stderr,
+               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    try:
+        rows += run_tasks(_realisation_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
+    return rows, ensemble_block(rows)

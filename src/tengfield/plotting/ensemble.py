@@ -1,0 +1,63 @@
+"""Ensemble figure: each output over the realisations, its running mean with the
+95 % confidence interval shrinking as 1/sqrt(N), and the regime fractions."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import new_figure
+
+_SHOWN = (("V_oc_pp_V", "V_OC peak-to-peak [V]", 1.0),
+          ("Q_sc_pp_C", "Q_SC peak-to-peak [nC]", 1e9),
+          ("I_sc_pp_A", "I_SC peak-to-peak [nA]", 1e9),
+          ("mean_power_W", "mean load power [µW]", 1e6),
+          ("average_harvested_power_W", "harvested power [µW]", 1e6))
+
+
+def _running_interval(values: np.ndarray):
+    from scipy.stats import t as student_t
+
+    n = np.arange(1, values.size + 1)
+    shifted = values - values[0]          # sums of squares without cancellation
+    mean_shifted = np.cumsum(shifted) / n
+    mean = values[0] + mean_shifted
+    sq = np.cumsum(shifted**2)
+    var = np.where(n > 1, (sq - n * mean_shifted**2) / np.maximum(n - 1, 1), np.nan)
+    half = np.where(n > 1, student_t.ppf(0.975, np.maximum(n - 1, 1))
+                    * np.sqrt(np.maximum(var, 0.0) / n), np.nan)
+    return n, mean, half
+
+
+def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
+    """ensemble.png: one row of panels per output (realisations and running mean +- CI)."""
+    shown = [(k, label, scale) for k, label, scale in _SHOWN
+             if k in block["quantities"] and block["quantities"][k]["mean"] is not None]
+    fig = new_figure((9.0, 2.3 * len(shown) + 2.0))
+    axes = fig.subplots(len(shown) + 1, 1, squeeze=False)[:, 0]
+    for ax, (key, label, scale) in zip(axes, shown):
+        values = np.array([np.nan if r[key] is None else r[key] for r in rows], float) * scale
+        n, mean, half = _running_interval(np.nan_to_num(values))
+        ax.plot(n, values, "o", ms=3, color="0.55", label="realisation")
+        ax.plot(n, mean, color="C0", lw=1.4, label="running mean")
+        ax.fill_between(n, mean - half, mean + half, color="C0", alpha=0.2,
+                        label="95 % CI of the mean")
+        ax.set_ylabel(label, fontsize=8)
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="best")
+    axes[len(shown) - 1].set_xlabel("realisations N")
+    ax = axes[-1]
+    fractions = block["regime_fractions"]
+    labels = list(fractions)
+    means = [fractions[k]["mean"] for k in labels]
+    errs = [fractions[k]["ci95_half_width"] or 0.0 for k in labels]
+    ax.bar(labels, means, yerr=errs, color="C2", alpha=0.7, capsize=4)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("fraction of realisations", fontsize=8)
+    ax.set_title("regime", fontsize=9)
+    fig.suptitle(f"ensemble of {block['realisations']} realisations "
+                 "(95 % confidence intervals, Student t)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    return Path(path)

@@ -1,0 +1,106 @@
+"""Random and harmonics excitations through scene files and the dynamics models."""
+import math
+
+import numpy as np
+import pytest
+
+from tengfield.dynamics import simulate
+from tengfield.dynamics.table import table_from_scene
+from tengfield.errors import SceneError
+from tengfield.scene import parse_scene
+
+SHORT = """
+[run]
+duration_s = 0.5
+settle_periods = 5
+sample_rate_hz = 4000.0
+"""
+
+
+def _scene(excitation: str, extra: str = ""):
+    return parse_scene("[excitation]\n" + excitation + SHORT + extra)
+
+
+def test_one_harmonic_run_equals_the_sine_run_bit_for_bit():
+    sine = _scene('kind = "sine"\nfrequency_hz = 33.0\namplitude_mm = 0.75\nphase_deg = 20.0\n')
+    one = _scene('kind = "harmonics"\nfrequency_hz = [33.0]\namplitude_mm = [0.75]\n'
+                 'phase_deg = [20.0]\n')
+    a, b = simulate(sine), simulate(one)
+    assert np.array_equal(a.gap, b.gap) and np.array_equal(a.impacts.time, b.impacts.time)
+    assert a.regime == b.regime
+
+
+def test_acceleration_amplitudes_are_displacements_over_omega_squared():
+    scene = _scene('kind = "harmonics"\nfrequency_hz = [20.0, 40.0]\n'
+                   'acceleration_m_per_s2 = [10.0, 5.0]\n')
+    amps = [c[1] for c in scene.excitation.harmonics]
+    assert amps == pytest.approx([10.0 / (2 * math.pi * 20) ** 2, 5.0 / (2 * math.pi * 40) ** 2])
+    # the fundamental sets the analysis period
+    assert scene.excitation.frequency == 20.0
+
+
+def test_same_seed_same_run_other_seed_other():
+    text = 'kind = "random"\nband_hz = [10.0, 200.0]\nrms_acceleration_m_per_s2 = 40.0\nseed = {}\n'
+    a = simulate(_scene(text.format(1)))
+    b = simulate(_scene(text.format(1)))
+    c = simulate(_scene(text.format(2)))
+    assert np.array_equal(a.gap, b.gap) and np.array_equal(a.impacts.time, b.impacts.time)
+    assert not np.array_equal(a.gap, c.gap)
+
+
+@pytest.mark.parametrize("model", ["impact", "soft"])
+def test_random_table_rms_and_ball_stays_between_plates(model):
+    scene = _scene('kind = "random"\nband_hz = [10.0, 200.0]\nrms_acceleration_m_per_s2 = 40.0\n',
+                   f'[contact]\nmodel = "{model}"\n')
+    result = simulate(scene)
+    _, _, acc = table_from_scene(scene).evaluate(np.arange(0.0, 0.5, 1e-4))
+    # 0.5 s of a 190 Hz band: relative sampling error of the mean square ~ 1/sqrt(95)
+    assert np.sqrt(np.mean(acc**2)) == pytest.approx(40.0, rel=0.4)
+    stroke = scene.device.stroke
+    # soft contact: the plates yield by a penetration far below the stroke
+    tol = 0.05 * stroke if model == "soft" else 1e-12
+    assert np.all(result.gap >= -tol) and np.all(result.gap <= stroke + tol)
+    assert result.impacts.time.size > 0
+
+
+def test_psd_file_in_g2_per_hz(tmp_path):
+    (tmp_path / "psd.csv").write_text("frequency_hz,psd_g2_per_hz\n10,0.01\n100,0.01\n")
+    (tmp_path / "s.toml").write_text('[excitation]\nkind = "random"\npsd_file = "psd.csv"\n' + SHORT)
+    from tengfield.scene import load_scene
+    scene = load_scene(tmp_path / "s.toml")
+    assert scene.excitation.psd_values == pytest.approx([0.01 * 9.80665**2] * 2)
+    rescaled = scene.with_values(excitation={"rms_acceleration_m_per_s2": 3.0})
+    from tengfield.dynamics.vibration import scene_psd
+    assert scene_psd(rescaled.excitation).mean_square() == pytest.approx(9.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("text, message", [
+    ('kind = "random"\n', "needs band_hz"),
+    ('kind = "random"\nband_hz = [10.0]\nrms_acceleration_m_per_s2 = 1.0\n', "f1 < f2"),
+    ('kind = "random"\nband_hz = [100.0, 10.0]\nrms_acceleration_m_per_s2 = 1.0\n', "f1 < f2"),
+    ('kind = "random"\nband_hz = [10.0, 100.0]\n', "rms_acceleration_m_per_s2 > 0"),
+    ('kind = "random"\nband_hz = [10.0, "x"]\nrms_acceleration_m_per_s2 = 1.0\n', "expected a number"),
+    ('kind = "random"\nband_hz = [10.0, 1e300]\nrms_acceleration_m_per_s2 = 1.0\n', "out of range"),
+    ('kind = "harmonics"\namplitude_mm = [1.0]\n', "needs frequency_hz"),
+    ('kind = "harmonics"\nfrequency_hz = [10.0, 20.0]\namplitude_mm = [1.0]\n', "1 entries but frequency_hz has 2"),
+    ('kind = "harmonics"\nfrequency_hz = [10.0]\n', "exactly one of"),
+    ('kind = "harmonics"\nfrequency_hz = [10.0, -1.0]\namplitude_mm = [1.0, 1.0]\n', "out of range"),
+    ('kind = "sine"\nfrequency_hz = [10.0, 20.0]\n', "only with [excitation] kind = 'harmonics'"),
+    ('kind = "sine"\nband_hz = [10.0, 20.0]\n', "needs kind = 'random'"),
+    ('kind = "random"\nband_hz = [10.0, 2e5]\nrms_acceleration_m_per_s2 = 1.0\n', "record samples"),
+])
+def test_bad_vibration_input_is_one_clear_error(text, message):
+    with pytest.raises(SceneError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        _scene(text)
+
+
+def test_3d_model_runs_with_per_axis_noise():
+    scene = _scene('kind = "random"\nband_hz = [10.0, 200.0]\nrms_acceleration_m_per_s2 = 30.0\n'
+                   'rms_acceleration_x_m_per_s2 = 10.0\n', '[contact]\nmodel = "3d"\n')
+    from tengfield.motion3d.simulate import lateral_tables
+    tx, ty = lateral_tables(scene)
+    _, _, ax = tx.evaluate(np.arange(0.0, 0.5, 1e-4))
+    assert np.sqrt(np.mean(ax**2)) == pytest.approx(10.0, rel=0.5)
+    assert ty.acc_bound == 0.0        # no y noise, no y sine
+    result = simulate(scene)
+    assert np.all(np.isfinite(result.gap))

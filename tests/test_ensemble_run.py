@@ -1,0 +1,142 @@
+"""[run] realisations: every realisation is the single run of its seed, the rows do not
+depend on how they were farmed (serial, --jobs, mpirun ranks), the summary block is the
+statistics of the rows, and the random excitation works with loads, rectifiers and
+arrays. The surrogate is the analytic plate model (``plate_model``): what is tested
+here is the ensemble, not the field."""
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import tengfield as tf
+from tengfield.ensemble import QUANTITIES, realisation_row, run_ensemble
+
+import plate_model as fx
+from test_farm_mpi import mpi_env, needs_mpirun, same_rows
+
+RANDOM = {"kind": "random", "band_hz": [10.0, 200.0], "rms_acceleration_m_per_s2": 40.0,
+          "seed": 11}
+SHORT = {"duration_s": 0.6, "settle_periods": 3, "sample_rate_hz": 4000.0}
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("surrogates")
+
+
+def _scene(realisations=4, **sections):
+    return fx.scene_with(excitation=RANDOM, run={**SHORT, "realisations": realisations},
+                         **sections)
+
+
+def _first(scene, cache):
+    return tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+
+
+@pytest.mark.parametrize("circuit", [{"kind": "open"}, {"kind": "load", "load_ohm": 1e8}])
+def test_each_realisation_is_the_run_of_its_seed(cache, circuit):
+    scene = _scene(circuit=circuit)
+    rows, block = run_ensemble(scene, _first(scene, cache), jobs=1, cache_dir=cache)
+    assert [r["seed"] for r in rows] == [11, 12, 13, 14]
+    for k, row in enumerate(rows):
+        single = tf.run(scene.with_values(excitation={"seed": 11 + k}), cache_dir=cache,
+                        solve=fx.plate_model_solve)
+        assert row == realisation_row(k, 11 + k, single.summary)
+    # the realisations differ (the motion is random), the block is their statistics
+    assert len({r["I_sc_pp_A"] for r in rows}) == 4
+    for name, stats in block["quantities"].items():
+        values = np.array([r[name] for r in rows], dtype=float)
+        assert stats["mean"] == pytest.approx(values.mean(), rel=1e-12)
+        assert stats["std"] == pytest.approx(values.std(ddof=1), rel=1e-9, abs=1e-300)
+    fractions = sum(s["mean"] for s in block["regime_fractions"].values())
+    assert fractions == pytest.approx(1.0)
+    assert ("mean_power_W" in block["quantities"]) == (circuit["kind"] == "load")
+
+
+def test_worker_processes_give_the_serial_rows(cache):
+    scene = _scene(realisations=5)
+    first = _first(scene, cache)
+    serial, _ = run_ensemble(scene, first, jobs=1, cache_dir=cache)
+    pooled, _ = run_ensemble(scene, first, jobs=2, cache_dir=cache)
+    assert same_rows(serial, pooled)
+
+
+def test_rectifier_and_array_take_a_random_excitation(cache):
+    rect = _scene(realisations=2, circuit={"kind": "rectifier", "storage_capacitance_uF": 1e-4})
+    rows, block = run_ensemble(rect, _first(rect, cache), jobs=1, cache_dir=cache)
+    assert all(r["final_stored_energy_J"] > 0 for r in rows)
+    assert block["quantities"]["average_harvested_power_W"]["n"] == 2
+    arr = _scene(realisations=1, array={"cells": 3, "restitution_spread": 0.05})
+    result = _first(arr, cache)
+    assert result.summary["array"]["cells"] == 3
+    assert np.all(np.isfinite(result.waveforms["I_sc_A"]))
+
+
+def test_sine_refuses_realisations():
+    with pytest.raises(tf.SceneError, match=r"realisations = 3 needs a random excitation"):
+        fx.scene_with(run={"realisations": 3})
+
+
+def _write_scene(path, extra=""):
+    band = ", ".join(str(b) for b in RANDOM["band_hz"])
+    path.write_text(f"""
+[excitation]
+kind = "random"
+band_hz = [{band}]
+rms_acceleration_m_per_s2 = 40.0
+seed = 11
+[run]
+duration_s = 0.6
+settle_periods = 3
+sample_rate_hz = 4000.0
+realisations = 4
+{extra}""")
+    return path
+
+
+@pytest.fixture(scope="module")
+def plate_cache(tmp_path_factory):
+    """A cache holding the plate-model surrogate of the CLI scene (no dolfinx)."""
+    from tengfield.scene import load_scene
+    d = tmp_path_factory.mktemp("cli-cache")
+    scene = load_scene(_write_scene(d / "s.toml"))
+    tf.run(scene, cache_dir=d, solve=fx.plate_model_solve)
+    return d
+
+
+@pytest.mark.slow
+def test_cli_run_writes_the_ensemble_with_figures(run_cli, cli_env, tmp_path, plate_cache):
+    scene = _write_scene(tmp_path / "s.toml")
+    out = tmp_path / "out"
+    res = run_cli("run", scene, "-o", out, "--cache-dir", plate_cache, "--jobs", "2")
+    assert res.returncode == 0, res.stderr
+    assert "Traceback" not in res.stderr
+    assert "ensemble of 4 realisations" in res.stdout
+    rows = list(csv.DictReader((out / "ensemble.csv").open()))
+    assert [int(r["seed"]) for r in rows] == [11, 12, 13, 14]
+    summary = json.loads((out / "summary.json").read_text())
+    stats = summary["ensemble"]["quantities"]["I_sc_pp_A"]
+    assert stats["mean"] == pytest.approx(np.mean([float(r["I_sc_pp_A"]) for r in rows]))
+    png = (out / "ensemble.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and len(png) > 10_000
+
+
+@pytest.mark.slow
+def test_cli_under_mpirun_gives_the_serial_ensemble(tmp_path, plate_cache, python):
+    import subprocess
+    needs_mpirun()
+    scene = _write_scene(tmp_path / "s.toml")
+    outs = {}
+    for name, prefix in (("serial", []), ("mpi", ["mpirun", "-n", "2"])):
+        out = tmp_path / name
+        res = subprocess.run(prefix + [python, "-m", "tengfield.cli", "run", str(scene), "-o",
+                                       str(out), "--cache-dir", str(plate_cache), "--no-plots",
+                                       *(["--jobs", "1"] if not prefix else [])],
+                             env=mpi_env(), capture_output=True, text=True, timeout=600)
+        assert res.returncode == 0, res.stderr
+        outs[name] = (out / "ensemble.csv").read_text()
+    assert outs["serial"] == outs["mpi"]
