@@ -2,13 +2,15 @@
 
 Scales every length of the default device ([device] ball, stroke, electrodes,
 tube, plates) by S = 1, 3, 10, 30 and solves the ball at mid-stroke with the
-default [field] settings (axisymmetric, degree 2, mesh_size_mm = 0.5, Kelvin
+default [field] settings (axisymmetric, degree 2, mesh_size_mm = 0.5 x S, Kelvin
 far field, with the error estimate), ``domain_radius_mm = 20 S`` (the default
 is 20 mm for S = 1). The mesh grades away from the ball, rims, gaps and
 dielectric interfaces (tengfield.field.geometry_axisymmetric.GRADING_REACH),
-so the cost follows the features, not the box, and a device whose electrode
-spacing exceeds 10 mm gets the geometrically similar mesh (mesh sizes scaled by
-spacing / 10 mm, ``geometry_axisymmetric.REFERENCE_SPACING``). A last row
+so the cost follows the features, not the box, and a device whose features are
+all S times the paper's gets the geometrically similar mesh: the default
+``mesh_size_mm`` (not written in the default scene) is scaled by the smallest
+feature against the paper's (``scene.default_mesh_scale``; a written value is used
+as written). A last row
 (S = 0) is the default device with 100 mm electrodes. Prints one row per case:
 S, dofs, wall time [s], relative error estimate, C_T [pF], q_upper/q_ball.
 

@@ -1005,6 +1005,45 @@ def _check_work(exc: Excitation, run: Run) -> None:
             f"{EVENTS_PER_PERIOD_ESTIMATE} per period): allowed <= {MAX_PERIODS:.3g} periods")
 
 
+#: The default ``[field] mesh_size_mm`` (0.5 mm) resolves the paper's device, whose
+#: smallest features are these [m]. Without ``mesh_size_mm`` in the scene, the default
+#: size is scaled by ``max(1, min over the features of size / paper's size)``
+#: (:func:`default_mesh_scale`): a device whose features are all k >= 1 times the
+#: paper's gets the paper's mesh scaled by k (same cost, same relative error); a device
+#: with one feature as small as the paper's keeps the default. A ``mesh_size_mm``
+#: written in the scene (or passed as an override) is never scaled.
+PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "gap_mm": 3.0e-3}
+#: ... and, with dielectric walls (``wall_permittivity != 1``), the walls and the
+#: ball's clearance to the tube (plate thickness also under a grounded table)
+PAPER_WALL_FEATURES = {"tube_outer_radius_mm - tube_inner_radius_mm": 1.5e-3,
+                       "plate_thickness_mm": 2.0e-3,
+                       "tube_inner_radius_mm - ball_diameter_mm / 2": 0.5e-3}
+
+
+def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
+    """The features [m] a mesh of ``device`` must resolve, by scene key (see
+    :data:`PAPER_FEATURES`)."""
+    features = {"ball_diameter_mm": device.ball_diameter,
+                "electrode_radius_mm": device.electrode_radius, "gap_mm": device.stroke}
+    walls = device.wall_permittivity != 1.0
+    if walls:
+        features["tube_outer_radius_mm - tube_inner_radius_mm"] = \
+            device.tube_outer_radius - device.tube_inner_radius
+        features["tube_inner_radius_mm - ball_diameter_mm / 2"] = \
+            device.tube_inner_radius - device.ball_radius
+    if walls or environment == "grounded-table":
+        features["plate_thickness_mm"] = device.plate_thickness
+    return features
+
+
+def default_mesh_scale(device, fld) -> float:
+    """Factor on the default ``mesh_size_mm``: ``max(1, min_i feature_i / paper_i)`` over
+    :func:`mesh_features` (1.0 exactly for the paper's device)."""
+    paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES}
+    ratios = [size / paper[key] for key, size in mesh_features(device, fld.environment).items()]
+    return max(1.0, min(ratios))
+
+
 def _field_problems(dev: Device, fld: Field, *, explicit: set[str]) -> list[str]:
     """Field-only problems: ranges relative to the geometry that a mesh needs."""
     from .field.contact import MIN_GAP_FRACTION
@@ -1058,9 +1097,12 @@ def _field_problems(dev: Device, fld: Field, *, explicit: set[str]) -> list[str]
     if method == "auto":
         method = "axisymmetric" if fld.ball_offset == 0.0 else "3d"
     finest = MESH_MIN_FRACTION[method] * feature
-    if fld.mesh_size < finest * (1 - 1e-12):
+    # the size the mesher uses: as written, or the default scaled by the smallest feature
+    mesh_size = fld.mesh_size if "mesh_size_mm" in explicit \
+        else fld.mesh_size * default_mesh_scale(dev, fld)
+    if mesh_size < finest * (1 - 1e-12):
         problems.append(
-            f"[field] mesh_size_mm = {fld.mesh_size * 1e3:g} is too fine for this device: "
+            f"[field] mesh_size_mm = {mesh_size * 1e3:g} is too fine for this device: "
             f"allowed >= {finest * 1e3:.3g} mm (1/{1 / MESH_MIN_FRACTION[method]:g} of the "
             f"smallest feature, [device] {feature_key} = {feature * 1e3:.3g} mm, for the "
             f"{method} solver; finer meshes exceed memory)")

@@ -43,6 +43,7 @@ import math
 import os
 from dataclasses import dataclass, field
 
+from .. import scene as _scene
 from ..errors import FieldError
 from . import contact
 
@@ -61,12 +62,11 @@ GRADING_REACH = 20.0
 #: paper's gets the paper's mesh scaled by k (same cost, same relative error); a
 #: device with one feature as small as the paper's keeps the default as it is. A
 #: ``mesh_size_mm`` written in the scene (or passed as an override) is never scaled.
-PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "gap_mm": 3.0e-3}
-#: ... and, with dielectric walls (``wall_permittivity != 1``), the walls and the
-#: ball's clearance to the tube (plate thickness also under a grounded table)
-PAPER_WALL_FEATURES = {"tube_outer_radius_mm - tube_inner_radius_mm": 1.5e-3,
-                       "plate_thickness_mm": 2.0e-3,
-                       "tube_inner_radius_mm - ball_diameter_mm / 2": 0.5e-3}
+# (PAPER_FEATURES, PAPER_WALL_FEATURES, mesh_features and default_mesh_scale live in
+# tengfield.scene: the scene's own "too fine" check needs the same rule)
+PAPER_FEATURES, PAPER_WALL_FEATURES = _scene.PAPER_FEATURES, _scene.PAPER_WALL_FEATURES
+mesh_features = _scene.mesh_features
+default_mesh_scale = _scene.default_mesh_scale
 #: relative precision of gmsh's integral of 1/size along the curves (its default,
 #: 1e-9, spends half of the meshing time of the steeply graded rims there)
 LC_INTEGRATION_PRECISION = 1e-6
@@ -118,30 +118,6 @@ class AxisymmetricLayout:
     @property
     def z_table(self) -> float:
         return self.z_lower - self.plate_thickness
-
-
-def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
-    """The features [m] a mesh of ``device`` must resolve, by scene key (see
-    :data:`PAPER_FEATURES`)."""
-    features = {"ball_diameter_mm": device.ball_diameter,
-                "electrode_radius_mm": device.electrode_radius, "gap_mm": device.stroke}
-    walls = device.wall_permittivity != 1.0
-    if walls:
-        features["tube_outer_radius_mm - tube_inner_radius_mm"] = \
-            device.tube_outer_radius - device.tube_inner_radius
-        features["tube_inner_radius_mm - ball_diameter_mm / 2"] = \
-            device.tube_inner_radius - device.ball_radius
-    if walls or environment == "grounded-table":
-        features["plate_thickness_mm"] = device.plate_thickness
-    return features
-
-
-def default_mesh_scale(device, fld) -> float:
-    """Factor on the default ``mesh_size_mm``: ``max(1, min_i feature_i / paper_i)`` over
-    :func:`mesh_features` (1.0 exactly for the paper's device)."""
-    paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES}
-    ratios = [size / paper[key] for key, size in mesh_features(device, fld.environment).items()]
-    return max(1.0, min(ratios))
 
 
 def mesh_size_written(scene) -> bool:
