@@ -146,3 +146,20 @@ def test_field_command_warns_once_when_the_estimate_exceeds_the_tolerance(
     assert "above [field] tolerance = 1e-08" in lines[0]
     assert "mesh_size_mm = 1.5" in lines[0]
     assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+def test_a_large_device_without_a_mesh_size_is_not_refused_as_too_fine():
+    """Every length x30 and no mesh_size_mm: the scene check judges the scaled default
+    (15 mm), which the mesher uses, not the unscaled 0.5 mm (refused before as 'too fine')."""
+    from tengfield.field.geometry_axisymmetric import base_mesh_size
+    from tengfield.scene import Scene
+
+    lengths = {"ball_diameter_mm": 7.0, "gap_mm": 3.0, "electrode_radius_mm": 4.0,
+               "tube_inner_radius_mm": 4.0, "tube_outer_radius_mm": 5.5,
+               "plate_thickness_mm": 2.0}
+    scene = Scene.from_dict({"device": {k: 30 * v for k, v in lengths.items()}})
+    assert scene.field_problems == ()
+    assert base_mesh_size(scene) == pytest.approx(15e-3)
+    written = Scene.from_dict({"device": {k: 30 * v for k, v in lengths.items()},
+                               "field": {"mesh_size_mm": 0.5}})
+    assert any("too fine" in p for p in written.field_problems)
