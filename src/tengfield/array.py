@@ -82,20 +82,23 @@ def check_array_scene(scene) -> None:
 
 
 def cell_trajectory(scene, draw):
-    """(Trajectory, number of impacts) of one cell with ``draw`` = (phase, e, v0)."""
+    """(Trajectory, impact times) of one cell with ``draw`` = (phase, e, v0), both on
+    the run's own axis (seconds after ``[initial] time_s``, as
+    :func:`tengfield.dynamics.simulate` integrates: the precision does not depend on
+    the absolute time)."""
     from .dynamics.impact import Restitution, integrate
     from .dynamics.result import run_span
-    from .dynamics.table import sine_table, table_from_scene
+    from .dynamics.table import sine_phase_at, sine_table, table_from_scene
 
     exc = scene.excitation
-    table = (sine_table(exc.amplitude, exc.omega, float(draw[0])) if exc.kind == "sine"
-             else table_from_scene(scene))
+    duration, t0, _ = run_span(scene, None)
+    table = (sine_table(exc.amplitude, exc.omega, sine_phase_at(exc.frequency, float(draw[0]), t0))
+             if exc.kind == "sine" else table_from_scene(scene, origin=t0))
     restitution = dataclasses.replace(Restitution.from_contact(scene.contact), e=float(draw[1]))
-    _, t0, t_end = run_span(scene, None)
-    traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=t0,
-                                 t_end=t_end, gap0=scene.initial.gap,
-                                 velocity0=float(draw[2]), period=exc.period)
-    return traj, int(impacts[0].size)
+    traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=0.0,
+                                 t_end=duration, gap0=scene.initial.gap,
+                                 velocity0=float(draw[2]), period=exc.period, time_origin=t0)
+    return traj, np.asarray(impacts[0], dtype=float).copy()
 
 
 def _simulate_block(args):
@@ -192,12 +195,14 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                                                       "initial_velocity_spread_m_per_s": 0.0})
     scaled = one.with_values(device={"cells": n})
     t = np.asarray(nominal.t, dtype=float)
+    elapsed = electrical.elapsed_times(nominal)     # the run's own axis (cells integrate on it)
     if len(distinct) == 1:
         result = _identical(scaled, nominal, curves, trajectories[0][0], n)
     else:
-        result = _spread(scene, nominal, curves, [tr for tr, _ in trajectories], weights, t)
+        result = _spread(scene, nominal, curves, [tr for tr, _ in trajectories], weights,
+                         elapsed, [imp for _, imp in trajectories])
     phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
-              else _phases(scene, curves, [tr for tr, _ in trajectories], t))
+              else _phases(scene, curves, [tr for tr, _ in trajectories], elapsed))
     cell_phases = phases[inverse.reshape(-1)]
     unit = np.exp(1j * np.deg2rad(cell_phases[np.isfinite(cell_phases)]))
     mean = np.angle(unit.mean()) if unit.size else 0.0
@@ -211,7 +216,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         "restitution_spread": arr.restitution_spread,
         "initial_velocity_spread_m_per_s": arr.velocity_spread, "seed": arr.seed,
         "distinct_dynamics": int(len(distinct)),
-        "impacts_per_cell_mean": float(np.average([k for _, k in trajectories],
+        "impacts_per_cell_mean": float(np.average([k.size for _, k in trajectories],
                                                   weights=weights)),
         "compared": result["compared"], "array_value": result["value"],
         "N_x_one_cell_value": result["reference_value"], "array_over_N_cells": ratio,
@@ -232,21 +237,29 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
 
 
 class _Sampled:
-    """A trajectory with the attributes the electrical functions read."""
+    """A cell's trajectory (on the run's own axis) with the attributes the electrical
+    functions read: output times ``t`` (absolute) and ``elapsed``, ``time_origin``,
+    ``impacts`` (absolute, as a DynamicsResult)."""
 
-    def __init__(self, trajectory, times, impacts=None):
+    def __init__(self, trajectory, elapsed, origin=0.0, impacts=None, absolute=None):
         self._traj = trajectory
-        self.t = np.asarray(times, dtype=float)
-        self.gap, self.gap_velocity, self.table = trajectory(self.t)
+        self.elapsed = np.asarray(elapsed, dtype=float)
+        self.time_origin = float(origin)
+        self.t = origin + self.elapsed if absolute is None else np.asarray(absolute)
+        self.gap, self.gap_velocity, self.table = trajectory(self.elapsed)
         self.impacts = impacts
 
+    def sample_elapsed(self, elapsed):
+        return self._traj(np.ascontiguousarray(np.atleast_1d(elapsed), dtype=float))
+
     def sample(self, times):
-        return self._traj(np.ascontiguousarray(np.atleast_1d(times), dtype=float))
+        return self.sample_elapsed(np.asarray(times, dtype=float) - self.time_origin)
 
 
 def _identical(scaled, nominal, curves, trajectory, n) -> dict:
     """No spread: the single-cell electrical stage with [device] cells = N."""
-    dyn = _Sampled(trajectory, nominal.t, getattr(nominal, "impacts", None))
+    dyn = _Sampled(trajectory, electrical.elapsed_times(nominal), electrical.time_origin(nominal),
+                   getattr(nominal, "impacts", None), absolute=nominal.t)
     waves = electrical.scene_waveforms(scaled, dyn, curves)
     out = {"columns": waves, "summary": {}}
     kind = scaled.circuit.kind
@@ -322,8 +335,10 @@ def _spline_eval(z, v, knots, cq, cc, stroke):
     return q, c, i
 
 
-def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
-    """Cells with different dynamics, walked in time chunks."""
+def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
+    """Cells with different dynamics, walked in time chunks; ``t``: the output times on
+    the run's own axis (``nominal``'s elapsed times), ``impacts``: each trajectory's
+    impact times on that axis."""
     from .dynamics.impact import TrajectoryBundle
     from .harvest import Harvester
 
@@ -342,8 +357,9 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
     rectifying = kind == "rectifier"
     options = electrical.harvester_options(scene) if rectifying else None
     harvesters = ref_harvester = None
+    origin = electrical.time_origin(nominal)
     if rectifying:
-        bare = dict(options, parallel_capacitance=0.0)
+        bare = dict(options, parallel_capacitance=0.0, time_origin=origin)
         if connection == "rectified-per-cell":
             harvesters = [Harvester(1, **bare) for _ in range(g)]
         else:
@@ -354,7 +370,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
     for lo in range(0, t.size, rows):
         times = t[lo:lo + rows]
         q, c, i = _evaluate(curves, bundle, times)
-        rq, rc, ri = _evaluate(curves, [nominal.sample], times)
+        rq, rc, ri = _evaluate(curves, [lambda x: electrical.sample_elapsed(nominal, x)], times)
         block = slice(lo, lo + times.size)
         fundamental += basis[block] @ q
         for key, value in zip(("Q", "C", "I"), (q, c, i)):
@@ -392,7 +408,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
         ref_parts.append(ref_harvester.advance(times, ref_q, ref_c))
     mask, _ = electrical.steady_window(t, scene)
     gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
-    columns = {"time_s": t, "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
+    columns = {"time_s": np.asarray(nominal.t, dtype=float), "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
                "table_m": np.asarray(table), "V_oc_V": sums["Q"] / (sums["C"] + c_p),
                "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
     out = {"columns": columns, "fundamental": fundamental,
