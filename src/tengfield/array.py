@@ -81,9 +81,10 @@ def check_array_scene(scene) -> None:
         raise SceneError("[array] initial_phase_spread_deg needs [excitation] kind = 'sine'")
 
 
-def cell_trajectory(scene, draw):
-    """(Trajectory, impact times) of one cell with ``draw`` = (phase, e, v0), both on
-    the run's own axis (seconds after ``[initial] time_s``, as
+def cell_trajectory(scene, draw, impacts: bool = False):
+    """(Trajectory, number of impacts) of one cell with ``draw`` = (phase, e, v0), and
+    with ``impacts`` its impact times [s] as a third element. The trajectory and the
+    times are on the run's own axis (seconds after ``[initial] time_s``, as
     :func:`tengfield.dynamics.simulate` integrates: the precision does not depend on
     the absolute time)."""
     from .dynamics.impact import Restitution, integrate
@@ -95,22 +96,27 @@ def cell_trajectory(scene, draw):
     table = (sine_table(exc.amplitude, exc.omega, sine_phase_at(exc.frequency, float(draw[0]), t0))
              if exc.kind == "sine" else table_from_scene(scene, origin=t0))
     restitution = dataclasses.replace(Restitution.from_contact(scene.contact), e=float(draw[1]))
+    impacts_wanted = impacts
     traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=0.0,
                                  t_end=duration, gap0=scene.initial.gap,
                                  velocity0=float(draw[2]), period=exc.period, time_origin=t0)
-    return traj, np.asarray(impacts[0], dtype=float).copy()
+    times = impacts[0]
+    if impacts_wanted:
+        return traj, int(times.size), np.asarray(times, dtype=float).copy()
+    return traj, int(times.size)
 
 
 def _simulate_block(args):
-    scene, draws = args
-    return [cell_trajectory(scene, d) for d in draws]
+    scene, draws, impacts = args
+    return [cell_trajectory(scene, d, impacts) for d in draws]
 
 
 def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
-                   progress: bool = False) -> list:
-    """Trajectories of the distinct ``draws`` (rows), on ``jobs`` processes (default:
-    the machine's cores) or over the ranks of ``comm`` (size > 1); ``progress``:
-    a tqdm bar on stderr when it is a terminal."""
+                   progress: bool = False, impacts: bool = False) -> list:
+    """(trajectory, number of impacts) of the distinct ``draws`` (rows), on ``jobs``
+    processes (default: the machine's cores) or over the ranks of ``comm`` (size > 1);
+    ``progress``: a tqdm bar on stderr when it is a terminal; ``impacts``: each with
+    its impact times as a third element (:func:`cell_trajectory`)."""
     from ._mpi import farm, rank_of, size_of
 
     n = len(draws)
@@ -127,18 +133,18 @@ def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
     try:
         if size_of(comm) > 1:
             blocks = _blocks(draws, 4 * size_of(comm))
-            parts = farm(comm, [(scene, b) for b in blocks], _simulate_block,
+            parts = farm(comm, [(scene, b, impacts) for b in blocks], _simulate_block,
                          progress=(lambda k: bar.update(k * len(blocks[0])))
                          if bar is not None else None)
         else:
             jobs = min(jobs or os.cpu_count() or 1, n)
             if jobs <= 1 or n < 8:
-                return _simulate_block((scene, draws))
+                return _simulate_block((scene, draws, impacts))
             from concurrent.futures import ProcessPoolExecutor
             blocks = _blocks(draws, 4 * jobs)
             with ProcessPoolExecutor(jobs) as pool:
                 parts = [done(p) for p in pool.map(_simulate_block,
-                                                   [(scene, b) for b in blocks])]
+                                                   [(scene, b, impacts) for b in blocks])]
     finally:
         if bar is not None:
             bar.close()
@@ -173,6 +179,10 @@ class ArrayResult:
     fine: object = None
     load: dict | None = None
     stages: dict = field(default_factory=dict)
+    #: peak-to-peak V_oc [V], Q_sc [C], I_sc [A] of the array over the steady window, by
+    #: the one rule of :func:`tengfield.electrical.terminal_peaks`: the output samples and
+    #: just before and after every cell's impacts
+    peaks: dict = field(default_factory=dict)
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
@@ -186,7 +196,8 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
     draws = draw_cells(scene)
     distinct, inverse = np.unique(draws, axis=0, return_inverse=True)
     weights = np.bincount(inverse.reshape(-1), minlength=len(distinct)).astype(float)
-    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress)
+    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress,
+                                  impacts=True)
     dynamics_time = time.perf_counter() - start
     start = time.perf_counter()
     one = scene.with_values(device={"cells": 1}, array={"cells": 0, "connection": "parallel",
@@ -199,10 +210,10 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
     if len(distinct) == 1:
         result = _identical(scaled, nominal, curves, trajectories[0][0], n)
     else:
-        result = _spread(scene, nominal, curves, [tr for tr, _ in trajectories], weights,
-                         elapsed, [imp for _, imp in trajectories])
+        result = _spread(scene, nominal, curves, [tr for tr, _, _ in trajectories], weights,
+                         elapsed, [imp for _, _, imp in trajectories])
     phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
-              else _phases(scene, curves, [tr for tr, _ in trajectories], elapsed))
+              else _phases(scene, curves, [tr for tr, _, _ in trajectories], elapsed))
     cell_phases = phases[inverse.reshape(-1)]
     unit = np.exp(1j * np.deg2rad(cell_phases[np.isfinite(cell_phases)]))
     mean = np.angle(unit.mean()) if unit.size else 0.0
@@ -216,7 +227,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         "restitution_spread": arr.restitution_spread,
         "initial_velocity_spread_m_per_s": arr.velocity_spread, "seed": arr.seed,
         "distinct_dynamics": int(len(distinct)),
-        "impacts_per_cell_mean": float(np.average([k.size for _, k in trajectories],
+        "impacts_per_cell_mean": float(np.average([k for _, k, _ in trajectories],
                                                   weights=weights)),
         "compared": result["compared"], "array_value": result["value"],
         "N_x_one_cell_value": result["reference_value"], "array_over_N_cells": ratio,
@@ -233,7 +244,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                        reference=result["reference"], output_label=result["label"],
                        phases_deg=relative, period=scene.excitation.period,
                        summary=result["summary"], fine=result.get("fine"),
-                       load=result.get("load"))
+                       load=result.get("load"), peaks=result["peaks"])
 
 
 class _Sampled:
@@ -261,7 +272,8 @@ def _identical(scaled, nominal, curves, trajectory, n) -> dict:
     dyn = _Sampled(trajectory, electrical.elapsed_times(nominal), electrical.time_origin(nominal),
                    getattr(nominal, "impacts", None), absolute=nominal.t)
     waves = electrical.scene_waveforms(scaled, dyn, curves)
-    out = {"columns": waves, "summary": {}}
+    out = {"columns": waves, "summary": {},
+           "peaks": electrical.terminal_peaks(scaled, dyn, curves, waves)}
     kind = scaled.circuit.kind
     mask, _ = electrical.steady_window(waves["time_s"], scaled)
     if kind == "load" and curves is not None:
@@ -412,7 +424,8 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
                "table_m": np.asarray(table), "V_oc_V": sums["Q"] / (sums["C"] + c_p),
                "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
     out = {"columns": columns, "fundamental": fundamental,
-           "summary": {"grid": "output samples (no per-cell impact instants)"}}
+           "summary": {"grid": "output samples (no per-cell impact instants)"},
+           "peaks": _spread_peaks(scene, curves, bundle, weights, impacts, t, columns)}
     if kind == "load":
         load = scene.circuit.load
         resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
@@ -450,6 +463,32 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
         out.update(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
                    output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
     return out
+
+
+def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
+    """Peak-to-peak V_oc, Q_sc, I_sc of the array's terminals over the steady window:
+    the output samples (``columns``) and just before and after every impact of every
+    cell (``IMPACT_OFFSET_PERIODS``), where that cell's I_SC jumps; all cells are
+    evaluated there (the rule of :func:`tengfield.electrical.terminal_peaks`). ``t`` and
+    ``impacts`` are on the run's own axis."""
+    mask, _ = electrical.steady_window(t, scene)
+    names = electrical.PEAK_QUANTITIES
+    low = {k: float(np.min(columns[c][mask])) for k, c in names.items()}
+    high = {k: float(np.max(columns[c][mask])) for k, c in names.items()}
+    instants = np.unique(np.concatenate([np.asarray(i, dtype=float) for i in impacts]))
+    instants = instants[(instants > t[mask][0]) & (instants < t[-1])]
+    if curves is not None and instants.size:
+        eps = electrical.IMPACT_OFFSET_PERIODS * scene.excitation.period
+        times = np.sort(np.concatenate([instants - eps, instants + eps]))
+        c_p = scene.circuit.parallel_capacitance
+        rows = max(2, CHUNK_VALUES // max(len(weights), 1))
+        for lo in range(0, times.size, rows):
+            q, c, i = _evaluate(curves, bundle, times[lo:lo + rows])
+            q, c, i = q @ weights, c @ weights, i @ weights
+            for key, value in (("V_oc", q / (c + c_p)), ("Q_sc", q), ("I_sc", i)):
+                low[key] = min(low[key], float(np.min(value)))
+                high[key] = max(high[key], float(np.max(value)))
+    return {k: high[k] - low[k] for k in names}
 
 
 def _store_only(res):

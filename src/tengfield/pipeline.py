@@ -260,13 +260,11 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
          "distinct_dynamics": block["distinct_dynamics"]})
     t = electrical.elapsed_times(dynamics)
     mask, _ = electrical.steady_window(t, scene)
-    peaks = {name: circuit.peak_to_peak(np.asarray(waveforms[column])[mask])
-             for name, column in electrical.PEAK_QUANTITIES.items()}
+    peaks = dict(arr.peaks)      # the one rule: samples and every cell's impact instants
     summary = _summary(scene, dynamics, waveforms, None, stages, table,
                        peaks={column: peaks[name]
                               for name, column in electrical.PEAK_QUANTITIES.items()})
     summary["cells"] = scene.array.cells
-    summary["peak_to_peak_rule"] = "over the output samples of the steady window (array)"
     if arr.load is not None:
         summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
         summary.pop("load_reason", None)
