@@ -367,6 +367,8 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     fundamental = np.zeros(g, dtype=complex)
     rect_cols = {c: np.empty(t.size) for c in electrical.RECTIFIER_COLUMNS}
     rectifying = kind == "rectifier"
+    if rectifying:
+        electrical.check_store_resolution(scene)
     options = electrical.harvester_options(scene) if rectifying else None
     harvesters = ref_harvester = None
     origin = electrical.time_origin(nominal)
@@ -446,6 +448,10 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
                                                         else 1.0)
         if connection == "rectified-per-cell":
             energy = float(sum(parts[-1][j].store_input[-1] * weights[j] for j in range(g)))
+            books = [r.balance() for r in parts[-1]]
+            electrical.warn_numerical_dissipation(
+                {k: float(sum(b[k] * w for b, w in zip(books, weights)))
+                 for k in ("delivered_J", "numerical_dissipation_J")})
             fine = None
             ref_curve = ref_fine.stored_energy * n
         else:

@@ -400,6 +400,61 @@ def harvester_options(scene) -> dict:
             "leakage": c.storage_leakage if c.storage_leakage > 0 else math.inf, "chip": chip}
 
 
+#: numerical_dissipation_J above this fraction of the energy delivered into the bridges
+#: gets a warning (the backward-Euler step moved the store too far per step)
+NUMERICAL_DISSIPATION_WARN = 0.01
+
+
+def smallest_resolved_store(scene) -> float:
+    """Smallest ``[circuit] storage_capacitance_uF`` [F] whose chip bursts the output
+    step resolves (0 without a chip): the energy between the UVLO levels,
+    ``C_L (uvlo_rising^2 - uvlo_falling^2) / 2``, must last at least one step
+    ``1 / sample_rate_hz`` at the chip's largest draw (input power + quiescent current
+    at the shunt voltage). Below it a burst (the chip on, then locked out again) fits
+    inside one step: the store is at 0 at every grid point while the books show shunt
+    and chip energy, and the step's own dissipation is half of what is delivered."""
+    c = scene.circuit
+    if c.kind != "rectifier" or c.pmic != "uvlo":
+        return 0.0
+    step = 1.0 / scene.run.sample_rate
+    draw = c.pmic_output**2 / (c.pmic_load * c.pmic_efficiency) \
+        + c.pmic_quiescent_current * c.pmic_shunt
+    return 2.0 * step * draw / (c.uvlo_rising**2 - c.uvlo_falling**2)
+
+
+def check_store_resolution(scene) -> None:
+    """One-line SceneError when the store is too small for the output step to resolve
+    its chip (:func:`smallest_resolved_store`)."""
+    from .errors import SceneError
+
+    smallest = smallest_resolved_store(scene)
+    c = scene.circuit
+    if c.storage_capacitance < smallest:
+        raise SceneError(
+            f"[circuit] storage_capacitance_uF = {c.storage_capacitance * 1e6:g} is out of "
+            f"range: with pmic = 'uvlo' at [run] sample_rate_hz = {scene.run.sample_rate:g} "
+            f"allowed >= {smallest * 1e6:.3g} (a chip burst, C_L (uvlo_rising_V^2 - "
+            f"uvlo_falling_V^2)/2 of energy, must last at least one output step; or raise "
+            f"[run] sample_rate_hz)")
+
+
+def warn_numerical_dissipation(books: dict) -> None:
+    """One ``tengfield: warning:`` line when the backward-Euler step's own dissipation
+    (``numerical_dissipation_J`` of ``HarvestResult.balance()``, or the same keys summed
+    over stores) exceeds ``NUMERICAL_DISSIPATION_WARN`` of the delivered energy."""
+    import warnings
+
+    delivered = books.get("delivered_J", 0.0)
+    lost = books.get("numerical_dissipation_J", 0.0)
+    if delivered > 0 and lost > NUMERICAL_DISSIPATION_WARN * delivered:
+        warnings.warn(
+            f"rectifier: numerical_dissipation_J = {lost:.3g} J is {lost / delivered:.1%} of "
+            f"the {delivered:.3g} J delivered into the bridges (> "
+            f"{NUMERICAL_DISSIPATION_WARN:.0%}): the store moves too far per step; raise "
+            f"[run] sample_rate_hz or [circuit] storage_capacitance_uF", RuntimeWarning,
+            stacklevel=3)
+
+
 def rectifier_grid(scene, dynamics) -> tuple[np.ndarray, np.ndarray]:
     """(grid [s], indices of the output samples in it): the output times and every
     impact instant (Q_SC(z(t)) has a kink there; the bridge steps end on it), on the
@@ -420,6 +475,7 @@ def rectifier_waveforms(scene, dynamics, curves) -> dict:
     grid's output indices ``output_index``."""
     from .harvest import Harvester
 
+    check_store_resolution(scene)
     grid, output_index = rectifier_grid(scene, dynamics)
     n = scene.device.cells
     run = Harvester(1, time_origin=time_origin(dynamics), **harvester_options(scene))
@@ -499,6 +555,7 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
     dt = np.diff(t)
     on_time = float(np.sum(dt[on[1:]]))
     books = fine.balance()
+    warn_numerical_dissipation(books)
     out = {
         "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
         "final_store_voltage_V": float(fine.store_voltage[-1]),

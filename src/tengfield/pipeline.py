@@ -96,6 +96,7 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     simulate = simulate or _default_simulate()
     if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
         check_field(scene)                # before the dynamics, not after
+    electrical.check_store_resolution(scene)   # a store the step cannot resolve: refuse now
 
     start = time.perf_counter()
     dynamics = simulate(scene)
