@@ -48,6 +48,10 @@ from .errors import SceneError
 
 #: cell-samples evaluated per chunk of the electrical stage (bounds the memory)
 CHUNK_VALUES = 1_000_000
+#: at most this many cell evaluations at the cells' impact instants for the peaks of an
+#: array with spread (every cell at every other cell's impacts grows as cells^2); above
+#: it, the instants in the output steps nearest the sampled extremes are kept
+PEAK_EVALUATIONS = 20_000_000
 
 
 # ---------------------------------------------------------------------------
@@ -475,14 +479,29 @@ def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
     """Peak-to-peak V_oc, Q_sc, I_sc of the array's terminals over the steady window:
     the output samples (``columns``) and just before and after every impact of every
     cell (``IMPACT_OFFSET_PERIODS``), where that cell's I_SC jumps; all cells are
-    evaluated there (the rule of :func:`tengfield.electrical.terminal_peaks`). ``t`` and
-    ``impacts`` are on the run's own axis."""
+    evaluated there (the rule of :func:`tengfield.electrical.terminal_peaks`). Costs
+    cells x (all cells' impacts) evaluations; beyond ``PEAK_EVALUATIONS`` only the
+    instants in the output steps whose samples are nearest a sampled extreme are taken.
+    ``t`` and ``impacts`` are on the run's own axis."""
     mask, _ = electrical.steady_window(t, scene)
     names = electrical.PEAK_QUANTITIES
     low = {k: float(np.min(columns[c][mask])) for k, c in names.items()}
     high = {k: float(np.max(columns[c][mask])) for k, c in names.items()}
     instants = np.unique(np.concatenate([np.asarray(i, dtype=float) for i in impacts]))
     instants = instants[(instants > t[mask][0]) & (instants < t[-1])]
+    budget = max(1, PEAK_EVALUATIONS // (2 * max(len(weights), 1)))
+    if instants.size > budget:
+        # too many to evaluate every cell at each: keep the instants whose output step
+        # has an end sample closest to a sampled extreme (of any quantity)
+        k = np.clip(np.searchsorted(t, instants) - 1, 0, t.size - 2)
+        closeness = np.full(instants.size, np.inf)
+        for key, col in names.items():
+            x = np.asarray(columns[col])
+            span = max(high[key] - low[key], 1e-300)
+            ends = np.stack([x[k], x[k + 1]])
+            closeness = np.minimum(closeness, np.min(np.minimum(high[key] - ends,
+                                                                ends - low[key]), axis=0) / span)
+        instants = np.sort(instants[np.argsort(closeness, kind="stable")[:budget]])
     if curves is not None and instants.size:
         eps = electrical.IMPACT_OFFSET_PERIODS * scene.excitation.period
         times = np.sort(np.concatenate([instants - eps, instants + eps]))
