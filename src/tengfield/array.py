@@ -48,6 +48,10 @@ from .errors import SceneError
 
 #: cell-samples evaluated per chunk of the electrical stage (bounds the memory)
 CHUNK_VALUES = 1_000_000
+#: at most this many cell evaluations at the cells' impact instants for the peaks of an
+#: array with spread (every cell at every other cell's impacts grows as cells^2); above
+#: it, the instants in the output steps nearest the sampled extremes are kept
+PEAK_EVALUATIONS = 20_000_000
 
 
 # ---------------------------------------------------------------------------
@@ -81,33 +85,42 @@ def check_array_scene(scene) -> None:
         raise SceneError("[array] initial_phase_spread_deg needs [excitation] kind = 'sine'")
 
 
-def cell_trajectory(scene, draw):
-    """(Trajectory, number of impacts) of one cell with ``draw`` = (phase, e, v0)."""
+def cell_trajectory(scene, draw, impacts: bool = False):
+    """(Trajectory, number of impacts) of one cell with ``draw`` = (phase, e, v0), and
+    with ``impacts`` its impact times [s] as a third element. The trajectory and the
+    times are on the run's own axis (seconds after ``[initial] time_s``, as
+    :func:`tengfield.dynamics.simulate` integrates: the precision does not depend on
+    the absolute time)."""
     from .dynamics.impact import Restitution, integrate
     from .dynamics.result import run_span
-    from .dynamics.table import sine_table, table_from_scene
+    from .dynamics.table import sine_phase_at, sine_table, table_from_scene
 
     exc = scene.excitation
-    table = (sine_table(exc.amplitude, exc.omega, float(draw[0])) if exc.kind == "sine"
-             else table_from_scene(scene))
+    duration, t0, _ = run_span(scene, None)
+    table = (sine_table(exc.amplitude, exc.omega, sine_phase_at(exc.frequency, float(draw[0]), t0))
+             if exc.kind == "sine" else table_from_scene(scene, origin=t0))
     restitution = dataclasses.replace(Restitution.from_contact(scene.contact), e=float(draw[1]))
-    _, t0, t_end = run_span(scene, None)
-    traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=t0,
-                                 t_end=t_end, gap0=scene.initial.gap,
-                                 velocity0=float(draw[2]), period=exc.period)
-    return traj, int(impacts[0].size)
+    impacts_wanted = impacts
+    traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=0.0,
+                                 t_end=duration, gap0=scene.initial.gap,
+                                 velocity0=float(draw[2]), period=exc.period, time_origin=t0)
+    times = impacts[0]
+    if impacts_wanted:
+        return traj, int(times.size), np.asarray(times, dtype=float).copy()
+    return traj, int(times.size)
 
 
 def _simulate_block(args):
-    scene, draws = args
-    return [cell_trajectory(scene, d) for d in draws]
+    scene, draws, impacts = args
+    return [cell_trajectory(scene, d, impacts) for d in draws]
 
 
 def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
-                   progress: bool = False) -> list:
-    """Trajectories of the distinct ``draws`` (rows), on ``jobs`` processes (default:
-    the machine's cores) or over the ranks of ``comm`` (size > 1); ``progress``:
-    a tqdm bar on stderr when it is a terminal."""
+                   progress: bool = False, impacts: bool = False) -> list:
+    """(trajectory, number of impacts) of the distinct ``draws`` (rows), on ``jobs``
+    processes (default: the machine's cores) or over the ranks of ``comm`` (size > 1);
+    ``progress``: a tqdm bar on stderr when it is a terminal; ``impacts``: each with
+    its impact times as a third element (:func:`cell_trajectory`)."""
     from ._mpi import farm, rank_of, size_of
 
     n = len(draws)
@@ -124,18 +137,18 @@ def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
     try:
         if size_of(comm) > 1:
             blocks = _blocks(draws, 4 * size_of(comm))
-            parts = farm(comm, [(scene, b) for b in blocks], _simulate_block,
+            parts = farm(comm, [(scene, b, impacts) for b in blocks], _simulate_block,
                          progress=(lambda k: bar.update(k * len(blocks[0])))
                          if bar is not None else None)
         else:
             jobs = min(jobs or os.cpu_count() or 1, n)
             if jobs <= 1 or n < 8:
-                return _simulate_block((scene, draws))
+                return _simulate_block((scene, draws, impacts))
             from concurrent.futures import ProcessPoolExecutor
             blocks = _blocks(draws, 4 * jobs)
             with ProcessPoolExecutor(jobs) as pool:
                 parts = [done(p) for p in pool.map(_simulate_block,
-                                                   [(scene, b) for b in blocks])]
+                                                   [(scene, b, impacts) for b in blocks])]
     finally:
         if bar is not None:
             bar.close()
@@ -170,6 +183,10 @@ class ArrayResult:
     fine: object = None
     load: dict | None = None
     stages: dict = field(default_factory=dict)
+    #: peak-to-peak V_oc [V], Q_sc [C], I_sc [A] of the array over the steady window, by
+    #: the one rule of :func:`tengfield.electrical.terminal_peaks`: the output samples and
+    #: just before and after every cell's impacts
+    peaks: dict = field(default_factory=dict)
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
@@ -183,7 +200,8 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
     draws = draw_cells(scene)
     distinct, inverse = np.unique(draws, axis=0, return_inverse=True)
     weights = np.bincount(inverse.reshape(-1), minlength=len(distinct)).astype(float)
-    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress)
+    trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress,
+                                  impacts=True)
     dynamics_time = time.perf_counter() - start
     start = time.perf_counter()
     one = scene.with_values(device={"cells": 1}, array={"cells": 0, "connection": "parallel",
@@ -192,12 +210,14 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                                                       "initial_velocity_spread_m_per_s": 0.0})
     scaled = one.with_values(device={"cells": n})
     t = np.asarray(nominal.t, dtype=float)
+    elapsed = electrical.elapsed_times(nominal)     # the run's own axis (cells integrate on it)
     if len(distinct) == 1:
         result = _identical(scaled, nominal, curves, trajectories[0][0], n)
     else:
-        result = _spread(scene, nominal, curves, [tr for tr, _ in trajectories], weights, t)
+        result = _spread(scene, nominal, curves, [tr for tr, _, _ in trajectories], weights,
+                         elapsed, [imp for _, _, imp in trajectories])
     phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
-              else _phases(scene, curves, [tr for tr, _ in trajectories], t))
+              else _phases(scene, curves, [tr for tr, _, _ in trajectories], elapsed))
     cell_phases = phases[inverse.reshape(-1)]
     unit = np.exp(1j * np.deg2rad(cell_phases[np.isfinite(cell_phases)]))
     mean = np.angle(unit.mean()) if unit.size else 0.0
@@ -211,7 +231,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         "restitution_spread": arr.restitution_spread,
         "initial_velocity_spread_m_per_s": arr.velocity_spread, "seed": arr.seed,
         "distinct_dynamics": int(len(distinct)),
-        "impacts_per_cell_mean": float(np.average([k for _, k in trajectories],
+        "impacts_per_cell_mean": float(np.average([k for _, k, _ in trajectories],
                                                   weights=weights)),
         "compared": result["compared"], "array_value": result["value"],
         "N_x_one_cell_value": result["reference_value"], "array_over_N_cells": ratio,
@@ -228,27 +248,36 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                        reference=result["reference"], output_label=result["label"],
                        phases_deg=relative, period=scene.excitation.period,
                        summary=result["summary"], fine=result.get("fine"),
-                       load=result.get("load"))
+                       load=result.get("load"), peaks=result["peaks"])
 
 
 class _Sampled:
-    """A trajectory with the attributes the electrical functions read."""
+    """A cell's trajectory (on the run's own axis) with the attributes the electrical
+    functions read: output times ``t`` (absolute) and ``elapsed``, ``time_origin``,
+    ``impacts`` (absolute, as a DynamicsResult)."""
 
-    def __init__(self, trajectory, times, impacts=None):
+    def __init__(self, trajectory, elapsed, origin=0.0, impacts=None, absolute=None):
         self._traj = trajectory
-        self.t = np.asarray(times, dtype=float)
-        self.gap, self.gap_velocity, self.table = trajectory(self.t)
+        self.elapsed = np.asarray(elapsed, dtype=float)
+        self.time_origin = float(origin)
+        self.t = origin + self.elapsed if absolute is None else np.asarray(absolute)
+        self.gap, self.gap_velocity, self.table = trajectory(self.elapsed)
         self.impacts = impacts
 
+    def sample_elapsed(self, elapsed):
+        return self._traj(np.ascontiguousarray(np.atleast_1d(elapsed), dtype=float))
+
     def sample(self, times):
-        return self._traj(np.ascontiguousarray(np.atleast_1d(times), dtype=float))
+        return self.sample_elapsed(np.asarray(times, dtype=float) - self.time_origin)
 
 
 def _identical(scaled, nominal, curves, trajectory, n) -> dict:
     """No spread: the single-cell electrical stage with [device] cells = N."""
-    dyn = _Sampled(trajectory, nominal.t, getattr(nominal, "impacts", None))
+    dyn = _Sampled(trajectory, electrical.elapsed_times(nominal), electrical.time_origin(nominal),
+                   getattr(nominal, "impacts", None), absolute=nominal.t)
     waves = electrical.scene_waveforms(scaled, dyn, curves)
-    out = {"columns": waves, "summary": {}}
+    out = {"columns": waves, "summary": {},
+           "peaks": electrical.terminal_peaks(scaled, dyn, curves, waves)}
     kind = scaled.circuit.kind
     mask, _ = electrical.steady_window(waves["time_s"], scaled)
     if kind == "load" and curves is not None:
@@ -322,8 +351,10 @@ def _spline_eval(z, v, knots, cq, cc, stroke):
     return q, c, i
 
 
-def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
-    """Cells with different dynamics, walked in time chunks."""
+def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
+    """Cells with different dynamics, walked in time chunks; ``t``: the output times on
+    the run's own axis (``nominal``'s elapsed times), ``impacts``: each trajectory's
+    impact times on that axis."""
     from .dynamics.impact import TrajectoryBundle
     from .harvest import Harvester
 
@@ -340,10 +371,13 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
     fundamental = np.zeros(g, dtype=complex)
     rect_cols = {c: np.empty(t.size) for c in electrical.RECTIFIER_COLUMNS}
     rectifying = kind == "rectifier"
+    if rectifying:
+        electrical.check_store_resolution(scene)
     options = electrical.harvester_options(scene) if rectifying else None
     harvesters = ref_harvester = None
+    origin = electrical.time_origin(nominal)
     if rectifying:
-        bare = dict(options, parallel_capacitance=0.0)
+        bare = dict(options, parallel_capacitance=0.0, time_origin=origin)
         if connection == "rectified-per-cell":
             harvesters = [Harvester(1, **bare) for _ in range(g)]
         else:
@@ -354,7 +388,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
     for lo in range(0, t.size, rows):
         times = t[lo:lo + rows]
         q, c, i = _evaluate(curves, bundle, times)
-        rq, rc, ri = _evaluate(curves, [nominal.sample], times)
+        rq, rc, ri = _evaluate(curves, [lambda x: electrical.sample_elapsed(nominal, x)], times)
         block = slice(lo, lo + times.size)
         fundamental += basis[block] @ q
         for key, value in zip(("Q", "C", "I"), (q, c, i)):
@@ -392,11 +426,12 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
         ref_parts.append(ref_harvester.advance(times, ref_q, ref_c))
     mask, _ = electrical.steady_window(t, scene)
     gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
-    columns = {"time_s": t, "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
+    columns = {"time_s": np.asarray(nominal.t, dtype=float), "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
                "table_m": np.asarray(table), "V_oc_V": sums["Q"] / (sums["C"] + c_p),
                "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
     out = {"columns": columns, "fundamental": fundamental,
-           "summary": {"grid": "output samples (no per-cell impact instants)"}}
+           "summary": {"grid": "output samples (no per-cell impact instants)"},
+           "peaks": _spread_peaks(scene, curves, bundle, weights, impacts, t, columns)}
     if kind == "load":
         load = scene.circuit.load
         resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
@@ -417,6 +452,10 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
                                                         else 1.0)
         if connection == "rectified-per-cell":
             energy = float(sum(parts[-1][j].store_input[-1] * weights[j] for j in range(g)))
+            books = [r.balance() for r in parts[-1]]
+            electrical.warn_numerical_dissipation(
+                {k: float(sum(b[k] * w for b, w in zip(books, weights)))
+                 for k in ("delivered_J", "numerical_dissipation_J")})
             fine = None
             ref_curve = ref_fine.stored_energy * n
         else:
@@ -434,6 +473,47 @@ def _spread(scene, nominal, curves, trajectories, weights, t) -> dict:
         out.update(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
                    output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
     return out
+
+
+def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
+    """Peak-to-peak V_oc, Q_sc, I_sc of the array's terminals over the steady window:
+    the output samples (``columns``) and just before and after every impact of every
+    cell (``IMPACT_OFFSET_PERIODS``), where that cell's I_SC jumps; all cells are
+    evaluated there (the rule of :func:`tengfield.electrical.terminal_peaks`). Costs
+    cells x (all cells' impacts) evaluations; beyond ``PEAK_EVALUATIONS`` only the
+    instants in the output steps whose samples are nearest a sampled extreme are taken.
+    ``t`` and ``impacts`` are on the run's own axis."""
+    mask, _ = electrical.steady_window(t, scene)
+    names = electrical.PEAK_QUANTITIES
+    low = {k: float(np.min(columns[c][mask])) for k, c in names.items()}
+    high = {k: float(np.max(columns[c][mask])) for k, c in names.items()}
+    instants = np.unique(np.concatenate([np.asarray(i, dtype=float) for i in impacts]))
+    instants = instants[(instants > t[mask][0]) & (instants < t[-1])]
+    budget = max(1, PEAK_EVALUATIONS // (2 * max(len(weights), 1)))
+    if instants.size > budget:
+        # too many to evaluate every cell at each: keep the instants whose output step
+        # has an end sample closest to a sampled extreme (of any quantity)
+        k = np.clip(np.searchsorted(t, instants) - 1, 0, t.size - 2)
+        closeness = np.full(instants.size, np.inf)
+        for key, col in names.items():
+            x = np.asarray(columns[col])
+            span = max(high[key] - low[key], 1e-300)
+            ends = np.stack([x[k], x[k + 1]])
+            closeness = np.minimum(closeness, np.min(np.minimum(high[key] - ends,
+                                                                ends - low[key]), axis=0) / span)
+        instants = np.sort(instants[np.argsort(closeness, kind="stable")[:budget]])
+    if curves is not None and instants.size:
+        eps = electrical.IMPACT_OFFSET_PERIODS * scene.excitation.period
+        times = np.sort(np.concatenate([instants - eps, instants + eps]))
+        c_p = scene.circuit.parallel_capacitance
+        rows = max(2, CHUNK_VALUES // max(len(weights), 1))
+        for lo in range(0, times.size, rows):
+            q, c, i = _evaluate(curves, bundle, times[lo:lo + rows])
+            q, c, i = q @ weights, c @ weights, i @ weights
+            for key, value in (("V_oc", q / (c + c_p)), ("Q_sc", q), ("I_sc", i)):
+                low[key] = min(low[key], float(np.min(value)))
+                high[key] = max(high[key], float(np.max(value)))
+    return {k: high[k] - low[k] for k in names}
 
 
 def _store_only(res):

@@ -44,6 +44,65 @@ IMPACT_OFFSET_PERIODS = 1e-9
 
 
 # ---------------------------------------------------------------------------
+# the run's own time axis
+def time_origin(dynamics) -> float:
+    """``[initial] time_s`` of ``dynamics`` [s] (its ``time_origin``; 0 without one)."""
+    return float(getattr(dynamics, "time_origin", 0.0) or 0.0)
+
+
+def elapsed_times(dynamics) -> np.ndarray:
+    """The output times of ``dynamics`` on the run's own axis, ``t - time_origin`` [s]
+    (exact: ``dynamics.elapsed`` when it has one). Every circuit is integrated on this
+    axis, so its precision does not depend on the absolute time (at t ~ 1.7e9 s the
+    doubles are 2.4e-7 s apart, far coarser than the impact offsets)."""
+    elapsed = getattr(dynamics, "elapsed", None)
+    if elapsed is not None:
+        return np.asarray(elapsed, dtype=float)
+    return np.asarray(dynamics.t, dtype=float) - time_origin(dynamics)
+
+
+def sample_elapsed(dynamics, elapsed):
+    """(gap, gap velocity, table) of ``dynamics`` at ``elapsed`` times [s] after its origin."""
+    sampler = getattr(dynamics, "sample_elapsed", None)
+    if sampler is not None:
+        return sampler(elapsed)
+    return dynamics.sample(np.asarray(elapsed, dtype=float) + time_origin(dynamics))
+
+
+def impact_elapsed(dynamics, start: float, end: float) -> np.ndarray:
+    """:func:`impact_times` on the run's own axis (``start``, ``end`` and the result in
+    seconds after ``time_origin``). The stored impact times are absolute (rounded to the
+    doubles near ``time_origin``); with a non-zero origin each one is put back on the
+    exact velocity jump of the trajectory by bisection over those few ulp."""
+    origin = time_origin(dynamics)
+    if origin == 0.0:
+        return impact_times(dynamics, start, end)
+    absolute = impact_times(dynamics, -math.inf, math.inf)
+    if absolute.size == 0 or not (hasattr(dynamics, "sample")
+                                  or hasattr(dynamics, "sample_elapsed")):
+        return np.empty(0)
+    approx = absolute - origin
+    ulp = np.spacing(np.abs(absolute))
+    lo, hi = np.maximum(approx - ulp, 0.0), approx + ulp
+    _, v_lo, _ = sample_elapsed(dynamics, lo)
+    _, v_hi, _ = sample_elapsed(dynamics, hi)
+    v_lo, v_hi = np.array(v_lo, dtype=float), np.array(v_hi, dtype=float)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        active = (mid > lo) & (mid < hi)
+        if not active.any():
+            break
+        _, v_mid, _ = sample_elapsed(dynamics, mid)
+        before = np.abs(v_mid - v_lo) <= np.abs(v_mid - v_hi)   # mid is before the jump
+        lo = np.where(active & before, mid, lo)
+        v_lo = np.where(active & before, v_mid, v_lo)
+        hi = np.where(active & ~before, mid, hi)
+        v_hi = np.where(active & ~before, v_mid, v_hi)
+    times = np.unique(hi)
+    return times[(times > start) & (times < end)]
+
+
+# ---------------------------------------------------------------------------
 # waveforms
 def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
                        parallel_capacitance: float = 0.0, radial=None,
@@ -156,12 +215,19 @@ def impact_times(dynamics, start: float, end: float) -> np.ndarray:
 def impact_states(scene, dynamics, impacts) -> tuple[np.ndarray, ...]:
     """``(gap_before, velocity_before, gap_after, velocity_after)`` at the ``impacts``
     [s], sampled ``IMPACT_OFFSET_PERIODS`` periods before and after each one."""
-    if not len(impacts) or not hasattr(dynamics, "sample"):
+    return _impact_states(scene, dynamics, np.asarray(impacts, dtype=float)
+                          - time_origin(dynamics))
+
+
+def _impact_states(scene, dynamics, impacts) -> tuple[np.ndarray, ...]:
+    """:func:`impact_states` at ``impacts`` on the run's own axis (:func:`elapsed_times`)."""
+    if not len(impacts) or not (hasattr(dynamics, "sample")
+                                or hasattr(dynamics, "sample_elapsed")):
         empty = np.empty(0)
         return empty, empty, empty, empty
     eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
-    gap_pre, vel_pre, _ = dynamics.sample(impacts - eps)
-    gap_post, vel_post, _ = dynamics.sample(impacts + eps)
+    gap_pre, vel_pre, _ = sample_elapsed(dynamics, impacts - eps)
+    gap_post, vel_post, _ = sample_elapsed(dynamics, impacts + eps)
     return gap_pre, vel_pre, gap_post, vel_post
 
 
@@ -193,19 +259,20 @@ def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> di
     """
     if waveforms is None:
         waveforms = scene_waveforms(scene, dynamics, curves)
-    t = np.asarray(waveforms["time_s"], dtype=float)
+    t = elapsed_times(dynamics)          # the rows of waveforms, on the run's own axis
     mask, _ = steady_window(t, scene)
     values = {name: [np.asarray(waveforms[column])[mask]]
               for name, column in PEAK_QUANTITIES.items()}
     if curves is not None:
-        impacts = impact_times(dynamics, t[mask][0], t[-1])
-        gap_pre, vel_pre, gap_post, vel_post = impact_states(scene, dynamics, impacts)
+        impacts = impact_elapsed(dynamics, t[mask][0], t[-1])
+        gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
         if gap_pre.size:
             eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
             extra = scene_terminal_waveforms(
                 scene, curves, np.concatenate([gap_pre, gap_post]),
                 np.concatenate([vel_pre, vel_post]),
-                *_radial(dynamics, curves, np.concatenate([impacts - eps, impacts + eps])))
+                *_radial(dynamics, curves, time_origin(dynamics)
+                         + np.concatenate([impacts - eps, impacts + eps])))
             for name in PEAK_QUANTITIES:
                 values[name].append(extra[name])
     return {name: circuit.peak_to_peak(np.concatenate(v)) for name, v in values.items()}
@@ -241,7 +308,15 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
     (default: the whole run); ``mean_power_W`` is the dissipated energy
     divided by the window length.
     """
-    t = np.asarray(dynamics.t, dtype=float)
+    origin = time_origin(dynamics)
+    return _load_waveforms(scene, dynamics, curves,
+                           None if window_start is None else window_start - origin)
+
+
+def _load_waveforms(scene, dynamics, curves, window_start) -> dict:
+    """:func:`load_waveforms` on the run's own axis (``window_start`` after the origin)."""
+    t = elapsed_times(dynamics)
+    origin = time_origin(dynamics)
     n_cells = scene.device.cells
     c_p = scene.circuit.parallel_capacitance
     load = scene.circuit.load
@@ -252,12 +327,13 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
                 "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
                 "stored_energy_change_J": 0.0, "integration_points": int(t.size),
                 "time_constant_s": 0.0}
-    impacts = impact_times(dynamics, t[0], t[-1])
+    impacts = impact_elapsed(dynamics, t[0], t[-1])
     output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
     extra = relaxation_times(np.concatenate([[t[0]], impacts]), load * c_min, output_step, t[-1])
-    gap_pre, vel_pre, gap_post, vel_post = impact_states(scene, dynamics, impacts)
-    gap_extra, vel_extra, _ = dynamics.sample(extra) if extra.size else (np.empty(0),) * 3
+    gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
+    gap_extra, vel_extra, _ = (sample_elapsed(dynamics, extra) if extra.size
+                               else (np.empty(0),) * 3)
     grid = np.concatenate([t, impacts, impacts, extra])
     gap = np.concatenate([np.asarray(dynamics.gap, dtype=float), gap_pre, gap_post, gap_extra])
     vel = np.concatenate([np.asarray(dynamics.gap_velocity, dtype=float), vel_pre, vel_post,
@@ -268,7 +344,8 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
     order = np.lexsort((tag, grid))
     grid, gap, vel = grid[order], gap[order], vel[order]
     output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
-    fine = scene_terminal_waveforms(scene, curves, gap, vel, *_radial(dynamics, curves, grid))
+    fine = scene_terminal_waveforms(scene, curves, gap, vel,
+                                    *_radial(dynamics, curves, origin + grid))
     response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
     delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
     stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
@@ -289,9 +366,9 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
 
 def steady_load(scene, dynamics, curves) -> dict:
     """:func:`load_waveforms` with energies over the :func:`steady_window`."""
-    t = np.asarray(dynamics.t, dtype=float)
+    t = elapsed_times(dynamics)
     mask, _ = steady_window(t, scene)
-    return load_waveforms(scene, dynamics, curves, window_start=t[mask][0])
+    return _load_waveforms(scene, dynamics, curves, t[mask][0])
 
 
 # ---------------------------------------------------------------------------
@@ -323,11 +400,67 @@ def harvester_options(scene) -> dict:
             "leakage": c.storage_leakage if c.storage_leakage > 0 else math.inf, "chip": chip}
 
 
+#: numerical_dissipation_J above this fraction of the energy delivered into the bridges
+#: gets a warning (the backward-Euler step moved the store too far per step)
+NUMERICAL_DISSIPATION_WARN = 0.01
+
+
+def smallest_resolved_store(scene) -> float:
+    """Smallest ``[circuit] storage_capacitance_uF`` [F] whose chip bursts the output
+    step resolves (0 without a chip): the energy between the UVLO levels,
+    ``C_L (uvlo_rising^2 - uvlo_falling^2) / 2``, must last at least one step
+    ``1 / sample_rate_hz`` at the chip's largest draw (input power + quiescent current
+    at the shunt voltage). Below it a burst (the chip on, then locked out again) fits
+    inside one step: the store is at 0 at every grid point while the books show shunt
+    and chip energy, and the step's own dissipation is half of what is delivered."""
+    c = scene.circuit
+    if c.kind != "rectifier" or c.pmic != "uvlo":
+        return 0.0
+    step = 1.0 / scene.run.sample_rate
+    draw = c.pmic_output**2 / (c.pmic_load * c.pmic_efficiency) \
+        + c.pmic_quiescent_current * c.pmic_shunt
+    return 2.0 * step * draw / (c.uvlo_rising**2 - c.uvlo_falling**2)
+
+
+def check_store_resolution(scene) -> None:
+    """One-line SceneError when the store is too small for the output step to resolve
+    its chip (:func:`smallest_resolved_store`)."""
+    from .errors import SceneError
+
+    smallest = smallest_resolved_store(scene)
+    c = scene.circuit
+    if c.storage_capacitance < smallest:
+        raise SceneError(
+            f"[circuit] storage_capacitance_uF = {c.storage_capacitance * 1e6:g} is out of "
+            f"range: with pmic = 'uvlo' at [run] sample_rate_hz = {scene.run.sample_rate:g} "
+            f"allowed >= {smallest * 1e6:.3g} (a chip burst, C_L (uvlo_rising_V^2 - "
+            f"uvlo_falling_V^2)/2 of energy, must last at least one output step; or raise "
+            f"[run] sample_rate_hz)")
+
+
+def warn_numerical_dissipation(books: dict) -> None:
+    """One ``tengfield: warning:`` line when the backward-Euler step's own dissipation
+    (``numerical_dissipation_J`` of ``HarvestResult.balance()``, or the same keys summed
+    over stores) exceeds ``NUMERICAL_DISSIPATION_WARN`` of the delivered energy."""
+    import warnings
+
+    delivered = books.get("delivered_J", 0.0)
+    lost = books.get("numerical_dissipation_J", 0.0)
+    if delivered > 0 and lost > NUMERICAL_DISSIPATION_WARN * delivered:
+        warnings.warn(
+            f"rectifier: numerical_dissipation_J = {lost:.3g} J is {lost / delivered:.1%} of "
+            f"the {delivered:.3g} J delivered into the bridges (> "
+            f"{NUMERICAL_DISSIPATION_WARN:.0%}): the store moves too far per step; raise "
+            f"[run] sample_rate_hz or [circuit] storage_capacitance_uF", RuntimeWarning,
+            stacklevel=3)
+
+
 def rectifier_grid(scene, dynamics) -> tuple[np.ndarray, np.ndarray]:
     """(grid [s], indices of the output samples in it): the output times and every
-    impact instant (Q_SC(z(t)) has a kink there; the bridge steps end on it)."""
-    t = np.asarray(dynamics.t, dtype=float)
-    impacts = impact_times(dynamics, t[0], t[-1])
+    impact instant (Q_SC(z(t)) has a kink there; the bridge steps end on it), on the
+    run's own axis (:func:`elapsed_times`)."""
+    t = elapsed_times(dynamics)
+    impacts = impact_elapsed(dynamics, t[0], t[-1])
     impacts = impacts[~np.isin(impacts, t)]
     grid = np.concatenate([t, impacts])
     order = np.argsort(grid, kind="stable")
@@ -342,14 +475,15 @@ def rectifier_waveforms(scene, dynamics, curves) -> dict:
     grid's output indices ``output_index``."""
     from .harvest import Harvester
 
+    check_store_resolution(scene)
     grid, output_index = rectifier_grid(scene, dynamics)
     n = scene.device.cells
-    run = Harvester(1, **harvester_options(scene))
+    run = Harvester(1, time_origin=time_origin(dynamics), **harvester_options(scene))
     rows = max(2, CHUNK_VALUES)
     parts = []
     for start in range(0, grid.size, rows):
         times = grid[start:start + rows]
-        gap, _, _ = dynamics.sample(times)
+        gap, _, _ = sample_elapsed(dynamics, times)
         q = curves.charge(gap) * n if curves is not None else np.zeros_like(gap)
         c = curves.capacitance(gap) * n if curves is not None else np.full_like(gap, 1e-12)
         parts.append(run.advance(times, q, c))
@@ -400,12 +534,15 @@ def _first_of(*times) -> float:
 def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=None) -> dict:
     """Numbers of a rectifier run (SI): store, time to each UVLO level, chip
     switching, average harvested power and energy per cycle over the steady
-    window (from ``window_start`` [s]), the energy books and their residuals,
-    and the ideal bridge's saturation voltage (docs/harvest.md)."""
+    window (from ``window_start`` [s] on ``fine.time``, the run's own axis), the
+    energy books and their residuals, and the ideal bridge's saturation voltage
+    (docs/harvest.md). Instants are reported as absolute times (``fine.time_origin``
+    + the time on the run's axis), as in ``waveforms.csv``."""
     from .harvest import saturation_voltage
 
     c = scene.circuit
     t = fine.time
+    origin = float(getattr(fine, "time_origin", 0.0))
     period = scene.excitation.period
     inside = t >= window_start
     k0 = int(np.flatnonzero(inside)[0]) if inside.any() else 0
@@ -418,24 +555,26 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
     dt = np.diff(t)
     on_time = float(np.sum(dt[on[1:]]))
     books = fine.balance()
+    warn_numerical_dissipation(books)
     out = {
         "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
         "final_store_voltage_V": float(fine.store_voltage[-1]),
         "final_stored_energy_J": float(fine.stored_energy[-1]),
         "max_store_voltage_V": float(np.max(fine.store_voltage)),
-        "time_to_uvlo_falling_V_s": first_crossing(t, fine.store_voltage, c.uvlo_falling),
-        "time_to_uvlo_rising_V_s": _first_of(
+        "time_to_uvlo_falling_V_s": origin + first_crossing(t, fine.store_voltage,
+                                                            c.uvlo_falling),
+        "time_to_uvlo_rising_V_s": origin + _first_of(
             first_crossing(t, fine.store_voltage, c.uvlo_rising),
             fine.threshold_times["uvlo_rising_s"]),
         "uvlo_levels_V": [c.uvlo_falling, c.uvlo_rising],
-        "chip_first_on_s": fine.threshold_times["uvlo_rising_s"],
-        "chip_first_lockout_s": fine.threshold_times["uvlo_falling_s"],
+        "chip_first_on_s": origin + fine.threshold_times["uvlo_rising_s"],
+        "chip_first_lockout_s": origin + fine.threshold_times["uvlo_falling_s"],
         "chip_switch_on_count": switch_on, "chip_switch_off_count": switch_off,
         "chip_duty_cycle": on_time / float(t[-1] - t[0]) if t[-1] > t[0] else 0.0,
         "chip_output_energy_J": float(fine.chip_input_energy[-1]) * c.pmic_efficiency,
         "average_harvested_power_W": into_store / length if length > 0 else 0.0,
         "energy_per_cycle_J": bridge * period / length if length > 0 else 0.0,
-        "window_start_s": float(t[k0]),
+        "window_start_s": origin + float(t[k0]),
         "energy_books_J": {k: v for k, v in books.items() if k.endswith("_J")},
         "energy_residuals": {k: v for k, v in books.items() if k.endswith("_residual")},
         "energy_residuals_rule": "relative to the energy delivered into the bridges; the "

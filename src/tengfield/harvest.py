@@ -516,6 +516,9 @@ class HarvestResult:
     threshold_times: dict
     initial_terminal_energy: float | None = None    # [J] at the run's start (chunked runs)
     initial_stored_energy: float | None = None      # [J]
+    #: [s] absolute time of ``time`` = 0: ``time`` and ``threshold_times`` are on the run's
+    #: own axis (``[initial] time_s`` subtracted), the step lengths exact at any origin
+    time_origin: float = 0.0
 
     def balance(self) -> dict:
         """Energy accounts at the end of the run [J] and the residuals of the three
@@ -560,13 +563,18 @@ class Harvester:
     bridge charges cumulative from the start; ``balance()`` of any chunk covers
     the run so far). The first chunk's first row is the start (open-circuit
     state); later chunks continue from the last row seen (their first step goes
-    from that row's time to their first time). Parameters as :func:`harvest`.
+    from that row's time to their first time). Parameters as :func:`harvest`;
+    ``time_origin`` [s]: the absolute time of ``times`` = 0 (pass times relative to
+    the run's start: at 1.7e9 s the doubles are too coarse for the step lengths),
+    kept in each result as ``HarvestResult.time_origin``.
     """
 
     def __init__(self, n_cells: int, *, storage_capacitance: float, diode: Diode = Diode(),
                  parallel_capacitance: float = 0.0, leakage: float = math.inf,
-                 chip: PowerChip | None = None, initial_store_voltage: float = 0.0):
+                 chip: PowerChip | None = None, initial_store_voltage: float = 0.0,
+                 time_origin: float = 0.0):
         _check("storage_capacitance_uF", storage_capacitance * 1e6, 0.0, 1e12, lo_open=True)
+        self.time_origin = float(time_origin)
         _check("storage_leakage_ohm", leakage, 0.0, math.inf, lo_open=True)
         self.n_cells = int(n_cells)
         self.storage_capacitance = float(storage_capacitance)
@@ -640,7 +648,7 @@ class Harvester:
             threshold_times={"uvlo_rising_s": float(self.state[2]),
                              "uvlo_falling_s": float(self.state[3])},
             initial_terminal_energy=self.initial_terminal_energy,
-            initial_stored_energy=self.initial_stored_energy)
+            initial_stored_energy=self.initial_stored_energy, time_origin=self.time_origin)
 
 
 def harvest(times, q_sc, c_t, *, storage_capacitance: float, diode: Diode = Diode(),

@@ -96,6 +96,7 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     simulate = simulate or _default_simulate()
     if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
         check_field(scene)                # before the dynamics, not after
+    electrical.check_store_resolution(scene)   # a store the step cannot resolve: refuse now
 
     start = time.perf_counter()
     dynamics = simulate(scene)
@@ -206,7 +207,7 @@ def _energy_per_cycle(scene, dynamics, curves, waveforms, load, rect) -> dict:
     """Summary blocks ``energy_per_cycle`` (CMEO bound, FOM_S, the V-Q loop areas of
     the last period for the resistive load ``[circuit] load_ohm`` and, for a
     rectifier, the bridge) and ``rectifier``; ``_vq`` holds the loops for vq.png."""
-    t = np.asarray(waveforms["time_s"], dtype=float)
+    t = electrical.elapsed_times(dynamics)     # the run's own axis: exact step lengths
     mask, _ = electrical.steady_window(t, scene)
     max_gap = float(np.max(np.asarray(dynamics.gap, dtype=float)[mask]))
     out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
@@ -258,15 +259,13 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
         f"[circuit] kind = {scene.circuit.kind!r}", time.perf_counter() - start,
         {"dynamics_wall_time_s": block["dynamics_wall_time_s"],
          "distinct_dynamics": block["distinct_dynamics"]})
-    t = np.asarray(waveforms["time_s"])
+    t = electrical.elapsed_times(dynamics)
     mask, _ = electrical.steady_window(t, scene)
-    peaks = {name: circuit.peak_to_peak(np.asarray(waveforms[column])[mask])
-             for name, column in electrical.PEAK_QUANTITIES.items()}
+    peaks = dict(arr.peaks)      # the one rule: samples and every cell's impact instants
     summary = _summary(scene, dynamics, waveforms, None, stages, table,
                        peaks={column: peaks[name]
                               for name, column in electrical.PEAK_QUANTITIES.items()})
     summary["cells"] = scene.array.cells
-    summary["peak_to_peak_rule"] = "over the output samples of the steady window (array)"
     if arr.load is not None:
         summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
         summary.pop("load_reason", None)
