@@ -48,11 +48,11 @@ def run(cache, circuit, **sections):
                          ids=["single", "array", "array-spread"])
 def test_a_store_the_step_cannot_resolve_is_refused_with_key_value_and_range(cache, sections):
     scene = fx.scene_with(run=SHORT_RUN, circuit={"kind": "rectifier", "pmic": "uvlo",
-                                                  "storage_capacitance_uF": 1e-9}, **sections)
+                                                  "storage_capacitance_uF": 1e-5}, **sections)
     with pytest.raises(SceneError) as err:
         tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
     text = str(err.value)
-    assert "[circuit] storage_capacitance_uF = 1e-09 is out of range" in text
+    assert "[circuit] storage_capacitance_uF = 1e-05 is out of range" in text
     smallest = electrical.smallest_resolved_store(scene) * 1e6
     assert f"allowed >= {smallest:.3g}" in text and "\n" not in text
     # the limit: a chip burst at the chip's largest draw lasts one output step
@@ -103,7 +103,10 @@ def test_large_numerical_dissipation_warns_once(cache):
 
 
 def test_per_cell_stores_warn_too(cache):
-    res, warned = run(cache, {"kind": "rectifier", "storage_capacitance_uF": 1e-9},
+    # a 1 pF store (the smallest [circuit] storage_capacitance_uF allows) behind a 1 MOhm
+    # leak: a time constant of 1 us, far below the output step
+    res, warned = run(cache, {"kind": "rectifier", "storage_capacitance_uF": 1e-6,
+                              "storage_leakage_ohm": 1e6},
                       array={"cells": 2, "restitution_spread": 0.05,
                              "connection": "rectified-per-cell"})
     assert len(warned) == 1
@@ -115,12 +118,12 @@ def test_cli_refuses_in_one_line_and_warns_in_one_line(tmp_path, run_cli, cli_en
                   TENGFIELD_CACHE_DIR=tmp_path / "cache")
     head = "[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 4000.0\n"
     (tmp_path / "tiny.toml").write_text(head + '[circuit]\nkind = "rectifier"\npmic = "uvlo"\n'
-                                        "storage_capacitance_uF = 1e-9\n")
+                                        "storage_capacitance_uF = 1e-5\n")
     proc = run_cli("run", "tiny.toml", "-o", "out", cwd=tmp_path, env=env, timeout=600)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("tengfield: error: [circuit] "
-                                                   "storage_capacitance_uF = 1e-09")
+                                                   "storage_capacitance_uF = 1e-05")
     (tmp_path / "small.toml").write_text(
         head + "[circuit]\n" + "".join(f"{k} = {v!r}\n".replace("'", '"')
                                        for k, v in CHIP.items())
