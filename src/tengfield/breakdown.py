@@ -359,17 +359,86 @@ def scene_breakdown(scene, table, states=None) -> BreakdownResult:
                     scene.circuit.reference, sigma)
 
 
-def scaled_table(table, sigma: float):
-    """The surrogate table for surface charge density ``sigma`` [C/m²]: the induced
-    charges and the ball charge scale with σ, C does not."""
+def scaled_table(table, factor: float):
+    """The surrogate table with every charge scaled by ``factor`` (σ_new / σ_old): the
+    induced charges and the ball charge are linear in σ, C does not depend on it."""
     import dataclasses
 
-    factor = sigma / (table.ball_charge / _ball_area_of(table)) if table.ball_charge else 0.0
     return dataclasses.replace(table, induced_charge=np.asarray(table.induced_charge) * factor,
                                ball_charge=float(table.ball_charge) * factor)
 
 
-def _ball_area_of(table) -> float:
-    inputs = table.provenance.get("field_inputs", {})
-    diameter = float(inputs.get("device", {}).get("ball_diameter_mm", math.nan)) * 1e-3
-    return math.pi * diameter**2
+def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool = False,
+                           command_line: str = "", write: bool = True, solve=None):
+    """The scene's surrogate (:func:`tengfield.surrogate.obtain_table`, cached) with its
+    breakdown lines. A cached table without them (written by an older tengfield or a
+    custom solve) is recomputed once with a warning, the new one cached."""
+    import dataclasses
+    import time
+    import warnings
+
+    from .surrogate import obtain_table, precompute, store_in_cache
+
+    table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+                                  progress=progress, command_line=command_line, write=write)
+    if table.line_potential is None and solve is None and scene.is_axisymmetric:
+        start = time.perf_counter()
+        if comm is None or comm.rank == 0:
+            warnings.warn(f"cached surrogate {outcome.path} has no breakdown lines, recomputing",
+                          RuntimeWarning, stacklevel=2)
+        table = precompute(scene, comm=comm, progress=progress, command_line=command_line)
+        stored = store_in_cache(outcome.path, table, comm) if write else False
+        outcome = dataclasses.replace(outcome, status="recomputed",
+                                      reason="the cached surrogate had no breakdown lines",
+                                      wall_time=outcome.wall_time + time.perf_counter() - start,
+                                      stored=stored)
+    return table, outcome
+
+
+def scene_sigma(scene, result: BreakdownResult) -> float:
+    """The σ [C/m²] a scene runs with: its own, or −σ_max for ``"breakdown"``."""
+    return -result.sigma_max if uses_breakdown_charge(scene) else scene.device.surface_charge
+
+
+def summary_lines(result: BreakdownResult, scene) -> list[str]:
+    """What ``tengfield breakdown`` prints."""
+    b = result.binding
+    sigma = scene_sigma(scene, result)
+    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} uC/m^2 (relative error estimate "
+             f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
+             f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
+             f"{math.degrees(b.angle):.0f} deg, ball at z = {b.position * 1e3:.4g} mm: gap "
+             f"{b.gap * 1e3:.4g} mm, V_b = {b.breakdown_voltage:.4g} V ({b.regime})"]
+    for state, bind in result.per_state.items():
+        lines.append(f"  {state:8s} sigma_max = {bind.sigma * 1e6:8.4g} uC/m^2 at z = "
+                     f"{bind.position * 1e3:.4g} mm, {bind.side} gap {bind.gap * 1e3:.4g} mm")
+    lines.append(f"scene sigma = {sigma * 1e6:.4g} uC/m^2: |sigma| / sigma_max = "
+                 f"{result.margin(sigma):.3g}")
+    return lines
+
+
+def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
+                  field_status: str = "") -> list:
+    """breakdown.json, breakdown.csv and (``plots``) breakdown.png in directory ``out``."""
+    from pathlib import Path
+
+    from .io import atomic_path, write_csv, write_json
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    sigma = scene_sigma(scene, result)
+    data = result.to_json(sigma)
+    data.update({"scene": scene.source, "field_hash": scene.field_hash(),
+                 "field_stage": field_status,
+                 "sigma_mode": "breakdown" if uses_breakdown_charge(scene) else "scene"})
+    written = [write_json(out / "breakdown.json", data)]
+    columns = [[row[c] for row in result.rows] for c in CSV_COLUMNS]
+    with atomic_path(out / "breakdown.csv") as tmp:
+        write_csv(tmp, list(CSV_COLUMNS), columns)
+    written.append(out / "breakdown.csv")
+    if plots:
+        from .plotting.breakdown import plot_breakdown
+        with atomic_path(out / "breakdown.png") as tmp:
+            plot_breakdown(result, sigma, tmp)
+        written.append(out / "breakdown.png")
+    return written
