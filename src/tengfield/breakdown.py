@@ -442,3 +442,65 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
             plot_breakdown(result, sigma, tmp)
         written.append(out / "breakdown.png")
     return written
+
+
+# ---------------------------------------------------------------------------
+# tengfield run
+def resolve_for_run(scene, table, comm=None):
+    """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
+    surface_charge_uC_per_m2 = "breakdown"`` the scene gets σ = −σ_max and the table is
+    scaled to it (no new field solve); otherwise both are returned as they are.
+    ``result`` is None when the table has no breakdown lines. Rank 0 of ``comm`` warns
+    once when |σ| exceeds σ_max."""
+    import warnings
+
+    if getattr(table, "line_potential", None) is None:
+        return scene, table, None
+    result = scene_breakdown(scene, table)
+    if uses_breakdown_charge(scene):
+        sigma = -result.sigma_max
+        table = scaled_table(table, sigma / scene.device.surface_charge)
+        scene = scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
+    elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
+        b = result.binding
+        warnings.warn(
+            f"[device] surface_charge_uC_per_m2 = {scene.device.surface_charge * 1e6:g} exceeds "
+            f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} uC/m^2 "
+            f"({b.state}, {b.side} gap {b.gap * 1e3:.3g} mm at z = {b.position * 1e3:.3g} mm): "
+            "the gap would discharge first (tengfield breakdown; \"breakdown\" runs at the limit)",
+            RuntimeWarning, stacklevel=3)
+    return scene, table, result
+
+
+def summary_block(result: BreakdownResult | None, scene, given=None) -> dict:
+    """``summary.json["breakdown"]``: σ_max, the margin |σ|/σ_max, where it binds
+    (``given``: the scene as loaded, whose σ may be "breakdown")."""
+    if result is None:
+        return {"available": False,
+                "reason": "the surrogate has no breakdown lines (3D solver or a custom solve)"}
+    sigma = scene.device.surface_charge
+    return {"available": True, "sigma_max_uC_per_m2": result.sigma_max * 1e6,
+            "margin": result.margin(sigma), "margin_rule": "|sigma| / sigma_max (above 1: the "
+            "air breaks down before this charge is reached)",
+            "sigma_uC_per_m2": sigma * 1e6,
+            "sigma_from": ("breakdown limit" if uses_breakdown_charge(given or scene)
+                           else "scene"),
+            "relative_error_estimate": result.relative_error_estimate,
+            "binding": result.binding.to_json(), "states_checked": list(result.states),
+            "pressure_Pa": result.paschen.pressure}
+
+
+def limited_energy(energy: dict, result: BreakdownResult, sigma: float) -> dict:
+    """The CMEO bound and the figures of merit at σ_max beside the ideal ones (E ∝ σ²):
+    ``max_energy_per_cycle_breakdown_limited_J`` = E_m (σ_max/σ)², the performance figure
+    of merit FOM_P = FOM_S σ² (Zi et al. 2015) ideal and at σ_max."""
+    if not energy or sigma == 0:
+        return {}
+    scale = (result.sigma_max / abs(sigma)) ** 2
+    fom = energy.get("figure_of_merit_structural", math.nan)
+    return {"max_energy_per_cycle_breakdown_limited_J": energy["max_energy_per_cycle_J"] * scale,
+            "Q_sc_max_breakdown_limited_C": energy["Q_sc_max_C"] * math.sqrt(scale),
+            "figure_of_merit_performance_C2_per_m4": fom * sigma**2,
+            "figure_of_merit_performance_breakdown_limited_C2_per_m4": fom * result.sigma_max**2,
+            "breakdown_rule": "at sigma_max: energies scale with sigma^2, charges with sigma; "
+                              "FOM_S does not depend on sigma, FOM_P = FOM_S sigma^2"}
