@@ -57,7 +57,11 @@ PLACEHOLDER_SIGMA = -1e-6
 
 def scene_states(scene) -> tuple[str, ...]:
     """The circuit states the scene implies: open circuit, short circuit, or all three
-    for a load or a rectifier (its transferred charge lies between the two open ones)."""
+    for a load or a rectifier (its transferred charge lies between the two open ones).
+    An open circuit read through an instrument (``parallel_capacitance_pF`` > 0) moves
+    charge between 0 and Q_SC through it: open and short circuit bound it."""
+    if scene.circuit.kind == "open" and scene.circuit.parallel_capacitance > 0.0:
+        return ("open", "short")
     return {"open": ("open",), "short": ("short",)}.get(scene.circuit.kind, STATES)
 
 

@@ -144,7 +144,8 @@ def warn_accuracy(table, comm) -> None:
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
-               field_error: str = "sampled") -> SurrogateTable:
+               field_error: str = "sampled", breakdown_lines: bool | None = None
+               ) -> SurrogateTable:
     """Adaptive table of field solves for ``scene`` (see the module docstring).
 
     ``comm`` spreads the positions of each refinement level over its ranks
@@ -154,12 +155,15 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     ``estimate_error=`` when it takes that keyword). When the device is
     mirror-symmetric (:func:`is_mirror_symmetric`) only the positions
     ``z <= Δh/2`` are solved and the others are their mirror images.
-    ``field_error``: "sampled" or "every" (module docstring).
+    ``field_error``: "sampled" or "every" (module docstring). ``breakdown_lines``: also
+    sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
+    axisymmetric solver.
     """
     from .store import provenance, solver_fingerprint
 
     # the breakdown lines (tengfield.breakdown) come with the default axisymmetric solves
-    lines = solve is None and scene.is_axisymmetric and scene.field.method != "3d"
+    lines = (solve is None and scene.is_axisymmetric and scene.field.method != "3d"
+             if breakdown_lines is None else bool(breakdown_lines))
     if solve is None:
         solve = _default_solver()
     if solve_comm is None:
