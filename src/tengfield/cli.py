@@ -39,6 +39,7 @@ COMMAND_MODULES = [
     "dynamics",
     "field",
     "run",
+    "breakdown",
     "precompute",
     "sweep",
     "report",

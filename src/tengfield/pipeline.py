@@ -105,12 +105,16 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
                                {"solver_wall_time_s": getattr(dynamics, "wall_time", None)})
     gap = np.asarray(dynamics.gap, dtype=float)
 
-    table = curves = None
+    table = curves = limit = None
+    hashed = scene
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
-        table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+        from . import breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": needs lines
+        table, outcome = (breakdown.obtain_breakdown_table if breakdown.uses_breakdown_charge(
+            scene) else obtain_table)(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                       progress=progress, command_line=command_line,
                                       write=write_cache)
+        scene, table, limit = breakdown.resolve_for_run(scene, table, comm)
         if outcome.status == "cached":
             stages["field"] = Stage("cached", outcome.reason, outcome.wall_time,
                                     {"path": outcome.path})
@@ -197,6 +201,8 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         extras = _energy_per_cycle(scene, dynamics, curves, waveforms, load,
                                    rect if scene.circuit.kind == "rectifier" else None)
         summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    if table is not None:
+        _breakdown_summary(summary, scene, hashed, limit)
     result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
                        table=table, curves=curves, peaks=peaks, stages=stages)
     result.extras = extras
@@ -279,6 +285,17 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
                        stages=stages)
     result.extras = {"_array": arr, "_fine": arr.fine}
     return result
+
+
+def _breakdown_summary(summary, scene, hashed, limit) -> None:
+    """summary["breakdown"] and the breakdown-limited CMEO / FOM beside the ideal ones."""
+    from . import breakdown
+
+    summary["field_hash"] = hashed.field_hash()     # the surrogate's (σ = "breakdown" too)
+    summary["breakdown"] = _jsonable(breakdown.summary_block(limit, scene, hashed))
+    if limit is not None and summary.get("energy_per_cycle"):
+        summary["energy_per_cycle"].update(_jsonable(breakdown.limited_energy(
+            summary["energy_per_cycle"], limit, scene.device.surface_charge)))
 
 
 def _needs_field(scene, gap) -> tuple[bool, str]:

@@ -188,6 +188,42 @@ class Array:
     seed: int = 0
 
 
+# ---------------------------------------------------------------------------
+# air breakdown (issue #23, tengfield.breakdown, tengfield.paschen): Paschen constants
+# of air (Raizer 1991, Table 4.1) and the pressure; [device] surface_charge_uC_per_m2
+# also takes "breakdown" (the run uses sigma = -sigma_max; until resolved the scene
+# holds BREAKDOWN_PLACEHOLDER_UC).
+SCHEMA["breakdown"] = {
+    "pressure_kPa": ("pressure", float, 101.325, 1e3, _rng(0.0, 1e4, lo_open=True)),
+    "paschen_A_per_Pa_m": ("paschen_A", float, 11.25, 1.0, _rng(0.0, 1e4, lo_open=True)),
+    "paschen_B_V_per_Pa_m": ("paschen_B", float, 273.75, 1.0, _rng(0.0, 1e6, lo_open=True)),
+    "secondary_emission": ("secondary_emission", float, 0.01, 1.0, _rng(0.0, 1.0, lo_open=True)),
+}
+#: the stand-in sigma [uC/m^2] of surface_charge_uC_per_m2 = "breakdown" before sigma_max is known
+BREAKDOWN_PLACEHOLDER_UC = -1.0
+#: keys that also take one keyword: (keyword, the number it stands for at load)
+KEYWORD_VALUES = {("device", "surface_charge_uC_per_m2"): ("breakdown", BREAKDOWN_PLACEHOLDER_UC)}
+
+
+@dataclass(frozen=True)
+class Breakdown:
+    """``[breakdown]``: ``pressure`` [Pa], Paschen's ``paschen_A`` [1/(Pa m)],
+    ``paschen_B`` [V/(Pa m)] and ``secondary_emission`` (γ)."""
+    pressure: float = 101325.0
+    paschen_A: float = 11.25
+    paschen_B: float = 273.75
+    secondary_emission: float = 0.01
+
+    def __post_init__(self):
+        from .paschen import STREAMER_PD   # the Townsend range must not be empty
+        lowest = math.exp(1.0 + math.log(math.log1p(1.0 / self.secondary_emission))) / STREAMER_PD
+        if self.paschen_A <= lowest:
+            raise SceneError(f"[breakdown] paschen_A_per_Pa_m = {self.paschen_A:g} is out of range "
+                             f"with secondary_emission = {self.secondary_emission:g}: allowed "
+                             f"({lowest:.4g}, 10000] (Paschen's minimum must lie below the "
+                             f"streamer regime, p d = {STREAMER_PD:.4g} Pa m)")
+
+
 def _check_harvest(dev, circ, arr) -> None:
     """Cross-key rules of the harvesting/array block (one-line SceneErrors)."""
     if circ.uvlo_rising <= circ.uvlo_falling:
@@ -581,6 +617,7 @@ class Scene:
     field: Field
     circuit: Circuit
     array: Array = Array()
+    breakdown: Breakdown = Breakdown()
     raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
     source: str = dataclasses.field(compare=False, repr=False, default="<default>")
     text: str = dataclasses.field(compare=False, repr=False, default="")
@@ -814,6 +851,12 @@ def auto_domain_radius(device: Device, offset: float = 0.0) -> float:
 def _convert(sec: str, key: str, value, spec):
     attr, typ, default, factor, constraint = spec
     where = f"[{sec}] {key}"
+    keyword = KEYWORD_VALUES.get((sec, key))
+    if keyword and isinstance(value, str):
+        if value != keyword[0]:
+            raise SceneError(f"{where} = {value!r}: expected a number or {keyword[0]!r}"
+                             + _suggest(value, [keyword[0]]))
+        value = keyword[1]
     if (sec, key) in AUTO_KEYS and isinstance(value, str):
         if value != "auto":
             raise SceneError(f"{where} = {_show(value)}: expected a number or 'auto'")
@@ -950,7 +993,7 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     _check_array_work(arr, exc, run)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
                  run=run, field=field_value, circuit=circ, array=arr,
-                 raw=copy.deepcopy(data), source=source, text=text)
+                 breakdown=Breakdown(**values["breakdown"]), raw=copy.deepcopy(data), source=source, text=text)
 
 
 def check_steady_window(exc: Excitation, settle_periods: int, duration: float,

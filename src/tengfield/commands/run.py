@@ -85,6 +85,11 @@ def print_summary(summary: dict) -> None:
         if "rectifier_loop_area_J" in energy:
             line += f"; rectifier: {energy['rectifier_loop_area_J']:.4g} J"
         print(line + f" (FOM_S = {energy['figure_of_merit_structural']:.4g})")
+    bd = summary.get("breakdown")
+    if bd and bd.get("available"):
+        print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} uC/m^2, "
+              f"|sigma| / sigma_max = {bd['margin']:.3g} (sigma = {bd['sigma_uC_per_m2']:.4g} "
+              f"uC/m^2, from the {bd['sigma_from']})")
     rect = summary.get("rectifier")
     if rect:
         def when(x):

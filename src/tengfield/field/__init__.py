@@ -37,7 +37,7 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 #: estimates). A cache of solves (the surrogate) should fingerprint these and
 #: only these: io.py, plot.py, potential.py and result.py write, draw or
 #: post-process and may change without invalidating stored solves.
-SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "contact.py",
+SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
                   "geometry3d.py", "geometry_axisymmetric.py", "solver3d.py")
 
 

@@ -54,8 +54,11 @@ from . import contact
 from . import geometry_axisymmetric as geometry
 from .result import FieldSolution, PositionResult
 
+#: info keys of the breakdown lines (coarse mesh, half-size mesh where estimated)
+LINE_KEYS = ("breakdown_lines", "breakdown_lines_check")
 #: options the solver accepts besides the scene (see solve_position_axisymmetric)
-SOLVER_OPTIONS = ("estimate_error", "keep_solution", "source_solve", "linear_solver")
+SOLVER_OPTIONS = ("estimate_error", "keep_solution", "source_solve", "linear_solver",
+                  "breakdown_lines")
 
 
 def far_field_weight(far_field: str, table: bool) -> float:
@@ -177,10 +180,12 @@ class Solution:
     source_charge: np.ndarray | None  # electrode charges of the source solve (reactions) [C]
     solve_time: float
     ball_area: float
+    unit_source: np.ndarray | None = None  # potential of σ = 1 C/m², electrodes grounded
 
 
 def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diameter: float, *,
-                         source_solve: bool, linear_solver: str = "direct") -> Solution:
+                         source_solve: bool, linear_solver: str = "direct",
+                         unit_source: bool = False) -> Solution:
     """Both weighting potentials (and optionally the σ source) with one factorisation."""
     comm = disc.mesh.comm
     t0 = time.perf_counter()
@@ -209,6 +214,11 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
         rhs = disc.P.createVecRight()
         disc.P.multTranspose(dx_api.vector(comm, (sigma / EPS0) * disc.ball_load), rhs)
         source = full(dx_api.solve(ksp, rhs), np.zeros(n_full))
+    unit = None
+    if unit_source:   # breakdown lines: the same back-substitution with σ = 1 C/m²
+        rhs = disc.P.createVecRight()
+        disc.P.multTranspose(dx_api.vector(comm, disc.ball_load / EPS0), rhs)
+        unit = full(dx_api.solve(ksp, rhs), np.zeros(n_full))
     solve_time = time.perf_counter() - t0
     ksp.destroy()
     K.destroy()
@@ -229,7 +239,7 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
         residual = 2.0 * math.pi * (EPS0 * apply_A(source) - sigma * disc.ball_load)
         source_charge = np.array([residual[disc.lower].sum(), residual[disc.upper].sum()])
     ball_area = 2.0 * math.pi * float(disc.ball_load.sum())
-    return Solution(C, fraction, psis, source, source_charge, solve_time, ball_area)
+    return Solution(C, fraction, psis, source, source_charge, solve_time, ball_area, unit)
 
 
 def richardson_error(change: float, degree: int) -> float:
@@ -293,6 +303,9 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
         res = solve_meshed(scene, z, comm, **(options if z == anchors[0] else later))
         if "source_electrode_charge_C" in res.info:
             res.extras = {"source": np.asarray(res.info["source_electrode_charge_C"])}
+        for key in LINE_KEYS:   # breakdown lines: extrapolated like C and q
+            if key in res.info:
+                res.extras = {**getattr(res, "extras", {}), key: np.asarray(res.info[key])}
         return res
 
     rule = contact.extrapolate_to_contact(position, anchors, dev.stroke, solve_at)
@@ -300,6 +313,9 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
     result = solves[0]
     if "source" in rule["extras"]:
         result.info["source_electrode_charge_C"] = rule["extras"]["source"]
+    for key in LINE_KEYS:
+        if key in rule["extras"]:
+            result.info[key] = rule["extras"][key]
     result.capacitance = rule["capacitance"]
     result.induced_fraction = rule["induced_fraction"]
     result.induced_charge = rule["induced_fraction"] * result.ball_charge
@@ -319,7 +335,7 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
 
 def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
                  keep_solution: bool = False, source_solve: bool = False,
-                 linear_solver: str = "direct") -> PositionResult:
+                 linear_solver: str = "direct", breakdown_lines: bool = False) -> PositionResult:
     """One axisymmetric solve of the geometry with the ball at gap ``position`` (one process)."""
     from . import _dolfinx as dx_api
 
@@ -337,15 +353,18 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, fld.degree, fld.far_field)
     diameter = scene.device.ball_diameter
     sol = solve_discretisation(dx_api, disc, sigma, diameter, source_solve=source_solve,
-                               linear_solver=linear_solver)
+                               linear_solver=linear_solver, unit_source=breakdown_lines)
     estimate = math.nan
     if estimate_error:
         # same grading lengths as the coarse mesh: a uniform halving of one mesh family
         lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=size)
         finer = discretise(dx_api, *fine_mesh, lay_half, eps, fld.degree, fld.far_field)
         fine = solve_discretisation(dx_api, finer, sigma, diameter, source_solve=False,
-                                    linear_solver=linear_solver)
+                                    linear_solver=linear_solver, unit_source=breakdown_lines)
         estimate = richardson_error(contact.relative_change(sol, fine), fld.degree)
+        if breakdown_lines:
+            from .breakdown import line_basis
+            lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
     info = {"mesh_size_m": lay.mesh_size, "domain_radius_m": lay.domain_radius,
             "far_field": fld.far_field, "environment": fld.environment,
             "meshed_gap_m": lay.effective_gap,
@@ -353,6 +372,11 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
             "ball_area_quadrature_m2": sol.ball_area, "error_estimate": "Richardson, mesh_size/2, rate h^(2p)"}
     if sol.source_charge is not None:
         info["source_electrode_charge_C"] = sol.source_charge
+    if breakdown_lines:   # basis potentials on the ball surface (tengfield.field.breakdown)
+        from .breakdown import line_basis
+        info["breakdown_lines"] = line_basis(dx_api, disc, sol.unit_source, sol.weighting, lay)
+        if estimate_error:
+            info["breakdown_lines_check"] = lines_check
     ball_charge = scene.device.ball_charge
     result = PositionResult(
         position=position, offset=0.0, capacitance=sol.capacitance,

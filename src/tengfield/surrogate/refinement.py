@@ -50,6 +50,11 @@ def _default_solver() -> SolveFunction:
     return solve_position
 
 
+def _line_angles():
+    from ..field.breakdown import LINE_ANGLES_DEG   # pure numpy
+    return LINE_ANGLES_DEG
+
+
 def _accepts_keyword(function, name: str) -> bool:
     """True when ``function`` takes the keyword ``name`` (or any keyword)."""
     try:
@@ -139,7 +144,8 @@ def warn_accuracy(table, comm) -> None:
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
-               field_error: str = "sampled") -> SurrogateTable:
+               field_error: str = "sampled", breakdown_lines: bool | None = None
+               ) -> SurrogateTable:
     """Adaptive table of field solves for ``scene`` (see the module docstring).
 
     ``comm`` spreads the positions of each refinement level over its ranks
@@ -149,10 +155,15 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     ``estimate_error=`` when it takes that keyword). When the device is
     mirror-symmetric (:func:`is_mirror_symmetric`) only the positions
     ``z <= Δh/2`` are solved and the others are their mirror images.
-    ``field_error``: "sampled" or "every" (module docstring).
+    ``field_error``: "sampled" or "every" (module docstring). ``breakdown_lines``: also
+    sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
+    axisymmetric solver.
     """
     from .store import provenance, solver_fingerprint
 
+    # the breakdown lines (tengfield.breakdown) come with the default axisymmetric solves
+    lines = (solve is None and scene.is_axisymmetric and scene.field.method != "3d"
+             if breakdown_lines is None else bool(breakdown_lines))
     if solve is None:
         solve = _default_solver()
     if solve_comm is None:
@@ -178,10 +189,13 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     def estimated_here(z: float) -> bool:
         return not sampled or bool(np.any(np.abs(sample_at - z) <= 1e-12 * stroke))
 
+    extra = {"breakdown_lines": True} if lines else {}
+
     def work(z):
         if sampled:
-            return solve(scene, float(z), comm=solve_comm, estimate_error=estimated_here(z))
-        return solve(scene, float(z), comm=solve_comm)
+            return solve(scene, float(z), comm=solve_comm, estimate_error=estimated_here(z),
+                         **extra)
+        return solve(scene, float(z), comm=solve_comm, **extra)
 
     def advance(n):
         if bar is not None:
@@ -238,6 +252,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         converged=bool(estimate <= tolerance), error_history=history,
         field_hash=scene.field_hash(),
         provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
+                    **({"breakdown_line_angles_deg": list(_line_angles())} if lines else {}),
                     "field_error_rule": rule, "solver_fingerprint": solver_fingerprint()})
     warn_accuracy(table, comm)
     return table

@@ -60,10 +60,14 @@ def mirrored(result, stroke: float):
     (wall and solve times 0: nothing was solved)."""
     C = np.asarray(result.capacitance, dtype=float)
     q = np.asarray(result.induced_charge, dtype=float)
+    info = {**getattr(result, "info", {}), "mirrored_from": result.position}
+    for key in ("breakdown_lines", "breakdown_lines_check"):   # sides and ψ's swap too
+        if key in info:
+            info[key] = np.asarray(info[key], dtype=float)[::-1][..., [0, 2, 1]].copy()
     return dataclasses.replace(result, position=stroke - result.position,
                                capacitance=C[::-1, ::-1].copy(), induced_charge=q[::-1].copy(),
                                wall_time=0.0, solve_time=0.0,   # no solve of its own
-                               info={**getattr(result, "info", {}), "mirrored_from": result.position})
+                               info=info)
 
 
 def contact_first_order(positions: np.ndarray, stroke: float, estimated=()) -> np.ndarray:

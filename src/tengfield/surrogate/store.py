@@ -50,6 +50,10 @@ SCALARS = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
 SCALAR_TYPES = {"ball_charge": float, "stroke": float, "interpolation_error": float,
                 "tolerance": float, "converged": bool, "field_hash": str, "method": str,
                 "degree": int}
+#: optional arrays (table attribute -> dataset), written when present: the breakdown
+#: lines' basis potentials (a file without them is still a valid surrogate)
+OPTIONAL_ARRAYS = {"line_potential": "breakdown_line_potential",
+                   "line_check": "breakdown_line_potential_check"}
 _SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
            "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
 
@@ -232,6 +236,9 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
     ``OSError`` if the file cannot be written (nothing is left behind)."""
     arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS.items()}
     arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 2)
+    for attr, name in OPTIONAL_ARRAYS.items():
+        if getattr(table, attr, None) is not None:
+            arrays[name] = np.asarray(getattr(table, attr), dtype=float)
     scalars = typed_scalars(vars(table), SCALAR_TYPES)
     return write_checked_file(path, arrays, scalars, SCALARS, {
         "format_version": FORMAT_VERSION,
@@ -254,7 +261,8 @@ def _read_checked(f, name: str) -> np.ndarray:
 
 def read_checked_file(path: str | Path, *, check_format, array_names: dict, scalar_names: dict,
                       scalar_types: dict, build, expected_hash: str | None = None,
-                      expected_solver: str | None = None, hash_label: str = "field hash"):
+                      expected_solver: str | None = None, hash_label: str = "field hash",
+                      optional_names: dict | None = None):
     """Read a file written by :func:`write_checked_file`; raise :class:`SurrogateError`
     (naming ``path``) unless it is complete, of the format ``check_format(attrs)``
     accepts (it raises :class:`SurrogateError` otherwise), unchanged since written
@@ -279,6 +287,8 @@ def read_checked_file(path: str | Path, *, check_format, array_names: dict, scal
                 raise SurrogateError(f"was made for {hash_label} {stored_hash[:12]}..., the "
                                      f"scene has {expected_hash[:12]}...")
             arrays = {attr: _read_checked(f, name) for attr, name in array_names.items()}
+            arrays.update({attr: _read_checked(f, name)
+                           for attr, name in (optional_names or {}).items() if name in f})
             history = _read_checked(f, "error_history")
             scalars = typed_scalars({attr: f.attrs[name] for attr, name in scalar_names.items()},
                                     scalar_types)
@@ -312,6 +322,15 @@ def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) ->
     if history.ndim != 2 or history.shape[1] != 2:
         raise SurrogateError(f"error history has shape {history.shape}")
     check_shapes(arrays)
+    n = np.shape(arrays["positions"])[0]
+    for attr in OPTIONAL_ARRAYS:
+        if attr in arrays:
+            shape = np.shape(arrays[attr])
+            if len(shape) != 4 or shape[0] != n or shape[1] != 2 or shape[3] != 3:
+                raise SurrogateError(f"array {OPTIONAL_ARRAYS[attr]!r} has shape {shape}, "
+                                     f"expected ({n}, 2, lines, 3)")
+    if "line_potential" in arrays and not np.all(np.isfinite(arrays["line_potential"])):
+        raise SurrogateError("non-finite breakdown line potentials")
     table = SurrogateTable(**arrays, **scalars, provenance=provenance_data,
                            error_history=[(int(n), float(e)) for n, e in history.tolist()])
     # __post_init__ sorts: check the order as stored, then the rest
@@ -331,7 +350,7 @@ def read_table(path: str | Path, expected_hash: str | None = None,
     return read_checked_file(path, check_format=_check_format, array_names=ARRAYS,
                              scalar_names=SCALARS, scalar_types=SCALAR_TYPES,
                              build=_build_table, expected_hash=expected_hash,
-                             expected_solver=expected_solver)
+                             expected_solver=expected_solver, optional_names=OPTIONAL_ARRAYS)
 
 
 # ---------------------------------------------------------------------------

@@ -35,6 +35,10 @@ class SurrogateError(TengfieldError, RuntimeError):
 #: the per-position arrays of a table (all of length ``count``)
 PER_POSITION = ("positions", "capacitance", "induced_charge", "dofs", "cells", "wall_time",
                 "solve_time", "field_error")
+#: optional per-position arrays (None when the solver did not give them): the basis
+#: potentials of the breakdown lines (tengfield.field.breakdown), shape (n, 2, lines, 3),
+#: and the same on the error estimate's half-size mesh (NaN where not estimated)
+OPTIONAL_PER_POSITION = ("line_potential", "line_check")
 
 
 @dataclass(kw_only=True)
@@ -77,9 +81,14 @@ class SurrogateTable(SolveRecord):
     induced_charge: np.ndarray
     ball_charge: float
     stroke: float
+    line_potential: np.ndarray | None = None
+    line_check: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")
+        for name in OPTIONAL_PER_POSITION:
+            if getattr(self, name) is not None:
+                setattr(self, name, np.asarray(getattr(self, name), dtype=float)[order])
         self.positions = np.asarray(self.positions, dtype=float)[order]
         self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(-1, 2, 2)[order]
         self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(-1, 2)[order]
@@ -102,12 +111,20 @@ class SurrogateTable(SolveRecord):
 
     def subset(self, mask) -> "SurrogateTable":
         """The positions selected by the boolean ``mask``."""
-        return dataclasses.replace(self, **{name: getattr(self, name)[mask] for name in PER_POSITION})
+        return dataclasses.replace(self, **{name: getattr(self, name)[mask] for name in PER_POSITION
+                                            + self._optional()})
+
+    def _optional(self) -> tuple:
+        return tuple(n for n in OPTIONAL_PER_POSITION if getattr(self, n) is not None)
 
     def merged(self, other: "SurrogateTable") -> "SurrogateTable":
         """This table plus the positions of ``other`` (same scene)."""
         cat = {name: np.concatenate([getattr(self, name), getattr(other, name)])
                for name in PER_POSITION}
+        for name in OPTIONAL_PER_POSITION:
+            mine, theirs = getattr(self, name), getattr(other, name)
+            cat[name] = (None if mine is None or theirs is None
+                         else np.concatenate([mine, theirs]))
         return dataclasses.replace(self, **cat)
 
 
@@ -125,7 +142,20 @@ def table_from_results(results: list, *, stroke: float) -> SurrogateTable:
         wall_time=[r.wall_time for r in results],
         solve_time=[getattr(r, "solve_time", math.nan) for r in results],
         field_error=[r.relative_error_estimate for r in results],
-        method=str(results[0].method), degree=int(results[0].degree))
+        method=str(results[0].method), degree=int(results[0].degree),
+        **_line_arrays(results))
+
+
+def _line_arrays(results: list) -> dict:
+    """``line_potential`` and ``line_check`` from the results' ``info`` (breakdown lines),
+    or nothing when a result has none."""
+    lines = [getattr(r, "info", {}).get("breakdown_lines") for r in results]
+    if any(v is None for v in lines):
+        return {}
+    lines = [np.asarray(v, dtype=float) for v in lines]
+    check = [np.asarray(getattr(r, "info", {}).get("breakdown_lines_check", np.full_like(v, np.nan)),
+                        dtype=float) for r, v in zip(results, lines)]
+    return {"line_potential": np.stack(lines), "line_check": np.stack(check)}
 
 
 def terminal_samples(table: SurrogateTable, reference: str = "floating"):

@@ -1,0 +1,175 @@
+"""Paschen's law for air: the breakdown voltage of a gap (pure numpy, SI).
+
+Townsend regime (self-sustained avalanche with secondary emission γ):
+
+    V_b(p·d) = B·p·d / (ln(A·p·d) − ln(ln(1 + 1/γ)))
+
+with the Townsend constants of air A = 15 cm⁻¹ Torr⁻¹ = 11.25 (Pa·m)⁻¹,
+B = 365 V cm⁻¹ Torr⁻¹ = 273.75 V/(Pa·m) (Raizer, *Gas Discharge Physics*,
+Springer 1991, Table 4.1, fitted for E/p = 100–800 V cm⁻¹ Torr⁻¹) and
+γ = 0.01 (a typical value for metal cathodes in air, Raizer §4.5). At 1 atm
+this gives V_min = B·e·ln(1 + 1/γ)/A ≈ 305 V at d ≈ 11 µm, 865 V at 0.1 mm,
+5.03 kV at 1 mm.
+
+Where that formula holds and what is used outside (one curve, continuous and
+non-decreasing in d, so a shorter line never breaks down at a higher voltage):
+
+=====================================  ===================================================
+p·d                                    V_b
+=====================================  ===================================================
+d ≤ d_fe = V_min / E_fe                field emission: constant field E_fe = 350 V/µm
+                                       (Peschot et al., Micromachines 2014/Appl. Phys.
+                                       Lett. 2014: ~350 V/µm measured below ~1 µm)
+d_fe < d, p·d < (p·d)_min              plateau V_min (the left branch of Paschen's curve
+                                       does not happen in air at µm gaps: the discharge
+                                       finds a longer path or field emission takes over)
+(p·d)_min ≤ p·d ≤ (p·d)_s              Townsend formula above (its valid range)
+p·d > (p·d)_s = 266.6 Pa·m             streamer regime (200 Torr·cm, Raizer §12; 2.6 mm
+(200 Torr·cm)                          at 1 atm): the uniform-field empirical law of air
+                                       V = 24.36·x + 6.72·√x kV, x = p·d in bar·cm
+                                       (Dakin et al., Electra 32, 1974), scaled to meet
+                                       the Townsend value at (p·d)_s
+=====================================  ===================================================
+
+Every function takes ``d`` [m] (array or scalar) and the pressure [Pa].
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Townsend constants of air (Raizer 1991, Table 4.1): A [1/(Pa m)], B [V/(Pa m)]
+AIR_A = 11.25
+AIR_B = 273.75
+#: secondary-emission coefficient (Raizer 1991, §4.5)
+AIR_GAMMA = 0.01
+#: standard atmosphere [Pa]
+ATMOSPHERE = 101325.0
+#: field-emission breakdown field at sub-µm gaps [V/m] (Peschot et al. 2014)
+FIELD_EMISSION_FIELD = 350e6
+#: upper end of the Townsend regime, p·d [Pa m] (200 Torr cm, Raizer §12)
+STREAMER_PD = 200.0 * 133.322 * 1e-2
+#: Dakin et al. (1974) uniform-field law of air, V [kV] = a x + b sqrt(x), x in bar cm
+DAKIN = (24.36, 6.72)
+
+REGIMES = ("field-emission", "plateau", "townsend", "streamer")
+
+
+@dataclass(frozen=True)
+class Paschen:
+    """Paschen's curve of a gas at one pressure (SI): ``A`` [1/(Pa m)], ``B``
+    [V/(Pa m)], ``gamma`` (secondary emission), ``pressure`` [Pa]."""
+    A: float = AIR_A
+    B: float = AIR_B
+    gamma: float = AIR_GAMMA
+    pressure: float = ATMOSPHERE
+    field_emission: float = FIELD_EMISSION_FIELD
+    streamer_pd: float = STREAMER_PD
+
+    def __post_init__(self):
+        for name in ("A", "B", "gamma", "pressure", "field_emission", "streamer_pd"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"Paschen {name} = {value!r}: must be a positive number")
+        if self.streamer_pd <= self.pd_min:
+            raise ValueError(f"streamer_pd = {self.streamer_pd:g} Pa m must exceed the "
+                             f"Paschen minimum {self.pd_min:g} Pa m")
+
+    @classmethod
+    def from_scene(cls, scene) -> "Paschen":
+        """The scene's ``[breakdown]`` constants (defaults: air at 1 atm)."""
+        bd = getattr(scene, "breakdown", None)
+        if bd is None:
+            return cls()
+        return cls(A=bd.paschen_A, B=bd.paschen_B, gamma=bd.secondary_emission,
+                   pressure=bd.pressure)
+
+    # -- the Townsend formula and its minimum ---------------------------------
+    @property
+    def log_term(self) -> float:
+        """ln(ln(1 + 1/γ))."""
+        return math.log(math.log1p(1.0 / self.gamma))
+
+    @property
+    def pd_min(self) -> float:
+        """p·d [Pa m] of the minimum of the Townsend curve: e^(1 + ln ln(1+1/γ)) / A."""
+        return math.exp(1.0 + self.log_term) / self.A
+
+    @property
+    def v_min(self) -> float:
+        """Minimum breakdown voltage [V]: B·(p·d)_min."""
+        return self.B * self.pd_min
+
+    @property
+    def d_min(self) -> float:
+        """Gap [m] of the minimum at this pressure."""
+        return self.pd_min / self.pressure
+
+    @property
+    def d_field_emission(self) -> float:
+        """Gap [m] below which the constant field-emission field applies: V_min / E_fe."""
+        return self.v_min / self.field_emission
+
+    @property
+    def d_streamer(self) -> float:
+        """Gap [m] above which the streamer law applies at this pressure."""
+        return self.streamer_pd / self.pressure
+
+    def townsend(self, d):
+        """The bare Townsend formula [V] (NaN where its denominator is ≤ 0)."""
+        pd = self.pressure * np.asarray(d, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            denominator = np.log(self.A * pd) - self.log_term
+            return np.where(denominator > 0.0, self.B * pd / denominator, np.nan)
+
+    def _dakin(self, pd):
+        x = np.asarray(pd, dtype=float) / 1e5 * 1e2     # Pa m -> bar cm
+        a, b = DAKIN
+        return a * x + b * np.sqrt(x)
+
+    # -- the curve used ---------------------------------------------------------
+    def voltage(self, d):
+        """Breakdown voltage V_b [V] of a gap ``d`` [m] (the whole curve, module docstring):
+        continuous and non-decreasing in d; 0 at d = 0; NaN for NaN or negative d."""
+        d = np.asarray(d, dtype=float)
+        pd = self.pressure * d
+        with np.errstate(invalid="ignore", divide="ignore"):
+            townsend = self.townsend(np.clip(d, self.d_min, self.d_streamer))
+            v_s = float(self.townsend(self.d_streamer))
+            streamer = v_s * self._dakin(np.maximum(pd, self.streamer_pd)) / self._dakin(
+                self.streamer_pd)
+            out = np.where(pd > self.streamer_pd, streamer, townsend)
+            out = np.where(pd < self.pd_min, np.minimum(self.v_min, self.field_emission * d), out)
+            out = np.where(d >= 0.0, out, np.nan)
+        return out if out.ndim else float(out)
+
+    def regime(self, d) -> np.ndarray:
+        """Which part of the curve applies at ``d`` [m]: one of :data:`REGIMES` per gap."""
+        d = np.atleast_1d(np.asarray(d, dtype=float))
+        out = np.full(d.shape, "townsend", dtype=object)
+        out[d <= self.d_field_emission] = "field-emission"
+        out[(d > self.d_field_emission) & (d < self.d_min)] = "plateau"
+        out[d > self.d_streamer] = "streamer"
+        return out
+
+    def to_json(self) -> dict:
+        """The constants and the curve's landmarks (file-level units in the keys)."""
+        return {"A_per_Pa_m": self.A, "B_V_per_Pa_m": self.B, "secondary_emission": self.gamma,
+                "pressure_Pa": self.pressure, "V_min_V": self.v_min, "d_min_m": self.d_min,
+                "field_emission_field_V_per_m": self.field_emission,
+                "field_emission_below_m": self.d_field_emission,
+                "streamer_above_m": self.d_streamer, "streamer_pd_Pa_m": self.streamer_pd,
+                "formula": "V_b = B p d / (ln(A p d) - ln(ln(1 + 1/gamma))) for "
+                           "(p d)_min <= p d <= (p d)_s; V_min plateau and E_fe d below; "
+                           "Dakin's uniform-field law scaled to continuity above",
+                "source": "A, B: Raizer, Gas Discharge Physics (1991), Table 4.1; gamma = 0.01; "
+                          "E_fe = 350 V/um: Peschot et al. (2014); streamer above 200 Torr cm: "
+                          "Raizer sec. 12, law of Dakin et al., Electra 32 (1974)"}
+
+
+def breakdown_voltage(d, pressure: float = ATMOSPHERE, *, A: float = AIR_A, B: float = AIR_B,
+                      gamma: float = AIR_GAMMA):
+    """V_b [V] of gap(s) ``d`` [m] at ``pressure`` [Pa] (:meth:`Paschen.voltage`)."""
+    return Paschen(A=A, B=B, gamma=gamma, pressure=pressure).voltage(d)

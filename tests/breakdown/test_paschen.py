@@ -1,0 +1,64 @@
+"""Paschen's law (tengfield.paschen) against tabulated values."""
+import math
+
+import numpy as np
+import pytest
+
+from tengfield.paschen import ATMOSPHERE, Paschen, breakdown_voltage
+
+
+@pytest.mark.parametrize("d, expected", [
+    (10e-6, 307.0), (0.1e-3, 865.0), (1e-3, 5030.0)])
+def test_townsend_formula_at_one_atmosphere(d, expected):
+    # DESIGN §8 / docs/breakdown.md: the Townsend formula with Raizer's constants
+    assert float(Paschen().townsend(d)) == pytest.approx(expected, rel=3e-3)
+
+
+def test_minimum_of_the_curve():
+    p = Paschen()
+    assert p.v_min == pytest.approx(305.0, rel=2e-3)
+    assert p.d_min == pytest.approx(11.0e-6, rel=1e-2)
+    # the minimum of the bare formula is where the analytic one says
+    d = np.linspace(5e-6, 50e-6, 20001)
+    v = p.townsend(d)
+    assert float(np.nanmin(v)) == pytest.approx(p.v_min, rel=1e-6)
+    assert d[np.nanargmin(v)] == pytest.approx(p.d_min, rel=2e-3)
+
+
+@pytest.mark.parametrize("d, measured", [
+    # uniform-field breakdown of air at 1 atm, 20 C: the values tabulated by Dakin et al.
+    # (Electra 32, 1974; V = 24.36 x + 6.72 sqrt(x) kV, x in bar cm) and the classical
+    # 31.6 kV at 1 cm (the textbook value for 1 atm, 20 C)
+    (0.5e-3, 2.91e3), (1e-3, 4.61e3), (2e-3, 7.97e3), (10e-3, 31.6e3)])
+def test_curve_against_measured_air_values(d, measured):
+    assert breakdown_voltage(d) == pytest.approx(measured, rel=0.15)
+
+
+def test_curve_is_continuous_and_non_decreasing():
+    p = Paschen()
+    d = np.geomspace(1e-8, 5e-2, 200001)
+    v = p.voltage(d)
+    assert np.all(np.isfinite(v))
+    assert np.all(np.diff(v) >= -1e-9 * v[1:])
+    # no jumps at the regime boundaries
+    for edge in (p.d_field_emission, p.d_min, p.d_streamer):
+        lo, hi = p.voltage(edge * (1 - 1e-9)), p.voltage(edge * (1 + 1e-9))
+        assert hi == pytest.approx(lo, rel=1e-6)
+    assert p.voltage(0.0) == 0.0
+    assert set(p.regime([1e-7, 5e-6, 1e-4, 1e-2])) == {"field-emission", "plateau", "townsend",
+                                                      "streamer"}
+
+
+def test_pressure_enters_through_p_times_d():
+    low = Paschen(pressure=0.5 * ATMOSPHERE)
+    assert low.voltage(2e-4) == pytest.approx(Paschen().voltage(1e-4), rel=1e-12)
+    # at mm gaps a lower pressure breaks down at a lower voltage
+    assert low.voltage(1e-3) < Paschen().voltage(1e-3)
+
+
+def test_bad_constants_are_refused():
+    with pytest.raises(ValueError, match="gamma"):
+        Paschen(gamma=0.0)
+    with pytest.raises(ValueError, match="pressure"):
+        Paschen(pressure=-1.0)
+    assert math.isnan(Paschen().voltage(-1e-3))
