@@ -78,8 +78,11 @@ def test_huge_store_charges_by_twice_q_sc_per_period(cache):
 def test_small_store_saturates_at_the_derived_voltage(cache):
     """Ideal bridge, no load, a periodic drive: U -> U_sat = Q_SC,max / (C(x_max) + C(0))
     (summary's saturation_voltage_V from the surrogate), within 1 %."""
-    res = rect_run(cache, lambda s: fx.FakeDynamics(s, kind="smooth"),
-                   storage_capacitance_uF=1e-7)
+    # 1 pF (the smallest store [circuit] allows) saturates within ~20 periods
+    scene = fx.scene_with(run={**SHORT_RUN, "duration_s": 2.0},
+                          circuit={"kind": "rectifier", "storage_capacitance_uF": 1e-6})
+    res = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve,
+                 simulate=lambda s: fx.FakeDynamics(s, kind="smooth"))
     rect = res.summary["rectifier"]
     assert rect["max_store_voltage_V"] == pytest.approx(rect["saturation_voltage_V"], rel=0.01)
     assert rect["max_store_voltage_V"] <= rect["saturation_voltage_V"] * (1 + 1e-9)
