@@ -107,7 +107,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
     out.mkdir(parents=True, exist_ok=True)
     written = []
     if plots:
-        from .plotting.waveforms import plot_surrogate, plot_waveforms
+        from .plotting.waveforms import plot_surrogate, plot_waveforms, visited_positions
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
         t = np.asarray(result.waveforms["time_s"])
         last = t >= t[-1] - shown                          # sent, not the whole run
@@ -116,7 +116,8 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
                                title=_run_title(result) + ", last 5 periods"))
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
-                                   path=out / "surrogate.png", cells=result.scene.device.cells))
+                                   path=out / "surrogate.png", cells=result.scene.device.cells,
+                                   visited=visited_positions(result.dynamics)))
         written += write_harvest_plots(result, out, figures=figures)
     rows = (getattr(result, "extras", None) or {}).get("ensemble_rows")
     if rows:

@@ -231,11 +231,16 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     tz_args = targs[8:12]
 
     def sampler(times):
+        """(gap, gap velocity, table) at absolute ``times`` [s] (the kernel's time axis)."""
         st = sampler3d(np.ascontiguousarray(np.atleast_1d(times), dtype=float))
         from ..dynamics._kernel import table_state_many
         yz, _, _ = table_state_many(np.ascontiguousarray(np.atleast_1d(times), dtype=float),
                                     *tz_args)
         return st[:, 2] - radius, st[:, 5], yz
+
+    def sampler_elapsed(elapsed):
+        """The same at ``elapsed`` [s] after t0 (DynamicsResult's ``_sampler`` convention)."""
+        return sampler(t0 + np.asarray(elapsed, dtype=float))
 
     surface = np.array(SURFACES)[episodes[:, 0].astype(int)] if episodes.size \
         else np.zeros(0, dtype="<U5")
@@ -251,7 +256,8 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     regime = classify(sampler, ct, cp, cvb, window_start=window_start, t_end=t_end, period=period,
                       stroke=dev.stroke, g=G, upper_stuck=False)
     n_samples = int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
-    t = t0 + np.arange(n_samples) / scene.run.sample_rate
+    elapsed = np.arange(n_samples) / scene.run.sample_rate
+    t = t0 + elapsed
     st = sampler3d(t)
     z, v, yz = sampler(t)
     finished = np.isfinite(episodes[:, 2]) & (episodes[:, 6] == 0)
@@ -261,7 +267,7 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
         t=t, gap=z, gap_velocity=v, table=yz,
         impacts=Impacts(ct, plates, cvb, cva), regime=regime, n_events=n_k,
         wall_time=_time.perf_counter() - wall0, model="3d", stroke=dev.stroke, period=period,
-        window_start=window_start, _sampler=sampler,
+        window_start=window_start, time_origin=t0, elapsed=elapsed, _sampler=sampler_elapsed,
         x=st[:, 0], y=st[:, 1], radial=np.hypot(st[:, 0], st[:, 1]), velocity=st[:, 3:6],
         spin=st[:, 6:9], contacts=contacts,
         wall_contacts=int(np.count_nonzero(episodes[:, 0] == 2)),

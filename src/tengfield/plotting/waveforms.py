@@ -3,7 +3,8 @@
 ``plot_waveforms``: V_OC, Q_SC, I_SC (and the load voltage/power when
 present) against time, each with the gap z(t) on a twin axis, in the style
 of the paper's Figs. 8c-d and 9b-d. ``plot_surrogate``: V_OC, Q_SC and C_T
-against z with the solved positions marked. ``plot_sweep``: peak-to-peak
+against z with the solved positions marked (a (z, r) surrogate: at r = 0 and at the
+offsets the ball reached, plus the change of Q_SC with r). ``plot_sweep``: peak-to-peak
 values over a frequency/amplitude grid, and power against load.
 """
 from __future__ import annotations
@@ -40,27 +41,114 @@ def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
     return Path(path)
 
 
-def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1) -> Path:
-    """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots."""
+#: trajectory points sent to the surrogate figure (the (z, r) places the ball went)
+VISITED_POINTS = 4000
+
+
+def visited_positions(dynamics) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(gap, radial offset)`` [m] of a 3D trajectory (at most ``VISITED_POINTS``
+    evenly spaced samples: small to send to the figure process), or None for a
+    trajectory on the axis (no ``radial``)."""
+    r = getattr(dynamics, "radial", None)
+    if r is None or np.asarray(r).size == 0:
+        return None
+    gap, r = np.asarray(dynamics.gap, dtype=float), np.asarray(r, dtype=float)
+    step = max(1, -(-gap.size // VISITED_POINTS))
+    return gap[::step].copy(), r[::step].copy()
+
+
+def _is_radial(curves) -> bool:
+    return hasattr(curves, "offsets") and hasattr(curves, "max_offset")
+
+
+def surrogate_lines(curves, *, cells: int = 1, visited=None, points: int = 400) -> list:
+    """The curves of :func:`plot_surrogate`: ``[(r [m], {"V_OC", "Q_SC", "C_T"}), ...]``
+    over ``z = linspace(0, Δh, points)`` (``cells`` cells in parallel: Q_SC and C_T
+    scale, V_OC does not).
+
+    A 1-D :class:`tengfield.surrogate.TerminalCurves` gives one line (r = 0); (z, r)
+    curves give r = 0 and, up to the largest offset ``visited`` (``(gap, r)`` of the
+    trajectory; None: the surrogate's r_max), its half and itself."""
+    z = np.linspace(0.0, curves.stroke, points)
+    if not _is_radial(curves):
+        return [(0.0, {"V_OC": curves.voltage(z), "Q_SC": curves.charge(z) * cells,
+                       "C_T": curves.capacitance(z) * cells})]
+    top = curves.max_offset if visited is None else float(np.max(visited[1], initial=0.0))
+    top = min(max(top, 0.0), curves.max_offset)
+    offsets = [0.0] if top == 0.0 else [0.0, 0.5 * top, top]
+    return [(r, {"V_OC": curves.voltage(z, r), "Q_SC": curves.charge(z, r) * cells,
+                 "C_T": curves.capacitance(z, r) * cells}) for r in offsets]
+
+
+def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=None) -> Path:
+    """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots.
+
+    ``curves``: the 1-D surrogate, or the (z, r) one of a ball off the axis
+    (:class:`tengfield.surrogate.radial.AnchoredTerminalCurves`): then the lines are
+    those of :func:`surrogate_lines` (r = 0 and the offsets the ball reached, the band
+    between shaded) and a fourth panel maps the change of Q_SC with r over (z, r)
+    with the field solves of the grid and the trajectory's (z, r) samples
+    (``visited``: ``(gap, r)`` [m], :func:`visited_positions`)."""
+    radial = _is_radial(curves)
+    lines = surrogate_lines(curves, cells=cells, visited=visited)
     z = np.linspace(0.0, curves.stroke, 400)
-    nodes = curves.positions
-    panels = [("V_OC [V]", curves.voltage(z), curves.charge_samples / curves.capacitance_samples, 1.0),
-              ("Q_SC [nC]", curves.charge(z) * cells, curves.charge_samples * cells, 1e9),
-              ("C_T [pF]", curves.capacitance(z) * cells, curves.capacitance_samples * cells, 1e12)]
-    fig = new_figure((12, 3.4))
-    axes = fig.subplots(1, 3)
-    for ax, (label, line, dots, factor) in zip(axes, panels):
-        ax.plot(z * 1e3, line * factor, color="C0", lw=1.2, label="cubic spline")
-        ax.plot(nodes * 1e3, dots * factor, "o", ms=3.5, color="C3", label="field solves")
+    if radial and not hasattr(curves, "axis"):    # bare (z, r) curves: the grid's r = 0
+        q0, c0 = curves.charge_grid[:, 0], curves.capacitance_grid[:, 0]
+        axis_dots = (curves.positions, q0 / c0, q0 * cells, c0 * cells)
+    else:                                         # the 1-D solves, on the axis
+        axis = getattr(curves, "axis", curves)
+        axis_dots = (axis.positions, axis.charge_samples / axis.capacitance_samples,
+                     axis.charge_samples * cells, axis.capacitance_samples * cells)
+    panels = [("V_OC", "V_OC [V]", 1.0), ("Q_SC", "Q_SC [nC]", 1e9), ("C_T", "C_T [pF]", 1e12)]
+    fig = new_figure((16 if radial else 12, 3.6 if radial else 3.4))
+    axes = fig.subplots(1, 4 if radial else 3)
+    colours = ["C0", "C2", "C1"]
+    for k, (ax, (key, label, factor)) in enumerate(zip(axes, panels)):
+        for (r, values), colour in zip(lines, colours):
+            name = "cubic spline" if not radial else f"r = {r * 1e3:.3g} mm"
+            ax.plot(z * 1e3, values[key] * factor, color=colour, lw=1.2, label=name)
+        if len(lines) > 1:
+            stacked = np.array([values[key] for _, values in lines]) * factor
+            ax.fill_between(z * 1e3, stacked.min(axis=0), stacked.max(axis=0), color="C1",
+                            alpha=0.15, lw=0, label="r reached")
+        ax.plot(axis_dots[0] * 1e3, axis_dots[k + 1] * factor, "o", ms=3.5, color="C3",
+                label="field solves (r = 0)" if radial else "field solves")
         ax.set_xlabel("gap z [mm]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
-    fig.suptitle(f"surrogate ({curves.reference}, {cells} cell(s)): {table.count} positions, "
-                 f"error estimate {table.interpolation_error:.2g}")
+    axes[0].legend(fontsize=7)
+    title = (f"surrogate ({curves.reference}, {cells} cell(s)): {table.count} positions, "
+             f"error estimate {table.interpolation_error:.2g}")
+    if radial:
+        _plot_radial_change(axes[3], curves, cells, visited)
+        title += (f"; (z, r): {len(curves.positions)} x {len(curves.offsets)} 3D solves "
+                  f"up to r = {curves.max_offset * 1e3:.3g} mm")
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     return Path(path)
+
+
+def _plot_radial_change(ax, curves, cells: int, visited) -> None:
+    """Q_SC(z, r) − Q_SC(z, 0) [pC] over (z, r) (filled contours), the grid's solves,
+    and where the ball went."""
+    z = np.linspace(0.0, curves.stroke, 120)
+    r = np.linspace(0.0, curves.max_offset, 60)
+    zz, rr = np.meshgrid(z, r, indexing="ij")
+    change = (curves.charge(zz, rr) - curves.charge(zz, np.zeros_like(rr))) * cells * 1e12
+    levels = 21 if np.ptp(change) > 0 else 2
+    filled = ax.contourf(zz * 1e3, rr * 1e3, change, levels=levels, cmap="RdBu_r")
+    ax.figure.colorbar(filled, ax=ax, label="Q_SC(z, r) − Q_SC(z, 0) [pC]")
+    gz, gr = np.meshgrid(curves.positions, curves.offsets, indexing="ij")
+    ax.plot(gz.ravel() * 1e3, gr.ravel() * 1e3, "+", ms=4, color="0.2", label="3D solves")
+    if visited is not None:
+        ax.plot(np.asarray(visited[0]) * 1e3, np.asarray(visited[1]) * 1e3, ".", ms=1.5,
+                color="C1", alpha=0.5, label="trajectory")
+    ax.set_xlim(0.0, curves.stroke * 1e3)
+    ax.set_ylim(0.0, curves.max_offset * 1e3 * 1.04)   # the outer solves stay visible
+    ax.set_xlabel("gap z [mm]")
+    ax.set_ylabel("radial offset r [mm]")
+    ax.legend(fontsize=7, loc="upper right")
 
 
 def plot_sweep(rows: list[dict], path: str | Path) -> Path:
