@@ -149,3 +149,16 @@ def test_noise_scales_with_rms_and_stays_in_band(f1, width, rms, seed):
 def test_refuses_nothing_to_synthesise():
     with pytest.raises(DynamicsError, match="at least one harmonic"):
         vibration_table(duration=1.0)
+
+
+def test_a_longer_run_extends_the_same_realisation():
+    """The noise depends on the seed and the run's clock, not on the run's length: a 1 s
+    and a 7 s table agree on the first second (the spline's samples to round-off)."""
+    psd = band_psd((10.0, 120.0), 5.0)
+    short = vibration_table(duration=1.0, seed=5, psd=psd)
+    long = vibration_table(duration=7.0, seed=5, psd=psd)
+    t = np.arange(0.0, 1.0, 1.0 / (32 * 120.0))
+    np.testing.assert_allclose(short.evaluate(t)[0], long.evaluate(t)[0], rtol=0,
+                               atol=1e-9 * np.max(np.abs(long.evaluate(t)[0])))
+    np.testing.assert_allclose(short.evaluate(t[:-200])[2], long.evaluate(t[:-200])[2],
+                               rtol=0, atol=1e-6 * 5.0)
