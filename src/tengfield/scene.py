@@ -929,8 +929,11 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
             if key not in SCHEMA[sec]:
                 raise SceneError(f"{source}: unknown key [{sec}] {key}" + _suggest(key, SCHEMA[sec]))
     components = None
+    given_data = data
     if isinstance(data.get("excitation"), dict) and data["excitation"].get("kind") == "harmonics":
-        data, components = _harmonic_components(data)
+        # the lists stay in scene.raw (with_values, to_dict, the written scene); the
+        # build below sees the fundamental's scalar values
+        given_data, (data, components) = data, _harmonic_components(data)
     values: dict[str, dict[str, Any]] = {}
     field_problems: list[str] = []
     for sec, keys in SCHEMA.items():
@@ -993,7 +996,7 @@ def _build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scen
     _check_array_work(arr, exc, run)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]), initial=ini,
                  run=run, field=field_value, circuit=circ, array=arr,
-                 breakdown=Breakdown(**values["breakdown"]), raw=copy.deepcopy(data), source=source, text=text)
+                 breakdown=Breakdown(**values["breakdown"]), raw=copy.deepcopy(given_data), source=source, text=text)
 
 
 def check_steady_window(exc: Excitation, settle_periods: int, duration: float,
