@@ -54,6 +54,9 @@ def edit(text: str, key: str, value: str) -> str:
     """``key = value`` in the scene file ``text`` (the key's one line; comments kept)."""
     new, count = re.subn(rf"^({re.escape(key)}\s*=\s*)[^#\s]+", rf"\g<1>{value}", text,
                          flags=re.M)
+    if count == 0:   # a key the default scene leaves unset, shown commented out
+        new, count = re.subn(rf"^#\s*({re.escape(key)}\s*=\s*)[^#\s]+", rf"\g<1>{value}",
+                             text, flags=re.M)
     assert count == 1, (key, count)
     return new
 
@@ -132,7 +135,7 @@ RUN_FILES = ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",
 
 #: what each Quick start command is covered by in this file
 COVERED = {"run", "scene", "dynamics", "map", "field", "precompute", "sweep", "report", "fit",
-           "info"}
+           "info", "breakdown"}
 
 
 def test_every_quick_start_command_is_covered():
@@ -174,6 +177,17 @@ def test_field(work, scene):
     where, cli = work
     cli("field", "my.toml", "--position-mm", "1.5", "-o", "out/field")
     check_outputs(where / "out" / "field", ("field.json", "potential.xdmf", "field.png"))
+
+
+def test_breakdown(work, precomputed):
+    """sigma_max from the cached surrogate's gap lines: a positive limit with its binding
+    state and gap, the table and the figure."""
+    where, cli = work
+    cli("breakdown", "my.toml", "-o", "out/bd")
+    out = where / "out" / "bd"
+    check_outputs(out, ("breakdown.json", "breakdown.csv", "breakdown.png"))
+    result = json.loads((out / "breakdown.json").read_text())
+    assert 0 < result["sigma_max_uC_per_m2"] < 1e3
 
 
 def test_sweep(work, precomputed):
