@@ -92,7 +92,7 @@ def cell_trajectory(scene, draw, impacts: bool = False):
     :func:`tengfield.dynamics.simulate` integrates: the precision does not depend on
     the absolute time)."""
     from .dynamics.impact import Restitution, integrate
-    from .dynamics.result import run_span
+    from .dynamics.run import run_span
     from .dynamics.table import sine_phase_at, sine_table, table_from_scene
 
     exc = scene.excitation

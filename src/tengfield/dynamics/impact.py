@@ -15,7 +15,8 @@ import numpy as np
 from ..errors import DynamicsError
 from ..scene import MAX_PERIODS, G  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
 from . import _kernel as K
-from .result import DynamicsResult, prepare_run, run_result
+from .result import DynamicsResult
+from .run import prepare_run, run_result
 from .table import PPOLY, TableMotion
 
 #: More events (impacts, lift-offs, releases) per excitation period than this

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ..dynamics.regime import classify
-from ..dynamics.result import DynamicsResult, Impacts, run_span
+from ..dynamics.result import DynamicsResult, Impacts
+from ..dynamics.run import run_span
 from ..dynamics.table import TableMotion, recorded_table, sine_table, table_from_scene
 from ..errors import DynamicsError, SceneError
 from ..scene import G
