@@ -15,9 +15,10 @@ import numpy as np
 from ..errors import DynamicsError
 from ..scene import MAX_PERIODS, G  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
 from . import _kernel as K
+from ._kernel import PPOLY
 from .result import DynamicsResult
 from .run import prepare_run, run_result
-from .table import PPOLY, TableMotion
+from .table import TableMotion
 
 #: More events (impacts, lift-offs, releases) per excitation period than this
 #: raise DynamicsError instead of running for ever.

@@ -30,7 +30,8 @@ from ..errors import DynamicsError
 from ..scene import G
 from .result import DynamicsResult
 from .run import prepare_run, run_result
-from .table import PPOLY, SINE, TableMotion
+from ._kernel import PPOLY, SINE
+from .table import TableMotion
 
 FREE, IN_LOWER, IN_UPPER = 0, 1, 2
 

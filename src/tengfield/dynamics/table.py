@@ -2,7 +2,7 @@
 
 Two kinds, one representation (:class:`TableMotion`):
 
-* ``SINE``: ``y = A sin(w t + phase)`` with ``params = (A, w, phase)``.
+* ``SINE`` (:mod:`._kernel`'s constant, as ``PPOLY``): ``y = A sin(w t + phase)`` with ``params = (A, w, phase)``.
 * ``PPOLY``: a C^4 piecewise quintic ``y(t)`` on breakpoints ``breaks``
   with coefficients ``coeffs[m, i]`` of ``(t - breaks[i])**(5 - m)``
   (scipy's ``PPoly`` layout), built from a recorded signal:
@@ -31,10 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DynamicsError
-
-#: Excitation kinds of TableMotion (the compiled kernel's ``kind`` argument).
-SINE = 0     # y = A sin(w t + phase), params = (A, w, phase)
-PPOLY = 1    # piecewise quintic on breaks/coeffs (a recorded signal)
+from ._kernel import PPOLY, SINE, table_state_many  # kinds of TableMotion: the kernel's constants
 
 SMOOTHING_ORDER = 4   # Butterworth order of [excitation] smoothing_hz (run twice: zero phase)
 
@@ -54,7 +51,6 @@ class TableMotion:
 
     def evaluate(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(y [m], y' [m/s], y'' [m/s^2]) at ``times`` [s]."""
-        from ._kernel import table_state_many
         t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=float)))
         return table_state_many(t, self.kind, self.params, self.breaks, self.coeffs)
 
