@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from tengfield.dynamics import simulate
-from tengfield.dynamics.table import table_from_scene
+from tengfield.dynamics.excitation import table_from_scene
 from tengfield.errors import SceneError
 from tengfield.scene import parse_scene
 

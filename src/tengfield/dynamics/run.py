@@ -8,9 +8,9 @@ import numpy as np
 
 from ..errors import DynamicsError, SceneError
 from ..scene import MAX_SAMPLES, G, check_steady_window  # MAX_SAMPLES: also for simulate(duration=)
+from .excitation import table_from_scene
 from .regime import classify
 from .result import PLATE_NAMES, DynamicsResult, Impacts
-from .table import table_from_scene
 
 
 def run_span(scene, duration: float | None) -> tuple[float, float, float]:

@@ -177,17 +177,3 @@ def _recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> Table
                        snap_bound=_piece_bound(d4, widths), t_first=float(x[0]),
                        t_last=float(x[-1]))
 
-
-def table_from_scene(scene, origin: float = 0.0) -> TableMotion:
-    """The table motion of ``scene.excitation`` (sine, recorded, random or harmonics) on the time axis
-    ``t - origin`` [s] (runs integrate relative to their start: precision does not
-    depend on the absolute time)."""
-    exc = scene.excitation
-    if exc.kind == "sine":
-        return sine_table(exc.amplitude, exc.omega,
-                          sine_phase_at(exc.frequency, exc.phase, origin))
-    if exc.kind in ("random", "harmonics"):
-        from .vibration import scene_vibration_table
-        return scene_vibration_table(scene, origin)
-    return recorded_table(exc.times, exc.values, exc.signal, origin=origin,
-                          smoothing_hz=exc.smoothing)

@@ -11,7 +11,9 @@ import numpy as np
 from ..dynamics.regime import classify
 from ..dynamics.result import DynamicsResult, Impacts
 from ..dynamics.run import run_span
-from ..dynamics.table import TableMotion, recorded_table, sine_table, table_from_scene
+from ..dynamics import excitation
+from ..dynamics.excitation import table_from_scene
+from ..dynamics.table import TableMotion
 from ..errors import DynamicsError, SceneError
 from ..scene import G
 from . import _kernel
@@ -89,24 +91,12 @@ def gravity_vector(scene) -> np.ndarray:
 
 
 def lateral_tables(scene) -> tuple[TableMotion, TableMotion]:
-    """Table motion along x and y (sine per axis, recorded columns of the same CSV, or
-    for random/harmonics the fundamental's sine plus noise per axis)."""
-    exc = scene.excitation
-    if exc.kind == "sine":
-        return (sine_table(exc.amplitude_x, exc.omega, exc.phase_x),
-                sine_table(exc.amplitude_y, exc.omega, exc.phase_y))
-    if exc.kind in ("random", "harmonics"):   # per-axis: the fundamental's sine + noise
-        from ..dynamics.vibration import scene_vibration_table
-        return (scene_vibration_table(scene, axis="x"), scene_vibration_table(scene, axis="y"))
-    tables = []
-    for key in ("signal_x_column", "signal_y_column"):
-        column = getattr(exc, key)
-        if not column:
-            tables.append(sine_table(0.0, exc.omega, 0.0))
-            continue
-        values = _read_column(scene, key, column)
-        tables.append(recorded_table(exc.times, values, exc.signal))
-    return tables[0], tables[1]
+    """Table motion along x and y, as the excitation's kind gives it
+    (:func:`tengfield.dynamics.excitation.lateral_tables`: sine per axis, recorded
+    columns of the same CSV, or for random/harmonics the fundamental's sine plus noise
+    per axis)."""
+    return excitation.lateral_tables(
+        scene, lambda key, column: _read_column(scene, key, column))
 
 
 def _read_column(scene, key: str, column: str) -> np.ndarray:
