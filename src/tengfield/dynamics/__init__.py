@@ -25,13 +25,13 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
 
     Starts at ``scene.initial`` (time, gap, velocity relative to the table),
     samples at ``scene.run.sample_rate_hz``; ``[contact] model`` picks the impact map,
-    soft contact or the 3D rigid ball (:mod:`tengfield.motion3d`); the regime is taken from the
+    soft contact or the 3D rigid ball (:mod:`tengfield.dynamics.motion3d`); the regime is taken from the
     window after ``scene.run.settle_periods`` excitation periods.
     Raises :class:`tengfield.errors.DynamicsError` if the motion cannot be
     integrated (e.g. the bound on events per period is exceeded).
     """
     if scene.contact.model == "3d":
-        from ..motion3d import simulate_3d
+        from .motion3d import simulate_3d
         return simulate_3d(scene, duration=duration)
     if scene.contact.model == "soft":
         from .soft import simulate_soft

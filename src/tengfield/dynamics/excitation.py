@@ -115,8 +115,3 @@ def table_from_scene(scene, origin: float = 0.0, *, phase: float | None = None) 
                             f"to phase {phase:g} rad (only a sine can)")
     return kind.vertical(scene, origin, phase)
 
-
-def lateral_tables(scene, read_column: Callable) -> tuple[TableMotion, TableMotion]:
-    """The table motion along x and y of ``scene.excitation`` (absolute time; the 3D
-    model), ``read_column(key, column)`` giving a column of the recorded file."""
-    return excitation_kind(scene).lateral(scene, read_column)

@@ -8,14 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dynamics.regime import classify
-from ..dynamics.result import DynamicsResult, Impacts
-from ..dynamics.run import run_span
-from ..dynamics import excitation
-from ..dynamics.excitation import table_from_scene
-from ..dynamics.table import TableMotion
-from ..errors import DynamicsError, SceneError
-from ..scene import G
+from ...errors import DynamicsError, SceneError
+from ...scene import G
+from .._kernel import table_state_many
+from ..excitation import excitation_kind, table_from_scene
+from ..regime import classify
+from ..result import DynamicsResult, Impacts
+from ..run import run_span
+from ..table import TableMotion
 from . import _kernel
 from .contact import KN, EXP, SURFACES, surface_parameters
 
@@ -92,10 +92,10 @@ def gravity_vector(scene) -> np.ndarray:
 
 def lateral_tables(scene) -> tuple[TableMotion, TableMotion]:
     """Table motion along x and y, as the excitation's kind gives it
-    (:func:`tengfield.dynamics.excitation.lateral_tables`: sine per axis, recorded
+    (:data:`tengfield.dynamics.excitation.EXCITATIONS`: sine per axis, recorded
     columns of the same CSV, or for random/harmonics the fundamental's sine plus noise
     per axis)."""
-    return excitation.lateral_tables(
+    return excitation_kind(scene).lateral(
         scene, lambda key, column: _read_column(scene, key, column))
 
 
@@ -224,7 +224,6 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     def sampler(times):
         """(gap, gap velocity, table) at absolute ``times`` [s] (the kernel's time axis)."""
         st = sampler3d(np.ascontiguousarray(np.atleast_1d(times), dtype=float))
-        from ..dynamics._kernel import table_state_many
         yz, _, _ = table_state_many(np.ascontiguousarray(np.atleast_1d(times), dtype=float),
                                     *tz_args)
         return st[:, 2] - radius, st[:, 5], yz

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..dynamics._kernel import table_state
+from .._kernel import table_state
 
 N_STATE = 18
 KNOT_WIDTH = 11           # t, p(3), v(3), w(3), mode
