@@ -226,4 +226,5 @@ def simulate_impact(scene, *, duration: float | None = None) -> DynamicsResult:
         t_end=duration, gap0=scene.initial.gap, velocity0=scene.initial.velocity,
         period=scene.excitation.period, time_origin=t0)
     return run_result(scene, traj, contacts, n_events, model="impact", t0=t0,
-                      duration=duration, wall0=wall0, upper_stuck=traj.upper_stuck_between)
+                      duration=duration, wall0=wall0, upper_stuck=traj.upper_stuck_between,
+                      gap_on_grid=traj.gap_on_grid)

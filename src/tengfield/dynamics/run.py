@@ -56,22 +56,24 @@ def prepare_run(scene, duration: float | None):
 
 
 def run_result(scene, traj, contacts, n_events: int, *, model: str, t0: float, duration: float,
-               wall0: float, upper_stuck=None) -> DynamicsResult:
+               wall0: float, upper_stuck=None, gap_on_grid=None) -> DynamicsResult:
     """The :class:`DynamicsResult` of a run integrated on ``t - t0`` over [0, duration] s.
 
     ``traj(elapsed)`` gives (gap [m], gap velocity [m/s], table position [m]);
     ``contacts`` = (times [s], plate index 0 lower / 1 upper, speeds before and after
     [m/s]); the regime is classified over the settled window ([run] settle_periods);
     ``upper_stuck(window_start, t_end)``: whether the ball rests on the upper plate
-    (None: it never does, as in the soft model); ``wall0``: ``time.perf_counter()`` at
-    the start."""
+    (None: it never does, as in the soft model); ``gap_on_grid(start, step, count)``: the
+    gap on a uniform grid in one pass, if the model has one (:func:`.regime.classify`);
+    ``wall0``: ``time.perf_counter()`` at the start."""
     times, plates, before, after = contacts
     period = scene.excitation.period
     stroke = scene.device.stroke
     window = min(scene.run.settle_periods * period, duration)
     stuck = bool(upper_stuck(window, duration)) if upper_stuck is not None else False
     regime = classify(traj, times, plates, before, window_start=window, t_end=duration,
-                      period=period, stroke=stroke, g=G, upper_stuck=stuck)
+                      period=period, stroke=stroke, g=G, upper_stuck=stuck,
+                      gap_on_grid=gap_on_grid)
     elapsed = sample_times(scene, duration)
     z, v, y = traj(elapsed)
     names = PLATE_NAMES[plates] if plates.size else np.zeros(0, dtype="<U5")
