@@ -1,8 +1,9 @@
 """Table motion y(t) in the form the compiled kernel evaluates.
 
-Two kinds, one representation (:class:`TableMotion`):
+Two kinds (the constants ``SINE``, ``PPOLY`` of the compiled kernel, :mod:`._kernel`),
+one representation (:class:`TableMotion`):
 
-* ``SINE`` (:mod:`._kernel`'s constant, as ``PPOLY``): ``y = A sin(w t + phase)`` with ``params = (A, w, phase)``.
+* ``SINE``: ``y = A sin(w t + phase)`` with ``params = (A, w, phase)``.
 * ``PPOLY``: a C^4 piecewise quintic ``y(t)`` on breakpoints ``breaks``
   with coefficients ``coeffs[m, i]`` of ``(t - breaks[i])**(5 - m)``
   (scipy's ``PPoly`` layout), built from a recorded signal:

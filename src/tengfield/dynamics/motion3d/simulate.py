@@ -13,8 +13,8 @@ from ...scene import G
 from .._kernel import table_state_many
 from ..excitation import excitation_kind, table_from_scene
 from ..regime import classify
-from ..result import DynamicsResult, Impacts
-from ..run import run_span
+from ..result import PLATE_NAMES, DynamicsResult, Impacts
+from ..run import run_span, sample_times
 from ..table import TableMotion
 from . import _kernel
 from .contact import KN, EXP, SURFACES, surface_parameters
@@ -154,7 +154,7 @@ def integrate_3d(scene, *, t_start: float, t_end: float, position0, velocity0, s
     y0[3:6] = velocity0
     y0[6:9] = spin0
     if rest_start is None:
-        rest_start = bool(np.any(_kernel._deltas(y0, P) > 0.0))
+        rest_start = bool(np.any(_kernel.overlaps(y0, P) > 0.0))
     acc_z = abs(g_vec[2]) + tz.acc_bound
     acc_xy = math.hypot(g_vec[0], g_vec[1]) + math.hypot(tx.acc_bound, ty.acc_bound)
     targs = _table_args(tx, ty, tz)
@@ -245,14 +245,13 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     window_start = min(t0 + scene.run.settle_periods * period, t_end)
     regime = classify(sampler, ct, cp, cvb, window_start=window_start, t_end=t_end, period=period,
                       stroke=dev.stroke, g=G, upper_stuck=False)
-    n_samples = int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
-    elapsed = np.arange(n_samples) / scene.run.sample_rate
+    elapsed = sample_times(scene, duration)
     t = t0 + elapsed
     st = sampler3d(t)
     z, v, yz = sampler(t)
     finished = np.isfinite(episodes[:, 2]) & (episodes[:, 6] == 0)
     steps_done = episodes[finished, 5]
-    plates = np.array(["lower", "upper"])[cp] if cp.size else np.zeros(0, dtype="<U5")
+    plates = PLATE_NAMES[cp] if cp.size else np.zeros(0, dtype="<U5")
     return Motion3DResult(
         t=t, gap=z, gap_velocity=v, table=yz,
         impacts=Impacts(ct, plates, cvb, cva), regime=regime, n_events=n_k,
