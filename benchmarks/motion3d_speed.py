@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from tengfield.motion3d import simulate_3d
+from tengfield.dynamics.motion3d import simulate_3d
 from tengfield.scene import default_scene
 
 CASES = {

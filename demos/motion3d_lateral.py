@@ -3,7 +3,7 @@ lateral drive grows, and the contact dwell times at 3 mm / 30 Hz.
 
 The paper's multibody model (Fig. 7, 3 mm / 30 Hz) shows contacts with the
 plates of ~10 ms. Here the ball is the 3D compliant-contact model
-(tengfield.motion3d, Hertz with PTFE/copper/PMMA handbook moduli, friction
+(tengfield.dynamics.motion3d, Hertz with PTFE/copper/PMMA handbook moduli, friction
 0.1 / 0.05); the table moves 3 mm vertically at 30 Hz plus a lateral sine
 of growing amplitude (x axis, 45 degrees phase). For each lateral amplitude:
 upper-plate impacts per period and mean upper impact speed (the charge
@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tengfield.motion3d import simulate_3d
+from tengfield.dynamics.motion3d import simulate_3d
 from tengfield.scene import default_scene
 
 
@@ -108,7 +108,7 @@ def main(argv: list[str] | None = None) -> dict:
     write_rows(out / "motion3d_lateral.csv", rows)
 
     import matplotlib.pyplot as plt
-    from tengfield.motion3d.output import plot_trajectory3d
+    from tengfield.plotting.dynamics import plot_trajectory3d
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     x = [row["lateral_mm"] for row in rows]
     a1.plot(x, [row["upper_per_period"] for row in rows], "o-", label="upper impacts / period")

@@ -121,7 +121,7 @@ def test_plots_leave_the_callers_matplotlib_backend_alone(tmp_path):
             "r = tf.run(fx.scene_with(run={'duration_s': 0.3, 'settle_periods': 2}), "
             "cache_dir=out, "
             "solve=fx.plate_model_solve); tf.io.write_run_outputs(r, out); "
-            "from tengfield.motion3d.output import plot_trajectory3d; "
+            "from tengfield.plotting.dynamics import plot_trajectory3d; "
             "m = tf.simulate_3d(fx.scene_with(contact={'model': '3d'}, "
             "run={'duration_s': 0.1, 'settle_periods': 1})); "
             "plot_trajectory3d(m, out + '/trajectory3d.png'); "

@@ -34,7 +34,7 @@ _LAZY = {
     "simulate": ("tengfield.dynamics", "simulate"),
     "solve_position": ("tengfield.field", "solve_position"),
     "build_surrogate": ("tengfield.surrogate", "obtain_table"),
-    "simulate_3d": ("tengfield.motion3d", "simulate_3d"),
+    "simulate_3d": ("tengfield.dynamics.motion3d", "simulate_3d"),
     "calibrate": ("tengfield.fit", "calibrate"),
 }
 

@@ -92,13 +92,12 @@ def cell_trajectory(scene, draw, impacts: bool = False):
     :func:`tengfield.dynamics.simulate` integrates: the precision does not depend on
     the absolute time)."""
     from .dynamics.impact import Restitution, integrate
-    from .dynamics.result import run_span
-    from .dynamics.table import sine_phase_at, sine_table, table_from_scene
+    from .dynamics.run import run_span
+    from .dynamics.excitation import table_from_scene
 
     exc = scene.excitation
     duration, t0, _ = run_span(scene, None)
-    table = (sine_table(exc.amplitude, exc.omega, sine_phase_at(exc.frequency, float(draw[0]), t0))
-             if exc.kind == "sine" else table_from_scene(scene, origin=t0))
+    table = table_from_scene(scene, origin=t0, phase=float(draw[0]))
     restitution = dataclasses.replace(Restitution.from_contact(scene.contact), e=float(draw[1]))
     impacts_wanted = impacts
     traj, impacts, _ = integrate(table, scene.device.stroke, restitution, t_start=0.0,

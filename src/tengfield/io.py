@@ -278,7 +278,6 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     out = Path(out_dir)
     three_d = scene.contact.model == "3d"
     if three_d:
-        from .motion3d.output import plot_trajectory3d, write_contacts_csv, write_trajectory3d_csv
         tables = [(write_trajectory3d_csv, "trajectory.csv"), (write_contacts_csv, "contacts.csv")]
     else:
         tables = [(write_trajectory_csv, "trajectory.csv")]
@@ -286,7 +285,7 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     written = [writable_target(out / name) for _, name in tables]
     drawing = None
     if plots:
-        from .plotting.dynamics import draw_trajectory, trajectory_figure
+        from .plotting.dynamics import draw_trajectory, plot_trajectory3d, trajectory_figure
         exc = scene.excitation
         title = (f"{exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
                  f"e = {scene.contact.restitution:g}" if exc.kind == "sine"
@@ -382,3 +381,40 @@ def write_report_json(path: str | Path, report) -> Path:
                      for r in report.rows],
             "recommendations": [dataclasses.asdict(r) for r in report.recommendations]}
     return write_json(path, data)
+
+
+# ---------------------------------------------------------------------------
+# a 3D run (tengfield.dynamics.motion3d): trajectory.csv with its extra columns, contacts.csv
+
+#: trajectory.csv columns of a 3D run, after the 1-D ones (time_s, gap_m, gap_velocity_m_per_s, table_m)
+EXTRA_COLUMNS = ("x_m", "y_m", "radial_m", "vx_m_per_s", "vy_m_per_s", "spin_x_rad_per_s",
+                 "spin_y_rad_per_s", "spin_z_rad_per_s")
+
+
+def trajectory_columns(result) -> dict[str, np.ndarray]:
+    """The extra trajectory columns of a
+    :class:`tengfield.dynamics.motion3d.Motion3DResult`, by CSV header name (SI)."""
+    return {"x_m": result.x, "y_m": result.y, "radial_m": result.radial,
+            "vx_m_per_s": result.velocity[:, 0], "vy_m_per_s": result.velocity[:, 1],
+            "spin_x_rad_per_s": result.spin[:, 0], "spin_y_rad_per_s": result.spin[:, 1],
+            "spin_z_rad_per_s": result.spin[:, 2]}
+
+
+def write_trajectory3d_csv(result, path) -> None:
+    """trajectory.csv: the 1-D columns then :data:`EXTRA_COLUMNS` (full precision)."""
+    extra = trajectory_columns(result)
+    write_csv(path, ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m", *EXTRA_COLUMNS],
+              [result.t, result.gap, result.gap_velocity, result.table]
+              + [extra[k] for k in EXTRA_COLUMNS])
+
+
+def write_contacts_csv(result, path) -> None:
+    """contacts.csv: every contact episode (surface, entry/exit time, normal speeds, steps)."""
+    c = result.contacts
+    write_csv(path, ["surface", "time_in_s", "time_out_s", "dwell_s", "speed_in_m_per_s",
+                     "speed_out_m_per_s", "steps", "initial_rest"],
+              [c["surface"], np.asarray(c["time_in"], dtype=float),
+               np.asarray(c["time_out"], dtype=float),
+               np.asarray(c["time_out"], dtype=float) - np.asarray(c["time_in"], dtype=float),
+               np.asarray(c["speed_in"], dtype=float), np.asarray(c["speed_out"], dtype=float),
+               np.asarray(c["steps"]).astype(int), np.asarray(c["initial"]).astype(bool).astype(int)])

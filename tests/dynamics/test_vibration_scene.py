@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from tengfield.dynamics import simulate
-from tengfield.dynamics.table import table_from_scene
+from tengfield.dynamics.excitation import table_from_scene
 from tengfield.errors import SceneError
 from tengfield.scene import parse_scene
 
@@ -97,7 +97,7 @@ def test_bad_vibration_input_is_one_clear_error(text, message):
 def test_3d_model_runs_with_per_axis_noise():
     scene = _scene('kind = "random"\nband_hz = [10.0, 200.0]\nrms_acceleration_m_per_s2 = 30.0\n'
                    'rms_acceleration_x_m_per_s2 = 10.0\n', '[contact]\nmodel = "3d"\n')
-    from tengfield.motion3d.simulate import lateral_tables
+    from tengfield.dynamics.motion3d.simulate import lateral_tables
     tx, ty = lateral_tables(scene)
     _, _, ax = tx.evaluate(np.arange(0.0, 0.5, 1e-4))
     assert np.sqrt(np.mean(ax**2)) == pytest.approx(10.0, rel=0.5)

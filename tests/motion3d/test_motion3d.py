@@ -9,8 +9,8 @@ from tengfield.dynamics.impact import Restitution, integrate
 from tengfield.dynamics.soft import simulate_soft
 from tengfield.dynamics.table import sine_table
 from tengfield.errors import SceneError
-from tengfield.motion3d import Motion3DResult, integrate_3d, simulate_3d
-from tengfield.motion3d.simulate import resting_position
+from tengfield.dynamics.motion3d import Motion3DResult, integrate_3d, simulate_3d
+from tengfield.dynamics.motion3d.simulate import resting_position
 from tengfield.scene import G, default_scene
 
 SHORT = {"duration_s": 0.3, "settle_periods": 2, "sample_rate_hz": 5000.0}
@@ -229,8 +229,8 @@ def test_default_scenes_unchanged_by_the_3d_keys():
 def test_writers_and_figure(tmp_path):
     import matplotlib
     matplotlib.use("Agg")   # the caller chooses the backend
-    from tengfield.motion3d.output import (EXTRA_COLUMNS, plot_trajectory3d, write_contacts_csv,
-                                           write_trajectory3d_csv)
+    from tengfield.io import EXTRA_COLUMNS, write_contacts_csv, write_trajectory3d_csv
+    from tengfield.plotting.dynamics import plot_trajectory3d
     scene = default_scene().with_values(
         contact={"model": "3d"}, run={"duration_s": 0.1, "settle_periods": 1,
                                       "sample_rate_hz": 2000.0},
@@ -253,7 +253,7 @@ def test_writers_and_figure(tmp_path):
 @pytest.mark.parametrize("speed", [0.1, 0.5, 2.0])
 def test_undamped_hertz_impact_time_and_rebound(speed):
     """e = 1: the Hertz contact time 2.943 (5 m / 4 k)^(2/5) v^(-1/5), full rebound."""
-    from tengfield.motion3d.contact import hertz_contact_time, surface_parameters
+    from tengfield.dynamics.motion3d.contact import hertz_contact_time, surface_parameters
     scene = default_scene().with_values(contact={"model": "3d", "restitution": 1.0},
                                         excitation={"amplitude_mm": 0.0})
     r = scene.device.ball_radius
@@ -289,7 +289,7 @@ def test_calibrated_hertz_rebounds_with_the_restitution_at_any_speed(e):
 
 def test_chrono_damping_rebound_matches_its_dimensionless_contact():
     """Chrono's closed-form beta: the rebound of x'' = -x^1.5 - a x^(1/4) x' (0.253 for e = 0.1)."""
-    from tengfield.motion3d.contact import SQRT_5_6, beta, rebound_of_damping
+    from tengfield.dynamics.motion3d.contact import SQRT_5_6, beta, rebound_of_damping
     for e in (0.1, 0.5):
         expected = rebound_of_damping(-beta(e) * 2 * SQRT_5_6 * math.sqrt(1.5))
         assert _rebound(e, 0.5, "chrono") == pytest.approx(expected, rel=2e-3)
@@ -319,7 +319,7 @@ def test_lateral_drive_symmetries():
 def test_simulate_dispatches_the_3d_model():
     """`tengfield.simulate` (and so `tengfield run`) runs the 3D ball for model = "3d"."""
     import tengfield as tf
-    from tengfield.motion3d import Motion3DResult
+    from tengfield.dynamics.motion3d import Motion3DResult
     scene = tf.default_scene().with_values(contact={"model": "3d"},
                                            run={"duration_s": 0.1, "settle_periods": 1,
                                                 "sample_rate_hz": 2000.0})

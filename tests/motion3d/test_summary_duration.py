@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tengfield.dynamics.soft import simulate_soft
-from tengfield.motion3d import simulate_3d
+from tengfield.dynamics.motion3d import simulate_3d
 from tengfield.scene import default_scene
 
 RUN = {"duration_s": 0.25, "settle_periods": 2, "sample_rate_hz": 4000.0}

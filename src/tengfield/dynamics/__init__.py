@@ -1,13 +1,19 @@
 """Non-smooth dynamics of the ball between the two plates (DESIGN.md section 5).
 
 ``simulate(scene)`` integrates the motion relative to the table with the
-contact model of ``scene.contact.model``:
+contact model of ``scene.contact.model``, taken from ``MODELS``
+(:mod:`tengfield.dynamics.models`: one entry per model):
 
 * ``"impact"``: rigid plates, Newton restitution, exact free flight between
   events, sticking/lift-off and chatter handled exactly
   (:mod:`tengfield.dynamics.impact`, compiled with numba);
 * ``"soft"``: the spring-dashpot contact of the paper's Eq. (1) integrated
-  by a stiff SciPy solver (:mod:`tengfield.dynamics.soft`).
+  by a stiff SciPy solver (:mod:`tengfield.dynamics.soft`);
+* ``"3d"``: the rigid ball in the tube, with wall contacts, friction and spin
+  (:mod:`tengfield.dynamics.motion3d`, compiled with numba).
+
+The table motion of each ``[excitation] kind`` is one entry of
+:data:`tengfield.dynamics.excitation.EXCITATIONS`.
 
 ``regime_map(scene, frequencies_hz, amplitudes_m)`` classifies the motion on
 a grid of excitations. Importing this package never imports dolfinx or gmsh.
@@ -17,7 +23,7 @@ from __future__ import annotations
 from .result import REGIMES, DynamicsResult, Impacts, Regime
 
 __all__ = ["simulate", "regime_map", "DynamicsResult", "Impacts", "Regime", "REGIMES",
-           "MapResult"]
+           "MapResult", "MODELS"]
 
 
 def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
@@ -25,19 +31,14 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
 
     Starts at ``scene.initial`` (time, gap, velocity relative to the table),
     samples at ``scene.run.sample_rate_hz``; ``[contact] model`` picks the impact map,
-    soft contact or the 3D rigid ball (:mod:`tengfield.motion3d`); the regime is taken from the
-    window after ``scene.run.settle_periods`` excitation periods.
+    soft contact or the 3D rigid ball from ``MODELS`` (:mod:`tengfield.dynamics.models`);
+    the regime is taken from the window after ``scene.run.settle_periods`` excitation
+    periods.
     Raises :class:`tengfield.errors.DynamicsError` if the motion cannot be
     integrated (e.g. the bound on events per period is exceeded).
     """
-    if scene.contact.model == "3d":
-        from ..motion3d import simulate_3d
-        return simulate_3d(scene, duration=duration)
-    if scene.contact.model == "soft":
-        from .soft import simulate_soft
-        return simulate_soft(scene, duration=duration)
-    from .impact import simulate_impact
-    return simulate_impact(scene, duration=duration)
+    from .models import model_of
+    return model_of(scene)(scene, duration=duration)
 
 
 def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
@@ -59,4 +60,7 @@ def __getattr__(name):
     if name == "MapResult":
         from .mapping import MapResult
         return MapResult
+    if name == "MODELS":
+        from .models import MODELS
+        return MODELS
     raise AttributeError(name)

@@ -44,7 +44,10 @@ import math
 import numpy as np
 from numba import njit
 
-from .table import PPOLY, SINE  # noqa: F401  (excitation kinds: compile-time constants)
+#: Kinds of table motion (:class:`tengfield.dynamics.table.TableMotion` ``kind``; compile-time
+#: constants of this kernel and of the 3D one).
+SINE = 0     # y = A sin(w t + phase), params = (A, w, phase)
+PPOLY = 1    # piecewise quintic on breaks/coeffs (a recorded signal)
 
 FLIGHT = 0
 STUCK_LOWER = 1

@@ -15,8 +15,10 @@ import numpy as np
 from ..errors import DynamicsError
 from ..scene import MAX_PERIODS, G  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
 from . import _kernel as K
-from .result import DynamicsResult, prepare_run, run_result
-from .table import PPOLY, TableMotion
+from ._kernel import PPOLY
+from .result import DynamicsResult
+from .run import prepare_run, run_result
+from .table import TableMotion
 
 #: More events (impacts, lift-offs, releases) per excitation period than this
 #: raise DynamicsError instead of running for ever.
@@ -224,4 +226,5 @@ def simulate_impact(scene, *, duration: float | None = None) -> DynamicsResult:
         t_end=duration, gap0=scene.initial.gap, velocity0=scene.initial.velocity,
         period=scene.excitation.period, time_origin=t0)
     return run_result(scene, traj, contacts, n_events, model="impact", t0=t0,
-                      duration=duration, wall0=wall0, upper_stuck=traj.upper_stuck_between)
+                      duration=duration, wall0=wall0, upper_stuck=traj.upper_stuck_between,
+                      gap_on_grid=traj.gap_on_grid)

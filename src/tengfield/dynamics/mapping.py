@@ -104,7 +104,8 @@ def point_regime(setup: PointSetup, frequency: float, amplitude: float) -> Regim
     window_start = setup.settle_periods * period
     return classify(traj, it, ip, ivb, window_start=window_start, t_end=t_end, period=period,
                     stroke=setup.stroke, g=G,
-                    upper_stuck=traj.upper_stuck_between(window_start, t_end))
+                    upper_stuck=traj.upper_stuck_between(window_start, t_end),
+                    gap_on_grid=traj.gap_on_grid)
 
 
 def _chunk(args):

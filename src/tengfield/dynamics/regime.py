@@ -125,22 +125,23 @@ def section_phase(impact_time: np.ndarray, start: float, period: float,
     return float(np.mod(middle / bins, 1.0))
 
 
-def _grid_gap(sampler, start: float, step: float, count: int) -> np.ndarray:
-    """z at ``start + i step`` (the sampler's compiled grid pass when it has one)."""
-    fast = getattr(sampler, "gap_on_grid", None)
-    if fast is not None:
-        return fast(start, step, count)
+def _grid_gap(sampler, start: float, step: float, count: int, gap_on_grid=None) -> np.ndarray:
+    """z at ``start + i step`` (by ``gap_on_grid(start, step, count)`` when given)."""
+    if gap_on_grid is not None:
+        return gap_on_grid(start, step, count)
     return sampler(start + step * np.arange(count))[0]
 
 
 def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
              impact_speed: np.ndarray, *, window_start: float, t_end: float, period: float,
-             stroke: float, g: float, upper_stuck: bool = False) -> Regime:
+             stroke: float, g: float, upper_stuck: bool = False, gap_on_grid=None) -> Regime:
     """Regime of [window_start, t_end]; ``sampler(times) -> (z, v, y)``.
 
     ``impact_plate`` holds 0 (lower) / 1 (upper), ``impact_speed`` the
     relative impact speeds [m/s]; ``upper_stuck`` says whether the ball was pressed to the upper plate in
-    the window.
+    the window; ``gap_on_grid(start, step, count)``: z on a uniform grid in one pass (a
+    compiled trajectory's, e.g. :meth:`tengfield.dynamics.impact.Trajectory.gap_on_grid`),
+    the same values as ``sampler`` there.
     """
     n_periods = int(math.floor((t_end - window_start) / period + 1e-9))
     if n_periods < 1:
@@ -153,7 +154,7 @@ def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
     z_sec, v_sec, _ = sampler(section_t)
     step = period / SAMPLES_PER_PERIOD
     count = SAMPLES_PER_PERIOD * n_periods + 1
-    z_dense = _grid_gap(sampler, window_start, step, count)
+    z_dense = _grid_gap(sampler, window_start, step, count, gap_on_grid)
     n_lower = int(np.count_nonzero(in_window & (impact_plate == 0)))
     upper = in_window & (impact_plate == 1)
     n_upper = int(np.count_nonzero(upper))

@@ -28,8 +28,10 @@ import numpy as np
 
 from ..errors import DynamicsError
 from ..scene import G
-from .result import DynamicsResult, prepare_run, run_result
-from .table import PPOLY, SINE, TableMotion
+from .result import DynamicsResult
+from .run import prepare_run, run_result
+from ._kernel import PPOLY, SINE
+from .table import TableMotion
 
 FREE, IN_LOWER, IN_UPPER = 0, 1, 2
 

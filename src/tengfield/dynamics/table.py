@@ -1,6 +1,7 @@
 """Table motion y(t) in the form the compiled kernel evaluates.
 
-Two kinds, one representation (:class:`TableMotion`):
+Two kinds (the constants ``SINE``, ``PPOLY`` of the compiled kernel, :mod:`._kernel`),
+one representation (:class:`TableMotion`):
 
 * ``SINE``: ``y = A sin(w t + phase)`` with ``params = (A, w, phase)``.
 * ``PPOLY``: a C^4 piecewise quintic ``y(t)`` on breakpoints ``breaks``
@@ -31,10 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DynamicsError
-
-#: Excitation kinds of TableMotion (the compiled kernel's ``kind`` argument).
-SINE = 0     # y = A sin(w t + phase), params = (A, w, phase)
-PPOLY = 1    # piecewise quintic on breaks/coeffs (a recorded signal)
+from ._kernel import PPOLY, SINE, table_state_many  # kinds of TableMotion: the kernel's constants
 
 SMOOTHING_ORDER = 4   # Butterworth order of [excitation] smoothing_hz (run twice: zero phase)
 
@@ -54,7 +52,6 @@ class TableMotion:
 
     def evaluate(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(y [m], y' [m/s], y'' [m/s^2]) at ``times`` [s]."""
-        from ._kernel import table_state_many
         t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=float)))
         return table_state_many(t, self.kind, self.params, self.breaks, self.coeffs)
 
@@ -181,17 +178,3 @@ def _recorded_table(times: np.ndarray, values: np.ndarray, signal: str) -> Table
                        snap_bound=_piece_bound(d4, widths), t_first=float(x[0]),
                        t_last=float(x[-1]))
 
-
-def table_from_scene(scene, origin: float = 0.0) -> TableMotion:
-    """The table motion of ``scene.excitation`` (sine, recorded, random or harmonics) on the time axis
-    ``t - origin`` [s] (runs integrate relative to their start: precision does not
-    depend on the absolute time)."""
-    exc = scene.excitation
-    if exc.kind == "sine":
-        return sine_table(exc.amplitude, exc.omega,
-                          sine_phase_at(exc.frequency, exc.phase, origin))
-    if exc.kind in ("random", "harmonics"):
-        from .vibration import scene_vibration_table
-        return scene_vibration_table(scene, origin)
-    return recorded_table(exc.times, exc.values, exc.signal, origin=origin,
-                          smoothing_hz=exc.smoothing)

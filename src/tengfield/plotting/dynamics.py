@@ -1,4 +1,5 @@
-"""Figures of the dynamics: trajectory (like the paper's Figs. 5a/6a/7a) and regime maps."""
+"""Figures of the dynamics: trajectory (like the paper's Figs. 5a/6a/7a), regime maps and
+the 3D ball's side and top views."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -166,4 +167,46 @@ def plot_regime_map(map_result, path, *, title: str | None = None):
     ax.set_title(title or "motion regimes of the ball", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
+    return path
+
+
+def plot_trajectory3d(result, path, *, title: str | None = None):
+    """trajectory3d.png: side view (gap z and radial offset r vs time) and top view (x-y) [mm].
+
+    Drawn without pyplot (the caller's matplotlib backend is left alone).
+    """
+    from matplotlib.patches import Circle
+
+    t = result.t
+    clearance_mm = result.tube_clearance * 1e3
+    fig = new_figure((11, 5))
+    ax_side = fig.add_subplot(1, 2, 1)
+    ax_top = fig.add_subplot(1, 2, 2)
+    ax_side.plot(t, result.gap * 1e3, color="#1f77b4", lw=1.2, label="gap $z$")
+    ax_side.plot(t, result.radial * 1e3, color="#d62728", lw=1.0, label="radial offset $r$")
+    ax_side.axhline(0.0, color="0.35", lw=0.8)
+    ax_side.axhline(result.stroke * 1e3, color="0.6", lw=0.8, ls="--", label="upper plate")
+    ax_side.axhline(clearance_mm, color="#d62728", lw=0.8, ls=":", label="tube wall (r)")
+    ax_side.set_xlabel("time [s]")
+    ax_side.set_ylabel("[mm]")
+    ax_side.set_title("side view")
+    ax_side.legend(loc="upper right", fontsize=8)
+    ax_side.grid(alpha=0.3)
+    ax_top.plot(result.x * 1e3, result.y * 1e3, color="#2ca02c", lw=0.8)
+    circle = Circle((0.0, 0.0), clearance_mm, fill=False, color="0.3", ls="--")
+    ax_top.add_patch(circle)
+    lim = 1.15 * max(clearance_mm, float(np.max(result.radial, initial=0.0)) * 1e3)
+    ax_top.set_xlim(-lim, lim)
+    ax_top.set_ylim(-lim, lim)
+    ax_top.set_aspect("equal")
+    ax_top.set_xlabel("x [mm]")
+    ax_top.set_ylabel("y [mm]")
+    ax_top.set_title("top view (centre; dashed: wall contact)")
+    ax_top.grid(alpha=0.3)
+    head = title or "ball in 3D"
+    s = result.summary()
+    fig.suptitle(f"{head}: regime {s['regime']}, {s['impacts']} plate impacts, "
+                 f"{s['wall_contacts']} wall contacts", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
     return path

@@ -8,11 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dynamics.regime import classify
-from ..dynamics.result import DynamicsResult, Impacts, run_span
-from ..dynamics.table import TableMotion, recorded_table, sine_table, table_from_scene
-from ..errors import DynamicsError, SceneError
-from ..scene import G
+from ...errors import DynamicsError, SceneError
+from ...scene import G
+from .._kernel import table_state_many
+from ..excitation import excitation_kind, table_from_scene
+from ..regime import classify
+from ..result import PLATE_NAMES, DynamicsResult, Impacts
+from ..run import run_span, sample_times
+from ..table import TableMotion
 from . import _kernel
 from .contact import KN, EXP, SURFACES, surface_parameters
 
@@ -88,24 +91,12 @@ def gravity_vector(scene) -> np.ndarray:
 
 
 def lateral_tables(scene) -> tuple[TableMotion, TableMotion]:
-    """Table motion along x and y (sine per axis, recorded columns of the same CSV, or
-    for random/harmonics the fundamental's sine plus noise per axis)."""
-    exc = scene.excitation
-    if exc.kind == "sine":
-        return (sine_table(exc.amplitude_x, exc.omega, exc.phase_x),
-                sine_table(exc.amplitude_y, exc.omega, exc.phase_y))
-    if exc.kind in ("random", "harmonics"):   # per-axis: the fundamental's sine + noise
-        from ..dynamics.vibration import scene_vibration_table
-        return (scene_vibration_table(scene, axis="x"), scene_vibration_table(scene, axis="y"))
-    tables = []
-    for key in ("signal_x_column", "signal_y_column"):
-        column = getattr(exc, key)
-        if not column:
-            tables.append(sine_table(0.0, exc.omega, 0.0))
-            continue
-        values = _read_column(scene, key, column)
-        tables.append(recorded_table(exc.times, values, exc.signal))
-    return tables[0], tables[1]
+    """Table motion along x and y, as the excitation's kind gives it
+    (:data:`tengfield.dynamics.excitation.EXCITATIONS`: sine per axis, recorded
+    columns of the same CSV, or for random/harmonics the fundamental's sine plus noise
+    per axis)."""
+    return excitation_kind(scene).lateral(
+        scene, lambda key, column: _read_column(scene, key, column))
 
 
 def _read_column(scene, key: str, column: str) -> np.ndarray:
@@ -163,7 +154,7 @@ def integrate_3d(scene, *, t_start: float, t_end: float, position0, velocity0, s
     y0[3:6] = velocity0
     y0[6:9] = spin0
     if rest_start is None:
-        rest_start = bool(np.any(_kernel._deltas(y0, P) > 0.0))
+        rest_start = bool(np.any(_kernel.overlaps(y0, P) > 0.0))
     acc_z = abs(g_vec[2]) + tz.acc_bound
     acc_xy = math.hypot(g_vec[0], g_vec[1]) + math.hypot(tx.acc_bound, ty.acc_bound)
     targs = _table_args(tx, ty, tz)
@@ -233,7 +224,6 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     def sampler(times):
         """(gap, gap velocity, table) at absolute ``times`` [s] (the kernel's time axis)."""
         st = sampler3d(np.ascontiguousarray(np.atleast_1d(times), dtype=float))
-        from ..dynamics._kernel import table_state_many
         yz, _, _ = table_state_many(np.ascontiguousarray(np.atleast_1d(times), dtype=float),
                                     *tz_args)
         return st[:, 2] - radius, st[:, 5], yz
@@ -255,14 +245,13 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     window_start = min(t0 + scene.run.settle_periods * period, t_end)
     regime = classify(sampler, ct, cp, cvb, window_start=window_start, t_end=t_end, period=period,
                       stroke=dev.stroke, g=G, upper_stuck=False)
-    n_samples = int(math.floor(duration * scene.run.sample_rate + 1e-9)) + 1
-    elapsed = np.arange(n_samples) / scene.run.sample_rate
+    elapsed = sample_times(scene, duration)
     t = t0 + elapsed
     st = sampler3d(t)
     z, v, yz = sampler(t)
     finished = np.isfinite(episodes[:, 2]) & (episodes[:, 6] == 0)
     steps_done = episodes[finished, 5]
-    plates = np.array(["lower", "upper"])[cp] if cp.size else np.zeros(0, dtype="<U5")
+    plates = PLATE_NAMES[cp] if cp.size else np.zeros(0, dtype="<U5")
     return Motion3DResult(
         t=t, gap=z, gap_velocity=v, table=yz,
         impacts=Impacts(ct, plates, cvb, cva), regime=regime, n_events=n_k,

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..dynamics._kernel import table_state
+from .._kernel import table_state
 
 N_STATE = 18
 KNOT_WIDTH = 11           # t, p(3), v(3), w(3), mode
@@ -270,7 +270,8 @@ def _settle_history(y, sliding, P, S):
 
 
 @njit(cache=True)
-def _deltas(y, P):
+def overlaps(y, P):
+    """Overlaps [m] of the ball with the lower plate, upper plate, wall (> 0: touching)."""
     d = np.empty(3)
     for s in range(3):
         d[s] = _geometry(s, y[0:3], P[1], P[3], P[4])[0]
@@ -399,7 +400,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
     sliding = np.zeros(3, dtype=np.bool_)
     y = y_start.copy()
     t = t_start
-    d = _deltas(y, P)
+    d = overlaps(y, P)
     for s in range(3):
         if d[s] > 0.0:
             episodes = _grow(episodes, n_e)
@@ -416,7 +417,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
             knots[n_k, 1:10] = y[0:9]
             knots[n_k, 10] = CONTACT
             return 1, knots, n_k + 1, episodes, n_e
-        d = _deltas(y, P)
+        d = overlaps(y, P)
         in_contact = d[0] > 0.0 or d[1] > 0.0 or d[2] > 0.0
         knots = _grow(knots, n_k)
         knots[n_k, 0] = t
@@ -433,7 +434,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
             tau = min(tau, t_end - t)
             y1 = _flight_state(t + tau, t, y, Y0, Yd0, P, kx, px, bx, cx, ky, py, by, cy,
                                kz, pz, bz, cz)
-            d1 = _deltas(y1, P)
+            d1 = overlaps(y1, P)
             if d1[0] > 0.0 or d1[1] > 0.0 or d1[2] > 0.0:
                 lo = 0.0
                 hi = tau
@@ -441,7 +442,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                     mid = 0.5 * (lo + hi)
                     ym = _flight_state(t + mid, t, y, Y0, Yd0, P, kx, px, bx, cx, ky, py, by,
                                        cy, kz, pz, bz, cz)
-                    dm = _deltas(ym, P)
+                    dm = overlaps(ym, P)
                     if dm[0] > 0.0 or dm[1] > 0.0 or dm[2] > 0.0:
                         hi = mid
                     else:
@@ -449,7 +450,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                 tau = hi
                 y1 = _flight_state(t + tau, t, y, Y0, Yd0, P, kx, px, bx, cx, ky, py, by, cy,
                                    kz, pz, bz, cz)
-                d1 = _deltas(y1, P)
+                d1 = overlaps(y1, P)
                 for s in range(3):
                     if d1[s] > 0.0:
                         _, nx, ny, nz = _geometry(s, y1[0:3], P[1], P[3], P[4])
@@ -464,7 +465,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
         # contact step
         h = min(_contact_step(y, P, S, steps), t_end - t)
         y1 = _rk4(t, y, h, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
-        d1 = _deltas(y1, P)
+        d1 = overlaps(y1, P)
         if _touched_set_changed(d, d1):
             # cut the step back to the first change of the set of touched surfaces
             lo = 0.0
@@ -473,13 +474,13 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                 mid = 0.5 * (lo + hi)
                 ym = _rk4(t, y, mid, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz,
                           cz)
-                if not _touched_set_changed(d, _deltas(ym, P)):
+                if not _touched_set_changed(d, overlaps(ym, P)):
                     lo = mid
                 else:
                     hi = mid
             h = hi
             y1 = _rk4(t, y, h, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz)
-            d1 = _deltas(y1, P)
+            d1 = overlaps(y1, P)
         for s in range(3):
             if d[s] > 0.0 and open_ep[s] >= 0:
                 episodes[open_ep[s], 5] += 1.0
@@ -502,7 +503,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
     knots = _grow(knots, n_k)
     knots[n_k, 0] = t
     knots[n_k, 1:10] = y[0:9]
-    d = _deltas(y, P)
+    d = overlaps(y, P)
     knots[n_k, 10] = CONTACT if (d[0] > 0.0 or d[1] > 0.0 or d[2] > 0.0) else FLIGHT
     n_k += 1
     return 0, knots, n_k, episodes, n_e

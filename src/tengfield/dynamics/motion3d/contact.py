@@ -32,8 +32,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import SceneError
-from ..dynamics.soft import damping_ratio
+from ...errors import SceneError
+from ..soft import damping_ratio
 
 SURFACES = ("lower", "upper", "wall")
 SQRT_5_6 = math.sqrt(5.0 / 6.0)
