@@ -6,7 +6,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..scene import MAX_SAMPLES  # the scene's limit, also for simulate(duration=)
+from ..scene.limits import MAX_SAMPLES  # the scene's limit, also for simulate(duration=)
 
 #: plate index of a contact -> its name
 PLATE_NAMES = np.array(["lower", "upper"])
@@ -124,7 +124,7 @@ def run_span(scene, duration: float | None) -> tuple[float, float, float]:
     import math
 
     from ..errors import DynamicsError
-    from ..scene import check_steady_window
+    from ..scene.limits import check_steady_window
 
     if duration is not None:
         duration = float(duration)
@@ -182,7 +182,7 @@ def run_result(scene, traj, contacts, n_events: int, *, model: str, t0: float, d
     the start."""
     import time
 
-    from ..scene import G
+    from ..scene.constants import G
     from .regime import classify
 
     times, plates, before, after = contacts

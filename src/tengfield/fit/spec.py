@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
-from ..scene import check_file_size, check_magnitude, check_time_steps, decode_utf8
+from ..scene.recorded import check_file_size, check_magnitude, check_time_steps, decode_utf8
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
