@@ -4,15 +4,14 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..dynamics.regime import classify
 from ..dynamics.result import DynamicsResult, Impacts, run_span
 from ..dynamics.table import TableMotion, recorded_table, sine_table, table_from_scene
-from ..errors import DynamicsError, SceneError
-from ..scene import G
+from ..errors import DynamicsError
+from ..scene.constants import G
 from . import _kernel
 from .contact import KN, EXP, SURFACES, surface_parameters
 
@@ -98,32 +97,12 @@ def lateral_tables(scene) -> tuple[TableMotion, TableMotion]:
         from ..dynamics.vibration import scene_vibration_table
         return (scene_vibration_table(scene, axis="x"), scene_vibration_table(scene, axis="y"))
     tables = []
-    for key in ("signal_x_column", "signal_y_column"):
-        column = getattr(exc, key)
-        if not column:
+    for values in (exc.values_x, exc.values_y):   # the lateral columns, read with the scene
+        if values is None:
             tables.append(sine_table(0.0, exc.omega, 0.0))
             continue
-        values = _read_column(scene, key, column)
         tables.append(recorded_table(exc.times, values, exc.signal))
     return tables[0], tables[1]
-
-
-def _read_column(scene, key: str, column: str) -> np.ndarray:
-    exc = scene.excitation
-    path = Path(exc.file)
-    if not path.is_absolute() and scene.source not in ("<default>", "<dict>", "<string>"):
-        path = Path(scene.source).parent / path
-    table = np.genfromtxt(path, delimiter=",", names=True, dtype=float, encoding="utf-8")
-    names = table.dtype.names or ()
-    if column not in names:
-        raise SceneError(f"[excitation] {key} = {column!r} is not a column of {exc.file!r}; "
-                         f"columns are {', '.join(names)}")
-    values = np.atleast_1d(np.asarray(table[column], dtype=float))
-    bad = np.flatnonzero(~np.isfinite(values))
-    if bad.size:
-        raise SceneError(f"[excitation] file = {exc.file!r}: column {column!r} holds NaN or inf "
-                         f"at data row {bad[0] + 1}")
-    return values
 
 
 def _table_args(tx: TableMotion, ty: TableMotion, tz: TableMotion) -> tuple:
