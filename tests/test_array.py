@@ -152,7 +152,8 @@ def test_an_array_whose_trajectories_would_not_fit_is_refused_at_load():
     the scene is read, before any field or dynamics work; identical cells share one
     trajectory and are not limited."""
     from tengfield.errors import SceneError
-    from tengfield.scene import MAX_ARRAY_CELL_PERIODS, parse_scene
+    from tengfield.scene import parse_scene
+    from tengfield.scene.limits import MAX_ARRAY_CELL_PERIODS
 
     with pytest.raises(SceneError, match=r"\[array\] cells x \[run\] duration_s x \[excitation\] "
                                          r"frequency_hz = 1000000 x 1 x 20 = 2e\+07 cell-periods: "

@@ -700,5 +700,5 @@ def structural_figure_of_merit(energy_per_cycle: float, surface_charge: float, a
     ``area`` [m^2] is the charged area (tengfield uses the ball's surface π d²),
     ``max_displacement`` x_max [m] the free stroke.
     """
-    from .scene import EPS0
+    from .scene.constants import EPS0
     return 2.0 * EPS0 * energy_per_cycle / (surface_charge**2 * area * max_displacement)

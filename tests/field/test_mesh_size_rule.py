@@ -11,6 +11,7 @@ import pytest
 
 from tengfield.field import geometry_axisymmetric as geometry
 from tengfield.scene import EPS0, Scene, default_scene
+from tengfield.scene.limits import default_mesh_scale
 
 FAR = {"ball_diameter_mm": 4.0, "gap_mm": 396.0, "electrode_radius_mm": 2.0,
        "tube_inner_radius_mm": 3.0, "tube_outer_radius_mm": 4.0, "plate_thickness_mm": 2.0,
@@ -73,7 +74,7 @@ def test_the_default_scene_keeps_its_mesh_size_to_the_bit():
     for scene in (written, unwritten):
         lay = geometry.layout(scene, 1.5e-3)
         assert lay.mesh_size == 0.5e-3 == scene.field.mesh_size
-    assert geometry.default_mesh_scale(unwritten.device, unwritten.field) == 1.0
+    assert default_mesh_scale(unwritten.device, unwritten.field) == 1.0
 
 
 @pytest.mark.parametrize("device, expected_mm", [

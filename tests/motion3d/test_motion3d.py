@@ -211,12 +211,12 @@ def test_bad_3d_keys_raise_scene_errors(tmp_path):
         default_scene().with_values(device={"tilt_deg": 200.0})
     np.savetxt(tmp_path / "t.csv", np.column_stack([np.linspace(0, 1, 20), np.zeros(20)]),
                delimiter=",", header="time_s,displacement_m", comments="")
-    scene = default_scene().with_values(
-        contact={"model": "3d"}, excitation={"kind": "recorded", "file": str(tmp_path / "t.csv"),
-                                             "signal_x_column": "ax"},
-        run={"duration_s": 0.5, "settle_periods": 1})
-    with pytest.raises(SceneError, match="signal_x_column"):
-        simulate_3d(scene)
+    with pytest.raises(SceneError, match="signal_x_column"):   # read with the scene
+        default_scene().with_values(
+            contact={"model": "3d"}, excitation={"kind": "recorded",
+                                                 "file": str(tmp_path / "t.csv"),
+                                                 "signal_x_column": "ax"},
+            run={"duration_s": 0.5, "settle_periods": 1})
 
 
 def test_default_scenes_unchanged_by_the_3d_keys():

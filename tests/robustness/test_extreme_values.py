@@ -12,7 +12,9 @@ from hypothesis import strategies as st
 
 from tengfield.dynamics.table import sine_table
 from tengfield.errors import SceneError
-from tengfield.scene import SCHEMA, auto_domain_radius, parse_scene
+from tengfield.scene import load_scene, parse_scene
+from tengfield.scene.limits import auto_domain_radius
+from tengfield.scene.schema import SCHEMA
 
 SHORT = "[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 2000\n"
 
@@ -145,20 +147,20 @@ def test_recorded_row_with_a_missing_column_names_the_line(run_cli, tmp_path):
 
 
 def test_recorded_file_too_large_is_refused_before_reading(tmp_path, monkeypatch):
-    import tengfield.scene as scene_mod
+    import tengfield.scene.recorded as recorded
 
-    monkeypatch.setattr(scene_mod, "MAX_RECORDED_BYTES", 1000)
+    monkeypatch.setattr(recorded, "MAX_RECORDED_BYTES", 1000)
     t, y = _record()
     body = "time_s,displacement_m\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(t, y))
     with pytest.raises(SceneError, match=r"table.csv' has [0-9,]+ bytes: allowed at most 1,000"):
-        scene_mod.load_scene(_recorded_scene(tmp_path, body))
+        load_scene(_recorded_scene(tmp_path, body))
 
 
 def test_recorded_rows_beyond_the_limit_are_refused_while_reading(tmp_path, monkeypatch):
-    import tengfield.scene as scene_mod
+    import tengfield.scene.recorded as recorded
 
-    monkeypatch.setattr(scene_mod, "MAX_RECORDED_ROWS", 100)
+    monkeypatch.setattr(recorded, "MAX_RECORDED_ROWS", 100)
     t, y = _record()
     body = "time_s,displacement_m\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(t, y))
     with pytest.raises(SceneError, match="more than 100 data rows"):
-        scene_mod.load_scene(_recorded_scene(tmp_path, body))
+        load_scene(_recorded_scene(tmp_path, body))

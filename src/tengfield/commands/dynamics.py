@@ -55,7 +55,8 @@ def _run_dynamics(args) -> int:
 def _dynamics(args, figures) -> int:
     from ..dynamics import simulate
     from ..io import write_dynamics_files, write_json
-    from ..scene import check_steady_window, load_scene
+    from ..scene import load_scene
+    from ..scene.limits import check_steady_window
 
     scene = load_scene(args.scene)
     if args.duration_s is not None:

@@ -27,9 +27,8 @@ class ExcitationKind:
     (``[excitation] phase_deg``, or an ``[array]`` cell's own), used by a kind that
     has one (``phased``).
 
-    ``lateral(scene, read_column) -> (x, y)``: the table motion along x and y on the
-    absolute time axis (the 3D model); ``read_column(key, column)`` gives the values
-    of a column of the recorded file (``key`` names the scene key that chose it).
+    ``lateral(scene) -> (x, y)``: the table motion along x and y on the absolute time
+    axis (the 3D model).
     """
     vertical: Callable[..., TableMotion]
     lateral: Callable[..., tuple[TableMotion, TableMotion]]
@@ -46,7 +45,7 @@ def _sine_vertical(scene, origin: float, phase: float) -> TableMotion:
     return sine_table(exc.amplitude, exc.omega, sine_phase_at(exc.frequency, phase, origin))
 
 
-def _sine_lateral(scene, read_column) -> tuple[TableMotion, TableMotion]:
+def _sine_lateral(scene) -> tuple[TableMotion, TableMotion]:
     """A sine per axis: ``amplitude_x_mm``/``phase_x_deg``, ``amplitude_y_mm``/``phase_y_deg``."""
     exc = scene.excitation
     return (sine_table(exc.amplitude_x, exc.omega, exc.phase_x),
@@ -59,24 +58,20 @@ def _recorded_vertical(scene, origin: float, phase: float) -> TableMotion:
                           smoothing_hz=exc.smoothing)
 
 
-def _recorded_lateral(scene, read_column) -> tuple[TableMotion, TableMotion]:
-    """The columns ``signal_x_column``, ``signal_y_column`` of the same file (none: still)."""
+def _recorded_lateral(scene) -> tuple[TableMotion, TableMotion]:
+    """The columns ``signal_x_column``, ``signal_y_column`` of the same file, read with the
+    scene (``Excitation.values_x``/``values_y``; none: still)."""
     exc = scene.excitation
-    tables = []
-    for key in ("signal_x_column", "signal_y_column"):
-        column = getattr(exc, key)
-        if not column:
-            tables.append(_still(scene))
-            continue
-        tables.append(recorded_table(exc.times, read_column(key, column), exc.signal))
-    return tables[0], tables[1]
+    return tuple(_still(scene) if values is None
+                 else recorded_table(exc.times, values, exc.signal)
+                 for values in (exc.values_x, exc.values_y))
 
 
 def _vibration_vertical(scene, origin: float, phase: float) -> TableMotion:
     return scene_vibration_table(scene, origin)
 
 
-def _vibration_lateral(scene, read_column) -> tuple[TableMotion, TableMotion]:
+def _vibration_lateral(scene) -> tuple[TableMotion, TableMotion]:
     """Per axis: the fundamental's sine plus noise (:func:`.vibration.scene_vibration_table`)."""
     return scene_vibration_table(scene, axis="x"), scene_vibration_table(scene, axis="y")
 

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DynamicsError
-from ..scene import MAX_PERIODS, G  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
+from ..scene.constants import G
+from ..scene.limits import MAX_PERIODS  # MAX_PERIODS: the scene's limit, also for simulate(duration=)
 from . import _kernel as K
 from ._kernel import PPOLY
 from .result import DynamicsResult

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import DynamicsError, SceneError
 from .._mpi import check_jobs, farm, rank_of, size_of
-from ..scene import G
+from ..scene.constants import G
 from .impact import Restitution, integrate
 from .regime import classify
 from .result import REGIMES, Regime

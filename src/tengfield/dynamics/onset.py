@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..scene import G
+from ..scene.constants import G
 from .impact import Restitution, integrate
 from .table import sine_table
 

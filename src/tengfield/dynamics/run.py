@@ -7,7 +7,8 @@ import time
 import numpy as np
 
 from ..errors import DynamicsError, SceneError
-from ..scene import MAX_SAMPLES, G, check_steady_window  # MAX_SAMPLES: also for simulate(duration=)
+from ..scene.constants import G
+from ..scene.limits import MAX_SAMPLES, check_steady_window  # MAX_SAMPLES: also for simulate(duration=)
 from .excitation import table_from_scene
 from .regime import classify
 from .result import PLATE_NAMES, DynamicsResult, Impacts

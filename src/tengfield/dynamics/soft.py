@@ -27,7 +27,7 @@ import time as _time
 import numpy as np
 
 from ..errors import DynamicsError
-from ..scene import G
+from ..scene.constants import G
 from .result import DynamicsResult
 from .run import prepare_run, run_result
 from ._kernel import PPOLY, SINE

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import FieldError
-from ..scene import EPS0
+from ..scene.constants import EPS0
 from . import contact
 from . import geometry_axisymmetric as geometry
 from .result import FieldSolution, PositionResult

@@ -22,8 +22,10 @@ from typing import Callable
 
 import numpy as np
 
-#: smallest meshed ball–electrode gap, as a fraction of the electrode spacing h
-MIN_GAP_FRACTION = 2e-3
+# smallest meshed ball–electrode gap, as a fraction of the electrode spacing h: a limit
+# of the scene (its field check needs it too)
+from ..scene.limits import MIN_GAP_FRACTION
+
 #: exponents of the near-contact power law X(δ) = X0 + b δ^p are clipped to this range
 CONTACT_EXPONENT_RANGE = (0.25, 2.0)
 #: A fitted exponent this close to 1 is mesh noise around a straight line

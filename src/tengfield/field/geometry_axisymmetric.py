@@ -43,8 +43,8 @@ import math
 import os
 from dataclasses import dataclass, field
 
-from .. import scene as _scene
 from ..errors import FieldError
+from ..scene.limits import default_mesh_scale
 from . import contact
 
 #: strongest singular exponent of the field (rim of an electrode meeting the tube corner)
@@ -55,18 +55,9 @@ RIM_EXPONENT = 0.43
 #: (h = 10 mm, extent 8.6 mm) at mesh sizes >= 0.125 mm the lengths are the
 #: device's own (h/4 and the extent) and the mesh is the one of earlier versions.
 GRADING_REACH = 20.0
-#: The features a default mesh must resolve, with their size [m] in the paper's device
-#: (data/default.toml). Without ``[field] mesh_size_mm`` in the scene, the default
-#: size is scaled by ``max(1, min over the features of size / paper's size)``
-#: (:func:`default_mesh_scale`): a device whose features are all k >= 1 times the
-#: paper's gets the paper's mesh scaled by k (same cost, same relative error); a
-#: device with one feature as small as the paper's keeps the default as it is. A
-#: ``mesh_size_mm`` written in the scene (or passed as an override) is never scaled.
-# (PAPER_FEATURES, PAPER_WALL_FEATURES, mesh_features and default_mesh_scale live in
-# tengfield.scene: the scene's own "too fine" check needs the same rule)
-PAPER_FEATURES, PAPER_WALL_FEATURES = _scene.PAPER_FEATURES, _scene.PAPER_WALL_FEATURES
-mesh_features = _scene.mesh_features
-default_mesh_scale = _scene.default_mesh_scale
+# The default mesh size is scaled to the device's smallest features (PAPER_FEATURES,
+# mesh_features, default_mesh_scale): a rule of tengfield.scene.limits, since the
+# scene's own "too fine" check needs the same rule.
 #: relative precision of gmsh's integral of 1/size along the curves (its default,
 #: 1e-9, spends half of the meshing time of the steeply graded rims there)
 LC_INTEGRATION_PRECISION = 1e-6

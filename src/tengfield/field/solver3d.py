@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FieldError
-from ..scene import EPS0
+from ..scene.constants import EPS0
 from . import contact
 from .geometry3d import (MeshSettings, build_model, contact_anchors, cylindrical_cell,
                          unique_model_name)

@@ -27,18 +27,15 @@ Without ``[fit.columns]`` the columns of a ``tengfield run`` waveforms.csv
 """
 from __future__ import annotations
 
-import csv
-import difflib
-import io
 import math
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..errors import SceneError
-from ..scene import check_file_size, check_magnitude, check_time_steps, decode_utf8
+from ..scene.recorded import check_magnitude, check_time_steps, read_table
+from ..scene.schema import suggest as _suggest
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
@@ -70,11 +67,6 @@ MAX_TRACE_ROWS = 2_000_000
 MAX_TRACE_VALUE = {"V": 1e6, "Q": 1.0, "I": 1e3}
 #: |time| [s] of a trace (the [initial] time_s bound)
 MAX_TRACE_TIME = 1e12
-
-
-def _suggest(word, options) -> str:
-    close = difflib.get_close_matches(str(word), list(options), n=1, cutoff=0.6)
-    return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def _number(where: str, value, lo=-math.inf, hi=math.inf) -> float:
@@ -283,38 +275,20 @@ class Trace:
 
 
 def read_trace(path, spec: FitSpec) -> Trace:
-    """Read the measured CSV named by ``--measured`` (header row, comma separated)."""
-    path = Path(path)
+    """Read the measured CSV named by ``--measured`` (header row, comma separated; the
+    scene's CSV reader, :func:`tengfield.scene.recorded.read_table`)."""
     name = str(path)
-    if not path.is_file():
-        raise SceneError(f"--measured {name!r}: no such file")
-    try:
-        check_file_size(path, f"--measured {name!r}", MAX_TRACE_BYTES)
-        blob = path.read_bytes()
-    except OSError as exc:
-        raise SceneError(f"--measured {name!r} could not be read: "
-                         f"{exc.strerror or exc}") from None
-    text = decode_utf8(blob, f"--measured {name!r}")
-    rows, lines = [], []
-    reader = csv.reader(io.StringIO(text, newline=""))
-    for row in reader:
-        if row and not row[0].lstrip().startswith("#"):
-            rows.append(row)
-            lines.append(reader.line_num)
-            if len(rows) > MAX_TRACE_ROWS + 1:
-                raise SceneError(f"--measured {name!r} has more than {MAX_TRACE_ROWS:,} data "
-                                 f"rows: allowed at most {MAX_TRACE_ROWS:,} (checked while "
-                                 "reading; decimate it)")
-    if not rows:
-        raise SceneError(f"--measured {name!r} is empty: expected a header row and at least "
+    what = f"--measured {name!r}"
+    table = read_table(name, None, what, max_bytes=MAX_TRACE_BYTES, max_rows=MAX_TRACE_ROWS)
+    header = table.header
+    if not header:
+        raise SceneError(f"{what} is empty: expected a header row and at least "
                          f"{MIN_SAMPLES} data rows")
-    header = [h.strip() for h in rows[0]]
-    data = rows[1:]
     columns = spec.columns
     if columns is None:
         columns = [Column(q, c, u, None) for q, (c, u) in RUN_COLUMNS.items() if c in header]
         if not columns:
-            raise SceneError(f"--measured {name!r} has none of the columns "
+            raise SceneError(f"{what} has none of the columns "
                              f"{', '.join(c for c, _ in RUN_COLUMNS.values())}; name the columns "
                              f"in [fit.columns] (columns are {', '.join(header)})")
     wanted = [("[fit] time_column", spec.time_column)] + \
@@ -323,32 +297,18 @@ def read_trace(path, spec: FitSpec) -> Trace:
         if col not in header:
             raise SceneError(f"{where} = {col!r} is not a column of {name!r}; columns are "
                              f"{', '.join(header)}" + _suggest(col, header))
-    if len(data) < MIN_SAMPLES:
-        raise SceneError(f"--measured {name!r} has {len(data)} data rows: at least "
+    if len(table.rows) < MIN_SAMPLES:
+        raise SceneError(f"{what} has {len(table.rows)} data rows: at least "
                          f"{MIN_SAMPLES} are needed")
 
-    for i, row in enumerate(data):
-        if len(row) != len(header):
-            raise SceneError(f"--measured {name!r}: line {lines[i + 1]} (data row {i + 1}) has "
-                             f"{len(row)} field(s): expected {len(header)} "
-                             f"({','.join(header)})")
-
     def column(col: str) -> np.ndarray:
-        j = header.index(col)
-        out = np.empty(len(data))
-        for i, row in enumerate(data):
-            try:
-                out[i] = float(row[j]) if j < len(row) and row[j].strip() else math.nan
-            except ValueError:
-                raise SceneError(f"--measured {name!r}: column {col!r} holds {row[j]!r} at data "
-                                 f"row {i + 1}: expected a number") from None
+        out = table.column(col, allow_blank=True)
         bad = np.flatnonzero(~np.isfinite(out))
         if bad.size:
-            raise SceneError(f"--measured {name!r}: column {col!r} holds NaN, inf or a blank at "
+            raise SceneError(f"{what}: column {col!r} holds NaN, inf or a blank at "
                              f"data row {bad[0] + 1} ({bad.size} such rows); remove or fill them")
         return out
 
-    what = f"--measured {name!r}"
     time = column(spec.time_column) * TIME_UNITS[spec.time_unit]
     check_magnitude(time, MAX_TRACE_TIME, what, f"time column {spec.time_column!r}", "s")
     check_time_steps(time, what)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import G
+from ..scene.constants import G
 from . import new_figure
 
 REGIME_COLOURS = {

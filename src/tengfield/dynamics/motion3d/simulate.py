@@ -4,12 +4,11 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ...errors import DynamicsError, SceneError
-from ...scene import G
+from ...errors import DynamicsError
+from ...scene.constants import G
 from .._kernel import table_state_many
 from ..excitation import excitation_kind, table_from_scene
 from ..regime import classify
@@ -93,28 +92,9 @@ def gravity_vector(scene) -> np.ndarray:
 def lateral_tables(scene) -> tuple[TableMotion, TableMotion]:
     """Table motion along x and y, as the excitation's kind gives it
     (:data:`tengfield.dynamics.excitation.EXCITATIONS`: sine per axis, recorded
-    columns of the same CSV, or for random/harmonics the fundamental's sine plus noise
-    per axis)."""
-    return excitation_kind(scene).lateral(
-        scene, lambda key, column: _read_column(scene, key, column))
-
-
-def _read_column(scene, key: str, column: str) -> np.ndarray:
-    exc = scene.excitation
-    path = Path(exc.file)
-    if not path.is_absolute() and scene.source not in ("<default>", "<dict>", "<string>"):
-        path = Path(scene.source).parent / path
-    table = np.genfromtxt(path, delimiter=",", names=True, dtype=float, encoding="utf-8")
-    names = table.dtype.names or ()
-    if column not in names:
-        raise SceneError(f"[excitation] {key} = {column!r} is not a column of {exc.file!r}; "
-                         f"columns are {', '.join(names)}")
-    values = np.atleast_1d(np.asarray(table[column], dtype=float))
-    bad = np.flatnonzero(~np.isfinite(values))
-    if bad.size:
-        raise SceneError(f"[excitation] file = {exc.file!r}: column {column!r} holds NaN or inf "
-                         f"at data row {bad[0] + 1}")
-    return values
+    columns of the same CSV (read with the scene), or for random/harmonics the
+    fundamental's sine plus noise per axis)."""
+    return excitation_kind(scene).lateral(scene)
 
 
 def _table_args(tx: TableMotion, ty: TableMotion, tz: TableMotion) -> tuple:

@@ -1,0 +1,283 @@
+"""Limits of work, size and geometry, and the checks that apply them
+(docs/stability.md, "bad input and faults").
+
+Work limits (samples, periods, cell-periods, synthesised records) are checked when a
+scene is built; the field-only ranges relative to the geometry (domain radius, feature
+sizes, mesh size, the contact rule's smallest gap) only where a field stage runs
+(:func:`field_problems`, reported by ``check_field``).
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import SceneError
+
+# -- limits of work, checked at load --
+#: Output samples per run, ``duration_s x sample_rate_hz``: 2e7 is 1000 s at 20 kHz
+#: (four float64 arrays of 0.64 GB; the CSV holds about 1 GB).
+MAX_SAMPLES = 2e7
+#: ... and at least this many (a 1e-300 s run, or a 1e-300 Hz sample rate, had none).
+MIN_SAMPLES = 2
+#: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
+MAX_PERIODS = 1e6
+#: ``[array]`` cells with their own dynamics (a spread set) x excitation periods: the
+#: run's peak memory is about 1.4 kB per cell-period (455 cells x 1000 periods: 642 MB,
+#: benchmarks/harvest_array_speed.py; the segments are kept twice, per cell and in one
+#: bundle), so 5e6 is about 7 GB.
+MAX_ARRAY_CELL_PERIODS = 5e6
+#: peak bytes per cell-period (the estimate in the message)
+ARRAY_BYTES_PER_CELL_PERIOD = 1.4e3
+#: Events per period the impact map provisions (its first allocation); with
+#: MAX_PERIODS this bounds the first allocation at 1.6e7 events (1.3 GB).
+EVENTS_PER_PERIOD_ESTIMATE = 16
+#: components of a harmonics excitation
+MAX_HARMONICS = 1000
+#: samples per period of the highest frequency in a synthesised record
+#: (tengfield.dynamics.vibration.SAMPLES_PER_PERIOD; bounds its size at load)
+VIBRATION_SAMPLES_PER_PERIOD = 32
+#: samples of a synthesised record (its quintic spline: about 1 kB of memory per sample
+#: while it is built, so 2e6 samples are ~2 GB; 2 s of a 31 kHz band)
+MAX_RECORD_SAMPLES = 2e6
+
+# -- sizes of the files read --
+#: Bytes of a scene file: the default scene is 5 kB; tomllib needs ~130 bytes of memory
+#: per byte of text (a 50 MB file took 6.7 GB), so 1 MB bounds a parse at ~150 MB.
+MAX_SCENE_BYTES = 1_000_000
+#: Nesting of tables and arrays in a scene file ([fit.columns.V] is 3 deep, an inline
+#: table of [fit.parameters] 3): deeper structures are refused (tomllib recurses).
+MAX_TOML_DEPTH = 8
+#: Data rows a recorded excitation needs: the table motion is a quintic spline
+#: (``tengfield.dynamics.table.recorded_table``).
+MIN_RECORDED_ROWS = 6
+#: Bytes and data rows of a recorded excitation (checked before reading): 2e6 rows is
+#: 100 s at 20 kHz; the quintic spline and its bounds take ~0.5 kB per row (1 GB), and
+#: Python's CSV reader ~2 s per million rows. A 30M-row file exhausted memory after 49 s.
+MAX_RECORDED_ROWS = 2_000_000
+MAX_RECORDED_BYTES = 200_000_000
+#: |displacement| [m] (1 km, the amplitude_mm bound) and |acceleration| [m/s^2] (1e8 g)
+#: of a record: the spline's bounds (up to the 4th derivative) stay finite
+MAX_RECORDED_DISPLACEMENT = 1e3
+MAX_RECORDED_ACCELERATION = 1e9
+#: |time| [s] of a record, the [initial] time_s bound (1e12 s: doubles keep 0.1 ms)
+MAX_RECORDED_TIME = 1e12
+#: a time step below this fraction of the record's median step is refused: far below the
+#: data's resolution (a near-duplicate stamp 1e-15 s apart made the spline ring)
+MIN_STEP_FRACTION = 1e-3
+#: points of a PSD table (psd_file)
+MAX_PSD_ROWS = 100000
+
+# -- field-only ranges relative to the geometry (checked by check_field) --
+#: ``domain_radius_mm = "auto"``: this factor x the device's bounding radius,
+#: rounded up at two significant digits (the paper's device: 2.2 x 8.9 mm -> 20 mm).
+DOMAIN_AUTO_FACTOR = 2.2
+#: The far-field sphere must exceed 1.2 x (bounding radius + ball offset) ...
+DOMAIN_MIN_FACTOR = 1.2
+#: ... and stay below 50 x the bounding radius (gmsh/OpenCASCADE fail far beyond).
+DOMAIN_MAX_FACTOR = 50.0
+#: Every feature (ball, plates, tube wall, electrode) >= 1e-3 x the bounding radius.
+FEATURE_MIN_FRACTION = 1e-3
+#: Smallest base mesh size as a fraction of the device's smallest feature, per
+#: solver (the mesh is graded finer still at rims and gaps). Measured, paper's
+#: device, degree 2, one (r, z) solve: 0.5 mm 1.3e4 dofs; 0.15 mm 1.3e5 dofs,
+#: 0.4 GB; the limit 0.075 mm 5.1e5 dofs, 78 s, 1.2 GB (dofs ~ h^-2).
+MESH_MIN_FRACTION = {"axisymmetric": 1.0 / 20.0, "3d": 1.0 / 4.0}
+#: smallest meshed ball-electrode gap, as a fraction of the electrode spacing h (the
+#: contact rule of both field solvers, tengfield.field.contact)
+MIN_GAP_FRACTION = 2e-3
+#: The contact rule meshes ball-electrode gaps down to min_gap and extrapolates
+#: from gaps g, 2g, 4g at both plates: the stroke must hold 8 of them.
+CONTACT_GAPS_IN_STROKE = 8
+#: The default ``[field] mesh_size_mm`` (0.5 mm) resolves the paper's device, whose
+#: smallest features are these [m]. Without ``mesh_size_mm`` in the scene, the default
+#: size is scaled by ``max(1, min over the features of size / paper's size)``
+#: (:func:`default_mesh_scale`): a device whose features are all k >= 1 times the
+#: paper's gets the paper's mesh scaled by k (same cost, same relative error); a device
+#: with one feature as small as the paper's keeps the default. A ``mesh_size_mm``
+#: written in the scene (or passed as an override) is never scaled.
+PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "gap_mm": 3.0e-3}
+#: ... and, with dielectric walls (``wall_permittivity != 1``), the walls and the
+#: ball's clearance to the tube (plate thickness also under a grounded table)
+PAPER_WALL_FEATURES = {"tube_outer_radius_mm - tube_inner_radius_mm": 1.5e-3,
+                       "plate_thickness_mm": 2.0e-3,
+                       "tube_inner_radius_mm - ball_diameter_mm / 2": 0.5e-3}
+
+
+# ---------------------------------------------------------------------------
+def check_steady_window(exc, settle_periods: int, duration: float,
+                        name: str = "duration_s") -> None:
+    """Refuse a run of ``duration`` [s] that ends before its regime window starts (after
+    ``settle_periods`` excitation periods): the same rule for every excitation kind
+    ("recorded": frequency_hz is the reference period of the analysis). ``name`` is how
+    the message names the duration (a scene key, an option)."""
+    settle = settle_periods * exc.period
+    if settle >= duration:
+        raise SceneError(
+            f"[run] settle_periods = {settle_periods} leaves no steady window: "
+            f"settle_periods / frequency_hz = {settle:g} s must be < {name} = {duration:g}")
+
+
+def check_work(exc, run) -> None:
+    """Refuse runs whose sample or event count would exhaust memory (product named)."""
+    samples = run.duration * run.sample_rate
+    if samples < MIN_SAMPLES:
+        raise SceneError(
+            f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
+            f"{samples:.3g} samples: allowed >= {MIN_SAMPLES:g} (the run's output needs "
+            "samples to report)")
+    if samples > MAX_SAMPLES:
+        raise SceneError(
+            f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
+            f"{samples:.3g} samples: allowed <= {MAX_SAMPLES:.3g} (lower sample_rate_hz or "
+            "split the run)")
+    periods = run.duration * exc.frequency
+    if periods > MAX_PERIODS:
+        raise SceneError(
+            f"[run] duration_s x [excitation] frequency_hz = {run.duration:g} x "
+            f"{exc.frequency:g} = {periods:.3g} excitation periods (about "
+            f"{EVENTS_PER_PERIOD_ESTIMATE * periods:.3g} impact-map events at "
+            f"{EVENTS_PER_PERIOD_ESTIMATE} per period): allowed <= {MAX_PERIODS:.3g} periods")
+
+
+def _vibration_max_frequency(exc) -> float:
+    freqs = [c[0] for c in exc.harmonics]
+    if exc.band:
+        freqs.append(exc.band[1])
+    if exc.psd_frequencies is not None:
+        freqs.append(float(exc.psd_frequencies[-1]))
+    return max(freqs) if freqs else 0.0
+
+
+def check_vibration_work(exc, run) -> None:
+    """Refuse a synthesised record that would not fit: duration x 32 samples per period
+    of the highest frequency must stay below MAX_RECORD_SAMPLES."""
+    if exc.kind not in ("random", "harmonics") or (exc.kind == "harmonics" and len(exc.harmonics) == 1
+                                                    and not exc.has_noise):
+        return
+    fmax = _vibration_max_frequency(exc)
+    count = run.duration * VIBRATION_SAMPLES_PER_PERIOD * fmax
+    if not count < MAX_RECORD_SAMPLES:
+        raise SceneError(
+            f"[run] duration_s x {VIBRATION_SAMPLES_PER_PERIOD} x the highest excitation "
+            f"frequency = {run.duration:g} x {VIBRATION_SAMPLES_PER_PERIOD} x {fmax:g} Hz = "
+            f"{count:.3g} record samples: allowed < {MAX_RECORD_SAMPLES:.0e} (a shorter run "
+            "or a lower band)")
+
+
+def check_array_work(arr, exc, run) -> None:
+    """Refuse an ``[array]`` whose cells' trajectories would not fit in memory: every cell
+    of a spread set has its own dynamics, kept for the electrical stage (identical cells
+    share one)."""
+    spread = arr.phase_spread > 0 or arr.restitution_spread > 0 or arr.velocity_spread > 0
+    if arr.cells == 0 or not spread:
+        return
+    cell_periods = arr.cells * run.duration * exc.frequency
+    if cell_periods > MAX_ARRAY_CELL_PERIODS:
+        raise SceneError(
+            f"[array] cells x [run] duration_s x [excitation] frequency_hz = {arr.cells} x "
+            f"{run.duration:g} x {exc.frequency:g} = {cell_periods:.3g} cell-periods: allowed "
+            f"<= {MAX_ARRAY_CELL_PERIODS:.0e} (each cell keeps its trajectory: about "
+            f"{cell_periods * ARRAY_BYTES_PER_CELL_PERIOD / 1e9:.3g} GB here; fewer cells or "
+            "a shorter run)")
+
+
+# ---------------------------------------------------------------------------
+def _round_up_2(x: float) -> float:
+    """``x`` > 0 rounded up at two significant digits (19.58 -> 20, 0.0213 -> 0.022)."""
+    exp = math.floor(math.log10(x)) - 1
+    return float(f"{math.ceil(x / 10.0**exp - 1e-9)}e{exp}")
+
+
+def auto_domain_radius(device, offset: float = 0.0) -> float:
+    """``[field] domain_radius_mm = "auto"`` [m]: ``DOMAIN_AUTO_FACTOR`` x the
+    device's bounding radius (at least 1.3 x (bounding radius + ball offset)),
+    rounded up at two significant digits in mm; 20 mm for the paper's device."""
+    b = device.bounding_radius
+    return 1e-3 * _round_up_2(1e3 * max(DOMAIN_AUTO_FACTOR * b, 1.3 * (b + offset)))
+
+
+def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
+    """The features [m] a mesh of ``device`` must resolve, by scene key (see
+    :data:`PAPER_FEATURES`)."""
+    features = {"ball_diameter_mm": device.ball_diameter,
+                "electrode_radius_mm": device.electrode_radius, "gap_mm": device.stroke}
+    walls = device.wall_permittivity != 1.0
+    if walls:
+        features["tube_outer_radius_mm - tube_inner_radius_mm"] = \
+            device.tube_outer_radius - device.tube_inner_radius
+        features["tube_inner_radius_mm - ball_diameter_mm / 2"] = \
+            device.tube_inner_radius - device.ball_radius
+    if walls or environment == "grounded-table":
+        features["plate_thickness_mm"] = device.plate_thickness
+    return features
+
+
+def default_mesh_scale(device, fld) -> float:
+    """Factor on the default ``mesh_size_mm``: ``max(1, min_i feature_i / paper_i)`` over
+    :func:`mesh_features` (1.0 exactly for the paper's device)."""
+    paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES}
+    ratios = [size / paper[key] for key, size in mesh_features(device, fld.environment).items()]
+    return max(1.0, min(ratios))
+
+
+def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
+    """Field-only problems: ranges relative to the geometry that a mesh needs
+    (``explicit``: the [field] keys written in the scene)."""
+    problems = []
+    b = dev.bounding_radius
+    b_mm = b * 1e3
+    max_offset = dev.tube_inner_radius - dev.ball_radius
+    if fld.ball_offset > max_offset + 1e-15:
+        problems.append(
+            f"[field] ball_offset_mm = {fld.ball_offset * 1e3:g} is out of range: allowed "
+            f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
+    if fld.ball_offset > 0 and fld.method == "axisymmetric":
+        problems.append("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "
+                        "use method = '3d' or 'auto' for an off-axis ball")
+    how = "" if "domain_radius_mm" in explicit else " ('auto')"
+    lowest = DOMAIN_MIN_FACTOR * (b + fld.ball_offset)
+    if fld.domain_radius <= lowest:
+        problems.append(
+            f"[field] domain_radius_mm = {fld.domain_radius * 1e3:g}{how} is too small: it must "
+            f"exceed {lowest * 1e3:.3g} mm ({DOMAIN_MIN_FACTOR:g} x the device's bounding radius "
+            "+ ball offset)")
+    if fld.domain_radius > DOMAIN_MAX_FACTOR * b:
+        problems.append(
+            f"[field] domain_radius_mm = {fld.domain_radius * 1e3:g} is too large for this "
+            f"device: allowed <= {DOMAIN_MAX_FACTOR * b_mm:.3g} mm ({DOMAIN_MAX_FACTOR:g} x the "
+            f"bounding radius {b_mm:.3g} mm); 'auto' picks one")
+    smallest = FEATURE_MIN_FRACTION * b
+    features = [("ball_diameter_mm", dev.ball_diameter),
+                ("plate_thickness_mm", dev.plate_thickness),
+                ("electrode_radius_mm", dev.electrode_radius),
+                ("tube_outer_radius_mm - tube_inner_radius_mm",
+                 dev.tube_outer_radius - dev.tube_inner_radius)]
+    feature_key, feature = min(features + [("gap_mm", dev.stroke)], key=lambda kv: kv[1])
+    for key, size in features:
+        if size < smallest:
+            problems.append(
+                f"[device] {key} = {size * 1e3:.3g} is too small for a field mesh: allowed >= "
+                f"{smallest * 1e3:.3g} mm ({FEATURE_MIN_FRACTION:g} x the device's bounding "
+                f"radius {b_mm:.3g} mm)")
+    gaps = CONTACT_GAPS_IN_STROKE * MIN_GAP_FRACTION * dev.plate_spacing
+    if dev.stroke < gaps * (1 - 1e-12):
+        # stroke >= n f (d + stroke)  <=>  stroke >= n f d / (1 - n f)
+        nf = CONTACT_GAPS_IN_STROKE * MIN_GAP_FRACTION
+        need = nf * dev.ball_diameter / (1.0 - nf)
+        problems.append(
+            f"[device] gap_mm = {dev.stroke * 1e3:g} is too small for a field solve: allowed >= "
+            f"{need * 1e3:.3g} mm ({CONTACT_GAPS_IN_STROKE} x the smallest meshed gap, "
+            f"{MIN_GAP_FRACTION:g} x the plate spacing); dynamics-only runs accept it")
+    method = fld.method
+    if method == "auto":
+        method = "axisymmetric" if fld.ball_offset == 0.0 else "3d"
+    finest = MESH_MIN_FRACTION[method] * feature
+    # the size the mesher uses: as written, or the default scaled by the smallest feature
+    mesh_size = fld.mesh_size if "mesh_size_mm" in explicit \
+        else fld.mesh_size * default_mesh_scale(dev, fld)
+    if mesh_size < finest * (1 - 1e-12):
+        problems.append(
+            f"[field] mesh_size_mm = {mesh_size * 1e3:g} is too fine for this device: "
+            f"allowed >= {finest * 1e3:.3g} mm (1/{1 / MESH_MIN_FRACTION[method]:g} of the "
+            f"smallest feature, [device] {feature_key} = {feature * 1e3:.3g} mm, for the "
+            f"{method} solver; finer meshes exceed memory)")
+    return problems

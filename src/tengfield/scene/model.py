@@ -1,0 +1,530 @@
+"""The scene objects (SI values only: metres, seconds, coulombs...) and their
+construction from file-level values.
+
+Every dataclass checks itself against :data:`tengfield.scene.schema.SCHEMA` when
+built, from a file or from Python (``Device(ball_diameter=-1, ...)`` raises a
+:class:`SceneError` naming the key and its range); cross-section rules (the initial gap
+within the stroke, the work limits, the array against the circuit) are checked by
+:class:`Scene`. :func:`build` turns a parsed scene (file keys, file units) into a
+:class:`Scene`, reading the files it names (recorded excitation, PSD table).
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import SceneError
+from ..paschen import STREAMER_PD
+from .constants import G
+from .limits import (auto_domain_radius, check_array_work, check_steady_window,
+                     check_vibration_work, check_work, field_problems)
+from .recorded import read_psd, read_recorded
+from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, PASSTHROUGH_SECTIONS, SCHEMA,
+                     check_section, convert, harmonic_components, suggest, with_defaults)
+
+
+@dataclass(frozen=True)
+class Device:
+    """Geometry and materials, SI. The z axis is the tube axis."""
+    ball_diameter: float        # [m]
+    stroke: float               # free stroke dh = h - d [m] (scene key gap_mm)
+    electrode_radius: float     # [m]
+    tube_inner_radius: float    # [m]
+    tube_outer_radius: float    # [m] (= end-plate radius)
+    plate_thickness: float      # [m]
+    ball_density: float         # [kg/m^3]
+    ball_permittivity: float    # relative
+    wall_permittivity: float    # relative
+    surface_charge: float       # [C/m^2], negative for PTFE
+    cells: int
+    # 3D motion: gravity tilted by ``tilt`` from -z toward azimuth ``tilt_azimuth`` [rad]
+    tilt: float = 0.0
+    tilt_azimuth: float = 0.0
+
+    def __post_init__(self):
+        check_section("device", self, "Device")
+        if self.tube_outer_radius <= self.tube_inner_radius:
+            raise SceneError(
+                f"[device] tube_outer_radius_mm = {self.tube_outer_radius * 1e3:g} must exceed "
+                f"tube_inner_radius_mm = {self.tube_inner_radius * 1e3:g}")
+        if self.ball_diameter >= 2.0 * self.tube_inner_radius:
+            raise SceneError(
+                f"[device] ball_diameter_mm = {self.ball_diameter * 1e3:g}: the ball does not fit "
+                f"the tube; allowed (0, {2e3 * self.tube_inner_radius:g}) mm (twice "
+                "tube_inner_radius_mm)")
+        if self.electrode_radius > self.tube_outer_radius:
+            raise SceneError(
+                f"[device] electrode_radius_mm = {self.electrode_radius * 1e3:g} is larger than "
+                f"the plate: allowed (0, {self.tube_outer_radius * 1e3:g}] mm "
+                "(tube_outer_radius_mm)")
+
+    @property
+    def ball_radius(self) -> float:
+        return 0.5 * self.ball_diameter
+
+    @property
+    def plate_spacing(self) -> float:
+        """h = d + dh: distance between the electrode faces [m]."""
+        return self.ball_diameter + self.stroke
+
+    @property
+    def ball_mass(self) -> float:
+        return self.ball_density * math.pi * self.ball_diameter**3 / 6.0
+
+    @property
+    def ball_charge(self) -> float:
+        """Total charge on the ball, sigma * pi d^2 [C]."""
+        return self.surface_charge * math.pi * self.ball_diameter**2
+
+    @property
+    def bounding_radius(self) -> float:
+        """Radius of the smallest sphere about the device centre holding one cell [m]."""
+        return math.hypot(self.tube_outer_radius, 0.5 * self.plate_spacing + self.plate_thickness)
+
+    @property
+    def cell_volume(self) -> float:
+        """Outer volume of one cell, tube and both plates [m^3]."""
+        return math.pi * self.tube_outer_radius**2 * (self.plate_spacing + 2 * self.plate_thickness)
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """Table motion y(t): ``A sin(2 pi f t + phase)``, a recorded signal, harmonics or
+    random noise."""
+    kind: str
+    frequency: float            # [Hz]; for "recorded" used as the reference period
+    amplitude: float            # [m]
+    phase: float                # [rad]
+    file: str
+    time_column: str
+    signal_column: str
+    signal: str
+    times: np.ndarray | None = field(default=None, compare=False, repr=False)   # [s]
+    values: np.ndarray | None = field(default=None, compare=False, repr=False)  # [m] or [m/s^2]
+    # 3D motion: lateral sine x = A_x sin(w t + phase_x) [m, rad]; recorded columns
+    # (read with the signal: values_x, values_y, same unit as values)
+    amplitude_x: float = 0.0
+    amplitude_y: float = 0.0
+    phase_x: float = 0.0
+    phase_y: float = 0.0
+    signal_x_column: str = ""
+    signal_y_column: str = ""
+    smoothing: float = 0.0      # [Hz] zero-phase low-pass of a recorded signal, 0 = off
+    # random and harmonics (issue #25): components (frequency [Hz], amplitude [m],
+    # phase [rad]); noise PSD: a flat band [Hz] with rms_acceleration [m/s^2], or a
+    # table (psd_frequencies [Hz], psd_values [(m/s^2)^2/Hz]); seed of the realisation
+    acceleration: float = 0.0
+    band: tuple = ()
+    rms_acceleration: float = 0.0
+    psd_file: str = ""
+    seed: int = 0
+    rms_acceleration_x: float = 0.0
+    rms_acceleration_y: float = 0.0
+    harmonics: tuple = ()
+    psd_frequencies: np.ndarray | None = field(default=None, compare=False, repr=False)
+    psd_values: np.ndarray | None = field(default=None, compare=False, repr=False)
+    values_x: np.ndarray | None = field(default=None, compare=False, repr=False)
+    values_y: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self):
+        check_section("excitation", self, "Excitation")
+        band, psd_file = self.band, self.psd_file   # the noise of random / harmonics
+        if self.kind not in ("random", "harmonics"):
+            for key, given in (("band_hz", band), ("psd_file", psd_file)):
+                if given:
+                    raise SceneError(f"[excitation] {key} needs kind = 'random' or 'harmonics' "
+                                     f"(kind = {self.kind!r})")
+            return
+        if band and psd_file:
+            raise SceneError("[excitation] band_hz and psd_file: give one of them (a flat band "
+                             "or a PSD table)")
+        if band:
+            if len(band) != 2 or not band[0] < band[1]:
+                shown = ", ".join(f"{b:g}" for b in band)
+                raise SceneError(f"[excitation] band_hz = [{shown}]: expected [f1, f2] with "
+                                 "0 < f1 < f2 [Hz]")
+            if self.rms_acceleration <= 0.0:
+                raise SceneError("[excitation] band_hz needs rms_acceleration_m_per_s2 > 0 "
+                                 f"(it is {self.rms_acceleration:g})")
+        elif not psd_file and self.kind == "random":
+            raise SceneError("[excitation] kind = 'random' needs band_hz = [f1, f2] with "
+                             "rms_acceleration_m_per_s2, or psd_file = 'name.csv'")
+
+    @property
+    def has_noise(self) -> bool:
+        """Random noise is part of the table motion (kind random, or harmonics + noise)."""
+        return self.kind in ("random", "harmonics") and (bool(self.band) or bool(self.psd_file))
+
+    @property
+    def omega(self) -> float:
+        return 2.0 * math.pi * self.frequency
+
+    @property
+    def period(self) -> float:
+        return 1.0 / self.frequency
+
+    @property
+    def gamma(self) -> float:
+        """Dimensionless intensity A w^2 / g (sine only)."""
+        return self.amplitude * self.omega**2 / G
+
+
+@dataclass(frozen=True)
+class Contact:
+    model: str
+    restitution: float
+    restitution_model: str
+    restitution_reference_speed: float   # [m/s]
+    restitution_exponent: float
+    stiffness: float                     # [N/m]
+    # 3D motion, SI: moduli [Pa], damping [N s/m] (< 0: from restitution), penetration_max [m]
+    law: str = "hertz"
+    damping_model: str = "calibrated"   # Hertz: beta fitted to rebound with e, or Chrono's closed form
+    exponent: float = 1.0
+    damping: float = -1.0
+    penetration_max: float = 0.0
+    ball_youngs_modulus: float = 0.5e9
+    ball_poisson_ratio: float = 0.46
+    plate_youngs_modulus: float = 120e9
+    plate_poisson_ratio: float = 0.34
+    wall_youngs_modulus: float = 3.0e9
+    wall_poisson_ratio: float = 0.37
+    friction_static: float = 0.1
+    friction_dynamic: float = 0.05
+
+    def __post_init__(self):
+        check_section("contact", self, "Contact")
+
+    def restitution_at(self, speed: float) -> float:
+        """Restitution for an impact at relative speed ``speed`` [m/s].
+
+        "constant": e. "power-law": ``min(1, e (v/v_ref)^-p)``, a common fit of
+        velocity-dependent restitution of polymer balls (e falls with speed).
+        """
+        if self.restitution_model == "constant" or self.restitution_exponent == 0.0:
+            return self.restitution
+        v = max(abs(speed), 1e-12)
+        return min(1.0, self.restitution * (v / self.restitution_reference_speed) ** (-self.restitution_exponent))
+
+
+@dataclass(frozen=True)
+class Initial:
+    time: float       # [s]
+    gap: float        # [m]
+    velocity: float   # relative to the table [m/s]
+
+    def __post_init__(self):
+        check_section("initial", self, "Initial")
+
+
+@dataclass(frozen=True)
+class Run:
+    duration: float        # [s]
+    settle_periods: int
+    sample_rate: float     # [Hz]
+    realisations: int = 1  # independent seeds of a random excitation
+
+    def __post_init__(self):
+        check_section("run", self, "Run")
+
+
+@dataclass(frozen=True)
+class Field:
+    method: str
+    degree: int
+    mesh_size: float       # [m]
+    tolerance: float
+    domain_radius: float   # [m]
+    environment: str
+    far_field: str
+    ball_offset: float     # [m]
+
+    def __post_init__(self):
+        check_section("field", self, "Field")
+
+
+class _RefusedField:
+    """Stands in for :class:`Field` when ``[field]`` values are bad: a dynamics-only
+    run never looks at them, and any use of one raises the :class:`SceneError`."""
+    __slots__ = ("problems",)
+
+    def __init__(self, problems: tuple[str, ...]):
+        object.__setattr__(self, "problems", tuple(problems))
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise SceneError("; ".join(self.problems))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("a scene's field settings are read-only")
+
+    def __reduce__(self):   # pickled for worker processes (map, sweep)
+        return (_RefusedField, (self.problems,))
+
+    def __eq__(self, other):
+        return isinstance(other, _RefusedField) and other.problems == self.problems
+
+    def __hash__(self):
+        return hash(self.problems)
+
+    def __repr__(self):
+        return f"_RefusedField({self.problems!r})"
+
+
+@dataclass(frozen=True)
+class Circuit:
+    kind: str
+    load: float                   # [ohm]
+    parallel_capacitance: float   # [F]
+    reference: str
+    # harvesting (kind = "rectifier"; tengfield.harvest), SI
+    diode: str = "ideal"
+    diode_forward_voltage: float = 0.0         # [V] per diode (ideal model)
+    diode_saturation_current: float = 1e-12    # [A] (shockley)
+    diode_emission_coefficient: float = 1.0    # (shockley)
+    diode_series_resistance: float = 0.0       # [ohm] per diode
+    storage_capacitance: float = 10e-6         # [F]
+    storage_leakage: float = 0.0               # [ohm], 0: none
+    pmic: str = "none"
+    uvlo_rising: float = 5.05                  # [V]
+    uvlo_falling: float = 4.04                 # [V]
+    pmic_output: float = 3.3                   # [V]
+    pmic_load: float = 1e5                     # [ohm]
+    pmic_efficiency: float = 0.9
+    pmic_quiescent_current: float = 450e-9     # [A]
+    pmic_shunt: float = 20.0                   # [V]
+
+    def __post_init__(self):
+        check_section("circuit", self, "Circuit")
+        if self.uvlo_rising <= self.uvlo_falling:
+            raise SceneError(f"[circuit] uvlo_rising_V = {self.uvlo_rising:g} must exceed "
+                             f"uvlo_falling_V = {self.uvlo_falling:g} (the lockout's hysteresis)")
+        if self.pmic_output >= self.uvlo_falling:
+            raise SceneError(f"[circuit] pmic_output_V = {self.pmic_output:g} is out of range: "
+                             f"allowed (0, {self.uvlo_falling:g}) (below uvlo_falling_V)")
+        if self.pmic_shunt <= self.uvlo_rising:
+            raise SceneError(f"[circuit] pmic_shunt_V = {self.pmic_shunt:g} must exceed "
+                             f"uvlo_rising_V = {self.uvlo_rising:g}")
+
+
+@dataclass(frozen=True)
+class Array:
+    """``[array]``: ``cells`` (0: none), ``connection``, spreads (full widths:
+    ``phase_spread`` [rad], ``restitution_spread``, ``velocity_spread`` [m/s]), ``seed``."""
+    cells: int = 0
+    connection: str = "parallel"
+    phase_spread: float = 0.0
+    restitution_spread: float = 0.0
+    velocity_spread: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self):
+        check_section("array", self, "Array")
+        if self.cells == 0 and (self.phase_spread or self.restitution_spread
+                                or self.velocity_spread or self.connection != "parallel"):
+            raise SceneError("[array] spreads and connection need [array] cells >= 1")
+
+
+@dataclass(frozen=True)
+class Breakdown:
+    """``[breakdown]``: ``pressure`` [Pa], Paschen's ``paschen_A`` [1/(Pa m)],
+    ``paschen_B`` [V/(Pa m)] and ``secondary_emission`` (γ)."""
+    pressure: float = 101325.0
+    paschen_A: float = 11.25
+    paschen_B: float = 273.75
+    secondary_emission: float = 0.01
+
+    def __post_init__(self):
+        check_section("breakdown", self, "Breakdown")   # the Townsend range must not be empty:
+        lowest = math.exp(1.0 + math.log(math.log1p(1.0 / self.secondary_emission))) / STREAMER_PD
+        if self.paschen_A <= lowest:
+            raise SceneError(f"[breakdown] paschen_A_per_Pa_m = {self.paschen_A:g} is out of range "
+                             f"with secondary_emission = {self.secondary_emission:g}: allowed "
+                             f"({lowest:.4g}, 10000] (Paschen's minimum must lie below the "
+                             f"streamer regime, p d = {STREAMER_PD:.4g} Pa m)")
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One BB-TENG and how it is driven: the sections as SI dataclasses, the file-level
+    values as given (``raw``), where they came from (``source``, ``text``)."""
+    device: Device
+    excitation: Excitation
+    contact: Contact
+    initial: Initial
+    run: Run
+    field: Field
+    circuit: Circuit
+    array: Array = Array()
+    breakdown: Breakdown = Breakdown()
+    raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
+    source: str = dataclasses.field(compare=False, repr=False, default="<default>")
+    text: str = dataclasses.field(compare=False, repr=False, default="")
+
+    def __post_init__(self):
+        """The rules between sections (the field's are checked by :func:`check_field`)."""
+        dev, exc, run, arr = self.device, self.excitation, self.run, self.array
+        if self.initial.gap > dev.stroke:
+            raise SceneError(f"[initial] gap_mm = {self.initial.gap * 1e3:g} is out of range: "
+                             f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] gap_mm)")
+        check_steady_window(exc, run.settle_periods, run.duration)
+        check_work(exc, run)
+        check_vibration_work(exc, run)
+        if run.realisations > 1 and not exc.has_noise:
+            raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "
+                             "([excitation] kind = 'random', or 'harmonics' with band_hz or "
+                             f"psd_file): with kind = {exc.kind!r} every realisation is the same")
+        if arr.cells > 0 and dev.cells != 1:
+            raise SceneError(f"[array] cells = {arr.cells} and [device] cells = {dev.cells}: set "
+                             "one of them ([device] cells: identical copies; [array] cells: cells "
+                             "with their own dynamics)")
+        if arr.connection != "parallel" and self.circuit.kind != "rectifier":
+            raise SceneError(f"[array] connection = {arr.connection!r} needs [circuit] kind = "
+                             f"'rectifier' (it is {self.circuit.kind!r})")
+        check_array_work(arr, exc, run)
+
+    # -- construction -----------------------------------------------------
+    @classmethod
+    def from_dict(cls, data: dict, *, base_dir: Path | None = None, source: str = "<dict>",
+                  text: str = "") -> "Scene":
+        return build(data, base_dir=base_dir, source=source, text=text)
+
+    def with_values(self, **sections: dict) -> "Scene":
+        """A copy with some file-level keys changed, validated again.
+
+        ``scene.with_values(excitation={"frequency_hz": 30.0})``
+        """
+        data = copy.deepcopy(self.raw)
+        for sec, values in sections.items():
+            data.setdefault(sec, {}).update(values)
+        base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
+        scene = build(data, base_dir=base, source=self.source, text=self.text)
+        if "field" in sections:   # explicit field settings: refuse bad ones at once
+            check_field(scene)
+        return scene
+
+    # -- provenance -------------------------------------------------------
+    def field_inputs(self) -> dict:
+        """Every input the field solution depends on (the keys flagged ``field`` in the
+        schema), as file-level values ("auto" resolved). Raises :class:`SceneError` if a
+        field value is bad."""
+        check_field(self)
+        full = with_defaults(self.raw)
+        out: dict[str, Any] = {"schema": FIELD_SCHEMA}
+        for sec, keys in FIELD_KEYS.items():
+            out[sec] = {k: full[sec][k] for k in keys}
+        for sec, key in AUTO_KEYS:
+            if out[sec][key] == "auto":
+                out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
+        return out
+
+    def field_hash(self) -> str:
+        """SHA-256 of :meth:`field_inputs` (the surrogate cache key)."""
+        blob = json.dumps(self.field_inputs(), sort_keys=True, default=float).encode()
+        return hashlib.sha256(blob).hexdigest()
+
+    def to_dict(self) -> dict:
+        """File-level values of every key (defaults filled in)."""
+        return with_defaults(self.raw)
+
+    # -- derived ----------------------------------------------------------
+    @property
+    def field_problems(self) -> tuple[str, ...]:
+        """Every bad field-only value (empty when a field stage may run)."""
+        return self.field.problems if isinstance(self.field, _RefusedField) else ()
+
+    @property
+    def is_axisymmetric(self) -> bool:
+        """On-axis ball in a body of revolution: the field is 2D (r, z)."""
+        return self.field.ball_offset == 0.0
+
+
+def check_field(scene: Scene) -> None:
+    """Raise :class:`SceneError` naming every bad field-only value of ``scene``.
+
+    Call it where a field stage starts (field solve, surrogate, ``tengfield
+    field``/``run``/``precompute``/``sweep``): field-only values (``[field]``
+    keys and the geometry ranges a mesh needs) never fail a dynamics-only run.
+    """
+    if scene.field_problems:
+        raise SceneError("; ".join(scene.field_problems))
+
+
+def _auto_mm(value_si: float) -> float:
+    """An SI length as the file-level millimetre number."""
+    return float(f"{value_si * 1e3:.12g}")
+
+
+# ---------------------------------------------------------------------------
+def build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene:
+    """A :class:`Scene` from file-level values by section (a parsed scene file, or
+    :meth:`Scene.with_values`): unknown sections and keys refused, every value checked
+    and turned into SI, the files it names read (relative to ``base_dir``)."""
+    if not isinstance(data, dict):
+        raise SceneError(f"{source}: a scene is a TOML table")
+    for sec in data:
+        if sec in PASSTHROUGH_SECTIONS:   # kept in scene.raw, validated by their own package
+            if not isinstance(data[sec], dict):
+                raise SceneError(f"{source}: [{sec}] must be a table")
+            continue
+        if sec not in SCHEMA:
+            raise SceneError(f"{source}: unknown section [{sec}]" + suggest(sec, SCHEMA)
+                             + f"; sections are {', '.join('[' + s + ']' for s in SCHEMA)}")
+        if not isinstance(data[sec], dict):
+            raise SceneError(f"{source}: [{sec}] must be a table")
+        for key in data[sec]:
+            if key not in SCHEMA[sec]:
+                raise SceneError(f"{source}: unknown key [{sec}] {key}" + suggest(key, SCHEMA[sec]))
+    components = None
+    given_data = data
+    if isinstance(data.get("excitation"), dict) and data["excitation"].get("kind") == "harmonics":
+        # the lists stay in scene.raw (with_values, to_dict, the written scene); the
+        # build below sees the fundamental's scalar values
+        given_data, (data, components) = data, harmonic_components(data)
+    values: dict[str, dict[str, Any]] = {}
+    problems: list[str] = []
+    for sec, keys in SCHEMA.items():
+        given = data.get(sec, {})
+        values[sec] = {}
+        for key, spec in keys.items():
+            raw = given.get(key, spec.default)
+            if sec != "field":
+                values[sec][spec.attr] = convert(sec, key, raw, spec)
+                continue
+            try:   # field-only: kept for check_field, never fails a dynamics run
+                values[sec][spec.attr] = convert(sec, key, raw, spec)
+            except SceneError as exc:
+                problems.append(str(exc))
+                values[sec][spec.attr] = convert(sec, key, spec.default, spec)
+
+    dev = Device(**values["device"])
+    exc_vals = values["excitation"]
+    record = {}
+    if exc_vals["kind"] == "recorded":
+        rec = read_recorded(exc_vals, base_dir)
+        record = {f.name: getattr(rec, f.name) for f in dataclasses.fields(rec)}
+    psd = (None, None)
+    if exc_vals["kind"] in ("random", "harmonics") and exc_vals["psd_file"] and not exc_vals["band"]:
+        psd = read_psd(exc_vals["psd_file"], base_dir)
+    exc = Excitation(**exc_vals, **record, harmonics=components or (),
+                     psd_frequencies=psd[0], psd_values=psd[1])
+    fvals = values["field"]
+    if fvals["domain_radius"] is None:
+        fvals["domain_radius"] = auto_domain_radius(dev, fvals["ball_offset"])
+    fld = Field(**fvals)
+    problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
+    return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]),
+                 initial=Initial(**values["initial"]), run=Run(**values["run"]),
+                 field=_RefusedField(problems) if problems else fld,
+                 circuit=Circuit(**values["circuit"]), array=Array(**values["array"]),
+                 breakdown=Breakdown(**values["breakdown"]), raw=copy.deepcopy(given_data),
+                 source=source, text=text)

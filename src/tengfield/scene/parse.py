@@ -1,0 +1,122 @@
+"""Scene files: TOML text -> :class:`~tengfield.scene.model.Scene`.
+
+Reading refuses what tomllib would choke on before it does (size, NUL characters,
+nesting), and what no scene key takes (TOML dates, integers beyond the doubles); the
+values themselves are checked by :func:`tengfield.scene.model.build`.
+"""
+from __future__ import annotations
+
+import datetime
+import re
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+from ..errors import SceneError
+from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
+from .model import Scene, build
+from .recorded import decode_utf8
+from .schema import show
+
+
+def default_text() -> str:
+    """The embedded default scene, with its comments."""
+    return resources.files("tengfield").joinpath("data/default.toml").read_text()
+
+
+def default_scene() -> Scene:
+    return parse_scene(default_text(), source="<default>")
+
+
+def load_scene(path: str | Path | None) -> Scene:
+    """Read a scene file; ``None`` gives the embedded default scene."""
+    if path is None:
+        return default_scene()
+    p = Path(path)
+    if p.is_dir():
+        raise SceneError(f"scene file {str(p)!r} is a directory: give a .toml file")
+    if not p.is_file():
+        raise SceneError(f"scene file {str(p)!r} does not exist")
+    try:
+        size = p.stat().st_size
+        if size > MAX_SCENE_BYTES + 4:   # before reading: a 50 MB file is refused at once
+            raise SceneError(f"scene file {str(p)!r} has {size:,} bytes: allowed at most "
+                             f"{MAX_SCENE_BYTES:,} (recorded data belong in a CSV file)")
+        blob = p.read_bytes()
+    except OSError as exc:
+        raise SceneError(f"scene file {str(p)!r} could not be read: {exc.strerror or exc}") from None
+    return parse_scene(decode_utf8(blob, f"scene file {str(p)!r}"), source=str(p),
+                       base_dir=p.parent)
+
+
+def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = None) -> Scene:
+    text = text.removeprefix("\ufeff")   # a UTF-8 byte-order mark is not TOML
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(f"{source}: {len(text):,} characters: a scene file is allowed at most "
+                         f"{MAX_SCENE_BYTES:,} (recorded data belong in a CSV file)")
+    if "\x00" in text:
+        raise SceneError(f"{source}: holds NUL characters (binary data, not a TOML scene)")
+    _check_nesting_text(text, source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{source}: malformed TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{source}: nested too deeply: allowed {MAX_TOML_DEPTH} levels of "
+                         "tables and arrays") from None
+    except (ValueError, OverflowError) as exc:   # e.g. an integer of more than 4300 digits
+        long = re.search(r"[0-9_]{4000,}", text)
+        if long:
+            line = text.count("\n", 0, long.start()) + 1
+            key = text[text.rfind("\n", 0, long.start()) + 1:long.start()].split("=")[0].strip()
+            raise SceneError(f"{source}: line {line}: {key} = an integer of "
+                             f"{long.end() - long.start()} digits is out of range: numbers must "
+                             "stay within the doubles (|x| < 1.8e308)") from None
+        detail = str(exc).split(";")[0].strip()
+        raise SceneError(f"{source}: malformed TOML: {detail}") from None
+    _check_values(data, source)
+    return build(data, base_dir=base_dir, source=source, text=text)
+
+
+def _check_nesting_text(text: str, source: str) -> None:
+    """Refuse brackets nested deeper than a scene can use before tomllib recurses into
+    them (a cheap upper bound: brackets inside strings and comments count too, so the
+    text limit is generous, 4 x MAX_TOML_DEPTH)."""
+    depth = deepest = 0
+    for ch in text:
+        if ch in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+                if deepest > 4 * MAX_TOML_DEPTH:
+                    raise SceneError(f"{source}: nested too deeply: allowed {MAX_TOML_DEPTH} "
+                                     "levels of tables and arrays")
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+
+
+def _check_values(data, source: str, path: str = "", depth: int = 0) -> None:
+    """Every value of a parsed scene: no TOML dates/times (no key takes one), nesting at
+    most MAX_TOML_DEPTH, integers within the doubles."""
+    if depth > MAX_TOML_DEPTH:
+        raise SceneError(f"{source}: {path} is nested too deeply: allowed {MAX_TOML_DEPTH} "
+                         "levels of tables and arrays")
+    items = data.items() if isinstance(data, dict) else enumerate(data) \
+        if isinstance(data, list) else ()
+    for key, value in items:
+        where = f"{path}.{key}" if isinstance(key, str) and path else \
+            f"{path}[{key}]" if path else f"[{key}]"
+        if isinstance(value, (datetime.date, datetime.time)):
+            raise SceneError(f"{source}: {_where(where)} = {show(value)}: no scene key takes a "
+                             "date or time; write a number or a string")
+        if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 2**1023:
+            raise SceneError(f"{source}: {_where(where)} = {show(value)} is out of range: "
+                             "integers must stay within the doubles (|x| < 1.8e308)")
+        if isinstance(value, (dict, list)):
+            _check_values(value, source, where, depth + 1)
+
+
+def _where(path: str) -> str:
+    """``[run].duration_s`` -> ``[run] duration_s`` (how messages name scene keys)."""
+    sec, dot, rest = path.partition("].")
+    return f"{sec}] {rest}" if dot else path

@@ -1,0 +1,246 @@
+"""Every CSV and text file tengfield reads as input, through one reader: the recorded
+excitation (its z column and the 3D model's lateral columns), the PSD table of a random
+excitation, and fit's measured trace (:func:`tengfield.fit.read_trace`).
+
+:func:`read_table` resolves the name, refuses a missing, oversized, UTF-16 or binary
+file before parsing, drops a UTF-8 byte-order mark, skips blank lines and ``#``
+comments, and refuses a row whose field count differs from the header's (naming its
+line) and more than ``max_rows`` data rows (while reading). :meth:`CsvTable.column`
+turns one column into floats, naming the line and data row of a cell that is not a
+number. Each message starts with ``what``, the name the user gave.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from .constants import G
+from .limits import (MAX_PSD_ROWS, MAX_RECORDED_ACCELERATION, MAX_RECORDED_BYTES,
+                     MAX_RECORDED_DISPLACEMENT, MAX_RECORDED_ROWS, MAX_RECORDED_TIME,
+                     MIN_RECORDED_ROWS, MIN_STEP_FRACTION)
+from .schema import suggest
+
+
+def decode_utf8(blob: bytes, what: str) -> str:
+    """UTF-8 text (a leading byte-order mark is dropped), or one-line SceneError naming
+    ``what`` (every text file tengfield reads: scenes, recorded excitations, measured
+    traces)."""
+    if blob.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError(f"{what} is UTF-16 text: save it as UTF-8")
+    try:
+        return blob.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        kind = "binary data" if b"\x00" in blob[:4096] else "not UTF-8 text"
+        raise SceneError(f"{what} is {kind} (byte 0x{blob[exc.start]:02x} at offset "
+                         f"{exc.start}): save it as UTF-8") from None
+
+
+def check_file_size(path: Path, what: str, limit: int) -> None:
+    """SceneError before reading when ``path`` has more than ``limit`` bytes."""
+    size = path.stat().st_size
+    if size > limit:
+        raise SceneError(f"{what} has {size:,} bytes: allowed at most {limit:,} "
+                         f"({limit / 1e6:g} MB, checked before reading; decimate or split it)")
+
+
+def read_text(name: str, base_dir: Path | None, what: str, max_bytes: int) -> str:
+    """The UTF-8 text of file ``name`` (relative to ``base_dir`` when given): a missing
+    file, one of more than ``max_bytes`` bytes or one that cannot be read or decoded is
+    a one-line SceneError starting with ``what``."""
+    path = Path(name)
+    if not path.is_absolute() and base_dir is not None:
+        path = base_dir / path
+    if not path.is_file():
+        raise SceneError(f"{what}: no such file" + (f" ({path})" if str(path) != name else ""))
+    try:
+        check_file_size(path, what, max_bytes)
+        blob = path.read_bytes()
+    except OSError as exc_:
+        raise SceneError(f"{what} could not be read: {exc_.strerror or exc_}") from None
+    return decode_utf8(blob, what)   # BOM dropped here
+
+
+def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[tuple]]:
+    """(header, [(line number, fields), ...]) of a comma-separated text: blank lines and
+    ``#`` comments skipped; a row whose field count differs from the header's is refused
+    naming its line; more than ``max_rows`` data rows are refused as soon as seen."""
+    header: list[str] | None = None
+    rows: list[tuple] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        line = line.split("#", 1)[0]
+        if not line.strip():
+            continue
+        fields = next(csv.reader([line]))
+        if header is None:
+            header = [f.strip() for f in fields]
+            continue
+        if len(fields) != len(header):
+            raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
+                             f"{len(fields)} field(s): expected {len(header)} "
+                             f"({','.join(header)}): {line.strip()[:60]!r}")
+        rows.append((number, fields))
+        if len(rows) > max_rows:
+            raise SceneError(f"{what} has more than {max_rows:,} data rows: allowed at most "
+                             f"{max_rows:,} (checked while reading; decimate or split it)")
+    return header or [], rows
+
+
+@dataclass(frozen=True)
+class CsvTable:
+    """A CSV file as read: ``header`` (stripped names; empty for an empty file) and
+    ``rows`` ((line number, fields) per data row); ``what`` names it in messages."""
+    what: str
+    header: list
+    rows: list
+
+    def column(self, col: str, *, allow_blank: bool = False) -> np.ndarray:
+        """Column ``col`` as floats; a cell that is not a number is refused naming its
+        line, data row and text (blank: NaN with ``allow_blank``)."""
+        j = self.header.index(col)
+        out = np.empty(len(self.rows))
+        for i, (number, fields) in enumerate(self.rows):
+            cell = fields[j].strip()
+            if not cell and allow_blank:
+                out[i] = math.nan
+                continue
+            try:
+                out[i] = float(cell)
+            except ValueError:
+                raise SceneError(f"{self.what}: column {col!r} holds {cell[:40]!r} at line "
+                                 f"{number} (data row {i + 1}): expected a number") from None
+        return out
+
+
+def read_table(name: str, base_dir: Path | None, what: str, *, max_bytes: int,
+               max_rows: int) -> CsvTable:
+    """Read CSV file ``name`` (:func:`read_text`, :func:`read_csv_rows`)."""
+    text = read_text(name, base_dir, what, max_bytes)
+    header, rows = read_csv_rows(text, what, max_rows)
+    return CsvTable(what, header, rows)
+
+
+def check_magnitude(x: np.ndarray, limit: float, what: str, label: str, unit: str) -> None:
+    """Refuse |x| > ``limit`` naming the first such data row and its value."""
+    bad = np.flatnonzero(np.abs(x) > limit)
+    if bad.size:
+        raise SceneError(f"{what}: {label} holds {x[bad[0]]:g} {unit} at data row {bad[0] + 1}: "
+                         f"allowed |x| <= {limit:g} {unit} (beyond it the numerics overflow; "
+                         "check the column's unit)")
+
+
+def check_time_steps(t: np.ndarray, what: str, *, row_offset: int = 0) -> None:
+    """Times must increase, by steps of at least MIN_STEP_FRACTION x the median step (and
+    more than 4 ulp of the times): the message names the data row and both values."""
+    step = np.diff(t)
+    if np.any(step <= 0):
+        i = int(np.flatnonzero(step <= 0)[0])
+        raise SceneError(f"{what}: time is not strictly increasing at data row "
+                         f"{i + 2 + row_offset} ({t[i]!r} s then {t[i + 1]!r} s)")
+    if step.size == 0:
+        return
+    median = float(np.median(step))
+    ulp = 4.0 * np.spacing(np.maximum(np.abs(t[:-1]), np.abs(t[1:])))
+    small = np.flatnonzero((step < MIN_STEP_FRACTION * median) | (step <= ulp))
+    if small.size:
+        i = int(small[0])
+        raise SceneError(f"{what}: time step at data row {i + 2 + row_offset} is {step[i]:.3g} s "
+                         f"({t[i]!r} s then {t[i + 1]!r} s), far below the data's resolution: "
+                         f"allowed >= {MIN_STEP_FRACTION:g} x the median step "
+                         f"{median:.3g} s (a duplicated or mistyped stamp?)")
+
+
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Record:
+    """A recorded excitation as read: ``times`` [s], ``values`` (the signal column, [m]
+    or [m/s^2]) and the lateral columns ``values_x``, ``values_y`` (None when not named)."""
+    times: np.ndarray
+    values: np.ndarray
+    values_x: np.ndarray | None = None
+    values_y: np.ndarray | None = None
+
+
+#: the columns of a recorded excitation by [excitation] key, and how a message names
+#: them (None: by the column's name)
+RECORDED_COLUMNS = {"time_column": "time", "signal_column": "signal",
+                    "signal_x_column": None, "signal_y_column": None}
+
+
+def read_recorded(exc: dict, base_dir: Path | None) -> Record:
+    """The CSV of ``[excitation] kind = "recorded"`` (``exc``: the section's SI values by
+    attribute): the time and signal columns, and the lateral columns the 3D model drives
+    the table with (signal_x_column, signal_y_column, when named), each checked as the
+    signal is."""
+    name = exc["file"]
+    if not name:
+        raise SceneError("[excitation] kind = 'recorded' needs file = 'name.csv'")
+    what = f"[excitation] file = {name!r}"
+    text = read_text(name, base_dir, what, MAX_RECORDED_BYTES)
+    if not text.strip():
+        raise SceneError(f"{what} is empty: expected a header line "
+                         f"({exc['time_column']},{exc['signal_column']}) and at least "
+                         f"{MIN_RECORDED_ROWS} data rows")
+    header, rows = read_csv_rows(text, what, MAX_RECORDED_ROWS)
+    table = CsvTable(what, header, rows)
+    wanted = ["time_column", "signal_column"] + [
+        key for key in ("signal_x_column", "signal_y_column") if exc[key]]
+    for col_key in wanted:
+        col = exc[col_key]
+        if col not in header:
+            raise SceneError(f"[excitation] {col_key} = {col!r} is not a column of {name!r}; "
+                             f"columns are {', '.join(header)}" + suggest(col, header))
+    if len(rows) < MIN_RECORDED_ROWS:
+        raise SceneError(f"{what} has {len(rows)} data rows: at least "
+                         f"{MIN_RECORDED_ROWS} are needed (the quintic spline of the table motion)")
+    columns = {key: table.column(exc[key], allow_blank=True) for key in wanted}
+    for key, arr in columns.items():
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            label = RECORDED_COLUMNS[key]
+            raise SceneError(f"{what}: {label} column holds NaN or inf at data row {bad[0] + 1}"
+                             if label else f"{what}: column {exc[key]!r} holds NaN or inf at "
+                             f"data row {bad[0] + 1}")
+    limit, unit = ((MAX_RECORDED_DISPLACEMENT, "m") if exc["signal"] == "displacement"
+                   else (MAX_RECORDED_ACCELERATION, "m/s^2"))
+    for key in wanted[1:]:
+        check_magnitude(columns[key], limit, what, f"{exc['signal']} column {exc[key]!r}", unit)
+    t = columns["time_column"]
+    check_magnitude(t, MAX_RECORDED_TIME, what, f"time column {exc['time_column']!r}", "s")
+    check_time_steps(t, what)
+    return Record(t, columns["signal_column"], columns.get("signal_x_column"),
+                  columns.get("signal_y_column"))
+
+
+def read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
+    """A PSD table (``[excitation] psd_file``): header ``frequency_hz`` and one of
+    ``psd_g2_per_hz`` or ``psd_m2_per_s4_per_hz``; returns (frequencies [Hz], values
+    [(m/s^2)^2/Hz]), refusing a table that holds no power."""
+    where = f"[excitation] psd_file = {name!r}"
+    table = read_table(name, base_dir, where, max_bytes=MAX_RECORDED_BYTES, max_rows=MAX_PSD_ROWS)
+    header = table.header
+    units = {"psd_g2_per_hz": G**2, "psd_m2_per_s4_per_hz": 1.0}
+    value_cols = [h for h in header if h in units]
+    if "frequency_hz" not in header or len(value_cols) != 1:
+        raise SceneError(f"{where}: header {','.join(header)!r} needs the columns frequency_hz "
+                         "and one of psd_g2_per_hz, psd_m2_per_s4_per_hz")
+    freqs = table.column("frequency_hz")
+    vals = table.column(value_cols[0])
+    if freqs.size < 2:
+        raise SceneError(f"{where} has {freqs.size} data rows: at least 2 are needed")
+    for i, (f, v) in enumerate(zip(freqs, vals)):
+        if not (math.isfinite(f) and math.isfinite(v)) or not 0.0 < f <= 1e6 or not 0.0 <= v <= 1e12:
+            raise SceneError(f"{where}: data row {i + 1}: frequency_hz = {f:g}, "
+                             f"{value_cols[0]} = {v:g}; allowed frequency in (0, 1e6] Hz, "
+                             "PSD in [0, 1e12]")
+        if i and f <= freqs[i - 1]:
+            raise SceneError(f"{where}: data row {i + 1}: frequency {f:g} Hz is not above the "
+                             f"previous row's {freqs[i - 1]:g} Hz")
+    if not np.any(vals > 0.0):
+        raise SceneError(f"[excitation] psd_file = {name!r} holds no power (every "
+                         "PSD value is 0)")
+    return freqs, vals * units[value_cols[0]]
