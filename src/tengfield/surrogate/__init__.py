@@ -18,9 +18,10 @@ from .refinement import FIELD_ERROR_MODES, error_sample_positions, precompute
 from .sampling import (FEWEST_POSITIONS, INITIAL_LEVEL, INITIAL_POSITIONS, MAX_POSITIONS,
                        contact_first_order, is_lobatto_count, is_mirror_symmetric,
                        lobatto_positions, mirrored, refinement_positions)
-from .store import (FORMAT_VERSION, CacheOutcome, _import_h5py, cache_path, check_table,
-                    default_cache_dir, load_cached, obtain_table, provenance, read_table,
-                    solver_fingerprint, store_in_cache, write_table)
+from .cache import (CacheOutcome, cache_path, default_cache_dir, load_cached, obtain_table,
+                    store_in_cache)
+from .provenance import FORMAT_VERSION, provenance, solver_fingerprint
+from .store import _import_h5py, check_table, read_table, write_table
 from .table import (SurrogateError, SurrogateTable, TerminalCurves, held_out_error,
                     table_from_results, terminal_samples)
 

@@ -478,7 +478,7 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     the middle and next to the ends of the stroke, on the axis and at the wall;
     the largest x (1 + FIELD_ERROR_MARGIN) elsewhere) or "every".
     """
-    from .store import provenance, solver_fingerprint
+    from .provenance import provenance, solver_fingerprint
 
     if solve is None:
         if scene.field.environment != "free-space":   # before any solve, on every rank
@@ -685,7 +685,7 @@ def read_radial_table(path, expected_hash: str | None = None,
 
 def radial_cache_path(scene, cache_dir=None, **settings) -> Path:
     """Where the (z, r) surrogate of ``scene`` lives in the cache."""
-    from .store import default_cache_dir
+    from .cache import default_cache_dir
 
     directory = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
     return directory / f"surrogate-zr-{radial_hash(scene, **settings)[:24]}.h5"
@@ -700,7 +700,8 @@ def obtain_radial_table(scene, *, cache_dir=None, comm=None, solve=None, progres
     :func:`tengfield.surrogate.obtain_table` (rank 0 decides and broadcasts;
     an untrusted file is recomputed with a warning; an unwritable cache costs a
     warning). ``refinement``: further keywords of :func:`precompute_radial`."""
-    from .store import CacheOutcome, load_cached, solver_fingerprint, store_in_cache
+    from .cache import CacheOutcome, load_cached, store_in_cache
+    from .provenance import solver_fingerprint
 
     start = time.perf_counter()
     settings = {"mesh_size_mm": mesh_size_mm, "degree": degree, "tolerance": tolerance}

@@ -35,6 +35,7 @@ import numpy as np
 from .._mpi import farm, rank_of
 from .sampling import (INITIAL_POSITIONS, MAX_POSITIONS, contact_first_order, is_lobatto_count,
                        is_mirror_symmetric, lobatto_positions, mirrored, refinement_positions)
+from .provenance import provenance, solver_fingerprint
 from .table import SurrogateTable, held_out_error, table_from_results
 
 SolveFunction = Callable[..., Any]
@@ -159,8 +160,6 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
     axisymmetric solver.
     """
-    from .store import provenance, solver_fingerprint
-
     # the breakdown lines (tengfield.breakdown) come with the default axisymmetric solves
     lines = (solve is None and scene.is_axisymmetric and scene.field.method != "3d"
              if breakdown_lines is None else bool(breakdown_lines))
