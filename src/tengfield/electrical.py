@@ -116,7 +116,7 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
     through ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V]
     (= Q_SC / (C_T + C_p), the true V_OC when C_p = 0), ``Q_sc`` [C],
     ``I_sc`` = (dQ_SC/dz) dz/dt [A], ``C_T`` [F] and ``dC_T_dt`` [F/s].
-    ``curves`` may be a (z, r) surrogate (:mod:`tengfield.surrogate.radial`):
+    ``curves`` may be a (z, r) surrogate (:class:`tengfield.surrogate.RadialTerminalCurves`):
     then ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0)
     enter, and ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ``.
     """
@@ -127,7 +127,6 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
         return {"V_oc": zero, "Q_sc": zero.copy(), "I_sc": zero.copy(),
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
     if hasattr(curves, "offsets"):   # the (z, r) surrogate
-        from .surrogate.radial import terminal_waveforms_zr
         zero = np.zeros_like(gap)
         return terminal_waveforms_zr(
             curves, gap, velocity, zero if radial is None else radial,
@@ -139,6 +138,30 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
     return {"V_oc": circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance),
             "Q_sc": q_sc, "I_sc": circuit.short_circuit_current(dq_dz, velocity),
             "C_T": c_t, "dC_T_dt": dc_dz * velocity}
+
+
+def terminal_waveforms_zr(curves, gap, gap_velocity, radial,
+                          radial_velocity, *, cells: int = 1,
+                          parallel_capacitance: float = 0.0) -> dict[str, np.ndarray]:
+    """:func:`tengfield.electrical.terminal_waveforms` for an off-axis trajectory
+    (``curves``: :class:`tengfield.surrogate.RadialTerminalCurves` or
+    :class:`tengfield.surrogate.AnchoredTerminalCurves`).
+
+    ``gap`` z(t), ``radial`` r(t) [m] and their rates [m/s] at the samples;
+    ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` [A], ``dC_T_dt`` likewise; same keys.
+    """
+    gap, radial = np.asarray(gap, dtype=float), np.asarray(radial, dtype=float)
+    z_rate = np.asarray(gap_velocity, dtype=float)
+    r_rate = np.asarray(radial_velocity, dtype=float)
+    dq_dz, dq_dr = curves.charge_derivative(gap, radial)
+    dc_dz, dc_dr = curves.capacitance_derivative(gap, radial)
+    q_rate = dq_dz * z_rate + dq_dr * r_rate
+    c_rate = dc_dz * z_rate + dc_dr * r_rate
+    # scale_cells is linear in each argument: pass the rates as "derivatives" at unit speed
+    q_sc, dq_dt, c_t, dc_dt = circuit.scale_cells(curves.charge(gap, radial), q_rate,
+                                                  curves.capacitance(gap, radial), c_rate, cells)
+    return {"V_oc": circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance),
+            "Q_sc": q_sc, "I_sc": dq_dt, "C_T": c_t, "dC_T_dt": dc_dt}
 
 
 def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
@@ -155,7 +178,7 @@ def _radial(dynamics, curves, times=None):
     is a (z, r) surrogate, else ``(None, None)``."""
     if not hasattr(curves, "offsets"):
         return None, None
-    from .surrogate.radial import radial_motion
+    from .surrogate.offaxis import radial_motion
     return radial_motion(dynamics, times)
 
 

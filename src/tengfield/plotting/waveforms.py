@@ -84,7 +84,7 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
     """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots.
 
     ``curves``: the 1-D surrogate, or the (z, r) one of a ball off the axis
-    (:class:`tengfield.surrogate.radial.AnchoredTerminalCurves`): then the lines are
+    (:class:`tengfield.surrogate.AnchoredTerminalCurves`): then the lines are
     those of :func:`surrogate_lines` (r = 0 and the offsets the ball reached, the band
     between shaded) and a fourth panel maps the change of Q_SC with r over (z, r)
     with the field solves of the grid and the trajectory's (z, r) samples

@@ -1,4 +1,5 @@
-"""The surrogate cache: where a scene's table lives, and whether it is trusted.
+"""The surrogate cache: where a scene's table lives (on the axis and over (z, r)), and
+whether it is trusted.
 
 :func:`obtain_table` is the cache keyed by :meth:`tengfield.scene.Scene.field_hash`
 (and the solver fingerprint): rank 0 decides hit or miss and broadcasts the
@@ -15,9 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._mpi import rank_of, size_of
-from .provenance import solver_fingerprint
-from .refinement import SolveFunction, precompute, warn_accuracy
-from .store import read_table, write_table
+from .provenance import radial_hash, solver_fingerprint
+from .refinement import (SolveFunction, precompute, precompute_radial, radial_accuracy_problems,
+                         warn_accuracy, warn_problems)
+from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
+from .store import read_radial_table, read_table, write_radial_table, write_table
 from .table import SurrogateError, SurrogateTable
 
 
@@ -126,4 +129,36 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     table = precompute(scene, comm=comm, solve=solve, progress=progress,
                        command_line=command_line)
     stored = store_in_cache(path, table, comm) if write else False
+    return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)
+
+
+def radial_cache_path(scene, cache_dir=None, **settings) -> Path:
+    """Where the (z, r) surrogate of ``scene`` lives in the cache."""
+    directory = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
+    return directory / f"surrogate-zr-{radial_hash(scene, **settings)[:24]}.h5"
+
+
+def obtain_radial_table(scene, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
+                        command_line: str = "", write: bool = True,
+                        mesh_size_mm: float = DEFAULT_MESH_SIZE_MM, degree: int = DEFAULT_DEGREE,
+                        tolerance: float = DEFAULT_TOLERANCE, **refinement):
+    """The cached (z, r) surrogate of ``scene`` if trusted, else a new one:
+    ``(RadialTable, CacheOutcome)``, the rules of
+    :func:`tengfield.surrogate.obtain_table` (rank 0 decides and broadcasts;
+    an untrusted file is recomputed with a warning; an unwritable cache costs a
+    warning). ``refinement``: further keywords of :func:`precompute_radial`."""
+    start = time.perf_counter()
+    settings = {"mesh_size_mm": mesh_size_mm, "degree": degree, "tolerance": tolerance}
+    path = radial_cache_path(scene, cache_dir, **settings)
+    key = radial_hash(scene, **settings)
+    table, status, reason = load_cached(
+        path, scene, comm,
+        read=lambda p: read_radial_table(p, expected_hash=key,
+                                         expected_solver=solver_fingerprint()))
+    if table is not None:
+        warn_problems(radial_accuracy_problems(table), comm, stacklevel=2)
+        return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
+    table = precompute_radial(scene, comm=comm, solve=solve, progress=progress,
+                              command_line=command_line, **settings, **refinement)
+    stored = store_in_cache(path, table, comm, write=write_radial_table) if write else False
     return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)

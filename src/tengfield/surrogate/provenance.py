@@ -3,7 +3,7 @@ cache keys and the file format versions.
 
 :func:`solver_fingerprint` (a hash of the field solver's source) and the scene's
 field hash (:meth:`tengfield.scene.Scene.field_hash`; for the (z, r) surrogate
-:func:`tengfield.surrogate.refinement.radial_hash`, which adds the 3D settings)
+:func:`radial_hash`, which adds the 3D settings)
 decide whether a stored table may be reused; :func:`provenance` records versions,
 scene text and command line with every table.
 """
@@ -16,6 +16,7 @@ import sys
 import time
 
 from .. import __version__
+from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
 
 #: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars
 FORMAT_VERSION = 2
@@ -57,3 +58,13 @@ def provenance(scene, command_line: str = "") -> dict:
             "field_inputs": scene.field_inputs(), "command_line": command_line,
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
 
+
+def radial_hash(scene, *, mesh_size_mm: float = DEFAULT_MESH_SIZE_MM,
+                degree: int = DEFAULT_DEGREE, tolerance: float = DEFAULT_TOLERANCE) -> str:
+    """SHA-256 of the scene's field inputs plus the (z, r) surrogate's own settings
+    (the cache key of :func:`obtain_radial_table`)."""
+    inputs = {"field": scene.field_inputs(),
+              "zr": {"format": FORMAT_VERSION_ZR, "method": "3d",
+                     "mesh_size_mm": float(mesh_size_mm), "degree": int(degree),
+                     "tolerance": float(tolerance)}}
+    return hashlib.sha256(json.dumps(inputs, sort_keys=True, default=float).encode()).hexdigest()

@@ -1,4 +1,5 @@
-"""The surrogate on disk: the HDF5 format, with checksums and structure checks.
+"""The surrogates on disk, on the axis and over (z, r): the HDF5 format, with checksums
+and structure checks.
 
 :func:`write_table` writes atomically (temporary file + ``os.replace``);
 every data array is stored with HDF5's Fletcher-32 filter and the SHA-256
@@ -8,7 +9,9 @@ scene and solver, every checksum matches and the data make sense
 (:func:`check_table`: positions sorted from 0 to the stroke, consistent
 shapes, finite values, each C symmetric positive definite with C_lu < 0,
 induced charges within the ball's charge). Where the files live and when one
-is reused: :mod:`tengfield.surrogate.cache`.
+is reused: :mod:`tengfield.surrogate.cache`. The (z, r) file (``kind = "zr"``) has
+the same rules (:func:`write_radial_table`, :func:`read_radial_table`,
+:func:`check_radial_table`: every offset's column passes :func:`check_table`).
 """
 from __future__ import annotations
 
@@ -21,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .provenance import FORMAT_VERSION
-from .table import SurrogateError, SurrogateTable
+from .provenance import FORMAT_VERSION, FORMAT_VERSION_ZR
+from .table import GRID_TAILS, RadialTable, SurrogateError, SurrogateTable
 
 #: table attribute -> HDF5 dataset name (unit-suffixed)
 ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
@@ -44,6 +47,19 @@ OPTIONAL_ARRAYS = {"line_potential": "breakdown_line_potential",
                    "line_check": "breakdown_line_potential_check"}
 _SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
            "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
+
+#: table attribute -> HDF5 dataset name
+ARRAYS_ZR = {"positions": "positions_m", "offsets": "offsets_m",
+             "capacitance": "capacitance_F", "induced_charge": "induced_charge_C",
+             "dofs": "dofs", "cells": "cells", "wall_time": "wall_time_s",
+             "solve_time": "solve_time_s", "field_error": "field_relative_error_estimate"}
+#: table attribute -> HDF5 file attribute (covered by ``scalars_sha256``)
+SCALARS_ZR = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
+              "max_offset": "max_offset_m", "interpolation_error": "interpolation_error_estimate",
+              "tolerance": "tolerance", "converged": "converged", "field_hash": "field_hash",
+              "method": "method", "degree": "degree", "mesh_size": "mesh_size_m"}
+#: table attribute -> type of its value: the 1-D surrogate's and the 3D ones
+SCALAR_TYPES_ZR = {**SCALAR_TYPES, "max_offset": float, "mesh_size": float}
 
 
 # ---------------------------------------------------------------------------
@@ -302,3 +318,77 @@ def read_table(path: str | Path, expected_hash: str | None = None,
                              scalar_names=SCALARS, scalar_types=SCALAR_TYPES,
                              build=_build_table, expected_hash=expected_hash,
                              expected_solver=expected_solver, optional_names=OPTIONAL_ARRAYS)
+
+
+# ---------------------------------------------------------------------------
+# the (z, r) file
+def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
+    """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
+    attribute -> array) has the shape ``(nz, nr, *tail)`` of :data:`GRID_TAILS`."""
+    for attr, tail in GRID_TAILS.items():
+        shape = np.shape(arrays[attr])
+        if shape != (nz, nr, *tail):
+            raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "
+                                 f"{(nz, nr, *tail)}")
+
+
+def check_radial_table(table: RadialTable) -> None:
+    """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense:
+    shapes, offsets strictly ascending from 0 to ``max_offset``, and every
+    offset's column passing :func:`tengfield.surrogate.check_table`."""
+    nz, nr = table.shape
+    _check_grid_shapes({attr: getattr(table, attr) for attr in GRID_TAILS}, nz, nr)
+    r = table.offsets
+    check_axis(r, float(table.max_offset), "offset", "max offset")
+    z = table.positions
+    if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
+        raise SurrogateError("positions are not strictly ascending")
+    for j in range(nr):
+        try:
+            check_table(table.column(j))
+        except SurrogateError as exc:
+            raise SurrogateError(f"at offset r = {r[j]:.6g} m: {exc.reason}") from None
+
+
+def write_radial_table(path, table: RadialTable) -> Path:
+    """Write ``table`` to HDF5 atomically with the 1-D surrogate's checksums
+    (:func:`write_checked_file`). Raises ``OSError`` if it
+    cannot (nothing is left behind)."""
+    arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
+    arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
+    scalars = typed_scalars(vars(table), SCALAR_TYPES_ZR)
+    return write_checked_file(path, arrays, scalars, SCALARS_ZR, {
+        "format_version": FORMAT_VERSION_ZR, "kind": "zr",
+        "provenance": json.dumps(table.provenance, default=str)})
+
+
+def _check_format_zr(attrs) -> None:
+    version = attrs.get("format_version")
+    if str(attrs.get("kind", "")) != "zr" or version is None or int(version) != FORMAT_VERSION_ZR:
+        raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
+                             f"(kind {attrs.get('kind')!r}, format {version!r})")
+
+
+def _build_radial_table(arrays: dict, history, scalars: dict,
+                        provenance_data: dict) -> RadialTable:
+    _check_grid_shapes(arrays, np.shape(arrays["positions"])[0], np.shape(arrays["offsets"])[0])
+    if history.ndim != 2 or history.shape[1] != 3:
+        raise SurrogateError(f"error history has shape {history.shape}")
+    table = RadialTable(**arrays, **scalars, provenance=provenance_data,
+                        error_history=[(int(a), int(b), float(e))
+                                       for a, b, e in history.tolist()])
+    check_radial_table(table)
+    return table
+
+
+def read_radial_table(path, expected_hash: str | None = None,
+                      expected_solver: str | None = None) -> RadialTable:
+    """Read a (z, r) surrogate file; raise :class:`SurrogateError` unless it is
+    complete, of this format, unchanged (checksums), sensible
+    (:func:`check_radial_table`) and (if given) for ``expected_hash``
+    (:func:`tengfield.surrogate.provenance.radial_hash`) and the solver ``expected_solver``
+    (:func:`read_checked_file`)."""
+    return read_checked_file(path, check_format=_check_format_zr, array_names=ARRAYS_ZR,
+                             scalar_names=SCALARS_ZR, scalar_types=SCALAR_TYPES_ZR,
+                             build=_build_radial_table, expected_hash=expected_hash,
+                             expected_solver=expected_solver, hash_label="hash")
