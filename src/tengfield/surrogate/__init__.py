@@ -40,9 +40,9 @@ from .sampling import (DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE, 
                        offset_positions, offset_refinement, refinement_positions)
 from .store import (_import_h5py, check_radial_table, check_table, read_radial_table, read_table,
                     write_radial_table, write_table)
-from .table import (AnchoredTerminalCurves, RadialTable, RadialTerminalCurves, SurrogateError,
-                    SurrogateTable, TerminalCurves, table_from_grid, table_from_results,
-                    terminal_grid, terminal_samples)
+from .table import (AnchoredTerminalCurves, Curves, OffAxisCurves, OnAxisCurves, RadialTable,
+                    RadialTerminalCurves, SurrogateError, SurrogateTable, TerminalCurves,
+                    table_from_grid, table_from_results, terminal_grid, terminal_samples)
 
 #: ``tengfield.surrogate.radial``: the (z, r) names under the module they were first
 #: published in (now in the modules above; V_OC, Q_SC, I_SC along an off-axis
@@ -67,5 +67,6 @@ __all__ = [
     "error_sample_positions", "held_out_error", "is_lobatto_count", "is_mirror_symmetric",
     "load_cached", "lobatto_positions", "mirrored", "obtain_table", "precompute", "provenance",
     "read_table", "refinement_positions", "solver_fingerprint", "store_in_cache",
-    "table_from_results", "terminal_samples", "write_table", "radial", *RADIAL_NAMES,
+    "table_from_results", "terminal_samples", "write_table", "Curves", "OnAxisCurves",
+    "OffAxisCurves", "radial", *RADIAL_NAMES,
 ]

@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
-from .. import terminals
+from .. import circuit, terminals
 from ..errors import TengfieldError
 from .sampling import grid_key
 
@@ -182,7 +183,77 @@ def terminal_samples(table: SurrogateTable, reference: str = "floating"):
     return q_u0 - q_u0[0], np.asarray(c_t, dtype=float)
 
 
-class TerminalCurves:
+class Curves(ABC):
+    """The terminal curves of one cell for one reference, as every caller uses them (the
+    electrical stage, the arrays, the figures, the fit).
+
+    :class:`TerminalCurves` for a ball on the axis (of :class:`OnAxisCurves`),
+    :class:`RadialTerminalCurves` and :class:`AnchoredTerminalCurves` off it (of
+    :class:`OffAxisCurves`). When ``radial`` is true the values depend on the radial
+    offset ``r`` [m] as well as the gap ``z`` [m], and the methods take ``(z, r)``,
+    else ``(z)``; ``axis`` is the 1-D curves on the axis (None for bare (z, r) curves).
+    ``positions`` [m] are the tabulated gaps; ``charge_samples`` [C] and
+    ``capacitance_samples`` [F] every tabulated value (e.g. for C_T's range).
+    """
+    reference: str
+    stroke: float
+    positions: np.ndarray
+    charge_samples: np.ndarray
+    capacitance_samples: np.ndarray
+    #: the values depend on the radial offset r (the methods take (z, r))
+    radial: bool = False
+    #: the curves of the ball on the axis (None: bare (z, r) curves have none)
+    axis: "TerminalCurves | None" = None
+
+    @abstractmethod
+    def charge(self, z, *r):
+        """Q_SC [C]."""
+
+    @abstractmethod
+    def charge_derivative(self, z, *r):
+        """dQ_SC/dz [C/m] (with r: the pair (dQ_SC/dz, dQ_SC/dr))."""
+
+    @abstractmethod
+    def capacitance(self, z, *r):
+        """C_T [F]."""
+
+    @abstractmethod
+    def capacitance_derivative(self, z, *r):
+        """dC_T/dz [F/m] (with r: the pair (dC_T/dz, dC_T/dr))."""
+
+    def voltage(self, z, *r):
+        """V_OC = Q_SC / C_T [V]."""
+        return terminals.open_circuit_voltage(self.charge(z, *r), self.capacitance(z, *r))
+
+    @abstractmethod
+    def evaluate_many(self, z, z_rate, r=None, r_rate=None, *, cells: int = 1) -> tuple:
+        """``(Q_SC [C], I_SC [A], C_T [F], dC_T/dt [F/s])`` of ``cells`` identical cells in
+        parallel along sampled gaps ``z`` [m] with rates ``z_rate`` [m/s] (and, where
+        ``radial``, offsets ``r`` [m] with rates ``r_rate`` [m/s], default 0): the arrays of
+        :func:`tengfield.electrical.terminal_waveforms`."""
+
+
+class OnAxisCurves(Curves):
+    """Curves of a ball on the axis: everything follows from ``charge(z)``,
+    ``capacitance(z)`` and their derivatives."""
+    radial = False
+
+    @property
+    def axis(self) -> "OnAxisCurves":
+        return self
+
+    def evaluate_many(self, z, z_rate, r=None, r_rate=None, *, cells: int = 1) -> tuple:
+        """:meth:`Curves.evaluate_many`; ``r`` and ``r_rate`` play no part on the axis.
+        ``I_SC = (dQ_SC/dz) ż`` and ``dC_T/dt = (dC_T/dz) ż`` of the scaled cells."""
+        z = np.asarray(z, dtype=float)
+        z_rate = np.asarray(z_rate, dtype=float)
+        q_sc, dq_dz, c_t, dc_dz = circuit.scale_cells(
+            self.charge(z), self.charge_derivative(z), self.capacitance(z),
+            self.capacitance_derivative(z), cells)
+        return q_sc, circuit.short_circuit_current(dq_dz, z_rate), c_t, dc_dz * z_rate
+
+
+class TerminalCurves(OnAxisCurves):
     """Smooth ``Q_SC(z)``, ``C_T(z)``, ``V_OC(z)`` of one cell for one reference.
 
     Cubic splines (not-a-knot) through the tabulated values; derivatives are
@@ -224,9 +295,12 @@ class TerminalCurves:
         """dC_T/dz [F/m]."""
         return self._dc(self._z(z))
 
-    def voltage(self, z):
-        """V_OC(z) = Q_SC / C_T [V]."""
-        return terminals.open_circuit_voltage(self.charge(z), self.capacitance(z))
+    def pieces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(knots, charge, capacitance)``: the splines' breakpoints [m] (the positions)
+        and the piecewise cubic coefficients of Q_SC and C_T, shape (4, knots - 1),
+        highest power first, in powers of ``z - knots[j]`` on interval j: for compiled
+        evaluation (:mod:`tengfield.array`). Read only."""
+        return self._q.x, self._q.c, self._c.c
 
 
 # ---------------------------------------------------------------------------
@@ -344,7 +418,35 @@ def terminal_grid(table: RadialTable, reference: str = "floating"):
     return np.asarray(q_u0 - q_u0[0, 0], dtype=float), np.asarray(c_t, dtype=float)
 
 
-class RadialTerminalCurves:
+class OffAxisCurves(Curves):
+    """Curves of a ball off the axis: ``charge(z, r)``, ``capacitance(z, r)`` and their
+    gradients ``(d/dz, d/dr)``; ``positions`` x ``offsets`` [m] is the grid of solves up
+    to ``max_offset`` [m], ``charge_grid`` and ``capacitance_grid`` the values on it."""
+    radial = True
+    offsets: np.ndarray
+    max_offset: float
+    charge_grid: np.ndarray
+    capacitance_grid: np.ndarray
+
+    def evaluate_many(self, z, z_rate, r=None, r_rate=None, *, cells: int = 1) -> tuple:
+        """:meth:`Curves.evaluate_many` with ``I_SC = dQ_SC/dz ż + dQ_SC/dr ṙ``, ``dC_T/dt``
+        likewise (no ``r``: on the axis; no ``r_rate``: 0)."""
+        z = np.asarray(z, dtype=float)
+        zero = np.zeros_like(z)
+        radial = np.asarray(zero if r is None else r, dtype=float)
+        z_rate = np.asarray(z_rate, dtype=float)
+        r_rate = np.asarray(zero if r_rate is None else r_rate, dtype=float)
+        dq_dz, dq_dr = self.charge_derivative(z, radial)
+        dc_dz, dc_dr = self.capacitance_derivative(z, radial)
+        q_rate = dq_dz * z_rate + dq_dr * r_rate
+        c_rate = dc_dz * z_rate + dc_dr * r_rate
+        # scale_cells is linear in each argument: pass the rates as "derivatives" at unit speed
+        q_sc, dq_dt, c_t, dc_dt = circuit.scale_cells(self.charge(z, radial), q_rate,
+                                                      self.capacitance(z, radial), c_rate, cells)
+        return q_sc, dq_dt, c_t, dc_dt
+
+
+class RadialTerminalCurves(OffAxisCurves):
     """Smooth ``Q_SC(z, r)``, ``C_T(z, r)``, ``V_OC(z, r)`` of one cell for one reference.
 
     The interface of :class:`tengfield.surrogate.TerminalCurves` with two
@@ -408,12 +510,8 @@ class RadialTerminalCurves:
         """``(dC_T/dz [F/m], dC_T/dr [F/m])`` of the interpolant."""
         return self._gradient(self._c, z, r)
 
-    def voltage(self, z, r):
-        """V_OC(z, r) = Q_SC / C_T [V]."""
-        return terminals.open_circuit_voltage(self.charge(z, r), self.capacitance(z, r))
 
-
-class AnchoredTerminalCurves:
+class AnchoredTerminalCurves(OffAxisCurves):
     """The (z, r) curves anchored to the axisymmetric surrogate:
     ``F(z, r) = F_axis(z) + [F_zr(z, r) − F_zr(z, 0)]`` for F = Q_SC and C_T.
 
@@ -462,7 +560,3 @@ class AnchoredTerminalCurves:
         d_z, d_r = self.zr.capacitance_derivative(z, r)
         return (self.axis.capacitance_derivative(z) + d_z
                 - self.zr.capacitance_derivative(z, 0.0)[0], d_r)
-
-    def voltage(self, z, r):
-        """V_OC(z, r) = Q_SC / C_T [V]."""
-        return terminals.open_circuit_voltage(self.charge(z, r), self.capacitance(z, r))
