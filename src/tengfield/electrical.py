@@ -153,7 +153,7 @@ def _radial(dynamics, curves, times=None):
     is a (z, r) surrogate, else ``(None, None)``."""
     if curves is None or not curves.radial:
         return None, None
-    from .surrogate import radial_motion
+    from .surrogate.offaxis import radial_motion
     return radial_motion(dynamics, times)
 
 
