@@ -5,7 +5,7 @@ import numpy as np
 import plate_model as fx
 import test_surrogate_zr as tz
 from tengfield import pipeline
-from tengfield.surrogate import radial
+from tengfield.surrogate import AnchoredTerminalCurves, radial_motion
 
 BASE = dict(contact={"model": "3d"}, run={"duration_s": 0.3, "settle_periods": 2})
 
@@ -18,7 +18,7 @@ def test_ball_on_the_axis_keeps_the_one_dimensional_surrogate(tmp_path):
     axial = run(fx.scene_with(**BASE, excitation={"frequency_hz": 30.0, "amplitude_mm": 1.0}),
                 tmp_path)
     assert "field_zr" not in axial.stages
-    assert not isinstance(axial.curves, radial.AnchoredTerminalCurves)
+    assert not isinstance(axial.curves, AnchoredTerminalCurves)
 
 
 def test_lateral_shaking_uses_the_zr_surrogate_consistently(tmp_path):
@@ -27,8 +27,8 @@ def test_lateral_shaking_uses_the_zr_surrogate_consistently(tmp_path):
                            circuit={"kind": "load", "load_ohm": 1e8})
     out = run(shaken, tmp_path)
     assert out.stages["field_zr"].status == "ran"
-    assert isinstance(out.curves, radial.AnchoredTerminalCurves)
-    r, _ = radial.radial_motion(out.dynamics)
+    assert isinstance(out.curves, AnchoredTerminalCurves)
+    r, _ = radial_motion(out.dynamics)
     assert r.max() > 1e-4                                   # the ball did leave the axis
     # I_SC = dQ_SC/dz z' + dQ_SC/dr r' is the time derivative of the sampled Q_SC
     t, q, i = (out.waveforms[k] for k in ("time_s", "Q_sc_C", "I_sc_A"))

@@ -242,15 +242,15 @@ def test_info(work):
 def test_run_3d_lateral(work, scene, precomputed):
     import test_surrogate_zr as tz
     from tengfield.scene import load_scene
-    from tengfield.surrogate import radial
+    from tengfield.surrogate import obtain_radial_table
 
     where, cli = work
     text = scene.read_text()
     text = edit(text, "model", '"3d"')
     text = add_to_section(text, "excitation", "amplitude_x_mm = 0.5\nphase_x_deg = 30.0\n")
     (where / "lateral.toml").write_text(text)
-    radial.obtain_radial_table(load_scene(where / "lateral.toml"), cache_dir=where / "cache",
-                               solve=tz.zr_model_solve)
+    obtain_radial_table(load_scene(where / "lateral.toml"), cache_dir=where / "cache",
+                        solve=tz.zr_model_solve)
     cli("run", "lateral.toml", "-o", "out/lateral")
     out = where / "out" / "lateral"
     check_outputs(out, RUN_FILES + ("contacts.csv", "trajectory3d.png"))

@@ -14,7 +14,8 @@ import pytest
 
 import test_surrogate_zr as tz
 from tengfield.scene import load_scene
-from tengfield.surrogate import TerminalCurves, obtain_table, radial
+from tengfield.surrogate import (AnchoredTerminalCurves, TerminalCurves, obtain_radial_table,
+                                 obtain_table)
 
 LATERAL = """\
 [excitation]
@@ -41,7 +42,7 @@ tolerance = 0.05
 def seed_cache(scene, cache):
     """Both surrogates of ``scene`` in ``cache`` (analytic stand-in): (table, zr_table)."""
     table, _ = obtain_table(scene, cache_dir=cache, solve=tz.zr_model_solve)
-    zr_table, _ = radial.obtain_radial_table(scene, cache_dir=cache, solve=tz.zr_model_solve)
+    zr_table, _ = obtain_radial_table(scene, cache_dir=cache, solve=tz.zr_model_solve)
     return table, zr_table
 
 
@@ -66,7 +67,7 @@ def test_surrogate_figure_of_zr_curves_shows_the_visited_offsets(tmp_path):
     scene = load_scene(path)
     table, zr_table = seed_cache(scene, tmp_path / "cache")
     axis = TerminalCurves(table, "floating")
-    curves = radial.AnchoredTerminalCurves(zr_table.curves("floating"), axis)
+    curves = AnchoredTerminalCurves(zr_table.curves("floating"), axis)
     r_seen = 0.4 * curves.max_offset
     gap = np.linspace(0.0, curves.stroke, 50)
     visited = (gap, np.linspace(0.0, r_seen, 50))

@@ -634,7 +634,7 @@ def test_solver_fingerprint_covers_the_solver_and_not_its_plots(tmp_path, monkey
     import shutil
 
     import tengfield.field as field_package
-    from tengfield.surrogate.store import solver_fingerprint
+    from tengfield.surrogate.provenance import solver_fingerprint
 
     names = [p.name for p in field_package.solver_source_paths()]
     assert {"axisymmetric.py", "solver3d.py", "contact.py", "_dolfinx.py"} <= set(names)

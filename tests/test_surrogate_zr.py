@@ -9,10 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tengfield import surrogate, terminals
+from tengfield import electrical, surrogate, terminals
 from tengfield.field.result import PositionResult
 from tengfield.surrogate import SurrogateError
-from tengfield.surrogate import radial
 
 h5py = surrogate._import_h5py()
 
@@ -31,7 +30,7 @@ def zr_model(scene, z, r):
     """
     c_ll, c_lu, c_uu, q_l, q_u = fx.plate_model(scene, z)
     stroke = scene.device.stroke
-    rho2 = (np.asarray(r, dtype=float) / radial.max_offset(scene.device))**2
+    rho2 = (np.asarray(r, dtype=float) / surrogate.max_offset(scene.device))**2
     wall = 0.02 * rho2 / (1.5 - rho2)            # grows fast toward rho = 1
     z = np.asarray(z, dtype=float)
     bulge = np.sin(np.pi * z / stroke)          # the offset matters most mid-stroke
@@ -73,17 +72,17 @@ def table_of(scene, solve=zr_model_solve, **kw):
     kw.setdefault("tolerance", 1e-3)
     kw.setdefault("max_positions", 129)
     kw.setdefault("max_offsets", 33)
-    return radial.precompute_radial(scene, solve=solve, solve_comm=SOLVE_COMM, **kw)
+    return surrogate.precompute_radial(scene, solve=solve, solve_comm=SOLVE_COMM, **kw)
 
 
 SCENE = fx.scene_with()
 STROKE = SCENE.device.stroke
-R_MAX = radial.max_offset(SCENE.device)
+R_MAX = surrogate.max_offset(SCENE.device)
 
 
 def dense(scene, n=81):
     z = np.linspace(0.0, scene.device.stroke, n)
-    r = np.linspace(0.0, radial.max_offset(scene.device), n // 2)
+    r = np.linspace(0.0, surrogate.max_offset(scene.device), n // 2)
     return np.meshgrid(z, r, indexing="ij")
 
 
@@ -101,11 +100,11 @@ def true_error(table, scene):
 
 # ---------------------------------------------------------------------------
 def test_offsets_are_nested_and_lobatto_in_r_squared():
-    r2, r3, r5 = (radial.offset_positions(R_MAX, n) for n in (2, 3, 5))
+    r2, r3, r5 = (surrogate.offset_positions(R_MAX, n) for n in (2, 3, 5))
     np.testing.assert_array_equal(r2, [0.0, R_MAX])
     np.testing.assert_allclose(r3[::2], r2, atol=1e-18)
     np.testing.assert_allclose(r5[::2], r3, atol=1e-18)
-    np.testing.assert_allclose(radial.offset_refinement(R_MAX, 3), r5[1::2])
+    np.testing.assert_allclose(surrogate.offset_refinement(R_MAX, 3), r5[1::2])
     np.testing.assert_allclose(r3[1]**2, 0.5 * R_MAX**2)          # the middle in s = r²
     s = r5**2   # Chebyshev-Lobatto in s: symmetric about s_max / 2
     np.testing.assert_allclose(s + s[::-1], R_MAX**2, rtol=1e-12)
@@ -144,10 +143,10 @@ def test_a_cached_unconverged_table_warns_again(tmp_path):
     kw = dict(cache_dir=tmp_path, solve=zr_model_solve, tolerance=1e-9, max_positions=17,
               max_offsets=3)
     with pytest.warns(RuntimeWarning, match="above the tolerance") as first:
-        radial.obtain_radial_table(SCENE, **kw)
+        surrogate.obtain_radial_table(SCENE, **kw)
     with warnings.catch_warnings(record=True) as again:
         warnings.simplefilter("always")
-        table, outcome = radial.obtain_radial_table(SCENE, **kw)
+        table, outcome = surrogate.obtain_radial_table(SCENE, **kw)
     assert outcome.status == "cached" and not table.converged
     said = [str(w.message) for w in again if "above the tolerance" in str(w.message)]
     assert said == [str(w.message) for w in first if "above the tolerance" in str(w.message)]
@@ -174,7 +173,7 @@ def test_axis_is_the_one_dimensional_surrogate_and_flat_in_r():
         dq_small = np.abs(zr.charge(z, 1e-2 * R_MAX) - zr.charge(z, 0.0)).max()
         dq_big = np.abs(zr.charge(z, 1e-1 * R_MAX) - zr.charge(z, 0.0)).max()
         assert dq_big > 50.0 * dq_small
-    check = radial.axis_check(table, one_d)
+    check = surrogate.axis_check(table, one_d)
     assert check["ok"] and check["deviation"] < 1e-12   # same solver on the axis
 
 
@@ -217,8 +216,8 @@ def test_waveforms_current_is_the_total_derivative():
     gap_rate = 0.5 * STROKE * w * np.sin(w * t)
     r = R_MAX * 0.5 * (1 - np.cos(1.7 * w * t))
     r_rate = R_MAX * 0.5 * 1.7 * w * np.sin(1.7 * w * t)
-    out = radial.terminal_waveforms_zr(curves, gap, gap_rate, r, r_rate, cells=3,
-                                       parallel_capacitance=1e-12)
+    out = electrical.terminal_waveforms_zr(curves, gap, gap_rate, r, r_rate, cells=3,
+                                           parallel_capacitance=1e-12)
     numeric = np.gradient(out["Q_sc"], t)
     inner = slice(5, -5)
     assert np.abs(out["I_sc"] - numeric)[inner].max() < 1e-4 * np.abs(out["I_sc"]).max()
@@ -227,7 +226,8 @@ def test_waveforms_current_is_the_total_derivative():
     assert np.abs(out["dC_T_dt"] - np.gradient(out["C_T"], t))[inner].max() \
         < 1e-4 * np.abs(out["dC_T_dt"]).max()
     # the lateral motion alone moves charge
-    still = radial.terminal_waveforms_zr(curves, np.full_like(t, 0.4 * STROKE), 0 * t, r, r_rate)
+    still = electrical.terminal_waveforms_zr(curves, np.full_like(t, 0.4 * STROKE), 0 * t, r,
+                                             r_rate)
     assert np.abs(still["I_sc"]).max() > 0.0
 
 
@@ -236,7 +236,7 @@ def test_radial_motion_of_a_trajectory():
         x = np.array([0.0, 3e-4, 0.0])
         y = np.array([0.0, 4e-4, -2e-4])
         velocity = np.array([[1.0, 1.0, 0.0], [0.3, 0.4, 0.2], [5.0, 1.0, 0.0]])
-    r, rate = radial.radial_motion(Motion)
+    r, rate = surrogate.radial_motion(Motion)
     np.testing.assert_allclose(r, [0.0, 5e-4, 2e-4])
     np.testing.assert_allclose(rate, [0.0, 0.5, -1.0])
 
@@ -281,22 +281,22 @@ def test_grounded_table_is_not_mirrored():
 
 def test_file_round_trip_and_checks(tmp_path):
     table = table_of(SCENE, tolerance=1e-3)
-    path = radial.write_radial_table(tmp_path / "zr.h5", table)
-    back = radial.read_radial_table(path, expected_hash=table.field_hash)
+    path = surrogate.write_radial_table(tmp_path / "zr.h5", table)
+    back = surrogate.read_radial_table(path, expected_hash=table.field_hash)
     np.testing.assert_array_equal(back.capacitance, table.capacitance)
     np.testing.assert_array_equal(back.offsets, table.offsets)
     assert back.error_history == table.error_history
     assert back.interpolation_error == table.interpolation_error
     assert not list(tmp_path.glob(".*.tmp"))   # atomic: no temporary file left
     with pytest.raises(SurrogateError, match="was made for hash"):
-        radial.read_radial_table(path, expected_hash="0" * 64)
+        surrogate.read_radial_table(path, expected_hash="0" * 64)
     with pytest.raises(SurrogateError, match="another version of the field solver"):
-        radial.read_radial_table(path, expected_solver="not-this-one")
+        surrogate.read_radial_table(path, expected_solver="not-this-one")
     # a 1-D surrogate file is not a (z, r) one, and vice versa
     one_d = surrogate.write_table(tmp_path / "line.h5", surrogate.precompute(
         SCENE, solve=fx.plate_model_solve, solve_comm=SOLVE_COMM))
     with pytest.raises(SurrogateError, match="not a \\(z, r\\) surrogate"):
-        radial.read_radial_table(one_d)
+        surrogate.read_radial_table(one_d)
     with pytest.raises(SurrogateError):
         surrogate.read_table(path)
 
@@ -304,59 +304,59 @@ def test_file_round_trip_and_checks(tmp_path):
 @pytest.mark.parametrize("name", ["capacitance_F", "induced_charge_C", "offsets_m"])
 def test_a_changed_array_is_caught(tmp_path, name):
     table = table_of(SCENE, tolerance=1e-3)
-    path = radial.write_radial_table(tmp_path / "zr.h5", table)
+    path = surrogate.write_radial_table(tmp_path / "zr.h5", table)
     with h5py.File(path, "r+") as f:
         data = f[name][()]
         flat = data.reshape(-1)
         flat[1] *= 1.001
         f[name][...] = data
     with pytest.raises(SurrogateError, match="checksum"):
-        radial.read_radial_table(path)
+        surrogate.read_radial_table(path)
 
 
 def test_consistent_but_wrong_data_is_not_trusted(tmp_path):
     """Correct checksums, nonsense physics: the structure checks catch it."""
     table = table_of(SCENE, tolerance=1e-3)
-    bad = radial.RadialTable(**{**table.__dict__})
+    bad = surrogate.RadialTable(**{**table.__dict__})
     bad.capacitance = table.capacitance.copy()
     bad.capacitance[3, 1, 0, 1] *= -1.0           # C_lu > 0 at one off-axis point
-    path = radial.write_radial_table(tmp_path / "zr.h5", bad)
+    path = surrogate.write_radial_table(tmp_path / "zr.h5", bad)
     with pytest.raises(SurrogateError, match="at offset r = .*positive definite"):
-        radial.read_radial_table(path)
-    bad = radial.RadialTable(**{**table.__dict__})
+        surrogate.read_radial_table(path)
+    bad = surrogate.RadialTable(**{**table.__dict__})
     bad.offsets = table.offsets[::-1].copy()
-    path = radial.write_radial_table(tmp_path / "zr2.h5", bad)
+    path = surrogate.write_radial_table(tmp_path / "zr2.h5", bad)
     with pytest.raises(SurrogateError, match="offsets are not strictly ascending"):
-        radial.read_radial_table(path)
+        surrogate.read_radial_table(path)
 
 
 def test_cache_hit_miss_and_corrupt(tmp_path):
     solver = Counting()
     kw = dict(cache_dir=tmp_path, solve=solver, tolerance=1e-3)
-    table, outcome = radial.obtain_radial_table(SCENE, **kw)
+    table, outcome = surrogate.obtain_radial_table(SCENE, **kw)
     assert outcome.status == "computed" and outcome.stored and solver.points
     n = len(solver.points)
-    again, outcome = radial.obtain_radial_table(SCENE, **kw)
+    again, outcome = surrogate.obtain_radial_table(SCENE, **kw)
     assert outcome.status == "cached" and len(solver.points) == n
     np.testing.assert_array_equal(again.induced_charge, table.induced_charge)
     # another 3D discretisation is another file
-    _, outcome = radial.obtain_radial_table(SCENE, **{**kw, "mesh_size_mm": 1.0})
+    _, outcome = surrogate.obtain_radial_table(SCENE, **{**kw, "mesh_size_mm": 1.0})
     assert outcome.status == "computed"
     # a truncated file is not trusted: one warning, recomputed, replaced
-    path = Path(radial.radial_cache_path(SCENE, tmp_path, tolerance=1e-3))
+    path = Path(surrogate.radial_cache_path(SCENE, tmp_path, tolerance=1e-3))
     path.write_bytes(path.read_bytes()[:500])
     with pytest.warns(RuntimeWarning, match="not trusted"):
-        _, outcome = radial.obtain_radial_table(SCENE, **kw)
+        _, outcome = surrogate.obtain_radial_table(SCENE, **kw)
     assert outcome.status == "recomputed"
-    assert radial.read_radial_table(path).shape == table.shape
+    assert surrogate.read_radial_table(path).shape == table.shape
 
 
 def test_unwritable_cache_warns_and_returns_the_table(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("not a directory")
     with pytest.warns(RuntimeWarning, match="could not be written"):
-        table, outcome = radial.obtain_radial_table(SCENE, cache_dir=blocker, solve=zr_model_solve,
-                                                    tolerance=1e-3)
+        table, outcome = surrogate.obtain_radial_table(SCENE, cache_dir=blocker,
+                                                       solve=zr_model_solve, tolerance=1e-3)
     assert not outcome.stored and table.converged
 
 
@@ -372,7 +372,7 @@ def test_grounded_table_is_refused_before_any_solve_by_the_3d_solver():
 
     scene = fx.scene_with(field={"environment": "grounded-table"})
     with pytest.raises(FieldError, match="environment = 'grounded-table'.*allowed 'free-space'"):
-        radial.precompute_radial(scene)
+        surrogate.precompute_radial(scene)
 
 
 def test_outside_the_grid_is_clipped():
@@ -388,8 +388,8 @@ def test_two_ranks_equal_serial():
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    parallel = radial.precompute_radial(SCENE, comm=comm, solve=zr_model_solve, tolerance=1e-4,
-                                        max_positions=129, max_offsets=33)
+    parallel = surrogate.precompute_radial(SCENE, comm=comm, solve=zr_model_solve, tolerance=1e-4,
+                                           max_positions=129, max_offsets=33)
     serial = table_of(SCENE, tolerance=1e-4)
     np.testing.assert_array_equal(parallel.capacitance, serial.capacitance)
     np.testing.assert_array_equal(parallel.induced_charge, serial.induced_charge)
@@ -409,16 +409,16 @@ def test_real_3d_axis_matches_the_axisymmetric_solver(tmp_path):
     scene = fx.scene_with()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)   # one round only: may not converge
-        table, outcome = radial.obtain_radial_table(
+        table, outcome = surrogate.obtain_radial_table(
             scene, cache_dir=tmp_path, mesh_size_mm=2.0, degree=1, tolerance=0.5,
             initial_positions=3, initial_offsets=2)
     assert table.shape == (5, 3) and table.method == "3d" and outcome.stored
     assert np.all(np.isfinite(table.field_error)) and np.all(table.field_error > 0)
-    radial.check_radial_table(table)
+    surrogate.check_radial_table(table)
     axis = [solve_position(scene, float(z), comm=MPI.COMM_SELF, method="axisymmetric",
                            mesh_size_mm=1.0, degree=2) for z in table.positions]
     axis_table = surrogate.table_from_results(axis, stroke=scene.device.stroke)
-    check = radial.axis_check(table, axis_table)
+    check = surrogate.axis_check(table, axis_table)
     assert check["ok"], check
     q = table.induced_charge
     change = np.abs(q[:, -1] - q[:, 0]) / np.abs(table.ball_charge)
@@ -427,7 +427,7 @@ def test_real_3d_axis_matches_the_axisymmetric_solver(tmp_path):
     zz = np.linspace(0.0, scene.device.stroke, 7)
     assert np.all(np.diff(curves.charge(zz, 0.5 * R_MAX)) != 0.0)
     assert np.all(curves.charge_derivative(zz, 0.0)[1] == 0.0)
-    again, outcome = radial.obtain_radial_table(
+    again, outcome = surrogate.obtain_radial_table(
         scene, cache_dir=tmp_path, mesh_size_mm=2.0, degree=1, tolerance=0.5,
         initial_positions=3, initial_offsets=2)
     assert outcome.status == "cached"
@@ -448,7 +448,7 @@ def test_anchored_curves_are_the_axis_on_the_axis_and_the_3d_change_off_it():
     zz, rr = dense(SCENE)
     for reference in terminals.REFERENCES:
         plain = table.curves(reference)
-        anchored = radial.AnchoredTerminalCurves(plain, axis.curves(reference))
+        anchored = surrogate.AnchoredTerminalCurves(plain, axis.curves(reference))
         q, c_t = model_terminals(SCENE, zz, rr, reference)
         z = zz[:, 0]
         np.testing.assert_allclose(anchored.charge(z, 0.0), axis.curves(reference).charge(z),
@@ -465,10 +465,10 @@ def test_anchored_curves_are_the_axis_on_the_axis_and_the_3d_change_off_it():
         np.testing.assert_allclose(d_r[inner], fd[inner],
                                    atol=1e-4 * np.abs(d_z).max() * STROKE / R_MAX)
         assert np.all(anchored.capacitance_derivative(z, 0.0)[1] == 0.0)
-        out = radial.terminal_waveforms_zr(anchored, zz[:, 3], 0 * z + 1.0, rr[:, 3], 0 * z)
+        out = electrical.terminal_waveforms_zr(anchored, zz[:, 3], 0 * z + 1.0, rr[:, 3], 0 * z)
         np.testing.assert_allclose(out["I_sc"], d_z[:, 3])
     with pytest.raises(ValueError, match="references differ"):
-        radial.AnchoredTerminalCurves(table.curves("floating"), axis.curves("grounded-lower"))
+        surrogate.AnchoredTerminalCurves(table.curves("floating"), axis.curves("grounded-lower"))
 
 
 def test_radial_motion_at_given_times_and_leaving_the_axis():
@@ -483,15 +483,16 @@ def test_radial_motion_at_given_times_and_leaving_the_axis():
             state[:, 0], state[:, 1] = 3e-4 * t, -4e-4 * t      # along a ray: r = 5e-4 t
             state[:, 3], state[:, 4] = 3e-4, -4e-4
             return state
-    r, rate = radial.radial_motion(Motion, [0.0, 0.5, 1.0])
+    r, rate = surrogate.radial_motion(Motion, [0.0, 0.5, 1.0])
     np.testing.assert_allclose(r, [0.0, 2.5e-4, 5e-4])
     np.testing.assert_allclose(rate, [0.0, 5e-4, 5e-4])
-    assert radial.leaves_axis(SCENE, Motion)
+    assert surrogate.leaves_axis(SCENE, Motion)
     Motion.radial = np.array([0.0, 0.4e-3 * R_MAX])
-    assert not radial.leaves_axis(SCENE, Motion)
+    assert not surrogate.leaves_axis(SCENE, Motion)
 
     class OneD:
         gap = np.zeros(4)
-    assert not radial.leaves_axis(SCENE, OneD)
-    assert np.all(radial.radial_motion(OneD)[0] == 0) and radial.radial_motion(OneD)[0].size == 4
-    assert radial.radial_motion(OneD, [0.1, 0.2])[1].size == 2
+    assert not surrogate.leaves_axis(SCENE, OneD)
+    r_axis = surrogate.radial_motion(OneD)[0]
+    assert np.all(r_axis == 0) and r_axis.size == 4
+    assert surrogate.radial_motion(OneD, [0.1, 0.2])[1].size == 2

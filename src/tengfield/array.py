@@ -316,8 +316,7 @@ def _evaluate(curves, trajectories, times):
     if curves is None:
         zero = np.zeros_like(z)
         return zero, np.full_like(z, 1e-15), zero
-    q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), curves._q.x, curves._q.c,
-                           curves._c.c, curves.stroke)
+    q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), *curves.pieces(), curves.stroke)
     return q.reshape(z.shape), c.reshape(z.shape), i.reshape(z.shape)
 
 

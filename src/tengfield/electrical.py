@@ -109,36 +109,34 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
                        radial_velocity=None) -> dict[str, np.ndarray]:
     """Open-circuit voltage, short-circuit charge and current along a trajectory.
 
-    ``curves``: :class:`tengfield.surrogate.TerminalCurves` of ONE cell, or
-    None when Q_SC is identically zero (then C_T is unknown and NaN).
-    ``gap`` z(t) [m] and ``gap_velocity`` dz/dt [m/s] are samples of the
-    trajectory; ``cells`` identical cells are wired in parallel and read
-    through ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V]
-    (= Q_SC / (C_T + C_p), the true V_OC when C_p = 0), ``Q_sc`` [C],
-    ``I_sc`` = (dQ_SC/dz) dz/dt [A], ``C_T`` [F] and ``dC_T_dt`` [F/s].
-    ``curves`` may be a (z, r) surrogate (:mod:`tengfield.surrogate.radial`):
-    then ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0)
-    enter, and ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ``.
+    ``curves``: the :class:`tengfield.surrogate.Curves` of ONE cell, or None when
+    Q_SC is identically zero (then C_T is unknown and NaN). ``gap`` z(t) [m] and
+    ``gap_velocity`` dz/dt [m/s] are samples of the trajectory; ``cells``
+    identical cells are wired in parallel and read through
+    ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V] (= Q_SC / (C_T + C_p),
+    the true V_OC when C_p = 0), ``Q_sc`` [C], ``I_sc`` = (dQ_SC/dz) dz/dt [A],
+    ``C_T`` [F] and ``dC_T_dt`` [F/s]. For (z, r) curves (``curves.radial``)
+    ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0) enter, and
+    ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` (:meth:`tengfield.surrogate.Curves.evaluate_many`).
     """
     gap = np.asarray(gap, dtype=float)
-    velocity = np.asarray(gap_velocity, dtype=float)
     if curves is None:
         zero = np.zeros_like(gap)
         return {"V_oc": zero, "Q_sc": zero.copy(), "I_sc": zero.copy(),
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
-    if hasattr(curves, "offsets"):   # the (z, r) surrogate
-        from .surrogate.radial import terminal_waveforms_zr
-        zero = np.zeros_like(gap)
-        return terminal_waveforms_zr(
-            curves, gap, velocity, zero if radial is None else radial,
-            zero if radial_velocity is None else radial_velocity, cells=cells,
-            parallel_capacitance=parallel_capacitance)
-    q_sc, dq_dz, c_t, dc_dz = circuit.scale_cells(
-        curves.charge(gap), curves.charge_derivative(gap), curves.capacitance(gap),
-        curves.capacitance_derivative(gap), cells)
+    q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial, radial_velocity,
+                                                  cells=cells)
     return {"V_oc": circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance),
-            "Q_sc": q_sc, "I_sc": circuit.short_circuit_current(dq_dz, velocity),
-            "C_T": c_t, "dC_T_dt": dc_dz * velocity}
+            "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
+
+
+def terminal_waveforms_zr(curves, gap, gap_velocity, radial, radial_velocity, *,
+                          cells: int = 1, parallel_capacitance: float = 0.0) -> dict:
+    """:func:`terminal_waveforms` for an off-axis trajectory: ``radial`` r(t) [m] and
+    ``radial_velocity`` dr/dt [m/s] at the samples (the name the (z, r) docs use)."""
+    return terminal_waveforms(curves, gap, gap_velocity, cells=cells,
+                              parallel_capacitance=parallel_capacitance, radial=radial,
+                              radial_velocity=radial_velocity)
 
 
 def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
@@ -153,9 +151,9 @@ def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
 def _radial(dynamics, curves, times=None):
     """``(r, dr/dt)`` of ``dynamics`` (at its samples or at ``times``) when ``curves``
     is a (z, r) surrogate, else ``(None, None)``."""
-    if not hasattr(curves, "offsets"):
+    if curves is None or not curves.radial:
         return None, None
-    from .surrogate.radial import radial_motion
+    from .surrogate.offaxis import radial_motion
     return radial_motion(dynamics, times)
 
 
@@ -612,7 +610,7 @@ def cmeo(scene, curves, max_gap: float) -> dict:
     (area = the ball's surface pi d^2 per cell, x_max = ``max_gap``), on the axis."""
     from .harvest import max_energy_per_cycle, structural_figure_of_merit
 
-    curves = getattr(curves, "axis", curves)   # a (z, r) surrogate: the stroke on the axis
+    curves = curves.axis   # a (z, r) surrogate: the stroke on the axis
     n = scene.device.cells
     c_p = scene.circuit.parallel_capacitance
     q_max = abs(float(curves.charge(max_gap)) - float(curves.charge(0.0))) * n

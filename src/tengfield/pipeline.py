@@ -29,7 +29,8 @@ from ._json import jsonable as _jsonable
 from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
 from .scene import check_field
-from .surrogate import SurrogateTable, TerminalCurves, obtain_table
+from .surrogate import (AnchoredTerminalCurves, SurrogateTable, TerminalCurves, leaves_axis,
+                        obtain_radial_table, obtain_table)
 
 
 @dataclass
@@ -127,13 +128,11 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
             "max_relative_error_estimate": float(np.nanmax(table.field_error)),
             "max_dofs": int(table.dofs.max())})
         curves = TerminalCurves(table, scene.circuit.reference)
-        from .surrogate import radial
-        if radial.leaves_axis(scene, dynamics):   # [contact] model = "3d", off the axis
-            zr_table, zr_outcome = radial.obtain_radial_table(
+        if leaves_axis(scene, dynamics):   # [contact] model = "3d", off the axis
+            zr_table, zr_outcome = obtain_radial_table(
                 scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
                 command_line=command_line, write=write_cache)
-            curves = radial.AnchoredTerminalCurves(zr_table.curves(scene.circuit.reference),
-                                                   curves)
+            curves = AnchoredTerminalCurves(zr_table.curves(scene.circuit.reference), curves)
             stages["field_zr"] = Stage(
                 "cached" if zr_outcome.status == "cached" else "ran", zr_outcome.reason,
                 zr_outcome.wall_time, {

@@ -18,12 +18,13 @@ from typing import Callable
 import numpy as np
 
 from ..electrical import extreme_times, load_waveforms, terminal_waveforms
+from ..surrogate import OnAxisCurves
 
 #: quantities a fit compares, with the waveform key per circuit kind
 QUANTITIES = ("V", "Q", "I")
 
 
-class ScaledCurves:
+class ScaledCurves(OnAxisCurves):
     """``TerminalCurves`` with Q_SC and dQ_SC/dz multiplied by ``scale`` (C_T unchanged)."""
 
     def __init__(self, curves, scale: float):

@@ -57,10 +57,6 @@ def visited_positions(dynamics) -> tuple[np.ndarray, np.ndarray] | None:
     return gap[::step].copy(), r[::step].copy()
 
 
-def _is_radial(curves) -> bool:
-    return hasattr(curves, "offsets") and hasattr(curves, "max_offset")
-
-
 def surrogate_lines(curves, *, cells: int = 1, visited=None, points: int = 400) -> list:
     """The curves of :func:`plot_surrogate`: ``[(r [m], {"V_OC", "Q_SC", "C_T"}), ...]``
     over ``z = linspace(0, Δh, points)`` (``cells`` cells in parallel: Q_SC and C_T
@@ -70,7 +66,7 @@ def surrogate_lines(curves, *, cells: int = 1, visited=None, points: int = 400) 
     curves give r = 0 and, up to the largest offset ``visited`` (``(gap, r)`` of the
     trajectory; None: the surrogate's r_max), its half and itself."""
     z = np.linspace(0.0, curves.stroke, points)
-    if not _is_radial(curves):
+    if not curves.radial:
         return [(0.0, {"V_OC": curves.voltage(z), "Q_SC": curves.charge(z) * cells,
                        "C_T": curves.capacitance(z) * cells})]
     top = curves.max_offset if visited is None else float(np.max(visited[1], initial=0.0))
@@ -84,19 +80,19 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
     """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots.
 
     ``curves``: the 1-D surrogate, or the (z, r) one of a ball off the axis
-    (:class:`tengfield.surrogate.radial.AnchoredTerminalCurves`): then the lines are
+    (:class:`tengfield.surrogate.AnchoredTerminalCurves`): then the lines are
     those of :func:`surrogate_lines` (r = 0 and the offsets the ball reached, the band
     between shaded) and a fourth panel maps the change of Q_SC with r over (z, r)
     with the field solves of the grid and the trajectory's (z, r) samples
     (``visited``: ``(gap, r)`` [m], :func:`visited_positions`)."""
-    radial = _is_radial(curves)
+    radial = curves.radial
     lines = surrogate_lines(curves, cells=cells, visited=visited)
     z = np.linspace(0.0, curves.stroke, 400)
-    if radial and not hasattr(curves, "axis"):    # bare (z, r) curves: the grid's r = 0
+    if curves.axis is None:                       # bare (z, r) curves: the grid's r = 0
         q0, c0 = curves.charge_grid[:, 0], curves.capacitance_grid[:, 0]
         axis_dots = (curves.positions, q0 / c0, q0 * cells, c0 * cells)
     else:                                         # the 1-D solves, on the axis
-        axis = getattr(curves, "axis", curves)
+        axis = curves.axis
         axis_dots = (axis.positions, axis.charge_samples / axis.capacitance_samples,
                      axis.charge_samples * cells, axis.capacitance_samples * cells)
     panels = [("V_OC", "V_OC [V]", 1.0), ("Q_SC", "Q_SC [nC]", 1e9), ("C_T", "C_T [pF]", 1e12)]

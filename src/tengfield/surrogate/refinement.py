@@ -32,10 +32,18 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .. import terminals
 from .._mpi import farm, rank_of
-from .sampling import (INITIAL_POSITIONS, MAX_POSITIONS, contact_first_order, is_lobatto_count,
-                       is_mirror_symmetric, lobatto_positions, mirrored, refinement_positions)
-from .table import SurrogateTable, held_out_error, table_from_results
+from ..errors import FieldError
+from .provenance import provenance, radial_hash, solver_fingerprint
+from .sampling import (DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE, INITIAL_OFFSETS,
+                       INITIAL_POSITIONS, MAX_OFFSETS, MAX_POSITIONS, MAX_POSITIONS_ZR,
+                       contact_first_order, grid_key, is_lobatto_count, is_mirror_symmetric,
+                       lobatto_positions, max_offset, mirrored, offset_positions,
+                       offset_refinement, refinement_positions)
+from .table import (RadialTable, RadialTerminalCurves, SurrogateError, SurrogateTable,
+                    TerminalCurves, table_from_grid, table_from_results, terminal_grid,
+                    terminal_samples)
 
 SolveFunction = Callable[..., Any]
 #: positions without their own field error estimate get the largest sampled one
@@ -159,8 +167,6 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
     axisymmetric solver.
     """
-    from .store import provenance, solver_fingerprint
-
     # the breakdown lines (tengfield.breakdown) come with the default axisymmetric solves
     lines = (solve is None and scene.is_axisymmetric and scene.field.method != "3d"
              if breakdown_lines is None else bool(breakdown_lines))
@@ -256,3 +262,224 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
                     "field_error_rule": rule, "solver_fingerprint": solver_fingerprint()})
     warn_accuracy(table, comm)
     return table
+
+
+# ---------------------------------------------------------------------------
+# accuracy: the held-out error estimates and the check on the axis
+def held_out_error(coarse: SurrogateTable, held_out: SurrogateTable) -> float:
+    """Largest relative deviation of ``coarse``'s interpolants from direct solves.
+
+    Over both references and the quantities Q_SC, C_T and V_OC, each relative
+    to its largest magnitude on the union of both position sets.
+    """
+    union = coarse.merged(held_out)
+    worst = 0.0
+    for reference in terminals.REFERENCES:
+        curves = TerminalCurves(coarse, reference)
+        q_all, c_all = terminal_samples(union, reference)
+        inside = np.isin(union.positions, held_out.positions)
+        z = union.positions[inside]
+        q_direct, c_direct = q_all[inside], c_all[inside]
+        v_all = q_all / c_all
+        pairs = [(curves.charge(z), q_direct, np.max(np.abs(q_all))),
+                 (curves.capacitance(z), c_direct, np.max(np.abs(c_all))),
+                 (curves.voltage(z), q_direct / c_direct, np.max(np.abs(v_all)))]
+        for interpolated, direct, scale in pairs:
+            if scale > 0.0:
+                worst = max(worst, float(np.max(np.abs(interpolated - direct)) / scale))
+    return worst
+
+
+def held_out_error_zr(coarse: RadialTable, fine: RadialTable) -> tuple[float, float, float]:
+    """``(all, along_z, along_r)``: largest relative deviation of ``coarse``'s
+    interpolant from the direct solves at the points of ``fine`` not in ``coarse``
+    (all of them; those whose offset is a coarse one; those whose gap is a coarse
+    one). Over Q_SC, C_T, V_OC and both references, each relative to its largest
+    magnitude on ``fine``; NaN where a group is empty."""
+    zz, rr = np.meshgrid(fine.positions, fine.offsets, indexing="ij")
+    old_z = np.isin(np.round(fine.positions * 1e13), np.round(coarse.positions * 1e13))
+    old_r = np.isin(np.round(fine.offsets * 1e13), np.round(coarse.offsets * 1e13))
+    old_z, old_r = np.meshgrid(old_z, old_r, indexing="ij")
+    held = ~(old_z & old_r)
+    groups = {"all": held, "z": held & old_r, "r": held & old_z}
+    worst = {name: (0.0 if np.any(mask) else math.nan) for name, mask in groups.items()}
+    for reference in terminals.REFERENCES:
+        curves = RadialTerminalCurves(coarse, reference)
+        q_fine, c_fine = terminal_grid(fine, reference)
+        v_fine = q_fine / c_fine
+        deviations = [(curves.charge(zz, rr), q_fine), (curves.capacitance(zz, rr), c_fine),
+                      (curves.voltage(zz, rr), v_fine)]
+        for interpolated, direct in deviations:
+            scale = float(np.max(np.abs(direct)))
+            if scale <= 0.0:
+                continue
+            relative = np.abs(interpolated - direct) / scale
+            for name, mask in groups.items():
+                if np.any(mask):
+                    worst[name] = max(worst[name], float(np.max(relative[mask])))
+    return worst["all"], worst["z"], worst["r"]
+
+
+def axis_check(table: RadialTable, axis_table: SurrogateTable) -> dict:
+    """Compare the r = 0 column of ``table`` with the axisymmetric surrogate ``axis_table``.
+
+    Returns ``deviation``: the largest relative difference of Q_SC and C_T
+    (both references, each relative to its largest magnitude) at the (z, r)
+    table's gaps, and ``allowed``: the sum of both tables' largest field error
+    estimates and the axisymmetric interpolation error; ``ok`` = deviation <= allowed.
+    """
+    z = table.positions
+    deviation = 0.0
+    for reference in terminals.REFERENCES:
+        q_grid, c_grid = terminal_grid(table, reference)
+        axis = TerminalCurves(axis_table, reference)
+        for ours, theirs in ((q_grid[:, 0], axis.charge(z)), (c_grid[:, 0], axis.capacitance(z))):
+            scale = float(np.max(np.abs(theirs)))
+            if scale > 0.0:
+                deviation = max(deviation, float(np.max(np.abs(ours - theirs)) / scale))
+    axis_interp = axis_table.interpolation_error
+    allowed = float(np.nanmax(table.field_error[:, 0])) + float(np.nanmax(axis_table.field_error)) \
+        + (float(axis_interp) if math.isfinite(axis_interp) else 0.0)
+    return {"deviation": deviation, "allowed": allowed, "ok": deviation <= allowed}
+
+
+# ---------------------------------------------------------------------------
+# the (z, r) surrogate: an off-axis ball (issue #13, DESIGN §8 "Field over (z, r)")
+def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
+                      mesh_size_mm: float = DEFAULT_MESH_SIZE_MM, degree: int = DEFAULT_DEGREE,
+                      tolerance: float = DEFAULT_TOLERANCE,
+                      initial_positions: int = INITIAL_POSITIONS,
+                      initial_offsets: int = INITIAL_OFFSETS,
+                      max_positions: int = MAX_POSITIONS_ZR, max_offsets: int = MAX_OFFSETS,
+                      progress: bool = False, command_line: str = "",
+                      field_error: str = "sampled") -> RadialTable:
+    """Adaptive (z, r) table of 3D field solves for ``scene`` (module docstring).
+
+    ``solve(scene, z, comm=..., offset=r, method="3d", mesh_size_mm=..., degree=...)``
+    defaults to :func:`tengfield.field.solve_position` (given ``estimate_error=``
+    when it takes it). ``comm`` spreads each round over its ranks (task farm,
+    each solve on ``solve_comm``, default ``COMM_SELF``); every rank returns
+    the same table. ``field_error``: "sampled" (the solver's own estimate at
+    the middle and next to the ends of the stroke, on the axis and at the wall;
+    the largest x (1 + FIELD_ERROR_MARGIN) elsewhere) or "every".
+    """
+    if solve is None:
+        if scene.field.environment != "free-space":   # before any solve, on every rank
+            raise FieldError(f"[field] environment = {scene.field.environment!r} is not "
+                             "supported by the 3D solver of the (z, r) surrogate: allowed "
+                             "'free-space'")
+        solve = _default_solver()
+    if solve_comm is None:
+        from mpi4py import MPI
+        solve_comm = MPI.COMM_SELF
+    if field_error not in FIELD_ERROR_MODES:
+        raise ValueError(f"field_error = {field_error!r}: choose one of {FIELD_ERROR_MODES}")
+    nz, nr = int(initial_positions), int(initial_offsets)
+    if not is_lobatto_count(nz):
+        raise ValueError(f"initial_positions = {nz}: must be 2^k + 1 >= 3")
+    if not (nr == 2 or is_lobatto_count(nr)):
+        raise ValueError(f"initial_offsets = {nr}: must be 2 or 2^k + 1")
+    if not (math.isfinite(tolerance) and tolerance > 0.0):
+        raise ValueError(f"tolerance = {tolerance!r}: must be > 0")
+    stroke = scene.device.stroke
+    largest = max_offset(scene.device)
+    if not largest > 0.0:
+        raise SurrogateError(f"the ball fills the tube (tube inner radius - ball radius = "
+                             f"{largest * 1e3:g} mm): no radial offset to tabulate")
+    symmetric = is_mirror_symmetric(scene)
+    sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
+    sample_z = error_sample_positions(stroke, symmetric, nz)
+    sample_keys = {grid_key(z, r) for z in sample_z for r in (0.0, largest)}
+    bar = None
+    if progress and rank_of(comm) == 0:
+        from tqdm import tqdm
+        bar = tqdm(total=0, desc="3D field solves (z, r)", unit="solve", file=sys.stderr,
+                   disable=not sys.stderr.isatty())
+
+    def work(point):
+        z, r = point
+        kwargs = dict(comm=solve_comm, offset=float(r), method="3d",
+                      mesh_size_mm=mesh_size_mm, degree=degree)
+        if sampled:
+            kwargs["estimate_error"] = grid_key(z, r) in sample_keys
+        return solve(scene, float(z), **kwargs)
+
+    def advance(n):
+        if bar is not None:
+            bar.update(n)
+
+    solved: dict = {}
+    measured = math.nan
+
+    def solve_grid(positions, offsets) -> None:
+        nonlocal measured
+        todo_z = positions[positions <= 0.5 * stroke * (1 + 1e-12)] if symmetric else positions
+        todo_z = todo_z[contact_first_order(todo_z, stroke)]
+        todo = [(z, r) for z in todo_z for r in offsets[::-1] if grid_key(z, r) not in solved]
+        if bar is not None:
+            bar.total += len(todo)
+            bar.refresh()
+        results = farm(comm, todo, work, progress=advance)
+        if sampled:
+            results, measured = _sampled_field_errors(
+                results, [grid_key(*p) in sample_keys for p in todo], measured)
+        for (z, r), res in zip(todo, results):
+            solved[grid_key(z, r)] = res
+            if symmetric and not math.isclose(z, 0.5 * stroke, rel_tol=1e-12):
+                solved[grid_key(stroke - z, r)] = mirrored(res, stroke)
+
+    def grid(positions, offsets) -> RadialTable:
+        return table_from_grid(solved, positions, offsets, stroke=stroke, largest_offset=largest)
+
+    z_now, r_now = lobatto_positions(stroke, nz), offset_positions(largest, nr)
+    z_next = np.sort(np.concatenate([z_now, refinement_positions(stroke, nz)]))
+    r_next = np.sort(np.concatenate([r_now, offset_refinement(largest, nr)]))
+    solve_grid(z_next, r_next)
+    history: list[tuple[int, int, float]] = []
+    error_z = error_r = math.inf
+    while True:
+        estimate, along_z, along_r = held_out_error_zr(grid(z_now, r_now), grid(z_next, r_next))
+        error_z = along_z if not math.isnan(along_z) else error_z
+        error_r = along_r if not math.isnan(along_r) else error_r
+        history.append((z_now.size, r_now.size, estimate))
+        z_now, r_now = z_next, r_next
+        if estimate <= tolerance:
+            break
+        refine_z = error_z > tolerance or not error_r > tolerance
+        refine_r = error_r > tolerance or not error_z > tolerance
+        refine_z &= 2 * z_now.size - 1 <= max_positions
+        refine_r &= 2 * r_now.size - 1 <= max_offsets
+        if not (refine_z or refine_r):
+            break
+        if refine_z:
+            z_next = np.sort(np.concatenate([z_now, refinement_positions(stroke, z_now.size)]))
+        if refine_r:
+            r_next = np.sort(np.concatenate([r_now, offset_refinement(largest, r_now.size)]))
+        solve_grid(z_next, r_next)
+    if bar is not None:
+        bar.close()
+    rule = (_field_error_rule(sample_z, f" on the axis and at r = {largest:.6g} m", "elsewhere")
+            if sampled else "measured at every point")
+    table = grid(z_now, r_now)
+    table = dataclasses.replace(
+        table, interpolation_error=estimate, tolerance=float(tolerance),
+        converged=bool(estimate <= tolerance),
+        error_history=history, degree=int(degree), mesh_size=float(mesh_size_mm) * 1e-3,
+        field_hash=radial_hash(scene, mesh_size_mm=mesh_size_mm, degree=degree,
+                               tolerance=tolerance),
+        provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
+                    "field_error_rule": rule, "solver_fingerprint": solver_fingerprint(),
+                    "kind": "zr"})
+    warn_problems(radial_accuracy_problems(table), comm, stacklevel=2)
+    return table
+
+
+def radial_accuracy_problems(table: RadialTable) -> list[str]:
+    """The interpolation error estimate of ``table`` above its tolerance, as one line (the
+    (z, r) tolerance is an interpolation target below the 3D field error, so the field
+    error is not held to it)."""
+    if not table.interpolation_error > table.tolerance:
+        return []
+    nz, nr = table.shape
+    return [f"(z, r) surrogate: interpolation error estimate {table.interpolation_error:.3g} "
+            f"is above the tolerance {table.tolerance:g} after {nz} x {nr} points"]

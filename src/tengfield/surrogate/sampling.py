@@ -1,8 +1,11 @@
-"""Where the surrogate samples the stroke: nested Chebyshev–Lobatto sets and mirror symmetry.
+"""Where the surrogate samples: nested Chebyshev–Lobatto sets in z (and in s = r² for
+the (z, r) surrogate), mirror symmetry, and the sampling defaults.
 
 ``z_j = Δh (1 - cos(π j / (n-1))) / 2`` with ``n = 2^k + 1`` positions
 (clustered at both ends of the stroke); each refinement adds the ``n - 1``
-angular midpoints, so ``n -> 2n - 1`` and every earlier solve is reused.
+angular midpoints, so ``n -> 2n - 1`` and every earlier solve is reused. The
+radial offsets ``r`` of an off-axis ball are Lobatto-spaced in ``s = r²`` over
+``[0, r_max²]`` (``r_max`` = tube inner radius − ball radius), from ``{0, r_max}``.
 """
 from __future__ import annotations
 
@@ -19,6 +22,19 @@ INITIAL_POSITIONS = 2 ** INITIAL_LEVEL + 1
 FEWEST_POSITIONS = 2 * INITIAL_POSITIONS - 1
 #: the refinement stops here even if the tolerance is not met (then converged = False): 65
 MAX_POSITIONS = 2 ** (INITIAL_LEVEL + 3) + 1
+
+#: first offset set of the (z, r) surrogate: s = r² in {0, r_max²} (then 3, 5, 9 offsets)
+INITIAL_OFFSETS = 2
+#: the (z, r) refinement stops at these counts even if the tolerance is not met
+MAX_POSITIONS_ZR = 33
+MAX_OFFSETS = 9
+#: default 3D discretisation of the (z, r) surrogate (docs/field3d.md: degree 2,
+#: 1.5 mm has a field error of ~1e-2, ~10 s of CPU per solve)
+DEFAULT_MESH_SIZE_MM = 1.5
+DEFAULT_DEGREE = 2
+#: default interpolation tolerance of the (z, r) surrogate: finer than the 3D field
+#: error is wasted
+DEFAULT_TOLERANCE = 1.0e-2
 
 
 def is_lobatto_count(count: int) -> bool:
@@ -82,3 +98,27 @@ def contact_first_order(positions: np.ndarray, stroke: float, estimated=()) -> n
     dear = (np.min(np.abs(positions[:, None] - marks[None, :]), axis=1) <= 1e-12 * stroke
             if marks.size and positions.size else np.zeros(positions.size, dtype=bool))
     return np.lexsort((gap, ~dear))
+
+
+# ---------------------------------------------------------------------------
+# sampling in r (the (z, r) surrogate)
+def max_offset(device) -> float:
+    """Largest radial offset of the ball centre [m]: tube inner radius − ball radius."""
+    return float(device.tube_inner_radius - device.ball_radius)
+
+
+def offset_positions(largest: float, count: int) -> np.ndarray:
+    """``count`` offsets r [m] in [0, ``largest``], Lobatto-spaced in s = r² (ascending)."""
+    if count == 2:
+        return np.array([0.0, float(largest)])
+    return np.sqrt(lobatto_positions(largest**2, count))
+
+
+def offset_refinement(largest: float, count: int) -> np.ndarray:
+    """The ``count - 1`` offsets that refine :func:`offset_positions` to ``2 count - 1``."""
+    return np.sqrt(refinement_positions(largest**2, count))
+
+
+def grid_key(z: float, r: float) -> tuple[int, int]:
+    """The dictionary key of the grid point (z, r) [m]."""
+    return (round(z * 1e13), round(r * 1e13))   # 0.1 pm: exact for the nested sets

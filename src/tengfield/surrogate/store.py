@@ -1,4 +1,5 @@
-"""The surrogate on disk: HDF5 file with checksums and provenance, and the cache.
+"""The surrogates on disk, on the axis and over (z, r): the HDF5 format, with checksums
+and structure checks.
 
 :func:`write_table` writes atomically (temporary file + ``os.replace``);
 every data array is stored with HDF5's Fletcher-32 filter and the SHA-256
@@ -7,34 +8,24 @@ trusts a file only if it is complete, of this format, for the expected
 scene and solver, every checksum matches and the data make sense
 (:func:`check_table`: positions sorted from 0 to the stroke, consistent
 shapes, finite values, each C symmetric positive definite with C_lu < 0,
-induced charges within the ball's charge). :func:`obtain_table` is the cache
-keyed by :meth:`tengfield.scene.Scene.field_hash`: rank 0 decides hit or
-miss and broadcasts the decision and the table, so the ranks never disagree.
-A file that is not trusted is recomputed (with a warning); a cache that
-cannot be written costs a warning, never the run.
+induced charges within the ball's charge). Where the files live and when one
+is reused: :mod:`tengfield.surrogate.cache`. The (z, r) file (``kind = "zr"``) has
+the same rules (:func:`write_radial_table`, :func:`read_radial_table`,
+:func:`check_radial_table`: every offset's column passes :func:`check_table`).
 """
 from __future__ import annotations
 
 import hashlib
-import importlib.metadata
 import json
 import os
 import sys
 import tempfile
-import time
-import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
-from .._mpi import rank_of, size_of
-from .refinement import SolveFunction, precompute
-from .table import SurrogateError, SurrogateTable
-
-#: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars
-FORMAT_VERSION = 2
+from .provenance import FORMAT_VERSION, FORMAT_VERSION_ZR
+from .table import GRID_TAILS, RadialTable, SurrogateError, SurrogateTable
 
 #: table attribute -> HDF5 dataset name (unit-suffixed)
 ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
@@ -57,42 +48,18 @@ OPTIONAL_ARRAYS = {"line_potential": "breakdown_line_potential",
 _SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
            "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
 
-
-# ---------------------------------------------------------------------------
-# provenance
-def solver_fingerprint() -> str:
-    """SHA-256 (16 hex digits) of the field solver's source files
-    (:func:`tengfield.field.solver_source_paths`: not the plotting or file-writing code).
-
-    Part of the cache check on top of the scene's field hash, so that a
-    changed solver (without a ``FIELD_SCHEMA`` bump) never reuses old solves.
-    """
-    from ..field import solver_source_paths
-
-    digest = hashlib.sha256()
-    for path in solver_source_paths():
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
-
-
-def provenance(scene, command_line: str = "") -> dict:
-    """Versions, scene text and command line recorded with a surrogate."""
-    versions = {"tengfield": __version__}
-    for label, dist in (("dolfinx", "fenics-dolfinx"), ("petsc4py", "petsc4py"),
-                        ("gmsh", "gmsh"), ("mpi4py", "mpi4py"), ("numpy", "numpy"),
-                        ("scipy", "scipy")):   # h5py + HDF5: the file attribute "written_with"
-        try:
-            versions[label] = importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            versions[label] = "missing"
-    petsc = sys.modules.get("petsc4py.PETSc")  # only if a solve loaded it
-    if petsc is not None:
-        versions["PETSc"] = ".".join(str(v) for v in petsc.Sys.getVersion())
-    text = scene.text or json.dumps(scene.to_dict(), indent=2, sort_keys=True)
-    return {"versions": versions, "scene_text": text, "scene_source": scene.source,
-            "field_inputs": scene.field_inputs(), "command_line": command_line,
-            "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+#: table attribute -> HDF5 dataset name
+ARRAYS_ZR = {"positions": "positions_m", "offsets": "offsets_m",
+             "capacitance": "capacitance_F", "induced_charge": "induced_charge_C",
+             "dofs": "dofs", "cells": "cells", "wall_time": "wall_time_s",
+             "solve_time": "solve_time_s", "field_error": "field_relative_error_estimate"}
+#: table attribute -> HDF5 file attribute (covered by ``scalars_sha256``)
+SCALARS_ZR = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
+              "max_offset": "max_offset_m", "interpolation_error": "interpolation_error_estimate",
+              "tolerance": "tolerance", "converged": "converged", "field_hash": "field_hash",
+              "method": "method", "degree": "degree", "mesh_size": "mesh_size_m"}
+#: table attribute -> type of its value: the 1-D surrogate's and the 3D ones
+SCALAR_TYPES_ZR = {**SCALAR_TYPES, "max_offset": float, "mesh_size": float}
 
 
 # ---------------------------------------------------------------------------
@@ -354,111 +321,74 @@ def read_table(path: str | Path, expected_hash: str | None = None,
 
 
 # ---------------------------------------------------------------------------
-# cache
-def default_cache_dir() -> Path:
-    """``$TENGFIELD_CACHE_DIR``, else ``$XDG_CACHE_HOME/tengfield``, else ``~/.cache/tengfield``."""
-    env = os.environ.get("TENGFIELD_CACHE_DIR")
-    if env:
-        return Path(env).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
-    return base / "tengfield"
+# the (z, r) file
+def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
+    """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
+    attribute -> array) has the shape ``(nz, nr, *tail)`` of :data:`GRID_TAILS`."""
+    for attr, tail in GRID_TAILS.items():
+        shape = np.shape(arrays[attr])
+        if shape != (nz, nr, *tail):
+            raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "
+                                 f"{(nz, nr, *tail)}")
 
 
-def cache_path(scene, cache_dir: str | Path | None = None) -> Path:
-    """Where the surrogate of ``scene`` lives in the cache (named by its field hash)."""
-    directory = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
-    return directory / f"surrogate-{scene.field_hash()[:24]}.h5"
-
-
-@dataclass
-class CacheOutcome:
-    """How :func:`obtain_table` got its table: ``status`` is "cached",
-    "computed" (no file) or "recomputed" (an untrusted file was replaced);
-    ``stored`` is False when the new table could not be written to the cache."""
-    status: str
-    reason: str
-    path: str
-    wall_time: float
-    stored: bool = True
-
-
-def _decide(path: Path, scene, read=None) -> tuple[SurrogateTable | None, str, str]:
-    """(table or None, status, reason) for the cache file ``path`` (one process);
-    ``read(path)`` (default: :func:`read_table` for ``scene``) reads and checks it."""
-    if path.is_dir():
-        return None, "computed", f"the cache path {path} is a directory"
-    if not path.exists():
-        return None, "computed", f"no cached surrogate at {path}"
-    try:
-        table = read(path) if read is not None else read_table(
-            path, expected_hash=scene.field_hash(), expected_solver=solver_fingerprint())
-    except SurrogateError as exc:
-        return None, "recomputed", f"cached surrogate {path} not trusted ({exc.reason})"
-    return table, "cached", f"complete surrogate with matching field hash at {path}"
-
-
-def load_cached(path: str | Path, scene, comm=None, *,
-                read=None) -> tuple[SurrogateTable | None, str, str]:
-    """Rank 0 of ``comm`` reads and checks the cache file ``path``; every rank gets
-    its decision ``(table or None, status, reason)`` (status "cached", "computed"
-    or "recomputed"). An untrusted file gives one warning (rank 0). ``read(path)``
-    replaces :func:`read_table` (e.g. the (z, r) surrogate's reader); it raises
-    :class:`SurrogateError` for a file it does not trust."""
-    decision: object = None
-    if rank_of(comm) == 0:
+def check_radial_table(table: RadialTable) -> None:
+    """Raise :class:`SurrogateError` (reason only) unless ``table`` makes sense:
+    shapes, offsets strictly ascending from 0 to ``max_offset``, and every
+    offset's column passing :func:`tengfield.surrogate.check_table`."""
+    nz, nr = table.shape
+    _check_grid_shapes({attr: getattr(table, attr) for attr in GRID_TAILS}, nz, nr)
+    r = table.offsets
+    check_axis(r, float(table.max_offset), "offset", "max offset")
+    z = table.positions
+    if z.ndim != 1 or not np.all(np.diff(z) > 0.0):
+        raise SurrogateError("positions are not strictly ascending")
+    for j in range(nr):
         try:
-            decision = _decide(Path(path), scene, read)
-        except Exception as exc:  # noqa: BLE001 - raised on every rank below, never a hang
-            decision = exc
-    if size_of(comm) > 1:
-        decision = comm.bcast(decision, root=0)
-    if isinstance(decision, Exception):
-        raise decision
-    table, status, reason = decision
-    if status == "recomputed" and rank_of(comm) == 0:
-        warnings.warn(f"{reason}, recomputing", RuntimeWarning, stacklevel=3)
-    return table, status, reason
+            check_table(table.column(j))
+        except SurrogateError as exc:
+            raise SurrogateError(f"at offset r = {r[j]:.6g} m: {exc.reason}") from None
 
 
-def store_in_cache(path: str | Path, table: SurrogateTable, comm=None, *, write=None) -> bool:
-    """Write ``table`` to the cache file ``path`` on rank 0 of ``comm``; if that fails
-    (cache directory a file or read-only, cache path a directory...) warn once and
-    return False on every rank, else True. ``write(path, table)`` replaces
-    :func:`write_table` (it raises ``OSError`` when it cannot write)."""
-    stored: object = True
-    if rank_of(comm) == 0:
-        try:
-            (write or write_table)(path, table)
-        except OSError as exc:
-            why = exc.strerror or str(exc)
-            warnings.warn(f"surrogate cache {path} could not be written ({why}); the table is "
-                          "used for this run but not cached", RuntimeWarning, stacklevel=3)
-            stored = False
-    if size_of(comm) > 1:
-        stored = comm.bcast(stored, root=0)
-    return bool(stored)
+def write_radial_table(path, table: RadialTable) -> Path:
+    """Write ``table`` to HDF5 atomically with the 1-D surrogate's checksums
+    (:func:`write_checked_file`). Raises ``OSError`` if it
+    cannot (nothing is left behind)."""
+    arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
+    arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
+    scalars = typed_scalars(vars(table), SCALAR_TYPES_ZR)
+    return write_checked_file(path, arrays, scalars, SCALARS_ZR, {
+        "format_version": FORMAT_VERSION_ZR, "kind": "zr",
+        "provenance": json.dumps(table.provenance, default=str)})
 
 
-def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
-                 solve: SolveFunction | None = None, progress: bool = False,
-                 command_line: str = "", write: bool = True) -> tuple[SurrogateTable, CacheOutcome]:
-    """The cached surrogate of ``scene`` if trusted (:func:`read_table`), else a new one.
+def _check_format_zr(attrs) -> None:
+    version = attrs.get("format_version")
+    if str(attrs.get("kind", "")) != "zr" or version is None or int(version) != FORMAT_VERSION_ZR:
+        raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
+                             f"(kind {attrs.get('kind')!r}, format {version!r})")
 
-    Rank 0 of ``comm`` decides hit or miss and broadcasts the decision and the
-    table (:func:`load_cached`). A partial, corrupt or mismatching file triggers
-    a warning and a recomputation (it is never trusted). The new table is
-    written by rank 0 unless ``write`` is false; a cache that cannot be
-    written gives a warning (:func:`store_in_cache`). Every rank returns the table.
-    """
-    start = time.perf_counter()
-    path = cache_path(scene, cache_dir)
-    table, status, reason = load_cached(path, scene, comm)
-    if table is not None:
-        from .refinement import warn_accuracy
-        warn_accuracy(table, comm)      # as when it was computed: a cache hit is no excuse
-        return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
-    table = precompute(scene, comm=comm, solve=solve, progress=progress,
-                       command_line=command_line)
-    stored = store_in_cache(path, table, comm) if write else False
-    return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)
+
+def _build_radial_table(arrays: dict, history, scalars: dict,
+                        provenance_data: dict) -> RadialTable:
+    _check_grid_shapes(arrays, np.shape(arrays["positions"])[0], np.shape(arrays["offsets"])[0])
+    if history.ndim != 2 or history.shape[1] != 3:
+        raise SurrogateError(f"error history has shape {history.shape}")
+    table = RadialTable(**arrays, **scalars, provenance=provenance_data,
+                        error_history=[(int(a), int(b), float(e))
+                                       for a, b, e in history.tolist()])
+    check_radial_table(table)
+    return table
+
+
+def read_radial_table(path, expected_hash: str | None = None,
+                      expected_solver: str | None = None) -> RadialTable:
+    """Read a (z, r) surrogate file; raise :class:`SurrogateError` unless it is
+    complete, of this format, unchanged (checksums), sensible
+    (:func:`check_radial_table`) and (if given) for ``expected_hash``
+    (:func:`tengfield.surrogate.provenance.radial_hash`) and the solver ``expected_solver``
+    (:func:`read_checked_file`)."""
+    return read_checked_file(path, check_format=_check_format_zr, array_names=ARRAYS_ZR,
+                             scalar_names=SCALARS_ZR, scalar_types=SCALAR_TYPES_ZR,
+                             build=_build_radial_table, expected_hash=expected_hash,
+                             expected_solver=expected_solver, hash_label="hash")
