@@ -43,6 +43,7 @@ COMMAND_MODULES = [
     "sweep",
     "report",
     "fit",
+    "design",
 ]
 
 

@@ -189,8 +189,9 @@ def _check_harvest(dev, circ, arr) -> None:
 # ---------------------------------------------------------------------------
 
 #: Sections passed through unvalidated to ``scene.raw`` (each is validated by
-#: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`).
-PASSTHROUGH_SECTIONS = ("fit",)
+#: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`, ``[design]`` by
+#: :mod:`tengfield.design`).
+PASSTHROUGH_SECTIONS = ("fit", "design")
 
 # ---------------------------------------------------------------------------
 # 3D motion keys (issue #13, tengfield.motion3d; used only by [contact] model = "3d").
