@@ -269,8 +269,9 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
 def _objective_values(objective, spec, scene, points, dynamics, curves, volume, row):
     if objective == "stroke":
         return [scene.device.stroke] * len(points)
-    if objective == "charge":
-        return [float(electrical.terminal_peaks(p, d, curves)["Q_sc"])
+    if objective in ("charge", "voltage", "current"):
+        name = {"charge": "Q_sc", "voltage": "V_oc", "current": "I_sc"}[objective]
+        return [float(electrical.terminal_peaks(p, d, curves)[name])
                 for p, d in zip(points, dynamics)]
     if objective == "harvested_power":
         out = []

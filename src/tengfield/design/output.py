@@ -106,7 +106,8 @@ def design_summary(result) -> dict:
         "confidence": result.confidence(),
         "error_bar_rule": "objective x factor x (largest field error estimate + surrogate "
                           "interpolation error estimate) of the candidate's surrogate; factor "
-                          "3 for powers (P ~ Q_SC^2 / C_T), 1 for charge, 0 for stroke",
+                          "3 for powers (P ~ Q_SC^2 / C_T), 2 for voltage (Q_SC / C_T) and "
+                          "current (dQ_SC/dz), 1 for charge, 0 for stroke",
         "ranking": [{"index": result.rows[i]["index"], **result.rows[i]["values"],
                      "objective": result.rows[i]["objective"],
                      "objective_error": result.rows[i]["objective_error"]}

@@ -15,9 +15,10 @@ geometry is a repeated candidate (scored once, its surrogate cached by field has
    at the resolution, or after three rounds without a new candidate.
 
 Each round's candidates are farmed (:func:`tengfield.sweep.run_tasks`: the MPI task
-farm over ``comm``'s ranks, else ``jobs`` processes) and every rank takes the same next
-decision from the gathered rows: the result depends on the seed, never on the number
-of ranks or processes.
+farm over ``comm``'s ranks; on one machine ``jobs`` worker processes that live for the
+whole search, so dolfinx and the JIT caches load once per worker, not once per round)
+and every rank takes the same next decision from the gathered rows: the result depends
+on the seed, never on the number of ranks or processes.
 """
 from __future__ import annotations
 
@@ -146,6 +147,42 @@ def _evaluate_task(task):
                     tables=_TABLES)
 
 
+class _Workers:
+    """``[work(t) for t in tasks]`` per round: the MPI farm (``comm`` with several ranks),
+    a process pool kept for every round (``jobs`` > 1), or a loop."""
+
+    def __init__(self, comm, jobs):
+        import os
+
+        from .._mpi import size_of
+
+        self.comm, self.pool = comm, None
+        self.jobs = 1 if size_of(comm) > 1 else max(1, jobs or os.cpu_count() or 1)
+
+    def __enter__(self):
+        if self.jobs > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+            self.pool = ProcessPoolExecutor(max_workers=self.jobs,
+                                            mp_context=multiprocessing.get_context("spawn"))
+        return self
+
+    def __exit__(self, *exc):
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
+
+    def map(self, work, tasks, progress):
+        from ..sweep import run_tasks
+
+        if self.pool is None:   # the MPI farm over comm's ranks, or a loop
+            return run_tasks(work, tasks, comm=self.comm, jobs=1, progress=progress)
+        results = []
+        for result in self.pool.map(work, tasks):
+            results.append(result)
+            progress(1)
+        return results
+
+
 def _ranking(rows: list) -> list[int]:
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok" and np.isfinite(r["objective"])]
     return sorted(ok, key=lambda i: (-rows[i]["objective"], i))
@@ -162,7 +199,6 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     from tqdm import tqdm
 
     from .._mpi import check_jobs, rank_of, size_of
-    from ..sweep import run_tasks
 
     start = time.perf_counter()
     spec = parse_design_section(scene, overrides)
@@ -188,7 +224,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
         if not fresh:
             return 0
         tasks = [(scene, spec, v, cache_dir, solve, simulate) for v in fresh]
-        results = run_tasks(_evaluate_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+        results = workers.map(_evaluate_task, tasks, bar.update)
         for values, row in zip(fresh, results):
             row = {"index": len(rows), "phase": phase, **row}
             seen[space.key(values)] = row["index"]
@@ -205,6 +241,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
                 u.append((v - lo) / (hi - lo))
         return np.array(u)
 
+    workers = _Workers(comm, jobs).__enter__()
     try:
         d = len(space.keys)
         n0 = spec.initial_count()
@@ -239,6 +276,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
                 if half < max(spec.resolution, 1e-6):
                     break
     finally:
+        workers.__exit__(None, None, None)
         bar.close()
     return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
                         wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,

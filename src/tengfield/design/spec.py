@@ -5,9 +5,10 @@ Scene syntax (every key optional except ``[design.vary]``)::
     [design]
     objective = "power_density"   # power_density [W/m^3], power [W], charge (Q_SC pp [C]),
                                   # harvested_power [W] (rectifier + store of [circuit]),
-                                  # stroke (Δh [m]: with require, the largest full-contact stroke);
-                                  # or a list of two: the first drives the search, both are
-                                  # reported (design.png: the Pareto plot)
+                                  # stroke (Δh [m]: with require, the largest full-contact stroke),
+                                  # voltage (V_OC pp [V]), current (I_SC pp [A]);
+                                  # or a list of up to four: the first drives the search, all
+                                  # are reported (design.png: the Pareto plot of the first two)
     aggregate = "mean"            # over the band: "mean" or "min" (worst case)
     candidates = 200              # evaluation budget (distinct candidates)
     seed = 1
@@ -42,6 +43,8 @@ OBJECTIVES = {
     "power_density": ("W/m^3", 3.0, True),
     "power": ("W", 3.0, True),
     "charge": ("C", 1.0, True),
+    "voltage": ("V", 2.0, True),        # V_OC pp = Q_SC / C_T
+    "current": ("A", 2.0, True),        # I_SC pp = dQ_SC/dz z': the spline's derivative
     "harvested_power": ("W", 3.0, True),
     "stroke": ("m", 0.0, False),
 }
@@ -211,9 +214,9 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
     spec = DesignSpec()
     objective = raw.get("objective", "power_density")
     objectives = objective if isinstance(objective, list) else [objective]
-    if not 1 <= len(objectives) <= 2 or len(set(map(str, objectives))) != len(objectives):
+    if not 1 <= len(objectives) <= 4 or len(set(map(str, objectives))) != len(objectives):
         raise SceneError(f"[design] objective = {objective!r}: give one objective or a list "
-                         "of two different ones")
+                         "of up to four different ones")
     spec.objectives = [_choice("objective", o, tuple(OBJECTIVES)) for o in objectives]
     spec.aggregate = _choice("aggregate", raw.get("aggregate", spec.aggregate), AGGREGATES)
     spec.require = _choice("require", raw.get("require", spec.require), REQUIRES)
