@@ -147,6 +147,12 @@ def _evaluate_task(task):
                     tables=_TABLES)
 
 
+def _quiet_worker() -> None:
+    """A worker's stderr carries tengfield's lines only (no ffcx/setuptools JIT chatter)."""
+    from ..cli import configure_output
+    configure_output()
+
+
 class _Workers:
     """``[work(t) for t in tasks]`` per round: the MPI farm (``comm`` with several ranks),
     a process pool kept for every round (``jobs`` > 1), or a loop."""
@@ -164,7 +170,8 @@ class _Workers:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
             self.pool = ProcessPoolExecutor(max_workers=self.jobs,
-                                            mp_context=multiprocessing.get_context("spawn"))
+                                            mp_context=multiprocessing.get_context("spawn"),
+                                            initializer=_quiet_worker)
         return self
 
     def __exit__(self, *exc):
