@@ -184,9 +184,11 @@ def main(argv: list[str] | None = None) -> dict:
     ax.legend(fontsize=7)
     for ax, t, label, title in ((axes[1], out["fig9g"], "Δh [mm]", "Fig. 9g: d = 7 mm"),
                                 (axes[2], out["fig9h"], "d [mm]", "Fig. 9h: Δh = 3 mm")):
-        for o, scale, unit in (("charge", 1e9, "Q_SC [nC]"), ("voltage", 1e-3, "V_OC [kV]"),
-                               ("current", 1e9 / 10, "I_SC [10 nA]")):
-            ax.plot(t["x"], np.array(t[o]) * scale, "o-", ms=3, label=unit)
+        for o, unit in (("charge", "Q_SC pp"), ("voltage", "V_OC pp"), ("current", "I_SC pp")):
+            values = np.array(t[o])
+            ax.plot(t["x"], values / values.max(), "o-", ms=3,
+                    label=f"{unit} / {values.max():.3g} {tf.design.OBJECTIVES[o][0]}")
+        ax.set_ylabel("relative to the largest")
         ax.set_xlabel(label)
         ax.set_title(title + ", 35 Hz, 1.5 mm", fontsize=9)
         ax.legend(fontsize=7)
