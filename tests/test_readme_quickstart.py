@@ -68,7 +68,7 @@ def add_to_section(text: str, section: str, lines: str) -> str:
 
 
 @pytest.fixture(scope="module")
-def work(tmp_path_factory, run_cli, cli_env):
+def work(tmp_path_factory, run_cli, cli_env, cli_command):
     """(dir, cli): ``cli(*args)`` runs ``tengfield args`` in dir with the module's
     cache, checks exit code 0, no traceback, and that every warning or error on stderr
     is one of tengfield's ``tengfield: ...`` lines (none from Python, numba, PETSc);
@@ -76,8 +76,16 @@ def work(tmp_path_factory, run_cli, cli_env):
     where = tmp_path_factory.mktemp("quickstart")
     env = cli_env(TENGFIELD_CACHE_DIR=where / "cache", XDG_CACHE_HOME=where / "xdg")
 
-    def cli(*args):
-        proc = run_cli(*args, cwd=where, env=env, timeout=900)
+    def cli(*args, mpirun=None):
+        if mpirun:   # as README writes it: mpirun -n N tengfield ...
+            import subprocess
+            proc = subprocess.run(
+                ["mpirun", "-n", str(mpirun), *cli_command(*args)], cwd=where,
+                env={**env, "OMPI_MCA_rmaps_base_oversubscribe": "1",
+                     "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe"},
+                capture_output=True, text=True, timeout=900)
+        else:
+            proc = run_cli(*args, cwd=where, env=env, timeout=900)
         assert proc.returncode == 0, f"tengfield {' '.join(map(str, args))}:\n{proc.stderr}"
         assert "Traceback" not in proc.stderr, proc.stderr
         stray = [ln for ln in proc.stderr.splitlines() if not ln.startswith("tengfield: ")
@@ -135,7 +143,7 @@ RUN_FILES = ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",
 
 #: what each Quick start command is covered by in this file
 COVERED = {"run", "scene", "dynamics", "map", "field", "precompute", "sweep", "report", "fit",
-           "info", "breakdown"}
+           "info", "breakdown", "design"}
 
 
 def test_every_quick_start_command_is_covered():
@@ -188,6 +196,27 @@ def test_breakdown(work, precomputed):
     check_outputs(out, ("breakdown.json", "breakdown.csv", "breakdown.png"))
     result = json.loads((out / "breakdown.json").read_text())
     assert 0 < result["sigma_max_uC_per_m2"] < 1e3
+
+
+def test_design(work, scene):
+    """A small [design] study over the stroke (4 candidates, one band point) under
+    mpirun -n 2 as README shows it: every output, and best.toml runs."""
+    import shutil
+    where, cli = work
+    text = (where / "my.toml").read_text() + (
+        '\n[design]\nobjective = "charge"\ncandidates = 4\nseed = 1\nsettle_periods = 4\n'
+        'window_periods = 4\n[design.vary]\ngap_mm = [2.0, 4.0]\n'
+        '[design.excitation]\nfrequency_hz = [20.0]\namplitude_mm = [1.5]\n')
+    (where / "design.toml").write_text(text)
+    if shutil.which("mpirun"):
+        cli("design", "design.toml", "-o", "out/design", mpirun=2)
+    else:
+        cli("design", "design.toml", "-o", "out/design")
+    out = where / "out" / "design"
+    check_outputs(out, ("design.csv", "design.json", "design.png", "best.toml"))
+    best = json.loads((out / "design.json").read_text())["best"]
+    assert 2.0 <= best["gap_mm"] <= 4.0 and best["objective"] > 0
+    cli("run", "out/design/best.toml", "-o", "out/best", "--no-plots")
 
 
 def test_sweep(work, precomputed):

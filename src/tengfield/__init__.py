@@ -11,6 +11,7 @@ V_OC, Q_SC, I_SC. In a notebook::
     table, outcome = tf.build_surrogate(scene)   # the cached field surrogate
     ball = tf.simulate_3d(scene)          # the rigid ball in 3D (wall, friction, spin)
     fit = tf.calibrate(scene, measured=trace)    # sigma, C_p, ... fitted to a trace
+    best = tf.design(scene)               # the geometry that serves [design]'s band best
     tf.harvest.harvest(t, q_sc, c_t, storage_capacitance=10e-6)   # bridges into a store
 
 Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
@@ -39,7 +40,7 @@ _LAZY = {
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", *_LAZY]
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", *_LAZY]
 
 
 def __getattr__(name: str):

@@ -44,6 +44,7 @@ COMMAND_MODULES = [
     "sweep",
     "report",
     "fit",
+    "design",
 ]
 
 

@@ -249,8 +249,9 @@ KEYWORD_VALUES = {("device", "surface_charge_uC_per_m2"): ("breakdown", BREAKDOW
 #: keys of [excitation] that hold one entry per component with kind = "harmonics"
 HARMONIC_KEYS = ("frequency_hz", "amplitude_mm", "acceleration_m_per_s2", "phase_deg")
 #: Sections passed through unvalidated to ``scene.raw`` (each is validated by
-#: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`).
-PASSTHROUGH_SECTIONS = ("fit",)
+#: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`, ``[design]`` by
+#: :mod:`tengfield.design`).
+PASSTHROUGH_SECTIONS = ("fit", "design")
 
 
 # ---------------------------------------------------------------------------

@@ -1,0 +1,321 @@
+"""One design candidate: its scene (geometry rule, charge, field settings) and its score.
+
+:func:`candidate_scene` builds the device of one set of varied values; :func:`evaluate`
+scores it on every band point: dynamics (impact map), the field surrogate (cached by
+the field hash; on this process, ``comm=None``), then the circuit (matched resistive
+load, rectifier, Q_SC peaks). An impossible candidate (a ball that does not fit, a
+mesh the field cannot take...) comes back ``status = "skipped"`` with the reason; one
+that misses ``require`` comes back ``"infeasible"`` without a field solve.
+"""
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from typing import Callable
+
+import numpy as np
+
+from .. import electrical
+from ..errors import FieldError, TengfieldError
+from .spec import OBJECTIVES, OTHER_VARY, DesignSpec
+
+#: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
+#: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
+#: DESIGN_TOLERANCE (9 -> 17 positions). Field error estimate measured 1.1e-2 (d = 5 mm)
+#: and 1.6e-2 (d = 10 mm at 1.43 mm); docs/design.md
+DESIGN_DEGREE = 2
+DESIGN_MESH_MAX_MM = 1.0
+DESIGN_MESH_BALL_FRACTION = 0.2
+DESIGN_TOLERANCE = 0.02
+#: matched-load scan: decades either side of 1 / (2 pi f C_T), grid points, Brent's tolerance
+LOAD_DECADES = 1.5
+LOAD_GRID = 7
+LOAD_XATOL_DECADES = 0.01
+
+
+def design_field_settings(ball_diameter_mm: float) -> dict:
+    """``[field]`` keys of the coarse design setting for a ball of this diameter."""
+    return {"degree": DESIGN_DEGREE,
+            "mesh_size_mm": float(f"{min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION * ball_diameter_mm):.6g}"),
+            "tolerance": DESIGN_TOLERANCE}
+
+
+def followed_geometry(base_device: dict, values: dict) -> dict:
+    """``[device]`` keys that follow the varied ones (``geometry = "follow"``), file units.
+
+    The base scene's radial clearance (tube bore - ball radius), tube wall (outer - inner
+    radius) and electrode inset (bore - electrode radius) are kept: a bigger ball gets a
+    bigger bore, the wall and the electrode follow the bore. A key that is itself varied
+    never follows.
+    """
+    b = base_device
+    out = {}
+    bore = b["tube_inner_radius_mm"]
+    if "ball_diameter_mm" in values and "tube_inner_radius_mm" not in values:
+        clearance = b["tube_inner_radius_mm"] - 0.5 * b["ball_diameter_mm"]
+        bore = 0.5 * values["ball_diameter_mm"] + clearance
+        out["tube_inner_radius_mm"] = bore
+    elif "tube_inner_radius_mm" in values:
+        bore = values["tube_inner_radius_mm"]
+    if bore != b["tube_inner_radius_mm"]:
+        if "electrode_radius_mm" not in values:
+            out["electrode_radius_mm"] = bore - (b["tube_inner_radius_mm"]
+                                                 - b["electrode_radius_mm"])
+        if "tube_outer_radius_mm" not in values:
+            out["tube_outer_radius_mm"] = bore + (b["tube_outer_radius_mm"]
+                                                  - b["tube_inner_radius_mm"])
+    return {k: float(f"{v:.12g}") for k, v in out.items()}
+
+
+def candidate_charge(scene, table=None):
+    """``(scene, table)`` at the ball's surface charge density σ a candidate is scored at.
+
+    THE one place that decides it: the scene's own ``[device] surface_charge_uC_per_m2``
+    (or its varied value); with ``surface_charge_uC_per_m2 = "breakdown"`` each geometry
+    at its own air-breakdown limit, σ = −σ_max from its surrogate's gap lines
+    (:func:`tengfield.breakdown.resolve_for_run`: the table is rescaled, no new field
+    solve), so designs are compared at charges they can hold. Raises
+    :class:`~tengfield.errors.FieldError` when the limit is asked for and the surrogate
+    has no gap lines.
+    """
+    from ..breakdown import resolve_for_run, uses_breakdown_charge
+
+    if table is None or not uses_breakdown_charge(scene):
+        return scene, table
+    resolved, scaled, limit = resolve_for_run(scene, table)
+    if limit is None:
+        raise FieldError("surface_charge_uC_per_m2 = 'breakdown' needs the surrogate's "
+                         "breakdown lines (an axisymmetric field solve)")
+    return resolved, scaled
+
+
+def candidate_scene(base, spec: DesignSpec, values: dict):
+    """The scene of one candidate (``values``: varied keys, file units); raises
+    :class:`~tengfield.errors.SceneError` when it is impossible."""
+    device = {k: v for k, v in values.items() if k not in OTHER_VARY}
+    if spec.geometry == "follow":
+        device.update(followed_geometry(base.to_dict()["device"], device))
+    sections = {"device": device}
+    other = {k: v for k, v in values.items() if k in OTHER_VARY}
+    for key, value in other.items():
+        sections.setdefault(OTHER_VARY[key], {})[key] = value
+    if spec.field == "coarse":
+        d_mm = device.get("ball_diameter_mm", base.device.ball_diameter * 1e3)
+        sections["field"] = design_field_settings(d_mm)
+    scene = base.with_values(**{s: v for s, v in sections.items() if s != "field"})
+    if "field" in sections:
+        scene = scene.with_values(field=sections["field"])   # checks the field values
+    return scene
+
+
+def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
+    """``scene`` driven at one band point (``amplitude`` [m]) for settle + window periods."""
+    periods = spec.settle_periods + spec.window_periods
+    return scene.with_values(
+        excitation={"frequency_hz": frequency, "amplitude_mm": amplitude * 1e3},
+        run={"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
+             "sample_rate_hz": spec.samples_per_period * frequency})
+
+
+def _load_power(point, dynamics, curves, load: float) -> float:
+    loaded = point.with_values(circuit={"kind": "load", "load_ohm": float(load)})
+    return float(electrical.steady_load(loaded, dynamics, curves)["mean_power_W"])
+
+
+def matched_load(points, dynamics, curves, aggregate: str) -> tuple[float, list[float]]:
+    """(R [ohm], powers [W] per point) maximising the aggregate mean power of ``points``
+    (band scenes with their ``dynamics``) into one resistor: a log grid of LOAD_GRID
+    loads over +- LOAD_DECADES around 1 / (2 pi f C_T) (f, C_T: means over the points),
+    then Brent's bounded search (scipy) between the best grid point's neighbours."""
+    from scipy.optimize import minimize_scalar
+
+    n_cells = points[0].device.cells
+    c_t = float(np.mean(curves.capacitance_samples)) * n_cells \
+        + points[0].circuit.parallel_capacitance
+    f = float(np.mean([p.excitation.frequency for p in points]))
+    centre = math.log10(1.0 / (2 * math.pi * f * c_t))
+    cache: dict[float, list[float]] = {}
+
+    def powers(log_r: float) -> list[float]:
+        key = round(float(log_r), 12)
+        if key not in cache:
+            cache[key] = [_load_power(p, d, curves, 10.0**key) for p, d in zip(points, dynamics)]
+        return cache[key]
+
+    def score(log_r: float) -> float:
+        p = powers(log_r)
+        return float(np.mean(p) if aggregate == "mean" else np.min(p))
+
+    grid = np.linspace(centre - LOAD_DECADES, centre + LOAD_DECADES, LOAD_GRID)
+    scores = [score(x) for x in grid]
+    k = int(np.argmax(scores))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, LOAD_GRID - 1)]
+    if k in (0, LOAD_GRID - 1):   # the optimum at the grid's edge: widen once
+        lo, hi = (grid[0] - 2 * LOAD_DECADES, grid[1]) if k == 0 else \
+            (grid[-2], grid[-1] + 2 * LOAD_DECADES)
+    if all(s == 0 for s in scores):
+        return 10.0**centre, powers(centre)
+    best = minimize_scalar(lambda x: -score(x), bounds=(lo, hi), method="bounded",
+                           options={"xatol": LOAD_XATOL_DECADES})
+    x = float(best.x) if -best.fun >= scores[k] else float(grid[k])
+    return 10.0**x, powers(x)
+
+
+def aggregate_values(values, how: str) -> float:
+    arr = np.asarray(values, dtype=float)
+    return float(np.mean(arr) if how == "mean" else np.min(arr))
+
+
+def _regime_ok(regime, require: str) -> bool:
+    if require == "upper-contact":
+        return regime.upper_contacts_per_period > 0
+    if require == "regular-contact":
+        return regime.name == "regular-contact"
+    return True
+
+
+def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
+             solve: Callable | None = None, simulate: Callable | None = None,
+             tables: dict | None = None) -> dict:
+    """Score one candidate (``values``: varied keys, file units) -> a row (JSON-ready).
+
+    ``tables``: an in-process memo {field hash: table} (a repeated geometry is free even
+    without a disk cache). Never raises for a bad candidate: skipped rows carry ``reason``.
+    """
+    from ..dynamics import simulate as default_simulate
+    from ..breakdown import obtain_breakdown_table, uses_breakdown_charge
+    from ..surrogate import TerminalCurves, obtain_table
+
+    simulate = simulate or default_simulate
+    row = {"values": dict(values), "status": "ok", "reason": "", "objectives": {},
+           "objective": math.nan, "objective_error": math.nan, "band_values": {},
+           "regimes": [], "upper_contacts_per_period": [], "upper_contact_fraction": math.nan,
+           "load_ohm": None, "field_hash": "", "field_error": math.nan,
+           "interpolation_error": math.nan, "field_status": "", "positions": 0,
+           "device_volume_m3": math.nan, "surface_charge_uC_per_m2": math.nan,
+           "wall_s": {"field": 0.0, "dynamics": 0.0, "circuit": 0.0}}
+    try:
+        scene = candidate_scene(base, spec, values)
+    except TengfieldError as exc:
+        return {**row, "status": "skipped", "reason": str(exc)}
+    volume = scene.device.cell_volume * scene.device.cells
+    row["device_volume_m3"] = volume
+    needs_field = any(OBJECTIVES[o][2] for o in spec.objectives)
+    if needs_field and scene.field_problems:
+        return {**row, "status": "skipped", "reason": "; ".join(scene.field_problems)}
+    # dynamics at every band point
+    start = time.perf_counter()
+    points, dynamics = [], []
+    try:
+        for f, a in spec.band:
+            point = band_scene(scene, spec, f, a)
+            points.append(point)
+            dynamics.append(simulate(point))
+    except TengfieldError as exc:
+        return {**row, "status": "skipped", "reason": str(exc),
+                "wall_s": {**row["wall_s"], "dynamics": time.perf_counter() - start}}
+    row["wall_s"]["dynamics"] = time.perf_counter() - start
+    row["regimes"] = [d.regime.name for d in dynamics]
+    row["upper_contacts_per_period"] = [float(d.regime.upper_contacts_per_period)
+                                        for d in dynamics]
+    row["upper_contact_fraction"] = float(np.mean([u > 0 for u in
+                                                   row["upper_contacts_per_period"]]))
+    missed = [(f, a) for (f, a), d in zip(spec.band, dynamics)
+              if not _regime_ok(d.regime, spec.require)]
+    if missed:
+        f, a = missed[0]
+        row.update(status="infeasible",
+                   reason=f"require = {spec.require!r} not met at {len(missed)} of "
+                          f"{len(spec.band)} band points (first: {f:g} Hz, {a * 1e3:g} mm)")
+        return row
+    # field surrogate (cached by the field hash)
+    curves = table = None
+    if needs_field:
+        start = time.perf_counter()
+        try:
+            key = scene.field_hash()
+            row["field_hash"] = key
+            if tables is not None and key in tables:
+                table, row["field_status"] = tables[key], "memo"
+            else:
+                with warnings.catch_warnings():   # the coarse field's accuracy is reported
+                    warnings.simplefilter("ignore", RuntimeWarning)   # as the error bar
+                    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) \
+                        else obtain_table        # "breakdown": the surrogate with its lines
+                    table, outcome = obtain(scene, cache_dir=cache_dir, comm=None,
+                                            solve=solve)
+                row["field_status"] = outcome.status
+                if tables is not None:
+                    tables[key] = table
+        except TengfieldError as exc:
+            return {**row, "status": "skipped", "reason": f"field: {exc}",
+                    "wall_s": {**row["wall_s"], "field": time.perf_counter() - start}}
+        row["wall_s"]["field"] = time.perf_counter() - start
+        row["field_error"] = float(np.nanmax(table.field_error)) \
+            if np.isfinite(table.field_error).any() else 0.0
+        row["interpolation_error"] = float(table.interpolation_error)
+        row["positions"] = int(table.count)
+        try:
+            charged, table = candidate_charge(scene, table)
+        except TengfieldError as exc:
+            return {**row, "status": "skipped", "reason": f"breakdown: {exc}"}
+        if charged is not scene:   # the band scenes at the charge the geometry can hold
+            scene = charged        # (the motion does not depend on the charge)
+            points = [band_scene(scene, spec, f, a) for f, a in spec.band]
+        row["surface_charge_uC_per_m2"] = scene.device.surface_charge * 1e6
+        curves = TerminalCurves(table, scene.circuit.reference)
+    # circuit
+    start = time.perf_counter()
+    band_values: dict[str, list[float]] = {}
+    for objective in spec.objectives:
+        band_values[objective] = _objective_values(objective, spec, scene, points, dynamics,
+                                                   curves, volume, row)
+    row["wall_s"]["circuit"] = time.perf_counter() - start
+    eps = (0.0 if math.isnan(row["field_error"]) else row["field_error"]) + \
+        (0.0 if math.isnan(row["interpolation_error"]) else row["interpolation_error"])
+    row["relative_error"] = eps
+    row["band_values"] = band_values
+    for objective, vals in band_values.items():
+        value = aggregate_values(vals, spec.aggregate)
+        row["objectives"][objective] = {"value": value,
+                                        "error": abs(value) * OBJECTIVES[objective][1] * eps}
+    row["objective"] = row["objectives"][spec.objective]["value"]
+    row["objective_error"] = row["objectives"][spec.objective]["error"]
+    return row
+
+
+def _objective_values(objective, spec, scene, points, dynamics, curves, volume, row):
+    if objective == "stroke":
+        return [scene.device.stroke] * len(points)
+    if objective in ("charge", "voltage", "current"):
+        name = {"charge": "Q_sc", "voltage": "V_oc", "current": "I_sc"}[objective]
+        return [float(electrical.terminal_peaks(p, d, curves)[name])
+                for p, d in zip(points, dynamics)]
+    if objective == "harvested_power":
+        out = []
+        for p, d in zip(points, dynamics):
+            rect_scene = p.with_values(circuit={"kind": "rectifier"})
+            rect = electrical.rectifier_waveforms(rect_scene, d, curves)
+            mask, _ = electrical.steady_window(d.t, rect_scene)
+            summary = electrical.rectifier_summary(rect_scene, rect["fine"], float(d.t[mask][0]))
+            out.append(float(summary["average_harvested_power_W"]))
+        return out
+    # power / power_density into the matched (or the varied) resistive load
+    if "load_ohm" in spec.vary:
+        load = scene.circuit.load
+        powers = [_load_power(p, d, curves, load) for p, d in zip(points, dynamics)]
+        row["load_ohm"] = load
+    elif spec.load == "one":
+        load, powers = matched_load(points, dynamics, curves, spec.aggregate)
+        row["load_ohm"] = load
+    else:
+        loads, powers = [], []
+        for p, d in zip(points, dynamics):
+            r, (power,) = matched_load([p], [d], curves, "mean")
+            loads.append(r)
+            powers.append(power)
+        row["load_ohm"] = loads
+    if objective == "power_density":
+        return [p / volume for p in powers]
+    return list(powers)

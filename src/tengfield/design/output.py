@@ -1,0 +1,188 @@
+"""design.csv, design.json, best.toml (and design.png through tengfield.plotting.design)."""
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+from .._toml import toml_value
+from ..io import atomic_path, write_json
+from .candidate import followed_geometry
+from .spec import OBJECTIVES, OTHER_VARY
+
+
+def _band_label(f: float, a: float) -> str:
+    return f"{f:g}hz_{a * 1e3:g}mm"
+
+
+def csv_columns(result) -> list[str]:
+    spec = result.spec
+    cols = ["index", "phase", *spec.vary, "status"]
+    for o in spec.objectives:
+        unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
+        cols += [f"{o}_{unit}", f"{o}_error_{unit}"]
+    for o in spec.objectives:
+        cols += [f"{o}_at_{_band_label(f, a)}" for f, a in spec.band]
+    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period", "load_ohm",
+             "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
+             "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
+             "field_hash"]
+    return cols
+
+
+def _fmt(x) -> str:
+    if x is None:
+        return ""
+    if isinstance(x, float):
+        return "" if not math.isfinite(x) else repr(x)
+    if isinstance(x, (list, tuple)):
+        return ";".join(_fmt(v) for v in x)
+    return str(x)
+
+
+def csv_record(result, row) -> dict:
+    spec = result.spec
+    rec = {"index": row["index"], "phase": row["phase"], "status": row["status"],
+           "reason": row["reason"], **row["values"]}
+    for o in spec.objectives:
+        unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
+        got = row["objectives"].get(o, {})
+        rec[f"{o}_{unit}"] = got.get("value")
+        rec[f"{o}_error_{unit}"] = got.get("error")
+        for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
+            rec[f"{o}_at_{_band_label(f, a)}"] = v
+    rec.update({"regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
+                "upper_contacts_per_period": row["upper_contacts_per_period"],
+                "load_ohm": row["load_ohm"], "device_volume_m3": row["device_volume_m3"],
+                "surface_charge_uC_per_m2": row.get("surface_charge_uC_per_m2"),
+                "field_relative_error": row["field_error"],
+                "interpolation_error": row["interpolation_error"], "positions": row["positions"],
+                "field_status": row["field_status"], "field_wall_s": row["wall_s"]["field"],
+                "dynamics_wall_s": row["wall_s"]["dynamics"],
+                "circuit_wall_s": row["wall_s"]["circuit"], "field_hash": row["field_hash"]})
+    return rec
+
+
+def write_design_csv(path, result) -> Path:
+    cols = csv_columns(result)
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=cols)
+        writer.writeheader()
+        for row in result.rows:
+            rec = csv_record(result, row)
+            writer.writerow({c: _fmt(rec.get(c)) for c in cols})
+    return Path(path)
+
+
+def cost_split(result) -> dict:
+    """Mean wall seconds per evaluated candidate in field, dynamics and circuit."""
+    done = [r for r in result.rows if r["status"] != "skipped"]
+    n = max(len(done), 1)
+    split = {k: sum(r["wall_s"][k] for r in done) / n for k in ("field", "dynamics", "circuit")}
+    solved = [r["wall_s"]["field"] for r in done if r["field_status"] in ("computed",
+                                                                          "recomputed")]
+    split["field_per_new_geometry"] = sum(solved) / len(solved) if solved else 0.0
+    split["new_geometries"] = len(solved)
+    split["candidates"] = len(done)
+    return split
+
+
+def design_summary(result) -> dict:
+    spec = result.spec
+    best = result.best
+    summary = {
+        "scene": result.scene.source,
+        "objective": spec.objective, "objectives": spec.objectives,
+        "unit": OBJECTIVES[spec.objective][0], "aggregate": spec.aggregate,
+        "best": None if best is None else {
+            **best["values"], "index": best["index"], "objective": best["objective"],
+            "objective_error": best["objective_error"],
+            "relative_error": best.get("relative_error"),
+            "objectives": best["objectives"], "band_values": best["band_values"],
+            "regimes": best["regimes"], "upper_contact_fraction": best["upper_contact_fraction"],
+            "load_ohm": best["load_ohm"], "followed": followed_geometry(
+                result.scene.to_dict()["device"],
+                {k: v for k, v in best["values"].items() if k not in OTHER_VARY})
+            if spec.geometry == "follow" else {}},
+        "confidence": result.confidence(),
+        "error_bar_rule": "objective x factor x (largest field error estimate + surrogate "
+                          "interpolation error estimate) of the candidate's surrogate; factor "
+                          "3 for powers (P ~ Q_SC^2 / C_T), 2 for voltage (Q_SC / C_T) and "
+                          "current (dQ_SC/dz), 1 for charge, 0 for stroke",
+        "ranking": [{"index": result.rows[i]["index"], **result.rows[i]["values"],
+                     "objective": result.rows[i]["objective"],
+                     "objective_error": result.rows[i]["objective_error"]}
+                    for i in result.ranking[:50]],
+        "pareto": [result.rows[i]["index"] for i in result.pareto()]
+        if len(spec.objectives) > 1 else None,
+        "counts": {s: sum(r["status"] == s for r in result.rows)
+                   for s in ("ok", "infeasible", "skipped")},
+        "skipped_reasons": sorted({r["reason"] for r in result.rows if r["status"] == "skipped"}),
+        "settings": spec.as_dict(),
+        "field_settings": ("coarse: degree 2, mesh_size_mm = min(1, 0.2 x ball diameter), "
+                           "tolerance 0.02 (17 positions)") if spec.field == "coarse"
+        else "the scene's [field]",
+        "rounds": result.rounds,
+        "wall_time_s": result.wall_time, "ranks": result.ranks, "jobs": result.jobs,
+        "cost_per_candidate_s": cost_split(result),
+    }
+    return summary
+
+
+def best_scene_dict(result) -> dict:
+    """The scene (file-level dict, ``[design]`` dropped) with the best candidate's values,
+    its followed geometry and (for a power objective) the matched load."""
+    best = result.best
+    if best is None:
+        raise ValueError("no feasible candidate")
+    data = {sec: dict(v) for sec, v in result.scene.raw.items() if sec != "design"}
+    device = {k: v for k, v in best["values"].items() if k not in OTHER_VARY}
+    if result.spec.geometry == "follow":
+        device.update(followed_geometry(result.scene.to_dict()["device"], device))
+    data.setdefault("device", {}).update(device)
+    for key, value in best["values"].items():
+        if key in OTHER_VARY:
+            data.setdefault(OTHER_VARY[key], {})[key] = value
+    if isinstance(best["load_ohm"], float):
+        data.setdefault("circuit", {}).update({"kind": "load",
+                                               "load_ohm": float(f"{best['load_ohm']:.6g}")})
+    f, a = result.spec.band[0]
+    data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
+    return data
+
+
+def to_toml(data: dict, header: str = "") -> str:
+    lines = [f"# {line}" for line in header.splitlines()]
+    for sec, values in data.items():
+        if not isinstance(values, dict):
+            continue
+        lines += ["", f"[{sec}]"]
+        lines += [f"{key} = {toml_value(v)}" for key, v in values.items()
+                  if not isinstance(v, dict)]
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
+    """design.csv, design.json, best.toml (if a candidate is feasible), design.png."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [write_design_csv(out / "design.csv", result),
+               write_json(out / "design.json", design_summary(result))]
+    best = result.best
+    if best is not None:
+        unit = OBJECTIVES[result.spec.objective][0]
+        header = (f"best design of `tengfield design` on {result.scene.source}\n"
+                  f"{result.spec.objective} ({result.spec.aggregate} over {len(result.spec.band)} "
+                  f"band points) = {best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
+                  + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
+                  + f"\nexcitation: the first band point; [field]: the scene's (the design used "
+                  + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
+        with atomic_path(out / "best.toml") as tmp:
+            tmp.write_text(to_toml(best_scene_dict(result), header))
+        written.append(out / "best.toml")
+    if plots:
+        from ..plotting.design import plot_design
+        with atomic_path(out / "design.png") as tmp:
+            plot_design(result, tmp)
+        written.append(out / "design.png")
+    return written

@@ -1,0 +1,335 @@
+"""The design search: space-filling start, then shrinking boxes around the best.
+
+Every candidate is a point ``u`` of the unit cube (one axis per varied key; ``load_ohm``
+on a log scale), snapped to a grid of ``[design] resolution`` so that a repeated
+geometry is a repeated candidate (scored once, its surrogate cached by field hash).
+
+1. Space filling: a scrambled Sobol' sequence (``scipy.stats.qmc``, seeded by
+   ``[design] seed``) of ``DesignSpec.initial_count()`` points covers the whole box,
+   so every regime (no contact, chaotic, regular contact) is sampled before any
+   refinement: the objective jumps where the regime changes, which defeats
+   gradient-based optimisers.
+2. Refinement: rounds of ``[design] batch`` Sobol' points (seed, round) in a box
+   around the best feasible candidate; the box halves after a round that does not
+   improve the best beyond its error bar, else shrinks by 0.8; it stops at the budget,
+   at the resolution, or after three rounds without a new candidate.
+
+Each round's candidates are farmed (:func:`tengfield.sweep.run_tasks`: the MPI task
+farm over ``comm``'s ranks; on one machine ``jobs`` worker processes that live for the
+whole search, so dolfinx and the JIT caches load once per worker, not once per round)
+and every rank takes the same next decision from the gathered rows: the result depends
+on the seed, never on the number of ranks or processes.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .candidate import evaluate
+from .spec import LOG_KEYS, OBJECTIVES, DesignSpec, parse_design_section, vary_spec
+
+#: box half-width (unit cube) of the first refinement round; shrink factors
+FIRST_HALF_WIDTH = 0.25
+SHRINK_IMPROVED = 0.8
+SHRINK_STALLED = 0.5
+STALL_ROUNDS = 3
+
+_TABLES: dict = {}   # this process's surrogates by field hash (cleared per design run)
+
+
+@dataclass
+class DesignResult:
+    """Outcome of :func:`design`.
+
+    ``rows``: every candidate in evaluation order (``index``, ``phase``, ``values`` (the
+    varied keys, file units), ``status`` "ok" / "infeasible" / "skipped", ``reason``,
+    ``objective`` and ``objective_error`` (SI; the error bar is the field + surrogate
+    error estimate times the objective's sensitivity), ``objectives`` (every objective),
+    ``band_values`` (per band point), ``regimes``, ``upper_contact_fraction``,
+    ``load_ohm``, field and timing details); ``ranking``: indices of the feasible rows,
+    best first; ``best``: the best row (None if none is feasible).
+    """
+    scene: object
+    spec: DesignSpec
+    rows: list
+    ranking: list
+    wall_time: float = 0.0
+    ranks: int = 1
+    jobs: int | None = None
+    rounds: list = field(default_factory=list)
+
+    @property
+    def best(self) -> dict | None:
+        return self.rows[self.ranking[0]] if self.ranking else None
+
+    def best_scene(self):
+        """The base scene with the best candidate's geometry (``[design]`` dropped)."""
+        from .output import best_scene_dict
+        from ..scene import Scene
+        return Scene.from_dict(best_scene_dict(self), source=f"best of {self.scene.source}")
+
+    def pareto(self) -> list[int]:
+        """Indices of the feasible rows no other row beats in both objectives (two objectives)."""
+        if len(self.spec.objectives) < 2:
+            return list(self.ranking[:1])
+        a, b = self.spec.objectives[:2]
+        pts = [(i, self.rows[i]["objectives"][a]["value"], self.rows[i]["objectives"][b]["value"])
+               for i in self.ranking]
+        return [i for i, x, y in pts
+                if not any((x2 >= x and y2 >= y) and (x2 > x or y2 > y) for _, x2, y2 in pts)]
+
+    def confidence(self) -> dict:
+        """How sure the best is: its margin over the runner-up against both error bars."""
+        if not self.ranking:
+            return {}
+        best = self.rows[self.ranking[0]]
+        out = {"objective": best["objective"], "error": best["objective_error"],
+               "relative_error": best.get("relative_error", math.nan)}
+        if len(self.ranking) > 1:
+            second = self.rows[self.ranking[1]]
+            margin = best["objective"] - second["objective"]
+            bars = best["objective_error"] + second["objective_error"]
+            ties = [i for i in self.ranking[1:]
+                    if best["objective"] - self.rows[i]["objective"]
+                    <= best["objective_error"] + self.rows[i]["objective_error"]]
+            out.update({"runner_up_index": second["index"], "margin": margin,
+                        "margin_over_error_bars": margin / bars if bars > 0 else math.inf,
+                        "candidates_within_error_bars": len(ties),
+                        "within_error_bars": [self.rows[i]["index"] for i in ties[:20]]})
+        return out
+
+
+class _Space:
+    """Unit cube <-> varied values (file units), snapped to the resolution grid."""
+
+    def __init__(self, spec: DesignSpec):
+        self.keys = list(spec.vary)
+        self.bounds = [spec.vary[k] for k in self.keys]
+        self.resolution = spec.resolution
+        self.integer = [vary_spec(k)[1][1] is int for k in self.keys]
+
+    def snap(self, u: np.ndarray) -> np.ndarray:
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        if self.resolution > 0:
+            u = np.round(u / self.resolution) * self.resolution
+        return np.clip(u, 0.0, 1.0)
+
+    def values(self, u) -> dict:
+        out = {}
+        for key, (lo, hi), x, integer in zip(self.keys, self.bounds, u, self.integer):
+            if key in LOG_KEYS:
+                v = 10.0 ** (math.log10(lo) + float(x) * (math.log10(hi) - math.log10(lo)))
+            else:
+                v = lo + float(x) * (hi - lo)
+            out[key] = int(round(v)) if integer else float(f"{v:.10g}")
+        return out
+
+    def key(self, values: dict) -> tuple:
+        return tuple(values[k] for k in self.keys)
+
+
+def _sobol(d: int, n: int, seed) -> np.ndarray:
+    from scipy.stats import qmc
+
+    sampler = qmc.Sobol(d, scramble=True, seed=np.random.default_rng(seed))
+    m = int(math.ceil(math.log2(max(n, 1))))
+    return sampler.random_base2(m)[:n]
+
+
+def _evaluate_task(task):
+    base, spec, values, cache_dir, solve, simulate = task
+    return evaluate(base, spec, values, cache_dir=cache_dir, solve=solve, simulate=simulate,
+                    tables=_TABLES)
+
+
+def _quiet_worker() -> None:
+    """A worker's stderr carries tengfield's lines only (no ffcx/setuptools JIT chatter)."""
+    from ..cli import configure_output
+    configure_output()
+
+
+class _Workers:
+    """``[work(t) for t in tasks]`` per round: the MPI farm (``comm`` with several ranks),
+    a process pool kept for every round (``jobs`` > 1), or a loop."""
+
+    def __init__(self, comm, jobs):
+        import os
+
+        from .._mpi import size_of
+
+        self.comm, self.pool = comm, None
+        self.jobs = 1 if size_of(comm) > 1 else max(1, jobs or os.cpu_count() or 1)
+
+    def __enter__(self):
+        if self.jobs > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+            self.pool = ProcessPoolExecutor(max_workers=self.jobs,
+                                            mp_context=multiprocessing.get_context("spawn"),
+                                            initializer=_quiet_worker)
+        return self
+
+    def __exit__(self, *exc):
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
+
+    def map(self, work, tasks, progress):
+        from ..sweep import run_tasks
+
+        if self.pool is None:   # the MPI farm over comm's ranks, or a loop
+            return run_tasks(work, tasks, comm=self.comm, jobs=1, progress=progress)
+        results = []
+        for result in self.pool.map(work, tasks):
+            results.append(result)
+            progress(1)
+        return results
+
+
+def _ranking(rows: list) -> list[int]:
+    ok = [i for i, r in enumerate(rows) if r["status"] == "ok" and np.isfinite(r["objective"])]
+    return sorted(ok, key=lambda i: (-rows[i]["objective"], i))
+
+
+def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
+           solve: Callable | None = None, simulate: Callable | None = None,
+           progress: bool = False, overrides: dict | None = None) -> DesignResult:
+    """Search the ``[design.vary]`` box of ``scene`` for the best ``[design] objective``
+    over the ``[design.excitation]`` band (module docstring). ``comm``: spread each round
+    over its ranks (every rank returns the same result); else ``jobs`` worker processes.
+    ``solve``/``simulate`` replace the field solver and the dynamics (tests);
+    ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
+    from tqdm import tqdm
+
+    from .._mpi import check_jobs, rank_of, size_of
+
+    start = time.perf_counter()
+    spec = parse_design_section(scene, overrides)
+    check_jobs(jobs, comm)
+    _TABLES.clear()
+    space = _Space(spec)
+    rows: list[dict] = []
+    seen: dict[tuple, int] = {}
+    rounds: list[dict] = []
+    bar = tqdm(total=spec.candidates, desc="design", unit="candidate", file=sys.stderr,
+               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+
+    def run_round(units: np.ndarray, phase: str) -> int:
+        fresh = []
+        for u in units:
+            values = space.values(space.snap(u))
+            k = space.key(values)
+            if k in seen or any(space.key(v) == k for v in fresh):
+                continue
+            if len(rows) + len(fresh) >= spec.candidates:
+                break
+            fresh.append(values)
+        if not fresh:
+            return 0
+        tasks = [(scene, spec, v, cache_dir, solve, simulate) for v in fresh]
+        results = workers.map(_evaluate_task, tasks, bar.update)
+        for values, row in zip(fresh, results):
+            row = {"index": len(rows), "phase": phase, **row}
+            seen[space.key(values)] = row["index"]
+            rows.append(row)
+        return len(fresh)
+
+    def unit_of(row) -> np.ndarray:
+        u = []
+        for key, (lo, hi) in zip(space.keys, space.bounds):
+            v = row["values"][key]
+            if key in LOG_KEYS:
+                u.append((math.log10(v) - math.log10(lo)) / (math.log10(hi) - math.log10(lo)))
+            else:
+                u.append((v - lo) / (hi - lo))
+        return np.array(u)
+
+    workers = _Workers(comm, jobs).__enter__()
+    try:
+        d = len(space.keys)
+        n0 = spec.initial_count()
+        added = run_round(_sobol(d, n0, [spec.seed, 0]), "space-filling")
+        rounds.append({"phase": "space-filling", "candidates": added})
+        half = FIRST_HALF_WIDTH
+        stalled = 0
+        k = 0
+        while len(rows) < spec.candidates:
+            ranking = _ranking(rows)
+            if not ranking:   # nothing feasible yet: keep filling the space
+                units = _sobol(d, spec.batch, [spec.seed, 1, k])
+                phase = "space-filling"
+            else:
+                centre = unit_of(rows[ranking[0]])
+                units = centre + (2.0 * _sobol(d, spec.batch, [spec.seed, 1, k]) - 1.0) * half
+                phase = f"refine {k + 1}"
+            before = rows[ranking[0]] if ranking else None
+            added = run_round(units, phase)
+            k += 1
+            after = _ranking(rows)
+            improved = bool(after) and (before is None or (
+                rows[after[0]]["objective"] - before["objective"] > before["objective_error"]))
+            rounds.append({"phase": phase, "candidates": added, "half_width": half,
+                           "improved_beyond_error_bar": improved,
+                           "best_index": rows[after[0]]["index"] if after else None})
+            stalled = stalled + 1 if added == 0 else 0
+            if stalled >= STALL_ROUNDS:
+                break
+            if ranking:
+                half *= SHRINK_IMPROVED if improved else SHRINK_STALLED
+                if half < max(spec.resolution, 1e-6):
+                    break
+    finally:
+        workers.__exit__(None, None, None)
+        bar.close()
+    return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
+                        wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,
+                        rounds=rounds)
+
+
+def narrowed_scene(result: DesignResult, fraction: float = 0.2, candidates: int = 24):
+    """The scene of a check of the optimum: every varied range narrowed to ``fraction`` of
+    its width around the best (clipped to the original range), ``candidates`` candidates,
+    another seed."""
+    best = result.best
+    if best is None:
+        raise ValueError("no feasible candidate to check")
+    vary = {}
+    for key, (lo, hi) in result.spec.vary.items():
+        v = best["values"][key]
+        if key in LOG_KEYS:
+            span = (math.log10(hi) - math.log10(lo)) * fraction / 2
+            a, b = 10 ** max(math.log10(lo), math.log10(v) - span), \
+                10 ** min(math.log10(hi), math.log10(v) + span)
+        else:
+            span = (hi - lo) * fraction / 2
+            a, b = max(lo, v - span), min(hi, v + span)
+        vary[key] = [float(a), float(b)] if a < b else [float(lo), float(hi)]
+    raw = dict(result.scene.raw.get("design", {}))
+    raw.update({"vary": vary, "candidates": candidates, "seed": result.spec.seed + 1,
+                "initial_candidates": 0})
+    return result.scene.with_values(design=raw)
+
+
+def check_optimum(result: DesignResult, *, fraction: float = 0.2, candidates: int = 24,
+                  **kwargs) -> dict:
+    """A narrower search around the best (:func:`narrowed_scene`): is anything better beyond
+    the error bars? Returns both bests and the verdict ``confirmed``."""
+    narrow = design(narrowed_scene(result, fraction, candidates), **kwargs)
+    best, other = result.best, narrow.best
+    gain = (other["objective"] - best["objective"]) if other else -math.inf
+    bars = best["objective_error"] + (other["objective_error"] if other else 0.0)
+    return {"best": best["values"], "objective": best["objective"],
+            "error": best["objective_error"],
+            "narrow_best": other["values"] if other else None,
+            "narrow_objective": other["objective"] if other else None,
+            "narrow_error": other["objective_error"] if other else None,
+            "gain": gain, "error_bars": bars, "confirmed": bool(gain <= bars),
+            "narrow_candidates": len(narrow.rows), "fraction": fraction,
+            "wall_time_s": narrow.wall_time, "result": narrow}
+
+
+__all__ = ["design", "DesignResult", "check_optimum", "narrowed_scene", "OBJECTIVES"]

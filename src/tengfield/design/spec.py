@@ -1,0 +1,252 @@
+"""The ``[design]`` section of a scene, validated (by this package, like ``[fit]``).
+
+Scene syntax (every key optional except ``[design.vary]``)::
+
+    [design]
+    objective = "power_density"   # power_density [W/m^3], power [W], charge (Q_SC pp [C]),
+                                  # harvested_power [W] (rectifier + store of [circuit]),
+                                  # stroke (Δh [m]: with require, the largest full-contact stroke),
+                                  # voltage (V_OC pp [V]), current (I_SC pp [A]);
+                                  # or a list of up to four: the first drives the search, all
+                                  # are reported (design.png: the Pareto plot of the first two)
+    aggregate = "mean"            # over the band: "mean" or "min" (worst case)
+    candidates = 200              # evaluation budget (distinct candidates)
+    seed = 1
+    require = "none"              # or "upper-contact" / "regular-contact" at every band point
+    load = "one"                  # matched load: "one" resistor for the band, or "each" point's own
+    geometry = "follow"           # tube and electrode follow a varied ball (docs/design.md), "fixed"
+    field = "coarse"              # the design's field settings (degree 2, h = min(1 mm, d/5)), "scene"
+    batch = 16                    # candidates per refinement round
+    settle_periods = 20           # per band point: transient, then
+    window_periods = 20           # the averaging window
+    samples_per_period = 200
+    resolution = 1e-3             # varied values snap to this fraction of their range
+    [design.vary]                 # any numeric [device] key and [circuit] load_ohm: [min, max]
+    gap_mm = [1.0, 5.0]
+    [design.excitation]           # the band: every frequency x every amplitude
+    frequency_hz = [33.0]
+    amplitude_mm = [0.5, 0.75, 1.0]
+"""
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass
+from dataclasses import field as _field
+
+from ..errors import SceneError
+from ..scene.schema import SCHEMA
+from ..scene.schema import convert as _convert
+
+#: objective -> (unit, relative-error factor on the field error bar, needs the field)
+#: power ~ Q_SC^2 / C_T: dP/P <= 2 dQ/Q + dC/C <= 3 eps; charge: eps; stroke: exact
+OBJECTIVES = {
+    "power_density": ("W/m^3", 3.0, True),
+    "power": ("W", 3.0, True),
+    "charge": ("C", 1.0, True),
+    "voltage": ("V", 2.0, True),        # V_OC pp = Q_SC / C_T
+    "current": ("A", 2.0, True),        # I_SC pp = dQ_SC/dz z': the spline's derivative
+    "harvested_power": ("W", 3.0, True),
+    "stroke": ("m", 0.0, False),
+}
+AGGREGATES = ("mean", "min")
+REQUIRES = ("none", "upper-contact", "regular-contact")
+LOAD_RULES = ("one", "each")
+GEOMETRY_RULES = ("follow", "fixed")
+FIELD_RULES = ("coarse", "scene")
+#: [design.vary] keys outside [device]: key -> section
+OTHER_VARY = {"load_ohm": "circuit"}
+#: varied keys searched on a logarithmic scale
+LOG_KEYS = ("load_ohm",)
+MAX_BAND_POINTS = 1000
+
+KEYS = ("objective", "aggregate", "candidates", "seed", "require", "load", "geometry", "field",
+        "batch", "settle_periods", "window_periods", "samples_per_period", "resolution",
+        "initial_candidates", "vary", "excitation")
+
+
+@dataclass
+class DesignSpec:
+    """``[design]`` validated; ``vary``: key -> (lo, hi) in file units; ``band``: (f [Hz], A [m])."""
+    objectives: list[str] = _field(default_factory=lambda: ["power_density"])
+    aggregate: str = "mean"
+    candidates: int = 200
+    seed: int = 1
+    require: str = "none"
+    load: str = "one"
+    geometry: str = "follow"
+    field: str = "coarse"
+    batch: int = 16
+    settle_periods: int = 20
+    window_periods: int = 20
+    samples_per_period: int = 200
+    resolution: float = 1e-3
+    initial_candidates: int = 0          # 0: the rule of initial_count()
+    vary: dict = _field(default_factory=dict)
+    band: list = _field(default_factory=list)
+
+    @property
+    def objective(self) -> str:
+        return self.objectives[0]
+
+    def initial_count(self) -> int:
+        """Space-filling candidates: the given count, else the largest power of 2 <= 40 %
+        of the budget (at least 4, at most the budget)."""
+        if self.initial_candidates:
+            return min(self.initial_candidates, self.candidates)
+        n = 4
+        while 2 * n <= 0.4 * self.candidates:
+            n *= 2
+        return min(n, self.candidates)
+
+    def as_dict(self) -> dict:
+        return {"objective": self.objectives if len(self.objectives) > 1 else self.objective,
+                "aggregate": self.aggregate, "candidates": self.candidates, "seed": self.seed,
+                "require": self.require, "load": self.load, "geometry": self.geometry,
+                "field": self.field, "batch": self.batch, "settle_periods": self.settle_periods,
+                "window_periods": self.window_periods,
+                "samples_per_period": self.samples_per_period, "resolution": self.resolution,
+                "initial_candidates": self.initial_count(),
+                "vary": {k: list(v) for k, v in self.vary.items()},
+                "band": [{"frequency_hz": f, "amplitude_mm": a * 1e3} for f, a in self.band]}
+
+
+def _suggest(word, options) -> str:
+    close = difflib.get_close_matches(str(word), list(options), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _choice(key: str, value, options) -> str:
+    if not isinstance(value, str) or value not in options:
+        raise SceneError(f"[design] {key} = {value!r} is not allowed: choose one of "
+                         + ", ".join(map(repr, options)) + _suggest(value, options))
+    return value
+
+
+def _whole(key: str, value, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise SceneError(f"[design] {key} = {value!r} is out of range: allowed whole numbers "
+                         f"[{lo}, {hi}]")
+    return value
+
+
+def vary_spec(key: str) -> tuple[str, tuple]:
+    """(section, SCHEMA entry) of a key [design.vary] accepts, or SceneError."""
+    allowed = [k for k, s in SCHEMA["device"].items() if s[1] in (float, int)
+               and k not in ("tilt_deg", "tilt_azimuth_deg")] + list(OTHER_VARY)
+    if key not in allowed:
+        raise SceneError(f"unknown key [design.vary] {key}" + _suggest(key, allowed)
+                         + "; allowed: " + ", ".join(allowed))
+    section = OTHER_VARY.get(key, "device")
+    return section, SCHEMA[section][key]
+
+
+def _vary(raw) -> dict:
+    if not isinstance(raw, dict) or not raw:
+        raise SceneError("[design.vary] must be a table of key = [min, max] with at least one "
+                         "key, e.g. gap_mm = [1.0, 5.0]")
+    out = {}
+    for key, bounds in raw.items():
+        section, spec = vary_spec(key)
+        where = f"[design.vary] {key}"
+        if (not isinstance(bounds, list) or len(bounds) != 2
+                or any(isinstance(b, bool) or not isinstance(b, (int, float)) for b in bounds)):
+            raise SceneError(f"{where} = {bounds!r}: expected [min, max] (two numbers)")
+        for b in bounds:   # each bound must be a valid value of the key
+            try:
+                _convert(section, key, float(b) if spec[1] is float else b, spec)
+            except SceneError as exc:
+                raise SceneError(f"{where} = {bounds!r}: {exc}") from None
+        lo, hi = float(bounds[0]), float(bounds[1])
+        if not lo < hi:
+            raise SceneError(f"{where} = {bounds!r}: min must be < max")
+        if key in LOG_KEYS and lo <= 0:
+            raise SceneError(f"{where} = {bounds!r}: min must be > 0 (searched on a log scale)")
+        out[key] = (lo, hi)
+    return out
+
+
+def _band(raw, scene) -> list[tuple[float, float]]:
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, dict):
+        raise SceneError("[design.excitation] must be a table (frequency_hz, amplitude_mm)")
+    for key in raw:
+        if key not in ("frequency_hz", "amplitude_mm"):
+            raise SceneError(f"unknown key [design.excitation] {key}"
+                             + _suggest(key, ("frequency_hz", "amplitude_mm"))
+                             + "; keys are frequency_hz, amplitude_mm")
+    lists = {}
+    for key, default, lo_open in (("frequency_hz", scene.excitation.frequency, True),
+                                  ("amplitude_mm", scene.excitation.amplitude * 1e3, False)):
+        values = raw.get(key, [default])
+        if not isinstance(values, list):
+            values = [values]
+        if not values:
+            raise SceneError(f"[design.excitation] {key} = []: give at least one value")
+        for v in values:
+            bad = isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)
+            if bad or v < 0 or (lo_open and v == 0) or v > (1e5 if key == "frequency_hz" else 1e3):
+                rng = "(0, 1e5]" if key == "frequency_hz" else "[0, 1000]"
+                raise SceneError(f"[design.excitation] {key} = {v!r} is out of range: "
+                                 f"allowed {rng}")
+        lists[key] = [float(v) for v in values]
+    band = [(f, a * 1e-3) for f in lists["frequency_hz"] for a in lists["amplitude_mm"]]
+    if len(band) > MAX_BAND_POINTS:
+        raise SceneError(f"[design.excitation] {len(band)} band points: allowed <= "
+                         f"{MAX_BAND_POINTS}")
+    return band
+
+
+def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
+    """Validate ``scene.raw["design"]`` (with ``overrides`` of top-level keys) -> :class:`DesignSpec`."""
+    raw = dict(scene.raw.get("design", {}) or {})
+    raw.update(overrides or {})
+    for key in raw:
+        if key not in KEYS:
+            raise SceneError(f"unknown key [design] {key}" + _suggest(key, KEYS)
+                             + f"; keys are {', '.join(KEYS)}")
+    if scene.excitation.kind != "sine":
+        raise SceneError(f"[excitation] kind = {scene.excitation.kind!r}: tengfield design "
+                         "scores sine excitations ([design.excitation]); allowed 'sine'")
+    if scene.array.cells:
+        raise SceneError(f"[array] cells = {scene.array.cells}: tengfield design scores one "
+                         "device ([device] cells identical cells); allowed 0")
+    spec = DesignSpec()
+    objective = raw.get("objective", "power_density")
+    objectives = objective if isinstance(objective, list) else [objective]
+    if not 1 <= len(objectives) <= 4 or len(set(map(str, objectives))) != len(objectives):
+        raise SceneError(f"[design] objective = {objective!r}: give one objective or a list "
+                         "of up to four different ones")
+    spec.objectives = [_choice("objective", o, tuple(OBJECTIVES)) for o in objectives]
+    spec.aggregate = _choice("aggregate", raw.get("aggregate", spec.aggregate), AGGREGATES)
+    spec.require = _choice("require", raw.get("require", spec.require), REQUIRES)
+    spec.load = _choice("load", raw.get("load", spec.load), LOAD_RULES)
+    spec.geometry = _choice("geometry", raw.get("geometry", spec.geometry), GEOMETRY_RULES)
+    spec.field = _choice("field", raw.get("field", spec.field), FIELD_RULES)
+    spec.candidates = _whole("candidates", raw.get("candidates", spec.candidates), 4, 100000)
+    spec.seed = _whole("seed", raw.get("seed", spec.seed), 0, 2**32 - 1)
+    spec.batch = _whole("batch", raw.get("batch", spec.batch), 1, 4096)
+    spec.settle_periods = _whole("settle_periods", raw.get("settle_periods", spec.settle_periods),
+                                 0, 100000)
+    spec.window_periods = _whole("window_periods", raw.get("window_periods", spec.window_periods),
+                                 2, 100000)
+    spec.samples_per_period = _whole("samples_per_period",
+                                     raw.get("samples_per_period", spec.samples_per_period),
+                                     20, 100000)
+    spec.initial_candidates = _whole("initial_candidates", raw.get("initial_candidates", 0),
+                                     0, 100000)
+    res = raw.get("resolution", spec.resolution)
+    if isinstance(res, bool) or not isinstance(res, (int, float)) or not 0 <= res <= 0.1:
+        raise SceneError(f"[design] resolution = {res!r} is out of range: allowed [0, 0.1] "
+                         "(a fraction of each varied range; 0: no snapping)")
+    spec.resolution = float(res)
+    if "vary" not in raw:
+        raise SceneError("[design.vary] is missing: give the keys to vary, e.g. "
+                         "gap_mm = [1.0, 5.0]")
+    spec.vary = _vary(raw["vary"])
+    spec.band = _band(raw.get("excitation"), scene)
+    if "load_ohm" in spec.vary and spec.load == "each":
+        raise SceneError("[design] load = 'each' and [design.vary] load_ohm: the load is either "
+                         "varied or matched, not both; allowed load = 'one' here")
+    return spec

@@ -1,0 +1,302 @@
+"""tengfield.design with the analytic plate model (no dolfinx): the [design] section,
+one candidate's score, the geometry rule, the cache, the search and its outputs."""
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import plate_model as fx
+import tengfield as tf
+from tengfield import electrical
+from tengfield.design import (candidate_scene, design, evaluate, followed_geometry,
+                              parse_design_section, write_design_outputs)
+from tengfield.design.candidate import _load_power, band_scene
+from tengfield.errors import SceneError
+from tengfield.surrogate import TerminalCurves, precompute
+
+SHIP_BAND = {"frequency_hz": [33.0], "amplitude_mm": [0.75, 1.0]}
+
+
+def design_scene(**design_keys):
+    section = {"objective": "power_density", "candidates": 12, "seed": 1,
+               "settle_periods": 10, "window_periods": 10, "samples_per_period": 120,
+               "vary": {"gap_mm": [1.0, 5.0]}, "excitation": SHIP_BAND}
+    section.update(design_keys)
+    return fx.scene_with(design=section)
+
+
+@pytest.fixture
+def cache(tmp_path):
+    return tmp_path / "cache"
+
+
+# ---------------------------------------------------------------------------
+# [design]: validated by its own package, one line naming key, value and range
+@pytest.mark.parametrize("keys, message", [
+    ({"objective": "powr"}, r"\[design\] objective = 'powr' is not allowed: choose one of "
+                            r"'power_density'.*did you mean 'power'"),
+    ({"aggregate": "max"}, r"\[design\] aggregate = 'max' is not allowed: choose one of 'mean', 'min'"),
+    ({"candidates": 2}, r"\[design\] candidates = 2 is out of range: allowed whole numbers \[4, 100000\]"),
+    ({"vary": {"gap_mn": [1, 2]}}, r"unknown key \[design.vary\] gap_mn \(did you mean 'gap_mm'\?\)"),
+    ({"vary": {"gap_mm": [3.0, 1.0]}}, r"\[design.vary\] gap_mm = \[3.0, 1.0\]: min must be < max"),
+    ({"vary": {"gap_mm": [-1.0, 1.0]}}, r"\[design.vary\] gap_mm = \[-1.0, 1.0\]: \[device\] gap_mm = "
+                                       r"-1.0 is out of range: allowed \[1e-06, 10000\]"),
+    ({"vary": {"gap_mm": 3.0}}, r"\[design.vary\] gap_mm = 3.0: expected \[min, max\]"),
+    ({"excitation": {"frequency_hz": [0.0]}}, r"\[design.excitation\] frequency_hz = 0.0 is out "
+                                              r"of range: allowed \(0, 1e5\]"),
+    ({"excitation": {"amplitud_mm": [1.0]}}, r"unknown key \[design.excitation\] amplitud_mm"),
+    ({"requir": "upper-contact"}, r"unknown key \[design\] requir \(did you mean 'require'\?\)"),
+    ({"require": "contact"}, r"\[design\] require = 'contact' is not allowed"),
+])
+def test_bad_design_input_is_one_line_naming_key_value_and_range(keys, message):
+    with pytest.raises(SceneError, match=message) as info:
+        parse_design_section(design_scene(**keys))
+    assert "\n" not in str(info.value)
+
+
+def test_a_scene_file_with_design_loads_and_the_section_is_kept(tmp_path):
+    path = tmp_path / "d.toml"
+    path.write_text('[design]\nobjective = "charge"\n[design.vary]\ngap_mm = [1.0, 5.0]\n'
+                    'ball_diameter_mm = [5, 10]\n[design.excitation]\nfrequency_hz = [33.0]\n'
+                    'amplitude_mm = [0.5, 0.75, 1.0]\n')
+    spec = parse_design_section(tf.load_scene(path))
+    assert spec.objective == "charge" and spec.aggregate == "mean" and spec.candidates == 200
+    assert spec.vary == {"gap_mm": (1.0, 5.0), "ball_diameter_mm": (5.0, 10.0)}
+    assert spec.band == [(33.0, 0.5e-3), (33.0, 0.75e-3), (33.0, 1.0e-3)]
+    assert spec.initial_count() == 64          # largest power of 2 <= 40 % of 200
+
+
+def test_without_design_excitation_the_band_is_the_scenes_excitation():
+    scene = fx.scene_with(design={"vary": {"gap_mm": [1.0, 5.0]}})
+    assert parse_design_section(scene).band == [(20.0, 1.5e-3)]
+
+
+# ---------------------------------------------------------------------------
+# the geometry rule and impossible candidates
+def test_a_bigger_ball_takes_its_tube_and_electrode_along():
+    base = fx.scene_with().to_dict()["device"]            # d 7, bore 4, outer 5.5, electrode 4
+    follow = followed_geometry(base, {"ball_diameter_mm": 10.0})
+    assert follow == {"tube_inner_radius_mm": 5.5, "electrode_radius_mm": 5.5,
+                      "tube_outer_radius_mm": 7.0}       # clearance 0.5, wall 1.5, no inset
+    # a varied key never follows
+    assert "tube_outer_radius_mm" not in followed_geometry(
+        base, {"ball_diameter_mm": 10.0, "tube_outer_radius_mm": 9.0})
+    assert followed_geometry(base, {"gap_mm": 2.0}) == {}
+
+
+@pytest.mark.slow   # several candidates' dynamics and load scans
+def test_impossible_candidates_are_skipped_with_the_reason_never_a_crash(cache):
+    scene = design_scene(geometry="fixed", vary={"ball_diameter_mm": [5.0, 10.0]})
+    spec = parse_design_section(scene)
+    row = evaluate(scene, spec, {"ball_diameter_mm": 9.0}, cache_dir=cache,
+                   solve=fx.plate_model_solve)
+    assert row["status"] == "skipped"
+    assert "the ball does not fit the tube" in row["reason"]
+    assert math.isnan(row["objective"])
+    # with the follow rule the same ball fits
+    follow = design_scene(vary={"ball_diameter_mm": [5.0, 10.0]})
+    ok = evaluate(follow, parse_design_section(follow), {"ball_diameter_mm": 9.0},
+                  cache_dir=cache, solve=fx.plate_model_solve)
+    assert ok["status"] == "ok" and ok["objective"] > 0
+
+
+def test_a_missed_requirement_costs_no_field_solve(cache):
+    scene = design_scene(require="upper-contact")
+    spec = parse_design_section(scene)
+    solver = fx.CountingSolver()
+    row = evaluate(scene, spec, {"gap_mm": 5.0}, cache_dir=cache, solve=solver)
+    assert row["status"] == "infeasible" and "require = 'upper-contact' not met" in row["reason"]
+    assert solver.calls == 0
+    assert row["upper_contact_fraction"] == 0.0
+
+
+# ---------------------------------------------------------------------------
+# one candidate's score
+def test_power_density_is_the_band_mean_of_the_matched_load_power_per_volume(cache):
+    scene = design_scene()
+    spec = parse_design_section(scene)
+    row = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    assert row["status"] == "ok" and row["field_status"] == "computed"
+    cand = candidate_scene(scene, spec, {"gap_mm": 2.0})
+    volume = cand.device.cell_volume
+    assert row["device_volume_m3"] == pytest.approx(volume)
+    band = row["band_values"]["power_density"]
+    assert row["objective"] == pytest.approx(np.mean(band), rel=1e-12)
+    # the matched load maximises the band's mean power: 20 % either side gives less
+    table = precompute(cand, solve=fx.plate_model_solve)
+    curves = TerminalCurves(table)
+    points = [band_scene(cand, spec, f, a) for f, a in spec.band]
+    dyn = [tf.simulate(p) for p in points]
+    load = row["load_ohm"]
+
+    def mean_density(r):
+        return np.mean([_load_power(p, d, curves, r) for p, d in zip(points, dyn)]) / volume
+    assert mean_density(load) == pytest.approx(row["objective"], rel=1e-9)
+    assert mean_density(load * 1.2) < row["objective"]
+    assert mean_density(load / 1.2) < row["objective"]
+    # the error bar: 3 x (field + surrogate error estimate) of the objective
+    eps = row["field_error"] + row["interpolation_error"]
+    assert row["objective_error"] == pytest.approx(3 * eps * row["objective"])
+
+
+def test_worst_case_aggregate_is_the_smallest_band_value(cache):
+    scene = design_scene(aggregate="min", objective="charge")
+    row = evaluate(scene, parse_design_section(scene), {"gap_mm": 2.0}, cache_dir=cache,
+                   solve=fx.plate_model_solve)
+    band = row["band_values"]["charge"]
+    assert row["objective"] == min(band) and row["objective"] > 0
+    # the charge is the run's Q_SC peak-to-peak at that band point
+    cand = band_scene(candidate_scene(scene, parse_design_section(scene), {"gap_mm": 2.0}),
+                      parse_design_section(scene), 33.0, 1.0e-3)
+    curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve))
+    assert band[1] == pytest.approx(
+        electrical.terminal_peaks(cand, tf.simulate(cand), curves)["Q_sc"], rel=1e-12)
+
+
+def test_a_repeated_geometry_costs_no_field_solve(cache):
+    scene = design_scene(vary={"gap_mm": [1.0, 5.0], "load_ohm": [1e8, 1e12]})
+    spec = parse_design_section(scene)
+    solver = fx.CountingSolver()
+    first = evaluate(scene, spec, {"gap_mm": 2.0, "load_ohm": 1e9}, cache_dir=cache,
+                     solve=solver)
+    calls = solver.calls
+    assert calls > 0 and first["load_ohm"] == 1e9
+    again = evaluate(scene, spec, {"gap_mm": 2.0, "load_ohm": 1e10}, cache_dir=cache,
+                     solve=solver)
+    assert solver.calls == calls and again["field_status"] == "cached"
+    assert again["field_hash"] == first["field_hash"]
+
+
+def test_harvested_power_and_stroke_objectives(cache):
+    scene = design_scene(objective=["harvested_power", "stroke"])
+    spec = parse_design_section(scene)
+    row = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    assert row["objectives"]["harvested_power"]["value"] > 0
+    assert row["objectives"]["stroke"] == {"value": pytest.approx(2e-3), "error": 0.0}
+
+
+def test_the_charge_comes_from_one_function(monkeypatch, cache):
+    """candidate_charge is the one place that sets σ (the breakdown limit goes there)."""
+    from tengfield.design import candidate as module
+
+    scene = design_scene(objective="charge")
+    spec = parse_design_section(scene)
+    base = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    from tengfield.breakdown import scaled_table
+    monkeypatch.setattr(module, "candidate_charge", lambda s, t=None: (s, scaled_table(t, 2.0)))
+    doubled = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    assert doubled["objective"] == pytest.approx(2 * base["objective"], rel=1e-9)
+
+
+# ---------------------------------------------------------------------------
+# the search
+@pytest.mark.slow   # several candidates' dynamics and load scans
+def test_search_is_deterministic_by_seed_and_spends_the_budget(cache):
+    scene = design_scene(candidates=16, batch=4)
+    a = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    b = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    assert [r["values"] for r in a.rows] == [r["values"] for r in b.rows]
+    assert [r["objective"] for r in a.rows] == [r["objective"] for r in b.rows]
+    assert len(a.rows) == 16 and len({tuple(r["values"].items()) for r in a.rows}) == 16
+    assert a.rows[0]["phase"] == "space-filling" and a.rows[-1]["phase"].startswith("refine")
+    c = design(design_scene(candidates=16, batch=4, seed=7), cache_dir=cache,
+               solve=fx.plate_model_solve, jobs=1)
+    assert [r["values"] for r in c.rows] != [r["values"] for r in a.rows]
+    assert a.best == a.rows[a.ranking[0]]
+    assert all(a.best["objective"] >= r["objective"] for r in a.rows if r["status"] == "ok")
+
+
+def test_search_finds_the_largest_full_contact_stroke(cache):
+    """objective = "stroke" with require: the search (boxes shrinking on a feasibility
+    edge) lands within a dense scan's step of the largest stroke that keeps contact."""
+    scene = design_scene(objective="stroke", require="upper-contact", candidates=32, batch=8,
+                         vary={"gap_mm": [0.5, 4.0]})
+    result = design(scene, cache_dir=cache, jobs=1)
+    spec = parse_design_section(scene)
+    scan = np.linspace(0.5, 4.0, 36)
+    feasible = [g for g in scan if evaluate(scene, spec, {"gap_mm": float(g)})["status"] == "ok"]
+    assert result.best is not None
+    assert result.best["values"]["gap_mm"] >= max(feasible) - 0.1 - 1e-9
+    assert result.best["upper_contact_fraction"] == 1.0
+
+
+@pytest.mark.slow   # several candidates' dynamics and load scans
+def test_two_processes_give_the_serial_rows(cache):
+    scene = design_scene(candidates=8, batch=4)
+    serial = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    pooled = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=2)
+    strip = ("wall_s", "field_status")
+    assert [{k: v for k, v in r.items() if k not in strip} for r in pooled.rows] == \
+        [{k: v for k, v in r.items() if k not in strip} for r in serial.rows]
+
+
+@pytest.mark.slow   # several candidates' dynamics and load scans
+def test_tf_design_is_the_api_and_the_outputs_are_complete(tmp_path, cache):
+    scene = design_scene(candidates=8, batch=4,
+                         vary={"gap_mm": [1.0, 5.0], "ball_diameter_mm": [5.0, 10.0]})
+    result = tf.design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    assert isinstance(result, tf.design.DesignResult)
+    written = write_design_outputs(result, tmp_path)
+    assert {p.name for p in written} == {"design.csv", "design.json", "best.toml", "design.png"}
+    rows = list(csv.DictReader(open(tmp_path / "design.csv")))
+    assert len(rows) == 8
+    for column in ("gap_mm", "ball_diameter_mm", "power_density_W_per_m3",
+                   "power_density_at_33hz_0.75mm", "power_density_at_33hz_1mm", "regimes",
+                   "upper_contact_fraction", "reason", "status"):
+        assert column in rows[0]
+    summary = json.loads((tmp_path / "design.json").read_text())
+    best = summary["best"]
+    assert {"gap_mm", "ball_diameter_mm", "objective", "objective_error"} <= set(best)
+    assert best["objective"] == result.best["objective"]
+    assert summary["ranking"][0]["index"] == best["index"]
+    assert summary["settings"]["candidates"] == 8 and summary["wall_time_s"] > 0
+    assert set(summary["cost_per_candidate_s"]) >= {"field", "dynamics", "circuit"}
+    # best.toml is a scene with the best geometry, its followed tube and the matched load
+    again = tf.load_scene(tmp_path / "best.toml")
+    assert again.device.stroke == pytest.approx(best["gap_mm"] * 1e-3)
+    assert again.device.ball_diameter == pytest.approx(best["ball_diameter_mm"] * 1e-3)
+    assert again.device.tube_inner_radius == pytest.approx(
+        (best["ball_diameter_mm"] / 2 + 0.5) * 1e-3)
+    assert again.circuit.kind == "load" and again.circuit.load == pytest.approx(
+        best["load_ohm"], rel=1e-5)
+    assert "design" not in again.raw
+    assert (tmp_path / "design.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow   # several candidates' dynamics and load scans
+def test_two_objectives_give_a_pareto_plot(tmp_path, cache):
+    scene = design_scene(candidates=8, batch=4, objective=["power_density", "charge"])
+    result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    front = result.pareto()
+    assert result.ranking[0] in front
+    write_design_outputs(result, tmp_path)
+    assert json.loads((tmp_path / "design.json").read_text())["pareto"]
+    assert (tmp_path / "design.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+@pytest.mark.field
+def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
+    """[device] surface_charge_uC_per_m2 = "breakdown": each candidate runs at -sigma_max of
+    its own geometry (the limit `tengfield breakdown` reports for that scene), so Q_SC is
+    the breakdown-limited charge; the two strokes get different limits."""
+    from tengfield.breakdown import obtain_breakdown_table, scene_breakdown
+    from tengfield.design import candidate_scene
+
+    scene = design_scene(objective="charge").with_values(
+        device={"surface_charge_uC_per_m2": "breakdown"})
+    spec = parse_design_section(scene)
+    rows = [evaluate(scene, spec, {"gap_mm": gap}, cache_dir=tmp_path) for gap in (2.0, 4.0)]
+    limits = []
+    for gap, row in zip((2.0, 4.0), rows):
+        assert row["status"] == "ok", row["reason"]
+        cand = candidate_scene(scene, spec, {"gap_mm": gap})
+        table, _ = obtain_breakdown_table(cand, cache_dir=tmp_path)
+        sigma_max = scene_breakdown(cand, table).sigma_max
+        assert row["surface_charge_uC_per_m2"] == pytest.approx(-sigma_max * 1e6, rel=1e-12)
+        limits.append(sigma_max)
+    assert limits[0] != pytest.approx(limits[1], rel=1e-3)
