@@ -360,7 +360,9 @@ def _agree(control, mine: _Outcome | None) -> _Outcome | None:
     """Collective on ``control``: the first failing rank's outcome on every rank, after
     rank 0 printed every rank's text (once: a text shared by all ranks untagged, one
     of some ranks tagged with the first of them); None if every rank is fine."""
-    everyone = control.allgather(mine)
+    # plain tuples: a rank started as `python -m tengfield.cli` has the class in __main__
+    everyone = [None if o is None else _Outcome(*o)
+                for o in control.allgather(None if mine is None else tuple(mine))]
     failed = [(r, o) for r, o in enumerate(everyone) if o is not None and (o.code or o.text)]
     if control.rank == 0:
         said = set()
@@ -378,6 +380,17 @@ def _agree(control, mine: _Outcome | None) -> _Outcome | None:
 
 
 def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
+    try:
+        return _agreed_run(parser, argv, world)
+    except BaseException as exc:      # noqa: BLE001 - a fault of the agreement itself:
+        text = _outcome_of(exc).text or f"tengfield: error: {type(exc).__name__}"
+        print(_on_rank(text, world.rank, world.size), file=sys.stderr)
+        sys.stderr.flush()            # the others may wait for this rank: end them all
+        world.Abort(1)
+        raise
+
+
+def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
     from ._mpi import FAILURE_GRACE_S, all_arrived
 
     control = world.Dup()   # the agreement's own: it never meets a command's collectives
