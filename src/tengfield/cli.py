@@ -192,8 +192,10 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     """One process (under mpirun -n N > 1: :func:`_main_under_mpirun`)."""
     if hasattr(args, "jobs"):   # before any output directory is made
         from ._mpi import check_jobs
+        from ._pool import start_early
         from .commands._common import world_if_parallel
         check_jobs(args.jobs, world_if_parallel())
+        start_early(args.jobs)   # the worker pool's server loads while the input is read
     action = _output_option(parser, args.command)
     target = getattr(args, action.dest, None) if action is not None else None
     if target is None:
