@@ -3,8 +3,9 @@
 One place for the start method of every pool (``tengfield map``'s regime map, ``sweep``
 and ``report``'s task lists, an ``[array]``'s cells), :func:`pool_context`:
 
-* ``fork`` when it is safe: the calling process has one thread and has not initialised
-  MPI (a plain ``tengfield map`` or ``sweep`` with a cached surrogate). The workers start
+* ``fork`` when it is safe (:func:`start_method`): the calling process has one thread
+  and has not initialised MPI (a plain ``tengfield map`` or ``sweep`` with a cached
+  surrogate; the CLI turns tqdm's monitor thread off for this). The workers start
   at once, with the compiled kernels the caller already loaded.
 * ``forkserver`` otherwise. Forking a process that has other threads (MPI's progress
   threads, a progress bar's monitor, a test runner's) can deadlock the child: Python
@@ -45,8 +46,19 @@ def _mpi_initialised() -> bool:
 
 
 def start_method() -> str:
-    """``fork`` if forking this process now is safe, else ``forkserver``."""
-    return "fork" if _threads() == 1 and not _mpi_initialised() else "forkserver"
+    """``fork`` if forking this process now is safe, else ``forkserver``.
+
+    Safe: no Python thread but this one, MPI not initialised and, on Python 3.12+,
+    one thread as the OS counts them (Python's own test). Before 3.12 a BLAS library's
+    native worker threads (a pip numpy's OpenBLAS, fork-safe through its own atfork
+    handlers) do not count, as they never did for these pools."""
+    import threading
+
+    if threading.active_count() > 1 or _mpi_initialised():
+        return "forkserver"
+    if sys.version_info >= (3, 12) and _threads() > 1:
+        return "forkserver"
+    return "fork"
 
 
 def pool_context(method: str | None = None):

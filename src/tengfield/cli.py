@@ -139,6 +139,11 @@ def configure_output() -> None:
         logging.getLogger(noisy).setLevel(logging.ERROR)
     logging.captureWarnings(False)
     warnings.showwarning = _showwarning
+    try:   # no progress-bar monitor thread: a worker pool may fork this process
+        import tqdm   # (tengfield._pool forks only a process with one thread)
+        tqdm.tqdm.monitor_interval = 0
+    except ImportError:   # pragma: no cover - a dependency
+        pass
 
 
 # -- output locations ------------------------------------------------------------------
