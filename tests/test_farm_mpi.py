@@ -250,18 +250,43 @@ def test_one_process_commands_under_mpirun_are_refused_once(tmp_path, cli_comman
     assert not out.exists()
 
 
-@pytest.mark.parametrize("rank, lines", [("0", 1), ("1", 0)])
+class _TwinWorld:
+    """A stand-in for ``MPI.COMM_WORLD`` of rank ``rank`` out of two whose other rank
+    does exactly the same (its allgather repeats this rank's value)."""
+
+    size = 2
+
+    def __init__(self, rank: int):
+        self.rank = rank
+        self.barriers = 0
+
+    def Dup(self):
+        return self
+
+    def allgather(self, value):
+        return [value] * self.size
+
+    def Barrier(self):
+        self.barriers += 1
+
+    def Abort(self, code):
+        raise AssertionError(f"Abort({code})")
+
+
+@pytest.mark.parametrize("rank, lines", [(0, 1), (1, 0)])
 @pytest.mark.parametrize("command", [["dynamics"], ["fit", "--targets", "V_pp_V=4.2"]])
 def test_one_process_commands_see_the_launcher(tmp_path, monkeypatch, capsys, rank, lines,
                                                command):
-    """The check reads the launcher's environment (no MPI initialised): rank 0 alone says
-    why, every rank exits 2 before any output directory exists."""
-    from tengfield.cli import main
+    """The check reads the launcher's environment: rank 0 alone says why, after a barrier
+    every rank exits 2 before any output directory exists."""
+    from tengfield import cli
 
+    world = _TwinWorld(rank)
+    monkeypatch.setattr(cli, "_launched_world", lambda: world)
     monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
-    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", rank)
     out = tmp_path / "out"
-    assert main([*command, "-o", str(out)]) == 2
+    assert cli.main([*command, "-o", str(out)]) == 2
+    assert world.barriers == 1      # nobody exits before rank 0 has written
     err = capsys.readouterr().err.splitlines()
     assert len(err) == lines and all("start it without mpirun" in e for e in err)
     assert not out.exists()

@@ -7,8 +7,8 @@ and ``Abort`` (``None`` means a serial run without MPI).
 from __future__ import annotations
 
 import os
-
 import sys
+import time
 import traceback
 from typing import Any, Callable, Sequence
 
@@ -54,6 +54,31 @@ def abort_with_message(comm, message: str, code: int = 2) -> None:
     sys.stderr.write(f"tengfield: error on rank {rank_of(comm)} of {size_of(comm)}: {message}\n")
     sys.stderr.flush()
     comm.Abort(code)
+
+
+#: Seconds a rank that failed on its own waits for the others to reach the end of the
+#: command (:func:`all_arrived`) before it aborts them: long enough for ranks that fail
+#: alike (the same bad value) to agree on one message, short enough not to look hung.
+FAILURE_GRACE_S = 5.0
+
+
+def all_arrived(comm, timeout: float | None = None) -> bool:
+    """Wait until every rank of ``comm`` calls this (a non-blocking barrier, polled
+    with short sleeps, so a waiting rank leaves its core to the others).
+
+    True once all have arrived; False if ``timeout`` seconds passed first (the
+    caller then aborts: a rank that never comes is blocked elsewhere, e.g. in a
+    collective call of the command on another communicator).
+    """
+    request = comm.Ibarrier()
+    deadline = None if timeout is None else time.monotonic() + timeout
+    pause = 1e-3
+    while not request.Test():
+        if deadline is not None and time.monotonic() >= deadline:
+            return False
+        time.sleep(pause)
+        pause = min(2 * pause, 0.05)
+    return True
 
 
 def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,

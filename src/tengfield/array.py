@@ -144,8 +144,10 @@ def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
             if jobs <= 1 or n < 8:
                 return _simulate_block((scene, draws, impacts))
             from concurrent.futures import ProcessPoolExecutor
+
+            from ._pool import pool_context
             blocks = _blocks(draws, 4 * jobs)
-            with ProcessPoolExecutor(jobs) as pool:
+            with ProcessPoolExecutor(jobs, mp_context=pool_context()) as pool:
                 parts = [done(p) for p in pool.map(_simulate_block,
                                                    [(scene, b, impacts) for b in blocks])]
     finally:

@@ -13,6 +13,10 @@ What every command gets from here, without code of its own:
 * bad input (:class:`~tengfield.errors.TengfieldError`) is one line
   ``tengfield: error: ...`` and exit 2; an I/O fault (full disk, ...) one line
   and exit 1; Ctrl-C ``tengfield: interrupted`` and exit 130;
+* under ``mpirun -n N`` (N > 1) the ranks agree on the input before any output
+  directory exists and on the outcome at the end: rank 0 prints a bad input or an
+  error once, every rank exits with the same code, and a failure on one rank alone
+  ends every rank within seconds (:func:`_main_under_mpirun`);
 * only tengfield's own lines on stderr: library logging (ffcx/setuptools JIT
   ``INFO:root:running build_ext`` and compiler lines) is silenced below
   warnings, and warnings print as ``tengfield: warning: ...``; VTK renders
@@ -27,7 +31,9 @@ import logging
 import os
 import re
 import sys
+import traceback
 import warnings
+from typing import NamedTuple
 
 from . import __version__
 from .errors import TengfieldError
@@ -135,6 +141,11 @@ def configure_output() -> None:
         logging.getLogger(noisy).setLevel(logging.ERROR)
     logging.captureWarnings(False)
     warnings.showwarning = _showwarning
+    try:   # no progress-bar monitor thread: a worker pool may fork this process
+        import tqdm   # (tengfield._pool forks only a process with one thread)
+        tqdm.tqdm.monitor_interval = 0
+    except ImportError:   # pragma: no cover - a dependency
+        pass
 
 
 # -- output locations ------------------------------------------------------------------
@@ -156,14 +167,6 @@ def _mpi_size() -> int:
         if value and value.isdigit():
             return int(value)
     return 1
-
-
-def _mpi_rank() -> int:
-    for key in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
-        value = os.environ.get(key)
-        if value and value.isdigit():
-            return int(value)
-    return 0
 
 
 class _PathRewriter(io.TextIOBase):
@@ -193,30 +196,22 @@ class _PathRewriter(io.TextIOBase):
 
 
 def _run_command(parser: argparse.ArgumentParser, args) -> int:
-    if _mpi_size() > 1 and getattr(args, "one_process", None):
-        # one process's work: N ranks would each do it and write the same files at once
-        if _mpi_rank() == 0:
-            print(f"tengfield: error: tengfield {args.command} runs on one process "
-                  f"({args.one_process}): start it without mpirun", file=sys.stderr)
-        return 2
+    """One process (under mpirun -n N > 1: :func:`_main_under_mpirun`)."""
     if hasattr(args, "jobs"):   # before any output directory is made
         from ._mpi import check_jobs
+        from ._pool import start_early
         from .commands._common import world_if_parallel
         check_jobs(args.jobs, world_if_parallel())
+        start_early(args.jobs)   # the worker pool's server loads while the input is read
     action = _output_option(parser, args.command)
     target = getattr(args, action.dest, None) if action is not None else None
     if target is None:
         return int(args.func(args) or 0)
-    from .outputs import StagedOutput, ensure_directory, ensure_file_parent
+    from .outputs import StagedOutput, ensure_file_parent
 
     option = action.option_strings[0]
     if action.metavar == "FILE":
         ensure_file_parent(target, option)
-        return int(args.func(args) or 0)
-    if _mpi_size() > 1:
-        # under mpirun every rank runs this: check/create only, the command's
-        # rank 0 writes (no staging across ranks)
-        ensure_directory(target, option)
         return int(args.func(args) or 0)
     staged = StagedOutput(target, option=option)
     staging = str(staged.open())
@@ -247,6 +242,8 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
 def main(argv: list[str] | None = None) -> int:
     configure_output()
     parser = build_parser()
+    if _mpi_size() > 1:
+        return _main_under_mpirun(parser, argv, _launched_world())
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
@@ -263,6 +260,197 @@ def main(argv: list[str] | None = None) -> int:
         where = f": {_STAGING_IN_PATH.sub('', str(exc.filename))}" if exc.filename else ""
         print(f"tengfield: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 1
+
+
+# -- under mpirun -n N (N > 1) -----------------------------------------------------------
+# Every rank runs main(). The ranks agree (collectively, on a communicator of their own)
+# on the outcome at three points: the input (arguments, --jobs, the scene file), the
+# output location, and the end of the command. Rank 0 alone prints what went wrong, once,
+# every rank exits with the same code only after rank 0 has written (Open MPI 5's
+# launcher drops a rank's last lines if another rank exits first), and a bad input leaves
+# no output directory. A rank that fails on its own while the others are blocked in the
+# command's collective calls prints its error and aborts them all after
+# _mpi.FAILURE_GRACE_S seconds (never a hang).
+class _Outcome(NamedTuple):
+    """How one rank ended a step: exit code and the text main() prints ('' = none)."""
+
+    code: int
+    text: str = ""
+    stream: str = "stderr"
+
+
+def _launched_world():
+    """``MPI.COMM_WORLD`` (initialises MPI); tests put a stand-in here."""
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD
+
+
+def _outcome_of(exc: BaseException) -> _Outcome:
+    """What the one-process main() prints and returns for ``exc``."""
+    if isinstance(exc, TengfieldError):
+        return _Outcome(2, f"tengfield: error: {exc}")
+    if isinstance(exc, KeyboardInterrupt):
+        return _Outcome(130, "tengfield: interrupted")
+    if isinstance(exc, OSError):
+        where = f": {_STAGING_IN_PATH.sub('', str(exc.filename))}" if exc.filename else ""
+        return _Outcome(1, f"tengfield: error: {exc.strerror or exc}{where}")
+    if isinstance(exc, SystemExit):
+        if exc.code is None or isinstance(exc.code, int):
+            return _Outcome(int(exc.code or 0))
+        return _Outcome(1, str(exc.code))
+    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)).rstrip()
+    return _Outcome(1, text)
+
+
+def _on_rank(text: str, rank: int, size: int) -> str:
+    """``text`` said by rank ``rank`` (printed by rank 0)."""
+    tag = f"on rank {rank} of {size}"
+    for prefix in ("tengfield: error: ", "tengfield: interrupted"):
+        if text.startswith(prefix):
+            return f"{prefix.rstrip(': ')} {tag}: {text[len(prefix):]}".rstrip(": ")
+    return f"tengfield: error {tag}:\n{text}"
+
+
+def _parse_quietly(parser: argparse.ArgumentParser, argv):
+    """``parser.parse_args(argv)``; what argparse prints and exits with (usage, --help)
+    is kept as an :class:`_Outcome` for rank 0 to print, not printed by every rank."""
+    import contextlib
+
+    out, err = io.StringIO(), io.StringIO()
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            args = parser.parse_args(argv)
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+        if out.getvalue():
+            return None, _Outcome(code, out.getvalue().rstrip("\n"), "stdout")
+        return None, _Outcome(code, err.getvalue().rstrip("\n"))
+    if not getattr(args, "func", None):
+        return None, _Outcome(2, parser.format_help().rstrip("\n"), "stdout")
+    return args, None
+
+
+def _check_input(args, world) -> None:
+    """Everything a rank can check before any output exists (raises TengfieldError)."""
+    from ._mpi import check_jobs
+
+    if getattr(args, "one_process", None):
+        # one process's work: N ranks would each do it and write the same files at once
+        raise TengfieldError(f"tengfield {args.command} runs on one process "
+                             f"({args.one_process}): start it without mpirun")
+    if hasattr(args, "jobs"):
+        check_jobs(args.jobs, world)
+    if getattr(args, "scene", None) is not None:
+        from .scene import load_scene
+
+        load_scene(args.scene)    # every command's first step: a missing or bad file
+
+
+def _missing_directories(path) -> list:
+    """``path`` and those of its parents that do not exist yet, deepest first."""
+    p, missing = os.path.abspath(path), []
+    while not os.path.lexists(p) and os.path.dirname(p) != p:
+        missing.append(p)
+        p = os.path.dirname(p)
+    return missing
+
+
+def _remove_if_empty(directories) -> None:
+    """Remove the directories this run created (deepest first) while they are empty."""
+    for d in directories:
+        try:
+            os.rmdir(d)
+        except OSError:
+            return
+
+
+def _agree(control, mine: _Outcome | None) -> _Outcome | None:
+    """Collective on ``control``: the first failing rank's outcome on every rank, after
+    rank 0 printed every rank's text (once: a text shared by all ranks untagged, one
+    of some ranks tagged with the first of them); None if every rank is fine."""
+    # plain tuples: a rank started as `python -m tengfield.cli` has the class in __main__
+    everyone = [None if o is None else _Outcome(*o)
+                for o in control.allgather(None if mine is None else tuple(mine))]
+    failed = [(r, o) for r, o in enumerate(everyone) if o is not None and (o.code or o.text)]
+    if control.rank == 0:
+        said = set()
+        for r, o in failed:
+            if not o.text or o.text in said:
+                continue
+            said.add(o.text)
+            alike = all(x is not None and x.text == o.text for x in everyone)
+            text = o.text if r == 0 or alike else _on_rank(o.text, r, control.size)
+            print(text, file=sys.stdout if o.stream == "stdout" else sys.stderr)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    control.Barrier()     # nobody exits before rank 0 has written
+    return failed[0][1] if failed else None
+
+
+def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
+    try:
+        return _agreed_run(parser, argv, world)
+    except BaseException as exc:      # noqa: BLE001 - a fault of the agreement itself:
+        text = _outcome_of(exc).text or f"tengfield: error: {type(exc).__name__}"
+        print(_on_rank(text, world.rank, world.size), file=sys.stderr)
+        sys.stderr.flush()            # the others may wait for this rank: end them all
+        world.Abort(1)
+        raise
+
+
+def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
+    from ._mpi import FAILURE_GRACE_S, all_arrived
+
+    control = world.Dup()   # the agreement's own: it never meets a command's collectives
+    created: list = []
+    args, mine = None, None
+    try:
+        args, mine = _parse_quietly(parser, argv)
+        if mine is None:
+            _check_input(args, world)
+    except BaseException as exc:      # noqa: BLE001 - every rank must reach _agree
+        mine = _outcome_of(exc)
+    action = _output_option(parser, args.command) if args is not None else None
+    target = getattr(args, action.dest, None) if action is not None else None
+    if target is not None:     # before any rank creates it (that follows the agreement)
+        file = action.metavar == "FILE"
+        created = _missing_directories((os.path.dirname(str(target)) or ".") if file
+                                       else target)
+    failed = _agree(control, mine)
+    if failed is not None:
+        return failed.code
+    if target is not None:
+        from .outputs import ensure_directory, ensure_file_parent
+
+        option = action.option_strings[0]
+        try:   # every rank: a node-local path must exist where each rank looks
+            (ensure_file_parent if action.metavar == "FILE" else ensure_directory)(target,
+                                                                                   option)
+        except BaseException as exc:  # noqa: BLE001
+            mine = _outcome_of(exc)
+        failed = _agree(control, mine)
+        if failed is not None:
+            _remove_if_empty(created)
+            return failed.code
+    try:
+        code = int(args.func(args) or 0)
+        mine = _Outcome(code) if code else None
+    except BaseException as exc:      # noqa: BLE001
+        mine = _outcome_of(exc)
+    if not all_arrived(control, None if mine is None else FAILURE_GRACE_S):
+        # the others are blocked in the command (waiting for this rank): say why, end all
+        _remove_if_empty(created)
+        if mine.text:
+            print(_on_rank(mine.text, world.rank, world.size), file=sys.stderr)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        world.Abort(mine.code or 1)
+    failed = _agree(control, mine)
+    if failed is not None:
+        _remove_if_empty(created)
+        return failed.code
+    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -62,7 +62,7 @@ def _sweep_task(args):
 
 
 def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = None,
-              progress: Callable[[int], None] | None = None, mp_context: str = "spawn") -> list:
+              progress: Callable[[int], None] | None = None, mp_context: str | None = None) -> list:
     """``[work(task) for task in tasks]``, in order, spread over the workers at hand.
 
     * ``comm`` with more than one rank (``mpirun -n N``): the MPI task farm
@@ -70,13 +70,13 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
       whole list, an exception on any rank aborts all ranks with its message);
       ``jobs`` must be None or 1 (:func:`tengfield._mpi.check_jobs`).
     * otherwise ``jobs`` worker processes (default: all cores; ``work`` and
-      the tasks must be picklable, ``mp_context`` "spawn" is safe after
-      MPI/dolfinx initialisation), or a plain loop for one job or one task.
+      the tasks must be picklable; ``mp_context``: a start method, default
+      tengfield's one, :func:`tengfield._pool.pool_context`), or a plain loop for
+      one job or one task.
 
     ``progress(n)``: called with the number of further tasks done (rank 0 only
     under MPI). Used by :func:`sweep`; ``tengfield map`` can use it too.
     """
-    import multiprocessing
     import os
     from concurrent.futures import ProcessPoolExecutor
 
@@ -94,8 +94,8 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
             if progress is not None:
                 progress(1)
         return results
-    context = multiprocessing.get_context(mp_context)
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+    from ._pool import pool_context
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=pool_context(mp_context)) as pool:
         for result in pool.map(work, tasks):
             results.append(result)
             if progress is not None:

@@ -9,7 +9,6 @@ default), each running the compiled kernel.
 from __future__ import annotations
 
 import math
-import multiprocessing as mp
 import os
 import sys
 from dataclasses import dataclass
@@ -184,8 +183,8 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
             for task in tasks:
                 store(_chunk(task))
         else:
-            ctx = mp.get_context("fork")
-            with ctx.Pool(min(jobs, len(tasks))) as pool:
+            from .._pool import pool_context
+            with pool_context().Pool(min(jobs, len(tasks))) as pool:
                 for results in pool.imap_unordered(_chunk, tasks):
                     store(results)
     finally:
