@@ -35,6 +35,14 @@ ENV PATH=/opt/tengfield/bin:$PATH
 # Behind a TLS-intercepting proxy, pass its CA bundle as a build secret:
 #   docker build --secret id=ca-bundle,src=/etc/ssl/certs/ca-certificates.crt .
 # Without the secret pip uses its own certificate store.
+# numba's compiled kernels live in the image (not in the /out volume, which
+# is empty in a new container): `python -m tengfield._warmup` compiles every
+# kernel at build time, so the first `tengfield run` loads them instead of
+# spending about 10 s compiling. numba keys an entry on the CPU: on a CPU
+# other than the build machine's a kernel is compiled once more (as root,
+# into the same directory; a user that cannot write there gets numba's
+# fallback, a cache of its own).
+ENV NUMBA_CACHE_DIR=/opt/tengfield/numba-cache
 ARG PIP_DEFAULT_TIMEOUT=180
 COPY . /tmp/tengfield-src
 RUN --mount=type=secret,id=ca-bundle \
@@ -43,7 +51,8 @@ RUN --mount=type=secret,id=ca-bundle \
  && pip install --no-cache-dir --disable-pip-version-check \
         "$(sh /tmp/tengfield-src/scripts/numpy-requirement)" "/tmp/tengfield-src[field]" \
  && rm -rf /tmp/tengfield-src \
- && tengfield --version
+ && tengfield --version \
+ && python -m tengfield._warmup
 
 # MPI as root inside the container; mpirun -n 2 also on a 1-core host
 # (OpenMPI 4.1 on bookworm reads OMPI_MCA_rmaps_base_oversubscribe, OpenMPI 5
@@ -65,11 +74,11 @@ ENV OMPI_ALLOW_RUN_AS_ROOT=1 \
     MPLBACKEND=Agg \
     PYTHONUNBUFFERED=1
 
-# Outputs go to /out: mount a host directory there. The caches go there too
-# (/out/cache: field surrogates, dolfinx's compiled forms, numba's compiled
-# kernels, matplotlib's font list), so later containers reuse them.
-ENV XDG_CACHE_HOME=/out/cache \
-    NUMBA_CACHE_DIR=/out/cache/numba
+# Outputs go to /out: mount a host directory there. The caches made at run
+# time go there too (/out/cache: field surrogates, dolfinx's compiled forms,
+# matplotlib's font list), so later containers reuse them; numba's kernels
+# are in the image (NUMBA_CACHE_DIR above).
+ENV XDG_CACHE_HOME=/out/cache
 WORKDIR /out
 VOLUME ["/out"]
 ENTRYPOINT ["tengfield"]

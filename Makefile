@@ -30,6 +30,9 @@ $(STAMP): pyproject.toml scripts/install-system.sh scripts/numpy-requirement
 	$(PY) -m pip install -q --disable-pip-version-check "$$(sh scripts/numpy-requirement)" -e ".[dev]"
 	@# a pip h5py (bundled HDF5) would shadow Debian's, which shares dolfinx's HDF5
 	$(PY) -m pip uninstall -y -q h5py 2>/dev/null || true
+	@# compile the numba kernels now (about 30 s), into numba's cache next to
+	@# their sources, so the first `tengfield run` does not pay for it
+	$(PY) -m tengfield._warmup
 	touch $(STAMP)
 
 run: setup
