@@ -28,7 +28,7 @@ import sys
 import time
 
 #: the modules holding ``@njit(cache=True)`` kernels
-KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.motion3d._kernel",
+KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.dynamics.motion3d._kernel",
                   "tengfield.harvest", "tengfield.array")
 
 _SHORT_3D = """

@@ -1,7 +1,7 @@
 """Whether the ball is off the axis, and its radial motion: what the (z, r) surrogate
 needs of a 3D trajectory.
 
-These belong to the 3D motion (:mod:`tengfield.motion3d`) and stay here until that
+These belong to the 3D motion (:mod:`tengfield.dynamics.motion3d`) and stay here until that
 package takes them; they read a trajectory and never import it.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ def _radial_rate(x, y, vx, vy) -> tuple[np.ndarray, np.ndarray]:
 
 
 def radial_motion(motion, times=None) -> tuple[np.ndarray, np.ndarray]:
-    """``(r, dr/dt)`` [m], [m/s] of a :class:`tengfield.motion3d.Motion3DResult` at its
+    """``(r, dr/dt)`` [m], [m/s] of a :class:`tengfield.dynamics.motion3d.Motion3DResult` at its
     output samples, or exactly at ``times`` [s] (``motion.sample3d``); dr/dt = 0 on
     the axis. Anything without lateral motion (a 1-D DynamicsResult) gives zeros."""
     if times is not None:
