@@ -55,22 +55,43 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
 
 def _load_waveforms(scene, dynamics, curves, window_start) -> dict:
     """:func:`load_waveforms` on the run's own axis (``window_start`` after the origin)."""
-    t = elapsed_times(dynamics)
-    origin = time_origin(dynamics)
     n_cells = scene.device.cells
     c_p = scene.circuit.parallel_capacitance
     load = scene.circuit.load
-    window_start = t[0] if window_start is None else window_start
     if curves is None:
-        zero = np.zeros_like(t)
-        return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(), "mean_power_W": 0.0,
-                "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
-                "stored_energy_change_J": 0.0, "integration_points": int(t.size),
-                "time_constant_s": 0.0}
+        return no_charge(dynamics)
+    c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
+    grid, fine, output_index = fine_terminal(scene, dynamics, curves, load * c_min)
+    response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
+    delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+    stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+    return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
+            "P_load": response.power[output_index],
+            **window_energies(dynamics, grid, window_start, response.power, delivered, stored),
+            "integration_points": int(grid.size),
+            "time_constant_s": load * (float(np.max(curves.capacitance_samples)) * n_cells + c_p)}
+
+
+def no_charge(dynamics) -> dict:
+    """The load numbers of a run with Q_SC = 0: nothing moves."""
+    zero = np.zeros_like(elapsed_times(dynamics))
+    return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(), "mean_power_W": 0.0,
+            "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
+            "stored_energy_change_J": 0.0, "integration_points": int(zero.size),
+            "time_constant_s": 0.0}
+
+
+def fine_terminal(scene, dynamics, curves, time_constant: float):
+    """``(grid, terminal, output_index)``: the integration grid of a load on the run's own
+    axis (the output times, every impact twice with its pre- and post-impact velocity,
+    :func:`relaxation_times` of ``time_constant`` [s] after the start and each impact),
+    the terminal waveforms there (:func:`scene_terminal_waveforms`) and the indices of
+    the output samples in it."""
+    t = elapsed_times(dynamics)
+    origin = time_origin(dynamics)
     impacts = impact_elapsed(dynamics, t[0], t[-1])
     output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
-    extra = relaxation_times(np.concatenate([[t[0]], impacts]), load * c_min, output_step, t[-1])
+    extra = relaxation_times(np.concatenate([[t[0]], impacts]), time_constant, output_step, t[-1])
     gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
     gap_extra, vel_extra, _ = (sample_elapsed(dynamics, extra) if extra.size
                                else (np.empty(0),) * 3)
@@ -86,22 +107,23 @@ def _load_waveforms(scene, dynamics, curves, window_start) -> dict:
     output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
     fine = scene_terminal_waveforms(scene, curves, gap, vel,
                                     *_radial(dynamics, curves, origin + grid))
-    response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
-    delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
-    stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+    return grid, fine, output_index
+
+
+def window_energies(dynamics, grid, window_start, dissipated_power, delivered_power,
+                    stored_energy) -> dict:
+    """Mean power and the energy books of a load over the window after ``window_start``
+    (the run's own axis; None: the whole run): trapezoidal sums on ``grid``."""
+    window_start = elapsed_times(dynamics)[0] if window_start is None else window_start
     in_window = grid >= window_start
     t_window = grid[in_window]
     window_length = t_window[-1] - t_window[0] if t_window.size > 1 else 0.0
-    dissipated = float(trapezoid(response.power[in_window], t_window))
-    stored_window = stored[in_window]
-    return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
-            "P_load": response.power[output_index],
-            "mean_power_W": dissipated / window_length if window_length > 0 else 0.0,
-            "delivered_energy_J": float(trapezoid(delivered[in_window], t_window)),
+    dissipated = float(trapezoid(dissipated_power[in_window], t_window))
+    stored_window = stored_energy[in_window]
+    return {"mean_power_W": dissipated / window_length if window_length > 0 else 0.0,
+            "delivered_energy_J": float(trapezoid(delivered_power[in_window], t_window)),
             "dissipated_energy_J": dissipated,
-            "stored_energy_change_J": float(stored_window[-1] - stored_window[0]),
-            "integration_points": int(grid.size),
-            "time_constant_s": load * (float(np.max(curves.capacitance_samples)) * n_cells + c_p)}
+            "stored_energy_change_J": float(stored_window[-1] - stored_window[0])}
 
 
 def steady_load(scene, dynamics, curves) -> dict:
