@@ -29,11 +29,10 @@ def test_every_entry_is_a_circuit_with_known_keys():
 
 
 def test_no_kind_chains_outside_the_registry():
-    # pipeline, array, io, sweep and fit ask the entry, not `circuit.kind == ...`
-    for name in ("pipeline.py", "array.py", "io.py", "sweep.py", "fit/_model.py"):
+    # pipeline, array, io and sweep ask the entry, not `circuit.kind == ...`
+    for name in ("pipeline.py", "array.py", "io.py", "sweep.py"):
         text = (SRC / name).read_text()
-        assert 'kind == "rectifier"' not in text and 'kind == "load"' not in text \
-            or name == "fit/_model.py", name
+        assert "circuit.kind ==" not in text and "kind == \"rectifier\"" not in text, name
 
 
 def test_the_scene_layer_does_not_import_electrical():
