@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import circuit, electrical
+from . import electrical
 from .errors import SceneError
 
 #: cell-samples evaluated per chunk of the electrical stage (bounds the memory)
@@ -279,26 +279,7 @@ def _identical(scaled, nominal, curves, trajectory, n) -> dict:
     waves = electrical.scene_waveforms(scaled, dyn, curves)
     out = {"columns": waves, "summary": {},
            "peaks": electrical.terminal_peaks(scaled, dyn, curves, waves)}
-    kind = scaled.circuit.kind
-    mask, _ = electrical.steady_window(waves["time_s"], scaled)
-    if kind == "load" and curves is not None:
-        load = electrical.steady_load(scaled, dyn, curves)
-        waves.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
-                      "P_load_W": load["P_load"]})
-        out.update(value=load["mean_power_W"], reference_value=load["mean_power_W"],
-                   compared="mean load power [W]", output=load["P_load"],
-                   reference=load["P_load"], label="P_load [W]", load=load)
-    elif kind == "rectifier" and curves is not None:
-        rect = electrical.rectifier_waveforms(scaled, dyn, curves)
-        waves.update({c: rect[c] for c in electrical.RECTIFIER_COLUMNS})
-        energy = float(rect["fine"].store_input[-1])
-        out.update(value=energy, reference_value=energy,
-                   compared="energy into the store(s) [J]", output=rect["E_store_J"],
-                   reference=rect["E_store_J"], label="E_store [J]", fine=rect["fine"])
-    else:
-        p2p = circuit.peak_to_peak(waves["Q_sc_C"][mask])
-        out.update(value=p2p, reference_value=p2p, compared="Q_SC peak-to-peak [C]",
-                   output=waves["Q_sc_C"], reference=waves["Q_sc_C"], label="Q_SC [C]")
+    out.update(electrical.circuit_for(scaled).array_identical(scaled, dyn, curves, waves))
     return out
 
 
@@ -356,10 +337,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     the run's own axis (``nominal``'s elapsed times), ``impacts``: each trajectory's
     impact times on that axis."""
     from .dynamics.impact import TrajectoryBundle
-    from .harvest import Harvester
 
-    kind = scene.circuit.kind
-    connection = scene.array.connection
     n = float(np.sum(weights))
     c_p = scene.circuit.parallel_capacitance
     g = len(trajectories)
@@ -369,21 +347,8 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     window, _ = electrical.steady_window(t, scene)
     basis = np.where(window, np.exp(-1j * scene.excitation.omega * t), 0.0)
     fundamental = np.zeros(g, dtype=complex)
-    rect_cols = {c: np.empty(t.size) for c in electrical.RECTIFIER_COLUMNS}
-    rectifying = kind == "rectifier"
-    if rectifying:
-        electrical.check_store_resolution(scene)
-    options = electrical.harvester_options(scene) if rectifying else None
-    harvesters = ref_harvester = None
-    origin = electrical.time_origin(nominal)
-    if rectifying:
-        bare = dict(options, parallel_capacitance=0.0, time_origin=origin)
-        if connection == "rectified-per-cell":
-            harvesters = [Harvester(1, **bare) for _ in range(g)]
-        else:
-            harvesters = [Harvester(g if connection == "rectified-parallel" else 1, **bare)]
-        ref_harvester = Harvester(1, **bare)
-    parts, ref_parts = [], []
+    wired = electrical.circuit_for(scene).spread(scene, t, weights,
+                                                 electrical.time_origin(nominal))
     bundle = TrajectoryBundle(trajectories)      # every cell sampled in one call per chunk
     for lo in range(0, t.size, rows):
         times = t[lo:lo + rows]
@@ -395,35 +360,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
             sums[key][block] = value @ weights
         for key, value in zip(("Q", "C", "I"), (rq, rc, ri)):
             ref[key][block] = value[:, 0] * n
-        if not rectifying:
-            continue
-        if connection == "parallel":
-            res = harvesters[0].advance(times, sums["Q"][block], sums["C"][block] + c_p)
-            store = (res.store_voltage, res.store_current, res.stored_energy,
-                     res.chip_on.astype(float))
-            parts.append(_store_only(res))
-        elif connection == "rectified-parallel":
-            res = harvesters[0].advance(times, q * weights, c * weights + c_p * weights)
-            store = (res.store_voltage, res.store_current, res.stored_energy,
-                     res.chip_on.astype(float))
-            parts.append(_store_only(res))
-        else:
-            results = [h.advance(times, q[:, j], c[:, j] + c_p) for j, h in enumerate(harvesters)]
-            w = weights / n
-            store = (sum(r.store_voltage * wj for r, wj in zip(results, w)),
-                     sum(r.store_current * wj for r, wj in zip(results, weights)),
-                     sum(r.stored_energy * wj for r, wj in zip(results, weights)),
-                     sum(r.chip_on * wj for r, wj in zip(results, w)))
-            parts[:] = [results]             # only the last chunk's ends are used
-        for col, value in zip(electrical.RECTIFIER_COLUMNS, store):
-            rect_cols[col][block] = value
-        if connection == "parallel":            # N x one cell, C_p once across them
-            ref_q, ref_c = rq[:, 0] * n, rc[:, 0] * n + c_p
-        elif connection == "rectified-parallel":  # N cells with C_p each, one store
-            ref_q, ref_c = rq[:, 0] * n, (rc[:, 0] + c_p) * n
-        else:                                     # one cell into its own store (x N below)
-            ref_q, ref_c = rq[:, 0], rc[:, 0] + c_p
-        ref_parts.append(ref_harvester.advance(times, ref_q, ref_c))
+        wired.chunk(block, times, q, c, sums, rq[:, 0], rc[:, 0])
     mask, _ = electrical.steady_window(t, scene)
     gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
     columns = {"time_s": np.asarray(nominal.t, dtype=float), "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
@@ -432,46 +369,9 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     out = {"columns": columns, "fundamental": fundamental,
            "summary": {"grid": "output samples (no per-cell impact instants)"},
            "peaks": _spread_peaks(scene, curves, bundle, weights, impacts, t, columns)}
-    if kind == "load":
-        load = scene.circuit.load
-        resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
-        ref_resp = circuit.load_response(t, ref["Q"], ref["I"], ref["C"], load, c_p)
-        columns.update({"V_load_V": resp.voltage, "I_load_A": resp.current,
-                        "P_load_W": resp.power})
-        length = t[mask][-1] - t[mask][0]
-        power = float(electrical.trapezoid(resp.power[mask], t[mask]) / length)
-        ref_power = float(electrical.trapezoid(ref_resp.power[mask], t[mask]) / length)
-        out.update(value=power, reference_value=ref_power, compared="mean load power [W]",
-                   output=resp.power, reference=ref_resp.power, label="P_load [W]",
-                   load={"mean_power_W": power, "V_load": resp.voltage, "I_load": resp.current})
-        out["summary"]["mean_load_power_W"] = power
-    elif rectifying:
-        columns.update(rect_cols)
-        ref_fine = electrical.concat_results(ref_parts)
-        ref_energy = float(ref_fine.store_input[-1]) * (n if connection == "rectified-per-cell"
-                                                        else 1.0)
-        if connection == "rectified-per-cell":
-            energy = float(sum(parts[-1][j].store_input[-1] * weights[j] for j in range(g)))
-            books = [r.balance() for r in parts[-1]]
-            electrical.warn_numerical_dissipation(
-                {k: float(sum(b[k] * w for b, w in zip(books, weights)))
-                 for k in ("delivered_J", "numerical_dissipation_J")})
-            fine = None
-            ref_curve = ref_fine.stored_energy * n
-        else:
-            fine = electrical.concat_results(parts)
-            energy = float(fine.store_input[-1])
-            ref_curve = ref_fine.stored_energy
-            out["summary"]["rectifier"] = electrical.rectifier_summary(scene, fine,
-                                                                       float(t[mask][0]))
-        out.update(value=energy, reference_value=ref_energy,
-                   compared="energy into the store(s) [J]", output=rect_cols["E_store_J"],
-                   reference=ref_curve, label="E_store [J]", fine=fine)
-    else:
-        p2p = circuit.peak_to_peak(sums["Q"][mask])
-        ref_p2p = circuit.peak_to_peak(ref["Q"][mask])
-        out.update(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
-                   output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
+    compared = wired.finish(sums, ref, columns, mask)
+    out["summary"].update(compared.pop("summary", {}))
+    out.update(compared)
     return out
 
 
@@ -514,13 +414,6 @@ def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
                 low[key] = min(low[key], float(np.min(value)))
                 high[key] = max(high[key], float(np.max(value)))
     return {k: high[k] - low[k] for k in names}
-
-
-def _store_only(res):
-    """A chunk's HarvestResult without its (rows, cells) arrays: an array run keeps only
-    the store's 1-D record, never N x samples."""
-    empty = np.empty((res.time.size, 0))        # not a view: the chunk's memory is freed
-    return dataclasses.replace(res, voltage=empty, bridge_charge=empty.copy())
 
 
 def _phases(scene, curves, trajectories, t) -> np.ndarray:

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ._json import jsonable
-from .electrical import LOAD_COLUMNS, RECTIFIER_COLUMNS, WAVEFORM_COLUMNS
+from .electrical import WAVEFORM_COLUMNS, all_columns
 
 #: format of a time column: every double round-trips
 TIME_FORMAT = "%.17g"
@@ -87,9 +87,9 @@ def write_json(path: str | Path, data) -> Path:
 # ---------------------------------------------------------------------------
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
-    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS``,
-    ``RECTIFIER_COLUMNS`` if present)."""
-    columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS + RECTIFIER_COLUMNS if c in waveforms]
+    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ the circuit's columns present,
+    in the registry's order: :func:`tengfield.electrical.all_columns`)."""
+    columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
     data = np.column_stack([waveforms[c] for c in columns])
     np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="",
                fmt=[TIME_FORMAT] + [VALUE_FORMAT] * (len(columns) - 1))

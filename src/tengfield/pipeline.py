@@ -24,7 +24,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import circuit, electrical
+from . import electrical
 from ._json import jsonable as _jsonable
 from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
@@ -97,7 +97,7 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     simulate = simulate or _default_simulate()
     if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
         check_field(scene)                # before the dynamics, not after
-    electrical.check_store_resolution(scene)   # a store the step cannot resolve: refuse now
+    electrical.circuit_for(scene).check(scene)   # e.g. a store the step cannot resolve
 
     start = time.perf_counter()
     dynamics = simulate(scene)
@@ -157,48 +157,19 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         return _run_array(scene, dynamics, curves, table, stages, comm, progress)
 
     start = time.perf_counter()
+    entry = electrical.circuit_for(scene)
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
-    load = None
-    if scene.circuit.kind == "load":
-        load = electrical.steady_load(scene, dynamics, curves)
-        waveforms.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
-                          "P_load_W": load["P_load"]})
-        delivered = load["delivered_energy_J"]
-        residual = delivered - load["dissipated_energy_J"] - load["stored_energy_change_J"]
-        stages["circuit"] = Stage("ran", f"load ODE, R = {scene.circuit.load:g} ohm",
-                                  time.perf_counter() - start,
-                                  {"energy_balance_relative_residual":
-                                   abs(residual) / max(abs(delivered), 1e-300)})
-    elif scene.circuit.kind == "rectifier":
-        if curves is None:
-            stages["circuit"] = Stage("skipped", "Q_SC = 0: nothing to rectify",
-                                      time.perf_counter() - start)
-            zero = np.zeros_like(waveforms["time_s"])
-            waveforms.update({c: zero.copy() for c in electrical.RECTIFIER_COLUMNS})
-        else:
-            rect = electrical.rectifier_waveforms(scene, dynamics, curves)
-            waveforms.update({c: rect[c] for c in electrical.RECTIFIER_COLUMNS})
-            books = rect["fine"].balance()
-            stages["circuit"] = Stage(
-                "ran", f"full bridge ({scene.circuit.diode}) into "
-                f"{scene.circuit.storage_capacitance * 1e6:g} uF, pmic = {scene.circuit.pmic!r}",
-                time.perf_counter() - start,
-                {"integration_points": int(rect["fine"].time.size),
-                 "energy_balance_relative_residual": max(
-                     books["terminal_residual"], books["bridge_residual"],
-                     books["store_residual"])})
-    else:
-        stages["circuit"] = Stage("ran", f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
-                                  "closed form; load ODE not run (no load)",
-                                  time.perf_counter() - start)
+    ran = entry.run(scene, dynamics, curves)
+    waveforms.update(ran.columns)
+    stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start, ran.details)
     peaks = electrical.terminal_peaks(scene, dynamics, curves, waveforms)
-    summary = _summary(scene, dynamics, waveforms, load, stages, table,
+    summary = _summary(scene, dynamics, waveforms, stages, table,
                        peaks={column: peaks[name]
-                              for name, column in electrical.PEAK_QUANTITIES.items()})
+                              for name, column in electrical.PEAK_QUANTITIES.items()},
+                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask))
     extras = {}
     if curves is not None:
-        extras = _energy_per_cycle(scene, dynamics, curves, waveforms, load,
-                                   rect if scene.circuit.kind == "rectifier" else None)
+        extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
         summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
     if table is not None:
         _breakdown_summary(summary, scene, hashed, limit)
@@ -208,46 +179,18 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     return result
 
 
-def _energy_per_cycle(scene, dynamics, curves, waveforms, load, rect) -> dict:
-    """Summary blocks ``energy_per_cycle`` (CMEO bound, FOM_S, the V-Q loop areas of
-    the last period for the resistive load ``[circuit] load_ohm`` and, for a
-    rectifier, the bridge) and ``rectifier``; ``_vq`` holds the loops for vq.png."""
+def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:
+    """Summary block ``energy_per_cycle`` (CMEO bound, FOM_S) with what the circuit
+    adds to it (:meth:`tengfield.electrical.Circuit.cycle`: its V-Q loops, ``_vq`` for
+    vq.png, further blocks such as ``rectifier``)."""
     t = electrical.elapsed_times(dynamics)     # the run's own axis: exact step lengths
     mask, _ = electrical.steady_window(t, scene)
     max_gap = float(np.max(np.asarray(dynamics.gap, dtype=float)[mask]))
     out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
-    period = scene.excitation.period
-    if load is None and rect is None:
-        return out                       # open/short circuit: the CMEO bound only
-    if load is None:                     # a rectifier run: the resistive loop to compare
-        load = electrical.steady_load(scene, dynamics, curves)
-    last = electrical.last_period(t, period)
-    v_load = np.asarray(load["V_load"])[last]
-    q_load = _cumulative(t[last], np.asarray(load["I_load"])[last])
-    vq = {"load": (q_load, v_load, electrical.loop_area(v_load, q_load))}
-    out["energy_per_cycle"].update({
-        "load_ohm": scene.circuit.load,
-        "load_loop_area_J": vq["load"][2],
-        "load_mean_power_times_period_J": load["mean_power_W"] * period})
-    if rect is not None:
-        fine = rect["fine"]
-        fine_last = electrical.last_period(fine.time, period)
-        v = fine.voltage[fine_last, 0]
-        q = fine.bridge_charge[fine_last, 0]
-        vq["rectifier"] = (q - q[0], v, electrical.loop_area(v, q))
-        out["energy_per_cycle"]["rectifier_loop_area_J"] = vq["rectifier"][2]
-        start = float(t[mask][0])
-        out["rectifier"] = electrical.rectifier_summary(scene, fine, start, curves, max_gap)
-        out["_fine"] = fine
-    out["_vq"] = vq
+    added = entry.cycle(scene, dynamics, curves, ran, t, mask, max_gap)
+    out["energy_per_cycle"].update(added.pop("energy_per_cycle", {}))
+    out.update(added)
     return out
-
-
-def _cumulative(t, current):
-    """∫ I dt [C] from the first sample (trapezoidal)."""
-    q = np.zeros_like(t)
-    q[1:] = np.cumsum(0.5 * (current[1:] + current[:-1]) * np.diff(t))
-    return q
 
 
 def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunResult:
@@ -264,18 +207,15 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
         f"[circuit] kind = {scene.circuit.kind!r}", time.perf_counter() - start,
         {"dynamics_wall_time_s": block["dynamics_wall_time_s"],
          "distinct_dynamics": block["distinct_dynamics"]})
-    t = electrical.elapsed_times(dynamics)
-    mask, _ = electrical.steady_window(t, scene)
     peaks = dict(arr.peaks)      # the one rule: samples and every cell's impact instants
-    summary = _summary(scene, dynamics, waveforms, None, stages, table,
+    summary = _summary(scene, dynamics, waveforms, stages, table,
                        peaks={column: peaks[name]
-                              for name, column in electrical.PEAK_QUANTITIES.items()})
+                              for name, column in electrical.PEAK_QUANTITIES.items()},
+                       circuit_blocks=lambda mask: electrical.no_load(scene))
     summary["cells"] = scene.array.cells
     if arr.load is not None:
         summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
         summary.pop("load_reason", None)
-    if arr.fine is not None and rect is None:
-        rect = electrical.rectifier_summary(scene, arr.fine, float(t[mask][0]))
     if rect is not None:
         summary["rectifier"] = rect
     summary["array"] = block
@@ -305,7 +245,9 @@ def _needs_field(scene, gap) -> tuple[bool, str]:
     return True, ""
 
 
-def _summary(scene, dynamics, waveforms, load, stages, table, *, peaks) -> dict:
+def _summary(scene, dynamics, waveforms, stages, table, *, peaks, circuit_blocks) -> dict:
+    """summary.json; ``circuit_blocks(mask)``: the circuit's ``load`` block (and
+    ``load_reason``) over the steady window ``mask``."""
     t = waveforms["time_s"]
     mask, window_reason = electrical.steady_window(t, scene)
     summary: dict[str, Any] = {
@@ -329,25 +271,5 @@ def _summary(scene, dynamics, waveforms, load, stages, table, *, peaks) -> dict:
     }
     if table is not None:
         summary["surrogate_error_estimate"] = table.interpolation_error
-    if load is not None:
-        volume = scene.device.cell_volume * scene.device.cells
-        power = load["mean_power_W"]
-        summary["load"] = {
-            "mean_power_W": power,
-            "device_volume_m3": volume,
-            "power_density_W_per_m3": power / volume,
-            "V_load_peak_to_peak_V": circuit.peak_to_peak(waveforms["V_load_V"][mask]),
-            "I_load_peak_to_peak_A": circuit.peak_to_peak(waveforms["I_load_A"][mask]),
-            "energy_balance_J": {k: load[k] for k in ("delivered_energy_J", "dissipated_energy_J",
-                                                      "stored_energy_change_J")},
-            "integration_points": load["integration_points"],
-            "time_constant_s": load["time_constant_s"],
-            "settled": bool(5.0 * load["time_constant_s"] <= float(t[mask][0] - t[0])),
-            "settled_rule": "5 R (C_T + C_p) <= settle time before the window; otherwise the "
-                            "window still holds the load's start-up transient (longer run or "
-                            "more settle_periods)",
-        }
-    else:
-        summary["load"] = None
-        summary["load_reason"] = f"[circuit] kind = {scene.circuit.kind!r}: no load to report"
+    summary.update(circuit_blocks(mask))
     return _jsonable(summary)

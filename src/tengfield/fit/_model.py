@@ -1,7 +1,8 @@
 """The forward model of a fit: one surrogate, dynamics re-run only when needed.
 
 The ONLY place :mod:`tengfield.fit` imports the electrical helpers
-(``terminal_waveforms``, ``load_waveforms``, ``extreme_times``).
+(``terminal_waveforms``, ``load_waveforms``, and the one peak rule: ``extreme_times``,
+``extremes``, ``steady_start``).
 
 Electrostatics is linear in the ball's charge: Q_SC, I_SC and every voltage
 scale with σ while C_T does not. The surrogate is obtained once at a
@@ -17,7 +18,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..electrical import extreme_times, load_waveforms, terminal_waveforms
+from ..electrical import (extreme_times, extremes, load_waveforms, steady_start,
+                          terminal_waveforms)
 from ..surrogate import OnAxisCurves
 
 #: quantities a fit compares, with the waveform key per circuit kind
@@ -82,8 +84,8 @@ class ForwardModel:
         self.reference_sigma = float(reference_sigma)
         self.simulate = simulate or _default_simulate()
         period = scene.excitation.period
-        self.window_start = scene.initial.time + scene.run.settle_periods * period
-        self.duration = scene.run.settle_periods * period + span + period
+        self.window_start = scene.initial.time + steady_start(scene)
+        self.duration = steady_start(scene) + span + period
         self.sample_rate = float(sample_rate or max(scene.run.sample_rate, 200.0 / period))
         self._cache: OrderedDict = OrderedDict()
         self.dynamics_runs = 0
@@ -169,12 +171,11 @@ class ForwardModel:
         """Peak-to-peak and peak |x| of V, Q, I over the steady window [SI].
 
         Samples: the dynamics' own output grid in the window plus just before and
-        after every impact (where I_SC jumps and takes its extremes).
+        after every impact (where I_SC jumps and takes its extremes): the rule of
+        :func:`tengfield.electrical.terminal_peaks` (:func:`~tengfield.electrical.extremes`).
         """
         grid = extreme_times(self.scene, self.dynamics(values), self.window_start)
-        wave = self.waveforms(values, grid)
         out = {}
-        for q, x in wave.items():
-            out[f"{q}_pp"] = float(np.max(x) - np.min(x))
-            out[f"{q}_peak"] = float(np.max(np.abs(x)))
+        for q, x in self.waveforms(values, grid).items():
+            out[f"{q}_pp"], out[f"{q}_peak"] = extremes(x)
         return out

@@ -302,6 +302,7 @@ class Circuit:
     pmic_efficiency: float = 0.9
     pmic_quiescent_current: float = 450e-9     # [A]
     pmic_shunt: float = 20.0                   # [V]
+    series_capacitance: float = 100e-12        # [F] (kind = "series-rc")
 
     def __post_init__(self):
         check_section("circuit", self, "Circuit")

@@ -183,10 +183,14 @@ SCHEMA: dict[str, dict[str, Key]] = {
     # kind = "rectifier": harvesting electronics (issue #11; tengfield.harvest); the
     # chip's defaults are the LTC3588-1's (docs/harvest.md)
     "circuit": {
-        "kind": Key("kind", str, "open", None, _choice("open", "short", "load", "rectifier")),
+        "kind": Key("kind", str, "open", None,
+                    _choice("open", "short", "load", "rectifier", "series-rc")),
         "load_ohm": Key("load", float, 1.0e8, 1.0,
                         _rng(1e-3, 1e18, why="1 mohm to 1 Eohm: the load integrator's tested span")),
         "parallel_capacitance_pF": Key("parallel_capacitance", float, 0.0, 1e-12, _rng(0.0, 1e9)),
+        # kind = "series-rc": C_s in series with load_ohm
+        "series_capacitance_pF": Key("series_capacitance", float, 100.0, 1e-12,
+                                     _rng(1e-6, 1e18, why="1 aF to 1 MF")),
         "reference": Key("reference", str, "floating", None, _choice("floating", "grounded-lower")),
         "diode": Key("diode", str, "ideal", None, _choice("ideal", "shockley")),
         "diode_forward_voltage_V": Key("diode_forward_voltage", float, 0.0, 1.0, _rng(0.0, 100.0)),

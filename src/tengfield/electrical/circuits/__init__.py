@@ -1,0 +1,150 @@
+"""The circuit registry: one entry per ``[circuit] kind``, one module per entry.
+
+:data:`CIRCUITS` maps each kind to its :class:`Circuit`. A module of this package
+that defines ``CIRCUIT`` (or ``CIRCUITS``, a tuple) is an entry: the package finds
+it by itself, so a new circuit kind is one new module here (+ its key(s) in
+:mod:`tengfield.scene.schema` and the ``Circuit`` dataclass, and its tests and
+docs). Every place that used to ask ``scene.circuit.kind == ...`` asks the entry:
+
+* :func:`tengfield.pipeline.run`: :meth:`Circuit.check` before the dynamics,
+  :meth:`Circuit.run` (its ``columns`` of ``waveforms.csv`` and its stage text),
+  :meth:`Circuit.summary` (the ``load`` block), :meth:`Circuit.cycle` (the
+  energy-per-cycle numbers, its V-Q loops and further summary blocks);
+* :mod:`tengfield.array`: :meth:`Circuit.array_identical` (cells without
+  spread) and :meth:`Circuit.spread` (cells with their own dynamics);
+* :mod:`tengfield.io`: :func:`all_columns` (the column order of waveforms.csv).
+
+The scene layer cannot import this package (it is lower): ``[circuit] kind``'s
+choices are a plain tuple in the schema, and a test holds them equal to
+:data:`CIRCUITS`.
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass, field
+from typing import Any
+
+from ... import circuit as _circuit
+from ..waveforms import steady_window
+
+
+@dataclass
+class CircuitRun:
+    """What one circuit did along a run: its ``columns`` of ``waveforms.csv`` at the
+    output samples, the stage (``status`` "ran" or "skipped", ``reason``, ``details``)
+    and ``data``, the entry's own record for its summary and cycle blocks."""
+    columns: dict
+    reason: str
+    details: dict = field(default_factory=dict)
+    status: str = "ran"
+    data: Any = None
+
+
+class Circuit:
+    """One ``[circuit] kind``. The base class is a circuit with nothing to integrate
+    (the terminal's closed forms); entries override what they add."""
+    #: the ``[circuit] kind`` value
+    name: str = ""
+    #: columns this kind adds to ``waveforms.csv`` (SI units in the names)
+    columns: tuple[str, ...] = ()
+    #: ``[circuit]`` keys (file names) this kind reads besides ``kind``,
+    #: ``parallel_capacitance_pF`` and ``reference`` (docs, scene checks)
+    keys: tuple[str, ...] = ()
+
+    # -- one run -------------------------------------------------------------
+    def check(self, scene) -> None:
+        """Refuse a scene this circuit cannot run, before any work (SceneError)."""
+
+    def run(self, scene, dynamics, curves) -> CircuitRun:
+        """The circuit along ``dynamics`` (``curves`` None: Q_SC = 0)."""
+        return CircuitRun({}, f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
+                              "closed form; load ODE not run (no load)")
+
+    def summary(self, scene, run: CircuitRun, waveforms, mask) -> dict:
+        """The ``load`` block of summary.json (and ``load_reason`` when there is none);
+        ``mask``: the steady window over the output samples."""
+        return no_load(scene)
+
+    def cycle(self, scene, dynamics, curves, run: CircuitRun, t, mask, max_gap) -> dict:
+        """What this circuit adds to the energy per cycle: ``energy_per_cycle`` (numbers
+        beside the CMEO bound), ``_vq`` (the V-Q loops of vq.png), ``_fine`` (the
+        record of charging.png) and further summary blocks. ``t``: the output times on
+        the run's own axis, ``mask`` its steady window, ``max_gap`` [m] the largest
+        gap in it."""
+        return {}
+
+    # -- arrays (tengfield.array) -------------------------------------------
+    def array_identical(self, scaled, dynamics, curves, waves) -> dict:
+        """An array without spread (``scaled``: one cell with [device] cells = N): adds
+        this kind's columns to ``waves`` and returns what array.png compares (``value``,
+        ``reference_value``, ``compared``, ``output``, ``reference``, ``label``), and
+        ``load``, ``fine``, ``summary`` blocks where the kind has them."""
+        mask, _ = steady_window(waves["time_s"], scaled)
+        p2p = _circuit.peak_to_peak(waves["Q_sc_C"][mask])
+        return dict(value=p2p, reference_value=p2p, compared="Q_SC peak-to-peak [C]",
+                    output=waves["Q_sc_C"], reference=waves["Q_sc_C"], label="Q_SC [C]")
+
+    def spread(self, scene, t, weights, origin) -> "SpreadCircuit":
+        """The circuit of an array whose cells have their own dynamics, fed chunk by
+        chunk (:class:`SpreadCircuit`); ``t``: the output times on the run's own axis,
+        ``weights``: each distinct cell's count, ``origin``: the run's time origin."""
+        return SpreadCircuit(scene, t, weights)
+
+
+class SpreadCircuit:
+    """The circuit of an array with spread: :meth:`chunk` sees every chunk of output
+    times (the cells' Q_SC, C_T as (rows, cells) arrays and N x the nominal cell's),
+    :meth:`finish` the sums and returns what array.png compares (as
+    :meth:`Circuit.array_identical`). The base compares the Q_SC peak-to-peak."""
+
+    def __init__(self, scene, t, weights):
+        self.scene, self.t, self.weights = scene, t, weights
+
+    def chunk(self, block, times, q, c, sums, ref_q, ref_c) -> None:
+        """One chunk of rows ``block`` at ``times``: per-cell ``q``, ``c``; ``sums`` the
+        array's Q, C, I so far; ``ref_q``, ``ref_c`` of one nominal cell."""
+
+    def finish(self, sums, ref, columns, mask) -> dict:
+        """What array.png compares; may add columns to ``columns``."""
+        p2p = _circuit.peak_to_peak(sums["Q"][mask])
+        ref_p2p = _circuit.peak_to_peak(ref["Q"][mask])
+        return dict(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
+                    output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
+
+
+def no_load(scene) -> dict:
+    """summary.json's blocks of a run with no load to report."""
+    return {"load": None,
+            "load_reason": f"[circuit] kind = {scene.circuit.kind!r}: no load to report"}
+
+
+def _discover() -> dict[str, Circuit]:
+    found: dict[str, Circuit] = {}
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        entries = getattr(module, "CIRCUITS", None) or (
+            (module.CIRCUIT,) if hasattr(module, "CIRCUIT") else ())
+        for entry in entries:
+            if entry.name in found:
+                raise RuntimeError(f"circuit kind {entry.name!r} registered twice")
+            found[entry.name] = entry
+    return found
+
+
+#: ``[circuit] kind`` -> its :class:`Circuit` (every module of this package that has one)
+CIRCUITS: dict[str, Circuit] = _discover()
+
+
+def circuit_for(scene) -> Circuit:
+    """The registry entry of ``scene``'s ``[circuit] kind``."""
+    return CIRCUITS[scene.circuit.kind]
+
+
+def all_columns() -> list[str]:
+    """Every circuit's extra ``waveforms.csv`` columns, once each, in registry order
+    (the order waveforms.csv writes those present)."""
+    out: list[str] = []
+    for entry in CIRCUITS.values():
+        out += [c for c in entry.columns if c not in out]
+    return out

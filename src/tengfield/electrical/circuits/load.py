@@ -1,0 +1,232 @@
+"""``[circuit] kind = "load"``: a resistor R (``load_ohm``) across the terminal and C_p.
+
+The load ODE along a trajectory with impacts (:func:`load_waveforms`: the
+exponential integrator of :func:`tengfield.circuit.load_response` on a grid
+refined at every impact), its summary block (mean power, energy balance), the
+resistive V-Q loop of vq.png (also drawn beside a rectifier's) and the array's
+load (the cells' terminals in parallel into one R).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ... import circuit
+from ..cycle import cumulative, last_period, loop_area
+from ..waveforms import (_impact_states, _radial, elapsed_times, impact_elapsed, sample_elapsed,
+                         scene_terminal_waveforms, steady_window, time_origin, trapezoid)
+from . import Circuit, CircuitRun, SpreadCircuit
+
+#: extra columns of ``waveforms.csv`` when a load is connected
+LOAD_COLUMNS = ["V_load_V", "I_load_A", "P_load_W"]
+
+
+def relaxation_times(starts, time_constant: float, output_step: float, end: float) -> np.ndarray:
+    """Extra integration times after each jump of I_SC: ``start + τ 2^(k/4)``, k = -16..24.
+
+    The load voltage relaxes in ``τ = R (C_T + C_p)`` after an impact; when τ
+    is not resolved by the output step these points let the trapezoidal
+    energy sums (mean power, energy balance) see the transient. Only offsets
+    below 4 output steps are used (longer transients are already resolved).
+    """
+    offsets = time_constant * 2.0 ** (np.arange(-16, 25) / 4.0)
+    offsets = offsets[offsets < 4.0 * output_step]
+    if offsets.size == 0 or len(starts) == 0:
+        return np.empty(0)
+    extra = (np.asarray(starts, dtype=float)[:, None] + offsets[None, :]).ravel()
+    return extra[extra < end]
+
+
+def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None) -> dict:
+    """V_load [V], I_load [A], P_load [W] at the output samples, mean power and energy balance.
+
+    The load is ``[circuit] load_ohm`` with ``cells`` and C_p of ``scene``.
+    The exponential integrator of :func:`tengfield.circuit.load_response`
+    runs on a fine grid: the output times, every impact time twice (pre- and
+    post-impact velocity, so the jumps of I_SC are exact) and
+    :func:`relaxation_times` after the start and each impact. Energies are
+    trapezoidal sums on that grid over the window after ``window_start`` [s]
+    (default: the whole run); ``mean_power_W`` is the dissipated energy
+    divided by the window length.
+    """
+    origin = time_origin(dynamics)
+    return _load_waveforms(scene, dynamics, curves,
+                           None if window_start is None else window_start - origin)
+
+
+def _load_waveforms(scene, dynamics, curves, window_start) -> dict:
+    """:func:`load_waveforms` on the run's own axis (``window_start`` after the origin)."""
+    n_cells = scene.device.cells
+    c_p = scene.circuit.parallel_capacitance
+    load = scene.circuit.load
+    if curves is None:
+        return no_charge(dynamics)
+    c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
+    grid, fine, output_index = fine_terminal(scene, dynamics, curves, load * c_min)
+    response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
+    delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+    stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+    return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
+            "P_load": response.power[output_index],
+            **window_energies(dynamics, grid, window_start, response.power, delivered, stored),
+            "integration_points": int(grid.size),
+            "time_constant_s": load * (float(np.max(curves.capacitance_samples)) * n_cells + c_p)}
+
+
+def no_charge(dynamics) -> dict:
+    """The load numbers of a run with Q_SC = 0: nothing moves."""
+    zero = np.zeros_like(elapsed_times(dynamics))
+    return {"V_load": zero, "I_load": zero.copy(), "P_load": zero.copy(), "mean_power_W": 0.0,
+            "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
+            "stored_energy_change_J": 0.0, "integration_points": int(zero.size),
+            "time_constant_s": 0.0}
+
+
+def fine_terminal(scene, dynamics, curves, time_constant: float):
+    """``(grid, terminal, output_index)``: the integration grid of a load on the run's own
+    axis (the output times, every impact twice with its pre- and post-impact velocity,
+    :func:`relaxation_times` of ``time_constant`` [s] after the start and each impact),
+    the terminal waveforms there (:func:`scene_terminal_waveforms`) and the indices of
+    the output samples in it."""
+    t = elapsed_times(dynamics)
+    origin = time_origin(dynamics)
+    impacts = impact_elapsed(dynamics, t[0], t[-1])
+    output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    extra = relaxation_times(np.concatenate([[t[0]], impacts]), time_constant, output_step, t[-1])
+    gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
+    gap_extra, vel_extra, _ = (sample_elapsed(dynamics, extra) if extra.size
+                               else (np.empty(0),) * 3)
+    grid = np.concatenate([t, impacts, impacts, extra])
+    gap = np.concatenate([np.asarray(dynamics.gap, dtype=float), gap_pre, gap_post, gap_extra])
+    vel = np.concatenate([np.asarray(dynamics.gap_velocity, dtype=float), vel_pre, vel_post,
+                          vel_extra])
+    # equal times: pre-impact (0) before an output sample (1) before post-impact (2)
+    tag = np.concatenate([np.ones(t.size), np.zeros(impacts.size), np.full(impacts.size, 2.0),
+                          np.full(extra.size, 3.0)])
+    order = np.lexsort((tag, grid))
+    grid, gap, vel = grid[order], gap[order], vel[order]
+    output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
+    fine = scene_terminal_waveforms(scene, curves, gap, vel,
+                                    *_radial(dynamics, curves, origin + grid))
+    return grid, fine, output_index
+
+
+def window_energies(dynamics, grid, window_start, dissipated_power, delivered_power,
+                    stored_energy) -> dict:
+    """Mean power and the energy books of a load over the window after ``window_start``
+    (the run's own axis; None: the whole run): trapezoidal sums on ``grid``."""
+    window_start = elapsed_times(dynamics)[0] if window_start is None else window_start
+    in_window = grid >= window_start
+    t_window = grid[in_window]
+    window_length = t_window[-1] - t_window[0] if t_window.size > 1 else 0.0
+    dissipated = float(trapezoid(dissipated_power[in_window], t_window))
+    stored_window = stored_energy[in_window]
+    return {"mean_power_W": dissipated / window_length if window_length > 0 else 0.0,
+            "delivered_energy_J": float(trapezoid(delivered_power[in_window], t_window)),
+            "dissipated_energy_J": dissipated,
+            "stored_energy_change_J": float(stored_window[-1] - stored_window[0])}
+
+
+def steady_load(scene, dynamics, curves) -> dict:
+    """:func:`load_waveforms` with energies over the :func:`steady_window`."""
+    t = elapsed_times(dynamics)
+    mask, _ = steady_window(t, scene)
+    return _load_waveforms(scene, dynamics, curves, t[mask][0])
+
+
+def resistive_loop(scene, load: dict, t, period: float) -> tuple[dict, tuple]:
+    """The energy-per-cycle numbers of the resistive load ``load`` (a :func:`steady_load`)
+    and its V-Q loop over the last period of ``t`` (the run's own axis)."""
+    last = last_period(t, period)
+    v_load = np.asarray(load["V_load"])[last]
+    q_load = cumulative(t[last], np.asarray(load["I_load"])[last])
+    loop = (q_load, v_load, loop_area(v_load, q_load))
+    return {"load_ohm": scene.circuit.load, "load_loop_area_J": loop[2],
+            "load_mean_power_times_period_J": load["mean_power_W"] * period}, loop
+
+
+def load_block(scene, load: dict, waveforms, mask, **extra) -> dict:
+    """summary.json's ``load`` block of a load run (``waveforms``: with the
+    ``LOAD_COLUMNS``; ``mask``: the steady window over its ``time_s``)."""
+    t = waveforms["time_s"]
+    volume = scene.device.cell_volume * scene.device.cells
+    power = load["mean_power_W"]
+    return {
+        "mean_power_W": power,
+        "device_volume_m3": volume,
+        "power_density_W_per_m3": power / volume,
+        "V_load_peak_to_peak_V": circuit.peak_to_peak(waveforms["V_load_V"][mask]),
+        "I_load_peak_to_peak_A": circuit.peak_to_peak(waveforms["I_load_A"][mask]),
+        "energy_balance_J": {k: load[k] for k in ("delivered_energy_J", "dissipated_energy_J",
+                                                  "stored_energy_change_J")},
+        "integration_points": load["integration_points"],
+        "time_constant_s": load["time_constant_s"],
+        "settled": bool(5.0 * load["time_constant_s"] <= float(t[mask][0] - t[0])),
+        "settled_rule": "5 R (C_T + C_p) <= settle time before the window; otherwise the "
+                        "window still holds the load's start-up transient (longer run or "
+                        "more settle_periods)",
+        **extra,
+    }
+
+
+def balance_residual(load: dict) -> float:
+    """|delivered - dissipated - stored change| / |delivered| of a load run."""
+    delivered = load["delivered_energy_J"]
+    residual = delivered - load["dissipated_energy_J"] - load["stored_energy_change_J"]
+    return abs(residual) / max(abs(delivered), 1e-300)
+
+
+class Load(Circuit):
+    name = "load"
+    columns = tuple(LOAD_COLUMNS)
+    keys = ("load_ohm",)
+
+    def run(self, scene, dynamics, curves) -> CircuitRun:
+        load = steady_load(scene, dynamics, curves)
+        return CircuitRun({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
+                           "P_load_W": load["P_load"]},
+                          f"load ODE, R = {scene.circuit.load:g} ohm",
+                          {"energy_balance_relative_residual": balance_residual(load)},
+                          data=load)
+
+    def summary(self, scene, run, waveforms, mask) -> dict:
+        return {"load": load_block(scene, run.data, waveforms, mask)}
+
+    def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
+        numbers, loop = resistive_loop(scene, run.data, t, scene.excitation.period)
+        return {"energy_per_cycle": numbers, "_vq": {"load": loop}}
+
+    def array_identical(self, scaled, dynamics, curves, waves) -> dict:
+        if curves is None:
+            return super().array_identical(scaled, dynamics, curves, waves)
+        load = steady_load(scaled, dynamics, curves)
+        waves.update({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
+                      "P_load_W": load["P_load"]})
+        return dict(value=load["mean_power_W"], reference_value=load["mean_power_W"],
+                    compared="mean load power [W]", output=load["P_load"],
+                    reference=load["P_load"], label="P_load [W]", load=load)
+
+    def spread(self, scene, t, weights, origin):
+        return _SpreadLoad(scene, t, weights)
+
+
+class _SpreadLoad(SpreadCircuit):
+    """The cells' terminals in parallel into one R, on the output samples."""
+
+    def finish(self, sums, ref, columns, mask) -> dict:
+        t = self.t
+        load = self.scene.circuit.load
+        c_p = self.scene.circuit.parallel_capacitance
+        resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
+        ref_resp = circuit.load_response(t, ref["Q"], ref["I"], ref["C"], load, c_p)
+        columns.update({"V_load_V": resp.voltage, "I_load_A": resp.current,
+                        "P_load_W": resp.power})
+        length = t[mask][-1] - t[mask][0]
+        power = float(trapezoid(resp.power[mask], t[mask]) / length)
+        ref_power = float(trapezoid(ref_resp.power[mask], t[mask]) / length)
+        return dict(value=power, reference_value=ref_power, compared="mean load power [W]",
+                    output=resp.power, reference=ref_resp.power, label="P_load [W]",
+                    load={"mean_power_W": power, "V_load": resp.voltage, "I_load": resp.current},
+                    summary={"mean_load_power_W": power})
+
+
+CIRCUIT = Load()

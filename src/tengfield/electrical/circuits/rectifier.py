@@ -1,0 +1,390 @@
+"""``[circuit] kind = "rectifier"``: a full bridge into a store with leakage and an
+optional UVLO chip (:mod:`tengfield.harvest`), along a trajectory.
+
+:func:`rectifier_waveforms` runs the bridge on the output samples and every impact
+instant; :func:`rectifier_summary` the store, chip and energy books over the steady
+window; the entry adds the bridge's V-Q loop beside the resistive one, charging.png's
+record, and the array's three connections (one bridge, a bridge per cell into one
+store, a bridge and store per cell).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..cycle import last_period, loop_area
+from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, steady_window, time_origin
+from . import Circuit, CircuitRun, SpreadCircuit
+from .load import resistive_loop, steady_load
+
+#: extra columns of ``waveforms.csv`` for ``[circuit] kind = "rectifier"``
+RECTIFIER_COLUMNS = ["V_store_V", "I_store_A", "E_store_J", "pmic_on"]
+#: rows per chunk of a rectifier run (times x cells), bounds its memory
+CHUNK_VALUES = 2_000_000
+
+
+def harvester_options(scene) -> dict:
+    """Keyword arguments of :class:`tengfield.harvest.Harvester` from ``[circuit]``
+    (SI): diode, store, leakage (0 in the file: none), the UVLO chip (``pmic``)."""
+    from ...harvest import Diode, PowerChip
+
+    c = scene.circuit
+    diode = Diode(model=c.diode, forward_voltage=c.diode_forward_voltage,
+                  saturation_current=c.diode_saturation_current,
+                  emission_coefficient=c.diode_emission_coefficient,
+                  series_resistance=c.diode_series_resistance)
+    chip = None
+    if c.pmic == "uvlo":
+        chip = PowerChip(uvlo_rising=c.uvlo_rising, uvlo_falling=c.uvlo_falling,
+                         output_voltage=c.pmic_output, load=c.pmic_load,
+                         efficiency=c.pmic_efficiency, quiescent_current=c.pmic_quiescent_current,
+                         shunt_voltage=c.pmic_shunt)
+    return {"storage_capacitance": c.storage_capacitance, "diode": diode,
+            "parallel_capacitance": c.parallel_capacitance,
+            "leakage": c.storage_leakage if c.storage_leakage > 0 else math.inf, "chip": chip}
+
+
+#: numerical_dissipation_J above this fraction of the energy delivered into the bridges
+#: gets a warning (the backward-Euler step moved the store too far per step)
+NUMERICAL_DISSIPATION_WARN = 0.01
+
+
+def smallest_resolved_store(scene) -> float:
+    """Smallest ``[circuit] storage_capacitance_uF`` [F] whose chip bursts the output
+    step resolves (0 without a chip): the energy between the UVLO levels,
+    ``C_L (uvlo_rising^2 - uvlo_falling^2) / 2``, must last at least one step
+    ``1 / sample_rate_hz`` at the chip's largest draw (input power + quiescent current
+    at the shunt voltage). Below it a burst (the chip on, then locked out again) fits
+    inside one step: the store is at 0 at every grid point while the books show shunt
+    and chip energy, and the step's own dissipation is half of what is delivered."""
+    c = scene.circuit
+    if c.kind != "rectifier" or c.pmic != "uvlo":
+        return 0.0
+    step = 1.0 / scene.run.sample_rate
+    draw = c.pmic_output**2 / (c.pmic_load * c.pmic_efficiency) \
+        + c.pmic_quiescent_current * c.pmic_shunt
+    return 2.0 * step * draw / (c.uvlo_rising**2 - c.uvlo_falling**2)
+
+
+def check_store_resolution(scene) -> None:
+    """One-line SceneError when the store is too small for the output step to resolve
+    its chip (:func:`smallest_resolved_store`)."""
+    from ...errors import SceneError
+
+    smallest = smallest_resolved_store(scene)
+    c = scene.circuit
+    if c.storage_capacitance < smallest:
+        raise SceneError(
+            f"[circuit] storage_capacitance_uF = {c.storage_capacitance * 1e6:g} is out of "
+            f"range: with pmic = 'uvlo' at [run] sample_rate_hz = {scene.run.sample_rate:g} "
+            f"allowed >= {smallest * 1e6:.3g} (a chip burst, C_L (uvlo_rising_V^2 - "
+            f"uvlo_falling_V^2)/2 of energy, must last at least one output step; or raise "
+            f"[run] sample_rate_hz)")
+
+
+def warn_numerical_dissipation(books: dict) -> None:
+    """One ``tengfield: warning:`` line when the backward-Euler step's own dissipation
+    (``numerical_dissipation_J`` of ``HarvestResult.balance()``, or the same keys summed
+    over stores) exceeds ``NUMERICAL_DISSIPATION_WARN`` of the delivered energy."""
+    import warnings
+
+    delivered = books.get("delivered_J", 0.0)
+    lost = books.get("numerical_dissipation_J", 0.0)
+    if delivered > 0 and lost > NUMERICAL_DISSIPATION_WARN * delivered:
+        warnings.warn(
+            f"rectifier: numerical_dissipation_J = {lost:.3g} J is {lost / delivered:.1%} of "
+            f"the {delivered:.3g} J delivered into the bridges (> "
+            f"{NUMERICAL_DISSIPATION_WARN:.0%}): the store moves too far per step; raise "
+            f"[run] sample_rate_hz or [circuit] storage_capacitance_uF", RuntimeWarning,
+            stacklevel=3)
+
+
+def rectifier_grid(scene, dynamics) -> tuple[np.ndarray, np.ndarray]:
+    """(grid [s], indices of the output samples in it): the output times and every
+    impact instant (Q_SC(z(t)) has a kink there; the bridge steps end on it), on the
+    run's own axis (:func:`elapsed_times`)."""
+    t = elapsed_times(dynamics)
+    impacts = impact_elapsed(dynamics, t[0], t[-1])
+    impacts = impacts[~np.isin(impacts, t)]
+    grid = np.concatenate([t, impacts])
+    order = np.argsort(grid, kind="stable")
+    return grid[order], np.flatnonzero(order < t.size)
+
+
+def rectifier_waveforms(scene, dynamics, curves) -> dict:
+    """``[device] cells`` identical cells (one bridge for them all: identical cells
+    give the same as one bridge each) charging ``[circuit]``'s store along
+    ``dynamics``. Returns the ``RECTIFIER_COLUMNS`` at the output samples, the
+    :class:`tengfield.harvest.HarvestResult` ``fine`` on the whole grid and the
+    grid's output indices ``output_index``."""
+    from ...harvest import Harvester
+
+    check_store_resolution(scene)
+    grid, output_index = rectifier_grid(scene, dynamics)
+    n = scene.device.cells
+    run = Harvester(1, time_origin=time_origin(dynamics), **harvester_options(scene))
+    rows = max(2, CHUNK_VALUES)
+    parts = []
+    for start in range(0, grid.size, rows):
+        times = grid[start:start + rows]
+        gap, _, _ = sample_elapsed(dynamics, times)
+        q = curves.charge(gap) * n if curves is not None else np.zeros_like(gap)
+        c = curves.capacitance(gap) * n if curves is not None else np.full_like(gap, 1e-12)
+        parts.append(run.advance(times, q, c))
+    fine = concat_results(parts)
+    return {"V_store_V": fine.store_voltage[output_index],
+            "I_store_A": fine.store_current[output_index],
+            "E_store_J": fine.stored_energy[output_index],
+            "pmic_on": fine.chip_on[output_index].astype(float),
+            "fine": fine, "output_index": output_index}
+
+
+def concat_results(parts):
+    """One :class:`tengfield.harvest.HarvestResult` of consecutive chunks."""
+    if len(parts) == 1:
+        return parts[0]
+    fields = {}
+    for f in dataclasses.fields(parts[0]):
+        values = [getattr(p, f.name) for p in parts]
+        fields[f.name] = (np.concatenate(values) if isinstance(values[0], np.ndarray)
+                          else getattr(parts[-1], f.name))
+    fields["initial_terminal_energy"] = parts[0].initial_terminal_energy
+    fields["initial_stored_energy"] = parts[0].initial_stored_energy
+    return type(parts[0])(**fields)
+
+
+def first_crossing(times, values, level: float) -> float:
+    """First time [s] ``values`` reach ``level`` (linear between samples); NaN if never."""
+    v = np.asarray(values, dtype=float)
+    hit = np.flatnonzero(v >= level)
+    if hit.size == 0:
+        return math.nan
+    k = int(hit[0])
+    if k == 0:
+        return float(times[0])
+    v0, v1 = v[k - 1], v[k]
+    return float(times[k - 1] + (level - v0) / (v1 - v0) * (times[k] - times[k - 1]))
+
+
+def _first_of(*times) -> float:
+    """Earliest of the finite ``times`` (a chip that switches on within the step it
+    reached the level may pull the sampled U back below it), NaN if none."""
+    finite = [x for x in times if math.isfinite(x)]
+    return min(finite) if finite else math.nan
+
+
+def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=None) -> dict:
+    """Numbers of a rectifier run (SI): store, time to each UVLO level, chip
+    switching, average harvested power and energy per cycle over the steady
+    window (from ``window_start`` [s] on ``fine.time``, the run's own axis), the
+    energy books and their residuals, and the ideal bridge's saturation voltage
+    (docs/harvest.md). Instants are reported as absolute times (``fine.time_origin``
+    + the time on the run's axis), as in ``waveforms.csv``."""
+    from ...harvest import saturation_voltage
+
+    c = scene.circuit
+    t = fine.time
+    origin = float(getattr(fine, "time_origin", 0.0))
+    period = scene.excitation.period
+    inside = t >= window_start
+    k0 = int(np.flatnonzero(inside)[0]) if inside.any() else 0
+    length = float(t[-1] - t[k0])
+    into_store = float(fine.store_input[-1] - fine.store_input[k0])
+    bridge = float(fine.bridge_energy[-1] - fine.bridge_energy[k0])
+    on = fine.chip_on
+    switch_on = int(np.count_nonzero(on[1:] & ~on[:-1]))
+    switch_off = int(np.count_nonzero(~on[1:] & on[:-1]))
+    dt = np.diff(t)
+    on_time = float(np.sum(dt[on[1:]]))
+    books = fine.balance()
+    warn_numerical_dissipation(books)
+    out = {
+        "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
+        "final_store_voltage_V": float(fine.store_voltage[-1]),
+        "final_stored_energy_J": float(fine.stored_energy[-1]),
+        "max_store_voltage_V": float(np.max(fine.store_voltage)),
+        "time_to_uvlo_falling_V_s": origin + first_crossing(t, fine.store_voltage,
+                                                            c.uvlo_falling),
+        "time_to_uvlo_rising_V_s": origin + _first_of(
+            first_crossing(t, fine.store_voltage, c.uvlo_rising),
+            fine.threshold_times["uvlo_rising_s"]),
+        "uvlo_levels_V": [c.uvlo_falling, c.uvlo_rising],
+        "chip_first_on_s": origin + fine.threshold_times["uvlo_rising_s"],
+        "chip_first_lockout_s": origin + fine.threshold_times["uvlo_falling_s"],
+        "chip_switch_on_count": switch_on, "chip_switch_off_count": switch_off,
+        "chip_duty_cycle": on_time / float(t[-1] - t[0]) if t[-1] > t[0] else 0.0,
+        "chip_output_energy_J": float(fine.chip_input_energy[-1]) * c.pmic_efficiency,
+        "average_harvested_power_W": into_store / length if length > 0 else 0.0,
+        "energy_per_cycle_J": bridge * period / length if length > 0 else 0.0,
+        "window_start_s": origin + float(t[k0]),
+        "energy_books_J": {k: v for k, v in books.items() if k.endswith("_J")},
+        "energy_residuals": {k: v for k, v in books.items() if k.endswith("_residual")},
+        "energy_residuals_rule": "relative to the energy delivered into the bridges; the "
+                                 "backward-Euler step's own dissipation is booked as "
+                                 "numerical_dissipation_J",
+    }
+    if curves is not None and max_gap is not None:
+        n = scene.device.cells
+        q_max = float(curves.charge(max_gap)) * n
+        c_max = float(curves.capacitance(max_gap)) * n + c.parallel_capacitance
+        c_0 = float(curves.capacitance(0.0)) * n + c.parallel_capacitance
+        out["saturation_voltage_V"] = saturation_voltage(abs(q_max), c_max, c_0,
+                                                         c.diode_forward_voltage)
+    return out
+
+
+class Rectifier(Circuit):
+    name = "rectifier"
+    columns = tuple(RECTIFIER_COLUMNS)
+    keys = ("diode", "diode_forward_voltage_V", "diode_saturation_current_A",
+            "diode_emission_coefficient", "diode_series_resistance_ohm",
+            "storage_capacitance_uF", "storage_leakage_ohm", "pmic", "uvlo_rising_V",
+            "uvlo_falling_V", "pmic_output_V", "pmic_load_ohm", "pmic_efficiency",
+            "pmic_quiescent_current_A", "pmic_shunt_V", "load_ohm")
+
+    def check(self, scene) -> None:
+        check_store_resolution(scene)
+
+    def run(self, scene, dynamics, curves) -> CircuitRun:
+        if curves is None:
+            zero = np.zeros_like(np.asarray(dynamics.t, dtype=float))
+            return CircuitRun({c: zero.copy() for c in RECTIFIER_COLUMNS},
+                              "Q_SC = 0: nothing to rectify", status="skipped")
+        rect = rectifier_waveforms(scene, dynamics, curves)
+        books = rect["fine"].balance()
+        c = scene.circuit
+        return CircuitRun(
+            {col: rect[col] for col in RECTIFIER_COLUMNS},
+            f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} uF, "
+            f"pmic = {c.pmic!r}",
+            {"integration_points": int(rect["fine"].time.size),
+             "energy_balance_relative_residual": max(
+                 books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
+            data=rect)
+
+    def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
+        """The resistive load ``[circuit] load_ohm``'s loop to compare, the bridge's loop,
+        summary.json's ``rectifier`` block and charging.png's record."""
+        period = scene.excitation.period
+        numbers, loop = resistive_loop(scene, steady_load(scene, dynamics, curves), t, period)
+        vq = {"load": loop}
+        fine = run.data["fine"]
+        fine_last = last_period(fine.time, period)
+        v = fine.voltage[fine_last, 0]
+        q = fine.bridge_charge[fine_last, 0]
+        vq["rectifier"] = (q - q[0], v, loop_area(v, q))
+        numbers["rectifier_loop_area_J"] = vq["rectifier"][2]
+        start = float(t[mask][0])
+        return {"energy_per_cycle": numbers,
+                "rectifier": rectifier_summary(scene, fine, start, curves, max_gap),
+                "_fine": fine, "_vq": vq}
+
+    def array_identical(self, scaled, dynamics, curves, waves) -> dict:
+        if curves is None:
+            return super().array_identical(scaled, dynamics, curves, waves)
+        rect = rectifier_waveforms(scaled, dynamics, curves)
+        waves.update({c: rect[c] for c in RECTIFIER_COLUMNS})
+        fine = rect["fine"]
+        energy = float(fine.store_input[-1])
+        t = elapsed_times(dynamics)
+        mask, _ = steady_window(t, scaled)
+        return dict(value=energy, reference_value=energy,
+                    compared="energy into the store(s) [J]", output=rect["E_store_J"],
+                    reference=rect["E_store_J"], label="E_store [J]", fine=fine,
+                    summary={"rectifier": rectifier_summary(scaled, fine, float(t[mask][0]))})
+
+    def spread(self, scene, t, weights, origin):
+        return _SpreadRectifier(scene, t, weights, origin)
+
+
+class _SpreadRectifier(SpreadCircuit):
+    """``[array] connection``: "parallel" (the cells' terminals in parallel, one bridge),
+    "rectified-parallel" (a bridge per cell into one store), "rectified-per-cell" (a
+    bridge and store per cell; energies add, V_store is the cells' mean); the reference
+    is N x the nominal cell wired the same way."""
+
+    def __init__(self, scene, t, weights, origin):
+        from ...harvest import Harvester
+
+        super().__init__(scene, t, weights)
+        check_store_resolution(scene)
+        self.connection = connection = scene.array.connection
+        self.g = g = len(weights)
+        self.n = float(np.sum(weights))
+        bare = dict(harvester_options(scene), parallel_capacitance=0.0, time_origin=origin)
+        if connection == "rectified-per-cell":
+            self.harvesters = [Harvester(1, **bare) for _ in range(g)]
+        else:
+            self.harvesters = [Harvester(g if connection == "rectified-parallel" else 1, **bare)]
+        self.ref_harvester = Harvester(1, **bare)
+        self.columns = {c: np.empty(t.size) for c in RECTIFIER_COLUMNS}
+        self.parts, self.ref_parts = [], []
+
+    def chunk(self, block, times, q, c, sums, ref_q, ref_c) -> None:
+        connection, weights, n = self.connection, self.weights, self.n
+        c_p = self.scene.circuit.parallel_capacitance
+        harvesters, parts = self.harvesters, self.parts
+        if connection == "parallel":
+            res = harvesters[0].advance(times, sums["Q"][block], sums["C"][block] + c_p)
+            store = (res.store_voltage, res.store_current, res.stored_energy,
+                     res.chip_on.astype(float))
+            parts.append(_store_only(res))
+        elif connection == "rectified-parallel":
+            res = harvesters[0].advance(times, q * weights, c * weights + c_p * weights)
+            store = (res.store_voltage, res.store_current, res.stored_energy,
+                     res.chip_on.astype(float))
+            parts.append(_store_only(res))
+        else:
+            results = [h.advance(times, q[:, j], c[:, j] + c_p) for j, h in enumerate(harvesters)]
+            w = weights / n
+            store = (sum(r.store_voltage * wj for r, wj in zip(results, w)),
+                     sum(r.store_current * wj for r, wj in zip(results, weights)),
+                     sum(r.stored_energy * wj for r, wj in zip(results, weights)),
+                     sum(r.chip_on * wj for r, wj in zip(results, w)))
+            parts[:] = [results]             # only the last chunk's ends are used
+        for col, value in zip(RECTIFIER_COLUMNS, store):
+            self.columns[col][block] = value
+        if connection == "parallel":            # N x one cell, C_p once across them
+            ref_q, ref_c = ref_q * n, ref_c * n + c_p
+        elif connection == "rectified-parallel":  # N cells with C_p each, one store
+            ref_q, ref_c = ref_q * n, (ref_c + c_p) * n
+        else:                                     # one cell into its own store (x N below)
+            ref_c = ref_c + c_p
+        self.ref_parts.append(self.ref_harvester.advance(times, ref_q, ref_c))
+
+    def finish(self, sums, ref, columns, mask) -> dict:
+        connection, weights, n, parts = self.connection, self.weights, self.n, self.parts
+        columns.update(self.columns)
+        ref_fine = concat_results(self.ref_parts)
+        ref_energy = float(ref_fine.store_input[-1]) * (n if connection == "rectified-per-cell"
+                                                        else 1.0)
+        summary = {}
+        if connection == "rectified-per-cell":
+            energy = float(sum(parts[-1][j].store_input[-1] * weights[j]
+                               for j in range(self.g)))
+            books = [r.balance() for r in parts[-1]]
+            warn_numerical_dissipation(
+                {k: float(sum(b[k] * w for b, w in zip(books, weights)))
+                 for k in ("delivered_J", "numerical_dissipation_J")})
+            fine = None
+            ref_curve = ref_fine.stored_energy * n
+        else:
+            fine = concat_results(parts)
+            energy = float(fine.store_input[-1])
+            ref_curve = ref_fine.stored_energy
+            summary["rectifier"] = rectifier_summary(self.scene, fine, float(self.t[mask][0]))
+        return dict(value=energy, reference_value=ref_energy,
+                    compared="energy into the store(s) [J]", output=self.columns["E_store_J"],
+                    reference=ref_curve, label="E_store [J]", fine=fine, summary=summary)
+
+
+def _store_only(res):
+    """A chunk's HarvestResult without its (rows, cells) arrays: an array run keeps only
+    the store's 1-D record, never N x samples."""
+    empty = np.empty((res.time.size, 0))        # not a view: the chunk's memory is freed
+    return dataclasses.replace(res, voltage=empty, bridge_charge=empty.copy())
+
+
+CIRCUIT = Rectifier()

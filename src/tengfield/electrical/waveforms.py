@@ -1,0 +1,291 @@
+"""The waveform core: the one place that turns z(t) into V_OC, Q_SC, I_SC.
+
+Every consumer (:func:`tengfield.pipeline.run`, :mod:`tengfield.sweep`,
+:mod:`tengfield.array`, :mod:`tengfield.report`, :mod:`tengfield.fit`, the
+demos) calls these functions, so they give the same numbers for the same scene;
+what a circuit does with the terminal is in :mod:`tengfield.electrical.circuits`:
+
+* :func:`terminal_waveforms`: V_OC, Q_SC, I_SC (and C_T) along sampled
+  z(t), ż(t) for ``cells`` identical cells in parallel read through a
+  parallel capacitance C_p;
+* :func:`scene_waveforms`: the same for a dynamics result, with ``cells``
+  and C_p taken from the scene, as the ``waveforms.csv`` columns;
+* :func:`steady_window`: the samples after ``[run] settle_periods`` periods
+  (:func:`steady_start`, the one rule; a DynamicsResult's ``window_start`` is
+  the same instant on the absolute axis);
+* :func:`terminal_peaks`: peak-to-peak V_OC, Q_SC, I_SC over the steady
+  window, over the samples *and* just before/after every impact (where
+  I_SC jumps and takes its extremes); :func:`extreme_times` and
+  :func:`extremes` are the same rule for a model sampled elsewhere (fit).
+
+Units are SI; signs are those of :mod:`tengfield.terminals` (V = V_lower -
+V_upper, charges and currents counted lower -> upper through the external
+circuit, reference state z = 0).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import circuit
+
+#: ∫ y dx by the trapezoidal rule: numpy 2's name (numpy 1 has only ``trapz``, which
+#: numpy 2 deprecates)
+trapezoid = np.trapezoid if hasattr(np, "trapezoid") else np.trapz
+
+#: columns of ``waveforms.csv`` (SI units in the names)
+WAVEFORM_COLUMNS = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m",
+                    "V_oc_V", "Q_sc_C", "I_sc_A"]
+#: the peak-to-peak quantities and their ``waveforms`` column
+PEAK_QUANTITIES = {"V_oc": "V_oc_V", "Q_sc": "Q_sc_C", "I_sc": "I_sc_A"}
+#: the pre-/post-impact states are sampled this many excitation periods from an impact
+IMPACT_OFFSET_PERIODS = 1e-9
+
+
+# ---------------------------------------------------------------------------
+# the run's own time axis
+def time_origin(dynamics) -> float:
+    """``[initial] time_s`` of ``dynamics`` [s] (its ``time_origin``; 0 without one)."""
+    return float(getattr(dynamics, "time_origin", 0.0) or 0.0)
+
+
+def elapsed_times(dynamics) -> np.ndarray:
+    """The output times of ``dynamics`` on the run's own axis, ``t - time_origin`` [s]
+    (exact: ``dynamics.elapsed`` when it has one). Every circuit is integrated on this
+    axis, so its precision does not depend on the absolute time (at t ~ 1.7e9 s the
+    doubles are 2.4e-7 s apart, far coarser than the impact offsets)."""
+    elapsed = getattr(dynamics, "elapsed", None)
+    if elapsed is not None:
+        return np.asarray(elapsed, dtype=float)
+    return np.asarray(dynamics.t, dtype=float) - time_origin(dynamics)
+
+
+def sample_elapsed(dynamics, elapsed):
+    """(gap, gap velocity, table) of ``dynamics`` at ``elapsed`` times [s] after its origin."""
+    sampler = getattr(dynamics, "sample_elapsed", None)
+    if sampler is not None:
+        return sampler(elapsed)
+    return dynamics.sample(np.asarray(elapsed, dtype=float) + time_origin(dynamics))
+
+
+def impact_elapsed(dynamics, start: float, end: float) -> np.ndarray:
+    """:func:`impact_times` on the run's own axis (``start``, ``end`` and the result in
+    seconds after ``time_origin``). The stored impact times are absolute (rounded to the
+    doubles near ``time_origin``); with a non-zero origin each one is put back on the
+    exact velocity jump of the trajectory by bisection over those few ulp."""
+    origin = time_origin(dynamics)
+    if origin == 0.0:
+        return impact_times(dynamics, start, end)
+    absolute = impact_times(dynamics, -math.inf, math.inf)
+    if absolute.size == 0 or not (hasattr(dynamics, "sample")
+                                  or hasattr(dynamics, "sample_elapsed")):
+        return np.empty(0)
+    approx = absolute - origin
+    ulp = np.spacing(np.abs(absolute))
+    lo, hi = np.maximum(approx - ulp, 0.0), approx + ulp
+    _, v_lo, _ = sample_elapsed(dynamics, lo)
+    _, v_hi, _ = sample_elapsed(dynamics, hi)
+    v_lo, v_hi = np.array(v_lo, dtype=float), np.array(v_hi, dtype=float)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        active = (mid > lo) & (mid < hi)
+        if not active.any():
+            break
+        _, v_mid, _ = sample_elapsed(dynamics, mid)
+        before = np.abs(v_mid - v_lo) <= np.abs(v_mid - v_hi)   # mid is before the jump
+        lo = np.where(active & before, mid, lo)
+        v_lo = np.where(active & before, v_mid, v_lo)
+        hi = np.where(active & ~before, mid, hi)
+        v_hi = np.where(active & ~before, v_mid, v_hi)
+    times = np.unique(hi)
+    return times[(times > start) & (times < end)]
+
+
+# ---------------------------------------------------------------------------
+# waveforms
+def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
+                       parallel_capacitance: float = 0.0, radial=None,
+                       radial_velocity=None) -> dict[str, np.ndarray]:
+    """Open-circuit voltage, short-circuit charge and current along a trajectory.
+
+    ``curves``: the :class:`tengfield.surrogate.Curves` of ONE cell, or None when
+    Q_SC is identically zero (then C_T is unknown and NaN). ``gap`` z(t) [m] and
+    ``gap_velocity`` dz/dt [m/s] are samples of the trajectory; ``cells``
+    identical cells are wired in parallel and read through
+    ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V] (= Q_SC / (C_T + C_p),
+    the true V_OC when C_p = 0), ``Q_sc`` [C], ``I_sc`` = (dQ_SC/dz) dz/dt [A],
+    ``C_T`` [F] and ``dC_T_dt`` [F/s]. For (z, r) curves (``curves.radial``)
+    ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0) enter, and
+    ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` (:meth:`tengfield.surrogate.Curves.evaluate_many`).
+    """
+    gap = np.asarray(gap, dtype=float)
+    if curves is None:
+        zero = np.zeros_like(gap)
+        return {"V_oc": zero, "Q_sc": zero.copy(), "I_sc": zero.copy(),
+                "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
+    q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial, radial_velocity,
+                                                  cells=cells)
+    return {"V_oc": circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance),
+            "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
+
+
+def terminal_waveforms_zr(curves, gap, gap_velocity, radial, radial_velocity, *,
+                          cells: int = 1, parallel_capacitance: float = 0.0) -> dict:
+    """:func:`terminal_waveforms` for an off-axis trajectory: ``radial`` r(t) [m] and
+    ``radial_velocity`` dr/dt [m/s] at the samples (the name the (z, r) docs use)."""
+    return terminal_waveforms(curves, gap, gap_velocity, cells=cells,
+                              parallel_capacitance=parallel_capacitance, radial=radial,
+                              radial_velocity=radial_velocity)
+
+
+def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
+                             radial_velocity=None) -> dict[str, np.ndarray]:
+    """:func:`terminal_waveforms` with ``[device] cells`` and ``[circuit]
+    parallel_capacitance_pF`` of ``scene``."""
+    return terminal_waveforms(curves, gap, gap_velocity, cells=scene.device.cells,
+                              parallel_capacitance=scene.circuit.parallel_capacitance,
+                              radial=radial, radial_velocity=radial_velocity)
+
+
+def _radial(dynamics, curves, times=None):
+    """``(r, dr/dt)`` of ``dynamics`` (at its samples or at ``times``) when ``curves``
+    is a (z, r) surrogate, else ``(None, None)``."""
+    if curves is None or not curves.radial:
+        return None, None
+    from ..surrogate.offaxis import radial_motion
+    return radial_motion(dynamics, times)
+
+
+def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
+    """The ``WAVEFORM_COLUMNS`` of ``dynamics`` (a DynamicsResult or anything with
+    ``t, gap, gap_velocity, table``) for ``scene``: time, trajectory and the
+    terminal waveforms at the output samples."""
+    t = np.asarray(dynamics.t, dtype=float)
+    gap = np.asarray(dynamics.gap, dtype=float)
+    velocity = np.asarray(dynamics.gap_velocity, dtype=float)
+    terminal = scene_terminal_waveforms(scene, curves, gap, velocity,
+                                        *_radial(dynamics, curves))
+    table = getattr(dynamics, "table", None)
+    return {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
+            "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
+            "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"]}
+
+
+# ---------------------------------------------------------------------------
+# the steady window and the impacts
+def steady_start(scene) -> float:
+    """Length [s] of the settling before the steady window: ``[run] settle_periods``
+    excitation periods (the rule of :func:`tengfield.dynamics.simulate`, whose result
+    holds ``window_start`` = ``time_origin`` + this)."""
+    return scene.run.settle_periods * scene.excitation.period
+
+
+def steady_window(times, scene) -> tuple[np.ndarray, str]:
+    """Boolean mask of the samples after ``[run] settle_periods`` excitation periods,
+    and the rule in words (the whole run when that leaves fewer than 2 samples)."""
+    t = np.asarray(times, dtype=float)
+    start = t[0] + steady_start(scene)
+    mask = t >= start
+    if np.count_nonzero(mask) < 2:
+        return np.ones_like(t, dtype=bool), (f"whole run: settle_periods x period = "
+                                             f"{start - t[0]:g} s leaves fewer than 2 samples")
+    return mask, f"t >= {start:g} s (after settle_periods = {scene.run.settle_periods} periods)"
+
+
+def impact_times(dynamics, start: float, end: float) -> np.ndarray:
+    """Sorted distinct times [s] of the impacts (velocity jumps) strictly inside (start, end).
+
+    ``dynamics.impacts`` may be :class:`tengfield.dynamics.Impacts`, a record
+    array with a ``time`` field, an array whose first column is the time, or
+    a list of objects with ``time`` (or ``t``); no ``impacts``: none.
+    """
+    impacts = getattr(dynamics, "impacts", None)
+    if impacts is None:
+        return np.empty(0)
+    if hasattr(impacts, "time"):                      # tengfield.dynamics.Impacts
+        times = np.asarray(impacts.time, dtype=float).reshape(-1)
+    elif hasattr(impacts, "dtype") and impacts.dtype.names and "time" in impacts.dtype.names:
+        times = np.asarray(impacts["time"], dtype=float)
+    elif isinstance(impacts, np.ndarray):
+        times = np.asarray(impacts, dtype=float).reshape(len(impacts), -1)[:, 0] \
+            if impacts.size else np.empty(0)
+    else:
+        times = np.asarray([getattr(i, "time", getattr(i, "t", math.nan)) for i in impacts],
+                           dtype=float)
+    times = times[np.isfinite(times)]
+    return np.unique(times[(times > start) & (times < end)])
+
+
+def impact_states(scene, dynamics, impacts) -> tuple[np.ndarray, ...]:
+    """``(gap_before, velocity_before, gap_after, velocity_after)`` at the ``impacts``
+    [s], sampled ``IMPACT_OFFSET_PERIODS`` periods before and after each one."""
+    return _impact_states(scene, dynamics, np.asarray(impacts, dtype=float)
+                          - time_origin(dynamics))
+
+
+def _impact_states(scene, dynamics, impacts) -> tuple[np.ndarray, ...]:
+    """:func:`impact_states` at ``impacts`` on the run's own axis (:func:`elapsed_times`)."""
+    if not len(impacts) or not (hasattr(dynamics, "sample")
+                                or hasattr(dynamics, "sample_elapsed")):
+        empty = np.empty(0)
+        return empty, empty, empty, empty
+    eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+    gap_pre, vel_pre, _ = sample_elapsed(dynamics, impacts - eps)
+    gap_post, vel_post, _ = sample_elapsed(dynamics, impacts + eps)
+    return gap_pre, vel_pre, gap_post, vel_post
+
+
+# ---------------------------------------------------------------------------
+# peaks
+def extreme_times(scene, dynamics, start: float) -> np.ndarray:
+    """Sorted times [s] at which a waveform's extremes after ``start`` are sought:
+    the dynamics' output samples from ``start`` on and just before and after
+    every impact there (``IMPACT_OFFSET_PERIODS``), the same instants as
+    :func:`terminal_peaks` uses."""
+    t = np.asarray(dynamics.t, dtype=float)
+    t = t[t >= start]
+    impacts = impact_times(dynamics, t[0], t[-1]) if t.size else np.empty(0)
+    eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+    return np.sort(np.concatenate([t, impacts - eps, impacts + eps]))
+
+
+def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> dict[str, float]:
+    """Peak-to-peak ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] over the steady window.
+
+    The extremes are taken over the output samples of the window *and* just
+    before and after every impact in it (``IMPACT_OFFSET_PERIODS``), where
+    I_SC = (dQ_SC/dz) ż jumps and takes its extremes: the trajectory is exact
+    there, so the peaks do not depend on ``[run] sample_rate_hz`` (sampled
+    alone, the I_SC peak of the default scene is 3 % low at 20 kHz;
+    docs/report.md). ``cells`` and C_p come from ``scene``; ``waveforms``
+    (the :func:`scene_waveforms` of the same scene and dynamics) saves
+    recomputing the samples.
+    """
+    if waveforms is None:
+        waveforms = scene_waveforms(scene, dynamics, curves)
+    t = elapsed_times(dynamics)          # the rows of waveforms, on the run's own axis
+    mask, _ = steady_window(t, scene)
+    values = {name: [np.asarray(waveforms[column])[mask]]
+              for name, column in PEAK_QUANTITIES.items()}
+    if curves is not None:
+        impacts = impact_elapsed(dynamics, t[mask][0], t[-1])
+        gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
+        if gap_pre.size:
+            eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+            extra = scene_terminal_waveforms(
+                scene, curves, np.concatenate([gap_pre, gap_post]),
+                np.concatenate([vel_pre, vel_post]),
+                *_radial(dynamics, curves, time_origin(dynamics)
+                         + np.concatenate([impacts - eps, impacts + eps])))
+            for name in PEAK_QUANTITIES:
+                values[name].append(extra[name])
+    return {name: circuit.peak_to_peak(np.concatenate(v)) for name, v in values.items()}
+
+
+def extremes(values) -> tuple[float, float]:
+    """(peak-to-peak, peak |x|) of a waveform sampled at the instants of the peak rule
+    (:func:`extreme_times`): the numbers :func:`terminal_peaks` reports, and fit's
+    ``*_pp`` / ``*_peak`` targets."""
+    x = np.asarray(values, dtype=float)
+    return circuit.peak_to_peak(x), float(np.max(np.abs(x)))
