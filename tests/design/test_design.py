@@ -300,3 +300,25 @@ def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
         assert row["surface_charge_uC_per_m2"] == pytest.approx(-sigma_max * 1e6, rel=1e-12)
         limits.append(sigma_max)
     assert limits[0] != pytest.approx(limits[1], rel=1e-3)
+
+
+def test_random_and_harmonics_excitations_are_scored_as_the_scene_gives_them(cache):
+    """A random (or harmonics + noise) scene: every candidate meets the same realisation
+    (its seed, on the run's clock); the score is deterministic, differs from the sine's,
+    and [design.excitation] (a sine band) is refused next to it."""
+    engine = {"kind": "harmonics", "frequency_hz": [33.0, 66.0], "amplitude_mm": [0.75, 0.05],
+              "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 3.0, "seed": 2}
+    section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
+               "window_periods": 10, "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]}}
+    scene = fx.scene_with(excitation=engine, design=section)
+    spec = parse_design_section(scene)
+    a = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    b = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    assert a["status"] == "ok" and a["objective"] == b["objective"] > 0
+    sine = fx.scene_with(design={**section, "excitation": {"frequency_hz": [33.0],
+                                                            "amplitude_mm": [0.75]}})
+    s = evaluate(sine, parse_design_section(sine), {"gap_mm": 2.0}, cache_dir=cache,
+                 solve=fx.plate_model_solve)
+    assert s["objective"] != a["objective"]
+    with pytest.raises(SceneError, match=r"\[design.excitation\] needs \[excitation\] kind"):
+        parse_design_section(fx.scene_with(excitation=engine, design=sine.raw["design"]))

@@ -118,3 +118,10 @@ def test_changed_copies_keep_every_harmonic():
     assert scene.raw["excitation"]["frequency_hz"] == [33.0, 66.0, 132.0]
     a, b = simulate(scene), simulate(again)
     assert np.array_equal(a.gap, b.gap)
+
+
+def test_a_single_number_applies_to_every_component():
+    scene = _scene('kind = "harmonics"\nfrequency_hz = [20.0, 40.0]\namplitude_mm = 0.5\n'
+                   'phase_deg = 30.0\n')
+    assert [c[1] for c in scene.excitation.harmonics] == [0.5e-3, 0.5e-3]
+    assert [c[2] for c in scene.excitation.harmonics] == pytest.approx([math.pi / 6] * 2)

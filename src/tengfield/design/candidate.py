@@ -110,12 +110,17 @@ def candidate_scene(base, spec: DesignSpec, values: dict):
 
 
 def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
-    """``scene`` driven at one band point (``amplitude`` [m]) for settle + window periods."""
+    """``scene`` driven at one band point (``amplitude`` [m]) for settle + window periods.
+    A random or harmonics excitation is kept as the scene gives it (its one band point is
+    its reference frequency and fundamental): every candidate meets the same realisation
+    (the noise follows the run's clock and seed, not its length)."""
     periods = spec.settle_periods + spec.window_periods
+    run = {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
+           "sample_rate_hz": spec.samples_per_period * frequency}
+    if scene.excitation.kind != "sine":
+        return scene.with_values(run=run)
     return scene.with_values(
-        excitation={"frequency_hz": frequency, "amplitude_mm": amplitude * 1e3},
-        run={"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
-             "sample_rate_hz": spec.samples_per_period * frequency})
+        excitation={"frequency_hz": frequency, "amplitude_mm": amplitude * 1e3}, run=run)
 
 
 def _load_power(point, dynamics, curves, load: float) -> float:

@@ -206,9 +206,14 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
         if key not in KEYS:
             raise SceneError(f"unknown key [design] {key}" + _suggest(key, KEYS)
                              + f"; keys are {', '.join(KEYS)}")
-    if scene.excitation.kind != "sine":
-        raise SceneError(f"[excitation] kind = {scene.excitation.kind!r}: tengfield design "
-                         "scores sine excitations ([design.excitation]); allowed 'sine'")
+    if scene.excitation.kind == "recorded":
+        raise SceneError("[excitation] kind = 'recorded': tengfield design scores sine "
+                         "([design.excitation] band), random or harmonics excitations; a "
+                         "record has a fixed length and no band")
+    if scene.excitation.kind != "sine" and "excitation" in raw:
+        raise SceneError(f"[design.excitation] needs [excitation] kind = 'sine': a "
+                         f"{scene.excitation.kind!r} excitation is scored as the scene gives it "
+                         "(leave [design.excitation] out)")
     if scene.array.cells:
         raise SceneError(f"[array] cells = {scene.array.cells}: tengfield design scores one "
                          "device ([device] cells identical cells); allowed 0")

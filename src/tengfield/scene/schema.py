@@ -416,6 +416,13 @@ def harmonic_components(data: dict) -> tuple[dict, tuple]:
         raise SceneError("[excitation] kind = 'harmonics' needs exactly one of amplitude_mm = "
                          "[...] and acceleration_m_per_s2 = [...], one entry per frequency")
     phases = entries("phase_deg") or [0.0] * len(freqs)
+    # a single number (not a list) applies to every component
+    if amps is not None and not isinstance(exc["amplitude_mm"], list):
+        amps = amps * len(freqs)
+    if accs is not None and not isinstance(exc["acceleration_m_per_s2"], list):
+        accs = accs * len(freqs)
+    if "phase_deg" in exc and not isinstance(exc["phase_deg"], list):
+        phases = phases * len(freqs)
     given = amps if amps is not None else accs
     for key, got in (("amplitude_mm" if amps is not None else "acceleration_m_per_s2", given),
                      ("phase_deg", phases)):
