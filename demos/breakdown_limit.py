@@ -30,6 +30,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from electrical_common import (demo_arguments, paper_scene, pyplot,  # noqa: E402
                                run_length, save_small_png)
+from demo_mpi import world  # noqa: E402
 from electrical_geometry import device_for  # noqa: E402
 
 PAPER = {"device": {"Q_sc": 1.42e-9, "V_oc": 4.2, "I_sc": 0.16e-6, "sigma_fit": -35.8e-6,
@@ -45,7 +46,7 @@ def at_limit(scene, cache_dir) -> dict:
     scene = scene.with_values(device={"surface_charge_uC_per_m2": "breakdown"})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        r = run(scene, cache_dir=cache_dir)
+        r = run(scene, cache_dir=cache_dir, comm=world())
     block = r.summary["breakdown"]
     i_abs = np.abs(np.asarray(r.I_sc))
     return {"sigma_max": block["sigma_max_uC_per_m2"] * 1e-6,

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from demo_mpi import is_root, world  # noqa: E402
 from electrical_common import demo_arguments, pyplot, save_small_png  # noqa: E402
 
 import tengfield as tf  # noqa: E402
@@ -52,8 +53,9 @@ def ship_scene(design_keys: dict):
 
 def run(scene, args, name, **kw):
     start = time.perf_counter()
-    result = design(scene, cache_dir=args.cache_dir, jobs=args.jobs, **kw)
-    write_design_outputs(result, Path(args.output) / name)
+    result = design(scene, cache_dir=args.cache_dir, jobs=args.jobs, comm=world(), **kw)
+    if is_root():
+        write_design_outputs(result, Path(args.output) / name)
     print(f"  [{name}] {len(result.rows)} candidates in {time.perf_counter() - start:.1f} s",
           file=sys.stderr)
     return result
@@ -115,7 +117,7 @@ def main(argv: list[str] | None = None) -> dict:
 
     # 3. is the optimum one?
     check = check_optimum(power, fraction=0.2, candidates=4 if fast else 12,
-                          cache_dir=args.cache_dir, jobs=args.jobs)
+                          cache_dir=args.cache_dir, jobs=args.jobs, comm=world())
     out["optimum_check"] = {k: v for k, v in check.items() if k != "result"}
 
     # Figs. 9g-h trends (space-filling studies)
@@ -197,8 +199,9 @@ def main(argv: list[str] | None = None) -> dict:
     path = save_small_png(fig, Path(args.output) / "design_ship.png")
     plt.close(fig)
     print(f"wrote {path}")
-    (Path(args.output) / "design_ship.json").write_text(json.dumps(
-        out, indent=2, default=lambda o: None))
+    if is_root():
+        (Path(args.output) / "design_ship.json").write_text(json.dumps(
+            out, indent=2, default=lambda o: None))
     return out
 
 

@@ -20,6 +20,8 @@ import numpy as np
 from tengfield.dynamics import simulate
 from tengfield.scene import default_scene
 
+from demo_mpi import is_root
+
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -83,7 +85,8 @@ def main(argv: list[str] | None = None) -> dict:
     ax2.legend(fontsize=8)
     ax2.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out / "dynamics_amplitude_sweep.png", dpi=130)
+    if is_root():
+        fig.savefig(out / "dynamics_amplitude_sweep.png", dpi=130)
     print(f"wrote {out / 'dynamics_amplitude_sweep.png'}")
 
     return {"regime": {f: r.regime.name for f, r in results.items()},

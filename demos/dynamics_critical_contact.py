@@ -26,6 +26,8 @@ from tengfield.dynamics.impact import Restitution
 from tengfield.dynamics.onset import onset_amplitude
 from tengfield.scene import G, default_scene
 
+from demo_mpi import is_root
+
 
 def launch_speed_eq10(amplitude: float, frequency: float) -> float:
     """Eq. (10): table (= ball) speed when y'' = -g, v0 = sqrt(A^2 w^4 - g^2) / w [m/s]."""
@@ -98,7 +100,8 @@ def main(argv: list[str] | None = None) -> dict:
     ax2.legend(fontsize=8)
     ax2.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out / "dynamics_critical_contact.png", dpi=130)
+    if is_root():
+        fig.savefig(out / "dynamics_critical_contact.png", dpi=130)
     print(f"wrote {out / 'dynamics_critical_contact.png'}")
 
     return {"onset_amplitude_mm": dict(zip(freqs.tolist(), (onset * 1e3).tolist())),

@@ -24,6 +24,8 @@ from tengfield.dynamics.impact import Restitution
 from tengfield.dynamics.onset import onset_amplitude, onset_frequency
 from tengfield.scene import G, default_scene
 
+from demo_mpi import is_root
+
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -95,7 +97,8 @@ def main(argv: list[str] | None = None) -> dict:
     ax2.legend(fontsize=8)
     ax2.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out / "dynamics_jump_onset.png", dpi=130)
+    if is_root():
+        fig.savefig(out / "dynamics_jump_onset.png", dpi=130)
     print(f"wrote {out / 'dynamics_jump_onset.png'}")
 
     return {"onset_amplitude_mm_at_5hz": {h * 1e3: float(c[i5] * 1e3)

@@ -23,6 +23,8 @@ from tengfield.dynamics import simulate
 from tengfield.plotting.dynamics import plot_trajectory
 from tengfield.scene import default_scene
 
+from demo_mpi import is_root
+
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -53,8 +55,9 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"time on the lower plate per period [ms]    ~10.5 (21 steps)   {on_lower * 1e3:.1f}")
     print(f"time on the upper plate per period [ms]    ~10 (20 steps)     {on_upper * 1e3:.1f}")
     print(f"max gap [mm]                               3                  {reg.max_gap * 1e3:.3f}")
-    plot_trajectory(res, out / "dynamics_regular_contact.png", max_periods=4,
-                    title="Fig. 7: regular contact, 3 mm, 30 Hz")
+    if is_root():
+        plot_trajectory(res, out / "dynamics_regular_contact.png", max_periods=4,
+                        title="Fig. 7: regular contact, 3 mm, 30 Hz")
     print(f"wrote {out / 'dynamics_regular_contact.png'}")
 
     return {"regime": reg.name, "period": reg.period,

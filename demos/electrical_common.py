@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from demo_mpi import is_root, world
+
 from tengfield import electrical
 
 #: The paper's measured peaks at 1.5 mm / 20 Hz (Figs. 9b-d): V_OC, Q_SC, I_SC.
@@ -58,7 +60,7 @@ def surrogate_curves(scene, cache_dir=None, solve=None):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        table, outcome = obtain_table(scene, cache_dir=cache_dir,
+        table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=world(),
                                       solve=solve or _solve_without_estimate)
     print(f"  surrogate: {table.count} positions ({outcome.status}), "
           f"interpolation error estimate {table.interpolation_error:.2g}", file=sys.stderr)
@@ -95,6 +97,9 @@ def reconciling_charge_density(sigma: float, charge_model: float, charge_measure
 
 
 def save_small_png(fig, path: Path, dpi: int = 90) -> Path:
+    """Save ``fig`` to ``path`` under 300 kB (rank 0 only under mpirun)."""
+    if not is_root():
+        return path
     fig.savefig(path, dpi=dpi)
     size = os.path.getsize(path)
     if size > 300_000:

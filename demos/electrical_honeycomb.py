@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from demo_mpi import is_root, world  # noqa: E402
 from electrical_common import (demo_arguments, measure, pyplot,  # noqa: E402
                                reconciling_capacitance, save_small_png, surrogate_curves)
 
@@ -99,9 +100,10 @@ def hexagonal_table(cell, scene, cache_dir):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        table = precompute(hex_scene, solve=solve, progress=True)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_table(path, table)
+        table = precompute(hex_scene, solve=solve, comm=world(), progress=True)
+    if is_root():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_table(path, table)
     print(f"  hexagonal 3D surrogate: {table.count} positions, estimate "
           f"{table.interpolation_error:.2g}", file=sys.stderr)
     return table

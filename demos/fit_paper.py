@@ -33,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from electrical_common import (PAPER_PEAKS, demo_arguments, paper_scene,  # noqa: E402
                                run_length, surrogate_curves)
 
+from demo_mpi import is_root, world  # noqa: E402
 from tengfield.fit import calibrate, write_fit_outputs  # noqa: E402
 
 #: the readings as `--targets` (peak-to-peak V and Q, peak |I|; 5 % uncertainty each)
@@ -59,8 +60,10 @@ def main(argv: list[str] | None = None) -> dict:
     surrogate_curves(scene, args.cache_dir)      # build or reuse the one surrogate
     numbers = {}
     for case, (targets, free) in CASES.items():
-        result = calibrate(scene, targets=targets, free=free, cache_dir=args.cache_dir)
-        write_fit_outputs(scene, result, Path(args.output) / f"fit_paper_{case}")
+        result = calibrate(scene, targets=targets, free=free, cache_dir=args.cache_dir,
+                           comm=world())
+        if is_root():
+            write_fit_outputs(scene, result, Path(args.output) / f"fit_paper_{case}")
         numbers[case] = {"targets": targets, "values": result.values,
                          "standard_errors": result.standard_errors,
                          "fitted": result.fitted, "chi2_reduced": result.chi2_reduced,

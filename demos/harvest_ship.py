@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from demo_mpi import is_root, world  # noqa: E402
 from electrical_common import demo_arguments, measure, surrogate_curves  # noqa: E402
 from electrical_honeycomb import PAPER, honeycomb_scene  # noqa: E402
 
@@ -84,7 +85,7 @@ def main(argv: list[str] | None = None) -> dict:
 
     scene = harvest_scene(base, args.fast)
     nominal = simulate(scene)
-    arr = run_array(scene, curves, nominal)
+    arr = run_array(scene, curves, nominal, comm=world())
     fine = arr.fine
     mask, _ = electrical.steady_window(fine.time, scene)
     rect = electrical.rectifier_summary(scene, fine, float(fine.time[mask][0]))
@@ -125,9 +126,10 @@ def main(argv: list[str] | None = None) -> dict:
           f"{result['phase_std_deg']:.3g} deg); energy books residual "
           f"{result['energy_residual_max']:.2g}")
     title = f"ship: {CELLS} cells, 0.5 mm, 33 Hz, per-cell bridges"
-    plot_charging(fine, scene, out / "harvest_ship.png", title=title)
-    plot_array(arr, {**arr.summary, "connection": "rectified-parallel"},
-               out / "harvest_ship_array.png", title=title)
+    if is_root():
+        plot_charging(fine, scene, out / "harvest_ship.png", title=title)
+        plot_array(arr, {**arr.summary, "connection": "rectified-parallel"},
+                   out / "harvest_ship_array.png", title=title)
     print(f"wrote {out / 'harvest_ship.png'}, {out / 'harvest_ship_array.png'}")
     return result
 

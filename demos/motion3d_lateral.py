@@ -35,6 +35,8 @@ import numpy as np
 from tengfield.dynamics.motion3d import simulate_3d
 from tengfield.scene import default_scene
 
+from demo_mpi import is_root, world
+
 
 def near_plate_dwell(t, gap, stroke, upper: bool, fraction: float = 0.01) -> np.ndarray:
     """Durations [s] of the intervals in which the ball stays within fraction*stroke of a plate."""
@@ -125,10 +127,12 @@ def main(argv: list[str] | None = None) -> dict:
     fig.suptitle("3D ball, horizontally shaken device (paper: multibody contacts ~10 ms)",
                  fontsize=10)
     fig.tight_layout()
-    fig.savefig(out / "motion3d_lateral.png", dpi=120)
+    if is_root():
+        fig.savefig(out / "motion3d_lateral.png", dpi=120)
     plt.close(fig)
-    plot_trajectory3d(last, out / "motion3d_lateral_trajectory3d.png",
-                      title=f"lateral {lateral_mm[-1]:g} mm")
+    if is_root():
+        plot_trajectory3d(last, out / "motion3d_lateral_trajectory3d.png",
+                          title=f"lateral {lateral_mm[-1]:g} mm")
     print(f"-> {out}/motion3d_lateral.png, motion3d_lateral.csv")
     electrical = electrical_rows(base, lateral_mm, out) if with_field else []
     return {"rows": rows, "electrical": electrical}
@@ -142,7 +146,7 @@ def electrical_rows(base, lateral_mm, out: Path) -> list[dict]:
     rows = []
     for ax in lateral_mm:
         res = pipeline.run(base.with_values(excitation={"amplitude_x_mm": ax, "phase_x_deg": 45.0}),
-                           progress=True)
+                           comm=world(), progress=True)
         rows.append({"lateral_mm": ax, "Q_sc_pp_nC": res.peaks["Q_sc"] * 1e9,
                      "V_oc_pp_V": res.peaks["V_oc"], "I_sc_pp_nA": res.peaks["I_sc"] * 1e9,
                      "surrogate": "(z, r)" if "field_zr" in res.stages else "axis"})
@@ -158,7 +162,10 @@ def electrical_rows(base, lateral_mm, out: Path) -> list[dict]:
 
 
 def write_rows(path: Path, rows: list[dict]) -> None:
-    """A CSV with one line per row dict (the keys of the first as the header)."""
+    """A CSV with one line per row dict (the keys of the first as the header; rank 0
+    only under mpirun)."""
+    if not is_root():
+        return
     with open(path, "w") as fh:
         fh.write(",".join(rows[0]) + "\n")
         for row in rows:

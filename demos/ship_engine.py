@@ -29,6 +29,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from demo_mpi import is_root, world  # noqa: E402
 from electrical_common import demo_arguments  # noqa: E402
 from electrical_honeycomb import honeycomb_scene  # noqa: E402
 
@@ -61,9 +62,9 @@ def main(argv: list[str] | None = None) -> dict:
     args = demo_arguments(__doc__, argv)
     out = Path(args.output)
     sine, engine = scenes(args.fast)
-    pure = tf.run(sine, cache_dir=args.cache_dir)
-    first = tf.run(engine, cache_dir=args.cache_dir)
-    rows, block = run_ensemble(engine, first, cache_dir=args.cache_dir, jobs=1)
+    pure = tf.run(sine, cache_dir=args.cache_dir, comm=world())
+    first = tf.run(engine, cache_dir=args.cache_dir, comm=world())
+    rows, block = run_ensemble(engine, first, cache_dir=args.cache_dir, jobs=1, comm=world())
     power = block["quantities"]["average_harvested_power_W"]
     i_pp = block["quantities"]["I_sc_pp_A"]
     result = {
@@ -85,7 +86,8 @@ def main(argv: list[str] | None = None) -> dict:
           f"[{power['ci95_low'] * 1e6:.4g}, {power['ci95_high'] * 1e6:.4g}] uW; I_SC pp "
           f"{i_pp['mean'] * 1e6:.4g} uA")
     from tengfield.plotting.ensemble import plot_ensemble
-    plot_ensemble(rows, block, out / "ship_engine.png")
+    if is_root():
+        plot_ensemble(rows, block, out / "ship_engine.png")
     print(f"wrote {out / 'ship_engine.png'}")
     return result
 
