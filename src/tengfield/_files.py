@@ -48,8 +48,8 @@ def writable_target(path: str | Path) -> Path:
     node is refused (:class:`tengfield.errors.OutputError`: nothing is written into a
     pipe or a device). The staging directory of ``-o DIR`` holds none of these; under
     mpirun the commands write into DIR itself. :func:`write_csv` writes where it is
-    told (``/dev/full`` included); :func:`atomic_path` and every writer of an output
-    file check."""
+    told (``/dev/full`` included); :func:`atomic_path` and the writers of an output
+    set check."""
     path = Path(path)
     try:
         st = os.lstat(path)
@@ -142,7 +142,7 @@ def write_csv(path: str | Path, header: list[str], columns: list, *,
 
     Formatted and written by Apache Arrow's CSV writer (compiled, 75 ns per number:
     600k impacts in 0.2 s, 6x faster than Python's ``repr``). Written where it is
-    told (an output file: inside :func:`atomic_path`)."""
+    told: in place (after :func:`writable_target`) or inside :func:`atomic_path`."""
     import pyarrow as pa
     import pyarrow.csv as pa_csv
 

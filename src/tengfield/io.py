@@ -13,11 +13,14 @@ Numbers are SI with the unit in the column name. The time column of
 round trip) so that the samples of a long run stay distinct; the other
 waveform columns with 10. The dynamics files (1D and 3D trajectories,
 impacts, contacts) hold every double as its shortest round-trip decimal.
-How one file is written (atomically; CSV by :func:`~tengfield._files.write_csv`,
-Apache Arrow's compiled writer, or, for the tables of text cells,
-:func:`~tengfield._files.write_rows`) is :mod:`tengfield._files`; its
-:func:`atomic_path`, :func:`writable_target`, :func:`write_csv` and
-:func:`write_json` are importable from here too.
+
+How one file is written is :mod:`tengfield._files` (its :func:`atomic_path`,
+:func:`writable_target`, :func:`write_csv` and :func:`write_json` are importable
+from here too): the tables of numbers (waveforms, dynamics, ensemble) by
+:func:`write_csv`, Apache Arrow's compiled writer, in place after
+:func:`writable_target` (inside the staging directory of ``-o DIR``); JSON,
+``map.csv``, ``sweep.csv`` and ``report.csv`` (:func:`~tengfield._files.write_rows`)
+atomically.
 """
 from __future__ import annotations
 
@@ -41,13 +44,11 @@ VALUE_FORMAT = "%.10g"
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
     """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS``,
-    ``RECTIFIER_COLUMNS`` if present), atomically."""
+    ``RECTIFIER_COLUMNS`` if present)."""
     columns = WAVEFORM_COLUMNS + [c for c in LOAD_COLUMNS + RECTIFIER_COLUMNS if c in waveforms]
     data = np.column_stack([waveforms[c] for c in columns])   # one dtype, as numpy.savetxt
-    with atomic_path(path) as tmp:
-        write_csv(tmp, columns, list(data.T), formats={
-            c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)})
-    return Path(path)
+    return write_csv(path, columns, list(data.T), formats={
+        c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)})
 
 
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
@@ -205,8 +206,7 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     threads = max(1, min(len(tables), (cores or 1) - (drawing is not None)))
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="tengfield-csv") as pool:
-        pending = [pool.submit(_atomically, write, dynamics, out / name)
-                   for write, name in tables]
+        pending = [pool.submit(write, dynamics, out / name) for write, name in tables]
         if plots:
             if three_d:
                 plot_trajectory3d(dynamics, out / "trajectory3d.png")
@@ -217,12 +217,6 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
         for job in pending:
             job.result()
     return written
-
-
-def _atomically(write, result, path: Path) -> None:
-    """``write(result, path)`` through :func:`atomic_path`."""
-    with atomic_path(path) as tmp:
-        write(result, tmp)
 
 
 def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool,
