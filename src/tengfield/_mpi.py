@@ -1,6 +1,8 @@
 """MPI task farm for independent jobs (e.g. one field solve per ball position).
 
-Communicators are always passed in; nothing here touches ``COMM_WORLD``.
+Communicators are always passed in; only :func:`world_if_parallel` touches
+``COMM_WORLD``, after :func:`launched_size`, the one test of whether mpirun started
+this process (the CLI's and the commands' alike), says that it has company.
 ``comm`` may be any object with mpi4py's ``rank``, ``size``, ``allgather``
 and ``Abort`` (``None`` means a serial run without MPI).
 """
@@ -11,6 +13,30 @@ import sys
 import time
 import traceback
 from typing import Any, Callable, Sequence
+
+
+#: what an MPI launcher puts into each rank's environment: the number of ranks it
+#: started (Open MPI, PMI: MPICH and Intel MPI, PMIx, MPICH's hydra), first found first
+LAUNCHER_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS")
+
+
+def launched_size() -> int:
+    """How many ranks mpirun started this process among (1: started without it, or
+    with ``-n 1``), read from the launcher's environment: MPI is not initialised."""
+    for key in LAUNCHER_SIZE_VARIABLES:
+        value = os.environ.get(key)
+        if value and value.isdigit():
+            return int(value)
+    return 1
+
+
+def world_if_parallel():
+    """``MPI.COMM_WORLD`` when started by mpirun with several ranks, else None
+    (a serial run never initialises MPI before it needs a field solve)."""
+    if launched_size() <= 1:
+        return None
+    from mpi4py import MPI
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
 
 
 def rank_of(comm) -> int:

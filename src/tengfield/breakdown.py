@@ -426,7 +426,7 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
     """breakdown.json, breakdown.csv and (``plots``) breakdown.png in directory ``out``."""
     from pathlib import Path
 
-    from .io import atomic_path, write_csv, write_json
+    from ._files import atomic_path, write_csv, write_json
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -20,22 +20,22 @@ What every command gets from here, without code of its own:
 * only tengfield's own lines on stderr: library logging (ffcx/setuptools JIT
   ``INFO:root:running build_ext`` and compiler lines) is silenced below
   warnings, and warnings print as ``tengfield: warning: ...``; VTK renders
-  off screen.
+  off screen (:func:`tengfield._console.configure_output`).
 """
 from __future__ import annotations
 
 import argparse
 import importlib
 import io
-import logging
 import os
 import re
 import sys
 import traceback
-import warnings
 from typing import NamedTuple
 
 from . import __version__
+from ._console import configure_output
+from ._mpi import launched_size
 from .errors import TengfieldError
 
 # command modules, in the order `tengfield --help` lists them
@@ -68,84 +68,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-# -- quiet, readable output --------------------------------------------------------------
-_WARNING_LINE = re.compile(r"^.*?:\d+: (\w+): (.*)$")
+#: a staging directory's part of a path, left out of an error line (it names DIR)
 _STAGING_IN_PATH = re.compile(r"/\.tengfield-staging-[^/]+")
-
-
-def warning_text(message) -> str:
-    """One line for a warning: its first non-empty line, file/line prefixes dropped."""
-    lines = [ln.strip() for ln in str(message).splitlines() if ln.strip()]
-    text = lines[0] if lines else str(message).strip()
-    match = _WARNING_LINE.match(text)
-    return match.group(2) if match else text
-
-
-class _TengfieldFormatter(logging.Formatter):
-    def format(self, record: logging.LogRecord) -> str:
-        kind = "error" if record.levelno >= logging.ERROR else "warning"
-        return f"tengfield: {kind}: {warning_text(record.getMessage())}"
-
-
-class _QuietHandler(logging.StreamHandler):
-    """Root handler: warnings and errors only, one tengfield line each.
-
-    It follows ``sys.stderr`` at emit time (so redirections and tests see it)."""
-
-    def __init__(self):
-        super().__init__()
-        self.setLevel(logging.WARNING)
-        self.setFormatter(_TengfieldFormatter())
-
-    @property
-    def stream(self):
-        return sys.stderr
-
-    @stream.setter
-    def stream(self, value):  # logging.StreamHandler.__init__ assigns it
-        pass
-
-
-def _showwarning(message, category, filename, lineno, file=None, line=None):
-    stream = file if file is not None else sys.stderr
-    try:
-        stream.write(f"tengfield: warning: {warning_text(message)}\n")
-    except (OSError, ValueError):  # a closed stream: nothing to tell
-        pass
-
-
-def configure_output() -> None:
-    """Quiet stderr: only tengfield's own lines (see the module docstring).
-
-    Idempotent; called by :func:`main` before any command module runs, i.e.
-    before ffcx, setuptools, pyvista or VTK are imported.
-    """
-    # the CLI only renders PNG files: never ask for an X server (VTK's
-    # "bad X server connection"); pyvista reads this at import
-    os.environ["PYVISTA_OFF_SCREEN"] = "true"
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        # no display: VTK (>= 9.4 wheels) would try X first and print "bad X server
-        # connection" before falling back; ask for the headless EGL window first
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    root = logging.getLogger()
-    if not any(isinstance(h, _QuietHandler) for h in root.handlers):
-        # a handler on the root first: ffcx's logging.basicConfig() then adds none,
-        # and setuptools' set_threshold (root level INFO during JIT builds) stays
-        # invisible because this handler passes WARNING and above only
-        for handler in list(root.handlers):
-            if type(handler) is logging.StreamHandler:   # a basicConfig() of a library
-                root.removeHandler(handler)
-        root.addHandler(_QuietHandler())
-    for noisy in ("distutils", "setuptools", "ffcx", "UFL", "ufl", "FFCX", "numba", "matplotlib",
-                  "PIL", "h5py"):
-        logging.getLogger(noisy).setLevel(logging.ERROR)
-    logging.captureWarnings(False)
-    warnings.showwarning = _showwarning
-    try:   # no progress-bar monitor thread: a worker pool may fork this process
-        import tqdm   # (tengfield._pool forks only a process with one thread)
-        tqdm.tqdm.monitor_interval = 0
-    except ImportError:   # pragma: no cover - a dependency
-        pass
 
 
 # -- output locations ------------------------------------------------------------------
@@ -159,14 +83,6 @@ def _output_option(parser: argparse.ArgumentParser, command: str):
             if "-o" in a.option_strings:
                 return a
     return None
-
-
-def _mpi_size() -> int:
-    for key in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS"):
-        value = os.environ.get(key)
-        if value and value.isdigit():
-            return int(value)
-    return 1
 
 
 class _PathRewriter(io.TextIOBase):
@@ -198,9 +114,8 @@ class _PathRewriter(io.TextIOBase):
 def _run_command(parser: argparse.ArgumentParser, args) -> int:
     """One process (under mpirun -n N > 1: :func:`_main_under_mpirun`)."""
     if hasattr(args, "jobs"):   # before any output directory is made
-        from ._mpi import check_jobs
+        from ._mpi import check_jobs, world_if_parallel
         from ._pool import start_early
-        from .commands._common import world_if_parallel
         check_jobs(args.jobs, world_if_parallel())
         start_early(args.jobs)   # the worker pool's server loads while the input is read
     action = _output_option(parser, args.command)
@@ -242,7 +157,7 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
 def main(argv: list[str] | None = None) -> int:
     configure_output()
     parser = build_parser()
-    if _mpi_size() > 1:
+    if launched_size() > 1:
         return _main_under_mpirun(parser, argv, _launched_world())
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

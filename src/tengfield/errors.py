@@ -15,3 +15,7 @@ class DynamicsError(TengfieldError, RuntimeError):
 
 class FieldError(TengfieldError, RuntimeError):
     """A field solve failed or was asked for something it cannot do."""
+
+
+class OutputError(TengfieldError):
+    """The output location cannot be used (not a directory, not writable, locked)."""

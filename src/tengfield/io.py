@@ -1,10 +1,10 @@
-"""Every CSV and JSON file tengfield writes (the edge of the library).
+"""The output sets of the commands: which CSV and JSON files, with which columns.
 
 * ``waveforms.csv`` (:func:`write_waveforms_csv`), ``summary.json`` and the
   plots of ``tengfield run`` (:func:`write_run_outputs`);
 * ``trajectory.csv``, ``impacts.csv`` (3D: ``contacts.csv``) and the trajectory
   figures of the dynamics (:func:`write_dynamics_files`);
-* ``sweep.csv`` (:func:`write_sweep_csv`);
+* ``map.csv`` (:func:`write_map_csv`), ``sweep.csv`` (:func:`write_sweep_csv`);
 * ``report.csv`` and ``report.json`` (:func:`write_report_csv`,
   :func:`write_report_json`).
 
@@ -12,22 +12,26 @@ Numbers are SI with the unit in the column name. The time column of
 ``waveforms.csv`` is written with 17 significant digits (``%.17g``, exact
 round trip) so that the samples of a long run stay distinct; the other
 waveform columns with 10. The dynamics files (1D and 3D trajectories,
-impacts, contacts) go through :func:`write_csv`: every double as its
-shortest round-trip decimal, by Apache Arrow's compiled writer. JSON,
-``sweep.csv`` and ``report.csv`` are written atomically (:func:`atomic_path`).
+impacts, contacts) hold every double as its shortest round-trip decimal.
+
+How one file is written is :mod:`tengfield._files` (its :func:`atomic_path`,
+:func:`writable_target`, :func:`write_csv` and :func:`write_json` are importable
+from here too): the tables of numbers (waveforms, dynamics, ensemble) by
+:func:`write_csv`, Apache Arrow's compiled writer, in place after
+:func:`writable_target` (inside the staging directory of ``-o DIR``); JSON,
+``map.csv``, ``sweep.csv`` and ``report.csv`` (:func:`~tengfield._files.write_rows`)
+atomically.
 """
 from __future__ import annotations
 
-import csv
 import json
 import math
 import os
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from ._json import jsonable
+from ._files import atomic_path, writable_target, write_csv, write_json, write_rows
 from .electrical import WAVEFORM_COLUMNS, all_columns
 
 #: format of a time column: every double round-trips
@@ -36,64 +40,15 @@ TIME_FORMAT = "%.17g"
 VALUE_FORMAT = "%.10g"
 
 
-def writable_target(path: str | Path) -> Path:
-    """``path``, made safe to write a file at: a symlink there is removed (a file is
-    written in its place, never through it to its target); a directory, FIFO or device
-    node is refused (:class:`tengfield.outputs.OutputError`: nothing is written into a
-    pipe or a device). The staging directory of ``-o DIR`` holds none of these; under
-    mpirun the commands write into DIR itself. The writers of one file (``write_csv``,
-    ...) write where they are told (``/dev/full`` included); the writers of an output
-    set (``write_run_outputs``, ``write_dynamics_files``, ``atomic_path``) check."""
-    import stat
-
-    from .outputs import OutputError, _kind
-
-    path = Path(path)
-    try:
-        st = os.lstat(path)
-    except FileNotFoundError:
-        return path
-    if stat.S_ISLNK(st.st_mode):
-        path.unlink()
-    elif not stat.S_ISREG(st.st_mode):
-        raise OutputError(f"{str(path)!r} is {_kind(st.st_mode)}, not a regular file: "
-                          "nothing was written there")
-    return path
-
-
-@contextmanager
-def atomic_path(path: str | Path):
-    """Yield a temporary path next to ``path`` (same suffix, so plotting libraries
-    pick the format); it replaces ``path`` (``os.replace``) when the block ends
-    without an exception, else it is removed: a reader never sees half a file."""
-    path = writable_target(path)
-    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}")
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def write_json(path: str | Path, data) -> Path:
-    """``data`` as indented strict JSON (NaN -> null, see :func:`tengfield._json.jsonable`)."""
-    path = Path(path)
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(jsonable(data), indent=2) + "\n")
-    return path
-
-
 # ---------------------------------------------------------------------------
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
     """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ the circuit's columns present,
     in the registry's order: :func:`tengfield.electrical.all_columns`)."""
     columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
-    data = np.column_stack([waveforms[c] for c in columns])
-    np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="",
-               fmt=[TIME_FORMAT] + [VALUE_FORMAT] * (len(columns) - 1))
-    return Path(path)
+    data = np.column_stack([waveforms[c] for c in columns])   # one dtype, as numpy.savetxt
+    return write_csv(path, columns, list(data.T), formats={
+        c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)})
 
 
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
@@ -183,48 +138,6 @@ def _run_title(result) -> str:
 
 # ---------------------------------------------------------------------------
 # dynamics
-def write_csv(path: str | Path, header: list[str], columns: list) -> Path:
-    """CSV of equal-length columns: floats as their shortest round-trip decimal (full
-    double precision: ``float(text)`` gives the double back; ``1e-05`` is written
-    ``0.00001``, ``2.5e-07`` as ``2.5e-7``), integers as integers, booleans as 0/1,
-    strings as they are (no quoting: they must not contain commas, quotes or line
-    breaks). The header is the plain comma-separated names.
-
-    Formatted and written by Apache Arrow's CSV writer (compiled, 75 ns per number:
-    600k impacts in 0.2 s, 6x faster than Python's ``repr``)."""
-    import pyarrow as pa
-    import pyarrow.csv as pa_csv
-
-    arrays = []
-    for name, col in zip(header, columns, strict=True):
-        if isinstance(col, pa.Array):       # e.g. a dictionary (categorical) column
-            arrays.append(col)
-            continue
-        values = np.asarray(col)
-        if values.dtype == bool:
-            values = values.astype(np.int8)
-        if values.dtype.kind == "U":
-            arrays.append(pa.array(values, type=pa.string()))
-        elif values.dtype.kind == "O":
-            arrays.append(pa.array([str(v) for v in values.tolist()], type=pa.string()))
-        else:
-            arrays.append(pa.array(values))
-        if len(arrays[-1]) != len(arrays[0]):
-            raise ValueError(f"write_csv: column {name!r} has {len(arrays[-1])} rows, "
-                             f"the first one {len(arrays[0])}")
-    table = pa.Table.from_arrays(arrays, names=list(header))
-    options = pa_csv.WriteOptions(include_header=False, quoting_style="none")
-    try:
-        with pa.OSFile(str(path), "wb") as sink:
-            sink.write((",".join(header) + "\n").encode())
-            pa_csv.write_csv(table, sink, write_options=options)
-    except OSError as exc:   # Arrow's: "Error writing bytes to file. Detail: [errno 28] ..."
-        if exc.errno:
-            raise OSError(exc.errno, os.strerror(exc.errno), str(path)) from None
-        raise
-    return Path(path)
-
-
 def write_trajectory_csv(result, path: str | Path) -> Path:
     """time_s, gap_m, gap_velocity_m_per_s, table_m of a DynamicsResult (full precision)."""
     return write_csv(path, ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m"],
@@ -248,16 +161,10 @@ MAP_COLUMNS = ["frequency_hz", "amplitude_mm", "regime", "period", "max_gap_mm",
 
 def write_map_csv(result, path: str | Path) -> Path:
     """map.csv of a :class:`tengfield.dynamics.mapping.MapResult`: one row per grid point."""
-    path = Path(path)
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(MAP_COLUMNS)
-        for r in result.records():
-            w.writerow([f"{r['frequency_hz']:.10g}", f"{r['amplitude_m'] * 1e3:.10g}",
-                        r["regime"], r["period"], f"{r['max_gap_m'] * 1e3:.10g}",
-                        f"{r['lower_contacts_per_period']:.6g}",
-                        f"{r['upper_contacts_per_period']:.6g}", r["error"]])
-    return path
+    return write_rows(path, MAP_COLUMNS, (
+        [f"{r['frequency_hz']:.10g}", f"{r['amplitude_m'] * 1e3:.10g}", r["regime"],
+         r["period"], f"{r['max_gap_m'] * 1e3:.10g}", f"{r['lower_contacts_per_period']:.6g}",
+         f"{r['upper_contacts_per_period']:.6g}", r["error"]] for r in result.records()))
 
 
 def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
@@ -326,12 +233,8 @@ def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
     """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty)."""
     from .sweep import SWEEP_COLUMNS
 
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=SWEEP_COLUMNS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: ("" if row.get(k) is None else row[k]) for k in SWEEP_COLUMNS})
-    return Path(path)
+    return write_rows(path, SWEEP_COLUMNS, (["" if row.get(k) is None else row[k]
+                                             for k in SWEEP_COLUMNS] for row in rows))
 
 
 # ---------------------------------------------------------------------------
@@ -361,14 +264,10 @@ def report_row_record(row) -> dict:
 
 def write_report_csv(path: str | Path, report) -> Path:
     """``report.csv``: one line per measured row of a :class:`tengfield.report.Report`."""
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=REPORT_COLUMNS)
-        writer.writeheader()
-        for row in report.rows:
-            rec = report_row_record(row)
-            writer.writerow({k: (format_number(v) if isinstance(v, float) else v)
-                             for k, v in rec.items()})
-    return Path(path)
+    records = (report_row_record(row) for row in report.rows)
+    return write_rows(path, REPORT_COLUMNS, ([format_number(v) if isinstance(v, float) else v
+                                              for v in (rec[k] for k in REPORT_COLUMNS)]
+                                             for rec in records))
 
 
 def write_report_json(path: str | Path, report) -> Path:

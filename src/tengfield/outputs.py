@@ -38,7 +38,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-from .errors import TengfieldError
+from ._files import file_kind as _kind
+from .errors import OutputError
 
 LOCK_NAME = ".tengfield.lock"
 MANIFEST_NAME = ".tengfield-manifest.json"
@@ -49,26 +50,12 @@ JOURNAL_NAME = "journal.json"
 OLD_NAME = "old"
 
 
-class OutputError(TengfieldError):
-    """The output location cannot be used (not a directory, not writable, locked)."""
-
-
 def _reason(exc: OSError) -> str:
     if exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
         return "is not writable (read-only or no permission)"
     if exc.errno == errno.ENAMETOOLONG:
         return "is too long a name for the file system"
     return exc.strerror or str(exc)
-
-
-_KINDS = {stat.S_IFIFO: "a named pipe (FIFO)", stat.S_IFCHR: "a character device",
-          stat.S_IFBLK: "a block device", stat.S_IFSOCK: "a socket", stat.S_IFLNK: "a symlink",
-          stat.S_IFDIR: "a directory", stat.S_IFREG: "a file"}
-
-
-def _kind(mode: int) -> str:
-    """``a named pipe (FIFO)``, ``a character device``, ... of an ``st_mode``."""
-    return _KINDS.get(stat.S_IFMT(mode), "a special file")
 
 
 def _not_empty(path, option: str, what: str) -> Path:

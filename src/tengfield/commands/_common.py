@@ -36,15 +36,3 @@ def add_jobs_argument(parser) -> None:
 def command_line() -> str:
     """The command line as typed (stored in the surrogate cache's provenance)."""
     return shlex.join(["tengfield", *sys.argv[1:]])
-
-
-def world_if_parallel():
-    """``MPI.COMM_WORLD`` when started by mpirun with several ranks, else None
-    (a serial run never initialises MPI before it needs a field solve)."""
-    import os
-
-    launched = any(k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"))
-    if not launched:
-        return None
-    from mpi4py import MPI
-    return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None

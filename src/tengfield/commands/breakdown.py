@@ -9,7 +9,8 @@ those of the surrogate (cached: no solve when it exists).
 """
 from __future__ import annotations
 
-from ._common import add_cache_argument, command_line, scene_command, world_if_parallel
+from .._mpi import world_if_parallel
+from ._common import add_cache_argument, command_line, scene_command
 
 
 def register(sub) -> None:

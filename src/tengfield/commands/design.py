@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import sys
 
-from ._common import add_cache_argument, add_jobs_argument, scene_command, world_if_parallel
+from .._mpi import world_if_parallel
+from ._common import add_cache_argument, add_jobs_argument, scene_command
 
 
 def register(sub) -> None:

@@ -82,11 +82,10 @@ def _dynamics(args, figures) -> int:
 def _run_map(args) -> int:
     import numpy as np
 
-    from .._mpi import check_jobs
+    from .._mpi import check_jobs, world_if_parallel
     from ..dynamics import regime_map
     from ..dynamics.mapping import check_map_size
     from ..io import writable_target, write_map_csv
-    from ._common import world_if_parallel
     from ..plotting.dynamics import plot_regime_map
     from ..scene import load_scene
 

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_cache_argument, command_line, scene_command, world_if_parallel
+from .._mpi import world_if_parallel
+from ._common import add_cache_argument, command_line, scene_command
 
 #: --max-positions may not exceed this (2^10 + 1 field solves)
 MAX_POSITIONS_LIMIT = 1025

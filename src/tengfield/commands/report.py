@@ -9,7 +9,8 @@ serial run's, and rank 0 writes the files.
 """
 from __future__ import annotations
 
-from ._common import scene_command, world_if_parallel
+from .._mpi import world_if_parallel
+from ._common import scene_command
 
 
 def register(sub) -> None:

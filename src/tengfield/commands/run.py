@@ -9,8 +9,8 @@ is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
 
-from ._common import (add_cache_argument, add_jobs_argument, command_line, scene_command,
-                      world_if_parallel)
+from .._mpi import world_if_parallel
+from ._common import add_cache_argument, add_jobs_argument, command_line, scene_command
 
 
 def register(sub) -> None:

@@ -16,8 +16,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._common import (add_cache_argument, add_jobs_argument, command_line, scene_command,
-                      world_if_parallel)
+from .._mpi import world_if_parallel
+from ._common import add_cache_argument, add_jobs_argument, command_line, scene_command
 from ._ranges import parse_range
 
 

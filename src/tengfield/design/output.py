@@ -1,12 +1,10 @@
 """design.csv, design.json, best.toml (and design.png through tengfield.plotting.design)."""
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
-from .._toml import toml_value
-from ..io import atomic_path, write_json
+from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
 from .candidate import followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
@@ -65,13 +63,8 @@ def csv_record(result, row) -> dict:
 
 def write_design_csv(path, result) -> Path:
     cols = csv_columns(result)
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=cols)
-        writer.writeheader()
-        for row in result.rows:
-            rec = csv_record(result, row)
-            writer.writerow({c: _fmt(rec.get(c)) for c in cols})
-    return Path(path)
+    records = (csv_record(result, row) for row in result.rows)
+    return write_rows(path, cols, ([_fmt(rec.get(c)) for c in cols] for rec in records))
 
 
 def cost_split(result) -> dict:
@@ -151,17 +144,6 @@ def best_scene_dict(result) -> dict:
     return data
 
 
-def to_toml(data: dict, header: str = "") -> str:
-    lines = [f"# {line}" for line in header.splitlines()]
-    for sec, values in data.items():
-        if not isinstance(values, dict):
-            continue
-        lines += ["", f"[{sec}]"]
-        lines += [f"{key} = {toml_value(v)}" for key, v in values.items()
-                  if not isinstance(v, dict)]
-    return "\n".join(lines).lstrip("\n") + "\n"
-
-
 def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     """design.csv, design.json, best.toml (if a candidate is feasible), design.png."""
     out = Path(out_dir)
@@ -177,8 +159,7 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
                   + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
                   + f"\nexcitation: the first band point; [field]: the scene's (the design used "
                   + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
-        with atomic_path(out / "best.toml") as tmp:
-            tmp.write_text(to_toml(best_scene_dict(result), header))
+        write_text(out / "best.toml", scene_toml(best_scene_dict(result), header))
         written.append(out / "best.toml")
     if plots:
         from ..plotting.design import plot_design

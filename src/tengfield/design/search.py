@@ -149,7 +149,7 @@ def _evaluate_task(task):
 
 def _quiet_worker() -> None:
     """A worker's stderr carries tengfield's lines only (no ffcx/setuptools JIT chatter)."""
-    from ..cli import configure_output
+    from .._console import configure_output
     configure_output()
 
 

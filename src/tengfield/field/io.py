@@ -22,7 +22,7 @@ def field_json(result, reference: str, potentials=None) -> dict:
 
 def write_field_json(path, result, reference: str, potentials=None) -> None:
     """Write :func:`field_json` to ``path`` (call on one rank; atomic, strict JSON)."""
-    from ..io import write_json
+    from .._files import write_json
 
     write_json(path, field_json(result, reference, potentials))
 

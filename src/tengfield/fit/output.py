@@ -5,8 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import write_json
-from .._toml import toml_value
+from .._files import scene_toml, write_json, write_text
 from .solve import FitResult
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
@@ -31,15 +30,6 @@ def fitted_scene_dict(scene, result: FitResult) -> dict:
     return data
 
 
-def to_toml(data: dict, header: str = "") -> str:
-    """TOML text of a scene dict (sections of scalars)."""
-    lines = [f"# {line}" for line in header.splitlines()]
-    for sec, values in data.items():
-        lines += ["", f"[{sec}]"]
-        lines += [f"{key} = {toml_value(v)}" for key, v in values.items()]
-    return "\n".join(lines).lstrip("\n") + "\n"
-
-
 def write_fit_outputs(scene, result: FitResult, out_dir, *, plots: bool = True) -> list[Path]:
     """Write fit.json, fitted.toml and (with ``plots``) fit.png to ``out_dir``."""
     out = Path(out_dir)
@@ -55,7 +45,8 @@ def write_fit_outputs(scene, result: FitResult, out_dir, *, plots: bool = True) 
     if "time_shift_s" in result.values:
         lines.append("time_shift_s is the trace's offset after the steady-window start "
                      "(no scene key)")
-    (out / "fitted.toml").write_text(to_toml(fitted_scene_dict(scene, result), "\n".join(lines)))
+    write_text(out / "fitted.toml", scene_toml(fitted_scene_dict(scene, result),
+                                               "\n".join(lines)))
     written.append(out / "fitted.toml")
     if plots:
         written.append(plot_fit(result, out / "fit.png"))

@@ -246,7 +246,7 @@ def _serve(stdin, stdout) -> int:
 
 
 def _main() -> int:
-    from ..cli import configure_output
+    from .._console import configure_output
 
     replies = os.fdopen(os.dup(1), "wb")    # the answers; what the figures print goes
     os.dup2(2, 1)                           # to stderr, not into the answers

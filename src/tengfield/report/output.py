@@ -9,9 +9,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._toml import toml_value
+from .._files import atomic_path, scene_toml, toml_value, write_text
 from ..io import format_number as _num
-from ..io import atomic_path, write_report_csv, write_report_json
+from ..io import write_report_csv, write_report_json
 from .study import QUANTITIES, Report, Row
 
 STAGE_TITLES = {
@@ -23,19 +23,13 @@ STAGE_TITLES = {
 
 
 def scene_text(scene, sections: dict, header: str) -> str:
-    """The whole scene as TOML with ``sections`` (file-level keys) replacing its values."""
+    """The whole scene as TOML with ``sections`` (file-level keys) replacing its values
+    (an empty ``file``, no recorded excitation, left out)."""
     data = scene.to_dict()
     for sec, values in sections.items():
         data.setdefault(sec, {}).update(values)
-    lines = [f"# {line}" for line in header.splitlines()]
-    for sec, values in data.items():
-        lines.append("")
-        lines.append(f"[{sec}]")
-        for key, value in values.items():
-            if value is None or (isinstance(value, str) and value == "" and key == "file"):
-                continue
-            lines.append(f"{key} = {toml_value(value)}")
-    return "\n".join(lines) + "\n"
+    return scene_toml({sec: {k: v for k, v in values.items() if not (k == "file" and v == "")}
+                       for sec, values in data.items()}, header)
 
 
 def plot_stage(path: Path, rows: list[Row], stage: str, targets=(1e-2, 1e-3)) -> Path:
@@ -162,11 +156,6 @@ def markdown(report: Report, images: dict) -> str:
     return "\n".join(lines)
 
 
-def _write_text(path: Path, text: str) -> None:
-    with atomic_path(path) as tmp:
-        tmp.write_text(text)
-
-
 def write_report(report: Report, out_dir) -> list[Path]:
     """Write report.csv, report.json, report.md, one PNG per stage and
     ``recommended-<target>.toml`` scene files to ``out_dir`` (each atomically)."""
@@ -184,12 +173,12 @@ def write_report(report: Report, out_dir) -> list[Path]:
             written.append(images[stage])
     for rec in report.recommendations:
         path = out / f"recommended-{rec.target:g}.toml"
-        _write_text(path, scene_text(report.scene, rec.scene_sections(),
+        write_text(path, scene_text(report.scene, rec.scene_sections(),
                                    f"{report.scene.source} with the cheapest settings measured by "
                                    f"`tengfield report`\nto reach {rec.target:g} on the peak-to-peak "
                                    f"V_OC, Q_SC, I_SC (measured: {rec.measured_error:.2g})"))
         written.append(path)
     md = out / "report.md"
-    _write_text(md, markdown(report, images))
+    write_text(md, markdown(report, images))
     written.append(md)
     return written

@@ -1,0 +1,93 @@
+"""What tengfield prints on stderr: its own lines only.
+
+:func:`configure_output` (called by :func:`tengfield.cli.main` before any command
+module runs, and by the processes tengfield starts: the figure process, the design
+workers) silences library logging below warnings (ffcx/setuptools JIT
+``INFO:root:running build_ext`` and compiler lines), prints warnings and logged
+errors as one line each (``tengfield: warning: ...``, :func:`warning_text`) and
+makes VTK render off screen.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import re
+import sys
+import warnings
+
+_WARNING_LINE = re.compile(r"^.*?:\d+: (\w+): (.*)$")
+
+
+def warning_text(message) -> str:
+    """One line for a warning: its first non-empty line, file/line prefixes dropped."""
+    lines = [ln.strip() for ln in str(message).splitlines() if ln.strip()]
+    text = lines[0] if lines else str(message).strip()
+    match = _WARNING_LINE.match(text)
+    return match.group(2) if match else text
+
+
+class _TengfieldFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        kind = "error" if record.levelno >= logging.ERROR else "warning"
+        return f"tengfield: {kind}: {warning_text(record.getMessage())}"
+
+
+class _QuietHandler(logging.StreamHandler):
+    """Root handler: warnings and errors only, one tengfield line each.
+
+    It follows ``sys.stderr`` at emit time (so redirections and tests see it)."""
+
+    def __init__(self):
+        super().__init__()
+        self.setLevel(logging.WARNING)
+        self.setFormatter(_TengfieldFormatter())
+
+    @property
+    def stream(self):
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value):  # logging.StreamHandler.__init__ assigns it
+        pass
+
+
+def _showwarning(message, category, filename, lineno, file=None, line=None):
+    stream = file if file is not None else sys.stderr
+    try:
+        stream.write(f"tengfield: warning: {warning_text(message)}\n")
+    except (OSError, ValueError):  # a closed stream: nothing to tell
+        pass
+
+
+def configure_output() -> None:
+    """Quiet stderr: only tengfield's own lines (see the module docstring).
+
+    Idempotent; called by :func:`tengfield.cli.main` before any command module runs, i.e.
+    before ffcx, setuptools, pyvista or VTK are imported.
+    """
+    # the CLI only renders PNG files: never ask for an X server (VTK's
+    # "bad X server connection"); pyvista reads this at import
+    os.environ["PYVISTA_OFF_SCREEN"] = "true"
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        # no display: VTK (>= 9.4 wheels) would try X first and print "bad X server
+        # connection" before falling back; ask for the headless EGL window first
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    root = logging.getLogger()
+    if not any(isinstance(h, _QuietHandler) for h in root.handlers):
+        # a handler on the root first: ffcx's logging.basicConfig() then adds none,
+        # and setuptools' set_threshold (root level INFO during JIT builds) stays
+        # invisible because this handler passes WARNING and above only
+        for handler in list(root.handlers):
+            if type(handler) is logging.StreamHandler:   # a basicConfig() of a library
+                root.removeHandler(handler)
+        root.addHandler(_QuietHandler())
+    for noisy in ("distutils", "setuptools", "ffcx", "UFL", "ufl", "FFCX", "numba", "matplotlib",
+                  "PIL", "h5py"):
+        logging.getLogger(noisy).setLevel(logging.ERROR)
+    logging.captureWarnings(False)
+    warnings.showwarning = _showwarning
+    try:   # no progress-bar monitor thread: a worker pool may fork this process
+        import tqdm   # (tengfield._pool forks only a process with one thread)
+        tqdm.tqdm.monitor_interval = 0
+    except ImportError:   # pragma: no cover - a dependency
+        pass
