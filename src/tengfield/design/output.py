@@ -164,6 +164,6 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     if plots:
         from ..plotting.design import plot_design
         with atomic_path(out / "design.png") as tmp:
-            plot_design(result, tmp)
+            plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()})
         written.append(out / "design.png")
     return written

@@ -6,14 +6,15 @@ import numpy as np
 from . import new_figure
 
 
-def plot_design(result, path):
-    from ..design.spec import OBJECTIVES
-
+def plot_design(result, path, *, units: dict[str, str]):
+    """design.png of a :class:`tengfield.design.DesignResult`; ``units``: objective ->
+    its unit (``tengfield.design.spec.OBJECTIVES``, passed in: plotting stays below the
+    packages whose results it draws)."""
     spec = result.spec
     rows = result.rows
     keys = list(spec.vary)
     obj = spec.objective
-    unit = OBJECTIVES[obj][0]
+    unit = units[obj]
     ok = [r for r in rows if r["status"] == "ok"]
     infeasible = [r for r in rows if r["status"] == "infeasible"]
     skipped = [r for r in rows if r["status"] == "skipped"]
@@ -81,8 +82,8 @@ def plot_design(result, path):
         if best is not None:
             ax2.plot(best["objectives"][a]["value"], best["objectives"][b]["value"], "*",
                      ms=16, color="C1", mec="k", label=f"best ({a})")
-        ax2.set_xlabel(f"{a} [{OBJECTIVES[a][0]}]")
-        ax2.set_ylabel(f"{b} [{OBJECTIVES[b][0]}]")
+        ax2.set_xlabel(f"{a} [{units[a]}]")
+        ax2.set_ylabel(f"{b} [{units[b]}]")
         ax2.grid(alpha=0.3)
         ax2.legend(fontsize=7)
         ax2.set_title("Pareto plot", fontsize=9)
