@@ -116,7 +116,7 @@ def lines_from_table(table, scene) -> Lines:
     from .errors import TengfieldError
     from .field.breakdown import LINE_ANGLES_DEG
 
-    if getattr(table, "line_potential", None) is None:
+    if table.line_potential is None:
         raise TengfieldError("the surrogate has no breakdown lines (made by the 3D solver or "
                              "a custom solve): the breakdown check needs the axisymmetric solver")
     angles = table.provenance.get("breakdown_line_angles_deg", LINE_ANGLES_DEG)
@@ -458,7 +458,7 @@ def resolve_for_run(scene, table, comm=None):
     once when |σ| exceeds σ_max."""
     import warnings
 
-    if getattr(table, "line_potential", None) is None:
+    if table.line_potential is None:
         return scene, table, None
     result = scene_breakdown(scene, table)
     if uses_breakdown_charge(scene):
