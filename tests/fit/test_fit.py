@@ -8,7 +8,7 @@ import pytest
 
 from tengfield.fit import fit_trace, parse_fit_section
 from tengfield.fit._model import ForwardModel
-from tengfield.fit.solve import _Problem, _Space
+from tengfield.fit._problem import _Problem, _Space
 
 from fit_synthetic import SHIFT, TRUE, synthetic
 

@@ -1,0 +1,74 @@
+"""The outcome of a fit (:class:`FitResult`, fit.json's summary) and :class:`FitError`."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import TengfieldError
+from .spec import PARAMETERS
+
+
+class FitError(TengfieldError, RuntimeError):
+    """The fit could not be carried out (e.g. the model gives no signal)."""
+
+
+@dataclass
+class FitResult:
+    """Outcome of :func:`fit_trace` / :func:`fit_targets` (file units for parameters)."""
+    mode: str                                   # "trace" or "targets"
+    names: list[str]
+    values: dict[str, float]
+    start: dict[str, float]
+    bounds: dict[str, tuple[float, float]]
+    standard_errors: dict[str, float]
+    correlation: np.ndarray
+    identifiable: dict[str, bool]
+    notes: list[str]
+    residual_rms: dict[str, float]              # per column / target, SI
+    chi2_reduced: float
+    noise: dict[str, dict]                      # per column: value [SI] and "given"/"estimated"
+    evaluations: int
+    jacobian_evaluations: int
+    dynamics_runs: int
+    status: int
+    message: str
+    wall_time: float
+    alignment: dict = field(default_factory=dict)
+    profiles: dict = field(default_factory=dict)
+    bootstrap: dict = field(default_factory=dict)
+    measured: dict = field(default_factory=dict)    # plotting: time, values
+    fitted: dict = field(default_factory=dict)
+    loss: str = "linear"
+
+    def as_dict(self) -> dict:
+        """JSON-ready summary (fit.json)."""
+        def finite(x):
+            return None if x is None or not math.isfinite(x) else float(x)
+        return {
+            "mode": self.mode,
+            "parameters": {n: {"value": self.values[n], "standard_error": finite(
+                self.standard_errors[n]), "start": self.start[n], "min": self.bounds[n][0],
+                "max": self.bounds[n][1], "identifiable": self.identifiable[n],
+                "unit": PARAMETERS[n][2], "meaning": PARAMETERS[n][3]} for n in self.names},
+            "correlation": {"names": self.names,
+                            "matrix": [[finite(v) for v in row] for row in self.correlation]},
+            "identifiability_notes": self.notes,
+            "residual_rms": self.residual_rms,
+            "chi2_reduced": finite(self.chi2_reduced),
+            "noise": self.noise,
+            "loss": self.loss,
+            "iterations": {"function_evaluations": self.evaluations,
+                           "jacobian_evaluations": self.jacobian_evaluations,
+                           "dynamics_runs": self.dynamics_runs},
+            "status": self.status, "message": self.message,
+            "wall_time_s": self.wall_time,
+            "alignment": self.alignment,
+            "profiles": self.profiles,
+            "bootstrap": self.bootstrap,
+            "uncertainty_rule": "covariance s^2 (J^T J)^-1 at the optimum, J the Jacobian of the "
+                                "weighted residuals; s^2 = reduced chi^2 when the noise is "
+                                "estimated, max(1, reduced chi^2) when it is given; assumes "
+                                "independent noise between samples",
+        }
