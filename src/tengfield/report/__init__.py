@@ -1,7 +1,10 @@
 """Error against run time for every stage, and the cheapest settings for a target accuracy.
 
-``tengfield report`` (docs/report.md). The measurement lives in
-:mod:`tengfield.report.study` (pure: no files, no plots), the files it
+``tengfield report`` (docs/report.md). The measurement (pure: no files, no
+plots) lives in :mod:`tengfield.report.study` (:func:`build_report`, the
+verification), :mod:`tengfield.report.stages` (each stage's rows),
+:mod:`tengfield.report.plan` (settings, plan, rows, error arithmetic) and
+:mod:`tengfield.report.recommend` (the recommendation logic); the files it
 writes in :mod:`tengfield.report.output`, the default recommendations in
 ``calibration.json`` (:func:`default_recommendations`). This package
 re-exports the public names::
@@ -11,13 +14,14 @@ re-exports the public names::
 from __future__ import annotations
 
 from .output import markdown, plot_stage, scene_text, toml_value, write_report
-from .study import (BUDGET_SHARE, MIN_ADAPTIVE_POSITIONS, QUANTITIES, TARGETS, FieldSetting,
-                    Plan, Recommendation, Report, Row, build_report, cheapest,
-                    circuit_rows, default_recommendations, dynamics_rows, field_rows,
-                    make_plan, max_relative_deviation, peak_errors, recommend,
-                    recommended_field_settings, recommended_sample_rate, relative_error,
-                    richardson, scene_with_recommended, solves_needed, surrogate_rows,
-                    surrogate_tolerance, verify)
+from .plan import (BUDGET_SHARE, MIN_ADAPTIVE_POSITIONS, QUANTITIES, TARGETS, FieldSetting,
+                   Plan, Row, cheapest, make_plan, max_relative_deviation, peak_errors,
+                   relative_error, richardson, solves_needed)
+from .recommend import (Recommendation, default_recommendations, recommend,
+                        recommended_field_settings, recommended_sample_rate,
+                        scene_with_recommended, surrogate_tolerance)
+from .stages import circuit_rows, dynamics_rows, field_rows, surrogate_rows
+from .study import Report, build_report, verify
 
 __all__ = ["BUDGET_SHARE", "MIN_ADAPTIVE_POSITIONS", "QUANTITIES", "TARGETS", "FieldSetting",
            "Plan", "Recommendation", "Report", "Row", "build_report", "cheapest",

@@ -1,6 +1,7 @@
 """Files of ``tengfield report``: report.md, one PNG per stage, recommended scene files.
 
-Kept apart from :mod:`tengfield.report.study` (the measurement) so that the
+Kept apart from :mod:`tengfield.report.study` and the modules it runs (the
+measurement: ``plan``, ``stages``, ``recommend``) so that the
 measurement stays free of I/O and plotting; report.csv and report.json are
 written by :mod:`tengfield.io`.
 """
@@ -12,7 +13,8 @@ from pathlib import Path
 from .._files import atomic_path, scene_toml, toml_value, write_text
 from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
-from .study import QUANTITIES, Report, Row
+from .plan import QUANTITIES, Row
+from .study import Report
 
 STAGE_TITLES = {
     "field": "Field: mesh size, degree, axisymmetric vs 3D, far field",
