@@ -29,7 +29,7 @@ import time
 
 #: the modules holding ``@njit(cache=True)`` kernels
 KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.dynamics.motion3d._kernel",
-                  "tengfield.harvest", "tengfield.array")
+                  "tengfield.harvest._kernel", "tengfield.array")
 
 _SHORT_3D = """
 [contact]
