@@ -13,7 +13,8 @@ re-exports the public names::
 """
 from __future__ import annotations
 
-from .output import markdown, plot_stage, scene_text, toml_value, write_report
+from ..plotting.report import plot_stage
+from .output import markdown, scene_text, toml_value, write_report
 from .plan import (BUDGET_SHARE, MIN_ADAPTIVE_POSITIONS, QUANTITIES, TARGETS, FieldSetting,
                    Plan, Row, cheapest, make_plan, max_relative_deviation, peak_errors,
                    relative_error, richardson, solves_needed)

@@ -7,13 +7,12 @@ written by :mod:`tengfield.io`.
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, toml_value, write_text
 from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
-from .plan import QUANTITIES, Row
+from .plan import QUANTITIES
 from .study import Report
 
 STAGE_TITLES = {
@@ -32,58 +31,6 @@ def scene_text(scene, sections: dict, header: str) -> str:
         data.setdefault(sec, {}).update(values)
     return scene_toml({sec: {k: v for k, v in values.items() if not (k == "file" and v == "")}
                        for sec, values in data.items()}, header)
-
-
-def plot_stage(path: Path, rows: list[Row], stage: str, targets=(1e-2, 1e-3)) -> Path:
-    """Log-log error against wall time for one stage (one marker series per group)."""
-    from ..plotting import new_figure
-
-    fig = new_figure((6.4, 4.2), dpi=100)
-    ax = fig.subplots()
-    groups: dict[str, list[Row]] = {}
-    for row in rows:
-        groups.setdefault(_group(row), []).append(row)
-    markers = "osD^v<>ph*"
-    for i, (name, members) in enumerate(groups.items()):
-        pts = []
-        for r in members:
-            err = r.error if math.isfinite(r.error) else r.error_position
-            if math.isfinite(err) and r.wall_time_s > 0:
-                pts.append((r.wall_time_s, max(err, 1e-12)))
-        if not pts:
-            continue
-        pts.sort()
-        xs, ys = zip(*pts)
-        ax.loglog(xs, ys, marker=markers[i % len(markers)], linestyle="-" if len(pts) > 1 else "",
-                  label=name)
-    for t in targets:
-        ax.axhline(t, color="0.6", lw=0.8, ls="--")
-        ax.text(ax.get_xlim()[0] if ax.lines else 1, t, f" {t:g}", va="bottom", fontsize=7,
-                color="0.4")
-    ax.set_xlabel("wall time [s]")
-    ax.set_ylabel("relative error" + (" (max of V_OC, Q_SC, I_SC peaks)"
-                                      if stage != "circuit" else " (mean power, V_load peak)"))
-    ax.set_title(STAGE_TITLES.get(stage, stage), fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
-    fig.tight_layout()
-    fig.savefig(path)
-    return path
-
-
-def _group(row: Row) -> str:
-    k = row.knobs
-    if row.stage == "field":
-        if k.get("method") == "3d":
-            return "3D (C, q at mid-stroke)"
-        if k.get("far_field") != "kelvin":
-            return f"{k.get('far_field')} far field"
-        return f"axisymmetric p{k.get('degree')}"
-    if row.stage == "dynamics":
-        return "impact map: sampling" if k.get("model") == "impact" else "soft contact vs impact map"
-    if row.stage == "circuit":
-        return f"R = {k.get('load_ohm'):.0e} ohm"
-    return row.stage
 
 
 def markdown(report: Report, images: dict) -> str:
@@ -161,6 +108,8 @@ def markdown(report: Report, images: dict) -> str:
 def write_report(report: Report, out_dir) -> list[Path]:
     """Write report.csv, report.json, report.md, one PNG per stage and
     ``recommended-<target>.toml`` scene files to ``out_dir`` (each atomically)."""
+    from ..plotting.report import plot_stage
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = [write_report_csv(out / "report.csv", report),
@@ -170,7 +119,7 @@ def write_report(report: Report, out_dir) -> list[Path]:
         rows = [r for r in report.rows if r.stage == stage]
         if rows:
             with atomic_path(out / f"{stage}.png") as tmp:
-                plot_stage(tmp, rows, stage)
+                plot_stage(tmp, rows, stage, STAGE_TITLES.get(stage, stage))   # plotting/report.py
             images[stage] = out / f"{stage}.png"
             written.append(images[stage])
     for rec in report.recommendations:

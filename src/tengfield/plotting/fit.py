@@ -1,0 +1,67 @@
+"""fit.png: measured against fitted (and the residuals) for a trace, or the fitted values
+against the targets (a :class:`tengfield.fit.FitResult`)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import new_figure
+
+
+_SI_LABEL = {"V": "V", "Q": "C", "I": "A"}
+_DISPLAY = {"V": ("V", 1.0), "Q": ("nC", 1e-9), "I": ("nA", 1e-9)}
+
+
+def plot_fit(result, path) -> Path:
+    """Measured vs fitted (and residuals) for a trace; measured vs fitted bars for targets."""
+    if result.mode == "targets":
+        labels = list(result.measured)
+        fig = new_figure((6.0, 3.2))
+        ax = fig.subplots()
+        x = np.arange(len(labels))
+        ratio = [result.fitted[k] / result.measured[k] for k in labels]
+        spread = [result.noise[k].get("relative", 0.0) for k in labels]
+        ax.axhline(1.0, color="0.3", lw=0.8)
+        ax.errorbar(x, np.ones(len(labels)), yerr=spread, fmt="none", ecolor="C0", capsize=6,
+                    label="target ± 1σ")
+        ax.plot(x, ratio, "o", color="C3", label="fitted")
+        ax.set_xticks(x, labels)
+        ax.set_ylabel("value / target")
+        ax.legend(fontsize=8)
+        ax.set_title(_title(result), fontsize=8)
+    else:
+        quantities = [q for q in result.fitted]
+        fig = new_figure((7.0, 2.6 * len(quantities) + 0.6))
+        axes = fig.subplots(2 * len(quantities), 1, sharex=True, squeeze=False,
+                            gridspec_kw={"height_ratios": [3, 1] * len(quantities)})
+        axes = axes[:, 0]
+        t = np.asarray(result.measured["time"])
+        for i, q in enumerate(quantities):
+            unit, factor = _DISPLAY[q]
+            measured = np.asarray(result.measured[q]) / factor
+            fitted = np.asarray(result.fitted[q]) / factor
+            ax, axr = axes[2 * i], axes[2 * i + 1]
+            ax.plot(t, measured, ".", ms=1.5, color="0.5", label="measured")
+            ax.plot(t, fitted, lw=1.0, color="C3", label="fitted")
+            ax.set_ylabel(f"{q} [{unit}]")
+            ax.legend(fontsize=7, loc="upper right")
+            axr.plot(t, measured - fitted, lw=0.6, color="C0")
+            axr.axhline(0.0, color="0.3", lw=0.5)
+            axr.set_ylabel("resid.", fontsize=8)
+            ax.grid(alpha=0.3)
+            axr.grid(alpha=0.3)
+        axes[0].set_title(_title(result), fontsize=8)
+        axes[-1].set_xlabel("measured time [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return Path(path)
+
+
+def _title(result) -> str:
+    parts = []
+    for name in result.names:
+        se = result.standard_errors[name]
+        flag = "" if result.identifiable[name] else " (n.i.)"
+        parts.append(f"{name} = {result.values[name]:.4g} ± {se:.2g}{flag}")
+    return "\n".join("; ".join(parts[i:i + 2]) for i in range(0, len(parts), 2))

@@ -1,0 +1,58 @@
+"""The error-against-run-time figures of ``tengfield report`` (one PNG per stage)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from . import new_figure
+
+
+def plot_stage(path: Path, rows: list, stage: str, title: str, targets=(1e-2, 1e-3)) -> Path:
+    """Log-log error against wall time for one stage of ``tengfield report`` (``rows``:
+    :class:`tengfield.report.plan.Row`; one marker series per group), titled ``title``."""
+    fig = new_figure((6.4, 4.2), dpi=100)
+    ax = fig.subplots()
+    groups: dict[str, list[Row]] = {}
+    for row in rows:
+        groups.setdefault(_group(row), []).append(row)
+    markers = "osD^v<>ph*"
+    for i, (name, members) in enumerate(groups.items()):
+        pts = []
+        for r in members:
+            err = r.error if math.isfinite(r.error) else r.error_position
+            if math.isfinite(err) and r.wall_time_s > 0:
+                pts.append((r.wall_time_s, max(err, 1e-12)))
+        if not pts:
+            continue
+        pts.sort()
+        xs, ys = zip(*pts)
+        ax.loglog(xs, ys, marker=markers[i % len(markers)], linestyle="-" if len(pts) > 1 else "",
+                  label=name)
+    for t in targets:
+        ax.axhline(t, color="0.6", lw=0.8, ls="--")
+        ax.text(ax.get_xlim()[0] if ax.lines else 1, t, f" {t:g}", va="bottom", fontsize=7,
+                color="0.4")
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("relative error" + (" (max of V_OC, Q_SC, I_SC peaks)"
+                                      if stage != "circuit" else " (mean power, V_load peak)"))
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(path)
+    return path
+
+
+def _group(row) -> str:
+    k = row.knobs
+    if row.stage == "field":
+        if k.get("method") == "3d":
+            return "3D (C, q at mid-stroke)"
+        if k.get("far_field") != "kelvin":
+            return f"{k.get('far_field')} far field"
+        return f"axisymmetric p{k.get('degree')}"
+    if row.stage == "dynamics":
+        return "impact map: sampling" if k.get("model") == "impact" else "soft contact vs impact map"
+    if row.stage == "circuit":
+        return f"R = {k.get('load_ohm'):.0e} ohm"
+    return row.stage
