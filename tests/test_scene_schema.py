@@ -52,7 +52,7 @@ ALTERNATIVES = {
 def _files(directory):
     t = np.arange(400) / 1000.0
     y = 1e-3 * np.sin(2 * np.pi * 20.0 * t)
-    rows = "".join(f"{a!r},{b!r},{a!r},{b!r},{b!r}\n" for a, b in zip(t, y))
+    rows = "".join(f"{float(a)!r},{float(b)!r},{float(a)!r},{float(b)!r},{float(b)!r}\n" for a, b in zip(t, y))
     for name in ("table.csv", "table2.csv"):
         (directory / name).write_text("time_s,displacement_m,t2_s,d2_m,x_m\n" + rows)
     for name, level in (("psd.csv", 1e-3), ("psd2.csv", 2e-3)):

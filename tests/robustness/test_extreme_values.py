@@ -114,8 +114,10 @@ def _recorded_scene(tmp_path, body):
 
 
 def _record(n=400, rate=1000.0, amp=1e-3):
+    """(times, values) as lists of Python floats: their repr is the number on numpy 1 and 2
+    (numpy 2's np.float64 repr reads 'np.float64(0.0)')."""
     t = np.arange(n) / rate
-    return t, amp * np.sin(2 * np.pi * 20 * t)
+    return t.tolist(), (amp * np.sin(2 * np.pi * 20 * t)).tolist()
 
 
 def test_recorded_values_near_1e300_are_one_line(run_cli, tmp_path):

@@ -140,7 +140,7 @@ def check_time_steps(t: np.ndarray, what: str, *, row_offset: int = 0) -> None:
     if np.any(step <= 0):
         i = int(np.flatnonzero(step <= 0)[0])
         raise SceneError(f"{what}: time is not strictly increasing at data row "
-                         f"{i + 2 + row_offset} ({t[i]!r} s then {t[i + 1]!r} s)")
+                         f"{i + 2 + row_offset} ({float(t[i])!r} s then {float(t[i + 1])!r} s)")
     if step.size == 0:
         return
     median = float(np.median(step))
@@ -149,7 +149,7 @@ def check_time_steps(t: np.ndarray, what: str, *, row_offset: int = 0) -> None:
     if small.size:
         i = int(small[0])
         raise SceneError(f"{what}: time step at data row {i + 2 + row_offset} is {step[i]:.3g} s "
-                         f"({t[i]!r} s then {t[i + 1]!r} s), far below the data's resolution: "
+                         f"({float(t[i])!r} s then {float(t[i + 1])!r} s), far below the data's resolution: "
                          f"allowed >= {MIN_STEP_FRACTION:g} x the median step "
                          f"{median:.3g} s (a duplicated or mistyped stamp?)")
 
