@@ -88,17 +88,6 @@ def ensemble_block(rows: list[dict]) -> dict:
     return block
 
 
-def check_ensemble(scene) -> None:
-    """Refuse ``[run] realisations`` > 1 where realisations cannot differ."""
-    from .errors import SceneError
-
-    n = scene.run.realisations
-    if n > 1 and not scene.excitation.has_noise:
-        raise SceneError(f"[run] realisations = {n} needs a random excitation ([excitation] "
-                         "kind = 'random', or 'harmonics' with band_hz or psd_file): "
-                         f"with kind = {scene.excitation.kind!r} every realisation is the same")
-
-
 def _realisation_task(task):
     from .pipeline import run
 
@@ -114,7 +103,8 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     ``first`` is the run of realisation 0 (the scene's own seed, already done); the other
     N - 1 are farmed over the ranks of ``comm`` (``mpirun -n N``) or ``jobs`` worker
     processes, each reading the surrogate the first run left in the cache. The rows and
-    the block do not depend on how the work was spread."""
+    the block do not depend on how the work was spread. (A scene whose realisations
+    could not differ is refused where it is built: ``[run] realisations`` needs noise.)"""
     import sys
 
     from tqdm import tqdm
@@ -122,7 +112,6 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     from ._mpi import rank_of
     from .sweep import run_tasks
 
-    check_ensemble(scene)
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
