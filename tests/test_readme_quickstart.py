@@ -163,6 +163,21 @@ def test_run(ran):
     assert "wrote " in proc.stdout
 
 
+def test_container_checks(work, ran, precomputed):
+    """What ``scripts/test-container`` asserts of these files inside each image
+    (``scripts/container/check_outputs.py``): every number in the surrogate file is
+    finite and tengfield reads it back; the run's files are complete and finite."""
+    import subprocess
+    import sys
+
+    where, _ = work
+    script = ROOT / "scripts" / "container" / "check_outputs.py"
+    for what, directory in (("precompute", precomputed.parent), ("run", ran[0])):
+        proc = subprocess.run([sys.executable, str(script), what, str(directory)],
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, f"check_outputs.py {what}:\n{proc.stdout}{proc.stderr}"
+
+
 def test_dynamics(work, scene):
     where, cli = work
     cli("dynamics", "my.toml", "-o", "out/dyn")

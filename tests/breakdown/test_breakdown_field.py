@@ -51,6 +51,14 @@ def test_lines_are_stored_with_the_surrogate_and_mirror_symmetric(cache):
     np.testing.assert_allclose(image[keep], lines[keep], rtol=1e-12)
     # the half-size mesh values exist where the field error was measured
     assert np.sum(np.all(np.isfinite(table.line_check), axis=(1, 2, 3))) >= 2
+    # ... and only there: the file holds those rows and their positions, never a NaN
+    np.testing.assert_array_equal(again.line_check, table.line_check)   # NaN rows equal
+    import h5py
+    with h5py.File(outcome.path, "r") as f:
+        for name, data in f.items():
+            assert np.all(np.isfinite(data[()])), name
+        solved = np.flatnonzero(np.all(np.isfinite(table.line_check), axis=(1, 2, 3)))
+        np.testing.assert_array_equal(f["breakdown_line_potential_check_index"][()], solved)
 
 
 def test_mirror_image_agrees_with_a_direct_solve():

@@ -18,8 +18,9 @@ import time
 from .. import __version__
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
 
-#: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars
-FORMAT_VERSION = 2
+#: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars;
+#: 3: the breakdown lines' mesh check stored only where it was solved (no NaN in a file)
+FORMAT_VERSION = 3
 #: format of the (z, r) HDF5 file
 FORMAT_VERSION_ZR = 1
 

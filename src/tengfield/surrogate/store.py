@@ -45,6 +45,10 @@ SCALAR_TYPES = {"ball_charge": float, "stroke": float, "interpolation_error": fl
 #: lines' basis potentials (a file without them is still a valid surrogate)
 OPTIONAL_ARRAYS = {"line_potential": "breakdown_line_potential",
                    "line_check": "breakdown_line_potential_check"}
+#: the positions (indices into ``positions_m``) where the lines' mesh check was solved:
+#: ``breakdown_line_potential_check`` holds only those rows, so every number in a file
+#: is finite (in memory, ``SurrogateTable.line_check`` has NaN rows where it was not)
+LINE_CHECK_INDEX = "breakdown_line_potential_check_index"
 _SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
            "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
 
@@ -206,6 +210,14 @@ def write_table(path: str | Path, table: SurrogateTable) -> Path:
     for attr, name in OPTIONAL_ARRAYS.items():
         if getattr(table, attr, None) is not None:
             arrays[name] = np.asarray(getattr(table, attr), dtype=float)
+    if OPTIONAL_ARRAYS["line_check"] in arrays:
+        check = arrays[OPTIONAL_ARRAYS["line_check"]]
+        solved = np.flatnonzero(np.all(np.isfinite(check), axis=tuple(range(1, check.ndim))))
+        if solved.size:
+            arrays[OPTIONAL_ARRAYS["line_check"]] = check[solved]
+            arrays[LINE_CHECK_INDEX] = solved.astype(np.int64)
+        else:   # solved nowhere: as if absent (HDF5 filters refuse empty datasets)
+            del arrays[OPTIONAL_ARRAYS["line_check"]]
     scalars = typed_scalars(vars(table), SCALAR_TYPES)
     return write_checked_file(path, arrays, scalars, SCALARS, {
         "format_version": FORMAT_VERSION,
@@ -290,6 +302,9 @@ def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) ->
         raise SurrogateError(f"error history has shape {history.shape}")
     check_shapes(arrays)
     n = np.shape(arrays["positions"])[0]
+    if "line_check" in arrays:
+        arrays["line_check"] = _expand_line_check(arrays["line_check"],
+                                                  arrays.pop("line_check_index", None), n)
     for attr in OPTIONAL_ARRAYS:
         if attr in arrays:
             shape = np.shape(arrays[attr])
@@ -308,6 +323,27 @@ def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) ->
     return table
 
 
+def _expand_line_check(rows, index, n: int) -> np.ndarray:
+    """The lines' mesh check at all ``n`` positions (NaN where it was not solved) from
+    the stored ``rows`` at the positions ``index``; raise :class:`SurrogateError`
+    unless the two agree and the rows are finite."""
+    rows = np.asarray(rows, dtype=float)
+    if index is None:
+        raise SurrogateError(f"array {LINE_CHECK_INDEX!r} is missing")
+    index = np.asarray(index)
+    if (index.ndim != 1 or index.dtype.kind not in "iu" or rows.ndim != 4
+            or rows.shape[0] != index.size or np.any(np.diff(index) <= 0)
+            or (index.size and (index[0] < 0 or index[-1] >= n))):
+        raise SurrogateError(f"arrays {OPTIONAL_ARRAYS['line_check']!r} (shape {rows.shape}) "
+                             f"and {LINE_CHECK_INDEX!r} (shape {index.shape}) do not match "
+                             f"{n} positions")
+    if not np.all(np.isfinite(rows)):
+        raise SurrogateError("non-finite breakdown line check potentials")
+    full = np.full((n, *rows.shape[1:]), np.nan)
+    full[index] = rows
+    return full
+
+
 def read_table(path: str | Path, expected_hash: str | None = None,
                expected_solver: str | None = None) -> SurrogateTable:
     """Read a surrogate file; raise :class:`SurrogateError` unless it is complete,
@@ -317,7 +353,8 @@ def read_table(path: str | Path, expected_hash: str | None = None,
     return read_checked_file(path, check_format=_check_format, array_names=ARRAYS,
                              scalar_names=SCALARS, scalar_types=SCALAR_TYPES,
                              build=_build_table, expected_hash=expected_hash,
-                             expected_solver=expected_solver, optional_names=OPTIONAL_ARRAYS)
+                             expected_solver=expected_solver,
+                             optional_names={**OPTIONAL_ARRAYS, "line_check_index": LINE_CHECK_INDEX})
 
 
 # ---------------------------------------------------------------------------
