@@ -24,16 +24,17 @@ def _read(path):
 
 
 def _same_double(text: str, value: float) -> bool:
-    back = float(text)
     if math.isnan(value):
-        return math.isnan(back)
+        return text == ""          # a missing value: an empty cell
+    back = float(text)
     return back == value and math.copysign(1.0, back) == math.copysign(1.0, value)
 
 
 @settings(max_examples=60, deadline=None)
 @given(values=doubles)
 def test_every_double_round_trips_bit_for_bit(tmp_path_factory, values):
-    """Subnormals, -0.0, huge and tiny magnitudes, inf and NaN: float(text) is the double."""
+    """Subnormals, -0.0, huge and tiny magnitudes, inf: float(text) is the double; NaN is
+    an empty cell."""
     path = tmp_path_factory.mktemp("csv") / "x.csv"
     write_csv(path, ["x_m", "minus_x_m"], [values, -values])
     rows = _read(path)
@@ -58,6 +59,19 @@ def test_integers_strings_and_booleans(tmp_path):
     assert _read(path) == [["surface", "steps", "initial_rest", "speed_m_per_s"],
                            ["lower", "3", "1", "0.5"], ["upper", "0", "0", "-1.25"],
                            ["wall", "12", "1", "2"]]
+
+
+def test_nan_is_an_empty_cell_in_both_writers(tmp_path):
+    """A value that does not exist (a contact still open at the run's end) is the empty
+    cell spreadsheets, Origin and pandas read as missing, never the text 'nan'."""
+    values = np.array([1.5, np.nan, -np.inf])
+    plain = write_csv(tmp_path / "p.csv", ["a_s", "b"], [values, np.array([1, 2, 3])])
+    printf = write_csv(tmp_path / "f.csv", ["a_s", "b"], [values, np.array([1, 2, 3])],
+                       formats={"a_s": "%.10g"})
+    assert _read(plain)[1:] == [["1.5", "1"], ["", "2"], ["-inf", "3"]]
+    assert _read(printf)[1:] == [["1.5", "1"], ["", "2"], ["-inf", "3"]]
+    back = np.genfromtxt(plain, delimiter=",", skip_header=1)
+    assert np.isnan(back[1, 0]) and back[2, 0] == -np.inf
 
 
 def test_empty_columns_give_the_header_only(tmp_path):

@@ -136,6 +136,8 @@ def check_outputs(out: Path, names) -> None:
             with open(path, newline="") as f:
                 rows = list(csv.reader(f))
             assert len(rows) >= 2 and len(rows[0]) >= 1, path
+            # a missing value is an empty cell (a contact still open at the end), not text
+            assert not [c for r in rows for c in r if c.strip().lower() == "nan"], path
 
 
 RUN_FILES = ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",

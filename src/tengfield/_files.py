@@ -136,8 +136,10 @@ def write_csv(path: str | Path, header: list[str], columns: list, *,
     double precision: ``float(text)`` gives the double back; ``1e-05`` is written
     ``0.00001``, ``2.5e-07`` as ``2.5e-7``), integers as integers, booleans as 0/1,
     strings as they are (no quoting: they must not contain commas, quotes or line
-    breaks; a table of text cells goes through :func:`write_rows`). The header is the
-    plain comma-separated names. ``formats`` gives a column (by name) a printf format
+    breaks; a table of text cells goes through :func:`write_rows`). A NaN (a value that
+    does not exist, e.g. the exit time of a contact still open when the run ends) is an
+    empty cell, the missing value of spreadsheets, Origin and pandas; ±inf is written
+    ``inf``/``-inf``. The header is the plain comma-separated names. ``formats`` gives a column (by name) a printf format
     instead (``"%.10g"``: what ``numpy.savetxt`` writes with it).
 
     Formatted and written by Apache Arrow's CSV writer (compiled, 75 ns per number:
@@ -161,8 +163,9 @@ def write_csv(path: str | Path, header: list[str], columns: list, *,
     options = pa_csv.WriteOptions(include_header=False, quoting_style="none")
     rows = len(arrays[0]) if arrays else 0
     if formats and rows:
-        blocks = [[pa.array([formats[name] % v for v in a[start:start + FORMAT_BLOCK_ROWS]
-                             .tolist()], type=pa.string()) if name in formats
+        blocks = [[pa.array([formats[name] % v if v == v else ""   # NaN: an empty cell
+                             for v in a[start:start + FORMAT_BLOCK_ROWS].tolist()],
+                            type=pa.string()) if name in formats
                    else a.slice(start, FORMAT_BLOCK_ROWS) for name, a in zip(header, arrays)]
                   for start in range(0, rows, FORMAT_BLOCK_ROWS)]
     else:
@@ -191,7 +194,7 @@ def _arrow_array(col):
         return pa.array(values, type=pa.string())
     if values.dtype.kind == "O":
         return pa.array([str(v) for v in values.tolist()], type=pa.string())
-    return pa.array(values)
+    return pa.array(values, from_pandas=True)   # float NaN -> null: an empty cell
 
 
 def write_rows(path: str | Path, header: list[str], rows) -> Path:
