@@ -383,6 +383,12 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
 
     from .surrogate import obtain_table, precompute, store_in_cache
 
+    if solve is None and (scene.field.method == "3d" or not scene.is_axisymmetric):
+        from .errors import TengfieldError   # refused before minutes of 3D solves
+        raise TengfieldError(
+            f"the breakdown check needs the gap lines of the axisymmetric field solver (the "
+            f"ball on the axis): [field] method = {scene.field.method!r}, ball_offset_mm = "
+            f"{scene.field.ball_offset * 1e3:g} has none; use method = \"axisymmetric\"")
     table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                   progress=progress, command_line=command_line, write=write)
     if table.line_potential is None and solve is None and scene.is_axisymmetric:
@@ -459,6 +465,12 @@ def resolve_for_run(scene, table, comm=None):
     import warnings
 
     if table.line_potential is None:
+        if uses_breakdown_charge(scene):   # never run at the stand-in sigma
+            from .errors import TengfieldError
+            raise TengfieldError(
+                '[device] surface_charge_uC_per_m2 = "breakdown": the surrogate has no '
+                "breakdown lines (made by the 3D solver or a custom solve), so sigma_max is "
+                "unknown; give sigma in uC/m^2 or use [field] method = \"axisymmetric\"")
         return scene, table, None
     result = scene_breakdown(scene, table)
     if uses_breakdown_charge(scene):

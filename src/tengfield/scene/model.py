@@ -523,6 +523,14 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene
         fvals["domain_radius"] = auto_domain_radius(dev, fvals["ball_offset"])
     fld = Field(**fvals)
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
+    if (isinstance(data.get("device"), dict)
+            and data["device"].get("surface_charge_uC_per_m2") == "breakdown"
+            and (fld.method == "3d" or fld.ball_offset != 0.0)):
+        problems.append(f'[device] surface_charge_uC_per_m2 = "breakdown" needs the gap lines '
+                        f'of the axisymmetric field solver (the ball on the axis); [field] '
+                        f'method = {fld.method!r}, ball_offset_mm = {fld.ball_offset * 1e3:g} '
+                        f'has none: use method = "axisymmetric" with ball_offset_mm = 0, or give '
+                        f'sigma in uC/m^2')
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]),
                  initial=Initial(**values["initial"]), run=Run(**values["run"]),
                  field=_RefusedField(problems) if problems else fld,
