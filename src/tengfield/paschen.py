@@ -23,6 +23,13 @@ d ≤ d_fe = V_min / E_fe                field emission: constant field E_fe = 3
 d_fe < d, p·d < (p·d)_min              plateau V_min (the left branch of Paschen's curve
                                        does not happen in air at µm gaps: the discharge
                                        finds a longer path or field emission takes over)
+p·L < (p·d)_min (low pressure)         long path: the discharge takes the longest path
+                                       L the device offers (``longest_path``), so
+                                       V_b = V_Townsend(p·L) on the left branch, capped by
+                                       E_fe·d; no Townsend breakdown at all ("vacuum",
+                                       A·p·L ≤ ln(1 + 1/γ)) leaves E_fe·d, the µm-gap
+                                       value: vacuum breakdown of mm gaps is lower and is
+                                       not modelled (air no longer limits the charge)
 (p·d)_min ≤ p·d ≤ (p·d)_s              Townsend formula above (its valid range)
 p·d > (p·d)_s = 266.6 Pa·m             streamer regime (200 Torr·cm, Raizer §12; 2.6 mm
 (200 Torr·cm)                          at 1 atm): the uniform-field empirical law of air
@@ -54,21 +61,25 @@ STREAMER_PD = 200.0 * 133.322 * 1e-2
 #: Dakin et al. (1974) uniform-field law of air, V [kV] = a x + b sqrt(x), x in bar cm
 DAKIN = (24.36, 6.72)
 
-REGIMES = ("field-emission", "plateau", "townsend", "streamer")
+REGIMES = ("field-emission", "plateau", "long-path", "vacuum", "townsend", "streamer")
 
 
 @dataclass(frozen=True)
 class Paschen:
     """Paschen's curve of a gas at one pressure (SI): ``A`` [1/(Pa m)], ``B``
-    [V/(Pa m)], ``gamma`` (secondary emission), ``pressure`` [Pa]."""
+    [V/(Pa m)], ``gamma`` (secondary emission), ``pressure`` [Pa], ``longest_path``
+    [m]: the longest discharge path the device offers (the left branch; inf: none)."""
     A: float = AIR_A
     B: float = AIR_B
     gamma: float = AIR_GAMMA
     pressure: float = ATMOSPHERE
     field_emission: float = FIELD_EMISSION_FIELD
     streamer_pd: float = STREAMER_PD
+    longest_path: float = math.inf
 
     def __post_init__(self):
+        if not (self.longest_path > 0.0):     # inf allowed: an unbounded gas
+            raise ValueError(f"Paschen longest_path = {self.longest_path!r}: must be positive")
         for name in ("A", "B", "gamma", "pressure", "field_emission", "streamer_pd"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -79,12 +90,14 @@ class Paschen:
 
     @classmethod
     def from_scene(cls, scene) -> "Paschen":
-        """The scene's ``[breakdown]`` constants (defaults: air at 1 atm)."""
+        """The scene's ``[breakdown]`` constants (defaults: air at 1 atm) and its device's
+        longest path (:func:`longest_path`)."""
         bd = getattr(scene, "breakdown", None)
+        path = longest_path(scene.device) if getattr(scene, "device", None) else math.inf
         if bd is None:
-            return cls()
+            return cls(longest_path=path)
         return cls(A=bd.paschen_A, B=bd.paschen_B, gamma=bd.secondary_emission,
-                   pressure=bd.pressure)
+                   pressure=bd.pressure, longest_path=path)
 
     # -- the Townsend formula and its minimum ---------------------------------
     @property
@@ -108,9 +121,20 @@ class Paschen:
         return self.pd_min / self.pressure
 
     @property
+    def v_left(self) -> float:
+        """Breakdown voltage [V] of the left branch below (p·d)_min: V_min when the
+        longest path reaches (p·d)_min, else the Townsend value on the longest path
+        (inf when no avalanche can sustain itself on it: vacuum)."""
+        if self.pressure * self.longest_path >= self.pd_min:
+            return self.v_min
+        value = float(self.townsend(self.longest_path))
+        return value if math.isfinite(value) else math.inf
+
+    @property
     def d_field_emission(self) -> float:
-        """Gap [m] below which the constant field-emission field applies: V_min / E_fe."""
-        return self.v_min / self.field_emission
+        """Gap [m] below which the constant field-emission field applies: V_left / E_fe
+        (V_min / E_fe unless the device is too small for the minimum)."""
+        return self.v_left / self.field_emission
 
     @property
     def d_streamer(self) -> float:
@@ -141,7 +165,7 @@ class Paschen:
             streamer = v_s * self._dakin(np.maximum(pd, self.streamer_pd)) / self._dakin(
                 self.streamer_pd)
             out = np.where(pd > self.streamer_pd, streamer, townsend)
-            out = np.where(pd < self.pd_min, np.minimum(self.v_min, self.field_emission * d), out)
+            out = np.where(pd < self.pd_min, np.minimum(self.v_left, self.field_emission * d), out)
             out = np.where(d >= 0.0, out, np.nan)
         return out if out.ndim else float(out)
 
@@ -149,8 +173,10 @@ class Paschen:
         """Which part of the curve applies at ``d`` [m]: one of :data:`REGIMES` per gap."""
         d = np.atleast_1d(np.asarray(d, dtype=float))
         out = np.full(d.shape, "townsend", dtype=object)
-        out[d <= self.d_field_emission] = "field-emission"
-        out[(d > self.d_field_emission) & (d < self.d_min)] = "plateau"
+        out[d <= self.d_field_emission] = ("field-emission" if math.isfinite(self.v_left)
+                                           else "vacuum")
+        out[(d > self.d_field_emission) & (d < self.d_min)] = (
+            "plateau" if self.v_left == self.v_min else "long-path")
         out[d > self.d_streamer] = "streamer"
         return out
 
@@ -161,12 +187,23 @@ class Paschen:
                 "field_emission_field_V_per_m": self.field_emission,
                 "field_emission_below_m": self.d_field_emission,
                 "streamer_above_m": self.d_streamer, "streamer_pd_Pa_m": self.streamer_pd,
+                "longest_path_m": self.longest_path if math.isfinite(self.longest_path)
+                else None, "left_branch_V": self.v_left if math.isfinite(self.v_left) else None,
                 "formula": "V_b = B p d / (ln(A p d) - ln(ln(1 + 1/gamma))) for "
-                           "(p d)_min <= p d <= (p d)_s; V_min plateau and E_fe d below; "
+                           "(p d)_min <= p d <= (p d)_s; below: V_min plateau (the "
+                           "Townsend value of the longest path when p L < (p d)_min) "
+                           "capped by E_fe d; "
                            "Dakin's uniform-field law scaled to continuity above",
                 "source": "A, B: Raizer, Gas Discharge Physics (1991), Table 4.1; gamma = 0.01; "
                           "E_fe = 350 V/um: Peschot et al. (2014); streamer above 200 Torr cm: "
                           "Raizer sec. 12, law of Dakin et al., Electra 32 (1974)"}
+
+
+def longest_path(device) -> float:
+    """The longest discharge path [m] between the ball and an electrode: the tube's
+    inner diagonal, hypot(plate spacing, inner diameter) (a bound: every line and field
+    line from the ball to an electrode is shorter)."""
+    return math.hypot(device.plate_spacing, 2.0 * device.tube_inner_radius)
 
 
 def breakdown_voltage(d, pressure: float = ATMOSPHERE, *, A: float = AIR_A, B: float = AIR_B,
