@@ -165,21 +165,6 @@ def test_run(ran):
     assert "wrote " in proc.stdout
 
 
-def test_container_checks(work, ran, precomputed):
-    """What ``scripts/test-container`` asserts of these files inside each image
-    (``scripts/container/check_outputs.py``): every number in the surrogate file is
-    finite and tengfield reads it back; the run's files are complete and finite."""
-    import subprocess
-    import sys
-
-    where, _ = work
-    script = ROOT / "scripts" / "container" / "check_outputs.py"
-    for what, directory in (("precompute", precomputed.parent), ("run", ran[0])):
-        proc = subprocess.run([sys.executable, str(script), what, str(directory)],
-                              capture_output=True, text=True, timeout=300)
-        assert proc.returncode == 0, f"check_outputs.py {what}:\n{proc.stdout}{proc.stderr}"
-
-
 def test_dynamics(work, scene):
     where, cli = work
     cli("dynamics", "my.toml", "-o", "out/dyn")
@@ -335,3 +320,22 @@ def test_run_array_with_spread(work, scene, precomputed):
     check_outputs(out, RUN_FILES + ("array.png",))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cells"] == 4 and summary["array"]["distinct_dynamics"] == 4
+
+
+def test_container_checks(work, ran, precomputed):
+    """Last in the module: what ``scripts/test-container`` asserts of these files inside
+    each image (``scripts/container/check_outputs.py``): every number in every surrogate
+    file of the cache (the axis and, after the 3D run, the (z, r) one) is finite and
+    tengfield reads it back; every run's files are complete and finite."""
+    import subprocess
+    import sys
+
+    where, _ = work
+    script = ROOT / "scripts" / "container" / "check_outputs.py"
+    runs = sorted(p.parent for p in (where / "out").glob("*/waveforms.csv")
+                  if (p.parent / "summary.json").is_file())
+    assert ran[0] in runs
+    for what, directory in [("precompute", precomputed.parent)] + [("run", d) for d in runs]:
+        proc = subprocess.run([sys.executable, str(script), what, str(directory)],
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, f"check_outputs.py {what} {directory}:\n{proc.stdout}{proc.stderr}"

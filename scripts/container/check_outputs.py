@@ -116,8 +116,14 @@ def check_precompute(directory: Path) -> None:
                     _require(bool(np.all(np.isfinite(data))), f"{path}:{name}: NaN or inf")
         print(f"ok  {path.name}: {len(datasets)} finite datasets, attributes {sorted(attrs)}")
         try:
-            from tengfield.surrogate import read_table
+            from tengfield.surrogate import read_radial_table, read_table
         except ImportError:  # an older tree: the generic checks above must do
+            continue
+        if str(attrs.get("kind", "")) == "zr":   # the (z, r) surrogate of a 3D run
+            table = read_radial_table(path)      # raises unless complete and well formed
+            print(f"ok  {path.name}: tengfield reads it back: (z, r) grid {table.shape}, "
+                  f"interpolation error {table.interpolation_error:.3g}, converged "
+                  f"{table.converged}")
             continue
         table = read_table(path)  # raises unless complete and well formed
         print(f"ok  {path.name}: tengfield reads it back: {table.count} positions, "
