@@ -70,3 +70,27 @@ def test_lower_pressure_lowers_the_limit_at_mm_gaps():
                               "grounded-lower").sigma_max
     assert half < 0.6 * one
     assert math.isfinite(half) and half > 0
+
+
+@pytest.mark.parametrize("pressure", [ATMOSPHERE, 50.0])
+def test_figure_marks_only_landmarks_it_shows(tmp_path, pressure, monkeypatch):
+    """breakdown.png at 1 atm and at 50 Pa (where Paschen's minimum lies at 22 mm and the
+    streamer regime at metres): every landmark label is inside the plotted gap range."""
+    import matplotlib.axes
+
+    from tengfield.plotting.breakdown import plot_breakdown
+    texts = []
+    original = matplotlib.axes.Axes.text
+
+    def spy(self, x, y, s, *args, **kwargs):
+        texts.append((self, x, s))
+        return original(self, x, y, s, *args, **kwargs)
+    monkeypatch.setattr(matplotlib.axes.Axes, "text", spy)
+    lines = planar_lines(3e-3, 1e-3)
+    res = breakdown.evaluate(lines, Paschen(pressure=pressure, longest_path=12.8e-3),
+                             ("open",), "grounded-lower")
+    plot_breakdown(res, -10e-6, tmp_path / "b.png")
+    assert (tmp_path / "b.png").stat().st_size > 10_000
+    assert texts and all(ax.get_xlim()[0] < x < ax.get_xlim()[1] for ax, x, _ in texts)
+    labels = {s.strip() for _, _, s in texts}
+    assert ("minimum" in labels) == (pressure == ATMOSPHERE)

@@ -18,10 +18,15 @@ def plot_breakdown(result, sigma: float, path, *, title: str | None = None) -> N
     d = np.geomspace(1e-6, 2e-2, 400)
     left.loglog(d * 1e3, paschen.voltage(d), color="k", lw=2.0,
                 label=f"Paschen, air, {paschen.pressure / 1e3:.4g} kPa")
-    for edge, text in ((paschen.d_min, "minimum"), (paschen.d_streamer, "streamer above")):
+    landmarks = [(paschen.d_min, "minimum"), (paschen.d_streamer, "streamer above")]
+    if np.isfinite(paschen.longest_path):
+        landmarks.append((paschen.longest_path, "longest path"))
+    for edge, text in landmarks:
+        if not d[0] < edge < d[-1]:      # off the plotted range (e.g. at low pressure)
+            continue
         left.axvline(edge * 1e3, color="0.7", lw=0.8, ls=":")
         left.text(edge * 1e3, 1.2 * paschen.v_min, f" {text}", fontsize=7, color="0.4",
-                  rotation=90, va="bottom")
+                  rotation=90, va="bottom", clip_on=True)
     s = abs(sigma)
     for state, curve in result.curves.items():
         colour = _COLOURS.get(state, "tab:purple")
