@@ -291,10 +291,16 @@ def read_checked_file(path: str | Path, *, check_format, array_names: dict, scal
     return table
 
 
+def _plain(value):
+    """An HDF5 attribute as a Python value (numpy 2 prints ``np.int64(2)`` for its repr)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def _check_format(attrs) -> None:
     version = attrs.get("format_version")
     if version is None or int(version) != FORMAT_VERSION:
-        raise SurrogateError(f"has format version {version!r}, expected {FORMAT_VERSION}")
+        raise SurrogateError(f"has format version {_plain(version)!r}, written by another "
+                             f"tengfield version (this one reads format {FORMAT_VERSION})")
 
 
 def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) -> SurrogateTable:
@@ -403,7 +409,7 @@ def _check_format_zr(attrs) -> None:
     version = attrs.get("format_version")
     if str(attrs.get("kind", "")) != "zr" or version is None or int(version) != FORMAT_VERSION_ZR:
         raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
-                             f"(kind {attrs.get('kind')!r}, format {version!r})")
+                             f"(kind {_plain(attrs.get('kind'))!r}, format {_plain(version)!r})")
 
 
 def _build_radial_table(arrays: dict, history, scalars: dict,
