@@ -389,6 +389,12 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
             f"the breakdown check needs the gap lines of the axisymmetric field solver (the "
             f"ball on the axis): [field] method = {scene.field.method!r}, ball_offset_mm = "
             f"{scene.field.ball_offset * 1e3:g} has none; use method = \"axisymmetric\"")
+    if scene.device.surface_charge == 0.0:
+        # the per-sigma gap voltages need the induced-charge fractions q / q_ball, which
+        # an uncharged ball does not give: its table is the stand-in sigma's (everything
+        # is linear in sigma; sigma_max does not depend on it)
+        from .scene.schema import BREAKDOWN_PLACEHOLDER_UC
+        scene = scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
     table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                   progress=progress, command_line=command_line, write=write)
     if table.line_potential is None and solve is None and scene.is_axisymmetric:
@@ -448,8 +454,13 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
     written.append(out / "breakdown.csv")
     if plots:
         from .plotting.breakdown import plot_breakdown
+        drawn, title = sigma, None
+        if sigma == 0.0:   # an uncharged ball has no gap voltages: draw them at the limit
+            drawn = -result.sigma_max
+            title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
+                     f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
         with atomic_path(out / "breakdown.png") as tmp:
-            plot_breakdown(result, sigma, tmp)
+            plot_breakdown(result, drawn, tmp, title=title)
         written.append(out / "breakdown.png")
     return written
 

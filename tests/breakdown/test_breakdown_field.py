@@ -37,6 +37,24 @@ def test_sigma_max_does_not_depend_on_the_scene_sigma(cache):
     assert 10e-6 < limits[0] < 60e-6
 
 
+def test_an_uncharged_ball_has_the_same_limit(cache, tmp_path):
+    """sigma = 0 gives no induced-charge fractions: its table is the stand-in sigma's, and
+    sigma_max is the charged scene's (it was inf, written as null), the figure drawn at
+    the limit."""
+    charged = coarse(surface_charge_uC_per_m2=-8.0)
+    table, _ = breakdown.obtain_breakdown_table(charged, cache_dir=cache)
+    expected = breakdown.scene_breakdown(charged, table).sigma_max
+    scene = coarse(surface_charge_uC_per_m2=0.0)
+    table0, _ = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+    result = breakdown.scene_breakdown(scene, table0)
+    assert result.sigma_max == pytest.approx(expected, rel=1e-9)
+    assert result.margin(0.0) == 0.0
+    breakdown.write_outputs(result, scene, tmp_path, plots=True)
+    data = json.loads((tmp_path / "breakdown.json").read_text())
+    assert data["sigma_max_uC_per_m2"] == pytest.approx(expected * 1e6, rel=1e-9)
+    assert (tmp_path / "breakdown.png").stat().st_size > 10_000
+
+
 def test_lines_are_stored_with_the_surrogate_and_mirror_symmetric(cache):
     scene = coarse(surface_charge_uC_per_m2=-8.0)
     table, outcome = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
