@@ -466,7 +466,23 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
 
 
 # ---------------------------------------------------------------------------
-# tengfield run
+# tengfield run, sweep, field
+def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
+                     command_line: str = "", write: bool = True):
+    """``(scene, table, outcome, result)``: the surrogate a command that uses the charge
+    runs with (``run``, ``sweep``, ``field``), at that charge: with ``"breakdown"`` the
+    surrogate with its lines (:func:`obtain_breakdown_table`) and the scene and table at
+    σ = −σ_max, otherwise the scene's own (:func:`resolve_for_run`; ``result`` None
+    when the table has no lines). The one place that decides it."""
+    from .surrogate import obtain_table
+
+    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
+    table, outcome = obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+                            progress=progress, command_line=command_line, write=write)
+    scene, table, result = resolve_for_run(scene, table, comm)
+    return scene, table, outcome, result
+
+
 def resolve_for_run(scene, table, comm=None):
     """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
     surface_charge_uC_per_m2 = "breakdown"`` the scene gets σ = −σ_max and the table is

@@ -30,7 +30,7 @@ from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
 from .scene import check_field
 from .surrogate import (AnchoredTerminalCurves, SurrogateTable, TerminalCurves, leaves_axis,
-                        obtain_radial_table, obtain_table)
+                        obtain_radial_table)
 
 
 @dataclass
@@ -110,12 +110,10 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     hashed = scene
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
-        from . import breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": needs lines
-        table, outcome = (breakdown.obtain_breakdown_table if breakdown.uses_breakdown_charge(
-            scene) else obtain_table)(scene, cache_dir=cache_dir, comm=comm, solve=solve,
-                                      progress=progress, command_line=command_line,
-                                      write=write_cache)
-        scene, table, limit = breakdown.resolve_for_run(scene, table, comm)
+        from . import breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": at -sigma_max
+        scene, table, outcome, limit = breakdown.obtain_run_table(
+            scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
+            command_line=command_line, write=write_cache)
         if outcome.status == "cached":
             stages["field"] = Stage("cached", outcome.reason, outcome.wall_time,
                                     {"path": outcome.path})

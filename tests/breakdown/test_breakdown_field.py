@@ -1,6 +1,7 @@
 """The breakdown limit from real field solves (coarse meshes: a few seconds each)."""
 import json
 import math
+import re
 import subprocess
 import sys
 import warnings
@@ -162,3 +163,39 @@ def test_cli_breakdown_writes_its_files(tmp_path, cache):
     assert list(header) == list(breakdown.CSV_COLUMNS)
     assert (out / "breakdown.png").stat().st_size > 10_000
     assert "sigma_max" in proc.stdout
+
+
+def test_sweep_runs_at_the_breakdown_charge(tmp_path, run_cli, cli_env):
+    """`tengfield sweep` with "breakdown": every point at -sigma_max, as `run` does (it
+    ran at the stand-in -1 uC/m^2, silently): the rows equal those of the scene with
+    that sigma written as a number; figures on."""
+    import csv
+
+    env = cli_env(TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    common = ("[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.2\n"
+              "[run]\nduration_s = 0.3\nsettle_periods = 2\n")
+    (tmp_path / "bd.toml").write_text('[device]\nsurface_charge_uC_per_m2 = "breakdown"\n'
+                                      + common)
+    grid = ("--frequency-hz", "20:30:2", "--amplitude-mm", "1.5:1.5:1")
+    done = run_cli("sweep", "bd.toml", *grid, "-o", "bd", cwd=tmp_path, env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    sigma = float(re.search(r"-sigma_max = (\S+) uC/m\^2", done.stderr).group(1))
+    assert -60 < sigma < -10
+    assert (tmp_path / "bd" / "sweep.png").stat().st_size > 10_000
+    table, _ = breakdown.obtain_breakdown_table(
+        parse_scene('[device]\nsurface_charge_uC_per_m2 = "breakdown"\n' + common),
+        cache_dir=tmp_path / "cache")
+    exact = -breakdown.scene_breakdown(parse_scene(common), table).sigma_max * 1e6
+    assert sigma == pytest.approx(exact, rel=1e-3)
+    (tmp_path / "num.toml").write_text(f"[device]\nsurface_charge_uC_per_m2 = {exact!r}\n"
+                                       + common)
+    same = run_cli("sweep", "num.toml", *grid, "-o", "num", "--no-plots", cwd=tmp_path,
+                   env=env)
+    assert same.returncode == 0, same.stderr[-3000:]
+
+    def rows(name):
+        with open(tmp_path / name / "sweep.csv", newline="") as f:
+            return list(csv.DictReader(f))
+    for a, b in zip(rows("bd"), rows("num"), strict=True):
+        assert float(a["Q_sc_pp_C"]) == pytest.approx(float(b["Q_sc_pp_C"]), rel=1e-9)
+        assert float(a["V_oc_pp_V"]) == pytest.approx(float(b["V_oc_pp_V"]), rel=1e-9)

@@ -83,3 +83,37 @@ def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli, cli_co
         assert (tmp_path / out / "potential.h5").stat().st_size > 0
     png = (tmp_path / "serial" / "field.png").read_bytes()   # serial 3D runs draw the section
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+
+
+@pytest.mark.slow
+def test_field_command_solves_at_the_breakdown_charge(tmp_path, run_cli, cli_env):
+    """``surface_charge_uC_per_m2 = "breakdown"``: the one-position solve is at -sigma_max,
+    the charge a run uses (it was at the stand-in -1 uC/m^2, silently), figures on; and
+    it equals a solve at that sigma written as a number."""
+    import math
+
+    env = cli_env(MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true",
+                  TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    coarse = "[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.2\n"
+    (tmp_path / "bd.toml").write_text('[device]\nsurface_charge_uC_per_m2 = "breakdown"\n'
+                                      + coarse)
+    done = run_cli("field", "bd.toml", "--position-mm", "1.5", "-o", "out", cwd=tmp_path,
+                   env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    limit = run_cli("breakdown", "bd.toml", "-o", "bd", "--no-plots", cwd=tmp_path, env=env)
+    sigma_max = json.loads((tmp_path / "bd" / "breakdown.json").read_text())[
+        "sigma_max_uC_per_m2"]
+    assert limit.returncode == 0 and 10 < sigma_max < 60
+    data = json.loads((tmp_path / "out" / "field.json").read_text())
+    area = math.pi * 7e-3 ** 2                       # the default ball, 7 mm
+    assert data["ball_charge_C"] == pytest.approx(-sigma_max * 1e-6 * area, rel=1e-9)
+    assert f"-sigma_max = {-sigma_max:.4g} uC/m^2" in done.stdout
+    assert (tmp_path / "out" / "field.png").stat().st_size > 50_000
+    (tmp_path / "num.toml").write_text(f"[device]\nsurface_charge_uC_per_m2 = {-sigma_max!r}\n"
+                                       + coarse)
+    same = run_cli("field", "num.toml", "--position-mm", "1.5", "-o", "num", "--no-plots",
+                   cwd=tmp_path, env=env)
+    assert same.returncode == 0, same.stderr[-3000:]
+    numeric = json.loads((tmp_path / "num" / "field.json").read_text())
+    assert numeric["open_circuit_potential_V"]["lower"] == pytest.approx(
+        data["open_circuit_potential_V"]["lower"], rel=1e-9)

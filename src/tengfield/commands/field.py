@@ -33,6 +33,24 @@ def register(sub) -> None:
     p.set_defaults(func=_run)
 
 
+def _resolved_charge(scene, comm):
+    """The scene with ``[device] surface_charge_uC_per_m2 = "breakdown"`` replaced by
+    -sigma_max (from the cached surrogate's breakdown lines, computed once if missing),
+    so the solve is at the charge a run would use; any other scene as it is."""
+    from .. import breakdown
+    from ..scene import check_field
+
+    if not breakdown.uses_breakdown_charge(scene):
+        return scene
+    check_field(scene)
+    scene, _, _, _ = breakdown.obtain_run_table(scene, comm=comm if comm.size > 1 else None,
+                                                progress=True)
+    if comm.rank == 0:
+        print(f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} uC/m^2 "
+              f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
+    return scene
+
+
 def _run(args) -> int:
     import pyvista  # noqa: F401 - before dolfinx: the reverse order breaks VTK text rendering
     from mpi4py import MPI
@@ -42,7 +60,7 @@ def _run(args) -> int:
     from ..scene import load_scene
 
     comm = MPI.COMM_WORLD
-    scene = load_scene(args.scene)
+    scene = _resolved_charge(load_scene(args.scene), comm)
     if args.offset_mm is not None:
         if not (math.isfinite(args.offset_mm) and args.offset_mm >= 0):
             raise FieldError(f"offset_mm = {args.offset_mm:g} is out of range: allowed "

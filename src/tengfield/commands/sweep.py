@@ -41,7 +41,7 @@ def _run(args) -> int:
     from ..io import atomic_path, write_sweep_csv
     from ..plotting.waveforms import plot_sweep
     from ..scene import load_scene
-    from ..surrogate import obtain_table
+    from ..breakdown import obtain_run_table, uses_breakdown_charge
     from .._mpi import check_jobs
     from ..sweep import check_grid, check_sweep_size, sweep
 
@@ -54,12 +54,18 @@ def _run(args) -> int:
     comm = world_if_parallel()
     check_jobs(args.jobs, comm)
     root = comm is None or comm.rank == 0
-    # a missing surrogate is computed by the same farm; rank 0 writes the cache
-    table, outcome = obtain_table(scene, cache_dir=args.cache_dir, comm=comm, progress=True,
-                                  command_line=command_line())
+    # a missing surrogate is computed by the same farm; rank 0 writes the cache; the
+    # scene and table at the charge it runs with ("breakdown": -sigma_max)
+    at_limit = uses_breakdown_charge(scene)
+    scene, table, outcome, _ = obtain_run_table(scene, cache_dir=args.cache_dir, comm=comm,
+                                                progress=True, command_line=command_line())
     if root:
         print(f"surrogate: {outcome.status} ({table.count} positions, error estimate "
               f"{table.interpolation_error:.2g})", file=sys.stderr)
+        if at_limit:
+            print(f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} "
+                  f'uC/m^2 (air-breakdown limit, [device] surface_charge_uC_per_m2 = '
+                  f'"breakdown")', file=sys.stderr)
     rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, comm=comm,
                  progress=True)
     if not root:
