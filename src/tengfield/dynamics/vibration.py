@@ -22,7 +22,7 @@ process is Gaussian): on the FFT grid ``f_k = k / T`` of a record of length
 
 whose variance is ``sum_k S(f_k) df`` (the requested mean square, up to the
 quadrature of S on the grid). The noise is made of such periodic blocks, each 32
-periods of the band's lowest frequency long with its own seed, crossfaded with
+periods of the band's lowest frequency (or of its width, if narrower) long with its own seed, crossfaded with
 power-complementary weights (:func:`noise_signal`), so a realisation is a function of
 the seed and of the run's own clock only: a longer run extends it, never changes it. The displacement is the exact double integral
 of each term, ``-a_k / (2 pi f_k)^2``, so displacement, velocity and
@@ -170,6 +170,22 @@ def noise_record(psd: PSD, samples: int, dt: float, seed
     return np.fft.irfft(disp_coeff, m), np.fft.irfft(acc_coeff, m)
 
 
+def noise_block_frequency(band: tuple[float, float]) -> float:
+    """The frequency [Hz] whose BLOCK_PERIODS periods make half a noise block: the band's
+    lower edge f1, or its width f2 - f1 when narrower. A block is then 2 BLOCK_PERIODS /
+    that long, so its FFT grid (spacing 1 / block) puts at least 2 BLOCK_PERIODS = 32
+    lines across the band: the realised variance is the requested one up to the edge
+    lines (a 2 Hz band at 100 Hz had no line at all on a grid of f1 / 32 and stood still)."""
+    lo, hi = float(band[0]), float(band[1])
+    return min(lo, hi - lo)
+
+
+def noise_block_samples(psd: PSD, dt: float) -> int:
+    """Samples of one noise block (:func:`noise_signal`, even): ``2 H``, ``H`` =
+    BLOCK_PERIODS periods of :func:`noise_block_frequency` at the step ``dt`` [s]."""
+    return 2 * int(math.ceil(BLOCK_PERIODS / (noise_block_frequency(psd.band) * dt)))
+
+
 def noise_signal(psd: PSD, dt: float, seed: int, index: np.ndarray) -> np.ndarray:
     """Displacement [m] of the Gaussian noise at the times ``index * dt`` [s] of the run's
     own clock (``index``: integers, 0 at the run's start), independent of how long a
@@ -177,7 +193,8 @@ def noise_signal(psd: PSD, dt: float, seed: int, index: np.ndarray) -> np.ndarra
     first second.
 
     The noise is made of periodic blocks (:func:`noise_record`) of ``2 H`` samples,
-    ``H = BLOCK_PERIODS`` periods of the band's lowest frequency, block j centred at
+    ``H = BLOCK_PERIODS`` periods of the band's lowest frequency (of its width, for a
+    band narrower than its lower edge: :func:`noise_block_frequency`), block j centred at
     sample ``j H`` with its own seed ``SeedSequence([seed, j + BLOCK_OFFSET])``, joined
     by power-complementary weights ``cos(pi (n - j H) / (2 H))`` (``w_j^2 + w_(j+1)^2 = 1``:
     independent blocks keep the variance exactly stationary). The weights vary over
@@ -186,7 +203,7 @@ def noise_signal(psd: PSD, dt: float, seed: int, index: np.ndarray) -> np.ndarra
     1e-3 in power.
     """
     idx = np.asarray(index, dtype=np.int64)
-    half = int(math.ceil(BLOCK_PERIODS / (psd.band[0] * dt)))
+    half = noise_block_samples(psd, dt) // 2
     y = np.zeros(idx.size)
     first, last = int(np.floor(idx.min() / half)), int(np.floor(idx.max() / half)) + 1
     for j in range(first, last + 1):
