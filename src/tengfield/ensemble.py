@@ -5,7 +5,8 @@ a regime fraction): the sample mean, the sample standard deviation (ddof = 1)
 and the two-sided 95 % confidence interval of the mean from Student's t with
 N - 1 degrees of freedom, ``mean +- t_{0.975, N-1} s / sqrt(N)``. The
 interval's half-width shrinks as 1/sqrt(N). With N = 1 the spread is unknown
-and reported as None.
+and reported as None. The fraction of realisations in a regime gets the exact
+binomial (Clopper-Pearson) interval instead (:func:`fraction_statistics`).
 """
 from __future__ import annotations
 
@@ -34,6 +35,33 @@ def statistics(values) -> dict:
     std = float(finite.std(ddof=1))
     half = float(student_t.ppf(0.5 + CONFIDENCE / 2.0, n - 1)) * std / math.sqrt(n)
     out.update(std=std, ci95_low=mean - half, ci95_high=mean + half, ci95_half_width=half)
+    return out
+
+
+def fraction_statistics(indicator) -> dict:
+    """The keys of :func:`statistics` for the fraction of realisations in a regime
+    (``indicator``: 1 in it, 0 not): ``mean`` k / N and the exact binomial
+    (Clopper-Pearson) 95 % interval of the probability,
+    ``[B(0.025; k, N - k + 1), B(0.975; k + 1, N - k)]`` (B: the beta distribution's
+    quantile; 0 or 1 at k = 0 or N). It covers the probability at least 95 % of the
+    time for every N and probability, and stays in [0, 1]; a Student interval of the
+    0/1 values does neither (4 of 4 gave [1, 1]). It is not symmetric:
+    ``ci95_half_width`` is half its length."""
+    x = np.asarray(indicator, dtype=float).ravel()
+    n = int(x.size)
+    out = {"n": n, "missing": 0, "mean": None, "std": None,
+           "ci95_low": None, "ci95_high": None, "ci95_half_width": None}
+    if n == 0:
+        return out
+    from scipy.stats import beta
+
+    k = int(np.count_nonzero(x))
+    alpha = 1.0 - CONFIDENCE
+    low = 0.0 if k == 0 else float(beta.ppf(alpha / 2.0, k, n - k + 1))
+    high = 1.0 if k == n else float(beta.ppf(1.0 - alpha / 2.0, k + 1, n - k))
+    out.update(mean=k / n, ci95_low=low, ci95_high=high, ci95_half_width=0.5 * (high - low))
+    if n > 1:
+        out["std"] = float(x.std(ddof=1))
     return out
 
 
@@ -70,12 +98,14 @@ def realisation_row(index: int, seed: int, summary: dict) -> dict:
 
 def ensemble_block(rows: list[dict]) -> dict:
     """``summary.json -> ensemble``: per quantity its statistics (:func:`statistics`),
-    and per regime the fraction of realisations in it with the same statistics of the
-    0/1 indicator."""
+    and per regime the fraction of realisations in it with its exact binomial interval
+    (:func:`fraction_statistics`)."""
     block = {"realisations": len(rows), "confidence": CONFIDENCE,
              "seeds": [r["seed"] for r in rows],
              "seed_rule": "realisation k uses [excitation] seed + k",
              "interval_rule": "mean +- t(0.975, N-1) s / sqrt(N) (Student); s with ddof = 1",
+             "fraction_interval_rule": "exact binomial (Clopper-Pearson): [beta.ppf(0.025, k, "
+                                       "N-k+1), beta.ppf(0.975, k+1, N-k)]",
              "quantities": {}, "regime_fractions": {}}
     for name in QUANTITIES:
         values = [r[name] for r in rows]
@@ -83,7 +113,7 @@ def ensemble_block(rows: list[dict]) -> dict:
             continue
         block["quantities"][name] = statistics([np.nan if v is None else v for v in values])
     for label in sorted({r["regime"] for r in rows}):
-        block["regime_fractions"][label] = statistics(
+        block["regime_fractions"][label] = fraction_statistics(
             [1.0 if r["regime"] == label else 0.0 for r in rows])
     return block
 

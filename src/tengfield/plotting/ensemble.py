@@ -31,6 +31,8 @@ def _running_interval(values: np.ndarray):
 
 def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     """ensemble.png: one row of panels per output (realisations and running mean +- CI)."""
+    from matplotlib.ticker import MaxNLocator
+
     shown = [(k, label, scale) for k, label, scale in _SHOWN
              if k in block["quantities"] and block["quantities"][k]["mean"] is not None]
     fig = new_figure((9.0, 2.3 * len(shown) + 2.0))
@@ -44,6 +46,7 @@ def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
                         label="95 % CI of the mean")
         ax.set_ylabel(label, fontsize=8)
         ax.ticklabel_format(axis="y", useOffset=False)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))   # N is a count
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="best")
     axes[len(shown) - 1].set_xlabel("realisations N")
@@ -51,11 +54,13 @@ def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     fractions = block["regime_fractions"]
     labels = list(fractions)
     means = [fractions[k]["mean"] for k in labels]
-    errs = [fractions[k]["ci95_half_width"] or 0.0 for k in labels]
+    # the exact binomial interval is not symmetric about the fraction
+    errs = [[m - fractions[k]["ci95_low"] for k, m in zip(labels, means)],
+            [fractions[k]["ci95_high"] - m for k, m in zip(labels, means)]]
     ax.bar(labels, means, yerr=errs, color="C2", alpha=0.7, capsize=4)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("fraction of realisations", fontsize=8)
-    ax.set_title("regime", fontsize=9)
+    ax.set_title("regime (exact binomial 95 % interval)", fontsize=9)
     fig.suptitle(f"ensemble of {block['realisations']} realisations "
                  "(95 % confidence intervals, Student t)", fontsize=10)
     fig.tight_layout()
