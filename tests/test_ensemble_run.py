@@ -140,3 +140,36 @@ def test_cli_under_mpirun_gives_the_serial_ensemble(tmp_path, plate_cache, pytho
         assert res.returncode == 0, res.stderr
         outs[name] = (out / "ensemble.csv").read_text()
     assert outs["serial"] == outs["mpi"]
+
+
+def test_a_resting_first_realisation_still_builds_the_surrogate_once(tmp_path, monkeypatch):
+    """Realisation 0 of a weak band rests (no field stage, no surrogate in the cache); the
+    others lift off. Each of them solved the field for itself, without caching it (N
+    solves instead of one, and again at the next run). The ensemble now builds it once
+    before farming: the workers read it from the cache and never solve."""
+    scene = fx.scene_with(excitation={**RANDOM, "rms_acceleration_m_per_s2": 3.6, "seed": 0},
+                          run={**SHORT, "duration_s": 0.5, "settle_periods": 1,
+                               "realisations": 4})
+    first = tf.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    assert first.table is None and first.summary["regime"]["regime"] == "rest"
+    import tengfield.surrogate.refinement as refinement
+
+    def no_field_solver():
+        raise AssertionError("a realisation solved the field itself")
+    monkeypatch.setattr(refinement, "_default_solver", no_field_solver)
+    rows, _ = run_ensemble(scene, first, jobs=1, cache_dir=tmp_path,
+                           solve=fx.plate_model_solve)
+    assert {r["regime"] for r in rows[1:]} != {"rest"}      # some realisations move
+    assert any(r["Q_sc_pp_C"] > 0 for r in rows)
+    assert list(tmp_path.glob("surrogate-*.h5"))
+
+
+def test_an_ensemble_that_never_moves_is_all_rest(tmp_path):
+    scene = fx.scene_with(excitation={**RANDOM, "rms_acceleration_m_per_s2": 1.0},
+                          run={**SHORT, "realisations": 3})
+    first = tf.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    assert first.table is None
+    rows, block = run_ensemble(scene, first, jobs=1, cache_dir=tmp_path,
+                               solve=fx.plate_model_solve)
+    assert {r["regime"] for r in rows} == {"rest"}
+    assert block["regime_fractions"]["rest"]["mean"] == 1.0

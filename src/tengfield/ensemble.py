@@ -127,14 +127,28 @@ def _realisation_task(task):
     return realisation_row(index, seed, result.summary)
 
 
+def _build_surrogate(scene, *, comm, cache_dir, solve, progress) -> None:
+    """Put the scene's surrogate in the cache (as :func:`tengfield.pipeline.run` would),
+    for realisations to read when realisation 0 rested and left none."""
+    from .breakdown import obtain_breakdown_table, uses_breakdown_charge
+    from .surrogate import obtain_table
+
+    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
+    obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
+
+
 def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=None,
-                 progress: bool = False) -> tuple[list[dict], dict]:
+                 progress: bool = False, solve=None) -> tuple[list[dict], dict]:
     """Rows of ensemble.csv and the ``ensemble`` block for ``[run] realisations`` = N:
     ``first`` is the run of realisation 0 (the scene's own seed, already done); the other
     N - 1 are farmed over the ranks of ``comm`` (``mpirun -n N``) or ``jobs`` worker
     processes, each reading the surrogate the first run left in the cache. The rows and
     the block do not depend on how the work was spread. (A scene whose realisations
-    could not differ is refused where it is built: ``[run] realisations`` needs noise.)"""
+    could not differ is refused where it is built: ``[run] realisations`` needs noise.)
+
+    If realisation 0 rested (no field stage: the ball never left the lower plate) the
+    surrogate is built here once, with ``solve`` (default the field solver), before the
+    others run: each of them that moves would otherwise solve the field for itself."""
     import sys
 
     from tqdm import tqdm
@@ -143,6 +157,9 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     from .sweep import run_tasks
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
+    if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
+        _build_surrogate(scene, comm=comm, cache_dir=cache_dir, solve=solve,
+                         progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
     bar = tqdm(total=len(seeds), initial=1, desc="realisations", unit="run", file=sys.stderr,
