@@ -173,3 +173,20 @@ def test_an_ensemble_that_never_moves_is_all_rest(tmp_path):
                                solve=fx.plate_model_solve)
     assert {r["regime"] for r in rows} == {"rest"}
     assert block["regime_fractions"]["rest"]["mean"] == 1.0
+
+
+@pytest.mark.parametrize("circuit, label", [
+    ({"kind": "rectifier", "storage_capacitance_uF": 1e-4}, "energy into the store(s) [J]"),
+    ({"kind": "load", "load_ohm": 1e8}, "mean load power [W]")])
+def test_an_array_ensemble_reports_the_arrays_output(cache, circuit, label):
+    """An [array] run reports its output under summary -> array (array_value, what it is
+    in "compared"), not under load / rectifier: its ensemble rows had only the
+    peak-to-peak values, the harvested energy or load power left empty in every row."""
+    arr = _scene(realisations=2, circuit=circuit,
+                 array={"cells": 3, "restitution_spread": 0.05})
+    first = _first(arr, cache)
+    rows, block = run_ensemble(arr, first, jobs=1, cache_dir=cache)
+    assert rows[0]["array_value"] == first.summary["array"]["array_value"] > 0
+    assert all(r["array_value"] > 0 for r in rows)
+    assert block["array_quantity"] == label
+    assert block["quantities"]["array_value"]["n"] == 2

@@ -76,24 +76,29 @@ def realisation_seeds(seed: int, count: int) -> list[int]:
 #: columns of ensemble.csv (one row per realisation)
 ENSEMBLE_COLUMNS = ["realisation", "seed", "regime", "V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A",
                     "mean_power_W", "power_density_W_per_m3", "average_harvested_power_W",
-                    "final_stored_energy_J"]
+                    "final_stored_energy_J", "array_value"]
 #: the quantities whose statistics summary.json -> ensemble reports
 QUANTITIES = ENSEMBLE_COLUMNS[3:]
 
 
 def realisation_row(index: int, seed: int, summary: dict) -> dict:
     """One row of ensemble.csv from a run's summary (None where the circuit has no such
-    number: no load, no rectifier)."""
+    number: no load, no rectifier). An ``[array]`` run reports its output as
+    ``summary -> array -> array_value`` (what it is: ``compared``, e.g. the energy into
+    the stores): the column ``array_value``."""
     p2p = summary["peak_to_peak"]
     load = summary.get("load") or {}
     rect = summary.get("rectifier") or {}
     regime = summary.get("regime") or {}
+    arr = summary.get("array") or {}
     return {"realisation": index, "seed": seed, "regime": regime.get("regime", ""),
             "V_oc_pp_V": p2p["V_oc_V"], "Q_sc_pp_C": p2p["Q_sc_C"], "I_sc_pp_A": p2p["I_sc_A"],
             "mean_power_W": load.get("mean_power_W"),
             "power_density_W_per_m3": load.get("power_density_W_per_m3"),
             "average_harvested_power_W": rect.get("average_harvested_power_W"),
-            "final_stored_energy_J": rect.get("final_stored_energy_J")}
+            "final_stored_energy_J": rect.get("final_stored_energy_J"),
+            "array_value": arr.get("array_value"),
+            "array_quantity": arr.get("compared")}
 
 
 def ensemble_block(rows: list[dict]) -> dict:
@@ -107,8 +112,11 @@ def ensemble_block(rows: list[dict]) -> dict:
              "fraction_interval_rule": "exact binomial (Clopper-Pearson): [beta.ppf(0.025, k, "
                                        "N-k+1), beta.ppf(0.975, k+1, N-k)]",
              "quantities": {}, "regime_fractions": {}}
+    labels = {r.get("array_quantity") for r in rows} - {None}
+    if labels:   # [array]: what array_value is (one circuit: one label)
+        block["array_quantity"] = ", ".join(sorted(labels))
     for name in QUANTITIES:
-        values = [r[name] for r in rows]
+        values = [r.get(name) for r in rows]
         if all(v is None for v in values):
             continue
         block["quantities"][name] = statistics([np.nan if v is None else v for v in values])

@@ -33,7 +33,8 @@ def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     """ensemble.png: one row of panels per output (realisations and running mean +- CI)."""
     from matplotlib.ticker import MaxNLocator
 
-    shown = [(k, label, scale) for k, label, scale in _SHOWN
+    items = _SHOWN + (("array_value", f"array: {block.get('array_quantity', '')}", 1.0),)
+    shown = [(k, label, scale) for k, label, scale in items
              if k in block["quantities"] and block["quantities"][k]["mean"] is not None]
     fig = new_figure((9.0, 2.3 * len(shown) + 2.0))
     axes = fig.subplots(len(shown) + 1, 1, squeeze=False)[:, 0]
