@@ -80,3 +80,35 @@ def test_the_load_check_counts_the_blocks_the_synthesis_makes():
     block = noise_block_samples(psd, dt)
     assert block == 2 * math.ceil(16 * 32 * 200.0 / 0.02)
     assert block <= MAX_NOISE_BLOCK_SAMPLES
+
+
+@pytest.mark.parametrize("value", [-1, 2**32])
+def test_a_seed_out_of_range_names_the_exact_bounds(value):
+    """The message gave 'allowed [0, 4.29497e+09]': the largest seed rounded (4294967295
+    is allowed, 4294970000 is not)."""
+    with pytest.raises(SceneError, match=rf"\[excitation\] seed = {value} is out of range: "
+                                         r"allowed \[0, 4294967295\]"):
+        parse_scene('[excitation]\nkind = "random"\nband_hz = [10.0, 200.0]\n'
+                    f'rms_acceleration_m_per_s2 = 1.0\nseed = {value}\n' + SHORT)
+
+
+def test_the_largest_seed_is_accepted_and_ensembles_wrap_around():
+    from tengfield.ensemble import realisation_seeds
+    scene = parse_scene('[excitation]\nkind = "random"\nband_hz = [10.0, 200.0]\n'
+                        'rms_acceleration_m_per_s2 = 1.0\nseed = 4294967295\n' + SHORT)
+    assert realisation_seeds(scene.excitation.seed, 3) == [4294967295, 0, 1]
+
+
+@pytest.mark.parametrize("excitation, message", [
+    ('kind = "random"\nband_hz = [0.0, 10.0]\nrms_acceleration_m_per_s2 = 1.0\n',
+     r"band_hz = \[0.0, 10.0\]: entry 1 = 0.0 is out of range: allowed \(0, 1e\+06\]"),
+    ('kind = "harmonics"\nfrequency_hz = [10.0, -1.0]\namplitude_mm = [1.0, 1.0]\n',
+     r"frequency_hz = \[10.0, -1.0\]: entry 2 = -1.0 is out of range"),
+    ('kind = "harmonics"\nfrequency_hz = [10.0, 20.0]\namplitude_mm = [1.0, "x"]\n',
+     r"amplitude_mm = \[1.0, 'x'\]: entry 2 = 'x': expected a number"),
+])
+def test_a_bad_list_entry_shows_the_list_and_its_position(excitation, message):
+    """A bad entry was reported as if it were the key's value ('band_hz = 0.0 is out of
+    range'), without the list the user wrote or which entry it was."""
+    with pytest.raises(SceneError, match=message):
+        parse_scene("[excitation]\n" + excitation + SHORT)
