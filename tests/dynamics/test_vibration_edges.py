@@ -112,3 +112,17 @@ def test_a_bad_list_entry_shows_the_list_and_its_position(excitation, message):
     range'), without the list the user wrote or which entry it was."""
     with pytest.raises(SceneError, match=message):
         parse_scene("[excitation]\n" + excitation + SHORT)
+
+
+@pytest.mark.parametrize("excitation, message", [
+    # harmonics with a noise level but no spectrum: the noise was silently left out
+    ('kind = "harmonics"\nfrequency_hz = [20.0, 40.0]\namplitude_mm = [1.0, 0.1]\n'
+     'rms_acceleration_m_per_s2 = 3.0\n',
+     r"rms_acceleration_m_per_s2 = 3 needs band_hz = \[f1, f2\] or psd_file"),
+    # a sine with a noise level: silently a pure sine
+    ('kind = "sine"\nrms_acceleration_m_per_s2 = 3.0\n',
+     r"rms_acceleration_m_per_s2 = 3 needs kind = 'random' or 'harmonics' \(kind = 'sine'\)"),
+])
+def test_a_noise_level_without_noise_is_refused(excitation, message):
+    with pytest.raises(SceneError, match=message):
+        parse_scene("[excitation]\n" + excitation + SHORT)
