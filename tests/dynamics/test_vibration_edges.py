@@ -126,3 +126,34 @@ def test_a_bad_list_entry_shows_the_list_and_its_position(excitation, message):
 def test_a_noise_level_without_noise_is_refused(excitation, message):
     with pytest.raises(SceneError, match=message):
         parse_scene("[excitation]\n" + excitation + SHORT)
+
+
+def test_the_mean_square_of_a_table_is_the_exact_log_log_integral():
+    """A segment with a zero end is zero everywhere in log-log interpolation: the mean
+    square is the closed-form integral of the other segments (power laws), not a
+    trapezoid sum that also counted a sliver next to every isolated non-zero row."""
+    psd = tabulated_psd([10.0, 20.0, 100.0, 200.0, 400.0], [1.0, 0.0, 1.0, 1.0, 4.0])
+    # [100, 200]: 1 -> 100; [200, 400]: S = (f / 200)^2 -> 200 (2^3 - 1) / 3
+    assert psd.mean_square() == pytest.approx(100.0 + 200.0 * 7.0 / 3.0, rel=1e-12)
+    # S ~ 1/f (exponent -1): the logarithm
+    assert tabulated_psd([10.0, 100.0], [1.0, 0.1]).mean_square() == pytest.approx(
+        10.0 * math.log(10.0), rel=1e-12)
+
+
+def test_a_table_whose_power_is_one_isolated_row_is_refused(tmp_path):
+    """frequency_hz,psd = (10, 0.01), (20, 0), (200, 0): log-log interpolation gives no
+    power anywhere, but the trapezoid mean square counted a sliver at 10 Hz; rescaled to
+    rms_acceleration_m_per_s2 = 20 the table acceleration's rms came out 166 m/s^2."""
+    (tmp_path / "psd.csv").write_text("frequency_hz,psd_g2_per_hz\n10,0.01\n20,0\n200,0\n")
+    (tmp_path / "s.toml").write_text('[excitation]\nkind = "random"\npsd_file = "psd.csv"\n'
+                                     'rms_acceleration_m_per_s2 = 20.0\n' + SHORT)
+    from tengfield.scene import load_scene
+    with pytest.raises(SceneError, match=r"psd_file = 'psd.csv' holds no power: .*two "
+                                         r"neighbouring rows"):
+        load_scene(tmp_path / "s.toml")
+
+
+def test_a_psd_without_power_is_not_scaled():
+    from tengfield.errors import DynamicsError
+    with pytest.raises(DynamicsError, match="without power"):
+        tabulated_psd([10.0, 20.0, 30.0], [1.0, 0.0, 0.0]).scaled(3.0)

@@ -89,17 +89,40 @@ class PSD:
 
     def scaled(self, rms_acceleration: float) -> "PSD":
         """The same shape with the given rms acceleration [m/s^2]."""
-        factor = float(rms_acceleration) ** 2 / self.mean_square()
+        total = self.mean_square()
+        if not total > 0.0:
+            raise DynamicsError("a PSD without power cannot be scaled to an rms")
+        factor = float(rms_acceleration) ** 2 / total
         return PSD(self.frequencies, self.values * factor, self.flat)
 
-    def mean_square(self, points: int = 20001) -> float:
-        """Integral of S over its band [(m/s^2)^2] (the acceleration's variance)."""
+    def mean_square(self) -> float:
+        """Integral of S over its band [(m/s^2)^2] (the acceleration's variance): exact,
+        segment by segment (:func:`loglog_integral`)."""
         lo, hi = self.band
         if self.flat:
             return float(self.values[0] * (hi - lo))
-        f = np.geomspace(lo, hi, points)
-        s = self(f)
-        return float(np.sum(0.5 * (s[1:] + s[:-1]) * np.diff(f)))
+        return loglog_integral(self.frequencies, self.values)
+
+
+def loglog_integral(frequencies, values) -> float:
+    """Integral of the log-log interpolation of (``frequencies``, ``values``) over the
+    table: on each segment ``S = S0 (f / f0)^b``, ``b = ln(S1 / S0) / ln(f1 / f0)``,
+    whose integral is ``S0 f0 ((f1 / f0)^(b + 1) - 1) / (b + 1)`` (``S0 f0 ln(f1 / f0)`` at
+    b = -1); a segment with a zero end is zero everywhere (log 0 = -inf)."""
+    f = np.asarray(frequencies, dtype=float)
+    s = np.asarray(values, dtype=float)
+    f0, f1, s0, s1 = f[:-1], f[1:], s[:-1], s[1:]
+    live = (s0 > 0.0) & (s1 > 0.0)
+    if not live.any():
+        return 0.0
+    f0, f1, s0, s1 = f0[live], f1[live], s0[live], s1[live]
+    ratio = np.log(f1 / f0)
+    b1 = np.log(s1 / s0) / ratio + 1.0
+    # (r^(b+1) - 1) / (b+1) = ratio * expm1(b1 ratio) / (b1 ratio), -> ratio as b1 -> 0
+    x = b1 * ratio
+    small = np.abs(x) < 1e-12
+    factor = np.where(small, ratio, np.expm1(x) / np.where(small, 1.0, b1))
+    return float(np.sum(s0 * f0 * factor))
 
 
 def band_psd(band_hz: tuple[float, float], rms_acceleration: float) -> PSD:
