@@ -16,16 +16,24 @@ _SHOWN = (("V_oc_pp_V", "V_OC peak-to-peak [V]", 1.0),
 
 
 def _running_interval(values: np.ndarray):
+    """(realisations 1..N, running mean, running 95 % half-width) over the values so far;
+    a missing value (NaN) is left out (the statistics of summary.json do the same)."""
     from scipy.stats import t as student_t
 
+    values = np.asarray(values, dtype=float)
     n = np.arange(1, values.size + 1)
-    shifted = values - values[0]          # sums of squares without cancellation
-    mean_shifted = np.cumsum(shifted) / n
-    mean = values[0] + mean_shifted
-    sq = np.cumsum(shifted**2)
-    var = np.where(n > 1, (sq - n * mean_shifted**2) / np.maximum(n - 1, 1), np.nan)
-    half = np.where(n > 1, student_t.ppf(0.975, np.maximum(n - 1, 1))
-                    * np.sqrt(np.maximum(var, 0.0) / n), np.nan)
+    finite = np.isfinite(values)
+    count = np.cumsum(finite)
+    ref = values[finite][0] if finite.any() else 0.0
+    shifted = np.where(finite, values - ref, 0.0)   # sums of squares without cancellation
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_shifted = np.cumsum(shifted) / count
+        sq = np.cumsum(shifted**2)
+        var = np.where(count > 1, (sq - count * mean_shifted**2) / np.maximum(count - 1, 1),
+                       np.nan)
+        half = np.where(count > 1, student_t.ppf(0.975, np.maximum(count - 1, 1))
+                        * np.sqrt(np.maximum(var, 0.0) / np.maximum(count, 1)), np.nan)
+    mean = np.where(count > 0, ref + mean_shifted, np.nan)
     return n, mean, half
 
 
@@ -40,7 +48,7 @@ def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     axes = fig.subplots(len(shown) + 1, 1, squeeze=False)[:, 0]
     for ax, (key, label, scale) in zip(axes, shown):
         values = np.array([np.nan if r[key] is None else r[key] for r in rows], float) * scale
-        n, mean, half = _running_interval(np.nan_to_num(values))
+        n, mean, half = _running_interval(values)
         ax.plot(n, values, "o", ms=3, color="0.55", label="realisation")
         ax.plot(n, mean, color="C0", lw=1.4, label="running mean")
         ax.fill_between(n, mean - half, mean + half, color="C0", alpha=0.2,
