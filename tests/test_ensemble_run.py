@@ -140,3 +140,53 @@ def test_cli_under_mpirun_gives_the_serial_ensemble(tmp_path, plate_cache, pytho
         assert res.returncode == 0, res.stderr
         outs[name] = (out / "ensemble.csv").read_text()
     assert outs["serial"] == outs["mpi"]
+
+
+def test_a_resting_first_realisation_still_builds_the_surrogate_once(tmp_path, monkeypatch):
+    """Realisation 0 of a weak band rests (no field stage, no surrogate in the cache); the
+    others lift off. Each of them solved the field for itself, without caching it (N
+    solves instead of one, and again at the next run). The ensemble now builds it once
+    before farming: the workers read it from the cache and never solve."""
+    scene = fx.scene_with(excitation={**RANDOM, "rms_acceleration_m_per_s2": 3.6, "seed": 0},
+                          run={**SHORT, "duration_s": 0.5, "settle_periods": 1,
+                               "realisations": 4})
+    first = tf.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    assert first.table is None and first.summary["regime"]["regime"] == "rest"
+    import tengfield.surrogate.refinement as refinement
+
+    def no_field_solver():
+        raise AssertionError("a realisation solved the field itself")
+    monkeypatch.setattr(refinement, "_default_solver", no_field_solver)
+    rows, _ = run_ensemble(scene, first, jobs=1, cache_dir=tmp_path,
+                           solve=fx.plate_model_solve)
+    assert {r["regime"] for r in rows[1:]} != {"rest"}      # some realisations move
+    assert any(r["Q_sc_pp_C"] > 0 for r in rows)
+    assert list(tmp_path.glob("surrogate-*.h5"))
+
+
+def test_an_ensemble_that_never_moves_is_all_rest(tmp_path):
+    scene = fx.scene_with(excitation={**RANDOM, "rms_acceleration_m_per_s2": 1.0},
+                          run={**SHORT, "realisations": 3})
+    first = tf.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    assert first.table is None
+    rows, block = run_ensemble(scene, first, jobs=1, cache_dir=tmp_path,
+                               solve=fx.plate_model_solve)
+    assert {r["regime"] for r in rows} == {"rest"}
+    assert block["regime_fractions"]["rest"]["mean"] == 1.0
+
+
+@pytest.mark.parametrize("circuit, label", [
+    ({"kind": "rectifier", "storage_capacitance_uF": 1e-4}, "energy into the store(s) [J]"),
+    ({"kind": "load", "load_ohm": 1e8}, "mean load power [W]")])
+def test_an_array_ensemble_reports_the_arrays_output(cache, circuit, label):
+    """An [array] run reports its output under summary -> array (array_value, what it is
+    in "compared"), not under load / rectifier: its ensemble rows had only the
+    peak-to-peak values, the harvested energy or load power left empty in every row."""
+    arr = _scene(realisations=2, circuit=circuit,
+                 array={"cells": 3, "restitution_spread": 0.05})
+    first = _first(arr, cache)
+    rows, block = run_ensemble(arr, first, jobs=1, cache_dir=cache)
+    assert rows[0]["array_value"] == first.summary["array"]["array_value"] > 0
+    assert all(r["array_value"] > 0 for r in rows)
+    assert block["array_quantity"] == label
+    assert block["quantities"]["array_value"]["n"] == 2

@@ -29,6 +29,11 @@ COMPANIONS = {
                                 "rms_acceleration_m_per_s2": 1.0},
     ("excitation", "rms_acceleration_m_per_s2"): {"kind": "random", "band_hz": [10.0, 100.0],
                                                   "rms_acceleration_m_per_s2": 1.0},
+    # a lateral noise level needs the noise's spectrum (a sine refuses it)
+    ("excitation", "rms_acceleration_x_m_per_s2"): {"kind": "random", "band_hz": [10.0, 100.0],
+                                                    "rms_acceleration_m_per_s2": 1.0},
+    ("excitation", "rms_acceleration_y_m_per_s2"): {"kind": "random", "band_hz": [10.0, 100.0],
+                                                    "rms_acceleration_m_per_s2": 1.0},
     ("run", "realisations"): {"excitation": {"kind": "random", "band_hz": [10.0, 100.0],
                                              "rms_acceleration_m_per_s2": 1.0}},
     ("array", "connection"): {"cells": 2, "circuit": {"kind": "rectifier"}},

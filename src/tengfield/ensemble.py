@@ -5,7 +5,8 @@ a regime fraction): the sample mean, the sample standard deviation (ddof = 1)
 and the two-sided 95 % confidence interval of the mean from Student's t with
 N - 1 degrees of freedom, ``mean +- t_{0.975, N-1} s / sqrt(N)``. The
 interval's half-width shrinks as 1/sqrt(N). With N = 1 the spread is unknown
-and reported as None.
+and reported as None. The fraction of realisations in a regime gets the exact
+binomial (Clopper-Pearson) interval instead (:func:`fraction_statistics`).
 """
 from __future__ import annotations
 
@@ -37,6 +38,33 @@ def statistics(values) -> dict:
     return out
 
 
+def fraction_statistics(indicator) -> dict:
+    """The keys of :func:`statistics` for the fraction of realisations in a regime
+    (``indicator``: 1 in it, 0 not): ``mean`` k / N and the exact binomial
+    (Clopper-Pearson) 95 % interval of the probability,
+    ``[B(0.025; k, N - k + 1), B(0.975; k + 1, N - k)]`` (B: the beta distribution's
+    quantile; 0 or 1 at k = 0 or N). It covers the probability at least 95 % of the
+    time for every N and probability, and stays in [0, 1]; a Student interval of the
+    0/1 values does neither (4 of 4 gave [1, 1]). It is not symmetric:
+    ``ci95_half_width`` is half its length."""
+    x = np.asarray(indicator, dtype=float).ravel()
+    n = int(x.size)
+    out = {"n": n, "missing": 0, "mean": None, "std": None,
+           "ci95_low": None, "ci95_high": None, "ci95_half_width": None}
+    if n == 0:
+        return out
+    from scipy.stats import beta
+
+    k = int(np.count_nonzero(x))
+    alpha = 1.0 - CONFIDENCE
+    low = 0.0 if k == 0 else float(beta.ppf(alpha / 2.0, k, n - k + 1))
+    high = 1.0 if k == n else float(beta.ppf(1.0 - alpha / 2.0, k + 1, n - k))
+    out.update(mean=k / n, ci95_low=low, ci95_high=high, ci95_half_width=0.5 * (high - low))
+    if n > 1:
+        out["std"] = float(x.std(ddof=1))
+    return out
+
+
 def realisation_seeds(seed: int, count: int) -> list[int]:
     """Seeds of ``count`` realisations: ``seed + k`` (mod 2^32), k = 0..count-1.
     Realisation 0 is the scene's own run; numpy's generator hashes each seed through
@@ -48,42 +76,52 @@ def realisation_seeds(seed: int, count: int) -> list[int]:
 #: columns of ensemble.csv (one row per realisation)
 ENSEMBLE_COLUMNS = ["realisation", "seed", "regime", "V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A",
                     "mean_power_W", "power_density_W_per_m3", "average_harvested_power_W",
-                    "final_stored_energy_J"]
+                    "final_stored_energy_J", "array_value"]
 #: the quantities whose statistics summary.json -> ensemble reports
 QUANTITIES = ENSEMBLE_COLUMNS[3:]
 
 
 def realisation_row(index: int, seed: int, summary: dict) -> dict:
     """One row of ensemble.csv from a run's summary (None where the circuit has no such
-    number: no load, no rectifier)."""
+    number: no load, no rectifier). An ``[array]`` run reports its output as
+    ``summary -> array -> array_value`` (what it is: ``compared``, e.g. the energy into
+    the stores): the column ``array_value``."""
     p2p = summary["peak_to_peak"]
     load = summary.get("load") or {}
     rect = summary.get("rectifier") or {}
     regime = summary.get("regime") or {}
+    arr = summary.get("array") or {}
     return {"realisation": index, "seed": seed, "regime": regime.get("regime", ""),
             "V_oc_pp_V": p2p["V_oc_V"], "Q_sc_pp_C": p2p["Q_sc_C"], "I_sc_pp_A": p2p["I_sc_A"],
             "mean_power_W": load.get("mean_power_W"),
             "power_density_W_per_m3": load.get("power_density_W_per_m3"),
             "average_harvested_power_W": rect.get("average_harvested_power_W"),
-            "final_stored_energy_J": rect.get("final_stored_energy_J")}
+            "final_stored_energy_J": rect.get("final_stored_energy_J"),
+            "array_value": arr.get("array_value"),
+            "array_quantity": arr.get("compared")}
 
 
 def ensemble_block(rows: list[dict]) -> dict:
     """``summary.json -> ensemble``: per quantity its statistics (:func:`statistics`),
-    and per regime the fraction of realisations in it with the same statistics of the
-    0/1 indicator."""
+    and per regime the fraction of realisations in it with its exact binomial interval
+    (:func:`fraction_statistics`)."""
     block = {"realisations": len(rows), "confidence": CONFIDENCE,
              "seeds": [r["seed"] for r in rows],
              "seed_rule": "realisation k uses [excitation] seed + k",
              "interval_rule": "mean +- t(0.975, N-1) s / sqrt(N) (Student); s with ddof = 1",
+             "fraction_interval_rule": "exact binomial (Clopper-Pearson): [beta.ppf(0.025, k, "
+                                       "N-k+1), beta.ppf(0.975, k+1, N-k)]",
              "quantities": {}, "regime_fractions": {}}
+    labels = {r.get("array_quantity") for r in rows} - {None}
+    if labels:   # [array]: what array_value is (one circuit: one label)
+        block["array_quantity"] = ", ".join(sorted(labels))
     for name in QUANTITIES:
-        values = [r[name] for r in rows]
+        values = [r.get(name) for r in rows]
         if all(v is None for v in values):
             continue
         block["quantities"][name] = statistics([np.nan if v is None else v for v in values])
     for label in sorted({r["regime"] for r in rows}):
-        block["regime_fractions"][label] = statistics(
+        block["regime_fractions"][label] = fraction_statistics(
             [1.0 if r["regime"] == label else 0.0 for r in rows])
     return block
 
@@ -97,14 +135,28 @@ def _realisation_task(task):
     return realisation_row(index, seed, result.summary)
 
 
+def _build_surrogate(scene, *, comm, cache_dir, solve, progress) -> None:
+    """Put the scene's surrogate in the cache (as :func:`tengfield.pipeline.run` would),
+    for realisations to read when realisation 0 rested and left none."""
+    from .breakdown import obtain_breakdown_table, uses_breakdown_charge
+    from .surrogate import obtain_table
+
+    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
+    obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
+
+
 def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=None,
-                 progress: bool = False) -> tuple[list[dict], dict]:
+                 progress: bool = False, solve=None) -> tuple[list[dict], dict]:
     """Rows of ensemble.csv and the ``ensemble`` block for ``[run] realisations`` = N:
     ``first`` is the run of realisation 0 (the scene's own seed, already done); the other
     N - 1 are farmed over the ranks of ``comm`` (``mpirun -n N``) or ``jobs`` worker
     processes, each reading the surrogate the first run left in the cache. The rows and
     the block do not depend on how the work was spread. (A scene whose realisations
-    could not differ is refused where it is built: ``[run] realisations`` needs noise.)"""
+    could not differ is refused where it is built: ``[run] realisations`` needs noise.)
+
+    If realisation 0 rested (no field stage: the ball never left the lower plate) the
+    surrogate is built here once, with ``solve`` (default the field solver), before the
+    others run: each of them that moves would otherwise solve the field for itself."""
     import sys
 
     from tqdm import tqdm
@@ -113,6 +165,9 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     from .sweep import run_tasks
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
+    if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
+        _build_surrogate(scene, comm=comm, cache_dir=cache_dir, solve=solve,
+                         progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
     bar = tqdm(total=len(seeds), initial=1, desc="realisations", unit="run", file=sys.stderr,

@@ -22,7 +22,7 @@ process is Gaussian): on the FFT grid ``f_k = k / T`` of a record of length
 
 whose variance is ``sum_k S(f_k) df`` (the requested mean square, up to the
 quadrature of S on the grid). The noise is made of such periodic blocks, each 32
-periods of the band's lowest frequency long with its own seed, crossfaded with
+periods of the band's lowest frequency (or of its width, if narrower) long with its own seed, crossfaded with
 power-complementary weights (:func:`noise_signal`), so a realisation is a function of
 the seed and of the run's own clock only: a longer run extends it, never changes it. The displacement is the exact double integral
 of each term, ``-a_k / (2 pi f_k)^2``, so displacement, velocity and
@@ -89,17 +89,40 @@ class PSD:
 
     def scaled(self, rms_acceleration: float) -> "PSD":
         """The same shape with the given rms acceleration [m/s^2]."""
-        factor = float(rms_acceleration) ** 2 / self.mean_square()
+        total = self.mean_square()
+        if not total > 0.0:
+            raise DynamicsError("a PSD without power cannot be scaled to an rms")
+        factor = float(rms_acceleration) ** 2 / total
         return PSD(self.frequencies, self.values * factor, self.flat)
 
-    def mean_square(self, points: int = 20001) -> float:
-        """Integral of S over its band [(m/s^2)^2] (the acceleration's variance)."""
+    def mean_square(self) -> float:
+        """Integral of S over its band [(m/s^2)^2] (the acceleration's variance): exact,
+        segment by segment (:func:`loglog_integral`)."""
         lo, hi = self.band
         if self.flat:
             return float(self.values[0] * (hi - lo))
-        f = np.geomspace(lo, hi, points)
-        s = self(f)
-        return float(np.sum(0.5 * (s[1:] + s[:-1]) * np.diff(f)))
+        return loglog_integral(self.frequencies, self.values)
+
+
+def loglog_integral(frequencies, values) -> float:
+    """Integral of the log-log interpolation of (``frequencies``, ``values``) over the
+    table: on each segment ``S = S0 (f / f0)^b``, ``b = ln(S1 / S0) / ln(f1 / f0)``,
+    whose integral is ``S0 f0 ((f1 / f0)^(b + 1) - 1) / (b + 1)`` (``S0 f0 ln(f1 / f0)`` at
+    b = -1); a segment with a zero end is zero everywhere (log 0 = -inf)."""
+    f = np.asarray(frequencies, dtype=float)
+    s = np.asarray(values, dtype=float)
+    f0, f1, s0, s1 = f[:-1], f[1:], s[:-1], s[1:]
+    live = (s0 > 0.0) & (s1 > 0.0)
+    if not live.any():
+        return 0.0
+    f0, f1, s0, s1 = f0[live], f1[live], s0[live], s1[live]
+    ratio = np.log(f1 / f0)
+    b1 = np.log(s1 / s0) / ratio + 1.0
+    # (r^(b+1) - 1) / (b+1) = ratio * expm1(b1 ratio) / (b1 ratio), -> ratio as b1 -> 0
+    x = b1 * ratio
+    small = np.abs(x) < 1e-12
+    factor = np.where(small, ratio, np.expm1(x) / np.where(small, 1.0, b1))
+    return float(np.sum(s0 * f0 * factor))
 
 
 def band_psd(band_hz: tuple[float, float], rms_acceleration: float) -> PSD:
@@ -170,6 +193,22 @@ def noise_record(psd: PSD, samples: int, dt: float, seed
     return np.fft.irfft(disp_coeff, m), np.fft.irfft(acc_coeff, m)
 
 
+def noise_block_frequency(band: tuple[float, float]) -> float:
+    """The frequency [Hz] whose BLOCK_PERIODS periods make half a noise block: the band's
+    lower edge f1, or its width f2 - f1 when narrower. A block is then 2 BLOCK_PERIODS /
+    that long, so its FFT grid (spacing 1 / block) puts at least 2 BLOCK_PERIODS = 32
+    lines across the band: the realised variance is the requested one up to the edge
+    lines (a 2 Hz band at 100 Hz had no line at all on a grid of f1 / 32 and stood still)."""
+    lo, hi = float(band[0]), float(band[1])
+    return min(lo, hi - lo)
+
+
+def noise_block_samples(psd: PSD, dt: float) -> int:
+    """Samples of one noise block (:func:`noise_signal`, even): ``2 H``, ``H`` =
+    BLOCK_PERIODS periods of :func:`noise_block_frequency` at the step ``dt`` [s]."""
+    return 2 * int(math.ceil(BLOCK_PERIODS / (noise_block_frequency(psd.band) * dt)))
+
+
 def noise_signal(psd: PSD, dt: float, seed: int, index: np.ndarray) -> np.ndarray:
     """Displacement [m] of the Gaussian noise at the times ``index * dt`` [s] of the run's
     own clock (``index``: integers, 0 at the run's start), independent of how long a
@@ -177,7 +216,8 @@ def noise_signal(psd: PSD, dt: float, seed: int, index: np.ndarray) -> np.ndarra
     first second.
 
     The noise is made of periodic blocks (:func:`noise_record`) of ``2 H`` samples,
-    ``H = BLOCK_PERIODS`` periods of the band's lowest frequency, block j centred at
+    ``H = BLOCK_PERIODS`` periods of the band's lowest frequency (of its width, for a
+    band narrower than its lower edge: :func:`noise_block_frequency`), block j centred at
     sample ``j H`` with its own seed ``SeedSequence([seed, j + BLOCK_OFFSET])``, joined
     by power-complementary weights ``cos(pi (n - j H) / (2 H))`` (``w_j^2 + w_(j+1)^2 = 1``:
     independent blocks keep the variance exactly stationary). The weights vary over
@@ -186,7 +226,7 @@ def noise_signal(psd: PSD, dt: float, seed: int, index: np.ndarray) -> np.ndarra
     1e-3 in power.
     """
     idx = np.asarray(index, dtype=np.int64)
-    half = int(math.ceil(BLOCK_PERIODS / (psd.band[0] * dt)))
+    half = noise_block_samples(psd, dt) // 2
     y = np.zeros(idx.size)
     first, last = int(np.floor(idx.min() / half)), int(np.floor(idx.max() / half)) + 1
     for j in range(first, last + 1):

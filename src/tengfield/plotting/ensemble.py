@@ -16,34 +16,46 @@ _SHOWN = (("V_oc_pp_V", "V_OC peak-to-peak [V]", 1.0),
 
 
 def _running_interval(values: np.ndarray):
+    """(realisations 1..N, running mean, running 95 % half-width) over the values so far;
+    a missing value (NaN) is left out (the statistics of summary.json do the same)."""
     from scipy.stats import t as student_t
 
+    values = np.asarray(values, dtype=float)
     n = np.arange(1, values.size + 1)
-    shifted = values - values[0]          # sums of squares without cancellation
-    mean_shifted = np.cumsum(shifted) / n
-    mean = values[0] + mean_shifted
-    sq = np.cumsum(shifted**2)
-    var = np.where(n > 1, (sq - n * mean_shifted**2) / np.maximum(n - 1, 1), np.nan)
-    half = np.where(n > 1, student_t.ppf(0.975, np.maximum(n - 1, 1))
-                    * np.sqrt(np.maximum(var, 0.0) / n), np.nan)
+    finite = np.isfinite(values)
+    count = np.cumsum(finite)
+    ref = values[finite][0] if finite.any() else 0.0
+    shifted = np.where(finite, values - ref, 0.0)   # sums of squares without cancellation
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_shifted = np.cumsum(shifted) / count
+        sq = np.cumsum(shifted**2)
+        var = np.where(count > 1, (sq - count * mean_shifted**2) / np.maximum(count - 1, 1),
+                       np.nan)
+        half = np.where(count > 1, student_t.ppf(0.975, np.maximum(count - 1, 1))
+                        * np.sqrt(np.maximum(var, 0.0) / np.maximum(count, 1)), np.nan)
+    mean = np.where(count > 0, ref + mean_shifted, np.nan)
     return n, mean, half
 
 
 def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     """ensemble.png: one row of panels per output (realisations and running mean +- CI)."""
-    shown = [(k, label, scale) for k, label, scale in _SHOWN
+    from matplotlib.ticker import MaxNLocator
+
+    items = _SHOWN + (("array_value", f"array: {block.get('array_quantity', '')}", 1.0),)
+    shown = [(k, label, scale) for k, label, scale in items
              if k in block["quantities"] and block["quantities"][k]["mean"] is not None]
     fig = new_figure((9.0, 2.3 * len(shown) + 2.0))
     axes = fig.subplots(len(shown) + 1, 1, squeeze=False)[:, 0]
     for ax, (key, label, scale) in zip(axes, shown):
         values = np.array([np.nan if r[key] is None else r[key] for r in rows], float) * scale
-        n, mean, half = _running_interval(np.nan_to_num(values))
+        n, mean, half = _running_interval(values)
         ax.plot(n, values, "o", ms=3, color="0.55", label="realisation")
         ax.plot(n, mean, color="C0", lw=1.4, label="running mean")
         ax.fill_between(n, mean - half, mean + half, color="C0", alpha=0.2,
                         label="95 % CI of the mean")
         ax.set_ylabel(label, fontsize=8)
         ax.ticklabel_format(axis="y", useOffset=False)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))   # N is a count
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="best")
     axes[len(shown) - 1].set_xlabel("realisations N")
@@ -51,11 +63,13 @@ def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     fractions = block["regime_fractions"]
     labels = list(fractions)
     means = [fractions[k]["mean"] for k in labels]
-    errs = [fractions[k]["ci95_half_width"] or 0.0 for k in labels]
+    # the exact binomial interval is not symmetric about the fraction
+    errs = [[m - fractions[k]["ci95_low"] for k, m in zip(labels, means)],
+            [fractions[k]["ci95_high"] - m for k, m in zip(labels, means)]]
     ax.bar(labels, means, yerr=errs, color="C2", alpha=0.7, capsize=4)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("fraction of realisations", fontsize=8)
-    ax.set_title("regime", fontsize=9)
+    ax.set_title("regime (exact binomial 95 % interval)", fontsize=9)
     fig.suptitle(f"ensemble of {block['realisations']} realisations "
                  "(95 % confidence intervals, Student t)", fontsize=10)
     fig.tight_layout()

@@ -38,6 +38,17 @@ VIBRATION_SAMPLES_PER_PERIOD = 32
 #: samples of a synthesised record (its quintic spline: about 1 kB of memory per sample
 #: while it is built, so 2e6 samples are ~2 GB; 2 s of a 31 kHz band)
 MAX_RECORD_SAMPLES = 2e6
+#: the record runs this many periods of its lowest frequency past the run's end, and
+#: starts this many samples before it (tengfield.dynamics.vibration.PAD_PERIODS,
+#: LEAD_SAMPLES)
+VIBRATION_PAD_PERIODS = 1.0
+VIBRATION_LEAD_SAMPLES = 64
+#: half a noise block is this many periods of min(band's lower edge, band's width)
+#: (tengfield.dynamics.vibration.BLOCK_PERIODS, noise_block_samples)
+VIBRATION_BLOCK_PERIODS = 16
+#: samples of one noise block (synthesised whole by an FFT: about 100 bytes per sample,
+#: measured: a [0.01, 200] Hz band's 2.0e7-sample blocks took 2.0 GB), so 2e7 is ~2 GB
+MAX_NOISE_BLOCK_SAMPLES = 2e7
 
 # -- sizes of the files read --
 #: Bytes of a scene file: the default scene is 5 kB; tomllib needs ~130 bytes of memory
@@ -138,29 +149,78 @@ def check_work(exc, run) -> None:
             f"{EVENTS_PER_PERIOD_ESTIMATE} per period): allowed <= {MAX_PERIODS:.3g} periods")
 
 
-def _vibration_max_frequency(exc) -> float:
-    freqs = [c[0] for c in exc.harmonics]
+def _noise_band(exc) -> tuple[float, float] | None:
+    """(lower, upper) edge [Hz] of the noise PSD (band_hz or the PSD table), or None."""
     if exc.band:
-        freqs.append(exc.band[1])
+        return float(exc.band[0]), float(exc.band[1])
     if exc.psd_frequencies is not None:
-        freqs.append(float(exc.psd_frequencies[-1]))
-    return max(freqs) if freqs else 0.0
+        return float(exc.psd_frequencies[0]), float(exc.psd_frequencies[-1])
+    return None
+
+
+def _vibration_frequencies(exc) -> list[float]:
+    """Every frequency [Hz] the synthesised record spans: the components, the noise band's
+    edges and (3D lateral sine of a random kind) the analysis frequency."""
+    freqs = [c[0] for c in exc.harmonics]
+    band = _noise_band(exc)
+    if band is not None:
+        freqs += list(band)
+    if exc.kind == "random" and (exc.amplitude_x > 0.0 or exc.amplitude_y > 0.0):
+        freqs.append(exc.frequency)
+    return freqs
+
+
+def _noise_key(exc) -> str:
+    if exc.band:
+        return "band_hz = [" + ", ".join(f"{b:g}" for b in exc.band) + "]"
+    return f"psd_file = {exc.psd_file!r}"
 
 
 def check_vibration_work(exc, run) -> None:
-    """Refuse a synthesised record that would not fit: duration x 32 samples per period
-    of the highest frequency must stay below MAX_RECORD_SAMPLES."""
+    """Refuse a synthesised record that would not fit: the record (the run, one period
+    of the lowest frequency after it, 32 samples per period of the highest) must stay
+    below MAX_RECORD_SAMPLES, and one noise block (32 periods of the band's lower edge,
+    or of its width if narrower, at that step) below MAX_NOISE_BLOCK_SAMPLES."""
     if exc.kind not in ("random", "harmonics") or (exc.kind == "harmonics" and len(exc.harmonics) == 1
                                                     and not exc.has_noise):
         return
-    fmax = _vibration_max_frequency(exc)
-    count = run.duration * VIBRATION_SAMPLES_PER_PERIOD * fmax
+    freqs = _vibration_frequencies(exc)
+    if not freqs:
+        return
+    fmax, fmin = max(freqs), min(freqs)
+    spp = VIBRATION_SAMPLES_PER_PERIOD
+    count = run.duration * spp * fmax
     if not count < MAX_RECORD_SAMPLES:
         raise SceneError(
-            f"[run] duration_s x {VIBRATION_SAMPLES_PER_PERIOD} x the highest excitation "
-            f"frequency = {run.duration:g} x {VIBRATION_SAMPLES_PER_PERIOD} x {fmax:g} Hz = "
+            f"[run] duration_s x {spp} x the highest excitation "
+            f"frequency = {run.duration:g} x {spp} x {fmax:g} Hz = "
             f"{count:.3g} record samples: allowed < {MAX_RECORD_SAMPLES:.0e} (a shorter run "
             "or a lower band)")
+    band = _noise_band(exc)
+    if band is not None:
+        lo, hi = band
+        block_f = min(lo, hi - lo)
+        block = 2.0 * math.ceil(VIBRATION_BLOCK_PERIODS * spp * fmax / block_f)
+        if not block <= MAX_NOISE_BLOCK_SAMPLES:
+            what = "lower edge" if block_f == lo else "width"
+            ratio = MAX_NOISE_BLOCK_SAMPLES / (2 * VIBRATION_BLOCK_PERIODS * spp)
+            raise SceneError(
+                f"[excitation] {_noise_key(exc)}: the noise is synthesised in blocks of "
+                f"{2 * VIBRATION_BLOCK_PERIODS} periods of the band's {what} ({block_f:g} Hz) "
+                f"sampled {spp} times per period of the highest frequency ({fmax:g} Hz): "
+                f"{block:.3g} samples: allowed <= {MAX_NOISE_BLOCK_SAMPLES:.0e} (highest "
+                f"frequency / min(lower edge, width) <= {ratio:.3g}; here {fmax / block_f:.3g})")
+    padded = (run.duration + VIBRATION_PAD_PERIODS / fmin) * spp * fmax + VIBRATION_LEAD_SAMPLES
+    if not padded < MAX_RECORD_SAMPLES:
+        lowest = (_noise_key(exc) if band is not None and fmin == band[0]
+                  else "frequency_hz = [" + ", ".join(f"{c[0]:g}" for c in exc.harmonics) + "]"
+                  if exc.harmonics else f"frequency_hz = {exc.frequency:g}")
+        raise SceneError(
+            f"[excitation] {lowest}: the synthesised record spans the run and one period "
+            f"of the lowest frequency ({fmin:g} Hz) after it, sampled {spp} times per period "
+            f"of the highest ({fmax:g} Hz): ({run.duration:g} s + 1 / {fmin:g} Hz) x {spp} x "
+            f"{fmax:g} Hz = {padded:.3g} samples: allowed < {MAX_RECORD_SAMPLES:.0e} (raise "
+            "the lowest frequency or lower the highest)")
 
 
 def check_array_work(arr, exc, run) -> None:

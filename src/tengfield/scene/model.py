@@ -137,11 +137,19 @@ class Excitation:
     def __post_init__(self):
         check_section("excitation", self, "Excitation")
         band, psd_file = self.band, self.psd_file   # the noise of random / harmonics
+        levels = (("rms_acceleration_m_per_s2", self.rms_acceleration),
+                  ("rms_acceleration_x_m_per_s2", self.rms_acceleration_x),
+                  ("rms_acceleration_y_m_per_s2", self.rms_acceleration_y))
         if self.kind not in ("random", "harmonics"):
             for key, given in (("band_hz", band), ("psd_file", psd_file)):
                 if given:
                     raise SceneError(f"[excitation] {key} needs kind = 'random' or 'harmonics' "
                                      f"(kind = {self.kind!r})")
+            for key, level in levels:   # a noise level would be silently left out
+                if level > 0.0:
+                    raise SceneError(f"[excitation] {key} = {level:g} needs kind = 'random' or "
+                                     f"'harmonics' (kind = {self.kind!r}) with band_hz or "
+                                     "psd_file: a noise level without noise")
             return
         if band and psd_file:
             raise SceneError("[excitation] band_hz and psd_file: give one of them (a flat band "
@@ -157,6 +165,12 @@ class Excitation:
         elif not psd_file and self.kind == "random":
             raise SceneError("[excitation] kind = 'random' needs band_hz = [f1, f2] with "
                              "rms_acceleration_m_per_s2, or psd_file = 'name.csv'")
+        elif not psd_file:   # harmonics without noise: a noise level would be left out
+            for key, level in levels:
+                if level > 0.0:
+                    raise SceneError(f"[excitation] {key} = {level:g} needs band_hz = [f1, f2] "
+                                     "or psd_file = 'name.csv' (the noise's spectrum): "
+                                     "kind = 'harmonics' has no noise without one")
 
     @property
     def has_noise(self) -> bool:

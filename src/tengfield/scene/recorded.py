@@ -243,4 +243,8 @@ def read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
     if not np.any(vals > 0.0):
         raise SceneError(f"[excitation] psd_file = {name!r} holds no power (every "
                          "PSD value is 0)")
+    if not np.any((vals[1:] > 0.0) & (vals[:-1] > 0.0)):
+        raise SceneError(f"[excitation] psd_file = {name!r} holds no power: between its rows "
+                         "the PSD is interpolated log-log, so a segment with a zero end is zero "
+                         "everywhere; give two neighbouring rows > 0")
     return freqs, vals * units[value_cols[0]]

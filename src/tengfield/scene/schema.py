@@ -270,7 +270,9 @@ def fmt_range(c) -> str:
     left = "(" if lo_open else "["
     right = ")" if hi_open else "]"
     why = c[5] if len(c) > 5 and c[5] else ""
-    return f"{left}{lo:g}, {hi:g}{right}" + (f" ({why})" if why else "")
+    def bound(x):   # an integer bound exactly (a seed's 4294967295, not 4.29497e+09)
+        return str(x) if isinstance(x, int) and not isinstance(x, bool) else f"{x:g}"
+    return f"{left}{bound(lo)}, {bound(hi)}{right}" + (f" ({why})" if why else "")
 
 
 def show(value) -> str:
@@ -321,8 +323,7 @@ def convert(sec: str, key: str, value, spec: Key):
             raise SceneError(f"{where} = {value!r}: expected a list of numbers, e.g. [20.0, 200.0]")
         if len(value) > MAX_HARMONICS:
             raise SceneError(f"{where}: {len(value)} entries; allowed at most {MAX_HARMONICS}")
-        return tuple(convert(sec, key, v, Key(attr, float, None, factor, constraint))
-                     for v in value)
+        return tuple(convert_entries(sec, key, value, Key(attr, float, None, factor, constraint)))
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         hint = (" (a list is allowed only with [excitation] kind = 'harmonics')"
                 if isinstance(value, list) and sec == "excitation" and key in HARMONIC_KEYS else "")
@@ -346,6 +347,20 @@ def convert(sec: str, key: str, value, spec: Key):
             raise SceneError(f"{where} = {show(value)} is out of range: allowed "
                              f"{fmt_range(constraint)}")
     return value * factor if typ is float else value
+
+
+def convert_entries(sec: str, key: str, values, spec) -> list:
+    """:func:`convert` of each entry of a list key; a bad entry's message shows the whole
+    list and the entry's position ("band_hz = [0.0, 10.0]: entry 1 = 0.0 is out of range")."""
+    out = []
+    for i, v in enumerate(values):
+        try:
+            out.append(convert(sec, key, v, spec))
+        except SceneError as exc:
+            text, prefix = str(exc), f"[{sec}] {key} = "
+            detail = text[len(prefix):] if text.startswith(prefix) else text
+            raise SceneError(f"{prefix}{show(list(values))}: entry {i + 1} = {detail}") from None
+    return out
 
 
 def check_attribute(sec: str, key: str, spec: Key, value, owner: str) -> None:
@@ -405,7 +420,7 @@ def harmonic_components(data: dict) -> tuple[dict, tuple]:
         if len(items) > MAX_HARMONICS:
             raise SceneError(f"[excitation] {key}: {len(items)} components; allowed at most "
                              f"{MAX_HARMONICS}")
-        return [convert("excitation", key, v, spec[key]) for v in items]
+        return convert_entries("excitation", key, items, spec[key])
 
     freqs = entries("frequency_hz")
     if freqs is None:
