@@ -146,6 +146,13 @@ def check_grid(scene, frequencies, amplitudes) -> None:
     grid's corners stand for all of it: the check costs four scene builds at any size."""
     from .errors import SceneError
 
+    kind = scene.excitation.kind
+    if kind != "sine":   # its points would all run the scene's own record, unchanged
+        raise SceneError(f"[excitation] kind = {kind!r}: a sweep varies a sine's frequency_hz "
+                         f"and amplitude_mm, which a {kind} excitation does not have (every "
+                         f"point would be the same run); sweep a kind = \"sine\" scene, or use "
+                         f"[run] realisations (noise) or `tengfield design` with "
+                         f"[design.excitation]")
     check_sweep_size(scene, len(frequencies), len(amplitudes))
     fs = sorted({min(map(float, frequencies)), max(map(float, frequencies))}) \
         if len(frequencies) else []

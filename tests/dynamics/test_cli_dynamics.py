@@ -119,3 +119,25 @@ def test_cli_map_without_plots(scene_file, tmp_path):
     assert main(["map", str(scene_file), "--frequency-hz", "10:20:2", "--amplitude-mm", "1:2:2",
                  "--periods", "20", "--jobs", "1", "--no-plots", "-o", str(out)]) == 0
     assert (out / "map.csv").exists() and not (out / "map.png").exists()
+
+
+def test_duration_option_draws_the_noise_for_the_whole_run(tmp_path):
+    """--duration-s longer than [run] duration_s of a random scene: the record is drawn
+    for the run asked for (it failed: "outside the recorded excitation [-0.01, 0.6]");
+    on a sine it equals the scene file with that duration."""
+    noise = ('[excitation]\nkind = "random"\nband_hz = [10.0, 100.0]\n'
+             'rms_acceleration_m_per_s2 = 10.0\n[run]\nduration_s = 0.5\nsettle_periods = 1\n')
+    (tmp_path / "r.toml").write_text(noise)
+    assert main(["dynamics", str(tmp_path / "r.toml"), "--duration-s", "3",
+                 "-o", str(tmp_path / "r"), "--no-plots"]) == 0
+    assert json.loads((tmp_path / "r" / "summary.json").read_text())["duration_s"] == 3.0
+    t = np.loadtxt(tmp_path / "r" / "trajectory.csv", delimiter=",", skiprows=1)[:, 0]
+    assert t[-1] - t[0] == pytest.approx(3.0)
+    (tmp_path / "s.toml").write_text("[run]\nduration_s = 0.5\nsettle_periods = 2\n")
+    (tmp_path / "s2.toml").write_text("[run]\nduration_s = 2.0\nsettle_periods = 2\n")
+    assert main(["dynamics", str(tmp_path / "s.toml"), "--duration-s", "2",
+                 "-o", str(tmp_path / "a"), "--no-plots"]) == 0
+    assert main(["dynamics", str(tmp_path / "s2.toml"), "-o", str(tmp_path / "b"),
+                 "--no-plots"]) == 0
+    assert (tmp_path / "a" / "trajectory.csv").read_bytes() == \
+        (tmp_path / "b" / "trajectory.csv").read_bytes()

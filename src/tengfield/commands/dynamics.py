@@ -64,7 +64,11 @@ def _dynamics(args, figures) -> int:
             raise SceneError(f"--duration-s = {args.duration_s!r}: allowed (0, inf)")
         check_steady_window(scene.excitation, scene.run.settle_periods, args.duration_s,
                             name="--duration-s")
-    result = simulate(scene, duration=args.duration_s)
+        try:   # the scene of that length: a noise record is drawn for it, its limits hold
+            scene = scene.with_values(run={"duration_s": args.duration_s})
+        except SceneError as exc:
+            raise SceneError(f"--duration-s = {args.duration_s:g}: {exc}") from None
+    result = simulate(scene)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     summary = result.summary()
@@ -82,7 +86,7 @@ def _dynamics(args, figures) -> int:
 def _run_map(args) -> int:
     import numpy as np
 
-    from .._mpi import check_jobs, world_if_parallel
+    from .._mpi import check_jobs, rank_of, world_if_parallel
     from ..dynamics import regime_map
     from ..dynamics.mapping import check_map_size
     from ..io import writable_target, write_map_csv
@@ -90,10 +94,15 @@ def _run_map(args) -> int:
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
+    comm = world_if_parallel()
+    if scene.excitation.kind != "sine" and rank_of(comm) == 0:
+        import warnings
+        warnings.warn(f"map: [excitation] kind = {scene.excitation.kind!r} is not used: every "
+                      f"grid point is a sine of that frequency and amplitude (the device's "
+                      f"regime map)", RuntimeWarning, stacklevel=1)
     freqs = list(parse_range(args.frequency_hz, "--frequency-hz"))
     amps_mm = list(parse_range(args.amplitude_mm, "--amplitude-mm", positive=False))
     check_map_size(len(freqs) * len(amps_mm), args.periods)   # before any work
-    comm = world_if_parallel()
     check_jobs(args.jobs, comm)
     result = regime_map(scene, np.array(freqs), np.array(amps_mm) * 1e-3, jobs=args.jobs,
                         progress=sys.stderr.isatty(), periods=args.periods, comm=comm)
