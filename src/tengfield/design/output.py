@@ -5,7 +5,7 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
-from .candidate import followed_geometry
+from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
 
@@ -21,7 +21,8 @@ def csv_columns(result) -> list[str]:
         cols += [f"{o}_{unit}", f"{o}_error_{unit}"]
     for o in spec.objectives:
         cols += [f"{o}_at_{_band_label(f, a)}" for f, a in spec.band]
-    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period", "load_ohm",
+    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period",
+             *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
              "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
              "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
              "field_hash"]
@@ -124,7 +125,10 @@ def design_summary(result) -> dict:
 
 def best_scene_dict(result) -> dict:
     """The scene (file-level dict, ``[design]`` dropped) with the best candidate's values,
-    its followed geometry and (for a power objective) the matched load."""
+    its followed geometry, (for a power objective) the matched load, (for harvested power)
+    the rectifier, the first band point as a sine ``[excitation]`` (a random or harmonics
+    excitation is kept as given) and the run a band point was scored on (settle + window
+    periods): ``tengfield run`` on it gives the design's value at the first band point."""
     best = result.best
     if best is None:
         raise ValueError("no feasible candidate")
@@ -136,11 +140,15 @@ def best_scene_dict(result) -> dict:
     for key, value in best["values"].items():
         if key in OTHER_VARY:
             data.setdefault(OTHER_VARY[key], {})[key] = value
-    if isinstance(best["load_ohm"], float):
+    if result.spec.objective == "harvested_power":   # scored through the [circuit] bridge
+        data.setdefault("circuit", {})["kind"] = "rectifier"
+    elif isinstance(best["load_ohm"], float):
         data.setdefault("circuit", {}).update({"kind": "load",
                                                "load_ohm": float(f"{best['load_ohm']:.6g}")})
     f, a = result.spec.band[0]
-    data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
+    if result.scene.excitation.kind == "sine":      # random / harmonics: scored as given
+        data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
+    data.setdefault("run", {}).update(band_run(result.spec, f))
     return data
 
 
@@ -152,13 +160,21 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
                write_json(out / "design.json", design_summary(result))]
     best = result.best
     if best is not None:
-        unit = OBJECTIVES[result.spec.objective][0]
+        objective = result.spec.objective
+        unit = OBJECTIVES[objective][0]
+        first = best["band_values"][objective][0]
+        f, a = result.spec.band[0]
+        point = f"{f:g} Hz, {a * 1e3:g} mm" if result.scene.excitation.kind == "sine" \
+            else f"the scene's {result.scene.excitation.kind} excitation"
+        n = len(result.spec.band)
         header = (f"best design of `tengfield design` on {result.scene.source}\n"
-                  f"{result.spec.objective} ({result.spec.aggregate} over {len(result.spec.band)} "
-                  f"band points) = {best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
+                  f"{objective} ({result.spec.aggregate} over {n} "
+                  f"band point{'s' * (n != 1)}) = {best['objective']:.6g} +- "
+                  f"{best['objective_error']:.2g} {unit}\n"
                   + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
-                  + f"\nexcitation: the first band point; [field]: the scene's (the design used "
-                  + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
+                  + f"\nexcitation and [run]: the first band point ({point}), where the design "
+                  f"scored {objective} = {first:.6g} {unit}\n[field]: the scene's (the design "
+                  "used " + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
         write_text(out / "best.toml", scene_toml(best_scene_dict(result), header))
         written.append(out / "best.toml")
     if plots:
