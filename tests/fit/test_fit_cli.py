@@ -175,6 +175,11 @@ def test_bad_fit_sections_are_one_line_errors(main, tmp_path, capsys, fit_text, 
     ("V_pp=4.2", "expected NAME=VALUE"),
     ("Q_pp_mC=1.4", "unit 'mC' is not allowed"),
     ("I_peak_uA=-0.16", "out of range"),
+    # a unit slip, as a trace beyond 1 MV / 1 C / 1 kA is refused: it was fitted and said
+    # "surface_charge_uC_per_m2 has no effect on these data"
+    ("V_pp_V=1e30", "V_pp = 1e+30 V is out of range: allowed (0, 1e+06] V"),
+    ("Q_pp_nC=2e9", "Q_pp = 2e+09 nC is out of range: allowed (0, 1e+09] nC"),
+    ("I_peak_mA=5e6", "I_peak = 5e+06 mA is out of range: allowed (0, 1e+06] mA"),
 ])
 def test_bad_targets_are_one_line_errors(main, tmp_path, capsys, target, expected):
     err = _error(main, capsys, ["fit", "--targets", target, "-o", str(tmp_path / "out")])

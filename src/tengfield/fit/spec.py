@@ -377,6 +377,9 @@ def parse_targets(items) -> list[Target]:
             raise SceneError(f"--targets {text!r}: uncertainty {spread!r} is out of range: "
                              "allowed (0, inf)")
         factor = UNITS[q][unit]
+        if number * factor > MAX_TRACE_VALUE[q]:   # a unit slip, as in a measured trace
+            raise SceneError(f"--targets {text!r}: {q}_{kind} = {number:g} {unit} is out of "
+                             f"range: allowed (0, {MAX_TRACE_VALUE[q] / factor:g}] {unit}")
         if any(t.key == f"{q}_{kind}" for t in targets):
             raise SceneError(f"--targets {text!r}: {q}_{kind} is given twice")
         targets.append(Target(q, kind, unit, number * factor, spread * factor, bool(sigma)))
