@@ -160,6 +160,10 @@ def test_bad_traces_are_one_line_errors(setup, main, tmp_path, capsys, case, exp
      "[fit.parameters] parallel_capacitance_pF.start = 5.0 is out of range: allowed [10, 20]"),
     ('[fit.columns.V]\nunit = "volt"', "[fit.columns.V] unit = 'volt' is not allowed"),
     ("[fit.columns.P]\n", "unknown quantity [fit.columns.P]"),
+    # a 146 TiB start-scan grid (a MemoryError traceback); the default scene runs at 20 Hz
+    ("[fit.parameters]\ntime_shift_s = {max = 1e9}",
+     "[fit.parameters] time_shift_s: bounds [0, 1e+09] s span 2e+10 periods: allowed at most "
+     "100 periods (5 s;"),
 ])
 def test_bad_fit_sections_are_one_line_errors(main, tmp_path, capsys, fit_text, expected):
     path = tmp_path / "scene.toml"

@@ -65,6 +65,9 @@ MAX_TRACE_ROWS = 2_000_000
 #: |value| in SI of a measured column (1 MV, 1 C, 1 kA are far beyond any TENG):
 #: a trace scaled by 1e300 overflowed the residual's squares
 MAX_TRACE_VALUE = {"V": 1e6, "Q": 1.0, "I": 1e3}
+#: widest time_shift_s range [periods]: the start scan and the dynamics span it (1e9 s
+#: asked for a 146 TiB grid)
+MAX_SHIFT_PERIODS = 100
 #: |time| [s] of a trace (the [initial] time_s bound)
 MAX_TRACE_TIME = 1e12
 
@@ -225,6 +228,11 @@ def _parameters(scene, raw, free) -> list[Parameter]:
             raise SceneError(f"{where}: min = {lo:g} must be < max = {hi:g}")
         if transform == "log" and lo <= 0:
             raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
+        if name == "time_shift_s" and hi - lo > MAX_SHIFT_PERIODS * period:
+            raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] s span {(hi - lo) / period:.3g} "
+                             f"periods: allowed at most {MAX_SHIFT_PERIODS} periods "
+                             f"({MAX_SHIFT_PERIODS * period:g} s; in a steady state shifts one "
+                             "period apart are equivalent)")
         if name == "restitution":
             if lo < 0 or hi > 1:
                 raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] are out of range: allowed [0, 1]")
