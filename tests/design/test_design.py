@@ -386,3 +386,21 @@ def test_a_varied_load_is_one_column_of_design_csv(tmp_path, cache):
     assert len(header) == len(set(header))
     rows = list(csv.DictReader(open(tmp_path / "design.csv")))
     assert [float(r["load_ohm"]) for r in rows] == [r["values"]["load_ohm"] for r in result.rows]
+
+
+def test_a_random_excitation_is_labelled_as_such_not_by_an_unused_amplitude(tmp_path, cache):
+    """A random excitation has no amplitude: design.csv's band columns and design.json's band
+    named the scene's unused sine amplitude ('charge_at_33hz_1.5mm')."""
+    noise = {"kind": "random", "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 20.0,
+             "seed": 0, "frequency_hz": 33.0}
+    section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
+               "window_periods": 10, "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]}}
+    scene = fx.scene_with(excitation=noise, design=section)
+    result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    write_design_outputs(result, tmp_path, plots=False)
+    with open(tmp_path / "design.csv") as f:
+        header = next(csv.reader(f))
+    assert "charge_at_33hz_random" in header
+    assert not any("_at_" in c and c.endswith("mm") for c in header)
+    band = json.loads((tmp_path / "design.json").read_text())["settings"]["band"]
+    assert band == [{"frequency_hz": 33.0, "excitation": "random"}]

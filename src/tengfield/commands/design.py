@@ -88,7 +88,7 @@ def _run(args) -> int:
         print(f"best: " + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
               + f": {result.spec.objective} = {best['objective']:.4g} +- "
               f"{best['objective_error']:.2g} {unit} ({result.spec.aggregate} over "
-              f"{len(result.spec.band)} band points)")
+              f"{len(result.spec.band)} band point{'s' * (len(result.spec.band) != 1)})")
         if "margin_over_error_bars" in conf:
             print(f"runner-up #{conf['runner_up_index']}: margin {conf['margin']:.3g} {unit} = "
                   f"{conf['margin_over_error_bars']:.3g} x the error bars; "

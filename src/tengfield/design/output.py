@@ -9,8 +9,10 @@ from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
 
-def _band_label(f: float, a: float) -> str:
-    return f"{f:g}hz_{a * 1e3:g}mm"
+def _band_label(f: float, a: float, kind: str = "sine") -> str:
+    """``33hz_0.75mm``; a random or harmonics excitation (no band amplitude: the scene's
+    excitation as given) ``33hz_random``."""
+    return f"{f:g}hz_{a * 1e3:g}mm" if kind == "sine" else f"{f:g}hz_{kind}"
 
 
 def csv_columns(result) -> list[str]:
@@ -20,7 +22,8 @@ def csv_columns(result) -> list[str]:
         unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
         cols += [f"{o}_{unit}", f"{o}_error_{unit}"]
     for o in spec.objectives:
-        cols += [f"{o}_at_{_band_label(f, a)}" for f, a in spec.band]
+        cols += [f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"
+                 for f, a in spec.band]
     cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
              "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
@@ -49,7 +52,7 @@ def csv_record(result, row) -> dict:
         rec[f"{o}_{unit}"] = got.get("value")
         rec[f"{o}_error_{unit}"] = got.get("error")
         for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
-            rec[f"{o}_at_{_band_label(f, a)}"] = v
+            rec[f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
     rec.update({"regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
                 "upper_contacts_per_period": row["upper_contacts_per_period"],
                 "load_ohm": row["load_ohm"], "device_volume_m3": row["device_volume_m3"],
@@ -112,7 +115,9 @@ def design_summary(result) -> dict:
         "counts": {s: sum(r["status"] == s for r in result.rows)
                    for s in ("ok", "infeasible", "skipped")},
         "skipped_reasons": sorted({r["reason"] for r in result.rows if r["status"] == "skipped"}),
-        "settings": spec.as_dict(),
+        "settings": {**spec.as_dict(), **({} if result.scene.excitation.kind == "sine" else {
+            "band": [{"frequency_hz": f, "excitation": result.scene.excitation.kind}
+                     for f, _ in spec.band]})},
         "field_settings": ("coarse: degree 2, mesh_size_mm = min(1, 0.2 x ball diameter), "
                            "tolerance 0.02 (17 positions)") if spec.field == "coarse"
         else "the scene's [field]",
