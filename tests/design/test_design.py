@@ -335,18 +335,20 @@ def _best_of(tmp_path, cache, scene):
     return result, best, run.summary
 
 
-@pytest.mark.parametrize("objective, value_of", [
-    ("power_density", lambda s: s["load"]["power_density_W_per_m3"]),
-    ("harvested_power", lambda s: s["rectifier"]["average_harvested_power_W"]),
-    ("charge", lambda s: s["peak_to_peak"]["Q_sc_C"]),
+@pytest.mark.parametrize("objective, load, value_of", [
+    ("power_density", "one", lambda s: s["load"]["power_density_W_per_m3"]),
+    ("power", "each", lambda s: s["load"]["mean_power_W"]),
+    ("harvested_power", "one", lambda s: s["rectifier"]["average_harvested_power_W"]),
+    ("charge", "one", lambda s: s["peak_to_peak"]["Q_sc_C"]),
 ])
 def test_best_toml_runs_to_the_designs_value_at_the_first_band_point(tmp_path, cache,
-                                                                     objective, value_of):
+                                                                     objective, load, value_of):
     """best.toml carries the run the design scored (settle + window periods at the design's
-    sampling) and, for harvested power, the rectifier: `tengfield run` on it gives the
-    design's value at the first band point (it ran the scene's own [run] and, for
-    harvested_power, an open circuit: 33 % off and no harvested power at all)."""
-    scene = design_scene(objective=objective, candidates=4, field="scene",
+    sampling), for harvested power the rectifier, with load = "each" the first band point's
+    own matched load: `tengfield run` on it gives the design's value at the first band point
+    (it ran the scene's own [run], and an open circuit for harvested_power and for
+    load = "each": no power at all)."""
+    scene = design_scene(objective=objective, candidates=4, field="scene", load=load,
                          settle_periods=6, window_periods=8).with_values(
         run={"duration_s": 0.3, "settle_periods": 2})
     result, best, summary = _best_of(tmp_path, cache, scene)

@@ -147,9 +147,10 @@ def best_scene_dict(result) -> dict:
             data.setdefault(OTHER_VARY[key], {})[key] = value
     if result.spec.objective == "harvested_power":   # scored through the [circuit] bridge
         data.setdefault("circuit", {})["kind"] = "rectifier"
-    elif isinstance(best["load_ohm"], float):
+    elif best["load_ohm"] is not None:   # load = "each": the first band point's own load
+        load = best["load_ohm"][0] if isinstance(best["load_ohm"], list) else best["load_ohm"]
         data.setdefault("circuit", {}).update({"kind": "load",
-                                               "load_ohm": float(f"{best['load_ohm']:.6g}")})
+                                               "load_ohm": float(f"{float(load):.6g}")})
     f, a = result.spec.band[0]
     if result.scene.excitation.kind == "sine":      # random / harmonics: scored as given
         data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
