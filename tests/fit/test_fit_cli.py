@@ -124,6 +124,10 @@ def _error(main, capsys, argv):
     ("not-increasing", "time is not strictly increasing"),
     ("utf-16", "is UTF-16 text: save it as UTF-8"),
     ("binary", "is binary data (byte 0x"),
+    # a European spreadsheet's or a scope's export: it said "has none of the columns ...
+    # (columns are time_ms;V_meas;Q_meas)"
+    ("semicolon", "is separated by ';', not by commas: save it as comma-separated"),
+    ("tab", "is separated by tabs, not by commas: save it as comma-separated"),
 ])
 def test_bad_traces_are_one_line_errors(setup, main, tmp_path, capsys, case, expected):
     path, cache, _, _ = setup
@@ -145,6 +149,8 @@ def test_bad_traces_are_one_line_errors(setup, main, tmp_path, capsys, case, exp
         csv.write_bytes(csv.read_text().encode("utf-16"))
     if case == "binary":
         csv.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff")
+    if case in ("semicolon", "tab"):
+        csv.write_text(csv.read_text().replace(",", ";" if case == "semicolon" else "\t"))
     err = _error(main, capsys, ["fit", str(path), "--measured", str(csv), "-o",
                                 str(tmp_path / "out"), "--cache-dir", str(cache)])
     assert expected in err
