@@ -194,3 +194,51 @@ def test_bad_fit_sections_are_one_line_errors(main, tmp_path, capsys, fit_text, 
 def test_bad_targets_are_one_line_errors(main, tmp_path, capsys, target, expected):
     err = _error(main, capsys, ["fit", "--targets", target, "-o", str(tmp_path / "out")])
     assert expected in err, err
+
+
+LOAD_SCENE = """
+[run]
+duration_s = 1.0
+settle_periods = 10
+
+[circuit]
+kind = "load"
+load_ohm = 1e8
+
+[fit.parameters]
+surface_charge_uC_per_m2 = {}
+load_ohm = {min = 1e6, max = 1e11}
+time_shift_s = {}
+"""
+
+
+def test_a_load_runs_waveforms_csv_is_read_by_its_load_columns(main, tmp_path):
+    """[circuit] kind = "load" compares V and I with the load's voltage and current: without
+    [fit.columns] a `tengfield run` waveforms.csv of a load gives V_load_V and I_load_A
+    (it took V_oc_V and I_sc_A: the fit pushed R to ~1e5 ohm, truth 1e9, chi2/nu < 1 and
+    no note, the open-circuit voltage weighted out as noise)."""
+    path = tmp_path / "scene.toml"
+    path.write_text(LOAD_SCENE)
+    scene = load_scene(path)
+    cache = tmp_path / "cache"
+    surrogate = reference_surrogate(scene, cache_dir=cache, solve=fx.plate_model_solve)[:2]
+    true = {"surface_charge_uC_per_m2": -30.0, "load_ohm": 1e9}
+    kw = dict(true=true, white=0.005, hum=0.0, duration=0.3)
+    loaded, _ = synthetic(scene, surrogate, 4, ("V", "Q", "I"), **kw)
+    opened, _ = synthetic(scene.with_values(circuit={"kind": "open"}), surrogate, 4,
+                          ("V", "I"), **kw)
+    csv = tmp_path / "waveforms.csv"     # the columns `tengfield run` writes for a load
+    np.savetxt(csv, np.column_stack([loaded.time, opened.values["V"], loaded.values["Q"],
+                                     opened.values["I"], loaded.values["V"],
+                                     loaded.values["I"]]),
+               delimiter=",", header="time_s,V_oc_V,Q_sc_C,I_sc_A,V_load_V,I_load_A",
+               comments="", fmt="%.12g")
+    out = tmp_path / "out"
+    assert main(["fit", str(path), "--measured", str(csv), "-o", str(out), "--cache-dir",
+                 str(cache), "--no-plots"]) == 0
+    summary = json.loads((out / "fit.json").read_text())
+    assert set(summary["residual_rms"]) == {"V", "Q", "I"}
+    params = summary["parameters"]
+    for name, value in true.items():
+        assert abs(params[name]["value"] - value) < 3.5 * params[name]["standard_error"], params
+    assert params["load_ohm"]["value"] == pytest.approx(1e9, rel=0.05)

@@ -56,6 +56,14 @@ UNITS = {
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 #: columns of a ``tengfield run`` waveforms.csv, used when [fit.columns] is absent
 RUN_COLUMNS = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
+#: ... of a run with [circuit] kind = "load", whose V and I the fit compares (the load's)
+LOAD_RUN_COLUMNS = {"V": ("V_load_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_load_A", "A")}
+
+
+def run_columns(kind: str) -> dict:
+    """The waveforms.csv columns (name, unit) of V, Q and I the fit compares for a scene
+    with ``[circuit] kind``: the load's voltage and current for "load", else V_OC, I_SC."""
+    return LOAD_RUN_COLUMNS if kind == "load" else RUN_COLUMNS
 LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
 MIN_SAMPLES = 8
 #: Bytes and data rows of a measured trace (checked before / while reading): every row
@@ -129,6 +137,8 @@ class FitSpec:
     bootstrap: int = 0
     columns: list[Column] | None = None
     parameters: list[Parameter] = field(default_factory=list)
+    #: columns used without [fit.columns]: :func:`run_columns` of the scene's circuit
+    default_columns: dict = field(default_factory=lambda: dict(RUN_COLUMNS))
 
 
 def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
@@ -166,12 +176,14 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
     if "bootstrap" in raw:
         spec.bootstrap = _whole_number("[fit] bootstrap", raw["bootstrap"], 0, 10000,
                                        "a whole number of replicas")
-    spec.columns = _columns(raw.get("columns")) if "columns" in raw else None
+    spec.default_columns = dict(run_columns(scene.circuit.kind))
+    spec.columns = _columns(raw.get("columns"), spec.default_columns) if "columns" in raw \
+        else None
     spec.parameters = _parameters(scene, raw.get("parameters"), free)
     return spec
 
 
-def _columns(raw) -> list[Column]:
+def _columns(raw, defaults: dict = RUN_COLUMNS) -> list[Column]:
     if not isinstance(raw, dict) or not raw:
         raise SceneError("[fit.columns] must be a table with V, Q and/or I sub-tables")
     columns = []
@@ -182,8 +194,8 @@ def _columns(raw) -> list[Column]:
         if not isinstance(entry, dict):
             raise SceneError(f"{where} must be a table (column, unit, noise)")
         _refuse_unknown_keys(entry, ("column", "unit", "noise"), where, " ")
-        column = entry.get("column", RUN_COLUMNS[quantity][0])
-        unit = entry.get("unit", RUN_COLUMNS[quantity][1])
+        column = entry.get("column", defaults[quantity][0])
+        unit = entry.get("unit", defaults[quantity][1])
         if not isinstance(column, str) or not column:
             raise SceneError(f"{where} column = {column!r}: expected a column name")
         if unit not in UNITS[quantity]:
@@ -300,10 +312,11 @@ def read_trace(path, spec: FitSpec) -> Trace:
                                  f"{header[0][:60]!r})")
     columns = spec.columns
     if columns is None:
-        columns = [Column(q, c, u, None) for q, (c, u) in RUN_COLUMNS.items() if c in header]
+        defaults = spec.default_columns
+        columns = [Column(q, c, u, None) for q, (c, u) in defaults.items() if c in header]
         if not columns:
             raise SceneError(f"{what} has none of the columns "
-                             f"{', '.join(c for c, _ in RUN_COLUMNS.values())}; name the columns "
+                             f"{', '.join(c for c, _ in defaults.values())}; name the columns "
                              f"in [fit.columns] (columns are {', '.join(header)})")
     wanted = [("[fit] time_column", spec.time_column)] + \
              [(f"[fit.columns.{c.quantity}] column", c.column) for c in columns]
