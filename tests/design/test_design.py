@@ -322,3 +322,87 @@ def test_random_and_harmonics_excitations_are_scored_as_the_scene_gives_them(cac
     assert s["objective"] != a["objective"]
     with pytest.raises(SceneError, match=r"\[design.excitation\] needs \[excitation\] kind"):
         parse_design_section(fx.scene_with(excitation=engine, design=sine.raw["design"]))
+
+
+# ---------------------------------------------------------------------------
+# best.toml: `tengfield run` on it reproduces the design's value at the first band point
+def _best_of(tmp_path, cache, scene):
+    result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    assert result.best is not None
+    write_design_outputs(result, tmp_path, plots=False)
+    best = tf.load_scene(tmp_path / "best.toml")
+    run = tf.run(best, cache_dir=cache, solve=fx.plate_model_solve)
+    return result, best, run.summary
+
+
+@pytest.mark.parametrize("objective, load, value_of", [
+    ("power_density", "one", lambda s: s["load"]["power_density_W_per_m3"]),
+    ("power", "each", lambda s: s["load"]["mean_power_W"]),
+    ("harvested_power", "one", lambda s: s["rectifier"]["average_harvested_power_W"]),
+    ("charge", "one", lambda s: s["peak_to_peak"]["Q_sc_C"]),
+])
+def test_best_toml_runs_to_the_designs_value_at_the_first_band_point(tmp_path, cache,
+                                                                     objective, load, value_of):
+    """best.toml carries the run the design scored (settle + window periods at the design's
+    sampling), for harvested power the rectifier, with load = "each" the first band point's
+    own matched load: `tengfield run` on it gives the design's value at the first band point
+    (it ran the scene's own [run], and an open circuit for harvested_power and for
+    load = "each": no power at all)."""
+    scene = design_scene(objective=objective, candidates=4, field="scene", load=load,
+                         settle_periods=6, window_periods=8).with_values(
+        run={"duration_s": 0.3, "settle_periods": 2})
+    result, best, summary = _best_of(tmp_path, cache, scene)
+    expected = result.best["band_values"][objective][0]
+    assert best.run.settle_periods == 6
+    assert best.run.duration == pytest.approx(14 / best.excitation.frequency)
+    assert value_of(summary) == pytest.approx(expected, rel=1e-6)
+    assert f"{expected:.6g}" in (tmp_path / "best.toml").read_text()   # said in the header
+
+
+def test_best_toml_keeps_a_harmonics_excitation(tmp_path, cache):
+    """A harmonics (or random) scene is scored as it is given: best.toml keeps every
+    component (it replaced the lists by the fundamental, a plain sine)."""
+    engine = {"kind": "harmonics", "frequency_hz": [33.0, 66.0], "amplitude_mm": [0.75, 0.05],
+              "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 3.0, "seed": 2}
+    section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
+               "window_periods": 10, "samples_per_period": 120, "field": "scene",
+               "vary": {"gap_mm": [1.0, 5.0]}}
+    scene = fx.scene_with(excitation=engine, design=section)
+    result, best, summary = _best_of(tmp_path, cache, scene)
+    assert best.excitation.kind == "harmonics"
+    assert best.raw["excitation"]["frequency_hz"] == [33.0, 66.0]
+    assert best.raw["excitation"]["amplitude_mm"] == [0.75, 0.05]
+    assert summary["peak_to_peak"]["Q_sc_C"] == pytest.approx(
+        result.best["band_values"]["charge"][0], rel=1e-6)
+
+
+def test_a_varied_load_is_one_column_of_design_csv(tmp_path, cache):
+    """[design.vary] load_ohm: design.csv has one load_ohm column, the varied (= used) load
+    (it had two of the same name: pandas reads the second as load_ohm.1, csv.DictReader
+    keeps only one)."""
+    scene = design_scene(objective="power", candidates=4, vary={"load_ohm": [1e6, 1e12]})
+    result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    write_design_outputs(result, tmp_path, plots=False)
+    with open(tmp_path / "design.csv") as f:
+        header = next(csv.reader(f))
+    assert len(header) == len(set(header))
+    rows = list(csv.DictReader(open(tmp_path / "design.csv")))
+    assert [float(r["load_ohm"]) for r in rows] == [r["values"]["load_ohm"] for r in result.rows]
+
+
+def test_a_random_excitation_is_labelled_as_such_not_by_an_unused_amplitude(tmp_path, cache):
+    """A random excitation has no amplitude: design.csv's band columns and design.json's band
+    named the scene's unused sine amplitude ('charge_at_33hz_1.5mm')."""
+    noise = {"kind": "random", "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 20.0,
+             "seed": 0, "frequency_hz": 33.0}
+    section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
+               "window_periods": 10, "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]}}
+    scene = fx.scene_with(excitation=noise, design=section)
+    result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    write_design_outputs(result, tmp_path, plots=False)
+    with open(tmp_path / "design.csv") as f:
+        header = next(csv.reader(f))
+    assert "charge_at_33hz_random" in header
+    assert not any("_at_" in c and c.endswith("mm") for c in header)
+    band = json.loads((tmp_path / "design.json").read_text())["settings"]["band"]
+    assert band == [{"frequency_hz": 33.0, "excitation": "random"}]

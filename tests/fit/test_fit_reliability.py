@@ -122,3 +122,20 @@ def test_a_row_with_a_missing_column_names_its_line(setup, tmp_path, capsys):
     csv.write_text("\n".join(lines) + "\n")
     code, captured = _fit(path, cache, csv, tmp_path / "out", capsys)
     _one_line(code, captured, "m.csv", "line 31", "data row 30", "3 field(s): expected 2")
+
+
+def test_a_constant_column_next_to_a_signal_is_refused_naming_it(tmp_path, capsys):
+    """A flat V column (a probe not connected) beside a good Q: the fit pulled sigma to
+    -0.05 +- 0.001 (truth -30), weighted the Q column out as 'noise', reported chi2/nu = 1
+    and no note (the flat column's zero spread kept the residual check quiet)."""
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE + '\n[fit.columns.Q]\ncolumn = "Q_meas"\nunit = "nC"\n')
+    scene = load_scene(path)
+    cache = tmp_path / "cache"
+    surrogate = reference_surrogate(scene, cache_dir=cache, solve=fx.plate_model_solve)[:2]
+    trace, _ = synthetic(scene, surrogate, 5, ("V", "Q"), duration=0.2)
+    trace.values["V"] = np.full(trace.time.size, 5.0)
+    csv = write_csv(tmp_path / "flat_v.csv", trace)
+    code, captured = _fit(path, cache, csv, tmp_path / "out", capsys)
+    _one_line(code, captured, "'V_meas'", "constant (5 V)", "[fit.columns]")
+    assert not (tmp_path / "out" / "fit.json").exists()

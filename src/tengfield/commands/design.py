@@ -12,6 +12,7 @@ equals a serial run's) and rank 0 writes the files; --jobs must then be omitted 
 """
 from __future__ import annotations
 
+import contextlib
 import sys
 
 from .._mpi import world_if_parallel
@@ -32,6 +33,31 @@ def register(sub) -> None:
     p.set_defaults(func=_run)
 
 
+@contextlib.contextmanager
+def _sigterm_as_interrupt(enabled: bool = True):
+    """SIGTERM (``kill``, a batch system's time limit) ends the study as Ctrl-C does: the
+    worker processes are stopped with it (they outlived a terminated study, orphaned, and
+    its staging directory stayed in -o DIR) and DIR keeps its previous content. Only in
+    the main thread of a process that left SIGTERM at its default (not under mpirun: the
+    launcher stops the ranks itself)."""
+    import signal
+    import threading
+
+    if (not enabled or threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def _run(args) -> int:
     from ..design import design, parse_design_section, write_design_outputs
     from ..design.spec import OBJECTIVES
@@ -42,8 +68,9 @@ def _run(args) -> int:
                  if v is not None}
     parse_design_section(scene, overrides)        # bad [design] input: before any work
     comm = world_if_parallel()
-    result = design(scene, comm=comm, jobs=args.jobs, cache_dir=args.cache_dir,
-                    progress=True, overrides=overrides or None)
+    with _sigterm_as_interrupt(comm is None):
+        result = design(scene, comm=comm, jobs=args.jobs, cache_dir=args.cache_dir,
+                        progress=True, overrides=overrides or None)
     if comm is not None and comm.rank != 0:
         return 0
     written = write_design_outputs(result, args.output, plots=not args.no_plots)
@@ -61,7 +88,7 @@ def _run(args) -> int:
         print(f"best: " + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
               + f": {result.spec.objective} = {best['objective']:.4g} +- "
               f"{best['objective_error']:.2g} {unit} ({result.spec.aggregate} over "
-              f"{len(result.spec.band)} band points)")
+              f"{len(result.spec.band)} band point{'s' * (len(result.spec.band) != 1)})")
         if "margin_over_error_bars" in conf:
             print(f"runner-up #{conf['runner_up_index']}: margin {conf['margin']:.3g} {unit} = "
                   f"{conf['margin_over_error_bars']:.3g} x the error bars; "

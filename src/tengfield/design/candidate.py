@@ -109,14 +109,20 @@ def candidate_scene(base, spec: DesignSpec, values: dict):
     return scene
 
 
+def band_run(spec: DesignSpec, frequency: float) -> dict:
+    """``[run]`` keys of a band point at ``frequency`` [Hz]: settle + window periods, sampled
+    ``samples_per_period`` times a period (the run a candidate is scored on)."""
+    periods = spec.settle_periods + spec.window_periods
+    return {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
+            "sample_rate_hz": spec.samples_per_period * frequency}
+
+
 def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
     """``scene`` driven at one band point (``amplitude`` [m]) for settle + window periods.
     A random or harmonics excitation is kept as the scene gives it (its one band point is
     its reference frequency and fundamental): every candidate meets the same realisation
     (the noise follows the run's clock and seed, not its length)."""
-    periods = spec.settle_periods + spec.window_periods
-    run = {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
-           "sample_rate_hz": spec.samples_per_period * frequency}
+    run = band_run(spec, frequency)
     if scene.excitation.kind != "sine":
         return scene.with_values(run=run)
     return scene.with_values(

@@ -5,12 +5,14 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
-from .candidate import followed_geometry
+from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
 
-def _band_label(f: float, a: float) -> str:
-    return f"{f:g}hz_{a * 1e3:g}mm"
+def _band_label(f: float, a: float, kind: str = "sine") -> str:
+    """``33hz_0.75mm``; a random or harmonics excitation (no band amplitude: the scene's
+    excitation as given) ``33hz_random``."""
+    return f"{f:g}hz_{a * 1e3:g}mm" if kind == "sine" else f"{f:g}hz_{kind}"
 
 
 def csv_columns(result) -> list[str]:
@@ -20,8 +22,10 @@ def csv_columns(result) -> list[str]:
         unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
         cols += [f"{o}_{unit}", f"{o}_error_{unit}"]
     for o in spec.objectives:
-        cols += [f"{o}_at_{_band_label(f, a)}" for f, a in spec.band]
-    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period", "load_ohm",
+        cols += [f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"
+                 for f, a in spec.band]
+    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period",
+             *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
              "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
              "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
              "field_hash"]
@@ -48,7 +52,7 @@ def csv_record(result, row) -> dict:
         rec[f"{o}_{unit}"] = got.get("value")
         rec[f"{o}_error_{unit}"] = got.get("error")
         for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
-            rec[f"{o}_at_{_band_label(f, a)}"] = v
+            rec[f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
     rec.update({"regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
                 "upper_contacts_per_period": row["upper_contacts_per_period"],
                 "load_ohm": row["load_ohm"], "device_volume_m3": row["device_volume_m3"],
@@ -111,7 +115,9 @@ def design_summary(result) -> dict:
         "counts": {s: sum(r["status"] == s for r in result.rows)
                    for s in ("ok", "infeasible", "skipped")},
         "skipped_reasons": sorted({r["reason"] for r in result.rows if r["status"] == "skipped"}),
-        "settings": spec.as_dict(),
+        "settings": {**spec.as_dict(), **({} if result.scene.excitation.kind == "sine" else {
+            "band": [{"frequency_hz": f, "excitation": result.scene.excitation.kind}
+                     for f, _ in spec.band]})},
         "field_settings": ("coarse: degree 2, mesh_size_mm = min(1, 0.2 x ball diameter), "
                            "tolerance 0.02 (17 positions)") if spec.field == "coarse"
         else "the scene's [field]",
@@ -124,7 +130,10 @@ def design_summary(result) -> dict:
 
 def best_scene_dict(result) -> dict:
     """The scene (file-level dict, ``[design]`` dropped) with the best candidate's values,
-    its followed geometry and (for a power objective) the matched load."""
+    its followed geometry, (for a power objective) the matched load, (for harvested power)
+    the rectifier, the first band point as a sine ``[excitation]`` (a random or harmonics
+    excitation is kept as given) and the run a band point was scored on (settle + window
+    periods): ``tengfield run`` on it gives the design's value at the first band point."""
     best = result.best
     if best is None:
         raise ValueError("no feasible candidate")
@@ -136,11 +145,16 @@ def best_scene_dict(result) -> dict:
     for key, value in best["values"].items():
         if key in OTHER_VARY:
             data.setdefault(OTHER_VARY[key], {})[key] = value
-    if isinstance(best["load_ohm"], float):
+    if result.spec.objective == "harvested_power":   # scored through the [circuit] bridge
+        data.setdefault("circuit", {})["kind"] = "rectifier"
+    elif best["load_ohm"] is not None:   # load = "each": the first band point's own load
+        load = best["load_ohm"][0] if isinstance(best["load_ohm"], list) else best["load_ohm"]
         data.setdefault("circuit", {}).update({"kind": "load",
-                                               "load_ohm": float(f"{best['load_ohm']:.6g}")})
+                                               "load_ohm": float(f"{float(load):.6g}")})
     f, a = result.spec.band[0]
-    data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
+    if result.scene.excitation.kind == "sine":      # random / harmonics: scored as given
+        data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
+    data.setdefault("run", {}).update(band_run(result.spec, f))
     return data
 
 
@@ -152,13 +166,21 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
                write_json(out / "design.json", design_summary(result))]
     best = result.best
     if best is not None:
-        unit = OBJECTIVES[result.spec.objective][0]
+        objective = result.spec.objective
+        unit = OBJECTIVES[objective][0]
+        first = best["band_values"][objective][0]
+        f, a = result.spec.band[0]
+        point = f"{f:g} Hz, {a * 1e3:g} mm" if result.scene.excitation.kind == "sine" \
+            else f"the scene's {result.scene.excitation.kind} excitation"
+        n = len(result.spec.band)
         header = (f"best design of `tengfield design` on {result.scene.source}\n"
-                  f"{result.spec.objective} ({result.spec.aggregate} over {len(result.spec.band)} "
-                  f"band points) = {best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
+                  f"{objective} ({result.spec.aggregate} over {n} "
+                  f"band point{'s' * (n != 1)}) = {best['objective']:.6g} +- "
+                  f"{best['objective_error']:.2g} {unit}\n"
                   + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
-                  + f"\nexcitation: the first band point; [field]: the scene's (the design used "
-                  + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
+                  + f"\nexcitation and [run]: the first band point ({point}), where the design "
+                  f"scored {objective} = {first:.6g} {unit}\n[field]: the scene's (the design "
+                  "used " + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
         write_text(out / "best.toml", scene_toml(best_scene_dict(result), header))
         written.append(out / "best.toml")
     if plots:

@@ -174,8 +174,11 @@ class _Workers:
                                             initializer=_quiet_worker)
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type=None, *exc):
         if self.pool is not None:
+            if exc_type is not None:   # interrupted (Ctrl-C, SIGTERM) or failed: the running
+                for process in list((self.pool._processes or {}).values()):   # candidates
+                    process.terminate()            # are abandoned, no worker outlives us
             self.pool.shutdown(cancel_futures=True)
 
     def map(self, work, tasks, progress):
@@ -249,6 +252,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
         return np.array(u)
 
     workers = _Workers(comm, jobs).__enter__()
+    failure = (None, None, None)
     try:
         d = len(space.keys)
         n0 = spec.initial_count()
@@ -282,8 +286,11 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
                 half *= SHRINK_IMPROVED if improved else SHRINK_STALLED
                 if half < max(spec.resolution, 1e-6):
                     break
+    except BaseException:
+        failure = sys.exc_info()
+        raise
     finally:
-        workers.__exit__(None, None, None)
+        workers.__exit__(*failure)
         bar.close()
     return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
                         wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,

@@ -25,7 +25,7 @@ def _check_signal(trace: Trace) -> None:
         if not np.all(np.isfinite(y)) or float(np.max(np.abs(y))) > limit:
             raise FitError(f"{trace.source!r}: {c.quantity} reaches {float(np.max(np.abs(y))):.3g} "
                            f"(SI): allowed |x| <= {limit:g} (check the column's unit)")
-    reasons = []
+    reasons, constant, signal = [], [], []
     for c in trace.columns:
         y = trace.values[c.quantity]
         pp = float(np.ptp(y))
@@ -33,14 +33,21 @@ def _check_signal(trace: Trace) -> None:
         if pp <= 64 * np.spacing(level) or pp == 0.0:
             reasons.append(f"{c.quantity} (column {c.column!r}) is constant "
                            f"({y[0] / c.factor:g} {c.unit})")
+            constant.append(reasons[-1])
         elif c.noise is not None and pp < NO_SIGNAL_NOISE_FACTOR * c.noise:
             reasons.append(f"{c.quantity} (column {c.column!r}) has peak-to-peak "
                            f"{pp / c.factor:.3g} {c.unit}, below {NO_SIGNAL_NOISE_FACTOR:g} x "
                            f"its noise {c.noise / c.factor:.3g} {c.unit}")
         else:
-            return
-    raise FitError(f"--measured {trace.source!r} carries no signal to fit: "
-                   + "; ".join(reasons) + " (check the column names and the recording)")
+            signal.append(c.column)
+    if not signal:
+        raise FitError(f"--measured {trace.source!r} carries no signal to fit: "
+                       + "; ".join(reasons) + " (check the column names and the recording)")
+    if constant:   # beside a signal it drags the fit to zero charge and weights the rest out
+        raise FitError(f"--measured {trace.source!r}: " + "; ".join(constant)
+                       + ": a flat column has no waveform to fit (a probe not connected?); "
+                       "list only the columns with a signal in [fit.columns] ("
+                       + ", ".join(map(repr, signal)) + ")")
 
 
 def _explained_note(result: FitResult, trace: Trace, loss: str = "linear") -> None:

@@ -56,6 +56,14 @@ UNITS = {
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 #: columns of a ``tengfield run`` waveforms.csv, used when [fit.columns] is absent
 RUN_COLUMNS = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
+#: ... of a run with [circuit] kind = "load", whose V and I the fit compares (the load's)
+LOAD_RUN_COLUMNS = {"V": ("V_load_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_load_A", "A")}
+
+
+def run_columns(kind: str) -> dict:
+    """The waveforms.csv columns (name, unit) of V, Q and I the fit compares for a scene
+    with ``[circuit] kind``: the load's voltage and current for "load", else V_OC, I_SC."""
+    return LOAD_RUN_COLUMNS if kind == "load" else RUN_COLUMNS
 LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
 MIN_SAMPLES = 8
 #: Bytes and data rows of a measured trace (checked before / while reading): every row
@@ -65,6 +73,9 @@ MAX_TRACE_ROWS = 2_000_000
 #: |value| in SI of a measured column (1 MV, 1 C, 1 kA are far beyond any TENG):
 #: a trace scaled by 1e300 overflowed the residual's squares
 MAX_TRACE_VALUE = {"V": 1e6, "Q": 1.0, "I": 1e3}
+#: widest time_shift_s range [periods]: the start scan and the dynamics span it (1e9 s
+#: asked for a 146 TiB grid)
+MAX_SHIFT_PERIODS = 100
 #: |time| [s] of a trace (the [initial] time_s bound)
 MAX_TRACE_TIME = 1e12
 
@@ -126,6 +137,8 @@ class FitSpec:
     bootstrap: int = 0
     columns: list[Column] | None = None
     parameters: list[Parameter] = field(default_factory=list)
+    #: columns used without [fit.columns]: :func:`run_columns` of the scene's circuit
+    default_columns: dict = field(default_factory=lambda: dict(RUN_COLUMNS))
 
 
 def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
@@ -163,12 +176,14 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
     if "bootstrap" in raw:
         spec.bootstrap = _whole_number("[fit] bootstrap", raw["bootstrap"], 0, 10000,
                                        "a whole number of replicas")
-    spec.columns = _columns(raw.get("columns")) if "columns" in raw else None
+    spec.default_columns = dict(run_columns(scene.circuit.kind))
+    spec.columns = _columns(raw.get("columns"), spec.default_columns) if "columns" in raw \
+        else None
     spec.parameters = _parameters(scene, raw.get("parameters"), free)
     return spec
 
 
-def _columns(raw) -> list[Column]:
+def _columns(raw, defaults: dict = RUN_COLUMNS) -> list[Column]:
     if not isinstance(raw, dict) or not raw:
         raise SceneError("[fit.columns] must be a table with V, Q and/or I sub-tables")
     columns = []
@@ -179,8 +194,8 @@ def _columns(raw) -> list[Column]:
         if not isinstance(entry, dict):
             raise SceneError(f"{where} must be a table (column, unit, noise)")
         _refuse_unknown_keys(entry, ("column", "unit", "noise"), where, " ")
-        column = entry.get("column", RUN_COLUMNS[quantity][0])
-        unit = entry.get("unit", RUN_COLUMNS[quantity][1])
+        column = entry.get("column", defaults[quantity][0])
+        unit = entry.get("unit", defaults[quantity][1])
         if not isinstance(column, str) or not column:
             raise SceneError(f"{where} column = {column!r}: expected a column name")
         if unit not in UNITS[quantity]:
@@ -225,6 +240,11 @@ def _parameters(scene, raw, free) -> list[Parameter]:
             raise SceneError(f"{where}: min = {lo:g} must be < max = {hi:g}")
         if transform == "log" and lo <= 0:
             raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
+        if name == "time_shift_s" and hi - lo > MAX_SHIFT_PERIODS * period:
+            raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] s span {(hi - lo) / period:.3g} "
+                             f"periods: allowed at most {MAX_SHIFT_PERIODS} periods "
+                             f"({MAX_SHIFT_PERIODS * period:g} s; in a steady state shifts one "
+                             "period apart are equivalent)")
         if name == "restitution":
             if lo < 0 or hi > 1:
                 raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] are out of range: allowed [0, 1]")
@@ -284,12 +304,19 @@ def read_trace(path, spec: FitSpec) -> Trace:
     if not header:
         raise SceneError(f"{what} is empty: expected a header row and at least "
                          f"{MIN_SAMPLES} data rows")
+    if len(header) == 1:   # a European spreadsheet's (;) or a scope's (tab) export
+        for sep, called in ((";", "';'"), ("\t", "tabs")):
+            if sep in header[0]:
+                raise SceneError(f"{what} is separated by {called}, not by commas: save it as "
+                                 "comma-separated with '.' decimals (header "
+                                 f"{header[0][:60]!r})")
     columns = spec.columns
     if columns is None:
-        columns = [Column(q, c, u, None) for q, (c, u) in RUN_COLUMNS.items() if c in header]
+        defaults = spec.default_columns
+        columns = [Column(q, c, u, None) for q, (c, u) in defaults.items() if c in header]
         if not columns:
             raise SceneError(f"{what} has none of the columns "
-                             f"{', '.join(c for c, _ in RUN_COLUMNS.values())}; name the columns "
+                             f"{', '.join(c for c, _ in defaults.values())}; name the columns "
                              f"in [fit.columns] (columns are {', '.join(header)})")
     wanted = [("[fit] time_column", spec.time_column)] + \
              [(f"[fit.columns.{c.quantity}] column", c.column) for c in columns]
@@ -377,6 +404,9 @@ def parse_targets(items) -> list[Target]:
             raise SceneError(f"--targets {text!r}: uncertainty {spread!r} is out of range: "
                              "allowed (0, inf)")
         factor = UNITS[q][unit]
+        if number * factor > MAX_TRACE_VALUE[q]:   # a unit slip, as in a measured trace
+            raise SceneError(f"--targets {text!r}: {q}_{kind} = {number:g} {unit} is out of "
+                             f"range: allowed (0, {MAX_TRACE_VALUE[q] / factor:g}] {unit}")
         if any(t.key == f"{q}_{kind}" for t in targets):
             raise SceneError(f"--targets {text!r}: {q}_{kind} is given twice")
         targets.append(Target(q, kind, unit, number * factor, spread * factor, bool(sigma)))
