@@ -17,6 +17,7 @@ and ``report``'s task lists, an ``[array]``'s cells), :func:`pool_context`:
 """
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import sys
@@ -81,3 +82,22 @@ def start_early(jobs: int | None) -> None:
 
         pool_context("forkserver")
         forkserver.ensure_running()
+
+
+@contextlib.contextmanager
+def process_pool(jobs: int, method: str | None = None):
+    """A ``ProcessPoolExecutor`` of ``jobs`` workers on :func:`pool_context`. When the
+    block fails or is interrupted (Ctrl-C, SIGTERM through the CLI) its workers are
+    terminated and the tasks not started are cancelled: no worker goes on computing,
+    or outlives the command (``with ProcessPoolExecutor`` would wait for every task)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=pool_context(method))
+    try:
+        yield pool
+    except BaseException:
+        for process in list((getattr(pool, "_processes", None) or {}).values()):
+            process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)

@@ -143,11 +143,9 @@ def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
             jobs = min(jobs or os.cpu_count() or 1, n)
             if jobs <= 1 or n < 8:
                 return _simulate_block((scene, draws, impacts))
-            from concurrent.futures import ProcessPoolExecutor
-
-            from ._pool import pool_context
+            from ._pool import process_pool
             blocks = _blocks(draws, 4 * jobs)
-            with ProcessPoolExecutor(jobs, mp_context=pool_context()) as pool:
+            with process_pool(jobs) as pool:
                 parts = [done(p) for p in pool.map(_simulate_block,
                                                    [(scene, b, impacts) for b in blocks])]
     finally:

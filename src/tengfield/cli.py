@@ -25,6 +25,7 @@ What every command gets from here, without code of its own:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import io
 import os
@@ -154,6 +155,38 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     return code
 
 
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM (``kill``, a batch system's time limit) ends a command as Ctrl-C does:
+    ``tengfield: interrupted``, exit 130, -o DIR keeps its previous content, no staging
+    directory left, worker pools stopped (:func:`tengfield._pool.process_pool`). Only in
+    the main thread of a process that left SIGTERM at its default (a single process:
+    under mpirun the launcher stops the ranks itself). A worker process forked while it
+    is installed dies of SIGTERM quietly, as with the default."""
+    import os
+    import signal
+    import threading
+
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
+        yield
+        return
+    owner = os.getpid()
+
+    def interrupt(signum, frame):
+        if os.getpid() != owner:          # a forked worker: die as the default would
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     configure_output()
     parser = build_parser()
@@ -164,7 +197,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return _run_command(parser, args)
+        with _sigterm_as_interrupt():
+            return _run_command(parser, args)
     except TengfieldError as exc:
         print(f"tengfield: error: {exc}", file=sys.stderr)
         return 2
@@ -172,9 +206,28 @@ def main(argv: list[str] | None = None) -> int:
         print("tengfield: interrupted", file=sys.stderr)
         return 130
     except OSError as exc:   # full disk, vanished directory...: a fault, not a bug report
+        if _caused_by_interrupt(exc):
+            print("tengfield: interrupted", file=sys.stderr)
+            return 130
         where = f": {_STAGING_IN_PATH.sub('', str(exc.filename))}" if exc.filename else ""
         print(f"tengfield: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 1
+    except Exception as exc:
+        if _caused_by_interrupt(exc):   # Ctrl-C/SIGTERM inside a C callback (numba's
+            print("tengfield: interrupted", file=sys.stderr)   # unpickler): a SystemError
+            return 130                                          # wrapping the interrupt
+        raise
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    """True when ``exc`` was raised because of a KeyboardInterrupt (its cause or context)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 # -- under mpirun -n N (N > 1) -----------------------------------------------------------

@@ -78,7 +78,6 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
     under MPI). Used by :func:`sweep`; ``tengfield map`` can use it too.
     """
     import os
-    from concurrent.futures import ProcessPoolExecutor
 
     from ._mpi import check_jobs, farm, size_of
 
@@ -94,8 +93,8 @@ def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = 
             if progress is not None:
                 progress(1)
         return results
-    from ._pool import pool_context
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=pool_context(mp_context)) as pool:
+    from ._pool import process_pool
+    with process_pool(jobs, mp_context) as pool:
         for result in pool.map(work, tasks):
             results.append(result)
             if progress is not None:

@@ -12,7 +12,6 @@ equals a serial run's) and rank 0 writes the files; --jobs must then be omitted 
 """
 from __future__ import annotations
 
-import contextlib
 import sys
 
 from .._mpi import world_if_parallel
@@ -33,31 +32,6 @@ def register(sub) -> None:
     p.set_defaults(func=_run)
 
 
-@contextlib.contextmanager
-def _sigterm_as_interrupt(enabled: bool = True):
-    """SIGTERM (``kill``, a batch system's time limit) ends the study as Ctrl-C does: the
-    worker processes are stopped with it (they outlived a terminated study, orphaned, and
-    its staging directory stayed in -o DIR) and DIR keeps its previous content. Only in
-    the main thread of a process that left SIGTERM at its default (not under mpirun: the
-    launcher stops the ranks itself)."""
-    import signal
-    import threading
-
-    if (not enabled or threading.current_thread() is not threading.main_thread()
-            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
-        yield
-        return
-
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def _run(args) -> int:
     from ..design import design, parse_design_section, write_design_outputs
     from ..design.spec import OBJECTIVES
@@ -68,9 +42,8 @@ def _run(args) -> int:
                  if v is not None}
     parse_design_section(scene, overrides)        # bad [design] input: before any work
     comm = world_if_parallel()
-    with _sigterm_as_interrupt(comm is None):
-        result = design(scene, comm=comm, jobs=args.jobs, cache_dir=args.cache_dir,
-                        progress=True, overrides=overrides or None)
+    result = design(scene, comm=comm, jobs=args.jobs, cache_dir=args.cache_dir,
+                    progress=True, overrides=overrides or None)   # SIGTERM: cli.py
     if comm is not None and comm.rank != 0:
         return 0
     written = write_design_outputs(result, args.output, plots=not args.no_plots)
