@@ -38,7 +38,28 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
     integrated (e.g. the bound on events per period is exceeded).
     """
     from .models import model_of
+    _warn_lateral_left_out(scene)
     return model_of(scene)(scene, duration=duration)
+
+
+def _warn_lateral_left_out(scene) -> None:
+    """One warning when the scene drives the table sideways and its contact model
+    moves the ball along the axis only (the lateral keys would be left out silently)."""
+    exc = scene.excitation
+    if scene.contact.model == "3d":
+        return
+    given = [f"{key} = {value:g}" for key, value in (
+        ("amplitude_x_mm", exc.amplitude_x * 1e3), ("amplitude_y_mm", exc.amplitude_y * 1e3),
+        ("rms_acceleration_x_m_per_s2", exc.rms_acceleration_x),
+        ("rms_acceleration_y_m_per_s2", exc.rms_acceleration_y)) if value != 0.0]
+    given += [f"{key} = {value!r}" for key, value in (
+        ("signal_x_column", exc.signal_x_column), ("signal_y_column", exc.signal_y_column))
+        if value]
+    if given:
+        import warnings
+        warnings.warn(f"[excitation] {', '.join(given)} left out: [contact] model = "
+                      f"{scene.contact.model!r} moves the ball along the axis only (a lateral "
+                      f"drive needs model = \"3d\")", RuntimeWarning, stacklevel=3)
 
 
 def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
