@@ -85,14 +85,16 @@ def start_early(jobs: int | None) -> None:
 
 
 @contextlib.contextmanager
-def process_pool(jobs: int, method: str | None = None):
-    """A ``ProcessPoolExecutor`` of ``jobs`` workers on :func:`pool_context`. When the
+def process_pool(jobs: int, method: str | None = None, initializer=None):
+    """A ``ProcessPoolExecutor`` of ``jobs`` workers on :func:`pool_context` (``method``:
+    a start method instead of :func:`start_method`'s choice). When the
     block fails or is interrupted (Ctrl-C, SIGTERM through the CLI) its workers are
     terminated and the tasks not started are cancelled: no worker goes on computing,
     or outlives the command (``with ProcessPoolExecutor`` would wait for every task)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=pool_context(method))
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=pool_context(method),
+                               initializer=initializer)
     try:
         yield pool
     except BaseException:

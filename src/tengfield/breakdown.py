@@ -383,7 +383,7 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
 
     from .surrogate import obtain_table, precompute, store_in_cache
 
-    if solve is None and (scene.field.method == "3d" or not scene.is_axisymmetric):
+    if solve is None and not scene.field.has_gap_lines:
         from .errors import TengfieldError   # refused before minutes of 3D solves
         raise TengfieldError(
             f"the breakdown check needs the gap lines of the axisymmetric field solver (the "
@@ -397,7 +397,7 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
         scene = scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
     table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                   progress=progress, command_line=command_line, write=write)
-    if table.line_potential is None and solve is None and scene.is_axisymmetric:
+    if table.line_potential is None and solve is None:   # has_gap_lines (above)
         start = time.perf_counter()
         if comm is None or comm.rank == 0:
             warnings.warn(f"cached surrogate {outcome.path} has no breakdown lines, recomputing",
@@ -481,6 +481,13 @@ def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: 
                             progress=progress, command_line=command_line, write=write)
     scene, table, result = resolve_for_run(scene, table, comm)
     return scene, table, outcome, result
+
+
+def charge_line(scene) -> str:
+    """What ``sweep`` and ``field`` print for a scene resolved by :func:`obtain_run_table`
+    from ``"breakdown"``: the σ it runs with."""
+    return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} uC/m^2 "
+            f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
 
 
 def resolve_for_run(scene, table, comm=None):

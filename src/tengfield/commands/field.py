@@ -46,8 +46,7 @@ def _resolved_charge(scene, comm):
     scene, _, _, _ = breakdown.obtain_run_table(scene, comm=comm if comm.size > 1 else None,
                                                 progress=True)
     if comm.rank == 0:
-        print(f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} uC/m^2 "
-              f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
+        print(breakdown.charge_line(scene))
     return scene
 
 

@@ -41,7 +41,7 @@ def _run(args) -> int:
     from ..io import atomic_path, write_sweep_csv
     from ..plotting.waveforms import plot_sweep
     from ..scene import load_scene
-    from ..breakdown import obtain_run_table, uses_breakdown_charge
+    from ..breakdown import charge_line, obtain_run_table, uses_breakdown_charge
     from .._mpi import check_jobs
     from ..sweep import check_grid, check_sweep_size, sweep
 
@@ -63,9 +63,7 @@ def _run(args) -> int:
         print(f"surrogate: {outcome.status} ({table.count} positions, error estimate "
               f"{table.interpolation_error:.2g})", file=sys.stderr)
         if at_limit:
-            print(f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} "
-                  f'uC/m^2 (air-breakdown limit, [device] surface_charge_uC_per_m2 = '
-                  f'"breakdown")', file=sys.stderr)
+            print(charge_line(scene), file=sys.stderr)
     rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, comm=comm,
                  progress=True)
     if not root:

@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from .. import electrical
-from ..errors import FieldError, TengfieldError
+from ..errors import TengfieldError
 from .spec import OBJECTIVES, OTHER_VARY, DesignSpec
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
@@ -76,17 +76,14 @@ def candidate_charge(scene, table=None):
     at its own air-breakdown limit, σ = −σ_max from its surrogate's gap lines
     (:func:`tengfield.breakdown.resolve_for_run`: the table is rescaled, no new field
     solve), so designs are compared at charges they can hold. Raises
-    :class:`~tengfield.errors.FieldError` when the limit is asked for and the surrogate
+    :class:`~tengfield.errors.TengfieldError` when the limit is asked for and the surrogate
     has no gap lines.
     """
     from ..breakdown import resolve_for_run, uses_breakdown_charge
 
     if table is None or not uses_breakdown_charge(scene):
         return scene, table
-    resolved, scaled, limit = resolve_for_run(scene, table)
-    if limit is None:
-        raise FieldError("surface_charge_uC_per_m2 = 'breakdown' needs the surrogate's "
-                         "breakdown lines (an axisymmetric field solve)")
+    resolved, scaled, _ = resolve_for_run(scene, table)   # raises without gap lines
     return resolved, scaled
 
 

@@ -162,24 +162,22 @@ class _Workers:
 
         from .._mpi import size_of
 
-        self.comm, self.pool = comm, None
+        self.comm, self.pool, self._stack = comm, None, None
         self.jobs = 1 if size_of(comm) > 1 else max(1, jobs or os.cpu_count() or 1)
 
     def __enter__(self):
-        if self.jobs > 1:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-            self.pool = ProcessPoolExecutor(max_workers=self.jobs,
-                                            mp_context=multiprocessing.get_context("spawn"),
-                                            initializer=_quiet_worker)
+        if self.jobs > 1:   # spawned (fresh interpreters); an interrupted or failed study
+            import contextlib   # terminates them (_pool.process_pool)
+
+            from .._pool import process_pool
+            self._stack = contextlib.ExitStack()
+            self.pool = self._stack.enter_context(
+                process_pool(self.jobs, "spawn", initializer=_quiet_worker))
         return self
 
-    def __exit__(self, exc_type=None, *exc):
-        if self.pool is not None:
-            if exc_type is not None:   # interrupted (Ctrl-C, SIGTERM) or failed: the running
-                for process in list((self.pool._processes or {}).values()):   # candidates
-                    process.terminate()            # are abandoned, no worker outlives us
-            self.pool.shutdown(cancel_futures=True)
+    def __exit__(self, *exc):
+        if self._stack is not None:
+            self._stack.__exit__(*exc)
 
     def map(self, work, tasks, progress):
         from ..sweep import run_tasks

@@ -264,6 +264,12 @@ class Field:
     def __post_init__(self):
         check_section("field", self, "Field")
 
+    @property
+    def has_gap_lines(self) -> bool:
+        """True when the surrogate's solver is the axisymmetric one (the ball on the axis,
+        method not "3d"): the only one that samples the breakdown gap lines."""
+        return self.method != "3d" and self.ball_offset == 0.0
+
 
 class _RefusedField:
     """Stands in for :class:`Field` when ``[field]`` values are bad: a dynamics-only
@@ -539,7 +545,7 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
     if (isinstance(data.get("device"), dict)
             and data["device"].get("surface_charge_uC_per_m2") == "breakdown"
-            and (fld.method == "3d" or fld.ball_offset != 0.0)):
+            and not fld.has_gap_lines):
         problems.append(f'[device] surface_charge_uC_per_m2 = "breakdown" needs the gap lines '
                         f'of the axisymmetric field solver (the ball on the axis); [field] '
                         f'method = {fld.method!r}, ball_offset_mm = {fld.ball_offset * 1e3:g} '
