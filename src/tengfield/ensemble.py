@@ -135,16 +135,6 @@ def _realisation_task(task):
     return realisation_row(index, seed, result.summary)
 
 
-def _build_surrogate(scene, *, comm, cache_dir, solve, progress) -> None:
-    """Put the scene's surrogate in the cache (as :func:`tengfield.pipeline.run` would),
-    for realisations to read when realisation 0 rested and left none."""
-    from .breakdown import obtain_breakdown_table, uses_breakdown_charge
-    from .surrogate import obtain_table
-
-    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
-    obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
-
-
 def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=None,
                  progress: bool = False, solve=None) -> tuple[list[dict], dict]:
     """Rows of ensemble.csv and the ``ensemble`` block for ``[run] realisations`` = N:
@@ -166,8 +156,8 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
-        _build_surrogate(scene, comm=comm, cache_dir=cache_dir, solve=solve,
-                         progress=progress)
+        from .breakdown import obtain_run_table   # the surrogate pipeline.run would cache
+        obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
     bar = tqdm(total=len(seeds), initial=1, desc="realisations", unit="run", file=sys.stderr,
