@@ -166,3 +166,15 @@ def test_recorded_rows_beyond_the_limit_are_refused_while_reading(tmp_path, monk
     body = "time_s,displacement_m\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(t, y))
     with pytest.raises(SceneError, match="more than 100 data rows"):
         load_scene(_recorded_scene(tmp_path, body))
+
+
+@pytest.mark.parametrize("sep, called", [(";", "';'"), ("\t", "tabs")])
+def test_recorded_file_with_another_separator_is_named(tmp_path, sep, called):
+    """The one CSV reader (recorded excitation, PSD table, fit's trace) names a ';' or tab
+    separated export and the fix (it said the file lacks its columns)."""
+    t, y = _record()
+    body = f"time_s{sep}displacement_m\n" + "".join(
+        f"{float(a)!r}{sep}{float(b)!r}\n" for a, b in zip(t, y))
+    with pytest.raises(SceneError, match=rf"table\.csv' is separated by {called}, not by "
+                                         r"commas: save it as comma-separated"):
+        load_scene(_recorded_scene(tmp_path, body))

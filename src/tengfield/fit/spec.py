@@ -304,12 +304,6 @@ def read_trace(path, spec: FitSpec) -> Trace:
     if not header:
         raise SceneError(f"{what} is empty: expected a header row and at least "
                          f"{MIN_SAMPLES} data rows")
-    if len(header) == 1:   # a European spreadsheet's (;) or a scope's (tab) export
-        for sep, called in ((";", "';'"), ("\t", "tabs")):
-            if sep in header[0]:
-                raise SceneError(f"{what} is separated by {called}, not by commas: save it as "
-                                 "comma-separated with '.' decimals (header "
-                                 f"{header[0][:60]!r})")
     columns = spec.columns
     if columns is None:
         defaults = spec.default_columns

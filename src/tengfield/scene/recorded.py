@@ -78,6 +78,12 @@ def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[
         fields = next(csv.reader([line]))
         if header is None:
             header = [f.strip() for f in fields]
+            if len(header) == 1:   # a European spreadsheet's (;) or a scope's (tab) export
+                for sep, called in ((";", "';'"), ("\t", "tabs")):
+                    if sep in header[0]:
+                        raise SceneError(f"{what} is separated by {called}, not by commas: "
+                                         "save it as comma-separated with '.' decimals "
+                                         f"(header {header[0][:60]!r})")
             continue
         if len(fields) != len(header):
             raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
