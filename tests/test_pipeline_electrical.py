@@ -50,15 +50,19 @@ def test_run_sweep_and_report_agree_with_cells_and_parallel_capacitance(cached):
                                reference_sample_rate=rate, stiffnesses=())
     rows, (_, _, reported) = report.dynamics_rows(plan, scene, result.curves)
 
-    for name in ("V_oc", "Q_sc", "I_sc"):
+    swept["V_read"] = row["V_read_pp_V"]
+    for name in ("V_oc", "Q_sc", "I_sc", "V_read"):
         assert swept[name] == pytest.approx(ran[name], rel=1e-12, abs=0), name
+    for name in ("V_oc", "Q_sc", "I_sc"):
         assert reported[name] == pytest.approx(ran[name], rel=1e-12, abs=0), name
         assert rows[0].errors[name] <= 1e-12, name      # was 3.0 (cells) and 0.99 (C_p)
-    # what cells and C_p do: Q_SC and I_SC x 4; V read through C_p below the ideal V_OC
+    # what cells and C_p do: Q_SC and I_SC x 4; V_OC (ideal) the same; the voltage read
+    # through C_p below it
     one = tf.run(fx.scene_with(run=SHORT_RUN), cache_dir=cached, solve=fx.plate_model_solve)
     assert ran["Q_sc"] == pytest.approx(4 * one.peaks["Q_sc"], rel=1e-12)
     assert ran["I_sc"] == pytest.approx(4 * one.peaks["I_sc"], rel=1e-12)
-    assert ran["V_oc"] < one.peaks["V_oc"]
+    assert ran["V_oc"] == pytest.approx(one.peaks["V_oc"], rel=1e-12)
+    assert ran["V_read"] < one.peaks["V_oc"]
 
 
 def test_sweep_power_equals_the_run_with_that_load(cached):

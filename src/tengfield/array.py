@@ -186,6 +186,8 @@ class ArrayResult:
     #: the one rule of :func:`tengfield.electrical.terminal_peaks`: the output samples and
     #: just before and after every cell's impacts
     peaks: dict = field(default_factory=dict)
+    #: peak max |x| of the same quantities over the same instants
+    peak: dict = field(default_factory=dict)
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
@@ -247,7 +249,8 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                        reference=result["reference"], output_label=result["label"],
                        phases_deg=relative, period=scene.excitation.period,
                        summary=result["summary"], fine=result.get("fine"),
-                       load=result.get("load"), peaks=result["peaks"])
+                       load=result.get("load"), peaks=result["peaks"]["peak_to_peak"],
+                       peak=result["peaks"]["peak"])
 
 
 class _Sampled:
@@ -276,7 +279,7 @@ def _identical(scaled, nominal, curves, trajectory, n) -> dict:
                    getattr(nominal, "impacts", None), absolute=nominal.t)
     waves = electrical.scene_waveforms(scaled, dyn, curves)
     out = {"columns": waves, "summary": {},
-           "peaks": electrical.terminal_peaks(scaled, dyn, curves, waves)}
+           "peaks": electrical.terminal_extremes(scaled, dyn, curves, waves)}
     out.update(electrical.circuit_for(scaled).array_identical(scaled, dyn, curves, waves))
     return out
 
@@ -362,8 +365,10 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     mask, _ = electrical.steady_window(t, scene)
     gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
     columns = {"time_s": np.asarray(nominal.t, dtype=float), "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
-               "table_m": np.asarray(table), "V_oc_V": sums["Q"] / (sums["C"] + c_p),
+               "table_m": np.asarray(table), "V_oc_V": sums["Q"] / sums["C"],
                "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
+    if c_p > 0.0:
+        columns[electrical.READ_COLUMN] = sums["Q"] / (sums["C"] + c_p)
     out = {"columns": columns, "fundamental": fundamental,
            "summary": {"grid": "output samples (no per-cell impact instants)"},
            "peaks": _spread_peaks(scene, curves, bundle, weights, impacts, t, columns)}
@@ -374,7 +379,8 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
 
 
 def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
-    """Peak-to-peak V_oc, Q_sc, I_sc of the array's terminals over the steady window:
+    """``{"peak_to_peak": ..., "peak": ...}`` of V_oc, Q_sc, I_sc (and V_read with
+    C_p > 0) of the array's terminals over the steady window:
     the output samples (``columns``) and just before and after every impact of every
     cell (``IMPACT_OFFSET_PERIODS``), where that cell's I_SC jumps; all cells are
     evaluated there (the rule of :func:`tengfield.electrical.terminal_peaks`). Costs
@@ -382,7 +388,7 @@ def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
     instants in the output steps whose samples are nearest a sampled extreme are taken.
     ``t`` and ``impacts`` are on the run's own axis."""
     mask, _ = electrical.steady_window(t, scene)
-    names = electrical.PEAK_QUANTITIES
+    names = electrical.peak_quantities(scene)
     low = {k: float(np.min(columns[c][mask])) for k, c in names.items()}
     high = {k: float(np.max(columns[c][mask])) for k, c in names.items()}
     instants = np.unique(np.concatenate([np.asarray(i, dtype=float) for i in impacts]))
@@ -408,10 +414,14 @@ def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
         for lo in range(0, times.size, rows):
             q, c, i = _evaluate(curves, bundle, times[lo:lo + rows])
             q, c, i = q @ weights, c @ weights, i @ weights
-            for key, value in (("V_oc", q / (c + c_p)), ("Q_sc", q), ("I_sc", i)):
+            values = {"V_oc": q / c, "Q_sc": q, "I_sc": i}
+            if "V_read" in names:
+                values["V_read"] = q / (c + c_p)
+            for key, value in values.items():
                 low[key] = min(low[key], float(np.min(value)))
                 high[key] = max(high[key], float(np.max(value)))
-    return {k: high[k] - low[k] for k in names}
+    return {"peak_to_peak": {k: high[k] - low[k] for k in names},
+            "peak": {k: max(abs(high[k]), abs(low[k])) for k in names}}
 
 
 def _phases(scene, curves, trajectories, t) -> np.ndarray:

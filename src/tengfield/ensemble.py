@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from .quantities import TERMINAL, column_name
+
 CONFIDENCE = 0.95
 
 
@@ -74,9 +76,15 @@ def realisation_seeds(seed: int, count: int) -> list[int]:
 
 
 #: columns of ensemble.csv (one row per realisation)
-ENSEMBLE_COLUMNS = ["realisation", "seed", "regime", "V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A",
-                    "mean_power_W", "power_density_W_per_m3", "average_harvested_power_W",
-                    "final_stored_energy_J", "array_value"]
+#: (the terminal ones named by :func:`tengfield.quantities.column_name`; ``V_read_*``
+#: empty without an instrument)
+ENSEMBLE_COLUMNS = (["realisation", "seed", "regime"]
+                    + [column_name(n, "peak_to_peak") for n in TERMINAL]
+                    + ["mean_power_W", "power_density_W_per_m3", "average_harvested_power_W",
+                       "final_stored_energy_J", "array_value"]
+                    + [column_name(n, stat) for stat, names in (
+                        ("peak_to_peak", ("V_read_V",)), ("peak", (*TERMINAL, "V_read_V")))
+                       for n in names])
 #: the quantities whose statistics summary.json -> ensemble reports
 QUANTITIES = ENSEMBLE_COLUMNS[3:]
 
@@ -91,8 +99,12 @@ def realisation_row(index: int, seed: int, summary: dict) -> dict:
     rect = summary.get("rectifier") or {}
     regime = summary.get("regime") or {}
     arr = summary.get("array") or {}
+    peak = summary.get("peak") or {}
+    terminal = {column_name(n, stat): values.get(n)
+                for stat, values in (("peak_to_peak", p2p), ("peak", peak))
+                for n in (*TERMINAL, "V_read_V")}
     return {"realisation": index, "seed": seed, "regime": regime.get("regime", ""),
-            "V_oc_pp_V": p2p["V_oc_V"], "Q_sc_pp_C": p2p["Q_sc_C"], "I_sc_pp_A": p2p["I_sc_A"],
+            **terminal,
             "mean_power_W": load.get("mean_power_W"),
             "power_density_W_per_m3": load.get("power_density_W_per_m3"),
             "average_harvested_power_W": rect.get("average_harvested_power_W"),

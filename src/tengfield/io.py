@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ._files import atomic_path, writable_target, write_csv, write_json, write_rows
-from .electrical import WAVEFORM_COLUMNS, all_columns
+from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
 
 #: format of a time column: every double round-trips
 TIME_FORMAT = "%.17g"
@@ -43,9 +43,10 @@ VALUE_FORMAT = "%.10g"
 # ---------------------------------------------------------------------------
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
-    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ the circuit's columns present,
-    in the registry's order: :func:`tengfield.electrical.all_columns`)."""
-    columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
+    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``V_read_V``, the voltage read
+    through C_p, when present; + the circuit's columns present, in the registry's
+    order: :func:`tengfield.electrical.all_columns`)."""
+    columns = WAVEFORM_COLUMNS + [c for c in [READ_COLUMN] + all_columns() if c in waveforms]
     data = np.column_stack([waveforms[c] for c in columns])   # one dtype, as numpy.savetxt
     return write_csv(path, columns, list(data.T), formats={
         c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)})
@@ -67,8 +68,10 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
         t = np.asarray(result.waveforms["time_s"])
         last = t >= t[-1] - shown                          # sent, not the whole run
         waveforms = {k: np.asarray(v)[last] for k, v in result.waveforms.items()}
-        written.append(_figure(figures, plot_waveforms, waveforms, path=out / "waveforms.png",
-                               title=_run_title(result) + ", last 5 periods"))
+        written.append(_figure(
+            figures, plot_waveforms, waveforms, path=out / "waveforms.png",
+            title=_run_title(result) + ", last 5 periods",
+            parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
                                    path=out / "surrogate.png", cells=result.scene.device.cells,
@@ -78,7 +81,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
     if rows:
         from .ensemble import ENSEMBLE_COLUMNS
         columns = [[r[c] for r in rows] if c == "regime"
-                   else np.array([np.nan if r[c] is None else r[c] for r in rows], dtype=float)
+                   else np.array([np.nan if r.get(c) is None else r[c] for r in rows], dtype=float)
                    if c not in ("realisation", "seed") else [int(r[c]) for r in rows]
                    for c in ENSEMBLE_COLUMNS]
         written.append(write_csv(writable_target(out / "ensemble.csv"), ENSEMBLE_COLUMNS,

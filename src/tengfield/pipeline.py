@@ -2,7 +2,8 @@
 
 :func:`run` returns a :class:`RunResult`: waveform columns as arrays
 (``r.waveforms``, also ``r.t``, ``r.V_oc``, ``r.Q_sc``, ``r.I_sc``), the
-peak-to-peak values (``r.peaks``), what each stage did (``r.stages``) and a
+peak-to-peak values (``r.peaks``; ``r.peak_to_peak`` is the same dict), the peaks
+max |x| (``r.peak``), what each stage did (``r.stages``) and a
 JSON-ready summary (``r.summary``). The electrical numbers come from
 :mod:`tengfield.electrical`; :func:`tengfield.io.write_run_outputs` writes
 ``waveforms.csv``, ``summary.json`` and the plots. Units are SI; sign
@@ -52,8 +53,10 @@ class RunResult:
     """Outcome of :func:`run`.
 
     ``waveforms``: the ``WAVEFORM_COLUMNS`` (+ ``LOAD_COLUMNS`` with a load)
-    as arrays, SI; ``peaks``: peak-to-peak ``V_oc`` [V], ``Q_sc`` [C],
-    ``I_sc`` [A] over the steady window (:func:`tengfield.electrical.terminal_peaks`);
+    as arrays, SI (``V_read_V`` too with ``parallel_capacitance_pF`` > 0); ``peaks``:
+    peak-to-peak ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] (and ``V_read`` [V]) over the
+    steady window (:func:`tengfield.electrical.terminal_extremes`; kept under this name,
+    also ``peak_to_peak``); ``peak``: max |x| of the same over the same instants;
     ``stages``: what each stage did (:class:`Stage`); ``summary``: all of it
     as JSON-ready data (``summary.json``); ``dynamics``, ``table``,
     ``curves``: the pieces the plots need (``table``/``curves`` None when
@@ -68,14 +71,27 @@ class RunResult:
     curves: TerminalCurves | None
     peaks: dict[str, float] = field(default_factory=dict)
     stages: dict[str, Stage] = field(default_factory=dict)
+    #: max |x| of V_oc [V], Q_sc [C], I_sc [A] (and V_read [V]) over the steady window
+    peak: dict[str, float] = field(default_factory=dict)
     #: what the harvesting plots need (V-Q loops, the fine rectifier record, the array)
     extras: dict = field(default_factory=dict)
 
     t = _column("time_s", "Output times [s].")
-    V_oc = _column("V_oc_V", "Open-circuit voltage [V] (read through C_p when "
-                             "``parallel_capacitance_pF`` > 0).")
+    V_oc = _column("V_oc_V", "Ideal open-circuit voltage [V] (no instrument; what an "
+                             "instrument of capacitance C_p reads is ``V_read``).")
     Q_sc = _column("Q_sc_C", "Short-circuit charge [C], lower -> upper, zero at the reference.")
     I_sc = _column("I_sc_A", "Short-circuit current [A], lower -> upper through the circuit.")
+
+    @property
+    def peak_to_peak(self) -> dict[str, float]:
+        """Peak-to-peak values (the same dict as ``peaks``)."""
+        return self.peaks
+
+    @property
+    def V_read(self):
+        """The voltage [V] an instrument of capacitance C_p reads (with a load: across
+        R || C_p); only with ``[circuit] parallel_capacitance_pF`` > 0 (else KeyError)."""
+        return self.waveforms[electrical.READ_COLUMN]
 
 
 def _default_simulate():
@@ -159,20 +175,26 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
     ran = entry.run(scene, dynamics, curves)
     waveforms.update(ran.columns)
+    # the instrument with a load: it reads the load's voltage across R || C_p
+    read_at_samples = electrical.READ_COLUMN in waveforms and entry.read_column in ran.columns
+    if read_at_samples:
+        waveforms[electrical.READ_COLUMN] = waveforms[entry.read_column]
     stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start, ran.details)
-    peaks = electrical.terminal_peaks(scene, dynamics, curves, waveforms)
-    summary = _summary(scene, dynamics, waveforms, stages, table,
-                       peaks={column: peaks[name]
-                              for name, column in electrical.PEAK_QUANTITIES.items()},
-                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask))
+    extremes = electrical.terminal_extremes(scene, dynamics, curves, waveforms,
+                                            read_at_samples=read_at_samples)
+    peaks, peak = extremes["peak_to_peak"], extremes["peak"]
+    summary = _summary(scene, dynamics, waveforms, stages, table, extremes=extremes,
+                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask),
+                       entry=entry)
     extras = {}
     if curves is not None:
         extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
         summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
     if table is not None:
         _breakdown_summary(summary, scene, hashed, limit)
+    _measured_comparison(summary, scene)
     result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
-                       table=table, curves=curves, peaks=peaks, stages=stages)
+                       table=table, curves=curves, peaks=peaks, stages=stages, peak=peak)
     result.extras = extras
     return result
 
@@ -207,9 +229,9 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
          "distinct_dynamics": block["distinct_dynamics"]})
     peaks = dict(arr.peaks)      # the one rule: samples and every cell's impact instants
     summary = _summary(scene, dynamics, waveforms, stages, table,
-                       peaks={column: peaks[name]
-                              for name, column in electrical.PEAK_QUANTITIES.items()},
-                       circuit_blocks=lambda mask: electrical.no_load(scene))
+                       extremes={"peak_to_peak": peaks, "peak": dict(arr.peak)},
+                       circuit_blocks=lambda mask: electrical.no_load(scene),
+                       entry=electrical.circuit_for(scene))
     summary["cells"] = scene.array.cells
     if arr.load is not None:
         summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
@@ -217,11 +239,22 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
     if rect is not None:
         summary["rectifier"] = rect
     summary["array"] = block
+    _measured_comparison(summary, scene)
     result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
                        dynamics=dynamics, table=table, curves=curves, peaks=peaks,
-                       stages=stages)
+                       stages=stages, peak=dict(arr.peak))
     result.extras = {"_array": arr, "_fine": arr.fine}
     return result
+
+
+def _measured_comparison(summary, scene) -> None:
+    """summary["measured_comparison"]: the ``[reference]`` values beside the tool's
+    (:func:`tengfield.quantities.compare_measured`), when the scene gives any."""
+    from .quantities import compare_measured
+
+    block = compare_measured(summary, scene.reference.given())
+    if block is not None:
+        summary["measured_comparison"] = _jsonable(block)
 
 
 def _breakdown_summary(summary, scene, hashed, limit) -> None:
@@ -243,9 +276,19 @@ def _needs_field(scene, gap) -> tuple[bool, str]:
     return True, ""
 
 
-def _summary(scene, dynamics, waveforms, stages, table, *, peaks, circuit_blocks) -> dict:
-    """summary.json; ``circuit_blocks(mask)``: the circuit's ``load`` block (and
-    ``load_reason``) over the steady window ``mask``."""
+def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blocks,
+             entry) -> dict:
+    """summary.json; ``extremes``: ``{"peak_to_peak": {...}, "peak": {...}}`` by short
+    name (``V_oc``), written by column name (``V_oc_V``); ``circuit_blocks(mask)``: the
+    circuit's ``load`` block (and ``load_reason``) over the steady window ``mask``;
+    ``entry``: the circuit's registry entry (``load_ohm`` only where it reads one)."""
+    columns = electrical.peak_quantities(scene)
+    blocks = {stat: {columns[name]: value for name, value in values.items()}
+              for stat, values in extremes.items()}
+    circuit_block = {"kind": scene.circuit.kind,
+                     "parallel_capacitance_F": scene.circuit.parallel_capacitance}
+    if "load_ohm" in entry.keys:
+        circuit_block["load_ohm"] = scene.circuit.load
     t = waveforms["time_s"]
     mask, window_reason = electrical.steady_window(t, scene)
     summary: dict[str, Any] = {
@@ -256,17 +299,25 @@ def _summary(scene, dynamics, waveforms, stages, table, *, peaks, circuit_blocks
         "sign_convention": "V = V_lower - V_upper; Q_SC and currents lower -> upper through "
                            "the external circuit; reference state: ball on the lower electrode",
         "cells": scene.device.cells,
-        "circuit": {"kind": scene.circuit.kind, "load_ohm": scene.circuit.load,
-                    "parallel_capacitance_F": scene.circuit.parallel_capacitance},
+        "circuit": circuit_block,
         "window": {"start_s": float(t[mask][0]), "end_s": float(t[mask][-1]),
                    "rule": window_reason},
-        "peak_to_peak": peaks,
+        "peak_to_peak": blocks["peak_to_peak"],
         "peak_to_peak_rule": "over the output samples of the steady window and just before "
                              "and after every impact (exact extremes of I_SC)",
+        "peak": blocks["peak"],
+        "peak_rule": "max |x| over the same instants as peak_to_peak",
         "regime": regime_dict(getattr(dynamics, "regime", None)),
         "load": None,
         "stages": stages,
     }
+    if electrical.READ_COLUMN in waveforms:
+        summary["V_read_rule"] = (
+            "V_read_V: what an instrument of capacitance C_p = "
+            f"{scene.circuit.parallel_capacitance * 1e12:g} pF reads"
+            + (f" across the circuit ({entry.read_column})" if entry.read_column in waveforms
+               else ": Q_SC / (C_T + C_p) of the open terminal")
+            + "; V_oc_V is the ideal open-circuit voltage")
     if table is not None:
         summary["surrogate_error_estimate"] = table.interpolation_error
     summary.update(circuit_blocks(mask))

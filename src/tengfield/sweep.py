@@ -14,10 +14,19 @@ from typing import Callable, Sequence
 
 from . import electrical
 from ._json import regime_dict
+from .quantities import TERMINAL, column_name
 
-#: columns of ``sweep.csv`` (one row per grid point and load)
-SWEEP_COLUMNS = ["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period",
-                 "V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A", "P_mean_W", "power_density_W_per_m3"]
+#: the terminal statistics of a sweep row: (column, statistic, short name), names from
+#: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
+TERMINAL_COLUMNS = [(column_name(name, stat), stat, name[:name.rindex("_")])
+                    for stat in ("peak_to_peak", "peak") for name in (*TERMINAL, "V_read_V")]
+#: columns of ``sweep.csv`` (one row per grid point and load); ``V_read_*`` empty without
+#: an instrument (``[circuit] parallel_capacitance_pF`` = 0)
+SWEEP_COLUMNS = (["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period"]
+                 + [column_name(n, "peak_to_peak") for n in TERMINAL]   # the first columns,
+                 + ["P_mean_W", "power_density_W_per_m3"]                # kept in place
+                 + [c for c, _, _ in TERMINAL_COLUMNS if c not in
+                    [column_name(n, "peak_to_peak") for n in TERMINAL]])
 
 
 def _default_simulate():
@@ -40,11 +49,12 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
                                           "amplitude_mm": float(amplitude) * 1e3})
     dynamics = simulate(point)
     curves = TerminalCurves(table, point.circuit.reference)
-    peaks = electrical.terminal_peaks(point, dynamics, curves)
+    extremes = electrical.terminal_extremes(point, dynamics, curves)
     regime = regime_dict(dynamics.regime) or {}
     base = {"frequency_hz": float(frequency), "amplitude_mm": float(amplitude) * 1e3,
-            "regime": regime.get("regime", ""), "period": regime.get("period", 0),
-            "V_oc_pp_V": peaks["V_oc"], "Q_sc_pp_C": peaks["Q_sc"], "I_sc_pp_A": peaks["I_sc"]}
+            "regime": regime.get("regime", ""), "period": regime.get("period", 0)}
+    for column, stat, name in TERMINAL_COLUMNS:
+        base[column] = extremes[stat].get(name)
     if not len(loads):
         return [{**base, "load_ohm": None, "P_mean_W": None, "power_density_W_per_m3": None}]
     rows = []

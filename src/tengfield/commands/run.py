@@ -20,6 +20,10 @@ def register(sub) -> None:
     add_jobs_argument(p)
     p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
                    help="skip the PNG files")
+    p.add_argument("--reference", nargs="+", metavar="KEY=VALUE", default=None,
+                   help="measured values to compare with, as in a [reference] section "
+                        "(e.g. V_pp_V=4.2 Q_pp_nC=1.42 I_peak_uA=0.16): the tool's values, "
+                        "the measured ones and the %% difference (docs/outputs.md)")
     p.set_defaults(func=_run)
 
 
@@ -41,7 +45,7 @@ def _run_scene(args, comm, figures) -> int:
     from ..pipeline import run
     from ..scene import load_scene
 
-    scene = load_scene(args.scene)
+    scene = with_measured(load_scene(args.scene), getattr(args, "reference", None))
     if scene.run.realisations > 1:   # before any work: the workers must be allowed
         from .._mpi import check_jobs
         check_jobs(args.jobs, comm)
@@ -64,14 +68,72 @@ def _run_scene(args, comm, figures) -> int:
     return 0
 
 
+def with_measured(scene, items):
+    """``scene`` with ``--reference KEY=VALUE ...`` merged into its ``[reference]``
+    (checked as keys in the file; a bad item is a one-line SceneError)."""
+    if not items:
+        return scene
+    from ..errors import SceneError
+    from ..quantities import parse_measured
+
+    try:
+        values = parse_measured(items)
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
+    return scene.with_values(reference=values)
+
+
+def terminal_lines(summary: dict) -> list[str]:
+    """The ``peak:`` and ``peak-to-peak:`` lines of a run's summary (names and units from
+    :mod:`tengfield.quantities`), and the instrument's reading when there is one."""
+    from ..quantities import QUANTITIES, TERMINAL, display
+
+    lines = []
+    for stat, words in (("peak", "peak (max |x|)"), ("peak_to_peak", "peak-to-peak")):
+        values = summary.get(stat)
+        if not values:
+            continue
+        names = [n for n in TERMINAL if n in values]
+        lines.append(f"{words} ({summary['reference']} reference, {summary['cells']} cell(s)): "
+                     + ", ".join(f"{QUANTITIES[n].symbol} = {display(n, values[n])}"
+                                 for n in names))
+    if "V_read_V" in (summary.get("peak") or {}):
+        c_p = summary["circuit"]["parallel_capacitance_F"] * 1e12
+        lines.append(f"V read through C_p = {c_p:g} pF: peak {display('V_read_V', summary['peak']['V_read_V'])}, "
+                     f"peak-to-peak {display('V_read_V', summary['peak_to_peak']['V_read_V'])} "
+                     "(V_OC above is the ideal open-circuit voltage)")
+    return lines
+
+
+def comparison_lines(summary: dict) -> list[str]:
+    """The table of ``summary["measured_comparison"]``: tool value, measured value and %
+    difference per measured figure, naming the tool quantity each is compared with."""
+    block = summary.get("measured_comparison")
+    if not block:
+        return []
+    lines = ["measured comparison (tool vs measured, difference = (tool - measured) / measured):"]
+    for name, row in block["quantities"].items():
+        diff = row["difference_percent"]
+        diff_text = "n/a" if diff is None else f"{diff:+.1f} %"
+        tool = "n/a" if row["tool_value"] is None else f"{row['tool_value']:.4g}"
+        lines.append(f"  {name:16s} tool {tool} vs measured {row['measured_value']:.4g} "
+                     f"{row['unit']}: {diff_text}  [{row['tool_key']}: {row['tool_label']}]")
+    return lines
+
+
+def _when(x, end: float | None) -> str:
+    """An instant [s], or "not reached in <run length>" for None."""
+    if x is not None:
+        return f"at {x:.4g} s"
+    return "not reached" + ("" if end is None else f" in {end:.4g} s")
+
+
 def print_summary(summary: dict) -> None:
-    p2p = summary["peak_to_peak"]
     regime = summary.get("regime") or {}
     print(f"regime: {regime.get('regime', '?')} (period {regime.get('period', '?')}, "
           f"max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
-    print(f"peak-to-peak ({summary['reference']} reference, {summary['cells']} cell(s)): "
-          f"V_OC = {p2p['V_oc_V']:.4g} V, Q_SC = {p2p['Q_sc_C'] * 1e9:.4g} nC, "
-          f"I_SC = {p2p['I_sc_A'] * 1e9:.4g} nA")
+    for line in terminal_lines(summary):
+        print(line)
     if summary.get("load"):
         load = summary["load"]
         print(f"load {summary['circuit']['load_ohm']:.3g} ohm: mean power "
@@ -92,13 +154,15 @@ def print_summary(summary: dict) -> None:
               f"uC/m^2, from the {bd['sigma_from']})")
     rect = summary.get("rectifier")
     if rect:
-        def when(x):
-            return "never" if x is None else f"{x:.4g} s"
-        print(f"store {rect['storage_capacitance_F'] * 1e6:.4g} uF: U = "
-              f"{rect['final_store_voltage_V']:.4g} V at the end; reaches "
-              f"{rect['uvlo_levels_V'][0]:g} V at {when(rect['time_to_uvlo_falling_V_s'])}, "
-              f"{rect['uvlo_levels_V'][1]:g} V at {when(rect['time_to_uvlo_rising_V_s'])}; "
-              f"harvested {rect['average_harvested_power_W'] * 1e6:.4g} uW, "
+        length = rect.get("record_length_s")
+        line = (f"store {rect['storage_capacitance_F'] * 1e6:.4g} uF: U = "
+                f"{rect['final_store_voltage_V']:.4g} V at the end")
+        if rect["pmic"] != "none":    # the UVLO levels are the chip's
+            line += (f"; reaches {rect['uvlo_levels_V'][0]:g} V "
+                     f"{_when(rect['time_to_uvlo_falling_V_s'], length)}, "
+                     f"{rect['uvlo_levels_V'][1]:g} V "
+                     f"{_when(rect['time_to_uvlo_rising_V_s'], length)}")
+        print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} uW, "
               f"{rect['energy_per_cycle_J']:.4g} J per cycle")
         if rect["pmic"] != "none":
             print(f"chip: on {rect['chip_switch_on_count']} time(s), duty cycle "
@@ -125,5 +189,7 @@ def print_summary(summary: dict) -> None:
                 parts.append(f"{label} {s['mean'] * scale:.4g}{spread} {unit}")
         print(f"ensemble of {ens['realisations']} realisations (mean +- 95 % CI): "
               + ", ".join(parts))
+    for line in comparison_lines(summary):
+        print(line)
     for name, stage in summary["stages"].items():
         print(f"  {name:9s} {stage['status']:8s} {stage['wall_time_s']:7.2f} s  {stage['reason']}")

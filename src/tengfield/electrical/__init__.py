@@ -19,9 +19,10 @@ from .circuits.rectifier import (CHUNK_VALUES, NUMERICAL_DISSIPATION_WARN, RECTI
                                  rectifier_waveforms, smallest_resolved_store,
                                  warn_numerical_dissipation)
 from .cycle import cmeo, cumulative, last_period, loop_area
-from .waveforms import (IMPACT_OFFSET_PERIODS, PEAK_QUANTITIES, WAVEFORM_COLUMNS, elapsed_times,
-                        extreme_times, extremes, impact_elapsed, impact_states, impact_times,
-                        sample_elapsed, scene_terminal_waveforms, scene_waveforms, steady_start,
-                        steady_window, terminal_peaks, terminal_waveforms, terminal_waveforms_zr,
-                        time_origin, trapezoid)
+from .waveforms import (IMPACT_OFFSET_PERIODS, PEAK_QUANTITIES, READ_COLUMN, WAVEFORM_COLUMNS,
+                        elapsed_times, extreme_times, extremes, impact_elapsed, impact_states,
+                        impact_times, peak_quantities, sample_elapsed, scene_terminal_waveforms,
+                        scene_waveforms, steady_start, steady_window, terminal_extremes,
+                        terminal_peaks, terminal_waveforms, terminal_waveforms_zr, time_origin,
+                        trapezoid)
 

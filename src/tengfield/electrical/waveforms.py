@@ -5,18 +5,19 @@ Every consumer (:func:`tengfield.pipeline.run`, :mod:`tengfield.sweep`,
 demos) calls these functions, so they give the same numbers for the same scene;
 what a circuit does with the terminal is in :mod:`tengfield.electrical.circuits`:
 
-* :func:`terminal_waveforms`: V_OC, Q_SC, I_SC (and C_T) along sampled
-  z(t), ż(t) for ``cells`` identical cells in parallel read through a
-  parallel capacitance C_p;
+* :func:`terminal_waveforms`: V_OC (always the ideal open-circuit voltage), the
+  voltage V_read an instrument of capacitance C_p reads, Q_SC, I_SC (and C_T)
+  along sampled z(t), ż(t) for ``cells`` identical cells in parallel;
 * :func:`scene_waveforms`: the same for a dynamics result, with ``cells``
   and C_p taken from the scene, as the ``waveforms.csv`` columns;
 * :func:`steady_window`: the samples after ``[run] settle_periods`` periods
   (:func:`steady_start`, the one rule; a DynamicsResult's ``window_start`` is
   the same instant on the absolute axis);
-* :func:`terminal_peaks`: peak-to-peak V_OC, Q_SC, I_SC over the steady
-  window, over the samples *and* just before/after every impact (where
-  I_SC jumps and takes its extremes); :func:`extreme_times` and
-  :func:`extremes` are the same rule for a model sampled elsewhere (fit).
+* :func:`terminal_extremes`: peak-to-peak and peak (max |x|) of V_OC, Q_SC, I_SC
+  (and V_read) over the steady window, over the samples *and* just before/after
+  every impact (where I_SC jumps and takes its extremes); :func:`terminal_peaks`
+  its peak-to-peak half; :func:`extreme_times` and :func:`extremes` are the same
+  rule for a model sampled elsewhere (fit).
 
 Units are SI; signs are those of :mod:`tengfield.terminals` (V = V_lower -
 V_upper, charges and currents counted lower -> upper through the external
@@ -39,6 +40,8 @@ WAVEFORM_COLUMNS = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m",
                     "V_oc_V", "Q_sc_C", "I_sc_A"]
 #: the peak-to-peak quantities and their ``waveforms`` column
 PEAK_QUANTITIES = {"V_oc": "V_oc_V", "Q_sc": "Q_sc_C", "I_sc": "I_sc_A"}
+#: the column of the voltage read through C_p (``[circuit] parallel_capacitance_pF`` > 0)
+READ_COLUMN = "V_read_V"
 #: the pre-/post-impact states are sampled this many excitation periods from an impact
 IMPACT_OFFSET_PERIODS = 1e-9
 
@@ -113,8 +116,10 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
     Q_SC is identically zero (then C_T is unknown and NaN). ``gap`` z(t) [m] and
     ``gap_velocity`` dz/dt [m/s] are samples of the trajectory; ``cells``
     identical cells are wired in parallel and read through
-    ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V] (= Q_SC / (C_T + C_p),
-    the true V_OC when C_p = 0), ``Q_sc`` [C], ``I_sc`` = (dQ_SC/dz) dz/dt [A],
+    ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V] (= Q_SC / C_T, the ideal
+    open-circuit voltage, whatever C_p), ``V_read`` [V] (= Q_SC / (C_T + C_p), what an
+    instrument of capacitance C_p reads; ``V_oc`` itself when C_p = 0), ``Q_sc`` [C],
+    ``I_sc`` = (dQ_SC/dz) dz/dt [A],
     ``C_T`` [F] and ``dC_T_dt`` [F/s]. For (z, r) curves (``curves.radial``)
     ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0) enter, and
     ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` (:meth:`tengfield.surrogate.Curves.evaluate_many`).
@@ -122,11 +127,14 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
     gap = np.asarray(gap, dtype=float)
     if curves is None:
         zero = np.zeros_like(gap)
-        return {"V_oc": zero, "Q_sc": zero.copy(), "I_sc": zero.copy(),
+        return {"V_oc": zero, "V_read": zero.copy(), "Q_sc": zero.copy(), "I_sc": zero.copy(),
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
     q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial, radial_velocity,
                                                   cells=cells)
-    return {"V_oc": circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance),
+    v_oc = circuit.open_circuit_voltage(q_sc, c_t)
+    v_read = v_oc if parallel_capacitance == 0.0 else \
+        circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance)
+    return {"V_oc": v_oc, "V_read": v_read,
             "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
 
 
@@ -160,16 +168,28 @@ def _radial(dynamics, curves, times=None):
 def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
     """The ``WAVEFORM_COLUMNS`` of ``dynamics`` (a DynamicsResult or anything with
     ``t, gap, gap_velocity, table``) for ``scene``: time, trajectory and the
-    terminal waveforms at the output samples."""
+    terminal waveforms at the output samples; with ``[circuit]
+    parallel_capacitance_pF`` > 0 also ``V_read_V`` (the voltage read through C_p)."""
     t = np.asarray(dynamics.t, dtype=float)
     gap = np.asarray(dynamics.gap, dtype=float)
     velocity = np.asarray(dynamics.gap_velocity, dtype=float)
     terminal = scene_terminal_waveforms(scene, curves, gap, velocity,
                                         *_radial(dynamics, curves))
     table = getattr(dynamics, "table", None)
-    return {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
-            "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
-            "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"]}
+    out = {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
+           "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
+           "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"]}
+    if scene.circuit.parallel_capacitance > 0.0:
+        out[READ_COLUMN] = terminal["V_read"]
+    return out
+
+
+def peak_quantities(scene) -> dict[str, str]:
+    """The quantities :func:`terminal_extremes` reports for ``scene`` and their
+    ``waveforms`` column: ``PEAK_QUANTITIES`` (+ ``V_read`` with C_p > 0)."""
+    if scene.circuit.parallel_capacitance > 0.0:
+        return {**PEAK_QUANTITIES, "V_read": READ_COLUMN}
+    return dict(PEAK_QUANTITIES)
 
 
 # ---------------------------------------------------------------------------
@@ -251,7 +271,17 @@ def extreme_times(scene, dynamics, start: float) -> np.ndarray:
 
 
 def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> dict[str, float]:
-    """Peak-to-peak ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] over the steady window.
+    """Peak-to-peak ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] (and ``V_read`` [V] with
+    C_p > 0) over the steady window: the ``peak_to_peak`` half of
+    :func:`terminal_extremes`."""
+    return terminal_extremes(scene, dynamics, curves, waveforms)["peak_to_peak"]
+
+
+def terminal_extremes(scene, dynamics, curves, waveforms: dict | None = None, *,
+                      read_at_samples: bool = False) -> dict:
+    """``{"peak_to_peak": {...}, "peak": {...}}``: max x - min x and max |x| of ``V_oc``
+    [V], ``Q_sc`` [C], ``I_sc`` [A] (and ``V_read`` [V] with C_p > 0) over the steady
+    window.
 
     The extremes are taken over the output samples of the window *and* just
     before and after every impact in it (``IMPACT_OFFSET_PERIODS``), where
@@ -260,14 +290,18 @@ def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> di
     alone, the I_SC peak of the default scene is 3 % low at 20 kHz;
     docs/report.md). ``cells`` and C_p come from ``scene``; ``waveforms``
     (the :func:`scene_waveforms` of the same scene and dynamics) saves
-    recomputing the samples.
+    recomputing the samples. ``read_at_samples``: the ``V_read_V`` column of
+    ``waveforms`` is not the terminal's open reading but a load's voltage across
+    R || C_p, taken at its samples alone (it is continuous at the impacts).
     """
     if waveforms is None:
         waveforms = scene_waveforms(scene, dynamics, curves)
+    quantities = peak_quantities(scene)
     t = elapsed_times(dynamics)          # the rows of waveforms, on the run's own axis
     mask, _ = steady_window(t, scene)
     values = {name: [np.asarray(waveforms[column])[mask]]
-              for name, column in PEAK_QUANTITIES.items()}
+              for name, column in quantities.items()}
+    at_impacts = [n for n in quantities if not (n == "V_read" and read_at_samples)]
     if curves is not None:
         impacts = impact_elapsed(dynamics, t[mask][0], t[-1])
         gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
@@ -278,9 +312,14 @@ def terminal_peaks(scene, dynamics, curves, waveforms: dict | None = None) -> di
                 np.concatenate([vel_pre, vel_post]),
                 *_radial(dynamics, curves, time_origin(dynamics)
                          + np.concatenate([impacts - eps, impacts + eps])))
-            for name in PEAK_QUANTITIES:
+            for name in at_impacts:
                 values[name].append(extra[name])
-    return {name: circuit.peak_to_peak(np.concatenate(v)) for name, v in values.items()}
+    out: dict = {"peak_to_peak": {}, "peak": {}}
+    for name, v in values.items():
+        x = np.concatenate(v)
+        out["peak_to_peak"][name] = circuit.peak_to_peak(x)
+        out["peak"][name] = float(np.max(np.abs(x))) if x.size else 0.0
+    return out
 
 
 def extremes(values) -> tuple[float, float]:

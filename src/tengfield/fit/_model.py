@@ -151,7 +151,7 @@ class ForwardModel:
         gap, velocity, _ = dynamics.sample(t)
         cells = self.scene.device.cells
         terminal = terminal_waveforms(curves, gap, velocity, cells=cells, parallel_capacitance=c_p)
-        out = {"V": terminal["V_oc"], "Q": terminal["Q_sc"], "I": terminal["I_sc"]}
+        out = {"V": terminal["V_read"], "Q": terminal["Q_sc"], "I": terminal["I_sc"]}
         if self.scene.circuit.kind == "load" and ({"V", "I"} & set(quantities)):
             out.update(self._load(dynamics, curves, c_p, load, t))
         return {q: np.asarray(out[q], dtype=float) for q in quantities}

@@ -16,18 +16,21 @@ from . import new_figure
 
 
 def plot_charging(fine, scene, path: str | Path, *, title: str = "") -> Path:
-    """U(t) [V] of a :class:`tengfield.harvest.HarvestResult` with the UVLO levels."""
+    """U(t) [V] of a :class:`tengfield.harvest.HarvestResult` with the UVLO levels (only
+    when there is a chip: ``[circuit] pmic`` not "none")."""
     c = scene.circuit
     t = np.asarray(fine.time)
     fig = new_figure((8, 3.6))
     ax = fig.subplots()
     ax.plot(t, fine.store_voltage, color="C0", lw=1.0, label="store U")
-    for level, name in ((c.uvlo_rising, "UVLO rising"), (c.uvlo_falling, "UVLO falling")):
+    levels = () if c.pmic == "none" else ((c.uvlo_rising, "UVLO rising"),
+                                          (c.uvlo_falling, "UVLO falling"))
+    for level, name in levels:
         ax.axhline(level, color="C3" if "rising" in name else "C1", ls="--", lw=0.8,
                    label=f"{name} {level:g} V")
     on = np.asarray(fine.chip_on, dtype=bool)
     if on.any():
-        top = max(float(np.max(fine.store_voltage)), c.uvlo_rising) * 1.05
+        top = max(float(np.max(fine.store_voltage)), c.uvlo_rising if levels else 0.0) * 1.05
         ax.fill_between(t, 0, top, where=on, color="C2", alpha=0.15, step="post",
                         label="chip on")
     ax.set_xlabel("time [s]")

@@ -16,14 +16,38 @@ import numpy as np
 from . import new_figure
 
 
+def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> list:
+    """``(column, axis label, factor)`` of each panel of :func:`plot_waveforms`, names and
+    units from :mod:`tengfield.quantities`: V_OC (ideal), the voltage read through C_p
+    when the waveforms have it, Q_SC, I_SC, and a load's V_load and P_load."""
+    from ..quantities import QUANTITIES, axis_label
+
+    names = ["V_oc_V"]
+    if "V_read_V" in waveforms:
+        names.append("V_read_V")
+    names += ["Q_sc_C", "I_sc_A"]
+    if "V_load_V" in waveforms:
+        names += ["V_load_V", "P_load_W"]
+    panels = []
+    for name in names:
+        label = axis_label(name)
+        if name == "V_read_V":
+            label = f"V read through C_p = {parallel_capacitance_pF:.3g} pF [V]"
+        elif name == "V_oc_V":
+            label = "V_OC (ideal) [V]" if "V_read_V" in waveforms else label
+        panels.append((name, label, QUANTITIES[name].display_scale))
+    return panels
+
+
 def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
-                   last_seconds: float | None = None) -> Path:
-    """Waveform panels against time [ms] with the gap [mm] in grey (right axis)."""
+                   last_seconds: float | None = None,
+                   parallel_capacitance_pF: float = 0.0) -> Path:
+    """Waveform panels against time [ms] with the gap [mm] in grey (right axis)
+    (:func:`waveform_panels`; ``parallel_capacitance_pF``: the instrument's C_p, named
+    on the V_read panel)."""
     t = np.asarray(waveforms["time_s"])
     mask = np.ones_like(t, dtype=bool) if last_seconds is None else t >= t[-1] - last_seconds
-    panels = [("V_oc_V", "V_OC [V]", 1.0), ("Q_sc_C", "Q_SC [nC]", 1e9), ("I_sc_A", "I_SC [nA]", 1e9)]
-    if "V_load_V" in waveforms:
-        panels += [("V_load_V", "V_load [V]", 1.0), ("P_load_W", "P_load [µW]", 1e6)]
+    panels = waveform_panels(waveforms, parallel_capacitance_pF)
     fig = new_figure((8, 2.1 * len(panels)))
     axes = fig.subplots(len(panels), 1, sharex=True)
     for ax, (key, label, factor) in zip(np.atleast_1d(axes), panels):

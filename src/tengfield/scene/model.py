@@ -375,6 +375,29 @@ class Breakdown:
 
 
 @dataclass(frozen=True)
+class Reference:
+    """``[reference]``: measured values [SI] to compare the run with (0: not given):
+    ``V_pp``, ``V_peak`` [V], ``Q_pp``, ``Q_peak`` [C], ``I_pp``, ``I_peak`` [A],
+    ``P_mean`` [W]. Which tool quantity each is compared with:
+    :data:`tengfield.quantities.MEASURED`."""
+    V_pp: float = 0.0
+    V_peak: float = 0.0
+    Q_pp: float = 0.0
+    Q_peak: float = 0.0
+    I_pp: float = 0.0
+    I_peak: float = 0.0
+    P_mean: float = 0.0
+
+    def __post_init__(self):
+        check_section("reference", self, "Reference")
+
+    def given(self) -> dict[str, float]:
+        """``{file key: measured value [SI]}`` of the values given (non-zero)."""
+        return {key: getattr(self, spec.attr) for key, spec in SCHEMA["reference"].items()
+                if getattr(self, spec.attr) != 0.0}
+
+
+@dataclass(frozen=True)
 class Scene:
     """One BB-TENG and how it is driven: the sections as SI dataclasses, the file-level
     values as given (``raw``), where they came from (``source``, ``text``)."""
@@ -387,6 +410,7 @@ class Scene:
     circuit: Circuit
     array: Array = Array()
     breakdown: Breakdown = Breakdown()
+    reference: Reference = Reference()
     raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
     source: str = dataclasses.field(compare=False, repr=False, default="<default>")
     text: str = dataclasses.field(compare=False, repr=False, default="")
@@ -555,5 +579,6 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene
                  initial=Initial(**values["initial"]), run=Run(**values["run"]),
                  field=_RefusedField(problems) if problems else fld,
                  circuit=Circuit(**values["circuit"]), array=Array(**values["array"]),
-                 breakdown=Breakdown(**values["breakdown"]), raw=copy.deepcopy(given_data),
+                 breakdown=Breakdown(**values["breakdown"]),
+                 reference=Reference(**values["reference"]), raw=copy.deepcopy(given_data),
                  source=source, text=text)

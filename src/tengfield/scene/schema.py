@@ -64,6 +64,8 @@ _AMPLITUDE = _rng(0.0, 1e6, why="up to 1 km: the kernel's bounds A w^2 ... A w^4
 #: the period count is bounded separately by MAX_PERIODS)
 _FREQUENCY = _rng(1e-6, 1e9, why="1 uHz to 1 GHz")
 _ANGLE = _rng(-360.0, 360.0)
+#: a measured magnitude of [reference] (0: not given)
+_MEASURED = _rng(0.0, 1e30, why="a measured magnitude; 0: not given")
 
 SCHEMA: dict[str, dict[str, Key]] = {
     "device": {
@@ -235,6 +237,18 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "paschen_B_V_per_Pa_m": Key("paschen_B", float, 273.75, 1.0, _rng(0.0, 1e6, lo_open=True)),
         "secondary_emission": Key("secondary_emission", float, 0.01, 1.0,
                                   _rng(0.0, 1.0, lo_open=True)),
+    },
+    # measured values to compare the run with (tengfield run: summary.json ->
+    # measured_comparison, the terminal's table). 0 (the default): not given. Which tool
+    # quantity each is compared with: tengfield.quantities.MEASURED (docs/outputs.md).
+    "reference": {
+        "V_pp_V": Key("V_pp", float, 0.0, 1.0, _MEASURED),
+        "V_peak_V": Key("V_peak", float, 0.0, 1.0, _MEASURED),
+        "Q_pp_nC": Key("Q_pp", float, 0.0, 1e-9, _MEASURED),
+        "Q_peak_nC": Key("Q_peak", float, 0.0, 1e-9, _MEASURED),
+        "I_pp_uA": Key("I_pp", float, 0.0, 1e-6, _MEASURED),
+        "I_peak_uA": Key("I_peak", float, 0.0, 1e-6, _MEASURED),
+        "P_mean_uW": Key("P_mean", float, 0.0, 1e-6, _MEASURED),
     },
 }
 

@@ -51,6 +51,9 @@ class Circuit:
     #: ``[circuit]`` keys (file names) this kind reads besides ``kind``,
     #: ``parallel_capacitance_pF`` and ``reference`` (docs, scene checks)
     keys: tuple[str, ...] = ()
+    #: the column an instrument of capacitance C_p across the terminal reads with this
+    #: circuit connected (``V_read_V``); "" : the open terminal's Q_SC / (C_T + C_p)
+    read_column: str = ""
 
     # -- one run -------------------------------------------------------------
     def check(self, scene) -> None:

@@ -179,6 +179,7 @@ class Load(Circuit):
     name = "load"
     columns = tuple(LOAD_COLUMNS)
     keys = ("load_ohm",)
+    read_column = "V_load_V"     # the instrument reads the load's R || C_p
 
     def run(self, scene, dynamics, curves) -> CircuitRun:
         load = steady_load(scene, dynamics, curves)

@@ -3,7 +3,7 @@ optional UVLO chip (:mod:`tengfield.harvest`), along a trajectory.
 
 :func:`rectifier_waveforms` runs the bridge on the output samples and every impact
 instant; :func:`rectifier_summary` the store, chip and energy books over the steady
-window; the entry adds the bridge's V-Q loop beside the resistive one, charging.png's
+window; the entry adds the bridge's V-Q loop, charging.png's
 record, and the array's three connections (one bridge, a bridge per cell into one
 store, a bridge and store per cell).
 """
@@ -17,7 +17,6 @@ import numpy as np
 from ..cycle import last_period, loop_area
 from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, steady_window, time_origin
 from . import Circuit, CircuitRun, SpreadCircuit
-from .load import resistive_loop, steady_load
 
 #: extra columns of ``waveforms.csv`` for ``[circuit] kind = "rectifier"``
 RECTIFIER_COLUMNS = ["V_store_V", "I_store_A", "E_store_J", "pmic_on"]
@@ -211,6 +210,7 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
             first_crossing(t, fine.store_voltage, c.uvlo_rising),
             fine.threshold_times["uvlo_rising_s"]),
         "uvlo_levels_V": [c.uvlo_falling, c.uvlo_rising],
+        "record_length_s": float(t[-1] - t[0]),
         "chip_first_on_s": origin + fine.threshold_times["uvlo_rising_s"],
         "chip_first_lockout_s": origin + fine.threshold_times["uvlo_falling_s"],
         "chip_switch_on_count": switch_on, "chip_switch_off_count": switch_off,
@@ -242,7 +242,7 @@ class Rectifier(Circuit):
             "diode_emission_coefficient", "diode_series_resistance_ohm",
             "storage_capacitance_uF", "storage_leakage_ohm", "pmic", "uvlo_rising_V",
             "uvlo_falling_V", "pmic_output_V", "pmic_load_ohm", "pmic_efficiency",
-            "pmic_quiescent_current_A", "pmic_shunt_V", "load_ohm")
+            "pmic_quiescent_current_A", "pmic_shunt_V")
 
     def check(self, scene) -> None:
         check_store_resolution(scene)
@@ -265,19 +265,16 @@ class Rectifier(Circuit):
             data=rect)
 
     def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
-        """The resistive load ``[circuit] load_ohm``'s loop to compare, the bridge's loop,
-        summary.json's ``rectifier`` block and charging.png's record."""
+        """The bridge's V-Q loop, summary.json's ``rectifier`` block and charging.png's
+        record (no resistive-load loop: a rectifier run has no load to compare)."""
         period = scene.excitation.period
-        numbers, loop = resistive_loop(scene, steady_load(scene, dynamics, curves), t, period)
-        vq = {"load": loop}
         fine = run.data["fine"]
         fine_last = last_period(fine.time, period)
         v = fine.voltage[fine_last, 0]
         q = fine.bridge_charge[fine_last, 0]
-        vq["rectifier"] = (q - q[0], v, loop_area(v, q))
-        numbers["rectifier_loop_area_J"] = vq["rectifier"][2]
+        vq = {"rectifier": (q - q[0], v, loop_area(v, q))}
         start = float(t[mask][0])
-        return {"energy_per_cycle": numbers,
+        return {"energy_per_cycle": {"rectifier_loop_area_J": vq["rectifier"][2]},
                 "rectifier": rectifier_summary(scene, fine, start, curves, max_gap),
                 "_fine": fine, "_vq": vq}
 

@@ -1,0 +1,251 @@
+"""The one table of output quantities: name, unit, label, how each is computed.
+
+Every place that shows an output takes its name and unit from here:
+``summary.json`` keys (``peak_to_peak.Q_sc_C``, ``peak.I_sc_A``,
+``load.mean_power_W``), the terminal summary of ``tengfield run``, the columns of
+``waveforms.csv``, ``sweep.csv`` and ``ensemble.csv``, the axis labels of the
+figures and the ``[reference]`` comparison with measured values.
+
+* :data:`QUANTITIES`: ``name -> Quantity`` (``QUANTITIES["V_oc_V"].unit == "V"``,
+  ``.label == "open-circuit voltage V_OC"``);
+* :data:`STATISTICS`: how a waveform becomes one number (``peak`` = max |x|,
+  ``peak_to_peak`` = max x - min x, over the steady window's samples and just
+  before and after every impact: :func:`tengfield.electrical.terminal_extremes`);
+* :func:`summary_keys` (``"peak_to_peak.Q_sc_C"``, ...), :func:`summary_value`
+  (the number of such a key in a summary dict), :func:`column_name` (the
+  ``sweep.csv`` / ``ensemble.csv`` column: ``V_oc_pp_V``, ``I_sc_peak_A``),
+  :func:`axis_label` (``"V_OC [V]"``, ``"Q_SC [nC]"``).
+
+A new output quantity is one :class:`Quantity` entry here plus its computation
+(a waveform column in :mod:`tengfield.electrical`, or a number in a summary
+block); docs/architecture.md has the recipe. This module is base layer: it
+imports nothing of tengfield.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One output quantity. ``name``: its key and CSV column, SI unit suffixed
+    (``V_oc_V``); ``unit``: the SI unit; ``symbol``: the short name printed and
+    drawn (``V_OC``); ``label``: words for a person; ``computed``: how it is
+    obtained; ``display_unit``/``display_scale``: what the terminal and the figures
+    show (``Q_SC`` in nC: ``display_scale`` 1e9); ``waveform``: a column of
+    ``waveforms.csv`` (True) or a number of a summary block (False);
+    ``block``: the summary block of such a number (``load``, ``rectifier``,
+    ``energy_per_cycle``); ``when``: when it is present (empty: always)."""
+    name: str
+    unit: str
+    symbol: str
+    label: str
+    computed: str
+    display_unit: str = ""
+    display_scale: float = 1.0
+    waveform: bool = True
+    block: str = ""
+    when: str = ""
+
+    @property
+    def short(self) -> str:
+        """The name without its unit suffix (``V_oc`` of ``V_oc_V``)."""
+        return self.name[: -(len(self.unit.replace("/", "_per_")) + 1)] \
+            if self.name.endswith("_" + self.unit.replace("/", "_per_")) else self.name
+
+
+def _q(name, unit, symbol, label, computed, display_unit="", display_scale=1.0, **kw):
+    return name, Quantity(name, unit, symbol, label, computed, display_unit or unit,
+                          display_scale, **kw)
+
+
+#: every output quantity, by name
+QUANTITIES: dict[str, Quantity] = dict([
+    _q("time_s", "s", "t", "time", "the output samples, [run] sample_rate_hz"),
+    _q("gap_m", "m", "z", "ball-electrode gap z", "the dynamics", "mm", 1e3),
+    _q("gap_velocity_m_per_s", "m/s", "dz/dt", "gap velocity", "the dynamics"),
+    _q("table_m", "m", "table", "table displacement", "the excitation", "mm", 1e3),
+    _q("V_oc_V", "V", "V_OC", "open-circuit voltage V_OC",
+       "Q_SC / C_T: the ideal open-circuit voltage (no instrument), cells in parallel"),
+    _q("Q_sc_C", "C", "Q_SC", "short-circuit charge Q_SC",
+       "Q_SC(z) of the surrogate x cells, zero in the reference state", "nC", 1e9),
+    _q("I_sc_A", "A", "I_SC", "short-circuit current I_SC",
+       "dQ_SC/dz dz/dt (+ dQ_SC/dr dr/dt off the axis), cells in parallel", "nA", 1e9),
+    _q("V_read_V", "V", "V_read", "voltage read through C_p",
+       "what an instrument of capacitance C_p reads: Q_SC / (C_T + C_p); with "
+       "[circuit] kind = \"load\" the voltage across R || C_p (= V_load_V)",
+       when="[circuit] parallel_capacitance_pF > 0"),
+    _q("V_load_V", "V", "V_load", "load voltage", "the load ODE, R || C_p",
+       when="[circuit] kind = \"load\" or \"series-rc\""),
+    _q("I_load_A", "A", "I_load", "load current", "V_load / R", "nA", 1e9,
+       when="[circuit] kind = \"load\" or \"series-rc\""),
+    _q("P_load_W", "W", "P_load", "load power", "V_load^2 / R", "µW", 1e6,
+       when="[circuit] kind = \"load\" or \"series-rc\""),
+    _q("mean_power_W", "W", "P_mean", "mean load power",
+       "energy dissipated in R over the steady window / its length", "µW", 1e6,
+       waveform=False, block="load", when="a load"),
+    _q("power_density_W_per_m3", "W/m^3", "P/V", "mean power per device volume",
+       "mean_power_W / the cells' volume", waveform=False, block="load", when="a load"),
+    _q("average_harvested_power_W", "W", "P_harvest", "power into the store",
+       "energy into the store over the steady window / its length", "µW", 1e6,
+       waveform=False, block="rectifier", when="[circuit] kind = \"rectifier\""),
+    _q("final_stored_energy_J", "J", "E_store", "energy in the store at the end",
+       "C_store U^2 / 2 at the last instant", waveform=False, block="rectifier",
+       when="[circuit] kind = \"rectifier\""),
+    _q("max_energy_per_cycle_J", "J", "E_CMEO", "CMEO energy per cycle (the device's own)",
+       "Q_max (V_OC,max + |V'_max|) / 2 without the instrument (Zi et al. 2015)",
+       waveform=False, block="energy_per_cycle"),
+    _q("figure_of_merit_structural", "1", "FOM_S", "structural figure of merit",
+       "2 eps0 E_CMEO / (sigma^2 A x_max), the device's own (no C_p)",
+       waveform=False, block="energy_per_cycle"),
+])
+
+#: how a waveform becomes one number: summary block -> (words, CSV column infix)
+STATISTICS: dict[str, tuple[str, str]] = {
+    "peak_to_peak": ("max x - min x over the steady window's samples and just before and "
+                     "after every impact", "pp"),
+    "peak": ("max |x| over the same instants as peak_to_peak", "peak"),
+}
+
+#: the terminal quantities every run reports with both statistics
+TERMINAL = ("V_oc_V", "Q_sc_C", "I_sc_A")
+
+
+def quantity(name: str) -> Quantity:
+    """The entry of ``name`` (KeyError naming the known ones)."""
+    try:
+        return QUANTITIES[name]
+    except KeyError:
+        raise KeyError(f"unknown output quantity {name!r}; known: "
+                       + ", ".join(QUANTITIES)) from None
+
+
+def summary_keys(*, instrument: bool = False) -> list[str]:
+    """The dotted summary.json keys of the numbers a run reports: ``peak_to_peak.<name>``
+    and ``peak.<name>`` of the terminal quantities (and ``V_read_V`` with an
+    ``instrument``, C_p > 0), then the block numbers (``load.mean_power_W``, ...)."""
+    names = list(TERMINAL) + (["V_read_V"] if instrument else [])
+    keys = [f"{stat}.{n}" for stat in STATISTICS for n in names]
+    keys += [f"{q.block}.{q.name}" for q in QUANTITIES.values() if not q.waveform]
+    return keys
+
+
+def summary_value(summary: dict, key: str):
+    """The number at dotted ``key`` of a summary dict (``"peak.I_sc_A"``), or None when
+    the run has no such number (no load, no instrument)."""
+    node = summary
+    for part in key.split("."):
+        if not isinstance(node, dict) or node.get(part) is None:
+            return None
+        node = node[part]
+    return node
+
+
+def column_name(name: str, statistic: str) -> str:
+    """The ``sweep.csv`` / ``ensemble.csv`` column of ``statistic`` of quantity ``name``:
+    ``column_name("V_oc_V", "peak_to_peak") == "V_oc_pp_V"``."""
+    q = quantity(name)
+    suffix = name[len(q.short):]
+    return f"{q.short}_{STATISTICS[statistic][1]}{suffix}"
+
+
+def axis_label(name: str, *, statistic: str = "") -> str:
+    """A figure's axis label: ``"Q_SC [nC]"`` (``statistic``: ``"Q_SC peak-to-peak [nC]"``)."""
+    q = quantity(name)
+    words = {"peak_to_peak": " peak-to-peak", "peak": " peak"}.get(statistic, "")
+    return f"{q.symbol}{words} [{q.display_unit}]"
+
+
+def display(name: str, value) -> str:
+    """``value`` [SI] of ``name`` as the terminal prints it: ``"0.3174 nC"``."""
+    q = quantity(name)
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return f"{value * q.display_scale:.4g} {q.display_unit}"
+
+
+def describe(key: str) -> str:
+    """Words for a dotted summary key: ``"peak.I_sc_A"`` -> ``"short-circuit current
+    I_SC, peak [A]"``."""
+    stat, _, name = key.rpartition(".")
+    q = quantity(name)
+    words = {"peak_to_peak": ", peak-to-peak", "peak": ", peak"}.get(stat, "")
+    return f"{q.label}{words} [{q.unit}]"
+
+
+# ---------------------------------------------------------------------------
+# measured values ([reference], tengfield run --reference)
+
+#: ``[reference]`` key -> (statistic, tool quantity, the measured unit, its SI factor).
+#: A measured voltage is compared with what the instrument reads: ``V_read_V`` when the
+#: run has one (``[circuit] parallel_capacitance_pF`` > 0), else the ideal ``V_oc_V``.
+MEASURED: dict[str, tuple[str, str, str, float]] = {
+    "V_pp_V": ("peak_to_peak", "V_read_V", "V", 1.0),
+    "V_peak_V": ("peak", "V_read_V", "V", 1.0),
+    "Q_pp_nC": ("peak_to_peak", "Q_sc_C", "nC", 1e-9),
+    "Q_peak_nC": ("peak", "Q_sc_C", "nC", 1e-9),
+    "I_pp_uA": ("peak_to_peak", "I_sc_A", "uA", 1e-6),
+    "I_peak_uA": ("peak", "I_sc_A", "uA", 1e-6),
+    "P_mean_uW": ("load", "mean_power_W", "uW", 1e-6),
+}
+
+
+def tool_key(measured_key: str, summary: dict) -> str:
+    """The dotted summary key a ``[reference]`` value is compared with in ``summary``
+    (``"I_peak_uA"`` -> ``"peak.I_sc_A"``; a voltage -> ``V_read_V`` with an
+    instrument, ``V_oc_V`` without)."""
+    stat, name, _, _ = MEASURED[measured_key]
+    if name == "V_read_V" and "V_read_V" not in (summary.get(stat) or {}):
+        name = "V_oc_V"
+    return f"{stat}.{name}"
+
+
+def parse_measured(items) -> dict[str, float]:
+    """``["V_pp_V=4.2", "Q_pp_nC=1.42"]`` (``tengfield run --reference``) -> file-level
+    ``{"V_pp_V": 4.2, ...}``; ValueError (one line) for an item without ``=``, an
+    unknown key (with the closest) or a value that is not a number. The values are
+    checked as ``[reference]`` keys by the scene."""
+    import difflib
+
+    out: dict[str, float] = {}
+    for item in items:
+        key, sep, text = str(item).partition("=")
+        key = key.strip()
+        if not sep:
+            raise ValueError(f"--reference {item!r}: expected KEY=VALUE, e.g. V_pp_V=4.2")
+        if key not in MEASURED:
+            close = difflib.get_close_matches(key, list(MEASURED), n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ValueError(f"--reference {key} is not a measured quantity{hint}; known: "
+                             + ", ".join(MEASURED))
+        try:
+            out[key] = float(text)
+        except ValueError:
+            raise ValueError(f"--reference {key} = {text!r}: expected a number") from None
+    return out
+
+
+def compare_measured(summary: dict, measured: dict[str, float]) -> dict | None:
+    """summary.json's ``measured_comparison`` block: for each measured value
+    (``{[reference] key: value [SI]}``, e.g. ``scene.reference.given()``) the tool's
+    value, the measured one (both in the measured unit), the difference (tool -
+    measured) / measured in %, and which tool quantity it is compared with. None
+    without measured values."""
+    if not measured:
+        return None
+    rows = {}
+    for key, value in measured.items():
+        _, _, unit, factor = MEASURED[key]
+        dotted = tool_key(key, summary)
+        tool = summary_value(summary, dotted)
+        rows[key] = {
+            "measured_value": value / factor, "unit": unit,
+            "tool_value": None if tool is None else tool / factor,
+            "difference_percent": (None if tool is None
+                                   else 100.0 * (tool - value) / value),
+            "tool_key": dotted, "tool_label": describe(dotted)}
+    return {"quantities": rows,
+            "rule": "difference_percent = 100 (tool - measured) / measured; a measured "
+                    "voltage is compared with the voltage read through C_p (V_read_V) when "
+                    "[circuit] parallel_capacitance_pF > 0, else with the ideal V_OC"}
