@@ -51,7 +51,8 @@ def at_limit(scene, cache_dir) -> dict:
     i_abs = np.abs(np.asarray(r.I_sc))
     return {"sigma_max": block["sigma_max_uC_per_m2"] * 1e-6,
             "error": block["relative_error_estimate"], "binding": block["binding"],
-            "Q_sc": r.peaks["Q_sc"], "V_oc": r.peaks["V_oc"], "I_sc": r.peaks["I_sc"],
+            "Q_sc": r.peaks["Q_sc"], "V_oc": r.peaks.get("V_read", r.peaks["V_oc"]),   # the reading
+            "I_sc": r.peaks["I_sc"],
             "I_peak": float(np.max(i_abs)), "regime": r.summary["regime"]["regime"]}
 
 

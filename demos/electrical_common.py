@@ -72,13 +72,16 @@ def measure(curves, dynamics, scene, *, parallel_capacitance: float | None = Non
     capacitance ``parallel_capacitance`` C_p [F] (default: the scene's): peak-to-peak
     ``V_oc`` [V], ``Q_sc`` [C], ``I_sc`` [A] (:func:`tengfield.electrical.terminal_peaks`:
     steady window, samples and impact instants), and for the plots the sampled
-    ``waveforms``, the steady-window ``mask`` and ``C_T_max`` [F] over it."""
+    ``waveforms``, the steady-window ``mask`` and ``C_T_max`` [F] over it. ``V_oc`` here
+    is what the instrument reads (tengfield's ``V_read``; the ideal V_OC when C_p = 0)."""
     if parallel_capacitance is not None:
         scene = scene.with_values(circuit={"parallel_capacitance_pF": parallel_capacitance * 1e12})
     wf = electrical.scene_terminal_waveforms(scene, curves, dynamics.gap, dynamics.gap_velocity)
+    wf["V_oc"] = wf["V_read"]
     mask, _ = electrical.steady_window(dynamics.t, scene)
-    return {**electrical.terminal_peaks(scene, dynamics, curves),
-            "C_T_max": float(np.max(wf["C_T"][mask])), "waveforms": wf, "mask": mask}
+    peaks = electrical.terminal_peaks(scene, dynamics, curves)
+    peaks["V_oc"] = peaks.pop("V_read", peaks["V_oc"])
+    return {**peaks, "C_T_max": float(np.max(wf["C_T"][mask])), "waveforms": wf, "mask": mask}
 
 
 def reconciling_capacitance(charge_pp: float, voltage_measured: float, c_t: float) -> float:

@@ -228,10 +228,18 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
         {"dynamics_wall_time_s": block["dynamics_wall_time_s"],
          "distinct_dynamics": block["distinct_dynamics"]})
     peaks = dict(arr.peaks)      # the one rule: samples and every cell's impact instants
+    peak = dict(arr.peak)
+    entry = electrical.circuit_for(scene)
+    if electrical.READ_COLUMN in waveforms and entry.read_column in waveforms:
+        # the instrument across the array's load reads its voltage (continuous: samples)
+        waveforms[electrical.READ_COLUMN] = waveforms[entry.read_column]
+        mask, _ = electrical.steady_window(electrical.elapsed_times(dynamics), scene)
+        read = np.asarray(waveforms[entry.read_column])[mask]
+        peaks["V_read"] = float(np.max(read) - np.min(read))
+        peak["V_read"] = float(np.max(np.abs(read)))
     summary = _summary(scene, dynamics, waveforms, stages, table,
-                       extremes={"peak_to_peak": peaks, "peak": dict(arr.peak)},
-                       circuit_blocks=lambda mask: electrical.no_load(scene),
-                       entry=electrical.circuit_for(scene))
+                       extremes={"peak_to_peak": peaks, "peak": peak},
+                       circuit_blocks=lambda mask: electrical.no_load(scene), entry=entry)
     summary["cells"] = scene.array.cells
     if arr.load is not None:
         summary["load"] = {"mean_power_W": arr.load["mean_power_W"]}
@@ -242,7 +250,7 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
     _measured_comparison(summary, scene)
     result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
                        dynamics=dynamics, table=table, curves=curves, peaks=peaks,
-                       stages=stages, peak=dict(arr.peak))
+                       stages=stages, peak=peak)
     result.extras = {"_array": arr, "_fine": arr.fine}
     return result
 

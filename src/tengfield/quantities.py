@@ -165,13 +165,13 @@ def display(name: str, value) -> str:
     return f"{value * q.display_scale:.4g} {q.display_unit}"
 
 
-def describe(key: str) -> str:
+def describe(key: str, *, unit: bool = True) -> str:
     """Words for a dotted summary key: ``"peak.I_sc_A"`` -> ``"short-circuit current
-    I_SC, peak [A]"``."""
+    I_SC, peak [A]"`` (without ``[A]`` when not ``unit``)."""
     stat, _, name = key.rpartition(".")
     q = quantity(name)
     words = {"peak_to_peak": ", peak-to-peak", "peak": ", peak"}.get(stat, "")
-    return f"{q.label}{words} [{q.unit}]"
+    return f"{q.label}{words}" + (f" [{q.unit}]" if unit else "")
 
 
 # ---------------------------------------------------------------------------
@@ -244,7 +244,7 @@ def compare_measured(summary: dict, measured: dict[str, float]) -> dict | None:
             "tool_value": None if tool is None else tool / factor,
             "difference_percent": (None if tool is None
                                    else 100.0 * (tool - value) / value),
-            "tool_key": dotted, "tool_label": describe(dotted)}
+            "tool_key": dotted, "tool_label": describe(dotted, unit=False)}
     return {"quantities": rows,
             "rule": "difference_percent = 100 (tool - measured) / measured; a measured "
                     "voltage is compared with the voltage read through C_p (V_read_V) when "

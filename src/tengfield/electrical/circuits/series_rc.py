@@ -97,7 +97,6 @@ def _columns(result) -> dict:
 class SeriesRC(Load):
     """The load's summary, V-Q loop and array comparison, with C_s in the branch."""
     name = "series-rc"
-    read_column = ""             # V_load_V is across R alone, not the terminal
     columns = COLUMNS
     keys = ("load_ohm", "series_capacitance_pF")
 
