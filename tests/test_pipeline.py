@@ -189,7 +189,8 @@ def test_cli_run_end_to_end_then_cached(tmp_path, cli, python):
         assert (out / name).stat().st_size > 0
     with open(out / "waveforms.csv") as f:
         header = next(csv.reader(f))
-    assert header == electrical.WAVEFORM_COLUMNS + electrical.LOAD_COLUMNS
+    # C_p = 5 pF across the load: the instrument's reading V_read_V (= V_load_V) too
+    assert header == electrical.WAVEFORM_COLUMNS + ["V_read_V"] + electrical.LOAD_COLUMNS
     data = np.loadtxt(out / "waveforms.csv", delimiter=",", skiprows=1)
     assert data.shape[0] == 0.3 * 5000 + 1
     assert np.allclose(np.diff(data[:, 0]), 1 / 5000.0)

@@ -121,11 +121,11 @@ def comparison_lines(summary: dict) -> list[str]:
     return lines
 
 
-def _when(x, end: float | None) -> str:
-    """An instant [s], or "not reached in <run length>" for None."""
+def _level(level: float, x, length: float | None) -> str:
+    """"reaches 4.04 V at 0.81 s", or "4.04 V not reached in 5 s" for ``x`` None."""
     if x is not None:
-        return f"at {x:.4g} s"
-    return "not reached" + ("" if end is None else f" in {end:.4g} s")
+        return f"reaches {level:g} V at {x:.4g} s"
+    return f"{level:g} V not reached" + ("" if length is None else f" in {length:.4g} s")
 
 
 def print_summary(summary: dict) -> None:
@@ -158,10 +158,9 @@ def print_summary(summary: dict) -> None:
         line = (f"store {rect['storage_capacitance_F'] * 1e6:.4g} uF: U = "
                 f"{rect['final_store_voltage_V']:.4g} V at the end")
         if rect["pmic"] != "none":    # the UVLO levels are the chip's
-            line += (f"; reaches {rect['uvlo_levels_V'][0]:g} V "
-                     f"{_when(rect['time_to_uvlo_falling_V_s'], length)}, "
-                     f"{rect['uvlo_levels_V'][1]:g} V "
-                     f"{_when(rect['time_to_uvlo_rising_V_s'], length)}")
+            falling, rising = rect["uvlo_levels_V"]
+            line += (f"; {_level(falling, rect['time_to_uvlo_falling_V_s'], length)}, "
+                     f"{_level(rising, rect['time_to_uvlo_rising_V_s'], length)}")
         print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} uW, "
               f"{rect['energy_per_cycle_J']:.4g} J per cycle")
         if rect["pmic"] != "none":
