@@ -177,9 +177,9 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
     freqs = sorted({r["frequency_hz"] for r in rows})
     amps = sorted({r["amplitude_mm"] for r in rows})
     loads = sorted({r["load_ohm"] for r in rows if r.get("load_ohm") is not None})
-    panels = [("V_oc_pp_V", "V_OC peak-to-peak [V]", 1.0),
-              ("Q_sc_pp_C", "Q_SC peak-to-peak [nC]", 1e9),
-              ("I_sc_pp_A", "I_SC peak-to-peak [nA]", 1e9)]
+    from ..quantities import QUANTITIES, TERMINAL, axis_label, column_name
+    panels = [(column_name(n, "peak_to_peak"), axis_label(n, statistic="peak_to_peak"),
+               QUANTITIES[n].display_scale) for n in TERMINAL]
     ncols = len(panels) + (1 if loads else 0)
     fig = new_figure((4 * ncols, 3.4))
     axes = fig.subplots(1, ncols)
