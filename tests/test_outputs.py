@@ -281,3 +281,23 @@ def test_cli_run_with_instrument_and_reference(tmp_path, run_cli, cli_env):
     assert len(bad.stderr.strip().splitlines()) == 1
     assert math.isfinite(summary["measured_comparison"]["quantities"]["V_pp_V"][
         "difference_percent"])
+
+
+def test_array_with_an_instrument_reports_both_voltages(cache):
+    """Cells with their own dynamics: V_OC of the array's terminal is Q / C, the reading
+    Q / (C + C_p); both statistics of each, peak <= peak-to-peak for I_SC."""
+    r = model_run(cache, circuit=INSTRUMENT,
+                  array={"cells": 3, "restitution_spread": 0.05})
+    s = r.summary
+    assert r.summary["array"]["distinct_dynamics"] > 1
+    assert set(s["peak"]) == set(s["peak_to_peak"]) == {"V_oc_V", "Q_sc_C", "I_sc_A",
+                                                        "V_read_V"}
+    assert 0 < s["peak"]["V_read_V"] < s["peak"]["V_oc_V"]
+    assert s["peak"]["I_sc_A"] <= s["peak_to_peak"]["I_sc_A"]
+    mask, _ = electrical.steady_window(r.t, r.scene)
+    for column in ("V_oc_V", "V_read_V", "Q_sc_C", "I_sc_A"):
+        assert s["peak"][column] >= np.max(np.abs(r.waveforms[column][mask])), column
+    # the reading and the ideal voltage of the same charge: V_read (C + C_p) = V_oc C
+    q = r.Q_sc
+    c = q[q != 0] / r.V_oc[q != 0]
+    np.testing.assert_allclose(r.V_read[q != 0] * (c + 338e-12), q[q != 0], rtol=1e-9)
