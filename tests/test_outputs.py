@@ -301,3 +301,16 @@ def test_array_with_an_instrument_reports_both_voltages(cache):
     q = r.Q_sc
     c = q[q != 0] / r.V_oc[q != 0]
     np.testing.assert_allclose(r.V_read[q != 0] * (c + 338e-12), q[q != 0], rtol=1e-9)
+
+
+def test_fit_reads_the_instruments_column_of_a_run(cache, tmp_path):
+    """A run read through C_p writes the ideal V_oc_V and the reading V_read_V: fit's
+    voltage (what an instrument reads, Q_SC / (C_T + C_p)) is taken from V_read_V."""
+    from tengfield import io
+    from tengfield.fit.spec import parse_fit_section, read_trace
+
+    r = model_run(cache, circuit=INSTRUMENT)
+    io.write_waveforms_csv(tmp_path / "waveforms.csv", r.waveforms)
+    trace = read_trace(tmp_path / "waveforms.csv", parse_fit_section(r.scene))
+    assert {c.quantity: c.column for c in trace.columns}["V"] == "V_read_V"
+    np.testing.assert_allclose(trace.values["V"], r.V_read, rtol=1e-9)

@@ -306,7 +306,9 @@ def read_trace(path, spec: FitSpec) -> Trace:
                          f"{MIN_SAMPLES} data rows")
     columns = spec.columns
     if columns is None:
-        defaults = spec.default_columns
+        defaults = dict(spec.default_columns)
+        if defaults.get("V", ("",))[0] == "V_oc_V" and "V_read_V" in header:
+            defaults["V"] = ("V_read_V", "V")   # a run read through C_p: the model's V
         columns = [Column(q, c, u, None) for q, (c, u) in defaults.items() if c in header]
         if not columns:
             raise SceneError(f"{what} has none of the columns "
