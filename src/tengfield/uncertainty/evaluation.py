@@ -1,0 +1,258 @@
+"""The evaluations of a study, as cheap as the physics allows.
+
+Samples are grouped by their dynamics-relevant inputs (every varied key except σ,
+``[circuit]`` and ``[breakdown]`` keys): one group runs the dynamics once and obtains
+its surrogate once (cached by the field hash, at the group's reference σ). Every
+evaluation in the group then only runs the electrical stage with the table scaled to its
+own σ (:func:`tengfield.breakdown.scaled_table`: every charge is linear in σ, C does not
+depend on it) and its own circuit values: σ alone is a scaling, no field solve and no new
+dynamics. Geometry keys give one field solve per distinct geometry (phase 1, farmed over
+the workers before the groups, so two workers never solve the same geometry).
+
+Nothing is written: an evaluation returns the run summary's numeric quantities
+(:func:`output_quantities`) and its regime.
+"""
+from __future__ import annotations
+
+import sys
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .. import electrical
+from .._json import jsonable, regime_dict
+from .spec import UncertaintySpec
+
+SIGMA_KEY = "device.surface_charge_uC_per_m2"
+#: sections whose keys change neither the dynamics nor the field: the electrical stage only
+ELECTRICAL_SECTIONS = ("circuit", "breakdown")
+#: summary blocks whose numeric leaves are an evaluation's outputs (``block.name``), and
+#: numeric top-level summary keys; the quantity table (tengfield/quantities.py) can
+#: replace both through :func:`output_quantities`
+OUTPUT_BLOCKS = ("peak_to_peak", "peak", "load", "energy_per_cycle", "rectifier")
+OUTPUT_TOP_LEVEL = ("V_read_V",)
+#: outputs drawn and printed first (when present)
+MAIN_OUTPUTS = ("V_read_V", "peak_to_peak.V_oc_V", "peak_to_peak.Q_sc_C",
+                "peak_to_peak.I_sc_A", "peak.V_oc_V", "peak.Q_sc_C", "peak.I_sc_A",
+                "load.mean_power_W", "rectifier.average_harvested_power_W")
+
+
+def output_quantities(summary: dict) -> dict[str, float]:
+    """The numeric outputs of one run summary: ``{"peak_to_peak.Q_sc_C": ..., ...}``
+    (the numeric leaves of :data:`OUTPUT_BLOCKS`, nested blocks joined with dots, and
+    :data:`OUTPUT_TOP_LEVEL`). The one place that decides which outputs a study has."""
+    out: dict[str, float] = {}
+
+    def walk(prefix, value):
+        if isinstance(value, dict):
+            for k, v in value.items():
+                if not str(k).startswith("_"):
+                    walk(f"{prefix}.{k}", v)
+        elif isinstance(value, (int, float, np.number)) and not isinstance(value, (bool, np.bool_)):
+            out[prefix] = float(value)
+
+    for name in OUTPUT_TOP_LEVEL:
+        walk(name, summary.get(name))
+    for block in OUTPUT_BLOCKS:
+        if isinstance(summary.get(block), dict):
+            walk(block, summary[block])
+    return out
+
+
+def main_outputs(keys) -> list[str]:
+    """The outputs shown in the figure and the terminal: :data:`MAIN_OUTPUTS` present."""
+    keys = list(keys)
+    return [k for k in MAIN_OUTPUTS if k in keys]
+
+
+def sections_of(values: dict) -> dict[str, dict]:
+    """``{"contact.restitution": 0.3}`` -> ``{"contact": {"restitution": 0.3}}`` (the
+    keyword arguments of :meth:`tengfield.scene.Scene.with_values`)."""
+    out: dict[str, dict] = {}
+    for key, value in values.items():
+        sec, name = key.split(".", 1)
+        out.setdefault(sec, {})[name] = float(value)
+    return out
+
+
+def is_electrical(key: str) -> bool:
+    """True for a key that changes only the electrical stage (σ, circuit, breakdown)."""
+    return key == SIGMA_KEY or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
+
+
+@dataclass
+class Group:
+    """Evaluations sharing their dynamics: ``dynamic`` the dynamics-relevant values,
+    ``members`` (evaluation index, its electrical values); index -1: the nominal run."""
+    dynamic: dict
+    members: list = field(default_factory=list)
+
+
+def groups_of(keys: list[str], values: np.ndarray) -> list[Group]:
+    """The evaluations grouped by their dynamics-relevant values, in order of first
+    appearance (the same on every worker)."""
+    dyn = [j for j, k in enumerate(keys) if not is_electrical(k)]
+    ele = [j for j, k in enumerate(keys) if is_electrical(k)]
+    groups: dict[tuple, Group] = {}
+    for i, row in enumerate(values):
+        key = tuple(float(row[j]) for j in dyn)
+        group = groups.setdefault(key, Group({keys[j]: float(row[j]) for j in dyn}))
+        group.members.append((i, {keys[j]: float(row[j]) for j in ele}))
+    return list(groups.values())
+
+
+def _reference(scene):
+    """The group's scene the table is obtained at: its own σ, or the stand-in σ when it is
+    zero (the table is scaled to each evaluation's σ)."""
+    if scene.device.surface_charge != 0.0 or scene.raw.get("device", {}).get(
+            "surface_charge_uC_per_m2") == "breakdown":
+        return scene
+    from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC
+    return scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
+
+
+def _obtain(scene, cache_dir, solve):
+    """``(scene at its charge, table, status)`` of ``scene``'s surrogate (cached)."""
+    from ..breakdown import obtain_run_table
+
+    resolved, table, outcome, _ = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+    return resolved, table, outcome.status
+
+
+def _field_task(task):
+    """Phase 1: obtain one geometry's surrogate; its field hash and cache status."""
+    scene, cache_dir, solve = task
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _, _, status = _obtain(scene, cache_dir, solve)
+    return scene.field_hash(), status, [str(w.message) for w in caught]
+
+
+def _outputs(scene, dynamics, table) -> tuple[dict, str]:
+    """The run's electrical stage and summary for ``scene`` with ``dynamics`` and
+    ``table`` (already at the scene's σ; None: no field needed), as
+    :func:`tengfield.pipeline.run` computes them after its field stage."""
+    from ..pipeline import _energy_per_cycle, _summary
+    from ..surrogate import TerminalCurves
+
+    curves = TerminalCurves(table, scene.circuit.reference) if table is not None else None
+    entry = electrical.circuit_for(scene)
+    entry.check(scene)
+    waveforms = electrical.scene_waveforms(scene, dynamics, curves)
+    ran = entry.run(scene, dynamics, curves)
+    waveforms.update(ran.columns)
+    peaks = electrical.terminal_peaks(scene, dynamics, curves, waveforms)
+    summary = _summary(scene, dynamics, waveforms, {}, table,
+                       peaks={column: peaks[name]
+                              for name, column in electrical.PEAK_QUANTITIES.items()},
+                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask))
+    if curves is not None:
+        extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
+        summary.update(jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    regime = (regime_dict(getattr(dynamics, "regime", None)) or {}).get("regime", "")
+    return output_quantities(summary), regime
+
+
+def _group_task(task):
+    """Phase 2: one group's dynamics and surrogate, then each member's electrical stage.
+    Returns ``(rows, field hash or None, cache status, warnings)``; a row is
+    ``(index, outputs, regime)``."""
+    from ..breakdown import scaled_table
+
+    scene, group, cache_dir, solve, simulate = task
+    simulate = simulate or _default_simulate()
+    rows, digest, status = [], None, "skipped"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
+        dynamics = simulate(base)
+        table, at, sigma_table = None, base, 0.0
+        charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
+        if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
+            ref = _reference(base)
+            digest = ref.field_hash()
+            ref_at, table, status = _obtain(ref, cache_dir, solve)
+            sigma_table = ref_at.device.surface_charge
+            at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
+        for index, values in group.members:
+            point = at.with_values(**sections_of(values)) if values else at
+            scaled = None
+            if table is not None and point.device.ball_charge != 0.0:
+                scaled = scaled_table(table, point.device.surface_charge / sigma_table)
+            rows.append((index, *_outputs(point, dynamics, scaled)))
+    return rows, digest, status, [str(w.message) for w in caught]
+
+
+def _default_simulate():
+    from ..dynamics import simulate
+    return simulate
+
+
+@dataclass
+class Evaluations:
+    """Outputs of every evaluation (``rows[i]``: dict of outputs; ``regimes[i]``), the
+    nominal run's outputs, the field solves the study needed and its warnings."""
+    rows: list[dict]
+    regimes: list[str]
+    nominal: dict
+    nominal_regime: str
+    field_solves: int
+    geometries: int
+    dynamics_runs: int
+    warnings: list[str]
+
+
+def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=None,
+                   jobs: int | None = None, cache_dir=None, solve: Callable | None = None,
+                   simulate: Callable | None = None, progress: bool = False) -> Evaluations:
+    """Every evaluation of ``values`` (``(evaluations, D)``, file units, columns in
+    ``spec.keys`` order) and the scene's nominal run, spread over the ranks of ``comm``
+    (``mpirun -n N``, :func:`tengfield.sweep.run_tasks`) or ``jobs`` processes; the
+    outcome does not depend on how the work was spread.
+
+    ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
+    from tqdm import tqdm
+
+    from .._mpi import rank_of
+    from ..sweep import run_tasks
+
+    keys = spec.keys
+    groups = groups_of(keys, values)
+    nominal = Group({}, [(-1, {})])
+    # phase 1: each distinct geometry's surrogate once (at the group's reference σ)
+    geometry: dict[str, object] = {}
+    if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
+        for group in [nominal, *groups]:
+            ref = _reference(scene.with_values(**sections_of(group.dynamic))
+                             if group.dynamic else scene)
+            geometry.setdefault(ref.field_hash(), ref)
+    field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
+                              comm=comm, jobs=jobs)
+    solved = {digest for digest, status, _ in field_results if status != "cached"}
+    messages = [m for _, _, caught in field_results for m in caught]
+    # phase 2: the groups (the nominal run first)
+    tasks = [(scene, g, cache_dir, solve, simulate) for g in [nominal, *groups]]
+    bar = tqdm(total=len(tasks), desc="uncertainty", unit="group", file=sys.stderr,
+               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    try:
+        results = run_tasks(_group_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
+    rows: list[dict | None] = [None] * len(values)
+    regimes = [""] * len(values)
+    nominal_out, nominal_regime = {}, ""
+    for group_rows, digest, status, caught in results:
+        if digest is not None and status != "cached":
+            solved.add(digest)
+        messages.extend(caught)
+        for index, outputs, regime in group_rows:
+            if index < 0:
+                nominal_out, nominal_regime = outputs, regime
+            else:
+                rows[index], regimes[index] = outputs, regime
+    distinct = list(dict.fromkeys(messages))
+    return Evaluations(rows=rows, regimes=regimes, nominal=nominal_out,
+                       nominal_regime=nominal_regime, field_solves=len(solved),
+                       geometries=len(geometry), dynamics_runs=len(tasks), warnings=distinct)
