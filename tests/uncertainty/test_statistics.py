@@ -26,6 +26,7 @@ def uniform_spec(d, samples, seed=0, low=-math.pi, high=math.pi, method="sobol")
         Distribution(f"test.x{j + 1}", "uniform", {"low": low, "high": high}) for j in range(d)))
 
 
+@pytest.mark.slow
 def test_ishigami_indices_lie_in_the_reported_intervals():
     spec = uniform_spec(3, 1024, seed=7)
     x = input_values(spec, unit_samples(spec))
