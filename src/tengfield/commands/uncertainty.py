@@ -50,8 +50,8 @@ def _run(args) -> int:
                       progress=True)
     if not root:
         return 0
-    for message in study.evaluations.warnings:
-        warnings.warn(message, RuntimeWarning, stacklevel=1)
+    for category, message in study.evaluations.warnings:
+        warnings.warn(message, category, stacklevel=1)
     written = write_outputs(study, Path(args.output), plots=not args.no_plots)
     for line in summary_lines(study):
         print(line)

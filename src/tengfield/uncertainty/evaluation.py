@@ -125,9 +125,14 @@ def _field_task(task):
     """Phase 1: obtain one geometry's surrogate; its field hash and cache status."""
     scene, cache_dir, solve = task
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
         _, _, status = _obtain(scene, cache_dir, solve)
-    return scene.field_hash(), status, [str(w.message) for w in caught]
+    return scene.field_hash(), status, _caught(caught)
+
+
+def _caught(caught) -> list:
+    """Recorded warnings as picklable ``(category, message)`` pairs (the filters in force
+    decided which were recorded; the driver shows each distinct one once)."""
+    return [(w.category, str(w.message)) for w in caught]
 
 
 def _outputs(scene, dynamics, table) -> tuple[dict, str]:
@@ -165,7 +170,6 @@ def _group_task(task):
     simulate = simulate or _default_simulate()
     rows, digest, status = [], None, "skipped"
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
         base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
         dynamics = simulate(base)
         table, at, sigma_table = None, base, 0.0
@@ -182,7 +186,7 @@ def _group_task(task):
             if table is not None and point.device.ball_charge != 0.0:
                 scaled = scaled_table(table, point.device.surface_charge / sigma_table)
             rows.append((index, *_outputs(point, dynamics, scaled)))
-    return rows, digest, status, [str(w.message) for w in caught]
+    return rows, digest, status, _caught(caught)
 
 
 def _default_simulate():
@@ -201,7 +205,7 @@ class Evaluations:
     field_solves: int
     geometries: int
     dynamics_runs: int
-    warnings: list[str]
+    warnings: list[tuple]
 
 
 def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=None,
