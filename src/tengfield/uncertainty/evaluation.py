@@ -1,7 +1,7 @@
 """The evaluations of a study, as cheap as the physics allows.
 
-Samples are grouped by their dynamics-relevant inputs (every varied key except σ,
-``[circuit]`` and ``[breakdown]`` keys): one group runs the dynamics once and obtains
+Samples are grouped by their dynamics-relevant inputs (every varied key except σ and
+``[circuit]`` keys): one group runs the dynamics once and obtains
 its surrogate once (cached by the field hash, at the group's reference σ). Every
 evaluation in the group then only runs the electrical stage with the table scaled to its
 own σ (:func:`tengfield.breakdown.scaled_table`: every charge is linear in σ, C does not
@@ -27,7 +27,9 @@ from .spec import UncertaintySpec
 
 SIGMA_KEY = "device.surface_charge_uC_per_m2"
 #: sections whose keys change neither the dynamics nor the field: the electrical stage only
-ELECTRICAL_SECTIONS = ("circuit", "breakdown")
+#: (a [breakdown] key can change σ itself, with surface_charge_uC_per_m2 = "breakdown": it
+#: forms groups like a dynamics key)
+ELECTRICAL_SECTIONS = ("circuit",)
 #: summary blocks whose numeric leaves are an evaluation's outputs (``block.name``), and
 #: numeric top-level summary keys; the quantity table (tengfield/quantities.py) can
 #: replace both through :func:`output_quantities`
@@ -78,7 +80,7 @@ def sections_of(values: dict) -> dict[str, dict]:
 
 
 def is_electrical(key: str) -> bool:
-    """True for a key that changes only the electrical stage (σ, circuit, breakdown)."""
+    """True for a key that changes only the electrical stage (σ, circuit)."""
     return key == SIGMA_KEY or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
 
 
@@ -113,11 +115,31 @@ def _reference(scene):
     return scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
 
 
+#: surrogates this process has obtained: (cache dir, field hash, breakdown values, σ as
+#: given) -> (resolved σ scene, table); groups that differ only in dynamics keys share one
+_OBTAINED: dict = {}
+_OBTAINED_MAX = 64
+
+
 def _obtain(scene, cache_dir, solve):
-    """``(scene at its charge, table, status)`` of ``scene``'s surrogate (cached)."""
+    """``(scene at its charge, table, status)`` of ``scene``'s surrogate: from this
+    process's memory when an earlier group had the same field (status "cached"), else
+    from the cache or a field solve (:func:`tengfield.breakdown.obtain_run_table`)."""
+    import json
+
     from ..breakdown import obtain_run_table
 
+    raw = scene.to_dict()
+    key = (str(cache_dir), scene.field_hash(), json.dumps(raw["breakdown"], sort_keys=True),
+           repr(scene.raw.get("device", {}).get("surface_charge_uC_per_m2")),
+           solve is None)
+    if key in _OBTAINED:
+        resolved, table = _OBTAINED[key]
+        return resolved, table, "cached"
     resolved, table, outcome, _ = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+    if len(_OBTAINED) >= _OBTAINED_MAX:
+        _OBTAINED.clear()
+    _OBTAINED[key] = (resolved, table)
     return resolved, table, outcome.status
 
 
