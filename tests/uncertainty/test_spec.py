@@ -93,3 +93,12 @@ def test_a_value_that_breaks_a_rule_between_keys_is_named():
     text = refused(vary={"device.ball_diameter_mm": {"distribution": "uniform", "low": 5.0,
                                                       "high": 9.0}})
     assert "device.ball_diameter_mm" in text and "9" in text
+
+
+def test_arrays_and_the_3d_model_are_refused_by_name():
+    section = {"samples": 32, "vary": RESTITUTION}
+    with pytest.raises(SceneError, match="\\[array\\] cells = 4"):
+        uncertainty_spec(default_scene().with_values(uncertainty=section, array={"cells": 4}))
+    with pytest.raises(SceneError, match="model = '3d'"):
+        uncertainty_spec(default_scene().with_values(uncertainty=section,
+                                                     contact={"model": "3d"}))

@@ -207,6 +207,14 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
                          "\"uniform\", low = 0.05, high = 0.5 } (docs/uncertainty.md)")
     if not isinstance(raw, dict):
         raise SceneError(f"{scene.source}: [uncertainty] must be a table")
+    if scene.array.cells > 0:
+        raise SceneError(f"[array] cells = {scene.array.cells}: a study evaluates one cell's "
+                         "electrical stage per sample; an array's cells are not supported by "
+                         "[uncertainty] (allowed [array] cells = 0; use [device] cells)")
+    if scene.contact.model == "3d":
+        raise SceneError("[contact] model = '3d': a study evaluates the on-axis surrogate; the "
+                         "3D model's off-axis field is not supported by [uncertainty] (allowed "
+                         "'impact', 'soft')")
     for key in raw:
         if key not in KEYS:
             raise SceneError(f"unknown key [uncertainty] {key}" + suggest(key, KEYS)
