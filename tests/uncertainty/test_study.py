@@ -102,3 +102,18 @@ def test_an_evaluation_equals_the_run_of_its_scene(tmp_path):
                 if isinstance(value, float):
                     assert row[f"{block}.{key}"] == pytest.approx(value, rel=1e-12), key
         assert "load.mean_power_W" in study.summary["main_outputs"]
+
+
+def test_a_candidates_percentile_score_is_its_worse_case_decile(tmp_path):
+    from tengfield.uncertainty import candidate_percentile, uncertainty_spec
+
+    scene = scene_with({SIGMA: {"distribution": "uniform", "low": -30.0, "high": -10.0}},
+                       samples=64, method="monte-carlo")
+    spec = uncertainty_spec(scene)
+    score, count = candidate_percentile(scene, spec, Q, 10.0, cache_dir=tmp_path,
+                                        solve=plate_model.plate_model_solve)
+    nominal = run(scene, cache_dir=tmp_path, solve=plate_model.plate_model_solve)
+    per_sigma = nominal.summary["peak_to_peak"]["Q_sc_C"] / 8.0
+    assert count == 64
+    # |σ| uniform on [10, 30]: its 10th percentile is 12 (quasi-random points: close)
+    assert score == pytest.approx(per_sigma * 12.0, rel=0.02)
