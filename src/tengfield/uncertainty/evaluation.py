@@ -122,7 +122,8 @@ _OBTAINED_MAX = 64
 
 
 def _obtain(scene, cache_dir, solve):
-    """``(scene at its charge, table, status)`` of ``scene``'s surrogate: from this
+    """``(scene at its charge, table, status, σ_max [C/m²] or None)`` of ``scene``'s
+    surrogate (σ_max: its air-breakdown limit, None without gap lines): from this
     process's memory when an earlier group had the same field (status "cached"), else
     from the cache or a field solve (:func:`tengfield.breakdown.obtain_run_table`)."""
     import json
@@ -134,20 +135,21 @@ def _obtain(scene, cache_dir, solve):
            repr(scene.raw.get("device", {}).get("surface_charge_uC_per_m2")),
            solve is None)
     if key in _OBTAINED:
-        resolved, table = _OBTAINED[key]
-        return resolved, table, "cached"
-    resolved, table, outcome, _ = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+        resolved, table, sigma_max = _OBTAINED[key]
+        return resolved, table, "cached", sigma_max
+    resolved, table, outcome, limit = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+    sigma_max = None if limit is None else float(limit.sigma_max)
     if len(_OBTAINED) >= _OBTAINED_MAX:
         _OBTAINED.clear()
-    _OBTAINED[key] = (resolved, table)
-    return resolved, table, outcome.status
+    _OBTAINED[key] = (resolved, table, sigma_max)
+    return resolved, table, outcome.status, sigma_max
 
 
 def _field_task(task):
     """Phase 1: obtain one geometry's surrogate; its field hash and cache status."""
     scene, cache_dir, solve = task
     with warnings.catch_warnings(record=True) as caught:
-        _, _, status = _obtain(scene, cache_dir, solve)
+        _, _, status, _ = _obtain(scene, cache_dir, solve)
     return scene.field_hash(), status, _caught(caught)
 
 
@@ -185,7 +187,8 @@ def _outputs(scene, dynamics, table) -> tuple[dict, str]:
 def _group_task(task):
     """Phase 2: one group's dynamics and surrogate, then each member's electrical stage.
     Returns ``(rows, field hash or None, cache status, warnings)``; a row is
-    ``(index, outputs, regime)``."""
+    ``(index, outputs, regime, above)``, ``above``: |σ| beyond the air-breakdown limit
+    of its geometry (None when the table has no gap lines)."""
     from ..breakdown import scaled_table
 
     scene, group, cache_dir, solve, simulate = task
@@ -194,12 +197,12 @@ def _group_task(task):
     with warnings.catch_warnings(record=True) as caught:
         base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
         dynamics = simulate(base)
-        table, at, sigma_table = None, base, 0.0
+        table, at, sigma_table, sigma_max = None, base, 0.0, None
         charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
             ref = _reference(base)
             digest = ref.field_hash()
-            ref_at, table, status = _obtain(ref, cache_dir, solve)
+            ref_at, table, status, sigma_max = _obtain(ref, cache_dir, solve)
             sigma_table = ref_at.device.surface_charge
             at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
         for index, values in group.members:
@@ -207,7 +210,9 @@ def _group_task(task):
             scaled = None
             if table is not None and point.device.ball_charge != 0.0:
                 scaled = scaled_table(table, point.device.surface_charge / sigma_table)
-            rows.append((index, *_outputs(point, dynamics, scaled)))
+            above = None if sigma_max is None or table is None else \
+                bool(abs(point.device.surface_charge) > sigma_max)
+            rows.append((index, *_outputs(point, dynamics, scaled), above))
     return rows, digest, status, _caught(caught)
 
 
@@ -228,6 +233,9 @@ class Evaluations:
     geometries: int
     dynamics_runs: int
     warnings: list[tuple]
+    #: evaluations whose |σ| exceeds their geometry's air-breakdown limit (None: unknown,
+    #: no surrogate with gap lines)
+    beyond_breakdown: int | None = None
 
 
 def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=None,
@@ -268,17 +276,25 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
         bar.close()
     rows: list[dict | None] = [None] * len(values)
     regimes = [""] * len(values)
-    nominal_out, nominal_regime = {}, ""
+    nominal_out, nominal_regime, beyond = {}, "", None
     for group_rows, digest, status, caught in results:
         if digest is not None and status != "cached":
             solved.add(digest)
         messages.extend(caught)
-        for index, outputs, regime in group_rows:
+        for index, outputs, regime, above in group_rows:
+            if above is not None and index >= 0:
+                beyond = (beyond or 0) + int(above)
             if index < 0:
                 nominal_out, nominal_regime = outputs, regime
             else:
                 rows[index], regimes[index] = outputs, regime
+    if beyond:
+        messages.append((RuntimeWarning, f"{beyond} of {len(values)} evaluations have |sigma| "
+                         "above the air-breakdown limit sigma_max of their geometry (the gap "
+                         "would discharge first; tengfield breakdown): keep the draws of "
+                         f"{SIGMA_KEY} within it"))
     distinct = list(dict.fromkeys(messages))
     return Evaluations(rows=rows, regimes=regimes, nominal=nominal_out,
                        nominal_regime=nominal_regime, field_solves=len(solved),
-                       geometries=len(geometry), dynamics_runs=len(tasks), warnings=distinct)
+                       geometries=len(geometry), dynamics_runs=len(tasks), warnings=distinct,
+                       beyond_breakdown=beyond)

@@ -70,6 +70,7 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
         "field_solves": evaluations.field_solves,
         "geometries": evaluations.geometries,
         "dynamics_runs": evaluations.dynamics_runs,
+        "beyond_breakdown": evaluations.beyond_breakdown,
         "output_keys": keys, "main_outputs": main_outputs(keys),
         "outputs": outputs, "notes": notes,
         "regimes": regime_fractions(evaluations.regimes),
