@@ -59,7 +59,8 @@ def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
                            yerr=[indices[k][which + "_conf"] for k in inputs], capsize=3,
                            color=colour, alpha=0.75, label=which)
                 ax.set_xticks(x)
-                ax.set_xticklabels(inputs, fontsize=7)
+                ax.set_xticklabels(inputs, fontsize=7, rotation=15 if len(inputs) > 2 else 0,
+                                   ha="right" if len(inputs) > 2 else "center")
                 ax.set_ylim(min(0.0, ax.get_ylim()[0]), max(1.05, ax.get_ylim()[1]))
                 ax.legend(fontsize=7, loc="best")
             else:

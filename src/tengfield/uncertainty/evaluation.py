@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import electrical
 from .._json import jsonable, regime_dict
-from .spec import UncertaintySpec
+from .spec import UncertaintySpec, sections_of
 
 SIGMA_KEY = "device.surface_charge_uC_per_m2"
 #: sections whose keys change neither the dynamics nor the field: the electrical stage only
@@ -67,16 +67,6 @@ def main_outputs(keys) -> list[str]:
     """The outputs shown in the figure and the terminal: :data:`MAIN_OUTPUTS` present."""
     keys = list(keys)
     return [k for k in MAIN_OUTPUTS if k in keys]
-
-
-def sections_of(values: dict) -> dict[str, dict]:
-    """``{"contact.restitution": 0.3}`` -> ``{"contact": {"restitution": 0.3}}`` (the
-    keyword arguments of :meth:`tengfield.scene.Scene.with_values`)."""
-    out: dict[str, dict] = {}
-    for key, value in values.items():
-        sec, name = key.split(".", 1)
-        out.setdefault(sec, {})[name] = float(value)
-    return out
 
 
 def is_electrical(key: str) -> bool:

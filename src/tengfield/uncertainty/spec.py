@@ -112,6 +112,16 @@ class UncertaintySpec:
                 "vary": {d.key: d.as_dict() for d in self.inputs}}
 
 
+def sections_of(values: dict) -> dict[str, dict]:
+    """``{"contact.restitution": 0.3}`` -> ``{"contact": {"restitution": 0.3}}`` (the
+    keyword arguments of :meth:`tengfield.scene.Scene.with_values`)."""
+    out: dict[str, dict] = {}
+    for key, value in values.items():
+        sec, name = key.split(".", 1)
+        out.setdefault(sec, {})[name] = float(value)
+    return out
+
+
 def _number(where: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise SceneError(f"{where} = {show(value)}: expected a finite number")
@@ -266,8 +276,6 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
 def _check_scenes(scene, spec: UncertaintySpec) -> None:
     """Each input at either end of what it can draw (the others nominal) builds a valid
     scene: a rule between keys (a ball wider than the bore...) is named before any work."""
-    from .evaluation import sections_of
-
     for dist in spec.inputs:
         for value in dist.support():
             try:
