@@ -68,9 +68,9 @@ def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
                         ha="center", va="center", fontsize=8, transform=ax.transAxes)
             ax.set_ylabel("share of variance", fontsize=8)
             ax.grid(alpha=0.3, axis="y")
+    bars = "; bars: Sobol S1 / ST with bootstrap 95 % intervals" if sobol else ""
     fig.suptitle(f"uncertainty: {summary['evaluations']} evaluations ({summary['method']}, "
-                 f"N = {summary['samples']}); bars: Sobol S1 / ST with bootstrap 95 % "
-                 "intervals", fontsize=9)
+                 f"N = {summary['samples']}){bars}", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     return Path(path)
