@@ -52,6 +52,7 @@ COMMAND_MODULES = [
     "report",
     "fit",
     "design",
+    "uncertainty",
 ]
 
 

@@ -268,8 +268,8 @@ KEYWORD_VALUES = {("device", "surface_charge_uC_per_m2"): ("breakdown", BREAKDOW
 HARMONIC_KEYS = ("frequency_hz", "amplitude_mm", "acceleration_m_per_s2", "phase_deg")
 #: Sections passed through unvalidated to ``scene.raw`` (each is validated by
 #: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`, ``[design]`` by
-#: :mod:`tengfield.design`).
-PASSTHROUGH_SECTIONS = ("fit", "design")
+#: :mod:`tengfield.design`, ``[uncertainty]`` by :mod:`tengfield.uncertainty`).
+PASSTHROUGH_SECTIONS = ("fit", "design", "uncertainty")
 
 
 # ---------------------------------------------------------------------------

@@ -1,0 +1,290 @@
+"""The evaluations of a study, as cheap as the physics allows.
+
+Samples are grouped by their dynamics-relevant inputs (every varied key except σ and
+``[circuit]`` keys): one group runs the dynamics once and obtains
+its surrogate once (cached by the field hash, at the group's reference σ). Every
+evaluation in the group then only runs the electrical stage with the table scaled to its
+own σ (:func:`tengfield.breakdown.scaled_table`: every charge is linear in σ, C does not
+depend on it) and its own circuit values: σ alone is a scaling, no field solve and no new
+dynamics. Geometry keys give one field solve per distinct geometry (phase 1, farmed over
+the workers before the groups, so two workers never solve the same geometry).
+
+Nothing is written: an evaluation returns the run summary's numeric quantities
+(:func:`output_quantities`) and its regime.
+"""
+from __future__ import annotations
+
+import sys
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .. import electrical
+from .._json import jsonable, regime_dict
+from .spec import UncertaintySpec, sections_of
+
+SIGMA_KEY = "device.surface_charge_uC_per_m2"
+#: sections whose keys change neither the dynamics nor the field: the electrical stage only
+#: (a [breakdown] key can change σ itself, with surface_charge_uC_per_m2 = "breakdown": it
+#: forms groups like a dynamics key)
+ELECTRICAL_SECTIONS = ("circuit",)
+#: summary blocks whose numeric leaves are an evaluation's outputs (``block.name``), and
+#: numeric top-level summary keys; the quantity table (tengfield/quantities.py) can
+#: replace both through :func:`output_quantities`
+OUTPUT_BLOCKS = ("peak_to_peak", "peak", "load", "energy_per_cycle", "rectifier")
+OUTPUT_TOP_LEVEL = ("V_read_V",)
+#: outputs drawn and printed first (when present)
+MAIN_OUTPUTS = ("V_read_V", "peak_to_peak.V_oc_V", "peak_to_peak.Q_sc_C",
+                "peak_to_peak.I_sc_A", "peak.V_oc_V", "peak.Q_sc_C", "peak.I_sc_A",
+                "load.mean_power_W", "rectifier.average_harvested_power_W")
+
+
+def output_quantities(summary: dict) -> dict[str, float]:
+    """The numeric outputs of one run summary: ``{"peak_to_peak.Q_sc_C": ..., ...}``
+    (the numeric leaves of :data:`OUTPUT_BLOCKS`, nested blocks joined with dots, and
+    :data:`OUTPUT_TOP_LEVEL`). The one place that decides which outputs a study has."""
+    out: dict[str, float] = {}
+
+    def walk(prefix, value):
+        if isinstance(value, dict):
+            for k, v in value.items():
+                if not str(k).startswith("_"):
+                    walk(f"{prefix}.{k}", v)
+        elif isinstance(value, (int, float, np.number)) and not isinstance(value, (bool, np.bool_)):
+            out[prefix] = float(value)
+
+    for name in OUTPUT_TOP_LEVEL:
+        walk(name, summary.get(name))
+    for block in OUTPUT_BLOCKS:
+        if isinstance(summary.get(block), dict):
+            walk(block, summary[block])
+    return out
+
+
+def main_outputs(keys) -> list[str]:
+    """The outputs shown in the figure and the terminal: :data:`MAIN_OUTPUTS` present."""
+    keys = list(keys)
+    return [k for k in MAIN_OUTPUTS if k in keys]
+
+
+def is_electrical(key: str) -> bool:
+    """True for a key that changes only the electrical stage (σ, circuit)."""
+    return key == SIGMA_KEY or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
+
+
+@dataclass
+class Group:
+    """Evaluations sharing their dynamics: ``dynamic`` the dynamics-relevant values,
+    ``members`` (evaluation index, its electrical values); index -1: the nominal run."""
+    dynamic: dict
+    members: list = field(default_factory=list)
+
+
+def groups_of(keys: list[str], values: np.ndarray) -> list[Group]:
+    """The evaluations grouped by their dynamics-relevant values, in order of first
+    appearance (the same on every worker)."""
+    dyn = [j for j, k in enumerate(keys) if not is_electrical(k)]
+    ele = [j for j, k in enumerate(keys) if is_electrical(k)]
+    groups: dict[tuple, Group] = {}
+    for i, row in enumerate(values):
+        key = tuple(float(row[j]) for j in dyn)
+        group = groups.setdefault(key, Group({keys[j]: float(row[j]) for j in dyn}))
+        group.members.append((i, {keys[j]: float(row[j]) for j in ele}))
+    return list(groups.values())
+
+
+def _reference(scene):
+    """The group's scene the table is obtained at: its own σ, or the stand-in σ when it is
+    zero (the table is scaled to each evaluation's σ)."""
+    if scene.device.surface_charge != 0.0 or scene.raw.get("device", {}).get(
+            "surface_charge_uC_per_m2") == "breakdown":
+        return scene
+    from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC
+    return scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
+
+
+#: surrogates this process has obtained: (cache dir, field hash, breakdown values, σ as
+#: given) -> (resolved σ scene, table); groups that differ only in dynamics keys share one
+_OBTAINED: dict = {}
+_OBTAINED_MAX = 64
+
+
+def _obtain(scene, cache_dir, solve):
+    """``(scene at its charge, table, status, σ_max [C/m²] or None)`` of ``scene``'s
+    surrogate (σ_max: its air-breakdown limit, None without gap lines): from this
+    process's memory when an earlier group had the same field (status "cached"), else
+    from the cache or a field solve (:func:`tengfield.breakdown.obtain_run_table`)."""
+    import json
+
+    from ..breakdown import obtain_run_table
+
+    raw = scene.to_dict()
+    key = (str(cache_dir), scene.field_hash(), json.dumps(raw["breakdown"], sort_keys=True),
+           repr(scene.raw.get("device", {}).get("surface_charge_uC_per_m2")),
+           solve is None)
+    if key in _OBTAINED:
+        resolved, table, sigma_max = _OBTAINED[key]
+        return resolved, table, "cached", sigma_max
+    resolved, table, outcome, limit = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+    sigma_max = None if limit is None else float(limit.sigma_max)
+    if len(_OBTAINED) >= _OBTAINED_MAX:
+        _OBTAINED.clear()
+    _OBTAINED[key] = (resolved, table, sigma_max)
+    return resolved, table, outcome.status, sigma_max
+
+
+def _field_task(task):
+    """Phase 1: obtain one geometry's surrogate; its field hash and cache status."""
+    scene, cache_dir, solve = task
+    with warnings.catch_warnings(record=True) as caught:
+        _, _, status, _ = _obtain(scene, cache_dir, solve)
+    return scene.field_hash(), status, _caught(caught)
+
+
+def _caught(caught) -> list:
+    """Recorded warnings as picklable ``(category, message)`` pairs (the filters in force
+    decided which were recorded; the driver shows each distinct one once)."""
+    return [(w.category, str(w.message)) for w in caught]
+
+
+def _outputs(scene, dynamics, table) -> tuple[dict, str]:
+    """The run's electrical stage and summary for ``scene`` with ``dynamics`` and
+    ``table`` (already at the scene's σ; None: no field needed), as
+    :func:`tengfield.pipeline.run` computes them after its field stage."""
+    from ..pipeline import _energy_per_cycle, _summary
+    from ..surrogate import TerminalCurves
+
+    curves = TerminalCurves(table, scene.circuit.reference) if table is not None else None
+    entry = electrical.circuit_for(scene)
+    entry.check(scene)
+    waveforms = electrical.scene_waveforms(scene, dynamics, curves)
+    ran = entry.run(scene, dynamics, curves)
+    waveforms.update(ran.columns)
+    peaks = electrical.terminal_peaks(scene, dynamics, curves, waveforms)
+    summary = _summary(scene, dynamics, waveforms, {}, table,
+                       peaks={column: peaks[name]
+                              for name, column in electrical.PEAK_QUANTITIES.items()},
+                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask))
+    if curves is not None:
+        extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
+        summary.update(jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    regime = (regime_dict(getattr(dynamics, "regime", None)) or {}).get("regime", "")
+    return output_quantities(summary), regime
+
+
+def _group_task(task):
+    """Phase 2: one group's dynamics and surrogate, then each member's electrical stage.
+    Returns ``(rows, field hash or None, cache status, warnings)``; a row is
+    ``(index, outputs, regime, above)``, ``above``: |σ| beyond the air-breakdown limit
+    of its geometry (None when the table has no gap lines)."""
+    from ..breakdown import scaled_table
+
+    scene, group, cache_dir, solve, simulate = task
+    simulate = simulate or _default_simulate()
+    rows, digest, status = [], None, "skipped"
+    with warnings.catch_warnings(record=True) as caught:
+        base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
+        dynamics = simulate(base)
+        table, at, sigma_table, sigma_max = None, base, 0.0, None
+        charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
+        if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
+            ref = _reference(base)
+            digest = ref.field_hash()
+            ref_at, table, status, sigma_max = _obtain(ref, cache_dir, solve)
+            sigma_table = ref_at.device.surface_charge
+            at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
+        for index, values in group.members:
+            point = at.with_values(**sections_of(values)) if values else at
+            scaled = None
+            if table is not None and point.device.ball_charge != 0.0:
+                scaled = scaled_table(table, point.device.surface_charge / sigma_table)
+            above = None if sigma_max is None or table is None else \
+                bool(abs(point.device.surface_charge) > sigma_max)
+            rows.append((index, *_outputs(point, dynamics, scaled), above))
+    return rows, digest, status, _caught(caught)
+
+
+def _default_simulate():
+    from ..dynamics import simulate
+    return simulate
+
+
+@dataclass
+class Evaluations:
+    """Outputs of every evaluation (``rows[i]``: dict of outputs; ``regimes[i]``), the
+    nominal run's outputs, the field solves the study needed and its warnings."""
+    rows: list[dict]
+    regimes: list[str]
+    nominal: dict
+    nominal_regime: str
+    field_solves: int
+    geometries: int
+    dynamics_runs: int
+    warnings: list[tuple]
+    #: evaluations whose |σ| exceeds their geometry's air-breakdown limit (None: unknown,
+    #: no surrogate with gap lines)
+    beyond_breakdown: int | None = None
+
+
+def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=None,
+                   jobs: int | None = None, cache_dir=None, solve: Callable | None = None,
+                   simulate: Callable | None = None, progress: bool = False) -> Evaluations:
+    """Every evaluation of ``values`` (``(evaluations, D)``, file units, columns in
+    ``spec.keys`` order) and the scene's nominal run, spread over the ranks of ``comm``
+    (``mpirun -n N``, :func:`tengfield.sweep.run_tasks`) or ``jobs`` processes; the
+    outcome does not depend on how the work was spread.
+
+    ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
+    from tqdm import tqdm
+
+    from .._mpi import rank_of
+    from ..sweep import run_tasks
+
+    keys = spec.keys
+    groups = groups_of(keys, values)
+    nominal = Group({}, [(-1, {})])
+    # phase 1: each distinct geometry's surrogate once (at the group's reference σ)
+    geometry: dict[str, object] = {}
+    if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
+        for group in [nominal, *groups]:
+            ref = _reference(scene.with_values(**sections_of(group.dynamic))
+                             if group.dynamic else scene)
+            geometry.setdefault(ref.field_hash(), ref)
+    field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
+                              comm=comm, jobs=jobs)
+    solved = {digest for digest, status, _ in field_results if status != "cached"}
+    messages = [m for _, _, caught in field_results for m in caught]
+    # phase 2: the groups (the nominal run first)
+    tasks = [(scene, g, cache_dir, solve, simulate) for g in [nominal, *groups]]
+    bar = tqdm(total=len(tasks), desc="uncertainty", unit="group", file=sys.stderr,
+               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    try:
+        results = run_tasks(_group_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
+    rows: list[dict | None] = [None] * len(values)
+    regimes = [""] * len(values)
+    nominal_out, nominal_regime, beyond = {}, "", None
+    for group_rows, digest, status, caught in results:
+        if digest is not None and status != "cached":
+            solved.add(digest)
+        messages.extend(caught)
+        for index, outputs, regime, above in group_rows:
+            if above is not None and index >= 0:
+                beyond = (beyond or 0) + int(above)
+            if index < 0:
+                nominal_out, nominal_regime = outputs, regime
+            else:
+                rows[index], regimes[index] = outputs, regime
+    if beyond:
+        messages.append((RuntimeWarning, f"{beyond} of {len(values)} evaluations have |sigma| "
+                         "above the air-breakdown limit sigma_max of their geometry (the gap "
+                         "would discharge first; tengfield breakdown): keep the draws of "
+                         f"{SIGMA_KEY} within it"))
+    distinct = list(dict.fromkeys(messages))
+    return Evaluations(rows=rows, regimes=regimes, nominal=nominal_out,
+                       nominal_regime=nominal_regime, field_solves=len(solved),
+                       geometries=len(geometry), dynamics_runs=len(tasks), warnings=distinct,
+                       beyond_breakdown=beyond)

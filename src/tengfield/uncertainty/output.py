@@ -1,0 +1,67 @@
+"""uncertainty.csv, uncertainty.json and uncertainty.png of a study, and the lines
+``tengfield uncertainty`` prints (every file through :mod:`tengfield._files`)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .._files import atomic_path, write_json, write_rows
+from .._json import jsonable
+from .statistics import dominant_input
+
+
+def csv_rows(study) -> tuple[list[str], list[list]]:
+    """``(header, rows)`` of uncertainty.csv: per evaluation its index, the sampled
+    inputs (file units), the regime and every output (empty where it has none)."""
+    keys = study.spec.keys
+    outputs = study.output_keys
+    header = ["evaluation", *keys, "regime", *outputs]
+    rows = []
+    for i, (values, out, regime) in enumerate(zip(study.values, study.evaluations.rows,
+                                                  study.evaluations.regimes)):
+        rows.append([i, *(repr(float(v)) for v in values), regime,
+                     *("" if out.get(k) is None else repr(float(out[k])) for k in outputs)])
+    return header, rows
+
+
+def write_outputs(study, out, *, plots: bool = True) -> list[Path]:
+    """The study's files in directory ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    header, rows = csv_rows(study)
+    written = [write_rows(out / "uncertainty.csv", header, rows),
+               write_json(out / "uncertainty.json", jsonable(study.summary))]
+    if plots:
+        from ..plotting.uncertainty import plot_uncertainty
+        with atomic_path(out / "uncertainty.png") as tmp:
+            plot_uncertainty(study.evaluations.rows, study.summary, tmp)
+        written.append(out / "uncertainty.png")
+    return written
+
+
+def summary_lines(study) -> list[str]:
+    """Per main output: the nominal value, the median and the 90 % interval (5-95 %), and
+    the input that dominates it (largest total Sobol index)."""
+    from ..plotting.uncertainty import display_unit
+
+    s = study.summary
+    lines = [f"{s['evaluations']} evaluations ({s['method']}, N = {s['samples']}, seed "
+             f"{s['seed']}): {s['dynamics_runs']} dynamics runs, {s['field_solves']} field "
+             f"solve{'s' * (s['field_solves'] != 1)}"]
+    for name in study.main or s["output_keys"][:3]:
+        block = s["outputs"][name]
+        unit, scale = display_unit(name)
+        p = block["percentiles"]
+        if not p:
+            lines.append(f"  {name}: no values")
+            continue
+        nominal = block.get("nominal")
+        text = (f"  {name}: nominal {'-' if nominal is None else f'{nominal * scale:.4g}'}, "
+                f"median {p['50'] * scale:.4g}, 90 % in [{p['5'] * scale:.4g}, "
+                f"{p['95'] * scale:.4g}] {unit}")
+        top = dominant_input(block.get("sobol"))
+        if top is not None:
+            text += f"; dominated by {top[0]} (ST = {top[1]:.2f})"
+        lines.append(text)
+    regimes = ", ".join(f"{k} {v['fraction']:.0%}" for k, v in s["regimes"].items())
+    lines.append(f"  regimes: {regimes}")
+    return lines

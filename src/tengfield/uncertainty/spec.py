@@ -1,0 +1,285 @@
+"""The ``[uncertainty]`` section: sample count, method, seed and ``[uncertainty.vary]``.
+
+``[uncertainty.vary]`` maps a scene key written ``"section.key"`` (a float key of the
+scene schema, in the file's units) to a distribution:
+
+* ``{ distribution = "uniform", low = .., high = .. }``
+* ``{ distribution = "normal", mean = .., std = .. }``
+* ``{ distribution = "lognormal", median = .., factor = .. }`` (``factor``: the
+  geometric standard deviation, > 1; ln x is normal with mean ln(median), std ln(factor))
+* ``{ distribution = "triangular", low = .., mode = .., high = .. }``
+
+:func:`uncertainty_spec` validates it the way every scene key is validated (one-line
+:class:`~tengfield.errors.SceneError` naming key, value and allowed range): unknown keys
+with a did-you-mean, a distribution whose range leaves the key's own allowed range
+(normal and lognormal: their 1e-6 and 1 - 1e-6 quantiles), a sample count too small for
+the number of inputs. ``tengfield scene`` calls it too.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ..errors import SceneError
+from ..scene.schema import SCHEMA, fmt_range, show, suggest
+
+SECTION = "uncertainty"
+METHODS = ("sobol", "monte-carlo")
+#: parameters of each distribution, in the order they are written
+DISTRIBUTIONS = {"uniform": ("low", "high"), "normal": ("mean", "std"),
+                 "lognormal": ("median", "factor"), "triangular": ("low", "mode", "high")}
+KEYS = ("samples", "method", "seed", "vary")
+DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0}
+#: the tail probability whose quantiles must lie inside the key's allowed range
+#: (normal, lognormal): no scrambled Sobol point of a study under ~1e6 evaluations
+#: comes nearer to 0 or 1
+TAIL = 1e-6
+#: Sobol (Saltelli) base samples: a power of two (the Sobol sequence's balance), at
+#: least MIN_SOBOL_SAMPLES and SOBOL_SAMPLES_PER_INPUT x the inputs; Monte Carlo at
+#: least MIN_MC_SAMPLES (a 5-95 % interval from fewer points is two of them)
+MIN_SOBOL_SAMPLES = 16
+SOBOL_SAMPLES_PER_INPUT = 4
+MIN_MC_SAMPLES = 20
+#: evaluations of one study (each runs the electrical stage, ~10 ms, and perhaps the
+#: dynamics): 1e6 is hours on one core
+MAX_EVALUATIONS = 1_000_000
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """One input: the scene key ``section.key`` and its distribution (file units)."""
+    key: str
+    kind: str
+    params: dict
+
+    @property
+    def section(self) -> str:
+        return self.key.split(".", 1)[0]
+
+    @property
+    def name(self) -> str:
+        return self.key.split(".", 1)[1]
+
+    def ppf(self, u):
+        """Values at probabilities ``u`` (array in (0, 1)): the inverse CDF."""
+        import numpy as np
+        from scipy import stats
+
+        u = np.asarray(u, dtype=float)
+        p = self.params
+        if self.kind == "uniform":
+            return p["low"] + u * (p["high"] - p["low"])
+        if self.kind == "normal":
+            return stats.norm.ppf(u, loc=p["mean"], scale=p["std"])
+        if self.kind == "lognormal":
+            return p["median"] * np.exp(math.log(p["factor"]) * stats.norm.ppf(u))
+        width = p["high"] - p["low"]
+        return stats.triang.ppf(u, (p["mode"] - p["low"]) / width, loc=p["low"], scale=width)
+
+    def support(self) -> tuple[float, float]:
+        """The values the study can draw: the ends (uniform, triangular) or the TAIL
+        quantiles (normal, lognormal)."""
+        if self.kind in ("uniform", "triangular"):
+            return self.params["low"], self.params["high"]
+        lo, hi = self.ppf([TAIL, 1.0 - TAIL])
+        return float(lo), float(hi)
+
+    def as_dict(self) -> dict:
+        return {"distribution": self.kind, **self.params}
+
+
+@dataclass(frozen=True)
+class UncertaintySpec:
+    """A validated ``[uncertainty]`` section."""
+    samples: int
+    method: str
+    seed: int
+    inputs: tuple[Distribution, ...] = field(default_factory=tuple)
+
+    @property
+    def keys(self) -> list[str]:
+        return [d.key for d in self.inputs]
+
+    @property
+    def evaluations(self) -> int:
+        """Evaluations of the study: N (D + 2) for Saltelli's scheme (first-order and
+        total indices), N for Monte Carlo."""
+        d = len(self.inputs)
+        return self.samples * (d + 2) if self.method == "sobol" else self.samples
+
+    def as_dict(self) -> dict:
+        return {"samples": self.samples, "method": self.method, "seed": self.seed,
+                "vary": {d.key: d.as_dict() for d in self.inputs}}
+
+
+def sections_of(values: dict) -> dict[str, dict]:
+    """``{"contact.restitution": 0.3}`` -> ``{"contact": {"restitution": 0.3}}`` (the
+    keyword arguments of :meth:`tengfield.scene.Scene.with_values`)."""
+    out: dict[str, dict] = {}
+    for key, value in values.items():
+        sec, name = key.split(".", 1)
+        out.setdefault(sec, {})[name] = float(value)
+    return out
+
+
+def _number(where: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SceneError(f"{where} = {show(value)}: expected a finite number")
+    return float(value)
+
+
+def _distribution(key: str, given) -> Distribution:
+    where = f"[uncertainty.vary] {key!r}"
+    if not isinstance(given, dict):
+        raise SceneError(f"{where} = {show(given)}: expected a table, e.g. "
+                         '{ distribution = "uniform", low = 0.1, high = 0.5 }')
+    kind = given.get("distribution")
+    if kind not in DISTRIBUTIONS:
+        choices = ", ".join(repr(k) for k in DISTRIBUTIONS)
+        raise SceneError(f"{where}: distribution = {show(kind)} is not allowed: choose one of "
+                         f"{choices}" + (suggest(kind, DISTRIBUTIONS) if isinstance(kind, str) else ""))
+    names = DISTRIBUTIONS[kind]
+    for name in given:
+        if name != "distribution" and name not in names:
+            raise SceneError(f"{where}: unknown parameter {name!r} of a {kind} distribution"
+                             + suggest(name, names) + f"; it takes {', '.join(names)}")
+    missing = [n for n in names if n not in given]
+    if missing:
+        raise SceneError(f"{where}: a {kind} distribution needs {', '.join(names)} "
+                         f"(missing {', '.join(missing)})")
+    p = {n: _number(f"{where} {n}", given[n]) for n in names}
+    if kind in ("uniform", "triangular") and not p["low"] < p["high"]:
+        raise SceneError(f"{where}: low = {p['low']:g} must be below high = {p['high']:g}")
+    if kind == "triangular" and not p["low"] <= p["mode"] <= p["high"]:
+        raise SceneError(f"{where}: mode = {p['mode']:g} is out of range: allowed "
+                         f"[{p['low']:g}, {p['high']:g}] (low, high)")
+    if kind == "normal" and not p["std"] > 0.0:
+        raise SceneError(f"{where}: std = {p['std']:g} is out of range: allowed (0, inf)")
+    if kind == "lognormal":
+        if not p["median"] > 0.0:
+            raise SceneError(f"{where}: median = {p['median']:g} is out of range: allowed (0, "
+                             "inf) (a lognormal value is positive; for a negative key use "
+                             "normal or uniform)")
+        if not p["factor"] > 1.0:
+            raise SceneError(f"{where}: factor = {p['factor']:g} is out of range: allowed (1, "
+                             "inf) (the geometric standard deviation)")
+    return Distribution(key, kind, p)
+
+
+def _check_key(key: str) -> None:
+    """``key`` is ``"section.key"`` of a float key of the schema."""
+    where = f"[uncertainty.vary] {key!r}"
+    if not isinstance(key, str) or "." not in key:
+        raise SceneError(f"{where}: write the scene key as \"section.key\", e.g. "
+                         "\"contact.restitution\"")
+    sec, name = key.split(".", 1)
+    if sec not in SCHEMA:
+        raise SceneError(f"{where}: unknown section [{sec}]" + suggest(sec, SCHEMA)
+                         + f"; sections are {', '.join(SCHEMA)}")
+    if name not in SCHEMA[sec]:
+        full = [f"{sec}.{k}" for k in SCHEMA[sec]]
+        raise SceneError(f"{where}: unknown key [{sec}] {name}" + suggest(key, full))
+    spec = SCHEMA[sec][name]
+    if spec.type is not float:
+        kind = {str: "a text key", int: "a whole-number key", tuple: "a list key"}[spec.type]
+        raise SceneError(f"{where}: [{sec}] {name} is {kind}; only numeric (real-valued) keys "
+                         "can be varied")
+
+
+def _check_support(dist: Distribution) -> None:
+    """The values the distribution can draw lie inside the key's own allowed range."""
+    spec = SCHEMA[dist.section][dist.name]
+    constraint = spec.check
+    if not constraint or constraint[0] != "range":
+        return
+    lo, hi = dist.support()
+    _, a, b, a_open, b_open = constraint[:5]
+    below = lo < a or (a_open and lo == a)
+    above = hi > b or (b_open and hi == b)
+    if below or above:
+        what = ("its values" if dist.kind in ("uniform", "triangular")
+                else f"its {TAIL:g} and {1 - TAIL:.6g} quantiles")
+        raise SceneError(f"[uncertainty.vary] {dist.key!r}: a {dist.kind} distribution "
+                         f"{dist.as_dict()} reaches {lo:.6g} .. {hi:.6g} ({what}): [{dist.section}] "
+                         f"{dist.name} is allowed {fmt_range(constraint)}")
+
+
+def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
+    """The scene's ``[uncertainty]`` section, validated (:class:`SceneError` on a bad
+    one). None when the scene has none and ``required`` is False; ``tengfield scene``
+    calls ``uncertainty_spec(scene, required=False)``."""
+    raw = scene.raw.get(SECTION)
+    if raw is None:
+        if not required:
+            return None
+        raise SceneError(f"{scene.source}: no [uncertainty] section: add one with "
+                         "[uncertainty.vary], e.g. \"contact.restitution\" = { distribution = "
+                         "\"uniform\", low = 0.05, high = 0.5 } (docs/uncertainty.md)")
+    if not isinstance(raw, dict):
+        raise SceneError(f"{scene.source}: [uncertainty] must be a table")
+    if scene.array.cells > 0:
+        raise SceneError(f"[array] cells = {scene.array.cells}: a study evaluates one cell's "
+                         "electrical stage per sample; an array's cells are not supported by "
+                         "[uncertainty] (allowed [array] cells = 0; use [device] cells)")
+    if scene.contact.model == "3d":
+        raise SceneError("[contact] model = '3d': a study evaluates the on-axis surrogate; the "
+                         "3D model's off-axis field is not supported by [uncertainty] (allowed "
+                         "'impact', 'soft')")
+    for key in raw:
+        if key not in KEYS:
+            raise SceneError(f"unknown key [uncertainty] {key}" + suggest(key, KEYS)
+                             + f"; keys are {', '.join(KEYS)}")
+    method = raw.get("method", DEFAULTS["method"])
+    if method not in METHODS:
+        raise SceneError(f"[uncertainty] method = {show(method)} is not allowed: choose one of "
+                         + ", ".join(repr(m) for m in METHODS)
+                         + (suggest(method, METHODS) if isinstance(method, str) else ""))
+    seed = raw.get("seed", DEFAULTS["seed"])
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= 2**32 - 1:
+        raise SceneError(f"[uncertainty] seed = {show(seed)}: allowed a whole number in "
+                         f"[0, {2**32 - 1}]")
+    vary = raw.get("vary")
+    if not isinstance(vary, dict) or not vary:
+        raise SceneError("[uncertainty.vary] is missing or empty: give at least one input, e.g. "
+                         "\"contact.restitution\" = { distribution = \"uniform\", low = 0.05, "
+                         "high = 0.5 }")
+    inputs = []
+    for key, given in vary.items():
+        _check_key(key)
+        dist = _distribution(key, given)
+        _check_support(dist)
+        inputs.append(dist)
+    samples = raw.get("samples", DEFAULTS["samples"])
+    if isinstance(samples, bool) or not isinstance(samples, int):
+        raise SceneError(f"[uncertainty] samples = {show(samples)}: expected a whole number")
+    d = len(inputs)
+    if method == "sobol":
+        least = max(MIN_SOBOL_SAMPLES, SOBOL_SAMPLES_PER_INPUT * d)
+        if samples < least or samples & (samples - 1):
+            power = 1 << max(least - 1, 1).bit_length()
+            raise SceneError(f"[uncertainty] samples = {samples} is too small or not a power of "
+                             f"two for method = \"sobol\" with {d} input{'s' * (d > 1)}: allowed "
+                             f"a power of two >= {least} (max({MIN_SOBOL_SAMPLES}, "
+                             f"{SOBOL_SAMPLES_PER_INPUT} x inputs)), e.g. {power}")
+    elif samples < max(MIN_MC_SAMPLES, d + 1):
+        raise SceneError(f"[uncertainty] samples = {samples} is too small for method = "
+                         f"\"monte-carlo\" with {d} input{'s' * (d > 1)}: allowed >= "
+                         f"{max(MIN_MC_SAMPLES, d + 1)}")
+    spec = UncertaintySpec(samples=samples, method=method, seed=seed, inputs=tuple(inputs))
+    if spec.evaluations > MAX_EVALUATIONS:
+        raise SceneError(f"[uncertainty] samples = {samples} gives {spec.evaluations} "
+                         f"evaluations: allowed <= {MAX_EVALUATIONS:.0e}")
+    _check_scenes(scene, spec)
+    return spec
+
+
+def _check_scenes(scene, spec: UncertaintySpec) -> None:
+    """Each input at either end of what it can draw (the others nominal) builds a valid
+    scene: a rule between keys (a ball wider than the bore...) is named before any work."""
+    for dist in spec.inputs:
+        for value in dist.support():
+            try:
+                scene.with_values(**sections_of({dist.key: value}))
+            except SceneError as exc:
+                raise SceneError(f"[uncertainty.vary] {dist.key!r} = {value:.6g} (an end of its "
+                                 f"{dist.kind} distribution): {exc}") from None

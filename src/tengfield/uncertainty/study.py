@@ -1,0 +1,120 @@
+"""One study: sample the inputs, evaluate, and summarise (``uncertainty.json``'s data).
+
+:func:`run_study` is the Python face of ``tengfield uncertainty``; :func:`candidate_percentile`
+scores one design candidate by a percentile of its objective over ``[uncertainty.vary]``
+(``[design] aggregate = "p10"``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .evaluation import Evaluations, evaluate_study, main_outputs
+from .sampling import study_values
+from .spec import UncertaintySpec, uncertainty_spec
+from .statistics import (distribution_statistics, dominant_input, percentile_score,
+                         regime_fractions, sobol_indices)
+
+
+@dataclass
+class Study:
+    """A finished study: the spec, the sampled values ``(evaluations, D)``, the
+    evaluations and the JSON-ready ``summary`` (``uncertainty.json``)."""
+    spec: UncertaintySpec
+    values: np.ndarray
+    evaluations: Evaluations
+    summary: dict
+
+    @property
+    def output_keys(self) -> list[str]:
+        return self.summary["output_keys"]
+
+    @property
+    def main(self) -> list[str]:
+        return main_outputs(self.output_keys)
+
+
+def output_keys(evaluations: Evaluations) -> list[str]:
+    """Every output any evaluation (or the nominal run) has, in order of appearance."""
+    keys = dict.fromkeys(evaluations.nominal)
+    for row in evaluations.rows:
+        keys.update(dict.fromkeys(row))
+    return list(keys)
+
+
+def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) -> dict:
+    """``uncertainty.json``: per output mean, std, percentiles (and Sobol indices),
+    regimes with Clopper-Pearson intervals, the field solves, the study's settings."""
+    keys = output_keys(evaluations)
+    outputs, notes = {}, {}
+    for name in keys:
+        column = [row.get(name) for row in evaluations.rows]
+        block = distribution_statistics(column)
+        block["nominal"] = evaluations.nominal.get(name)
+        if spec.method == "sobol":
+            try:
+                block["sobol"] = sobol_indices(spec.keys, column, seed=spec.seed)
+                block["dominant_input"] = dominant_input(block["sobol"])[0]
+            except ValueError as exc:
+                block["sobol"] = None
+                notes[name] = f"no Sobol indices: {exc}"
+        outputs[name] = block
+    return {
+        "scene": scene.source,
+        "samples": spec.samples, "evaluations": len(evaluations.rows),
+        "method": spec.method, "seed": spec.seed,
+        "distributions": {d.key: d.as_dict() for d in spec.inputs},
+        "nominal_inputs": nominal_inputs(scene, spec),
+        "field_solves": evaluations.field_solves,
+        "geometries": evaluations.geometries,
+        "dynamics_runs": evaluations.dynamics_runs,
+        "beyond_breakdown": evaluations.beyond_breakdown,
+        "output_keys": keys, "main_outputs": main_outputs(keys),
+        "outputs": outputs, "notes": notes,
+        "regimes": regime_fractions(evaluations.regimes),
+        "nominal_regime": evaluations.nominal_regime,
+        "rules": {
+            "sampling": ("Saltelli's scheme on a scrambled Sobol sequence (SALib), N (D + 2) "
+                         "evaluations" if spec.method == "sobol" else
+                         "scrambled Sobol sequence (scipy.stats.qmc), N evaluations"),
+            "sobol": "SALib.analyze.sobol: S1 (Saltelli 2010), ST (Jansen); *_conf: half-width "
+                     "of the bootstrap 95 % interval",
+            "percentiles": "numpy.percentile (linear) over the evaluations",
+            "regimes": "exact binomial (Clopper-Pearson) 95 % interval",
+            "cost": "evaluations grouped by their dynamics-relevant inputs: one dynamics run and "
+                    "one cached surrogate per group; sigma scales the table, circuit keys rerun "
+                    "the electrical stage only; field_solves counts the distinct field hashes "
+                    "whose surrogate was not in the cache"},
+    }
+
+
+def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
+    """The scene's own value of every varied key (file units)."""
+    full = scene.to_dict()
+    return {d.key: full[d.section][d.name] for d in spec.inputs}
+
+
+def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: int | None = None,
+              cache_dir=None, solve: Callable | None = None, simulate: Callable | None = None,
+              progress: bool = False) -> Study:
+    """The study of ``scene``'s ``[uncertainty]`` section (or ``spec``)."""
+    spec = spec or uncertainty_spec(scene)
+    values = study_values(spec)
+    evaluations = evaluate_study(scene, spec, values, comm=comm, jobs=jobs, cache_dir=cache_dir,
+                                 solve=solve, simulate=simulate, progress=progress)
+    return Study(spec, values, evaluations, summarise(scene, spec, values, evaluations))
+
+
+def candidate_percentile(candidate, spec: UncertaintySpec, objective: str, percentile: float, *,
+                         cache_dir=None, solve=None, simulate=None) -> tuple[float, int]:
+    """``(score, evaluations)``: the ``percentile``-th percentile of the output
+    ``objective`` (an :func:`~tengfield.uncertainty.evaluation.output_quantities` name,
+    e.g. ``"load.mean_power_W"``) of the design candidate's scene over the study
+    ``spec`` (Monte Carlo or Sobol points alike), on this process (``comm=None``,
+    one job: the design farms the candidates)."""
+    study = run_study(candidate, spec, jobs=1, cache_dir=cache_dir, solve=solve,
+                      simulate=simulate)
+    return (percentile_score([row.get(objective) for row in study.evaluations.rows], percentile),
+            len(study.evaluations.rows))
