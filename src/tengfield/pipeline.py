@@ -170,6 +170,36 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     if scene.array.cells > 0:
         return _run_array(scene, dynamics, curves, table, stages, comm, progress)
 
+    stage = electrical_stage(scene, dynamics, curves, table, stages)
+    waveforms, summary, extras = stage.waveforms, stage.summary, stage.extras
+    peaks, peak = stage.peak_to_peak, stage.peak
+    if table is not None:
+        _breakdown_summary(summary, scene, hashed, limit)
+    _measured_comparison(summary, scene)
+    result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
+                       table=table, curves=curves, peaks=peaks, stages=stages, peak=peak)
+    result.extras = extras
+    return result
+
+
+@dataclass
+class ElectricalStage:
+    """What :func:`electrical_stage` computed: the waveform columns (SI), summary.json's
+    blocks, peak-to-peak and peak values by short name, and the figures' extras."""
+    waveforms: dict
+    summary: dict
+    peak_to_peak: dict
+    peak: dict
+    extras: dict
+
+
+def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
+                     ) -> ElectricalStage:
+    """The circuit stage of :func:`run` for ``scene`` with ``dynamics`` and ``curves``
+    (``table``/``curves`` None: no field needed): waveforms, summary (with the energy
+    per cycle), peaks. ``stages`` (if given) gets its ``"circuit"`` entry. Used by
+    :func:`run` and by the uncertainty study (one electrical stage, not a copy)."""
+    stages = {} if stages is None else stages
     start = time.perf_counter()
     entry = electrical.circuit_for(scene)
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
@@ -182,7 +212,6 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start, ran.details)
     extremes = electrical.terminal_extremes(scene, dynamics, curves, waveforms,
                                             read_at_samples=read_at_samples)
-    peaks, peak = extremes["peak_to_peak"], extremes["peak"]
     summary = _summary(scene, dynamics, waveforms, stages, table, extremes=extremes,
                        circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask),
                        entry=entry)
@@ -190,13 +219,7 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     if curves is not None:
         extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
         summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
-    if table is not None:
-        _breakdown_summary(summary, scene, hashed, limit)
-    _measured_comparison(summary, scene)
-    result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
-                       table=table, curves=curves, peaks=peaks, stages=stages, peak=peak)
-    result.extras = extras
-    return result
+    return ElectricalStage(waveforms, summary, extremes["peak_to_peak"], extremes["peak"], extras)
 
 
 def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:

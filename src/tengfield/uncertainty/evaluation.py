@@ -22,7 +22,8 @@ from typing import Callable
 import numpy as np
 
 from .. import electrical
-from .._json import jsonable, regime_dict
+from .._json import regime_dict
+from ..quantities import summary_keys
 from .spec import UncertaintySpec, sections_of
 
 SIGMA_KEY = "device.surface_charge_uC_per_m2"
@@ -36,9 +37,10 @@ ELECTRICAL_SECTIONS = ("circuit",)
 OUTPUT_BLOCKS = ("peak_to_peak", "peak", "load", "energy_per_cycle", "rectifier")
 OUTPUT_TOP_LEVEL = ("V_read_V",)
 #: outputs drawn and printed first (when present)
-MAIN_OUTPUTS = ("V_read_V", "peak_to_peak.V_oc_V", "peak_to_peak.Q_sc_C",
-                "peak_to_peak.I_sc_A", "peak.V_oc_V", "peak.Q_sc_C", "peak.I_sc_A",
-                "load.mean_power_W", "rectifier.average_harvested_power_W")
+#: the outputs shown in the figure and the terminal, in this order: the quantity table's
+#: summary keys (peak-to-peak and peak of V_OC, Q_SC, I_SC, V read through C_p, then the
+#: block numbers such as the load's mean power)
+MAIN_OUTPUTS = tuple(summary_keys(instrument=True))
 
 
 def output_quantities(summary: dict) -> dict[str, float]:
@@ -153,23 +155,12 @@ def _outputs(scene, dynamics, table) -> tuple[dict, str]:
     """The run's electrical stage and summary for ``scene`` with ``dynamics`` and
     ``table`` (already at the scene's σ; None: no field needed), as
     :func:`tengfield.pipeline.run` computes them after its field stage."""
-    from ..pipeline import _energy_per_cycle, _summary
+    from ..pipeline import electrical_stage
     from ..surrogate import TerminalCurves
 
     curves = TerminalCurves(table, scene.circuit.reference) if table is not None else None
-    entry = electrical.circuit_for(scene)
-    entry.check(scene)
-    waveforms = electrical.scene_waveforms(scene, dynamics, curves)
-    ran = entry.run(scene, dynamics, curves)
-    waveforms.update(ran.columns)
-    peaks = electrical.terminal_peaks(scene, dynamics, curves, waveforms)
-    summary = _summary(scene, dynamics, waveforms, {}, table,
-                       peaks={column: peaks[name]
-                              for name, column in electrical.PEAK_QUANTITIES.items()},
-                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask))
-    if curves is not None:
-        extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
-        summary.update(jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    electrical.circuit_for(scene).check(scene)
+    summary = electrical_stage(scene, dynamics, curves, table).summary
     regime = (regime_dict(getattr(dynamics, "regime", None)) or {}).get("regime", "")
     return output_quantities(summary), regime
 
