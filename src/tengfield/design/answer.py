@@ -16,6 +16,8 @@ import numpy as np
 from .candidate import followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY, LOG_KEYS
 
+#: a varied value within this fraction of its range from an end is "on the bound"
+BOUND_FRACTION = 0.02
 #: SI unit -> (label, factor) choices for readable numbers (value x factor)
 _PREFIXED = {
     "W": [("pW", 1e12), ("nW", 1e9), ("µW", 1e6), ("mW", 1e3), ("W", 1.0)],
@@ -82,10 +84,10 @@ def chosen_band_point(result, row) -> int:
 
 
 def on_bounds(result, row) -> list[tuple[str, str, float]]:
-    """[(key, "lower" | "upper", bound)] of the varied keys ``row`` sits on (within the
-    search's resolution of the range's end)."""
+    """[(key, "lower" | "upper", bound)] of the varied keys ``row`` sits on (within
+    BOUND_FRACTION of the range, or the search's resolution, of its end)."""
     spec = result.spec
-    tol = max(spec.resolution, 1e-9)
+    tol = max(spec.resolution, BOUND_FRACTION)
     out = []
     for key, (lo, hi) in spec.vary.items():
         v = row["values"][key]

@@ -5,7 +5,8 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
-from .answer import band_table_lines, chosen_band_point, design_answer, on_bounds, point_label
+from .answer import (band_table_lines, chosen_band_point, design_answer, on_bounds, point_label,
+                     readable_unit)
 from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
@@ -196,6 +197,16 @@ def best_toml_header(result) -> str:
             + ("coarse settings)" if spec.field == "coarse" else "these)"))
 
 
+def plot_scales(result) -> dict:
+    """objective -> (readable unit, factor) for design.png, from the largest value."""
+    out = {}
+    for o in result.spec.objectives:
+        vals = [abs(r["objectives"][o]["value"]) for r in result.rows if r["status"] == "ok"
+                and math.isfinite(r["objectives"][o]["value"])]
+        out[o] = readable_unit(OBJECTIVES[o][0], max(vals, default=0.0))
+    return out
+
+
 def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     """design.csv, design.json, best.toml (if a candidate is feasible), design.png."""
     out = Path(out_dir)
@@ -211,6 +222,7 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
         from ..plotting.design import plot_design
         with atomic_path(out / "design.png") as tmp:
             plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()},
+                        scales=plot_scales(result),
                         on_bound=on_bounds(result, best) if best is not None else [])
         written.append(out / "design.png")
     return written
