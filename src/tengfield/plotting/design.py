@@ -115,6 +115,10 @@ def plot_design(result, path, *, units: dict[str, str], scales: dict | None = No
             if any(key in (kx, ky) for key, _, _ in on_bound):
                 ax.plot(best["values"][kx], best["values"][ky], "o", ms=22, mfc="none",
                         mec="C3", mew=1.5, label="best on a bound")
+        for b in spec.vary[kx]:   # the search box
+            ax.axvline(b, color="0.6", ls=":", lw=0.8)
+        for b in spec.vary[ky]:
+            ax.axhline(b, color="0.6", ls=":", lw=0.8)
         ax.set_xlabel(key_label(kx))
         ax.set_ylabel(key_label(ky))
         if kx == "load_ohm":
