@@ -35,6 +35,7 @@ def cache(tmp_path):
     return tmp_path / "cache"
 
 
+@pytest.mark.slow   # a small design search (plate model)
 def test_best_toml_never_rests_and_runs_to_the_value_it_names(tmp_path, cache):
     """The band's first point (25 Hz / 0.3 mm) rests: best.toml was written there and
     `tengfield run` gave 0 W. Now it runs at the non-zero point nearest the band's centre,
@@ -62,6 +63,7 @@ def test_best_toml_never_rests_and_runs_to_the_value_it_names(tmp_path, cache):
     assert summary["best_toml_band_point"]["index"] == k
 
 
+@pytest.mark.slow   # a small design search (plate model)
 def test_a_band_point_where_nothing_moves_is_named(cache):
     result = design(design_scene(), cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     lines = design_warnings(result)
@@ -87,6 +89,7 @@ def test_an_optimum_on_a_bound_is_named_with_the_key_and_the_bound(cache):
         assert not [w for w in design_warnings(inner) if "bound" in w]
 
 
+@pytest.mark.slow   # a small design search (plate model)
 def test_a_worst_case_aggregate_that_ties_is_named_not_an_infinite_margin(tmp_path, cache):
     """aggregate = "min" over a band with a resting point: every candidate scores 0; it
     printed 'margin 0 W = inf x the error bars' and ranked them anyway."""
@@ -143,6 +146,7 @@ def test_chaos_in_the_best_design_is_a_warning(cache):
     assert "its ± includes that spread" in chaos[0]
 
 
+@pytest.mark.slow   # a small design search (plate model)
 def test_the_answer_is_stated_in_design_json_and_on_the_terminal(tmp_path, cache):
     """Every varied key, the plate spacing h = stroke + d, the tube and electrode sizes
     that followed a bigger ball (named as changed), σ, the load, the band table; the same
@@ -183,3 +187,54 @@ def test_readable_units():
     assert readable_unit("W/m^3", 2150.0) == ("mW/cm³", 1e-3)
     assert readable_unit("C", 4.6e-10) == ("pC", 1e12)
     assert readable_unit("m", 2e-3) == ("mm", 1e3)
+
+
+@pytest.mark.slow   # a small design search (plate model)
+def test_design_png_is_readable_with_error_bars_and_the_bound_optimum_marked(cache):
+    """Readable units and axis labels, error bars, the bound optimum marked, no Pareto panel
+    for one objective (it drew W with a 1e-6 offset, raw key names, no error bars)."""
+    from tengfield.design.output import plot_scales
+    from tengfield.design.spec import OBJECTIVES
+    from tengfield.plotting.design import plot_design
+
+    result = design(design_scene(candidates=6, batch=2, vary={"gap_mm": [1.0, 3.0]}),
+                    cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    units = {k: v[0] for k, v in OBJECTIVES.items()}
+    bound = [("gap_mm", "upper", 3.0)]      # as if the best sat on it: drawn and named
+    fig = plot_design(result, "/dev/null", units=units, scales=plot_scales(result),
+                      on_bound=bound)
+    axes = [a for a in fig.axes if a.get_label() != "<colorbar>"]
+    assert len(axes) == 1 and "Pareto" not in axes[0].get_title()
+    ax = axes[0]
+    assert ax.get_xlabel() == "stroke Δh [mm]" and ax.get_ylabel() == "mean load power [µW]"
+    assert ax.containers, "error bars"
+    labels = ax.get_legend_handles_labels()[1]
+    assert "best on a bound" in labels and "feasible (± error bar)" in labels
+    assert "best on the upper bound of gap_mm (3): widen the range" in ax.get_title()
+    assert re.search(r"best \d[\d.]* ± [\d.e-]+ µW", ax.get_title())
+    assert not ax.yaxis.get_major_formatter().get_offset()
+
+
+@pytest.mark.slow   # a small design search (plate model)
+def test_progress_shows_done_total_and_the_current_best_on_a_terminal(monkeypatch, cache):
+    import io
+    import sys
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    scene = design_scene(candidates=4)
+    screen = Terminal()
+    monkeypatch.setattr(sys, "stderr", screen)
+    design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1, progress=True)
+    shown = screen.getvalue()
+    assert "4/4" in shown and re.search(r"best \d[\d.]* [nµm]?W", shown)
+    piped = io.StringIO()                     # not a terminal: nothing
+    monkeypatch.setattr(sys, "stderr", piped)
+    design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1, progress=True)
+    assert piped.getvalue() == ""
+    quiet = Terminal()                        # --quiet: progress=False
+    monkeypatch.setattr(sys, "stderr", quiet)
+    design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1, progress=False)
+    assert quiet.getvalue() == ""

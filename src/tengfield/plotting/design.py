@@ -135,9 +135,11 @@ def plot_design(result, path, *, units: dict[str, str], scales: dict | None = No
                   f"{best['objective_error'] * factor:.2g} {label}")
     if tie:
         title += " - all candidates equal (a tie)"
+    if bound_text and len(keys) == 1:
+        title += "\n" + bound_text
     axes[0].set_title(title, fontsize=9)
-    if bound_text:
-        axes[-1 - pareto].set_title(bound_text, fontsize=8, color="C3")
+    if bound_text and len(keys) > 1:
+        axes[1].set_title(bound_text, fontsize=8, color="C3")
     if pareto:
         a, b = spec.objectives[:2]
         (la, fa), (lb, fb) = scales.get(a, (units[a], 1.0)), scales.get(b, (units[b], 1.0))
