@@ -238,3 +238,15 @@ def test_progress_shows_done_total_and_the_current_best_on_a_terminal(monkeypatc
     monkeypatch.setattr(sys, "stderr", quiet)
     design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1, progress=False)
     assert quiet.getvalue() == ""
+
+
+def test_design_csv_has_the_spread_and_windows_per_band_point(tmp_path, cache):
+    import csv
+
+    result = design(_chaotic_scene(vary={"gap_mm": [3.9, 4.1]}), cache_dir=cache,
+                    solve=fx.plate_model_solve, jobs=1)
+    write_design_outputs(result, tmp_path, plots=False)
+    rows = list(csv.DictReader(open(tmp_path / "design.csv")))
+    for rec, row in zip(rows, result.rows):
+        assert rec["windows"] == "3"
+        assert float(rec["charge_spread_per_band_point"]) == row["band_spread"]["charge"][0] > 0

@@ -26,7 +26,8 @@ def csv_columns(result) -> list[str]:
     for o in spec.objectives:
         cols += [f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"
                  for f, a in spec.band]
-    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period",
+    cols += [f"{spec.objective}_spread_per_band_point", "windows",
+             "regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
              "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
              "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
@@ -55,7 +56,9 @@ def csv_record(result, row) -> dict:
         rec[f"{o}_error_{unit}"] = got.get("error")
         for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
             rec[f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
-    rec.update({"regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
+    rec.update({f"{spec.objective}_spread_per_band_point":
+                row.get("band_spread", {}).get(spec.objective, []),
+                "windows": row.get("windows", []), "regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
                 "upper_contacts_per_period": row["upper_contacts_per_period"],
                 "load_ohm": row["load_ohm"], "device_volume_m3": row["device_volume_m3"],
                 "surface_charge_uC_per_m2": row.get("surface_charge_uC_per_m2"),
