@@ -300,6 +300,15 @@ def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
         assert row["surface_charge_uC_per_m2"] == pytest.approx(-sigma_max * 1e6, rel=1e-12)
         limits.append(sigma_max)
     assert limits[0] != pytest.approx(limits[1], rel=1e-3)
+    # the answer says which σ and that it is the breakdown limit
+    from tengfield.design import DesignResult, answer_lines
+    from tengfield.design.answer import describe
+    rows = [{"index": i, "phase": "test", **r} for i, r in enumerate(rows)]
+    result = DesignResult(scene=scene, spec=spec, rows=rows, ranking=[0, 1])
+    stated = describe(result, rows[0])
+    assert stated["breakdown"] is True
+    assert stated["surface_charge_uC_per_m2"] == rows[0]["surface_charge_uC_per_m2"]
+    assert "(the air-breakdown limit of this geometry)" in "\n".join(answer_lines(result))
 
 
 def test_random_and_harmonics_excitations_are_scored_as_the_scene_gives_them(cache):
