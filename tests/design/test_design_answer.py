@@ -250,3 +250,21 @@ def test_design_csv_has_the_spread_and_windows_per_band_point(tmp_path, cache):
     for rec, row in zip(rows, result.rows):
         assert rec["windows"] == "3"
         assert float(rec["charge_spread_per_band_point"]) == row["band_spread"]["charge"][0] > 0
+
+
+def test_best_toml_band_point_prefers_the_centre_then_regular_motion_then_the_value():
+    from types import SimpleNamespace as NS
+
+    spec = NS(objective="power", band=[(25.0, 0.3e-3), (25.0, 1e-3), (33.0, 0.3e-3),
+                                      (33.0, 1e-3)])
+    result = NS(spec=spec)
+    row = {"band_values": {"power": [0.0, 9.0, 0.02, 25.0]},
+           "regimes": ["rest", "bounce", "bounce", "chaos"]}
+    assert chosen_band_point(result, row) == 1          # equally near: regular before chaos
+    row["regimes"][3] = "regular-contact"
+    assert chosen_band_point(result, row) == 3          # then the larger value
+    spec.band = [(25.0, 0.3e-3), (29.0, 0.65e-3), (33.0, 1e-3)]
+    row = {"band_values": {"power": [0.0, 1.0, 25.0]}, "regimes": ["rest", "bounce", "regular-contact"]}
+    assert chosen_band_point(result, row) == 1          # the centre first
+    row["band_values"]["power"][1] = 0.0
+    assert chosen_band_point(result, row) == 2          # never a point that scored zero

@@ -67,7 +67,8 @@ def band_points(result, row) -> list[dict]:
 def chosen_band_point(result, row) -> int:
     """Index of the band point best.toml runs at: among the points where ``row`` scored a
     non-zero value, the one nearest the band's centre (frequency and amplitude each
-    relative to its span); ties to the larger value. None non-zero: the largest."""
+    relative to its span); among equally near ones a regular (not chaotic) one, then the
+    larger value. None non-zero: the largest."""
     band = result.spec.band
     values = row["band_values"][result.spec.objective]
     live = [i for i, v in enumerate(values) if np.isfinite(v) and v != 0]
@@ -80,7 +81,9 @@ def chosen_band_point(result, row) -> int:
         span = x.max() - x.min()
         return 0.0 if span == 0 else (x[i] - 0.5 * (x.max() + x.min())) / span
 
-    return min(live, key=lambda i: (round(math.hypot(rel(f, i), rel(a, i)), 12), -values[i], i))
+    regimes = row["regimes"] or [""] * len(values)
+    return min(live, key=lambda i: (round(math.hypot(rel(f, i), rel(a, i)), 12),
+                                    regimes[i] == "chaos", -values[i], i))
 
 
 def on_bounds(result, row) -> list[tuple[str, str, float]]:

@@ -5,8 +5,8 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
-from .answer import (band_table_lines, chosen_band_point, design_answer, on_bounds, point_label,
-                     readable_unit)
+from .answer import (band_table_lines, chosen_band_point, describe, design_answer, on_bounds,
+                     point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
@@ -193,7 +193,9 @@ def best_toml_header(result) -> str:
     return (f"best design of `tengfield design` on {result.scene.source}\n"
             f"{objective} ({spec.aggregate} over {n} band point{'s' * (n != 1)}) = "
             f"{best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
-            + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items()) + "\n"
+            + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
+            + f" (plate spacing h = stroke + ball diameter = "
+            f"{describe(result, best)['plate_spacing_mm']:g} mm)\n"
             "band table:\n" + "\n".join(band_table_lines(result, best)) + "\n"
             f"excitation and [run]: {point_label(f, a, kind)} ({why}), where the design "
             f"scored {objective} = {value:.6g} {unit}\n[field]: the scene's (the design used "
