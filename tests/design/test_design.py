@@ -300,6 +300,15 @@ def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
         assert row["surface_charge_uC_per_m2"] == pytest.approx(-sigma_max * 1e6, rel=1e-12)
         limits.append(sigma_max)
     assert limits[0] != pytest.approx(limits[1], rel=1e-3)
+    # the answer says which σ and that it is the breakdown limit
+    from tengfield.design import DesignResult, answer_lines
+    from tengfield.design.answer import describe
+    rows = [{"index": i, "phase": "test", **r} for i, r in enumerate(rows)]
+    result = DesignResult(scene=scene, spec=spec, rows=rows, ranking=[0, 1])
+    stated = describe(result, rows[0])
+    assert stated["breakdown"] is True
+    assert stated["surface_charge_uC_per_m2"] == rows[0]["surface_charge_uC_per_m2"]
+    assert "(the air-breakdown limit of this geometry)" in "\n".join(answer_lines(result))
 
 
 def test_random_and_harmonics_excitations_are_scored_as_the_scene_gives_them(cache):
@@ -325,7 +334,7 @@ def test_random_and_harmonics_excitations_are_scored_as_the_scene_gives_them(cac
 
 
 # ---------------------------------------------------------------------------
-# best.toml: `tengfield run` on it reproduces the design's value at the first band point
+# best.toml: `tengfield run` on it reproduces the design's value at its band point
 def _best_of(tmp_path, cache, scene):
     result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     assert result.best is not None
@@ -341,18 +350,22 @@ def _best_of(tmp_path, cache, scene):
     ("harvested_power", "one", lambda s: s["rectifier"]["average_harvested_power_W"]),
     ("charge", "one", lambda s: s["peak_to_peak"]["Q_sc_C"]),
 ])
-def test_best_toml_runs_to_the_designs_value_at_the_first_band_point(tmp_path, cache,
-                                                                     objective, load, value_of):
+def test_best_toml_runs_to_the_designs_value_at_its_band_point(tmp_path, cache,
+                                                               objective, load, value_of):
     """best.toml carries the run the design scored (settle + window periods at the design's
     sampling), for harvested power the rectifier, with load = "each" the first band point's
-    own matched load: `tengfield run` on it gives the design's value at the first band point
-    (it ran the scene's own [run], and an open circuit for harvested_power and for
+    own matched load: `tengfield run` on it gives the design's value at the band point it
+    names (it ran the scene's own [run], and an open circuit for harvested_power and for
     load = "each": no power at all)."""
+    from tengfield.design.answer import chosen_band_point
+
     scene = design_scene(objective=objective, candidates=4, field="scene", load=load,
                          settle_periods=6, window_periods=8).with_values(
         run={"duration_s": 0.3, "settle_periods": 2})
     result, best, summary = _best_of(tmp_path, cache, scene)
-    expected = result.best["band_values"][objective][0]
+    k = chosen_band_point(result, result.best)
+    expected = result.best["band_values"][objective][k]
+    assert best.excitation.amplitude == pytest.approx(result.spec.band[k][1])
     assert best.run.settle_periods == 6
     assert best.run.duration == pytest.approx(14 / best.excitation.frequency)
     assert value_of(summary) == pytest.approx(expected, rel=1e-6)

@@ -6,6 +6,16 @@ by field hash, on the design's coarse stated field settings) on every band point
 Writes DIR/design.csv (every candidate), DIR/design.json (best, ranking, error bars,
 settings, wall time), DIR/design.png and DIR/best.toml (ready for `tengfield run`).
 
+A scene without [design] (e.g. the one `tengfield scene --default` writes) gets a default
+study, said in one line: the stroke gap_mm over 0.5-1.5 x and the ball diameter over
+0.7-1.3 x the scene's values (tube and electrode follow the ball), at the scene's
+excitation, 24 candidates.
+
+The answer (stdout): the best design and the runner-up, with the plate spacing, what
+followed, σ, the load and the band table; warnings (stderr) name a band point where
+nothing moves, an optimum on a bound of its range, a tie, chaos in the best design.
+Progress (done/total, ETA, current best) on a terminal; --quiet or a pipe: none.
+
 On one machine --jobs worker processes share each round's candidates. Under
 ``mpirun -n N tengfield design ...`` they are farmed over the N ranks (the result
 equals a serial run's) and rank 0 writes the files; --jobs must then be omitted or 1.
@@ -27,23 +37,33 @@ def register(sub) -> None:
                    help="search seed (overrides [design] seed)")
     add_jobs_argument(p)
     add_cache_argument(p)
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress display (it is off anyway when stderr is not a terminal)")
     p.add_argument("--no-plots", "--no-plot", dest="no_plots", action="store_true",
                    help="skip design.png")
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
+    import warnings
+
     from ..design import design, parse_design_section, write_design_outputs
-    from ..design.spec import OBJECTIVES
+    from ..design.answer import answer_lines
+    from ..design.spec import default_design_section
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
     overrides = {k: v for k, v in (("candidates", args.candidates), ("seed", args.seed))
                  if v is not None}
-    parse_design_section(scene, overrides)        # bad [design] input: before any work
     comm = world_if_parallel()
+    if "design" not in scene.raw:   # e.g. the default scene: a default study, said once
+        section, said = default_design_section(scene, args.candidates)
+        scene = scene.with_values(design=section)
+        if comm is None or comm.rank == 0:
+            print(f"tengfield: {said}", file=sys.stderr)
+    parse_design_section(scene, overrides)        # bad [design] input: before any work
     result = design(scene, comm=comm, jobs=args.jobs, cache_dir=args.cache_dir,
-                    progress=True, overrides=overrides or None)   # SIGTERM: cli.py
+                    progress=not args.quiet, overrides=overrides or None)   # SIGTERM: cli.py
     if comm is not None and comm.rank != 0:
         return 0
     written = write_design_outputs(result, args.output, plots=not args.no_plots)
@@ -52,19 +72,10 @@ def _run(args) -> int:
     print(f"{len(result.rows)} candidates ({counts['ok']} scored, {counts['infeasible']} "
           f"infeasible, {counts['skipped']} skipped) in {result.wall_time:.1f} s on "
           f"{result.ranks} rank(s)", file=sys.stderr)
-    best = result.best
-    if best is None:
-        print("no candidate is feasible: see design.csv (reason)")
-    else:
-        unit = OBJECTIVES[result.spec.objective][0]
-        conf = result.confidence()
-        print(f"best: " + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
-              + f": {result.spec.objective} = {best['objective']:.4g} +- "
-              f"{best['objective_error']:.2g} {unit} ({result.spec.aggregate} over "
-              f"{len(result.spec.band)} band point{'s' * (len(result.spec.band) != 1)})")
-        if "margin_over_error_bars" in conf:
-            print(f"runner-up #{conf['runner_up_index']}: margin {conf['margin']:.3g} {unit} = "
-                  f"{conf['margin_over_error_bars']:.3g} x the error bars; "
-                  f"{conf['candidates_within_error_bars']} candidate(s) within the error bars")
+    print("\n".join(answer_lines(result)))
+    sys.stdout.flush()
+    from ..design.answer import design_warnings
+    for text in design_warnings(result):    # one `tengfield: warning: ...` line each
+        warnings.warn(text, UserWarning, stacklevel=1)
     print("wrote " + ", ".join(map(str, written)))
     return 0

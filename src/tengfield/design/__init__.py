@@ -10,10 +10,13 @@ boxes) runs its rounds over the MPI task farm or worker processes (docs/design.m
 * :func:`design` -> :class:`DesignResult` (``best``, ``ranking``, ``rows``, ``confidence()``);
 * :func:`evaluate`, :func:`candidate_scene`, :func:`candidate_charge` - one candidate;
 * :func:`check_optimum` - a narrower search around the best;
+* :func:`design_answer`, :func:`design_warnings`, :func:`answer_lines` - the answer stated
+  (plate spacing, what followed, σ, load, band table), the warnings, the terminal's text;
 * :func:`write_design_outputs` - design.csv, design.json, best.toml, design.png.
 """
 from __future__ import annotations
 
+from .answer import answer_lines, chosen_band_point, design_answer, design_warnings
 from .candidate import (candidate_charge, candidate_scene, design_field_settings, evaluate,
                         followed_geometry, matched_load)
 from .output import design_summary, write_design_outputs
@@ -23,7 +26,8 @@ from .spec import OBJECTIVES, DesignSpec, parse_design_section
 __all__ = ["design", "DesignResult", "DesignSpec", "parse_design_section", "evaluate",
            "candidate_scene", "candidate_charge", "design_field_settings", "followed_geometry",
            "matched_load", "check_optimum", "narrowed_scene", "write_design_outputs",
-           "design_summary", "OBJECTIVES"]
+           "design_summary", "OBJECTIVES", "design_answer", "design_warnings", "answer_lines",
+           "chosen_band_point"]
 
 
 class _CallableModule(__import__("types").ModuleType):

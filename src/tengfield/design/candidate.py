@@ -32,6 +32,8 @@ DESIGN_TOLERANCE = 0.02
 LOAD_DECADES = 1.5
 LOAD_GRID = 7
 LOAD_XATOL_DECADES = 0.01
+#: windows an irregular (chaotic) band point is scored over: its spread enters the error bar
+DYNAMICS_WINDOWS = 3
 
 
 def design_field_settings(ball_diameter_mm: float) -> dict:
@@ -198,6 +200,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     simulate = simulate or default_simulate
     row = {"values": dict(values), "status": "ok", "reason": "", "objectives": {},
            "objective": math.nan, "objective_error": math.nan, "band_values": {},
+           "band_spread": {}, "dynamics_error": {}, "windows": [],
            "regimes": [], "upper_contacts_per_period": [], "upper_contact_fraction": math.nan,
            "load_ohm": None, "field_hash": "", "field_error": math.nan,
            "interpolation_error": math.nan, "field_status": "", "positions": 0,
@@ -279,36 +282,47 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     for objective in spec.objectives:
         band_values[objective] = _objective_values(objective, spec, scene, points, dynamics,
                                                    curves, volume, row)
+    row["band_values"] = band_values
+    row["band_spread"] = dynamics_spread(spec, points, dynamics, curves, volume, row, simulate)
+    row["windows"] = [DYNAMICS_WINDOWS if irregular(d.regime) else 1 for d in dynamics]
     row["wall_s"]["circuit"] = time.perf_counter() - start
     eps = (0.0 if math.isnan(row["field_error"]) else row["field_error"]) + \
         (0.0 if math.isnan(row["interpolation_error"]) else row["interpolation_error"])
     row["relative_error"] = eps
-    row["band_values"] = band_values
     for objective, vals in band_values.items():
         value = aggregate_values(vals, spec.aggregate)
-        row["objectives"][objective] = {"value": value,
-                                        "error": abs(value) * OBJECTIVES[objective][1] * eps}
+        field_part = abs(value) * OBJECTIVES[objective][1] * eps
+        dyn_part = aggregate_spread(vals, row["band_spread"][objective], spec.aggregate)
+        row["objectives"][objective] = {"value": value, "error": field_part + dyn_part}
+        row["dynamics_error"][objective] = dyn_part
     row["objective"] = row["objectives"][spec.objective]["value"]
     row["objective_error"] = row["objectives"][spec.objective]["error"]
     return row
 
 
-def _objective_values(objective, spec, scene, points, dynamics, curves, volume, row):
+def _point_value(objective, point, dynamics, curves, volume, load) -> float:
+    """The objective at one band point (``point``: its scene, ``dynamics`` its motion,
+    ``load`` [ohm] the resistor of a power objective), SI."""
     if objective == "stroke":
-        return [scene.device.stroke] * len(points)
+        return float(point.device.stroke)
     if objective in ("charge", "voltage", "current"):
         name = {"charge": "Q_sc", "voltage": "V_oc", "current": "I_sc"}[objective]
-        return [float(electrical.terminal_peaks(p, d, curves)[name])
-                for p, d in zip(points, dynamics)]
+        return float(electrical.terminal_peaks(point, dynamics, curves)[name])
     if objective == "harvested_power":
-        out = []
-        for p, d in zip(points, dynamics):
-            rect_scene = p.with_values(circuit={"kind": "rectifier"})
-            rect = electrical.rectifier_waveforms(rect_scene, d, curves)
-            mask, _ = electrical.steady_window(d.t, rect_scene)
-            summary = electrical.rectifier_summary(rect_scene, rect["fine"], float(d.t[mask][0]))
-            out.append(float(summary["average_harvested_power_W"]))
-        return out
+        rect_scene = point.with_values(circuit={"kind": "rectifier"})
+        rect = electrical.rectifier_waveforms(rect_scene, dynamics, curves)
+        mask, _ = electrical.steady_window(dynamics.t, rect_scene)
+        summary = electrical.rectifier_summary(rect_scene, rect["fine"],
+                                               float(dynamics.t[mask][0]))
+        return float(summary["average_harvested_power_W"])
+    power = _load_power(point, dynamics, curves, load)
+    return power / volume if objective == "power_density" else power
+
+
+def _objective_values(objective, spec, scene, points, dynamics, curves, volume, row):
+    if objective not in ("power", "power_density"):
+        return [_point_value(objective, p, d, curves, volume, None)
+                for p, d in zip(points, dynamics)]
     # power / power_density into the matched (or the varied) resistive load
     if "load_ohm" in spec.vary:
         load = scene.circuit.load
@@ -327,3 +341,53 @@ def _objective_values(objective, spec, scene, points, dynamics, curves, volume, 
     if objective == "power_density":
         return [p / volume for p in powers]
     return list(powers)
+
+
+def irregular(regime) -> bool:
+    """A band point whose motion does not repeat in the window (``chaos``, or a period
+    longer than the window can hold whole): one window's value is one sample of it."""
+    return regime.name == "chaos"
+
+
+def _load_of(row, i):
+    load = row["load_ohm"]
+    return load[i] if isinstance(load, list) else load
+
+
+def window_values(objective, spec, point, curves, volume, load, simulate) -> list[float]:
+    """The objective of one band point over DYNAMICS_WINDOWS - 1 further windows of the
+    same length (the run continued: settle + j x window periods, then one window), the
+    same load: the samples its spread over windows is taken from."""
+    out = []
+    f = point.excitation.frequency
+    for j in range(1, DYNAMICS_WINDOWS):
+        settle = spec.settle_periods + j * spec.window_periods
+        later = point.with_values(run={"duration_s": (settle + spec.window_periods) / f,
+                                       "settle_periods": settle})
+        out.append(_point_value(objective, later, simulate(later), curves, volume, load))
+    return out
+
+
+def dynamics_spread(spec, points, dynamics, curves, volume, row, simulate) -> dict:
+    """Per objective: the spread (sample standard deviation over DYNAMICS_WINDOWS windows)
+    of each irregular band point's value (0 elsewhere) -> row["band_spread"]."""
+    spread = {o: [0.0] * len(points) for o in spec.objectives}
+    for i, (p, d) in enumerate(zip(points, dynamics)):
+        if not irregular(d.regime):
+            continue
+        for o in spec.objectives:
+            if o == "stroke":
+                continue
+            first = row["band_values"][o][i]
+            more = window_values(o, spec, p, curves, volume, _load_of(row, i), simulate)
+            spread[o][i] = float(np.std([first, *more], ddof=1))
+    return spread
+
+
+def aggregate_spread(values, spreads, how: str) -> float:
+    """The spread of the band's aggregate: mean -> sqrt(sum s_i^2) / n (independent
+    windows); min -> the spread of the smallest point."""
+    s = np.asarray(spreads, dtype=float)
+    if how == "mean":
+        return float(math.sqrt(float(np.sum(s ** 2))) / len(s))
+    return float(s[int(np.argmin(values))])

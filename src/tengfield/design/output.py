@@ -5,6 +5,8 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
+from .answer import (band_table_lines, chosen_band_point, describe, design_answer, on_bounds,
+                     point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
@@ -24,7 +26,8 @@ def csv_columns(result) -> list[str]:
     for o in spec.objectives:
         cols += [f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"
                  for f, a in spec.band]
-    cols += ["regimes", "upper_contact_fraction", "upper_contacts_per_period",
+    cols += [f"{spec.objective}_spread_per_band_point", "windows",
+             "regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
              "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
              "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
@@ -53,7 +56,9 @@ def csv_record(result, row) -> dict:
         rec[f"{o}_error_{unit}"] = got.get("error")
         for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
             rec[f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
-    rec.update({"regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
+    rec.update({f"{spec.objective}_spread_per_band_point":
+                row.get("band_spread", {}).get(spec.objective, []),
+                "windows": row.get("windows", []), "regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
                 "upper_contacts_per_period": row["upper_contacts_per_period"],
                 "load_ohm": row["load_ohm"], "device_volume_m3": row["device_volume_m3"],
                 "surface_charge_uC_per_m2": row.get("surface_charge_uC_per_m2"),
@@ -87,6 +92,7 @@ def cost_split(result) -> dict:
 def design_summary(result) -> dict:
     spec = result.spec
     best = result.best
+    answer = design_answer(result)
     summary = {
         "scene": result.scene.source,
         "objective": spec.objective, "objectives": spec.objectives,
@@ -100,12 +106,23 @@ def design_summary(result) -> dict:
             "load_ohm": best["load_ohm"], "followed": followed_geometry(
                 result.scene.to_dict()["device"],
                 {k: v for k, v in best["values"].items() if k not in OTHER_VARY})
-            if spec.geometry == "follow" else {}},
+            if spec.geometry == "follow" else {},
+            **{k: answer["best"][k] for k in ("plate_spacing_mm", "changed",
+                                              "surface_charge_uC_per_m2", "breakdown", "load",
+                                              "field_error", "dynamics_error", "band_points")},
+            "on_bound": [{"key": k, "bound": side, "value": b}
+                         for k, side, b in on_bounds(result, best)]},
+        "runner_up": answer["runner_up"],
+        "best_toml_band_point": answer.get("best_toml_band_point"),
+        "warnings": answer["warnings"],
         "confidence": result.confidence(),
         "error_bar_rule": "objective x factor x (largest field error estimate + surrogate "
                           "interpolation error estimate) of the candidate's surrogate; factor "
                           "3 for powers (P ~ Q_SC^2 / C_T), 2 for voltage (Q_SC / C_T) and "
-                          "current (dQ_SC/dz), 1 for charge, 0 for stroke",
+                          "current (dQ_SC/dz), 1 for charge, 0 for stroke; plus the dynamics: "
+                          "a chaotic band point is scored over 3 windows, the standard "
+                          "deviation of its value enters the aggregate (mean: sqrt(sum s^2)/n, "
+                          "min: the smallest point's)",
         "ranking": [{"index": result.rows[i]["index"], **result.rows[i]["values"],
                      "objective": result.rows[i]["objective"],
                      "objective_error": result.rows[i]["objective_error"]}
@@ -131,9 +148,11 @@ def design_summary(result) -> dict:
 def best_scene_dict(result) -> dict:
     """The scene (file-level dict, ``[design]`` dropped) with the best candidate's values,
     its followed geometry, (for a power objective) the matched load, (for harvested power)
-    the rectifier, the first band point as a sine ``[excitation]`` (a random or harmonics
+    the rectifier, the chosen band point as a sine ``[excitation]`` (a random or harmonics
     excitation is kept as given) and the run a band point was scored on (settle + window
-    periods): ``tengfield run`` on it gives the design's value at the first band point."""
+    periods) at the band point :func:`~tengfield.design.answer.chosen_band_point` names
+    (nearest the band's centre among those where the design scored non-zero):
+    ``tengfield run`` on it gives the design's value there."""
     best = result.best
     if best is None:
         raise ValueError("no feasible candidate")
@@ -145,17 +164,52 @@ def best_scene_dict(result) -> dict:
     for key, value in best["values"].items():
         if key in OTHER_VARY:
             data.setdefault(OTHER_VARY[key], {})[key] = value
+    k = chosen_band_point(result, best)
     if result.spec.objective == "harvested_power":   # scored through the [circuit] bridge
         data.setdefault("circuit", {})["kind"] = "rectifier"
-    elif best["load_ohm"] is not None:   # load = "each": the first band point's own load
-        load = best["load_ohm"][0] if isinstance(best["load_ohm"], list) else best["load_ohm"]
+    elif best["load_ohm"] is not None:   # load = "each": the chosen band point's own load
+        load = best["load_ohm"][k] if isinstance(best["load_ohm"], list) else best["load_ohm"]
         data.setdefault("circuit", {}).update({"kind": "load",
                                                "load_ohm": float(f"{float(load):.6g}")})
-    f, a = result.spec.band[0]
+    f, a = result.spec.band[k]
     if result.scene.excitation.kind == "sine":      # random / harmonics: scored as given
         data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
     data.setdefault("run", {}).update(band_run(result.spec, f))
     return data
+
+
+def best_toml_header(result) -> str:
+    """best.toml's header: the design's value, the band table, the band point it runs at."""
+    best, spec = result.best, result.spec
+    objective = spec.objective
+    unit = OBJECTIVES[objective][0]
+    k = chosen_band_point(result, best)
+    f, a = spec.band[k]
+    kind = result.scene.excitation.kind
+    value = best["band_values"][objective][k]
+    n = len(spec.band)
+    why = "the band point nearest the band's centre where the design scores non-zero" \
+        if value != 0 else "no band point scores non-zero: the largest"
+    return (f"best design of `tengfield design` on {result.scene.source}\n"
+            f"{objective} ({spec.aggregate} over {n} band point{'s' * (n != 1)}) = "
+            f"{best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
+            + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
+            + f" (plate spacing h = stroke + ball diameter = "
+            f"{describe(result, best)['plate_spacing_mm']:g} mm)\n"
+            "band table:\n" + "\n".join(band_table_lines(result, best)) + "\n"
+            f"excitation and [run]: {point_label(f, a, kind)} ({why}), where the design "
+            f"scored {objective} = {value:.6g} {unit}\n[field]: the scene's (the design used "
+            + ("coarse settings)" if spec.field == "coarse" else "these)"))
+
+
+def plot_scales(result) -> dict:
+    """objective -> (readable unit, factor) for design.png, from the largest value."""
+    out = {}
+    for o in result.spec.objectives:
+        vals = [abs(r["objectives"][o]["value"]) for r in result.rows if r["status"] == "ok"
+                and math.isfinite(r["objectives"][o]["value"])]
+        out[o] = readable_unit(OBJECTIVES[o][0], max(vals, default=0.0))
+    return out
 
 
 def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
@@ -166,26 +220,14 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
                write_json(out / "design.json", design_summary(result))]
     best = result.best
     if best is not None:
-        objective = result.spec.objective
-        unit = OBJECTIVES[objective][0]
-        first = best["band_values"][objective][0]
-        f, a = result.spec.band[0]
-        point = f"{f:g} Hz, {a * 1e3:g} mm" if result.scene.excitation.kind == "sine" \
-            else f"the scene's {result.scene.excitation.kind} excitation"
-        n = len(result.spec.band)
-        header = (f"best design of `tengfield design` on {result.scene.source}\n"
-                  f"{objective} ({result.spec.aggregate} over {n} "
-                  f"band point{'s' * (n != 1)}) = {best['objective']:.6g} +- "
-                  f"{best['objective_error']:.2g} {unit}\n"
-                  + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
-                  + f"\nexcitation and [run]: the first band point ({point}), where the design "
-                  f"scored {objective} = {first:.6g} {unit}\n[field]: the scene's (the design "
-                  "used " + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
-        write_text(out / "best.toml", scene_toml(best_scene_dict(result), header))
+        write_text(out / "best.toml", scene_toml(best_scene_dict(result),
+                                                 best_toml_header(result)))
         written.append(out / "best.toml")
     if plots:
         from ..plotting.design import plot_design
         with atomic_path(out / "design.png") as tmp:
-            plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()})
+            plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()},
+                        scales=plot_scales(result),
+                        on_bound=on_bounds(result, best) if best is not None else [])
         written.append(out / "design.png")
     return written

@@ -97,8 +97,9 @@ class DesignResult:
             ties = [i for i in self.ranking[1:]
                     if best["objective"] - self.rows[i]["objective"]
                     <= best["objective_error"] + self.rows[i]["objective_error"]]
+            ratio = margin / bars if bars > 0 else (None if margin == 0 else math.inf)
             out.update({"runner_up_index": second["index"], "margin": margin,
-                        "margin_over_error_bars": margin / bars if bars > 0 else math.inf,
+                        "margin_over_error_bars": ratio, "tie": margin == 0 and bars == 0,
                         "candidates_within_error_bars": len(ties),
                         "within_error_bars": [self.rows[i]["index"] for i in ties[:20]]})
         return out
@@ -191,6 +192,24 @@ class _Workers:
         return results
 
 
+def progress_bar(total: int, enabled: bool):
+    """THE progress display of a design (done/total, rate, ETA; the current best as its
+    postfix): on stderr when ``enabled`` and stderr is a terminal, silent otherwise
+    (piped, ``--quiet``, ranks other than 0)."""
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="design", unit="candidate", file=sys.stderr,
+                disable=not (enabled and sys.stderr.isatty()))
+
+
+def show_best(bar, spec: DesignSpec, row: dict) -> None:
+    """The current best on the progress display."""
+    from .answer import readable_unit
+
+    label, factor = readable_unit(OBJECTIVES[spec.objective][0], row["objective"])
+    bar.set_postfix_str(f"best {row['objective'] * factor:.4g} {label}", refresh=True)
+
+
 def _ranking(rows: list) -> list[int]:
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok" and np.isfinite(r["objective"])]
     return sorted(ok, key=lambda i: (-rows[i]["objective"], i))
@@ -204,8 +223,6 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     over its ranks (every rank returns the same result); else ``jobs`` worker processes.
     ``solve``/``simulate`` replace the field solver and the dynamics (tests);
     ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
-    from tqdm import tqdm
-
     from .._mpi import check_jobs, rank_of, size_of
 
     start = time.perf_counter()
@@ -216,8 +233,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     rows: list[dict] = []
     seen: dict[tuple, int] = {}
     rounds: list[dict] = []
-    bar = tqdm(total=spec.candidates, desc="design", unit="candidate", file=sys.stderr,
-               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    bar = progress_bar(spec.candidates, progress and rank_of(comm) == 0)
 
     def run_round(units: np.ndarray, phase: str) -> int:
         fresh = []
@@ -237,6 +253,9 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
             row = {"index": len(rows), "phase": phase, **row}
             seen[space.key(values)] = row["index"]
             rows.append(row)
+        ranking = _ranking(rows)
+        if ranking:
+            show_best(bar, spec, rows[ranking[0]])
         return len(fresh)
 
     def unit_of(row) -> np.ndarray:

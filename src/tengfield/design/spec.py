@@ -198,6 +198,32 @@ def _band(raw, scene) -> list[tuple[float, float]]:
     return band
 
 
+#: the default study of a scene without [design]: ranges as fractions of the scene's values
+DEFAULT_STROKE_RANGE = (0.5, 1.5)
+DEFAULT_BALL_RANGE = (0.7, 1.3)
+DEFAULT_CANDIDATES = 24
+
+
+def default_design_section(scene, candidates: int | None = None) -> tuple[dict, str]:
+    """([design] of the default study, the line that says so) for a scene without one:
+    power density (band mean, matched load) over the stroke and the ball diameter around
+    the scene's values (tube and electrode follow), at the scene's own excitation."""
+    stroke, d = scene.device.stroke * 1e3, scene.device.ball_diameter * 1e3
+    vary = {"gap_mm": [float(f"{stroke * f:.3g}") for f in DEFAULT_STROKE_RANGE],
+            "ball_diameter_mm": [float(f"{d * f:.3g}") for f in DEFAULT_BALL_RANGE]}
+    section = {"objective": "power_density", "candidates": DEFAULT_CANDIDATES, "batch": 8,
+               "vary": vary}
+    ex = scene.excitation
+    at = (f"{ex.frequency:g} Hz / {ex.amplitude * 1e3:g} mm" if ex.kind == "sine"
+          else f"its {ex.kind} excitation")
+    said = (f"{scene.source} has no [design]: a default study of power density over "
+            f"gap_mm = {vary['gap_mm']} and ball_diameter_mm = {vary['ball_diameter_mm']} "
+            f"(tube and electrodes follow the ball) at {at}, {candidates or DEFAULT_CANDIDATES} "
+            "candidates "
+            "(docs/design.md: write a [design] section for your own)")
+    return section, said
+
+
 def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
     """Validate ``scene.raw["design"]`` (with ``overrides`` of top-level keys) -> :class:`DesignSpec`."""
     raw = dict(scene.raw.get("design", {}) or {})
