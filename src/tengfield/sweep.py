@@ -9,7 +9,6 @@ processes, or over the ranks of an MPI job (``mpirun -n N tengfield sweep``,
 """
 from __future__ import annotations
 
-import sys
 from typing import Callable, Sequence
 
 from . import electrical
@@ -179,16 +178,14 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
     same as a serial run. Otherwise ``jobs`` worker processes (default: all
     cores) on this machine.
     """
-    from tqdm import tqdm
-
-    from ._mpi import check_jobs, rank_of
+    from ._console import progress_bar
+    from ._mpi import check_jobs
 
     check_jobs(jobs, comm)
     check_sweep_size(scene, len(frequencies), len(amplitudes), len(loads))
     check_grid(scene, frequencies, amplitudes)   # on every rank, before any work
     tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
-    bar = tqdm(total=len(tasks), desc="sweep", unit="point", file=sys.stderr,
-               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    bar = progress_bar(len(tasks), "sweep", progress, unit="point", comm=comm)
     try:
         results = run_tasks(_sweep_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:
