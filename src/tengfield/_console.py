@@ -132,5 +132,17 @@ def progress_bar(total: int | None, what: str, enabled: bool = True, *, unit: st
     """
     from tqdm import tqdm
 
+    shown = progress_shown(enabled, comm)
+    width = _terminal_width() if shown else 0
     return tqdm(total=total, desc=what, unit=unit, initial=initial, file=sys.stderr,
-                disable=not progress_shown(enabled, comm), dynamic_ncols=True)
+                disable=not shown, dynamic_ncols=width > 0, ncols=None if width > 0 else 80,
+                nrows=None if width > 0 else 24)
+
+
+def _terminal_width() -> int:
+    """Columns of the terminal on stderr; 0 when it does not say (a bare pseudo-terminal:
+    tqdm would then draw an empty line)."""
+    try:
+        return os.get_terminal_size(sys.stderr.fileno()).columns
+    except (AttributeError, OSError, ValueError):
+        return 0
