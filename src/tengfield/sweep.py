@@ -166,6 +166,19 @@ def check_grid(scene, frequencies, amplitudes) -> None:
                                  f"{float(a) * 1e3:g}: {exc}") from None
 
 
+class SweepRows(list):
+    """The rows of :func:`sweep` (a list of dicts, one per grid point and load) with
+    :meth:`plot`."""
+
+    def plot(self):
+        """The sweep figure (a matplotlib Figure; ``tengfield sweep`` saves it as sweep.png):
+        peak-to-peak V_OC, Q_SC, I_SC against frequency per amplitude, and mean power
+        against load when the sweep has loads."""
+        from .plotting.waveforms import sweep_figure   # the edge, imported on use
+
+        return sweep_figure(self)
+
+
 def sweep(scene, table, frequencies, amplitudes, loads=(), *,
           jobs: int | None = None, comm=None, progress: bool = False) -> list[dict]:
     """:func:`sweep_point` over the grid ``frequencies`` [Hz] x ``amplitudes`` [m]
@@ -190,4 +203,4 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
         results = run_tasks(_sweep_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:
         bar.close()
-    return [row for rows in results for row in rows]
+    return SweepRows(row for rows in results for row in rows)

@@ -54,6 +54,12 @@ class MapResult:
     upper_contacts_per_period: np.ndarray
     error: np.ndarray            # message where a point failed, else ''
 
+    def plot(self, *, title: str | None = None):
+        """The regime map (a matplotlib Figure; ``tengfield map`` saves it as map.png)."""
+        from ..plotting.dynamics import regime_map_figure   # the edge, imported on use
+
+        return regime_map_figure(self, title=title)
+
     def records(self) -> list[dict]:
         """One dict per grid point (frequency-fastest), SI units."""
         out = []
