@@ -6,6 +6,11 @@ workers) silences library logging below warnings (ffcx/setuptools JIT
 ``INFO:root:running build_ext`` and compiler lines), prints warnings and logged
 errors as one line each (``tengfield: warning: ...``, :func:`warning_text`) and
 makes VTK render off screen.
+
+:func:`progress_bar` is the one progress bar of every long command (sweep, map,
+report, precompute, ensembles, fit's scans, design): ``done/total`` and an ETA on
+stderr, only on a terminal, on MPI rank 0 and without ``--quiet``
+(:func:`set_quiet`, or ``TENGFIELD_QUIET=1``).
 """
 from __future__ import annotations
 
@@ -91,3 +96,53 @@ def configure_output() -> None:
         tqdm.tqdm.monitor_interval = 0
     except ImportError:   # pragma: no cover - a dependency
         pass
+
+
+# -- progress --------------------------------------------------------------------------
+_quiet = False
+
+
+def set_quiet(quiet: bool = True) -> None:
+    """``--quiet``: no progress bar in this process (warnings and errors still print)."""
+    global _quiet
+    _quiet = bool(quiet)
+
+
+def progress_shown(enabled: bool = True, comm=None) -> bool:
+    """Whether a progress bar prints: ``enabled``, stderr a terminal, rank 0 of ``comm``,
+    not ``--quiet`` / ``TENGFIELD_QUIET``."""
+    if not enabled or _quiet or os.environ.get("TENGFIELD_QUIET", "") not in ("", "0"):
+        return False
+    if comm is not None and comm.Get_rank() != 0:
+        return False
+    try:
+        return bool(sys.stderr.isatty())
+    except (AttributeError, ValueError):   # a closed or replaced stream
+        return False
+
+
+def progress_bar(total: int | None, what: str, enabled: bool = True, *, unit: str = "task",
+                 comm=None, initial: int = 0):
+    """A progress bar on stderr: ``what: 40%|####  | done/total [elapsed<ETA, rate]``.
+
+    Shown only when :func:`progress_shown` (else every call on it does nothing).
+    Use as ``bar.update(n)`` (callable as the ``progress`` argument of
+    :func:`tengfield._mpi.farm` / ``run_tasks``), ``bar.total = n`` to grow it,
+    ``bar.close()`` (or ``with progress_bar(...) as bar:``).
+    """
+    from tqdm import tqdm
+
+    shown = progress_shown(enabled, comm)
+    width = _terminal_width() if shown else 0
+    return tqdm(total=total, desc=what, unit=unit, initial=initial, file=sys.stderr,
+                disable=not shown, dynamic_ncols=width > 0, ncols=None if width > 0 else 80,
+                nrows=None if width > 0 else 24)
+
+
+def _terminal_width() -> int:
+    """Columns of the terminal on stderr; 0 when it does not say (a bare pseudo-terminal:
+    tqdm would then draw an empty line)."""
+    try:
+        return os.get_terminal_size(sys.stderr.fileno()).columns
+    except (AttributeError, OSError, ValueError):
+        return 0

@@ -214,6 +214,14 @@ class BreakdownResult:
     def relative_error_estimate(self) -> float:
         return float(self.error.get("relative", math.nan))
 
+    def plot(self, sigma: float | None = None, *, title: str | None = None):
+        """The breakdown figure (a matplotlib Figure; ``tengfield breakdown`` saves it as
+        breakdown.png): the gap voltages at ``sigma`` [C/m²] (default −σ_max) against
+        Paschen's curve, and their ratio to it over the stroke."""
+        from .plotting.breakdown import breakdown_figure   # the edge, imported on use
+
+        return breakdown_figure(self, -self.sigma_max if sigma is None else sigma, title=title)
+
     def margin(self, sigma: float) -> float:
         """|σ| / σ_max (above 1: the air breaks down before the charge is reached)."""
         return abs(sigma) / self.sigma_max if self.sigma_max > 0 else math.inf

@@ -35,7 +35,7 @@ import traceback
 from typing import NamedTuple
 
 from . import __version__
-from ._console import configure_output
+from ._console import configure_output, set_quiet
 from ._mpi import launched_size
 from .errors import TengfieldError
 
@@ -64,6 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "V_OC / Q_SC / I_SC waveforms. Without SCENE every command uses "
                     "the embedded default scene (the paper's device).")
     parser.add_argument("--version", action="version", version=f"tengfield {__version__}")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bars (anywhere on the line; warnings and errors "
+                             "still print)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(f"tengfield.commands.{name}").register(sub)
@@ -188,9 +191,21 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def _take_quiet(argv) -> list[str]:
+    """``argv`` without ``--quiet`` (accepted before or after the command; see
+    :func:`tengfield._console.set_quiet`)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    end = argv.index("--") if "--" in argv else len(argv)
+    if "--quiet" in argv[:end]:
+        set_quiet(True)
+        argv = [a for a in argv[:end] if a != "--quiet"] + argv[end:]
+    return argv
+
+
 def main(argv: list[str] | None = None) -> int:
     configure_output()
     parser = build_parser()
+    argv = _take_quiet(argv)
     if launched_size() > 1:
         return _main_under_mpirun(parser, argv, _launched_world())
     args = parser.parse_args(argv)

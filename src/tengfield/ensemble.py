@@ -159,11 +159,7 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     If realisation 0 rested (no field stage: the ball never left the lower plate) the
     surrogate is built here once, with ``solve`` (default the field solver), before the
     others run: each of them that moves would otherwise solve the field for itself."""
-    import sys
-
-    from tqdm import tqdm
-
-    from ._mpi import rank_of
+    from ._console import progress_bar
     from .sweep import run_tasks
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
@@ -172,8 +168,7 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
         obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
-    bar = tqdm(total=len(seeds), initial=1, desc="realisations", unit="run", file=sys.stderr,
-               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    bar = progress_bar(len(seeds), "realisations", progress, unit="run", comm=comm, initial=1)
     try:
         rows += run_tasks(_realisation_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:

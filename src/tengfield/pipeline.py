@@ -93,6 +93,38 @@ class RunResult:
         R || C_p); only with ``[circuit] parallel_capacitance_pF`` > 0 (else KeyError)."""
         return self.waveforms[electrical.READ_COLUMN]
 
+    def plot(self, *, last_periods: float | None = 5.0):
+        """The waveforms figure (a matplotlib Figure; a notebook shows it): V_OC, Q_SC, I_SC
+        (and the load's V and P) against time with the gap, over the last ``last_periods``
+        excitation periods (None: the whole run). ``tengfield run`` saves this figure as
+        waveforms.png (5 periods)."""
+        from .io import _run_title            # the edge, imported on use (notebooks)
+        from .plotting.waveforms import waveforms_figure
+
+        waveforms, title = self.waveforms, _run_title(self)
+        if last_periods is not None:
+            t = np.asarray(waveforms["time_s"])
+            last = t >= t[-1] - last_periods * self.scene.excitation.period
+            waveforms = {k: np.asarray(v)[last] for k, v in waveforms.items()}
+            title += f", last {last_periods:g} periods"
+        return waveforms_figure(waveforms, title=title, parallel_capacitance_pF=(
+            self.scene.circuit.parallel_capacitance * 1e12))
+
+    def to_dataframe(self):
+        """The waveforms as a pandas DataFrame (the columns of waveforms.csv, SI), when
+        pandas is installed (it is not a dependency of tengfield)."""
+        try:
+            import pandas
+        except ImportError:
+            raise ImportError("RunResult.to_dataframe() needs pandas, which tengfield does not "
+                              "install: pip install pandas (RunResult.waveforms holds the same "
+                              "columns as a dict of numpy arrays)") from None
+        from .io import WAVEFORM_COLUMNS
+
+        order = [c for c in WAVEFORM_COLUMNS if c in self.waveforms]
+        order += [c for c in self.waveforms if c not in order]
+        return pandas.DataFrame({c: np.asarray(self.waveforms[c]) for c in order})
+
 
 def _default_simulate():
     from .dynamics import simulate

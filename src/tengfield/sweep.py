@@ -9,7 +9,6 @@ processes, or over the ranks of an MPI job (``mpirun -n N tengfield sweep``,
 """
 from __future__ import annotations
 
-import sys
 from typing import Callable, Sequence
 
 from . import electrical
@@ -177,6 +176,19 @@ def check_grid(scene, frequencies, amplitudes) -> None:
                                  f"{float(a) * 1e3:g}: {exc}") from None
 
 
+class SweepRows(list):
+    """The rows of :func:`sweep` (a list of dicts, one per grid point and load) with
+    :meth:`plot`."""
+
+    def plot(self):
+        """The sweep figure (a matplotlib Figure; ``tengfield sweep`` saves it as sweep.png):
+        peak-to-peak V_OC, Q_SC, I_SC against frequency per amplitude, and mean power
+        against load when the sweep has loads."""
+        from .plotting.waveforms import sweep_figure   # the edge, imported on use
+
+        return sweep_figure(self)
+
+
 def sweep(scene, table, frequencies, amplitudes, loads=(), *,
           jobs: int | None = None, comm=None, progress: bool = False) -> list[dict]:
     """:func:`sweep_point` over the grid ``frequencies`` [Hz] x ``amplitudes`` [m]
@@ -189,18 +201,16 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
     same as a serial run. Otherwise ``jobs`` worker processes (default: all
     cores) on this machine.
     """
-    from tqdm import tqdm
-
-    from ._mpi import check_jobs, rank_of
+    from ._console import progress_bar
+    from ._mpi import check_jobs
 
     check_jobs(jobs, comm)
     check_sweep_size(scene, len(frequencies), len(amplitudes), len(loads))
     check_grid(scene, frequencies, amplitudes)   # on every rank, before any work
     tasks = [(scene, table, float(f), float(a), tuple(loads)) for f in frequencies for a in amplitudes]
-    bar = tqdm(total=len(tasks), desc="sweep", unit="point", file=sys.stderr,
-               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    bar = progress_bar(len(tasks), "sweep", progress, unit="point", comm=comm)
     try:
         results = run_tasks(_sweep_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:
         bar.close()
-    return [row for rows in results for row in rows]
+    return SweepRows(row for rows in results for row in rows)

@@ -84,7 +84,7 @@ def test_the_default_scene_keeps_its_mesh_size_to_the_bit():
     (scaled(3.0, gap_mm=6.0), 1.0),                          # stroke x2 only
     (scaled(3.0, tube_inner_radius_mm=11.0), 0.5),           # ball-tube clearance x1
     (FAR, 0.5),                                              # 400 mm spacing, small parts
-    (scaled(0.5), 0.5),                                      # smaller than the paper's: 0.5
+    (scaled(0.5), 0.25),                                     # all smaller: scaled down too
 ])
 def test_the_default_mesh_size_scales_with_the_smallest_feature(device, expected_mm):
     scene = scene_of(device)

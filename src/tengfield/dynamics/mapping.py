@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import DynamicsError, SceneError
-from .._mpi import check_jobs, farm, rank_of, size_of
+from .._mpi import check_jobs, farm, size_of
 from ..scene.constants import G
 from .impact import Restitution, integrate
 from .regime import classify
@@ -54,6 +53,12 @@ class MapResult:
     lower_contacts_per_period: np.ndarray
     upper_contacts_per_period: np.ndarray
     error: np.ndarray            # message where a point failed, else ''
+
+    def plot(self, *, title: str | None = None):
+        """The regime map (a matplotlib Figure; ``tengfield map`` saves it as map.png)."""
+        from ..plotting.dynamics import regime_map_figure   # the edge, imported on use
+
+        return regime_map_figure(self, title=title)
 
     def records(self) -> list[dict]:
         """One dict per grid point (frequency-fastest), SI units."""
@@ -158,9 +163,8 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
     up = np.full(shape, np.nan)
     errors = np.full(shape, "", dtype=object)
 
-    from tqdm import tqdm
-    bar = tqdm(total=amps.size * freqs.size, unit="pt", desc="regime map", file=sys.stderr,
-               disable=not progress or rank_of(comm) != 0 or None)
+    from .._console import progress_bar
+    bar = progress_bar(amps.size * freqs.size, "regime map", progress, unit="point", comm=comm)
     _chunk((setup, [(0, 0, 1.0, 0.0)]))   # load the compiled kernel once, before forking
 
     def store(results):

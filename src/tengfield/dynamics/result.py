@@ -92,6 +92,14 @@ class DynamicsResult:
         s = np.ascontiguousarray(np.atleast_1d(np.asarray(elapsed, dtype=float)))
         return self._sampler(s)
 
+    def plot(self, *, max_periods: float | None = None, title: str | None = None):
+        """The trajectory figure (a matplotlib Figure; ``tengfield dynamics`` saves it as
+        trajectory.png): table, plates and ball against time, the gap z(t), impacts
+        marked; ``max_periods``: the last that many excitation periods."""
+        from ..plotting.dynamics import trajectory_figure, trajectory_plot   # the edge, on use
+
+        return trajectory_plot(trajectory_figure(self, title=title, max_periods=max_periods))
+
     def summary(self) -> dict:
         """JSON-ready summary (the CLI's summary.json)."""
         plates = self.impacts.plate

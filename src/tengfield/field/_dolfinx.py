@@ -30,7 +30,13 @@ PETSc conventions: every KSP gets its own options prefix (pass a unique
 """
 from __future__ import annotations
 
+import contextlib
+import functools
 import itertools
+import logging
+import os
+import sys
+import tempfile
 
 import numpy as np
 
@@ -55,8 +61,74 @@ SUPPORTED = ((0, 5), (0, 9))
 
 _counter = itertools.count()
 
+
+# -- the form compiler, quiet ------------------------------------------------------
+class _BelowWarning(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.levelno >= logging.WARNING
+
+
+@contextlib.contextmanager
+def quiet_compiler():
+    """The form compiler (ffcx -> cffi -> setuptools -> the C compiler) says nothing on
+    stderr meanwhile: setuptools logs ``running build_ext`` and the compiler's command
+    lines at INFO on the root logger (raising its level to INFO, with ffcx's
+    ``logging.basicConfig()`` handler on stderr), and the compiler itself may write to
+    file descriptor 2. Both are dropped, unless logging asks for INFO (the root logger's
+    level at INFO or below before the compile, or ``TENGFIELD_VERBOSE=1``); what was
+    written to descriptor 2 is passed on when the compile fails, and tengfield's own
+    lines always are. The root logger's level is restored after."""
+    root = logging.getLogger()
+    if root.getEffectiveLevel() <= logging.INFO or \
+            os.environ.get("TENGFIELD_VERBOSE", "") not in ("", "0"):
+        yield
+        return
+    level = root.level
+    quiet = _BelowWarning()
+    filtered = [root, *root.handlers]
+    for item in filtered:
+        item.addFilter(quiet)
+    try:
+        sys.stderr.flush()
+    except (AttributeError, OSError, ValueError):
+        pass
+    try:
+        saved = os.dup(2)
+    except OSError:    # no descriptor 2 (a daemon): nothing can reach it anyway
+        saved = None
+    captured = tempfile.TemporaryFile() if saved is not None else None
+    failed = True
+    try:
+        if captured is not None:
+            os.dup2(captured.fileno(), 2)
+        yield
+        failed = False
+    finally:
+        if captured is not None:
+            os.dup2(saved, 2)
+            os.close(saved)
+            captured.seek(0)
+            text = captured.read()
+            captured.close()
+            kept = text if failed else b"".join(
+                line for line in text.splitlines(keepends=True) if line.startswith(b"tengfield: "))
+            if kept:
+                os.write(2, kept)
+        for item in filtered:
+            item.removeFilter(quiet)
+        root.setLevel(level)
+
+
+def _quietly(compile_function):
+    @functools.wraps(compile_function)
+    def call(*args, **kwargs):
+        with quiet_compiler():
+            return compile_function(*args, **kwargs)
+    return call
+
+
 # -- names chosen by version (the only version switch) ------------------------
-_function_space = fem.FunctionSpace if LEGACY else fem.functionspace
+_function_space = _quietly(fem.FunctionSpace if LEGACY else fem.functionspace)
 _bb_tree = dolfinx.geometry.BoundingBoxTree if LEGACY else dolfinx.geometry.bb_tree
 _collisions = (dolfinx.geometry.compute_collisions if LEGACY
                else dolfinx.geometry.compute_collisions_points)
@@ -90,7 +162,8 @@ def petsc_vector(f):
 
 def mesh_from_gmsh(model, comm, *, rank: int = 0, gdim: int):
     """(mesh, cell_tags, facet_tags) from the gmsh model on ``rank`` of ``comm``."""
-    out = gmshio.model_to_mesh(model, comm, rank, gdim=gdim, **_partition_options(comm))
+    with quiet_compiler():    # the coordinate element is compiled on first use
+        out = gmshio.model_to_mesh(model, comm, rank, gdim=gdim, **_partition_options(comm))
     return out[0], out[1], out[2]
 
 
@@ -210,9 +283,10 @@ def interpolate(V, f):
 # -- forms and assembly -------------------------------------------------------
 def form(ufl_form, jit_options: dict | None = None):
     """Compiled form (``jit_options`` go to ffcx/cffi under the version's keyword)."""
-    if jit_options:
-        return fem.form(ufl_form, **{_JIT_KEY: jit_options})
-    return fem.form(ufl_form)
+    with quiet_compiler():
+        if jit_options:
+            return fem.form(ufl_form, **{_JIT_KEY: jit_options})
+        return fem.form(ufl_form)
 
 
 def assemble_matrix(a, bcs=()):

@@ -27,8 +27,12 @@ Mesh grading (all sizes scale with the base size ``mesh_size``):
   rim/tube corner), which restores the optimal convergence rate of a
   smooth problem under uniform refinement;
 * ``s = 0.4 · mesh_size`` on the ball surface, growing linearly away;
-* in the ball-electrode gaps, ``s = (mesh_size/1 mm) · w(ρ)`` where
-  ``w(ρ) ≈ g + ρ²/d`` is the local gap width;
+* in the ball-electrode gaps, ``s = (mesh_size/ℓ) · w(ρ)`` where
+  ``w(ρ) ≈ g + ρ²/d`` is the local gap width and ``ℓ = 1 mm · d / 7 mm`` (the paper's
+  ball: 1 mm exactly), so the rule is scale-free: the paper's device divided by k with
+  its mesh size divided by k is the paper's mesh divided by k (it used ℓ = 1 mm for
+  every device, and a device /30 meshed its gaps 30x finer than the paper's, in
+  ~900x the cells: gmsh ran for minutes at 11 GB);
 * far away the size grows with the distance to the device.
 
 Physical groups (no point groups): surfaces ``ball``, ``walls``, ``air``,
@@ -44,7 +48,7 @@ import os
 from dataclasses import dataclass, field
 
 from ..errors import FieldError
-from ..scene.limits import default_mesh_scale
+from ..scene.limits import PAPER_FEATURES, default_mesh_scale
 from . import contact
 
 #: strongest singular exponent of the field (rim of an electrode meeting the tube corner)
@@ -344,7 +348,8 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
     for gap, z0 in ((lay.gap_lower, zl), (lay.gap_upper, zu)):
         if gap < 2.0 * h:
             d_gap = distance_to_points([(0.0, z0)])
-            math_eval(f"({h / 1e-3!r}) * (({gap!r}) + {d_gap}^2 / ({2.0 * lay.ball_radius!r}))")
+            math_eval(f"({gap_size_factor(lay)!r}) * (({gap!r}) + {d_gap}^2 / "
+                      f"({2.0 * lay.ball_radius!r}))")
 
     # dielectric interfaces: h on them, growing linearly away
     if interface_curves:
@@ -390,10 +395,29 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
     gmsh.option.setNumber("Mesh.Smoothing", 0)
 
 
+def gap_size_factor(lay: AxisymmetricLayout) -> float:
+    """``c`` of the gap rule ``s = c · (g + ρ²/d)``: mesh_size / ℓ, ℓ = 1 mm · d / 7 mm
+    (exactly ``mesh_size / 1e-3`` for the paper's 7 mm ball)."""
+    scale = 2.0 * lay.ball_radius / PAPER_FEATURES["ball_diameter_mm"]
+    return lay.mesh_size / (1e-3 * scale)
+
+
+def _gap_cells(lay: AxisymmetricLayout) -> float:
+    """Triangles of the gap rule where it is finer than the base size: the half-disk
+    around the axis point of each gap, ∫ π ρ dρ / (0.433 s²) with s = c (g + ρ²/d), is
+    π d / (0.866 c²) (1/g - 1/g_max), g_max = h / c the width where s reaches h."""
+    h, c, d = lay.mesh_size, gap_size_factor(lay), 2.0 * lay.ball_radius
+    cells = 0.0
+    for gap in (lay.gap_lower, lay.gap_upper):
+        if 0.0 < gap < 2.0 * h and gap < h / c:
+            cells += math.pi * d / (0.866 * c * c) * (1.0 / gap - c / h)
+    return cells
+
+
 def estimated_cells(lay: AxisymmetricLayout) -> float:
     """Rough number of triangles of the mesh of ``lay`` (before meshing, from the
     size fields of :func:`_size_fields`: bulk and far field, rims, ball surface,
-    dielectric interfaces; a triangle of size s covers ~0.433 s²)."""
+    ball-electrode gaps, dielectric interfaces; a triangle of size s covers ~0.433 s²)."""
     h = lay.mesh_size
     area = 0.433 * h * h
     B, R = lay.info["bulk_length_m"], lay.domain_radius
@@ -407,7 +431,7 @@ def estimated_cells(lay: AxisymmetricLayout) -> float:
             + 2.0 * (lay.tube_outer_radius - lay.tube_inner_radius)
         interfaces = length / (0.433 * INTERFACE_GROWTH * h)
     image = bulk * 0.5 if lay.kelvin else 0.0
-    return bulk + rims + ball + interfaces + image
+    return bulk + rims + ball + interfaces + image + _gap_cells(lay)
 
 
 def estimated_dofs(lay: AxisymmetricLayout, degree: int) -> float:

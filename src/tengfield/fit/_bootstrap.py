@@ -19,18 +19,18 @@ def _bootstrap(problem: _Problem, u_best, residual, fitted: dict, trace: Trace,
     step = float(np.median(np.diff(trace.time)))
     block = int(min(max(1, round(0.25 * period / step)), max(1, n // 4)))
     resid = {q: trace.values[q] - fitted[q] for q in fitted}
-    import sys
-
-    from tqdm import tqdm
+    from .._console import progress_bar
 
     samples = []
-    for _ in tqdm(range(spec.bootstrap), desc="bootstrap", unit="refit", file=sys.stderr,
-                  disable=not (progress and sys.stderr.isatty())):
+    bar = progress_bar(spec.bootstrap, "bootstrap", progress, unit="refit")
+    for _ in range(spec.bootstrap):
         starts = rng.integers(0, n - block + 1, size=int(np.ceil(n / block)))
         index = (starts[:, None] + np.arange(block)[None, :]).ravel()[:n]
         data = {q: fitted[q] + resid[q][index] for q in fitted}
         replica = _Problem(problem.model, problem.space, lambda v, d=data: residual(v, d))
         samples.append(_optimise(replica, u_best, spec).x)
+        bar.update(1)
+    bar.close()
     values = np.array([list(problem.space.values(u).values()) for u in samples])
     out = {"replicas": spec.bootstrap, "block_samples": block,
            "rule": "moving-block residual bootstrap, blocks of a quarter period, refits "

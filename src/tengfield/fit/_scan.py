@@ -12,11 +12,15 @@ from ..errors import TengfieldError
 SCAN_POINTS = {"restitution": 13, "amplitude_scale": 9}
 
 
-def _start_scan(model, trace, params, start, weights, quantities, candidates: int = 240):
+def _start_scan(model, trace, params, start, weights, quantities, candidates: int = 240,
+                progress: bool = False):
     """Start values from a scan: the time shift over its bounds (a least-squares
     cross-correlation with the best common charge scale when σ is free) for every
     point of a coarse grid of the restitution / amplitude scale (the impact map has
-    local minima there), keeping the best. Returns (start, description)."""
+    local minima there), keeping the best. Returns (start, description). ``progress``:
+    a bar over the grid's points on a terminal (:func:`tengfield._console.progress_bar`)."""
+    from .._console import progress_bar
+
     by_name = {p.name: p for p in params}
     shift = by_name.get("time_shift_s")
     scan_shift = shift is not None and not shift.start_given
@@ -38,6 +42,7 @@ def _start_scan(model, trace, params, start, weights, quantities, candidates: in
     t_rel = trace.time[pick] - trace.time[0]
     measured = {q: trace.values[q][pick] / weights[q] for q in quantities}
     best = (math.inf, None, None, None)
+    bar = progress_bar(len(combos), "fit start scan", progress, unit="point")
     for combo in combos:
         values = {p.name: start[p.name] for p in params if p.name != "time_shift_s"}
         values.update(combo)
@@ -45,6 +50,8 @@ def _start_scan(model, trace, params, start, weights, quantities, candidates: in
             dense = model.waveforms(values, grid, quantities)
         except TengfieldError:
             continue
+        finally:
+            bar.update(1)
         for s in shifts:
             f = {q: np.interp(model.window_start + s + t_rel, grid, dense[q]) / weights[q]
                  for q in quantities}
@@ -54,6 +61,7 @@ def _start_scan(model, trace, params, start, weights, quantities, candidates: in
             score = sum(float(np.sum((measured[q] - a * f[q]) ** 2)) for q in quantities)
             if score < best[0]:
                 best = (score, combo, float(s), a)
+    bar.close()
     if best[1] is None:
         return start, {"rule": "start scan failed: the given start values are used"}
     _, combo, s, a = best

@@ -42,6 +42,13 @@ class FitResult:
     fitted: dict = field(default_factory=dict)
     loss: str = "linear"
 
+    def plot(self):
+        """The fit figure (a matplotlib Figure; ``tengfield fit`` saves it as fit.png):
+        measured against fitted with the residuals (a trace), or fitted / target (targets)."""
+        from ..plotting.fit import fit_figure   # the edge, imported on use
+
+        return fit_figure(self)
+
     def as_dict(self) -> dict:
         """JSON-ready summary (fit.json)."""
         def finite(x):

@@ -98,7 +98,8 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
                              "steady-window start"}
     if (shift_param is not None and not shift_param.start_given) or \
             any(p.name in SCAN_POINTS for p in params):
-        start, scan = _start_scan(model, trace, params, start, weights, quantities)
+        start, scan = _start_scan(model, trace, params, start, weights, quantities,
+                                  progress=progress)
         alignment.update(scan)
 
     def residual(values, data=None):

@@ -1,4 +1,6 @@
-"""Plots (matplotlib, Agg). Each stage has its own module."""
+"""Plots (matplotlib, Agg). Each stage has its own module; each figure has a core that
+returns the matplotlib Figure (``*_figure``, used by the results' ``plot()``) and a
+``plot_*`` that saves it (:func:`save_figure`, used by the CLI)."""
 
 
 def new_figure(figsize, **kwargs):
@@ -10,3 +12,12 @@ def new_figure(figsize, **kwargs):
     fig = Figure(figsize=figsize, **kwargs)
     FigureCanvasAgg(fig)
     return fig
+
+
+def save_figure(fig, path, dpi: float):
+    """Write ``fig`` (from a ``*_figure`` function of this package: what the results'
+    ``plot()`` return in a notebook) to the PNG ``path``; returns ``path``. Every
+    ``plot_*(..., path)`` is its ``*_figure`` core saved here, so the CLI's PNG and
+    ``plot()`` are one figure."""
+    fig.savefig(path, dpi=dpi)
+    return path

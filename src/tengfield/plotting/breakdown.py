@@ -3,12 +3,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
 _COLOURS = {"open": "tab:blue", "open-top": "tab:green", "short": "tab:red"}
 
 
 def plot_breakdown(result, sigma: float, path, *, title: str | None = None) -> None:
+    """breakdown.png: :func:`breakdown_figure` saved to ``path``."""
+    save_figure(breakdown_figure(result, sigma, title=title), path, dpi=130)
+
+
+def breakdown_figure(result, sigma: float, *, title: str | None = None):
     """Left: |σ ΔV| of the axial gaps (and the binding line) against their length over the
     stroke, with Paschen's curve; right: the largest |σ ΔV| / V_b over the lines against
     the ball position. ``sigma`` [C/m²]: the scene's (or -σ_max). The binding point is marked."""
@@ -64,4 +69,4 @@ def plot_breakdown(result, sigma: float, path, *, title: str | None = None) -> N
     right.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"air breakdown at sigma = {sigma * 1e6:.3g} uC/m2: "
                  f"sigma_max = {result.sigma_max * 1e6:.3g} uC/m2", fontsize=10)
-    fig.savefig(path, dpi=130)
+    return fig

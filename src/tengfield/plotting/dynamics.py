@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.constants import G
-from . import new_figure
+from . import new_figure, save_figure
 
 REGIME_COLOURS = {
     "rest": "#d9d9d9",
@@ -96,6 +96,11 @@ def plot_trajectory(result, path, *, title: str | None = None, max_periods: floa
 
 def draw_trajectory(data: TrajectoryFigure, path):
     """Draw a :class:`TrajectoryFigure` to the PNG ``path``."""
+    return save_figure(trajectory_plot(data), path, dpi=130)
+
+
+def trajectory_plot(data: TrajectoryFigure):
+    """The trajectory figure (matplotlib Figure) of a :class:`TrajectoryFigure`."""
     t, y, z = data.t, data.y, data.z
     stroke_mm = data.stroke * 1e3
     fig = new_figure((9, 6))
@@ -127,11 +132,15 @@ def draw_trajectory(data: TrajectoryFigure, path):
         if data.window_start > t[0]:
             ax.axvspan(t[0], data.window_start, color="0.9", zorder=-1)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    return path
+    return fig
 
 
 def plot_regime_map(map_result, path, *, title: str | None = None):
+    """map.png: :func:`regime_map_figure` saved to ``path``."""
+    return save_figure(regime_map_figure(map_result, title=title), path, dpi=130)
+
+
+def regime_map_figure(map_result, *, title: str | None = None):
     """Regime colours over (frequency, amplitude) with the lift-off curve A w^2 = g."""
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
@@ -166,12 +175,16 @@ def plot_regime_map(map_result, path, *, title: str | None = None):
     ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
     ax.set_title(title or "motion regimes of the ball", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    return path
+    return fig
 
 
 def plot_trajectory3d(result, path, *, title: str | None = None):
-    """trajectory3d.png: side view (gap z and radial offset r vs time) and top view (x-y) [mm].
+    """trajectory3d.png: :func:`trajectory3d_figure` saved to ``path``."""
+    return save_figure(trajectory3d_figure(result, title=title), path, dpi=120)
+
+
+def trajectory3d_figure(result, *, title: str | None = None):
+    """Side view (gap z and radial offset r vs time) and top view (x-y) [mm].
 
     Drawn without pyplot (the caller's matplotlib backend is left alone).
     """
@@ -208,5 +221,4 @@ def plot_trajectory3d(result, path, *, title: str | None = None):
     fig.suptitle(f"{head}: regime {s['regime']}, {s['impacts']} plate impacts, "
                  f"{s['wall_contacts']} wall contacts", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return path
+    return fig

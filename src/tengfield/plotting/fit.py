@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
 
 _SI_LABEL = {"V": "V", "Q": "C", "I": "A"}
@@ -14,6 +14,11 @@ _DISPLAY = {"V": ("V", 1.0), "Q": ("nC", 1e-9), "I": ("nA", 1e-9)}
 
 
 def plot_fit(result, path) -> Path:
+    """fit.png: :func:`fit_figure` saved to ``path``."""
+    return Path(save_figure(fit_figure(result), path, dpi=90))
+
+
+def fit_figure(result):
     """Measured vs fitted (and residuals) for a trace; measured vs fitted bars for targets."""
     if result.mode == "targets":
         labels = list(result.measured)
@@ -54,8 +59,7 @@ def plot_fit(result, path) -> Path:
         axes[0].set_title(_title(result), fontsize=8)
         axes[-1].set_xlabel("measured time [s]")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    return Path(path)
+    return fig
 
 
 def _title(result) -> str:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
 
 def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> list:
@@ -42,6 +42,14 @@ def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> li
 def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
                    last_seconds: float | None = None,
                    parallel_capacitance_pF: float = 0.0) -> Path:
+    """waveforms.png: :func:`waveforms_figure` saved to ``path``."""
+    save_figure(waveforms_figure(waveforms, title=title, last_seconds=last_seconds,
+                                 parallel_capacitance_pF=parallel_capacitance_pF), path, dpi=120)
+    return Path(path)
+
+
+def waveforms_figure(waveforms: dict, *, title: str = "", last_seconds: float | None = None,
+                     parallel_capacitance_pF: float = 0.0):
     """Waveform panels against time [ms] with the gap [mm] in grey (right axis)
     (:func:`waveform_panels`; ``parallel_capacitance_pF``: the instrument's C_p, named
     on the V_read panel)."""
@@ -61,8 +69,7 @@ def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return Path(path)
+    return fig
 
 
 #: trajectory points sent to the surrogate figure (the (z, r) places the ball went)
@@ -172,6 +179,12 @@ def _plot_radial_change(ax, curves, cells: int, visited) -> None:
 
 
 def plot_sweep(rows: list[dict], path: str | Path) -> Path:
+    """sweep.png: :func:`sweep_figure` saved to ``path``."""
+    save_figure(sweep_figure(rows), path, dpi=120)
+    return Path(path)
+
+
+def sweep_figure(rows: list[dict]):
     """Peak-to-peak V_OC, Q_SC, I_SC against frequency (one line per amplitude),
     and mean load power against load resistance when the sweep has loads."""
     freqs = sorted({r["frequency_hz"] for r in rows})
@@ -210,5 +223,4 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
         if len(freqs) * len(amps) <= 8:
             ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return Path(path)
+    return fig

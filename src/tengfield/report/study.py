@@ -38,7 +38,6 @@ them in order (:func:`build_report`) and verifies the recommendations.
 from __future__ import annotations
 
 import dataclasses
-import sys
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -116,9 +115,7 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     recommendations, whose errors equal a serial run's (wall times are measured
     on whichever rank ran the job).
     """
-    from tqdm import tqdm
-
-    from .._mpi import rank_of
+    from .._console import progress_bar
 
     if comm is None:
         from mpi4py import MPI
@@ -126,8 +123,7 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     plan = plan or make_plan(fast)
     started = time.perf_counter()
     total = _task_estimate(plan)
-    bar = tqdm(total=total, desc="report", unit="task", file=sys.stderr,
-               disable=not progress or rank_of(farm_comm) != 0 or not sys.stderr.isatty())
+    bar = progress_bar(total, "report", progress, unit="task", comm=farm_comm)
 
     def advance(n=1):
         bar.update(n)

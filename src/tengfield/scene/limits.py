@@ -98,12 +98,20 @@ MIN_GAP_FRACTION = 2e-3
 #: The contact rule meshes ball-electrode gaps down to min_gap and extrapolates
 #: from gaps g, 2g, 4g at both plates: the stroke must hold 8 of them.
 CONTACT_GAPS_IN_STROKE = 8
+#: Smallest length a field mesh may hold [m] (the smallest meshed gap, MIN_GAP_FRACTION x
+#: the plate spacing): OpenCASCADE merges points closer than 1e-7 m. Measured, the
+#: paper's device divided by k, ball at contact: k = 66 (smallest gap 0.30 µm) meshes as
+#: the paper's, k = 75 (0.27 µm) gives gmsh elements dolfinx cannot read, k = 1000 loses
+#: the electrodes; 0.5 µm keeps a margin (k <= 40).
+MIN_MESHED_LENGTH = 5e-7
 #: The default ``[field] mesh_size_mm`` (0.5 mm) resolves the paper's device, whose
 #: smallest features are these [m]. Without ``mesh_size_mm`` in the scene, the default
-#: size is scaled by ``max(1, min over the features of size / paper's size)``
-#: (:func:`default_mesh_scale`): a device whose features are all k >= 1 times the
-#: paper's gets the paper's mesh scaled by k (same cost, same relative error); a device
-#: with one feature as small as the paper's keeps the default. A ``mesh_size_mm``
+#: size is scaled (:func:`default_mesh_scale`): a device whose features are all k >= 1
+#: times the paper's gets the paper's mesh scaled by k (same cost, same relative error);
+#: one whose features are all smaller than the paper's (k < 1) gets it scaled by the
+#: largest k (the paper's device divided by 30: the paper's mesh divided by 30; the 0.5 mm
+#: default left its gaps unresolved and devices /100 and below failed in gmsh); a device
+#: with features on both sides of the paper's keeps the default. A ``mesh_size_mm``
 #: written in the scene (or passed as an override) is never scaled.
 PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "gap_mm": 3.0e-3}
 #: ... and, with dielectric walls (``wall_permittivity != 1``), the walls and the
@@ -272,11 +280,16 @@ def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
 
 
 def default_mesh_scale(device, fld) -> float:
-    """Factor on the default ``mesh_size_mm``: ``max(1, min_i feature_i / paper_i)`` over
-    :func:`mesh_features` (1.0 exactly for the paper's device)."""
+    """Factor on the default ``mesh_size_mm`` from the ratios ``feature_i / paper_i`` over
+    :func:`mesh_features`: the smallest when all are >= 1, the largest when all are < 1,
+    else 1 (1.0 exactly for the paper's device)."""
     paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES}
     ratios = [size / paper[key] for key, size in mesh_features(device, fld.environment).items()]
-    return max(1.0, min(ratios))
+    if min(ratios) >= 1.0:
+        return min(ratios)
+    if max(ratios) < 1.0:
+        return max(ratios)
+    return 1.0
 
 
 def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
@@ -327,6 +340,13 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
             f"[device] gap_mm = {dev.stroke * 1e3:g} is too small for a field solve: allowed >= "
             f"{need * 1e3:.3g} mm ({CONTACT_GAPS_IN_STROKE} x the smallest meshed gap, "
             f"{MIN_GAP_FRACTION:g} x the plate spacing); dynamics-only runs accept it")
+    spacing = dev.plate_spacing
+    if MIN_GAP_FRACTION * spacing < MIN_MESHED_LENGTH * (1 - 1e-12):
+        problems.append(
+            f"[device] ball_diameter_mm + gap_mm = {spacing * 1e3:.3g} mm is too small for a "
+            f"field solve: allowed >= {MIN_MESHED_LENGTH / MIN_GAP_FRACTION * 1e3:.3g} mm (the "
+            f"smallest meshed gap, {MIN_GAP_FRACTION:g} x that, must be >= "
+            f"{MIN_MESHED_LENGTH * 1e6:g} µm for gmsh's geometry); dynamics-only runs accept it")
     method = fld.method
     if method == "auto":
         method = "axisymmetric" if fld.ball_offset == 0.0 else "3d"

@@ -184,9 +184,8 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         raise ValueError(f"initial_positions = {count}: must be 2^k + 1 >= 3")
     bar = None
     if progress and rank_of(comm) == 0:
-        from tqdm import tqdm
-        bar = tqdm(total=count, desc="field solves", unit="position", file=sys.stderr,
-                   disable=not sys.stderr.isatty())
+        from .._console import progress_bar
+        bar = progress_bar(count, "field solves", unit="position")
 
     symmetric = is_mirror_symmetric(scene)
     sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
@@ -392,9 +391,8 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     sample_keys = {grid_key(z, r) for z in sample_z for r in (0.0, largest)}
     bar = None
     if progress and rank_of(comm) == 0:
-        from tqdm import tqdm
-        bar = tqdm(total=0, desc="3D field solves (z, r)", unit="solve", file=sys.stderr,
-                   disable=not sys.stderr.isatty())
+        from .._console import progress_bar
+        bar = progress_bar(0, "3D field solves (z, r)", unit="solve")
 
     def work(point):
         z, r = point
