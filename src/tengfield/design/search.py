@@ -194,12 +194,12 @@ class _Workers:
 
 def progress_bar(total: int, enabled: bool):
     """THE progress display of a design (done/total, rate, ETA; the current best as its
-    postfix): on stderr when ``enabled`` and stderr is a terminal, silent otherwise
-    (piped, ``--quiet``, ranks other than 0)."""
-    from tqdm import tqdm
+    postfix): the shared bar of :func:`tengfield._console.progress_bar` (on a terminal
+    only; silent when piped, with ``--quiet``; the caller passes ``enabled`` False on
+    ranks other than 0)."""
+    from .._console import progress_bar as bar
 
-    return tqdm(total=total, desc="design", unit="candidate", file=sys.stderr,
-                disable=not (enabled and sys.stderr.isatty()))
+    return bar(total, "design", enabled, unit="candidate")
 
 
 def show_best(bar, spec: DesignSpec, row: dict) -> None:
