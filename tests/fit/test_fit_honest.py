@@ -177,3 +177,53 @@ def test_fit_of_the_papers_peaks_warns_of_breakdown(tmp_path, run_cli, cli_env):
         abs(sigma) / limit, rel=1e-9)
     assert f"{sigma:.4g}" in lines[0] and f"sigma_max = {limit:.3g} uC/m^2" in lines[0]
     assert (out / "fit.png").exists()
+
+
+# -- #30.6: a written scene names its files so that it runs from where it is ----------------
+def test_fitted_toml_of_a_recorded_excitation_runs_from_the_output_folder(tmp_path, main,
+                                                                         monkeypatch):
+    """fitted.toml lives in -o but kept file = "table.csv" relative to the original scene:
+    `tengfield run fitted.toml` failed `no such file`. Figures on."""
+    import math
+
+    from tengfield.scene import load_scene as load
+
+    scenes = tmp_path / "scenes"
+    scenes.mkdir()
+    t = [i * 1e-3 for i in range(1201)]
+    (scenes / "table.csv").write_text("time_s,displacement_m\n" + "".join(
+        f"{x!r},{1.5e-3 * math.sin(2 * math.pi * 20 * x)!r}\n" for x in t))
+    path = scenes / "s.toml"
+    path.write_text("[excitation]\nkind = 'recorded'\nfile = 'table.csv'\n"
+                    "[run]\nduration_s = 1.0\n")
+    scene = load(path)
+    cache = tmp_path / "cache"
+    reference_surrogate(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    elsewhere = tmp_path / "work"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)                  # the command runs from another folder
+    out = tmp_path / "results" / "fit"
+    assert main(["fit", str(path), "--targets", "Q_pp_nC=0.5", "--free",
+                 "surface_charge_uC_per_m2", "-o", str(out), "--cache-dir", str(cache)]) == 0
+    assert (out / "fit.png").exists()
+    fitted = load(out / "fitted.toml")           # runs from where it is
+    np.testing.assert_array_equal(fitted.excitation.times, scene.excitation.times)
+    np.testing.assert_array_equal(fitted.excitation.values, scene.excitation.values)
+    assert fitted.device.surface_charge != scene.device.surface_charge
+
+
+def test_scene_toml_writes_file_keys_resolvable_from_anywhere(tmp_path):
+    from tengfield._files import scene_dir, scene_toml
+    import tomllib
+
+    base = tmp_path / "a" / "b"
+    data = {"excitation": {"kind": "random", "psd_file": "../psd.csv", "file": "",
+                           "seed": 3},
+            "run": {"output_file": "/abs/x.csv"}}
+    text = tomllib.loads(scene_toml(data, "h", base_dir=base))
+    assert text["excitation"]["psd_file"] == str(tmp_path / "a" / "psd.csv")
+    assert text["excitation"]["file"] == "" and text["excitation"]["seed"] == 3
+    assert text["run"]["output_file"] == "/abs/x.csv"
+    assert tomllib.loads(scene_toml(data))["excitation"]["psd_file"] == "../psd.csv"
+    assert scene_dir(str(base / "s.toml")) == base
+    assert scene_dir("<default>") == type(base).cwd()

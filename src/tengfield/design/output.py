@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
+from .._files import atomic_path, scene_dir, scene_toml, write_json, write_rows, write_text
 from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
 
@@ -181,7 +181,8 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
                   + f"\nexcitation and [run]: the first band point ({point}), where the design "
                   f"scored {objective} = {first:.6g} {unit}\n[field]: the scene's (the design "
                   "used " + ("coarse settings)" if result.spec.field == "coarse" else "these)"))
-        write_text(out / "best.toml", scene_toml(best_scene_dict(result), header))
+        write_text(out / "best.toml", scene_toml(best_scene_dict(result), header,
+                                                 base_dir=scene_dir(result.scene.source)))
         written.append(out / "best.toml")
     if plots:
         from ..plotting.design import plot_design
