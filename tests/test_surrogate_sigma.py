@@ -92,3 +92,42 @@ def test_cli_run_at_another_sigma_is_a_cache_hit(tmp_path, run_cli, cli_env):
         for key in ("V_oc_V", "Q_sc_C", "I_sc_A"):
             assert summaries[uc]["peak_to_peak"][key] == pytest.approx(
                 factor * summaries[-8.0]["peak_to_peak"][key], rel=1e-9), (uc, key)
+
+
+def test_a_surrogate_cached_by_an_older_tengfield_is_read_and_copied(tmp_path):
+    """A cache written under the old key (sigma in it, FIELD_SCHEMA 1) is read (and
+    scaled), never solved again; it is copied under today's key."""
+    import dataclasses
+
+    from tengfield.surrogate.provenance import legacy_field_hash
+
+    scene = _sigma(fx.scene_with(), -8.0)
+    solver = fx.CountingSolver()
+    table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path / "made", solve=solver)
+    legacy = legacy_field_hash(scene)
+    assert legacy != scene.field_hash()
+    old = tmp_path / "cache" / f"surrogate-{legacy[:24]}.h5"
+    old.parent.mkdir()
+    surrogate.write_table(old, dataclasses.replace(table, field_hash=legacy))
+    calls = solver.calls
+    # the old key holds sigma: the scene at -8 finds it
+    got, outcome = surrogate.obtain_table(scene, cache_dir=tmp_path / "cache", solve=solver)
+    assert solver.calls == calls
+    assert outcome.status == "cached" and "older tengfield" in outcome.reason
+    np.testing.assert_array_equal(got.induced_charge, table.induced_charge)
+    assert surrogate.cache_path(scene, tmp_path / "cache").is_file()
+    # ... and its copy under today's key serves every sigma
+    got, outcome = surrogate.obtain_table(_sigma(scene, -20.0), cache_dir=tmp_path / "cache",
+                                          solve=solver)
+    assert solver.calls == calls and outcome.status == "cached"
+    assert "older" not in outcome.reason
+    np.testing.assert_allclose(got.induced_charge, 2.5 * table.induced_charge, rtol=1e-12)
+
+
+def test_the_default_scenes_legacy_key_is_the_old_field_hash():
+    """FIELD_SCHEMA 1's hash of the default scene (tests/test_scene_schema.py before #28)."""
+    from tengfield.scene import default_scene
+    from tengfield.surrogate.provenance import legacy_field_hash
+
+    assert legacy_field_hash(default_scene()) == (
+        "56dec865f925b863506de432f346f81a03924f24ee0d70bc7fb742ff937ee99c")

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._mpi import rank_of, size_of
-from .provenance import radial_hash, solver_fingerprint
+from .provenance import legacy_field_hash, radial_hash, solver_fingerprint
 from .refinement import (SolveFunction, precompute, precompute_radial, radial_accuracy_problems,
                          warn_accuracy, warn_problems)
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
@@ -135,6 +135,29 @@ def _at_scene_charge(table, scene, reason: str):
             f"{scene.device.surface_charge * 1e6:.6g} uC/m^2 (no field solve)")
 
 
+def _legacy(scene, path: Path, comm, write: bool):
+    """A trusted surrogate cached by an older tengfield under the key with σ
+    (:func:`legacy_field_hash`): read, copied to ``path`` under today's key (when
+    ``write``), and used. ``(None, "computed", reason)`` when there is none."""
+    import dataclasses
+
+    legacy = legacy_field_hash(scene)
+    old = path.parent / f"surrogate-{legacy[:24]}.h5"
+    missing = (None, "computed", f"no cached surrogate at {path}")
+    if old == path or not old.is_file():
+        return missing
+    table, status, reason = load_cached(
+        old, scene, comm, read=lambda p: read_table(p, expected_hash=legacy,
+                                                    expected_solver=solver_fingerprint()))
+    if table is None:   # an untrusted old file was warned of; solve for today's key
+        return None, "recomputed", reason
+    table = dataclasses.replace(table, field_hash=scene.field_hash())
+    if write:
+        store_in_cache(path, table, comm)
+    return table, "cached", (f"surrogate of an older tengfield (sigma in its key) at {old}"
+                             + (f", copied to {path}" if write else ""))
+
+
 def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
                  solve: SolveFunction | None = None, progress: bool = False,
                  command_line: str = "", write: bool = True) -> tuple[SurrogateTable, CacheOutcome]:
@@ -149,6 +172,8 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     start = time.perf_counter()
     path = cache_path(scene, cache_dir)
     table, status, reason = load_cached(path, scene, comm)
+    if table is None and status == "computed":
+        table, status, reason = _legacy(scene, path, comm, write)
     if table is not None:
         warn_accuracy(table, comm)      # as when it was computed: a cache hit is no excuse
         table, reason = _at_scene_charge(table, scene, reason)
