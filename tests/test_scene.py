@@ -35,7 +35,10 @@ def test_field_hash_tracks_only_field_inputs():
     assert s.with_values(device={"cells": 91}).field_hash() == h
     assert s.with_values(device={"ball_permittivity": 2.0}).field_hash() != h
     assert s.with_values(field={"mesh_size_mm": 0.4}).field_hash() != h
-    assert s.with_values(device={"surface_charge_uC_per_m2": -9.0}).field_hash() != h
+    # sigma is not a field input: a cached surrogate is scaled to it (issue #28)
+    assert s.with_values(device={"surface_charge_uC_per_m2": -9.0}).field_hash() == h
+    assert s.with_values(device={"surface_charge_uC_per_m2": 8.0}).field_hash() == h
+    assert s.with_values(device={"surface_charge_uC_per_m2": "breakdown"}).field_hash() == h
 
 
 BAD = [

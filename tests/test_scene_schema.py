@@ -11,8 +11,9 @@ from tengfield.errors import SceneError
 from tengfield.scene import Device, Scene, default_scene
 from tengfield.scene.schema import FIELD_KEYS, SCHEMA
 
-#: the field hash of the default scene (every cached surrogate of it is keyed by this)
-DEFAULT_FIELD_HASH = "56dec865f925b863506de432f346f81a03924f24ee0d70bc7fb742ff937ee99c"
+#: the field hash of the default scene (every cached surrogate of it is keyed by this;
+#: FIELD_SCHEMA 2: sigma left the hash, issue #28)
+DEFAULT_FIELD_HASH = "b60e9f08787bcb2dcfe3f4759b8cac5b3bf8488ea49dd5adb3b2c65053007eff"
 
 #: keys whose change needs other keys set to build a valid scene (in both scenes compared)
 RECORDED = {"kind": "recorded", "file": "table.csv"}

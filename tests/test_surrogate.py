@@ -204,7 +204,7 @@ def test_cache_hit_miss_partial_and_corrupt(tmp_path, plate_default_scene):
     assert outcome.status == "cached" and solver.calls == calls
     np.testing.assert_array_equal(again.capacitance, first.capacitance)
     # a field-relevant change: miss, a new file
-    moved = scene.with_values(device={"surface_charge_uC_per_m2": -5.0})
+    moved = scene.with_values(device={"ball_permittivity": 3.0})
     _, outcome = surrogate.obtain_table(moved, **kw)
     assert outcome.status == "computed" and solver.calls > calls
     assert len(list(tmp_path.glob("surrogate-*.h5"))) == 2

@@ -109,17 +109,46 @@ def toml_value(value) -> str:
     raise TypeError(f"cannot write {value!r} to TOML")
 
 
-def scene_toml(data: dict, header: str = "") -> str:
+def scene_dir(source: str) -> Path:
+    """The folder a scene's relative file names resolve from: its file's folder, or the
+    working directory for a scene without a file (``"<default>"``, ``"<dict>"``), as
+    :meth:`tengfield.scene.Scene.with_values` reads them."""
+    if source in ("<default>", "<dict>", "") or source.startswith("<"):
+        return Path.cwd()
+    return Path(source).parent
+
+
+def _is_file_key(key: str) -> bool:
+    """A key naming a file (``file``, ``psd_file``, ...)."""
+    return key == "file" or key.endswith("_file")
+
+
+def _file_value(key: str, value, base_dir: Path | None):
+    """``value`` of a file key as an absolute path (resolved from ``base_dir``), so that
+    the written scene runs from wherever it lives (issue #30.6: a fitted.toml in ``-o``
+    kept ``file = "rec.csv"`` relative to the original scene and did not run)."""
+    if base_dir is None or not _is_file_key(key) or not isinstance(value, str) or not value:
+        return value
+    if os.path.isabs(value):
+        return value
+    return os.path.abspath(os.path.join(os.fspath(base_dir), value))
+
+
+def scene_toml(data: dict, header: str = "", *, base_dir: str | Path | None = None) -> str:
     """TOML text of a scene dict (``{section: {key: value}}``): ``header`` as comment
     lines, then one table per section. What a scene file of scalars cannot hold is
-    left out: an entry at the top level that is no section, a sub-table, a None."""
+    left out: an entry at the top level that is no section, a sub-table, a None.
+    ``base_dir``: the folder the original scene's relative file names (``file``,
+    ``psd_file``) resolve from (:func:`scene_dir`); they are written as absolute paths,
+    since the written scene lives elsewhere (in ``-o``)."""
     lines = [f"# {line}" for line in header.splitlines()]
+    base = None if base_dir is None else Path(base_dir)
     for sec, values in data.items():
         if not isinstance(values, dict):
             continue
         lines += ["", f"[{sec}]"]
-        lines += [f"{key} = {toml_value(v)}" for key, v in values.items()
-                  if v is not None and not isinstance(v, dict)]
+        lines += [f"{key} = {toml_value(_file_value(key, v, base))}"
+                  for key, v in values.items() if v is not None and not isinstance(v, dict)]
     return "\n".join(lines).lstrip("\n") + "\n"
 
 

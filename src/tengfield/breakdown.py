@@ -373,11 +373,11 @@ def scene_breakdown(scene, table, states=None) -> BreakdownResult:
 
 def scaled_table(table, factor: float):
     """The surrogate table with every charge scaled by ``factor`` (σ_new / σ_old): the
-    induced charges and the ball charge are linear in σ, C does not depend on it."""
-    import dataclasses
+    induced charges and the ball charge are linear in σ, C does not depend on it
+    (:func:`tengfield.surrogate.table.scaled_charges`)."""
+    from .surrogate.table import scaled_charges
 
-    return dataclasses.replace(table, induced_charge=np.asarray(table.induced_charge) * factor,
-                               ball_charge=float(table.ball_charge) * factor)
+    return scaled_charges(table, factor)
 
 
 def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool = False,
@@ -516,9 +516,11 @@ def resolve_for_run(scene, table, comm=None):
         return scene, table, None
     result = scene_breakdown(scene, table)
     if uses_breakdown_charge(scene):
+        from .surrogate.table import at_ball_charge
+
         sigma = -result.sigma_max
-        table = scaled_table(table, sigma / scene.device.surface_charge)
         scene = scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
+        table = at_ball_charge(table, scene.device.ball_charge)   # whatever σ it was solved at
     elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
         b = result.binding
         warnings.warn(

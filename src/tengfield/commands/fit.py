@@ -1,6 +1,6 @@
 """``tengfield fit``: calibrate a scene's unknowns to a measured trace or to scalar targets.
 
-Writes DIR/fit.json (values, standard errors, correlations, residual RMS,
+Writes DIR/fit.json (values, standard errors, correlations, residuals,
 identifiability notes, iterations, wall time), DIR/fit.png (measured vs fitted
 with residuals) and DIR/fitted.toml (the scene with the fitted values).
 """
@@ -79,7 +79,14 @@ def print_result(result) -> None:
         flag = "" if result.identifiable[name] else "   NOT identifiable"
         print(f"  {name:26s} = {result.values[name]:12.6g} +- "
               f"{result.standard_errors[name]:.3g} {unit}{flag}")
-    print(f"  reduced chi^2 = {result.chi2_reduced:.3g}; residual RMS: "
-          + ", ".join(f"{k} {v:.3g}" for k, v in result.residual_rms.items()) + " (SI)")
+    from ..fit._residuals import residual_lines
+
+    print(f"  reduced chi^2 = {result.chi2_reduced:.3g}; residuals:")
+    for line in residual_lines(result.mode, result.residuals):
+        print(f"    {line}")
+    if result.breakdown:
+        b = result.breakdown
+        print(f"  air breakdown: sigma_max = {b['sigma_max_uC_per_m2']:.3g} uC/m^2 of the scene, "
+              f"|fitted sigma| / sigma_max = {b['margin']:.3g}")
     for note in result.notes:
         print(f"  note: {note}")

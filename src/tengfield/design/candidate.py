@@ -196,6 +196,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     from ..dynamics import simulate as default_simulate
     from ..breakdown import obtain_breakdown_table, uses_breakdown_charge
     from ..surrogate import TerminalCurves, obtain_table
+    from ..surrogate.table import at_ball_charge
 
     simulate = simulate or default_simulate
     row = {"values": dict(values), "status": "ok", "reason": "", "objectives": {},
@@ -248,7 +249,9 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
             key = scene.field_hash()
             row["field_hash"] = key
             if tables is not None and key in tables:
-                table, row["field_status"] = tables[key], "memo"
+                # the key leaves sigma out (a surrogate scales): at this candidate's charge
+                table, row["field_status"] = at_ball_charge(tables[key],
+                                                            scene.device.ball_charge), "memo"
             else:
                 with warnings.catch_warnings():   # the coarse field's accuracy is reported
                     warnings.simplefilter("ignore", RuntimeWarning)   # as the error bar

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
+from .._files import atomic_path, scene_dir, scene_toml, write_json, write_rows, write_text
 from .answer import (band_table_lines, chosen_band_point, describe, design_answer, on_bounds,
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
@@ -221,7 +221,8 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     best = result.best
     if best is not None:
         write_text(out / "best.toml", scene_toml(best_scene_dict(result),
-                                                 best_toml_header(result)))
+                                                 best_toml_header(result),
+                                                 base_dir=scene_dir(result.scene.source)))
         written.append(out / "best.toml")
     if plots:
         from ..plotting.design import plot_design

@@ -30,13 +30,52 @@ FALLBACK_SIGMA_UC = -1.0
 def reference_surrogate(scene, *, cache_dir=None, solve=None, comm=None, progress=False):
     """``(curves, sigma_ref [C/m²], outcome)``: the surrogate of ``scene`` at its own σ
     (at -1 µC/m² when that is zero), obtained once (cached by the field hash)."""
-    from ..surrogate import TerminalCurves, obtain_table
+    from ..surrogate import TerminalCurves
+
+    table, sigma_ref, outcome = _reference_table(scene, cache_dir=cache_dir, solve=solve,
+                                                 comm=comm, progress=progress)
+    return TerminalCurves(table, scene.circuit.reference), sigma_ref, outcome
+
+
+def _reference_table(scene, *, cache_dir=None, solve=None, comm=None, progress=False):
+    """``(table, sigma_ref [C/m²], outcome)`` of :func:`reference_surrogate`."""
+    from ..surrogate import obtain_table
 
     if scene.device.surface_charge == 0.0:
         scene = scene.with_values(device={"surface_charge_uC_per_m2": FALLBACK_SIGMA_UC})
     table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                   progress=progress)
-    return TerminalCurves(table, scene.circuit.reference), scene.device.surface_charge, outcome
+    return table, scene.device.surface_charge, outcome
+
+
+def breakdown_check(scene, table, result: FitResult) -> None:
+    """A fitted σ beyond the scene's air-breakdown limit σ_max (from the same surrogate's
+    gap lines, :func:`tengfield.breakdown.scene_breakdown`): one warning naming both, a
+    note, and ``result.breakdown``. Nothing when σ is not fitted or the surrogate has no
+    gap lines (3D solver, a custom solve)."""
+    import warnings
+
+    name = "surface_charge_uC_per_m2"
+    if name not in result.values or table.line_potential is None:
+        return
+    from ..breakdown import scene_breakdown
+
+    limit = scene_breakdown(scene, table)
+    sigma = result.values[name] * 1e-6
+    margin = limit.margin(sigma)
+    result.breakdown = {"sigma_max_uC_per_m2": limit.sigma_max * 1e6, "margin": margin,
+                        "fitted_sigma_uC_per_m2": result.values[name],
+                        "binding": limit.binding.state, "rule": "|fitted sigma| / sigma_max "
+                        "(above 1: the gap would discharge before the ball holds that charge)"}
+    if margin > 1.0:
+        b = limit.binding
+        text = (f"fitted {name} = {result.values[name]:.4g} exceeds the scene's air-breakdown "
+                f"limit sigma_max = {limit.sigma_max * 1e6:.3g} uC/m^2 ({b.state}, {b.side} "
+                f"gap {b.gap * 1e3:.3g} mm): the gap would discharge first, so the data "
+                "need another explanation (geometry, C_p, the instrument) or the charge is "
+                "not the ball's alone")
+        result.notes.append(text)
+        warnings.warn(f"fit: {text}", RuntimeWarning, stacklevel=2)
 
 
 def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, solve=None,
@@ -60,11 +99,18 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
             spec = parse_fit_section(scene, _default_target_parameters(goal))
     else:
         goal = read_trace(measured, spec)
-    curves, sigma_ref, _ = reference_surrogate(scene, cache_dir=cache_dir, solve=solve,
-                                               comm=comm, progress=progress)
+    from ..surrogate import TerminalCurves
+
+    table, sigma_ref, _ = _reference_table(scene, cache_dir=cache_dir, solve=solve, comm=comm,
+                                           progress=progress)
+    curves = TerminalCurves(table, scene.circuit.reference)
     if targets is not None:
-        return fit_targets(scene, curves, sigma_ref, goal, spec, simulate=simulate)
-    return fit_trace(scene, curves, sigma_ref, goal, spec, simulate=simulate, progress=progress)
+        result = fit_targets(scene, curves, sigma_ref, goal, spec, simulate=simulate)
+    else:
+        result = fit_trace(scene, curves, sigma_ref, goal, spec, simulate=simulate,
+                           progress=progress)
+    breakdown_check(scene, table, result)
+    return result
 
 
 def _default_target_parameters(targets) -> list[str]:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import scene_toml, write_json, write_text
+from .._files import scene_dir, scene_toml, write_json, write_text
 from .solve import FitResult
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
@@ -44,7 +44,8 @@ def write_fit_outputs(scene, result: FitResult, out_dir, *, plots: bool = True) 
         lines.append("time_shift_s is the trace's offset after the steady-window start "
                      "(no scene key)")
     write_text(out / "fitted.toml", scene_toml(fitted_scene_dict(scene, result),
-                                               "\n".join(lines)))
+                                               "\n".join(lines),
+                                               base_dir=scene_dir(scene.source)))
     written.append(out / "fitted.toml")
     if plots:
         from ..plotting.fit import plot_fit

@@ -26,7 +26,7 @@ class FitResult:
     correlation: np.ndarray
     identifiable: dict[str, bool]
     notes: list[str]
-    residual_rms: dict[str, float]              # per column / target, SI
+    residual_rms: dict[str, float]              # per column / target, SI, >= 0
     chi2_reduced: float
     noise: dict[str, dict]                      # per column: value [SI] and "given"/"estimated"
     evaluations: int
@@ -41,6 +41,11 @@ class FitResult:
     measured: dict = field(default_factory=dict)    # plotting: time, values
     fitted: dict = field(default_factory=dict)
     loss: str = "linear"
+    #: per column / target in its own unit and as a % (tengfield.fit._residuals)
+    residuals: dict = field(default_factory=dict)
+    #: σ_max of the scene's surrogate and the fitted σ's margin (when σ is fitted and the
+    #: surrogate has breakdown lines)
+    breakdown: dict = field(default_factory=dict)
 
     def plot(self):
         """The fit figure (a matplotlib Figure; ``tengfield fit`` saves it as fit.png):
@@ -63,6 +68,11 @@ class FitResult:
                             "matrix": [[finite(v) for v in row] for row in self.correlation]},
             "identifiability_notes": self.notes,
             "residual_rms": self.residual_rms,
+            "residual_rms_rule": "SI: a column's RMS of fitted - measured, a target's "
+                                 "|fitted - measured|; 'residuals' has them in the data's units "
+                                 "and as %",
+            "residuals": self.residuals,
+            "breakdown": self.breakdown,
             "chi2_reduced": finite(self.chi2_reduced),
             "noise": self.noise,
             "loss": self.loss,

@@ -26,6 +26,7 @@ from ._bootstrap import _bootstrap
 from ._identify import _profile, _uncertainty
 from ._model import ForwardModel
 from ._problem import _optimise, _Problem, _Space
+from ._residuals import bound_notes, on_bound, target_residuals, trace_residuals
 from ._scan import SCAN_POINTS, _start_scan
 from ._signal import _check_signal, _explained_note
 from .result import FitError, FitResult
@@ -46,11 +47,6 @@ def _finish(mode, problem, res, spec, params, start, residual_parts, noise, nois
             if not identifiable[name] or not math.isfinite(standard_errors[name]):
                 profiles[name] = _profile(problem, u, spec, float(res.cost), max(s2, 1e-300),
                                           name, standard_errors[name], whole_range=True)
-    for k, par in enumerate(params):
-        if par.lo < values[par.name] < par.hi:
-            continue
-        notes.append(f"{par.name} = {values[par.name]:.6g} sits on its bound "
-                     f"[{par.lo:g}, {par.hi:g}]: widen the bound or check the model")
     return FitResult(
         mode=mode, names=problem.space.names, values=values, start=start,
         bounds={p.name: (p.lo, p.hi) for p in params}, standard_errors=standard_errors,
@@ -144,6 +140,8 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
                        "units": {c.quantity: c.unit for c in trace.columns}}
     result.fitted = model.waveforms(result.values, model.model_times(trace.time, shift),
                                     quantities)
+    result.residuals = trace_residuals(trace, result.fitted)
+    bound_notes(result, on_bound(problem.space, res.x))
     _explained_note(result, trace, spec.loss)
     if spec.bootstrap:
         result.bootstrap = _bootstrap(problem, res.x, residual, result.fitted, trace, spec,
@@ -177,9 +175,9 @@ def fit_targets(scene, curves, reference_sigma: float, targets: list[Target], sp
     u0 = np.clip(space.to_u([start[p.name] for p in params]), space.lower, space.upper)
     res = _optimise(problem, u0, spec)
 
-    def residual_parts(values):
+    def residual_parts(values):   # |fitted - measured| [SI]: one number's RMS
         scalars = model.scalars(values)
-        return {t.label: float(scalars[t.key] - t.value) for t in targets}
+        return {t.label: abs(float(scalars[t.key] - t.value)) for t in targets}
 
     noise = {t.label: {"value_SI": t.uncertainty, "relative": t.uncertainty / t.value,
                        "how": "given (+-)" if t.uncertainty_given
@@ -195,5 +193,7 @@ def fit_targets(scene, curves, reference_sigma: float, targets: list[Target], sp
     scalars = model.scalars(result.values)
     result.measured = {t.label: t.value / t.factor for t in targets}
     result.fitted = {t.label: scalars[t.key] / t.factor for t in targets}
+    result.residuals = target_residuals(targets, scalars)
+    bound_notes(result, on_bound(problem.space, res.x))
     result.wall_time = time.perf_counter() - t0
     return result

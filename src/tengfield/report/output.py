@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import atomic_path, scene_toml, toml_value, write_text
+from .._files import atomic_path, scene_dir, scene_toml, toml_value, write_text
 from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
 from .plan import QUANTITIES
@@ -30,7 +30,8 @@ def scene_text(scene, sections: dict, header: str) -> str:
     for sec, values in sections.items():
         data.setdefault(sec, {}).update(values)
     return scene_toml({sec: {k: v for k, v in values.items() if not (k == "file" and v == "")}
-                       for sec, values in data.items()}, header)
+                       for sec, values in data.items()}, header,
+                      base_dir=scene_dir(scene.source))
 
 
 def markdown(report: Report, images: dict) -> str:

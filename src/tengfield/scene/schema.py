@@ -18,8 +18,9 @@ from ..errors import SceneError
 from .limits import MAX_HARMONICS
 
 #: Bumped whenever the field solver changes what it computes for the same
-#: inputs; part of the surrogate cache hash.
-FIELD_SCHEMA = 1
+#: inputs; part of the surrogate cache hash. 2: the ball's surface charge left the
+#: hash (a surrogate is scaled to the scene's sigma, issue #28)
+FIELD_SCHEMA = 2
 
 
 class Key(NamedTuple):
@@ -80,9 +81,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                            "ball mass")),
         "ball_permittivity": Key("ball_permittivity", float, 2.1, 1.0, _rng(1.0, 1e4), field=True),
         "wall_permittivity": Key("wall_permittivity", float, 2.6, 1.0, _rng(1.0, 1e4), field=True),
-        # also the keyword "breakdown" (KEYWORD_VALUES)
-        "surface_charge_uC_per_m2": Key("surface_charge", float, -8.0, 1e-6, _rng(-1e4, 1e4),
-                                        field=True),
+        # also the keyword "breakdown" (KEYWORD_VALUES). Not a field key: every charge of
+        # the field is linear in sigma, so a cached surrogate is scaled to the scene's sigma
+        # (tengfield.surrogate.at_surface_charge) and a sigma-only change solves nothing
+        "surface_charge_uC_per_m2": Key("surface_charge", float, -8.0, 1e-6, _rng(-1e4, 1e4)),
         "cells": Key("cells", int, 1, 1, _rng(1, 10**7)),
         # 3D motion (issue #13): gravity tilted by tilt from -z toward tilt_azimuth
         "tilt_deg": Key("tilt", float, 0.0, _DEG, _rng(0.0, 180.0)),

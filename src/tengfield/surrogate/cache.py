@@ -3,12 +3,16 @@ whether it is trusted.
 
 :func:`obtain_table` is the cache keyed by :meth:`tengfield.scene.Scene.field_hash`
 (and the solver fingerprint): rank 0 decides hit or miss and broadcasts the
-decision and the table, so the ranks never disagree. A file that is not trusted
+decision and the table, so the ranks never disagree. The ball's surface charge σ is
+not in the key: every charge of the field is linear in σ, so a table solved at one σ
+is scaled to the scene's (:func:`tengfield.surrogate.table.at_ball_charge`) and a
+σ-only change (value or sign) solves nothing. A file that is not trusted
 (:func:`tengfield.surrogate.store.read_table`) is recomputed (with a warning); a
 cache that cannot be written costs a warning, never the run.
 """
 from __future__ import annotations
 
+import math
 import os
 import time
 import warnings
@@ -16,12 +20,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._mpi import rank_of, size_of
-from .provenance import radial_hash, solver_fingerprint
+from .provenance import legacy_field_hash, radial_hash, solver_fingerprint
 from .refinement import (SolveFunction, precompute, precompute_radial, radial_accuracy_problems,
                          warn_accuracy, warn_problems)
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
 from .store import read_radial_table, read_table, write_radial_table, write_table
-from .table import SurrogateError, SurrogateTable
+from .table import SurrogateError, SurrogateTable, at_ball_charge
 
 
 def default_cache_dir() -> Path:
@@ -109,6 +113,51 @@ def store_in_cache(path: str | Path, table: SurrogateTable, comm=None, *, write=
     return bool(stored)
 
 
+def solved_scene(scene):
+    """The scene a surrogate is solved for: ``scene`` itself, or (an uncharged ball, whose
+    table could not be scaled) the same scene at the stand-in σ
+    (``BREAKDOWN_PLACEHOLDER_UC``). The table is then scaled to the scene's own σ."""
+    if scene.device.surface_charge != 0.0:
+        return scene
+    from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC
+    return scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
+
+
+def _at_scene_charge(table, scene, reason: str):
+    """``(table at the scene's σ, reason)``: a table solved at another σ is scaled and the
+    reason says from which σ."""
+    stored = float(table.ball_charge)
+    if float(scene.device.ball_charge) == stored:
+        return table, reason
+    stored_sigma = stored / (math.pi * scene.device.ball_diameter**2)
+    return (at_ball_charge(table, scene.device.ball_charge),
+            f"{reason}; charges scaled from sigma = {stored_sigma * 1e6:.6g} to "
+            f"{scene.device.surface_charge * 1e6:.6g} uC/m^2 (no field solve)")
+
+
+def _legacy(scene, path: Path, comm, write: bool):
+    """A trusted surrogate cached by an older tengfield under the key with σ
+    (:func:`legacy_field_hash`): read, copied to ``path`` under today's key (when
+    ``write``), and used. ``(None, "computed", reason)`` when there is none."""
+    import dataclasses
+
+    legacy = legacy_field_hash(scene)
+    old = path.parent / f"surrogate-{legacy[:24]}.h5"
+    missing = (None, "computed", f"no cached surrogate at {path}")
+    if old == path or not old.is_file():
+        return missing
+    table, status, reason = load_cached(
+        old, scene, comm, read=lambda p: read_table(p, expected_hash=legacy,
+                                                    expected_solver=solver_fingerprint()))
+    if table is None:   # an untrusted old file was warned of; solve for today's key
+        return None, "recomputed", reason
+    table = dataclasses.replace(table, field_hash=scene.field_hash())
+    if write:
+        store_in_cache(path, table, comm)
+    return table, "cached", (f"surrogate of an older tengfield (sigma in its key) at {old}"
+                             + (f", copied to {path}" if write else ""))
+
+
 def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
                  solve: SolveFunction | None = None, progress: bool = False,
                  command_line: str = "", write: bool = True) -> tuple[SurrogateTable, CacheOutcome]:
@@ -123,12 +172,16 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     start = time.perf_counter()
     path = cache_path(scene, cache_dir)
     table, status, reason = load_cached(path, scene, comm)
+    if table is None and status == "computed":
+        table, status, reason = _legacy(scene, path, comm, write)
     if table is not None:
         warn_accuracy(table, comm)      # as when it was computed: a cache hit is no excuse
+        table, reason = _at_scene_charge(table, scene, reason)
         return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
-    table = precompute(scene, comm=comm, solve=solve, progress=progress,
+    table = precompute(solved_scene(scene), comm=comm, solve=solve, progress=progress,
                        command_line=command_line)
     stored = store_in_cache(path, table, comm) if write else False
+    table, _ = _at_scene_charge(table, scene, reason)
     return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)
 
 
@@ -157,8 +210,10 @@ def obtain_radial_table(scene, *, cache_dir=None, comm=None, solve=None, progres
                                          expected_solver=solver_fingerprint()))
     if table is not None:
         warn_problems(radial_accuracy_problems(table), comm, stacklevel=2)
+        table, reason = _at_scene_charge(table, scene, reason)
         return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
-    table = precompute_radial(scene, comm=comm, solve=solve, progress=progress,
+    table = precompute_radial(solved_scene(scene), comm=comm, solve=solve, progress=progress,
                               command_line=command_line, **settings, **refinement)
     stored = store_in_cache(path, table, comm, write=write_radial_table) if write else False
+    table, _ = _at_scene_charge(table, scene, reason)
     return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)

@@ -60,6 +60,18 @@ def provenance(scene, command_line: str = "") -> dict:
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
 
 
+def legacy_field_hash(scene) -> str:
+    """The field hash an older tengfield (``FIELD_SCHEMA`` 1, σ part of the key) gave
+    ``scene``: its cache file is still read (and scaled) rather than solved again."""
+    inputs = scene.field_inputs()
+    inputs["schema"] = 1
+    inputs["device"] = {**inputs["device"],
+                        "surface_charge_uC_per_m2": scene.to_dict()["device"][
+                            "surface_charge_uC_per_m2"]}
+    blob = json.dumps(inputs, sort_keys=True, default=float).encode()
+    return hashlib.sha256(blob).hexdigest()
+
+
 def radial_hash(scene, *, mesh_size_mm: float = DEFAULT_MESH_SIZE_MM,
                 degree: int = DEFAULT_DEGREE, tolerance: float = DEFAULT_TOLERANCE) -> str:
     """SHA-256 of the scene's field inputs plus the (z, r) surrogate's own settings

@@ -138,6 +138,28 @@ class SurrogateTable(SolveRecord):
         return dataclasses.replace(self, **cat)
 
 
+def scaled_charges(table, factor: float):
+    """``table`` (a :class:`SurrogateTable` or :class:`RadialTable`) with every charge
+    times ``factor``: the induced charges q_l, q_u and the ball charge are linear in σ;
+    the capacitances, the breakdown lines' basis potentials (per unit σ) and the
+    relative error estimates do not depend on it. ``factor`` 1 returns ``table``."""
+    if factor == 1.0:
+        return table
+    return dataclasses.replace(table, induced_charge=np.asarray(table.induced_charge) * factor,
+                               ball_charge=float(table.ball_charge) * factor)
+
+
+def at_ball_charge(table, ball_charge: float):
+    """``table`` at the ball charge ``ball_charge`` [C] (σ π d²): a cached surrogate
+    solved at another σ, scaled (no field solve). The stored table's own ball charge
+    must be non-zero (:func:`tengfield.surrogate.obtain_table` never solves at σ = 0)."""
+    stored = float(table.ball_charge)
+    if stored == 0.0:
+        raise SurrogateError("the surrogate was solved for an uncharged ball; it cannot be "
+                             "scaled to another charge")
+    return scaled_charges(table, 1.0 if ball_charge == stored else ball_charge / stored)
+
+
 def table_from_results(results: list, *, stroke: float) -> SurrogateTable:
     """A :class:`SurrogateTable` from :class:`~tengfield.field.PositionResult` s."""
     if not results:
