@@ -67,8 +67,10 @@ def _run_scene(args, comm, figures) -> int:
 def print_summary(summary: dict) -> None:
     p2p = summary["peak_to_peak"]
     regime = summary.get("regime") or {}
-    print(f"regime: {regime.get('regime', '?')} (period {regime.get('period', '?')}, "
-          f"max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
+    from ..dynamics.regime import regime_label
+
+    print(f"regime: {regime_label(regime.get('regime', '?'), regime.get('period', 0))} "
+          f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
     print(f"peak-to-peak ({summary['reference']} reference, {summary['cells']} cell(s)): "
           f"V_OC = {p2p['V_oc_V']:.4g} V, Q_SC = {p2p['Q_sc_C'] * 1e9:.4g} nC, "
           f"I_SC = {p2p['I_sc_A'] * 1e9:.4g} nA")
