@@ -6,6 +6,7 @@ from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
 from .candidate import band_run, followed_geometry
+from ..scene.schema import update_section
 from .spec import OBJECTIVES, OTHER_VARY
 
 
@@ -141,7 +142,7 @@ def best_scene_dict(result) -> dict:
     device = {k: v for k, v in best["values"].items() if k not in OTHER_VARY}
     if result.spec.geometry == "follow":
         device.update(followed_geometry(result.scene.to_dict()["device"], device))
-    data.setdefault("device", {}).update(device)
+    update_section(data, "device", device)   # a varied gap_mm replaces stroke_mm
     for key, value in best["values"].items():
         if key in OTHER_VARY:
             data.setdefault(OTHER_VARY[key], {})[key] = value

@@ -1,6 +1,6 @@
 """Scene files: a TOML description of one BB-TENG and how it is driven.
 
-Keys in the file carry their unit (``gap_mm``, ``frequency_hz``); the
+Keys in the file carry their unit (``stroke_mm``, ``frequency_hz``); the
 :class:`Scene` object holds SI values only (metres, seconds, coulombs...).
 Every key is validated on load; a bad value raises :class:`SceneError`
 naming the key, the value and the allowed range. The homes: ``schema`` (every
