@@ -59,3 +59,15 @@ def test_cli_warns_once(tmp_path, capsys):
     assert len(lines) == 1 and lines[0].startswith("tengfield: warning: ")
     assert "write stroke_mm = 2.5" in lines[0]
     assert json.loads(out.out)["device"]["stroke_mm"] == 2.5
+
+
+def test_set_with_the_old_name_warns_once_and_sets_the_stroke(tmp_path, capsys):
+    (tmp_path / "old.toml").write_text("[device]\ngap_mm = 2.5\n")
+    assert main(["scene", str(tmp_path / "old.toml"), "--set", "run.duration_s=2"]) == 0
+    out = capsys.readouterr()
+    assert len([ln for ln in out.err.splitlines() if "gap_mm" in ln]) == 1   # the file's
+    assert main(["scene", "--set", "device.gap_mm=2"]) == 0
+    out = capsys.readouterr()
+    lines = [ln for ln in out.err.splitlines() if "gap_mm" in ln]
+    assert len(lines) == 1 and "write --set device.stroke_mm=2" in lines[0]
+    assert json.loads(out.out)["device"]["stroke_mm"] == 2

@@ -10,14 +10,16 @@ import copy
 import datetime
 import re
 import tomllib
+import warnings
 from importlib import resources
 from pathlib import Path
 
+from .._mpi import launched_rank
 from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
 from .recorded import decode_utf8
-from .schema import show
+from .schema import RENAMED_KEYS, show, update_section
 
 
 def default_text() -> str:
@@ -110,6 +112,15 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
     data = copy.deepcopy(scene.raw)
     for text in settings:
         path, value = parse_setting(text)
+        new = RENAMED_KEYS.get(tuple(path)) if len(path) == 2 else None
+        if new is not None:   # the file's old names were warned about when it was read
+            if launched_rank() == 0:   # under mpirun: one line, not one per rank
+                warnings.warn(f"--set {path[0]}.{path[1]}: [{path[0]}] {path[1]} is now called "
+                          f"{new}: write --set {path[0]}.{new}={value!r} ({path[1]} is "
+                              "read until the next release)", FutureWarning, stacklevel=2)
+            data[path[0]] = dict(data.get(path[0]) or {})
+            update_section(data, path[0], {new: value})
+            continue
         node = data
         for part in path[:-1]:
             child = node.setdefault(part, {})
@@ -119,7 +130,7 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
         node[path[-1]] = value
     base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
     source = scene.source if scene.source != "<default>" else "<default scene>"
-    return build(data, base_dir=base, source=f"{source} with --set", text="")
+    return build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)
 
 
 def _check_nesting_text(text: str, source: str) -> None:
