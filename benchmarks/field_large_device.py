@@ -21,7 +21,7 @@ from __future__ import annotations
 import argparse
 import time
 
-LENGTH_KEYS = ("ball_diameter_mm", "gap_mm", "electrode_radius_mm", "tube_inner_radius_mm",
+LENGTH_KEYS = ("ball_diameter_mm", "stroke_mm", "electrode_radius_mm", "tube_inner_radius_mm",
                "tube_outer_radius_mm", "plate_thickness_mm")
 
 
@@ -30,7 +30,7 @@ def scaled_scene(scale: float):
 
     base = default_scene()
     dev = base.device
-    values = {"ball_diameter_mm": dev.ball_diameter, "gap_mm": dev.stroke,
+    values = {"ball_diameter_mm": dev.ball_diameter, "stroke_mm": dev.stroke,
               "electrode_radius_mm": dev.electrode_radius,
               "tube_inner_radius_mm": dev.tube_inner_radius,
               "tube_outer_radius_mm": dev.tube_outer_radius,

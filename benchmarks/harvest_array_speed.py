@@ -33,7 +33,7 @@ def main(argv=None) -> dict:
     args = p.parse_args(argv)
     freq = 33.0
     scene = fx.scene_with(
-        device={"gap_mm": 3.0},
+        device={"stroke_mm": 3.0},
         excitation={"frequency_hz": freq, "amplitude_mm": 0.5},
         run={"duration_s": args.periods / freq, "settle_periods": 10,
              "sample_rate_hz": args.samples_per_period * freq},

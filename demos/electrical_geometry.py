@@ -34,7 +34,7 @@ from tengfield.dynamics import simulate  # noqa: E402
 def device_for(ball_diameter_mm: float, gap_mm: float) -> dict:
     """``[device]`` keys of a tube that fits the ball with 0.5 mm radial clearance."""
     inner = 0.5 * ball_diameter_mm + 0.5
-    return {"ball_diameter_mm": ball_diameter_mm, "gap_mm": gap_mm,
+    return {"ball_diameter_mm": ball_diameter_mm, "stroke_mm": gap_mm,
             "tube_inner_radius_mm": inner, "electrode_radius_mm": inner,
             "tube_outer_radius_mm": inner + 1.5}
 

@@ -59,7 +59,7 @@ def honeycomb_scene(fast: bool):
     outer = equal_area_radius(cell.outer_apothem)
     periods = 40 if fast else 120
     return cell, default_scene().with_values(
-        device={"ball_diameter_mm": cell.ball_diameter * 1e3, "gap_mm": cell.stroke * 1e3,
+        device={"ball_diameter_mm": cell.ball_diameter * 1e3, "stroke_mm": cell.stroke * 1e3,
                 "tube_inner_radius_mm": bore * 1e3, "electrode_radius_mm": bore * 1e3,
                 "tube_outer_radius_mm": outer * 1e3,
                 "plate_thickness_mm": cell.plate_thickness * 1e3,

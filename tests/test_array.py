@@ -187,7 +187,7 @@ def test_trajectory_bundle_equals_each_trajectory_bit_for_bit():
                 zj, vj, _ = tr(times)
                 np.testing.assert_array_equal(z[:, j], zj)
                 np.testing.assert_array_equal(v[:, j], vj)
-    other = array.simulate_cells(scene.with_values(device={"gap_mm": 2.0}),
+    other = array.simulate_cells(scene.with_values(device={"stroke_mm": 2.0}),
                                  array.draw_cells(scene)[:1], jobs=1)[0][0]
     with pytest.raises(ValueError, match="differ in stroke"):
         TrajectoryBundle([trajectories[0], other])

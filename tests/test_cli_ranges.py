@@ -33,19 +33,20 @@ def test_bad_ranges_name_option_text_and_allowed(text, kw, needle):
 
 
 def test_a_bad_sweep_point_is_refused_before_the_surrogate(tmp_path, capsys, monkeypatch):
-    """10 Hz leaves no steady window in the default 1 s run (10 settle periods): the sweep
-    names the point and exits 2 before computing (or even looking for) a surrogate."""
+    """0.0001 Hz: the run extended to a steady window (20 periods, 2e5 s at 20 kHz) is
+    more samples than allowed: the sweep names the point and exits 2 before computing
+    (or even looking for) a surrogate."""
     from tengfield.cli import main
 
     cache = tmp_path / "cache"
     monkeypatch.setenv("TENGFIELD_CACHE_DIR", str(cache))
     out = tmp_path / "out"
-    assert main(["sweep", "--frequency-hz", "20:10:2", "--amplitude-mm", "1", "-o",
+    assert main(["sweep", "--frequency-hz", "20:0.0001:2", "--amplitude-mm", "1", "-o",
                  str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
-    assert err[0].startswith("tengfield: error: sweep point frequency_hz = 10, amplitude_mm = 1: "
-                             "[run] settle_periods = 10 leaves no steady window")
+    assert err[0].startswith("tengfield: error: sweep point frequency_hz = 0.0001, "
+                             "amplitude_mm = 1: [run] duration_s x sample_rate_hz")
     assert not cache.exists() and not out.exists()
 
 
@@ -54,6 +55,29 @@ def test_sweep_library_names_the_bad_point():
     from tengfield.sweep import check_grid
 
     check_grid(default_scene(), [20.0, 30.0], [1e-3])
-    with pytest.raises(SceneError, match=r"sweep point frequency_hz = 10, amplitude_mm = 1: "
-                                         r"\[run\] settle_periods"):
-        check_grid(default_scene(), [20.0, 10.0], [1e-3, 2e-3])
+    with pytest.raises(SceneError, match=r"sweep point frequency_hz = 0.0001, amplitude_mm = 1: "
+                                         r"\[run\] duration_s x sample_rate_hz"):
+        check_grid(default_scene(), [20.0, 1e-4], [1e-3, 2e-3])
+
+
+def test_sweep_extends_the_run_where_settling_leaves_no_window():
+    """The README's sweep from 5 Hz: the default 1 s run settles for 10 periods (2 s at
+    5 Hz). Those points run settle_periods + 10 periods (10 = the steady periods the
+    scene has at its own 20 Hz), the others keep duration_s; one line says which."""
+    from tengfield.scene import default_scene
+    from tengfield.sweep import check_grid, extension_line, point_scene
+
+    scene = default_scene()
+    check_grid(scene, [5.0, 50.0], [0.5e-3, 3e-3])          # refused before this change
+    for f in (5.0, 10.0):
+        point = point_scene(scene, f, 1e-3)
+        assert point.run.duration == pytest.approx(20 / f)
+        assert point.excitation.frequency == f and point.excitation.amplitude == 1e-3
+        steady = point.run.duration - point.run.settle_periods / f
+        assert steady * f == pytest.approx(10)
+    for f in (10.5, 20.0, 50.0):
+        assert point_scene(scene, f, 1e-3).run.duration == scene.run.duration
+    line = extension_line(scene, [5.0, 10.0, 15.0, 50.0])
+    assert "\n" not in line and "frequency_hz <= 10:" in line and "those 2 frequencies" in line
+    assert "settle_periods + 10 periods (up to 4 s)" in line
+    assert extension_line(scene, [15.0, 50.0]) is None

@@ -1,19 +1,18 @@
-"""Smoke test of README's "Quick start": every command of the block, figures on (issue #21).
+"""README's "Quick start" block, every line as written, in order (issues #21, #29).
 
-Each command runs as the README shows it, in a subprocess, on a small scene made
-from ``tengfield scene --default`` (0.3 s, coarse field); the files README's
-"Outputs" table lists must exist, be non-empty, and PNGs must decode. Sizes shrunk
-against the README: ``map`` and ``sweep`` grids (the sweep from 10 Hz: two settling
-periods must fit in the 0.3 s run); ``precompute`` serial (not under
-``mpirun -n 2``); ``report --fast`` (its CI-sized plan: the full report is ~100x the
-solves); ``fit --targets`` is given the small scene (the README's form without a
-scene computes the default scene's fine surrogate). Beyond the block: a 3D run with a
-lateral drive, a rectifier run and an ``[array]`` with spread, all figures on.
+The lines are parsed from README.md and run unchanged by bash in a scratch directory
+that stands for a fresh clone after ``make run``: the Makefile and the files its set-up
+stamp depends on (symlinks), ``examples/``, and ``.venv/bin/tengfield`` running this
+checkout's CLI, with the stamp made so ``make run`` does not set up again. The scene is
+the one the block writes (``scene --default > my.toml``, the full default scene), the
+``mpirun -n 2`` lines run under mpirun when it exists, figures are on. Each line must
+exit 0 with only tengfield's own lines on stderr, and write the files README's
+"Outputs" table lists (non-empty, PNGs decode, CSVs without ``nan``).
 
-One surrogate cache serves the module: ``precompute`` fills it with the real field
-solves, the rest find it. The 3D run's (z, r) surrogate (3D solves, minutes) is
-pre-cached from the analytic (z, r) stand-in of ``tests/test_surrogate_zr.py``; its
-axis part is the real cached one.
+Beyond the block, on a small scene made from my.toml (0.3 s, coarse field): a 3D run
+with a lateral drive, a rectifier run and an ``[array]`` with spread, all figures on.
+The 3D run's (z, r) surrogate (3D solves, minutes) is pre-cached from the analytic
+(z, r) stand-in of ``tests/test_surrogate_zr.py``; its axis part is the real one.
 """
 from __future__ import annotations
 
@@ -67,61 +66,76 @@ def add_to_section(text: str, section: str, lines: str) -> str:
     return text.replace(head, head + lines)
 
 
+def foreign_lines(stderr: str) -> list[str]:
+    """Warning or error lines on stderr that are not tengfield's own."""
+    return [ln for ln in stderr.splitlines() if not ln.startswith("tengfield: ")
+            and (re.search("warning", ln, re.I) or re.search(r"error:|Error\b|Exception", ln))]
+
+
+MPI_ENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1",
+           "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
+           "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+
+
 @pytest.fixture(scope="module")
-def work(tmp_path_factory, run_cli, cli_env, cli_command):
-    """(dir, cli): ``cli(*args)`` runs ``tengfield args`` in dir with the module's
-    cache, checks exit code 0, no traceback, and that every warning or error on stderr
-    is one of tengfield's ``tengfield: ...`` lines (none from Python, numba, PETSc);
-    returns the CompletedProcess."""
+def clone(tmp_path_factory, python, cli_env):
+    """(dir, env): the scratch "fresh clone after make run" (module docstring)."""
+    import stat
+
     where = tmp_path_factory.mktemp("quickstart")
-    env = cli_env(TENGFIELD_CACHE_DIR=where / "cache", XDG_CACHE_HOME=where / "xdg")
-
-    def cli(*args, mpirun=None):
-        if mpirun:   # as README writes it: mpirun -n N tengfield ...
-            import subprocess
-            proc = subprocess.run(
-                ["mpirun", "-n", str(mpirun), *cli_command(*args)], cwd=where,
-                env={**env, "OMPI_MCA_rmaps_base_oversubscribe": "1",
-                     "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe"},
-                capture_output=True, text=True, timeout=900)
-        else:
-            proc = run_cli(*args, cwd=where, env=env, timeout=900)
-        assert proc.returncode == 0, f"tengfield {' '.join(map(str, args))}:\n{proc.stderr}"
-        assert "Traceback" not in proc.stderr, proc.stderr
-        stray = [ln for ln in proc.stderr.splitlines() if not ln.startswith("tengfield: ")
-                 and (re.search("warning", ln, re.I) or re.search(r"error:|Error\b|Exception", ln))]
-        assert not stray, f"tengfield {' '.join(map(str, args))}: foreign messages {stray}"
-        return proc
-    return where, cli
+    for name in ("Makefile", "pyproject.toml", "scripts", "examples"):
+        (where / name).symlink_to(ROOT / name)
+    bin_dir = where / ".venv" / "bin"
+    bin_dir.mkdir(parents=True)
+    wrapper = bin_dir / "tengfield"
+    wrapper.write_text(f"#!/bin/sh\nexec {python} -m tengfield.cli \"$@\"\n")
+    wrapper.chmod(wrapper.stat().st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
+    # newer than the files its rule lists (the checkout's, older): set up already
+    (where / ".venv" / ".tengfield-installed").touch()
+    env = cli_env(TENGFIELD_CACHE_DIR=where / "cache", XDG_CACHE_HOME=where / "xdg",
+                  **MPI_ENV)
+    return where, env
 
 
 @pytest.fixture(scope="module")
-def scene(work):
-    """my.toml: ``tengfield scene --default`` made small (the fit and every run use it)."""
-    where, cli = work
-    text = cli("scene", "--default").stdout
-    for key, value in SMALL.items():
-        text = edit(text, key, value)
-    (where / "my.toml").write_text(text)
-    checked = json.loads(cli("scene", "my.toml").stdout)  # the file reads back, values kept
-    assert checked["run"]["duration_s"] == 0.3 and checked["field"]["mesh_size_mm"] == 1.5
-    return where / "my.toml"
+def quick_start(clone):
+    """{line: CompletedProcess}: every Quick start line run by bash in the clone, in
+    order, as written (``mpirun -n 2 ...`` without mpirun when there is none)."""
+    import shutil
+    import subprocess
+
+    where, env = clone
+    done = {}
+    for line in quick_start_commands():
+        command = line
+        if line.startswith("mpirun ") and not shutil.which("mpirun"):
+            command = line.split(None, 3)[3]
+        done[line] = subprocess.run(["bash", "-c", command], cwd=where, env=env,
+                                    capture_output=True, text=True, timeout=1800)
+    return done
 
 
-@pytest.fixture(scope="module")
-def precomputed(work, scene):
-    where, cli = work
-    cli("precompute", "my.toml")
-    files = list((where / "cache").glob("surrogate-*.h5"))
-    assert len(files) == 1 and files[0].stat().st_size > 0
-    return files[0]
+def line_of(sub: str, contains: str = "") -> str:
+    """The Quick start line of tengfield command ``sub`` (containing ``contains``)."""
+    found = [ln for ln in quick_start_commands() if subcommand(ln) == sub and contains in ln]
+    assert len(found) == 1, (sub, contains, found)
+    return found[0]
 
 
-@pytest.fixture(scope="module")
-def ran(work, precomputed):
-    where, cli = work
-    proc = cli("run", "my.toml", "-o", "out/my")
-    return where / "out" / "my", proc
+def ran(quick_start, clone, sub: str, contains: str = ""):
+    """(clone dir, CompletedProcess) of that line, checked: exit 0, no traceback, only
+    tengfield's own warning and error lines."""
+    line = line_of(sub, contains)
+    proc = quick_start[line]
+    assert proc.returncode == 0, f"{line}\n{proc.stderr[-3000:]}"
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert not foreign_lines(proc.stderr), f"{line}: foreign messages {foreign_lines(proc.stderr)}"
+    return clone[0], proc
+
+
+def output_of(line: str) -> str:
+    words = line.split("#")[0].split()
+    return words[words.index("-o") + 1]
 
 
 def check_outputs(out: Path, names) -> None:
@@ -152,122 +166,182 @@ def test_every_quick_start_command_is_covered():
     commands = quick_start_commands()
     assert len(commands) >= 10
     assert {subcommand(line) for line in commands} == COVERED
+    text = (ROOT / "README.md").read_text()
+    first_block = re.search(r"```bash\n(.*?)```", text, re.S).group(1)
+    assert [ln.split()[:2] for ln in first_block.splitlines()[:2]] == [["make", "run"],
+                                                                         ["make", "test"]]
 
 
-def test_run(ran):
-    out, proc = ran
+def test_make_run(quick_start, clone):
+    where, proc = ran(quick_start, clone, "run", "make run")
+    check_outputs(where / "out", RUN_FILES)
+
+
+def test_scene_default(quick_start, clone):
+    from tengfield.scene import load_scene
+
+    where, _ = ran(quick_start, clone, "scene")
+    text = (where / "my.toml").read_text()
+    assert "# [design]" in text and "# [fit]" in text    # the templates, commented
+    assert load_scene(where / "my.toml").run.duration == 1.0
+
+
+def test_run(quick_start, clone):
+    line = line_of("run", ".venv/bin/tengfield run")
+    where, proc = ran(quick_start, clone, "run", ".venv/bin/tengfield run")
+    out = where / output_of(line)
     check_outputs(out, RUN_FILES)
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["stages"]["field"]["status"] == "cached"   # precompute filled the cache
+    assert summary["stages"]["field"]["status"] == "cached"   # make run filled the cache
     assert summary["peak_to_peak"]["V_oc_V"] > 0
-    data = np.loadtxt(out / "waveforms.csv", delimiter=",", skiprows=1)
-    assert data.shape[0] == round(0.3 * 5000) + 1
     assert "wrote " in proc.stdout
 
 
-def test_dynamics(work, scene):
-    where, cli = work
-    cli("dynamics", "my.toml", "-o", "out/dyn")
-    check_outputs(where / "out" / "dyn", ("trajectory.csv", "impacts.csv", "summary.json",
-                                          "trajectory.png"))
-    summary = json.loads((where / "out" / "dyn" / "summary.json").read_text())
-    assert summary["duration_s"] == pytest.approx(0.3)
+def test_dynamics(quick_start, clone):
+    line = line_of("dynamics")
+    where, _ = ran(quick_start, clone, "dynamics")
+    out = where / output_of(line)
+    check_outputs(out, ("trajectory.csv", "impacts.csv", "summary.json", "trajectory.png"))
+    assert json.loads((out / "summary.json").read_text())["duration_s"] == pytest.approx(1.0)
 
 
-def test_map(work, scene):
-    where, cli = work
-    cli("map", "my.toml", "--frequency-hz", "5:70:6", "--amplitude-mm", "0.1:5:5",
-        "-o", "out/map")
-    check_outputs(where / "out" / "map", ("map.csv", "map.png"))
-    with open(where / "out" / "map" / "map.csv", newline="") as f:
-        assert len(list(csv.DictReader(f))) == 30
+def test_map(quick_start, clone):
+    line = line_of("map")
+    where, proc = ran(quick_start, clone, "map")
+    out = where / output_of(line)
+    check_outputs(out, ("map.csv", "map.png"))
+    with open(out / "map.csv", newline="") as f:
+        assert len(list(csv.DictReader(f))) == 100 * 100
 
 
-def test_field(work, scene):
-    where, cli = work
-    cli("field", "my.toml", "--position-mm", "1.5", "-o", "out/field")
-    check_outputs(where / "out" / "field", ("field.json", "potential.xdmf", "field.png"))
+def test_field(quick_start, clone):
+    line = line_of("field")
+    where, _ = ran(quick_start, clone, "field")
+    check_outputs(where / output_of(line), ("field.json", "potential.xdmf", "field.png"))
 
 
-def test_breakdown(work, precomputed):
-    """sigma_max from the cached surrogate's gap lines: a positive limit with its binding
-    state and gap, the table and the figure."""
-    where, cli = work
-    cli("breakdown", "my.toml", "-o", "out/bd")
-    out = where / "out" / "bd"
-    check_outputs(out, ("breakdown.json", "breakdown.csv", "breakdown.png"))
-    result = json.loads((out / "breakdown.json").read_text())
-    assert 0 < result["sigma_max_uC_per_m2"] < 1e3
+def test_precompute(quick_start, clone):
+    where, _ = ran(quick_start, clone, "precompute")
+    files = list((where / "cache").glob("surrogate-*.h5"))
+    assert files and all(f.stat().st_size > 0 for f in files)
 
 
-def test_design(work, scene):
-    """A small [design] study over the stroke (4 candidates, one band point) under
-    mpirun -n 2 as README shows it: every output, and best.toml runs."""
-    import shutil
-    where, cli = work
-    text = (where / "my.toml").read_text() + (
-        '\n[design]\nobjective = "charge"\ncandidates = 4\nseed = 1\nsettle_periods = 4\n'
-        'window_periods = 4\n[design.vary]\ngap_mm = [2.0, 4.0]\n'
-        '[design.excitation]\nfrequency_hz = [20.0]\namplitude_mm = [1.5]\n')
-    (where / "design.toml").write_text(text)
-    if shutil.which("mpirun"):
-        cli("design", "design.toml", "-o", "out/design", mpirun=2)
-    else:
-        cli("design", "design.toml", "-o", "out/design")
-    out = where / "out" / "design"
-    check_outputs(out, ("design.csv", "design.json", "design.png", "best.toml"))
-    best = json.loads((out / "design.json").read_text())["best"]
-    assert 2.0 <= best["gap_mm"] <= 4.0 and best["objective"] > 0
-    cli("run", "out/design/best.toml", "-o", "out/best", "--no-plots")
+def test_sweep(quick_start, clone):
+    """From 5 Hz: the points where the default 10 settle periods fill the 1 s run run
+    longer, and one line says so."""
+    line = line_of("sweep")
+    where, proc = ran(quick_start, clone, "sweep")
+    out = where / output_of(line)
+    check_outputs(out, ("sweep.csv", "sweep.png"))
+    with open(out / "sweep.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 10 * 6
+    assert min(float(r["frequency_hz"]) for r in rows) == 5.0
+    longer = [ln for ln in proc.stderr.splitlines() if "leaves no steady window" in ln]
+    assert len(longer) == 1 and longer[0].startswith("sweep: ")
 
 
-def test_sweep(work, precomputed):
-    where, cli = work
-    cli("sweep", "my.toml", "--frequency-hz", "10:50:3", "--amplitude-mm", "0.5:3:2",
-        "-o", "out/sweep")
-    check_outputs(where / "out" / "sweep", ("sweep.csv", "sweep.png"))
-    with open(where / "out" / "sweep" / "sweep.csv", newline="") as f:
-        assert len(list(csv.DictReader(f))) == 6
-
-
-def test_report_fast(work, scene):
-    where, cli = work
-    cli("report", "my.toml", "--fast", "-o", "out/report")
-    check_outputs(where / "out" / "report",
+def test_report(quick_start, clone):
+    line = line_of("report")
+    where, _ = ran(quick_start, clone, "report")
+    check_outputs(where / output_of(line),
                   ("report.md", "report.csv", "report.json", "field.png", "surrogate.png",
                    "dynamics.png", "circuit.png", "recommended-0.01.toml",
                    "recommended-0.001.toml"))
 
 
-def test_fit_measured_recovers_the_runs_own_charge(work, ran):
-    """The run's own steady V_OC and Q_SC as the "scope" trace: σ comes back."""
-    where, cli = work
-    out, _ = ran
-    with open(out / "waveforms.csv", newline="") as f:
-        rows = [r for r in csv.DictReader(f) if float(r["time_s"]) >= 0.1]
-    with open(where / "scope.csv", "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["time_s", "V_oc_V", "Q_sc_C"])
-        writer.writerows([r["time_s"], r["V_oc_V"], r["Q_sc_C"]] for r in rows)
-    cli("fit", "my.toml", "--measured", "scope.csv", "-o", "out/fit")
-    check_outputs(where / "out" / "fit", ("fit.json", "fit.png", "fitted.toml"))
-    fit = json.loads((where / "out" / "fit" / "fit.json").read_text())
+def test_fit_measured_example_trace(quick_start, clone):
+    """examples/scope.csv (the default scene's run with 1 % noise): sigma comes back."""
+    line = line_of("fit", "--measured")
+    where, _ = ran(quick_start, clone, "fit", "--measured")
+    out = where / output_of(line)
+    check_outputs(out, ("fit.json", "fit.png", "fitted.toml"))
+    fit = json.loads((out / "fit.json").read_text())
+    if output_of(line) == output_of(line_of("fit", "--targets")):   # overwritten after
+        pytest.fail("the two fit lines write the same directory")
     assert fit["parameters"]["surface_charge_uC_per_m2"]["value"] == pytest.approx(-8.0,
-                                                                                  rel=1e-3)
+                                                                                  rel=1e-2)
 
 
-def test_fit_targets(work, precomputed):
-    where, cli = work
-    cli("fit", "my.toml", "--targets", "V_pp_V=4.2", "Q_pp_nC=1.42", "-o", "out/fit-targets")
-    check_outputs(where / "out" / "fit-targets", ("fit.json", "fit.png", "fitted.toml"))
-    fit = json.loads((where / "out" / "fit-targets" / "fit.json").read_text())
+def test_fit_targets(quick_start, clone):
+    line = line_of("fit", "--targets")
+    where, _ = ran(quick_start, clone, "fit", "--targets")
+    out = where / output_of(line)
+    check_outputs(out, ("fit.json", "fit.png", "fitted.toml"))
+    fit = json.loads((out / "fit.json").read_text())
     assert fit["parameters"]["surface_charge_uC_per_m2"]["value"] < 0   # as the PTFE ball's
 
 
-def test_info(work):
-    _, cli = work
-    proc = cli("info")
+def test_breakdown(quick_start, clone):
+    line = line_of("breakdown")
+    where, _ = ran(quick_start, clone, "breakdown")
+    out = where / output_of(line)
+    check_outputs(out, ("breakdown.json", "breakdown.csv", "breakdown.png"))
+    result = json.loads((out / "breakdown.json").read_text())
+    assert 0 < result["sigma_max_uC_per_m2"] < 1e3
+
+
+def test_design(quick_start, clone):
+    """`design my.toml` on the scene without [design] (its templates are commented)."""
+    line = line_of("design")
+    if "[design.vary] is missing" in quick_start[line].stderr:
+        # `design` on a scene without [design] doing something sensible is the design
+        # engineer's part of issue #29; until it is merged this line fails as before
+        pytest.xfail("tengfield design on a scene without [design] (issue #29, design/)")
+    where, _ = ran(quick_start, clone, "design")
+    check_outputs(where / output_of(line), ("design.csv", "design.json", "design.png",
+                                            "best.toml"))
+
+
+def test_info(quick_start, clone):
+    _, proc = ran(quick_start, clone, "info")
     assert "tengfield" in proc.stdout.lower() and "numpy" in proc.stdout.lower()
+
+
+# -- beyond the block: a small scene made from my.toml --------------------------------
+@pytest.fixture(scope="module")
+def work(clone, quick_start, run_cli):
+    """(dir, cli): ``cli(*args)`` runs ``tengfield args`` in the clone with its cache,
+    checks exit code 0, no traceback and only tengfield's own lines on stderr."""
+    where, env = clone
+
+    def cli(*args):
+        proc = run_cli(*args, cwd=where, env=env, timeout=900)
+        assert proc.returncode == 0, f"tengfield {' '.join(map(str, args))}:\n{proc.stderr}"
+        assert "Traceback" not in proc.stderr, proc.stderr
+        assert not foreign_lines(proc.stderr), foreign_lines(proc.stderr)
+        return proc
+    return where, cli
+
+
+@pytest.fixture(scope="module")
+def scene(work):
+    """small.toml: the block's my.toml made small (0.3 s, coarse field)."""
+    where, cli = work
+    text = (where / "my.toml").read_text()
+    for key, value in SMALL.items():
+        text = edit(text, key, value)
+    (where / "small.toml").write_text(text)
+    checked = json.loads(cli("scene", "small.toml").stdout)
+    assert checked["run"]["duration_s"] == 0.3 and checked["field"]["mesh_size_mm"] == 1.5
+    return where / "small.toml"
+
+
+@pytest.fixture(scope="module")
+def precomputed(work, scene):
+    where, cli = work
+    before = set((where / "cache").glob("surrogate-*.h5"))
+    cli("precompute", "small.toml")
+    files = set((where / "cache").glob("surrogate-*.h5")) - before
+    assert len(files) == 1 and next(iter(files)).stat().st_size > 0
+    return next(iter(files))
+
+
+@pytest.fixture(scope="module")
+def small_run(work, precomputed):
+    where, cli = work
+    cli("run", "small.toml", "-o", "out/small")
+    return where / "out" / "small"
 
 
 def test_run_3d_lateral(work, scene, precomputed):
@@ -322,7 +396,7 @@ def test_run_array_with_spread(work, scene, precomputed):
     assert summary["cells"] == 4 and summary["array"]["distinct_dynamics"] == 4
 
 
-def test_container_checks(work, ran, precomputed):
+def test_container_checks(work, small_run, precomputed):
     """Last in the module: what ``scripts/test-container`` asserts of these files inside
     each image (``scripts/container/check_outputs.py``): every number in every surrogate
     file of the cache (the axis and, after the 3D run, the (z, r) one) is finite and
@@ -334,7 +408,7 @@ def test_container_checks(work, ran, precomputed):
     script = ROOT / "scripts" / "container" / "check_outputs.py"
     runs = sorted(p.parent for p in (where / "out").glob("*/waveforms.csv")
                   if (p.parent / "summary.json").is_file())
-    assert ran[0] in runs
+    assert small_run in runs
     for what, directory in [("precompute", precomputed.parent)] + [("run", d) for d in runs]:
         proc = subprocess.run([sys.executable, str(script), what, str(directory)],
                               capture_output=True, text=True, timeout=300)

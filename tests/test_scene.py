@@ -44,7 +44,7 @@ def test_field_hash_tracks_only_field_inputs():
 BAD = [
     ("[device]\nball_diameter_mm = -7\n", ["ball_diameter_mm", "-7", "[1e-06, 10000]"]),
     ("[device]\nball_diameter_mm = 0\n", ["ball_diameter_mm", "0"]),
-    ("[device]\ngap_mm = nan\n", ["gap_mm", "nan", "not finite"]),
+    ("[device]\nstroke_mm = nan\n", ["stroke_mm", "nan", "not finite"]),
     ("[device]\nball_diameter_mm = 8.0\n", ["ball_diameter_mm", "8", "does not fit", "8) mm"]),
     ("[device]\nelectrode_radius_mm = 6.0\n", ["electrode_radius_mm", "6", "larger than the plate"]),
     ("[contact]\nrestitution = 1.2\n", ["restitution", "1.2", "[0, 1]"]),
@@ -53,11 +53,11 @@ BAD = [
     ("[excitation]\nfrequency_hz = -5\n", ["frequency_hz", "-5"]),
     ("[run]\nduration_s = 0\n", ["duration_s", "0"]),
     ("[run]\nduration_s = -1\n", ["duration_s", "-1"]),
-    ("[devcie]\ngap_mm = 3\n", ["devcie", "did you mean 'device'"]),
+    ("[devcie]\nstroke_mm = 3\n", ["devcie", "did you mean 'device'"]),
     ("[device]\nball_diamter_mm = 7\n", ["ball_diamter_mm", "did you mean 'ball_diameter_mm'"]),
     ("[contact]\nmodel = 'sofft'\n", ["model", "sofft", "'impact', 'soft'", "did you mean 'soft'"]),
-    ("[device]\ngap_mm = 3\nball_diameter_mm = \n", ["malformed TOML", "line 3"]),
-    ("[device]\ngap_mm = 'three'\n", ["gap_mm", "'three'", "number"]),
+    ("[device]\nstroke_mm = 3\nball_diameter_mm = \n", ["malformed TOML", "line 3"]),
+    ("[device]\nstroke_mm = 'three'\n", ["stroke_mm", "'three'", "number"]),
     ("[device]\ncells = 2.5\n", ["cells", "2.5", "whole"]),
     ("[initial]\ngap_mm = 4\n", ["[initial] gap_mm", "4", "[0, 3]"]),
     ("[field]\nmesh_size_mm = 0\n", ["mesh_size_mm", "0"]),
@@ -134,10 +134,10 @@ def test_auto_domain_radius_is_twenty_mm_for_the_paper_device():
 
 
 @pytest.mark.parametrize("device", [
-    {"gap_mm": 30.0},                                             # tall
+    {"stroke_mm": 30.0},                                          # tall
     {"tube_outer_radius_mm": 100.0, "tube_inner_radius_mm": 90.0,
      "electrode_radius_mm": 100.0},                                # wide
-    {"gap_mm": 0.5, "ball_diameter_mm": 0.7, "tube_inner_radius_mm": 0.4,
+    {"stroke_mm": 0.5, "ball_diameter_mm": 0.7, "tube_inner_radius_mm": 0.4,
      "tube_outer_radius_mm": 0.55, "electrode_radius_mm": 0.4,
      "plate_thickness_mm": 0.2},                                   # the paper's device / 10
 ])
@@ -151,7 +151,7 @@ def test_auto_domain_radius_scales_with_the_device(device):
 def test_dynamics_only_scene_never_fails_on_a_field_value():
     from tengfield.dynamics import simulate
 
-    text = ("[device]\ngap_mm = 30\n[field]\ndomain_radius_mm = 5\nmesh_size_mm = 0\n"
+    text = ("[device]\nstroke_mm = 30\n[field]\ndomain_radius_mm = 5\nmesh_size_mm = 0\n"
             "degree = 9\nmethod = 'fem'\n[run]\nduration_s = 0.2\nsettle_periods = 1\n")
     scene = parse_scene(text)                       # no error at load
     assert len(scene.field_problems) == 4
@@ -177,7 +177,7 @@ def test_explicit_field_overrides_are_checked_at_once():
 
 # -- #8.7: geometry/mesh ranges relative to the geometry (check_field) -----------------------
 @pytest.mark.parametrize("section,values,needles", [
-    ("device", {"gap_mm": 0.01}, ["gap_mm = 0.01", "too small for a field solve", ">= 0.114 mm"]),
+    ("device", {"stroke_mm": 0.01}, ["stroke_mm = 0.01", "too small for a field solve", ">= 0.114 mm"]),
     ("device", {"ball_diameter_mm": 1e-6}, ["ball_diameter_mm = 1e-06", ">= 0.00652 mm"]),
     ("field", {"mesh_size_mm": 0.001}, ["mesh_size_mm = 0.001", "too fine", ">= 0.075 mm"]),
     ("field", {"domain_radius_mm": 1e6}, ["domain_radius_mm = 1e+06", "too large", "<= 445 mm"]),
@@ -216,9 +216,9 @@ def test_recorded_settle_beyond_duration_is_refused(tmp_path):
 
 # -- #8.5: encodings, BOM, directories --------------------------------------------------------
 @pytest.mark.parametrize("blob,needle", [
-    ("[device]\n# Kugel aus PTFE, Durchmesser 7 mm (\u00e9)\ngap_mm = 3\n".encode("latin-1"),
+    ("[device]\n# Kugel aus PTFE, Durchmesser 7 mm (\u00e9)\nstroke_mm = 3\n".encode("latin-1"),
      "not UTF-8 text (byte 0xe9"),
-    ("[device]\ngap_mm = 3\n".encode("utf-16"), "UTF-16"),
+    ("[device]\nstroke_mm = 3\n".encode("utf-16"), "UTF-16"),
     (bytes(range(256)) * 4, "binary data"),
     (b"\x00\x00\x00[device]", "NUL"),
 ])
@@ -232,7 +232,7 @@ def test_scene_not_utf8_is_one_line(tmp_path, blob, needle):
 
 def test_utf8_bom_is_accepted_in_toml_and_csv_headers(tmp_path):
     path = tmp_path / "s.toml"
-    path.write_bytes(b"\xef\xbb\xbf[device]\ngap_mm = 2.5\n")
+    path.write_bytes(b"\xef\xbb\xbf[device]\nstroke_mm = 2.5\n")
     assert load_scene(path).device.stroke == pytest.approx(2.5e-3)
     (tmp_path / "table.csv").write_bytes(
         b"\xef\xbb\xbftime_s,displacement_m\n" + b"".join(b"%g,0\n" % (0.1 * i) for i in range(12)))

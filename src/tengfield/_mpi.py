@@ -30,6 +30,21 @@ def launched_size() -> int:
     return 1
 
 
+#: ... and this process's rank among them
+LAUNCHER_RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK")
+
+
+def launched_rank() -> int:
+    """This process's rank among the ranks mpirun started (0 without mpirun), read from
+    the launcher's environment: MPI is not initialised. A line every rank would print
+    alike (a scene's warning) is printed where this is 0."""
+    for key in LAUNCHER_RANK_VARIABLES:
+        value = os.environ.get(key)
+        if value and value.isdigit():
+            return int(value)
+    return 0
+
+
 def world_if_parallel():
     """``MPI.COMM_WORLD`` when started by mpirun with several ranks, else None
     (a serial run never initialises MPI before it needs a field solve)."""

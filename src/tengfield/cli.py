@@ -70,7 +70,24 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(f"tengfield.commands.{name}").register(sub)
+    for command in sub.choices.values():
+        if any(a.dest == "scene" for a in command._actions):     # noqa: SLF001
+            command.add_argument(
+                "--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                dest="settings",
+                help="set one scene key as in the file, e.g. --set excitation.frequency_hz=30 "
+                     "--set circuit.kind=rectifier (repeatable; checked like the file)")
     return parser
+
+
+def _apply_settings(args) -> None:
+    """``--set section.key=value``: the command gets the scene (file or default) with
+    them applied, checked as the same keys in the file (raises SceneError)."""
+    settings = getattr(args, "settings", None)
+    if settings:
+        from .scene import load_scene, with_settings
+
+        args.scene = with_settings(load_scene(args.scene), settings)
 
 
 #: a staging directory's part of a path, left out of an error line (it names DIR)
@@ -214,6 +231,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         with _sigterm_as_interrupt():
+            _apply_settings(args)
             return _run_command(parser, args)
     except TengfieldError as exc:
         print(f"tengfield: error: {exc}", file=sys.stderr)
@@ -325,6 +343,7 @@ def _check_input(args, world) -> None:
                              f"({args.one_process}): start it without mpirun")
     if hasattr(args, "jobs"):
         check_jobs(args.jobs, world)
+    _apply_settings(args)
     if getattr(args, "scene", None) is not None:
         from .scene import load_scene
 

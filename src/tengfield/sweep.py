@@ -44,8 +44,7 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     from .surrogate import TerminalCurves
 
     simulate = simulate or _default_simulate()
-    point = scene.with_values(excitation={"frequency_hz": float(frequency),
-                                          "amplitude_mm": float(amplitude) * 1e3})
+    point = point_scene(scene, frequency, amplitude)
     dynamics = simulate(point)
     curves = TerminalCurves(table, point.circuit.reference)
     extremes = electrical.terminal_extremes(point, dynamics, curves)
@@ -64,6 +63,54 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
         rows.append({**base, "load_ohm": float(load), "P_mean_W": result["mean_power_W"],
                      "power_density_W_per_m3": result["mean_power_W"] / volume})
     return rows
+
+
+#: fewest steady periods of a point whose run is extended (:func:`point_duration`)
+MIN_STEADY_PERIODS = 2
+
+
+def steady_periods(scene) -> int:
+    """Steady periods a point gets when its run must be extended: as many as the scene
+    has at its own frequency (``duration_s x frequency_hz - settle_periods``), at least
+    :data:`MIN_STEADY_PERIODS`."""
+    exc, run = scene.excitation, scene.run
+    return max(MIN_STEADY_PERIODS, int(run.duration * exc.frequency - run.settle_periods))
+
+
+def point_duration(scene, frequency: float) -> float:
+    """The run length [s] of a sweep point at ``frequency`` [Hz]: ``[run] duration_s``,
+    or, where ``settle_periods`` periods fill it (no steady window), extended to
+    ``settle_periods + steady_periods(scene)`` periods of that frequency."""
+    run = scene.run
+    if run.settle_periods / float(frequency) < run.duration:
+        return run.duration
+    return (run.settle_periods + steady_periods(scene)) / float(frequency)
+
+
+def point_scene(scene, frequency: float, amplitude: float):
+    """The scene of one sweep point (frequency [Hz], amplitude [m]), its run extended
+    where the settling leaves no steady window (:func:`point_duration`)."""
+    values = {"excitation": {"frequency_hz": float(frequency),
+                             "amplitude_mm": float(amplitude) * 1e3}}
+    duration = point_duration(scene, frequency)
+    if duration != scene.run.duration:
+        values["run"] = {"duration_s": float(f"{duration:.12g}")}
+    return scene.with_values(**values)
+
+
+def extension_line(scene, frequencies) -> str | None:
+    """One line saying which points run longer than ``[run] duration_s`` (None: none)."""
+    longer = sorted(float(f) for f in frequencies
+                    if point_duration(scene, f) != scene.run.duration)
+    if not longer:
+        return None
+    run = scene.run
+    count = len(longer)
+    return (f"sweep: [run] settle_periods = {run.settle_periods} leaves no steady window in "
+            f"duration_s = {run.duration:g} s at frequency_hz <= {longer[-1]:g}: "
+            f"{'that point runs' if count == 1 else f'those {count} frequencies run'} "
+            f"settle_periods + {steady_periods(scene)} periods "
+            f"(up to {point_duration(scene, longer[0]):.3g} s)")
 
 
 def _sweep_task(args):
@@ -169,8 +216,7 @@ def check_grid(scene, frequencies, amplitudes) -> None:
     for f in fs:
         for a in amps:
             try:
-                scene.with_values(excitation={"frequency_hz": float(f),
-                                              "amplitude_mm": float(a) * 1e3})
+                point_scene(scene, f, a)
             except SceneError as exc:
                 raise SceneError(f"sweep point frequency_hz = {float(f):g}, amplitude_mm = "
                                  f"{float(a) * 1e3:g}: {exc}") from None

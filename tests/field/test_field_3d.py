@@ -181,7 +181,7 @@ def test_gap_rule_is_the_axisymmetric_one():
     (lambda: geometry3d.meshed_gap(PAPER, 3.5e-3), ["position_mm", "3.5", "[0, 3]"]),
     (lambda: geometry3d.meshed_offset(PAPER, 0.6e-3), ["offset_mm", "0.6", "[0, 0.5]"]),
     (lambda: geometry3d.meshed_gap(dataclasses.replace(PAPER, stroke=5e-5), 0.0),
-     ["gap_mm", "0.05", "too small"]),
+     ["stroke_mm", "0.05", "too small"]),
     (lambda: geometry3d.MeshSettings(size=0.0, domain_radius=0.02), ["mesh_size_mm", "0"]),
     (lambda: geometry3d.MeshSettings(size=-1e-3, domain_radius=0.02), ["mesh_size_mm", "-1"]),
     (lambda: solver3d.solve_cell(PAPER, 1e-3, 0.0, dataclasses.replace(P2, degree=3), comm=None),

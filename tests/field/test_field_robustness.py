@@ -84,7 +84,7 @@ def test_gmsh_failure_is_one_line_naming_the_keys(monkeypatch):
                        estimate_error=False)
     message = str(err.value)
     assert "\n" not in message
-    for key in ("gap_mm = 3", "ball_diameter_mm = 7", "mesh_size_mm = 0.5", "domain_radius_mm = 20",
+    for key in ("stroke_mm = 3", "ball_diameter_mm = 7", "mesh_size_mm = 0.5", "domain_radius_mm = 20",
                 "BRepAlgoAPI"):
         assert key in message
 

@@ -13,11 +13,11 @@ from tengfield.field import geometry_axisymmetric as geometry
 from tengfield.scene import EPS0, Scene, default_scene
 from tengfield.scene.limits import default_mesh_scale
 
-FAR = {"ball_diameter_mm": 4.0, "gap_mm": 396.0, "electrode_radius_mm": 2.0,
+FAR = {"ball_diameter_mm": 4.0, "stroke_mm": 396.0, "electrode_radius_mm": 2.0,
        "tube_inner_radius_mm": 3.0, "tube_outer_radius_mm": 4.0, "plate_thickness_mm": 2.0,
        "ball_permittivity": 1.0, "wall_permittivity": 1.0}
 #: the lengths of the paper's device (the schema defaults)
-PAPER_LENGTHS = {"ball_diameter_mm": 7.0, "gap_mm": 3.0, "electrode_radius_mm": 4.0,
+PAPER_LENGTHS = {"ball_diameter_mm": 7.0, "stroke_mm": 3.0, "electrode_radius_mm": 4.0,
                  "tube_inner_radius_mm": 4.0, "tube_outer_radius_mm": 5.5,
                  "plate_thickness_mm": 2.0}
 
@@ -62,7 +62,7 @@ def test_the_3d_solver_uses_an_explicit_mesh_size_as_written(monkeypatch):
     solver3d.solve_position_3d(scene_of(FAR, mesh_size_mm=4.0), 0.198, offset=0.1e-3,
                                comm=None)
     assert seen["size"] == 4e-3
-    solver3d.solve_position_3d(scene_of(scaled(3.0, gap_mm=6.0)), 3e-3, offset=0.1e-3,
+    solver3d.solve_position_3d(scene_of(scaled(3.0, stroke_mm=6.0)), 3e-3, offset=0.1e-3,
                                comm=None)
     assert seen["size"] == pytest.approx(1e-3, rel=1e-12)   # the default, scaled
 
@@ -81,7 +81,7 @@ def test_the_default_scene_keeps_its_mesh_size_to_the_bit():
     (scaled(3.0), 1.5),                                      # geometrically similar x3
     (scaled(3.0, ball_diameter_mm=7.0), 0.5),                # the ball stays small
     (scaled(3.0, electrode_radius_mm=8.0), 1.0),             # electrodes x2 only
-    (scaled(3.0, gap_mm=6.0), 1.0),                          # stroke x2 only
+    (scaled(3.0, stroke_mm=6.0), 1.0),                          # stroke x2 only
     (scaled(3.0, tube_inner_radius_mm=11.0), 0.5),           # ball-tube clearance x1
     (FAR, 0.5),                                              # 400 mm spacing, small parts
     (scaled(0.5), 0.25),                                     # all smaller: scaled down too
@@ -155,7 +155,7 @@ def test_a_large_device_without_a_mesh_size_is_not_refused_as_too_fine():
     from tengfield.field.geometry_axisymmetric import base_mesh_size
     from tengfield.scene import Scene
 
-    lengths = {"ball_diameter_mm": 7.0, "gap_mm": 3.0, "electrode_radius_mm": 4.0,
+    lengths = {"ball_diameter_mm": 7.0, "stroke_mm": 3.0, "electrode_radius_mm": 4.0,
                "tube_inner_radius_mm": 4.0, "tube_outer_radius_mm": 5.5,
                "plate_thickness_mm": 2.0}
     scene = Scene.from_dict({"device": {k: 30 * v for k, v in lengths.items()}})

@@ -27,7 +27,7 @@ FAST_RUN = {"duration_s": 1.0, "settle_periods": 2, "sample_rate_hz": 20000.0}
 
 def still_table(restitution, gap_mm, velocity=0.0, stroke_mm=3.0, duration=1.0):
     """A still table (A = 0): only gravity and the plates act on the ball."""
-    return scene_with(device={"gap_mm": stroke_mm},
+    return scene_with(device={"stroke_mm": stroke_mm},
                       excitation={"amplitude_mm": 0.0, "frequency_hz": 20.0},
                       contact={"restitution": restitution},
                       initial={"gap_mm": gap_mm, "velocity_m_per_s": velocity},
@@ -190,7 +190,7 @@ def test_one_micron_stroke_follows_the_table_sign_of_g_plus_acceleration():
     """Δh = 1 µm, Γ = 2: the ball is (almost) always on a plate: on the upper one while
     ÿ < -g, i.e. a fraction (π - 2 asin(1/Γ)) / 2π of the time (± transit time)."""
     gamma = 2.0
-    scene = scene_with(device={"gap_mm": 1e-3},
+    scene = scene_with(device={"stroke_mm": 1e-3},
                        excitation={"amplitude_mm": amplitude_mm_for(gamma, 20.0)},
                        run={"duration_s": 1.0, "settle_periods": 2, "sample_rate_hz": 2e5})
     res = simulate(scene)

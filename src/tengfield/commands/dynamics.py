@@ -77,7 +77,9 @@ def _dynamics(args, figures) -> int:
     write_dynamics_files(result, scene, out, plots=not args.no_plots, figures=figures)
     if figures is not None:
         figures.finish()
-    print(f"regime {summary['regime']}, period {summary['period']}, max gap "
+    from ..dynamics.regime import regime_label
+
+    print(f"regime {regime_label(summary['regime'], summary['period'])}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")
     return 0
@@ -115,6 +117,10 @@ def _run_map(args) -> int:
         plot_regime_map(result, writable_target(out / "map.png"),
                         title=f"regimes, e = {scene.contact.restitution:g}, dh = "
                               f"{scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")
-    counts = {n: int(np.sum(result.regime == n)) for n in np.unique(result.regime)}
-    print(f"{result.regime.size} points: {counts} -> {out}/")
+    from ..dynamics.regime import regime_table
+    from ..dynamics.result import REGIMES
+
+    counts = {str(n): int(np.sum(result.regime == n)) for n in np.unique(result.regime)}
+    print(f"{result.regime.size} points: {out}/")
+    print(regime_table(counts, REGIMES))
     return 0

@@ -20,7 +20,7 @@ def register(sub) -> None:
                     "charges (electrodes grounded) and C_T; writes DIR/field.json, "
                     "DIR/potential.xdmf (open-circuit potential for ParaView) and DIR/field.png.")
     p.add_argument("--position-mm", type=float, required=True, metavar="Z",
-                   help="gap between the ball's bottom and the lower electrode [mm], 0..gap_mm")
+                   help="gap between the ball's bottom and the lower electrode [mm], 0..stroke_mm")
     p.add_argument("--offset-mm", type=float, default=None, metavar="R",
                    help="lateral ball offset from the axis [mm] (3D only; default [field] "
                         "ball_offset_mm)")
@@ -126,8 +126,8 @@ def _axisymmetric(scene, position, reference, out, *, plot: bool):
         io.write_xdmf(out / "potential.xdmf", result.solution, state.potentials)
         field_plot.render_potential_png(
             out / "field.png", result.solution, state.potential_values(),
-            title=(f"open-circuit potential, z = {position * 1e3:.3g} mm, "
-                   f"{reference} reference, V_OC = {state.V_oc:.4g} V"))
+            title=(f"potential, ball's bottom at z = {position * 1e3:.3g} mm, "
+                   f"V_OC = {state.V_oc:.4g} V ({reference})"))
     result.solution = None   # stays on rank 0
     return result, state.potentials
 

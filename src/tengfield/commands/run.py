@@ -130,8 +130,10 @@ def _level(level: float, x, length: float | None) -> str:
 
 def print_summary(summary: dict) -> None:
     regime = summary.get("regime") or {}
-    print(f"regime: {regime.get('regime', '?')} (period {regime.get('period', '?')}, "
-          f"max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
+    from ..dynamics.regime import regime_label
+
+    print(f"regime: {regime_label(regime.get('regime', '?'), regime.get('period', 0))} "
+          f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
     for line in terminal_lines(summary):
         print(line)
     if summary.get("load"):

@@ -9,10 +9,26 @@ def register(sub) -> None:
     p = sub.add_parser("scene", help="print the default scene, or check a scene file",
                        description="`tengfield scene --default > my.toml` writes the embedded "
                                    "default scene with its comments; `tengfield scene FILE` "
-                                   "checks FILE and prints every key in SI-free file units.")
+                                   "checks FILE (every section any command reads, [design] and "
+                                   "[fit] included) and prints every key in SI-free file units.")
     p.add_argument("scene", nargs="?", help="scene file to check")
     p.add_argument("--default", action="store_true", help="print the commented default scene")
     p.set_defaults(func=_run)
+
+
+def check_sections(scene) -> None:
+    """The sections only one command reads, checked by that command's own validator
+    (raises SceneError): ``[design]`` (design/spec.py), ``[fit]`` (fit/spec.py). The
+    other sections ([device] ... [breakdown], [array]) are checked when the scene is
+    built."""
+    if "design" in scene.raw:
+        from ..design.spec import parse_design_section
+
+        parse_design_section(scene)
+    if "fit" in scene.raw:
+        from ..fit.spec import parse_fit_section
+
+        parse_fit_section(scene)
 
 
 def _run(args) -> int:
@@ -22,6 +38,7 @@ def _run(args) -> int:
         sys.stdout.write(default_text())
         return 0
     scene = load_scene(args.scene)
+    check_sections(scene)
     print(json.dumps(scene.to_dict(), indent=2))
     print(f"# field hash {scene.field_hash()}", file=sys.stderr)
     return 0

@@ -43,7 +43,7 @@ def _run(args) -> int:
     from ..scene import load_scene
     from ..breakdown import charge_line, obtain_run_table, uses_breakdown_charge
     from .._mpi import check_jobs
-    from ..sweep import check_grid, check_sweep_size, sweep
+    from ..sweep import check_grid, check_sweep_size, extension_line, sweep
 
     scene = load_scene(args.scene)
     frequencies = parse_range(args.frequency_hz, "--frequency-hz")
@@ -64,6 +64,9 @@ def _run(args) -> int:
               f"{table.interpolation_error:.2g})", file=sys.stderr)
         if at_limit:
             print(charge_line(scene), file=sys.stderr)
+        longer = extension_line(scene, frequencies)
+        if longer:
+            print(longer, file=sys.stderr)
     rows = sweep(scene, table, frequencies, amplitudes, loads, jobs=args.jobs, comm=comm,
                  progress=True)
     if not root:

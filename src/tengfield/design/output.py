@@ -8,6 +8,7 @@ from .._files import atomic_path, scene_dir, scene_toml, write_json, write_rows,
 from .answer import (band_table_lines, chosen_band_point, describe, design_answer, on_bounds,
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
+from ..scene.schema import update_section
 from .spec import OBJECTIVES, OTHER_VARY
 
 
@@ -160,7 +161,7 @@ def best_scene_dict(result) -> dict:
     device = {k: v for k, v in best["values"].items() if k not in OTHER_VARY}
     if result.spec.geometry == "follow":
         device.update(followed_geometry(result.scene.to_dict()["device"], device))
-    data.setdefault("device", {}).update(device)
+    update_section(data, "device", device)   # a varied gap_mm replaces stroke_mm
     for key, value in best["values"].items():
         if key in OTHER_VARY:
             data.setdefault(OTHER_VARY[key], {})[key] = value

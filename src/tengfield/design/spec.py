@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from dataclasses import field as _field
 
 from ..errors import SceneError
-from ..scene.schema import SCHEMA
+from ..scene.schema import RENAMED_KEYS, SCHEMA
 from ..scene.schema import convert as _convert
 
 #: objective -> (unit, relative-error factor on the field error bar, needs the field)
@@ -134,11 +134,13 @@ def vary_spec(key: str) -> tuple[str, tuple]:
     """(section, SCHEMA entry) of a key [design.vary] accepts, or SceneError."""
     allowed = [k for k, s in SCHEMA["device"].items() if s[1] in (float, int)
                and k not in ("tilt_deg", "tilt_azimuth_deg")] + list(OTHER_VARY)
-    if key not in allowed:
-        raise SceneError(f"unknown key [design.vary] {key}" + _suggest(key, allowed)
+    old_names = [old for (sec, old) in RENAMED_KEYS if sec == "device"]
+    name = RENAMED_KEYS.get(("device", key), key)     # an old name (gap_mm) is still read
+    if name not in allowed:
+        raise SceneError(f"unknown key [design.vary] {key}" + _suggest(key, allowed + old_names)
                          + "; allowed: " + ", ".join(allowed))
-    section = OTHER_VARY.get(key, "device")
-    return section, SCHEMA[section][key]
+    section = OTHER_VARY.get(name, "device")
+    return section, SCHEMA[section][name]
 
 
 def _vary(raw) -> dict:

@@ -132,6 +132,28 @@ def _grid_gap(sampler, start: float, step: float, count: int, gap_on_grid=None) 
     return sampler(start + step * np.arange(count))[0]
 
 
+def regime_label(name: str, period: int) -> str:
+    """How a regime is said in one line: ``"bounce, period 2"``, ``"chaos (aperiodic)"``
+    (a chaotic window has no period: ``period`` 0), ``"rest"``."""
+    if name == "chaos" or not period:
+        return f"{name} (aperiodic)" if name == "chaos" else name
+    if name == "rest":
+        return name
+    return f"{name}, period {period}"
+
+
+def regime_table(counts: dict, order=()) -> str:
+    """The points of a regime map per regime as a text table (regime, points, share);
+    ``counts`` {regime: points}, rows in ``order`` first, then the others."""
+    total = sum(counts.values()) or 1
+    names = [n for n in order if n in counts] + sorted(n for n in counts if n not in order)
+    width = max([len("regime")] + [len(n) for n in names])
+    lines = [f"{'regime':<{width}}  {'points':>8}  {'share':>7}"]
+    lines += [f"{n:<{width}}  {counts[n]:>8d}  {100.0 * counts[n] / total:>6.1f}%"
+              for n in names]
+    return "\n".join(lines)
+
+
 def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
              impact_speed: np.ndarray, *, window_start: float, t_end: float, period: float,
              stroke: float, g: float, upper_stuck: bool = False, gap_on_grid=None) -> Regime:

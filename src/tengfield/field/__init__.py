@@ -69,7 +69,7 @@ def check_position(scene, position: float) -> None:
         raise FieldError(f"position_mm = {position!r}: expected a number") from None
     if not math.isfinite(value) or value < 0.0 or value > stroke * (1.0 + 1e-12):
         raise FieldError(f"position_mm = {value * 1e3:g} is out of range: allowed "
-                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] gap_mm)")
+                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] stroke_mm)")
 
 
 def resolve_method(scene, method: str | None = None, offset: float = 0.0) -> str:

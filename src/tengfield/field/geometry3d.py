@@ -169,7 +169,7 @@ def check_position(cell, position: float) -> None:
     stroke = cell.stroke
     if not (math.isfinite(position) and 0.0 <= position <= stroke * (1 + 1e-12)):
         raise FieldError(f"position_mm = {position * 1e3:g} is out of range: allowed "
-                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] gap_mm)")
+                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] stroke_mm)")
 
 
 def meshed_gap(cell, position: float) -> float:
@@ -178,7 +178,7 @@ def meshed_gap(cell, position: float) -> float:
     check_position(cell, position)
     g_min = minimum_gap(cell)
     if cell.stroke < 4 * g_min:
-        raise FieldError(f"[device] gap_mm = {cell.stroke * 1e3:g} is too small for the 3D mesh: "
+        raise FieldError(f"[device] stroke_mm = {cell.stroke * 1e3:g} is too small for the 3D mesh: "
                          f"allowed > {4e3 * g_min:g} mm (4 x the minimum meshed gap)")
     return min(max(position, g_min), cell.stroke - g_min)
 

@@ -460,7 +460,7 @@ def meshing_failure(scene, exc: BaseException) -> str:
     """One line for a gmsh/OpenCASCADE failure, naming the keys that shape the mesh."""
     dev, fld = scene.device, scene.field
     first = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
-    return (f"gmsh could not mesh the device ({first}): check [device] gap_mm = "
+    return (f"gmsh could not mesh the device ({first}): check [device] stroke_mm = "
             f"{dev.stroke * 1e3:g}, ball_diameter_mm = {dev.ball_diameter * 1e3:g} and "
             f"[field] {mesh_size_text(scene)}, domain_radius_mm = "
             f"{fld.domain_radius * 1e3:g}")

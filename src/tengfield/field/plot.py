@@ -37,6 +37,13 @@ def colour_bar_labels(limit: float, n_labels: int = 5) -> list[str]:
     return [fmt % v for v in values]
 
 
+def height_origin(lay) -> float:
+    """Where field.png's vertical axis has its zero [m, mesh coordinates]: the lower
+    electrode's face, so the axis reads the gap z of the title (the mesh's own origin
+    is the midplane between the plates)."""
+    return lay.z_lower
+
+
 def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
                          window_size=(1400, 1100)) -> None:
     """Paper figure of an axisymmetric ``solution``: φ [V] (local dof values on
@@ -137,8 +144,13 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
         plotter.add_mesh(pv.Line((-half_w, zl - t, 0.05), (half_w, zl - t, 0.05)),
                          color="black", line_width=6)
     plotter.add_text(title, position="upper_edge", font_size=14, color="black")
-    plotter.show_bounds(xtitle="r (mm)", ytitle="z (mm)", color="black", font_size=14,
-                        location="outer", ticks="outside", bounds=(-half_w, half_w, z0, z1, 0, 0))
+    # the vertical axis is the title's z: height above the lower electrode's face (the
+    # mesh's origin is the midplane); the ball's bottom sits at the gap z
+    base = height_origin(lay) * mm
+    plotter.show_bounds(xtitle="r (mm)", ytitle="z: height above the lower electrode (mm)",
+                        color="black", font_size=14, location="outer", ticks="outside",
+                        bounds=(-half_w, half_w, z0, z1, 0, 0),
+                        axes_ranges=[-half_w, half_w, z0 - base, z1 - base, 0, 0])
     plotter.view_xy()
     plotter.camera.zoom(1.15)
     plotter.screenshot(str(Path(path)))

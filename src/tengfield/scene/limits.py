@@ -113,7 +113,7 @@ MIN_MESHED_LENGTH = 5e-7
 #: default left its gaps unresolved and devices /100 and below failed in gmsh); a device
 #: with features on both sides of the paper's keeps the default. A ``mesh_size_mm``
 #: written in the scene (or passed as an override) is never scaled.
-PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "gap_mm": 3.0e-3}
+PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "stroke_mm": 3.0e-3}
 #: ... and, with dielectric walls (``wall_permittivity != 1``), the walls and the
 #: ball's clearance to the tube (plate thickness also under a grounded table)
 PAPER_WALL_FEATURES = {"tube_outer_radius_mm - tube_inner_radius_mm": 1.5e-3,
@@ -267,7 +267,7 @@ def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
     """The features [m] a mesh of ``device`` must resolve, by scene key (see
     :data:`PAPER_FEATURES`)."""
     features = {"ball_diameter_mm": device.ball_diameter,
-                "electrode_radius_mm": device.electrode_radius, "gap_mm": device.stroke}
+                "electrode_radius_mm": device.electrode_radius, "stroke_mm": device.stroke}
     walls = device.wall_permittivity != 1.0
     if walls:
         features["tube_outer_radius_mm - tube_inner_radius_mm"] = \
@@ -324,7 +324,7 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
                 ("electrode_radius_mm", dev.electrode_radius),
                 ("tube_outer_radius_mm - tube_inner_radius_mm",
                  dev.tube_outer_radius - dev.tube_inner_radius)]
-    feature_key, feature = min(features + [("gap_mm", dev.stroke)], key=lambda kv: kv[1])
+    feature_key, feature = min(features + [("stroke_mm", dev.stroke)], key=lambda kv: kv[1])
     for key, size in features:
         if size < smallest:
             problems.append(
@@ -337,7 +337,7 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
         nf = CONTACT_GAPS_IN_STROKE * MIN_GAP_FRACTION
         need = nf * dev.ball_diameter / (1.0 - nf)
         problems.append(
-            f"[device] gap_mm = {dev.stroke * 1e3:g} is too small for a field solve: allowed >= "
+            f"[device] stroke_mm = {dev.stroke * 1e3:g} is too small for a field solve: allowed >= "
             f"{need * 1e3:.3g} mm ({CONTACT_GAPS_IN_STROKE} x the smallest meshed gap, "
             f"{MIN_GAP_FRACTION:g} x the plate spacing); dynamics-only runs accept it")
     spacing = dev.plate_spacing

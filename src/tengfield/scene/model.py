@@ -15,27 +15,31 @@ import dataclasses
 import hashlib
 import json
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .._mpi import launched_rank
 from ..errors import SceneError
 from ..paschen import STREAMER_PD
 from .constants import G
 from .limits import (auto_domain_radius, check_array_work, check_steady_window,
                      check_vibration_work, check_work, field_problems)
 from .recorded import read_psd, read_recorded
-from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, PASSTHROUGH_SECTIONS, SCHEMA,
-                     check_section, convert, harmonic_components, suggest, with_defaults)
+from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
+                     RENAMED_KEYS, SCHEMA, check_section, convert, harmonic_components,
+                     renamed_section, suggest, update_section, with_defaults)
+from .schema import show as schema_show
 
 
 @dataclass(frozen=True)
 class Device:
     """Geometry and materials, SI. The z axis is the tube axis."""
     ball_diameter: float        # [m]
-    stroke: float               # free stroke dh = h - d [m] (scene key gap_mm)
+    stroke: float               # free stroke dh = h - d [m] (scene key stroke_mm)
     electrode_radius: float     # [m]
     tube_inner_radius: float    # [m]
     tube_outer_radius: float    # [m] (= end-plate radius)
@@ -420,7 +424,7 @@ class Scene:
         dev, exc, run, arr = self.device, self.excitation, self.run, self.array
         if self.initial.gap > dev.stroke:
             raise SceneError(f"[initial] gap_mm = {self.initial.gap * 1e3:g} is out of range: "
-                             f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] gap_mm)")
+                             f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] stroke_mm)")
         check_steady_window(exc, run.settle_periods, run.duration)
         check_work(exc, run)
         check_vibration_work(exc, run)
@@ -449,10 +453,10 @@ class Scene:
         ``scene.with_values(excitation={"frequency_hz": 30.0})``
         """
         data = copy.deepcopy(self.raw)
-        for sec, values in sections.items():
-            data.setdefault(sec, {}).update(values)
+        for sec, values in sections.items():   # a renamed key under either name
+            update_section(data, sec, values)
         base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
-        scene = build(data, base_dir=base, source=self.source, text=self.text)
+        scene = build(data, base_dir=base, source=self.source, text=self.text, warn=False)
         if "field" in sections:   # explicit field settings: refuse bad ones at once
             check_field(scene)
         return scene
@@ -466,8 +470,8 @@ class Scene:
         full = with_defaults(self.raw)
         out: dict[str, Any] = {"schema": FIELD_SCHEMA}
         for sec, keys in FIELD_KEYS.items():
-            out[sec] = {k: full[sec][k] for k in keys}
-        for sec, key in AUTO_KEYS:
+            out[sec] = {HASH_NAMES.get((sec, k), k): full[sec][k] for k in keys}
+        for sec, key in AUTO_KEYS:   # (no renamed key takes "auto")
             if out[sec][key] == "auto":
                 out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
         return out
@@ -510,12 +514,38 @@ def _auto_mm(value_si: float) -> float:
 
 
 # ---------------------------------------------------------------------------
-def build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene:
+def _renamed(data: dict, source: str, warn: bool) -> dict:
+    """``data`` with renamed keys under their new names (a copy if any was renamed); a
+    section with both names is refused, an old name warned about once."""
+    out = data
+    for (sec, old), new in RENAMED_KEYS.items():
+        section = data.get(sec)
+        if not isinstance(section, dict) or old not in section:
+            continue
+        if new in section:
+            raise SceneError(f"{source}: [{sec}] {old} and {new} are the same key ({old} is "
+                             f"its old name): give {new} only")
+        if warn and launched_rank() == 0:   # under mpirun: one line, not one per rank
+            warnings.warn(f"{source}: [{sec}] {old} is now called {new}: write "
+                          f"{new} = {schema_show(section[old])} ({old} is read until the "
+                          f"next release)", FutureWarning, stacklevel=4)
+        if out is data:
+            out = dict(data)
+        out[sec] = renamed_section(sec, section)
+    return out
+
+
+def build(data: dict, *, base_dir: Path | None, source: str, text: str,
+          warn: bool = True) -> Scene:
     """A :class:`Scene` from file-level values by section (a parsed scene file, or
     :meth:`Scene.with_values`): unknown sections and keys refused, every value checked
-    and turned into SI, the files it names read (relative to ``base_dir``)."""
+    and turned into SI, the files it names read (relative to ``base_dir``). A renamed
+    key (:data:`RENAMED_KEYS`) is read under its old name with one warning (``warn``);
+    ``scene.raw`` keeps the names as given."""
     if not isinstance(data, dict):
         raise SceneError(f"{source}: a scene is a TOML table")
+    given_names = data
+    data = _renamed(data, source, warn)
     for sec in data:
         if sec in PASSTHROUGH_SECTIONS:   # kept in scene.raw, validated by their own package
             if not isinstance(data[sec], dict):
@@ -580,5 +610,5 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str) -> Scene
                  field=_RefusedField(problems) if problems else fld,
                  circuit=Circuit(**values["circuit"]), array=Array(**values["array"]),
                  breakdown=Breakdown(**values["breakdown"]),
-                 reference=Reference(**values["reference"]), raw=copy.deepcopy(given_data),
+                 reference=Reference(**values["reference"]), raw=copy.deepcopy(given_names),
                  source=source, text=text)

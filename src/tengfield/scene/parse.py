@@ -6,17 +6,20 @@ values themselves are checked by :func:`tengfield.scene.model.build`.
 """
 from __future__ import annotations
 
+import copy
 import datetime
 import re
 import tomllib
+import warnings
 from importlib import resources
 from pathlib import Path
 
+from .._mpi import launched_rank
 from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
 from .recorded import decode_utf8
-from .schema import show
+from .schema import RENAMED_KEYS, show, update_section
 
 
 def default_text() -> str:
@@ -28,8 +31,11 @@ def default_scene() -> Scene:
     return parse_scene(default_text(), source="<default>")
 
 
-def load_scene(path: str | Path | None) -> Scene:
-    """Read a scene file; ``None`` gives the embedded default scene."""
+def load_scene(path: "str | Path | Scene | None") -> Scene:
+    """Read a scene file; ``None`` gives the embedded default scene; a :class:`Scene`
+    is returned as it is (the CLI hands its commands a scene with ``--set`` applied)."""
+    if isinstance(path, Scene):
+        return path
     if path is None:
         return default_scene()
     p = Path(path)
@@ -76,6 +82,55 @@ def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = 
         raise SceneError(f"{source}: malformed TOML: {detail}") from None
     _check_values(data, source)
     return build(data, base_dir=base_dir, source=source, text=text)
+
+
+def parse_setting(text: str) -> tuple[list[str], object]:
+    """``section.key=value`` (``--set``) -> (``["section", "key"]``, value). The value is
+    read as a TOML value (``30``, ``1e8``, ``"rectifier"``, ``[1.0, 4.0]``, ``true``);
+    a bare word that is no TOML value is a string (``kind=rectifier``)."""
+    name, eq, value = text.partition("=")
+    path = [part.strip() for part in name.split(".")]
+    if not eq or len(path) < 2 or not all(path):
+        raise SceneError(f"--set {text!r}: write section.key=value, e.g. "
+                         "--set excitation.frequency_hz=30")
+    value = value.strip()
+    try:
+        parsed = tomllib.loads(f"v = {value}")["v"]
+    except (tomllib.TOMLDecodeError, ValueError, OverflowError, RecursionError):
+        if not re.fullmatch(r"[A-Za-z0-9_+\-./]+", value or "?"):
+            raise SceneError(f"--set {text!r}: {value!r} is no TOML value (numbers as "
+                             "written, strings in quotes, lists as [a, b])") from None
+        parsed = value
+    _check_values({"v": parsed}, "--set")
+    return path, parsed
+
+
+def with_settings(scene: Scene, settings: list[str]) -> Scene:
+    """``scene`` with the ``--set section.key=value`` settings applied, in order, each
+    checked as the same key in the file would be (unknown keys with the did-you-mean,
+    values with their range)."""
+    data = copy.deepcopy(scene.raw)
+    for text in settings:
+        path, value = parse_setting(text)
+        new = RENAMED_KEYS.get(tuple(path)) if len(path) == 2 else None
+        if new is not None:   # the file's old names were warned about when it was read
+            if launched_rank() == 0:   # under mpirun: one line, not one per rank
+                warnings.warn(f"--set {path[0]}.{path[1]}: [{path[0]}] {path[1]} is now called "
+                          f"{new}: write --set {path[0]}.{new}={value!r} ({path[1]} is "
+                              "read until the next release)", FutureWarning, stacklevel=2)
+            data[path[0]] = dict(data.get(path[0]) or {})
+            update_section(data, path[0], {new: value})
+            continue
+        node = data
+        for part in path[:-1]:
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise SceneError(f"--set {text!r}: {part} is a value, not a table")
+            node = child
+        node[path[-1]] = value
+    base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
+    source = scene.source if scene.source != "<default>" else "<default scene>"
+    return build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)
 
 
 def _check_nesting_text(text: str, source: str) -> None:

@@ -1,7 +1,7 @@
 """Every scene key, declared once: section, file key -> :class:`Key` (attribute, type,
 default, SI factor, range or choices, and whether it changes a field solve).
 
-Keys in the file carry their unit (``gap_mm``, ``frequency_hz``); ``Key.factor`` turns
+Keys in the file carry their unit (``stroke_mm``, ``frequency_hz``); ``Key.factor`` turns
 the file's number into SI. :data:`FIELD_KEYS` (the surrogate cache hash) is derived
 from the ``field=True`` flags. :func:`convert` checks one file value,
 :func:`check_attribute` one SI value of a dataclass built from Python.
@@ -71,7 +71,8 @@ _MEASURED = _rng(0.0, 1e30, why="a measured magnitude; 0: not given")
 SCHEMA: dict[str, dict[str, Key]] = {
     "device": {
         "ball_diameter_mm": Key("ball_diameter", float, 7.0, 1e-3, _LENGTH, field=True),
-        "gap_mm": Key("stroke", float, 3.0, 1e-3, _LENGTH, field=True),
+        # the free stroke dh = h - d (called gap_mm before issue #29: RENAMED_KEYS)
+        "stroke_mm": Key("stroke", float, 3.0, 1e-3, _LENGTH, field=True),
         "electrode_radius_mm": Key("electrode_radius", float, 4.0, 1e-3, _LENGTH, field=True),
         "tube_inner_radius_mm": Key("tube_inner_radius", float, 4.0, 1e-3, _LENGTH, field=True),
         "tube_outer_radius_mm": Key("tube_outer_radius", float, 5.5, 1e-3, _LENGTH, field=True),
@@ -260,6 +261,14 @@ FIELD_KEYS: dict[str, list[str]] = {
     sec: [key for key, spec in keys.items() if spec.field]
     for sec, keys in SCHEMA.items() if any(spec.field for spec in keys.values())}
 
+#: Renamed keys: (section, old name) -> new name. The old name is read for one release,
+#: with one warning line saying what to write ([initial] gap_mm keeps its name: it is
+#: the ball's gap, the stroke was the [device] gap_mm).
+RENAMED_KEYS = {("device", "gap_mm"): "stroke_mm"}
+#: The name a renamed field key has in the surrogate cache hash (its name when the cache
+#: was first keyed): renaming a key never invalidates a cached surrogate.
+HASH_NAMES = {("device", "stroke_mm"): "gap_mm"}
+
 #: Keys that also accept the string "auto", resolved to a number at load.
 AUTO_KEYS = {("field", "domain_radius_mm")}
 #: the stand-in sigma [uC/m^2] of surface_charge_uC_per_m2 = "breakdown" before sigma_max is known
@@ -302,11 +311,32 @@ def show(value) -> str:
     return text if len(text) <= 80 else text[:77] + "..."
 
 
+def renamed_section(sec: str, values: dict) -> dict:
+    """``values`` of section ``sec`` with renamed keys under their new names (a copy when
+    one was renamed; the caller refuses a section that holds both names)."""
+    if not isinstance(values, dict) or not any((sec, k) in RENAMED_KEYS for k in values):
+        return values
+    return {RENAMED_KEYS.get((sec, k), k): v for k, v in values.items()}
+
+
+def update_section(data: dict, sec: str, values: dict) -> None:
+    """``data[sec].update(values)`` with a renamed key written under its new name,
+    replacing the value under either name (``data`` holds file-level sections)."""
+    target = data.setdefault(sec, {})
+    for key, value in values.items():
+        new = RENAMED_KEYS.get((sec, key), key)
+        for (rsec, old), renamed in RENAMED_KEYS.items():
+            if rsec == sec and renamed == new:
+                target.pop(old, None)
+        target[new] = value
+
+
 def with_defaults(raw: dict) -> dict:
-    """File-level values of every key of every section (defaults filled in)."""
+    """File-level values of every key of every section (defaults filled in; a renamed key
+    under its new name)."""
     full = {}
     for sec, keys in SCHEMA.items():
-        given = raw.get(sec, {})
+        given = renamed_section(sec, raw.get(sec, {}))
         full[sec] = {k: given.get(k, spec.default) for k, spec in keys.items()}
     return full
 
