@@ -89,7 +89,8 @@ class Cell(Protocol):
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
         """The breakdown lines from the ball surface (points at polar angles from the
         axis, lower and upper side) to the electrodes: ``{"start", "foot"}`` arrays
-        (2, n, 3) in (r, z, 0), ``"length"`` (2, n) and ``"on_electrode"`` (2, n)."""
+        (2, n, 3) in (r, z, 0) and ``"length"`` (2, n) [m] (a shape may add its own
+        keys)."""
 
     def mesh_features(self) -> dict[str, float]:
         """The lengths [m] a mesh must resolve, by scene key (default mesh size rule)."""

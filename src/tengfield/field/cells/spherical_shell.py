@@ -159,29 +159,36 @@ class SphericalShell:
         return self.cavity_diameter
 
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
-        """Lines from the ball surface to the cavity wall, along the radius through the
-        surface point (the shortest path from that point to the wall, so no field line
-        from there is shorter). Surface points at polar angle θ from the axis, on the
-        lower side (θ measured from the bottom) and the upper side (from the top);
-        ``on_electrode`` is False where the foot lies on the band (that line is not
-        used, as a tube line whose foot lies beyond the electrode rim)."""
+        """Lines from the ball surface to each electrode: from the surface point at polar
+        angle θ from the axis (lower side: θ from the bottom, upper side: from the top)
+        to the nearest point of that side's electrode, so no field line from there to
+        the electrode is shorter (with a breakdown curve that does not fall with the
+        gap, pairing the voltage with this length errs on the safe side, as the
+        tube's lines do). The nearest point is the radial projection ``a p/|p|`` when
+        it lies on the electrode (``radial`` True), else the electrode's rim in the
+        point's meridian (the distance to the sphere grows with the angle from the
+        projection). ``{"start", "foot"}`` (2, n, 3) in (r, z, 0), ``"length"`` and
+        ``"radial"`` (2, n)."""
         theta = np.radians(np.asarray(angles_deg, dtype=float))
         rb, a = self.ball_radius, self.cavity_radius
+        edge = 0.5 * self.electrode_band
+        rim_r = math.sqrt(a * a - edge * edge)
         r = rb * np.sin(theta)
         dz = rb * np.cos(theta)
-        out = {"start": [], "foot": [], "length": [], "on_electrode": []}
-        for side, sign in (("lower", -1.0), ("upper", 1.0)):
+        out = {"start": [], "foot": [], "length": [], "radial": []}
+        for sign in (-1.0, 1.0):   # lower side, upper side
             start = np.column_stack([r, ball_centre_z + sign * dz, np.zeros_like(r)])
             rho = np.linalg.norm(start, axis=1)
-            direction = np.where(rho[:, None] > 0, start / np.maximum(rho, 1e-300)[:, None],
-                                 np.array([0.0, sign, 0.0]))
-            foot = a * direction
-            z_foot = foot[:, 1]
+            safe = np.maximum(rho, 1e-300)[:, None]
+            radial_foot = np.where(rho[:, None] > 1e-12 * a, a * start / safe,
+                                   np.array([0.0, sign * a, 0.0]))
+            radial = sign * radial_foot[:, 1] >= edge
+            rim = np.array([rim_r, sign * edge, 0.0])
+            foot = np.where(radial[:, None], radial_foot, rim)
             out["start"].append(start)
             out["foot"].append(foot)
-            out["length"].append(a - rho)
-            edge = 0.5 * self.electrode_band
-            out["on_electrode"].append(z_foot <= -edge if side == "lower" else z_foot >= edge)
+            out["length"].append(np.linalg.norm(foot - start, axis=1))
+            out["radial"].append(radial)
         return {key: np.array(value) for key, value in out.items()}
 
     def mesh_features(self) -> dict[str, float]:
