@@ -242,3 +242,62 @@ def test_closed_sphere_limit_matches_poissons_integral(z):
     wide = solve(shell(electrode_band=0.4e-3, **closed), z)
     assert np.abs(wide.induced_fraction - exact).max() > np.abs(
         res.induced_fraction - exact).max()
+
+
+def test_from_keys_reads_file_units():
+    cell = SphericalShell.from_keys({"shape": "spherical-shell", "cavity_diameter_mm": 20,
+                                     "shell_thickness_mm": 2, "electrode_band_mm": 2,
+                                     "ball_diameter_mm": 8, "wall_permittivity": 3.0},
+                                    domain_radius_mm=40)
+    assert cell == shell(ball_permittivity=2.1, domain_radius=40e-3)
+    with pytest.raises(FieldError, match=r"\[device\] electrode_band_mm is missing"):
+        SphericalShell.from_keys({"cavity_diameter_mm": 20, "shell_thickness_mm": 2,
+                                  "ball_diameter_mm": 8})
+
+
+# -- the tube through the same protocol ---------------------------------------------------
+def test_tube_cell_geometry_matches_the_scene():
+    from tengfield.paschen import longest_path
+    from tengfield.scene import default_scene
+    from tengfield.scene.limits import mesh_features
+
+    scene = default_scene()
+    tube = CELLS["tube"].from_scene(scene)
+    dev = scene.device
+    assert isinstance(tube, Cell)
+    assert tube.stroke == dev.stroke
+    assert tube.longest_path() == longest_path(dev)
+    assert tube.volume() == dev.cell_volume
+    assert tube.mesh_features() == mesh_features(dev, scene.field.environment)
+    centre = np.array([0.0, 0.0, tube.ball_centre_z(0.3e-3)])
+    assert tube.wall_distance(centre) == pytest.approx(0.3e-3)   # the gap to the lower plate
+    assert tube.wall_normal(centre) == pytest.approx([0.0, 0.0, -1.0])
+    side = np.array([dev.tube_inner_radius - dev.ball_radius - 0.1e-3, 0.0, 0.0])
+    assert tube.wall_distance(side) == pytest.approx(0.1e-3)
+    assert tube.wall_normal(side) == pytest.approx([1.0, 0.0, 0.0])
+    assert not tube.admissible(side + np.array([0.2e-3, 0.0, 0.0]))
+
+
+@field
+@pytest.mark.slow
+@pytest.mark.parametrize("z", [0.0, 1.5e-3])
+def test_the_cell_route_reproduces_the_tube_solver_to_the_bit(z):
+    """solve_cell_position on the tube cell builds the same mesh and runs the same
+    assembly and solves as solve_position: the same numbers to the bit (also through
+    the contact rule at z = 0)."""
+    pytest.importorskip("dolfinx")
+    from mpi4py import MPI
+
+    from tengfield.field import solve_position
+    from tengfield.scene import default_scene
+
+    scene = default_scene().with_values(field={"mesh_size_mm": 0.8})
+    direct = solve_position(scene, z, comm=MPI.COMM_SELF, method="axisymmetric",
+                            estimate_error=False)
+    via = solve(CELLS["tube"].from_scene(scene), z, sigma=scene.device.surface_charge,
+                mesh_size=0.8e-3, degree=scene.field.degree, far_field=scene.field.far_field,
+                domain_radius=scene.field.domain_radius)
+    assert np.array_equal(via.capacitance, direct.capacitance)
+    assert np.array_equal(via.induced_fraction, direct.induced_fraction)
+    assert np.array_equal(via.induced_charge, direct.induced_charge)
+    assert via.dofs == direct.dofs

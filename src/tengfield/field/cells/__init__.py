@@ -31,11 +31,13 @@ plots                       ``outline()``: polylines in (r, z) [m]
 Coordinates: the cell's centre at the origin, z up (the drive's axis), SI.
 A ball centre is ``(x, y, z)`` [m].
 
-``CELLS`` maps a ``[device] shape`` name to the class of its cell. The tube
-(and the honeycomb) are not registered yet: today their geometry lives in
-:mod:`tengfield.field.geometry_axisymmetric`, ``geometry3d`` and the scene;
-docs/architecture.md ("Where a new cell shape goes") and docs/spherical_shell.md
-say what is left.
+``CELLS`` maps a ``[device] shape`` name to the class of its cell; each class
+has ``from_scene(scene)``. ``"tube"`` is an adapter over the scene and the
+existing tube modules (:mod:`.tube`; the stages still read the tube directly),
+``"spherical-shell"`` the new shell (:mod:`.spherical_shell`; the scene has no
+keys for it yet, ``SphericalShell.from_keys`` reads them in file units). The
+honeycomb and the 3D gmsh models are not cells yet; docs/architecture.md
+("Where a new cell shape goes") and docs/spherical_shell.md say what is left.
 """
 from __future__ import annotations
 
@@ -44,8 +46,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from .spherical_shell import SphericalShell
+from .tube import Tube
 
-__all__ = ["Cell", "CELLS", "SphericalShell", "cell_class"]
+__all__ = ["Cell", "CELLS", "SphericalShell", "Tube", "cell_class"]
 
 
 @runtime_checkable
@@ -108,7 +111,7 @@ class Cell(Protocol):
 
 
 #: ``[device] shape`` -> the class of its cell
-CELLS: dict[str, type] = {SphericalShell.name: SphericalShell}
+CELLS: dict[str, type] = {Tube.name: Tube, SphericalShell.name: SphericalShell}
 
 
 def cell_class(shape: str) -> type:

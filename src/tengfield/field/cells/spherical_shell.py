@@ -47,6 +47,36 @@ class SphericalShell:
 
     name = "spherical-shell"
 
+    #: the ``[device]`` keys of the shell (file units) -> the dataclass field and factor
+    KEYS = {"cavity_diameter_mm": ("cavity_diameter", 1e-3),
+            "shell_thickness_mm": ("shell_thickness", 1e-3),
+            "electrode_band_mm": ("electrode_band", 1e-3),
+            "ball_diameter_mm": ("ball_diameter", 1e-3),
+            "wall_permittivity": ("wall_permittivity", 1.0),
+            "ball_permittivity": ("ball_permittivity", 1.0)}
+
+    @classmethod
+    def from_keys(cls, device: dict, domain_radius_mm: float | None = None
+                  ) -> "SphericalShell":
+        """The shell of a ``[device]`` table in file units (mm; ``shape`` and keys of
+        other shapes are ignored); a missing key names itself."""
+        values = {}
+        for key, (attribute, factor) in cls.KEYS.items():
+            if key in device:
+                values[attribute] = float(device[key]) * factor
+            elif attribute not in ("wall_permittivity", "ball_permittivity"):
+                raise FieldError(f"[device] {key} is missing: shape = 'spherical-shell' "
+                                 f"needs {', '.join(k for k in cls.KEYS if k.endswith('_mm'))}")
+        if domain_radius_mm is not None:
+            values["domain_radius"] = float(domain_radius_mm) * 1e-3
+        return cls(**values)
+
+    @classmethod
+    def from_scene(cls, scene) -> "SphericalShell":
+        """The shell of ``scene``'s ``[device]`` table as written (``scene.raw``)."""
+        device = dict(((getattr(scene, "raw", None) or {}).get("device") or {}))
+        return cls.from_keys(device)
+
     def __post_init__(self) -> None:
         for key, value in (("cavity_diameter_mm", self.cavity_diameter),
                            ("shell_thickness_mm", self.shell_thickness),
