@@ -24,6 +24,8 @@ from __future__ import annotations
 import math
 import time
 
+import numpy as np
+
 from ...errors import FieldError
 from ...scene.constants import EPS0
 from .. import contact
@@ -33,7 +35,8 @@ from ..result import PositionResult
 
 #: options of :func:`solve_cell_position` besides the cell and the position
 SOLVER_OPTIONS = ("sigma", "mesh_size", "degree", "far_field", "domain_radius",
-                  "estimate_error", "source_solve", "linear_solver", "grading_size")
+                  "estimate_error", "source_solve", "linear_solver", "grading_size",
+                  "breakdown_lines")
 
 
 def build_mesh(cell, position: float, comm, *, mesh_size: float, degree: int,
@@ -87,8 +90,8 @@ def far_field_charge(dx_api, disc, potential, lay, far_field: str) -> float:
 
 def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float, degree: int,
                   far_field: str, domain_radius: float | None, estimate_error: bool,
-                  source_solve: bool, linear_solver: str, grading_size: float | None
-                  ) -> PositionResult:
+                  source_solve: bool, linear_solver: str, grading_size: float | None,
+                  breakdown_lines: bool = False) -> PositionResult:
     """One solve of the meshable ``position`` (one process)."""
     from .. import _dolfinx as dx_api
 
@@ -100,7 +103,8 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
                                                   grading_size=grading_size, **common)
     disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, degree, far_field)
     sol = solve_discretisation(dx_api, disc, sigma, cell.ball_diameter,
-                               source_solve=source_solve, linear_solver=linear_solver)
+                               source_solve=source_solve, linear_solver=linear_solver,
+                               unit_source=breakdown_lines)
     estimate = math.nan
     if estimate_error:   # half the size, the coarse mesh's grading lengths: one family
         lay_half, *fine_mesh = build_mesh(cell, position, comm, mesh_size=0.5 * mesh_size,
@@ -120,6 +124,9 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         if far_field == "robin":
             info["far_field_charge_C"] = far_field_charge(dx_api, disc, sol.source, lay,
                                                           far_field)
+    if breakdown_lines:   # [φ_1, ψ_lower, ψ_upper] at the ball's surface points
+        from ..breakdown import line_basis
+        info["breakdown_lines"] = line_basis(dx_api, disc, sol.unit_source, sol.weighting, lay)
     ball_charge = sigma * math.pi * cell.ball_diameter**2
     return PositionResult(
         position=position, offset=0.0, capacitance=sol.capacitance,
@@ -135,9 +142,19 @@ def _solve_serial(cell, position: float, comm, **options) -> PositionResult:
     if anchors is None:
         return _solve_meshed(cell, position, comm, **options)
     t0 = time.perf_counter()
-    rule = contact.extrapolate_to_contact(
-        position, anchors, cell.stroke, lambda z: _solve_meshed(cell, z, comm, **options))
+
+    def solve_at(z):
+        res = _solve_meshed(cell, z, comm, **options)
+        if "breakdown_lines" in res.info:   # extrapolated like C and q
+            res.extras = {"breakdown_lines": np.asarray(res.info["breakdown_lines"])}
+        return res
+
+    rule = contact.extrapolate_to_contact(position, anchors, cell.stroke, solve_at)
     result = rule["solves"][0]
+    if "breakdown_lines" in rule["extras"]:
+        result.info["breakdown_lines"] = rule["extras"]["breakdown_lines"]
+    for res in rule["solves"]:
+        res.__dict__.pop("extras", None)
     result.capacitance = rule["capacitance"]
     result.induced_fraction = rule["induced_fraction"]
     result.induced_charge = rule["induced_fraction"] * result.ball_charge
@@ -158,14 +175,18 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
                         mesh_size: float, degree: int = 2, far_field: str = "kelvin",
                         domain_radius: float | None = None, estimate_error: bool = True,
                         source_solve: bool = False, linear_solver: str = "direct",
-                        grading_size: float | None = None) -> PositionResult:
+                        grading_size: float | None = None, breakdown_lines: bool = False
+                        ) -> PositionResult:
     """:class:`PositionResult` of ``cell`` with the ball on the axis at gap ``position``
     [m] in [0, cell.stroke] (computed on rank 0 of ``comm``, broadcast).
 
     ``source_solve`` adds ``info["source_electrode_charge_C"]`` (the electrode charges
     as reactions of the σ source solve, Gauss's law on the electrodes) and, with
     ``far_field = "robin"``, ``info["far_field_charge_C"]`` (the charge the field
-    carries to infinity)."""
+    carries to infinity). ``breakdown_lines`` adds ``info["breakdown_lines"]``: the
+    basis values [φ_1 (V per C/m²), ψ_lower, ψ_upper] at the ball's surface points of
+    :data:`tengfield.field.breakdown.LINE_ANGLES_DEG` (2 sides, n, 3), as the tube's
+    (the lines' lengths: ``cell.breakdown_feet``)."""
     from mpi4py import MPI
 
     from .. import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
@@ -178,7 +199,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
     options = dict(sigma=float(sigma), mesh_size=float(mesh_size), degree=int(degree),
                    far_field=far_field, domain_radius=domain_radius,
                    estimate_error=estimate_error, source_solve=source_solve,
-                   linear_solver=linear_solver, grading_size=grading_size)
+                   linear_solver=linear_solver, grading_size=grading_size,
+                   breakdown_lines=breakdown_lines)
     if comm.size == 1:
         return _solve_serial(cell, position, comm, **options)
     outcome = None
