@@ -370,3 +370,33 @@ def test_upper_axial_line_reads_the_axis_node():
     cell = shell(electrode_band=0.1e-3)
     lines = solve(cell, 0.5 * cell.stroke, breakdown_lines=True).info["breakdown_lines"]
     assert lines[1, 0, 2] == pytest.approx(lines[0, 0, 1], abs=1e-5)
+
+
+@field
+@pytest.mark.slow
+def test_kept_potentials_match_the_closed_sphere_everywhere_in_the_cavity():
+    """The potentials themselves (``keep_solution``), band -> 0, ball (ε = 1) at the
+    centre: ψ_lower at points all over the cavity equals the Legendre series of the
+    closed sphere (:func:`hemisphere_series`), and the ball's source potential
+    (electrodes grounded) is φ_σ(ρ) = σ r_b²/ε0 (1/ρ - 1/a) between the ball and the
+    wall (Gauss, radial field), constant σ r_b (1 - r_b/a)/ε0 inside the ball.
+    Mesh 1 mm, band 0.1 mm: observed 6e-5 (ψ, absolute) and 5e-4 (φ_σ, relative,
+    largest near the wall where φ_σ -> 0)."""
+    from tengfield.field import _dolfinx as dx_api
+    from tengfield.scene.constants import EPS0
+
+    sigma = -1e-5
+    cell = shell(electrode_band=0.1e-3, ball_permittivity=1.0, wall_permittivity=1.0)
+    res = solve(cell, 0.5 * cell.stroke, sigma=sigma, source_solve=True, keep_solution=True)
+    sol = res.solution
+    rng = np.random.default_rng(7)
+    rho = rng.uniform(0.05 * A, 0.8 * A, 40)
+    angle = rng.uniform(0.0, math.pi, 40)
+    points = np.column_stack([rho * np.sin(angle), -rho * np.cos(angle), np.zeros(40)])
+    psi = dx_api.point_values(sol.space, sol.weighting[0].x.array, points)
+    expected = [hemisphere_series(r, z, A) for r, z, _ in points]
+    assert psi == pytest.approx(expected, abs=3e-4)
+    rb = cell.ball_radius
+    phi = dx_api.point_values(sol.space, sol.source.x.array, points)
+    outside = sigma * rb * rb / EPS0 * (1.0 / np.maximum(rho, rb) - 1.0 / A)
+    assert phi == pytest.approx(outside, rel=1e-3)

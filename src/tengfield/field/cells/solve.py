@@ -29,14 +29,14 @@ import numpy as np
 from ...errors import FieldError
 from ...scene.constants import EPS0
 from .. import contact
-from ..axisymmetric import discretise, richardson_error, solve_discretisation
+from ..axisymmetric import discretise, field_solution, richardson_error, solve_discretisation
 from ..geometry_axisymmetric import FACET_TAGS
 from ..result import PositionResult
 
 #: options of :func:`solve_cell_position` besides the cell and the position
 SOLVER_OPTIONS = ("sigma", "mesh_size", "degree", "far_field", "domain_radius",
                   "estimate_error", "source_solve", "linear_solver", "grading_size",
-                  "breakdown_lines")
+                  "breakdown_lines", "keep_solution")
 
 
 def build_mesh(cell, position: float, comm, *, mesh_size: float, degree: int,
@@ -91,7 +91,8 @@ def far_field_charge(dx_api, disc, potential, lay, far_field: str) -> float:
 def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float, degree: int,
                   far_field: str, domain_radius: float | None, estimate_error: bool,
                   source_solve: bool, linear_solver: str, grading_size: float | None,
-                  breakdown_lines: bool = False) -> PositionResult:
+                  breakdown_lines: bool = False, keep_solution: bool = False
+                  ) -> PositionResult:
     """One solve of the meshable ``position`` (one process)."""
     from .. import _dolfinx as dx_api
 
@@ -128,12 +129,15 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         from ..breakdown import line_basis
         info["breakdown_lines"] = line_basis(dx_api, disc, sol.unit_source, sol.weighting, lay)
     ball_charge = sigma * math.pi * cell.ball_diameter**2
-    return PositionResult(
+    result = PositionResult(
         position=position, offset=0.0, capacitance=sol.capacitance,
         induced_charge=sol.induced_fraction * ball_charge, ball_charge=ball_charge,
         dofs=dx_api.num_dofs(disc.V), cells=dx_api.num_cells(mesh), method="axisymmetric",
         degree=degree, wall_time=time.perf_counter() - t0, relative_error_estimate=estimate,
         solve_time=sol.solve_time, info=info, induced_fraction=sol.induced_fraction)
+    if keep_solution:
+        result.solution = field_solution(dx_api, disc, sol, lay)
+    return result
 
 
 def _solve_serial(cell, position: float, comm, **options) -> PositionResult:
@@ -143,8 +147,10 @@ def _solve_serial(cell, position: float, comm, **options) -> PositionResult:
         return _solve_meshed(cell, position, comm, **options)
     t0 = time.perf_counter()
 
-    def solve_at(z):
-        res = _solve_meshed(cell, z, comm, **options)
+    later = {**options, "keep_solution": False}
+
+    def solve_at(z):   # the potentials kept are those of the nearest anchor gap
+        res = _solve_meshed(cell, z, comm, **(options if z == anchors[0] else later))
         if "breakdown_lines" in res.info:   # extrapolated like C and q
             res.extras = {"breakdown_lines": np.asarray(res.info["breakdown_lines"])}
         return res
@@ -175,8 +181,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
                         mesh_size: float, degree: int = 2, far_field: str = "kelvin",
                         domain_radius: float | None = None, estimate_error: bool = True,
                         source_solve: bool = False, linear_solver: str = "direct",
-                        grading_size: float | None = None, breakdown_lines: bool = False
-                        ) -> PositionResult:
+                        grading_size: float | None = None, breakdown_lines: bool = False,
+                        keep_solution: bool = False) -> PositionResult:
     """:class:`PositionResult` of ``cell`` with the ball on the axis at gap ``position``
     [m] in [0, cell.stroke] (computed on rank 0 of ``comm``, broadcast).
 
@@ -186,7 +192,9 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
     carries to infinity). ``breakdown_lines`` adds ``info["breakdown_lines"]``: the
     basis values [φ_1 (V per C/m²), ψ_lower, ψ_upper] at the ball's surface points of
     :data:`tengfield.field.breakdown.LINE_ANGLES_DEG` (2 sides, n, 3), as the tube's
-    (the lines' lengths: ``cell.breakdown_feet``)."""
+    (the lines' lengths: ``cell.breakdown_feet``). ``keep_solution`` (a communicator
+    of size 1): ``result.solution``, the tube's :class:`FieldSolution` (mesh, ψ_lower,
+    ψ_upper, with ``source_solve`` φ_σ)."""
     from mpi4py import MPI
 
     from .. import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
@@ -200,9 +208,11 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
                    far_field=far_field, domain_radius=domain_radius,
                    estimate_error=estimate_error, source_solve=source_solve,
                    linear_solver=linear_solver, grading_size=grading_size,
-                   breakdown_lines=breakdown_lines)
+                   breakdown_lines=breakdown_lines, keep_solution=keep_solution)
     if comm.size == 1:
         return _solve_serial(cell, position, comm, **options)
+    if keep_solution:
+        raise FieldError("keep_solution needs a communicator of size 1")
     outcome = None
     if comm.rank == 0:
         try:
