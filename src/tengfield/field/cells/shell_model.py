@@ -1,0 +1,258 @@
+"""gmsh model of the spherical shell in the axisymmetric (r, z) half-plane.
+
+Coordinates as :mod:`tengfield.field.geometry_axisymmetric`: x = r >= 0,
+y = z, the cavity's centre at the origin, SI. The electrodes are the arcs of
+the cavity circle ``|x| = a`` below ``z = -w/2`` and above ``z = +w/2``
+(zero-thickness conductors); the shell ``a <= |x| <= b`` is a dielectric
+(meshed as ``walls`` when its permittivity is not 1); the ball is the half
+disk of radius d/2 at ``(0, z_c)``.
+
+The far field is the tube's (the same half-disk of radius R around the origin,
+and for ``kelvin`` its Kelvin image shifted by ``2.5 R`` with periodic arcs),
+and the physical groups carry the tube's names and tags
+(:data:`~tengfield.field.geometry_axisymmetric.CELL_TAGS`, ``FACET_TAGS``), so
+the tube's solver (``axisymmetric.discretise``, ``solve_discretisation``)
+assembles this model unchanged.
+
+Mesh grading (sizes scale with the base size h), as for the tube:
+
+* radical grading toward the four electrode rims (the edges of the band),
+  ``s = h (ρ/L)^(1-μ)``, μ = RIM_EXPONENT / degree;
+* ``0.4 h`` on the ball surface, growing linearly away;
+* in the ball-wall gaps at the bottom and top, ``(h / 1 mm)·w(ρ)`` with the
+  local gap width ``w(ρ) = g + ρ²/2 (1/r_b - 1/a)``;
+* ``h`` on the shell's surfaces (dielectric interfaces), growing linearly;
+* far away the size grows with the distance to the cell.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import os
+from dataclasses import dataclass, field
+
+from ...errors import FieldError
+from .. import contact
+from ..geometry_axisymmetric import (CELL_TAGS, FACET_TAGS, GRADING_REACH, INTERFACE_GROWTH,
+                                     LC_INTEGRATION_PRECISION, RIM_EXPONENT)
+
+_model_counter = itertools.count()
+
+
+@dataclass(frozen=True)
+class ShellLayout:
+    """Dimensions of one axisymmetric shell geometry (SI). The attributes the tube's
+    solver reads (``table``, ``kelvin``, ``shift``, ``domain_radius``,
+    ``ball_centre_z``) have the tube layout's meaning."""
+    ball_radius: float
+    ball_centre_z: float
+    cavity_radius: float
+    outer_radius: float
+    band: float
+    walls: bool
+    domain_radius: float
+    kelvin: bool
+    shift: float
+    gap_lower: float
+    gap_upper: float
+    requested_gap: float
+    effective_gap: float
+    mesh_size: float
+    grading_exponent: float
+    table: bool = False
+    inversion_centre_z: float = 0.0
+    info: dict = field(default_factory=dict)
+
+    @property
+    def rims(self) -> list[tuple[float, float]]:
+        """(r, z) of the electrode rims: the band's edges on the cavity circle."""
+        h = 0.5 * self.band
+        r = math.sqrt(max(self.cavity_radius**2 - h * h, 0.0))
+        return [(r, -h), (r, h)]
+
+
+def layout(cell, position: float, *, mesh_size: float, degree: int = 2,
+           domain_radius: float | None = None, far_field: str = "kelvin",
+           grading_size: float | None = None) -> ShellLayout:
+    """Dimensions for ``cell`` (a :class:`SphericalShell`) with the ball at gap
+    ``position`` [m] above the cavity's bottom, clamped by the contact rule to
+    [g, stroke - g] (g = ``MIN_GAP_FRACTION`` x the cavity diameter)."""
+    if far_field not in ("kelvin", "robin", "dirichlet"):
+        raise FieldError(f"[field] far_field = {far_field!r}: allowed kelvin, robin, dirichlet")
+    mesh_size = float(mesh_size)
+    if not (mesh_size > 0 and math.isfinite(mesh_size)):
+        raise FieldError(f"[field] mesh_size_mm = {mesh_size * 1e3:g} is out of range: "
+                         "allowed (0, 100] mm")
+    grading_size = mesh_size if grading_size is None else float(grading_size)
+    R = float(cell.far_radius if domain_radius is None else domain_radius)
+    b = cell.outer_radius
+    if R <= 1.05 * b:
+        raise FieldError(f"[field] domain_radius_mm = {R * 1e3:g} is too small: it must exceed "
+                         f"{1.05e3 * b:.3g} mm (the shell's outer radius)")
+    gap = contact.clamp_gap(float(position), cell.stroke, cell.electrode_spacing)
+    a = cell.cavity_radius
+    return ShellLayout(
+        ball_radius=cell.ball_radius, ball_centre_z=cell.ball_centre_z(gap),
+        cavity_radius=a, outer_radius=b, band=cell.electrode_band,
+        walls=cell.wall_permittivity != 1.0, domain_radius=R, kelvin=far_field == "kelvin",
+        shift=2.5 * R, gap_lower=gap, gap_upper=cell.stroke - gap, requested_gap=float(position),
+        effective_gap=gap, mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
+        info={"device_extent_m": b, "rim_reach_m": min(0.5 * a, GRADING_REACH * grading_size),
+              "bulk_length_m": min(b, GRADING_REACH * grading_size)})
+
+
+def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
+    """Create and mesh the gmsh model of ``lay``; returns its unique name (left current)."""
+    name = f"tengfield_shell_axisym_{os.getpid()}_{next(_model_counter)}"
+    gmsh.model.add(name)
+    occ = gmsh.model.occ
+    R, a, b = lay.domain_radius, lay.cavity_radius, lay.outer_radius
+    rb, zb = lay.ball_radius, lay.ball_centre_z
+    phi0 = math.asin(0.5 * lay.band / a)
+
+    def half_disk(zc, radius):
+        disk = occ.addDisk(0.0, zc, 0.0, radius, radius)
+        box = occ.addRectangle(0.0, zc - radius, 0.0, radius, 2.0 * radius)
+        out, _ = occ.intersect([(2, disk)], [(2, box)])
+        return out[0][1]
+
+    domain = half_disk(0.0, R)
+    ball = half_disk(zb, rb)
+    tools = [(2, ball)]
+    if lay.walls:
+        shell, _ = occ.cut([(2, half_disk(0.0, b))], [(2, half_disk(0.0, a))])
+        tools += list(shell)
+    centre = occ.addPoint(0.0, 0.0, 0.0)
+
+    def arc(lo, hi):
+        start = occ.addPoint(a * math.cos(lo), a * math.sin(lo), 0.0)
+        end = occ.addPoint(a * math.cos(hi), a * math.sin(hi), 0.0)
+        return (1, occ.addCircleArc(start, centre, end))
+
+    electrodes = [arc(-0.5 * math.pi, -phi0), arc(phi0, 0.5 * math.pi)]
+    _, children = occ.fragment([(2, domain)], tools + electrodes)
+    ball_parts = {tag for _, tag in children[1]}
+    wall_parts = {tag for parts in children[2:2 + len(tools) - 1] for _, tag in parts}
+    image = half_disk(lay.shift, R) if lay.kelvin else None
+    occ.synchronize()
+    gmsh.model.occ.remove([(0, centre)])   # the arcs' centre point, if left unused
+    occ.synchronize()
+
+    groups: dict[str, list[int]] = {k: [] for k in (*CELL_TAGS, *FACET_TAGS)}
+    for _, s in gmsh.model.getEntities(2):
+        if s == image:
+            groups["exterior"].append(s)
+        elif s in ball_parts:
+            groups["ball"].append(s)
+        elif s in wall_parts:
+            groups["walls"].append(s)
+        else:
+            groups["air"].append(s)
+
+    tol = 1e-9 * R
+    pad = 2e-7 + 1e-6 * R
+    edge = 0.5 * lay.band
+    mids: dict[int, float] = {}
+    interfaces = []
+    for _, c in gmsh.model.getEntities(1):
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        x, y, _ = gmsh.model.getValue(1, c, [0.5 * (lo[0] + hi[0])])
+        bb = gmsh.model.getBoundingBox(1, c)   # xmin, ymin, zmin, xmax, ymax, zmax
+        mids[c] = y
+        if x < tol and bb[3] < pad:
+            continue   # the symmetry axis
+        if image is not None and y > R + tol:
+            if abs(math.hypot(x, y - lay.shift) - R) < 1e3 * tol:
+                groups["far_boundary_image"].append(c)
+        elif abs(math.hypot(x, y - zb) - rb) < 1e3 * tol:
+            groups["ball_surface"].append(c)
+        elif abs(math.hypot(x, y) - R) < 1e3 * tol:
+            groups["far_boundary"].append(c)
+        elif abs(math.hypot(x, y) - a) < 1e3 * tol:
+            if bb[4] <= -edge + pad:
+                groups["electrode_lower"].append(c)
+            elif bb[1] >= edge - pad:
+                groups["electrode_upper"].append(c)
+            else:
+                interfaces.append(c)   # the band
+        elif abs(math.hypot(x, y) - b) < 1e3 * tol:
+            interfaces.append(c)
+
+    for key in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper",
+                "far_boundary"):
+        if not groups[key]:
+            raise FieldError(f"spherical shell geometry: no {key!r} entity found (gmsh model "
+                             f"{name})")
+    if image is not None:
+        masters = sorted(groups["far_boundary"], key=mids.get)
+        slaves = sorted(groups["far_boundary_image"], key=mids.get)
+        if len(masters) != len(slaves):
+            raise FieldError("spherical shell geometry: the Kelvin arcs do not pair up")
+        translation = [1, 0, 0, 0, 0, 1, 0, lay.shift, 0, 0, 1, 0, 0, 0, 0, 1]
+        gmsh.model.mesh.setPeriodic(1, slaves, masters, translation)
+    for key, tag in CELL_TAGS.items():
+        if groups[key]:
+            gmsh.model.addPhysicalGroup(2, groups[key], tag)
+            gmsh.model.setPhysicalName(2, tag, key)
+    for key, tag in FACET_TAGS.items():
+        if groups[key]:
+            gmsh.model.addPhysicalGroup(1, groups[key], tag)
+            gmsh.model.setPhysicalName(1, tag, key)
+    _size_fields(gmsh, lay)
+    gmsh.model.mesh.generate(2)
+    if geometry_order > 1:
+        gmsh.model.mesh.setOrder(geometry_order)
+    return name
+
+
+def _size_fields(gmsh, lay: ShellLayout) -> None:
+    """Background mesh size (one MathEval: the Min of the expressions of the module
+    docstring), plus the Kelvin image's box."""
+    fld = gmsh.model.mesh.field
+    h, mu, a = lay.mesh_size, lay.grading_exponent, lay.cavity_radius
+    sizes = []
+    L = lay.info["rim_reach_m"]
+    d_rim = "Min(" + ", ".join(f"Sqrt((x - ({x!r}))^2 + (y - ({y!r}))^2)"
+                               for x, y in lay.rims) + ")"
+    rho_min = L * (h / L) ** (1.0 / mu) if h < L else L
+    sizes.append(f"({h!r}) * (Max({d_rim}, ({rho_min!r})) / ({L!r}))^({1.0 - mu!r})")
+    d_ball = f"Abs(Sqrt(x^2 + (y - ({lay.ball_centre_z!r}))^2) - ({lay.ball_radius!r}))"
+    sizes.append(f"({0.4 * h!r}) + 0.3 * {d_ball}")
+    curvature = 0.5 * (1.0 / lay.ball_radius - 1.0 / a)
+    for gap, z0 in ((lay.gap_lower, -a), (lay.gap_upper, a)):
+        if gap < 2.0 * h:
+            sizes.append(f"({h / 1e-3!r}) * (({gap!r}) + (x^2 + (y - ({z0!r}))^2) * "
+                         f"({curvature!r}))")
+    if lay.walls:
+        radius = "Sqrt(x^2 + y^2)"
+        sizes.append(f"({h!r}) + {INTERFACE_GROWTH!r} * Min(Abs({radius} - ({a!r})), "
+                     f"Abs({radius} - ({lay.outer_radius!r})))")
+    else:   # the band and the electrodes' backs: h on the cavity surface
+        sizes.append(f"({h!r}) + {INTERFACE_GROWTH!r} * Abs(Sqrt(x^2 + y^2) - ({a!r}))")
+    extent = lay.info["bulk_length_m"]
+    sizes.append(f"({h!r}) * Max(1, Sqrt(x^2 + y^2) / ({extent!r}))")
+    fields = []
+    if lay.kelvin:
+        box = fld.add("Box")
+        fld.setNumber(box, "VIn", h * lay.domain_radius / extent)
+        fld.setNumber(box, "VOut", 1e22)
+        fld.setNumber(box, "XMin", -1.0)
+        fld.setNumber(box, "XMax", 1.0)
+        fld.setNumber(box, "YMin", lay.shift - 1.5 * lay.domain_radius)
+        fld.setNumber(box, "YMax", lay.shift + 1.5 * lay.domain_radius)
+        fields.append(box)
+    combined = sizes[0]
+    for expr in sizes[1:]:
+        combined = f"Min({combined}, {expr})"
+    size = fld.add("MathEval")
+    fld.setString(size, "F", combined)
+    fmin = fld.add("Min")
+    fld.setNumbers(fmin, "FieldsList", [size, *fields])
+    fld.setAsBackgroundMesh(fmin)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25 * lay.domain_radius)
+    gmsh.option.setNumber("Mesh.Algorithm", 6)
+    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", LC_INTEGRATION_PRECISION)
+    gmsh.option.setNumber("Mesh.Smoothing", 0)

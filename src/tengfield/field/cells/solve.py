@@ -1,0 +1,228 @@
+"""The axisymmetric solve of any :class:`~tengfield.field.cells.Cell` with the ball on
+its axis: the cell builds the gmsh model, the tube's solver does the rest.
+
+The cell's model carries the tube's physical groups, so this module reuses
+:func:`tengfield.field.axisymmetric.discretise` (floating-potential weighting
+solves ψ_lower, ψ_upper, the ball's σ source, the far field: ``kelvin``,
+``robin`` or ``dirichlet``) and ``solve_discretisation`` (one LDLᵀ factorisation
+per mesh under its own PETSc options prefix) unchanged, and the contact rule of
+:mod:`tengfield.field.contact` (positions closer than g to the wall are
+extrapolated from gaps g, 2g, 4g). The result is the tube's
+:class:`~tengfield.field.result.PositionResult`: C_ll, C_lu, C_uu, q_lower,
+q_upper, with the Richardson error estimate of a half-size mesh of the same
+family (``estimate_error``).
+
+Settings are passed explicitly (the scene has no cell shapes yet):
+``sigma`` [C/m²] the ball's surface charge, ``mesh_size`` [m], ``degree``,
+``far_field``, ``domain_radius`` [m] (default: the cell's).
+
+As the tube's solve, it runs on rank 0 of ``comm`` (on COMM_SELF) and the
+result is broadcast to every rank.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ...errors import FieldError
+from ...scene.constants import EPS0
+from .. import contact
+from ..axisymmetric import discretise, field_solution, richardson_error, solve_discretisation
+from ..geometry_axisymmetric import FACET_TAGS
+from ..result import PositionResult
+
+#: options of :func:`solve_cell_position` besides the cell and the position
+SOLVER_OPTIONS = ("sigma", "mesh_size", "degree", "far_field", "domain_radius",
+                  "estimate_error", "source_solve", "linear_solver", "grading_size",
+                  "breakdown_lines", "keep_solution")
+
+
+def build_mesh(cell, position: float, comm, *, mesh_size: float, degree: int,
+               far_field: str, domain_radius: float | None, grading_size: float | None = None):
+    """(layout, mesh, cell_tags, facet_tags) of ``cell`` with the ball at ``position``."""
+    import gmsh
+
+    from .. import _dolfinx as dx_api
+    from .._gmsh import initialize as initialize_gmsh
+
+    lay = cell.axisymmetric_layout(position, mesh_size=mesh_size, degree=degree,
+                                   domain_radius=domain_radius, far_field=far_field,
+                                   grading_size=grading_size)
+    initialised_here = not gmsh.isInitialized()
+    if initialised_here:
+        initialize_gmsh(["-nt", "1"], readConfigFiles=False, interruptible=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        try:
+            cell.build_axisymmetric_model(gmsh, lay, geometry_order=2)
+        except FieldError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - gmsh/OpenCASCADE: one line naming the keys
+            first = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
+            raise FieldError(f"gmsh could not mesh the {cell.name} cell ({first}): check its "
+                             f"dimensions and [field] mesh_size_mm = {mesh_size * 1e3:g}"
+                             ) from None
+        mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=2)
+        gmsh.model.remove()
+    finally:
+        if initialised_here:
+            gmsh.finalize()
+    return lay, mesh, cell_tags, facet_tags
+
+
+def far_field_charge(dx_api, disc, potential, lay, far_field: str) -> float:
+    """Charge [C] that the field of ``potential`` (a full dof vector [V]) carries to
+    infinity, ``-ε0 ∮_{|x|=R} ∂φ/∂n dA``, with the Robin condition ``∂φ/∂n = -κφ/R``
+    (κ = 1, the monopole far field): ``ε0 (κ/R) ∮ φ dA``. Only for ``far_field =
+    "robin"`` (Kelvin's exterior flux is not a boundary integral)."""
+    if far_field != "robin":
+        raise FieldError("far_field_charge needs far_field = 'robin'")
+    ufl = dx_api.ufl
+    phi = dx_api.function(disc.V, potential)
+    _, ds, _ = dx_api.measures(disc.mesh, disc.cell_tags, disc.facet_tags)
+    r = ufl.SpatialCoordinate(disc.mesh)[0]
+    flux = dx_api.assemble_scalar(dx_api.form(phi * r * ds(FACET_TAGS["far_boundary"])),
+                                  disc.mesh.comm)
+    return 2.0 * math.pi * EPS0 * flux / lay.domain_radius
+
+
+def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float, degree: int,
+                  far_field: str, domain_radius: float | None, estimate_error: bool,
+                  source_solve: bool, linear_solver: str, grading_size: float | None,
+                  breakdown_lines: bool = False, keep_solution: bool = False
+                  ) -> PositionResult:
+    """One solve of the meshable ``position`` (one process)."""
+    from .. import _dolfinx as dx_api
+
+    t0 = time.perf_counter()
+    eps = {"ball": cell.ball_permittivity, "walls": cell.wall_permittivity, "air": 1.0,
+           "exterior": 1.0}
+    common = dict(degree=degree, far_field=far_field, domain_radius=domain_radius)
+    lay, mesh, cell_tags, facet_tags = build_mesh(cell, position, comm, mesh_size=mesh_size,
+                                                  grading_size=grading_size, **common)
+    disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, degree, far_field)
+    sol = solve_discretisation(dx_api, disc, sigma, cell.ball_diameter,
+                               source_solve=source_solve, linear_solver=linear_solver,
+                               unit_source=breakdown_lines)
+    estimate = math.nan
+    if estimate_error:   # half the size, the coarse mesh's grading lengths: one family
+        lay_half, *fine_mesh = build_mesh(cell, position, comm, mesh_size=0.5 * mesh_size,
+                                          grading_size=grading_size or mesh_size, **common)
+        finer = discretise(dx_api, *fine_mesh, lay_half, eps, degree, far_field)
+        fine = solve_discretisation(dx_api, finer, sigma, cell.ball_diameter,
+                                    source_solve=False, linear_solver=linear_solver)
+        estimate = richardson_error(contact.relative_change(sol, fine), degree)
+    info = {"shape": cell.name, "mesh_size_m": lay.mesh_size,
+            "domain_radius_m": lay.domain_radius, "far_field": far_field,
+            "meshed_gap_m": lay.effective_gap,
+            "minimum_gap_m": contact.minimum_gap(cell.electrode_spacing),
+            "ball_area_quadrature_m2": sol.ball_area,
+            "error_estimate": "Richardson, mesh_size/2, rate h^(2p)"}
+    if sol.source_charge is not None:
+        info["source_electrode_charge_C"] = sol.source_charge
+        if far_field == "robin":
+            info["far_field_charge_C"] = far_field_charge(dx_api, disc, sol.source, lay,
+                                                          far_field)
+    if breakdown_lines:   # [φ_1, ψ_lower, ψ_upper] at the ball's surface points
+        from ..breakdown import line_basis
+        info["breakdown_lines"] = line_basis(dx_api, disc, sol.unit_source, sol.weighting, lay)
+    ball_charge = sigma * math.pi * cell.ball_diameter**2
+    result = PositionResult(
+        position=position, offset=0.0, capacitance=sol.capacitance,
+        induced_charge=sol.induced_fraction * ball_charge, ball_charge=ball_charge,
+        dofs=dx_api.num_dofs(disc.V), cells=dx_api.num_cells(mesh), method="axisymmetric",
+        degree=degree, wall_time=time.perf_counter() - t0, relative_error_estimate=estimate,
+        solve_time=sol.solve_time, info=info, induced_fraction=sol.induced_fraction)
+    if keep_solution:
+        result.solution = field_solution(dx_api, disc, sol, lay)
+    return result
+
+
+def _solve_serial(cell, position: float, comm, **options) -> PositionResult:
+    """With the contact rule: near the wall, extrapolated from three meshable gaps."""
+    anchors = contact.contact_anchors(position, cell.stroke, cell.electrode_spacing)
+    if anchors is None:
+        return _solve_meshed(cell, position, comm, **options)
+    t0 = time.perf_counter()
+
+    later = {**options, "keep_solution": False}
+
+    def solve_at(z):   # the potentials kept are those of the nearest anchor gap
+        res = _solve_meshed(cell, z, comm, **(options if z == anchors[0] else later))
+        if "breakdown_lines" in res.info:   # extrapolated like C and q
+            res.extras = {"breakdown_lines": np.asarray(res.info["breakdown_lines"])}
+        return res
+
+    rule = contact.extrapolate_to_contact(position, anchors, cell.stroke, solve_at)
+    result = rule["solves"][0]
+    if "breakdown_lines" in rule["extras"]:
+        result.info["breakdown_lines"] = rule["extras"]["breakdown_lines"]
+    for res in rule["solves"]:
+        res.__dict__.pop("extras", None)
+    result.capacitance = rule["capacitance"]
+    result.induced_fraction = rule["induced_fraction"]
+    result.induced_charge = rule["induced_fraction"] * result.ball_charge
+    result.info.pop("source_electrode_charge_C", None)   # the nearest anchor's, not this z's
+    result.info.pop("far_field_charge_C", None)
+    result.relative_error_estimate = max(max(r.relative_error_estimate
+                                             for r in rule["solves"]), rule["error"])
+    result.position = position
+    result.solve_time = sum(r.solve_time for r in rule["solves"])
+    result.wall_time = time.perf_counter() - t0
+    result.info["contact_rule"] = ("power-law extrapolation from gaps "
+                                   + ", ".join(f"{d:.6g}" for d in rule["distances"]) + " m")
+    result.info["contact_extrapolation_error"] = rule["error"]
+    return result
+
+
+def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
+                        mesh_size: float, degree: int = 2, far_field: str = "kelvin",
+                        domain_radius: float | None = None, estimate_error: bool = True,
+                        source_solve: bool = False, linear_solver: str = "direct",
+                        grading_size: float | None = None, breakdown_lines: bool = False,
+                        keep_solution: bool = False) -> PositionResult:
+    """:class:`PositionResult` of ``cell`` with the ball on the axis at gap ``position``
+    [m] in [0, cell.stroke] (computed on rank 0 of ``comm``, broadcast).
+
+    ``source_solve`` adds ``info["source_electrode_charge_C"]`` (the electrode charges
+    as reactions of the σ source solve, Gauss's law on the electrodes) and, with
+    ``far_field = "robin"``, ``info["far_field_charge_C"]`` (the charge the field
+    carries to infinity). ``breakdown_lines`` adds ``info["breakdown_lines"]``: the
+    basis values [φ_1 (V per C/m²), ψ_lower, ψ_upper] at the ball's surface points of
+    :data:`tengfield.field.breakdown.LINE_ANGLES_DEG` (2 sides, n, 3), as the tube's
+    (the lines' lengths: ``cell.breakdown_feet``). ``keep_solution`` (a communicator
+    of size 1): ``result.solution``, the tube's :class:`FieldSolution` (mesh, ψ_lower,
+    ψ_upper, with ``source_solve`` φ_σ)."""
+    from mpi4py import MPI
+
+    from .. import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
+
+    if not (0.0 <= position <= cell.stroke):
+        raise FieldError(f"position = {position * 1e3:g} mm is out of range: allowed "
+                         f"[0, {cell.stroke * 1e3:g}] mm (the {cell.name}'s stroke)")
+    if degree not in (1, 2, 3):
+        raise FieldError(f"[field] degree = {degree} is out of range: allowed 1, 2, 3")
+    options = dict(sigma=float(sigma), mesh_size=float(mesh_size), degree=int(degree),
+                   far_field=far_field, domain_radius=domain_radius,
+                   estimate_error=estimate_error, source_solve=source_solve,
+                   linear_solver=linear_solver, grading_size=grading_size,
+                   breakdown_lines=breakdown_lines, keep_solution=keep_solution)
+    if comm.size == 1:
+        return _solve_serial(cell, position, comm, **options)
+    if keep_solution:
+        raise FieldError("keep_solution needs a communicator of size 1")
+    outcome = None
+    if comm.rank == 0:
+        try:
+            outcome = _solve_serial(cell, position, MPI.COMM_SELF, **options)
+        except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
+            outcome = exc
+    outcome = comm.bcast(outcome, root=0)
+    if isinstance(outcome, Exception):
+        raise outcome
+    return outcome
+
+
+__all__ = ["solve_cell_position", "far_field_charge", "build_mesh", "SOLVER_OPTIONS"]

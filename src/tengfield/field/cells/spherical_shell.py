@@ -1,0 +1,255 @@
+"""The spherical shell: a ball inside a spherical cavity whose two hemispheres are
+the electrodes (the rolling/bouncing-ball shells of full-space vibration and
+blue-energy harvesters).
+
+Geometry (SI, centre of the cavity at the origin, z up): the cavity of radius
+``a = cavity_diameter/2`` is lined by two zero-thickness electrodes on its
+surface, the lower one where ``z <= -w/2`` and the upper one where
+``z >= +w/2`` (``w = electrode_band``, the height of the insulating band at the
+equator; the band's arc length is ``2a·asin(w/2a)``, = w to first order). The
+shell, of permittivity ``wall_permittivity``, fills ``a <= |x| <= a + t``
+(``t = shell_thickness``) behind the electrodes. The ball (diameter d, its own
+permittivity, surface charge σ given to the solver) moves in the cavity: on
+the axis its centre is at ``z_c = -a + position + d/2`` with the gap
+``position`` in ``[0, stroke]``, ``stroke = cavity_diameter - ball_diameter``;
+anywhere, its centre must satisfy ``|c| <= a - d/2``.
+
+This module is pure geometry (numpy); the gmsh model is in
+:mod:`tengfield.field.cells.shell_model`, loaded on first use.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import FieldError
+from ...scene.limits import DOMAIN_AUTO_FACTOR, DOMAIN_MIN_FACTOR
+
+#: allowed ranges (open below, closed above) of the lengths [mm]
+_RANGES_MM = {"cavity_diameter_mm": (0.0, 1000.0), "shell_thickness_mm": (0.0, 100.0),
+              "electrode_band_mm": (0.0, 1000.0), "ball_diameter_mm": (0.0, 1000.0)}
+
+
+@dataclass(frozen=True)
+class SphericalShell:
+    """A spherical-shell cell (SI). ``domain_radius`` [m]: the far-field sphere of the
+    field solve (``None``: ``DOMAIN_AUTO_FACTOR`` x the shell's outer radius)."""
+
+    cavity_diameter: float
+    shell_thickness: float
+    electrode_band: float
+    ball_diameter: float
+    wall_permittivity: float = 1.0
+    ball_permittivity: float = 2.1
+    domain_radius: float | None = None
+
+    name = "spherical-shell"
+
+    #: the ``[device]`` keys of the shell (file units) -> the dataclass field and factor
+    KEYS = {"cavity_diameter_mm": ("cavity_diameter", 1e-3),
+            "shell_thickness_mm": ("shell_thickness", 1e-3),
+            "electrode_band_mm": ("electrode_band", 1e-3),
+            "ball_diameter_mm": ("ball_diameter", 1e-3),
+            "wall_permittivity": ("wall_permittivity", 1.0),
+            "ball_permittivity": ("ball_permittivity", 1.0)}
+
+    @classmethod
+    def from_keys(cls, device: dict, domain_radius_mm: float | None = None
+                  ) -> "SphericalShell":
+        """The shell of a ``[device]`` table in file units (mm; ``shape`` and keys of
+        other shapes are ignored); a missing key names itself."""
+        values = {}
+        for key, (attribute, factor) in cls.KEYS.items():
+            if key in device:
+                values[attribute] = float(device[key]) * factor
+            elif attribute not in ("wall_permittivity", "ball_permittivity"):
+                raise FieldError(f"[device] {key} is missing: shape = 'spherical-shell' "
+                                 f"needs {', '.join(k for k in cls.KEYS if k.endswith('_mm'))}")
+        if domain_radius_mm is not None:
+            values["domain_radius"] = float(domain_radius_mm) * 1e-3
+        return cls(**values)
+
+    @classmethod
+    def from_scene(cls, scene) -> "SphericalShell":
+        """The shell of ``scene``'s ``[device]`` table as written (``scene.raw``)."""
+        device = dict(((getattr(scene, "raw", None) or {}).get("device") or {}))
+        return cls.from_keys(device)
+
+    def __post_init__(self) -> None:
+        for key, value in (("cavity_diameter_mm", self.cavity_diameter),
+                           ("shell_thickness_mm", self.shell_thickness),
+                           ("electrode_band_mm", self.electrode_band),
+                           ("ball_diameter_mm", self.ball_diameter)):
+            lo, hi = _RANGES_MM[key]
+            if not (math.isfinite(value) and lo * 1e-3 < value <= hi * 1e-3):
+                raise FieldError(f"[device] {key} = {value * 1e3:g} is out of range: "
+                                 f"allowed ({lo:g}, {hi:g}] mm")
+        if self.ball_diameter >= self.cavity_diameter:
+            raise FieldError(f"[device] ball_diameter_mm = {self.ball_diameter * 1e3:g} is out "
+                             f"of range: allowed (0, {self.cavity_diameter * 1e3:g}) mm "
+                             "(smaller than cavity_diameter_mm)")
+        if self.electrode_band >= self.cavity_diameter:
+            raise FieldError(f"[device] electrode_band_mm = {self.electrode_band * 1e3:g} is out "
+                             f"of range: allowed (0, {self.cavity_diameter * 1e3:g}) mm "
+                             "(narrower than cavity_diameter_mm)")
+        for key, value in (("wall_permittivity", self.wall_permittivity),
+                           ("ball_permittivity", self.ball_permittivity)):
+            if not (math.isfinite(value) and 1.0 <= value <= 1000.0):
+                raise FieldError(f"[device] {key} = {value:g} is out of range: allowed [1, 1000]")
+        if self.domain_radius is not None:
+            lowest = DOMAIN_MIN_FACTOR * self.outer_radius
+            if not (math.isfinite(self.domain_radius) and self.domain_radius > lowest):
+                raise FieldError(f"[field] domain_radius_mm = {self.domain_radius * 1e3:g} is too "
+                                 f"small: it must exceed {lowest * 1e3:.3g} mm "
+                                 f"({DOMAIN_MIN_FACTOR:g} x the shell's outer radius)")
+
+    # -- dimensions ----------------------------------------------------------
+    @property
+    def cavity_radius(self) -> float:
+        return 0.5 * self.cavity_diameter
+
+    @property
+    def outer_radius(self) -> float:
+        return self.cavity_radius + self.shell_thickness
+
+    @property
+    def ball_radius(self) -> float:
+        return 0.5 * self.ball_diameter
+
+    @property
+    def stroke(self) -> float:
+        """Travel of the ball along the axis [m]: cavity - ball diameter."""
+        return self.cavity_diameter - self.ball_diameter
+
+    @property
+    def electrode_spacing(self) -> float:
+        """The electrodes' distance along the axis [m]: the cavity diameter."""
+        return self.cavity_diameter
+
+    @property
+    def bounding_radius(self) -> float:
+        return self.outer_radius
+
+    @property
+    def far_radius(self) -> float:
+        """The field solve's far-field sphere [m] (``domain_radius`` or its default)."""
+        if self.domain_radius is not None:
+            return self.domain_radius
+        return DOMAIN_AUTO_FACTOR * self.outer_radius
+
+    @property
+    def rim_angle(self) -> float:
+        """Elevation [rad] of the electrodes' rims above the equator: asin(w / 2a)."""
+        return math.asin(0.5 * self.electrode_band / self.cavity_radius)
+
+    # -- the ball's region -------------------------------------------------------
+    def ball_centre_z(self, position: float) -> float:
+        """z [m] of the ball centre at gap ``position`` above the cavity's bottom."""
+        return -self.cavity_radius + float(position) + self.ball_radius
+
+    def admissible(self, centre) -> bool:
+        """Ball centred at ``centre`` inside the cavity: |c| <= a - d/2."""
+        return bool(np.linalg.norm(np.asarray(centre, dtype=float)) <=
+                    self.cavity_radius - self.ball_radius * (1.0 - 1e-12))
+
+    def wall_distance(self, centre) -> float:
+        """Gap [m] between the ball and the spherical wall: a - d/2 - |c| (< 0: overlap)."""
+        return self.cavity_radius - self.ball_radius - float(
+            np.linalg.norm(np.asarray(centre, dtype=float)))
+
+    def wall_normal(self, centre) -> np.ndarray:
+        """Unit vector from the ball centre to the nearest wall point: the outward radial
+        c/|c| (the contact force on the ball points along its opposite). At the centre
+        every direction is as near; -z (down) is returned."""
+        c = np.asarray(centre, dtype=float).reshape(3)
+        norm = float(np.linalg.norm(c))
+        if norm <= 1e-15 * self.cavity_radius:
+            return np.array([0.0, 0.0, -1.0])
+        return c / norm
+
+    def electrode_at(self, z: float) -> str | None:
+        """"lower", "upper" or None (the band) for the point at height ``z`` [m] on the
+        cavity surface."""
+        if z <= -0.5 * self.electrode_band:
+            return "lower"
+        if z >= 0.5 * self.electrode_band:
+            return "upper"
+        return None
+
+    # -- breakdown, volume, plots ---------------------------------------------------
+    def volume(self) -> float:
+        """The shell's volume [m³]: the sphere of its outer radius."""
+        return 4.0 / 3.0 * math.pi * self.outer_radius**3
+
+    def longest_path(self) -> float:
+        """Longest straight path [m] inside the cavity: its diameter (a bound on every
+        line and field line from the ball to an electrode)."""
+        return self.cavity_diameter
+
+    def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
+        """Lines from the ball surface to each electrode: from the surface point at polar
+        angle θ from the axis (lower side: θ from the bottom, upper side: from the top)
+        to the nearest point of that side's electrode, so no field line from there to
+        the electrode is shorter (with a breakdown curve that does not fall with the
+        gap, pairing the voltage with this length errs on the safe side, as the
+        tube's lines do). The nearest point is the radial projection ``a p/|p|`` when
+        it lies on the electrode (``radial`` True), else the electrode's rim in the
+        point's meridian (the distance to the sphere grows with the angle from the
+        projection). ``{"start", "foot"}`` (2, n, 3) in (r, z, 0), ``"length"`` and
+        ``"radial"`` (2, n)."""
+        theta = np.radians(np.asarray(angles_deg, dtype=float))
+        rb, a = self.ball_radius, self.cavity_radius
+        edge = 0.5 * self.electrode_band
+        rim_r = math.sqrt(a * a - edge * edge)
+        r = rb * np.sin(theta)
+        dz = rb * np.cos(theta)
+        out = {"start": [], "foot": [], "length": [], "radial": []}
+        for sign in (-1.0, 1.0):   # lower side, upper side
+            start = np.column_stack([r, ball_centre_z + sign * dz, np.zeros_like(r)])
+            rho = np.linalg.norm(start, axis=1)
+            safe = np.maximum(rho, 1e-300)[:, None]
+            radial_foot = np.where(rho[:, None] > 1e-12 * a, a * start / safe,
+                                   np.array([0.0, sign * a, 0.0]))
+            radial = sign * radial_foot[:, 1] >= edge
+            rim = np.array([rim_r, sign * edge, 0.0])
+            foot = np.where(radial[:, None], radial_foot, rim)
+            out["start"].append(start)
+            out["foot"].append(foot)
+            out["length"].append(np.linalg.norm(foot - start, axis=1))
+            out["radial"].append(radial)
+        return {key: np.array(value) for key, value in out.items()}
+
+    def mesh_features(self) -> dict[str, float]:
+        """Lengths [m] the default mesh must resolve, by scene key."""
+        features = {"ball_diameter_mm": self.ball_diameter, "gap_mm": self.stroke,
+                    "electrode_band_mm": self.electrode_band}
+        if self.wall_permittivity != 1.0:
+            features["shell_thickness_mm"] = self.shell_thickness
+        return features
+
+    def outline(self, points: int = 91) -> list[np.ndarray]:
+        """(r, z) polylines [m]: lower electrode, upper electrode (cavity surface), band,
+        the shell's outer surface."""
+        a, b, phi0 = self.cavity_radius, self.outer_radius, self.rim_angle
+
+        def arc(radius, lo, hi):
+            phi = np.linspace(lo, hi, points)
+            return np.column_stack([radius * np.cos(phi), radius * np.sin(phi)])
+
+        return [arc(a, -0.5 * math.pi, -phi0), arc(a, phi0, 0.5 * math.pi),
+                arc(a, -phi0, phi0), arc(b, -0.5 * math.pi, 0.5 * math.pi)]
+
+    # -- field ---------------------------------------------------------------------
+    def axisymmetric_layout(self, position: float, *, mesh_size: float, degree: int = 2,
+                            domain_radius: float | None = None, far_field: str = "kelvin",
+                            grading_size: float | None = None):
+        from .shell_model import layout
+        return layout(self, position, mesh_size=mesh_size, degree=degree,
+                      domain_radius=domain_radius, far_field=far_field,
+                      grading_size=grading_size)
+
+    def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
+        from .shell_model import build_model
+        return build_model(gmsh, layout, geometry_order=geometry_order)
