@@ -222,7 +222,8 @@ def test_waveforms_current_is_the_total_derivative():
     inner = slice(5, -5)
     assert np.abs(out["I_sc"] - numeric)[inner].max() < 1e-4 * np.abs(out["I_sc"]).max()
     np.testing.assert_allclose(out["Q_sc"], 3 * curves.charge(gap, r))
-    np.testing.assert_allclose(out["V_oc"], out["Q_sc"] / (out["C_T"] + 1e-12))
+    np.testing.assert_allclose(out["V_oc"], out["Q_sc"] / out["C_T"])       # ideal V_OC
+    np.testing.assert_allclose(out["V_read"], out["Q_sc"] / (out["C_T"] + 1e-12))  # through C_p
     assert np.abs(out["dC_T_dt"] - np.gradient(out["C_T"], t))[inner].max() \
         < 1e-4 * np.abs(out["dC_T_dt"]).max()
     # the lateral motion alone moves charge

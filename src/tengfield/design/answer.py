@@ -119,13 +119,25 @@ def _load(result, row) -> dict:
             "ohm": row["load_ohm"]}
 
 
+def _current(device: dict) -> dict:
+    """A [device] table under the current key names (a varied old name, gap_mm, replaces
+    the value under the new one, stroke_mm)."""
+    from ..scene.schema import RENAMED_KEYS
+
+    out = dict(device)
+    for (section, old), new in RENAMED_KEYS.items():
+        if section == "device" and old in out:
+            out[new] = out.pop(old)
+    return out
+
+
 def describe(result, row) -> dict:
     """One design, stated: varied keys, plate spacing, what followed, σ, load, band table."""
     base = result.scene.to_dict()["device"]
     device_values = {k: v for k, v in row["values"].items() if k not in OTHER_VARY}
     followed = followed_geometry(base, device_values) if result.spec.geometry == "follow" \
         else {}
-    device = {**base, **device_values, **followed}
+    device = _current({**base, **device_values, **followed})
     obj = result.spec.objective
     sigma = row.get("surface_charge_uC_per_m2", math.nan)
     if not (isinstance(sigma, float) and math.isfinite(sigma)):
@@ -134,7 +146,7 @@ def describe(result, row) -> dict:
     dyn = row.get("dynamics_error", {}).get(obj, 0.0)
     return {
         "index": row["index"], "values": dict(row["values"]),
-        "plate_spacing_mm": float(f"{device['gap_mm'] + device['ball_diameter_mm']:.12g}"),
+        "plate_spacing_mm": float(f"{device['stroke_mm'] + device['ball_diameter_mm']:.12g}"),
         "changed": {k: {"from": base[k], "to": v} for k, v in followed.items()
                     if v != base[k]},
         "surface_charge_uC_per_m2": sigma,
@@ -297,3 +309,4 @@ def answer_lines(result) -> list[str]:
                          f"{conf['candidates_within_error_bars']} candidate(s) within the "
                          "error bars of the best")
     return lines
+

@@ -22,7 +22,7 @@ Scene syntax (every key optional except ``[design.vary]``)::
     samples_per_period = 200
     resolution = 1e-3             # varied values snap to this fraction of their range
     [design.vary]                 # any numeric [device] key and [circuit] load_ohm: [min, max]
-    gap_mm = [1.0, 5.0]
+    stroke_mm = [1.0, 5.0]
     [design.excitation]           # the band: every frequency x every amplitude
     frequency_hz = [33.0]
     amplitude_mm = [0.5, 0.75, 1.0]
@@ -146,7 +146,7 @@ def vary_spec(key: str) -> tuple[str, tuple]:
 def _vary(raw) -> dict:
     if not isinstance(raw, dict) or not raw:
         raise SceneError("[design.vary] must be a table of key = [min, max] with at least one "
-                         "key, e.g. gap_mm = [1.0, 5.0]")
+                         "key, e.g. stroke_mm = [1.0, 5.0]")
     out = {}
     for key, bounds in raw.items():
         section, spec = vary_spec(key)
@@ -211,7 +211,7 @@ def default_design_section(scene, candidates: int | None = None) -> tuple[dict, 
     power density (band mean, matched load) over the stroke and the ball diameter around
     the scene's values (tube and electrode follow), at the scene's own excitation."""
     stroke, d = scene.device.stroke * 1e3, scene.device.ball_diameter * 1e3
-    vary = {"gap_mm": [float(f"{stroke * f:.3g}") for f in DEFAULT_STROKE_RANGE],
+    vary = {"stroke_mm": [float(f"{stroke * f:.3g}") for f in DEFAULT_STROKE_RANGE],
             "ball_diameter_mm": [float(f"{d * f:.3g}") for f in DEFAULT_BALL_RANGE]}
     section = {"objective": "power_density", "candidates": DEFAULT_CANDIDATES, "batch": 8,
                "vary": vary}
@@ -219,7 +219,7 @@ def default_design_section(scene, candidates: int | None = None) -> tuple[dict, 
     at = (f"{ex.frequency:g} Hz / {ex.amplitude * 1e3:g} mm" if ex.kind == "sine"
           else f"its {ex.kind} excitation")
     said = (f"{scene.source} has no [design]: a default study of power density over "
-            f"gap_mm = {vary['gap_mm']} and ball_diameter_mm = {vary['ball_diameter_mm']} "
+            f"stroke_mm = {vary['stroke_mm']} and ball_diameter_mm = {vary['ball_diameter_mm']} "
             f"(tube and electrodes follow the ball) at {at}, {candidates or DEFAULT_CANDIDATES} "
             "candidates "
             "(docs/design.md: write a [design] section for your own)")
@@ -276,7 +276,7 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
     spec.resolution = float(res)
     if "vary" not in raw:
         raise SceneError("[design.vary] is missing: give the keys to vary, e.g. "
-                         "gap_mm = [1.0, 5.0]")
+                         "stroke_mm = [1.0, 5.0]")
     spec.vary = _vary(raw["vary"])
     spec.band = _band(raw.get("excitation"), scene)
     if "load_ohm" in spec.vary and spec.load == "each":

@@ -343,7 +343,7 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
     spacing = dev.plate_spacing
     if MIN_GAP_FRACTION * spacing < MIN_MESHED_LENGTH * (1 - 1e-12):
         problems.append(
-            f"[device] ball_diameter_mm + gap_mm = {spacing * 1e3:.3g} mm is too small for a "
+            f"[device] ball_diameter_mm + stroke_mm = {spacing * 1e3:.3g} mm is too small for a "
             f"field solve: allowed >= {MIN_MESHED_LENGTH / MIN_GAP_FRACTION * 1e3:.3g} mm (the "
             f"smallest meshed gap, {MIN_GAP_FRACTION:g} x that, must be >= "
             f"{MIN_MESHED_LENGTH * 1e6:g} µm for gmsh's geometry); dynamics-only runs accept it")
