@@ -64,7 +64,7 @@ def test_a_device_below_gmshs_tolerance_is_refused_in_one_line(k):
         check_field(scene)
     text = str(info.value)
     assert "\n" not in text
-    assert "ball_diameter_mm + gap_mm" in text and "allowed >= 0.25 mm" in text
+    assert "ball_diameter_mm + stroke_mm" in text and "allowed >= 0.25 mm" in text
     assert f"{(7.0 + 3.0) / k:.3g} mm" in text
 
 
@@ -99,5 +99,5 @@ def test_field_command_refuses_the_device_divided_by_100(tmp_path, run_cli):
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("tengfield: error: "), done.stderr
-    assert "ball_diameter_mm + gap_mm = 0.1 mm" in lines[0]
+    assert "ball_diameter_mm + stroke_mm = 0.1 mm" in lines[0]
     assert not (tmp_path / "out").exists()
