@@ -14,7 +14,7 @@ from tengfield.field import geometry_axisymmetric as geometry
 from tengfield.scene import Scene, SceneError, check_field, default_scene
 from tengfield.scene.limits import default_mesh_scale
 
-PAPER_LENGTHS = {"ball_diameter_mm": 7.0, "gap_mm": 3.0, "electrode_radius_mm": 4.0,
+PAPER_LENGTHS = {"ball_diameter_mm": 7.0, "stroke_mm": 3.0, "electrode_radius_mm": 4.0,
                  "tube_inner_radius_mm": 4.0, "tube_outer_radius_mm": 5.5,
                  "plate_thickness_mm": 2.0}
 
