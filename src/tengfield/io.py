@@ -33,6 +33,7 @@ import numpy as np
 
 from ._files import atomic_path, writable_target, write_csv, write_json, write_rows
 from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
+from .plotting.waveforms import run_title
 
 #: format of a time column: every double round-trips
 TIME_FORMAT = "%.17g"
@@ -70,7 +71,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
         waveforms = {k: np.asarray(v)[last] for k, v in result.waveforms.items()}
         written.append(_figure(
             figures, plot_waveforms, waveforms, path=out / "waveforms.png",
-            title=_run_title(result) + ", last 5 periods",
+            title=run_title(result) + ", last 5 periods",
             parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
@@ -117,26 +118,16 @@ def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
     written = []
     if extras.get("_fine") is not None:
         written.append(_figure(figures, hp.plot_charging, extras["_fine"], result.scene,
-                               path=out / "charging.png", title=_run_title(result)))
+                               path=out / "charging.png", title=run_title(result)))
     if extras.get("_vq"):
         written.append(_figure(figures, hp.plot_vq, extras["_vq"],
                                result.summary.get("energy_per_cycle", {}), path=out / "vq.png",
-                               title=_run_title(result)))
+                               title=run_title(result)))
     if extras.get("_array") is not None:
         written.append(_figure(figures, hp.plot_array, extras["_array"],
                                result.summary.get("array", {}), path=out / "array.png",
-                               title=_run_title(result)))
+                               title=run_title(result)))
     return written
-
-
-def _run_title(result) -> str:
-    exc = result.scene.excitation
-    regime = result.summary.get("regime") or {}
-    name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
-    return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
-            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
-            f"{result.scene.circuit.reference}"
-            + (f", {name}" if name else ""))
 
 
 # ---------------------------------------------------------------------------

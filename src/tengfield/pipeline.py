@@ -98,10 +98,9 @@ class RunResult:
         (and the load's V and P) against time with the gap, over the last ``last_periods``
         excitation periods (None: the whole run). ``tengfield run`` saves this figure as
         waveforms.png (5 periods)."""
-        from .io import _run_title            # the edge, imported on use (notebooks)
-        from .plotting.waveforms import waveforms_figure
+        from .plotting.waveforms import run_title, waveforms_figure   # the edge, on use
 
-        waveforms, title = self.waveforms, _run_title(self)
+        waveforms, title = self.waveforms, run_title(self)
         if last_periods is not None:
             t = np.asarray(waveforms["time_s"])
             last = t >= t[-1] - last_periods * self.scene.excitation.period
@@ -119,8 +118,6 @@ class RunResult:
             raise ImportError("RunResult.to_dataframe() needs pandas, which tengfield does not "
                               "install: pip install pandas (RunResult.waveforms holds the same "
                               "columns as a dict of numpy arrays)") from None
-        from .io import WAVEFORM_COLUMNS
-
         order = [c for c in WAVEFORM_COLUMNS if c in self.waveforms]
         order += [c for c in self.waveforms if c not in order]
         return pandas.DataFrame({c: np.asarray(self.waveforms[c]) for c in order})

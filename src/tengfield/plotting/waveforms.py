@@ -224,3 +224,14 @@ def sweep_figure(rows: list[dict]):
             ax.legend(fontsize=7)
     fig.tight_layout()
     return fig
+
+
+def run_title(result) -> str:
+    """The title of a run's figures: excitation, cells, reference, regime."""
+    exc = result.scene.excitation
+    regime = result.summary.get("regime") or {}
+    name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
+    return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
+            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
+            f"{result.scene.circuit.reference}"
+            + (f", {name}" if name else ""))
