@@ -19,7 +19,9 @@ change):
    wrote there and this one did not are removed (``DIR/.tengfield-manifest.json``
    lists them; only plain names inside ``DIR``, regular files reached through real
    directories: never "../x", "/x" or a symlink's target), so the directory always
-   holds one complete set;
+   holds one complete set. A file the command read (its scene, a recorded excitation,
+   a PSD table, fit's measured trace: :func:`tengfield._files.note_input`) is never
+   removed (it stays, no longer listed) nor replaced (one error line, nothing written);
 4. on any failure (exception, full disk, Ctrl-C) the staging directory is
    removed and the previous set stays as it was.
 
@@ -39,6 +41,7 @@ import tempfile
 from pathlib import Path
 
 from ._files import file_kind as _kind
+from ._files import forget_inputs, input_named
 from .errors import OutputError
 
 LOCK_NAME = ".tengfield.lock"
@@ -188,6 +191,7 @@ class StagedOutput:
     # -- the three steps -----------------------------------------------------------
     def open(self) -> Path:
         self._created = not os.path.lexists(self.target)
+        forget_inputs()      # the command notes the files it reads from here on
         ensure_directory(self._spelled, self.option)
         self._lock()
         try:
@@ -293,11 +297,18 @@ class StagedOutput:
                 if last and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
                     raise OutputError(f"{self.option} {str(here)!r} is {_kind(st.st_mode)}, "
                                       "not a regular file: nothing was replaced")
+                read_as = input_named(here) if last else None
+                if read_as is not None:
+                    raise OutputError(f"{self.option} {str(self.target)!r}: {name!r} there is a "
+                                      f"file this command read ({read_as!r}) and would be "
+                                      "replaced by its output of that name: nothing was "
+                                      f"written; choose another {self.option} directory")
             moves.append((name, True))
         for name in stale:
             if _parents_are_directories(self.target, name):
                 st = _lstat(self.target / name)
-                if st is not None and stat.S_ISREG(st.st_mode):
+                if st is not None and stat.S_ISREG(st.st_mode) \
+                        and input_named(self.target / name) is None:   # an input stays
                     moves.append((name, False))
         return moves
 

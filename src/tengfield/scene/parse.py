@@ -12,6 +12,7 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
+from .._files import note_input
 from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
@@ -42,6 +43,7 @@ def load_scene(path: str | Path | None) -> Scene:
         if size > MAX_SCENE_BYTES + 4:   # before reading: a 50 MB file is refused at once
             raise SceneError(f"scene file {str(p)!r} has {size:,} bytes: allowed at most "
                              f"{MAX_SCENE_BYTES:,} (recorded data belong in a CSV file)")
+        note_input(p)     # never replaced or removed by the command's outputs
         blob = p.read_bytes()
     except OSError as exc:
         raise SceneError(f"scene file {str(p)!r} could not be read: {exc.strerror or exc}") from None

@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._files import file_kind, note_input
 from ..errors import SceneError
 from .constants import G
 from .limits import (MAX_PSD_ROWS, MAX_RECORDED_ACCELERATION, MAX_RECORDED_BYTES,
@@ -48,15 +51,42 @@ def check_file_size(path: Path, what: str, limit: int) -> None:
                          f"({limit / 1e6:g} MB, checked before reading; decimate or split it)")
 
 
-def read_text(name: str, base_dir: Path | None, what: str, max_bytes: int) -> str:
-    """The UTF-8 text of file ``name`` (relative to ``base_dir`` when given): a missing
-    file, one of more than ``max_bytes`` bytes or one that cannot be read or decoded is
-    a one-line SceneError starting with ``what``."""
+def resolve_input(name: str, base_dir: Path | None, what: str) -> Path:
+    """The path of input file ``name``: relative to ``base_dir`` (the scene's folder) and
+    then confined to it (``..`` or a symlink leading out of it is refused: a scene cannot
+    make tengfield read, and print parts of, a file elsewhere by a relative name); an
+    absolute name is read as given. It must be a regular file: a directory, a FIFO or a
+    device is named as such. One-line SceneError starting with ``what``."""
     path = Path(name)
     if not path.is_absolute() and base_dir is not None:
-        path = base_dir / path
-    if not path.is_file():
-        raise SceneError(f"{what}: no such file" + (f" ({path})" if str(path) != name else ""))
+        path = Path(base_dir) / path
+        try:
+            inside = path.resolve().is_relative_to(Path(base_dir).resolve())
+        except (OSError, RuntimeError):   # a symlink loop
+            inside = False
+        if not inside:
+            raise SceneError(f"{what} leads outside the scene's folder ({str(base_dir)!r}): "
+                             "a relative name must stay inside it; give an absolute path "
+                             "to read a file elsewhere")
+    shown = f" ({path})" if str(path) != name else ""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise SceneError(f"{what}: no such file{shown}") from None
+    except OSError as exc:
+        raise SceneError(f"{what} could not be read: {exc.strerror or exc}{shown}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise SceneError(f"{what} is {file_kind(st.st_mode)}, not a regular file{shown}")
+    return path
+
+
+def read_text(name: str, base_dir: Path | None, what: str, max_bytes: int) -> str:
+    """The UTF-8 text of file ``name`` (:func:`resolve_input`): a missing file, one of
+    more than ``max_bytes`` bytes or one that cannot be read or decoded is a one-line
+    SceneError starting with ``what``. The file is noted as an input of the command
+    (:func:`tengfield._files.note_input`: never replaced by its outputs)."""
+    path = resolve_input(name, base_dir, what)
+    note_input(path)
     try:
         check_file_size(path, what, max_bytes)
         blob = path.read_bytes()
