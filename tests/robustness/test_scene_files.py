@@ -1,0 +1,61 @@
+"""#30 items 19, 20 (files named by a scene): a relative name stays inside the scene's
+folder (no ``..`` or symlink out of it), no error prints the file's content, and a
+directory, FIFO or device is named as what it is, not "no such file"."""
+import os
+
+import pytest
+
+from tengfield.errors import SceneError
+from tengfield.scene import load_scene
+
+SECRET = "root:$6$saltsalt$hashhashhash:20228:0:99999:7:::\n"
+
+
+def scene_in(folder, line):
+    folder.mkdir(exist_ok=True)
+    path = folder / "s.toml"
+    path.write_text(f'[excitation]\nkind = "recorded"\n{line}\n')
+    return path
+
+
+@pytest.mark.parametrize("key", ["file", "psd_file"])
+def test_a_relative_name_cannot_leave_the_scenes_folder(tmp_path, key):
+    (tmp_path / "shadow").write_text(SECRET)
+    path = scene_in(tmp_path / "a", f'{key} = "../shadow"')
+    if key == "psd_file":
+        path.write_text('[excitation]\nkind = "random"\npsd_file = "../shadow"\n')
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    assert "leads outside the scene's folder" in str(err.value)
+    assert "hashhash" not in str(err.value) and "20228" not in str(err.value)
+
+
+def test_a_symlink_out_of_the_folder_is_refused(tmp_path):
+    (tmp_path / "shadow").write_text(SECRET)
+    path = scene_in(tmp_path / "a", 'file = "link.csv"')
+    (tmp_path / "a" / "link.csv").symlink_to(tmp_path / "shadow")
+    with pytest.raises(SceneError, match="leads outside the scene's folder"):
+        load_scene(path)
+
+
+def test_a_file_in_a_subfolder_is_read(tmp_path):
+    path = scene_in(tmp_path / "a", 'file = "data/t.csv"\ntime_column = "time_s"\nsignal_column = "z_m"')
+    (tmp_path / "a" / "data").mkdir()
+    rows = "\n".join(f"{i * 1e-3},{1e-3 * (i % 7)}" for i in range(200))
+    (tmp_path / "a" / "data" / "t.csv").write_text("time_s,z_m\n" + rows + "\n")
+    assert load_scene(path).excitation is not None
+
+
+@pytest.mark.parametrize("kind", ["directory", "fifo", "device"])
+def test_a_special_file_is_named_as_such(tmp_path, kind):
+    target = tmp_path / "a" / "x.csv"
+    path = scene_in(tmp_path / "a", 'file = "x.csv"' if kind != "device" else 'file = "/dev/zero"')
+    if kind == "directory":
+        target.mkdir()
+    elif kind == "fifo":
+        os.mkfifo(target)
+    expected = {"directory": "is a directory", "fifo": "is a named pipe (FIFO)",
+                "device": "is a character device"}[kind]
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    assert expected in str(err.value) and "no such file" not in str(err.value)
