@@ -3,6 +3,8 @@ folder (no ``..`` or symlink out of it), no error prints the file's content, and
 directory, FIFO or device is named as what it is, not "no such file"."""
 import os
 
+import numpy as np
+
 import pytest
 
 from tengfield.errors import SceneError
@@ -59,3 +61,28 @@ def test_a_special_file_is_named_as_such(tmp_path, kind):
     with pytest.raises(SceneError) as err:
         load_scene(path)
     assert expected in str(err.value) and "no such file" not in str(err.value)
+
+
+def write_record(folder, times):
+    z = 1.5e-3 * np.sin(2 * np.pi * 20 * times)
+    (folder / "t.csv").write_text("time_s,z_m\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(times, z)))
+    path = folder / "s.toml"
+    path.write_text('[excitation]\nkind = "recorded"\nfile = "t.csv"\ntime_column = "time_s"\n'
+                    'signal_column = "z_m"\nsignal = "displacement"\nfrequency_hz = 20\n')
+    return path
+
+
+def test_a_gap_in_a_recorded_trace_is_refused_naming_the_rows(tmp_path):
+    """#30 item 4: rows between 0.4 and 0.6 s removed (1000 x the median step) would be
+    filled with invented motion: refused, naming the rows on both sides."""
+    t = np.arange(0, 1.0, 2e-4)
+    t = t[(t < 0.4) | (t > 0.6)]
+    with pytest.raises(SceneError, match=r"a gap between data rows 2000 and 2001 \(0\.3998 s "
+                                         r"then 0\.6002 s: 1e\+03 x the median step"):
+        load_scene(write_record(tmp_path, t))
+
+
+def test_a_few_missing_samples_are_interpolated(tmp_path):
+    """Two missing samples (3 x the median step) are within the limit: read."""
+    t = np.delete(np.arange(0, 0.5, 2e-4), [100, 101])
+    assert load_scene(write_record(tmp_path, t)).excitation is not None

@@ -74,6 +74,9 @@ MAX_RECORDED_TIME = 1e12
 #: a time step below this fraction of the record's median step is refused: far below the
 #: data's resolution (a near-duplicate stamp 1e-15 s apart made the spline ring)
 MIN_STEP_FRACTION = 1e-3
+#: a recorded excitation's time step may be at most this many times its median step: a
+#: longer step is a gap (rows missing), where the spline would invent the table's motion
+MAX_STEP_FACTOR = 10.0
 #: points of a PSD table (psd_file)
 MAX_PSD_ROWS = 100000
 

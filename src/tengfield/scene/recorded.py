@@ -25,7 +25,7 @@ from ..errors import SceneError
 from .constants import G
 from .limits import (MAX_PSD_ROWS, MAX_RECORDED_ACCELERATION, MAX_RECORDED_BYTES,
                      MAX_RECORDED_DISPLACEMENT, MAX_RECORDED_ROWS, MAX_RECORDED_TIME,
-                     MIN_RECORDED_ROWS, MIN_STEP_FRACTION)
+                     MAX_STEP_FACTOR, MIN_RECORDED_ROWS, MIN_STEP_FRACTION)
 from .schema import suggest
 
 
@@ -190,6 +190,25 @@ def check_time_steps(t: np.ndarray, what: str, *, row_offset: int = 0) -> None:
                          f"{median:.3g} s (a duplicated or mistyped stamp?)")
 
 
+def check_no_gaps(t: np.ndarray, what: str) -> None:
+    """Refuse a time step above MAX_STEP_FACTOR x the median step (rows missing: the
+    spline through the record would invent the table's motion there), naming the data
+    rows on both sides, their times and the number of such gaps."""
+    step = np.diff(t)
+    if step.size == 0:
+        return
+    median = float(np.median(step))
+    gaps = np.flatnonzero(step > MAX_STEP_FACTOR * median)
+    if gaps.size:
+        i = int(gaps[0])
+        more = f" (and {gaps.size - 1} more)" if gaps.size > 1 else ""
+        raise SceneError(f"{what}: a gap between data rows {i + 1} and {i + 2} ({t[i]:.9g} s "
+                         f"then {t[i + 1]:.9g} s: {step[i] / median:.3g} x the median step "
+                         f"{median:.3g} s){more}: allowed at most {MAX_STEP_FACTOR:g} x the "
+                         "median step (the motion inside would be invented): fill the gap or "
+                         "cut the record there")
+
+
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Record:
@@ -248,6 +267,7 @@ def read_recorded(exc: dict, base_dir: Path | None) -> Record:
     t = columns["time_column"]
     check_magnitude(t, MAX_RECORDED_TIME, what, f"time column {exc['time_column']!r}", "s")
     check_time_steps(t, what)
+    check_no_gaps(t, what)
     return Record(t, columns["signal_column"], columns.get("signal_x_column"),
                   columns.get("signal_y_column"))
 
