@@ -180,17 +180,21 @@ class StagedOutput:
     """``with StagedOutput(DIR) as staging: ...`` writes into ``staging`` and, when the
     block ends without an exception, moves the files into ``DIR``; see the module doc."""
 
-    def __init__(self, target: str | Path, *, option: str = "-o"):
+    def __init__(self, target: str | Path, *, option: str = "-o", created: bool | None = None):
+        """``created``: whether this command made DIR (default: DIR does not exist when
+        :meth:`open` is called; under mpirun the ranks made it before)."""
         self._spelled = target
         self.target = Path(target)
         self.option = option
         self.staging: Path | None = None
         self._lock_fd: int | None = None
         self._created = False
+        self._created_given = created
 
     # -- the three steps -----------------------------------------------------------
     def open(self) -> Path:
-        self._created = not os.path.lexists(self.target)
+        self._created = (not os.path.lexists(self.target) if self._created_given is None
+                         else self._created_given)
         forget_inputs()      # the command notes the files it reads from here on
         ensure_directory(self._spelled, self.option)
         self._lock()
@@ -415,6 +419,19 @@ class StagedOutput:
         if not isinstance(files, list):
             return set()
         return {name for name in files if _plain_name(name) is not None}
+
+
+def drop_staging(staging: str | Path, target: str | Path, created: bool) -> None:
+    """Remove ``staging`` (and the lock and DIR when this command ``created`` DIR and
+    nothing else is there): the clean-up of a rank that ends an MPI job whose rank 0
+    (holding the :class:`StagedOutput`) is blocked and will be killed."""
+    shutil.rmtree(staging, ignore_errors=True)
+    if created:
+        try:
+            if {p.name for p in Path(target).iterdir()} <= {LOCK_NAME}:
+                (Path(target) / LOCK_NAME).unlink(missing_ok=True)
+        except OSError:
+            pass
 
 
 def _read_json(path: Path):
