@@ -14,6 +14,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 import stat
 from dataclasses import dataclass
 from pathlib import Path
@@ -95,6 +96,25 @@ def read_text(name: str, base_dir: Path | None, what: str, max_bytes: int) -> st
     return decode_utf8(blob, what)   # BOM dropped here
 
 
+def check_header(fields: list[str], what: str) -> list[str]:
+    """The stripped column names of a header line: a file separated by ';' or tabs and a
+    name given twice are refused."""
+    header = [f.strip() for f in fields]
+    if len(header) == 1:   # a European spreadsheet's (;) or a scope's (tab) export
+        for sep, called in ((";", "';'"), ("\t", "tabs")):
+            if sep in header[0]:
+                raise SceneError(f"{what} is separated by {called}, not by commas: "
+                                 "save it as comma-separated with '.' decimals "
+                                 f"(header {header[0][:60]!r})")
+    seen = set()
+    for i, col in enumerate(header):
+        if col in seen:
+            raise SceneError(f"{what}: the header names column {col[:40]!r} twice (columns "
+                             f"{header.index(col) + 1} and {i + 1}): give each column its own name")
+        seen.add(col)
+    return header
+
+
 def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[tuple]]:
     """(header, [(line number, fields), ...]) of a comma-separated text: blank lines and
     ``#`` comments skipped; a row whose field count differs from the header's is refused
@@ -107,13 +127,7 @@ def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[
             continue
         fields = next(csv.reader([line]))
         if header is None:
-            header = [f.strip() for f in fields]
-            if len(header) == 1:   # a European spreadsheet's (;) or a scope's (tab) export
-                for sep, called in ((";", "';'"), ("\t", "tabs")):
-                    if sep in header[0]:
-                        raise SceneError(f"{what} is separated by {called}, not by commas: "
-                                         "save it as comma-separated with '.' decimals "
-                                         f"(header {header[0][:60]!r})")
+            header = check_header(fields, what)
             continue
         if len(fields) != len(header):
             raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
@@ -124,6 +138,11 @@ def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[
             raise SceneError(f"{what} has more than {max_rows:,} data rows: allowed at most "
                              f"{max_rows:,} (checked while reading; decimate or split it)")
     return header or [], rows
+
+
+#: a number as a CSV cell may hold it: ASCII digits, '.', an exponent, nan or inf
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)",
+                     re.ASCII | re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -145,6 +164,8 @@ class CsvTable:
                 out[i] = math.nan
                 continue
             try:
+                if not _NUMBER.fullmatch(cell):   # float() takes 1_5e-4 and non-ASCII digits
+                    raise ValueError(cell)
                 out[i] = float(cell)
             except ValueError:
                 raise SceneError(f"{self.what}: column {col!r} holds {cell[:40]!r} at line "
@@ -235,24 +256,27 @@ def read_recorded(exc: dict, base_dir: Path | None) -> Record:
     if not name:
         raise SceneError("[excitation] kind = 'recorded' needs file = 'name.csv'")
     what = f"[excitation] file = {name!r}"
-    text = read_text(name, base_dir, what, MAX_RECORDED_BYTES)
-    if not text.strip():
+    wanted = ["time_column", "signal_column"] + [
+        key for key in ("signal_x_column", "signal_y_column") if exc[key]]
+    path = resolve_input(name, base_dir, what)
+    note_input(path)
+    try:
+        check_file_size(path, what, MAX_RECORDED_BYTES)
+        blob = path.read_bytes()
+    except OSError as exc_:
+        raise SceneError(f"{what} could not be read: {exc_.strerror or exc_}") from None
+    if not decode_utf8(blob, what).strip():     # checks the encoding (the text is dropped)
         raise SceneError(f"{what} is empty: expected a header line "
                          f"({exc['time_column']},{exc['signal_column']}) and at least "
                          f"{MIN_RECORDED_ROWS} data rows")
-    header, rows = read_csv_rows(text, what, MAX_RECORDED_ROWS)
-    table = CsvTable(what, header, rows)
-    wanted = ["time_column", "signal_column"] + [
-        key for key in ("signal_x_column", "signal_y_column") if exc[key]]
-    for col_key in wanted:
-        col = exc[col_key]
-        if col not in header:
-            raise SceneError(f"[excitation] {col_key} = {col!r} is not a column of {name!r}; "
-                             f"columns are {', '.join(header)}" + suggest(col, header))
-    if len(rows) < MIN_RECORDED_ROWS:
-        raise SceneError(f"{what} has {len(rows)} data rows: at least "
+    columns = _fast_columns(blob, exc, wanted, what) if b"#" not in blob else None
+    if columns is None:     # comments, or a row Arrow refuses: Python's reader names it
+        columns = _python_columns(decode_utf8(blob, what), exc, wanted, what)
+    del blob
+    rows = len(columns["time_column"])
+    if rows < MIN_RECORDED_ROWS:
+        raise SceneError(f"{what} has {rows} data rows: at least "
                          f"{MIN_RECORDED_ROWS} are needed (the quintic spline of the table motion)")
-    columns = {key: table.column(exc[key], allow_blank=True) for key in wanted}
     for key, arr in columns.items():
         bad = np.flatnonzero(~np.isfinite(arr))
         if bad.size:
@@ -270,6 +294,68 @@ def read_recorded(exc: dict, base_dir: Path | None) -> Record:
     check_no_gaps(t, what)
     return Record(t, columns["signal_column"], columns.get("signal_x_column"),
                   columns.get("signal_y_column"))
+
+
+def _check_columns(header: list[str], exc: dict, wanted: list[str]) -> None:
+    for col_key in wanted:
+        col = exc[col_key]
+        if col not in header:
+            raise SceneError(f"[excitation] {col_key} = {col!r} is not a column of "
+                             f"{exc['file']!r}; columns are {', '.join(h[:40] for h in header[:50])}"
+                             + suggest(col, header))
+
+
+def _python_columns(text: str, exc: dict, wanted: list[str], what: str) -> dict:
+    """The wanted columns by Python's csv module (comments; the messages naming a line)."""
+    header, rows = read_csv_rows(text, what, MAX_RECORDED_ROWS)
+    del text
+    _check_columns(header, exc, wanted)
+    table = CsvTable(what, header, rows)
+    return {key: table.column(exc[key], allow_blank=True) for key in wanted}
+
+
+#: bytes Arrow parses at a time when reading a recorded excitation
+ARROW_BLOCK_BYTES = 1 << 22
+
+
+def _fast_columns(blob: bytes, exc: dict, wanted: list[str], what: str) -> dict | None:
+    """The wanted columns of a comment-free CSV by Apache Arrow, block by block and only
+    those columns (a 190 MB file of 30 columns: 2 s and ~0.6 GB instead of 300 s and
+    3.7 GB); None when Arrow refuses something (a short row, a cell that is not a number,
+    ...): Python's reader then names it by its line."""
+    import pyarrow as pa
+    import pyarrow.csv as pa_csv
+
+    pos, line = 0, b""
+    while pos < len(blob) and not line.strip():       # the header: the first non-blank line
+        end = blob.find(b"\n", pos)
+        end = len(blob) if end < 0 else end
+        line, pos = blob[pos:end], end + 1
+    header = check_header(next(csv.reader([line.decode("utf-8-sig")])), what)
+    _check_columns(header, exc, wanted)
+    names = list(dict.fromkeys(exc[key] for key in wanted))
+    body = pa.py_buffer(memoryview(blob)[min(pos, len(blob)):])
+    convert = pa_csv.ConvertOptions(include_columns=names, null_values=[""],
+                                    column_types={n: pa.float64() for n in names},
+                                    strings_can_be_null=False, quoted_strings_can_be_null=True)
+    chunks: dict = {n: [] for n in names}
+    rows = 0
+    try:
+        reader = pa_csv.open_csv(pa.BufferReader(body), read_options=pa_csv.ReadOptions(
+            column_names=header, block_size=ARROW_BLOCK_BYTES, use_threads=False),
+            convert_options=convert)
+        for batch in reader:
+            rows += batch.num_rows
+            if rows > MAX_RECORDED_ROWS:
+                raise SceneError(f"{what} has more than {MAX_RECORDED_ROWS:,} data rows: allowed "
+                                 f"at most {MAX_RECORDED_ROWS:,} (checked while reading; "
+                                 "decimate or split it)")
+            for n in names:
+                chunks[n].append(batch.column(n).to_numpy(zero_copy_only=False))
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError, StopIteration):
+        return None
+    return {key: (np.concatenate(chunks[exc[key]]) if chunks[exc[key]] else np.empty(0))
+            .astype(np.float64) for key in wanted}
 
 
 def read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
