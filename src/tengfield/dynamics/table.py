@@ -100,11 +100,16 @@ def smooth_record(times: np.ndarray, values: np.ndarray, cutoff_hz: float) -> np
     """
     from scipy.signal import butter, sosfiltfilt
 
-    dt = (times[-1] - times[0]) / (times.size - 1)
+    duration = float(times[-1] - times[0])
+    dt = duration / (times.size - 1)
     nyquist = 0.5 / dt
-    if not 0.0 < cutoff_hz < nyquist:
-        raise DynamicsError(f"[excitation] smoothing_hz = {cutoff_hz:g}: allowed (0, "
-                            f"{nyquist:g}) Hz (below the Nyquist frequency of the record)")
+    if not 1.0 / duration <= cutoff_hz < nyquist:
+        # below 1 / duration the filter keeps nothing of the motion but its trend (and
+        # far below it the filter's matrices are singular: LinAlgError at 1e-6 Hz)
+        raise DynamicsError(f"[excitation] smoothing_hz = {cutoff_hz:.12g}: allowed "
+                            f"[{1.0 / duration:.6g}, {nyquist:.6g}) Hz (from 1 / the record's "
+                            f"duration {duration:.6g} s to the Nyquist frequency of its "
+                            "sampling; 0 = no smoothing)")
     sos = butter(SMOOTHING_ORDER, cutoff_hz / nyquist, output="sos")
     # odd extension over ~10 time constants of the filter: the ends stay undistorted
     # (the default 27 samples left edge transients of 20x the drive's acceleration)

@@ -125,7 +125,11 @@ def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[
         line = line.split("#", 1)[0]
         if not line.strip():
             continue
-        fields = next(csv.reader([line]))
+        try:
+            fields = next(csv.reader([line]))
+        except csv.Error as exc:     # a cell over the module's 131,072-character limit
+            raise SceneError(f"{what}: line {number} cannot be read as CSV ({exc}; "
+                             f"{len(line):,} characters): a number takes a few") from None
         if header is None:
             header = check_header(fields, what)
             continue
@@ -331,7 +335,11 @@ def _fast_columns(blob: bytes, exc: dict, wanted: list[str], what: str) -> dict 
         end = blob.find(b"\n", pos)
         end = len(blob) if end < 0 else end
         line, pos = blob[pos:end], end + 1
-    header = check_header(next(csv.reader([line.decode("utf-8-sig")])), what)
+    try:
+        fields = next(csv.reader([line.decode("utf-8-sig")]))
+    except csv.Error:
+        return None        # Python's reader names the line
+    header = check_header(fields, what)
     _check_columns(header, exc, wanted)
     names = list(dict.fromkeys(exc[key] for key in wanted))
     body = pa.py_buffer(memoryview(blob)[min(pos, len(blob)):])
