@@ -58,3 +58,29 @@ def test_a_cut_off_inside_the_range_smooths():
     table = recorded_table(t, z, "displacement", smoothing_hz=1000.0)
     pos = table.evaluate(t[2000:8000])[0]
     assert np.max(np.abs(pos - z[2000:8000])) < 1e-6
+
+
+# -- #30 item 18: a single-sample glitch in a displacement record ------------------------
+def sine_record(noise=0.0):
+    t = np.arange(10_000) * 1e-4
+    z = 1.5e-3 * np.sin(2 * np.pi * 20 * t)
+    if noise:
+        z = z + np.random.default_rng(3).normal(0, noise, z.size)
+    return t, z
+
+
+def test_a_single_sample_glitch_is_named_by_its_row():
+    t, z = sine_record()
+    z[216] += 1e-4                         # 0.1 mm at t = 0.0216 s
+    with pytest.raises(DynamicsError, match=r"displacement at data row 217 \(t = 0\.0216 s\) "
+                                            r"is 0\.0001 m off its neighbours.*smoothing_hz"):
+        recorded_table(t, z, "displacement")
+    recorded_table(t, z, "displacement", smoothing_hz=1000.0)   # low-passed: accepted
+
+
+@pytest.mark.parametrize("noise", [0.0, 1e-6, 2e-5])
+def test_clean_and_noisy_records_and_kinks_pass(noise):
+    t, z = sine_record(noise)
+    recorded_table(t, z, "displacement")
+    tri = 1e-3 * np.abs(((t * 20) % 1.0) - 0.5)          # a triangle wave: kinks, no spike
+    recorded_table(t, tri, "displacement")
