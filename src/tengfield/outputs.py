@@ -85,6 +85,11 @@ def ensure_directory(path: str | Path, option: str = "-o") -> Path:
     """
     p = _not_empty(path, option, "a directory")
     where = f"{option} {str(p)!r}"
+    inner = [part for part in Path(os.path.abspath(p)).parts
+             if part.startswith((STAGING_PREFIX, ".tengfield-probe-"))]
+    if inner:   # another command's staging directory: removed when that command ends
+        raise OutputError(f"{where} is inside {inner[0]!r}, a tengfield command's staging "
+                          "directory (removed when that command ends): choose another directory")
     try:
         st = os.stat(p)
     except FileNotFoundError:

@@ -72,3 +72,20 @@ def test_dynamics_never_overwrites_its_recorded_input(tmp_path, run_cli):
     assert (tmp_path / "trajectory.csv").read_bytes() == record
     assert (tmp_path / "rec.toml").read_text() == RECORDED
     assert (tmp_path / "s.toml").read_text() == SHORT
+
+
+def test_another_commands_staging_directory_is_refused_as_output(tmp_path, capsys):
+    """#30 item 23: -o DIR/.tengfield-staging-XXXX (its files would vanish with it)."""
+    from tengfield import cli
+
+    out = tmp_path / "D"
+    staged = StagedOutput(out)
+    staging = staged.open()
+    try:
+        code = cli.main(["map", "--frequency-hz", "10:20:2", "--amplitude-mm", "1",
+                         "--no-plots", "-o", str(staging / "sub")])
+    finally:
+        staged.abort()
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "a tengfield command's staging directory" in err and len(err.splitlines()) == 1
