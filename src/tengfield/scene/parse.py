@@ -77,7 +77,35 @@ def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = 
         detail = str(exc).split(";")[0].strip()
         raise SceneError(f"{source}: malformed TOML: {detail}") from None
     _check_values(data, source)
-    return build(data, base_dir=base_dir, source=source, text=text)
+    scene = build(data, base_dir=base_dir, source=source, text=text)
+    check_rules(scene)
+    return scene
+
+
+#: the largest noise seed (numpy's SeedSequence takes any integer; the scene's range)
+MAX_SEED = 2**32 - 1
+
+
+def check_rules(scene: Scene) -> None:
+    """What a scene file says that a command would refuse or leave out later, said when
+    the file is read (``tengfield scene`` included): an [array] with a contact model other
+    than the impact map (the rule of :func:`tengfield.array.check_array_scene`), ensemble
+    seeds past 2^32 - 1 (they wrapped to 0, 1, ...), and penetration_max_mm with the
+    Hertz law (it only shapes the power law's damping: one warning)."""
+    if scene.array.cells > 0 and scene.contact.model != "impact":
+        raise SceneError(f"[contact] model = {scene.contact.model!r}: [array] runs need the "
+                         "impact map (model = 'impact')")
+    exc, runs = scene.excitation, scene.run.realisations
+    if runs > 1 and exc.seed + runs - 1 > MAX_SEED:
+        raise SceneError(f"[excitation] seed = {exc.seed} with [run] realisations = {runs}: the "
+                         f"realisations use seeds {exc.seed} ... {exc.seed + runs - 1}; allowed "
+                         f"seed + realisations - 1 <= {MAX_SEED} (seed <= {MAX_SEED - runs + 1})")
+    contact = scene.contact
+    if contact.law == "hertz" and contact.penetration_max > 0.0:
+        import warnings
+        warnings.warn(f"[contact] penetration_max_mm = {contact.penetration_max * 1e3:g} left "
+                      "out: it shapes the damping of law = 'power' only (law = 'hertz' damps "
+                      "by [contact] damping_model)", RuntimeWarning, stacklevel=3)
 
 
 def _check_nesting_text(text: str, source: str) -> None:
