@@ -45,3 +45,41 @@ def test_scene_command_refuses_what_run_refuses(tmp_path, capsys):
     (tmp_path / "s.toml").write_text('[contact]\nmodel = "3d"\n[array]\ncells = 4\n')
     assert cli.main(["scene", str(tmp_path / "s.toml")]) == 2
     assert "[array] runs need the impact map" in capsys.readouterr().err
+
+
+# -- #30 item 20: messages -------------------------------------------------------------
+def test_the_sample_limit_itself_is_allowed_and_past_it_the_numbers_differ():
+    from tengfield.scene.limits import MAX_SAMPLES
+
+    parse_scene(f"[run]\nduration_s = {MAX_SAMPLES / 20000:.17g}\nsample_rate_hz = 20000\n"
+                "settle_periods = 0\n")
+    with pytest.raises(SceneError, match=r"= 20000000\.02 samples: allowed <= 2e\+07 "):
+        parse_scene(f"[run]\nduration_s = 1000.000001\nsample_rate_hz = 20000\n")
+
+
+@pytest.mark.parametrize("noise", ["0", "-1"])
+def test_fit_noise_zero_and_negative_say_the_same_range(noise):
+    from tengfield.fit import parse_fit_section
+
+    scene = parse_scene(f'[fit.columns.V]\ncolumn = "v"\nnoise = {noise}\n')
+    with pytest.raises(SceneError, match=r"noise = -?[01] is out of range: allowed \(0, inf\)"):
+        parse_fit_section(scene)
+
+
+def test_a_psd_table_with_both_columns_says_so(tmp_path):
+    (tmp_path / "psd.csv").write_text("frequency_hz,psd_g2_per_hz,psd_m2_per_s4_per_hz\n"
+                                      "10,1e-3,0.1\n100,1e-3,0.1\n")
+    (tmp_path / "s.toml").write_text('[excitation]\nkind = "random"\npsd_file = "psd.csv"\n')
+    from tengfield.scene import load_scene
+    with pytest.raises(SceneError, match="has both psd_g2_per_hz and psd_m2_per_s4_per_hz: "
+                                         "keep exactly one"):
+        load_scene(tmp_path / "s.toml")
+
+
+def test_a_fifo_as_scene_file_is_named(tmp_path):
+    import os
+
+    from tengfield.scene import load_scene
+    os.mkfifo(tmp_path / "s.toml")
+    with pytest.raises(SceneError, match=r"is a named pipe \(FIFO\), not a regular file"):
+        load_scene(tmp_path / "s.toml")

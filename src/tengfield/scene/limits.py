@@ -130,6 +130,13 @@ def check_steady_window(exc, settle_periods: int, duration: float,
             f"settle_periods / frequency_hz = {settle:g} s must be < {name} = {duration:g}")
 
 
+def past(value: float, limit: float) -> str:
+    """``value`` in 3 digits, or in as many as show it differs from ``limit`` (a value
+    just past a limit read "2e+07 samples: allowed <= 2e+07")."""
+    text = f"{value:.3g}"
+    return text if text != f"{limit:.3g}" else f"{value:.12g}"
+
+
 def check_work(exc, run) -> None:
     """Refuse runs whose sample or event count would exhaust memory (product named)."""
     samples = run.duration * run.sample_rate
@@ -138,11 +145,11 @@ def check_work(exc, run) -> None:
             f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
             f"{samples:.3g} samples: allowed >= {MIN_SAMPLES:g} (the run's output needs "
             "samples to report)")
-    if samples > MAX_SAMPLES:
+    if samples > MAX_SAMPLES * (1.0 + 1e-12):   # 1000 s x 20 kHz is the limit, not past it
         raise SceneError(
             f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
-            f"{samples:.3g} samples: allowed <= {MAX_SAMPLES:.3g} (lower sample_rate_hz or "
-            "split the run)")
+            f"{past(samples, MAX_SAMPLES)} samples: allowed <= {MAX_SAMPLES:.3g} (lower "
+            "sample_rate_hz or split the run)")
     periods = run.duration * exc.frequency
     if periods > MAX_PERIODS:
         raise SceneError(

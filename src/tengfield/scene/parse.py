@@ -7,12 +7,13 @@ values themselves are checked by :func:`tengfield.scene.model.build`.
 from __future__ import annotations
 
 import datetime
+import os
 import re
 import tomllib
 from importlib import resources
 from pathlib import Path
 
-from .._files import note_input
+from .._files import file_kind, note_input
 from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
@@ -37,7 +38,11 @@ def load_scene(path: str | Path | None) -> Scene:
     if p.is_dir():
         raise SceneError(f"scene file {str(p)!r} is a directory: give a .toml file")
     if not p.is_file():
-        raise SceneError(f"scene file {str(p)!r} does not exist")
+        try:
+            kind = file_kind(os.stat(p).st_mode)   # a FIFO, a device: named, not "missing"
+        except OSError:
+            raise SceneError(f"scene file {str(p)!r} does not exist") from None
+        raise SceneError(f"scene file {str(p)!r} is {kind}, not a regular file: give a .toml file")
     try:
         size = p.stat().st_size
         if size > MAX_SCENE_BYTES + 4:   # before reading: a 50 MB file is refused at once

@@ -375,6 +375,9 @@ def read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
     header = table.header
     units = {"psd_g2_per_hz": G**2, "psd_m2_per_s4_per_hz": 1.0}
     value_cols = [h for h in header if h in units]
+    if len(value_cols) > 1:
+        raise SceneError(f"{where}: header {','.join(header)!r} has both psd_g2_per_hz and "
+                         "psd_m2_per_s4_per_hz: keep exactly one of them")
     if "frequency_hz" not in header or len(value_cols) != 1:
         raise SceneError(f"{where}: header {','.join(header)!r} needs the columns frequency_hz "
                          "and one of psd_g2_per_hz, psd_m2_per_s4_per_hz")
