@@ -83,3 +83,13 @@ def test_a_fifo_as_scene_file_is_named(tmp_path):
     os.mkfifo(tmp_path / "s.toml")
     with pytest.raises(SceneError, match=r"is a named pipe \(FIFO\), not a regular file"):
         load_scene(tmp_path / "s.toml")
+
+
+@pytest.mark.parametrize("value", ["x" * 500_000, "sine\u200b"])
+def test_a_long_or_invisible_choice_is_shown_short_and_escaped(value):
+    with pytest.raises(SceneError) as err:
+        parse_scene(f'[excitation]\nkind = "{value}"\n')
+    text = str(err.value)
+    assert len(text) < 300 and "\u200b" not in text and "is not allowed: choose one of" in text
+    if value.startswith("sine"):
+        assert "'sine\\u200b'" in text
