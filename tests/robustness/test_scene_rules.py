@@ -93,3 +93,20 @@ def test_a_long_or_invisible_choice_is_shown_short_and_escaped(value):
     assert len(text) < 300 and "\u200b" not in text and "is not allowed: choose one of" in text
     if value.startswith("sine"):
         assert "'sine\\u200b'" in text
+
+
+def test_a_failing_sweep_point_is_named(monkeypatch):
+    """#30 item 20: an error inside one point of a sweep names the point."""
+    import tengfield.sweep as sweep_module
+    from tengfield.errors import DynamicsError
+    from tengfield.scene import default_scene
+
+    def point(scene, table, frequency, amplitude, loads):
+        if frequency > 25:
+            raise DynamicsError("the impact map diverged")
+        return [{"frequency_hz": frequency}]
+
+    monkeypatch.setattr(sweep_module, "sweep_point", point)
+    with pytest.raises(DynamicsError, match=r"^sweep point frequency_hz = 30, amplitude_mm = 1\.5: "
+                                            r"the impact map diverged$"):
+        sweep_module.sweep(default_scene(), None, [20.0, 30.0], [1.5e-3], jobs=1)
