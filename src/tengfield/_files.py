@@ -76,8 +76,8 @@ def writable_target(path: str | Path) -> Path:
     """``path``, made safe to write a file at: a symlink there is removed (a file is
     written in its place, never through it to its target); a directory, FIFO or device
     node is refused (:class:`tengfield.errors.OutputError`: nothing is written into a
-    pipe or a device). The staging directory of ``-o DIR`` holds none of these; under
-    mpirun the commands write into DIR itself. :func:`write_csv` writes where it is
+    pipe or a device). The staging directory of ``-o DIR`` (under mpirun too) holds none
+    of these; the Python API writes where it is told. :func:`write_csv` writes where it is
     told (``/dev/full`` included); :func:`atomic_path` and the writers of an output
     set check."""
     path = Path(path)
