@@ -110,3 +110,26 @@ def test_a_failing_sweep_point_is_named(monkeypatch):
     with pytest.raises(DynamicsError, match=r"^sweep point frequency_hz = 30, amplitude_mm = 1\.5: "
                                             r"the impact map diverged$"):
         sweep_module.sweep(default_scene(), None, [20.0, 30.0], [1.5e-3], jobs=1)
+
+
+def test_fit_names_its_own_window_when_the_record_is_too_short(tmp_path):
+    """#30 item 20: fit runs the dynamics for settle + trace + one period (1.65 s here),
+    not for [run] duration_s = 1; a 1 s record is refused naming that window."""
+    import numpy as np
+
+    from tengfield.fit._model import ForwardModel
+    from tengfield.scene import load_scene
+
+    t = np.arange(10_000) * 1e-4
+    (tmp_path / "t.csv").write_text("time_s,z_m\n" + "".join(
+        f"{a!r},{1.5e-3 * np.sin(2 * np.pi * 20 * a)!r}\n" for a in t))
+    (tmp_path / "s.toml").write_text('[excitation]\nkind = "recorded"\nfile = "t.csv"\n'
+                                     'time_column = "time_s"\nsignal_column = "z_m"\n'
+                                     'frequency_hz = 20\n[run]\nduration_s = 1\n'
+                                     'settle_periods = 10\n')
+    scene = load_scene(tmp_path / "s.toml")
+    with pytest.raises(SceneError, match=r"^fit: the model runs 1\.65 s \(0\.5 s of "
+                                         r"settle_periods / frequency_hz, 1\.1 s of the measured "
+                                         r"trace.*\[0, 0\.9999\] s is shorter"):
+        ForwardModel(scene, None, 1.0, span=1.1, simulate=lambda s: None)
+    ForwardModel(scene, None, 1.0, span=0.3, simulate=lambda s: None)   # fits: accepted
