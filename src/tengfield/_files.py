@@ -37,6 +37,36 @@ _KINDS = {stat.S_IFIFO: "a named pipe (FIFO)", stat.S_IFCHR: "a character device
           stat.S_IFDIR: "a directory", stat.S_IFREG: "a file"}
 
 
+#: the files this process read as input (scene files, recorded excitations, PSD tables,
+#: measured traces) as (st_dev, st_ino): an output directory never removes or replaces
+#: one of them (:class:`tengfield.outputs.StagedOutput`)
+_INPUTS: dict[tuple[int, int], str] = {}
+
+
+def note_input(path: str | Path) -> None:
+    """Record that this process reads ``path`` as an input (every reader of an input
+    file calls it before reading)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return
+    _INPUTS[(st.st_dev, st.st_ino)] = str(path)
+
+
+def input_named(path: str | Path) -> str | None:
+    """The name an input was read under when ``path`` is the same file, else None."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return _INPUTS.get((st.st_dev, st.st_ino))
+
+
+def forget_inputs() -> None:
+    """Start a new command's list of inputs."""
+    _INPUTS.clear()
+
+
 def file_kind(mode: int) -> str:
     """``a named pipe (FIFO)``, ``a character device``, ... of an ``st_mode``."""
     return _KINDS.get(stat.S_IFMT(mode), "a special file")
@@ -46,8 +76,8 @@ def writable_target(path: str | Path) -> Path:
     """``path``, made safe to write a file at: a symlink there is removed (a file is
     written in its place, never through it to its target); a directory, FIFO or device
     node is refused (:class:`tengfield.errors.OutputError`: nothing is written into a
-    pipe or a device). The staging directory of ``-o DIR`` holds none of these; under
-    mpirun the commands write into DIR itself. :func:`write_csv` writes where it is
+    pipe or a device). The staging directory of ``-o DIR`` (under mpirun too) holds none
+    of these; the Python API writes where it is told. :func:`write_csv` writes where it is
     told (``/dev/full`` included); :func:`atomic_path` and the writers of an output
     set check."""
     path = Path(path)

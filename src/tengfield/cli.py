@@ -364,6 +364,8 @@ def _remove_if_empty(directories) -> None:
     for d in directories:
         try:
             os.rmdir(d)
+        except FileNotFoundError:   # removed already (by the staged output's abort)
+            continue
         except OSError:
             return
 
@@ -392,6 +394,7 @@ def _agree(control, mine: _Outcome | None) -> _Outcome | None:
 
 
 def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
+    out, err = sys.stdout, sys.stderr      # _open_staging rewrites the staging path
     try:
         return _agreed_run(parser, argv, world)
     except BaseException as exc:      # noqa: BLE001 - a fault of the agreement itself:
@@ -400,6 +403,8 @@ def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
         sys.stderr.flush()            # the others may wait for this rank: end them all
         world.Abort(1)
         raise
+    finally:
+        sys.stdout, sys.stderr = out, err
 
 
 def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
@@ -407,6 +412,7 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
 
     control = world.Dup()   # the agreement's own: it never meets a command's collectives
     created: list = []
+    staged = None
     args, mine = None, None
     try:
         args, mine = _parse_quietly(parser, argv)
@@ -436,24 +442,75 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
         if failed is not None:
             _remove_if_empty(created)
             return failed.code
+        if action.metavar != "FILE":   # all or nothing, as a single process (#30 item 2)
+            staged, failed = _open_staging(control, args, action, bool(created))
+            if failed is not None:
+                _remove_if_empty(created)
+                return failed.code
     try:
         code = int(args.func(args) or 0)
         mine = _Outcome(code) if code else None
     except BaseException as exc:      # noqa: BLE001
         mine = _outcome_of(exc)
+    if staged is not None:
+        setattr(args, action.dest, target)
     if not all_arrived(control, None if mine is None else FAILURE_GRACE_S):
         # the others are blocked in the command (waiting for this rank): say why, end all
+        if isinstance(staged, _OnAnotherRank):   # rank 0, blocked, is killed
+            from .outputs import drop_staging
+            drop_staging(staged.staging, target, bool(created))
+        elif staged is not None:
+            staged.abort()
         _remove_if_empty(created)
         if mine.text:
             print(_on_rank(mine.text, world.rank, world.size), file=sys.stderr)
         sys.stdout.flush()
         sys.stderr.flush()
         world.Abort(mine.code or 1)
+    if staged is not None:     # every rank succeeded: rank 0 moves the set into place
+        anyone_failed = any(control.allgather(mine is not None))
+        try:
+            if control.rank == 0:
+                staged.abort() if anyone_failed else staged.commit()
+        except BaseException as exc:  # noqa: BLE001
+            mine = _outcome_of(exc)
     failed = _agree(control, mine)
     if failed is not None:
         _remove_if_empty(created)
         return failed.code
     return 0
+
+
+def _open_staging(control, args, action, created: bool):
+    """Under mpirun: rank 0 opens -o DIR's staging directory (lock, recovery) and every
+    rank writes into it (``args``' -o is set to it; rank 0 moves the set into place when
+    every rank succeeded). Returns (rank 0's StagedOutput or None, the failed outcome)."""
+    from .outputs import StagedOutput
+
+    staged, mine, where = None, None, None
+    if control.rank == 0:
+        try:
+            staged = StagedOutput(getattr(args, action.dest), option=action.option_strings[0],
+                                  created=created)
+            where = str(staged.open())
+        except BaseException as exc:  # noqa: BLE001
+            staged, mine = None, _outcome_of(exc)
+    where = control.bcast(where)
+    failed = _agree(control, mine)
+    if failed is not None:
+        return None, failed
+    target = str(getattr(args, action.dest))
+    setattr(args, action.dest, where)
+    sys.stdout = _PathRewriter(sys.stdout, where, target)
+    sys.stderr = _PathRewriter(sys.stderr, where, target)
+    return (staged if control.rank == 0 else _OnAnotherRank(where)), None
+
+
+class _OnAnotherRank(NamedTuple):
+    """What _open_staging returns on the ranks other than 0 (rank 0 holds the
+    StagedOutput): the staging directory every rank writes into."""
+
+    staging: str
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -19,7 +19,9 @@ change):
    wrote there and this one did not are removed (``DIR/.tengfield-manifest.json``
    lists them; only plain names inside ``DIR``, regular files reached through real
    directories: never "../x", "/x" or a symlink's target), so the directory always
-   holds one complete set;
+   holds one complete set. A file the command read (its scene, a recorded excitation,
+   a PSD table, fit's measured trace: :func:`tengfield._files.note_input`) is never
+   removed (it stays, no longer listed) nor replaced (one error line, nothing written);
 4. on any failure (exception, full disk, Ctrl-C) the staging directory is
    removed and the previous set stays as it was.
 
@@ -39,6 +41,7 @@ import tempfile
 from pathlib import Path
 
 from ._files import file_kind as _kind
+from ._files import forget_inputs, input_named
 from .errors import OutputError
 
 LOCK_NAME = ".tengfield.lock"
@@ -82,6 +85,11 @@ def ensure_directory(path: str | Path, option: str = "-o") -> Path:
     """
     p = _not_empty(path, option, "a directory")
     where = f"{option} {str(p)!r}"
+    inner = [part for part in Path(os.path.abspath(p)).parts
+             if part.startswith((STAGING_PREFIX, ".tengfield-probe-"))]
+    if inner:   # another command's staging directory: removed when that command ends
+        raise OutputError(f"{where} is inside {inner[0]!r}, a tengfield command's staging "
+                          "directory (removed when that command ends): choose another directory")
     try:
         st = os.stat(p)
     except FileNotFoundError:
@@ -177,17 +185,22 @@ class StagedOutput:
     """``with StagedOutput(DIR) as staging: ...`` writes into ``staging`` and, when the
     block ends without an exception, moves the files into ``DIR``; see the module doc."""
 
-    def __init__(self, target: str | Path, *, option: str = "-o"):
+    def __init__(self, target: str | Path, *, option: str = "-o", created: bool | None = None):
+        """``created``: whether this command made DIR (default: DIR does not exist when
+        :meth:`open` is called; under mpirun the ranks made it before)."""
         self._spelled = target
         self.target = Path(target)
         self.option = option
         self.staging: Path | None = None
         self._lock_fd: int | None = None
         self._created = False
+        self._created_given = created
 
     # -- the three steps -----------------------------------------------------------
     def open(self) -> Path:
-        self._created = not os.path.lexists(self.target)
+        self._created = (not os.path.lexists(self.target) if self._created_given is None
+                         else self._created_given)
+        forget_inputs()      # the command notes the files it reads from here on
         ensure_directory(self._spelled, self.option)
         self._lock()
         try:
@@ -293,11 +306,18 @@ class StagedOutput:
                 if last and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
                     raise OutputError(f"{self.option} {str(here)!r} is {_kind(st.st_mode)}, "
                                       "not a regular file: nothing was replaced")
+                read_as = input_named(here) if last else None
+                if read_as is not None:
+                    raise OutputError(f"{self.option} {str(self.target)!r}: {name!r} there is a "
+                                      f"file this command read ({read_as!r}) and would be "
+                                      "replaced by its output of that name: nothing was "
+                                      f"written; choose another {self.option} directory")
             moves.append((name, True))
         for name in stale:
             if _parents_are_directories(self.target, name):
                 st = _lstat(self.target / name)
-                if st is not None and stat.S_ISREG(st.st_mode):
+                if st is not None and stat.S_ISREG(st.st_mode) \
+                        and input_named(self.target / name) is None:   # an input stays
                     moves.append((name, False))
         return moves
 
@@ -404,6 +424,19 @@ class StagedOutput:
         if not isinstance(files, list):
             return set()
         return {name for name in files if _plain_name(name) is not None}
+
+
+def drop_staging(staging: str | Path, target: str | Path, created: bool) -> None:
+    """Remove ``staging`` (and the lock and DIR when this command ``created`` DIR and
+    nothing else is there): the clean-up of a rank that ends an MPI job whose rank 0
+    (holding the :class:`StagedOutput`) is blocked and will be killed."""
+    shutil.rmtree(staging, ignore_errors=True)
+    if created:
+        try:
+            if {p.name for p in Path(target).iterdir()} <= {LOCK_NAME}:
+                (Path(target) / LOCK_NAME).unlink(missing_ok=True)
+        except OSError:
+            pass
 
 
 def _read_json(path: Path):

@@ -114,7 +114,19 @@ def extension_line(scene, frequencies) -> str | None:
 
 
 def _sweep_task(args):
-    return sweep_point(*args)
+    """One point; a one-line error (a TengfieldError) names the point it happened at."""
+    from .errors import TengfieldError
+
+    try:
+        return sweep_point(*args)
+    except TengfieldError as exc:
+        _, _, frequency, amplitude, _ = args
+        try:
+            named = type(exc)(f"sweep point frequency_hz = {frequency:g}, amplitude_mm = "
+                              f"{amplitude * 1e3:g}: {exc}")
+        except TypeError:     # an error class with other arguments: as it is
+            raise exc from None
+        raise named from None
 
 
 def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = None,

@@ -100,16 +100,52 @@ def smooth_record(times: np.ndarray, values: np.ndarray, cutoff_hz: float) -> np
     """
     from scipy.signal import butter, sosfiltfilt
 
-    dt = (times[-1] - times[0]) / (times.size - 1)
+    duration = float(times[-1] - times[0])
+    dt = duration / (times.size - 1)
     nyquist = 0.5 / dt
-    if not 0.0 < cutoff_hz < nyquist:
-        raise DynamicsError(f"[excitation] smoothing_hz = {cutoff_hz:g}: allowed (0, "
-                            f"{nyquist:g}) Hz (below the Nyquist frequency of the record)")
+    if not 1.0 / duration <= cutoff_hz < nyquist:
+        # below 1 / duration the filter keeps nothing of the motion but its trend (and
+        # far below it the filter's matrices are singular: LinAlgError at 1e-6 Hz)
+        raise DynamicsError(f"[excitation] smoothing_hz = {cutoff_hz:.12g}: allowed "
+                            f"[{1.0 / duration:.6g}, {nyquist:.6g}) Hz (from 1 / the record's "
+                            f"duration {duration:.6g} s to the Nyquist frequency of its "
+                            "sampling; 0 = no smoothing)")
     sos = butter(SMOOTHING_ORDER, cutoff_hz / nyquist, output="sos")
     # odd extension over ~10 time constants of the filter: the ends stay undistorted
     # (the default 27 samples left edge transients of 20x the drive's acceleration)
     pad = min(values.size - 1, int(math.ceil(10.0 / (cutoff_hz * dt))))
     return sosfiltfilt(sos, values, padtype="odd", padlen=pad)
+
+
+#: a displacement sample off the mean of its neighbours by more than this many times the
+#: record's median such offset, its neighbours off the other way (a spike, not a kink),
+#: is a glitch: the quintic spline through it swings, and the contact search through the
+#: swing fails ("did not converge") far from the cause
+GLITCH_FACTOR = 100.0
+
+
+def check_glitches(times: np.ndarray, values: np.ndarray) -> None:
+    """DynamicsError naming the data row and time of the first single-sample spike of a
+    displacement record (see GLITCH_FACTOR); ``smoothing_hz`` low-passes it instead."""
+    if values.size < 5:
+        return
+    r = values[1:-1] - 0.5 * (values[:-2] + values[2:])      # offset from the neighbours
+    a = np.abs(r)
+    scale = max(float(np.median(a)), 1e-12 * float(np.ptp(values)), 1e-300)
+    mid = np.arange(1, r.size - 1)
+    spike = ((a[mid] > GLITCH_FACTOR * scale) & (r[mid - 1] * r[mid] < 0)
+             & (r[mid + 1] * r[mid] < 0) & (a[mid - 1] > 0.25 * a[mid])
+             & (a[mid + 1] > 0.25 * a[mid]))
+    hits = mid[spike]
+    if hits.size:
+        i = int(hits[0]) + 1                                    # index into values
+        more = f" (and {hits.size - 1} more)" if hits.size > 1 else ""
+        raise DynamicsError(
+            f"[excitation] file: the recorded displacement at data row {i + 1} "
+            f"(t = {times[i]:.9g} s) is {values[i] - 0.5 * (values[i - 1] + values[i + 1]):.3g} m "
+            f"off its neighbours, {a[i - 1] / scale:.3g} x the record's typical offset{more}: "
+            f"a single-sample glitch (allowed {GLITCH_FACTOR:g} x): fix or remove the row, or "
+            "low-pass the record with [excitation] smoothing_hz")
 
 
 def recorded_table(times: np.ndarray, values: np.ndarray, signal: str, *,
@@ -134,6 +170,8 @@ def recorded_table(times: np.ndarray, values: np.ndarray, signal: str, *,
             rel = grid
     if smoothing_hz > 0.0 and times.size >= 6:
         values = smooth_record(rel, np.asarray(values, dtype=float), smoothing_hz)
+    elif signal == "displacement":
+        check_glitches(times, np.asarray(values, dtype=float))
     table = _recorded_table(rel, values, signal)
     shift = first - float(origin)
     if shift == 0.0:

@@ -66,6 +66,23 @@ def _default_simulate():
     return simulate
 
 
+def _check_record_covers(scene, settle: float, span: float, duration: float) -> None:
+    """The fit runs the dynamics for ``duration`` = settle + trace span with shifts + one
+    period, not for [run] duration_s: a recorded excitation too short for it is named so."""
+    from ..errors import SceneError
+
+    exc = scene.excitation
+    if exc.kind != "recorded" or exc.times is None or not len(exc.times):
+        return
+    t0, first, last = scene.initial.time, float(exc.times[0]), float(exc.times[-1])
+    if t0 < first or t0 + duration > last:
+        raise SceneError(f"fit: the model runs {duration:.6g} s ({settle:.6g} s of settle_periods "
+                         f"/ frequency_hz, {span:.6g} s of the measured trace with its time "
+                         f"shifts, one period) from {t0:g} s; the recorded excitation "
+                         f"[{first:g}, {last:g}] s is shorter: give a longer record, a shorter "
+                         "--measured trace or fewer [run] settle_periods")
+
+
 class ForwardModel:
     """V, Q, I of ``scene`` for a set of parameter values (file units, see ``fit.spec``).
 
@@ -86,6 +103,7 @@ class ForwardModel:
         period = scene.excitation.period
         self.window_start = scene.initial.time + steady_start(scene)
         self.duration = steady_start(scene) + span + period
+        _check_record_covers(scene, steady_start(scene), span, self.duration)
         self.sample_rate = float(sample_rate or max(scene.run.sample_rate, 200.0 / period))
         self._cache: OrderedDict = OrderedDict()
         self.dynamics_runs = 0

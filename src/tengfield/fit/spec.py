@@ -203,7 +203,7 @@ def _columns(raw, defaults: dict = RUN_COLUMNS) -> list[Column]:
                              + ", ".join(map(repr, UNITS[quantity])) + _suggest(unit, UNITS[quantity]))
         noise = None
         if "noise" in entry:
-            noise = _number(f"{where} noise", entry["noise"], 0.0, math.inf)
+            noise = _number(f"{where} noise", entry["noise"], -math.inf, math.inf)
             if noise <= 0:
                 raise SceneError(f"{where} noise = {entry['noise']!r} is out of range: allowed (0, inf)")
             noise *= UNITS[quantity][unit]

@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import copy
 import datetime
+import os
 import re
 import tomllib
 import warnings
 from importlib import resources
 from pathlib import Path
 
+from .._files import file_kind, note_input
 from .._mpi import launched_rank
 from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
@@ -42,12 +44,17 @@ def load_scene(path: "str | Path | Scene | None") -> Scene:
     if p.is_dir():
         raise SceneError(f"scene file {str(p)!r} is a directory: give a .toml file")
     if not p.is_file():
-        raise SceneError(f"scene file {str(p)!r} does not exist")
+        try:
+            kind = file_kind(os.stat(p).st_mode)   # a FIFO, a device: named, not "missing"
+        except OSError:
+            raise SceneError(f"scene file {str(p)!r} does not exist") from None
+        raise SceneError(f"scene file {str(p)!r} is {kind}, not a regular file: give a .toml file")
     try:
         size = p.stat().st_size
         if size > MAX_SCENE_BYTES + 4:   # before reading: a 50 MB file is refused at once
             raise SceneError(f"scene file {str(p)!r} has {size:,} bytes: allowed at most "
                              f"{MAX_SCENE_BYTES:,} (recorded data belong in a CSV file)")
+        note_input(p)     # never replaced or removed by the command's outputs
         blob = p.read_bytes()
     except OSError as exc:
         raise SceneError(f"scene file {str(p)!r} could not be read: {exc.strerror or exc}") from None
@@ -81,7 +88,35 @@ def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = 
         detail = str(exc).split(";")[0].strip()
         raise SceneError(f"{source}: malformed TOML: {detail}") from None
     _check_values(data, source)
-    return build(data, base_dir=base_dir, source=source, text=text)
+    scene = build(data, base_dir=base_dir, source=source, text=text)
+    check_rules(scene)
+    return scene
+
+
+#: the largest noise seed (numpy's SeedSequence takes any integer; the scene's range)
+MAX_SEED = 2**32 - 1
+
+
+def check_rules(scene: Scene) -> None:
+    """What a scene file says that a command would refuse or leave out later, said when
+    the file is read (``tengfield scene`` included): an [array] with a contact model other
+    than the impact map (the rule of :func:`tengfield.array.check_array_scene`), ensemble
+    seeds past 2^32 - 1 (they wrapped to 0, 1, ...), and penetration_max_mm with the
+    Hertz law (it only shapes the power law's damping: one warning)."""
+    if scene.array.cells > 0 and scene.contact.model != "impact":
+        raise SceneError(f"[contact] model = {scene.contact.model!r}: [array] runs need the "
+                         "impact map (model = 'impact')")
+    exc, runs = scene.excitation, scene.run.realisations
+    if runs > 1 and exc.seed + runs - 1 > MAX_SEED:
+        raise SceneError(f"[excitation] seed = {exc.seed} with [run] realisations = {runs}: the "
+                         f"realisations use seeds {exc.seed} ... {exc.seed + runs - 1}; allowed "
+                         f"seed + realisations - 1 <= {MAX_SEED} (seed <= {MAX_SEED - runs + 1})")
+    contact = scene.contact
+    if contact.law == "hertz" and contact.penetration_max > 0.0:
+        import warnings
+        warnings.warn(f"[contact] penetration_max_mm = {contact.penetration_max * 1e3:g} left "
+                      "out: it shapes the damping of law = 'power' only (law = 'hertz' damps "
+                      "by [contact] damping_model)", RuntimeWarning, stacklevel=3)
 
 
 def parse_setting(text: str) -> tuple[list[str], object]:
@@ -130,7 +165,9 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
         node[path[-1]] = value
     base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
     source = scene.source if scene.source != "<default>" else "<default scene>"
-    return build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)
+    scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)
+    check_rules(scene)      # the rules between keys, as for the file
+    return scene
 
 
 def _check_nesting_text(text: str, source: str) -> None:

@@ -361,7 +361,7 @@ def convert(sec: str, key: str, value, spec: Key):
             raise SceneError(f"{where} = {show(value)}: expected a string")
         if constraint and constraint[0] == "choice" and value not in constraint[1]:
             allowed = ", ".join(repr(o) for o in constraint[1])
-            raise SceneError(f"{where} = {value!r} is not allowed: choose one of {allowed}"
+            raise SceneError(f"{where} = {show(value)} is not allowed: choose one of {allowed}"
                              + suggest(value, constraint[1]))
         return value
     if typ is tuple:
@@ -414,7 +414,7 @@ def check_attribute(sec: str, key: str, spec: Key, value, owner: str) -> None:
     checked against its key: SceneError naming the attribute, the key in file units and
     the allowed range. Bounds are compared in SI (``bound x factor``, as :func:`convert`
     scales a file value), so every value :func:`convert` returns passes."""
-    where = f"{owner}.{spec.attr} = {value!r}"
+    where = f"{owner}.{spec.attr} = {show(value)}"
     if spec.type is str:
         if not isinstance(value, str):
             raise SceneError(f"{where}: expected a string ([{sec}] {key})")
