@@ -97,8 +97,9 @@ def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
     """Draw ``function(*data, path, **kwargs)`` here, or send it to ``figures``; returns
     ``path``."""
     writable_target(path)
-    if figures is None:
-        function(*data, path, **kwargs)
+    if figures is None:      # atomically: a full disk leaves no 0-byte figure behind
+        with atomic_path(path) as tmp:
+            function(*data, tmp, **kwargs)
     else:
         figures.draw(function, *data, path, **kwargs)
     return Path(path)
