@@ -16,6 +16,7 @@ the same rules (:func:`write_radial_table`, :func:`read_radial_table`,
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 import sys
@@ -177,24 +178,35 @@ def write_checked_file(path: str | Path, arrays: dict, scalars: dict, scalar_nam
     h5py = _import_h5py()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    # HDF5 builds the file in memory; the disk sees only plain writes. A full disk then is
+    # an OSError (ENOSPC) like any other; an HDF5 file whose flush failed on a full disk
+    # raised "Slist already enabled?" and crashed the interpreter (issue #30.14).
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        f.attrs["complete"] = False
+        for name, data in arrays.items():
+            dataset = f.create_dataset(name, data=data, fletcher32=True,
+                                       chunks=data.shape if data.size else None)
+            dataset.attrs["sha256"] = array_digest(data)
+        for attr, name in scalar_names.items():
+            f.attrs[name] = scalars[attr]
+        f.attrs["scalars_sha256"] = scalars_digest(scalars)
+        for name, value in attrs.items():
+            f.attrs[name] = value
+        f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
+        f.flush()
+        f.attrs["complete"] = True
+    image = buffer.getbuffer()
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
     try:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["complete"] = False
-            for name, data in arrays.items():
-                dataset = f.create_dataset(name, data=data, fletcher32=True,
-                                           chunks=data.shape if data.size else None)
-                dataset.attrs["sha256"] = array_digest(data)
-            for attr, name in scalar_names.items():
-                f.attrs[name] = scalars[attr]
-            f.attrs["scalars_sha256"] = scalars_digest(scalars)
-            for name, value in attrs.items():
-                f.attrs[name] = value
-            f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
-            f.flush()
-            f.attrs["complete"] = True
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(image)
+            fh.flush()
+            os.fsync(fh.fileno())
         os.replace(tmp, path)
+    except OSError as exc:   # name the file (a bare "No space left on device" names none)
+        Path(tmp).unlink(missing_ok=True)
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
