@@ -200,6 +200,9 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
     on_time = float(np.sum(dt[on[1:]]))
     books = fine.balance()
     warn_numerical_dissipation(books)
+    if c.pmic == "uvlo":
+        from ...harvest import warn_quiescent_starvation
+        warn_quiescent_starvation(fine, c.pmic_quiescent_current, k0)
     out = {
         "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
         "final_store_voltage_V": float(fine.store_voltage[-1]),
