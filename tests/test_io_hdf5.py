@@ -156,3 +156,28 @@ def test_the_papers_15_minute_record_runs_in_hdf5_with_bounded_memory(tmp_path, 
         t = f["waveforms/time_s"]
         assert t.shape == (18_000_001,)
         assert t[-1] == pytest.approx(900.0)
+
+
+def test_run_trajectory_csv_does_not_repeat_the_waveform_columns(tmp_path):
+    """trajectory.csv of `tengfield run` keeps time_s (the join) and what waveforms.csv
+    lacks; joined on time_s the two give the dynamics back."""
+    pd = pytest.importorskip("pandas")
+    result = _result(tmp_path)
+    out = tmp_path / "out"
+    tio.write_run_outputs(result, out, plots=False)
+    tio.write_dynamics_outputs(result, out, plots=False)
+    waveforms = pd.read_csv(out / "waveforms.csv", float_precision="round_trip")
+    trajectory = pd.read_csv(out / "trajectory.csv", float_precision="round_trip")
+    assert list(trajectory.columns) == ["time_s"]       # 1-D: the motion is in waveforms.csv
+    joined = trajectory.merge(waveforms, on="time_s", how="left", validate="one_to_one")
+    assert len(joined) == len(result.dynamics.t)
+    np.testing.assert_array_equal(joined["time_s"].to_numpy(), result.dynamics.t)
+    # waveforms.csv writes the motion with 10 significant digits (trajectory.csv of
+    # `tengfield dynamics` and run.h5 hold every double)
+    np.testing.assert_allclose(joined["gap_m"].to_numpy(), result.dynamics.gap, rtol=1e-9,
+                               atol=1e-9 * result.dynamics.gap.max())
+    # tengfield dynamics keeps its full table
+    (tmp_path / "dyn").mkdir()
+    tio.write_dynamics_files(result.dynamics, result.scene, tmp_path / "dyn", plots=False)
+    assert list(pd.read_csv(tmp_path / "dyn" / "trajectory.csv").columns) == [
+        "time_s", "gap_m", "gap_velocity_m_per_s", "table_m"]

@@ -248,7 +248,7 @@ def write_map_csv(result, path: str | Path) -> Path:
 
 def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
                          max_periods: float | None = None, figures=None,
-                         tables: bool = True) -> list[Path]:
+                         tables: bool = True, written_elsewhere=()) -> list[Path]:
     """The dynamics' files, for ``tengfield dynamics`` and ``tengfield run`` alike:
     trajectory.csv and impacts.csv (a 3D run: its trajectory columns and contacts.csv),
     and with ``plots`` trajectory.png (the last ``max_periods`` periods; default the
@@ -270,6 +270,9 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     else:
         tables = [(write_trajectory_csv, "trajectory.csv")]
     tables.append((write_impacts_csv, "impacts.csv"))
+    if written_elsewhere:   # tengfield run: waveforms.csv holds these; time_s joins them
+        tables[0] = (_trajectory_without(set(written_elsewhere) - {"time_s"}, scene),
+                     "trajectory.csv")
     if not want_tables:    # they are in run.h5 (write_run_hdf5)
         tables = []
     written = [writable_target(out / name) for _, name in tables]
@@ -302,13 +305,39 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     return written
 
 
+def _trajectory_without(columns: set, scene):
+    """A trajectory.csv writer that leaves ``columns`` out (they are in waveforms.csv)."""
+    def write(dynamics, path):
+        table = {k: v for k, v in dynamics_tables(dynamics, scene)["trajectory"].items()
+                 if k not in columns}
+        return write_csv(path, list(table), list(table.values()))
+    return write
+
+
 def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool,
                            figures=None) -> list[Path]:
     """:func:`write_dynamics_files` of a :class:`tengfield.pipeline.RunResult` (the figure
-    shows the last 5 periods, as waveforms.png does)."""
+    shows the last 5 periods, as waveforms.png does). Its trajectory.csv does not repeat
+    the columns of waveforms.csv (``time_s`` joins the two; a 1-D run's trajectory.csv is
+    then ``time_s`` alone, the motion being in waveforms.csv); in run.h5 the repeated
+    columns are hard links."""
+    csv_tables = run_tables_format(result) == "csv"
+    same_times = csv_tables and _same_times(result)
     return write_dynamics_files(result.dynamics, result.scene, out_dir, plots=plots,
-                                max_periods=5, figures=figures,
-                                tables=run_tables_format(result) == "csv")
+                                max_periods=5, figures=figures, tables=csv_tables,
+                                written_elsewhere=_waveform_columns(result) if same_times
+                                else ())
+
+
+def _waveform_columns(result) -> list[str]:
+    """The columns :func:`write_waveforms_csv` writes for ``result``."""
+    return WAVEFORM_COLUMNS + [c for c in all_columns() if c in result.waveforms]
+
+
+def _same_times(result) -> bool:
+    """waveforms.csv and the trajectory share their time samples (and so their rows)."""
+    a, b = np.asarray(result.waveforms["time_s"]), np.asarray(result.dynamics.t)
+    return a is b or (a.shape == b.shape and bool(np.array_equal(a, b)))
 
 
 # ---------------------------------------------------------------------------
