@@ -91,18 +91,97 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
             from .plotting.ensemble import plot_ensemble
             written.append(_figure(figures, plot_ensemble, rows, result.summary["ensemble"],
                                    path=out / "ensemble.png"))
-    written.insert(0, write_waveforms_csv(writable_target(out / "waveforms.csv"),
-                                          result.waveforms))
+    if run_tables_format(result, warn=True) == "hdf5":
+        written.insert(0, write_run_hdf5(writable_target(out / HDF5_FILE), result))
+    else:
+        written.insert(0, write_waveforms_csv(writable_target(out / "waveforms.csv"),
+                                              result.waveforms))
     written.append(write_json(out / "summary.json", result.summary))
     return written
+
+
+def run_tables_format(result, *, warn: bool = False) -> str:
+    """``"hdf5"`` (one run.h5 holding waveforms, trajectory and impacts) if ``[run]
+    output_format = "hdf5"`` or the run has more samples than a CSV table may
+    (:data:`tengfield.io_hdf5.MAX_CSV_ROWS`; with ``warn``, one warning says so), else
+    ``"csv"``."""
+    from .io_hdf5 import MAX_CSV_ROWS
+
+    if result.scene.run.output_format == "hdf5":
+        return "hdf5"
+    rows = len(result.waveforms["time_s"])
+    if rows > MAX_CSV_ROWS:
+        if warn:
+            import warnings
+            warnings.warn(f"{rows:.3g} samples ([run] duration_s x sample_rate_hz) pass the "
+                          f"CSV bound of {MAX_CSV_ROWS:.0e} rows: the tables go to {HDF5_FILE} "
+                          "(waveforms, trajectory, impacts; set [run] output_format = "
+                          "'hdf5' to choose it)", RuntimeWarning, stacklevel=2)
+        return "hdf5"
+    return "csv"
+
+
+#: the HDF5 file of ``[run] output_format = "hdf5"`` (tengfield.io_hdf5)
+HDF5_FILE = "run.h5"
+
+
+def write_run_hdf5(path: str | Path, result) -> Path:
+    """run.h5 of a :class:`tengfield.pipeline.RunResult`: groups ``waveforms`` (the
+    columns of waveforms.csv), ``trajectory`` (the dynamics' columns; those equal to a
+    waveform column are hard links to it), ``impacts`` (3D: and ``contacts``), every
+    column with its ``units``; summary.json and the scene text as file attributes
+    (:mod:`tengfield.io_hdf5`)."""
+    from ._json import jsonable
+    from .io_hdf5 import write_tables
+    from . import __version__
+
+    waveforms = result.waveforms
+    columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
+    tables = {"waveforms": {c: waveforms[c] for c in columns}}
+    tables.update(dynamics_tables(result.dynamics, result.scene))
+    return write_tables(path, tables, attrs={
+        "tengfield_version": __version__, "scene_text": result.scene.text or "",
+        "summary_json": json.dumps(jsonable(result.summary)),
+        "layout": "one group per table (waveforms, trajectory, impacts[, contacts]), one "
+                  "dataset per column with its 'units' attribute; trajectory columns equal "
+                  "to waveform columns are hard links"})
+
+
+def dynamics_tables(dynamics, scene) -> dict:
+    """The dynamics' tables as ``{table: {column: array}}``: ``trajectory`` and
+    ``impacts`` (a 3D run: its extra trajectory columns and ``contacts``), the columns
+    of trajectory.csv, impacts.csv and contacts.csv."""
+    tables = {"trajectory": {"time_s": dynamics.t, "gap_m": dynamics.gap,
+                             "gap_velocity_m_per_s": dynamics.gap_velocity,
+                             "table_m": dynamics.table}}
+    if scene.contact.model == "3d":
+        tables["trajectory"].update(trajectory_columns(dynamics))
+    imp = dynamics.impacts
+    tables["impacts"] = {"time_s": imp.time,
+                         "plate": np.where(imp.plate == "upper", "upper", "lower"),
+                         "speed_before_m_per_s": imp.speed_before,
+                         "speed_after_m_per_s": imp.speed_after}
+    if scene.contact.model == "3d":
+        c = dynamics.contacts
+        time_in = np.asarray(c["time_in"], dtype=float)
+        time_out = np.asarray(c["time_out"], dtype=float)
+        tables["contacts"] = {
+            "surface": np.asarray(c["surface"]).astype(str), "time_in_s": time_in,
+            "time_out_s": time_out, "dwell_s": time_out - time_in,
+            "speed_in_m_per_s": np.asarray(c["speed_in"], dtype=float),
+            "speed_out_m_per_s": np.asarray(c["speed_out"], dtype=float),
+            "steps": np.asarray(c["steps"]).astype(int),
+            "initial_rest": np.asarray(c["initial"]).astype(bool).astype(np.int8)}
+    return tables
 
 
 def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
     """Draw ``function(*data, path, **kwargs)`` here, or send it to ``figures``; returns
     ``path``."""
     writable_target(path)
-    if figures is None:
-        function(*data, path, **kwargs)
+    if figures is None:      # atomically: a full disk leaves no 0-byte figure behind
+        with atomic_path(path) as tmp:
+            function(*data, tmp, **kwargs)
     else:
         figures.draw(function, *data, path, **kwargs)
     return Path(path)
@@ -162,7 +241,8 @@ def write_map_csv(result, path: str | Path) -> Path:
 
 
 def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
-                         max_periods: float | None = None, figures=None) -> list[Path]:
+                         max_periods: float | None = None, figures=None,
+                         tables: bool = True, written_elsewhere=()) -> list[Path]:
     """The dynamics' files, for ``tengfield dynamics`` and ``tengfield run`` alike:
     trajectory.csv and impacts.csv (a 3D run: its trajectory columns and contacts.csv),
     and with ``plots`` trajectory.png (the last ``max_periods`` periods; default the
@@ -177,12 +257,18 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     from concurrent.futures import ThreadPoolExecutor
 
     out = Path(out_dir)
+    want_tables = tables
     three_d = scene.contact.model == "3d"
     if three_d:
         tables = [(write_trajectory3d_csv, "trajectory.csv"), (write_contacts_csv, "contacts.csv")]
     else:
         tables = [(write_trajectory_csv, "trajectory.csv")]
     tables.append((write_impacts_csv, "impacts.csv"))
+    if written_elsewhere:   # tengfield run: waveforms.csv holds these; time_s joins them
+        tables[0] = (_trajectory_without(set(written_elsewhere) - {"time_s"}, scene),
+                     "trajectory.csv")
+    if not want_tables:    # they are in run.h5 (write_run_hdf5)
+        tables = []
     written = [writable_target(out / name) for _, name in tables]
     drawing = None
     if plots:
@@ -198,7 +284,7 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
             drawing = figures.draw(draw_trajectory, data, out / "trajectory.png")
     # the figure process draws on a core of its own: leave it one
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    threads = max(1, min(len(tables), (cores or 1) - (drawing is not None)))
+    threads = max(1, min(len(tables) or 1, (cores or 1) - (drawing is not None)))
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="tengfield-csv") as pool:
         pending = [pool.submit(write, dynamics, out / name) for write, name in tables]
         if plots:
@@ -213,12 +299,39 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     return written
 
 
+def _trajectory_without(columns: set, scene):
+    """A trajectory.csv writer that leaves ``columns`` out (they are in waveforms.csv)."""
+    def write(dynamics, path):
+        table = {k: v for k, v in dynamics_tables(dynamics, scene)["trajectory"].items()
+                 if k not in columns}
+        return write_csv(path, list(table), list(table.values()))
+    return write
+
+
 def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool,
                            figures=None) -> list[Path]:
     """:func:`write_dynamics_files` of a :class:`tengfield.pipeline.RunResult` (the figure
-    shows the last 5 periods, as waveforms.png does)."""
+    shows the last 5 periods, as waveforms.png does). Its trajectory.csv does not repeat
+    the columns of waveforms.csv (``time_s`` joins the two; a 1-D run's trajectory.csv is
+    then ``time_s`` alone, the motion being in waveforms.csv); in run.h5 the repeated
+    columns are hard links."""
+    csv_tables = run_tables_format(result) == "csv"
+    same_times = csv_tables and _same_times(result)
     return write_dynamics_files(result.dynamics, result.scene, out_dir, plots=plots,
-                                max_periods=5, figures=figures)
+                                max_periods=5, figures=figures, tables=csv_tables,
+                                written_elsewhere=_waveform_columns(result) if same_times
+                                else ())
+
+
+def _waveform_columns(result) -> list[str]:
+    """The columns :func:`write_waveforms_csv` writes for ``result``."""
+    return WAVEFORM_COLUMNS + [c for c in all_columns() if c in result.waveforms]
+
+
+def _same_times(result) -> bool:
+    """waveforms.csv and the trajectory share their time samples (and so their rows)."""
+    a, b = np.asarray(result.waveforms["time_s"]), np.asarray(result.dynamics.t)
+    return a is b or (a.shape == b.shape and bool(np.array_equal(a, b)))
 
 
 # ---------------------------------------------------------------------------

@@ -350,9 +350,16 @@ def test_run_writes_the_same_3d_dynamics_files_as_the_dynamics_command(tmp_path)
     assert names == {"trajectory.csv", "contacts.csv", "impacts.csv", "trajectory3d.png",
                      "trajectory.png"}
     assert main(["dynamics", str(scene_file), "-o", str(tmp_path / "dyn"), "--no-plots"]) == 0
-    for name in ("trajectory.csv", "contacts.csv", "impacts.csv"):
+    for name in ("contacts.csv", "impacts.csv"):
         assert (tmp_path / "run" / name).read_bytes() == (tmp_path / "dyn" / name).read_bytes()
+    extra = ["x_m", "y_m", "radial_m", "vx_m_per_s", "vy_m_per_s",
+             "spin_x_rad_per_s", "spin_y_rad_per_s", "spin_z_rad_per_s"]
+    with open(tmp_path / "dyn" / "trajectory.csv") as fh:
+        dyn = list(csv.reader(fh))
+    assert dyn[0][4:] == extra
+    # run's trajectory.csv leaves out what waveforms.csv holds (issue #28): time_s, then
+    # the 3D columns, the same cells as the dynamics command's
     with open(tmp_path / "run" / "trajectory.csv") as fh:
-        header = next(csv.reader(fh))
-    assert header[4:] == ["x_m", "y_m", "radial_m", "vx_m_per_s", "vy_m_per_s",
-                          "spin_x_rad_per_s", "spin_y_rad_per_s", "spin_z_rad_per_s"]
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["time_s", *extra]
+    assert rows[1:] == [[r[0], *r[4:]] for r in dyn[1:]]

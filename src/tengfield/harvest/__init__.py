@@ -344,6 +344,40 @@ def harvest(times, q_sc, c_t, *, storage_capacitance: float, diode: Diode = Diod
     return run.advance(times, q_sc, c_t)
 
 
+def mean_bridge_current(result: HarvestResult, start: int = 0) -> float:
+    """Mean current [A] through the bridges into the store from row ``start`` on: the
+    charge every cell's bridge moved (``|Δ bridge_charge|``, summed over the cells and
+    steps) over the time."""
+    length = float(result.time[-1] - result.time[start])
+    if length <= 0.0:
+        return 0.0
+    moved = np.abs(np.diff(result.bridge_charge[start:], axis=0)).sum()
+    return float(moved) / length
+
+
+def warn_quiescent_starvation(result: HarvestResult, quiescent_current: float,
+                              start: int = 0) -> bool:
+    """One ``tengfield: warning:`` line, and True, when the store stayed at 0 V from row
+    ``start`` on under a chip whose quiescent current [A] exceeds the mean current the
+    bridges deliver (:func:`mean_bridge_current`): the chip takes the charge as it
+    comes, nothing is stored or harvested (the kernel books no energy into the store
+    then; issue #30.5)."""
+    import warnings
+
+    if quiescent_current <= 0.0 or float(np.max(result.store_voltage[start:])) > 0.0:
+        return False
+    current = mean_bridge_current(result, start)
+    if current >= quiescent_current:
+        return False
+    warnings.warn(
+        f"rectifier: the chip's quiescent current ([circuit] pmic_quiescent_current_A = "
+        f"{quiescent_current:.3g} A) exceeds the mean current the bridges deliver "
+        f"({current:.3g} A): the store stays at 0 V and nothing is harvested (a larger "
+        "charge or device, more cells, or a chip with a lower quiescent draw)",
+        RuntimeWarning, stacklevel=3)
+    return True
+
+
 def saturation_voltage(q_sc_max: float, c_max: float, c_min: float, forward_voltage: float = 0.0):
     """Store voltage [V] a periodic TENG charges an ideal bridge's store to (no load).
 

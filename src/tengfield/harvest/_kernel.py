@@ -280,7 +280,17 @@ def _harvest_kernel(q_sc, c_t, times, c_store, leak, model, forward, i_sat, n_vt
             v_before[j] = deficit[j] / caps[j]
             acc[0] += 0.5 * deficit[j] * deficit[j] / caps[j] - e_before
         # 2. transfer
-        if h > 0.0:
+        pinned = False
+        if h > 0.0 and has_chip and quiescent > 0.0 and u == 0.0:
+            # an empty store the chip's quiescent draw holds at 0 V: if the bridges move
+            # no more than I_q h over the step, the chip takes it as it comes, at U = 0:
+            # nothing is stored, no energy enters the store (the split step raised U to
+            # dq / C_L and drained it again, booking O(h) energy: issue #30.5)
+            pinned = _store_charge(v_before, caps, 0.0, h, model, forward, i_sat, n_vt,
+                                   r_series, v_after) <= quiescent * h
+        if pinned:
+            u_new = 0.0
+        elif h > 0.0:
             u_new = _transfer(v_before, caps, u, c_store, h, model, forward, i_sat, n_vt,
                               r_series, v_after)
         else:
@@ -295,7 +305,13 @@ def _harvest_kernel(q_sc, c_t, times, c_store, leak, model, forward, i_sat, n_vt
             if moved != 0.0:
                 # mechanical work of the move, less the overshoot the blocked move added
                 # (the clamped terminal never reaches vm): W = W_move - C (vm - va)^2 / 2
-                acc[0] -= 0.5 * caps[j] * (vm - va) ** 2
+                if pinned and va == 0.0:
+                    # clamped at 0 V: the move's field energy all went through the bridge
+                    # at U = 0 (no work kept); the same expression as step 1, so an empty
+                    # store's books stay exactly zero
+                    acc[0] -= 0.5 * deficit[j] * deficit[j] / caps[j]
+                else:
+                    acc[0] -= 0.5 * caps[j] * (vm - va) ** 2
                 acc[1] += va * moved                 # energy into the bridge (backward Euler)
             if moved != 0.0 or model == 1:
                 q_fwd, q_rev = _cell_charges(vm, va, caps[j], u_new, h, model, forward, i_sat,

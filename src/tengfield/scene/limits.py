@@ -18,6 +18,10 @@ from ..errors import SceneError
 MAX_SAMPLES = 2e7
 #: ... and at least this many (a 1e-300 s run, or a 1e-300 Hz sample rate, had none).
 MIN_SAMPLES = 2
+#: Output samples of an ensemble, ``realisations x duration_s x sample_rate_hz``: each
+#: realisation runs the dynamics and the circuit over every sample, as a sweep point
+#: does (tengfield.sweep.MAX_SWEEP_WORK, the same 1e10: ~20 min of circuit alone).
+MAX_ENSEMBLE_WORK = 1e10
 #: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
 MAX_PERIODS = 1e6
 #: ``[array]`` cells with their own dynamics (a spread set) x excitation periods: the
@@ -165,6 +169,19 @@ def check_work(exc, run) -> None:
             f"{exc.frequency:g} = {periods:.3g} excitation periods (about "
             f"{EVENTS_PER_PERIOD_ESTIMATE * periods:.3g} impact-map events at "
             f"{EVENTS_PER_PERIOD_ESTIMATE} per period): allowed <= {MAX_PERIODS:.3g} periods")
+
+
+def check_ensemble_work(run) -> None:
+    """Refuse an ensemble whose total samples (``realisations`` x the run's samples)
+    pass :data:`MAX_ENSEMBLE_WORK`, naming the keys (before any realisation starts)."""
+    samples = run.duration * run.sample_rate
+    work = run.realisations * samples
+    if run.realisations > 1 and work > MAX_ENSEMBLE_WORK:
+        raise SceneError(
+            f"[run] realisations x duration_s x sample_rate_hz = {run.realisations} x "
+            f"{run.duration:g} x {run.sample_rate:g} = {work:.3g} samples: allowed <= "
+            f"{MAX_ENSEMBLE_WORK:.0e} (fewer realisations, a shorter run or a lower "
+            "sample rate)")
 
 
 def _noise_band(exc) -> tuple[float, float] | None:

@@ -26,8 +26,8 @@ from .._mpi import launched_rank
 from ..errors import SceneError
 from ..paschen import STREAMER_PD
 from .constants import G
-from .limits import (auto_domain_radius, check_array_work, check_steady_window,
-                     check_vibration_work, check_work, field_problems)
+from .limits import (auto_domain_radius, check_array_work, check_ensemble_work,
+                     check_steady_window, check_vibration_work, check_work, field_problems)
 from .recorded import read_psd, read_recorded
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
                      RENAMED_KEYS, SCHEMA, check_section, convert, harmonic_components,
@@ -249,6 +249,7 @@ class Run:
     settle_periods: int
     sample_rate: float     # [Hz]
     realisations: int = 1  # independent seeds of a random excitation
+    output_format: str = "csv"   # "csv" | "hdf5" (tengfield.io_hdf5; auto past the CSV bound)
 
     def __post_init__(self):
         check_section("run", self, "Run")
@@ -432,6 +433,7 @@ class Scene:
             raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "
                              "([excitation] kind = 'random', or 'harmonics' with band_hz or "
                              f"psd_file): with kind = {exc.kind!r} every realisation is the same")
+        check_ensemble_work(run)
         if arr.cells > 0 and dev.cells != 1:
             raise SceneError(f"[array] cells = {arr.cells} and [device] cells = {dev.cells}: set "
                              "one of them ([device] cells: identical copies; [array] cells: cells "
@@ -451,10 +453,18 @@ class Scene:
         """A copy with some file-level keys changed, validated again.
 
         ``scene.with_values(excitation={"frequency_hz": 30.0})``
+
+        Values may be numpy scalars or arrays (``np.float32(30)``, ``np.int64(3)``): they
+        are taken as the Python numbers (lists) they hold. A section that is not a dict
+        raises :class:`TypeError` naming it.
         """
         data = copy.deepcopy(self.raw)
         for sec, values in sections.items():   # a renamed key under either name
-            update_section(data, sec, values)
+            if not isinstance(values, dict):
+                raise TypeError(f"with_values({sec}={values!r:.60}): expected a dict of "
+                                f"[{sec}] keys and file-level values, e.g. "
+                                f"with_values({sec}={{'key': value}})")
+            update_section(data, sec, {k: _python_value(v) for k, v in values.items()})
         base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
         scene = build(data, base_dir=base, source=self.source, text=self.text, warn=False)
         if "field" in sections:   # explicit field settings: refuse bad ones at once
@@ -495,6 +505,18 @@ class Scene:
     def is_axisymmetric(self) -> bool:
         """On-axis ball in a body of revolution: the field is 2D (r, z)."""
         return self.field.ball_offset == 0.0
+
+
+def _python_value(value):
+    """A numpy scalar or array as the Python number, bool, string or list it holds
+    (the schema's checks take Python values); anything else unchanged."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return type(value)(_python_value(v) for v in value)
+    return value
 
 
 def check_field(scene: Scene) -> None:

@@ -167,6 +167,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "sample_rate_hz": Key("sample_rate", float, 20000.0, 1.0, _rng(0.0, 1e9, lo_open=True)),
         # independent realisations of a random excitation (issue #25; tengfield.ensemble)
         "realisations": Key("realisations", int, 1, 1, _rng(1, 100000)),
+        # the tables of `tengfield run`: CSV files, or one HDF5 file (run.h5); a run past
+        # the CSV bound (tengfield.io_hdf5.MAX_CSV_ROWS) writes HDF5 with a warning
+        "output_format": Key("output_format", str, "csv", None, _choice("csv", "hdf5")),
     },
     # field-only: a bad value fails only where a field stage runs (check_field)
     "field": {

@@ -141,17 +141,36 @@ def rectifier_waveforms(scene, dynamics, curves) -> dict:
 
 
 def concat_results(parts):
-    """One :class:`tengfield.harvest.HarvestResult` of consecutive chunks."""
+    """One :class:`tengfield.harvest.HarvestResult` of consecutive chunks.
+
+    The chunks are taken out of the list ``parts`` (a list: emptied) as they are
+    copied into the whole arrays, so memory peaks at the whole result plus one chunk
+    (a 500 s rectifier run held every chunk and its concatenation: twice the record)."""
     if len(parts) == 1:
         return parts[0]
-    fields = {}
-    for f in dataclasses.fields(parts[0]):
-        values = [getattr(p, f.name) for p in parts]
-        fields[f.name] = (np.concatenate(values) if isinstance(values[0], np.ndarray)
-                          else getattr(parts[-1], f.name))
-    fields["initial_terminal_energy"] = parts[0].initial_terminal_energy
-    fields["initial_stored_energy"] = parts[0].initial_stored_energy
-    return type(parts[0])(**fields)
+    first, last = parts[0], parts[-1]
+    kind = type(first)
+    names = [f.name for f in dataclasses.fields(first)
+             if isinstance(getattr(first, f.name), np.ndarray)]
+    total = sum(len(p.time) for p in parts)
+    whole = {name: np.empty((total, *getattr(first, name).shape[1:]),
+                            dtype=getattr(first, name).dtype) for name in names}
+    fields = {f.name: getattr(last, f.name) for f in dataclasses.fields(first)
+              if f.name not in whole}
+    fields["initial_terminal_energy"] = first.initial_terminal_energy
+    fields["initial_stored_energy"] = first.initial_stored_energy
+    del first, last
+    start = 0
+    if not isinstance(parts, list):
+        parts = list(parts)
+    while parts:
+        part = parts.pop(0)
+        n = len(part.time)
+        for name in names:
+            whole[name][start:start + n] = getattr(part, name)
+        start += n
+        del part
+    return kind(**fields, **whole)
 
 
 def first_crossing(times, values, level: float) -> float:
@@ -199,6 +218,9 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
     on_time = float(np.sum(dt[on[1:]]))
     books = fine.balance()
     warn_numerical_dissipation(books)
+    if c.pmic == "uvlo":
+        from ...harvest import warn_quiescent_starvation
+        warn_quiescent_starvation(fine, c.pmic_quiescent_current, k0)
     out = {
         "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
         "final_store_voltage_V": float(fine.store_voltage[-1]),

@@ -1,0 +1,157 @@
+"""One HDF5 file of tables (``run.h5`` of ``tengfield run``, ``[run] output_format =
+"hdf5"``): a group per table, a dataset per column (the CSV header names), each with
+its ``units`` attribute, chunked and compressed (deflate + shuffle, which h5py, HDF5's
+own tools, MATLAB and Origin's HDF5 import all read), written a chunk at a time.
+
+Layout (docs/stability.md, "long runs"):
+
+* ``/waveforms/<column>``: the columns of waveforms.csv;
+* ``/trajectory/<column>``: the dynamics' columns; a column equal to one of
+  ``/waveforms`` (``time_s``, ``gap_m``... of a 1-D run) is an HDF5 hard link to it,
+  stored once, read as any other dataset;
+* ``/impacts/<column>`` (``plate`` as the strings ``lower``/``upper``), and for a 3D run
+  ``/contacts/<column>``;
+* file attributes ``summary_json`` (summary.json's text), ``scene_text``,
+  ``tengfield_version``, ``layout``.
+
+In pandas (no PyTables needed)::
+
+    import h5py, pandas as pd
+    with h5py.File("out/run.h5", "r") as f:
+        waveforms = pd.DataFrame({name: f["waveforms"][name][()] for name in f["waveforms"]})
+
+``h5py`` is Debian's build (:func:`tengfield.surrogate.store._import_h5py`); it is
+imported only when a file is written.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+#: The largest table written as CSV (rows): what tengfield reads back as a recorded
+#: excitation or a measured trace (tengfield.scene.limits.MAX_RECORDED_ROWS,
+#: tengfield.fit.spec.MAX_TRACE_ROWS: 100 s at 20 kHz). A run with more samples writes
+#: its tables to run.h5 instead (one warning), as ``[run] output_format = "hdf5"`` does.
+MAX_CSV_ROWS = 2_000_000
+#: rows per HDF5 chunk and per write (2 MB of doubles): memory stays one chunk per column
+CHUNK_ROWS = 1 << 18
+#: deflate level: 1 is ~4x faster than 4 for <2 % more bytes (doubles compress little)
+DEFLATE_LEVEL = 1
+FILE_NAME = "run.h5"
+
+#: unit of a column from its name's suffix (longest first)
+_UNITS = (("_m_per_s2", "m/s^2"), ("_m_per_s", "m/s"), ("_rad_per_s", "rad/s"),
+          ("_W_per_m3", "W/m^3"), ("_ohm", "ohm"), ("_Hz", "Hz"), ("_V", "V"), ("_C", "C"),
+          ("_A", "A"), ("_W", "W"), ("_J", "J"), ("_F", "F"), ("_s", "s"), ("_m", "m"))
+
+
+def unit_of(column: str) -> str:
+    """The SI unit of a column named with its unit suffix (``gap_velocity_m_per_s`` ->
+    ``m/s``); ``1`` for a count or a name without one (``plate``, ``steps``)."""
+    for suffix, unit in _UNITS:
+        if column.endswith(suffix):
+            return unit
+    return "1"
+
+
+def _h5py():
+    from .surrogate.store import _import_h5py
+    return _import_h5py()
+
+
+def _column(group, name: str, values) -> None:
+    """Dataset ``name`` of ``group`` from a 1-D array, written ``CHUNK_ROWS`` at a time
+    (a view per write: no copy of the column)."""
+    values = np.asarray(values)
+    if values.dtype.kind in "UO":                  # text cells (impacts' plate)
+        values = np.asarray(values, dtype=bytes)
+    if values.dtype == bool:
+        values = values.astype(np.int8)
+    n = values.shape[0]
+    options = {}
+    if n:
+        options = dict(chunks=(min(n, CHUNK_ROWS),), compression="gzip",
+                       compression_opts=DEFLATE_LEVEL, shuffle=values.dtype.kind in "fiu")
+    dataset = group.create_dataset(name, shape=(n,), dtype=values.dtype, **options)
+    for start in range(0, n, CHUNK_ROWS):
+        dataset[start:start + CHUNK_ROWS] = values[start:start + CHUNK_ROWS]
+    dataset.attrs["units"] = unit_of(name)
+
+
+def _same(a, b) -> bool:
+    """Equal 1-D columns (compared a chunk at a time: no n-sized temporary)."""
+    a, b = np.asarray(a), np.asarray(b)
+    if a is b:
+        return True
+    if a.shape != b.shape or a.dtype != b.dtype:
+        return False
+    return all(np.array_equal(a[i:i + CHUNK_ROWS], b[i:i + CHUNK_ROWS])
+               for i in range(0, a.shape[0], CHUNK_ROWS))
+
+
+def _check_room(path: Path, tables: dict) -> None:
+    """``OSError(ENOSPC)`` naming ``path`` if its filesystem has less room than the
+    uncompressed columns need: HDF5 meeting a full disk mid-write can crash the
+    interpreter (a full cache disk: "Slist already enabled?", then a segfault)."""
+    import errno
+    import shutil
+
+    need = sum(np.asarray(v).nbytes for columns in tables.values() for v in columns.values())
+    need += 1 << 20                                  # metadata, chunk index
+    free = shutil.disk_usage(path.parent).free
+    if free < need:
+        raise OSError(errno.ENOSPC, f"No space left on device ({free / 1e6:.3g} MB free, "
+                      f"up to {need / 1e6:.3g} MB needed)", str(path))
+
+
+def write_tables(path: str | Path, tables: dict, *, attrs: dict | None = None,
+                 link_to: str | None = "waveforms") -> Path:
+    """Write ``tables`` (group name -> {column name -> 1-D array}, in order) to the HDF5
+    file ``path``, through a temporary file replaced at the end (a reader never sees
+    half a file; an error leaves none). A column of another group equal to the column of
+    the same name in group ``link_to`` is a hard link to it (stored once). ``attrs``:
+    file attributes (strings, numbers). Raises ``OSError`` naming ``path``."""
+    h5py = _h5py()
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}")
+    _check_room(path, tables)
+    try:
+        with h5py.File(tmp, "w", track_order=True) as f:
+            for name, value in (attrs or {}).items():
+                f.attrs[name] = value
+            for group_name, columns in tables.items():
+                group = f.create_group(group_name, track_order=True)
+                group.attrs["rows"] = len(next(iter(columns.values()))) if columns else 0
+                shared = tables.get(link_to, {}) if group_name != link_to else {}
+                for column, values in columns.items():
+                    if column in shared and _same(values, shared[column]):
+                        group[column] = f[f"{link_to}/{column}"]     # hard link
+                    else:
+                        _column(group, column, values)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def read_tables(path: str | Path) -> dict:
+    """``{group: {column: array}}`` of a file written by :func:`write_tables` (strings
+    decoded), for tests and notebooks; the file's attributes under ``"attrs"``."""
+    h5py = _h5py()
+    out: dict = {}
+    with h5py.File(path, "r") as f:
+        out["attrs"] = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+        for group_name, group in f.items():
+            out[group_name] = {}
+            for column, dataset in group.items():
+                values = dataset[()]
+                if values.dtype.kind == "S":
+                    values = values.astype(str)
+                out[group_name][column] = values
+    return out

@@ -1,0 +1,183 @@
+"""run.h5 (issue #28, "big outputs"): ``[run] output_format = "hdf5"`` and, past the CSV
+bound, automatically with one warning; one chunked, compressed file holding waveforms,
+trajectory and impacts with units, readable by h5py and pandas; trajectory columns equal
+to waveform columns are stored once (hard links)."""
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import tengfield as tf
+from tengfield import io as tio
+from tengfield import io_hdf5
+from tengfield.surrogate.store import _import_h5py
+
+import plate_model as fx
+
+h5py = _import_h5py()
+
+
+def _result(tmp_path, **run):
+    scene = fx.scene_with(run={"duration_s": 1.0, "settle_periods": 2, **run})
+    return tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+
+
+def test_units_come_from_the_column_names():
+    assert io_hdf5.unit_of("gap_velocity_m_per_s") == "m/s"
+    assert io_hdf5.unit_of("V_oc_V") == "V" and io_hdf5.unit_of("Q_sc_C") == "C"
+    assert io_hdf5.unit_of("I_sc_A") == "A" and io_hdf5.unit_of("time_s") == "s"
+    assert io_hdf5.unit_of("table_m") == "m" and io_hdf5.unit_of("plate") == "1"
+    assert io_hdf5.unit_of("spin_x_rad_per_s") == "rad/s"
+
+
+def test_hdf5_holds_the_tables_of_the_csv_files(tmp_path):
+    result = _result(tmp_path, output_format="hdf5")
+    out = tmp_path / "out"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)   # chosen: no warning
+        written = tio.write_run_outputs(result, out, plots=False)
+        written += tio.write_dynamics_outputs(result, out, plots=False)
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["run.h5", "summary.json"], names
+    assert [p.name for p in written] == ["run.h5", "summary.json"]
+    with h5py.File(out / "run.h5", "r") as f:
+        assert set(f) == {"waveforms", "trajectory", "impacts"}
+        wf = f["waveforms"]
+        assert list(wf) == list(tio.WAVEFORM_COLUMNS)
+        for name in wf:
+            np.testing.assert_array_equal(wf[name][()], result.waveforms[name])
+        assert wf["V_oc_V"].attrs["units"] == "V" and wf["I_sc_A"].attrs["units"] == "A"
+        assert wf["time_s"].compression == "gzip" and wf["time_s"].chunks is not None
+        # the trajectory's columns are the waveforms' ones, stored once
+        for name in ("time_s", "gap_m", "gap_velocity_m_per_s", "table_m"):
+            assert f["trajectory"][name].id == wf[name].id
+        np.testing.assert_array_equal(f["trajectory/gap_m"][()], result.dynamics.gap)
+        imp = f["impacts"]
+        assert imp["plate"][()].astype(str).tolist() == result.dynamics.impacts.plate.tolist()
+        np.testing.assert_array_equal(imp["speed_after_m_per_s"][()],
+                                      result.dynamics.impacts.speed_after)
+        assert imp["speed_after_m_per_s"].attrs["units"] == "m/s"
+        summary = json.loads(f.attrs["summary_json"])
+        assert summary["peak_to_peak"]["V_oc_V"] == pytest.approx(
+            result.summary["peak_to_peak"]["V_oc_V"])
+
+
+def test_pandas_reads_it_as_the_docs_say(tmp_path):
+    pd = pytest.importorskip("pandas")
+    result = _result(tmp_path, output_format="hdf5")
+    path = tio.write_run_hdf5(tmp_path / "run.h5", result)
+    with h5py.File(path, "r") as f:
+        waveforms = pd.DataFrame({name: f["waveforms"][name][()] for name in f["waveforms"]})
+    assert list(waveforms.columns) == list(tio.WAVEFORM_COLUMNS)
+    assert len(waveforms) == len(result.waveforms["time_s"])
+    assert waveforms["Q_sc_C"].iloc[-1] == result.waveforms["Q_sc_C"][-1]
+
+
+def test_past_the_csv_bound_the_tables_go_to_hdf5_with_one_warning(tmp_path, monkeypatch):
+    result = _result(tmp_path)                  # output_format = "csv" (the default)
+    rows = len(result.waveforms["time_s"])
+    monkeypatch.setattr(io_hdf5, "MAX_CSV_ROWS", rows - 1)
+    out = tmp_path / "out"
+    with pytest.warns(RuntimeWarning, match=r"pass the CSV bound .*run\.h5") as caught:
+        tio.write_run_outputs(result, out, plots=False)
+        tio.write_dynamics_outputs(result, out, plots=False)
+    assert len([w for w in caught if "CSV bound" in str(w.message)]) == 1
+    assert sorted(p.name for p in out.iterdir()) == ["run.h5", "summary.json"]
+    # at the bound: CSV as before
+    monkeypatch.setattr(io_hdf5, "MAX_CSV_ROWS", rows)
+    out2 = tmp_path / "out2"
+    tio.write_run_outputs(result, out2, plots=False)
+    tio.write_dynamics_outputs(result, out2, plots=False)
+    assert sorted(p.name for p in out2.iterdir()) == ["impacts.csv", "summary.json",
+                                                      "trajectory.csv", "waveforms.csv"]
+
+
+def test_columns_are_written_a_chunk_at_a_time(tmp_path, monkeypatch):
+    """A column longer than a chunk is written in pieces (CHUNK_ROWS each) and reads back
+    whole; a table that does not fit the disk is refused before HDF5 writes a byte."""
+    monkeypatch.setattr(io_hdf5, "CHUNK_ROWS", 1000)
+    x = np.linspace(0.0, 1.0, 4321)
+    path = io_hdf5.write_tables(tmp_path / "t.h5", {"a": {"time_s": x, "V_oc_V": x ** 2}})
+    with h5py.File(path, "r") as f:
+        assert f["a/time_s"].chunks == (1000,)
+        np.testing.assert_array_equal(f["a/V_oc_V"][()], x ** 2)
+    import shutil
+    from collections import namedtuple
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**6, 10**6 - 1000, 1000))
+    with pytest.raises(OSError, match="No space left on device") as err:
+        io_hdf5.write_tables(tmp_path / "u.h5", {"a": {"time_s": x}})
+    assert err.value.filename == str(tmp_path / "u.h5")
+    assert not (tmp_path / "u.h5").exists()
+
+
+@pytest.mark.slow
+def test_cli_run_in_hdf5_with_figures(tmp_path, run_cli):
+    """End to end, figures on: run.h5 instead of the three CSV files."""
+    scene = tmp_path / "s.toml"
+    scene.write_text('[run]\nduration_s = 1.0\nsettle_periods = 2\noutput_format = "hdf5"\n')
+    out = run_cli("run", scene, "-o", tmp_path / "out")
+    assert out.returncode == 0, out.stderr
+    names = sorted(p.name for p in (tmp_path / "out").iterdir() if not p.name.startswith("."))
+    assert names == ["run.h5", "summary.json", "surrogate.png", "trajectory.png",
+                     "waveforms.png"]
+    with h5py.File(tmp_path / "out" / "run.h5", "r") as f:
+        assert f["waveforms/V_oc_V"].shape == (20001,)
+        assert f["trajectory/time_s"].id == f["waveforms/time_s"].id
+
+
+@pytest.mark.slow
+def test_the_papers_15_minute_record_runs_in_hdf5_with_bounded_memory(tmp_path, cli_env, python):
+    """duration_s = 900 at the default 20 kHz (1.8e7 samples), figures on: one warning,
+    run.h5 instead of 3.1 GB of CSV, and the main process peaks well below the 4.7 GB
+    it took with CSV (measured 2.0 GB; benchmarks/long_run.py)."""
+    import subprocess
+
+    scene = tmp_path / "s.toml"
+    scene.write_text("[run]\nduration_s = 900\n")
+    code = ("import resource, runpy, sys\n"
+            f"sys.argv = ['tengfield', 'run', {str(scene)!r}, '-o', {str(tmp_path / 'out')!r}]\n"
+            "try:\n    runpy.run_module('tengfield.cli', run_name='__main__')\n"
+            "finally:\n    print('PEAK_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,"
+            " file=sys.stderr)\n")
+    out = subprocess.run([python, "-c", code], capture_output=True, text=True, env=cli_env(),
+                         timeout=1800)
+    assert out.returncode == 0, out.stderr[-3000:]
+    said = [line for line in out.stderr.splitlines() if line.startswith("tengfield:")]
+    assert len([s for s in said if "CSV bound" in s]) == 1, said
+    peak_gb = int(out.stderr.split("PEAK_KB")[1].split()[0]) / 1e6
+    assert peak_gb < 3.0, peak_gb
+    files = {p.name: p.stat().st_size for p in (tmp_path / "out").iterdir()
+             if not p.name.startswith(".")}
+    assert "waveforms.csv" not in files and "trajectory.csv" not in files
+    assert files["run.h5"] < 0.5e9 and "waveforms.png" in files
+    with h5py.File(tmp_path / "out" / "run.h5", "r") as f:
+        t = f["waveforms/time_s"]
+        assert t.shape == (18_000_001,)
+        assert t[-1] == pytest.approx(900.0)
+
+
+def test_run_trajectory_csv_does_not_repeat_the_waveform_columns(tmp_path):
+    """trajectory.csv of `tengfield run` keeps time_s (the join) and what waveforms.csv
+    lacks; joined on time_s the two give the dynamics back."""
+    pd = pytest.importorskip("pandas")
+    result = _result(tmp_path)
+    out = tmp_path / "out"
+    tio.write_run_outputs(result, out, plots=False)
+    tio.write_dynamics_outputs(result, out, plots=False)
+    waveforms = pd.read_csv(out / "waveforms.csv", float_precision="round_trip")
+    trajectory = pd.read_csv(out / "trajectory.csv", float_precision="round_trip")
+    assert list(trajectory.columns) == ["time_s"]       # 1-D: the motion is in waveforms.csv
+    joined = trajectory.merge(waveforms, on="time_s", how="left", validate="one_to_one")
+    assert len(joined) == len(result.dynamics.t)
+    np.testing.assert_array_equal(joined["time_s"].to_numpy(), result.dynamics.t)
+    # waveforms.csv writes the motion with 10 significant digits (trajectory.csv of
+    # `tengfield dynamics` and run.h5 hold every double)
+    np.testing.assert_allclose(joined["gap_m"].to_numpy(), result.dynamics.gap, rtol=1e-9,
+                               atol=1e-9 * result.dynamics.gap.max())
+    # tengfield dynamics keeps its full table
+    (tmp_path / "dyn").mkdir()
+    tio.write_dynamics_files(result.dynamics, result.scene, tmp_path / "dyn", plots=False)
+    assert list(pd.read_csv(tmp_path / "dyn" / "trajectory.csv").columns) == [
+        "time_s", "gap_m", "gap_velocity_m_per_s", "table_m"]
