@@ -90,7 +90,7 @@ def test_past_the_csv_bound_the_tables_go_to_hdf5_with_one_warning(tmp_path, mon
     tio.write_run_outputs(result, out2, plots=False)
     tio.write_dynamics_outputs(result, out2, plots=False)
     assert sorted(p.name for p in out2.iterdir()) == ["impacts.csv", "summary.json",
-                                                      "trajectory.csv", "waveforms.csv"]
+                                                      "waveforms.csv"]
 
 
 def test_columns_are_written_a_chunk_at_a_time(tmp_path, monkeypatch):
@@ -159,22 +159,19 @@ def test_the_papers_15_minute_record_runs_in_hdf5_with_bounded_memory(tmp_path, 
 
 
 def test_run_trajectory_csv_does_not_repeat_the_waveform_columns(tmp_path):
-    """trajectory.csv of `tengfield run` keeps time_s (the join) and what waveforms.csv
-    lacks; joined on time_s the two give the dynamics back."""
+    """`tengfield run` of a 1-D model writes no trajectory.csv: its columns (time, gap,
+    velocity, table) are all in waveforms.csv, which gives the dynamics back."""
     pd = pytest.importorskip("pandas")
     result = _result(tmp_path)
     out = tmp_path / "out"
     tio.write_run_outputs(result, out, plots=False)
     tio.write_dynamics_outputs(result, out, plots=False)
+    assert not (out / "trajectory.csv").exists() and (out / "impacts.csv").exists()
     waveforms = pd.read_csv(out / "waveforms.csv", float_precision="round_trip")
-    trajectory = pd.read_csv(out / "trajectory.csv", float_precision="round_trip")
-    assert list(trajectory.columns) == ["time_s"]       # 1-D: the motion is in waveforms.csv
-    joined = trajectory.merge(waveforms, on="time_s", how="left", validate="one_to_one")
-    assert len(joined) == len(result.dynamics.t)
-    np.testing.assert_array_equal(joined["time_s"].to_numpy(), result.dynamics.t)
+    np.testing.assert_array_equal(waveforms["time_s"].to_numpy(), result.dynamics.t)
     # waveforms.csv writes the motion with 10 significant digits (trajectory.csv of
     # `tengfield dynamics` and run.h5 hold every double)
-    np.testing.assert_allclose(joined["gap_m"].to_numpy(), result.dynamics.gap, rtol=1e-9,
+    np.testing.assert_allclose(waveforms["gap_m"].to_numpy(), result.dynamics.gap, rtol=1e-9,
                                atol=1e-9 * result.dynamics.gap.max())
     # tengfield dynamics keeps its full table
     (tmp_path / "dyn").mkdir()

@@ -185,7 +185,7 @@ def test_cli_run_end_to_end_then_cached(tmp_path, cli, python):
     assert first.returncode == 0, first.stderr
     out = tmp_path / "out1"
     for name in ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",
-                 "trajectory.csv", "impacts.csv", "trajectory.png"):
+                 "impacts.csv", "trajectory.png"):
         assert (out / name).stat().st_size > 0
     with open(out / "waveforms.csv") as f:
         header = next(csv.reader(f))

@@ -265,8 +265,11 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
         tables = [(write_trajectory_csv, "trajectory.csv")]
     tables.append((write_impacts_csv, "impacts.csv"))
     if written_elsewhere:   # tengfield run: waveforms.csv holds these; time_s joins them
-        tables[0] = (_trajectory_without(set(written_elsewhere) - {"time_s"}, scene),
-                     "trajectory.csv")
+        if three_d:         # the 3D model's own columns (x, y, r, spin, ...) stay
+            tables[0] = (_trajectory_without(set(written_elsewhere) - {"time_s"}, scene),
+                         "trajectory.csv")
+        else:               # a 1-D trajectory is time, gap, velocity, table: all in waveforms.csv
+            tables.pop(0)
     if not want_tables:    # they are in run.h5 (write_run_hdf5)
         tables = []
     written = [writable_target(out / name) for _, name in tables]
