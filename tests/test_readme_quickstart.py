@@ -187,14 +187,36 @@ def test_scene_default(quick_start, clone):
 
 
 def test_run(quick_start, clone):
-    line = line_of("run", ".venv/bin/tengfield run")
-    where, proc = ran(quick_start, clone, "run", ".venv/bin/tengfield run")
+    line = line_of("run", ".venv/bin/tengfield run my.toml -o")
+    where, proc = ran(quick_start, clone, "run", ".venv/bin/tengfield run my.toml -o")
     out = where / output_of(line)
     check_outputs(out, RUN_FILES)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["stages"]["field"]["status"] == "cached"   # make run filled the cache
     assert summary["peak_to_peak"]["V_oc_V"] > 0
     assert "wrote " in proc.stdout
+
+
+def test_run_beside_the_bench(quick_start, clone):
+    """`run --set circuit.parallel_capacitance_pF=338 --reference ...`: the instrument's
+    reading V_read_V beside the ideal V_OC, and the measured values compared per
+    quantity, with the tool quantity each is compared with (issue #28)."""
+    line = line_of("run", "--reference")
+    where, proc = ran(quick_start, clone, "run", "--reference")
+    out = where / output_of(line)
+    check_outputs(out, RUN_FILES)
+    summary = json.loads((out / "summary.json").read_text())
+    v_read, v_oc = summary["peak_to_peak"]["V_read_V"], summary["peak_to_peak"]["V_oc_V"]
+    assert 0 < v_read < v_oc / 100          # 338 pF beside C_T ~ 0.28 pF
+    rows = summary["measured_comparison"]["quantities"]
+    assert rows["V_pp_V"]["tool_key"] == "peak_to_peak.V_read_V"
+    assert rows["I_peak_uA"]["tool_key"] == "peak.I_sc_A"
+    for name, measured in (("V_pp_V", 4.2), ("Q_pp_nC", 1.42), ("I_peak_uA", 0.16)):
+        row = rows[name]
+        assert row["measured_value"] == pytest.approx(measured)
+        assert row["difference_percent"] == pytest.approx(
+            100 * (row["tool_value"] - measured) / measured, rel=1e-9)
+    assert "measured comparison" in proc.stdout and "V read through C_p = 338 pF" in proc.stdout
 
 
 def test_dynamics(quick_start, clone):
