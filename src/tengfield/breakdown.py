@@ -60,9 +60,8 @@ def scene_states(scene) -> tuple[str, ...]:
     for a load or a rectifier (its transferred charge lies between the two open ones).
     An open circuit read through an instrument (``parallel_capacitance_pF`` > 0) moves
     charge between 0 and Q_SC through it: open and short circuit bound it."""
-    if scene.circuit.kind == "open" and scene.circuit.parallel_capacitance > 0.0:
-        return ("open", "short")
-    return {"open": ("open",), "short": ("short",)}.get(scene.circuit.kind, STATES)
+    from .electrical import circuit_for   # the entry's breakdown_states / states()
+    return circuit_for(scene).states(scene)
 
 
 def uses_breakdown_charge(scene) -> bool:
