@@ -130,13 +130,8 @@ def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
 
 
 def _run_title(result) -> str:
-    exc = result.scene.excitation
-    regime = result.summary.get("regime") or {}
-    name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
-    return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
-            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
-            f"{result.scene.circuit.reference}"
-            + (f", {name}" if name else ""))
+    from .pipeline import run_title   # the result's own words (RunResult.plot uses them too)
+    return run_title(result)
 
 
 # ---------------------------------------------------------------------------
