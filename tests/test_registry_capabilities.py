@@ -101,6 +101,13 @@ def test_breakdown_states_come_from_the_circuit_entry(kind, c_p, states):
     assert breakdown.scene_states(scene) == states == circuit_for(scene).states(scene)
 
 
+def test_a_circuit_has_a_load_where_it_reads_load_ohm():
+    # summary.json's circuit block names load_ohm only where the entry has a load
+    for name, entry in CIRCUITS.items():
+        assert entry.has_load == ("load_ohm" in entry.keys), name
+    assert CIRCUITS["load"].has_load and not CIRCUITS["rectifier"].has_load
+
+
 def test_fit_columns_come_from_the_circuit_entry():
     assert run_columns("load")["V"] == ("V_load_V", "V") and CIRCUITS["load"].fit_load
     for kind in ("open", "short", "rectifier", "series-rc"):

@@ -445,13 +445,13 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
     """summary.json; ``extremes``: ``{"peak_to_peak": {...}, "peak": {...}}`` by short
     name (``V_oc``), written by column name (``V_oc_V``); ``circuit_blocks(mask)``: the
     circuit's ``load`` block (and ``load_reason``) over the steady window ``mask``;
-    ``entry``: the circuit's registry entry (``load_ohm`` only where it reads one)."""
+    ``entry``: the circuit's registry entry (``load_ohm`` only where it has a load)."""
     columns = electrical.peak_quantities(scene)
     blocks = {stat: {columns[name]: value for name, value in values.items()}
               for stat, values in extremes.items()}
     circuit_block = {"kind": scene.circuit.kind,
                      "parallel_capacitance_F": scene.circuit.parallel_capacitance}
-    if "load_ohm" in entry.keys:
+    if entry.has_load:
         circuit_block["load_ohm"] = scene.circuit.load
     t = waveforms["time_s"]
     mask, window_reason = electrical.steady_window(t, scene)
