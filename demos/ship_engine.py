@@ -34,7 +34,7 @@ from electrical_common import demo_arguments  # noqa: E402
 from electrical_honeycomb import honeycomb_scene  # noqa: E402
 
 import tengfield as tf  # noqa: E402
-from tengfield.ensemble import run_ensemble  # noqa: E402
+from tengfield.pipeline import run_ensemble  # noqa: E402
 
 SIGMA_UC_PER_M2 = "breakdown"
 ENGINE = {"kind": "harmonics", "frequency_hz": [33.0, 66.0, 132.0],

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import tengfield as tf
-from tengfield.ensemble import QUANTITIES, realisation_row, run_ensemble
+from tengfield.ensemble import QUANTITIES, realisation_row
+from tengfield.pipeline import run_ensemble, run_one
 
 import plate_model as fx
 from test_farm_mpi import mpi_env, needs_mpirun, same_rows
@@ -34,7 +35,7 @@ def _scene(realisations=4, **sections):
 
 
 def _first(scene, cache):
-    return tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    return run_one(scene, cache_dir=cache, solve=fx.plate_model_solve)
 
 
 @pytest.mark.parametrize("circuit", [{"kind": "open"}, {"kind": "load", "load_ohm": 1e8}])
@@ -43,8 +44,8 @@ def test_each_realisation_is_the_run_of_its_seed(cache, circuit):
     rows, block = run_ensemble(scene, _first(scene, cache), jobs=1, cache_dir=cache)
     assert [r["seed"] for r in rows] == [11, 12, 13, 14]
     for k, row in enumerate(rows):
-        single = tf.run(scene.with_values(excitation={"seed": 11 + k}), cache_dir=cache,
-                        solve=fx.plate_model_solve)
+        single = run_one(scene.with_values(excitation={"seed": 11 + k}), cache_dir=cache,
+                         solve=fx.plate_model_solve)
         assert row == realisation_row(k, 11 + k, single.summary)
     # the realisations differ (the motion is random), the block is their statistics
     assert len({r["I_sc_pp_A"] for r in rows}) == 4
@@ -104,7 +105,7 @@ def plate_cache(tmp_path_factory):
     from tengfield.scene import load_scene
     d = tmp_path_factory.mktemp("cli-cache")
     scene = load_scene(_write_scene(d / "s.toml"))
-    tf.run(scene, cache_dir=d, solve=fx.plate_model_solve)
+    run_one(scene, cache_dir=d, solve=fx.plate_model_solve)
     return d
 
 
@@ -150,7 +151,7 @@ def test_a_resting_first_realisation_still_builds_the_surrogate_once(tmp_path, m
     scene = fx.scene_with(excitation={**RANDOM, "rms_acceleration_m_per_s2": 3.6, "seed": 0},
                           run={**SHORT, "duration_s": 0.5, "settle_periods": 1,
                                "realisations": 4})
-    first = tf.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    first = run_one(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
     assert first.table is None and first.summary["regime"]["regime"] == "rest"
     import tengfield.surrogate.refinement as refinement
 
@@ -167,7 +168,7 @@ def test_a_resting_first_realisation_still_builds_the_surrogate_once(tmp_path, m
 def test_an_ensemble_that_never_moves_is_all_rest(tmp_path):
     scene = fx.scene_with(excitation={**RANDOM, "rms_acceleration_m_per_s2": 1.0},
                           run={**SHORT, "realisations": 3})
-    first = tf.run(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
+    first = run_one(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
     assert first.table is None
     rows, block = run_ensemble(scene, first, jobs=1, cache_dir=tmp_path,
                                solve=fx.plate_model_solve)
@@ -190,3 +191,29 @@ def test_an_array_ensemble_reports_the_arrays_output(cache, circuit, label):
     assert all(r["array_value"] > 0 for r in rows)
     assert block["array_quantity"] == label
     assert block["quantities"]["array_value"]["n"] == 2
+
+
+@pytest.mark.slow
+def test_the_library_runs_the_ensemble_the_cli_writes(run_cli, tmp_path, plate_cache):
+    """tf.run(scene) honours [run] realisations (it used to run realisation 0 only: the
+    CLI ran the others): its ensemble block and rows are those the CLI writes to
+    summary.json and ensemble.csv (the CLI calls the library), and those of
+    run_ensemble after the first run."""
+    from tengfield.scene import load_scene
+    path = _write_scene(tmp_path / "s.toml")
+    scene = load_scene(path)
+    result = tf.run(scene, cache_dir=plate_cache, jobs=1)
+    rows, block = result.ensemble_rows, result.ensemble
+    assert block is result.summary["ensemble"] and block["realisations"] == 4
+    assert [r["seed"] for r in rows] == [11, 12, 13, 14]
+    assert rows == run_ensemble(scene, run_one(scene, cache_dir=plate_cache), jobs=1,
+                                cache_dir=plate_cache)[0]
+    single = tf.run(scene.with_values(run={"realisations": 1}), cache_dir=plate_cache)
+    assert single.ensemble is None and single.ensemble_rows is None
+    out = tmp_path / "out"
+    res = run_cli("run", path, "-o", out, "--cache-dir", plate_cache, "--jobs", "1")
+    assert res.returncode == 0, res.stderr
+    written = json.loads((out / "summary.json").read_text())["ensemble"]
+    assert written == json.loads(json.dumps(block))
+    csv_rows = list(csv.DictReader((out / "ensemble.csv").open()))
+    assert [float(r["I_sc_pp_A"]) for r in csv_rows] == [r["I_sc_pp_A"] for r in rows]

@@ -78,10 +78,13 @@ def draw_cells(scene) -> np.ndarray:
 
 def check_array_scene(scene) -> None:
     """One-line SceneErrors for what arrays do not support."""
-    if scene.contact.model != "impact":
+    from .dynamics.excitation import excitation_kind
+    from .dynamics.models import model_of
+
+    if not model_of(scene).event_map:
         raise SceneError(f"[contact] model = {scene.contact.model!r}: [array] runs need the "
                          "impact map (model = 'impact')")
-    if scene.excitation.kind != "sine" and scene.array.phase_spread > 0:
+    if not excitation_kind(scene).phased and scene.array.phase_spread > 0:
         raise SceneError("[array] initial_phase_spread_deg needs [excitation] kind = 'sine'")
 
 

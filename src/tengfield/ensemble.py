@@ -7,6 +7,10 @@ N - 1 degrees of freedom, ``mean +- t_{0.975, N-1} s / sqrt(N)``. The
 interval's half-width shrinks as 1/sqrt(N). With N = 1 the spread is unknown
 and reported as None. The fraction of realisations in a regime gets the exact
 binomial (Clopper-Pearson) interval instead (:func:`fraction_statistics`).
+
+The realisations are run by :func:`tengfield.pipeline.run` (``[run] realisations``,
+:func:`tengfield.pipeline.run_ensemble`); this module gives their seeds, rows and
+statistics.
 """
 from __future__ import annotations
 
@@ -136,41 +140,3 @@ def ensemble_block(rows: list[dict]) -> dict:
         block["regime_fractions"][label] = fraction_statistics(
             [1.0 if r["regime"] == label else 0.0 for r in rows])
     return block
-
-
-def _realisation_task(task):
-    from .pipeline import run
-
-    index, seed, scene, cache_dir = task
-    result = run(scene.with_values(excitation={"seed": seed}), cache_dir=cache_dir,
-                 write_cache=False)
-    return realisation_row(index, seed, result.summary)
-
-
-def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=None,
-                 progress: bool = False, solve=None) -> tuple[list[dict], dict]:
-    """Rows of ensemble.csv and the ``ensemble`` block for ``[run] realisations`` = N:
-    ``first`` is the run of realisation 0 (the scene's own seed, already done); the other
-    N - 1 are farmed over the ranks of ``comm`` (``mpirun -n N``) or ``jobs`` worker
-    processes, each reading the surrogate the first run left in the cache. The rows and
-    the block do not depend on how the work was spread. (A scene whose realisations
-    could not differ is refused where it is built: ``[run] realisations`` needs noise.)
-
-    If realisation 0 rested (no field stage: the ball never left the lower plate) the
-    surrogate is built here once, with ``solve`` (default the field solver), before the
-    others run: each of them that moves would otherwise solve the field for itself."""
-    from ._console import progress_bar
-    from .sweep import run_tasks
-
-    seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
-    if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
-        from .breakdown import obtain_run_table   # the surrogate pipeline.run would cache
-        obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
-    rows = [realisation_row(0, seeds[0], first.summary)]
-    tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
-    bar = progress_bar(len(seeds), "realisations", progress, unit="run", comm=comm, initial=1)
-    try:
-        rows += run_tasks(_realisation_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
-    finally:
-        bar.close()
-    return rows, ensemble_block(rows)

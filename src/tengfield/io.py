@@ -258,7 +258,8 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
 
     out = Path(out_dir)
     want_tables = tables
-    three_d = scene.contact.model == "3d"
+    from .dynamics.models import model_of
+    three_d = model_of(scene).lateral   # trajectory3d.csv, contacts.csv
     if three_d:
         tables = [(write_trajectory3d_csv, "trajectory.csv"), (write_contacts_csv, "contacts.csv")]
     else:
@@ -275,10 +276,11 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     written = [writable_target(out / name) for _, name in tables]
     drawing = None
     if plots:
+        from .dynamics.excitation import excitation_kind
         from .plotting.dynamics import draw_trajectory, plot_trajectory3d, trajectory_figure
         exc = scene.excitation
         title = (f"{exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
-                 f"e = {scene.contact.restitution:g}" if exc.kind == "sine"
+                 f"e = {scene.contact.restitution:g}" if excitation_kind(scene).periodic
                  else "recorded excitation")
         data = trajectory_figure(dynamics, max_periods=max_periods, title=title)
         for name in ("trajectory.png", "trajectory3d.png") if three_d else ("trajectory.png",):

@@ -29,6 +29,7 @@ from . import electrical
 from ._json import jsonable as _jsonable
 from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
+from .ensemble import ensemble_block, realisation_row, realisation_seeds
 from .scene import check_field
 from .surrogate import (AnchoredTerminalCurves, SurrogateTable, TerminalCurves, leaves_axis,
                         obtain_radial_table)
@@ -109,6 +110,19 @@ class RunResult:
         return waveforms_figure(waveforms, title=title, parallel_capacitance_pF=(
             self.scene.circuit.parallel_capacitance * 1e12))
 
+    @property
+    def ensemble(self) -> dict | None:
+        """``[run] realisations`` > 1: summary.json's ``ensemble`` block (per quantity the
+        mean, std and Student-t 95 % interval over the realisations; regime fractions);
+        None for a single run."""
+        return self.summary.get("ensemble")
+
+    @property
+    def ensemble_rows(self) -> list[dict] | None:
+        """``[run] realisations`` > 1: the rows of ensemble.csv (one per realisation, its
+        seed and outputs); None for a single run."""
+        return self.extras.get("ensemble_rows")
+
     def to_dataframe(self):
         """The waveforms as a pandas DataFrame (the columns of waveforms.csv, SI), when
         pandas is installed (it is not a dependency of tengfield)."""
@@ -130,29 +144,82 @@ def _default_simulate():
 
 def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         simulate: Callable | None = None, progress: bool = False,
-        command_line: str = "", write_cache: bool = True) -> RunResult:
-    """Dynamics, surrogate and circuit for ``scene``.
+        command_line: str = "", write_cache: bool = True,
+        jobs: int | None = None) -> RunResult:
+    """Dynamics, surrogate and circuit for ``scene``; with ``[run] realisations`` = N > 1
+    also the other N - 1 noise realisations (:func:`run_ensemble`: ``result.ensemble``,
+    ``result.ensemble_rows``, what ``tengfield run`` writes as ensemble.csv).
 
     ``simulate(scene)`` defaults to :func:`tengfield.dynamics.simulate`,
     ``solve(scene, z, comm=...)`` to :func:`tengfield.field.solve_position`
     (only called when no valid cached surrogate exists); ``comm`` spreads
-    the field solves over its ranks.
+    the field solves (and the realisations) over its ranks, ``jobs`` the realisations
+    over worker processes (default: all cores).
     """
+    if scene.run.realisations > 1:   # before any work: the workers must be allowed
+        from ._mpi import check_jobs
+        check_jobs(jobs, comm)
+    result = run_one(scene, comm=comm, cache_dir=cache_dir, solve=solve, simulate=simulate,
+                     progress=progress, command_line=command_line, write_cache=write_cache)
+    if scene.run.realisations > 1:
+        rows, block = run_ensemble(scene, result, comm=comm, jobs=jobs, cache_dir=cache_dir,
+                                   progress=progress, solve=solve)
+        result.summary["ensemble"] = block
+        result.extras["ensemble_rows"] = rows
+    return result
+
+
+def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
+            simulate: Callable | None = None, progress: bool = False,
+            command_line: str = "", write_cache: bool = True) -> RunResult:
+    """One realisation of ``scene`` (its own seed), in four stages: dynamics, field and
+    surrogate, circuit, summary (arguments as :func:`run`)."""
     stages: dict[str, Stage] = {}
-    simulate = simulate or _default_simulate()
     if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
         check_field(scene)                # before the dynamics, not after
     electrical.circuit_for(scene).check(scene)   # e.g. a store the step cannot resolve
 
+    dynamics = _dynamics_stage(scene, simulate or _default_simulate(), stages)
+    hashed = scene   # as loaded: its field hash, its σ (may be "breakdown")
+    scene, table, curves, limit = _field_stage(
+        scene, dynamics, stages, cache_dir=cache_dir, comm=comm, solve=solve,
+        progress=progress, command_line=command_line, write_cache=write_cache)
+    if scene.array.cells > 0:
+        return _run_array(scene, dynamics, curves, table, stages, comm, progress)
+    stage = electrical_stage(scene, dynamics, curves, table, stages)
+    return _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
+
+
+def _dynamics_stage(scene, simulate, stages):
+    """The ball's motion (``stages["dynamics"]``)."""
     start = time.perf_counter()
     dynamics = simulate(scene)
     stages["dynamics"] = Stage("ran", f"[contact] model = {scene.contact.model!r}",
                                time.perf_counter() - start,
                                {"solver_wall_time_s": getattr(dynamics, "wall_time", None)})
-    gap = np.asarray(dynamics.gap, dtype=float)
+    return dynamics
 
+
+def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages) -> RunResult:
+    """summary.json's breakdown and measured blocks, and the :class:`RunResult`."""
+    summary = stage.summary
+    if table is not None:
+        _breakdown_summary(summary, scene, hashed, limit)
+    _measured_comparison(summary, scene)
+    result = RunResult(scene=scene, waveforms=stage.waveforms, summary=summary,
+                       dynamics=dynamics, table=table, curves=curves,
+                       peaks=stage.peak_to_peak, stages=stages, peak=stage.peak)
+    result.extras = stage.extras
+    return result
+
+
+def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, command_line,
+                 write_cache):
+    """``(scene, table, curves, limit)``: the surrogate (cached or solved) at the charge the
+    run uses (``scene`` at −σ_max for "breakdown"), the terminal curves (with the off-axis
+    change of a ball that leaves the axis), the breakdown limit; Nones when Q_SC = 0."""
+    gap = np.asarray(dynamics.gap, dtype=float)
     table = curves = limit = None
-    hashed = scene
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
         from . import breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": at -sigma_max
@@ -195,20 +262,46 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     else:
         stages["field"] = Stage("skipped", why_not)
         stages["surrogate"] = Stage("skipped", why_not)
+    return scene, table, curves, limit
 
-    if scene.array.cells > 0:
-        return _run_array(scene, dynamics, curves, table, stages, comm, progress)
 
-    stage = electrical_stage(scene, dynamics, curves, table, stages)
-    waveforms, summary, extras = stage.waveforms, stage.summary, stage.extras
-    peaks, peak = stage.peak_to_peak, stage.peak
-    if table is not None:
-        _breakdown_summary(summary, scene, hashed, limit)
-    _measured_comparison(summary, scene)
-    result = RunResult(scene=scene, waveforms=waveforms, summary=summary, dynamics=dynamics,
-                       table=table, curves=curves, peaks=peaks, stages=stages, peak=peak)
-    result.extras = extras
-    return result
+# ---------------------------------------------------------------------------
+# [run] realisations
+def _realisation_task(task):
+    index, seed, scene, cache_dir = task
+    result = run_one(scene.with_values(excitation={"seed": seed}), cache_dir=cache_dir,
+                     write_cache=False)
+    return realisation_row(index, seed, result.summary)
+
+
+def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=None,
+                 progress: bool = False, solve=None) -> tuple[list[dict], dict]:
+    """Rows of ensemble.csv and the ``ensemble`` block for ``[run] realisations`` = N:
+    ``first`` is the run of realisation 0 (the scene's own seed, already done); the other
+    N - 1 are farmed over the ranks of ``comm`` (``mpirun -n N``) or ``jobs`` worker
+    processes, each reading the surrogate the first run left in the cache. The rows and
+    the block do not depend on how the work was spread (:mod:`tengfield.ensemble`: the
+    seeds and the statistics). (A scene whose realisations could not differ is refused
+    where it is built: ``[run] realisations`` needs noise.)
+
+    If realisation 0 rested (no field stage: the ball never left the lower plate) the
+    surrogate is built here once, with ``solve`` (default the field solver), before the
+    others run: each of them that moves would otherwise solve the field for itself."""
+    from ._console import progress_bar
+    from .sweep import run_tasks
+
+    seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
+    if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
+        from .breakdown import obtain_run_table   # the surrogate run_one would cache
+        obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
+    rows = [realisation_row(0, seeds[0], first.summary)]
+    tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
+    bar = progress_bar(len(seeds), "realisations", progress, unit="run", comm=comm, initial=1)
+    try:
+        rows += run_tasks(_realisation_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
+    return rows, ensemble_block(rows)
 
 
 @dataclass
@@ -341,13 +434,13 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
     """summary.json; ``extremes``: ``{"peak_to_peak": {...}, "peak": {...}}`` by short
     name (``V_oc``), written by column name (``V_oc_V``); ``circuit_blocks(mask)``: the
     circuit's ``load`` block (and ``load_reason``) over the steady window ``mask``;
-    ``entry``: the circuit's registry entry (``load_ohm`` only where it reads one)."""
+    ``entry``: the circuit's registry entry (``load_ohm`` only where it has a load)."""
     columns = electrical.peak_quantities(scene)
     blocks = {stat: {columns[name]: value for name, value in values.items()}
               for stat, values in extremes.items()}
     circuit_block = {"kind": scene.circuit.kind,
                      "parallel_capacitance_F": scene.circuit.parallel_capacitance}
-    if "load_ohm" in entry.keys:
+    if entry.has_load:
         circuit_block["load_ohm"] = scene.circuit.load
     t = waveforms["time_s"]
     mask, window_reason = electrical.steady_window(t, scene)

@@ -213,8 +213,10 @@ def check_grid(scene, frequencies, amplitudes) -> None:
     grid's corners stand for all of it: the check costs four scene builds at any size."""
     from .errors import SceneError
 
+    from .dynamics.excitation import excitation_kind
+
     kind = scene.excitation.kind
-    if kind != "sine":   # its points would all run the scene's own record, unchanged
+    if not excitation_kind(scene).periodic:   # every point would run the scene's own record
         raise SceneError(f"[excitation] kind = {kind!r}: a sweep varies a sine's frequency_hz "
                          f"and amplitude_mm, which a {kind} excitation does not have (every "
                          f"point would be the same run); sweep a kind = \"sine\" scene, or use "

@@ -7,6 +7,7 @@ import pytest
 
 from tengfield.dynamics import MODELS, simulate
 from tengfield.dynamics.excitation import EXCITATIONS, table_from_scene
+from tengfield.dynamics.models import ContactModel
 from tengfield.errors import DynamicsError, SceneError
 from tengfield.scene import default_scene, parse_scene
 
@@ -32,7 +33,7 @@ def test_simulate_dispatches_through_models(monkeypatch):
         calls.append(duration)
         return "ran"
 
-    monkeypatch.setitem(MODELS, "impact", fake)
+    monkeypatch.setitem(MODELS, "impact", ContactModel(fake, event_map=True))
     assert simulate(default_scene(), duration=0.5) == "ran" and calls == [0.5]
 
 

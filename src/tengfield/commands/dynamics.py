@@ -97,7 +97,9 @@ def _run_map(args) -> int:
 
     scene = load_scene(args.scene)
     comm = world_if_parallel()
-    if scene.excitation.kind != "sine" and rank_of(comm) == 0:
+    from ..dynamics.excitation import excitation_kind
+
+    if not excitation_kind(scene).periodic and rank_of(comm) == 0:
         import warnings
         warnings.warn(f"map: [excitation] kind = {scene.excitation.kind!r} is not used: every "
                       f"grid point is a sine of that frequency and amplitude (the device's "

@@ -73,6 +73,7 @@ def _run(args) -> int:
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     plot = not args.no_plot
+    # kept: the resolved solver picks how this command solves and draws (rank 0 or all)
     if method == "axisymmetric":
         # a small problem: solved and drawn on rank 0, the outcome shared
         result, potentials = _on_rank_zero(
@@ -91,7 +92,7 @@ def _run(args) -> int:
         written = [out / "field.json"]
         if plot:
             written += [out / "potential.xdmf"]
-            if method == "axisymmetric" or comm.size == 1:
+            if method == "axisymmetric" or comm.size == 1:   # kept: field.png of one rank
                 written.append(out / "field.png")
         print("wrote " + ", ".join(str(w) for w in written))
     return 0

@@ -46,17 +46,9 @@ def _run_scene(args, comm, figures) -> int:
     from ..scene import load_scene
 
     scene = with_measured(load_scene(args.scene), getattr(args, "reference", None))
-    if scene.run.realisations > 1:   # before any work: the workers must be allowed
-        from .._mpi import check_jobs
-        check_jobs(args.jobs, comm)
+    # [run] realisations > 1: the library runs the ensemble (result.ensemble, ensemble_rows)
     result = run(scene, comm=comm, cache_dir=args.cache_dir, progress=True,
-                 command_line=command_line())
-    if scene.run.realisations > 1:
-        from ..ensemble import run_ensemble
-        rows, block = run_ensemble(scene, result, comm=comm, jobs=args.jobs,
-                                   cache_dir=args.cache_dir, progress=True)
-        result.summary["ensemble"] = block
-        result.extras["ensemble_rows"] = rows
+                 command_line=command_line(), jobs=args.jobs)
     if comm is None or comm.rank == 0:
         plots = not args.no_plots
         written = write_run_outputs(result, args.output, plots=plots, figures=figures)

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from .candidate import followed_geometry
-from .spec import OBJECTIVES, OTHER_VARY, LOG_KEYS
+from .spec import OBJECTIVES, OTHER_VARY, LOG_KEYS, periodic
 
 #: a varied value within this fraction of its range from an end is "on the bound"
 BOUND_FRACTION = 0.02
@@ -42,7 +42,7 @@ def readable_unit(unit: str, magnitude: float) -> tuple[str, float]:
 
 def point_label(f: float, a: float, kind: str = "sine") -> str:
     """``25 Hz / 0.3 mm`` (a random or harmonics excitation: ``33 Hz (random)``)."""
-    return f"{f:g} Hz / {a * 1e3:g} mm" if kind == "sine" else f"{f:g} Hz ({kind})"
+    return f"{f:g} Hz / {a * 1e3:g} mm" if periodic(kind) else f"{f:g} Hz ({kind})"
 
 
 def _kind(result) -> str:
@@ -59,7 +59,7 @@ def band_points(result, row) -> list[dict]:
     out = []
     for (f, a), regime, v, s in zip(result.spec.band, regimes, values, spreads):
         out.append({"frequency_hz": f,
-                    "amplitude_mm": a * 1e3 if _kind(result) == "sine" else None,
+                    "amplitude_mm": a * 1e3 if periodic(_kind(result)) else None,
                     "regime": regime, "value": v, "spread": s})
     return out
 
@@ -180,7 +180,7 @@ def design_warnings(result) -> list[str]:
             gamma = a * (2 * math.pi * f) ** 2 / 9.80665
             out.append(f"{point_label(f, a, kind)}: no candidate moves (the ball rests on the "
                        f"lower plate in all {len(moved)}" + (f"; Γ = Aω²/g = {gamma:.2f} < 1"
-                                                             if kind == "sine" and gamma < 1
+                                                             if periodic(kind) and gamma < 1
                                                              else "")
                        + "): it scores 0 for every design; raise the amplitude or drop it "
                        "from [design.excitation]")
@@ -223,7 +223,7 @@ def design_answer(result) -> dict:
     f, a = result.spec.band[k]
     return {"best": describe(result, result.best), "runner_up": runner_up(result),
             "best_toml_band_point": {"index": k, "frequency_hz": f,
-                                     "amplitude_mm": a * 1e3 if _kind(result) == "sine"
+                                     "amplitude_mm": a * 1e3 if periodic(_kind(result))
                                      else None,
                                      "value": result.best["band_values"][
                                          result.spec.objective][k]},

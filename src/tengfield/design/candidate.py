@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import electrical
 from ..errors import TengfieldError
-from .spec import OBJECTIVES, OTHER_VARY, DesignSpec
+from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, periodic
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
 #: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
@@ -122,7 +122,7 @@ def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
     its reference frequency and fundamental): every candidate meets the same realisation
     (the noise follows the run's clock and seed, not its length)."""
     run = band_run(spec, frequency)
-    if scene.excitation.kind != "sine":
+    if not periodic(scene.excitation.kind):
         return scene.with_values(run=run)
     return scene.with_values(
         excitation={"frequency_hz": frequency, "amplitude_mm": amplitude * 1e3}, run=run)

@@ -9,13 +9,13 @@ from .answer import (band_table_lines, chosen_band_point, describe, design_answe
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from ..scene.schema import update_section
-from .spec import OBJECTIVES, OTHER_VARY
+from .spec import OBJECTIVES, OTHER_VARY, periodic
 
 
 def _band_label(f: float, a: float, kind: str = "sine") -> str:
     """``33hz_0.75mm``; a random or harmonics excitation (no band amplitude: the scene's
     excitation as given) ``33hz_random``."""
-    return f"{f:g}hz_{a * 1e3:g}mm" if kind == "sine" else f"{f:g}hz_{kind}"
+    return f"{f:g}hz_{a * 1e3:g}mm" if periodic(kind) else f"{f:g}hz_{kind}"
 
 
 def csv_columns(result) -> list[str]:
@@ -133,7 +133,7 @@ def design_summary(result) -> dict:
         "counts": {s: sum(r["status"] == s for r in result.rows)
                    for s in ("ok", "infeasible", "skipped")},
         "skipped_reasons": sorted({r["reason"] for r in result.rows if r["status"] == "skipped"}),
-        "settings": {**spec.as_dict(), **({} if result.scene.excitation.kind == "sine" else {
+        "settings": {**spec.as_dict(), **({} if periodic(result.scene.excitation.kind) else {
             "band": [{"frequency_hz": f, "excitation": result.scene.excitation.kind}
                      for f, _ in spec.band]})},
         "field_settings": ("coarse: degree 2, mesh_size_mm = min(1, 0.2 x ball diameter), "
@@ -173,7 +173,7 @@ def best_scene_dict(result) -> dict:
         data.setdefault("circuit", {}).update({"kind": "load",
                                                "load_ohm": float(f"{float(load):.6g}")})
     f, a = result.spec.band[k]
-    if result.scene.excitation.kind == "sine":      # random / harmonics: scored as given
+    if periodic(result.scene.excitation.kind):      # random / harmonics: scored as given
         data.setdefault("excitation", {}).update({"frequency_hz": f, "amplitude_mm": a * 1e3})
     data.setdefault("run", {}).update(band_run(result.spec, f))
     return data

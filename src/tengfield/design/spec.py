@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from dataclasses import field as _field
 
 from ..errors import SceneError
+from .._registry import lookup
 from ..scene.schema import RENAMED_KEYS, SCHEMA
 from ..scene.schema import convert as _convert
 
@@ -216,7 +217,7 @@ def default_design_section(scene, candidates: int | None = None) -> tuple[dict, 
     section = {"objective": "power_density", "candidates": DEFAULT_CANDIDATES, "batch": 8,
                "vary": vary}
     ex = scene.excitation
-    at = (f"{ex.frequency:g} Hz / {ex.amplitude * 1e3:g} mm" if ex.kind == "sine"
+    at = (f"{ex.frequency:g} Hz / {ex.amplitude * 1e3:g} mm" if periodic(ex.kind)
           else f"its {ex.kind} excitation")
     said = (f"{scene.source} has no [design]: a default study of power density over "
             f"stroke_mm = {vary['stroke_mm']} and ball_diameter_mm = {vary['ball_diameter_mm']} "
@@ -224,6 +225,19 @@ def default_design_section(scene, candidates: int | None = None) -> tuple[dict, 
             "candidates "
             "(docs/design.md: write a [design] section for your own)")
     return section, said
+
+
+def periodic(kind: str) -> bool:
+    """Does ``[excitation] kind`` have a band (a frequency and amplitude to vary)?
+    Asks the kind's entry in ``EXCITATIONS`` (random and harmonics are scored as given)."""
+    from ..dynamics.excitation import EXCITATIONS
+    return lookup(EXCITATIONS, kind, "[excitation] kind").periodic
+
+
+def recorded(kind: str) -> bool:
+    """Is ``[excitation] kind`` a measured record (fixed length, no band)?"""
+    from ..dynamics.excitation import EXCITATIONS
+    return lookup(EXCITATIONS, kind, "[excitation] kind").recorded
 
 
 def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
@@ -234,11 +248,11 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
         if key not in KEYS:
             raise SceneError(f"unknown key [design] {key}" + _suggest(key, KEYS)
                              + f"; keys are {', '.join(KEYS)}")
-    if scene.excitation.kind == "recorded":
+    if recorded(scene.excitation.kind):
         raise SceneError("[excitation] kind = 'recorded': tengfield design scores sine "
                          "([design.excitation] band), random or harmonics excitations; a "
                          "record has a fixed length and no band")
-    if scene.excitation.kind != "sine" and "excitation" in raw:
+    if not periodic(scene.excitation.kind) and "excitation" in raw:
         raise SceneError(f"[design.excitation] needs [excitation] kind = 'sine': a "
                          f"{scene.excitation.kind!r} excitation is scored as the scene gives it "
                          "(leave [design.excitation] out)")

@@ -45,8 +45,9 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
 def _warn_lateral_left_out(scene) -> None:
     """One warning when the scene drives the table sideways and its contact model
     moves the ball along the axis only (the lateral keys would be left out silently)."""
+    from .models import model_of
     exc = scene.excitation
-    if scene.contact.model == "3d":
+    if model_of(scene).lateral:
         return
     given = [f"{key} = {value:g}" for key, value in (
         ("amplitude_x_mm", exc.amplitude_x * 1e3), ("amplitude_y_mm", exc.amplitude_y * 1e3),

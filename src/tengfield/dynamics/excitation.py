@@ -12,7 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from ..errors import DynamicsError, SceneError
+from .._registry import lookup
+from ..errors import DynamicsError
 from .table import TableMotion, recorded_table, sine_phase_at, sine_table
 from .vibration import scene_vibration_table
 
@@ -29,10 +30,20 @@ class ExcitationKind:
 
     ``lateral(scene) -> (x, y)``: the table motion along x and y on the absolute time
     axis (the 3D model).
+
+    Capabilities (what callers ask instead of comparing the kind's name):
+    ``periodic``: one frequency and amplitude describe it (``frequency_hz``,
+    ``amplitude_mm``), so sweeps, regime maps, design bands and fit's amplitude scale
+    can vary them; ``phased``: it takes another phase (an ``[array]`` cell's own);
+    ``random``: it has a noise seed (``[run] realisations`` draw new ones);
+    ``recorded``: it is a measured record of fixed length (runs must lie inside it).
     """
     vertical: Callable[..., TableMotion]
     lateral: Callable[..., tuple[TableMotion, TableMotion]]
     phased: bool = False
+    periodic: bool = False
+    random: bool = False
+    recorded: bool = False
 
 
 def _still(scene) -> TableMotion:
@@ -78,21 +89,16 @@ def _vibration_lateral(scene) -> tuple[TableMotion, TableMotion]:
 
 #: ``[excitation] kind`` -> how it moves the table
 EXCITATIONS: dict[str, ExcitationKind] = {
-    "sine": ExcitationKind(_sine_vertical, _sine_lateral, phased=True),
-    "recorded": ExcitationKind(_recorded_vertical, _recorded_lateral),
-    "random": ExcitationKind(_vibration_vertical, _vibration_lateral),
-    "harmonics": ExcitationKind(_vibration_vertical, _vibration_lateral),
+    "sine": ExcitationKind(_sine_vertical, _sine_lateral, phased=True, periodic=True),
+    "recorded": ExcitationKind(_recorded_vertical, _recorded_lateral, recorded=True),
+    "random": ExcitationKind(_vibration_vertical, _vibration_lateral, random=True),
+    "harmonics": ExcitationKind(_vibration_vertical, _vibration_lateral, random=True),
 }
 
 
 def excitation_kind(scene) -> ExcitationKind:
     """The :class:`ExcitationKind` of ``scene.excitation.kind``."""
-    kind = scene.excitation.kind
-    try:
-        return EXCITATIONS[kind]
-    except KeyError:
-        raise SceneError(f"[excitation] kind = {kind!r}: allowed "
-                         f"{', '.join(map(repr, EXCITATIONS))}") from None
+    return lookup(EXCITATIONS, scene.excitation.kind, "[excitation] kind")
 
 
 def table_from_scene(scene, origin: float = 0.0, *, phase: float | None = None) -> TableMotion:

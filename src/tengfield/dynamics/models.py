@@ -9,9 +9,10 @@ first run.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol
 
-from ..errors import SceneError
+from .._registry import lookup
 from .impact import simulate_impact
 from .motion3d import simulate_3d
 from .result import DynamicsResult
@@ -26,19 +27,32 @@ class Model(Protocol):
     def __call__(self, scene, *, duration: float | None = None) -> DynamicsResult: ...
 
 
-#: ``[contact] model`` -> the function that runs it
-MODELS: dict[str, Model] = {
-    "impact": simulate_impact,   # rigid plates, Newton restitution, exact event map (.impact)
-    "soft": simulate_soft,       # spring-dashpot contact, stiff SciPy solver (.soft)
-    "3d": simulate_3d,           # rigid ball in the tube, walls, friction, spin (.motion3d)
+@dataclass(frozen=True)
+class ContactModel:
+    """One ``[contact] model``: ``run`` (a :class:`Model`; the entry is called as it is)
+    and its capabilities, what callers ask instead of comparing the model's name:
+    ``lateral``: the ball moves off the axis (the table's x and y drive it; its run
+    writes trajectory3d and contacts); ``event_map``: the exact impact map that
+    ``[array]`` cells with their own dynamics need."""
+    run: Model
+    lateral: bool = False
+    event_map: bool = False
+
+    def __call__(self, scene, *, duration: float | None = None) -> DynamicsResult:
+        return self.run(scene, duration=duration)
+
+
+#: ``[contact] model`` -> its :class:`ContactModel`
+MODELS: dict[str, ContactModel] = {
+    # rigid plates, Newton restitution, exact event map (.impact)
+    "impact": ContactModel(simulate_impact, event_map=True),
+    # spring-dashpot contact, stiff SciPy solver (.soft)
+    "soft": ContactModel(simulate_soft),
+    # rigid ball in the tube, walls, friction, spin (.motion3d)
+    "3d": ContactModel(simulate_3d, lateral=True),
 }
 
 
-def model_of(scene) -> Model:
-    """The :class:`Model` of ``scene.contact.model``."""
-    name = scene.contact.model
-    try:
-        return MODELS[name]
-    except KeyError:
-        raise SceneError(f"[contact] model = {name!r}: allowed "
-                         f"{', '.join(map(repr, MODELS))}") from None
+def model_of(scene) -> ContactModel:
+    """The :class:`ContactModel` of ``scene.contact.model``."""
+    return lookup(MODELS, scene.contact.model, "[contact] model")

@@ -40,7 +40,7 @@ def write_xdmf(path, solution, potentials=None) -> None:
     """
     from . import _dolfinx as dx_api
 
-    if solution.method == "3d":
+    if solution.method == "3d":   # kept: the field package's own solution types
         dx_api.write_xdmf(path, solution.mesh, list(solution.weighting), solution.mesh.comm)
         return
     from mpi4py import MPI

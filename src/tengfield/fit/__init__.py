@@ -23,8 +23,9 @@ __all__ = ["calibrate", "reference_surrogate", "fit_trace", "fit_targets", "FitR
            "FitError", "FitSpec", "Trace", "Target", "PARAMETERS", "parse_fit_section",
            "read_trace", "parse_targets", "write_fit_outputs", "fitted_scene_dict"]
 
-#: σ [µC/m²] of the surrogate when the scene's own σ is zero
-FALLBACK_SIGMA_UC = -1.0
+#: σ [µC/m²] of the surrogate when the scene's own σ is zero: the one stand-in σ
+#: (:func:`tengfield.surrogate.cache.solved_scene`, breakdown's, uncertainty's)
+from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC as FALLBACK_SIGMA_UC  # noqa: E402
 
 
 def reference_surrogate(scene, *, cache_dir=None, solve=None, comm=None, progress=False):
@@ -40,9 +41,9 @@ def reference_surrogate(scene, *, cache_dir=None, solve=None, comm=None, progres
 def _reference_table(scene, *, cache_dir=None, solve=None, comm=None, progress=False):
     """``(table, sigma_ref [C/m²], outcome)`` of :func:`reference_surrogate`."""
     from ..surrogate import obtain_table
+    from ..surrogate.cache import solved_scene
 
-    if scene.device.surface_charge == 0.0:
-        scene = scene.with_values(device={"surface_charge_uC_per_m2": FALLBACK_SIGMA_UC})
+    scene = solved_scene(scene)   # an uncharged ball: the stand-in σ, as every surrogate
     table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                   progress=progress)
     return table, scene.device.surface_charge, outcome

@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..electrical import (extreme_times, extremes, load_waveforms, steady_start,
+from ..electrical import (circuit_for, extreme_times, extremes, load_waveforms, steady_start,
                           terminal_waveforms)
 from ..surrogate import OnAxisCurves
 
@@ -170,7 +170,7 @@ class ForwardModel:
         cells = self.scene.device.cells
         terminal = terminal_waveforms(curves, gap, velocity, cells=cells, parallel_capacitance=c_p)
         out = {"V": terminal["V_read"], "Q": terminal["Q_sc"], "I": terminal["I_sc"]}
-        if self.scene.circuit.kind == "load" and ({"V", "I"} & set(quantities)):
+        if circuit_for(self.scene).fit_load and ({"V", "I"} & set(quantities)):
             out.update(self._load(dynamics, curves, c_p, load, t))
         return {q: np.asarray(out[q], dtype=float) for q in quantities}
 

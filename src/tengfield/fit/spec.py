@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..dynamics.excitation import excitation_kind as _excitation
+from ..electrical import CIRCUITS, Circuit, circuit_for
 from ..errors import SceneError
 from ..scene.recorded import check_magnitude, check_time_steps, read_table
 from ..scene.schema import suggest as _suggest
@@ -54,16 +56,17 @@ UNITS = {
     "I": {"pA": 1e-12, "nA": 1e-9, "uA": 1e-6, "mA": 1e-3, "A": 1.0},
 }
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
-#: columns of a ``tengfield run`` waveforms.csv, used when [fit.columns] is absent
-RUN_COLUMNS = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
-#: ... of a run with [circuit] kind = "load", whose V and I the fit compares (the load's)
-LOAD_RUN_COLUMNS = {"V": ("V_load_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_load_A", "A")}
+#: columns of a ``tengfield run`` waveforms.csv (the terminal's), used when [fit.columns]
+#: is absent and the circuit names no others
+RUN_COLUMNS = Circuit.fit_columns
 
 
 def run_columns(kind: str) -> dict:
     """The waveforms.csv columns (name, unit) of V, Q and I the fit compares for a scene
-    with ``[circuit] kind``: the load's voltage and current for "load", else V_OC, I_SC."""
-    return LOAD_RUN_COLUMNS if kind == "load" else RUN_COLUMNS
+    with ``[circuit] kind``: its registry entry's ``fit_columns`` (the load's voltage
+    and current for "load", else V_OC, I_SC)."""
+    from .._registry import lookup
+    return lookup(CIRCUITS, kind, "[circuit] kind").fit_columns
 LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")
 MIN_SAMPLES = 8
 #: Bytes and data rows of a measured trace (checked before / while reading): every row
@@ -253,10 +256,10 @@ def _parameters(scene, raw, free) -> list[Parameter]:
         if name == "amplitude_scale":
             if lo <= 0:
                 raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
-            if scene.excitation.kind != "sine":
+            if not _excitation(scene).periodic:
                 raise SceneError(f"{where}: only a sine excitation can be scaled "
                                  f"([excitation] kind = {scene.excitation.kind!r})")
-        if name == "load_ohm" and scene.circuit.kind != "load":
+        if name == "load_ohm" and not circuit_for(scene).fit_load:
             raise SceneError(f"{where}: the scene has no load ([circuit] kind = "
                              f"{scene.circuit.kind!r}); set kind = 'load' to fit load_ohm")
         given = "start" in entry

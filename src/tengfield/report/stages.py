@@ -71,7 +71,8 @@ class _Solver:
             key = self.key(setting, z)
             if key not in self.cache and key not in todo:
                 todo[key] = (setting, float(z))
-        # dearest first (3D, then the most cells x degree^2), so the dynamic schedule balances
+        # dearest first (3D, then the most cells x degree^2), so the dynamic schedule balances;
+        # kept: a report setting's solver name (not a scene's choice), only a cost estimate
         items = sorted(todo.values(), key=lambda p: (p[0].method == "3d",
                                                      p[0].degree**2 / p[0].mesh_size_mm**2),
                        reverse=True)

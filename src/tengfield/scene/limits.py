@@ -388,3 +388,32 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
             f"smallest feature, [device] {feature_key} = {feature * 1e3:.3g} mm, for the "
             f"{method} solver; finer meshes exceed memory)")
     return problems
+
+
+class RefusedField:
+    """Stands in for :class:`~tengfield.scene.model.Field` when ``[field]`` values are bad: a dynamics-only
+    run never looks at them, and any use of one raises the :class:`SceneError`."""
+    __slots__ = ("problems",)
+
+    def __init__(self, problems: tuple[str, ...]):
+        object.__setattr__(self, "problems", tuple(problems))
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise SceneError("; ".join(self.problems))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("a scene's field settings are read-only")
+
+    def __reduce__(self):   # pickled for worker processes (map, sweep)
+        return (RefusedField, (self.problems,))
+
+    def __eq__(self, other):
+        return isinstance(other, RefusedField) and other.problems == self.problems
+
+    def __hash__(self):
+        return hash(self.problems)
+
+    def __repr__(self):
+        return f"_RefusedField({self.problems!r})"

@@ -15,24 +15,23 @@ import dataclasses
 import hashlib
 import json
 import math
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._mpi import launched_rank
 from ..errors import SceneError
 from ..paschen import STREAMER_PD
 from .constants import G
-from .limits import (auto_domain_radius, check_array_work, check_ensemble_work,
+from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_array_work,
+                     check_ensemble_work,
                      check_steady_window, check_vibration_work, check_work, field_problems)
 from .recorded import read_psd, read_recorded
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
-                     RENAMED_KEYS, SCHEMA, check_section, convert, harmonic_components,
-                     renamed_section, suggest, update_section, with_defaults)
-from .schema import show as schema_show
+                     SCHEMA, check_section, convert, harmonic_components, suggest,
+                     update_section, with_defaults)
+from .schema import renamed as _renamed
 
 
 @dataclass(frozen=True)
@@ -276,34 +275,6 @@ class Field:
         return self.method != "3d" and self.ball_offset == 0.0
 
 
-class _RefusedField:
-    """Stands in for :class:`Field` when ``[field]`` values are bad: a dynamics-only
-    run never looks at them, and any use of one raises the :class:`SceneError`."""
-    __slots__ = ("problems",)
-
-    def __init__(self, problems: tuple[str, ...]):
-        object.__setattr__(self, "problems", tuple(problems))
-
-    def __getattr__(self, name):
-        if name.startswith("__"):
-            raise AttributeError(name)
-        raise SceneError("; ".join(self.problems))
-
-    def __setattr__(self, name, value):
-        raise AttributeError("a scene's field settings are read-only")
-
-    def __reduce__(self):   # pickled for worker processes (map, sweep)
-        return (_RefusedField, (self.problems,))
-
-    def __eq__(self, other):
-        return isinstance(other, _RefusedField) and other.problems == self.problems
-
-    def __hash__(self):
-        return hash(self.problems)
-
-    def __repr__(self):
-        return f"_RefusedField({self.problems!r})"
-
 
 @dataclass(frozen=True)
 class Circuit:
@@ -534,27 +505,6 @@ def _auto_mm(value_si: float) -> float:
     """An SI length as the file-level millimetre number."""
     return float(f"{value_si * 1e3:.12g}")
 
-
-# ---------------------------------------------------------------------------
-def _renamed(data: dict, source: str, warn: bool) -> dict:
-    """``data`` with renamed keys under their new names (a copy if any was renamed); a
-    section with both names is refused, an old name warned about once."""
-    out = data
-    for (sec, old), new in RENAMED_KEYS.items():
-        section = data.get(sec)
-        if not isinstance(section, dict) or old not in section:
-            continue
-        if new in section:
-            raise SceneError(f"{source}: [{sec}] {old} and {new} are the same key ({old} is "
-                             f"its old name): give {new} only")
-        if warn and launched_rank() == 0:   # under mpirun: one line, not one per rank
-            warnings.warn(f"{source}: [{sec}] {old} is now called {new}: write "
-                          f"{new} = {schema_show(section[old])} ({old} is read until the "
-                          f"next release)", FutureWarning, stacklevel=4)
-        if out is data:
-            out = dict(data)
-        out[sec] = renamed_section(sec, section)
-    return out
 
 
 def build(data: dict, *, base_dir: Path | None, source: str, text: str,

@@ -11,9 +11,11 @@ from __future__ import annotations
 import datetime
 import difflib
 import math
+import warnings
 from numbers import Integral, Real
 from typing import Any, NamedTuple
 
+from .._mpi import launched_rank as _launched_rank
 from ..errors import SceneError
 from .limits import MAX_HARMONICS
 
@@ -503,3 +505,24 @@ def harmonic_components(data: dict) -> tuple[dict, tuple]:
     out = dict(data)
     out["excitation"] = exc
     return out, components
+
+
+def renamed(data: dict, source: str, warn: bool) -> dict:
+    """``data`` with renamed keys under their new names (a copy if any was renamed); a
+    section with both names is refused, an old name warned about once."""
+    out = data
+    for (sec, old), new in RENAMED_KEYS.items():
+        section = data.get(sec)
+        if not isinstance(section, dict) or old not in section:
+            continue
+        if new in section:
+            raise SceneError(f"{source}: [{sec}] {old} and {new} are the same key ({old} is "
+                             f"its old name): give {new} only")
+        if warn and _launched_rank() == 0:   # under mpirun: one line, not one per rank
+            warnings.warn(f"{source}: [{sec}] {old} is now called {new}: write "
+                          f"{new} = {show(section[old])} ({old} is read until the "
+                          f"next release)", FutureWarning, stacklevel=4)
+        if out is data:
+            out = dict(data)
+        out[sec] = renamed_section(sec, section)
+    return out

@@ -221,7 +221,8 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
         raise SceneError(f"[array] cells = {scene.array.cells}: a study evaluates one cell's "
                          "electrical stage per sample; an array's cells are not supported by "
                          "[uncertainty] (allowed [array] cells = 0; use [device] cells)")
-    if scene.contact.model == "3d":
+    from ..dynamics.models import model_of
+    if model_of(scene).lateral:
         raise SceneError("[contact] model = '3d': a study evaluates the on-axis surrogate; the "
                          "3D model's off-axis field is not supported by [uncertainty] (allowed "
                          "'impact', 'soft')")

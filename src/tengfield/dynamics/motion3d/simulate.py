@@ -171,7 +171,7 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
     period = scene.excitation.period
     duration, t0, t_end = run_span(scene, duration)
     exc = scene.excitation
-    if exc.kind == "recorded" and (t0 < exc.times[0] or t_end > exc.times[-1]):
+    if excitation_kind(scene).recorded and (t0 < exc.times[0] or t_end > exc.times[-1]):
         raise DynamicsError(f"the run [{t0:g}, {t_end:g}] s is outside the recorded excitation "
                             f"[{exc.times[0]:g}, {exc.times[-1]:g}] s")
     if position0 is None:

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ... import circuit as _circuit
+from ..._registry import lookup
 from ..waveforms import steady_window
 
 
@@ -54,6 +55,23 @@ class Circuit:
     #: the column an instrument of capacitance C_p across the terminal reads with this
     #: circuit connected (``V_read_V``); "" : the open terminal's Q_SC / (C_T + C_p)
     read_column: str = ""
+    #: a resistive load takes the power (``[circuit] load_ohm``; summary.json's
+    #: ``load`` block has its mean power)
+    has_load: bool = False
+    #: ``tengfield fit`` models this kind's V and I by the R ∥ C_p load ODE (and can
+    #: fit ``load_ohm``); otherwise it compares the terminal's V_OC, Q_SC, I_SC
+    fit_load: bool = False
+    #: the waveforms.csv columns (name, unit) of V, Q and I that ``tengfield fit``
+    #: compares a measured run with when ``[fit.columns]`` is absent
+    fit_columns: dict = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
+    #: the circuit states whose breakdown limit binds (tengfield.breakdown): all three
+    #: for a load or a rectifier (its transferred charge lies between the open ones)
+    breakdown_states: tuple[str, ...] = ("open", "open-top", "short")
+
+    def states(self, scene) -> tuple[str, ...]:
+        """The breakdown states of this kind in ``scene`` (an entry may depend on its
+        keys, as the open circuit read through C_p does)."""
+        return self.breakdown_states
 
     # -- one run -------------------------------------------------------------
     def check(self, scene) -> None:
@@ -141,7 +159,7 @@ CIRCUITS: dict[str, Circuit] = _discover()
 
 def circuit_for(scene) -> Circuit:
     """The registry entry of ``scene``'s ``[circuit] kind``."""
-    return CIRCUITS[scene.circuit.kind]
+    return lookup(CIRCUITS, scene.circuit.kind, "[circuit] kind")
 
 
 def all_columns() -> list[str]:

@@ -11,10 +11,18 @@ from . import Circuit
 
 class Open(Circuit):
     name = "open"
+    breakdown_states = ("open",)
+
+    def states(self, scene) -> tuple[str, ...]:
+        """Read through an instrument (``parallel_capacitance_pF`` > 0) the open circuit
+        moves charge between 0 and Q_SC through it: open and short circuit bound it."""
+        return ("open", "short") if scene.circuit.parallel_capacitance > 0.0 \
+            else self.breakdown_states
 
 
 class Short(Circuit):
     name = "short"
+    breakdown_states = ("short",)
 
 
 CIRCUITS = (Open(), Short())

@@ -180,6 +180,9 @@ class Load(Circuit):
     columns = tuple(LOAD_COLUMNS)
     keys = ("load_ohm",)
     read_column = "V_load_V"     # the instrument reads the load's R || C_p
+    has_load = True
+    fit_load = True
+    fit_columns = {"V": ("V_load_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_load_A", "A")}
 
     def run(self, scene, dynamics, curves) -> CircuitRun:
         load = steady_load(scene, dynamics, curves)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import circuit
-from . import CircuitRun, SpreadCircuit
+from . import Circuit, CircuitRun, SpreadCircuit
 from .load import (Load, balance_residual, fine_terminal, load_block, no_charge,
                    window_energies)
 from ..waveforms import elapsed_times, steady_window, trapezoid
@@ -99,6 +99,8 @@ class SeriesRC(Load):
     name = "series-rc"
     columns = COLUMNS
     keys = ("load_ohm", "series_capacitance_pF")
+    fit_load = False             # fit's forward model is the R ∥ C_p load, not R + C_s
+    fit_columns = Circuit.fit_columns
 
     def run(self, scene, dynamics, curves) -> CircuitRun:
         result = steady_series(scene, dynamics, curves)

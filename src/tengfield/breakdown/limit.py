@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .paschen import Paschen
+from ..paschen import Paschen
 
 #: circuit states checked: see the module docstring
 STATES = ("open", "open-top", "short")
@@ -53,22 +53,6 @@ DENSE_POINTS = 801
 #: surface charge density used for the field solves of [device]
 #: surface_charge_uC_per_m2 = "breakdown" before σ_max is known [C/m^2]
 PLACEHOLDER_SIGMA = -1e-6
-
-
-def scene_states(scene) -> tuple[str, ...]:
-    """The circuit states the scene implies: open circuit, short circuit, or all three
-    for a load or a rectifier (its transferred charge lies between the two open ones).
-    An open circuit read through an instrument (``parallel_capacitance_pF`` > 0) moves
-    charge between 0 and Q_SC through it: open and short circuit bound it."""
-    if scene.circuit.kind == "open" and scene.circuit.parallel_capacitance > 0.0:
-        return ("open", "short")
-    return {"open": ("open",), "short": ("short",)}.get(scene.circuit.kind, STATES)
-
-
-def uses_breakdown_charge(scene) -> bool:
-    """True when ``[device] surface_charge_uC_per_m2 = "breakdown"``."""
-    return (scene.raw.get("device", {}) if isinstance(scene.raw, dict) else {}).get(
-        "surface_charge_uC_per_m2") == "breakdown"
 
 
 @dataclass
@@ -113,8 +97,8 @@ class Lines:
 
 def lines_from_table(table, scene) -> Lines:
     """:class:`Lines` of a surrogate table with breakdown lines (``table.line_potential``)."""
-    from .errors import TengfieldError
-    from .field.breakdown import LINE_ANGLES_DEG
+    from ..errors import TengfieldError
+    from ..field.breakdown import LINE_ANGLES_DEG
 
     if table.line_potential is None:
         raise TengfieldError("the surrogate has no breakdown lines (made by the 3D solver or "
@@ -134,10 +118,9 @@ def lines_from_table(table, scene) -> Lines:
                  else 0.0)
 
 
-# ---------------------------------------------------------------------------
 def electrode_potentials(lines: Lines, state: str, reference: str = "floating") -> np.ndarray:
     """[V_lower, V_upper] per unit σ [V per C/m²] at each sampled position, shape (n, 2)."""
-    from .field.potential import open_circuit_potentials
+    from ..field.potential import open_circuit_potentials
 
     C = lines.capacitance
     q = lines.fractions * lines.ball_area
@@ -218,7 +201,7 @@ class BreakdownResult:
         """The breakdown figure (a matplotlib Figure; ``tengfield breakdown`` saves it as
         breakdown.png): the gap voltages at ``sigma`` [C/m²] (default −σ_max) against
         Paschen's curve, and their ratio to it over the stroke."""
-        from .plotting.breakdown import breakdown_figure   # the edge, imported on use
+        from ..plotting.breakdown import breakdown_figure   # the edge, imported on use
 
         return breakdown_figure(self, -self.sigma_max if sigma is None else sigma, title=title)
 
@@ -359,195 +342,6 @@ CSV_COLUMNS = ("position_m", "state", "gap", "line_angle_deg", "gap_length_m",
                "axial_gap_length_m", "gap_voltage_per_sigma_V_per_uC_per_m2",
                "gap_voltage_at_scene_sigma_V", "breakdown_voltage_V", "sigma_limit_uC_per_m2",
                "margin")
-
-
-# ---------------------------------------------------------------------------
-def scene_breakdown(scene, table, states=None) -> BreakdownResult:
-    """:func:`evaluate` for a scene and its surrogate table (the scene's states,
-    ``[circuit] reference``, ``[breakdown]`` Paschen constants and the scene's σ)."""
-    sigma = None if uses_breakdown_charge(scene) else scene.device.surface_charge
-    return evaluate(lines_from_table(table, scene), Paschen.from_scene(scene),
-                    scene_states(scene) if states is None else states,
-                    scene.circuit.reference, sigma)
-
-
-def scaled_table(table, factor: float):
-    """The surrogate table with every charge scaled by ``factor`` (σ_new / σ_old): the
-    induced charges and the ball charge are linear in σ, C does not depend on it
-    (:func:`tengfield.surrogate.table.scaled_charges`)."""
-    from .surrogate.table import scaled_charges
-
-    return scaled_charges(table, factor)
-
-
-def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool = False,
-                           command_line: str = "", write: bool = True, solve=None):
-    """The scene's surrogate (:func:`tengfield.surrogate.obtain_table`, cached) with its
-    breakdown lines. A cached table without them (written by an older tengfield or a
-    custom solve) is recomputed once with a warning, the new one cached."""
-    import dataclasses
-    import time
-    import warnings
-
-    from .surrogate import obtain_table, precompute, store_in_cache
-
-    if solve is None and not scene.field.has_gap_lines:
-        from .errors import TengfieldError   # refused before minutes of 3D solves
-        raise TengfieldError(
-            f"the breakdown check needs the gap lines of the axisymmetric field solver (the "
-            f"ball on the axis): [field] method = {scene.field.method!r}, ball_offset_mm = "
-            f"{scene.field.ball_offset * 1e3:g} has none; use method = \"axisymmetric\"")
-    if scene.device.surface_charge == 0.0:
-        # the per-sigma gap voltages need the induced-charge fractions q / q_ball, which
-        # an uncharged ball does not give: its table is the stand-in sigma's (everything
-        # is linear in sigma; sigma_max does not depend on it)
-        from .scene.schema import BREAKDOWN_PLACEHOLDER_UC
-        scene = scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
-    table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
-                                  progress=progress, command_line=command_line, write=write)
-    if table.line_potential is None and solve is None:   # has_gap_lines (above)
-        start = time.perf_counter()
-        if comm is None or comm.rank == 0:
-            warnings.warn(f"cached surrogate {outcome.path} has no breakdown lines, recomputing",
-                          RuntimeWarning, stacklevel=2)
-        table = precompute(scene, comm=comm, progress=progress, command_line=command_line)
-        stored = store_in_cache(outcome.path, table, comm) if write else False
-        outcome = dataclasses.replace(outcome, status="recomputed",
-                                      reason="the cached surrogate had no breakdown lines",
-                                      wall_time=outcome.wall_time + time.perf_counter() - start,
-                                      stored=stored)
-    return table, outcome
-
-
-def scene_sigma(scene, result: BreakdownResult) -> float:
-    """The σ [C/m²] a scene runs with: its own, or −σ_max for ``"breakdown"``."""
-    return -result.sigma_max if uses_breakdown_charge(scene) else scene.device.surface_charge
-
-
-def summary_lines(result: BreakdownResult, scene) -> list[str]:
-    """What ``tengfield breakdown`` prints."""
-    b = result.binding
-    sigma = scene_sigma(scene, result)
-    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} uC/m^2 (relative error estimate "
-             f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
-             f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
-             f"{math.degrees(b.angle):.0f} deg, ball at z = {b.position * 1e3:.4g} mm: gap "
-             f"{b.gap * 1e3:.4g} mm, V_b = {b.breakdown_voltage:.4g} V ({b.regime})"]
-    for state, bind in result.per_state.items():
-        lines.append(f"  {state:8s} sigma_max = {bind.sigma * 1e6:8.4g} uC/m^2 at z = "
-                     f"{bind.position * 1e3:.4g} mm, {bind.side} gap {bind.gap * 1e3:.4g} mm")
-    lines.append(f"scene sigma = {sigma * 1e6:.4g} uC/m^2: |sigma| / sigma_max = "
-                 f"{result.margin(sigma):.3g}")
-    return lines
-
-
-def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
-                  field_status: str = "") -> list:
-    """breakdown.json, breakdown.csv and (``plots``) breakdown.png in directory ``out``."""
-    from pathlib import Path
-
-    from ._files import atomic_path, write_csv, write_json
-
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    sigma = scene_sigma(scene, result)
-    data = result.to_json(sigma)
-    data.update({"scene": scene.source, "field_hash": scene.field_hash(),
-                 "field_stage": field_status,
-                 "sigma_mode": "breakdown" if uses_breakdown_charge(scene) else "scene"})
-    written = [write_json(out / "breakdown.json", data)]
-    columns = [[row[c] for row in result.rows] for c in CSV_COLUMNS]
-    with atomic_path(out / "breakdown.csv") as tmp:
-        write_csv(tmp, list(CSV_COLUMNS), columns)
-    written.append(out / "breakdown.csv")
-    if plots:
-        from .plotting.breakdown import plot_breakdown
-        drawn, title = sigma, None
-        if sigma == 0.0:   # an uncharged ball has no gap voltages: draw them at the limit
-            drawn = -result.sigma_max
-            title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
-                     f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
-        with atomic_path(out / "breakdown.png") as tmp:
-            plot_breakdown(result, drawn, tmp, title=title)
-        written.append(out / "breakdown.png")
-    return written
-
-
-# ---------------------------------------------------------------------------
-# tengfield run, sweep, field
-def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
-                     command_line: str = "", write: bool = True):
-    """``(scene, table, outcome, result)``: the surrogate a command that uses the charge
-    runs with (``run``, ``sweep``, ``field``), at that charge: with ``"breakdown"`` the
-    surrogate with its lines (:func:`obtain_breakdown_table`) and the scene and table at
-    σ = −σ_max, otherwise the scene's own (:func:`resolve_for_run`; ``result`` None
-    when the table has no lines). The one place that decides it."""
-    from .surrogate import obtain_table
-
-    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
-    table, outcome = obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve,
-                            progress=progress, command_line=command_line, write=write)
-    scene, table, result = resolve_for_run(scene, table, comm)
-    return scene, table, outcome, result
-
-
-def charge_line(scene) -> str:
-    """What ``sweep`` and ``field`` print for a scene resolved by :func:`obtain_run_table`
-    from ``"breakdown"``: the σ it runs with."""
-    return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} uC/m^2 "
-            f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
-
-
-def resolve_for_run(scene, table, comm=None):
-    """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
-    surface_charge_uC_per_m2 = "breakdown"`` the scene gets σ = −σ_max and the table is
-    scaled to it (no new field solve); otherwise both are returned as they are.
-    ``result`` is None when the table has no breakdown lines. Rank 0 of ``comm`` warns
-    once when |σ| exceeds σ_max."""
-    import warnings
-
-    if table.line_potential is None:
-        if uses_breakdown_charge(scene):   # never run at the stand-in sigma
-            from .errors import TengfieldError
-            raise TengfieldError(
-                '[device] surface_charge_uC_per_m2 = "breakdown": the surrogate has no '
-                "breakdown lines (made by the 3D solver or a custom solve), so sigma_max is "
-                "unknown; give sigma in uC/m^2 or use [field] method = \"axisymmetric\"")
-        return scene, table, None
-    result = scene_breakdown(scene, table)
-    if uses_breakdown_charge(scene):
-        from .surrogate.table import at_ball_charge
-
-        sigma = -result.sigma_max
-        scene = scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
-        table = at_ball_charge(table, scene.device.ball_charge)   # whatever σ it was solved at
-    elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
-        b = result.binding
-        warnings.warn(
-            f"[device] surface_charge_uC_per_m2 = {scene.device.surface_charge * 1e6:g} exceeds "
-            f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} uC/m^2 "
-            f"({b.state}, {b.side} gap {b.gap * 1e3:.3g} mm at z = {b.position * 1e3:.3g} mm): "
-            "the gap would discharge first (tengfield breakdown; \"breakdown\" runs at the limit)",
-            RuntimeWarning, stacklevel=3)
-    return scene, table, result
-
-
-def summary_block(result: BreakdownResult | None, scene, given=None) -> dict:
-    """``summary.json["breakdown"]``: σ_max, the margin |σ|/σ_max, where it binds
-    (``given``: the scene as loaded, whose σ may be "breakdown")."""
-    if result is None:
-        return {"available": False,
-                "reason": "the surrogate has no breakdown lines (3D solver or a custom solve)"}
-    sigma = scene.device.surface_charge
-    return {"available": True, "sigma_max_uC_per_m2": result.sigma_max * 1e6,
-            "margin": result.margin(sigma), "margin_rule": "|sigma| / sigma_max (above 1: the "
-            "air breaks down before this charge is reached)",
-            "sigma_uC_per_m2": sigma * 1e6,
-            "sigma_from": ("breakdown limit" if uses_breakdown_charge(given or scene)
-                           else "scene"),
-            "relative_error_estimate": result.relative_error_estimate,
-            "binding": result.binding.to_json(), "states_checked": list(result.states),
-            "pressure_Pa": result.paschen.pressure}
 
 
 def limited_energy(energy: dict, result: BreakdownResult, sigma: float) -> dict:

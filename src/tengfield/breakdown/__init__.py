@@ -1,0 +1,26 @@
+"""Air breakdown (docs/breakdown.md), split by layer:
+
+* :mod:`.limit` the physics (pure numpy): the gap lines, their voltages per unit σ in
+  each circuit state, σ_max (:func:`evaluate`, :class:`BreakdownResult`), the energies
+  at σ_max;
+* :mod:`.charge` the charge a run uses (its σ, or −σ_max for ``"breakdown"``) and the
+  surrogate at it (:func:`obtain_run_table`, the one place that decides it);
+* :mod:`.output` what ``tengfield breakdown`` prints and writes.
+"""
+from __future__ import annotations
+
+from .charge import (charge_line, obtain_breakdown_table, obtain_run_table, resolve_for_run,
+                     scaled_table, scene_breakdown, scene_sigma, scene_states, summary_block,
+                     uses_breakdown_charge)
+from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, PLACEHOLDER_SIGMA, SIDES, STATE_TEXT,
+                    STATES, Binding, BreakdownResult, Lines, electrode_potentials, evaluate,
+                    gap_voltages, limited_energy, lines_from_table)
+from .output import summary_lines, write_outputs
+
+__all__ = ["CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "PLACEHOLDER_SIGMA", "SIDES",
+           "STATE_TEXT", "STATES", "Binding", "BreakdownResult", "Lines", "charge_line",
+           "electrode_potentials", "evaluate", "gap_voltages", "limited_energy",
+           "lines_from_table", "obtain_breakdown_table", "obtain_run_table",
+           "resolve_for_run", "scaled_table", "scene_breakdown", "scene_sigma",
+           "scene_states", "summary_block", "summary_lines", "uses_breakdown_charge",
+           "write_outputs"]

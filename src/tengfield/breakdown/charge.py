@@ -1,0 +1,160 @@
+"""The charge a run uses: the scene's σ, or −σ_max for ``[device]
+surface_charge_uC_per_m2 = "breakdown"``, decided in one place for run, sweep, field,
+design, the ensemble and uncertainty (:func:`obtain_run_table`), with the surrogate
+scaled to it (charges are linear in σ: no new field solve)."""
+from __future__ import annotations
+
+from ..paschen import Paschen
+from .limit import BreakdownResult, evaluate, lines_from_table
+
+
+def scene_states(scene) -> tuple[str, ...]:
+    """The circuit states the scene implies: open circuit, short circuit, or all three
+    for a load or a rectifier (its transferred charge lies between the two open ones).
+    An open circuit read through an instrument (``parallel_capacitance_pF`` > 0) moves
+    charge between 0 and Q_SC through it: open and short circuit bound it."""
+    from ..electrical import circuit_for   # the entry's breakdown_states / states()
+    return circuit_for(scene).states(scene)
+
+
+def uses_breakdown_charge(scene) -> bool:
+    """True when ``[device] surface_charge_uC_per_m2 = "breakdown"``."""
+    return (scene.raw.get("device", {}) if isinstance(scene.raw, dict) else {}).get(
+        "surface_charge_uC_per_m2") == "breakdown"
+
+
+def scene_breakdown(scene, table, states=None) -> BreakdownResult:
+    """:func:`evaluate` for a scene and its surrogate table (the scene's states,
+    ``[circuit] reference``, ``[breakdown]`` Paschen constants and the scene's σ)."""
+    sigma = None if uses_breakdown_charge(scene) else scene.device.surface_charge
+    return evaluate(lines_from_table(table, scene), Paschen.from_scene(scene),
+                    scene_states(scene) if states is None else states,
+                    scene.circuit.reference, sigma)
+
+
+def scaled_table(table, factor: float):
+    """The surrogate table with every charge scaled by ``factor`` (σ_new / σ_old): the
+    induced charges and the ball charge are linear in σ, C does not depend on it
+    (:func:`tengfield.surrogate.table.scaled_charges`)."""
+    from ..surrogate.table import scaled_charges
+
+    return scaled_charges(table, factor)
+
+
+def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool = False,
+                           command_line: str = "", write: bool = True, solve=None):
+    """The scene's surrogate (:func:`tengfield.surrogate.obtain_table`, cached) with its
+    breakdown lines. A cached table without them (written by an older tengfield or a
+    custom solve) is recomputed once with a warning, the new one cached."""
+    import dataclasses
+    import time
+    import warnings
+
+    from ..surrogate import obtain_table, precompute, store_in_cache
+
+    if solve is None and not scene.field.has_gap_lines:
+        from ..errors import TengfieldError   # refused before minutes of 3D solves
+        raise TengfieldError(
+            f"the breakdown check needs the gap lines of the axisymmetric field solver (the "
+            f"ball on the axis): [field] method = {scene.field.method!r}, ball_offset_mm = "
+            f"{scene.field.ball_offset * 1e3:g} has none; use method = \"axisymmetric\"")
+    if scene.device.surface_charge == 0.0:
+        # the per-sigma gap voltages need the induced-charge fractions q / q_ball, which
+        # an uncharged ball does not give: its table is the stand-in sigma's (everything
+        # is linear in sigma; sigma_max does not depend on it)
+        from ..surrogate.cache import solved_scene
+        scene = solved_scene(scene)
+    table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+                                  progress=progress, command_line=command_line, write=write)
+    if table.line_potential is None and solve is None:   # has_gap_lines (above)
+        start = time.perf_counter()
+        if comm is None or comm.rank == 0:
+            warnings.warn(f"cached surrogate {outcome.path} has no breakdown lines, recomputing",
+                          RuntimeWarning, stacklevel=2)
+        table = precompute(scene, comm=comm, progress=progress, command_line=command_line)
+        stored = store_in_cache(outcome.path, table, comm) if write else False
+        outcome = dataclasses.replace(outcome, status="recomputed",
+                                      reason="the cached surrogate had no breakdown lines",
+                                      wall_time=outcome.wall_time + time.perf_counter() - start,
+                                      stored=stored)
+    return table, outcome
+
+
+def scene_sigma(scene, result: BreakdownResult) -> float:
+    """The σ [C/m²] a scene runs with: its own, or −σ_max for ``"breakdown"``."""
+    return -result.sigma_max if uses_breakdown_charge(scene) else scene.device.surface_charge
+
+
+def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
+                     command_line: str = "", write: bool = True):
+    """``(scene, table, outcome, result)``: the surrogate a command that uses the charge
+    runs with (``run``, ``sweep``, ``field``), at that charge: with ``"breakdown"`` the
+    surrogate with its lines (:func:`obtain_breakdown_table`) and the scene and table at
+    σ = −σ_max, otherwise the scene's own (:func:`resolve_for_run`; ``result`` None
+    when the table has no lines). The one place that decides it."""
+    from ..surrogate import obtain_table
+
+    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
+    table, outcome = obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve,
+                            progress=progress, command_line=command_line, write=write)
+    scene, table, result = resolve_for_run(scene, table, comm)
+    return scene, table, outcome, result
+
+
+def charge_line(scene) -> str:
+    """What ``sweep`` and ``field`` print for a scene resolved by :func:`obtain_run_table`
+    from ``"breakdown"``: the σ it runs with."""
+    return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} uC/m^2 "
+            f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
+
+
+def resolve_for_run(scene, table, comm=None):
+    """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
+    surface_charge_uC_per_m2 = "breakdown"`` the scene gets σ = −σ_max and the table is
+    scaled to it (no new field solve); otherwise both are returned as they are.
+    ``result`` is None when the table has no breakdown lines. Rank 0 of ``comm`` warns
+    once when |σ| exceeds σ_max."""
+    import warnings
+
+    if table.line_potential is None:
+        if uses_breakdown_charge(scene):   # never run at the stand-in sigma
+            from ..errors import TengfieldError
+            raise TengfieldError(
+                '[device] surface_charge_uC_per_m2 = "breakdown": the surrogate has no '
+                "breakdown lines (made by the 3D solver or a custom solve), so sigma_max is "
+                "unknown; give sigma in uC/m^2 or use [field] method = \"axisymmetric\"")
+        return scene, table, None
+    result = scene_breakdown(scene, table)
+    if uses_breakdown_charge(scene):
+        from ..surrogate.table import at_ball_charge
+
+        sigma = -result.sigma_max
+        scene = scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
+        table = at_ball_charge(table, scene.device.ball_charge)   # whatever σ it was solved at
+    elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
+        b = result.binding
+        warnings.warn(
+            f"[device] surface_charge_uC_per_m2 = {scene.device.surface_charge * 1e6:g} exceeds "
+            f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} uC/m^2 "
+            f"({b.state}, {b.side} gap {b.gap * 1e3:.3g} mm at z = {b.position * 1e3:.3g} mm): "
+            "the gap would discharge first (tengfield breakdown; \"breakdown\" runs at the limit)",
+            RuntimeWarning, stacklevel=3)
+    return scene, table, result
+
+
+def summary_block(result: BreakdownResult | None, scene, given=None) -> dict:
+    """``summary.json["breakdown"]``: σ_max, the margin |σ|/σ_max, where it binds
+    (``given``: the scene as loaded, whose σ may be "breakdown")."""
+    if result is None:
+        return {"available": False,
+                "reason": "the surrogate has no breakdown lines (3D solver or a custom solve)"}
+    sigma = scene.device.surface_charge
+    return {"available": True, "sigma_max_uC_per_m2": result.sigma_max * 1e6,
+            "margin": result.margin(sigma), "margin_rule": "|sigma| / sigma_max (above 1: the "
+            "air breaks down before this charge is reached)",
+            "sigma_uC_per_m2": sigma * 1e6,
+            "sigma_from": ("breakdown limit" if uses_breakdown_charge(given or scene)
+                           else "scene"),
+            "relative_error_estimate": result.relative_error_estimate,
+            "binding": result.binding.to_json(), "states_checked": list(result.states),
+            "pressure_Pa": result.paschen.pressure}

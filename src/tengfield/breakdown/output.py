@@ -1,0 +1,56 @@
+"""``tengfield breakdown``'s words and files: what it prints, breakdown.json,
+breakdown.csv and breakdown.png (the figure through :mod:`tengfield.plotting`)."""
+from __future__ import annotations
+
+import math
+
+from .charge import scene_sigma, uses_breakdown_charge
+from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
+
+def summary_lines(result: BreakdownResult, scene) -> list[str]:
+    """What ``tengfield breakdown`` prints."""
+    b = result.binding
+    sigma = scene_sigma(scene, result)
+    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} uC/m^2 (relative error estimate "
+             f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
+             f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
+             f"{math.degrees(b.angle):.0f} deg, ball at z = {b.position * 1e3:.4g} mm: gap "
+             f"{b.gap * 1e3:.4g} mm, V_b = {b.breakdown_voltage:.4g} V ({b.regime})"]
+    for state, bind in result.per_state.items():
+        lines.append(f"  {state:8s} sigma_max = {bind.sigma * 1e6:8.4g} uC/m^2 at z = "
+                     f"{bind.position * 1e3:.4g} mm, {bind.side} gap {bind.gap * 1e3:.4g} mm")
+    lines.append(f"scene sigma = {sigma * 1e6:.4g} uC/m^2: |sigma| / sigma_max = "
+                 f"{result.margin(sigma):.3g}")
+    return lines
+
+
+def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
+                  field_status: str = "") -> list:
+    """breakdown.json, breakdown.csv and (``plots``) breakdown.png in directory ``out``."""
+    from pathlib import Path
+
+    from .._files import atomic_path, write_csv, write_json
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    sigma = scene_sigma(scene, result)
+    data = result.to_json(sigma)
+    data.update({"scene": scene.source, "field_hash": scene.field_hash(),
+                 "field_stage": field_status,
+                 "sigma_mode": "breakdown" if uses_breakdown_charge(scene) else "scene"})
+    written = [write_json(out / "breakdown.json", data)]
+    columns = [[row[c] for row in result.rows] for c in CSV_COLUMNS]
+    with atomic_path(out / "breakdown.csv") as tmp:
+        write_csv(tmp, list(CSV_COLUMNS), columns)
+    written.append(out / "breakdown.csv")
+    if plots:
+        from ..plotting.breakdown import plot_breakdown
+        drawn, title = sigma, None
+        if sigma == 0.0:   # an uncharged ball has no gap voltages: draw them at the limit
+            drawn = -result.sigma_max
+            title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
+                     f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
+        with atomic_path(out / "breakdown.png") as tmp:
+            plot_breakdown(result, drawn, tmp, title=title)
+        written.append(out / "breakdown.png")
+    return written
