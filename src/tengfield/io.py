@@ -154,14 +154,16 @@ def dynamics_tables(dynamics, scene) -> dict:
     tables = {"trajectory": {"time_s": dynamics.t, "gap_m": dynamics.gap,
                              "gap_velocity_m_per_s": dynamics.gap_velocity,
                              "table_m": dynamics.table}}
-    if scene.contact.model == "3d":
+    from .dynamics.models import model_of
+    lateral = model_of(scene).lateral       # the 3D model: its own columns and contacts
+    if lateral:
         tables["trajectory"].update(trajectory_columns(dynamics))
     imp = dynamics.impacts
     tables["impacts"] = {"time_s": imp.time,
                          "plate": np.where(imp.plate == "upper", "upper", "lower"),
                          "speed_before_m_per_s": imp.speed_before,
                          "speed_after_m_per_s": imp.speed_after}
-    if scene.contact.model == "3d":
+    if lateral:
         c = dynamics.contacts
         time_in = np.asarray(c["time_in"], dtype=float)
         time_out = np.asarray(c["time_out"], dtype=float)

@@ -292,7 +292,7 @@ def test_writers_never_write_through_a_symlink_or_into_a_pipe(tmp_path):
     dynamics = SimpleNamespace(t=three, gap=three, gap_velocity=three, table=three,
                                impacts=SimpleNamespace(time=three, plate=np.array(["upper"] * 3),
                                                        speed_before=three, speed_after=three))
-    scene = SimpleNamespace(contact=SimpleNamespace(model="1d"))
+    scene = SimpleNamespace(contact=SimpleNamespace(model="impact"))
     writes = {"trajectory.csv": lambda: writers.write_dynamics_files(dynamics, scene, out,
                                                                      plots=False),
               "summary.json": lambda: writers.write_json(out / "summary.json", {"a": 1})}

@@ -71,8 +71,10 @@ def _check_record_covers(scene, settle: float, span: float, duration: float) -> 
     period, not for [run] duration_s: a recorded excitation too short for it is named so."""
     from ..errors import SceneError
 
+    from ..dynamics.excitation import excitation_kind
+
     exc = scene.excitation
-    if exc.kind != "recorded" or exc.times is None or not len(exc.times):
+    if not excitation_kind(scene).recorded or exc.times is None or not len(exc.times):
         return
     t0, first, last = scene.initial.time, float(exc.times[0]), float(exc.times[-1])
     if t0 < first or t0 + duration > last:
