@@ -30,6 +30,8 @@ from .scene import Scene, default_scene, load_scene, parse_scene  # noqa: E402
 
 #: public name -> (module, attribute), imported on first access
 _LAZY = {
+    "run": ("tengfield.pipeline", "run"),
+    "simulate": ("tengfield.dynamics", "simulate"),
     "RunResult": ("tengfield.pipeline", "RunResult"),
     "solve_position": ("tengfield.field", "solve_position"),
     "build_surrogate": ("tengfield.surrogate", "obtain_table"),
@@ -37,55 +39,8 @@ _LAZY = {
     "calibrate": ("tengfield.fit", "calibrate"),
 }
 
-__all__ = ["run", "simulate", "Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
+__all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
            "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", *_LAZY]
-
-
-def _as_scene(scene, function: str) -> Scene:
-    """``scene`` itself, or the scene of a dict of sections (``{"excitation":
-    {"frequency_hz": 30.0}, ...}``, file-level keys; the rest default); a
-    :class:`TypeError` naming what to pass for anything else."""
-    if isinstance(scene, Scene):
-        return scene
-    if isinstance(scene, dict):
-        from .scene.model import _python_value
-        data = {}
-        for sec, values in scene.items():
-            if not isinstance(values, dict):
-                raise TypeError(f"tengfield.{function}({{{sec!r}: {values!r:.40}}}): each "
-                                f"section of a scene dict is a dict of keys, e.g. "
-                                f"{{'excitation': {{'frequency_hz': 30.0}}}}")
-            data[sec] = {k: _python_value(v) for k, v in values.items()}
-        return Scene.from_dict(data)
-    raise TypeError(f"tengfield.{function}: expected a tengfield.Scene (tengfield."
-                    f"default_scene(), tengfield.load_scene(path)) or a dict of scene "
-                    f"sections, got {type(scene).__name__}")
-
-
-def run(scene, **options):
-    """:func:`tengfield.pipeline.run` of ``scene`` (a :class:`Scene`, or a dict of
-    sections with file-level keys, e.g. ``{"excitation": {"frequency_hz": 30.0}}``)."""
-    from .pipeline import run as _run
-    return _run(_as_scene(scene, "run"), **options)
-
-
-def simulate(scene, *, duration: float | None = None):
-    """:func:`tengfield.dynamics.simulate` of ``scene`` (a :class:`Scene` or a dict, as
-    :func:`run`) over ``duration`` [s] (a positive finite number; default
-    ``[run] duration_s``)."""
-    import math
-    import numbers
-
-    from .dynamics import simulate as _simulate
-    if duration is not None:
-        if isinstance(duration, bool) or not isinstance(duration, numbers.Real):
-            raise TypeError(f"tengfield.simulate: duration = {duration!r:.40} must be a "
-                            f"number of seconds (a float), got {type(duration).__name__}")
-        duration = float(duration)
-        if not (math.isfinite(duration) and duration > 0.0):
-            raise ValueError(f"tengfield.simulate: duration = {duration!r} s is out of range: "
-                             "allowed (0, inf)")
-    return _simulate(_as_scene(scene, "simulate"), duration=duration)
 
 
 def __getattr__(name: str):

@@ -154,8 +154,11 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     ``solve(scene, z, comm=...)`` to :func:`tengfield.field.solve_position`
     (only called when no valid cached surrogate exists); ``comm`` spreads
     the field solves (and the realisations) over its ranks, ``jobs`` the realisations
-    over worker processes (default: all cores).
+    over worker processes (default: all cores). ``scene``: a :class:`~tengfield.Scene`, or
+    a dict of sections with file-level keys (``{"excitation": {"frequency_hz": 30.0}}``).
     """
+    from .scene import as_scene
+    scene = as_scene(scene, "run")
     if scene.run.realisations > 1:   # before any work: the workers must be allowed
         from ._mpi import check_jobs
         check_jobs(jobs, comm)

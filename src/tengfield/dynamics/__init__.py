@@ -35,9 +35,24 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
     the regime is taken from the window after ``scene.run.settle_periods`` excitation
     periods.
     Raises :class:`tengfield.errors.DynamicsError` if the motion cannot be
-    integrated (e.g. the bound on events per period is exceeded).
+    integrated (e.g. the bound on events per period is exceeded). ``scene``: a
+    :class:`~tengfield.Scene` or a dict of sections (as :func:`tengfield.run`);
+    ``duration``: a positive finite number of seconds.
     """
+    import math
+    import numbers
+
+    from ..scene import as_scene
     from .models import model_of
+    if duration is not None:
+        if isinstance(duration, bool) or not isinstance(duration, numbers.Real):
+            raise TypeError(f"tengfield.simulate: duration = {duration!r:.40} must be a "
+                            f"number of seconds (a float), got {type(duration).__name__}")
+        duration = float(duration)
+        if not (math.isfinite(duration) and duration > 0.0):
+            raise ValueError(f"tengfield.simulate: duration = {duration!r} s is out of range: "
+                             "allowed (0, inf)")
+    scene = as_scene(scene, "simulate")
     _warn_lateral_left_out(scene)
     return model_of(scene)(scene, duration=duration)
 

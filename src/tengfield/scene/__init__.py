@@ -11,5 +11,5 @@ from ..errors import SceneError  # noqa: F401
 from .constants import EPS0, G  # noqa: F401
 from .model import (Array, Breakdown, Circuit, Contact, Device, Excitation, Field,  # noqa: F401
                     Initial, Reference, Run, Scene, check_field)
-from .parse import (default_scene, default_text, load_scene, parse_scene,  # noqa: F401
-                    with_settings)
+from .parse import (as_scene, default_scene, default_text, load_scene,  # noqa: F401
+                    parse_scene, with_settings)

@@ -212,3 +212,24 @@ def _where(path: str) -> str:
     """``[run].duration_s`` -> ``[run] duration_s`` (how messages name scene keys)."""
     sec, dot, rest = path.partition("].")
     return f"{sec}] {rest}" if dot else path
+
+
+def as_scene(scene, function: str) -> Scene:
+    """``scene`` itself, or the scene of a dict of sections (``{"excitation":
+    {"frequency_hz": 30.0}, ...}``, file-level keys; the rest default); a
+    :class:`TypeError` naming what to pass for anything else."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, dict):
+        from .model import _python_value
+        data = {}
+        for sec, values in scene.items():
+            if not isinstance(values, dict):
+                raise TypeError(f"tengfield.{function}({{{sec!r}: {values!r:.40}}}): each "
+                                f"section of a scene dict is a dict of keys, e.g. "
+                                f"{{'excitation': {{'frequency_hz': 30.0}}}}")
+            data[sec] = {k: _python_value(v) for k, v in values.items()}
+        return Scene.from_dict(data)
+    raise TypeError(f"tengfield.{function}: expected a tengfield.Scene (tengfield."
+                    f"default_scene(), tengfield.load_scene(path)) or a dict of scene "
+                    f"sections, got {type(scene).__name__}")
