@@ -83,11 +83,11 @@ def test_a_scene_without_design_gets_a_default_study_said_in_one_line(tmp_path, 
     said = [ln for ln in proc.stderr.splitlines() if "has no [design]" in ln]
     assert said == [
         "tengfield: <default> has no [design]: a default study of power density over "
-        "gap_mm = [1.5, 4.5] and ball_diameter_mm = [4.9, 9.1] (tube and electrodes follow "
+        "stroke_mm = [1.5, 4.5] and ball_diameter_mm = [4.9, 9.1] (tube and electrodes follow "
         "the ball) at 20 Hz / 1.5 mm, 4 candidates (docs/design.md: write a [design] "
         "section for your own)"]
     summary = json.loads((out / "design.json").read_text())
-    assert summary["settings"]["vary"] == {"gap_mm": [1.5, 4.5],
+    assert summary["settings"]["vary"] == {"stroke_mm": [1.5, 4.5],
                                            "ball_diameter_mm": [4.9, 9.1]}
     assert summary["counts"]["ok"] == 4 and "best:" in proc.stdout
 
