@@ -63,6 +63,35 @@ def test_design_on_two_ranks_equals_the_serial_design(tmp_path_factory):
         assert other == strip(serial.rows)
 
 
+@pytest.mark.mpi
+def test_p10_design_on_two_ranks_equals_the_serial_design(tmp_path_factory):
+    """aggregate = "p10": each candidate's study runs on the rank that scores it; the
+    rows (percentiles, their intervals, the study's counts) are the serial ones."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    cache = comm.bcast(str(tmp_path_factory.mktemp("cache")) if comm.rank == 0 else None)
+    scene = fx.scene_with(
+        design={"objective": "charge", "candidates": 8, "batch": 4, "seed": 1,
+                "aggregate": "p10", "settle_periods": 10, "window_periods": 10,
+                "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]},
+                "excitation": {"frequency_hz": [33.0], "amplitude_mm": [1.0]}},
+        contact={"restitution": 0.8},
+        uncertainty={"samples": 32, "method": "monte-carlo", "seed": 0, "vary": {
+            "contact.restitution": {"distribution": "uniform", "low": 0.05, "high": 0.8}}})
+    parallel = design(scene, comm=comm, cache_dir=cache, solve=fx.plate_model_solve)
+    serial = design(scene, cache_dir=cache + "-serial", solve=fx.plate_model_solve, jobs=1)
+
+    def strip(rows):
+        return [{k: v for k, v in r.items() if k not in ("wall_s", "field_status")}
+                for r in rows]
+    assert strip(parallel.rows) == strip(serial.rows)
+    assert all(r["uncertainty_evaluations"] == 32 for r in serial.rows if r["status"] == "ok")
+    assert parallel.ranking == serial.ranking
+    for other in comm.allgather(strip(parallel.rows)):
+        assert other == strip(serial.rows)
+
+
 def env():
     return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                 OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",

@@ -26,6 +26,14 @@ def csv_columns(result) -> list[str]:
     for o in spec.objectives:
         cols += [f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"
                  for f, a in spec.band]
+    if spec.percentile is not None:   # the percentile aggregate: nominal and per band point
+        tag = f"p{spec.percentile:g}"
+        for o in spec.objectives:
+            unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
+            cols += [f"{o}_nominal_{unit}", f"{o}_percentile_error_{unit}"]
+            cols += [f"{o}_{tag}_at_{_band_label(f, a, result.scene.excitation.kind)}"
+                     for f, a in spec.band]
+        cols.append("uncertainty_evaluations")
     cols += [f"{spec.objective}_spread_per_band_point", "windows",
              "regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
@@ -56,6 +64,17 @@ def csv_record(result, row) -> dict:
         rec[f"{o}_error_{unit}"] = got.get("error")
         for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
             rec[f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
+    if spec.percentile is not None and "robust" in row:
+        tag = f"p{spec.percentile:g}"
+        for o in spec.objectives:
+            unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
+            got = row["objectives"].get(o, {})
+            rec[f"{o}_nominal_{unit}"] = got.get("nominal")
+            rec[f"{o}_percentile_error_{unit}"] = got.get("percentile_error")
+            pts = row["robust"]["objectives"][o]["band_percentiles"]
+            for (f, a), v in zip(spec.band, pts):
+                rec[f"{o}_{tag}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
+        rec["uncertainty_evaluations"] = row.get("uncertainty_evaluations")
     rec.update({f"{spec.objective}_spread_per_band_point":
                 row.get("band_spread", {}).get(spec.objective, []),
                 "windows": row.get("windows", []), "regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
@@ -103,7 +122,9 @@ def design_summary(result) -> dict:
             "relative_error": best.get("relative_error"),
             "objectives": best["objectives"], "band_values": best["band_values"],
             "regimes": best["regimes"], "upper_contact_fraction": best["upper_contact_fraction"],
-            "load_ohm": best["load_ohm"], "followed": followed_geometry(
+            "load_ohm": best["load_ohm"],
+            **({"robust": answer["best"]["robust"]} if "robust" in answer["best"] else {}),
+            "followed": followed_geometry(
                 result.scene.to_dict()["device"],
                 {k: v for k, v in best["values"].items() if k not in OTHER_VARY})
             if spec.geometry == "follow" else {},

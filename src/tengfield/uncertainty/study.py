@@ -14,8 +14,8 @@ import numpy as np
 from .evaluation import Evaluations, evaluate_study, main_outputs
 from .sampling import study_values
 from .spec import UncertaintySpec, uncertainty_spec
-from .statistics import (distribution_statistics, dominant_input, percentile_score,
-                         regime_fractions, sobol_indices)
+from .statistics import (distribution_statistics, dominant_input, percentile_interval,
+                         percentile_score, regime_fractions, sobol_indices)
 
 
 @dataclass
@@ -114,7 +114,29 @@ def candidate_percentile(candidate, spec: UncertaintySpec, objective: str, perce
     e.g. ``"load.mean_power_W"``) of the design candidate's scene over the study
     ``spec`` (Monte Carlo or Sobol points alike), on this process (``comm=None``,
     one job: the design farms the candidates)."""
-    study = run_study(candidate, spec, jobs=1, cache_dir=cache_dir, solve=solve,
-                      simulate=simulate)
-    return (percentile_score([row.get(objective) for row in study.evaluations.rows], percentile),
-            len(study.evaluations.rows))
+    out = candidate_percentiles(candidate, spec, [objective], percentile, cache_dir=cache_dir,
+                                solve=solve, simulate=simulate)
+    return out["scores"][objective], out["evaluations"]
+
+
+def candidate_percentiles(candidate, spec: UncertaintySpec, objectives, percentile: float, *,
+                          cache_dir=None, solve=None, simulate=None) -> dict:
+    """One study of the candidate's scene, several outputs scored: ``{"scores": {name:
+    percentile}, "intervals": {name: (low, high)} (the distribution-free 95 % interval of
+    that percentile, :func:`percentile_interval`), "nominal": {name: the scene's own
+    value}, "evaluations", "field_solves", "dynamics_runs", "missing": {name: evaluations
+    without the output}}``. Only the evaluations are run (no Sobol indices, nothing
+    written); on this process (``comm=None``, one job)."""
+    values = study_values(spec)
+    ev = evaluate_study(candidate, spec, values, jobs=1, cache_dir=cache_dir, solve=solve,
+                        simulate=simulate)
+    scores, intervals, missing = {}, {}, {}
+    for name in objectives:
+        column = [row.get(name) for row in ev.rows]
+        scores[name] = percentile_score(column, percentile)
+        intervals[name] = percentile_interval(column, percentile)
+        missing[name] = sum(v is None or v != v for v in column)
+    return {"scores": scores, "intervals": intervals,
+            "nominal": {name: ev.nominal.get(name) for name in objectives},
+            "evaluations": len(ev.rows), "field_solves": ev.field_solves,
+            "dynamics_runs": ev.dynamics_runs, "missing": missing}
