@@ -331,7 +331,8 @@ def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=Non
     candidate's band scene, with the matched (or varied) load of the nominal search kept
     for power objectives and the ``[circuit]`` rectifier for harvested power ->
     ``{"objectives": {objective: {"band_percentiles", "band_intervals", "band_nominal",
-    "percentile_error"}}, "evaluations"}``. The percentile error: the half-widths of the
+    "percentile_error"}}, "evaluations", "field_solves"}`` (field_solves: surrogates the
+    studies did not find in the cache; 0 when the candidate's own was cached). The percentile error: the half-widths of the
     percentiles' 95 % intervals combined over the band as sqrt(sum s^2) / n."""
     from ..uncertainty.study import candidate_percentiles
 
@@ -341,7 +342,7 @@ def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=Non
               "rectifier": [o for o in spec.objectives if o == "harvested_power"]}
     out = {o: {"band_percentiles": [], "band_intervals": [], "band_nominal": []}
            for o in spec.objectives}
-    evaluations = 0
+    evaluations = solves = 0
     for i, point in enumerate(points):
         for kind, objectives in groups.items():
             if not objectives:
@@ -357,6 +358,7 @@ def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=Non
             study = candidate_percentiles(scene, spec.uncertainty, names, spec.percentile,
                                           cache_dir=cache_dir, solve=solve, simulate=simulate)
             evaluations += study["evaluations"]
+            solves += study["field_solves"]
             for o, name in zip(objectives, names):
                 out[o]["band_percentiles"].append(study["scores"][name])
                 out[o]["band_intervals"].append(list(study["intervals"][name]))
@@ -366,7 +368,7 @@ def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=Non
         half = [h for h in half if math.isfinite(h)]
         r["percentile_error"] = (math.sqrt(sum(h * h for h in half)) / len(half)
                                  if half else 0.0)
-    return {"objectives": out, "evaluations": evaluations}
+    return {"objectives": out, "evaluations": evaluations, "field_solves": solves}
 
 
 def _point_value(objective, point, dynamics, curves, volume, load) -> float:

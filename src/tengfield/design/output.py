@@ -105,6 +105,11 @@ def cost_split(result) -> dict:
     split["field_per_new_geometry"] = sum(solved) / len(solved) if solved else 0.0
     split["new_geometries"] = len(solved)
     split["candidates"] = len(done)
+    if result.spec.percentile is not None:   # the studies of a percentile aggregate
+        robust = [r for r in done if "robust" in r]
+        split["uncertainty"] = sum(r["wall_s"].get("uncertainty", 0.0) for r in robust) / n
+        split["uncertainty_evaluations"] = sum(r["robust"]["evaluations"] for r in robust)
+        split["uncertainty_field_solves"] = sum(r["robust"]["field_solves"] for r in robust)
     return split
 
 
