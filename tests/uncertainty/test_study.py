@@ -65,8 +65,31 @@ def test_two_inputs_total_at_least_first_order_and_first_orders_sum_below_one(tm
             conf += r["S1_conf"]
         assert sum(r["S1"] for r in indices.values()) <= 1.0 + conf, name
     assert checked >= 3
+    assert study.main == study.summary["main_outputs"]
     # the restitution changes the dynamics: one group per distinct value (A and B rows)
     assert study.summary["dynamics_runs"] == 1 + 2 * 64
+
+
+def test_a_peak_equal_to_its_peak_to_peak_everywhere_is_shown_once():
+    """Q_SC of the real device starts from 0 at the lower plate: its peak is its
+    peak-to-peak in every evaluation and the figure shows it once; the bipolar
+    current's peak differs and is shown; one differing evaluation keeps the panel."""
+    from tengfield.uncertainty.evaluation import Evaluations
+    from tengfield.uncertainty.study import shown_outputs
+
+    def rows(q_peak_last):
+        return [{Q: 1.0, "peak.Q_sc_C": 1.0, "peak_to_peak.I_sc_A": 2.0, "peak.I_sc_A": 1.2},
+                {Q: 2.0, "peak.Q_sc_C": q_peak_last, "peak_to_peak.I_sc_A": 3.0,
+                 "peak.I_sc_A": 1.9}]
+
+    def shown(q_peak_last):
+        ev = Evaluations(rows=rows(q_peak_last), regimes=["", ""], nominal=rows(2.0)[1],
+                         nominal_regime="", field_solves=0, geometries=0, dynamics_runs=0,
+                         warnings=[])
+        return shown_outputs(list(rows(2.0)[0]), ev)
+    assert shown(2.0) == [Q, "peak_to_peak.I_sc_A", "peak.I_sc_A"]
+    assert shown(2.0 * (1 + 1e-8))[:3] == [Q, "peak_to_peak.I_sc_A", "peak.I_sc_A"]  # a rounding
+    assert shown(1.5) == [Q, "peak_to_peak.I_sc_A", "peak.Q_sc_C", "peak.I_sc_A"]
 
 
 def test_a_geometry_key_reuses_the_cached_fields(tmp_path):

@@ -6,6 +6,7 @@ scores one design candidate by a percentile of its objective over ``[uncertainty
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -33,7 +34,7 @@ class Study:
 
     @property
     def main(self) -> list[str]:
-        return main_outputs(self.output_keys)
+        return self.summary.get("main_outputs", main_outputs(self.output_keys))
 
 
 def output_keys(evaluations: Evaluations) -> list[str]:
@@ -71,7 +72,7 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
         "geometries": evaluations.geometries,
         "dynamics_runs": evaluations.dynamics_runs,
         "beyond_breakdown": evaluations.beyond_breakdown,
-        "output_keys": keys, "main_outputs": main_outputs(keys),
+        "output_keys": keys, "main_outputs": shown_outputs(keys, evaluations),
         "outputs": outputs, "notes": notes,
         "regimes": regime_fractions(evaluations.regimes),
         "nominal_regime": evaluations.nominal_regime,
@@ -88,6 +89,25 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
                     "the electrical stage only; field_solves counts the distinct field hashes "
                     "whose surrogate was not in the cache"},
     }
+
+
+def shown_outputs(keys, evaluations: Evaluations) -> list[str]:
+    """The main outputs shown (figure, terminal): :func:`main_outputs`, with a ``peak.X``
+    left out where it equals ``peak_to_peak.X`` (to 1e-6) in every evaluation and the nominal run
+    (a quantity that starts from 0, e.g. Q_SC: its peak is its peak-to-peak)."""
+    main = main_outputs(keys)
+    out = []
+    for name in main:
+        twin = "peak_to_peak." + name[len("peak."):] if name.startswith("peak.") else None
+        if twin in main:
+            pairs = [(row.get(name), row.get(twin)) for row in [*evaluations.rows,
+                                                               evaluations.nominal]]
+            if all(a is not None and b is not None and math.isclose(a, b, rel_tol=1e-6,
+                                                                    abs_tol=0.0)
+                   for a, b in pairs):
+                continue
+        out.append(name)
+    return out
 
 
 def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
