@@ -140,3 +140,33 @@ def test_a_candidates_percentile_score_is_its_worse_case_decile(tmp_path):
     assert count == 64
     # |σ| uniform on [10, 30]: its 10th percentile is 12 (quasi-random points: close)
     assert score == pytest.approx(per_sigma * 12.0, rel=0.02)
+
+
+def test_groups_that_keep_the_geometry_build_no_scene_for_the_field_phase(tmp_path,
+                                                                          monkeypatch):
+    """A contact key changes the dynamics, not the field: the field phase takes the
+    nominal geometry for its groups (the scene of a group's restitution is built once,
+    for its dynamics), and still obtains exactly one surrogate."""
+    from tengfield.scene import Scene
+
+    scene = scene_with({SIGMA: {"distribution": "uniform", "low": -30.0, "high": -10.0},
+                        "contact.restitution": {"distribution": "uniform", "low": 0.05,
+                                                "high": 0.5}}, samples=16)
+    calls = []
+    original = Scene.with_values
+
+    def counting(self, **sections):
+        import traceback
+        calls.append((traceback.extract_stack()[-2].name, sorted(sections)))
+        return original(self, **sections)
+    monkeypatch.setattr(Scene, "with_values", counting)
+    study = run_study(scene, cache_dir=tmp_path, solve=plate_model.plate_model_solve, jobs=1)
+    groups = study.summary["dynamics_runs"] - 1            # without the nominal run
+    assert groups == 32
+    # scenes with a group's restitution: one per group for its dynamics, none for the
+    # field phase (evaluate_study builds no scene)
+    assert sum(name == "_group_task" and "contact" in c for name, c in calls) == groups
+    assert not [c for name, c in calls if name == "evaluate_study"]
+    assert study.summary["geometries"] == 1 and study.summary["field_solves"] == 1
+    assert evaluation.changes_field({"device.gap_mm": 1.0})
+    assert not evaluation.changes_field({"contact.restitution": 0.3})

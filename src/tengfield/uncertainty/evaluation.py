@@ -71,6 +71,15 @@ def main_outputs(keys) -> list[str]:
     return [k for k in MAIN_OUTPUTS if k in keys]
 
 
+def changes_field(values: dict) -> bool:
+    """True when a ``"section.key"`` of ``values`` is one the field hash depends on
+    (:data:`tengfield.scene.schema.FIELD_KEYS`); else the scene's own geometry."""
+    from ..scene.schema import FIELD_KEYS
+
+    return any(key.split(".", 1)[1] in FIELD_KEYS.get(key.split(".", 1)[0], ())
+               for key in values)
+
+
 def is_electrical(key: str) -> bool:
     """True for a key that changes only the electrical stage (σ, circuit)."""
     return key == SIGMA_KEY or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
@@ -240,6 +249,8 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     geometry: dict[str, object] = {}
     if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
         for group in [nominal, *groups]:
+            if group.dynamic and not changes_field(group.dynamic):
+                continue       # the nominal geometry (no field key varied): no scene built
             ref = _reference(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
             geometry.setdefault(ref.field_hash(), ref)
