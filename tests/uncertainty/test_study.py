@@ -170,3 +170,23 @@ def test_groups_that_keep_the_geometry_build_no_scene_for_the_field_phase(tmp_pa
     assert study.summary["geometries"] == 1 and study.summary["field_solves"] == 1
     assert evaluation.changes_field({"device.gap_mm": 1.0})
     assert not evaluation.changes_field({"contact.restitution": 0.3})
+
+
+def test_excitation_draws_are_evaluated_at_their_own_excitation(tmp_path):
+    """Groups that share a surrogate keep their own scene: a draw of the frequency and
+    the amplitude gives the outputs of ``tengfield run`` at that excitation (its own
+    steady window), for every evaluation, not the first group's."""
+    scene = scene_with({"excitation.frequency_hz": {"distribution": "uniform", "low": 15.0,
+                                                    "high": 30.0},
+                        "excitation.amplitude_mm": {"distribution": "uniform", "low": 1.0,
+                                                    "high": 2.0}},
+                       samples=20, method="monte-carlo")
+    study = run_study(scene, cache_dir=tmp_path, solve=plate_model.plate_model_solve, jobs=1)
+    assert study.summary["field_solves"] == 1
+    for i in (0, 5, 13, 19):
+        f, a = study.values[i]
+        point = scene.with_values(excitation={"frequency_hz": f, "amplitude_mm": a})
+        summary = run(point, cache_dir=tmp_path, solve=plate_model.plate_model_solve).summary
+        row = study.evaluations.rows[i]
+        for key, value in summary["peak_to_peak"].items():
+            assert row[f"peak_to_peak.{key}"] == pytest.approx(value, rel=1e-12), (i, key)
