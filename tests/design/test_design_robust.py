@@ -135,6 +135,8 @@ def test_p10_picks_a_more_robust_stroke_than_mean(tmp_path, cache):
     assert summary["best"]["robust"]["percentile"] == 10.0
     assert summary["best"]["robust"]["evaluations"] == 32
     assert (tmp_path / "out" / "design.png").stat().st_size > 10_000
+    assert "# charge (p10 over [uncertainty.vary], mean over 1 band point) = " in \
+        (tmp_path / "out" / "best.toml").read_text()
     header = (tmp_path / "out" / "design.csv").read_text().splitlines()[0]
     assert "charge_p10_at_33hz_1mm" in header and "uncertainty_evaluations" in header
 

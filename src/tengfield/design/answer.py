@@ -247,7 +247,7 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
     lines = [f"{title}: " + ", ".join(f"{k} = {v:g}" for k, v in d["values"].items())
              + f"  ->  plate spacing h = stroke + ball diameter = {d['plate_spacing_mm']:g} mm",
              f"  {spec.objective} = {d['objective'] * factor:.4g} ± "
-             f"{d['objective_error'] * factor:.2g} {label} ({_over(spec)} {n} band "
+             f"{d['objective_error'] * factor:.2g} {label} ({aggregate_words(spec)} {n} band "
              f"point{'s' * (n != 1)}; ± = field/surrogate {d['field_error'] * factor:.2g}"
              f" + dynamics {d['dynamics_error'] * factor:.2g}"
              + (f" + percentile {d['robust']['percentile_error'] * factor:.2g}"
@@ -275,8 +275,9 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
     return lines
 
 
-def _over(spec) -> str:
-    """How the band was aggregated, in words."""
+def aggregate_words(spec) -> str:
+    """How the band was aggregated, in words ("mean over", "p10 over [uncertainty.vary],
+    mean over"), followed by the band's point count."""
     if spec.percentile is not None:
         return f"{spec.aggregate} over [uncertainty.vary], mean over"
     return f"{spec.aggregate} over"

@@ -5,7 +5,8 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_toml, write_json, write_rows, write_text
-from .answer import (band_table_lines, chosen_band_point, describe, design_answer, on_bounds,
+from .answer import (aggregate_words, band_table_lines, chosen_band_point, describe,
+                     design_answer, on_bounds,
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from .spec import OBJECTIVES, OTHER_VARY
@@ -217,7 +218,7 @@ def best_toml_header(result) -> str:
     why = "the band point nearest the band's centre where the design scores non-zero" \
         if value != 0 else "no band point scores non-zero: the largest"
     return (f"best design of `tengfield design` on {result.scene.source}\n"
-            f"{objective} ({spec.aggregate} over {n} band point{'s' * (n != 1)}) = "
+            f"{objective} ({aggregate_words(spec)} {n} band point{'s' * (n != 1)}) = "
             f"{best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
             + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
             + f" (plate spacing h = stroke + ball diameter = "
