@@ -63,6 +63,35 @@ def test_design_on_two_ranks_equals_the_serial_design(tmp_path_factory):
         assert other == strip(serial.rows)
 
 
+@pytest.mark.mpi
+def test_p10_design_on_two_ranks_equals_the_serial_design(tmp_path_factory):
+    """aggregate = "p10": each candidate's study runs on the rank that scores it; the
+    rows (percentiles, their intervals, the study's counts) are the serial ones."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    cache = comm.bcast(str(tmp_path_factory.mktemp("cache")) if comm.rank == 0 else None)
+    scene = fx.scene_with(
+        design={"objective": "charge", "candidates": 8, "batch": 4, "seed": 1,
+                "aggregate": "p10", "settle_periods": 10, "window_periods": 10,
+                "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]},
+                "excitation": {"frequency_hz": [33.0], "amplitude_mm": [1.0]}},
+        contact={"restitution": 0.8},
+        uncertainty={"samples": 32, "method": "monte-carlo", "seed": 0, "vary": {
+            "contact.restitution": {"distribution": "uniform", "low": 0.05, "high": 0.8}}})
+    parallel = design(scene, comm=comm, cache_dir=cache, solve=fx.plate_model_solve)
+    serial = design(scene, cache_dir=cache + "-serial", solve=fx.plate_model_solve, jobs=1)
+
+    def strip(rows):
+        return [{k: v for k, v in r.items() if k not in ("wall_s", "field_status")}
+                for r in rows]
+    assert strip(parallel.rows) == strip(serial.rows)
+    assert all(r["uncertainty_evaluations"] == 32 for r in serial.rows if r["status"] == "ok")
+    assert parallel.ranking == serial.ranking
+    for other in comm.allgather(strip(parallel.rows)):
+        assert other == strip(serial.rows)
+
+
 def env():
     return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                 OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
@@ -139,3 +168,71 @@ def test_cli_bad_design_is_one_line_and_jobs_next_to_mpirun_is_refused(tmp_path,
     assert result.stderr.strip() == ("tengfield: error: [design] candidates = 3 is out of "
                                      "range: allowed whole numbers [4, 100000]")
     assert not (tmp_path / "out").exists()
+
+
+ROBUST_SCENE = """
+[contact]
+restitution = 0.8
+[design]
+objective = "charge"
+aggregate = "p10"
+candidates = 4
+batch = 2
+seed = 3
+settle_periods = 10
+window_periods = 10
+samples_per_period = 120
+[design.vary]
+gap_mm = [1.5, 4.0]
+[design.excitation]
+frequency_hz = [33.0]
+amplitude_mm = [1.0]
+[uncertainty]
+samples = 32
+method = "monte-carlo"
+[uncertainty.vary]
+"contact.restitution" = { distribution = "uniform", low = 0.05, high = 0.8 }
+"device.surface_charge_uC_per_m2" = { distribution = "uniform", low = -10.0, high = -6.0 }
+"""
+
+
+@pytest.mark.slow   # real field solves (4 geometries) three times: serial, --jobs 2, mpirun
+def test_cli_p10_design_serial_jobs_and_mpirun_write_the_same_rows(tmp_path, run_cli):
+    """aggregate = "p10" end to end (figures on): the study of each candidate reuses its
+    cached surrogate (no further field solve), the sample count is stated, and serial,
+    --jobs 2 and mpirun -n 2 write the same design.csv."""
+    if shutil.which("mpirun") is None:
+        pytest.skip("mpirun not installed")
+    scene = tmp_path / "robust.toml"
+    scene.write_text(ROBUST_SCENE)
+    serial = run_cli("design", scene, "-o", tmp_path / "serial", "--cache-dir",
+                     tmp_path / "cache-serial", "--jobs", "1")
+    assert serial.returncode == 0, serial.stderr
+    assert "the 10th percentile over [uncertainty.vary] (contact.restitution, " \
+           "device.surface_charge_uC_per_m2; monte-carlo, N = 32: 32 evaluations per band " \
+           "point)" in serial.stdout
+    summary = json.loads((tmp_path / "serial" / "design.json").read_text())
+    assert summary["settings"]["uncertainty"]["samples"] == 32
+    assert summary["cost_per_candidate_s"]["uncertainty_evaluations"] == 4 * 32
+    assert summary["cost_per_candidate_s"]["uncertainty_field_solves"] == 0
+    best = summary["best"]
+    assert best["objective"] < best["robust"]["nominal"]   # the worse decile of σ and e
+    assert (tmp_path / "serial" / "design.png").stat().st_size > 10_000
+    jobs = run_cli("design", scene, "-o", tmp_path / "jobs", "--cache-dir",
+                   tmp_path / "cache-jobs", "--jobs", "2")
+    assert jobs.returncode == 0, jobs.stderr
+    parallel = subprocess.run(
+        ["mpirun", "-n", "2", sys.executable, "-m", "tengfield.cli", "design", str(scene),
+         "-o", str(tmp_path / "mpi"), "--cache-dir", str(tmp_path / "cache-mpi")],
+        env=env(), capture_output=True, text=True, timeout=900)
+    assert parallel.returncode == 0, parallel.stderr
+    want = rows_of(tmp_path / "serial" / "design.csv")
+    assert rows_of(tmp_path / "jobs" / "design.csv") == want
+    got = rows_of(tmp_path / "mpi" / "design.csv")
+    # the error bar holds the field solver's own error estimate (~1e-13 apart under mpirun)
+
+    def exact(rows):
+        return [{k: v for k, v in r.items() if k != "charge_error_C"} for r in rows]
+    assert exact(got) == exact(want)
+    assert [float(r["charge_error_C"]) for r in got] == pytest.approx(
+        [float(r["charge_error_C"]) for r in want], rel=1e-9)

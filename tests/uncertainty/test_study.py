@@ -65,8 +65,31 @@ def test_two_inputs_total_at_least_first_order_and_first_orders_sum_below_one(tm
             conf += r["S1_conf"]
         assert sum(r["S1"] for r in indices.values()) <= 1.0 + conf, name
     assert checked >= 3
+    assert study.main == study.summary["main_outputs"]
     # the restitution changes the dynamics: one group per distinct value (A and B rows)
     assert study.summary["dynamics_runs"] == 1 + 2 * 64
+
+
+def test_a_peak_equal_to_its_peak_to_peak_everywhere_is_shown_once():
+    """Q_SC of the real device starts from 0 at the lower plate: its peak is its
+    peak-to-peak in every evaluation and the figure shows it once; the bipolar
+    current's peak differs and is shown; one differing evaluation keeps the panel."""
+    from tengfield.uncertainty.evaluation import Evaluations
+    from tengfield.uncertainty.study import shown_outputs
+
+    def rows(q_peak_last):
+        return [{Q: 1.0, "peak.Q_sc_C": 1.0, "peak_to_peak.I_sc_A": 2.0, "peak.I_sc_A": 1.2},
+                {Q: 2.0, "peak.Q_sc_C": q_peak_last, "peak_to_peak.I_sc_A": 3.0,
+                 "peak.I_sc_A": 1.9}]
+
+    def shown(q_peak_last):
+        ev = Evaluations(rows=rows(q_peak_last), regimes=["", ""], nominal=rows(2.0)[1],
+                         nominal_regime="", field_solves=0, geometries=0, dynamics_runs=0,
+                         warnings=[])
+        return shown_outputs(list(rows(2.0)[0]), ev)
+    assert shown(2.0) == [Q, "peak_to_peak.I_sc_A", "peak.I_sc_A"]
+    assert shown(2.0 * (1 + 1e-8))[:3] == [Q, "peak_to_peak.I_sc_A", "peak.I_sc_A"]  # a rounding
+    assert shown(1.5) == [Q, "peak_to_peak.I_sc_A", "peak.Q_sc_C", "peak.I_sc_A"]
 
 
 def test_a_geometry_key_reuses_the_cached_fields(tmp_path):
@@ -117,3 +140,53 @@ def test_a_candidates_percentile_score_is_its_worse_case_decile(tmp_path):
     assert count == 64
     # |σ| uniform on [10, 30]: its 10th percentile is 12 (quasi-random points: close)
     assert score == pytest.approx(per_sigma * 12.0, rel=0.02)
+
+
+def test_groups_that_keep_the_geometry_build_no_scene_for_the_field_phase(tmp_path,
+                                                                          monkeypatch):
+    """A contact key changes the dynamics, not the field: the field phase takes the
+    nominal geometry for its groups (the scene of a group's restitution is built once,
+    for its dynamics), and still obtains exactly one surrogate."""
+    from tengfield.scene import Scene
+
+    scene = scene_with({SIGMA: {"distribution": "uniform", "low": -30.0, "high": -10.0},
+                        "contact.restitution": {"distribution": "uniform", "low": 0.05,
+                                                "high": 0.5}}, samples=16)
+    calls = []
+    original = Scene.with_values
+
+    def counting(self, **sections):
+        import traceback
+        calls.append((traceback.extract_stack()[-2].name, sorted(sections)))
+        return original(self, **sections)
+    monkeypatch.setattr(Scene, "with_values", counting)
+    study = run_study(scene, cache_dir=tmp_path, solve=plate_model.plate_model_solve, jobs=1)
+    groups = study.summary["dynamics_runs"] - 1            # without the nominal run
+    assert groups == 32
+    # scenes with a group's restitution: one per group for its dynamics, none for the
+    # field phase (evaluate_study builds no scene)
+    assert sum(name == "_group_task" and "contact" in c for name, c in calls) == groups
+    assert not [c for name, c in calls if name == "evaluate_study"]
+    assert study.summary["geometries"] == 1 and study.summary["field_solves"] == 1
+    assert evaluation.changes_field({"device.gap_mm": 1.0})
+    assert not evaluation.changes_field({"contact.restitution": 0.3})
+
+
+def test_excitation_draws_are_evaluated_at_their_own_excitation(tmp_path):
+    """Groups that share a surrogate keep their own scene: a draw of the frequency and
+    the amplitude gives the outputs of ``tengfield run`` at that excitation (its own
+    steady window), for every evaluation, not the first group's."""
+    scene = scene_with({"excitation.frequency_hz": {"distribution": "uniform", "low": 15.0,
+                                                    "high": 30.0},
+                        "excitation.amplitude_mm": {"distribution": "uniform", "low": 1.0,
+                                                    "high": 2.0}},
+                       samples=20, method="monte-carlo")
+    study = run_study(scene, cache_dir=tmp_path, solve=plate_model.plate_model_solve, jobs=1)
+    assert study.summary["field_solves"] == 1
+    for i in (0, 5, 13, 19):
+        f, a = study.values[i]
+        point = scene.with_values(excitation={"frequency_hz": f, "amplitude_mm": a})
+        summary = run(point, cache_dir=tmp_path, solve=plate_model.plate_model_solve).summary
+        row = study.evaluations.rows[i]
+        for key, value in summary["peak_to_peak"].items():
+            assert row[f"peak_to_peak.{key}"] == pytest.approx(value, rel=1e-12), (i, key)

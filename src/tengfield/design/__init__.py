@@ -2,8 +2,10 @@
 
 ``[design]`` (:mod:`tengfield.design.spec`) names the objective (power density into the
 matched load, power, Q_SC, harvested power, or the stroke), the band of excitations it
-is aggregated over (mean or worst case), the keys to vary and the budget. Every
-candidate gets its own field surrogate (cached by field hash, coarse stated settings),
+is aggregated over (mean or worst case; or ``"p10"``: a percentile over the scene's
+``[uncertainty.vary]`` at each band point, then the band's mean), the keys to vary and
+the budget. Every candidate gets its own field surrogate (cached by field hash, coarse
+stated settings),
 its dynamics at every band point and its circuit; the search (Sobol' start, shrinking
 boxes) runs its rounds over the MPI task farm or worker processes (docs/design.md).
 

@@ -144,6 +144,7 @@ def describe(result, row) -> dict:
         sigma = base.get("surface_charge_uC_per_m2")
     error = row["objective_error"]
     dyn = row.get("dynamics_error", {}).get(obj, 0.0)
+    pct = row["objectives"].get(obj, {}).get("percentile_error", 0.0)
     return {
         "index": row["index"], "values": dict(row["values"]),
         "plate_spacing_mm": float(f"{device['stroke_mm'] + device['ball_diameter_mm']:.12g}"),
@@ -154,9 +155,24 @@ def describe(result, row) -> dict:
         == "breakdown",
         "load": _load(result, row),
         "objective": row["objective"], "objective_error": error,
-        "field_error": error - dyn, "dynamics_error": dyn,
+        "field_error": error - dyn - pct, "dynamics_error": dyn,
         "band_points": band_points(result, row),
+        **({"robust": robust_statement(result, row)} if "robust" in row else {}),
     }
+
+
+def robust_statement(result, row) -> dict:
+    """A percentile aggregate stated: the percentile, the study's sample count and
+    evaluations, the value at the nominal inputs, the percentile's sampling error and
+    the percentile at each band point."""
+    spec, obj = result.spec, result.spec.objective
+    u = spec.uncertainty
+    got = row["objectives"][obj]
+    return {"percentile": spec.percentile, "samples": u.samples, "method": u.method,
+            "evaluations_per_band_point": u.evaluations,
+            "evaluations": row.get("uncertainty_evaluations"), "inputs": list(u.keys),
+            "nominal": got.get("nominal"), "percentile_error": got.get("percentile_error"),
+            "band_percentiles": row["robust"]["objectives"][obj]["band_percentiles"]}
 
 
 def runner_up(result) -> dict | None:
@@ -243,9 +259,19 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
     lines = [f"{title}: " + ", ".join(f"{k} = {v:g}" for k, v in d["values"].items())
              + f"  ->  plate spacing h = stroke + ball diameter = {d['plate_spacing_mm']:g} mm",
              f"  {spec.objective} = {d['objective'] * factor:.4g} ± "
-             f"{d['objective_error'] * factor:.2g} {label} ({spec.aggregate} over {n} band "
+             f"{d['objective_error'] * factor:.2g} {label} ({aggregate_words(spec)} {n} band "
              f"point{'s' * (n != 1)}; ± = field/surrogate {d['field_error'] * factor:.2g}"
-             f" + dynamics {d['dynamics_error'] * factor:.2g})"]
+             f" + dynamics {d['dynamics_error'] * factor:.2g}"
+             + (f" + percentile {d['robust']['percentile_error'] * factor:.2g}"
+                if "robust" in d else "") + ")"]
+    if "robust" in d:
+        r = d["robust"]
+        lines.append(f"  = the {r['percentile']:g}th percentile over [uncertainty.vary] "
+                     f"({', '.join(r['inputs'])}; {r['method']}, N = {r['samples']}: "
+                     f"{r['evaluations_per_band_point']} evaluations per band point), the "
+                     f"band's mean; ± includes its sampling error "
+                     f"{r['percentile_error'] * factor:.2g}; at the nominal inputs "
+                     f"{r['nominal'] * factor:.4g} {label}")
     if d["changed"]:
         lines.append("  changed to follow: " + ", ".join(
             f"{k} {c['from']:g} -> {c['to']:g}" for k, c in d["changed"].items()))
@@ -261,6 +287,14 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
     return lines
 
 
+def aggregate_words(spec) -> str:
+    """How the band was aggregated, in words ("mean over", "p10 over [uncertainty.vary],
+    mean over"), followed by the band's point count."""
+    if spec.percentile is not None:
+        return f"{spec.aggregate} over [uncertainty.vary], mean over"
+    return f"{spec.aggregate} over"
+
+
 def _ohm(r: float) -> str:
     for label, f in (("GΩ", 1e9), ("MΩ", 1e6), ("kΩ", 1e3)):
         if r >= f:
@@ -274,14 +308,17 @@ def band_table_lines(result, row) -> list[str]:
     pts = band_points(result, row)
     label, factor = readable_unit(unit, max((abs(p["value"]) for p in pts
                                              if np.isfinite(p["value"])), default=0.0))
+    robust = row.get("robust", {}).get("objectives", {}).get(result.spec.objective)
+    tag = f"   {result.spec.aggregate} [{label}]" if robust else ""
     lines = [f"  {'frequency':>10} {'amplitude':>10}  {'regime':<16} {result.spec.objective} "
-             f"[{label}]"]
-    for p in pts:
+             f"[{label}]" + (" (nominal)" if robust else "") + tag]
+    for i, p in enumerate(pts):
         amp = f"{p['amplitude_mm']:g} mm" if p["amplitude_mm"] is not None \
             else result.scene.excitation.kind
         spread = f" ± {p['spread'] * factor:.2g} (windows)" if p["spread"] else ""
         lines.append(f"  {p['frequency_hz']:>7g} Hz {amp:>10}  {p['regime']:<16} "
-                     f"{p['value'] * factor:.4g}{spread}")
+                     f"{p['value'] * factor:.4g}{spread}"
+                     + (f"   {robust['band_percentiles'][i] * factor:.4g}" if robust else ""))
     return lines
 
 

@@ -289,18 +289,89 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     row["band_spread"] = dynamics_spread(spec, points, dynamics, curves, volume, row, simulate)
     row["windows"] = [DYNAMICS_WINDOWS if irregular(d.regime) else 1 for d in dynamics]
     row["wall_s"]["circuit"] = time.perf_counter() - start
+    robust = None
+    if spec.percentile is not None:   # the objectives' percentiles over [uncertainty.vary]
+        start = time.perf_counter()
+        try:
+            robust = robust_values(spec, points, row, cache_dir=cache_dir, solve=solve,
+                                   simulate=simulate)
+        except TengfieldError as exc:
+            return {**row, "status": "skipped", "reason": f"uncertainty: {exc}"}
+        row["wall_s"]["uncertainty"] = time.perf_counter() - start
+        row["robust"] = robust
+        row["uncertainty_evaluations"] = robust["evaluations"]
     eps = (0.0 if math.isnan(row["field_error"]) else row["field_error"]) + \
         (0.0 if math.isnan(row["interpolation_error"]) else row["interpolation_error"])
     row["relative_error"] = eps
+    how = spec.band_aggregate
     for objective, vals in band_values.items():
-        value = aggregate_values(vals, spec.aggregate)
-        field_part = abs(value) * OBJECTIVES[objective][1] * eps
-        dyn_part = aggregate_spread(vals, row["band_spread"][objective], spec.aggregate)
-        row["objectives"][objective] = {"value": value, "error": field_part + dyn_part}
+        value = aggregate_values(vals, how)
+        dyn_part = aggregate_spread(vals, row["band_spread"][objective], how)
+        entry, pct_part = {"value": value}, 0.0
+        if robust is not None:   # the band's mean of the percentiles; the nominal kept
+            r = robust["objectives"][objective]
+            pct_part = r["percentile_error"]
+            entry = {"value": aggregate_values(r["band_percentiles"], "mean"),
+                     "nominal": value, "percentile_error": pct_part}
+        field_part = abs(entry["value"]) * OBJECTIVES[objective][1] * eps
+        row["objectives"][objective] = {**entry, "error": field_part + dyn_part + pct_part}
         row["dynamics_error"][objective] = dyn_part
     row["objective"] = row["objectives"][spec.objective]["value"]
     row["objective_error"] = row["objectives"][spec.objective]["error"]
     return row
+
+
+#: design objective -> the run summary's output a percentile aggregate takes (SI)
+ROBUST_OUTPUTS = {"power": "load.mean_power_W", "power_density": "load.power_density_W_per_m3",
+                  "charge": "peak_to_peak.Q_sc_C", "voltage": "peak_to_peak.V_oc_V",
+                  "current": "peak_to_peak.I_sc_A",
+                  "harvested_power": "rectifier.average_harvested_power_W"}
+
+
+def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=None) -> dict:
+    """``[design] aggregate = "pNN"``: at each band point the study of ``[uncertainty]``
+    (:func:`tengfield.uncertainty.study.candidate_percentiles`, on this process) on the
+    candidate's band scene, with the matched (or varied) load of the nominal search kept
+    for power objectives and the ``[circuit]`` rectifier for harvested power ->
+    ``{"objectives": {objective: {"band_percentiles", "band_intervals", "band_nominal",
+    "percentile_error"}}, "evaluations", "field_solves"}`` (field_solves: surrogates the
+    studies did not find in the cache; 0 when the candidate's own was cached). The percentile error: the half-widths of the
+    percentiles' 95 % intervals combined over the band as sqrt(sum s^2) / n."""
+    from ..uncertainty.study import candidate_percentiles
+
+    power = [o for o in spec.objectives if o in ("power", "power_density")]
+    groups = {"load": power + [o for o in spec.objectives
+                               if o in ("charge", "voltage", "current")],
+              "rectifier": [o for o in spec.objectives if o == "harvested_power"]}
+    out = {o: {"band_percentiles": [], "band_intervals": [], "band_nominal": []}
+           for o in spec.objectives}
+    evaluations = solves = 0
+    for i, point in enumerate(points):
+        for kind, objectives in groups.items():
+            if not objectives:
+                continue
+            if kind == "rectifier":
+                scene = point.with_values(circuit={"kind": "rectifier"})
+            elif power:
+                scene = point.with_values(circuit={"kind": "load",
+                                                   "load_ohm": float(_load_of(row, i))})
+            else:
+                scene = point
+            names = [ROBUST_OUTPUTS[o] for o in objectives]
+            study = candidate_percentiles(scene, spec.uncertainty, names, spec.percentile,
+                                          cache_dir=cache_dir, solve=solve, simulate=simulate)
+            evaluations += study["evaluations"]
+            solves += study["field_solves"]
+            for o, name in zip(objectives, names):
+                out[o]["band_percentiles"].append(study["scores"][name])
+                out[o]["band_intervals"].append(list(study["intervals"][name]))
+                out[o]["band_nominal"].append(study["nominal"][name])
+    for o, r in out.items():
+        half = [0.5 * (hi - lo) for lo, hi in r["band_intervals"]]
+        half = [h for h in half if math.isfinite(h)]
+        r["percentile_error"] = (math.sqrt(sum(h * h for h in half)) / len(half)
+                                 if half else 0.0)
+    return {"objectives": out, "evaluations": evaluations, "field_solves": solves}
 
 
 def _point_value(objective, point, dynamics, curves, volume, load) -> float:
@@ -332,7 +403,7 @@ def _objective_values(objective, spec, scene, points, dynamics, curves, volume, 
         powers = [_load_power(p, d, curves, load) for p, d in zip(points, dynamics)]
         row["load_ohm"] = load
     elif spec.load == "one":
-        load, powers = matched_load(points, dynamics, curves, spec.aggregate)
+        load, powers = matched_load(points, dynamics, curves, spec.band_aggregate)
         row["load_ohm"] = load
     else:
         loads, powers = [], []

@@ -5,7 +5,8 @@ import math
 from pathlib import Path
 
 from .._files import atomic_path, scene_dir, scene_toml, write_json, write_rows, write_text
-from .answer import (band_table_lines, chosen_band_point, describe, design_answer, on_bounds,
+from .answer import (aggregate_words, band_table_lines, chosen_band_point, describe,
+                     design_answer, on_bounds,
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from ..scene.schema import update_section
@@ -27,6 +28,14 @@ def csv_columns(result) -> list[str]:
     for o in spec.objectives:
         cols += [f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"
                  for f, a in spec.band]
+    if spec.percentile is not None:   # the percentile aggregate: nominal and per band point
+        tag = f"p{spec.percentile:g}"
+        for o in spec.objectives:
+            unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
+            cols += [f"{o}_nominal_{unit}", f"{o}_percentile_error_{unit}"]
+            cols += [f"{o}_{tag}_at_{_band_label(f, a, result.scene.excitation.kind)}"
+                     for f, a in spec.band]
+        cols.append("uncertainty_evaluations")
     cols += [f"{spec.objective}_spread_per_band_point", "windows",
              "regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
@@ -57,6 +66,17 @@ def csv_record(result, row) -> dict:
         rec[f"{o}_error_{unit}"] = got.get("error")
         for (f, a), v in zip(spec.band, row["band_values"].get(o, [None] * len(spec.band))):
             rec[f"{o}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
+    if spec.percentile is not None and "robust" in row:
+        tag = f"p{spec.percentile:g}"
+        for o in spec.objectives:
+            unit = OBJECTIVES[o][0].replace("/", "_per_").replace("^", "")
+            got = row["objectives"].get(o, {})
+            rec[f"{o}_nominal_{unit}"] = got.get("nominal")
+            rec[f"{o}_percentile_error_{unit}"] = got.get("percentile_error")
+            pts = row["robust"]["objectives"][o]["band_percentiles"]
+            for (f, a), v in zip(spec.band, pts):
+                rec[f"{o}_{tag}_at_{_band_label(f, a, result.scene.excitation.kind)}"] = v
+        rec["uncertainty_evaluations"] = row.get("uncertainty_evaluations")
     rec.update({f"{spec.objective}_spread_per_band_point":
                 row.get("band_spread", {}).get(spec.objective, []),
                 "windows": row.get("windows", []), "regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
@@ -87,6 +107,11 @@ def cost_split(result) -> dict:
     split["field_per_new_geometry"] = sum(solved) / len(solved) if solved else 0.0
     split["new_geometries"] = len(solved)
     split["candidates"] = len(done)
+    if result.spec.percentile is not None:   # the studies of a percentile aggregate
+        robust = [r for r in done if "robust" in r]
+        split["uncertainty"] = sum(r["wall_s"].get("uncertainty", 0.0) for r in robust) / n
+        split["uncertainty_evaluations"] = sum(r["robust"]["evaluations"] for r in robust)
+        split["uncertainty_field_solves"] = sum(r["robust"]["field_solves"] for r in robust)
     return split
 
 
@@ -104,7 +129,9 @@ def design_summary(result) -> dict:
             "relative_error": best.get("relative_error"),
             "objectives": best["objectives"], "band_values": best["band_values"],
             "regimes": best["regimes"], "upper_contact_fraction": best["upper_contact_fraction"],
-            "load_ohm": best["load_ohm"], "followed": followed_geometry(
+            "load_ohm": best["load_ohm"],
+            **({"robust": answer["best"]["robust"]} if "robust" in answer["best"] else {}),
+            "followed": followed_geometry(
                 result.scene.to_dict()["device"],
                 {k: v for k, v in best["values"].items() if k not in OTHER_VARY})
             if spec.geometry == "follow" else {},
@@ -192,7 +219,7 @@ def best_toml_header(result) -> str:
     why = "the band point nearest the band's centre where the design scores non-zero" \
         if value != 0 else "no band point scores non-zero: the largest"
     return (f"best design of `tengfield design` on {result.scene.source}\n"
-            f"{objective} ({spec.aggregate} over {n} band point{'s' * (n != 1)}) = "
+            f"{objective} ({aggregate_words(spec)} {n} band point{'s' * (n != 1)}) = "
             f"{best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
             + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
             + f" (plate spacing h = stroke + ball diameter = "

@@ -9,7 +9,9 @@ Scene syntax (every key optional except ``[design.vary]``)::
                                   # voltage (V_OC pp [V]), current (I_SC pp [A]);
                                   # or a list of up to four: the first drives the search, all
                                   # are reported (design.png: the Pareto plot of the first two)
-    aggregate = "mean"            # over the band: "mean" or "min" (worst case)
+    aggregate = "mean"            # over the band: "mean" or "min" (worst case), or "pNN" (e.g.
+                                  # "p10"): the NN-th percentile over [uncertainty.vary] at each
+                                  # band point, then the band's mean (needs [uncertainty])
     candidates = 200              # evaluation budget (distinct candidates)
     seed = 1
     require = "none"              # or "upper-contact" / "regular-contact" at every band point
@@ -83,12 +85,21 @@ class DesignSpec:
     samples_per_period: int = 200
     resolution: float = 1e-3
     initial_candidates: int = 0          # 0: the rule of initial_count()
+    #: aggregate "pNN": NN, and the validated [uncertainty] study it is taken over
+    percentile: float | None = None
+    uncertainty: object = None
     vary: dict = _field(default_factory=dict)
     band: list = _field(default_factory=list)
 
     @property
     def objective(self) -> str:
         return self.objectives[0]
+
+    @property
+    def band_aggregate(self) -> str:
+        """How band points are combined: ``aggregate``, or "mean" (of the band points'
+        percentiles) for a percentile aggregate; the matched load is chosen by it."""
+        return "mean" if self.percentile is not None else self.aggregate
 
     def initial_count(self) -> int:
         """Space-filling candidates: the given count, else the largest power of 2 <= 40 %
@@ -109,7 +120,27 @@ class DesignSpec:
                 "samples_per_period": self.samples_per_period, "resolution": self.resolution,
                 "initial_candidates": self.initial_count(),
                 "vary": {k: list(v) for k, v in self.vary.items()},
-                "band": [{"frequency_hz": f, "amplitude_mm": a * 1e3} for f, a in self.band]}
+                "band": [{"frequency_hz": f, "amplitude_mm": a * 1e3} for f, a in self.band],
+                **({"uncertainty": robust_dict(self)} if self.percentile is not None else {})}
+
+
+def robust_dict(spec: "DesignSpec") -> dict:
+    """design.json's statement of a percentile aggregate: the percentile, the study's
+    sample count, evaluations per band point and per candidate, its distributions."""
+    u = spec.uncertainty
+    return {"percentile": spec.percentile, "samples": u.samples, "method": u.method,
+            "seed": u.seed, "evaluations_per_band_point": u.evaluations,
+            "evaluations_per_candidate": u.evaluations * len(spec.band),
+            "distributions": {d.key: d.as_dict() for d in u.inputs},
+            "rule": ROBUST_RULE}
+
+
+#: the rule of a percentile aggregate, stated in design.json and docs/design.md
+ROBUST_RULE = ("at each band point the objective's percentile over the [uncertainty] study's "
+               "evaluations of the candidate (its matched load, found at the nominal inputs, "
+               "kept); the band's mean of these is the score; error bar: field/surrogate + "
+               "the spread over windows + the percentile's sampling error (half-width of its "
+               "distribution-free 95 % interval, combined over the band as sqrt(sum s^2) / n)")
 
 
 def _suggest(word, options) -> str:
@@ -129,6 +160,54 @@ def _whole(key: str, value, lo: int, hi: int) -> int:
         raise SceneError(f"[design] {key} = {value!r} is out of range: allowed whole numbers "
                          f"[{lo}, {hi}]")
     return value
+
+
+def _aggregate(value) -> tuple[str, float | None]:
+    """(aggregate, percentile or None): "mean", "min" or "pNN" with 0 < NN < 100."""
+    from ..uncertainty.statistics import parse_percentile
+
+    allowed = ", ".join(map(repr, AGGREGATES)) + ' or "pNN" (0 < NN < 100, e.g. "p10")'
+    try:
+        p = parse_percentile(value) if isinstance(value, str) else None
+    except ValueError:
+        p = -1.0
+    if p is not None and p > 0:
+        return value, p
+    if isinstance(value, str) and value in AGGREGATES:
+        return value, None
+    raise SceneError(f"[design] aggregate = {value!r} is not allowed: choose one of {allowed}"
+                     + (_suggest(value, AGGREGATES) if p is None else ""))
+
+
+#: [uncertainty.vary] keys a percentile aggregate cannot vary: the design sets them
+#: (the band's excitation and run, the matched or varied load)
+ROBUST_FIXED = ("excitation.frequency_hz", "excitation.amplitude_mm", "circuit.load_ohm")
+
+
+def _robust_study(scene, spec: DesignSpec):
+    """The validated ``[uncertainty]`` study a percentile aggregate is taken over."""
+    from ..uncertainty.spec import uncertainty_spec
+
+    where = f"[design] aggregate = {spec.aggregate!r}"
+    raw = scene.raw.get("uncertainty")
+    if not isinstance(raw, dict) or not raw.get("vary"):
+        raise SceneError(f"{where} needs an [uncertainty] section with [uncertainty.vary] "
+                         "(the inputs not known, docs/uncertainty.md); allowed without it: "
+                         "'mean', 'min'")
+    if "stroke" in spec.objectives:
+        raise SceneError(f"{where} with objective 'stroke': the stroke does not vary over "
+                         "[uncertainty.vary]; allowed aggregates for it: 'mean', 'min'")
+    study = uncertainty_spec(scene)
+    for key in study.keys:
+        section, name = key.split(".", 1)
+        varied = section == "device" and name in spec.vary or \
+            name in OTHER_VARY and OTHER_VARY[name] == section and name in spec.vary
+        if varied or key in ROBUST_FIXED or section == "run":
+            raise SceneError(f"[uncertainty.vary] {key!r} with {where}: the design sets this "
+                             "key (a [design.vary] key, the band's excitation and run, the "
+                             "load); allowed: the other numeric keys (e.g. "
+                             "device.surface_charge_uC_per_m2, contact.restitution)")
+    return study
 
 
 def vary_spec(key: str) -> tuple[str, tuple]:
@@ -266,7 +345,7 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
         raise SceneError(f"[design] objective = {objective!r}: give one objective or a list "
                          "of up to four different ones")
     spec.objectives = [_choice("objective", o, tuple(OBJECTIVES)) for o in objectives]
-    spec.aggregate = _choice("aggregate", raw.get("aggregate", spec.aggregate), AGGREGATES)
+    spec.aggregate, spec.percentile = _aggregate(raw.get("aggregate", spec.aggregate))
     spec.require = _choice("require", raw.get("require", spec.require), REQUIRES)
     spec.load = _choice("load", raw.get("load", spec.load), LOAD_RULES)
     spec.geometry = _choice("geometry", raw.get("geometry", spec.geometry), GEOMETRY_RULES)
@@ -293,6 +372,8 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
                          "stroke_mm = [1.0, 5.0]")
     spec.vary = _vary(raw["vary"])
     spec.band = _band(raw.get("excitation"), scene)
+    if spec.percentile is not None:
+        spec.uncertainty = _robust_study(scene, spec)
     if "load_ohm" in spec.vary and spec.load == "each":
         raise SceneError("[design] load = 'each' and [design.vary] load_ohm: the load is either "
                          "varied or matched, not both; allowed load = 'one' here")

@@ -51,7 +51,9 @@ def plot_design(result, path, *, units: dict[str, str], scales: dict | None = No
     infeasible = [r for r in rows if r["status"] == "infeasible"]
     skipped = [r for r in rows if r["status"] == "skipped"]
     best = result.best
-    band = f"{spec.aggregate} over {len(spec.band)} band point{'s' * (len(spec.band) > 1)}"
+    over = (f"{spec.aggregate} over [uncertainty.vary], mean over"
+            if getattr(spec, "percentile", None) is not None else f"{spec.aggregate} over")
+    band = f"{over} {len(spec.band)} band point{'s' * (len(spec.band) > 1)}"
     values = np.array([r["objective"] for r in ok]) * factor
     tie = len(values) > 1 and float(np.ptp(values)) == 0.0
     pareto = len(spec.objectives) > 1

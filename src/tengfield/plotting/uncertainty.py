@@ -27,7 +27,8 @@ def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
     evaluation's outputs)."""
     shown = summary["main_outputs"] or summary["output_keys"][:3]
     sobol = summary["method"] == "sobol"
-    fig = new_figure((11.0 if sobol else 6.5, 2.6 * max(len(shown), 1) + 1.0))
+    height = 2.6 * max(len(shown), 1) + 1.0
+    fig = new_figure((11.0 if sobol else 6.5, height))
     axes = fig.subplots(max(len(shown), 1), 2 if sobol else 1, squeeze=False)
     inputs = list(summary["distributions"])
     for row_axes, name in zip(axes, shown):
@@ -71,6 +72,6 @@ def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
     bars = "; bars: Sobol S1 / ST with bootstrap 95 % intervals" if sobol else ""
     fig.suptitle(f"uncertainty: {summary['evaluations']} evaluations ({summary['method']}, "
                  f"N = {summary['samples']}){bars}", fontsize=9)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.4 / height))   # the title above the panels
     fig.savefig(path, dpi=110)
     return Path(path)

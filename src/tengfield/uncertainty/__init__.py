@@ -13,7 +13,7 @@ Sobol indices with bootstrap intervals, percentiles, Clopper-Pearson regime frac
 from .evaluation import output_quantities
 from .spec import UncertaintySpec, uncertainty_spec
 from .statistics import parse_percentile, percentile_score
-from .study import Study, candidate_percentile, run_study
+from .study import Study, candidate_percentile, candidate_percentiles, run_study
 
 __all__ = ["UncertaintySpec", "uncertainty_spec", "run_study", "Study", "output_quantities",
-           "candidate_percentile", "parse_percentile", "percentile_score"]
+           "candidate_percentile", "candidate_percentiles", "parse_percentile", "percentile_score"]

@@ -71,6 +71,15 @@ def main_outputs(keys) -> list[str]:
     return [k for k in MAIN_OUTPUTS if k in keys]
 
 
+def changes_field(values: dict) -> bool:
+    """True when a ``"section.key"`` of ``values`` is one the field hash depends on
+    (:data:`tengfield.scene.schema.FIELD_KEYS`); else the scene's own geometry."""
+    from ..scene.schema import FIELD_KEYS
+
+    return any(key.split(".", 1)[1] in FIELD_KEYS.get(key.split(".", 1)[0], ())
+               for key in values)
+
+
 def is_electrical(key: str) -> bool:
     """True for a key that changes only the electrical stage (σ, circuit)."""
     return key == SIGMA_KEY or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
@@ -108,7 +117,8 @@ def _reference(scene):
 
 
 #: surrogates this process has obtained: (cache dir, field hash, breakdown values, σ as
-#: given) -> (resolved σ scene, table); groups that differ only in dynamics keys share one
+#: given) -> (the σ the table is at [C/m²], table, σ_max); groups that differ only in
+#: dynamics keys share one (each keeps its own scene: excitation, run, contact...)
 _OBTAINED: dict = {}
 _OBTAINED_MAX = 64
 
@@ -126,14 +136,18 @@ def _obtain(scene, cache_dir, solve):
     key = (str(cache_dir), scene.field_hash(), json.dumps(raw["breakdown"], sort_keys=True),
            repr(scene.raw.get("device", {}).get("surface_charge_uC_per_m2")),
            solve is None)
-    if key in _OBTAINED:
-        resolved, table, sigma_max = _OBTAINED[key]
+    if key in _OBTAINED:   # the same field and charge rule: THIS scene at that charge
+        sigma, table, sigma_max = _OBTAINED[key]
+        resolved = scene if scene.device.surface_charge == sigma and not \
+            isinstance(scene.raw.get("device", {}).get("surface_charge_uC_per_m2"), str) \
+            else scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
         return resolved, table, "cached", sigma_max
     resolved, table, outcome, limit = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
     sigma_max = None if limit is None else float(limit.sigma_max)
     if len(_OBTAINED) >= _OBTAINED_MAX:
         _OBTAINED.clear()
-    _OBTAINED[key] = (resolved, table, sigma_max)
+    # the charge, not the scene: groups sharing a field differ in their other keys
+    _OBTAINED[key] = (float(resolved.device.surface_charge), table, sigma_max)
     return resolved, table, outcome.status, sigma_max
 
 
@@ -240,6 +254,8 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     geometry: dict[str, object] = {}
     if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
         for group in [nominal, *groups]:
+            if group.dynamic and not changes_field(group.dynamic):
+                continue       # the nominal geometry (no field key varied): no scene built
             ref = _reference(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
             geometry.setdefault(ref.field_hash(), ref)

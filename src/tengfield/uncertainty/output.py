@@ -57,7 +57,7 @@ def summary_lines(study) -> list[str]:
         nominal = block.get("nominal")
         text = (f"  {name}: nominal {'-' if nominal is None else f'{nominal * scale:.4g}'}, "
                 f"median {p['50'] * scale:.4g}, 90 % in [{p['5'] * scale:.4g}, "
-                f"{p['95'] * scale:.4g}] {unit}")
+                f"{p['95'] * scale:.4g}]" + (f" {unit}" if unit else ""))
         top = dominant_input(block.get("sobol"))
         if top is not None:
             text += f"; dominated by {top[0]} (ST = {top[1]:.2f})"

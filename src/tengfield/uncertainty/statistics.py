@@ -106,3 +106,22 @@ def percentile_score(values, percentile: float) -> float:
     x = np.asarray([np.nan if v is None else v for v in values], dtype=float)
     x = x[np.isfinite(x)]
     return float(np.percentile(x, percentile)) if x.size else math.nan
+
+
+def percentile_interval(values, percentile: float, confidence: float = CONFIDENCE) -> tuple:
+    """``(low, high)``: the distribution-free ``confidence`` interval of the
+    ``percentile``-th percentile of the values' distribution, between two order
+    statistics (binomial ranks; NaN left out; NaN, NaN when fewer than 2 values). For
+    quasi-random points it is conservative (their percentiles converge faster)."""
+    from scipy import stats
+
+    x = np.sort(np.asarray([np.nan if v is None else v for v in values], dtype=float))
+    x = x[np.isfinite(x)]
+    n = x.size
+    if n < 2:
+        return math.nan, math.nan
+    q = percentile / 100.0
+    tail = 0.5 * (1.0 - confidence)
+    lo = int(stats.binom.ppf(tail, n, q)) - 1          # 0-based rank of the lower bound
+    hi = int(stats.binom.ppf(1.0 - tail, n, q))        # 0-based rank of the upper bound
+    return float(x[min(max(lo, 0), n - 1)]), float(x[min(max(hi, 0), n - 1)])

@@ -6,6 +6,7 @@ scores one design candidate by a percentile of its objective over ``[uncertainty
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -14,8 +15,8 @@ import numpy as np
 from .evaluation import Evaluations, evaluate_study, main_outputs
 from .sampling import study_values
 from .spec import UncertaintySpec, uncertainty_spec
-from .statistics import (distribution_statistics, dominant_input, percentile_score,
-                         regime_fractions, sobol_indices)
+from .statistics import (distribution_statistics, dominant_input, percentile_interval,
+                         percentile_score, regime_fractions, sobol_indices)
 
 
 @dataclass
@@ -33,7 +34,7 @@ class Study:
 
     @property
     def main(self) -> list[str]:
-        return main_outputs(self.output_keys)
+        return self.summary.get("main_outputs", main_outputs(self.output_keys))
 
 
 def output_keys(evaluations: Evaluations) -> list[str]:
@@ -71,7 +72,7 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
         "geometries": evaluations.geometries,
         "dynamics_runs": evaluations.dynamics_runs,
         "beyond_breakdown": evaluations.beyond_breakdown,
-        "output_keys": keys, "main_outputs": main_outputs(keys),
+        "output_keys": keys, "main_outputs": shown_outputs(keys, evaluations),
         "outputs": outputs, "notes": notes,
         "regimes": regime_fractions(evaluations.regimes),
         "nominal_regime": evaluations.nominal_regime,
@@ -88,6 +89,25 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
                     "the electrical stage only; field_solves counts the distinct field hashes "
                     "whose surrogate was not in the cache"},
     }
+
+
+def shown_outputs(keys, evaluations: Evaluations) -> list[str]:
+    """The main outputs shown (figure, terminal): :func:`main_outputs`, with a ``peak.X``
+    left out where it equals ``peak_to_peak.X`` (to 1e-6) in every evaluation and the nominal run
+    (a quantity that starts from 0, e.g. Q_SC: its peak is its peak-to-peak)."""
+    main = main_outputs(keys)
+    out = []
+    for name in main:
+        twin = "peak_to_peak." + name[len("peak."):] if name.startswith("peak.") else None
+        if twin in main:
+            pairs = [(row.get(name), row.get(twin)) for row in [*evaluations.rows,
+                                                               evaluations.nominal]]
+            if all(a is not None and b is not None and math.isclose(a, b, rel_tol=1e-6,
+                                                                    abs_tol=0.0)
+                   for a, b in pairs):
+                continue
+        out.append(name)
+    return out
 
 
 def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
@@ -114,7 +134,29 @@ def candidate_percentile(candidate, spec: UncertaintySpec, objective: str, perce
     e.g. ``"load.mean_power_W"``) of the design candidate's scene over the study
     ``spec`` (Monte Carlo or Sobol points alike), on this process (``comm=None``,
     one job: the design farms the candidates)."""
-    study = run_study(candidate, spec, jobs=1, cache_dir=cache_dir, solve=solve,
-                      simulate=simulate)
-    return (percentile_score([row.get(objective) for row in study.evaluations.rows], percentile),
-            len(study.evaluations.rows))
+    out = candidate_percentiles(candidate, spec, [objective], percentile, cache_dir=cache_dir,
+                                solve=solve, simulate=simulate)
+    return out["scores"][objective], out["evaluations"]
+
+
+def candidate_percentiles(candidate, spec: UncertaintySpec, objectives, percentile: float, *,
+                          cache_dir=None, solve=None, simulate=None) -> dict:
+    """One study of the candidate's scene, several outputs scored: ``{"scores": {name:
+    percentile}, "intervals": {name: (low, high)} (the distribution-free 95 % interval of
+    that percentile, :func:`percentile_interval`), "nominal": {name: the scene's own
+    value}, "evaluations", "field_solves", "dynamics_runs", "missing": {name: evaluations
+    without the output}}``. Only the evaluations are run (no Sobol indices, nothing
+    written); on this process (``comm=None``, one job)."""
+    values = study_values(spec)
+    ev = evaluate_study(candidate, spec, values, jobs=1, cache_dir=cache_dir, solve=solve,
+                        simulate=simulate)
+    scores, intervals, missing = {}, {}, {}
+    for name in objectives:
+        column = [row.get(name) for row in ev.rows]
+        scores[name] = percentile_score(column, percentile)
+        intervals[name] = percentile_interval(column, percentile)
+        missing[name] = sum(v is None or v != v for v in column)
+    return {"scores": scores, "intervals": intervals,
+            "nominal": {name: ev.nominal.get(name) for name in objectives},
+            "evaluations": len(ev.rows), "field_solves": ev.field_solves,
+            "dynamics_runs": ev.dynamics_runs, "missing": missing}
