@@ -44,8 +44,8 @@ def cache(tmp_path):
     ("p10", {"uncertainty": False},
      r"\[design\] aggregate = 'p10' needs an \[uncertainty\] section with "
      r"\[uncertainty.vary\] .*allowed without it: 'mean', 'min'"),
-    ("p10", {"vary": {"device.gap_mm": {"distribution": "uniform", "low": 2.0, "high": 3.0}}},
-     r"\[uncertainty.vary\] 'device.gap_mm' with \[design\] aggregate = 'p10': the design "
+    ("p10", {"vary": {"device.stroke_mm": {"distribution": "uniform", "low": 2.0, "high": 3.0}}},
+     r"\[uncertainty.vary\] 'device.stroke_mm' with \[design\] aggregate = 'p10': the design "
      r"sets this key"),
     ("p10", {"vary": {"excitation.amplitude_mm": {"distribution": "uniform", "low": 0.5,
                                                   "high": 1.0}}},

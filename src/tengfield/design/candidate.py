@@ -340,23 +340,25 @@ def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=Non
     from ..uncertainty.study import candidate_percentiles
 
     power = [o for o in spec.objectives if o in ("power", "power_density")]
-    groups = {"load": power + [o for o in spec.objectives
-                               if o in ("charge", "voltage", "current")],
-              "rectifier": [o for o in spec.objectives if o == "harvested_power"]}
+
+    def at_load(point, i):      # power at the candidate's matched load; Q, V, I as run
+        return point.with_values(circuit={"kind": "load", "load_ohm": float(_load_of(row, i))}) \
+            if power else point
+
+    def into_store(point, i):   # harvested power: the scene's [circuit] rectifier and store
+        return point.with_values(circuit={"kind": "rectifier"})
+
+    groups = [(power + [o for o in spec.objectives if o in ("charge", "voltage", "current")],
+               at_load),
+              ([o for o in spec.objectives if o == "harvested_power"], into_store)]
     out = {o: {"band_percentiles": [], "band_intervals": [], "band_nominal": []}
            for o in spec.objectives}
     evaluations = solves = 0
     for i, point in enumerate(points):
-        for kind, objectives in groups.items():
+        for objectives, scene_of in groups:
             if not objectives:
                 continue
-            if kind == "rectifier":
-                scene = point.with_values(circuit={"kind": "rectifier"})
-            elif power:
-                scene = point.with_values(circuit={"kind": "load",
-                                                   "load_ohm": float(_load_of(row, i))})
-            else:
-                scene = point
+            scene = scene_of(point, i)
             names = [ROBUST_OUTPUTS[o] for o in objectives]
             study = candidate_percentiles(scene, spec.uncertainty, names, spec.percentile,
                                           cache_dir=cache_dir, solve=solve, simulate=simulate)

@@ -198,10 +198,11 @@ def _robust_study(scene, spec: DesignSpec):
         raise SceneError(f"{where} with objective 'stroke': the stroke does not vary over "
                          "[uncertainty.vary]; allowed aggregates for it: 'mean', 'min'")
     study = uncertainty_spec(scene)
+    designed = {RENAMED_KEYS.get(("device", k), k) for k in spec.vary}   # gap_mm: stroke_mm
     for key in study.keys:
         section, name = key.split(".", 1)
-        varied = section == "device" and name in spec.vary or \
-            name in OTHER_VARY and OTHER_VARY[name] == section and name in spec.vary
+        varied = section == "device" and name in designed or \
+            name in OTHER_VARY and OTHER_VARY[name] == section and name in designed
         if varied or key in ROBUST_FIXED or section == "run":
             raise SceneError(f"[uncertainty.vary] {key!r} with {where}: the design sets this "
                              "key (a [design.vary] key, the band's excitation and run, the "
