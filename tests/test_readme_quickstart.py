@@ -159,7 +159,7 @@ RUN_FILES = ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png",
 
 #: what each Quick start command is covered by in this file
 COVERED = {"run", "scene", "dynamics", "map", "field", "precompute", "sweep", "report", "fit",
-           "info", "breakdown", "design"}
+           "info", "breakdown", "design", "uncertainty"}
 
 
 def test_every_quick_start_command_is_covered():
@@ -310,6 +310,23 @@ def test_design(quick_start, clone):
     where, _ = ran(quick_start, clone, "design")
     check_outputs(where / output_of(line), ("design.csv", "design.json", "design.png",
                                             "best.toml"))
+
+
+def test_uncertainty(quick_start, clone):
+    """`uncertainty my.toml` on the scene without [uncertainty] (its template is
+    commented): the default study (σ and restitution), announced in one line; σ scales
+    the cached surrogate, so no field solve."""
+    line = line_of("uncertainty")
+    where, proc = ran(quick_start, clone, "uncertainty")
+    out = where / output_of(line)
+    check_outputs(out, ("uncertainty.csv", "uncertainty.json", "uncertainty.png"))
+    assert "has no [uncertainty]: a default study" in proc.stderr
+    result = json.loads((out / "uncertainty.json").read_text())
+    assert result["field_solves"] == 0
+    band = result["outputs"]["peak_to_peak.Q_sc_C"]["percentiles"]
+    assert 0 < band["5"] < band["50"] < band["95"]
+    assert set(result["outputs"]["peak_to_peak.Q_sc_C"]["sobol"]) == {
+        "device.surface_charge_uC_per_m2", "contact.restitution"}
 
 
 def test_info(quick_start, clone):

@@ -9,8 +9,8 @@ def register(sub) -> None:
     p = sub.add_parser("scene", help="print the default scene, or check a scene file",
                        description="`tengfield scene --default > my.toml` writes the embedded "
                                    "default scene with its comments; `tengfield scene FILE` "
-                                   "checks FILE (every section any command reads, [design] and "
-                                   "[fit] included) and prints every key in SI-free file units.")
+                                   "checks FILE (every section any command reads, [design], "
+                                   "[fit] and [uncertainty] included) and prints every key in SI-free file units.")
     p.add_argument("scene", nargs="?", help="scene file to check")
     p.add_argument("--default", action="store_true", help="print the commented default scene")
     p.set_defaults(func=_run)
@@ -18,9 +18,9 @@ def register(sub) -> None:
 
 def check_sections(scene) -> None:
     """The sections only one command reads, checked by that command's own validator
-    (raises SceneError): ``[design]`` (design/spec.py), ``[fit]`` (fit/spec.py). The
-    other sections ([device] ... [breakdown], [array]) are checked when the scene is
-    built."""
+    (raises SceneError): ``[design]`` (design/spec.py), ``[fit]`` (fit/spec.py),
+    ``[uncertainty]`` (uncertainty/spec.py). The other sections ([device] ...
+    [breakdown], [array], [reference]) are checked when the scene is built."""
     if "design" in scene.raw:
         from ..design.spec import parse_design_section
 
@@ -29,6 +29,10 @@ def check_sections(scene) -> None:
         from ..fit.spec import parse_fit_section
 
         parse_fit_section(scene)
+    if "uncertainty" in scene.raw:
+        from ..uncertainty.spec import uncertainty_spec
+
+        uncertainty_spec(scene)
 
 
 def _run(args) -> int:

@@ -41,9 +41,16 @@ def _run(args) -> int:
     from ..uncertainty import run_study, uncertainty_spec
     from ..uncertainty.output import summary_lines, write_outputs
 
+    from ..uncertainty.spec import default_uncertainty_section
+
     scene = load_scene(args.scene)
-    spec = uncertainty_spec(scene)
     comm = world_if_parallel()
+    if "uncertainty" not in scene.raw:   # e.g. the default scene: a default study, said once
+        section, said = default_uncertainty_section(scene)
+        scene = scene.with_values(uncertainty=section)
+        if comm is None or comm.rank == 0:
+            print(f"tengfield: {said}", file=sys.stderr)
+    spec = uncertainty_spec(scene)
     check_jobs(args.jobs, comm)
     root = comm is None or comm.rank == 0
     study = run_study(scene, spec, comm=comm, jobs=args.jobs, cache_dir=args.cache_dir,

@@ -284,3 +284,33 @@ def _check_scenes(scene, spec: UncertaintySpec) -> None:
             except SceneError as exc:
                 raise SceneError(f"[uncertainty.vary] {dist.key!r} = {value:.6g} (an end of its "
                                  f"{dist.kind} distribution): {exc}") from None
+
+
+#: the default study's restitution range: 0.1 fits the paper's thresholds, PTFE on
+#: copper is often quoted at 0.5-0.8 (docs/uncertainty.md)
+DEFAULT_RESTITUTION = (0.05, 0.8)
+#: the default study's charge range, as fractions of the scene's sigma
+DEFAULT_SIGMA_FACTORS = (0.5, 1.5)
+DEFAULT_SAMPLES = 64
+
+
+def default_uncertainty_section(scene) -> tuple[dict, str]:
+    """([uncertainty] of the default study, the line that says so) for a scene without
+    one: the restitution over :data:`DEFAULT_RESTITUTION` and, for a numeric non-zero
+    σ, σ over :data:`DEFAULT_SIGMA_FACTORS` of the scene's, uniform; Sobol indices
+    with N = :data:`DEFAULT_SAMPLES`."""
+    vary = {"contact.restitution": {"distribution": "uniform", "low": DEFAULT_RESTITUTION[0],
+                                    "high": DEFAULT_RESTITUTION[1]}}
+    sigma = scene.raw.get("device", {}).get("surface_charge_uC_per_m2",
+                                            scene.device.surface_charge * 1e6)
+    if isinstance(sigma, (int, float)) and not isinstance(sigma, bool) and sigma != 0.0:
+        low, high = sorted(float(f"{sigma * f:.6g}") for f in DEFAULT_SIGMA_FACTORS)
+        vary = {"device.surface_charge_uC_per_m2": {"distribution": "uniform", "low": low,
+                                                    "high": high}, **vary}
+    section = {"samples": DEFAULT_SAMPLES, "method": "sobol", "seed": 1, "vary": vary}
+    said = (f"{scene.source} has no [uncertainty]: a default study of "
+            + " and ".join(f"{k} uniform in [{v['low']:g}, {v['high']:g}]"
+                           for k, v in vary.items())
+            + f", Sobol indices, N = {DEFAULT_SAMPLES} (docs/uncertainty.md: write an "
+            "[uncertainty] section for your own)")
+    return section, said
