@@ -194,7 +194,7 @@ def test_design_png_is_readable_with_error_bars_and_the_bound_optimum_marked(cac
     """Readable units and axis labels, error bars, the bound optimum marked, no Pareto panel
     for one objective (it drew W with a 1e-6 offset, raw key names, no error bars)."""
     from tengfield.design.output import plot_scales
-    from tengfield.design.spec import OBJECTIVES
+    from tengfield.design.spec import OBJECTIVES, objective_label
     from tengfield.plotting.design import plot_design
 
     result = design(design_scene(candidates=6, batch=2, vary={"gap_mm": [1.0, 3.0]}),
@@ -202,11 +202,11 @@ def test_design_png_is_readable_with_error_bars_and_the_bound_optimum_marked(cac
     units = {k: v[0] for k, v in OBJECTIVES.items()}
     bound = [("gap_mm", "upper", 3.0)]      # as if the best sat on it: drawn and named
     fig = plot_design(result, "/dev/null", units=units, scales=plot_scales(result),
-                      on_bound=bound)
+                      names={k: objective_label(k) for k in OBJECTIVES}, on_bound=bound)
     axes = [a for a in fig.axes if a.get_label() != "<colorbar>"]
     assert len(axes) == 1 and "Pareto" not in axes[0].get_title()
     ax = axes[0]
-    assert ax.get_xlabel() == "stroke Δh [mm]" and ax.get_ylabel() == "mean load power [µW]"
+    assert ax.get_xlabel() == "stroke Δh [mm]" and ax.get_ylabel() == "mean load power [µW]"   # the quantity table's words
     assert ax.containers, "error bars"
     labels = ax.get_legend_handles_labels()[1]
     assert "best on a bound" in labels and "feasible (± error bar)" in labels

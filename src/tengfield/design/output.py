@@ -10,7 +10,7 @@ from .answer import (aggregate_words, band_table_lines, chosen_band_point, descr
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from ..scene.schema import update_section
-from .spec import OBJECTIVES, OTHER_VARY, periodic
+from .spec import OBJECTIVES, OTHER_VARY, objective_label, periodic
 
 
 def _band_label(f: float, a: float, kind: str = "sine") -> str:
@@ -256,6 +256,7 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
         from ..plotting.design import plot_design
         with atomic_path(out / "design.png") as tmp:
             plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()},
+                        names={k: objective_label(k) for k in OBJECTIVES},
                         scales=plot_scales(result),
                         on_bound=on_bounds(result, best) if best is not None else [])
         written.append(out / "design.png")

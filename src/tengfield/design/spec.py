@@ -41,15 +41,42 @@ from .._registry import lookup
 from ..scene.schema import RENAMED_KEYS, SCHEMA
 from ..scene.schema import convert as _convert
 
+#: objective -> the output quantity it scores (tengfield.quantities: name, unit, label);
+#: "stroke" is the device's own stroke Δh
+OBJECTIVE_QUANTITIES = {
+    "power_density": "load.power_density_W_per_m3",
+    "power": "load.mean_power_W",
+    "charge": "peak_to_peak.Q_sc_C",
+    "voltage": "peak_to_peak.V_oc_V",       # the ideal V_OC = Q_SC / C_T
+    "current": "peak_to_peak.I_sc_A",       # dQ_SC/dz z': the spline's derivative
+    "harvested_power": "rectifier.average_harvested_power_W",
+}
+
+
+def _unit(objective: str) -> str:
+    """The SI unit of an objective, from the quantity table."""
+    from ..quantities import QUANTITIES
+    return QUANTITIES[OBJECTIVE_QUANTITIES[objective].rpartition(".")[2]].unit
+
+
+def objective_label(objective: str) -> str:
+    """Words for an objective (axis labels, the answer): the quantity table's, without
+    its unit (``"short-circuit charge Q_SC, peak-to-peak"``)."""
+    if objective not in OBJECTIVE_QUANTITIES:
+        return "stroke Δh"
+    from ..quantities import describe
+    return describe(OBJECTIVE_QUANTITIES[objective], unit=False)
+
+
 #: objective -> (unit, relative-error factor on the field error bar, needs the field)
 #: power ~ Q_SC^2 / C_T: dP/P <= 2 dQ/Q + dC/C <= 3 eps; charge: eps; stroke: exact
 OBJECTIVES = {
-    "power_density": ("W/m^3", 3.0, True),
-    "power": ("W", 3.0, True),
-    "charge": ("C", 1.0, True),
-    "voltage": ("V", 2.0, True),        # V_OC pp = Q_SC / C_T
-    "current": ("A", 2.0, True),        # I_SC pp = dQ_SC/dz z': the spline's derivative
-    "harvested_power": ("W", 3.0, True),
+    "power_density": (_unit("power_density"), 3.0, True),
+    "power": (_unit("power"), 3.0, True),
+    "charge": (_unit("charge"), 1.0, True),
+    "voltage": (_unit("voltage"), 2.0, True),
+    "current": (_unit("current"), 2.0, True),
+    "harvested_power": (_unit("harvested_power"), 3.0, True),
     "stroke": ("m", 0.0, False),
 }
 AGGREGATES = ("mean", "min")

@@ -9,6 +9,7 @@ from . import new_figure
 
 #: [design.vary] key -> axis label (others: the key's name with its unit suffix)
 KEY_LABELS = {
+    "stroke_mm": "stroke Δh [mm]",
     "gap_mm": "stroke Δh [mm]",
     "ball_diameter_mm": "ball diameter d [mm]",
     "electrode_radius_mm": "electrode radius [mm]",
@@ -20,10 +21,6 @@ KEY_LABELS = {
     "load_ohm": "load R [Ω]",
 }
 _SUFFIXES = (("_uC_per_m2", "µC/m²"), ("_kg_per_m3", "kg/m³"), ("_mm", "mm"), ("_ohm", "Ω"))
-OBJECTIVE_NAMES = {"power_density": "power density", "power": "mean load power",
-                   "charge": "Q_SC pp", "voltage": "V_OC pp", "current": "I_SC pp",
-                   "harvested_power": "harvested power", "stroke": "stroke Δh"}
-
 
 def key_label(key: str) -> str:
     if key in KEY_LABELS:
@@ -34,10 +31,10 @@ def key_label(key: str) -> str:
     return key.replace("_", " ")
 
 
-def plot_design(result, path, *, units: dict[str, str], scales: dict | None = None,
-                on_bound=()):
+def plot_design(result, path, *, units: dict[str, str], names: dict[str, str] | None = None,
+                scales: dict | None = None, on_bound=()):
     """design.png of a :class:`tengfield.design.DesignResult`. ``units``: objective -> its
-    SI unit; ``scales``: objective -> (label, factor) of the readable unit (value x factor;
+    SI unit; ``names``: objective -> its words (the quantity table's); ``scales``: objective -> (label, factor) of the readable unit (value x factor;
     default the SI unit); ``on_bound``: [(key, "lower" | "upper", bound)] the best sits on
     (passed in: plotting stays below the packages whose results it draws)."""
     spec = result.spec
@@ -45,8 +42,9 @@ def plot_design(result, path, *, units: dict[str, str], scales: dict | None = No
     keys = list(spec.vary)
     obj = spec.objective
     scales = scales or {}
+    names = names or {}
     label, factor = scales.get(obj, (units[obj], 1.0))
-    ylabel = f"{OBJECTIVE_NAMES.get(obj, obj)} [{label}]"
+    ylabel = f"{names.get(obj, obj)} [{label}]"
     ok = [r for r in rows if r["status"] == "ok"]
     infeasible = [r for r in rows if r["status"] == "infeasible"]
     skipped = [r for r in rows if r["status"] == "skipped"]
@@ -130,7 +128,7 @@ def plot_design(result, path, *, units: dict[str, str], scales: dict | None = No
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="best")
         against_first_key(axes[1])
-    title = f"{OBJECTIVE_NAMES.get(obj, obj)}, {band}" + (
+    title = f"{names.get(obj, obj)}, {band}" + (
         f" ({len(keys) - 2} more varied)" if len(keys) > 2 else "")
     if best is not None:
         title += (f"\nbest {best['objective'] * factor:.4g} ± "
@@ -156,8 +154,8 @@ def plot_design(result, path, *, units: dict[str, str], scales: dict | None = No
         if best is not None:
             ax2.plot(best["objectives"][a]["value"] * fa, best["objectives"][b]["value"] * fb,
                      "*", ms=16, color="C1", mec="k", label=f"best ({a})")
-        ax2.set_xlabel(f"{OBJECTIVE_NAMES.get(a, a)} [{la}]")
-        ax2.set_ylabel(f"{OBJECTIVE_NAMES.get(b, b)} [{lb}]")
+        ax2.set_xlabel(f"{names.get(a, a)} [{la}]")
+        ax2.set_ylabel(f"{names.get(b, b)} [{lb}]")
         ax2.grid(alpha=0.3)
         ax2.legend(fontsize=7)
         ax2.set_title("Pareto plot", fontsize=9)
