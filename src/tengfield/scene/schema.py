@@ -38,6 +38,16 @@ class Key(NamedTuple):
 
 _INF = math.inf
 
+#: ``[device] shape``: the cells a scene can name (``tengfield.field.cells.CELLS`` holds
+#: their geometry; ``tests/field/test_shell_scene.py`` holds the two equal)
+CELL_SHAPES = ("tube", "hexagonal", "spherical-shell")
+#: the ``[device]`` keys of each shape besides the shared ones (ball, permittivities,
+#: charge, density): a shape's field hash holds its own keys and not the others'
+SHAPE_KEYS = {"tube": ("stroke_mm", "electrode_radius_mm", "tube_inner_radius_mm",
+                       "tube_outer_radius_mm", "plate_thickness_mm"),
+              "spherical-shell": ("cavity_diameter_mm", "shell_thickness_mm",
+                                  "electrode_band_mm")}
+
 
 def _rng(lo=-_INF, hi=_INF, lo_open=False, hi_open=False, why=""):
     """A range constraint; ``why`` names the numerical limit behind a bound (quoted in
@@ -90,6 +100,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # 3D motion (issue #13): gravity tilted by tilt from -z toward tilt_azimuth
         "tilt_deg": Key("tilt", float, 0.0, _DEG, _rng(0.0, 180.0)),
         "tilt_azimuth_deg": Key("tilt_azimuth", float, 0.0, _DEG, _ANGLE),
+        # the cell's shape (issue #32; scene/shapes.py, field/cells/). In the field hash
+        # only when not "tube" (a tube's hash is the one before the key existed)
+        "shape": Key("shape", str, "tube", None, _choice(*CELL_SHAPES), field=True),
+        # shape = "spherical-shell": the cavity (its stroke is cavity - ball diameter), the
+        # shell behind the electrodes (wall_permittivity), the insulating band at the
+        # equator. In the field hash of a shell only (SHAPE_FIELD_KEYS)
+        "cavity_diameter_mm": Key("cavity_diameter", float, 20.0, 1e-3, _LENGTH),
+        "shell_thickness_mm": Key("shell_thickness", float, 2.0, 1e-3, _LENGTH),
+        "electrode_band_mm": Key("electrode_band", float, 2.0, 1e-3, _LENGTH),
     },
     "excitation": {
         "kind": Key("kind", str, "sine", None, _choice("sine", "recorded", "random", "harmonics")),
