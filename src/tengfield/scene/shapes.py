@@ -64,12 +64,20 @@ class _Tube:
         return dev.tube_inner_radius - dev.ball_radius
 
 
+def _ball_fits(ball: float, cavity: float) -> None:
+    if ball >= cavity:
+        raise SceneError(f"[device] ball_diameter_mm = {_mm(ball)} is out of range: allowed "
+                         f"(0, {_mm(cavity)}) mm (smaller than cavity_diameter_mm: the ball "
+                         "must fit the cavity)")
+
+
 class _SphericalShell:
     name = "spherical-shell"
 
     @staticmethod
     def stroke(device_values: dict, given: dict) -> float:
         """cavity - ball diameter; ``stroke_mm`` (or its old name) only if equal."""
+        _ball_fits(device_values["ball_diameter"], device_values["cavity_diameter"])
         stroke = device_values["cavity_diameter"] - device_values["ball_diameter"]
         for key in ("stroke_mm", "gap_mm"):
             if key in given and not isinstance(given[key], bool) \
@@ -85,11 +93,7 @@ class _SphericalShell:
     @staticmethod
     def check(dev) -> None:
         cavity = dev.cavity_diameter
-        if dev.ball_diameter >= cavity:
-            raise SceneError(
-                f"[device] ball_diameter_mm = {_mm(dev.ball_diameter)} is out of range: allowed "
-                f"(0, {_mm(cavity)}) mm (smaller than cavity_diameter_mm: the ball must fit "
-                "the cavity)")
+        _ball_fits(dev.ball_diameter, cavity)
         if dev.electrode_band >= cavity:
             raise SceneError(
                 f"[device] electrode_band_mm = {_mm(dev.electrode_band)} is out of range: allowed "
