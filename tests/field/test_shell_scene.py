@@ -181,6 +181,7 @@ def test_a_shell_runs_end_to_end_with_figures(tmp_path, run_cli, cli_env):
     from mpi4py import MPI
 
     from tengfield.field import solve_position
+    from tengfield.field.cells import cell_of
     from tengfield.scene import load_scene
     from tengfield.terminals import upper_short_circuit_charge
 
@@ -216,13 +217,24 @@ def test_a_shell_runs_end_to_end_with_figures(tmp_path, run_cli, cli_env):
     bd = json.loads((tmp_path / "bd" / "breakdown.json").read_text())
     sigma_max = bd["sigma_max_uC_per_m2"]
     assert 1.0 < sigma_max < 1e3
+    assert 0.0 < bd["relative_error_estimate"] < 0.1   # the shell's lines have their check
+    # the shell's lines: the binding line's length is the shell's (breakdown_feet)
+    binding = bd["binding"]
+    cell = cell_of(scene)
+    feet = cell.breakdown_feet(cell.ball_centre_z(binding["position_m"]),
+                               [binding["line_angle_deg"]])
+    side = 0 if binding["gap"] == "lower" else 1
+    assert binding["gap_length_m"] == pytest.approx(feet["length"][side, 0], rel=1e-12)
 
-    # a load: the power density is the mean power over the shell's sphere
+    # a load at the breakdown charge: the power density is the mean power over the
+    # shell's sphere, the run's sigma is -sigma_max
     path.write_text(SHELL_TOML.format(extra_device="", extra="[circuit]\nkind = \"load\"\n"
-                                      "load_ohm = 1e8\n"))
+                                      "load_ohm = 1e8\n").replace("-50", '"breakdown"'))
     proc = run_cli("run", path, "--no-plots", "-o", tmp_path / "load", env=env)
     assert proc.returncode == 0, proc.stderr
-    load = json.loads((tmp_path / "load" / "summary.json").read_text())["load"]
+    run_summary = json.loads((tmp_path / "load" / "summary.json").read_text())
+    assert run_summary["breakdown"]["sigma_uC_per_m2"] == pytest.approx(-sigma_max, rel=1e-6)
+    load = run_summary["load"]
     volume = 4.0 / 3.0 * math.pi * 12e-3**3
     assert load["device_volume_m3"] == pytest.approx(volume, rel=1e-14)
     assert load["power_density_W_per_m3"] == pytest.approx(load["mean_power_W"] / volume,

@@ -468,7 +468,8 @@ class Scene:
         for sec, key in AUTO_KEYS:   # (no renamed key takes "auto")
             if out[sec][key] == "auto":
                 out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
-        out["device"] = shape_field_inputs(out["device"], self.device.shape, full["device"])
+        out["device"] = shape_field_inputs(out["device"], self.device.shape, full["device"],
+                                           HASH_NAMES)
         return out
 
     def field_hash(self) -> str:

@@ -41,12 +41,6 @@ _INF = math.inf
 #: ``[device] shape``: the cells a scene can name (``tengfield.field.cells.CELLS`` holds
 #: their geometry; ``tests/field/test_shell_scene.py`` holds the two equal)
 CELL_SHAPES = ("tube", "hexagonal", "spherical-shell")
-#: the ``[device]`` keys of each shape besides the shared ones (ball, permittivities,
-#: charge, density): a shape's field hash holds its own keys and not the others'
-SHAPE_KEYS = {"tube": ("stroke_mm", "electrode_radius_mm", "tube_inner_radius_mm",
-                       "tube_outer_radius_mm", "plate_thickness_mm"),
-              "spherical-shell": ("cavity_diameter_mm", "shell_thickness_mm",
-                                  "electrode_band_mm")}
 
 
 def _rng(lo=-_INF, hi=_INF, lo_open=False, hi_open=False, why=""):
@@ -105,7 +99,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "shape": Key("shape", str, "tube", None, _choice(*CELL_SHAPES), field=True),
         # shape = "spherical-shell": the cavity (its stroke is cavity - ball diameter), the
         # shell behind the electrodes (wall_permittivity), the insulating band at the
-        # equator. In the field hash of a shell only (SHAPE_FIELD_KEYS)
+        # equator. In the field hash of a shell only (scene/shapes.py SHAPE_KEYS)
         "cavity_diameter_mm": Key("cavity_diameter", float, 20.0, 1e-3, _LENGTH),
         "shell_thickness_mm": Key("shell_thickness", float, 2.0, 1e-3, _LENGTH),
         "electrode_band_mm": Key("electrode_band", float, 2.0, 1e-3, _LENGTH),

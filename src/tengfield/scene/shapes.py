@@ -23,6 +23,14 @@ import math
 from ..errors import SceneError
 
 
+#: the ``[device]`` keys of each shape besides the shared ones (ball, permittivities,
+#: charge, density): a shape's field hash holds its own keys and not the others'
+SHAPE_KEYS = {"tube": ("stroke_mm", "electrode_radius_mm", "tube_inner_radius_mm",
+                       "tube_outer_radius_mm", "plate_thickness_mm"),
+              "spherical-shell": ("cavity_diameter_mm", "shell_thickness_mm",
+                                  "electrode_band_mm")}
+
+
 def _mm(x: float) -> str:
     return f"{x * 1e3:g}"
 
@@ -175,18 +183,18 @@ def shape_mesh_features(dev) -> dict[str, float] | None:
     return features
 
 
-def shape_field_inputs(device_inputs: dict, shape: str, full_device: dict) -> dict:
+def shape_field_inputs(device_inputs: dict, shape: str, full_device: dict,
+                       hash_names: dict) -> dict:
     """The ``[device]`` part of the field hash for ``shape``: a tube's exactly as before
     the shape key existed (no ``shape``, no shell keys); another shape's names it, holds
-    its own keys and drops the tube's."""
-    from .schema import HASH_NAMES, SHAPE_KEYS
-
+    its own keys (:data:`SHAPE_KEYS`) and drops the tube's (``hash_names``: the schema's
+    ``HASH_NAMES``, a renamed key's name in the hash)."""
     out = dict(device_inputs)
     if shape == "tube":
         out.pop("shape", None)
         return out
     for key in SHAPE_KEYS["tube"]:
-        out.pop(HASH_NAMES.get(("device", key), key), None)
+        out.pop(hash_names.get(("device", key), key), None)
     for key in SHAPE_KEYS.get(shape, ()):
         out[key] = full_device[key]
     return out
