@@ -52,7 +52,7 @@ def test_the_shapes_of_the_schema_are_the_registered_cells():
     from tengfield.field.cells import CELLS
     from tengfield.scene.shapes import NOT_RUNNABLE, SHAPES
 
-    assert set(CELL_SHAPES) - set(NOT_RUNNABLE) == set(CELLS) == set(SHAPES)
+    assert set(CELL_SHAPES) == set(CELLS) == set(SHAPES) and not NOT_RUNNABLE
     assert default_scene().device.shape == "tube"
 
 
@@ -92,8 +92,6 @@ def test_volume_bounding_radius_and_longest_path_are_the_shells():
      r"^\[device\] stroke_mm = 3.0 does not apply to shape = 'spherical-shell': its stroke "
      r"is cavity_diameter_mm - ball_diameter_mm = 12 mm \(leave stroke_mm out\)$"),
     ({"cavity_diameter_mm": -1.0}, r"^\[device\] cavity_diameter_mm = -1.0 is out of range"),
-    ({"shape": "hexagonal"}, r"^\[device\] shape = 'hexagonal': the honeycomb cell is not a "
-                             r"scene cell yet"),
     ({"shape": "sphere"}, r"^\[device\] shape = 'sphere' is not allowed: choose one of 'tube', "
                           r"'hexagonal', 'spherical-shell'"),
 ])
@@ -271,3 +269,64 @@ def test_the_tubes_default_run_is_unchanged_to_the_bit(tmp_path, run_cli, cli_en
             assert summary[block][key] == value, (block, key)
     assert summary["peak"]["I_sc_A"] == TUBE_PEAK_I
     assert summary["peak_to_peak"]["I_sc_A"] == TUBE_PEAK_TO_PEAK_I
+
+
+#: the honeycomb cell of Fig. 10 (HexagonalCell's defaults) as a scene
+HEXAGONAL = {"device": {"shape": "hexagonal", "ball_diameter_mm": 5.0, "stroke_mm": 2.0,
+                        "tube_inner_radius_mm": 3.0, "tube_outer_radius_mm": 4.0,
+                        "plate_thickness_mm": 2.0, "wall_permittivity": 3.0},
+             "field": {"method": "3d", "degree": 1, "mesh_size_mm": 1.5,
+                       "domain_radius_mm": 20.0, "far_field": "robin"}}
+
+
+def test_the_hexagonal_cell_is_a_3d_scene_cell():
+    """``shape = "hexagonal"``: the tube's keys with the hexagon's meaning (apothems);
+    the prism's volume, the corner-to-corner Paschen path, 3D solves only."""
+    from tengfield.field.cells import Hexagonal, cell_of
+    from tengfield.paschen import Paschen
+
+    scene = Scene.from_dict(HEXAGONAL)
+    cell = cell_of(scene)
+    assert isinstance(cell, Hexagonal)
+    assert scene.device.cell_volume == pytest.approx(2 * math.sqrt(3) * 4e-3**2 * 11e-3,
+                                                     rel=1e-14)
+    assert Paschen.from_scene(scene).longest_path == pytest.approx(
+        math.hypot(7e-3, 6e-3 / math.cos(math.pi / 6)), rel=1e-14)
+    assert cell.cell.bounding_radius == scene.device.bounding_radius
+    # the contact geometry: a flat at y = +apothem, the plates
+    assert cell.wall_distance([0.0, 0.4e-3, 0.0]) == pytest.approx(0.1e-3)
+    assert cell.wall_normal([0.0, 0.4e-3, 0.0]) == pytest.approx([0.0, 1.0, 0.0], abs=1e-15)
+    assert cell.wall_normal([0.0, 0.0, -0.9e-3]) == pytest.approx([0.0, 0.0, -1.0])
+    assert scene.field_inputs()["device"]["shape"] == "hexagonal"
+    assert scene.field_hash() != Scene.from_dict(
+        {**HEXAGONAL, "device": {k: v for k, v in HEXAGONAL["device"].items()
+                                 if k != "shape"}}).field_hash()
+    with pytest.raises(SceneError, match=r"\[field\] method = 'auto': shape = 'hexagonal' is "
+                                         r"a 3D cell; use method = '3d'"):
+        check_field(Scene.from_dict({"device": HEXAGONAL["device"]}))
+    with pytest.raises(SceneError, match=r"^\[device\] ball_diameter_mm = 6: the ball does not "
+                                         r"fit the hexagonal bore"):
+        Scene.from_dict({**HEXAGONAL, "device": {**HEXAGONAL["device"],
+                                                 "ball_diameter_mm": 6.0}})
+
+
+@field
+@pytest.mark.slow
+def test_a_hexagonal_scene_solves_the_honeycomb_cell_to_the_bit():
+    """``solve_position`` on a hexagonal scene is ``solve_cell_3d`` of the honeycomb's
+    ``HexagonalCell`` (the way the honeycomb demo solves it), bit for bit."""
+    from mpi4py import MPI
+
+    from tengfield.field import solve_position
+    from tengfield.field.geometry3d import HexagonalCell
+    from tengfield.field.solver3d import Solve3DSettings, solve_cell_3d
+
+    scene = Scene.from_dict(HEXAGONAL)
+    res = solve_position(scene, 1e-3, comm=MPI.COMM_SELF, estimate_error=False)
+    settings = Solve3DSettings(degree=1, mesh_size=1.5e-3, domain_radius=20e-3,
+                               far_field="robin", estimate_error=False)
+    ref = solve_cell_3d(HexagonalCell(), 1e-3, surface_charge=scene.device.surface_charge,
+                        settings=settings, comm=MPI.COMM_SELF)
+    assert np.array_equal(res.capacitance, ref.capacitance)
+    assert np.array_equal(res.induced_charge, ref.induced_charge)
+    assert res.method == "3d"

@@ -12,9 +12,9 @@ here, one entry per shape in :data:`SHAPES`.
   ``shell_thickness_mm`` of ``wall_permittivity``. The stroke is ``cavity_diameter -
   ball_diameter``: ``stroke_mm`` is derived, and refused when written with another
   value.
-* ``"hexagonal"``: the honeycomb cell is reachable from Python only
-  (``tengfield.field.geometry3d.HexagonalCell`` with ``solver3d.solve_cell_3d``, as
-  its demo does); a scene naming it is refused with one line.
+* ``"hexagonal"``: the honeycomb cell of Fig. 10 (``tengfield.field.geometry3d.
+  HexagonalCell``): the tube's keys with the hexagon's meaning (apothems), 3D field
+  solves only (``[field] method = "3d"``), 1-D dynamics.
 """
 from __future__ import annotations
 
@@ -29,6 +29,7 @@ SHAPE_KEYS = {"tube": ("stroke_mm", "electrode_radius_mm", "tube_inner_radius_mm
                        "tube_outer_radius_mm", "plate_thickness_mm"),
               "spherical-shell": ("cavity_diameter_mm", "shell_thickness_mm",
                                   "electrode_band_mm")}
+SHAPE_KEYS["hexagonal"] = SHAPE_KEYS["tube"]   # the tube's keys, the hexagon's meaning
 
 
 def _mm(x: float) -> str:
@@ -126,15 +127,51 @@ class _SphericalShell:
         return dev.cavity_diameter
 
 
+class _Hexagonal:
+    """The honeycomb cell (Fig. 10): the tube's keys with the hexagon's meaning
+    (``tube_inner_radius_mm``/``tube_outer_radius_mm``: the bore's and the outside's
+    apothems, axis to a flat), electrodes over the whole bore."""
+    name = "hexagonal"
+    stroke = _Tube.stroke
+
+    @staticmethod
+    def check(dev) -> None:
+        if dev.tube_outer_radius <= dev.tube_inner_radius:
+            raise SceneError(
+                f"[device] tube_outer_radius_mm = {_mm(dev.tube_outer_radius)} must exceed "
+                f"tube_inner_radius_mm = {_mm(dev.tube_inner_radius)} (the hexagon's apothems)")
+        if dev.ball_diameter >= 2.0 * dev.tube_inner_radius:
+            raise SceneError(
+                f"[device] ball_diameter_mm = {_mm(dev.ball_diameter)}: the ball does not fit "
+                f"the hexagonal bore; allowed (0, {2e3 * dev.tube_inner_radius:g}) mm (twice "
+                "tube_inner_radius_mm, the bore's apothem)")
+
+    @staticmethod
+    def bounding_radius(dev) -> float:
+        corner = dev.tube_outer_radius / math.cos(math.pi / 6)
+        return math.hypot(corner, 0.5 * dev.plate_spacing + dev.plate_thickness)
+
+    @staticmethod
+    def volume(dev) -> float:
+        """The hexagonal prism: 2√3 b² (h + 2t), b the outer apothem."""
+        return 2.0 * math.sqrt(3.0) * dev.tube_outer_radius**2 * (dev.plate_spacing
+                                                                  + 2 * dev.plate_thickness)
+
+    @staticmethod
+    def max_offset(dev) -> float:
+        return dev.tube_inner_radius - dev.ball_radius
+
+    @staticmethod
+    def longest_path(dev) -> float:
+        """Hypot of the plate spacing and the bore's corner-to-corner width."""
+        return math.hypot(dev.plate_spacing, 2.0 * dev.tube_inner_radius / math.cos(math.pi / 6))
+
+
 #: ``[device] shape`` -> its scene-level rules (the shapes a scene can run)
-SHAPES = {_Tube.name: _Tube, _SphericalShell.name: _SphericalShell}
+SHAPES = {_Tube.name: _Tube, _Hexagonal.name: _Hexagonal, _SphericalShell.name: _SphericalShell}
 
 #: shapes the schema names that a scene cannot run yet -> why (one line)
-NOT_RUNNABLE = {"hexagonal": "the honeycomb cell is not a scene cell yet: use it from Python "
-                             "(tengfield.field.geometry3d.HexagonalCell with "
-                             "tengfield.field.solver3d.solve_cell_3d, as "
-                             "demos/electrical_honeycomb.py does); allowed here 'tube', "
-                             "'spherical-shell'"}
+NOT_RUNNABLE: dict[str, str] = {}
 
 
 def shape_of(shape: str):
@@ -151,8 +188,9 @@ def check_shape_scene(scene) -> None:
     if dev.shape == "tube":
         return
     if scene.contact.model == "3d":
+        wall = "spherical" if dev.shape == "spherical-shell" else "hexagonal"
         raise SceneError(f"[contact] model = '3d' is not available for shape = {dev.shape!r} "
-                         "yet (the contact on the spherical wall is not done): use 'impact' "
+                         f"yet (the contact on the {wall} wall is not done): use 'impact' "
                          "or 'soft'")
 
 
@@ -161,7 +199,11 @@ def shape_field_problems(dev, fld) -> list[str]:
     if dev.shape == "tube":
         return []
     problems = []
-    if fld.method == "3d" or fld.ball_offset > 0.0:
+    if dev.shape == "hexagonal":
+        if fld.method != "3d":
+            problems.append(f"[field] method = {fld.method!r}: shape = 'hexagonal' is a 3D "
+                            "cell; use method = '3d'")
+    elif fld.method == "3d" or fld.ball_offset > 0.0:
         problems.append(f"[field] method = {fld.method!r}, ball_offset_mm = "
                         f"{fld.ball_offset * 1e3:g}: shape = {dev.shape!r} has the axisymmetric "
                         "solver only (the ball on the axis) yet: use method = 'auto' or "

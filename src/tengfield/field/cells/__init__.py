@@ -37,8 +37,8 @@ the one place :func:`tengfield.field.solve_position` (and so the surrogate, the
 run, ``tengfield field``) dispatches on the shape. ``"tube"`` is an adapter over
 the scene and the existing tube modules (:mod:`.tube`), ``"spherical-shell"``
 the shell (:mod:`.spherical_shell`, its scene keys in ``scene/schema.py``, the
-scene-level rules in ``scene/shapes.py``). The honeycomb and the 3D gmsh models
-are not cells yet; docs/architecture.md ("Where a new cell shape goes") and
+scene-level rules in ``scene/shapes.py``), ``"hexagonal"`` an adapter over the
+honeycomb's 3D cell (:mod:`.hexagonal`). The 3D gmsh models are not cell methods yet; docs/architecture.md ("Where a new cell shape goes") and
 docs/spherical_shell.md say what is left.
 """
 from __future__ import annotations
@@ -47,10 +47,11 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from .hexagonal import Hexagonal
 from .spherical_shell import SphericalShell
 from .tube import Tube
 
-__all__ = ["Cell", "CELLS", "SphericalShell", "Tube", "cell_class", "cell_of"]
+__all__ = ["Cell", "CELLS", "Hexagonal", "SphericalShell", "Tube", "cell_class", "cell_of"]
 
 
 @runtime_checkable
@@ -119,7 +120,8 @@ class Cell(Protocol):
 
 
 #: ``[device] shape`` -> the class of its cell
-CELLS: dict[str, type] = {Tube.name: Tube, SphericalShell.name: SphericalShell}
+CELLS: dict[str, type] = {Tube.name: Tube, Hexagonal.name: Hexagonal,
+                          SphericalShell.name: SphericalShell}
 
 
 def cell_of(scene):
