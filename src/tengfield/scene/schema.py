@@ -94,8 +94,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # 3D motion (issue #13): gravity tilted by tilt from -z toward tilt_azimuth
         "tilt_deg": Key("tilt", float, 0.0, _DEG, _rng(0.0, 180.0)),
         "tilt_azimuth_deg": Key("tilt_azimuth", float, 0.0, _DEG, _ANGLE),
-        # the cell's shape (issue #32; scene/shapes.py, field/cells/). In the field hash
-        # only when not "tube" (a tube's hash is the one before the key existed)
+        # the cell's shape (issue #32; scene/shapes.py, field/cells/): "hexagonal" reads the
+        # tube's keys as the hexagon's apothems (3D solves). In the field hash only when
+        # not "tube" (a tube's hash is the one before the key existed)
         "shape": Key("shape", str, "tube", None, _choice(*CELL_SHAPES), field=True),
         # shape = "spherical-shell": the cavity (its stroke is cavity - ball diameter), the
         # shell behind the electrodes (wall_permittivity), the insulating band at the
