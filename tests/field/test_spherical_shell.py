@@ -25,7 +25,10 @@ def test_registry_and_protocol():
     assert CELLS["spherical-shell"] is SphericalShell
     assert cell_class("spherical-shell") is SphericalShell
     assert isinstance(cell, Cell)
-    with pytest.raises(ValueError, match="allowed spherical-shell"):
+    from tengfield.field.cells import Hexagonal, Tube
+    from tengfield.scene import default_scene
+    assert isinstance(Tube(default_scene()), Cell) and isinstance(Hexagonal(default_scene()), Cell)
+    with pytest.raises(ValueError, match="allowed hexagonal, spherical-shell, tube"):
         cell_class("dodecahedron")
 
 

@@ -130,6 +130,12 @@ class Hexagonal:
     def mesh_features(self) -> dict[str, float]:
         return mesh_features(self.scene.device, self.scene.field.environment)
 
+    def axisymmetric_layout(self, position: float, **settings):
+        raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
+
+    def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
+        raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
+
     def outline(self) -> list[np.ndarray]:
         """(r, z) polylines of the section through two flats: electrodes, bore, outside."""
         dev = self.scene.device
