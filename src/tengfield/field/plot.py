@@ -163,7 +163,8 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     # the vertical axis is the title's z: height above the lower electrode's face (the
     # mesh's origin is the midplane); the ball's bottom sits at the gap z
     base = height_origin(lay) * mm
-    plotter.show_bounds(xtitle="r (mm)", ytitle="z: height above the lower electrode (mm)",
+    height = cell["height_label"] if cell is not None else "the lower electrode"
+    plotter.show_bounds(xtitle="r (mm)", ytitle=f"z: height above {height} (mm)",
                         color="black", font_size=14, location="outer", ticks="outside",
                         bounds=(-half_w, half_w, z0, z1, 0, 0),
                         axes_ranges=[-half_w, half_w, z0 - base, z1 - base, 0, 0])

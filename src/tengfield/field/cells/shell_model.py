@@ -74,7 +74,7 @@ class ShellLayout:
         """What field.png draws (SI, (r, z) polylines for r >= 0): ``electrodes`` (the two
         arcs), ``walls`` (the band and the shell's outer surface), ``half_width`` and
         ``z_range`` of the frame, ``on_electrode(r, z, tol)`` (arrays [m]) where field
-        lines stop."""
+        lines stop, ``height_label`` (where the height axis has its zero)."""
         a, b = self.cavity_radius, self.outer_radius
         phi0 = math.asin(0.5 * self.band / a)
 
@@ -90,7 +90,7 @@ class ShellLayout:
         margin = 0.15 * b
         return {"electrodes": [arc(a, -0.5 * math.pi, -phi0), arc(a, phi0, 0.5 * math.pi)],
                 "walls": walls, "half_width": b + margin, "z_range": (-b - margin, b + margin),
-                "on_electrode": on_electrode}
+                "on_electrode": on_electrode, "height_label": "the cavity's bottom"}
 
     @property
     def rims(self) -> list[tuple[float, float]]:
