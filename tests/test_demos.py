@@ -234,6 +234,28 @@ def check_breakdown_limit(run):
     assert all(r["sigma_max"] > 0 for _, r in strokes)
 
 
+@pins("spherical_shell")
+def check_spherical_shell(run):
+    small_png(run)
+    tube, shell = run.numbers["tube"], run.numbers["shell"]
+    # the same ball, stroke and drive: the 1-D dynamics are the same to the bit
+    assert shell["max_gap_mm"] == tube["max_gap_mm"] and shell["regime"] == tube["regime"]
+    # the shell couples more charge (its electrodes wrap the ball: 0.52 nC against the
+    # tube's 0.32 nC at sigma = -8 uC/m^2, fast fields) and has the larger C_T
+    assert shell["peak_to_peak"]["Q_sc"] == pytest.approx(0.521e-9, rel=0.05)
+    assert tube["peak_to_peak"]["Q_sc"] == pytest.approx(0.321e-9, rel=0.05)
+    assert shell["C_T_pF"][0] > 3 * tube["C_T_pF"][1]
+    for res in (tube, shell):
+        # Q_SC never exceeds the full stroke's; the peaks at sigma_max are sigma-linear
+        assert res["peak_to_peak"]["Q_sc"] <= res["Q_sc_full_stroke_nC"] * 1e-9 * (1 + 1e-9)
+        assert 10 < res["sigma_max_uC_per_m2"] < 80
+        scale = res["sigma_max_uC_per_m2"] / 8.0
+        for key in ("V_oc", "Q_sc", "I_sc"):
+            assert res["at_sigma_max_peak_to_peak"][key] == pytest.approx(
+                scale * res["peak_to_peak"][key], rel=1e-6)
+    assert shell["sigma_max_uC_per_m2"] == pytest.approx(44.1, rel=0.15)
+
+
 @pins("fit_paper", *(f"fit_paper_{case}/fit.png" for case in "ABC"))
 def check_fit_paper(run):
     import electrical_common      # on sys.path (load_demo); the module fit_paper imported

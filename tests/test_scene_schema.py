@@ -37,6 +37,9 @@ COMPANIONS = {
                                                     "rms_acceleration_m_per_s2": 1.0},
     ("run", "realisations"): {"excitation": {"kind": "random", "band_hz": [10.0, 100.0],
                                              "rms_acceleration_m_per_s2": 1.0}},
+    # the first other shape, "hexagonal", is a 3D cell (method = "3d"); a spherical
+    # shell's stroke is cavity - ball diameter (20 - 7 mm): stroke_mm equal to it
+    ("device", "shape"): {"stroke_mm": 13.0, "field": {"method": "3d"}},
     ("array", "connection"): {"cells": 2, "circuit": {"kind": "rectifier"}},
     ("array", "initial_phase_spread_deg"): {"cells": 2},
     ("array", "restitution_spread"): {"cells": 2},

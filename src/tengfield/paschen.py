@@ -202,7 +202,11 @@ class Paschen:
 def longest_path(device) -> float:
     """The longest discharge path [m] between the ball and an electrode: the tube's
     inner diagonal, hypot(plate spacing, inner diameter) (a bound: every line and field
-    line from the ball to an electrode is shorter)."""
+    line from the ball to an electrode is shorter); a spherical shell's: its cavity
+    diameter (``scene/shapes.py``)."""
+    if getattr(device, "shape", "tube") != "tube":
+        from .scene.shapes import shape_of   # the scene imports this module
+        return shape_of(device.shape).longest_path(device)
     return math.hypot(device.plate_spacing, 2.0 * device.tube_inner_radius)
 
 

@@ -183,10 +183,14 @@ def test_solver_sources_exclude_io_and_plots():
     import tengfield.field as field
     paths = field.solver_source_paths()
     assert all(p.is_file() for p in paths)
-    names = {p.name for p in paths}
+    root = Path(field.__file__).parent
+    names = {p.relative_to(root).as_posix() for p in paths}
     assert {"axisymmetric.py", "solver3d.py", "_dolfinx.py", "contact.py"} <= names
     assert not names & {"io.py", "plot.py", "potential.py", "result.py"}
-    package = {p.name for p in Path(field.__file__).parent.glob("*.py")}
+    # the cells (field/cells/: their meshes and solve decide the numbers) are all in
+    assert {p.relative_to(root).as_posix() for p in root.glob("cells/*.py")} <= names
+    names = {name for name in names if "/" not in name}
+    package = {p.name for p in root.glob("*.py")}
     assert names <= package
     # _gmsh.py starts gmsh with the arguments its callers give (stderr filtering only)
     assert package - names == {"io.py", "plot.py", "potential.py", "result.py", "_gmsh.py"}, \

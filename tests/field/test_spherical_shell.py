@@ -25,7 +25,10 @@ def test_registry_and_protocol():
     assert CELLS["spherical-shell"] is SphericalShell
     assert cell_class("spherical-shell") is SphericalShell
     assert isinstance(cell, Cell)
-    with pytest.raises(ValueError, match="allowed spherical-shell"):
+    from tengfield.field.cells import Hexagonal, Tube
+    from tengfield.scene import default_scene
+    assert isinstance(Tube(default_scene()), Cell) and isinstance(Hexagonal(default_scene()), Cell)
+    with pytest.raises(ValueError, match="allowed hexagonal, spherical-shell, tube"):
         cell_class("dodecahedron")
 
 
@@ -68,7 +71,7 @@ def test_volume_longest_path_outline_and_features():
     assert lower[:, 1].max() == pytest.approx(-1e-3)   # the band's edges: z = ±w/2
     assert upper[:, 1].min() == pytest.approx(1e-3)
     assert lower[0] == pytest.approx([0.0, -A], abs=1e-15)
-    assert cell.mesh_features() == {"ball_diameter_mm": 8e-3, "gap_mm": 12e-3,
+    assert cell.mesh_features() == {"ball_diameter_mm": 8e-3, "stroke_mm": 12e-3,
                                     "electrode_band_mm": 2e-3, "shell_thickness_mm": 2e-3}
     assert "shell_thickness_mm" not in shell(wall_permittivity=1.0).mesh_features()
     assert cell.electrode_at(-2e-3) == "lower" and cell.electrode_at(0.0) is None
@@ -349,23 +352,19 @@ def test_concentric_ball_potential_and_lines(ball_permittivity):
     rb = cell.ball_radius
     assert lines[..., 0] == pytest.approx(rb * (1.0 - rb / A) / EPS0, rel=3e-4)
     assert lines[..., 1] + lines[..., 2] == pytest.approx(1.0, abs=3e-4)
-    # mirror symmetry, and Poisson's integral (the upper side's axial line θ = 0 is
-    # left out: see test_upper_axial_line_reads_the_axis_node)
-    assert lines[0, 1:, 1] == pytest.approx(lines[1, 1:, 2], abs=1e-5)
+    # mirror symmetry (the axial lines too, since line_basis reads the top node at
+    # r = -1.7e-21: test_upper_axial_line_reads_the_axis_node), and Poisson's integral
+    assert lines[0, :, 1] == pytest.approx(lines[1, :, 2], abs=1e-5)
     if ball_permittivity == 1.0:   # the lower side's points (r, z) on the ball surface
         theta = np.radians(LINE_ANGLES_DEG)
         expected = [hemisphere_series(rb * math.sin(t), -rb * math.cos(t), A) for t in theta]
         assert lines[0, :, 1] == pytest.approx(expected, abs=3e-4)
 
 
-@pytest.mark.xfail(strict=True, reason="field/breakdown.py line_basis: a surface node on the "
-                   "axis with r = -1e-21 (as gmsh places the shell's ball top) gets the polar "
-                   "angle -π instead of +π, so the upper side's θ = 0 value is clamped from "
-                   "the next node (the tube's lines are read the same way); fix: "
-                   "arctan2(abs(r), ...)")
 def test_upper_axial_line_reads_the_axis_node():
     """line_basis on ball-surface nodes like those of the shell's mesh (found there: the
-    top node at r = -1.7e-21): the upper side's axial value is the top node's value."""
+    top node at r = -1.7e-21): the upper side's axial value is the top node's value
+    (before the fix, arctan2 gave that node -π and the value was read 0.4 h away)."""
     from types import SimpleNamespace
 
     from tengfield.field.breakdown import line_basis

@@ -79,16 +79,22 @@ class Lines:
     check: np.ndarray | None = None
     sides: tuple = (True, True)
     field_error: float = 0.0
+    #: a cell's own lines: ``line_lengths(z, angles)`` -> (len(z), 2, lines) [m] (a
+    #: spherical shell's, field/cells); None: the tube's lines parallel to the axis
+    line_lengths: object = None
 
     def lengths(self, z) -> np.ndarray:
         """Line lengths [m], shape (len(z), 2, lines); NaN for lines not used."""
         z = np.atleast_1d(np.asarray(z, dtype=float))
-        rise = self.ball_radius * (1.0 - np.cos(self.angles))
-        lower = z[:, None] + rise[None, :]
-        upper = (self.stroke - z)[:, None] + rise[None, :]
-        out = np.stack([lower, upper], axis=1)
-        beyond = self.ball_radius * np.sin(self.angles) > self.electrode_radius * (1 + 1e-12)
-        out[:, :, beyond] = np.nan
+        if self.line_lengths is not None:
+            out = np.array(self.line_lengths(z, self.angles), dtype=float)
+        else:
+            rise = self.ball_radius * (1.0 - np.cos(self.angles))
+            lower = z[:, None] + rise[None, :]
+            upper = (self.stroke - z)[:, None] + rise[None, :]
+            out = np.stack([lower, upper], axis=1)
+            beyond = self.ball_radius * np.sin(self.angles) > self.electrode_radius * (1 + 1e-12)
+            out[:, :, beyond] = np.nan
         for k, present in enumerate(self.sides):
             if not present:
                 out[:, k, :] = np.nan
@@ -99,6 +105,7 @@ def lines_from_table(table, scene) -> Lines:
     """:class:`Lines` of a surrogate table with breakdown lines (``table.line_potential``)."""
     from ..errors import TengfieldError
     from ..field.breakdown import LINE_ANGLES_DEG
+    from ..field.cells import cell_of
 
     if table.line_potential is None:
         raise TengfieldError("the surrogate has no breakdown lines (made by the 3D solver or "
@@ -114,6 +121,7 @@ def lines_from_table(table, scene) -> Lines:
                  basis=np.asarray(table.line_potential), angles=np.radians(np.asarray(angles)),
                  ball_radius=dev.ball_radius, stroke=float(table.stroke),
                  electrode_radius=dev.electrode_radius, check=table.line_check,
+                 line_lengths=getattr(cell_of(scene), "line_lengths", None),
                  field_error=float(np.nanmax(field_error)) if np.any(np.isfinite(field_error))
                  else 0.0)
 

@@ -38,7 +38,10 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 #: only these: io.py, plot.py, potential.py and result.py write, draw or
 #: post-process and may change without invalidating stored solves.
 SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
-                  "geometry3d.py", "geometry_axisymmetric.py", "solver3d.py")
+                  "geometry3d.py", "geometry_axisymmetric.py", "solver3d.py",
+                  "cells/__init__.py", "cells/hexagonal.py", "cells/shell_model.py",
+                  "cells/solve.py",
+                  "cells/spherical_shell.py", "cells/tube.py")
 
 
 def solver_source_paths() -> list[Path]:
@@ -118,8 +121,6 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
     offset = scene.field.ball_offset
     check_position(scene, position)
     chosen = resolve_method(scene, method, offset)
-    if chosen == "axisymmetric":
-        from .axisymmetric import solve_position_axisymmetric
-        return solve_position_axisymmetric(scene, position, comm=comm, **overrides)
-    from .solver3d import solve_position_3d
-    return solve_position_3d(scene, position, offset=offset, comm=comm, **overrides)
+    from .cells import cell_of   # the cell's own solver (field/cells: CELLS)
+    return cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen, offset=offset,
+                                      **overrides)

@@ -51,7 +51,10 @@ def line_basis(dx_api, disc, unit_source, weighting, lay, angles_deg=LINE_ANGLES
 
     dofs = np.unique(dx_api.facet_dofs(disc.V, disc.facet_tags, FACET_TAGS["ball_surface"]))
     xy = dx_api.dof_coordinates(disc.V)[dofs]
-    polar = np.arctan2(xy[:, 0], lay.ball_centre_z - xy[:, 1])   # 0 at the bottom, π at the top
+    # 0 at the bottom, π at the top; |r|: a node on the axis may carry r = -1e-21, whose
+    # arctan2 is -π instead of π (the top node then sorted first, the upper axial line
+    # read from the node 0.4 h away)
+    polar = np.arctan2(np.abs(xy[:, 0]), lay.ball_centre_z - xy[:, 1])
     order = np.argsort(polar)
     polar, dofs = polar[order], dofs[order]
     theta = np.radians(np.asarray(angles_deg, dtype=float))

@@ -67,10 +67,16 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     mm = 1e3
     full.points[:] *= mm  # plot in mm
 
-    zl, zu, t = lay.z_lower * mm, lay.z_upper * mm, lay.plate_thickness * mm
-    ro, ri, a = lay.tube_outer_radius * mm, lay.tube_inner_radius * mm, lay.electrode_radius * mm
-    half_w = ro + 2.0
-    z0, z1 = zl - t - 1.5, zu + t + 1.5
+    cell = lay.plot_outline() if hasattr(lay, "plot_outline") else None   # a cell's (field/cells)
+    if cell is None:   # the tube
+        zl, zu, t = lay.z_lower * mm, lay.z_upper * mm, lay.plate_thickness * mm
+        ro, ri, a = (lay.tube_outer_radius * mm, lay.tube_inner_radius * mm,
+                     lay.electrode_radius * mm)
+        half_w = ro + 2.0
+        z0, z1 = zl - t - 1.5, zu + t + 1.5
+    else:
+        half_w = cell["half_width"] * mm
+        z0, z1 = (z * mm for z in cell["z_range"])
     n_r = 400  # even: no sample sits exactly on the axis (the seam of the mirrored halves)
     step = 2 * half_w / n_r
     plane = pv.ImageData(dimensions=(n_r, int((z1 - z0) / step), 1), spacing=(step, step, 1.0),
@@ -112,12 +118,15 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
         j = np.clip(np.rint((p[:, 0] - xs[0]) / step).astype(int), 0, shape[1] - 1)
         return ~valid_grid[i, j]
 
+    def on_electrode(p):
+        if cell is not None:
+            return cell["on_electrode"](p[:, 0] / mm, p[:, 1] / mm, 0.5 * step / mm)
+        return (np.abs(np.abs(p[:, 1]) - zu) < 0.5 * step) & (np.abs(p[:, 0]) <= a)
+
     lines = trace_field_lines(-grad_r, -grad_z, xs, ys, seeds, step_length=0.4 * step,
                               max_steps=3000,
                               stop=lambda p: (np.hypot(p[:, 0], p[:, 1] - zb) < rb)
-                              | ((np.abs(np.abs(p[:, 1]) - zu) < 0.5 * step)
-                                 & (np.abs(p[:, 0]) <= a))
-                              | outside_mesh(p))
+                              | on_electrode(p) | outside_mesh(p))
     for line in lines:
         if len(line) > 3 and np.all(np.isfinite(line)) and \
                 np.linalg.norm(line[int(0.3 * len(line)) + 1] - line[int(0.3 * len(line)) - 1]) > 0:
@@ -133,9 +142,16 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     circle.points[:, 2] = 0.05
     plotter.add_mesh(circle.extract_feature_edges(), color="black", line_width=4,
                      render_lines_as_tubes=True)
-    for z in (zl, zu):
+    if cell is not None:   # the cell's outline, both halves of the meridian plane
+        for kind, colour, width in (("electrodes", "#b87333", 8), ("walls", "#555555", 2)):
+            for line in cell[kind]:
+                for sign in (1.0, -1.0):
+                    xyz = np.column_stack([sign * line[:, 0] * mm, line[:, 1] * mm,
+                                           np.full(len(line), 0.05)])
+                    plotter.add_mesh(pv.lines_from_points(xyz), color=colour, line_width=width)
+    for z in (() if cell is not None else (zl, zu)):
         plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333", line_width=8)  # copper
-    if lay.walls:
+    if lay.walls and cell is None:
         for x0, x1, y0, y1 in ((-ro, ro, zl - t, zl), (-ro, ro, zu, zu + t),
                                (ri, ro, zl, zu), (-ro, -ri, zl, zu)):
             box = pv.Rectangle([(x0, y0, 0.03), (x1, y0, 0.03), (x1, y1, 0.03)])
@@ -147,7 +163,8 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     # the vertical axis is the title's z: height above the lower electrode's face (the
     # mesh's origin is the midplane); the ball's bottom sits at the gap z
     base = height_origin(lay) * mm
-    plotter.show_bounds(xtitle="r (mm)", ytitle="z: height above the lower electrode (mm)",
+    height = cell["height_label"] if cell is not None else "the lower electrode"
+    plotter.show_bounds(xtitle="r (mm)", ytitle=f"z: height above {height} (mm)",
                         color="black", font_size=14, location="outer", ticks="outside",
                         bounds=(-half_w, half_w, z0, z1, 0, 0),
                         axes_ranges=[-half_w, half_w, z0 - base, z1 - base, 0, 0])

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from ..errors import SceneError
+from .shapes import shape_mesh_features, shape_of
 
 # -- limits of work, checked at load --
 #: Output samples per run, ``duration_s x sample_rate_hz``: 2e7 is 1000 s at 20 kHz
@@ -126,6 +127,9 @@ PAPER_FEATURES = {"ball_diameter_mm": 7.0e-3, "electrode_radius_mm": 4.0e-3, "st
 PAPER_WALL_FEATURES = {"tube_outer_radius_mm - tube_inner_radius_mm": 1.5e-3,
                        "plate_thickness_mm": 2.0e-3,
                        "tube_inner_radius_mm - ball_diameter_mm / 2": 0.5e-3}
+#: ... and a spherical shell's band and shell thickness, against the paper's electrode
+#: radius and tube wall (the sizes the default mesh resolves there)
+PAPER_SHELL_FEATURES = {"electrode_band_mm": 4.0e-3, "shell_thickness_mm": 1.5e-3}
 
 
 # ---------------------------------------------------------------------------
@@ -292,7 +296,10 @@ def auto_domain_radius(device, offset: float = 0.0) -> float:
 
 def mesh_features(device, environment: str = "free-space") -> dict[str, float]:
     """The features [m] a mesh of ``device`` must resolve, by scene key (see
-    :data:`PAPER_FEATURES`)."""
+    :data:`PAPER_FEATURES`; a spherical shell's: :func:`shapes.shape_mesh_features`)."""
+    shaped = shape_mesh_features(device)
+    if shaped is not None:
+        return shaped
     features = {"ball_diameter_mm": device.ball_diameter,
                 "electrode_radius_mm": device.electrode_radius, "stroke_mm": device.stroke}
     walls = device.wall_permittivity != 1.0
@@ -310,7 +317,7 @@ def default_mesh_scale(device, fld) -> float:
     """Factor on the default ``mesh_size_mm`` from the ratios ``feature_i / paper_i`` over
     :func:`mesh_features`: the smallest when all are >= 1, the largest when all are < 1,
     else 1 (1.0 exactly for the paper's device)."""
-    paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES}
+    paper = {**PAPER_FEATURES, **PAPER_WALL_FEATURES, **PAPER_SHELL_FEATURES}
     ratios = [size / paper[key] for key, size in mesh_features(device, fld.environment).items()]
     if min(ratios) >= 1.0:
         return min(ratios)
@@ -325,7 +332,7 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
     problems = []
     b = dev.bounding_radius
     b_mm = b * 1e3
-    max_offset = dev.tube_inner_radius - dev.ball_radius
+    max_offset = shape_of(dev.shape).max_offset(dev)
     if fld.ball_offset > max_offset + 1e-15:
         problems.append(
             f"[field] ball_offset_mm = {fld.ball_offset * 1e3:g} is out of range: allowed "
@@ -351,6 +358,9 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
                 ("electrode_radius_mm", dev.electrode_radius),
                 ("tube_outer_radius_mm - tube_inner_radius_mm",
                  dev.tube_outer_radius - dev.tube_inner_radius)]
+    shaped = shape_mesh_features(dev)
+    if shaped is not None:   # the shape's own features (the stroke is added below)
+        features = [(key, size) for key, size in shaped.items() if key != "stroke_mm"]
     feature_key, feature = min(features + [("stroke_mm", dev.stroke)], key=lambda kv: kv[1])
     for key, size in features:
         if size < smallest:

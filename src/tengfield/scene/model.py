@@ -28,6 +28,7 @@ from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_ar
                      check_ensemble_work,
                      check_steady_window, check_vibration_work, check_work, field_problems)
 from .recorded import read_psd, read_recorded
+from .shapes import check_shape_scene, shape_field_inputs, shape_field_problems, shape_of
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
                      SCHEMA, check_section, convert, harmonic_components, suggest,
                      update_section, with_defaults)
@@ -51,23 +52,15 @@ class Device:
     # 3D motion: gravity tilted by ``tilt`` from -z toward azimuth ``tilt_azimuth`` [rad]
     tilt: float = 0.0
     tilt_azimuth: float = 0.0
+    # the cell's shape and the spherical shell's keys (scene/shapes.py) [m]
+    shape: str = "tube"
+    cavity_diameter: float = 20e-3
+    shell_thickness: float = 2e-3
+    electrode_band: float = 2e-3
 
     def __post_init__(self):
         check_section("device", self, "Device")
-        if self.tube_outer_radius <= self.tube_inner_radius:
-            raise SceneError(
-                f"[device] tube_outer_radius_mm = {self.tube_outer_radius * 1e3:g} must exceed "
-                f"tube_inner_radius_mm = {self.tube_inner_radius * 1e3:g}")
-        if self.ball_diameter >= 2.0 * self.tube_inner_radius:
-            raise SceneError(
-                f"[device] ball_diameter_mm = {self.ball_diameter * 1e3:g}: the ball does not fit "
-                f"the tube; allowed (0, {2e3 * self.tube_inner_radius:g}) mm (twice "
-                "tube_inner_radius_mm)")
-        if self.electrode_radius > self.tube_outer_radius:
-            raise SceneError(
-                f"[device] electrode_radius_mm = {self.electrode_radius * 1e3:g} is larger than "
-                f"the plate: allowed (0, {self.tube_outer_radius * 1e3:g}] mm "
-                "(tube_outer_radius_mm)")
+        shape_of(self.shape).check(self)   # the shape's own rules (the tube's: ball fits)
 
     @property
     def ball_radius(self) -> float:
@@ -90,12 +83,12 @@ class Device:
     @property
     def bounding_radius(self) -> float:
         """Radius of the smallest sphere about the device centre holding one cell [m]."""
-        return math.hypot(self.tube_outer_radius, 0.5 * self.plate_spacing + self.plate_thickness)
+        return shape_of(self.shape).bounding_radius(self)
 
     @property
     def cell_volume(self) -> float:
-        """Outer volume of one cell, tube and both plates [m^3]."""
-        return math.pi * self.tube_outer_radius**2 * (self.plate_spacing + 2 * self.plate_thickness)
+        """Outer volume of one cell [m^3]: tube and both plates, or the shell's sphere."""
+        return shape_of(self.shape).volume(self)
 
 
 @dataclass(frozen=True)
@@ -413,6 +406,7 @@ class Scene:
             raise SceneError(f"[array] connection = {arr.connection!r} needs [circuit] kind = "
                              f"'rectifier' (it is {self.circuit.kind!r})")
         check_array_work(arr, exc, run)
+        check_shape_scene(self)
 
     # -- construction -----------------------------------------------------
     @classmethod
@@ -455,6 +449,8 @@ class Scene:
         for sec, key in AUTO_KEYS:   # (no renamed key takes "auto")
             if out[sec][key] == "auto":
                 out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
+        out["device"] = shape_field_inputs(out["device"], self.device.shape, full["device"],
+                                           HASH_NAMES)
         return out
 
     def field_hash(self) -> str:
@@ -553,6 +549,8 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                 problems.append(str(exc))
                 values[sec][spec.attr] = convert(sec, key, spec.default, spec)
 
+    values["device"]["stroke"] = shape_of(values["device"]["shape"]).stroke(
+        values["device"], data.get("device", {}))   # a shell's: cavity - ball diameter
     dev = Device(**values["device"])
     exc_vals = values["excitation"]
     record = {}
@@ -569,6 +567,7 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
         fvals["domain_radius"] = auto_domain_radius(dev, fvals["ball_offset"])
     fld = Field(**fvals)
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
+    problems += shape_field_problems(dev, fld)
     if (isinstance(data.get("device"), dict)
             and data["device"].get("surface_charge_uC_per_m2") == "breakdown"
             and not fld.has_gap_lines):

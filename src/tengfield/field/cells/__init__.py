@@ -32,12 +32,14 @@ Coordinates: the cell's centre at the origin, z up (the drive's axis), SI.
 A ball centre is ``(x, y, z)`` [m].
 
 ``CELLS`` maps a ``[device] shape`` name to the class of its cell; each class
-has ``from_scene(scene)``. ``"tube"`` is an adapter over the scene and the
-existing tube modules (:mod:`.tube`; the stages still read the tube directly),
-``"spherical-shell"`` the new shell (:mod:`.spherical_shell`; the scene has no
-keys for it yet, ``SphericalShell.from_keys`` reads them in file units). The
-honeycomb and the 3D gmsh models are not cells yet; docs/architecture.md
-("Where a new cell shape goes") and docs/spherical_shell.md say what is left.
+has ``from_scene(scene)`` (``cell_of(scene)``) and ``solve_scene(scene, z, ...)``,
+the one place :func:`tengfield.field.solve_position` (and so the surrogate, the
+run, ``tengfield field``) dispatches on the shape. ``"tube"`` is an adapter over
+the scene and the existing tube modules (:mod:`.tube`), ``"spherical-shell"``
+the shell (:mod:`.spherical_shell`, its scene keys in ``scene/schema.py``, the
+scene-level rules in ``scene/shapes.py``), ``"hexagonal"`` an adapter over the
+honeycomb's 3D cell (:mod:`.hexagonal`). The 3D gmsh models are not cell methods yet; docs/architecture.md ("Where a new cell shape goes") and
+docs/spherical_shell.md say what is left.
 """
 from __future__ import annotations
 
@@ -45,10 +47,11 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from .hexagonal import Hexagonal
 from .spherical_shell import SphericalShell
 from .tube import Tube
 
-__all__ = ["Cell", "CELLS", "SphericalShell", "Tube", "cell_class"]
+__all__ = ["Cell", "CELLS", "Hexagonal", "SphericalShell", "Tube", "cell_class", "cell_of"]
 
 
 @runtime_checkable
@@ -110,8 +113,20 @@ class Cell(Protocol):
         """Create and mesh the (r, z) model of ``layout``; returns its unique name."""
 
 
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """:func:`tengfield.field.solve_position` of a scene of this shape (``method``
+        resolved, "axisymmetric" or "3d"): a :class:`PositionResult`."""
+
+
 #: ``[device] shape`` -> the class of its cell
-CELLS: dict[str, type] = {Tube.name: Tube, SphericalShell.name: SphericalShell}
+CELLS: dict[str, type] = {Tube.name: Tube, Hexagonal.name: Hexagonal,
+                          SphericalShell.name: SphericalShell}
+
+
+def cell_of(scene):
+    """The cell of ``scene`` (``[device] shape``, validated by the scene)."""
+    return cell_class(scene.device.shape).from_scene(scene)
 
 
 def cell_class(shape: str) -> type:

@@ -31,6 +31,8 @@ import math
 import os
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ...errors import FieldError
 from .. import contact
 from ..geometry_axisymmetric import (CELL_TAGS, FACET_TAGS, GRADING_REACH, INTERFACE_GROWTH,
@@ -62,6 +64,33 @@ class ShellLayout:
     table: bool = False
     inversion_centre_z: float = 0.0
     info: dict = field(default_factory=dict)
+
+    @property
+    def z_lower(self) -> float:
+        """The cavity's bottom [m] (field.png's height origin: the gap z reads there)."""
+        return -self.cavity_radius
+
+    def plot_outline(self, points: int = 91) -> dict:
+        """What field.png draws (SI, (r, z) polylines for r >= 0): ``electrodes`` (the two
+        arcs), ``walls`` (the band and the shell's outer surface), ``half_width`` and
+        ``z_range`` of the frame, ``on_electrode(r, z, tol)`` (arrays [m]) where field
+        lines stop, ``height_label`` (where the height axis has its zero)."""
+        a, b = self.cavity_radius, self.outer_radius
+        phi0 = math.asin(0.5 * self.band / a)
+
+        def arc(radius, lo, hi):
+            phi = np.linspace(lo, hi, points)
+            return np.column_stack([radius * np.cos(phi), radius * np.sin(phi)])
+
+        def on_electrode(r, z, tol):
+            return (np.abs(np.hypot(r, z) - a) < tol) & (np.abs(z) >= 0.5 * self.band)
+
+        walls = [arc(a, -phi0, phi0)] + ([arc(b, -0.5 * math.pi, 0.5 * math.pi)]
+                                         if self.walls else [])
+        margin = 0.15 * b
+        return {"electrodes": [arc(a, -0.5 * math.pi, -phi0), arc(a, phi0, 0.5 * math.pi)],
+                "walls": walls, "half_width": b + margin, "z_range": (-b - margin, b + margin),
+                "on_electrode": on_electrode, "height_label": "the cavity's bottom"}
 
     @property
     def rims(self) -> list[tuple[float, float]]:

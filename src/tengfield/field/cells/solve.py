@@ -29,7 +29,7 @@ import numpy as np
 from ...errors import FieldError
 from ...scene.constants import EPS0
 from .. import contact
-from ..axisymmetric import discretise, field_solution, richardson_error, solve_discretisation
+from ..axisymmetric import LINE_KEYS, discretise, field_solution, richardson_error, solve_discretisation
 from ..geometry_axisymmetric import FACET_TAGS
 from ..result import PositionResult
 
@@ -107,13 +107,18 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
                                source_solve=source_solve, linear_solver=linear_solver,
                                unit_source=breakdown_lines)
     estimate = math.nan
+    lines_check = None
     if estimate_error:   # half the size, the coarse mesh's grading lengths: one family
         lay_half, *fine_mesh = build_mesh(cell, position, comm, mesh_size=0.5 * mesh_size,
                                           grading_size=grading_size or mesh_size, **common)
         finer = discretise(dx_api, *fine_mesh, lay_half, eps, degree, far_field)
         fine = solve_discretisation(dx_api, finer, sigma, cell.ball_diameter,
-                                    source_solve=False, linear_solver=linear_solver)
+                                    source_solve=False, linear_solver=linear_solver,
+                                    unit_source=breakdown_lines)
         estimate = richardson_error(contact.relative_change(sol, fine), degree)
+        if breakdown_lines:   # the lines on the half-size mesh: their error estimate
+            from ..breakdown import line_basis
+            lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
     info = {"shape": cell.name, "mesh_size_m": lay.mesh_size,
             "domain_radius_m": lay.domain_radius, "far_field": far_field,
             "meshed_gap_m": lay.effective_gap,
@@ -128,6 +133,8 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
     if breakdown_lines:   # [φ_1, ψ_lower, ψ_upper] at the ball's surface points
         from ..breakdown import line_basis
         info["breakdown_lines"] = line_basis(dx_api, disc, sol.unit_source, sol.weighting, lay)
+        if lines_check is not None:
+            info["breakdown_lines_check"] = lines_check
     ball_charge = sigma * math.pi * cell.ball_diameter**2
     result = PositionResult(
         position=position, offset=0.0, capacitance=sol.capacitance,
@@ -151,14 +158,15 @@ def _solve_serial(cell, position: float, comm, **options) -> PositionResult:
 
     def solve_at(z):   # the potentials kept are those of the nearest anchor gap
         res = _solve_meshed(cell, z, comm, **(options if z == anchors[0] else later))
-        if "breakdown_lines" in res.info:   # extrapolated like C and q
-            res.extras = {"breakdown_lines": np.asarray(res.info["breakdown_lines"])}
+        res.extras = {key: np.asarray(res.info[key]) for key in LINE_KEYS
+                      if key in res.info}   # breakdown lines: extrapolated like C and q
         return res
 
     rule = contact.extrapolate_to_contact(position, anchors, cell.stroke, solve_at)
     result = rule["solves"][0]
-    if "breakdown_lines" in rule["extras"]:
-        result.info["breakdown_lines"] = rule["extras"]["breakdown_lines"]
+    for key in LINE_KEYS:
+        if key in rule["extras"]:
+            result.info[key] = rule["extras"][key]
     for res in rule["solves"]:
         res.__dict__.pop("extras", None)
     result.capacitance = rule["capacitance"]

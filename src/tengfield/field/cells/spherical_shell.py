@@ -73,9 +73,33 @@ class SphericalShell:
 
     @classmethod
     def from_scene(cls, scene) -> "SphericalShell":
-        """The shell of ``scene``'s ``[device]`` table as written (``scene.raw``)."""
-        device = dict(((getattr(scene, "raw", None) or {}).get("device") or {}))
-        return cls.from_keys(device)
+        """The shell of ``scene`` (``[device] shape = "spherical-shell"``, validated by
+        the scene) with its far-field sphere ``[field] domain_radius_mm``."""
+        dev = scene.device
+        return cls(cavity_diameter=dev.cavity_diameter, shell_thickness=dev.shell_thickness,
+                   electrode_band=dev.electrode_band, ball_diameter=dev.ball_diameter,
+                   wall_permittivity=dev.wall_permittivity,
+                   ball_permittivity=dev.ball_permittivity,
+                   domain_radius=scene.field.domain_radius)
+
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """:func:`tengfield.field.solve_position` for this cell: the axisymmetric solve
+        (:func:`~tengfield.field.cells.solve.solve_cell_position`) at the scene's σ and
+        ``[field]`` discretisation (the default mesh size scaled as the tube's)."""
+        if method != "axisymmetric" or offset != 0.0:
+            raise FieldError(f"method = {method!r}, offset_mm = {offset * 1e3:g}: the "
+                             f"{self.name} has the axisymmetric solver only (the ball on the "
+                             "axis) yet")
+        from ..geometry_axisymmetric import base_mesh_size
+        from .solve import solve_cell_position
+
+        fld = scene.field
+        return solve_cell_position(self, position, comm=comm,
+                                   sigma=scene.device.surface_charge,
+                                   mesh_size=base_mesh_size(scene), degree=fld.degree,
+                                   far_field=fld.far_field, domain_radius=fld.domain_radius,
+                                   **options)
 
     def __post_init__(self) -> None:
         for key, value in (("cavity_diameter_mm", self.cavity_diameter),
@@ -221,9 +245,17 @@ class SphericalShell:
             out["radial"].append(radial)
         return {key: np.array(value) for key, value in out.items()}
 
+    def line_lengths(self, positions, angles) -> np.ndarray:
+        """Breakdown line lengths [m] (len(positions), 2, lines) for the ball at gaps
+        ``positions`` [m] and lines at polar ``angles`` [rad] (:meth:`breakdown_feet`;
+        :class:`tengfield.breakdown.Lines` reads them)."""
+        degrees = np.degrees(np.asarray(angles, dtype=float))
+        return np.array([self.breakdown_feet(self.ball_centre_z(z), degrees)["length"]
+                         for z in np.atleast_1d(np.asarray(positions, dtype=float))])
+
     def mesh_features(self) -> dict[str, float]:
         """Lengths [m] the default mesh must resolve, by scene key."""
-        features = {"ball_diameter_mm": self.ball_diameter, "gap_mm": self.stroke,
+        features = {"ball_diameter_mm": self.ball_diameter, "stroke_mm": self.stroke,
                     "electrode_band_mm": self.electrode_band}
         if self.wall_permittivity != 1.0:
             features["shell_thickness_mm"] = self.shell_thickness

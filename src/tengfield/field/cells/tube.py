@@ -29,6 +29,15 @@ class Tube:
     def from_scene(cls, scene) -> "Tube":
         return cls(scene)
 
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """:func:`tengfield.field.solve_position` for the tube: the tube's own solvers."""
+        if method == "axisymmetric":
+            from ..axisymmetric import solve_position_axisymmetric
+            return solve_position_axisymmetric(scene, position, comm=comm, **options)
+        from ..solver3d import solve_position_3d
+        return solve_position_3d(scene, position, offset=offset, comm=comm, **options)
+
     @property
     def device(self):
         return self.scene.device

@@ -1,0 +1,146 @@
+"""The honeycomb cell of Fig. 10 as a :class:`~tengfield.field.cells.Cell`
+(``[device] shape = "hexagonal"``): an adapter over
+:class:`tengfield.field.geometry3d.HexagonalCell` and the 3D solver (nothing of the
+honeycomb is re-implemented here).
+
+The tube's keys are read with the hexagon's meaning: ``tube_inner_radius_mm`` is the
+inner apothem (axis to a flat of the hexagonal bore), ``tube_outer_radius_mm`` the
+outer one (wall thickness = outer - inner), ``plate_thickness_mm``, ``stroke_mm``,
+the ball and the permittivities as for the tube; the electrodes cover the inner
+hexagon (``electrode_radius_mm`` is not used). Hexagons have two flats parallel to x.
+
+Field: 3D solves only (``[field] method = "3d"``; no breakdown lines), the scene's
+``[field]`` discretisation, as ``solve_position_3d`` does for the tube.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import FieldError
+from ...scene.limits import mesh_features
+
+#: unit normals of the hexagon's six flats (two parallel to x)
+_NORMALS = np.array([[math.cos(math.pi / 2 + k * math.pi / 3),
+                      math.sin(math.pi / 2 + k * math.pi / 3), 0.0] for k in range(6)])
+
+
+@dataclass(frozen=True)
+class Hexagonal:
+    """The honeycomb cell of ``scene`` (a validated scene with ``shape = "hexagonal"``)."""
+
+    scene: object
+
+    name = "hexagonal"
+
+    @classmethod
+    def from_scene(cls, scene) -> "Hexagonal":
+        return cls(scene)
+
+    @property
+    def cell(self):
+        """The :class:`~tengfield.field.geometry3d.HexagonalCell` of the scene."""
+        from ..geometry3d import HexagonalCell
+
+        dev = self.scene.device
+        return HexagonalCell(ball_diameter=dev.ball_diameter, stroke=dev.stroke,
+                             inner_apothem=dev.tube_inner_radius,
+                             wall_thickness=dev.tube_outer_radius - dev.tube_inner_radius,
+                             plate_thickness=dev.plate_thickness,
+                             ball_permittivity=dev.ball_permittivity,
+                             wall_permittivity=dev.wall_permittivity)
+
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """The 3D solve (:func:`tengfield.field.solver3d.solve_cell_3d`) at the scene's σ
+        and ``[field]`` settings; options ``estimate_error``, ``keep_solution``."""
+        if method != "3d":
+            raise FieldError("[field] method = 'axisymmetric': shape = 'hexagonal' is a 3D "
+                             "cell; use method = '3d'")
+        unknown = set(options) - {"estimate_error", "keep_solution"}
+        if unknown:
+            raise FieldError(f"unknown 3D solver option(s) {sorted(unknown)}; allowed: "
+                             "estimate_error, keep_solution")
+        from ..geometry_axisymmetric import base_mesh_size
+        from ..solver3d import Solve3DSettings, solve_cell_3d
+
+        fld = scene.field
+        settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
+                                   domain_radius=fld.domain_radius, far_field=fld.far_field,
+                                   estimate_error=options.get("estimate_error", True))
+        return solve_cell_3d(self.cell, position, offset=offset,
+                             surface_charge=scene.device.surface_charge, settings=settings,
+                             comm=comm, keep_solution=options.get("keep_solution", False))
+
+    # -- geometry ----------------------------------------------------------------
+    @property
+    def ball_radius(self) -> float:
+        return self.scene.device.ball_radius
+
+    @property
+    def stroke(self) -> float:
+        return self.scene.device.stroke
+
+    @property
+    def electrode_spacing(self) -> float:
+        return self.scene.device.plate_spacing
+
+    @property
+    def bounding_radius(self) -> float:
+        return self.cell.bounding_radius
+
+    def ball_centre_z(self, position: float) -> float:
+        return -0.5 * self.electrode_spacing + float(position) + self.ball_radius
+
+    def _clearances(self, centre) -> np.ndarray:
+        """Gaps [m] to the nearest flat of the bore, the lower and the upper electrode."""
+        c = np.asarray(centre, dtype=float).reshape(3)
+        half, rb = 0.5 * self.electrode_spacing, self.ball_radius
+        lateral = self.scene.device.tube_inner_radius - rb - float(np.max(_NORMALS @ c))
+        return np.array([lateral, c[2] + half - rb, half - rb - c[2]])
+
+    def admissible(self, centre) -> bool:
+        return bool(np.all(self._clearances(centre) >= -1e-12 * self.electrode_spacing))
+
+    def wall_distance(self, centre) -> float:
+        return float(np.min(self._clearances(centre)))
+
+    def wall_normal(self, centre) -> np.ndarray:
+        c = np.asarray(centre, dtype=float).reshape(3)
+        k = int(np.argmin(self._clearances(c)))
+        if k == 0:
+            return _NORMALS[int(np.argmax(_NORMALS @ c))].copy()
+        return np.array([0.0, 0.0, -1.0 if k == 1 else 1.0])
+
+    def volume(self) -> float:
+        """The hexagonal prism, walls and both plates: 2√3 b² (h + 2t) (b: outer apothem)."""
+        return self.scene.device.cell_volume
+
+    def longest_path(self) -> float:
+        """Hypot of the plate spacing and the bore's corner-to-corner width."""
+        from ...paschen import longest_path
+        return longest_path(self.scene.device)
+
+    def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
+        raise FieldError("shape = 'hexagonal' has no breakdown lines (3D solves): give "
+                         "[device] surface_charge_uC_per_m2 as a number")
+
+    def mesh_features(self) -> dict[str, float]:
+        return mesh_features(self.scene.device, self.scene.field.environment)
+
+    def axisymmetric_layout(self, position: float, **settings):
+        raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
+
+    def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
+        raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
+
+    def outline(self) -> list[np.ndarray]:
+        """(r, z) polylines of the section through two flats: electrodes, bore, outside."""
+        dev = self.scene.device
+        h, t = 0.5 * dev.plate_spacing, dev.plate_thickness
+        ri, ro = dev.tube_inner_radius, dev.tube_outer_radius
+        return [np.array([[0.0, -h], [ri, -h]]), np.array([[0.0, h], [ri, h]]),
+                np.array([[0.0, -h - t], [ro, -h - t], [ro, h + t], [0.0, h + t]]),
+                np.array([[0.0, -h], [ri, -h], [ri, h], [0.0, h]])]

@@ -1,0 +1,242 @@
+"""The scene's side of ``[device] shape`` (issue #32): each shape's own rules, the
+quantities the base layer needs (stroke, volume, bounding radius, mesh features) and
+its part of the field hash. The cells' full geometry (meshes, breakdown lines,
+outlines, 3D contact) is :mod:`tengfield.field.cells` (``CELLS``); the scene layer
+cannot import it (it is a layer up), so the few formulas the scene itself needs are
+here, one entry per shape in :data:`SHAPES`.
+
+* ``"tube"``: the paper's tube (``stroke_mm``, ``electrode_radius_mm``,
+  ``tube_*_radius_mm``, ``plate_thickness_mm``), unchanged.
+* ``"spherical-shell"``: the cavity ``cavity_diameter_mm`` lined by two hemispherical
+  electrodes split by the band ``electrode_band_mm`` at the equator, the shell
+  ``shell_thickness_mm`` of ``wall_permittivity``. The stroke is ``cavity_diameter -
+  ball_diameter``: ``stroke_mm`` is derived, and refused when written with another
+  value.
+* ``"hexagonal"``: the honeycomb cell of Fig. 10 (``tengfield.field.geometry3d.
+  HexagonalCell``): the tube's keys with the hexagon's meaning (apothems), 3D field
+  solves only (``[field] method = "3d"``), 1-D dynamics.
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import SceneError
+
+
+#: the ``[device]`` keys of each shape besides the shared ones (ball, permittivities,
+#: charge, density): a shape's field hash holds its own keys and not the others'
+SHAPE_KEYS = {"tube": ("stroke_mm", "electrode_radius_mm", "tube_inner_radius_mm",
+                       "tube_outer_radius_mm", "plate_thickness_mm"),
+              "spherical-shell": ("cavity_diameter_mm", "shell_thickness_mm",
+                                  "electrode_band_mm")}
+SHAPE_KEYS["hexagonal"] = SHAPE_KEYS["tube"]   # the tube's keys, the hexagon's meaning
+
+
+def _mm(x: float) -> str:
+    return f"{x * 1e3:g}"
+
+
+class _Tube:
+    name = "tube"
+
+    @staticmethod
+    def stroke(device_values: dict, given: dict) -> float:
+        return device_values["stroke"]
+
+    @staticmethod
+    def check(dev) -> None:
+        if dev.tube_outer_radius <= dev.tube_inner_radius:
+            raise SceneError(
+                f"[device] tube_outer_radius_mm = {_mm(dev.tube_outer_radius)} must exceed "
+                f"tube_inner_radius_mm = {_mm(dev.tube_inner_radius)}")
+        if dev.ball_diameter >= 2.0 * dev.tube_inner_radius:
+            raise SceneError(
+                f"[device] ball_diameter_mm = {_mm(dev.ball_diameter)}: the ball does not fit "
+                f"the tube; allowed (0, {2e3 * dev.tube_inner_radius:g}) mm (twice "
+                "tube_inner_radius_mm)")
+        if dev.electrode_radius > dev.tube_outer_radius:
+            raise SceneError(
+                f"[device] electrode_radius_mm = {_mm(dev.electrode_radius)} is larger than "
+                f"the plate: allowed (0, {_mm(dev.tube_outer_radius)}] mm "
+                "(tube_outer_radius_mm)")
+
+    @staticmethod
+    def bounding_radius(dev) -> float:
+        return math.hypot(dev.tube_outer_radius, 0.5 * dev.plate_spacing + dev.plate_thickness)
+
+    @staticmethod
+    def volume(dev) -> float:
+        return math.pi * dev.tube_outer_radius**2 * (dev.plate_spacing + 2 * dev.plate_thickness)
+
+    @staticmethod
+    def max_offset(dev) -> float:
+        return dev.tube_inner_radius - dev.ball_radius
+
+
+def _ball_fits(ball: float, cavity: float) -> None:
+    if ball >= cavity:
+        raise SceneError(f"[device] ball_diameter_mm = {_mm(ball)} is out of range: allowed "
+                         f"(0, {_mm(cavity)}) mm (smaller than cavity_diameter_mm: the ball "
+                         "must fit the cavity)")
+
+
+class _SphericalShell:
+    name = "spherical-shell"
+
+    @staticmethod
+    def stroke(device_values: dict, given: dict) -> float:
+        """cavity - ball diameter; ``stroke_mm`` (or its old name) only if equal."""
+        _ball_fits(device_values["ball_diameter"], device_values["cavity_diameter"])
+        stroke = device_values["cavity_diameter"] - device_values["ball_diameter"]
+        for key in ("stroke_mm", "gap_mm"):
+            if key in given and not isinstance(given[key], bool) \
+                    and isinstance(given[key], (int, float)) \
+                    and not math.isclose(float(given[key]) * 1e-3, stroke, rel_tol=1e-9,
+                                         abs_tol=1e-15):
+                raise SceneError(
+                    f"[device] {key} = {given[key]!r} does not apply to shape = "
+                    f"'spherical-shell': its stroke is cavity_diameter_mm - ball_diameter_mm "
+                    f"= {_mm(stroke)} mm (leave {key} out)")
+        return stroke
+
+    @staticmethod
+    def check(dev) -> None:
+        cavity = dev.cavity_diameter
+        _ball_fits(dev.ball_diameter, cavity)
+        if dev.electrode_band >= cavity:
+            raise SceneError(
+                f"[device] electrode_band_mm = {_mm(dev.electrode_band)} is out of range: allowed "
+                f"(0, {_mm(cavity)}) mm (narrower than cavity_diameter_mm)")
+
+    @staticmethod
+    def bounding_radius(dev) -> float:
+        return 0.5 * dev.cavity_diameter + dev.shell_thickness
+
+    @staticmethod
+    def volume(dev) -> float:
+        """The outer sphere: 4/3 π (a + t)³."""
+        return 4.0 / 3.0 * math.pi * (0.5 * dev.cavity_diameter + dev.shell_thickness) ** 3
+
+    @staticmethod
+    def max_offset(dev) -> float:
+        return 0.5 * dev.cavity_diameter - dev.ball_radius
+
+    @staticmethod
+    def longest_path(dev) -> float:
+        """The cavity's diameter (Paschen's low-pressure bound; ``SphericalShell``'s)."""
+        return dev.cavity_diameter
+
+
+class _Hexagonal:
+    """The honeycomb cell (Fig. 10): the tube's keys with the hexagon's meaning
+    (``tube_inner_radius_mm``/``tube_outer_radius_mm``: the bore's and the outside's
+    apothems, axis to a flat), electrodes over the whole bore."""
+    name = "hexagonal"
+    stroke = _Tube.stroke
+
+    @staticmethod
+    def check(dev) -> None:
+        if dev.tube_outer_radius <= dev.tube_inner_radius:
+            raise SceneError(
+                f"[device] tube_outer_radius_mm = {_mm(dev.tube_outer_radius)} must exceed "
+                f"tube_inner_radius_mm = {_mm(dev.tube_inner_radius)} (the hexagon's apothems)")
+        if dev.ball_diameter >= 2.0 * dev.tube_inner_radius:
+            raise SceneError(
+                f"[device] ball_diameter_mm = {_mm(dev.ball_diameter)}: the ball does not fit "
+                f"the hexagonal bore; allowed (0, {2e3 * dev.tube_inner_radius:g}) mm (twice "
+                "tube_inner_radius_mm, the bore's apothem)")
+
+    @staticmethod
+    def bounding_radius(dev) -> float:
+        corner = dev.tube_outer_radius / math.cos(math.pi / 6)
+        return math.hypot(corner, 0.5 * dev.plate_spacing + dev.plate_thickness)
+
+    @staticmethod
+    def volume(dev) -> float:
+        """The hexagonal prism: 2√3 b² (h + 2t), b the outer apothem."""
+        return 2.0 * math.sqrt(3.0) * dev.tube_outer_radius**2 * (dev.plate_spacing
+                                                                  + 2 * dev.plate_thickness)
+
+    @staticmethod
+    def max_offset(dev) -> float:
+        return dev.tube_inner_radius - dev.ball_radius
+
+    @staticmethod
+    def longest_path(dev) -> float:
+        """Hypot of the plate spacing and the bore's corner-to-corner width."""
+        return math.hypot(dev.plate_spacing, 2.0 * dev.tube_inner_radius / math.cos(math.pi / 6))
+
+
+#: ``[device] shape`` -> its scene-level rules (the shapes a scene can run)
+SHAPES = {_Tube.name: _Tube, _Hexagonal.name: _Hexagonal, _SphericalShell.name: _SphericalShell}
+
+#: shapes the schema names that a scene cannot run yet -> why (one line)
+NOT_RUNNABLE: dict[str, str] = {}
+
+
+def shape_of(shape: str):
+    """The rules of ``shape``; SceneError for a shape a scene cannot run."""
+    if shape in NOT_RUNNABLE:
+        raise SceneError(f"[device] shape = {shape!r}: {NOT_RUNNABLE[shape]}")
+    return SHAPES[shape]
+
+
+def check_shape_scene(scene) -> None:
+    """Rules between the shape and other sections: what the shell does not support yet
+    (the 3D contact model, 3D field solves, an off-axis ball, a grounded table)."""
+    dev = scene.device
+    if dev.shape == "tube":
+        return
+    if scene.contact.model == "3d":
+        wall = "spherical" if dev.shape == "spherical-shell" else "hexagonal"
+        raise SceneError(f"[contact] model = '3d' is not available for shape = {dev.shape!r} "
+                         f"yet (the contact on the {wall} wall is not done): use 'impact' "
+                         "or 'soft'")
+
+
+def shape_field_problems(dev, fld) -> list[str]:
+    """Field-only problems of a non-tube shape (its solver is axisymmetric, free space)."""
+    if dev.shape == "tube":
+        return []
+    problems = []
+    if dev.shape == "hexagonal":
+        if fld.method != "3d":
+            problems.append(f"[field] method = {fld.method!r}: shape = 'hexagonal' is a 3D "
+                            "cell; use method = '3d'")
+    elif fld.method == "3d" or fld.ball_offset > 0.0:
+        problems.append(f"[field] method = {fld.method!r}, ball_offset_mm = "
+                        f"{fld.ball_offset * 1e3:g}: shape = {dev.shape!r} has the axisymmetric "
+                        "solver only (the ball on the axis) yet: use method = 'auto' or "
+                        "'axisymmetric' with ball_offset_mm = 0")
+    if fld.environment != "free-space":
+        problems.append(f"[field] environment = {fld.environment!r} is not available for "
+                        f"shape = {dev.shape!r}: allowed 'free-space'")
+    return problems
+
+
+def shape_mesh_features(dev) -> dict[str, float] | None:
+    """The features [m] a mesh of a non-tube shape must resolve (None: the tube's rule)."""
+    if dev.shape != "spherical-shell":
+        return None
+    features = {"ball_diameter_mm": dev.ball_diameter, "stroke_mm": dev.stroke,
+                "electrode_band_mm": dev.electrode_band}
+    if dev.wall_permittivity != 1.0:
+        features["shell_thickness_mm"] = dev.shell_thickness
+    return features
+
+
+def shape_field_inputs(device_inputs: dict, shape: str, full_device: dict,
+                       hash_names: dict) -> dict:
+    """The ``[device]`` part of the field hash for ``shape``: a tube's exactly as before
+    the shape key existed (no ``shape``, no shell keys); another shape's names it, holds
+    its own keys (:data:`SHAPE_KEYS`) and drops the tube's (``hash_names``: the schema's
+    ``HASH_NAMES``, a renamed key's name in the hash)."""
+    out = dict(device_inputs)
+    if shape == "tube":
+        out.pop("shape", None)
+        return out
+    for key in SHAPE_KEYS["tube"]:
+        out.pop(hash_names.get(("device", key), key), None)
+    for key in SHAPE_KEYS.get(shape, ()):
+        out[key] = full_device[key]
+    return out
