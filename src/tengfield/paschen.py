@@ -91,9 +91,9 @@ class Paschen:
     @classmethod
     def from_scene(cls, scene) -> "Paschen":
         """The scene's ``[breakdown]`` constants (defaults: air at 1 atm) and its device's
-        longest path (:func:`longest_path`)."""
+        longest path (``scene.device.longest_path``: each cell shape's own)."""
         bd = getattr(scene, "breakdown", None)
-        path = longest_path(scene.device) if getattr(scene, "device", None) else math.inf
+        path = scene.device.longest_path if getattr(scene, "device", None) else math.inf
         if bd is None:
             return cls(longest_path=path)
         return cls(A=bd.paschen_A, B=bd.paschen_B, gamma=bd.secondary_emission,
@@ -197,17 +197,6 @@ class Paschen:
                 "source": "A, B: Raizer, Gas Discharge Physics (1991), Table 4.1; gamma = 0.01; "
                           "E_fe = 350 V/um: Peschot et al. (2014); streamer above 200 Torr cm: "
                           "Raizer sec. 12, law of Dakin et al., Electra 32 (1974)"}
-
-
-def longest_path(device) -> float:
-    """The longest discharge path [m] between the ball and an electrode: the tube's
-    inner diagonal, hypot(plate spacing, inner diameter) (a bound: every line and field
-    line from the ball to an electrode is shorter); a spherical shell's: its cavity
-    diameter (``scene/shapes.py``)."""
-    if getattr(device, "shape", "tube") != "tube":
-        from .scene.shapes import shape_of   # the scene imports this module
-        return shape_of(device.shape).longest_path(device)
-    return math.hypot(device.plate_spacing, 2.0 * device.tube_inner_radius)
 
 
 def breakdown_voltage(d, pressure: float = ATMOSPHERE, *, A: float = AIR_A, B: float = AIR_B,

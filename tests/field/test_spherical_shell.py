@@ -283,7 +283,6 @@ def test_from_keys_reads_file_units():
 
 # -- the tube through the same protocol ---------------------------------------------------
 def test_tube_cell_geometry_matches_the_scene():
-    from tengfield.paschen import longest_path
     from tengfield.scene import default_scene
     from tengfield.scene.limits import mesh_features
 
@@ -292,7 +291,8 @@ def test_tube_cell_geometry_matches_the_scene():
     dev = scene.device
     assert isinstance(tube, Cell)
     assert tube.stroke == dev.stroke
-    assert tube.longest_path() == longest_path(dev)
+    assert tube.longest_path() == dev.longest_path == math.hypot(dev.plate_spacing,
+                                                                 2 * dev.tube_inner_radius)
     assert tube.volume() == dev.cell_volume
     assert tube.mesh_features() == mesh_features(dev, scene.field.environment)
     centre = np.array([0.0, 0.0, tube.ball_centre_z(0.3e-3)])

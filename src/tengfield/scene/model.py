@@ -86,6 +86,12 @@ class Device:
         return shape_of(self.shape).bounding_radius(self)
 
     @property
+    def longest_path(self) -> float:
+        """The longest discharge path [m] between the ball and an electrode (Paschen's
+        low-pressure bound; each shape's own, scene/shapes.py)."""
+        return shape_of(self.shape).longest_path(self)
+
+    @property
     def cell_volume(self) -> float:
         """Outer volume of one cell [m^3]: tube and both plates, or the shell's sphere."""
         return shape_of(self.shape).volume(self)

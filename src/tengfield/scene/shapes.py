@@ -69,6 +69,12 @@ class _Tube:
         return math.pi * dev.tube_outer_radius**2 * (dev.plate_spacing + 2 * dev.plate_thickness)
 
     @staticmethod
+    def longest_path(dev) -> float:
+        """The tube's inner diagonal, hypot(plate spacing, inner diameter): every line and
+        field line from the ball to an electrode is shorter (Paschen's low-pressure bound)."""
+        return math.hypot(dev.plate_spacing, 2.0 * dev.tube_inner_radius)
+
+    @staticmethod
     def max_offset(dev) -> float:
         return dev.tube_inner_radius - dev.ball_radius
 

@@ -120,8 +120,7 @@ class Hexagonal:
 
     def longest_path(self) -> float:
         """Hypot of the plate spacing and the bore's corner-to-corner width."""
-        from ...paschen import longest_path
-        return longest_path(self.scene.device)
+        return self.scene.device.longest_path
 
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
         raise FieldError("shape = 'hexagonal' has no breakdown lines (3D solves): give "

@@ -99,7 +99,7 @@ class Tube:
         return self.device.cell_volume
 
     def longest_path(self) -> float:
-        """The tube's inner diagonal (the bound of ``tengfield.paschen.longest_path``)."""
+        """The tube's inner diagonal (``scene.device.longest_path`` of a tube)."""
         return math.hypot(self.device.plate_spacing, 2.0 * self.device.tube_inner_radius)
 
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
