@@ -13,7 +13,7 @@ export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 
-.PHONY: setup system run test test-serial test-mpi bench clean
+.PHONY: setup system run test test-serial test-mpi test-fast bench clean
 
 setup: $(STAMP)
 
@@ -42,6 +42,10 @@ test: setup test-serial test-mpi
 
 test-serial: setup
 	$(PY) -m pytest -q -p no:cacheprovider tests
+
+# the fast tier (no subprocess CLI runs, demos, 3D fields or tests over ~1 s): minutes
+test-fast: setup
+	$(PY) -m pytest -q -p no:cacheprovider -m "not slow" tests
 
 test-mpi: setup
 	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider --color=no -m mpi tests

@@ -1,4 +1,4 @@
-"""Jobs for the figure-process tests (tests/test_figure_process.py): importable in the
+"""Jobs for the figure-process tests (tests/cli/test_figure_process.py): importable in the
 child through PYTHONPATH."""
 import os
 import sys

@@ -12,7 +12,7 @@ exit 0 with only tengfield's own lines on stderr, and write the files README's
 Beyond the block, on a small scene made from my.toml (0.3 s, coarse field): a 3D run
 with a lateral drive, a rectifier run and an ``[array]`` with spread, all figures on.
 The 3D run's (z, r) surrogate (3D solves, minutes) is pre-cached from the analytic
-(z, r) stand-in of ``tests/test_surrogate_zr.py``; its axis part is the real one.
+(z, r) stand-in of ``tests/surrogate/test_surrogate_zr.py``; its axis part is the real one.
 """
 from __future__ import annotations
 

@@ -20,7 +20,7 @@ from tengfield import electrical, io, report, sweep
 
 import plate_model as fx
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHORT_RUN = {"duration_s": 0.3, "settle_periods": 2, "sample_rate_hz": 5000.0}
 
 

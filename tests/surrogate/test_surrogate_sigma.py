@@ -125,7 +125,7 @@ def test_a_surrogate_cached_by_an_older_tengfield_is_read_and_copied(tmp_path):
 
 
 def test_the_default_scenes_legacy_key_is_the_old_field_hash():
-    """FIELD_SCHEMA 1's hash of the default scene (tests/test_scene_schema.py before #28)."""
+    """FIELD_SCHEMA 1's hash of the default scene (tests/scene/test_scene_schema.py before #28)."""
     from tengfield.scene import default_scene
     from tengfield.surrogate.provenance import legacy_field_hash
 

@@ -16,7 +16,7 @@ from tengfield import electrical, pipeline, surrogate
 
 import plate_model as fx
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL_SCENE = """\
 [run]
 duration_s = 0.3

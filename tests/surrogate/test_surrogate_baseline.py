@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-BASELINE = json.loads((Path(__file__).parent / "data" / "surrogate_before_issue9.json")
+BASELINE = json.loads((Path(__file__).resolve().parents[1] / "data" / "surrogate_before_issue9.json")
                       .read_text())
 
 

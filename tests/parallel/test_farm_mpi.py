@@ -25,7 +25,7 @@ from tengfield.errors import SceneError
 
 import plate_model as fx
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHORT_RUN = {"duration_s": 2.0}
 FREQUENCIES = [15.0, 20.0, 25.0]
 AMPLITUDES = [1.0e-3, 1.5e-3]
@@ -206,7 +206,7 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
     script = tmp_path / "fail.py"
     script.write_text(textwrap.dedent(f"""
         import sys
-        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        sys.path.insert(0, {str(Path(__file__).resolve().parents[1])!r})
         from mpi4py import MPI
         import plate_model as fx
         from tengfield import surrogate, sweep

@@ -8,7 +8,7 @@ from tengfield.scene.schema import SCHEMA
 
 import plate_model as fx
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "tengfield"
+SRC = Path(__file__).resolve().parents[2] / "src" / "tengfield"
 
 
 def test_the_schema_offers_exactly_the_registered_kinds():

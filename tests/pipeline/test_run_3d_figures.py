@@ -2,7 +2,7 @@
 
 The figure of the surrogate used to call ``voltage(z)`` of the (z, r) curves without
 r and crash the figure process. The surrogates are pre-cached from the analytic
-(z, r) stand-in of ``tests/test_surrogate_zr.py`` (the CLI finds them by the scene's
+(z, r) stand-in of ``tests/surrogate/test_surrogate_zr.py`` (the CLI finds them by the scene's
 hash and imports no dolfinx), so the test costs a dynamics run, not 3D field solves.
 """
 from __future__ import annotations

@@ -22,7 +22,7 @@ from tengfield.errors import SceneError
 from tengfield.report import FieldSetting, Recommendation, Row
 from tengfield.scene import default_scene, load_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 # ---------------------------------------------------------------------------

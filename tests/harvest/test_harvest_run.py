@@ -20,7 +20,7 @@ from tengfield.harvest import Diode, Harvester, PowerChip, harvest
 
 import plate_model as fx
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHORT_RUN = {"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 5000.0}
 #: a small store and chip levels the plate model's 0.3 nC cell reaches in 0.5 s
 SMALL_CHIP = {"kind": "rectifier", "storage_capacitance_uF": 1e-4, "pmic": "uvlo",

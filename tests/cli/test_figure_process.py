@@ -13,7 +13,7 @@ from tengfield.plotting.dynamics import draw_trajectory, trajectory_figure
 from tengfield.plotting.process import FigureProcess
 from tengfield.scene import default_scene
 
-TESTS = Path(__file__).parent
+TESTS = Path(__file__).resolve().parents[1]   # the tests' root (figure_jobs, plate_model)
 
 
 @pytest.fixture

@@ -18,7 +18,7 @@ from tengfield.scene import default_scene
 
 import plate_model as fx
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "tengfield"
+SRC = Path(__file__).resolve().parents[2] / "src" / "tengfield"
 #: the registries' own modules and the scene layer may name the choices
 OWN = ("scene/", "dynamics/excitation.py", "dynamics/models.py", "electrical/circuits/",
        "field/__init__.py", "field/result.py", "_registry.py")
