@@ -19,9 +19,10 @@ from tengfield.scene import default_scene
 import plate_model as fx
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "tengfield"
-#: the registries' own modules and the scene layer may name the choices
+#: the registries' own modules and the scene layer may name the choices (field/cells/:
+#: the CELLS registry's entries, each deciding which field methods its shape has)
 OWN = ("scene/", "dynamics/excitation.py", "dynamics/models.py", "electrical/circuits/",
-       "field/__init__.py", "field/result.py", "_registry.py")
+       "field/__init__.py", "field/result.py", "field/cells/", "_registry.py")
 
 
 def _choice_comparisons() -> list[str]:

@@ -168,7 +168,7 @@ def test_groups_that_keep_the_geometry_build_no_scene_for_the_field_phase(tmp_pa
     assert sum(name == "_group_task" and "contact" in c for name, c in calls) == groups
     assert not [c for name, c in calls if name == "evaluate_study"]
     assert study.summary["geometries"] == 1 and study.summary["field_solves"] == 1
-    assert evaluation.changes_field({"device.gap_mm": 1.0})
+    assert evaluation.changes_field({"device.stroke_mm": 1.0})
     assert not evaluation.changes_field({"contact.restitution": 0.3})
 
 
