@@ -206,7 +206,8 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
     script = tmp_path / "fail.py"
     script.write_text(textwrap.dedent(f"""
         import sys
-        sys.path.insert(0, {str(Path(__file__).resolve().parents[1])!r})
+        sys.path.insert(0, {str(Path(__file__).resolve().parents[1])!r})   # plate_model
+        sys.path.insert(0, {str(Path(__file__).resolve().parent)!r})       # this file
         from mpi4py import MPI
         import plate_model as fx
         from tengfield import surrogate, sweep
