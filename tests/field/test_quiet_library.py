@@ -42,4 +42,12 @@ def test_a_cold_library_solve_prints_nothing_on_stderr(tmp_path, cli_env):
 @pytest.mark.slow
 @pytest.mark.field
 def test_the_compiler_lines_show_when_logging_asks_for_them(tmp_path, cli_env):
-    assert "running build_ext" in _solve(tmp_path, cli_env, "--info")
+    """With logging at INFO the compile's lines are the user's to see. dolfinx 0.9's
+    stack (Debian 13: setuptools >= 68 through cffi) logs no line at INFO for a compile,
+    so there is nothing to show there; dolfinx 0.5.2's (Debian 12) logs ``running
+    build_ext``, which must come through."""
+    err = _solve(tmp_path, cli_env, "--info")
+    import dolfinx
+    if err == "" and tuple(int(x) for x in dolfinx.__version__.split(".")[:2]) >= (0, 9):
+        pytest.skip("dolfinx >= 0.9 logs no compile line at INFO: nothing to show")
+    assert "running build_ext" in err

@@ -65,7 +65,7 @@ def test_a_special_file_is_named_as_such(tmp_path, kind):
 
 def write_record(folder, times):
     z = 1.5e-3 * np.sin(2 * np.pi * 20 * times)
-    (folder / "t.csv").write_text("time_s,z_m\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(times, z)))
+    (folder / "t.csv").write_text("time_s,z_m\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(times, z)))
     path = folder / "s.toml"
     path.write_text('[excitation]\nkind = "recorded"\nfile = "t.csv"\ntime_column = "time_s"\n'
                     'signal_column = "z_m"\nsignal = "displacement"\nfrequency_hz = 20\n')

@@ -122,7 +122,7 @@ def test_fit_names_its_own_window_when_the_record_is_too_short(tmp_path):
 
     t = np.arange(10_000) * 1e-4
     (tmp_path / "t.csv").write_text("time_s,z_m\n" + "".join(
-        f"{a!r},{1.5e-3 * np.sin(2 * np.pi * 20 * a)!r}\n" for a in t))
+        f"{float(a)!r},{float(1.5e-3 * np.sin(2 * np.pi * 20 * a))!r}\n" for a in t))
     (tmp_path / "s.toml").write_text('[excitation]\nkind = "recorded"\nfile = "t.csv"\n'
                                      'time_column = "time_s"\nsignal_column = "z_m"\n'
                                      'frequency_hz = 20\n[run]\nduration_s = 1\n'

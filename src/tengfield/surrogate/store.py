@@ -248,8 +248,13 @@ def _read_checked(f, name: str) -> np.ndarray:
     the stored size is the data plus Fletcher-32's 4 bytes) nor than the file has."""
     if name not in f:
         raise SurrogateError(f"array {name!r} is missing")
-    dataset = f[name]
-    shape, dtype = dataset.shape, dataset.dtype
+    try:    # newer HDF5 (Debian 13) refuses a dimension beyond its maximum when opening
+        dataset = f[name]
+        shape, dtype = dataset.shape, dataset.dtype
+    except (KeyError, OSError, ValueError) as exc:
+        raise SurrogateError(f"array {name!r}: its header is damaged (not read): "
+                             f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
+                             ) from None
     if shape is None or dtype.kind not in "biuf" or dtype.itemsize > 8:
         raise SurrogateError(f"array {name!r} has dtype {dtype} and shape {shape}: not a "
                              "numeric array as written")
