@@ -534,11 +534,10 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
             if key not in SCHEMA[sec]:
                 raise SceneError(f"{source}: unknown key [{sec}] {key}" + suggest(key, SCHEMA[sec]))
     components = None
-    given_data = data
     if isinstance(data.get("excitation"), dict) and data["excitation"].get("kind") == "harmonics":
         # the lists stay in scene.raw (with_values, to_dict, the written scene); the
         # build below sees the fundamental's scalar values
-        given_data, (data, components) = data, harmonic_components(data)
+        data, components = harmonic_components(data)
     values: dict[str, dict[str, Any]] = {}
     problems: list[str] = []
     for sec, keys in SCHEMA.items():

@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
-import sys
 import warnings
 from typing import Any, Callable
 

@@ -24,6 +24,7 @@ import numpy as np
 from .. import electrical
 from .._json import regime_dict
 from ..quantities import summary_keys
+from ..surrogate.cache import solved_scene
 from .spec import UncertaintySpec, sections_of
 
 SIGMA_KEY = "device.surface_charge_uC_per_m2"
@@ -106,16 +107,6 @@ def groups_of(keys: list[str], values: np.ndarray) -> list[Group]:
     return list(groups.values())
 
 
-def _reference(scene):
-    """The group's scene the table is obtained at: its own σ, or the stand-in σ when it is
-    zero (the table is scaled to each evaluation's σ)."""
-    if scene.device.surface_charge != 0.0 or scene.raw.get("device", {}).get(
-            "surface_charge_uC_per_m2") == "breakdown":
-        return scene
-    from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC
-    return scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
-
-
 #: surrogates this process has obtained: (cache dir, field hash, breakdown values, σ as
 #: given) -> (the σ the table is at [C/m²], table, σ_max); groups that differ only in
 #: dynamics keys share one (each keeps its own scene: excitation, run, contact...)
@@ -195,7 +186,7 @@ def _group_task(task):
         table, at, sigma_table, sigma_max = None, base, 0.0, None
         charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
-            ref = _reference(base)
+            ref = solved_scene(base)
             digest = ref.field_hash()
             ref_at, table, status, sigma_max = _obtain(ref, cache_dir, solve)
             sigma_table = ref_at.device.surface_charge
@@ -256,7 +247,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
         for group in [nominal, *groups]:
             if group.dynamic and not changes_field(group.dynamic):
                 continue       # the nominal geometry (no field key varied): no scene built
-            ref = _reference(scene.with_values(**sections_of(group.dynamic))
+            ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
             geometry.setdefault(ref.field_hash(), ref)
     field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
