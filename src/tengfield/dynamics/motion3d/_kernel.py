@@ -1,7 +1,7 @@
 """Compiled integrator of the 3D ball (numba). Table frame, SI units.
 
-State: centre position p (z = 0 is the lower electrode face, z axis = tube
-axis), velocity v and angular velocity w relative to the table, plus one
+State: centre position p (z = 0 is the lowest point of the cavity: the tube's
+lower electrode face, the shell's bottom; z axis = the drive's axis), velocity v and angular velocity w relative to the table, plus one
 tangential history spring xi per surface (lower plate, upper plate, wall).
 Acceleration: ``g_vec - Y''(t) + F/m``, ``w' = torque / I``.
 
@@ -18,7 +18,14 @@ Two modes:
   a step that starts or ends a contact is cut back by bisection so every
   episode starts and ends on a step boundary.
 
-Per surface parameters ``S[s]`` (s = 0 lower, 1 upper, 2 wall):
+Parameters ``P`` = (m, R, I, H, R_t, g_x, g_y, g_z, then the three surfaces'
+geometry rows from :func:`tengfield.field.cells.contact_surfaces.contact_surfaces`:
+kind (floor, ceiling, cylinder, sphere zone), p0, p1, lo, hi, 0). H and R_t
+(the tube's plate spacing and radius) serve the tube's flight bound only; a
+cell whose first surface is a sphere zone (the spherical shell: lower
+electrode, upper electrode, band of one sphere) bounds its flights by the sphere.
+
+Per surface parameters ``S[s]`` (s = 0 lower, 1 upper, 2 wall or band):
 ``law`` (0 Hertz, 1 power), ``kn`` (F = kn delta^e), ``e``, ``cn`` (Hertz:
 gamma_n = cn delta^(1/4); power: c_max of the STEP), ``kt`` (Hertz:
 k_t = kt delta^(1/2); power: k_t = kt e delta^(e-1)), ``ct`` (like cn), ``dmax`` (STEP
@@ -35,6 +42,9 @@ from numba import njit
 from .._kernel import table_state
 
 N_STATE = 18
+GEOM = 8                  # P[GEOM:]: the three surfaces' rows (kind, p0, p1, lo, hi, 0)
+GEOM_WIDTH = 6
+FLOOR_KIND, CEILING_KIND, CYLINDER_KIND, SPHERE_KIND = 0.0, 1.0, 2.0, 3.0
 KNOT_WIDTH = 11           # t, p(3), v(3), w(3), mode
 FLIGHT, CONTACT = 0.0, 1.0
 BISECTIONS = 48
@@ -65,16 +75,36 @@ def table3(t, kx, px, bx, cx, ky, py, by, cy, kz, pz, bz, cz):
 
 
 @njit(cache=True)
-def _geometry(s, p, R, H, Rt):
-    """(delta, nx, ny, nz) of surface s: penetration [m] and unit normal pushing the ball."""
-    if s == 0:
-        return R - p[2], 0.0, 0.0, 1.0
-    if s == 1:
-        return p[2] + R - H, 0.0, 0.0, -1.0
-    rho = math.sqrt(p[0] * p[0] + p[1] * p[1])
-    if rho < 1e-300:
-        return R - Rt, -1.0, 0.0, 0.0
-    return rho + R - Rt, -p[0] / rho, -p[1] / rho, 0.0
+def _geometry(s, p, R, P):
+    """(delta, nx, ny, nz) of surface s: penetration [m] and unit normal pushing the ball.
+
+    The surface's row of the geometry table starts at ``P[GEOM + GEOM_WIDTH s]``:
+    (kind, p0, p1, lo, hi) as :mod:`tengfield.field.cells.contact_surfaces` writes it.
+    A sphere zone that does not hold the contact point returns delta = -p1 (apart).
+    """
+    b = GEOM + GEOM_WIDTH * s
+    kind = P[b]
+    if kind == FLOOR_KIND:
+        return R - (p[2] - P[b + 1]), 0.0, 0.0, 1.0
+    if kind == CEILING_KIND:
+        return p[2] + R - P[b + 1], 0.0, 0.0, -1.0
+    if kind == CYLINDER_KIND:
+        Rt = P[b + 1]
+        rho = math.sqrt(p[0] * p[0] + p[1] * p[1])
+        if rho < 1e-300:
+            return R - Rt, -1.0, 0.0, 0.0
+        return rho + R - Rt, -p[0] / rho, -p[1] / rho, 0.0
+    # SPHERE_KIND: the inside of the sphere (0, 0, p0), radius p1, zone [lo, hi]
+    a = P[b + 2]
+    dz = p[2] - P[b + 1]
+    dist = math.sqrt(p[0] * p[0] + p[1] * p[1] + dz * dz)
+    if dist < 1e-300:
+        return R - a, 0.0, 0.0, 1.0
+    nx, ny, nz = -p[0] / dist, -p[1] / dist, -dz / dist
+    height = a * dz / dist   # the contact point's height above the centre
+    if height < P[b + 3] or height > P[b + 4]:
+        return -a, nx, ny, nz
+    return dist + R - a, nx, ny, nz
 
 
 @njit(cache=True)
@@ -137,7 +167,7 @@ def _contact(s, p, v, w, xi, sliding, P, S, out):
 
     Returns (delta, normal force, tangential force magnitude)."""
     R = P[1]
-    delta, nx, ny, nz = _geometry(s, p, R, P[3], P[4])
+    delta, nx, ny, nz = _geometry(s, p, R, P)
     if delta <= 0.0:
         return delta, 0.0, 0.0
     fn, ktt, ctt = _normal_force(s, delta, v, nx, ny, nz, S)
@@ -179,7 +209,7 @@ def _deriv(t, y, dy, out, sliding, P, S, kx, px, bx, cx, ky, py, by, cy, kz, pz,
     xi = y[9:18]
     R = P[1]
     for s in range(3):
-        delta, nx, ny, nz = _geometry(s, p, R, P[3], P[4])
+        delta, nx, ny, nz = _geometry(s, p, R, P)
         if delta > 0.0:
             _contact(s, p, v, w, xi, sliding, P, S, out)
             dy[9 + 3 * s], dy[10 + 3 * s], dy[11 + 3 * s] = _slip_velocity(v, w, R, nx, ny, nz)
@@ -235,7 +265,7 @@ def _settle_history(y, sliding, P, S):
     R = P[1]
     for s in range(3):
         k = 9 + 3 * s
-        delta, nx, ny, nz = _geometry(s, p, R, P[3], P[4])
+        delta, nx, ny, nz = _geometry(s, p, R, P)
         if delta <= 0.0:
             y[k] = 0.0
             y[k + 1] = 0.0
@@ -274,7 +304,7 @@ def overlaps(y, P):
     """Overlaps [m] of the ball with the lower plate, upper plate, wall (> 0: touching)."""
     d = np.empty(3)
     for s in range(3):
-        d[s] = _geometry(s, y[0:3], P[1], P[3], P[4])[0]
+        d[s] = _geometry(s, y[0:3], P[1], P)[0]
     return d
 
 
@@ -291,7 +321,7 @@ def _contact_step(y, P, S, steps):
     h = math.inf
     h_edge = math.inf
     for s in range(3):
-        delta, nx, ny, nz = _geometry(s, y[0:3], P[1], P[3], P[4])
+        delta, nx, ny, nz = _geometry(s, y[0:3], P[1], P)
         if delta <= 0.0:
             continue
         e = S[s, 2]
@@ -332,6 +362,8 @@ def _flight_state(t, t0, y0, Y0, Yd0, P, kx, px, bx, cx, ky, py, by, cy, kz, pz,
 @njit(cache=True)
 def _flight_bound(y, P, acc_z, acc_xy):
     """Longest time [s] in which free flight from y cannot touch any surface."""
+    if P[GEOM] == SPHERE_KIND:
+        return _flight_bound_sphere(y, P, acc_z, acc_xy)
     R = P[1]
     H = P[3]
     Rt = P[4]
@@ -361,6 +393,42 @@ def _flight_bound(y, P, acc_z, acc_xy):
             return tau
         tau *= 0.5
     return 0.0
+
+
+@njit(cache=True)
+def _flight_bound_sphere(y, P, acc_z, acc_xy):
+    """Longest time [s] in which free flight from y cannot reach the spherical wall:
+    ``|q + u s| + acc s^2 / 2 <= a - R`` (q: the centre from the sphere's centre,
+    u: the velocity, acc: the bound of |g - Y''| on the three axes)."""
+    R = P[1]
+    a = P[GEOM + 2]
+    rmax = a - R
+    qx, qy, qz = y[0], y[1], y[2] - P[GEOM + 1]
+    ux, uy, uz = y[3], y[4], y[5]
+    q2 = qx * qx + qy * qy + qz * qz
+    qu = qx * ux + qy * uy + qz * uz
+    u2 = ux * ux + uy * uy + uz * uz
+    acc = math.sqrt(acc_z * acc_z + acc_xy * acc_xy)
+    room = rmax - math.sqrt(q2)
+    if room <= 0.0:
+        return 0.0
+    un = math.sqrt(u2)
+    # the triangle inequality's bound |q| + |u| s + acc s^2/2 <= rmax (always valid)
+    if acc > 0.0:
+        safe = 2.0 * room / (un + math.sqrt(un * un + 2.0 * acc * room))
+    elif un > 0.0:
+        safe = room / un
+    else:
+        safe = math.inf
+    tau = 1.0
+    for _ in range(60):
+        if tau <= safe:
+            return safe if safe < math.inf else tau
+        r = math.sqrt(max(q2 + 2.0 * qu * tau + u2 * tau * tau, 0.0)) + 0.5 * acc * tau * tau
+        if r <= rmax:
+            return tau
+        tau *= 0.5
+    return safe
 
 
 @njit(cache=True)
@@ -453,7 +521,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                 d1 = overlaps(y1, P)
                 for s in range(3):
                     if d1[s] > 0.0:
-                        _, nx, ny, nz = _geometry(s, y1[0:3], P[1], P[3], P[4])
+                        _, nx, ny, nz = _geometry(s, y1[0:3], P[1], P)
                         episodes = _grow(episodes, n_e)
                         _put_episode(episodes, n_e, s, t + tau,
                                      -(y1[3] * nx + y1[4] * ny + y1[5] * nz), 0.0)
@@ -486,7 +554,7 @@ def run_3d(P, S, steps, t_start, t_end, y_start, rest_start, max_steps,
                 episodes[open_ep[s], 5] += 1.0
         t = t + h
         for s in range(3):
-            _, nx, ny, nz = _geometry(s, y1[0:3], P[1], P[3], P[4])
+            _, nx, ny, nz = _geometry(s, y1[0:3], P[1], P)
             vn = y1[3] * nx + y1[4] * ny + y1[5] * nz
             if d[s] > 0.0 and not d1[s] > 0.0:
                 if open_ep[s] >= 0:

@@ -16,7 +16,12 @@ Hertz (``[contact] law = "hertz"``), per surface (lower plate, upper plate, wall
   ``gamma_t = -2 sqrt(5/6) beta sqrt(S_t m)``, ``S_t = k_t``;
 * R_e: the ball radius R on a plate; on the concave tube wall (radius R_t) the
   principal relative radii are R (along the axis) and R R_t/(R_t - R) (around
-  it); Johnson's equivalent radius is their geometric mean.
+  it); Johnson's equivalent radius is their geometric mean; inside a concave
+  sphere (the spherical shell's cavity, radius a) both are R a/(a - R).
+
+The surfaces, their kinds, radii and materials (``plate``: the electrodes,
+``wall``: the tube's wall or the shell's insulating band) come from the cell
+(:func:`tengfield.field.cells.contact_surfaces.contact_surfaces`).
 
 Power law (``law = "power"``, the multibody IMPACT form)
 ``F_n = k delta^e + STEP(delta; 0, 0, d_max, c_max) d(delta)/dt`` (not clamped,
@@ -35,7 +40,7 @@ import numpy as np
 from ...errors import SceneError
 from ..soft import damping_ratio
 
-SURFACES = ("lower", "upper", "wall")
+SURFACES = ("lower", "upper", "wall")   # the tube's names (a shell's third is "band")
 SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
 
@@ -105,6 +110,32 @@ def wall_radius(ball_radius: float, tube_radius: float) -> float:
     return math.sqrt(ball_radius * around)
 
 
+def sphere_radius(ball_radius: float, cavity_radius: float) -> float:
+    """Equivalent contact radius [m] of the ball inside a concave sphere: R a / (a - R)."""
+    return ball_radius * cavity_radius / (cavity_radius - ball_radius)
+
+
+def cell_surfaces(scene):
+    """The contact surfaces of ``scene``'s cell (:class:`~tengfield.field.cells.
+    contact_surfaces.ContactSurfaces`); a shape without them is a SceneError."""
+    from ...field.cells import cell_of
+    from ...field.cells.contact_surfaces import contact_surfaces
+    try:
+        return contact_surfaces(cell_of(scene))
+    except ValueError as exc:
+        raise SceneError(f"[contact] model = '3d': {exc}") from None
+
+
+def equivalent_radius(ball_radius: float, surface) -> float:
+    """Hertz equivalent radius [m] of the ball on ``surface`` (a ``ContactSurface``)."""
+    from ...field.cells.contact_surfaces import CYLINDER, SPHERE
+    if surface.kind == CYLINDER:
+        return wall_radius(ball_radius, surface.concave_radius)
+    if surface.kind == SPHERE:
+        return sphere_radius(ball_radius, surface.concave_radius)
+    return ball_radius
+
+
 def hertz_contact_time(mass: float, stiffness: float, speed: float) -> float:
     """Duration [s] of an undamped Hertz impact (F = k delta^1.5) at ``speed`` [m/s]."""
     delta_max = (1.25 * mass * speed**2 / stiffness) ** 0.4
@@ -115,10 +146,13 @@ def hertz_contact_time(mass: float, stiffness: float, speed: float) -> float:
 LAW, KN, EXP, CN, KT, CT, DMAX, CLAMP, MU_S, MU_D = range(10)
 
 
-def surface_parameters(scene) -> np.ndarray:
-    """(3, 10) table of the kernel's per-surface contact parameters (SI)."""
+def surface_parameters(scene, surfaces=None) -> np.ndarray:
+    """(3, 10) table of the kernel's per-surface contact parameters (SI) for the cell's
+    ``surfaces`` (default: :func:`cell_surfaces` of the scene)."""
     c = scene.contact
     dev = scene.device
+    if surfaces is None:
+        surfaces = cell_surfaces(scene)
     m = dev.ball_mass
     radius = dev.ball_radius
     if c.friction_dynamic > c.friction_static:
@@ -132,16 +166,15 @@ def surface_parameters(scene) -> np.ndarray:
         b = calibrated_beta(c.restitution)
     else:
         b = beta(c.restitution)
-    for s, name in enumerate(SURFACES):
+    for s, surface in enumerate(surfaces.surfaces):
         S[s, MU_S] = c.friction_static
         S[s, MU_D] = c.friction_dynamic
         if c.law == "hertz":
-            if name == "wall":
+            if surface.material == "wall":
                 e_s, nu_s = c.wall_youngs_modulus, c.wall_poisson_ratio
-                r_e = wall_radius(radius, dev.tube_inner_radius)
             else:
                 e_s, nu_s = c.plate_youngs_modulus, c.plate_poisson_ratio
-                r_e = radius
+            r_e = equivalent_radius(radius, surface)
             e_star = effective_modulus(c.ball_youngs_modulus, c.ball_poisson_ratio, e_s, nu_s)
             g_star = effective_shear_modulus(c.ball_youngs_modulus, c.ball_poisson_ratio, e_s, nu_s)
             S[s, LAW] = 0.0

@@ -1,4 +1,6 @@
-"""``simulate_3d(scene)``: the rigid ball in the tube, three-axis table motion."""
+"""``simulate_3d(scene)``: the rigid ball in its cell (the tube, the spherical shell),
+three-axis table motion. The walls come from the cell
+(:func:`tengfield.field.cells.contact_surfaces.contact_surfaces`)."""
 from __future__ import annotations
 
 import math
@@ -16,7 +18,7 @@ from ..result import PLATE_NAMES, DynamicsResult, Impacts
 from ..run import run_span, sample_times
 from ..table import TableMotion
 from . import _kernel
-from .contact import KN, EXP, SURFACES, surface_parameters
+from .contact import KN, EXP, cell_surfaces, surface_parameters
 
 #: RK4 steps per natural period of the stiffest active contact (and per
 #: penetration time at the current speed); gives ~30-60 steps per impact.
@@ -28,12 +30,14 @@ MAX_STEPS_PER_SECOND = 5_000_000
 class Motion3DResult(DynamicsResult):
     """A :class:`tengfield.dynamics.DynamicsResult` plus the lateral motion and spin.
 
-    ``gap`` is z of the ball's bottom above the lower electrode (the ball may
-    penetrate slightly: compliant contact); ``x``, ``y`` the centre's
-    offsets [m] from the tube axis relative to the table, ``radial`` =
-    hypot(x, y), ``velocity`` (n, 3) [m/s] relative to the table, ``spin``
-    (n, 3) the angular velocity [rad/s]; ``contacts`` every contact episode
-    (all three surfaces), ``wall_contacts`` the number of wall episodes,
+    ``gap`` is z of the ball's bottom above the lower electrode (the shell's
+    cavity bottom; the ball may penetrate slightly: compliant contact); ``x``,
+    ``y`` the centre's offsets [m] from the cell's axis relative to the table,
+    ``radial`` = hypot(x, y), ``velocity`` (n, 3) [m/s] relative to the table,
+    ``spin`` (n, 3) the angular velocity [rad/s]; ``contacts`` every contact
+    episode (all three surfaces: ``surface`` lower, upper and wall for the tube,
+    lower, upper and band for the shell), ``wall_contacts`` the number of
+    episodes on the third surface (the tube's wall, the shell's band),
     ``steps_per_contact`` the mean number of integrator steps per episode.
     ``sample3d(times)`` gives the full state at any times.
     """
@@ -46,7 +50,8 @@ class Motion3DResult(DynamicsResult):
     wall_contacts: int = 0
     steps_per_contact: float = 0.0
     min_steps_per_contact: int = 0
-    tube_clearance: float = 0.0         # R_t - R [m]: largest radial offset without contact
+    tube_clearance: float = 0.0         # R_t - R (shell: a - R) [m]: largest radial offset
+    surface_names: tuple = ("lower", "upper", "wall")   # the contact surfaces, in order
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     _sampler3d: object = field(default=None, repr=False)
 
@@ -126,9 +131,11 @@ def integrate_3d(scene, *, t_start: float, t_end: float, position0, velocity0, s
         tz = table_from_scene(scene)
     else:
         tx, ty, tz = tables
-    S = surface_parameters(scene)
-    P = np.array([m, radius, 0.4 * m * radius**2, dev.plate_spacing, dev.tube_inner_radius,
-                  g_vec[0], g_vec[1], g_vec[2]])
+    surfaces = cell_surfaces(scene)
+    S = surface_parameters(scene, surfaces)
+    P = np.concatenate([[m, radius, 0.4 * m * radius**2, surfaces.height,
+                         surfaces.surfaces[2].concave_radius, g_vec[0], g_vec[1], g_vec[2]],
+                        surfaces.table().ravel()])
     y0 = np.zeros(_kernel.N_STATE)
     y0[0:3] = position0
     y0[3:6] = velocity0
@@ -142,7 +149,7 @@ def integrate_3d(scene, *, t_start: float, t_end: float, position0, velocity0, s
     status, knots, n_k, episodes, n_e = _kernel.run_3d(
         P, S, float(steps), float(t_start), float(t_end), y0, bool(rest_start), max_steps,
         *targs, float(acc_z), float(acc_xy))
-    return status, knots[:n_k].copy(), episodes[:n_e].copy(), P, S, targs
+    return status, knots[:n_k].copy(), episodes[:n_e].copy(), P, S, targs, surfaces
 
 
 def resting_position(scene, t0: float, gap0: float, x0: float = 0.0, y0: float = 0.0,
@@ -181,7 +188,7 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
             position0 = np.array([0.0, 0.0, dev.ball_radius + scene.initial.gap])
     if velocity0 is None:
         velocity0 = np.array([0.0, 0.0, scene.initial.velocity])
-    status, knots, episodes, P, S, targs = integrate_3d(
+    status, knots, episodes, P, S, targs, surfaces = integrate_3d(
         scene, t_start=t0, t_end=t_end, position0=position0, velocity0=velocity0, spin0=spin0,
         steps=steps)
     if status != 0:
@@ -212,7 +219,7 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
         """The same at ``elapsed`` [s] after t0 (DynamicsResult's ``_sampler`` convention)."""
         return sampler(t0 + np.asarray(elapsed, dtype=float))
 
-    surface = np.array(SURFACES)[episodes[:, 0].astype(int)] if episodes.size \
+    surface = np.array(surfaces.names)[episodes[:, 0].astype(int)] if episodes.size \
         else np.zeros(0, dtype="<U5")
     contacts = {"surface": surface, "time_in": episodes[:, 1], "time_out": episodes[:, 2],
                 "speed_in": episodes[:, 3], "speed_out": episodes[:, 4],
@@ -242,5 +249,6 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
         wall_contacts=int(np.count_nonzero(episodes[:, 0] == 2)),
         steps_per_contact=float(np.mean(steps_done)) if steps_done.size else 0.0,
         min_steps_per_contact=int(np.min(steps_done)) if steps_done.size else 0,
-        tube_clearance=dev.tube_inner_radius - radius, gravity=np.asarray(P[5:8]),
+        tube_clearance=surfaces.clearance, surface_names=surfaces.names,
+        gravity=np.asarray(P[5:8]),
         _sampler3d=sampler3d)
