@@ -102,9 +102,13 @@ def test_bad_shell_keys_are_one_line_errors(device, message):
 
 
 def test_what_the_shell_does_not_do_yet_is_refused_naming_the_key():
-    with pytest.raises(SceneError, match=r"^\[contact\] model = '3d' is not available for "
-                                         r"shape = 'spherical-shell' yet"):
-        Scene.from_dict({"device": SHELL, "contact": {"model": "3d"}})
+    # the 3D contact on the spherical wall runs (tengfield dynamics); its field stage (the
+    # shell's (z, r) surrogate) does not yet: run, field, breakdown refuse it in one line
+    scene = Scene.from_dict({"device": SHELL, "contact": {"model": "3d"}})
+    with pytest.raises(SceneError, match=r"^\[contact\] model = '3d' on shape = "
+                                         r"'spherical-shell': the field stage needs") as info:
+        check_field(scene)
+    assert "\n" not in str(info.value)
     for fld, key in (({"method": "3d"}, "method"), ({"ball_offset_mm": 1.0}, "ball_offset_mm"),
                      ({"environment": "grounded-table"}, "environment")):
         scene = Scene.from_dict({"device": SHELL, "field": fld})   # dynamics-only runs may

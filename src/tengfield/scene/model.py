@@ -28,7 +28,8 @@ from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_ar
                      check_ensemble_work,
                      check_steady_window, check_vibration_work, check_work, field_problems)
 from .recorded import read_psd, read_recorded
-from .shapes import check_shape_scene, shape_field_inputs, shape_field_problems, shape_of
+from .shapes import (check_shape_scene, shape_field_inputs, shape_field_problems, shape_of,
+                     shape_scene_field_problems)
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
                      SCHEMA, check_section, convert, harmonic_components, suggest,
                      update_section, with_defaults)
@@ -499,8 +500,9 @@ def check_field(scene: Scene) -> None:
     field``/``run``/``precompute``/``sweep``): field-only values (``[field]``
     keys and the geometry ranges a mesh needs) never fail a dynamics-only run.
     """
-    if scene.field_problems:
-        raise SceneError("; ".join(scene.field_problems))
+    problems = list(scene.field_problems) + shape_scene_field_problems(scene)
+    if problems:
+        raise SceneError("; ".join(problems))
 
 
 def _auto_mm(value_si: float) -> float:
