@@ -184,7 +184,9 @@ def plot_trajectory3d(result, path, *, title: str | None = None):
 
 
 def trajectory3d_figure(result, *, title: str | None = None):
-    """Side view (gap z and radial offset r vs time) and top view (x-y) [mm].
+    """Side view (gap z and radial offset r vs time) and top view (x-y) [mm]; in a
+    spherical shell (``result.cavity_radius`` > 0) also the meridian view: the centre's
+    (r, z) inside the circle it cannot leave, with the band's rims.
 
     Drawn without pyplot (the caller's matplotlib backend is left alone).
     """
@@ -192,19 +194,24 @@ def trajectory3d_figure(result, *, title: str | None = None):
 
     t = result.t
     clearance_mm = result.tube_clearance * 1e3
-    fig = new_figure((11, 5))
-    ax_side = fig.add_subplot(1, 2, 1)
-    ax_top = fig.add_subplot(1, 2, 2)
+    shell = getattr(result, "cavity_radius", 0.0) > 0.0
+    top_label, wall_label = (("top of the cavity", "equator (largest r)") if shell
+                             else ("upper plate", "tube wall (r)"))
+    fig = new_figure((15, 5) if shell else (11, 5))
+    ax_side = fig.add_subplot(1, 3 if shell else 2, 1)
+    ax_top = fig.add_subplot(1, 3 if shell else 2, 3 if shell else 2)
     ax_side.plot(t, result.gap * 1e3, color="#1f77b4", lw=1.2, label="gap $z$")
     ax_side.plot(t, result.radial * 1e3, color="#d62728", lw=1.0, label="radial offset $r$")
     ax_side.axhline(0.0, color="0.35", lw=0.8)
-    ax_side.axhline(result.stroke * 1e3, color="0.6", lw=0.8, ls="--", label="upper plate")
-    ax_side.axhline(clearance_mm, color="#d62728", lw=0.8, ls=":", label="tube wall (r)")
+    ax_side.axhline(result.stroke * 1e3, color="0.6", lw=0.8, ls="--", label=top_label)
+    ax_side.axhline(clearance_mm, color="#d62728", lw=0.8, ls=":", label=wall_label)
     ax_side.set_xlabel("time [s]")
     ax_side.set_ylabel("[mm]")
     ax_side.set_title("side view")
     ax_side.legend(loc="upper right", fontsize=8)
     ax_side.grid(alpha=0.3)
+    if shell:
+        _meridian_view(fig.add_subplot(1, 3, 2), result)
     ax_top.plot(result.x * 1e3, result.y * 1e3, color="#2ca02c", lw=0.8)
     circle = Circle((0.0, 0.0), clearance_mm, fill=False, color="0.3", ls="--")
     ax_top.add_patch(circle)
@@ -218,7 +225,33 @@ def trajectory3d_figure(result, *, title: str | None = None):
     ax_top.grid(alpha=0.3)
     head = title or "ball in 3D"
     s = result.summary()
-    fig.suptitle(f"{head}: regime {s['regime']}, {s['impacts']} plate impacts, "
-                 f"{s['wall_contacts']} wall contacts", fontsize=10)
+    third = "band" if shell else "wall"
+    fig.suptitle(f"{head}: regime {s['regime']}, {s['impacts']} "
+                 f"{'electrode' if shell else 'plate'} impacts, "
+                 f"{s['wall_contacts']} {third} contacts", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def _meridian_view(ax, result):
+    """The centre in the (r, z) half-plane of the shell [mm], z from the cavity's centre:
+    the circle a - R it cannot leave (contact), the rays to the band's rims."""
+    a = result.cavity_radius
+    c = result.tube_clearance                      # a - R
+    z = (result.gap - c) * 1e3                     # gap + R - a
+    phi = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 181)
+    ax.plot(c * 1e3 * np.cos(phi), c * 1e3 * np.sin(phi), color="0.3", ls="--", lw=0.8,
+            label="contact (|c| = a - R)")
+    rim = float(np.arcsin(min(result.band_half_height / a, 1.0)))
+    for sign in (-1.0, 1.0):
+        ax.plot([0.0, c * 1e3 * np.cos(rim)], [0.0, sign * c * 1e3 * np.sin(rim)],
+                color="#ff7f0e", lw=0.8, ls=":", label="band's rims" if sign > 0 else None)
+    ax.plot(result.radial * 1e3, z, color="#9467bd", lw=0.8, label="centre")
+    ax.set_xlim(-0.05 * c * 1e3, 1.15 * c * 1e3)
+    ax.set_ylim(-1.15 * c * 1e3, 1.15 * c * 1e3)
+    ax.set_aspect("equal")
+    ax.set_xlabel("r [mm]")
+    ax.set_ylabel("z from the cavity's centre [mm]")
+    ax.set_title("meridian view (centre)")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.grid(alpha=0.3)

@@ -198,3 +198,23 @@ def test_the_honeycomb_has_no_3d_walls_yet():
     with pytest.raises(Exception, match=r"hexagonal"):
         cell_surfaces(Scene.from_dict({"device": {"shape": "hexagonal"},
                                        "contact": {"model": "3d"}, "field": {"method": "3d"}}))
+
+
+def test_the_tubes_3d_motion_is_the_one_before_the_cell_route():
+    """The tube's walls now come from its cell (contact_surfaces): a 3-axis run gives the
+    numbers of the model that read the tube's attributes (commit 6631751; measured: the
+    whole trajectory and contacts of this run, a vertical and a power-law tilted run
+    identical to the bit). Pinned: the first impacts and wall contacts (before chaos
+    could amplify a platform's rounding)."""
+    scene = default_scene().with_values(
+        contact={"model": "3d"},
+        run={"duration_s": 0.03, "settle_periods": 0, "sample_rate_hz": 5000.0},
+        excitation={"frequency_hz": 30.0, "amplitude_mm": 3.0, "amplitude_x_mm": 0.5,
+                    "amplitude_y_mm": 0.3, "phase_x_deg": 30.0})
+    r = simulate_3d(scene)
+    assert r.surface_names == ("lower", "upper", "wall") and r.cavity_radius == 0.0
+    assert r.tube_clearance == scene.device.tube_inner_radius - scene.device.ball_radius
+    np.testing.assert_allclose(r.impacts.time[:3], [0.010994838532535443, 0.012801662086455255,
+                                                    0.02628877233774488], rtol=1e-12)
+    wall = r.contacts["time_in"][r.contacts["surface"] == "wall"][:2]
+    np.testing.assert_allclose(wall, [0.008154143176408045, 0.00957134727221344], rtol=1e-12)

@@ -52,6 +52,8 @@ class Motion3DResult(DynamicsResult):
     min_steps_per_contact: int = 0
     tube_clearance: float = 0.0         # R_t - R (shell: a - R) [m]: largest radial offset
     surface_names: tuple = ("lower", "upper", "wall")   # the contact surfaces, in order
+    cavity_radius: float = 0.0          # the shell's a [m] (0: the tube, a cylinder)
+    band_half_height: float = 0.0       # the shell's w/2 [m]: the band's rims above/below
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     _sampler3d: object = field(default=None, repr=False)
 
@@ -250,5 +252,7 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
         steps_per_contact=float(np.mean(steps_done)) if steps_done.size else 0.0,
         min_steps_per_contact=int(np.min(steps_done)) if steps_done.size else 0,
         tube_clearance=surfaces.clearance, surface_names=surfaces.names,
+        cavity_radius=surfaces.surfaces[0].concave_radius if surfaces.spherical else 0.0,
+        band_half_height=surfaces.surfaces[1].zone[0] if surfaces.spherical else 0.0,
         gravity=np.asarray(P[5:8]),
         _sampler3d=sampler3d)
