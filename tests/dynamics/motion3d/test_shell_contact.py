@@ -192,6 +192,13 @@ def test_lateral_drive_rolls_and_bounces_around_the_cavity():
     assert np.max(r.radial) > 0.5 * (A - R)
     assert r.summary()["max_spin_rad_per_s"] > 10.0
     assert set(r.impacts.plate) == {"lower", "upper"}
+    # an impact comes from flight (approaching); most electrode episodes here start by
+    # sliding across a rim from the band, and those are not impacts
+    c = r.contacts
+    crossed = np.isin(c["time_in"], c["time_out"][np.isfinite(c["time_out"])])
+    assert np.count_nonzero(crossed & (c["surface"] != "band")) > len(r.impacts) > 5
+    assert not np.any(np.isin(r.impacts.time, c["time_out"]))
+    assert np.all(r.impacts.speed_before > 0.0)
 
 
 def test_the_honeycomb_has_no_3d_walls_yet():

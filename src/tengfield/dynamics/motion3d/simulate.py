@@ -90,6 +90,13 @@ def _mean_ms(x: np.ndarray) -> float | None:
     return float(np.mean(x) * 1e3) if x.size else None
 
 
+def transfers(episodes: np.ndarray) -> np.ndarray:
+    """Episodes that start where another ends (the same step): the ball crossed from one
+    surface onto the next without leaving the wall (the shell's band rims)."""
+    ends = episodes[np.isfinite(episodes[:, 2]), 2]
+    return np.isin(episodes[:, 1], ends)
+
+
 def gravity_vector(scene) -> np.ndarray:
     """Gravity [m/s^2] in the device frame: tilted by ``tilt`` from -z toward ``tilt_azimuth``."""
     th, ph = scene.device.tilt, scene.device.tilt_azimuth
@@ -227,6 +234,8 @@ def simulate_3d(scene, *, duration: float | None = None, position0=None, velocit
                 "speed_in": episodes[:, 3], "speed_out": episodes[:, 4],
                 "steps": episodes[:, 5].astype(np.int64), "initial": episodes[:, 6] > 0}
     impact_sel = (episodes[:, 0] < 2) & (episodes[:, 6] == 0)
+    if surfaces.spherical:   # sliding across a rim onto an electrode is no impact
+        impact_sel &= ~transfers(episodes)
     ct = episodes[impact_sel, 1]
     cp = episodes[impact_sel, 0].astype(np.int64)
     cvb = episodes[impact_sel, 3]
