@@ -447,8 +447,10 @@ class Scene:
     def field_inputs(self) -> dict:
         """Every input the field solution depends on (the keys flagged ``field`` in the
         schema), as file-level values ("auto" resolved). Raises :class:`SceneError` if a
-        field value is bad."""
-        check_field(self)
+        field value is bad (the rules between the shape and other sections are
+        check_field's: they do not change the field's inputs)."""
+        if self.field_problems:
+            raise SceneError("; ".join(self.field_problems))
         full = with_defaults(self.raw)
         out: dict[str, Any] = {"schema": FIELD_SCHEMA}
         for sec, keys in FIELD_KEYS.items():

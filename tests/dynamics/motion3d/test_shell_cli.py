@@ -74,3 +74,20 @@ def test_run_refuses_the_shells_3d_contact_in_one_line(shell_file, tmp_path, cap
                              "'spherical-shell': the field stage needs the shell's (z, r) "
                              "surrogate")
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.slow
+def test_an_uncharged_ball_runs_without_a_field_stage(shell_file, tmp_path):
+    """No field stage, nothing refused: the 3D motion and zero outputs; the shell's field
+    hash does not depend on the contact model."""
+    from tengfield.scene import load_scene
+
+    shell_file.write_text(SHELL_3D.replace("surface_charge_uC_per_m2 = -50",
+                                           "surface_charge_uC_per_m2 = 0"))
+    out = tmp_path / "run0"
+    assert main(["run", str(shell_file), "-o", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert (out / "trajectory3d.png").exists() and (out / "contacts.csv").exists()
+    scene = load_scene(shell_file)
+    assert summary["field_hash"] == scene.field_hash() == scene.with_values(
+        contact={"model": "impact"}).field_hash()
