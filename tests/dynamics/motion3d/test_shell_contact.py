@@ -225,3 +225,41 @@ def test_the_tubes_3d_motion_is_the_one_before_the_cell_route():
                                                     0.02628877233774488], rtol=1e-12)
     wall = r.contacts["time_in"][r.contacts["surface"] == "wall"][:2]
     np.testing.assert_allclose(wall, [0.008154143176408045, 0.00957134727221344], rtol=1e-12)
+
+
+@pytest.mark.parametrize("which", ["shell", "tube"])
+def test_the_kernels_gaps_and_normals_are_the_cells(which):
+    """For centres all over the cavity the compiled kernel's largest overlap is minus the
+    cell's ``wall_distance`` and its normal minus the cell's ``wall_normal`` (the Cell
+    protocol's 3D contact geometry); in the shell exactly one zone holds the contact
+    point, the one ``electrode_at`` names."""
+    from tengfield.dynamics.motion3d import _kernel
+
+    scene = shell() if which == "shell" else default_scene().with_values(contact={"model": "3d"})
+    cell = cell_of(scene)
+    surfaces = cell_surfaces(scene)
+    radius = scene.device.ball_radius
+    P = np.concatenate([[scene.device.ball_mass, radius, 0.0, surfaces.height,
+                         surfaces.surfaces[2].concave_radius, 0.0, 0.0, -G],
+                        surfaces.table().ravel()])
+    rng = np.random.default_rng(7)
+    reach = surfaces.clearance + 5e-5   # into the wall by up to 50 µm too
+    half_stroke = 0.5 * scene.device.stroke + 5e-5
+    for _ in range(200):
+        if which == "shell":
+            direction = rng.normal(size=3)
+            centre = direction / np.linalg.norm(direction) * reach * rng.uniform() ** (1 / 3)
+        else:
+            centre = rng.uniform(-1.0, 1.0, 3) * [reach / 1.5, reach / 1.5, half_stroke]
+        y = np.zeros(_kernel.N_STATE)
+        y[0:3] = centre + [0.0, 0.0, surfaces.shift]
+        d = _kernel.overlaps(y, P)
+        k = int(np.argmax(d))
+        assert d[k] == pytest.approx(-cell.wall_distance(centre), abs=1e-15)
+        _, nx, ny, nz = _kernel._geometry(k, y[0:3], radius, P)
+        np.testing.assert_allclose([nx, ny, nz], -cell.wall_normal(centre), atol=1e-12)
+        if which == "shell":
+            touched = np.flatnonzero(d > -A)   # the zone holding the contact point
+            assert touched.size == 1
+            point_z = A * centre[2] / np.linalg.norm(centre)
+            assert surfaces.names[touched[0]] == (cell.electrode_at(point_z) or "band")
