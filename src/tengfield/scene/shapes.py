@@ -189,7 +189,8 @@ def shape_of(shape: str):
 
 def check_shape_scene(scene) -> None:
     """Rules between the shape and other sections: what a shape does not support yet
-    (the honeycomb's 3D contact; the shell's field side of it: :func:`shape_scene_field_problems`)."""
+    (the honeycomb's 3D contact; the shell's field side of it:
+    :func:`shape_scene_field_problems`)."""
     dev = scene.device
     if dev.shape == "hexagonal" and scene.contact.model == "3d":
         raise SceneError(f"[contact] model = '3d' is not available for shape = {dev.shape!r} "

@@ -1,8 +1,9 @@
 """Compiled integrator of the 3D ball (numba). Table frame, SI units.
 
 State: centre position p (z = 0 is the lowest point of the cavity: the tube's
-lower electrode face, the shell's bottom; z axis = the drive's axis), velocity v and angular velocity w relative to the table, plus one
-tangential history spring xi per surface (lower plate, upper plate, wall).
+lower electrode face, the shell's bottom; z axis = the drive's axis),
+velocity v and angular velocity w relative to the table, plus one tangential
+history spring xi per surface (lower, upper, wall or band).
 Acceleration: ``g_vec - Y''(t) + F/m``, ``w' = torque / I``.
 
 Two modes:
