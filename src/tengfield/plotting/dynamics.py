@@ -253,5 +253,6 @@ def _meridian_view(ax, result):
     ax.set_xlabel("r [mm]")
     ax.set_ylabel("z from the cavity's centre [mm]")
     ax.set_title("meridian view (centre)")
-    ax.legend(loc="upper right", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3, fontsize=7,
+              frameon=False)
     ax.grid(alpha=0.3)
