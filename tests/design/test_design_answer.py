@@ -268,3 +268,35 @@ def test_best_toml_band_point_prefers_the_centre_then_regular_motion_then_the_va
     assert chosen_band_point(result, row) == 1          # the centre first
     row["band_values"]["power"][1] = 0.0
     assert chosen_band_point(result, row) == 2          # never a point that scored zero
+
+
+@pytest.mark.slow   # a small design search (plate model)
+def test_design_result_plot_returns_the_figure_design_png_is(cache, tmp_path):
+    """DesignResult.plot() -> a matplotlib Figure (not saved) with the varied keys and the
+    objective on its axes; design.png is the same figure saved (same pixel size)."""
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    from tengfield.design.output import plot_scales
+    from tengfield.design.spec import objective_label
+
+    result = design(design_scene(objective="charge", candidates=6, batch=3,
+                                 vary={"stroke_mm": [1.0, 3.0], "ball_diameter_mm": [6.0, 8.0]}),
+                    cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    fig = result.plot()
+    assert isinstance(fig, Figure)
+    axes = [a for a in fig.axes if a.get_label() != "<colorbar>"]
+    unit = plot_scales(result)["charge"][0]
+    assert unit == "pC" or unit == "nC"
+    objective = f"{objective_label('charge')} [{unit}]"
+    assert [(a.get_xlabel(), a.get_ylabel()) for a in axes] == [
+        ("stroke Δh [mm]", "ball diameter d [mm]"), ("stroke Δh [mm]", objective)]
+    best = result.best["values"]
+    star = [line for line in axes[0].get_lines() if line.get_label() == "best"][0]
+    assert (star.get_xdata()[0], star.get_ydata()[0]) == (best["stroke_mm"],
+                                                         best["ball_diameter_mm"])
+    written = write_design_outputs(result, tmp_path / "out")
+    fig.savefig(tmp_path / "plot.png", dpi=110)
+    png = tmp_path / "out" / "design.png"
+    assert png in written
+    assert Image.open(png).size == Image.open(tmp_path / "plot.png").size

@@ -246,6 +246,17 @@ def plot_scales(result) -> dict:
     return out
 
 
+def plot_options(result) -> dict:
+    """The keywords of :func:`tengfield.plotting.design.design_figure` for ``result``
+    (units, the objectives' words, readable scales, the bounds the best sits on): design.png
+    and :meth:`DesignResult.plot` draw the same figure."""
+    best = result.best
+    return {"units": {k: v[0] for k, v in OBJECTIVES.items()},
+            "names": {k: objective_label(k) for k in OBJECTIVES},
+            "scales": plot_scales(result),
+            "on_bound": on_bounds(result, best) if best is not None else []}
+
+
 def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     """design.csv, design.json, best.toml (if a candidate is feasible), design.png."""
     out = Path(out_dir)
@@ -261,9 +272,6 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     if plots:
         from ..plotting.design import plot_design
         with atomic_path(out / "design.png") as tmp:
-            plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()},
-                        names={k: objective_label(k) for k in OBJECTIVES},
-                        scales=plot_scales(result),
-                        on_bound=on_bounds(result, best) if best is not None else [])
+            plot_design(result, tmp, **plot_options(result))
         written.append(out / "design.png")
     return written
