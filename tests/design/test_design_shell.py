@@ -46,6 +46,14 @@ def test_a_varied_ball_takes_the_cavity_along_keeping_the_stroke():
     cand = candidate_scene(written, parse_design_section(written),
                            {"cavity_diameter_mm": 16.0, "ball_diameter_mm": 7.0})
     assert cand.device.stroke == pytest.approx(9e-3, rel=1e-12)
+    # the band and the shell's thickness vary as any key (their own field hash)
+    varied = shell_design(vary={"electrode_band_mm": [1.0, 4.0], "shell_thickness_mm": [1.0, 3.0]})
+    spec = parse_design_section(varied)
+    one = candidate_scene(varied, spec, {"electrode_band_mm": 3.0, "shell_thickness_mm": 1.0})
+    two = candidate_scene(varied, spec, {"electrode_band_mm": 1.5, "shell_thickness_mm": 1.0})
+    assert (one.device.electrode_band, one.device.shell_thickness) == (3e-3, 1e-3)
+    assert one.device.cell_volume == pytest.approx(4 / 3 * __import__("math").pi * 11e-3**3)
+    assert one.field_hash() != two.field_hash() != varied.field_hash()
 
 
 @pytest.mark.parametrize("values, message", [
@@ -148,6 +156,7 @@ def test_tengfield_design_on_a_shell_end_to_end(tmp_path, run_cli, cli_env):
     assert len(rows) == 4 and {r["status"] for r in rows} == {"ok"}
     for r in rows:
         cavity, ball = float(r["cavity_diameter_mm"]), float(r["ball_diameter_mm"])
+        assert 0 < ball < cavity
         outer = 0.5e-3 * cavity + 2e-3
         assert float(r["device_volume_m3"]) == pytest.approx(4 / 3 * math.pi * outer**3,
                                                              rel=1e-12)
