@@ -142,7 +142,8 @@ def test_tengfield_design_on_a_shell_end_to_end(tmp_path, run_cli, cli_env):
     """``tengfield design`` over a shell's cavity and ball (figures on): design.csv names
     the varied keys, every candidate's stroke and volume are its own shell's, the answer
     states the stroke (cavity - ball), and ``tengfield run best.toml`` gives the design's
-    Q_SC peak-to-peak (the same surrogate, the same band point)."""
+    Q_SC peak-to-peak (the same surrogate, the same band point); with σ = "breakdown"
+    each shell is scored at its own limit."""
     import math
 
     path = tmp_path / "shell.toml"
@@ -174,3 +175,19 @@ def test_tengfield_design_on_a_shell_end_to_end(tmp_path, run_cli, cli_env):
     got = json.loads((run / "summary.json").read_text())
     assert got["stages"]["field"]["status"] == "cached"      # the design's own surrogate
     assert got["peak_to_peak"]["Q_sc_C"] == pytest.approx(best["objective"], rel=1e-6)
+
+    # σ = "breakdown": each shell at its own air-breakdown limit (its gap lines); the
+    # same candidates (same seed), the charge scales with σ exactly
+    path.write_text(SHELL_TOML.replace("-50", '"breakdown"'))
+    proc = run_cli("design", path, "-o", tmp_path / "bd", "--jobs", "1", "--no-plots", env=env)
+    assert proc.returncode == 0, proc.stderr
+    limited = list(csv.DictReader((tmp_path / "bd" / "design.csv").open()))
+    sigmas = set()
+    for r, at50 in zip(limited, rows):
+        assert r["cavity_diameter_mm"] == at50["cavity_diameter_mm"]
+        sigma = float(r["surface_charge_uC_per_m2"])
+        sigmas.add(round(sigma, 6))
+        assert -1e3 < sigma < 0
+        assert float(r["charge_C"]) == pytest.approx(float(at50["charge_C"]) * sigma / -50.0,
+                                                     rel=1e-12)
+    assert len(sigmas) == 4                                # each geometry its own limit
