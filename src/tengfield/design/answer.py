@@ -196,7 +196,7 @@ def design_warnings(result) -> list[str]:
         if moved and all(r["regimes"][i] == "rest" for r in moved):
             gamma = a * (2 * math.pi * f) ** 2 / 9.80665
             out.append(f"{point_label(f, a, kind)}: no candidate moves (the ball rests on the "
-                       f"lower plate in all {len(moved)}" + (f"; Γ = Aω²/g = {gamma:.2f} < 1"
+                       f"lower electrode in all {len(moved)}" + (f"; Γ = Aω²/g = {gamma:.2f} < 1"
                                                              if periodic(kind) and gamma < 1
                                                              else "")
                        + "): it scores 0 for every design; raise the amplitude or drop it "
