@@ -3,9 +3,9 @@
 Pure functions of a :class:`~tengfield.design.search.DesignResult` (numbers and text,
 no files): :func:`design_answer` (the best design and the runner-up: every varied key,
 the shape's derived length (the tube's plate spacing h = stroke + ball diameter, the
-shell's stroke = cavity - ball diameter), the sizes that followed, σ, the load, the band table), :func:`chosen_band_point` (the band point
-best.toml runs at), :func:`design_warnings` (one line each) and :func:`answer_lines`
-(the terminal's text).
+shell's stroke = cavity - ball diameter), the sizes that followed, σ, the load, the
+band table), :func:`chosen_band_point` (the band point best.toml runs at),
+:func:`design_warnings` (one line each) and :func:`answer_lines` (the terminal's text).
 """
 from __future__ import annotations
 

@@ -185,9 +185,9 @@ def best_scene_dict(result) -> dict:
     best = result.best
     if best is None:
         raise ValueError("no feasible candidate")
-    data = {sec: dict(v) for sec, v in result.scene.raw.items() if sec != "design"}
     from ..scene.shapes import derived_stroke
 
+    data = {sec: dict(v) for sec, v in result.scene.raw.items() if sec != "design"}
     device = {k: v for k, v in best["values"].items() if k not in OTHER_VARY}
     base_device = result.scene.to_dict()["device"]
     if result.spec.geometry == "follow":
