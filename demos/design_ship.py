@@ -77,31 +77,31 @@ def main(argv: list[str] | None = None) -> dict:
 
     # 1. the largest full-contact stroke (dynamics only)
     stroke_keys = {"objective": "stroke", "require": "upper-contact", "candidates": 24 if fast else 64,
-                   "batch": 8, "seed": 1, "vary": {"gap_mm": [0.5, 4.0]}, "excitation": SHIP_BAND}
+                   "batch": 8, "seed": 1, "vary": {"stroke_mm": [0.5, 4.0]}, "excitation": SHIP_BAND}
     full = run(ship_scene(stroke_keys), args, "ship_stroke")
-    out["full_contact_stroke_mm"] = full.best["values"]["gap_mm"] if full.best else None
+    out["full_contact_stroke_mm"] = full.best["values"]["stroke_mm"] if full.best else None
     per_amplitude = {}
     for a in SHIP_BAND["amplitude_mm"]:
         one = run(ship_scene({**stroke_keys, "excitation": {"frequency_hz": [33.0],
                                                             "amplitude_mm": [a]}}),
                   args, f"ship_stroke_{a:g}mm")
-        per_amplitude[a] = one.best["values"]["gap_mm"] if one.best else None
+        per_amplitude[a] = one.best["values"]["stroke_mm"] if one.best else None
     out["full_contact_stroke_by_amplitude_mm"] = per_amplitude
     # regular contact at the two larger amplitudes (the paper's "regular and full contact")
     regular = run(ship_scene({**stroke_keys, "require": "regular-contact",
                               "excitation": {"frequency_hz": [33.0],
                                              "amplitude_mm": [0.75, 1.0]}}),
                   args, "ship_stroke_regular")
-    out["regular_contact_stroke_0.75_1mm_mm"] = (regular.best["values"]["gap_mm"]
+    out["regular_contact_stroke_0.75_1mm_mm"] = (regular.best["values"]["stroke_mm"]
                                                  if regular.best else None)
 
     # 2. the largest power density over the band
     power_keys = {"objective": "power_density", "candidates": 8 if fast else 32,
-                  "batch": 4 if fast else 8, "seed": 1, "vary": {"gap_mm": [0.5, 5.0]},
+                  "batch": 4 if fast else 8, "seed": 1, "vary": {"stroke_mm": [0.5, 5.0]},
                   "excitation": SHIP_BAND}
     power = run(ship_scene(power_keys), args, "ship_power")
     best = power.best
-    out["power_density_stroke_mm"] = best["values"]["gap_mm"]
+    out["power_density_stroke_mm"] = best["values"]["stroke_mm"]
     out["power_density_W_per_m3"] = best["objective"]
     out["power_density_error_W_per_m3"] = best["objective_error"]
     out["power_density_regimes"] = best["regimes"]
@@ -111,7 +111,7 @@ def main(argv: list[str] | None = None) -> dict:
     # the paper's 2 mm scored the same way
     from tengfield.design import evaluate, parse_design_section
     spec = parse_design_section(power.scene)
-    paper = evaluate(power.scene, spec, {"gap_mm": PAPER_STROKE_MM}, cache_dir=args.cache_dir)
+    paper = evaluate(power.scene, spec, {"stroke_mm": PAPER_STROKE_MM}, cache_dir=args.cache_dir)
     out["paper_stroke_power_density_W_per_m3"] = paper["objective"]
     out["paper_stroke_regimes"] = paper["regimes"]
 
@@ -125,11 +125,11 @@ def main(argv: list[str] | None = None) -> dict:
     n = 5 if fast else 12
     fig9 = {"objective": objectives, "candidates": n, "initial_candidates": n, "seed": 1,
             "excitation": FIG9_BAND}
-    gap = run(tf.default_scene().with_values(design={**fig9, "vary": {"gap_mm": [1.0, 5.0]}}),
+    gap = run(tf.default_scene().with_values(design={**fig9, "vary": {"stroke_mm": [1.0, 5.0]}}),
               args, "fig9g")
     dia = run(tf.default_scene().with_values(
         design={**fig9, "vary": {"ball_diameter_mm": [5.0, 10.0]}}), args, "fig9h")
-    out["fig9g"] = trend(gap, "gap_mm", objectives)
+    out["fig9g"] = trend(gap, "stroke_mm", objectives)
     out["fig9h"] = trend(dia, "ball_diameter_mm", objectives)
     g = out["fig9g"]
     v = np.array(g["voltage"])
@@ -170,11 +170,11 @@ def main(argv: list[str] | None = None) -> dict:
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     ax = axes[0]
     rows = sorted((r for r in power.rows + check["result"].rows if r["status"] == "ok"),
-                  key=lambda r: r["values"]["gap_mm"])
-    ax.errorbar([r["values"]["gap_mm"] for r in rows], [r["objective"] for r in rows],
+                  key=lambda r: r["values"]["stroke_mm"])
+    ax.errorbar([r["values"]["stroke_mm"] for r in rows], [r["objective"] for r in rows],
                 yerr=[r["objective_error"] for r in rows], fmt="o-", ms=3, capsize=2,
                 label="band-mean power density")
-    ax.plot(best["values"]["gap_mm"], best["objective"], "*", ms=15, color="C1", mec="k",
+    ax.plot(best["values"]["stroke_mm"], best["objective"], "*", ms=15, color="C1", mec="k",
             label="best")
     ax.axvline(PAPER_STROKE_MM, color="0.4", ls="--", label="paper Δh = 2 mm")
     if out["full_contact_stroke_mm"]:

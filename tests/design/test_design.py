@@ -24,7 +24,7 @@ SHIP_BAND = {"frequency_hz": [33.0], "amplitude_mm": [0.75, 1.0]}
 def design_scene(**design_keys):
     section = {"objective": "power_density", "candidates": 12, "seed": 1,
                "settle_periods": 10, "window_periods": 10, "samples_per_period": 120,
-               "vary": {"gap_mm": [1.0, 5.0]}, "excitation": SHIP_BAND}
+               "vary": {"stroke_mm": [1.0, 5.0]}, "excitation": SHIP_BAND}
     section.update(design_keys)
     return fx.scene_with(design=section)
 
@@ -60,18 +60,18 @@ def test_bad_design_input_is_one_line_naming_key_value_and_range(keys, message):
 
 def test_a_scene_file_with_design_loads_and_the_section_is_kept(tmp_path):
     path = tmp_path / "d.toml"
-    path.write_text('[design]\nobjective = "charge"\n[design.vary]\ngap_mm = [1.0, 5.0]\n'
+    path.write_text('[design]\nobjective = "charge"\n[design.vary]\nstroke_mm = [1.0, 5.0]\n'
                     'ball_diameter_mm = [5, 10]\n[design.excitation]\nfrequency_hz = [33.0]\n'
                     'amplitude_mm = [0.5, 0.75, 1.0]\n')
     spec = parse_design_section(tf.load_scene(path))
     assert spec.objective == "charge" and spec.aggregate == "mean" and spec.candidates == 200
-    assert spec.vary == {"gap_mm": (1.0, 5.0), "ball_diameter_mm": (5.0, 10.0)}
+    assert spec.vary == {"stroke_mm": (1.0, 5.0), "ball_diameter_mm": (5.0, 10.0)}
     assert spec.band == [(33.0, 0.5e-3), (33.0, 0.75e-3), (33.0, 1.0e-3)]
     assert spec.initial_count() == 64          # largest power of 2 <= 40 % of 200
 
 
 def test_without_design_excitation_the_band_is_the_scenes_excitation():
-    scene = fx.scene_with(design={"vary": {"gap_mm": [1.0, 5.0]}})
+    scene = fx.scene_with(design={"vary": {"stroke_mm": [1.0, 5.0]}})
     assert parse_design_section(scene).band == [(20.0, 1.5e-3)]
 
 
@@ -85,7 +85,7 @@ def test_a_bigger_ball_takes_its_tube_and_electrode_along():
     # a varied key never follows
     assert "tube_outer_radius_mm" not in followed_geometry(
         base, {"ball_diameter_mm": 10.0, "tube_outer_radius_mm": 9.0})
-    assert followed_geometry(base, {"gap_mm": 2.0}) == {}
+    assert followed_geometry(base, {"stroke_mm": 2.0}) == {}
 
 
 @pytest.mark.slow   # several candidates' dynamics and load scans
@@ -108,7 +108,7 @@ def test_a_missed_requirement_costs_no_field_solve(cache):
     scene = design_scene(require="upper-contact")
     spec = parse_design_section(scene)
     solver = fx.CountingSolver()
-    row = evaluate(scene, spec, {"gap_mm": 5.0}, cache_dir=cache, solve=solver)
+    row = evaluate(scene, spec, {"stroke_mm": 5.0}, cache_dir=cache, solve=solver)
     assert row["status"] == "infeasible" and "require = 'upper-contact' not met" in row["reason"]
     assert solver.calls == 0
     assert row["upper_contact_fraction"] == 0.0
@@ -119,9 +119,9 @@ def test_a_missed_requirement_costs_no_field_solve(cache):
 def test_power_density_is_the_band_mean_of_the_matched_load_power_per_volume(cache):
     scene = design_scene()
     spec = parse_design_section(scene)
-    row = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    row = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert row["status"] == "ok" and row["field_status"] == "computed"
-    cand = candidate_scene(scene, spec, {"gap_mm": 2.0})
+    cand = candidate_scene(scene, spec, {"stroke_mm": 2.0})
     volume = cand.device.cell_volume
     assert row["device_volume_m3"] == pytest.approx(volume)
     band = row["band_values"]["power_density"]
@@ -145,12 +145,12 @@ def test_power_density_is_the_band_mean_of_the_matched_load_power_per_volume(cac
 
 def test_worst_case_aggregate_is_the_smallest_band_value(cache):
     scene = design_scene(aggregate="min", objective="charge")
-    row = evaluate(scene, parse_design_section(scene), {"gap_mm": 2.0}, cache_dir=cache,
+    row = evaluate(scene, parse_design_section(scene), {"stroke_mm": 2.0}, cache_dir=cache,
                    solve=fx.plate_model_solve)
     band = row["band_values"]["charge"]
     assert row["objective"] == min(band) and row["objective"] > 0
     # the charge is the run's Q_SC peak-to-peak at that band point
-    cand = band_scene(candidate_scene(scene, parse_design_section(scene), {"gap_mm": 2.0}),
+    cand = band_scene(candidate_scene(scene, parse_design_section(scene), {"stroke_mm": 2.0}),
                       parse_design_section(scene), 33.0, 1.0e-3)
     curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve))
     assert band[1] == pytest.approx(
@@ -158,14 +158,14 @@ def test_worst_case_aggregate_is_the_smallest_band_value(cache):
 
 
 def test_a_repeated_geometry_costs_no_field_solve(cache):
-    scene = design_scene(vary={"gap_mm": [1.0, 5.0], "load_ohm": [1e8, 1e12]})
+    scene = design_scene(vary={"stroke_mm": [1.0, 5.0], "load_ohm": [1e8, 1e12]})
     spec = parse_design_section(scene)
     solver = fx.CountingSolver()
-    first = evaluate(scene, spec, {"gap_mm": 2.0, "load_ohm": 1e9}, cache_dir=cache,
+    first = evaluate(scene, spec, {"stroke_mm": 2.0, "load_ohm": 1e9}, cache_dir=cache,
                      solve=solver)
     calls = solver.calls
     assert calls > 0 and first["load_ohm"] == 1e9
-    again = evaluate(scene, spec, {"gap_mm": 2.0, "load_ohm": 1e10}, cache_dir=cache,
+    again = evaluate(scene, spec, {"stroke_mm": 2.0, "load_ohm": 1e10}, cache_dir=cache,
                      solve=solver)
     assert solver.calls == calls and again["field_status"] == "cached"
     assert again["field_hash"] == first["field_hash"]
@@ -174,7 +174,7 @@ def test_a_repeated_geometry_costs_no_field_solve(cache):
 def test_harvested_power_and_stroke_objectives(cache):
     scene = design_scene(objective=["harvested_power", "stroke"])
     spec = parse_design_section(scene)
-    row = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    row = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert row["objectives"]["harvested_power"]["value"] > 0
     assert row["objectives"]["stroke"] == {"value": pytest.approx(2e-3), "error": 0.0}
 
@@ -185,10 +185,10 @@ def test_the_charge_comes_from_one_function(monkeypatch, cache):
 
     scene = design_scene(objective="charge")
     spec = parse_design_section(scene)
-    base = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    base = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     from tengfield.breakdown import scaled_table
     monkeypatch.setattr(module, "candidate_charge", lambda s, t=None: (s, scaled_table(t, 2.0)))
-    doubled = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    doubled = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert doubled["objective"] == pytest.approx(2 * base["objective"], rel=1e-9)
 
 
@@ -214,13 +214,13 @@ def test_search_finds_the_largest_full_contact_stroke(cache):
     """objective = "stroke" with require: the search (boxes shrinking on a feasibility
     edge) lands within a dense scan's step of the largest stroke that keeps contact."""
     scene = design_scene(objective="stroke", require="upper-contact", candidates=32, batch=8,
-                         vary={"gap_mm": [0.5, 4.0]})
+                         vary={"stroke_mm": [0.5, 4.0]})
     result = design(scene, cache_dir=cache, jobs=1)
     spec = parse_design_section(scene)
     scan = np.linspace(0.5, 4.0, 36)
-    feasible = [g for g in scan if evaluate(scene, spec, {"gap_mm": float(g)})["status"] == "ok"]
+    feasible = [g for g in scan if evaluate(scene, spec, {"stroke_mm": float(g)})["status"] == "ok"]
     assert result.best is not None
-    assert result.best["values"]["gap_mm"] >= max(feasible) - 0.1 - 1e-9
+    assert result.best["values"]["stroke_mm"] >= max(feasible) - 0.1 - 1e-9
     assert result.best["upper_contact_fraction"] == 1.0
 
 
@@ -237,27 +237,27 @@ def test_two_processes_give_the_serial_rows(cache):
 @pytest.mark.slow   # several candidates' dynamics and load scans
 def test_tf_design_is_the_api_and_the_outputs_are_complete(tmp_path, cache):
     scene = design_scene(candidates=8, batch=4,
-                         vary={"gap_mm": [1.0, 5.0], "ball_diameter_mm": [5.0, 10.0]})
+                         vary={"stroke_mm": [1.0, 5.0], "ball_diameter_mm": [5.0, 10.0]})
     result = tf.design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     assert isinstance(result, tf.design.DesignResult)
     written = write_design_outputs(result, tmp_path)
     assert {p.name for p in written} == {"design.csv", "design.json", "best.toml", "design.png"}
     rows = list(csv.DictReader(open(tmp_path / "design.csv")))
     assert len(rows) == 8
-    for column in ("gap_mm", "ball_diameter_mm", "power_density_W_per_m3",
+    for column in ("stroke_mm", "ball_diameter_mm", "power_density_W_per_m3",
                    "power_density_at_33hz_0.75mm", "power_density_at_33hz_1mm", "regimes",
                    "upper_contact_fraction", "reason", "status"):
         assert column in rows[0]
     summary = json.loads((tmp_path / "design.json").read_text())
     best = summary["best"]
-    assert {"gap_mm", "ball_diameter_mm", "objective", "objective_error"} <= set(best)
+    assert {"stroke_mm", "ball_diameter_mm", "objective", "objective_error"} <= set(best)
     assert best["objective"] == result.best["objective"]
     assert summary["ranking"][0]["index"] == best["index"]
     assert summary["settings"]["candidates"] == 8 and summary["wall_time_s"] > 0
     assert set(summary["cost_per_candidate_s"]) >= {"field", "dynamics", "circuit"}
     # best.toml is a scene with the best geometry, its followed tube and the matched load
     again = tf.load_scene(tmp_path / "best.toml")
-    assert again.device.stroke == pytest.approx(best["gap_mm"] * 1e-3)
+    assert again.device.stroke == pytest.approx(best["stroke_mm"] * 1e-3)
     assert again.device.ball_diameter == pytest.approx(best["ball_diameter_mm"] * 1e-3)
     assert again.device.tube_inner_radius == pytest.approx(
         (best["ball_diameter_mm"] / 2 + 0.5) * 1e-3)
@@ -290,11 +290,11 @@ def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
     scene = design_scene(objective="charge").with_values(
         device={"surface_charge_uC_per_m2": "breakdown"})
     spec = parse_design_section(scene)
-    rows = [evaluate(scene, spec, {"gap_mm": gap}, cache_dir=tmp_path) for gap in (2.0, 4.0)]
+    rows = [evaluate(scene, spec, {"stroke_mm": gap}, cache_dir=tmp_path) for gap in (2.0, 4.0)]
     limits = []
     for gap, row in zip((2.0, 4.0), rows):
         assert row["status"] == "ok", row["reason"]
-        cand = candidate_scene(scene, spec, {"gap_mm": gap})
+        cand = candidate_scene(scene, spec, {"stroke_mm": gap})
         table, _ = obtain_breakdown_table(cand, cache_dir=tmp_path)
         sigma_max = scene_breakdown(cand, table).sigma_max
         assert row["surface_charge_uC_per_m2"] == pytest.approx(-sigma_max * 1e6, rel=1e-12)
@@ -318,15 +318,15 @@ def test_random_and_harmonics_excitations_are_scored_as_the_scene_gives_them(cac
     engine = {"kind": "harmonics", "frequency_hz": [33.0, 66.0], "amplitude_mm": [0.75, 0.05],
               "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 3.0, "seed": 2}
     section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
-               "window_periods": 10, "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]}}
+               "window_periods": 10, "samples_per_period": 120, "vary": {"stroke_mm": [1.0, 5.0]}}
     scene = fx.scene_with(excitation=engine, design=section)
     spec = parse_design_section(scene)
-    a = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
-    b = evaluate(scene, spec, {"gap_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    a = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    b = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert a["status"] == "ok" and a["objective"] == b["objective"] > 0
     sine = fx.scene_with(design={**section, "excitation": {"frequency_hz": [33.0],
                                                             "amplitude_mm": [0.75]}})
-    s = evaluate(sine, parse_design_section(sine), {"gap_mm": 2.0}, cache_dir=cache,
+    s = evaluate(sine, parse_design_section(sine), {"stroke_mm": 2.0}, cache_dir=cache,
                  solve=fx.plate_model_solve)
     assert s["objective"] != a["objective"]
     with pytest.raises(SceneError, match=r"\[design.excitation\] needs \[excitation\] kind"):
@@ -379,7 +379,7 @@ def test_best_toml_keeps_a_harmonics_excitation(tmp_path, cache):
               "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 3.0, "seed": 2}
     section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
                "window_periods": 10, "samples_per_period": 120, "field": "scene",
-               "vary": {"gap_mm": [1.0, 5.0]}}
+               "vary": {"stroke_mm": [1.0, 5.0]}}
     scene = fx.scene_with(excitation=engine, design=section)
     result, best, summary = _best_of(tmp_path, cache, scene)
     assert best.excitation.kind == "harmonics"
@@ -409,7 +409,7 @@ def test_a_random_excitation_is_labelled_as_such_not_by_an_unused_amplitude(tmp_
     noise = {"kind": "random", "band_hz": [10.0, 300.0], "rms_acceleration_m_per_s2": 20.0,
              "seed": 0, "frequency_hz": 33.0}
     section = {"objective": "charge", "candidates": 4, "seed": 1, "settle_periods": 10,
-               "window_periods": 10, "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]}}
+               "window_periods": 10, "samples_per_period": 120, "vary": {"stroke_mm": [1.0, 5.0]}}
     scene = fx.scene_with(excitation=noise, design=section)
     result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     write_design_outputs(result, tmp_path, plots=False)
@@ -419,3 +419,30 @@ def test_a_random_excitation_is_labelled_as_such_not_by_an_unused_amplitude(tmp_
     assert not any("_at_" in c and c.endswith("mm") for c in header)
     band = json.loads((tmp_path / "design.json").read_text())["settings"]["band"]
     assert band == [{"frequency_hz": 33.0, "excitation": "random"}]
+
+
+def test_the_old_stroke_key_is_read_once_under_its_new_name(tmp_path):
+    """[design.vary] gap_mm (the stroke's name before issue #29) is read with one warning
+    and stored as stroke_mm: candidates, design.csv's column and the answer name stroke_mm;
+    both names at once are refused."""
+    import warnings
+
+    from tengfield.design.output import csv_columns
+    from tengfield.design.search import DesignResult
+
+    path = tmp_path / "old.toml"
+    path.write_text('[design]\nobjective = "stroke"\n[design.vary]\ngap_mm = [1.0, 5.0]\n')
+    scene = tf.load_scene(path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        spec = parse_design_section(scene)
+        again = parse_design_section(scene)       # the CLI parses twice: still one line
+    lines = [str(w.message) for w in caught if "design.vary" in str(w.message)]
+    assert len(lines) == 1 and "gap_mm is now called stroke_mm" in lines[0]
+    assert spec.vary == again.vary == {"stroke_mm": (1.0, 5.0)}
+    assert "stroke_mm" in csv_columns(DesignResult(scene, spec, [], []))
+    assert candidate_scene(scene, spec, {"stroke_mm": 2.0}).device.stroke == pytest.approx(2e-3)
+    both = fx.scene_with(design={"vary": {"gap_mm": [1.0, 5.0], "stroke_mm": [1.0, 5.0]}})
+    with pytest.raises(SceneError, match=r"\[design.vary\] gap_mm and stroke_mm are the same "
+                                         r"key \(gap_mm is its old name\): give stroke_mm only"):
+        parse_design_section(both)

@@ -25,7 +25,7 @@ RESTING_BAND = {"frequency_hz": [25.0, 33.0], "amplitude_mm": [0.3, 1.0]}
 def design_scene(**design_keys):
     section = {"objective": "power", "candidates": 4, "seed": 1, "settle_periods": 10,
                "window_periods": 10, "samples_per_period": 120,
-               "vary": {"gap_mm": [1.0, 3.0]}, "excitation": RESTING_BAND}
+               "vary": {"stroke_mm": [1.0, 3.0]}, "excitation": RESTING_BAND}
     section.update(design_keys)
     return fx.scene_with(design=section)
 
@@ -73,19 +73,19 @@ def test_a_band_point_where_nothing_moves_is_named(cache):
 
 
 def test_an_optimum_on_a_bound_is_named_with_the_key_and_the_bound(cache):
-    """The stroke objective grows with gap_mm: its best sits on the upper bound."""
+    """The stroke objective grows with stroke_mm: its best sits on the upper bound."""
     result = design(design_scene(objective="stroke", candidates=12, batch=4), cache_dir=cache,
                     jobs=1)
-    assert result.best["values"]["gap_mm"] == 3.0
+    assert result.best["values"]["stroke_mm"] == 3.0
     bound = [w for w in design_warnings(result) if "bound" in w]
-    assert bound == ["the best gap_mm = 3 is on the upper bound of its range [design.vary] "
-                     "gap_mm = [1, 3]: the optimum may lie beyond it; widen the range"]
+    assert bound == ["the best stroke_mm = 3 is on the upper bound of its range [design.vary] "
+                     "stroke_mm = [1, 3]: the optimum may lie beyond it; widen the range"]
     # an interior optimum is not named
-    inner = design(design_scene(objective="stroke", vary={"gap_mm": [1.0, 3.0]},
+    inner = design(design_scene(objective="stroke", vary={"stroke_mm": [1.0, 3.0]},
                                 require="upper-contact",
                                 excitation={"frequency_hz": [33.0], "amplitude_mm": [0.5]}),
                    cache_dir=cache, jobs=1)
-    if inner.best is not None and 1.0 < inner.best["values"]["gap_mm"] < 3.0:
+    if inner.best is not None and 1.0 < inner.best["values"]["stroke_mm"] < 3.0:
         assert not [w for w in design_warnings(inner) if "bound" in w]
 
 
@@ -107,7 +107,7 @@ def test_a_worst_case_aggregate_that_ties_is_named_not_an_infinite_margin(tmp_pa
 
 def _chaotic_scene(**keys):
     """33 Hz / 0.75 mm at gap 4 mm: chaotic (plate model, restitution 0.1)."""
-    section = {"objective": "charge", "vary": {"gap_mm": [3.5, 4.5]},
+    section = {"objective": "charge", "vary": {"stroke_mm": [3.5, 4.5]},
                "excitation": {"frequency_hz": [33.0], "amplitude_mm": [0.75]}}
     return design_scene(**{**section, **keys})
 
@@ -115,14 +115,14 @@ def _chaotic_scene(**keys):
 def test_a_chaotic_band_point_carries_its_spread_over_windows_in_the_error_bar(cache):
     scene = _chaotic_scene()
     spec = parse_design_section(scene)
-    row = evaluate(scene, spec, {"gap_mm": 4.0}, cache_dir=cache, solve=fx.plate_model_solve)
+    row = evaluate(scene, spec, {"stroke_mm": 4.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert row["regimes"] == ["chaos"] and row["windows"] == [3]
     spread = row["band_spread"]["charge"][0]
     assert spread > 0
     # the spread is the standard deviation of the value over three consecutive windows
     from tengfield.design.candidate import band_scene, candidate_scene, window_values
     from tengfield.surrogate import TerminalCurves, precompute
-    cand = candidate_scene(scene, spec, {"gap_mm": 4.0})
+    cand = candidate_scene(scene, spec, {"stroke_mm": 4.0})
     point = band_scene(cand, spec, 33.0, 0.75e-3)
     curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve))
     more = window_values("charge", spec, point, curves, 1.0, None, tf.simulate)
@@ -132,13 +132,13 @@ def test_a_chaotic_band_point_carries_its_spread_over_windows_in_the_error_bar(c
     assert row["objective_error"] == pytest.approx(field_part + spread, rel=1e-12)
     assert row["dynamics_error"]["charge"] == spread
     # a regular band point is scored on one window: no spread
-    regular = evaluate(scene, spec, {"gap_mm": 1.0}, cache_dir=cache,
+    regular = evaluate(scene, spec, {"stroke_mm": 1.0}, cache_dir=cache,
                        solve=fx.plate_model_solve)
     assert regular["windows"] == [1] and regular["band_spread"]["charge"] == [0.0]
 
 
 def test_chaos_in_the_best_design_is_a_warning(cache):
-    result = design(_chaotic_scene(vary={"gap_mm": [3.9, 4.1]}), cache_dir=cache,
+    result = design(_chaotic_scene(vary={"stroke_mm": [3.9, 4.1]}), cache_dir=cache,
                     solve=fx.plate_model_solve, jobs=1)
     assert result.best["regimes"] == ["chaos"]
     chaos = [w for w in design_warnings(result) if "chaotic" in w]
@@ -151,13 +151,13 @@ def test_the_answer_is_stated_in_design_json_and_on_the_terminal(tmp_path, cache
     """Every varied key, the plate spacing h = stroke + d, the tube and electrode sizes
     that followed a bigger ball (named as changed), σ, the load, the band table; the same
     for the runner-up."""
-    scene = design_scene(vary={"gap_mm": [1.0, 3.0], "ball_diameter_mm": [6.0, 9.0]},
+    scene = design_scene(vary={"stroke_mm": [1.0, 3.0], "ball_diameter_mm": [6.0, 9.0]},
                          candidates=5)
     result = design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     write_design_outputs(result, tmp_path, plots=False)
     summary = json.loads((tmp_path / "design.json").read_text())
     best = summary["best"]
-    assert best["plate_spacing_mm"] == pytest.approx(best["gap_mm"] + best["ball_diameter_mm"])
+    assert best["plate_spacing_mm"] == pytest.approx(best["stroke_mm"] + best["ball_diameter_mm"])
     assert [p["frequency_hz"] for p in best["band_points"]] == [25.0, 25.0, 33.0, 33.0]
     assert [p["amplitude_mm"] for p in best["band_points"]] == [0.3, 1.0, 0.3, 1.0]
     assert [p["regime"] for p in best["band_points"]] == result.best["regimes"]
@@ -197,10 +197,10 @@ def test_design_png_is_readable_with_error_bars_and_the_bound_optimum_marked(cac
     from tengfield.design.spec import OBJECTIVES, objective_label
     from tengfield.plotting.design import plot_design
 
-    result = design(design_scene(candidates=6, batch=2, vary={"gap_mm": [1.0, 3.0]}),
+    result = design(design_scene(candidates=6, batch=2, vary={"stroke_mm": [1.0, 3.0]}),
                     cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     units = {k: v[0] for k, v in OBJECTIVES.items()}
-    bound = [("gap_mm", "upper", 3.0)]      # as if the best sat on it: drawn and named
+    bound = [("stroke_mm", "upper", 3.0)]      # as if the best sat on it: drawn and named
     fig = plot_design(result, "/dev/null", units=units, scales=plot_scales(result),
                       names={k: objective_label(k) for k in OBJECTIVES}, on_bound=bound)
     axes = [a for a in fig.axes if a.get_label() != "<colorbar>"]
@@ -210,7 +210,7 @@ def test_design_png_is_readable_with_error_bars_and_the_bound_optimum_marked(cac
     assert ax.containers, "error bars"
     labels = ax.get_legend_handles_labels()[1]
     assert "best on a bound" in labels and "feasible (± error bar)" in labels
-    assert "best on the upper bound of gap_mm (3): widen the range" in ax.get_title()
+    assert "best on the upper bound of stroke_mm (3): widen the range" in ax.get_title()
     assert re.search(r"best \d[\d.]* ± [\d.e-]+ µW", ax.get_title())
     assert not ax.yaxis.get_major_formatter().get_offset()
 
@@ -243,7 +243,7 @@ def test_progress_shows_done_total_and_the_current_best_on_a_terminal(monkeypatc
 def test_design_csv_has_the_spread_and_windows_per_band_point(tmp_path, cache):
     import csv
 
-    result = design(_chaotic_scene(vary={"gap_mm": [3.9, 4.1]}), cache_dir=cache,
+    result = design(_chaotic_scene(vary={"stroke_mm": [3.9, 4.1]}), cache_dir=cache,
                     solve=fx.plate_model_solve, jobs=1)
     write_design_outputs(result, tmp_path, plots=False)
     rows = list(csv.DictReader(open(tmp_path / "design.csv")))
@@ -268,3 +268,35 @@ def test_best_toml_band_point_prefers_the_centre_then_regular_motion_then_the_va
     assert chosen_band_point(result, row) == 1          # the centre first
     row["band_values"]["power"][1] = 0.0
     assert chosen_band_point(result, row) == 2          # never a point that scored zero
+
+
+@pytest.mark.slow   # a small design search (plate model)
+def test_design_result_plot_returns_the_figure_design_png_is(cache, tmp_path):
+    """DesignResult.plot() -> a matplotlib Figure (not saved) with the varied keys and the
+    objective on its axes; design.png is the same figure saved (same pixel size)."""
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    from tengfield.design.output import plot_scales
+    from tengfield.design.spec import objective_label
+
+    result = design(design_scene(objective="charge", candidates=6, batch=3,
+                                 vary={"stroke_mm": [1.0, 3.0], "ball_diameter_mm": [6.0, 8.0]}),
+                    cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    fig = result.plot()
+    assert isinstance(fig, Figure)
+    axes = [a for a in fig.axes if a.get_label() != "<colorbar>"]
+    unit = plot_scales(result)["charge"][0]
+    assert unit == "pC" or unit == "nC"
+    objective = f"{objective_label('charge')} [{unit}]"
+    assert [(a.get_xlabel(), a.get_ylabel()) for a in axes] == [
+        ("stroke Δh [mm]", "ball diameter d [mm]"), ("stroke Δh [mm]", objective)]
+    best = result.best["values"]
+    star = [line for line in axes[0].get_lines() if line.get_label() == "best"][0]
+    assert (star.get_xdata()[0], star.get_ydata()[0]) == (best["stroke_mm"],
+                                                         best["ball_diameter_mm"])
+    written = write_design_outputs(result, tmp_path / "out")
+    fig.savefig(tmp_path / "plot.png", dpi=110)
+    png = tmp_path / "out" / "design.png"
+    assert png in written
+    assert Image.open(png).size == Image.open(tmp_path / "plot.png").size

@@ -28,7 +28,7 @@ settle_periods = 10
 window_periods = 10
 samples_per_period = 120
 [design.vary]
-gap_mm = [1.5, 4.0]
+stroke_mm = [1.5, 4.0]
 [design.excitation]
 frequency_hz = [25.0, 33.0]
 amplitude_mm = [0.3, 1.0]
@@ -97,7 +97,7 @@ def test_a_bad_spec_under_mpirun_is_one_line_and_exit_2(tmp_path):
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")
     bad = tmp_path / "bad.toml"
-    bad.write_text('[design]\ncandidates = 3\n[design.vary]\ngap_mm = [1.0, 5.0]\n')
+    bad.write_text('[design]\ncandidates = 3\n[design.vary]\nstroke_mm = [1.0, 5.0]\n')
     proc = subprocess.run(
         ["mpirun", "-n", "2", sys.executable, "-m", "tengfield.cli", "design", str(bad),
          "-o", str(tmp_path / "out")], env=env(), capture_output=True, text=True, timeout=300)

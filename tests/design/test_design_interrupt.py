@@ -43,7 +43,7 @@ field = "scene"
 settle_periods = 4
 window_periods = 4
 [design.vary]
-gap_mm = [1.0, 5.0]
+stroke_mm = [1.0, 5.0]
 """
 
 

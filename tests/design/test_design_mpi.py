@@ -28,7 +28,7 @@ settle_periods = 10
 window_periods = 10
 samples_per_period = 120
 [design.vary]
-gap_mm = [1.5, 4.0]
+stroke_mm = [1.5, 4.0]
 [design.excitation]
 frequency_hz = [33.0]
 amplitude_mm = [1.0]
@@ -38,7 +38,7 @@ amplitude_mm = [1.0]
 def plate_scene():
     return fx.scene_with(design={
         "candidates": 12, "batch": 4, "seed": 2, "settle_periods": 10, "window_periods": 10,
-        "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0], "ball_diameter_mm": [5.0, 9.0]},
+        "samples_per_period": 120, "vary": {"stroke_mm": [1.0, 5.0], "ball_diameter_mm": [5.0, 9.0]},
         "excitation": {"frequency_hz": [33.0], "amplitude_mm": [0.75, 1.0]}})
 
 
@@ -74,7 +74,7 @@ def test_p10_design_on_two_ranks_equals_the_serial_design(tmp_path_factory):
     scene = fx.scene_with(
         design={"objective": "charge", "candidates": 8, "batch": 4, "seed": 1,
                 "aggregate": "p10", "settle_periods": 10, "window_periods": 10,
-                "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]},
+                "samples_per_period": 120, "vary": {"stroke_mm": [1.0, 5.0]},
                 "excitation": {"frequency_hz": [33.0], "amplitude_mm": [1.0]}},
         contact={"restitution": 0.8},
         uncertainty={"samples": 32, "method": "monte-carlo", "seed": 0, "vary": {
@@ -124,7 +124,7 @@ def test_cli_design_end_to_end_and_mpirun_gives_the_serial_files(tmp_path, run_c
     serial = run_cli("design", scene, "-o", tmp_path / "serial", "--cache-dir",
                      tmp_path / "cache-serial", "--jobs", "1")
     assert serial.returncode == 0, serial.stderr
-    assert "best: gap_mm = " in serial.stdout and "µW/cm³" in serial.stdout
+    assert "best: stroke_mm = " in serial.stdout and "µW/cm³" in serial.stdout
     out = tmp_path / "serial"
     for name in ("design.csv", "design.json", "design.png", "best.toml"):
         assert (out / name).stat().st_size > 0
@@ -162,7 +162,7 @@ def test_cli_design_end_to_end_and_mpirun_gives_the_serial_files(tmp_path, run_c
 @pytest.mark.slow
 def test_cli_bad_design_is_one_line_and_jobs_next_to_mpirun_is_refused(tmp_path, run_cli):
     bad = tmp_path / "bad.toml"
-    bad.write_text('[design]\ncandidates = 3\n[design.vary]\ngap_mm = [1.0, 5.0]\n')
+    bad.write_text('[design]\ncandidates = 3\n[design.vary]\nstroke_mm = [1.0, 5.0]\n')
     result = run_cli("design", bad, "-o", tmp_path / "out")
     assert result.returncode == 2
     assert result.stderr.strip() == ("tengfield: error: [design] candidates = 3 is out of "
@@ -183,7 +183,7 @@ settle_periods = 10
 window_periods = 10
 samples_per_period = 120
 [design.vary]
-gap_mm = [1.5, 4.0]
+stroke_mm = [1.5, 4.0]
 [design.excitation]
 frequency_hz = [33.0]
 amplitude_mm = [1.0]

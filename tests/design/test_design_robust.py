@@ -21,7 +21,7 @@ def robust_scene(aggregate="p10", vary=None, uncertainty=True, **design_keys):
     within 0.05-0.8 (PTFE on copper: quoted 0.5-0.8, the paper's thresholds fit 0.1)."""
     section = {"objective": "charge", "candidates": 10, "batch": 4, "seed": 1,
                "aggregate": aggregate, "settle_periods": 10, "window_periods": 10,
-               "samples_per_period": 120, "vary": {"gap_mm": [1.0, 5.0]},
+               "samples_per_period": 120, "vary": {"stroke_mm": [1.0, 5.0]},
                "excitation": {"frequency_hz": [33.0], "amplitude_mm": [1.0]}}
     section.update(design_keys)
     sections = {"design": section, "contact": {"restitution": 0.8}}
@@ -82,7 +82,7 @@ def test_a_contact_insensitive_candidate_scores_its_nominal_and_its_study_matche
     10th percentile is its nominal value; the study's nominal run is the design's own
     band value (the same outputs)."""
     scene = robust_scene()
-    row = evaluate(scene, parse_design_section(scene), {"gap_mm": 1.5}, cache_dir=cache,
+    row = evaluate(scene, parse_design_section(scene), {"stroke_mm": 1.5}, cache_dir=cache,
                    solve=fx.plate_model_solve)
     assert row["status"] == "ok" and row["regimes"] == ["regular-contact"]
     robust = row["robust"]["objectives"]["charge"]
@@ -98,7 +98,7 @@ def test_power_percentile_keeps_the_matched_load_and_scales_with_sigma_squared(c
     power is the nominal (σ = -8) power x (12 / 8)² (quasi-random points: close)."""
     sigma = {SIGMA: {"distribution": "uniform", "low": -30.0, "high": -10.0}}
     scene = robust_scene(vary=sigma, objective="power")
-    row = evaluate(scene, parse_design_section(scene), {"gap_mm": 2.0}, cache_dir=cache,
+    row = evaluate(scene, parse_design_section(scene), {"stroke_mm": 2.0}, cache_dir=cache,
                    solve=fx.plate_model_solve)
     assert row["status"] == "ok" and row["load_ohm"] > 0
     nominal = row["objectives"]["power"]["nominal"]
@@ -115,13 +115,13 @@ def test_p10_picks_a_more_robust_stroke_than_mean(tmp_path, cache):
     stroke, "p10" a shorter one whose worse decile is larger."""
     by_mean = design(robust_scene("mean"), cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
     by_p10 = design(robust_scene("p10"), cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
-    g_mean = by_mean.best["values"]["gap_mm"]
-    g_p10 = by_p10.best["values"]["gap_mm"]
+    g_mean = by_mean.best["values"]["stroke_mm"]
+    g_p10 = by_p10.best["values"]["stroke_mm"]
     assert g_p10 < g_mean - 0.5
     # the p10 choice is better in the worse case, the mean choice at the nominal inputs
     p10_scene = robust_scene("p10")
     spec = parse_design_section(p10_scene)
-    mean_best_p10 = evaluate(p10_scene, spec, {"gap_mm": g_mean}, cache_dir=cache,
+    mean_best_p10 = evaluate(p10_scene, spec, {"stroke_mm": g_mean}, cache_dir=cache,
                              solve=fx.plate_model_solve)
     # by more than the two error bars combined (independent: in quadrature)
     assert by_p10.best["objective"] > mean_best_p10["objective"] + math.hypot(
@@ -168,7 +168,7 @@ def test_every_objectives_study_runs_the_designs_own_band_points(cache, objectiv
     scene = robust_scene(vary=sigma, objective=objective,
                          excitation={"frequency_hz": [33.0], "amplitude_mm": [0.75, 1.0]},
                          **keys)
-    row = evaluate(scene, parse_design_section(scene), {"gap_mm": 2.0}, cache_dir=cache,
+    row = evaluate(scene, parse_design_section(scene), {"stroke_mm": 2.0}, cache_dir=cache,
                    solve=fx.plate_model_solve)
     assert row["status"] == "ok", row["reason"]
     for o, robust in row["robust"]["objectives"].items():

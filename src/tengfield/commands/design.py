@@ -7,11 +7,12 @@ Writes DIR/design.csv (every candidate), DIR/design.json (best, ranking, error b
 settings, wall time), DIR/design.png and DIR/best.toml (ready for `tengfield run`).
 
 A scene without [design] (e.g. the one `tengfield scene --default` writes) gets a default
-study, said in one line: the stroke gap_mm over 0.5-1.5 x and the ball diameter over
-0.7-1.3 x the scene's values (tube and electrode follow the ball), at the scene's
-excitation, 24 candidates.
+study, said in one line: the stroke stroke_mm over 0.5-1.5 x and the ball diameter over
+0.7-1.3 x the scene's values (tube and electrode follow the ball; a spherical shell: its
+cavity over 0.8-1.2 x and the ball), at the scene's excitation, 24 candidates.
 
-The answer (stdout): the best design and the runner-up, with the plate spacing, what
+The answer (stdout): the best design and the runner-up, with the plate spacing (a
+shell: its stroke), what
 followed, σ, the load and the band table; warnings (stderr) name a band point where
 nothing moves, an optimum on a bound of its range, a tie, chaos in the best design.
 Progress (done/total, ETA, current best) on a terminal; --quiet or a pipe: none.

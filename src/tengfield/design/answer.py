@@ -2,10 +2,10 @@
 
 Pure functions of a :class:`~tengfield.design.search.DesignResult` (numbers and text,
 no files): :func:`design_answer` (the best design and the runner-up: every varied key,
-the plate spacing h = stroke + ball diameter, the tube and electrode sizes that
-followed, σ, the load, the band table), :func:`chosen_band_point` (the band point
-best.toml runs at), :func:`design_warnings` (one line each) and :func:`answer_lines`
-(the terminal's text).
+the shape's derived length (the tube's plate spacing h = stroke + ball diameter, the
+shell's stroke = cavity - ball diameter), the sizes that followed, σ, the load, the
+band table), :func:`chosen_band_point` (the band point best.toml runs at),
+:func:`design_warnings` (one line each) and :func:`answer_lines` (the terminal's text).
 """
 from __future__ import annotations
 
@@ -119,25 +119,26 @@ def _load(result, row) -> dict:
             "ohm": row["load_ohm"]}
 
 
-def _current(device: dict) -> dict:
-    """A [device] table under the current key names (a varied old name, gap_mm, replaces
-    the value under the new one, stroke_mm)."""
-    from ..scene.schema import RENAMED_KEYS
+def derived_length(result, device: dict) -> dict:
+    """The length the answer states beside the varied keys, by the shape's rule
+    (``scene/shapes.py``): the tube's plate spacing h = stroke + ball diameter, the
+    shell's stroke = cavity - ball diameter -> {"key", "words", "value_mm"}."""
+    from ..scene.shapes import shape_of
 
-    out = dict(device)
-    for (section, old), new in RENAMED_KEYS.items():
-        if section == "device" and old in out:
-            out[new] = out.pop(old)
-    return out
+    rules = shape_of(result.scene.device.shape)
+    key, words = rules.derived
+    return {"key": key, "words": words,
+            "value_mm": float(f"{rules.derived_mm(device):.12g}")}
 
 
 def describe(result, row) -> dict:
-    """One design, stated: varied keys, plate spacing, what followed, σ, load, band table."""
+    """One design, stated: varied keys, the shape's derived length (the tube's plate
+    spacing, the shell's stroke), what followed, σ, load, band table."""
     base = result.scene.to_dict()["device"]
     device_values = {k: v for k, v in row["values"].items() if k not in OTHER_VARY}
     followed = followed_geometry(base, device_values) if result.spec.geometry == "follow" \
         else {}
-    device = _current({**base, **device_values, **followed})
+    derived = derived_length(result, {**base, **device_values, **followed})
     obj = result.spec.objective
     sigma = row.get("surface_charge_uC_per_m2", math.nan)
     if not (isinstance(sigma, float) and math.isfinite(sigma)):
@@ -147,7 +148,7 @@ def describe(result, row) -> dict:
     pct = row["objectives"].get(obj, {}).get("percentile_error", 0.0)
     return {
         "index": row["index"], "values": dict(row["values"]),
-        "plate_spacing_mm": float(f"{device['stroke_mm'] + device['ball_diameter_mm']:.12g}"),
+        derived["key"]: derived["value_mm"], "derived_length": derived,
         "changed": {k: {"from": base[k], "to": v} for k, v in followed.items()
                     if v != base[k]},
         "surface_charge_uC_per_m2": sigma,
@@ -195,7 +196,7 @@ def design_warnings(result) -> list[str]:
         if moved and all(r["regimes"][i] == "rest" for r in moved):
             gamma = a * (2 * math.pi * f) ** 2 / 9.80665
             out.append(f"{point_label(f, a, kind)}: no candidate moves (the ball rests on the "
-                       f"lower plate in all {len(moved)}" + (f"; Γ = Aω²/g = {gamma:.2f} < 1"
+                       f"lower electrode in all {len(moved)}" + (f"; Γ = Aω²/g = {gamma:.2f} < 1"
                                                              if periodic(kind) and gamma < 1
                                                              else "")
                        + "): it scores 0 for every design; raise the amplitude or drop it "
@@ -257,7 +258,7 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
     label, factor = readable_unit(unit, d["objective"])
     n = len(spec.band)
     lines = [f"{title}: " + ", ".join(f"{k} = {v:g}" for k, v in d["values"].items())
-             + f"  ->  plate spacing h = stroke + ball diameter = {d['plate_spacing_mm']:g} mm",
+             + f"  ->  {d['derived_length']['words']} = {d['derived_length']['value_mm']:g} mm",
              f"  {spec.objective} = {d['objective'] * factor:.4g} ± "
              f"{d['objective_error'] * factor:.2g} {label} ({aggregate_words(spec)} {n} band "
              f"point{'s' * (n != 1)}; ± = field/surrogate {d['field_error'] * factor:.2g}"

@@ -46,28 +46,13 @@ def design_field_settings(ball_diameter_mm: float) -> dict:
 def followed_geometry(base_device: dict, values: dict) -> dict:
     """``[device]`` keys that follow the varied ones (``geometry = "follow"``), file units.
 
-    The base scene's radial clearance (tube bore - ball radius), tube wall (outer - inner
-    radius) and electrode inset (bore - electrode radius) are kept: a bigger ball gets a
-    bigger bore, the wall and the electrode follow the bore. A key that is itself varied
-    never follows.
+    The rule is the shape's (``base_device["shape"]``; ``scene/shapes.py``): the tube keeps
+    its radial clearance (bore - ball radius), wall and electrode inset, so a bigger ball
+    gets a bigger bore; the spherical shell keeps its stroke (cavity - ball), so a bigger
+    ball gets a bigger cavity. A key that is itself varied never follows.
     """
-    b = base_device
-    out = {}
-    bore = b["tube_inner_radius_mm"]
-    if "ball_diameter_mm" in values and "tube_inner_radius_mm" not in values:
-        clearance = b["tube_inner_radius_mm"] - 0.5 * b["ball_diameter_mm"]
-        bore = 0.5 * values["ball_diameter_mm"] + clearance
-        out["tube_inner_radius_mm"] = bore
-    elif "tube_inner_radius_mm" in values:
-        bore = values["tube_inner_radius_mm"]
-    if bore != b["tube_inner_radius_mm"]:
-        if "electrode_radius_mm" not in values:
-            out["electrode_radius_mm"] = bore - (b["tube_inner_radius_mm"]
-                                                 - b["electrode_radius_mm"])
-        if "tube_outer_radius_mm" not in values:
-            out["tube_outer_radius_mm"] = bore + (b["tube_outer_radius_mm"]
-                                                  - b["tube_inner_radius_mm"])
-    return {k: float(f"{v:.12g}") for k, v in out.items()}
+    from ..scene.shapes import followed_keys
+    return followed_keys(base_device.get("shape", "tube"), base_device, values)
 
 
 def candidate_charge(scene, table=None):
@@ -92,9 +77,14 @@ def candidate_charge(scene, table=None):
 def candidate_scene(base, spec: DesignSpec, values: dict):
     """The scene of one candidate (``values``: varied keys, file units); raises
     :class:`~tengfield.errors.SceneError` when it is impossible."""
+    from ..scene.shapes import derived_stroke
+
     device = {k: v for k, v in values.items() if k not in OTHER_VARY}
+    base_device = base.to_dict()["device"]
     if spec.geometry == "follow":
-        device.update(followed_geometry(base.to_dict()["device"], device))
+        device.update(followed_geometry(base_device, device))
+    device.update(derived_stroke(base.device.shape, base.raw.get("device", {}),
+                                 {**base_device, **device}))
     sections = {"device": device}
     other = {k: v for k, v in values.items() if k in OTHER_VARY}
     for key, value in other.items():

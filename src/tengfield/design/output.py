@@ -135,7 +135,8 @@ def design_summary(result) -> dict:
                 result.scene.to_dict()["device"],
                 {k: v for k, v in best["values"].items() if k not in OTHER_VARY})
             if spec.geometry == "follow" else {},
-            **{k: answer["best"][k] for k in ("plate_spacing_mm", "changed",
+            **{k: answer["best"][k] for k in (answer["best"]["derived_length"]["key"],
+                                              "derived_length", "changed",
                                               "surface_charge_uC_per_m2", "breakdown", "load",
                                               "field_error", "dynamics_error", "band_points")},
             "on_bound": [{"key": k, "bound": side, "value": b}
@@ -184,11 +185,17 @@ def best_scene_dict(result) -> dict:
     best = result.best
     if best is None:
         raise ValueError("no feasible candidate")
+    from ..scene.shapes import derived_stroke
+
     data = {sec: dict(v) for sec, v in result.scene.raw.items() if sec != "design"}
     device = {k: v for k, v in best["values"].items() if k not in OTHER_VARY}
+    base_device = result.scene.to_dict()["device"]
     if result.spec.geometry == "follow":
-        device.update(followed_geometry(result.scene.to_dict()["device"], device))
-    update_section(data, "device", device)   # a varied gap_mm replaces stroke_mm
+        device.update(followed_geometry(base_device, device))
+    # a shell written with stroke_mm: that key at the best's cavity - ball
+    device.update(derived_stroke(result.scene.device.shape, data.get("device", {}),
+                                 {**base_device, **device}))
+    update_section(data, "device", device)   # a varied stroke_mm replaces a written gap_mm
     for key, value in best["values"].items():
         if key in OTHER_VARY:
             data.setdefault(OTHER_VARY[key], {})[key] = value
@@ -222,9 +229,8 @@ def best_toml_header(result) -> str:
             f"{objective} ({aggregate_words(spec)} {n} band point{'s' * (n != 1)}) = "
             f"{best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
             + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())
-            + f" (plate spacing h = stroke + ball diameter = "
-            f"{describe(result, best)['plate_spacing_mm']:g} mm)\n"
-            "band table:\n" + "\n".join(band_table_lines(result, best)) + "\n"
+            + " ({words} = {value_mm:g} mm)\n".format(**describe(result, best)["derived_length"])
+            + "band table:\n" + "\n".join(band_table_lines(result, best)) + "\n"
             f"excitation and [run]: {point_label(f, a, kind)} ({why}), where the design "
             f"scored {objective} = {value:.6g} {unit}\n[field]: the scene's (the design used "
             + ("coarse settings)" if spec.field == "coarse" else "these)"))
@@ -238,6 +244,17 @@ def plot_scales(result) -> dict:
                 and math.isfinite(r["objectives"][o]["value"])]
         out[o] = readable_unit(OBJECTIVES[o][0], max(vals, default=0.0))
     return out
+
+
+def plot_options(result) -> dict:
+    """The keywords of :func:`tengfield.plotting.design.design_figure` for ``result``
+    (units, the objectives' words, readable scales, the bounds the best sits on): design.png
+    and :meth:`DesignResult.plot` draw the same figure."""
+    best = result.best
+    return {"units": {k: v[0] for k, v in OBJECTIVES.items()},
+            "names": {k: objective_label(k) for k in OBJECTIVES},
+            "scales": plot_scales(result),
+            "on_bound": on_bounds(result, best) if best is not None else []}
 
 
 def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
@@ -255,9 +272,6 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
     if plots:
         from ..plotting.design import plot_design
         with atomic_path(out / "design.png") as tmp:
-            plot_design(result, tmp, units={k: v[0] for k, v in OBJECTIVES.items()},
-                        names={k: objective_label(k) for k in OBJECTIVES},
-                        scales=plot_scales(result),
-                        on_bound=on_bounds(result, best) if best is not None else [])
+            plot_design(result, tmp, **plot_options(result))
         written.append(out / "design.png")
     return written

@@ -73,6 +73,15 @@ class DesignResult:
         from ..scene import Scene
         return Scene.from_dict(best_scene_dict(self), source=f"best of {self.scene.source}")
 
+    def plot(self):
+        """design.png's figure (a matplotlib Figure, not saved): the objective over the
+        varied keys with error bars, the best marked; with several objectives the Pareto
+        plot of the first two (``tengfield design`` saves the same figure)."""
+        from ..plotting.design import design_figure   # the edge, imported on use
+        from .output import plot_options
+
+        return design_figure(self, **plot_options(self))
+
     def pareto(self) -> list[int]:
         """Indices of the feasible rows no other row beats in both objectives (two objectives)."""
         if len(self.spec.objectives) < 2:

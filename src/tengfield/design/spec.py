@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import warnings
 from dataclasses import dataclass
 from dataclasses import field as _field
 
@@ -225,7 +226,7 @@ def _robust_study(scene, spec: DesignSpec):
         raise SceneError(f"{where} with objective 'stroke': the stroke does not vary over "
                          "[uncertainty.vary]; allowed aggregates for it: 'mean', 'min'")
     study = uncertainty_spec(scene)
-    designed = {RENAMED_KEYS.get(("device", k), k) for k in spec.vary}   # gap_mm: stroke_mm
+    designed = set(spec.vary)   # current names (parse_design_section renamed gap_mm)
     for key in study.keys:
         section, name = key.split(".", 1)
         varied = section == "device" and name in designed or \
@@ -251,14 +252,28 @@ def vary_spec(key: str) -> tuple[str, tuple]:
     return section, SCHEMA[section][name]
 
 
-def _vary(raw) -> dict:
+#: (scene source, old key) whose [design.vary] rename this process has warned about
+_WARNED_RENAMES: set = set()
+
+
+def _vary(raw, scene=None) -> dict:
+    """{key: (lo, hi)} under the current key names: a renamed key (``gap_mm``) is read,
+    checked and reported under its written name, stored under its new one (``stroke_mm``:
+    design.csv's column), with one warning line per scene."""
+    from .._mpi import launched_rank
+    from ..scene.shapes import design_vary_problem
+
     if not isinstance(raw, dict) or not raw:
         raise SceneError("[design.vary] must be a table of key = [min, max] with at least one "
                          "key, e.g. stroke_mm = [1.0, 5.0]")
     out = {}
+    shape = scene.device.shape if scene is not None else "tube"
     for key, bounds in raw.items():
         section, spec = vary_spec(key)
         where = f"[design.vary] {key}"
+        problem = design_vary_problem(shape, key)
+        if problem:
+            raise SceneError(problem)
         if (not isinstance(bounds, list) or len(bounds) != 2
                 or any(isinstance(b, bool) or not isinstance(b, (int, float)) for b in bounds)):
             raise SceneError(f"{where} = {bounds!r}: expected [min, max] (two numbers)")
@@ -272,7 +287,19 @@ def _vary(raw) -> dict:
             raise SceneError(f"{where} = {bounds!r}: min must be < max")
         if key in LOG_KEYS and lo <= 0:
             raise SceneError(f"{where} = {bounds!r}: min must be > 0 (searched on a log scale)")
-        out[key] = (lo, hi)
+        name = RENAMED_KEYS.get(("device", key), key)
+        if name != key:
+            if name in raw:
+                raise SceneError(f"[design.vary] {key} and {name} are the same key ({key} is "
+                                 f"its old name): give {name} only")
+            source = getattr(scene, "source", "<scene>")
+            if (source, key) not in _WARNED_RENAMES and launched_rank() == 0:
+                _WARNED_RENAMES.add((source, key))
+                warnings.warn(f"{source}: [design.vary] {key} is now called {name}: write "
+                              f"{name} = [{lo:g}, {hi:g}] (design.csv names the column {name}; "
+                              f"{key} is read until the next release)", FutureWarning,
+                              stacklevel=2)
+        out[name] = (lo, hi)
     return out
 
 
@@ -308,27 +335,29 @@ def _band(raw, scene) -> list[tuple[float, float]]:
     return band
 
 
-#: the default study of a scene without [design]: ranges as fractions of the scene's values
-DEFAULT_STROKE_RANGE = (0.5, 1.5)
-DEFAULT_BALL_RANGE = (0.7, 1.3)
+#: the default study of a scene without [design] (its ranges: each shape's
+#: ``default_design_vary`` in scene/shapes.py, fractions of the scene's values)
 DEFAULT_CANDIDATES = 24
 
 
 def default_design_section(scene, candidates: int | None = None) -> tuple[dict, str]:
     """([design] of the default study, the line that says so) for a scene without one:
     power density (band mean, matched load) over the stroke and the ball diameter around
-    the scene's values (tube and electrode follow), at the scene's own excitation."""
-    stroke, d = scene.device.stroke * 1e3, scene.device.ball_diameter * 1e3
-    vary = {"stroke_mm": [float(f"{stroke * f:.3g}") for f in DEFAULT_STROKE_RANGE],
-            "ball_diameter_mm": [float(f"{d * f:.3g}") for f in DEFAULT_BALL_RANGE]}
+    the scene's values (tube and electrode follow), at the scene's own excitation; a
+    spherical shell varies its cavity and ball diameter (a ball that does not fit its
+    cavity is a skipped candidate)."""
+    from ..scene.shapes import shape_of
+
+    vary = shape_of(scene.device.shape).default_design_vary(scene.device)
     section = {"objective": "power_density", "candidates": DEFAULT_CANDIDATES, "batch": 8,
                "vary": vary}
     ex = scene.excitation
     at = (f"{ex.frequency:g} Hz / {ex.amplitude * 1e3:g} mm" if periodic(ex.kind)
           else f"its {ex.kind} excitation")
+    over = " and ".join(f"{k} = {v}" for k, v in vary.items())
+    follows = " (tube and electrodes follow the ball)" if "stroke_mm" in vary else ""
     said = (f"{scene.source} has no [design]: a default study of power density over "
-            f"stroke_mm = {vary['stroke_mm']} and ball_diameter_mm = {vary['ball_diameter_mm']} "
-            f"(tube and electrodes follow the ball) at {at}, {candidates or DEFAULT_CANDIDATES} "
+            f"{over}{follows} at {at}, {candidates or DEFAULT_CANDIDATES} "
             "candidates "
             "(docs/design.md: write a [design] section for your own)")
     return section, said
@@ -398,7 +427,7 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
     if "vary" not in raw:
         raise SceneError("[design.vary] is missing: give the keys to vary, e.g. "
                          "stroke_mm = [1.0, 5.0]")
-    spec.vary = _vary(raw["vary"])
+    spec.vary = _vary(raw["vary"], scene)
     spec.band = _band(raw.get("excitation"), scene)
     if spec.percentile is not None:
         spec.uncertainty = _robust_study(scene, spec)

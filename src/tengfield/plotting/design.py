@@ -31,9 +31,16 @@ def key_label(key: str) -> str:
     return key.replace("_", " ")
 
 
-def plot_design(result, path, *, units: dict[str, str], names: dict[str, str] | None = None,
-                scales: dict | None = None, on_bound=()):
-    """design.png of a :class:`tengfield.design.DesignResult`. ``units``: objective -> its
+def plot_design(result, path, **options):
+    """design.png: :func:`design_figure` saved to ``path``; returns the Figure."""
+    fig = design_figure(result, **options)
+    fig.savefig(path, dpi=110)
+    return fig
+
+
+def design_figure(result, *, units: dict[str, str], names: dict[str, str] | None = None,
+                  scales: dict | None = None, on_bound=()):
+    """The figure of a :class:`tengfield.design.DesignResult` (design.png). ``units``: objective -> its
     SI unit; ``names``: objective -> its words (the quantity table's); ``scales``: objective -> (label, factor) of the readable unit (value x factor;
     default the SI unit); ``on_bound``: [(key, "lower" | "upper", bound)] the best sits on
     (passed in: plotting stays below the packages whose results it draws)."""
@@ -165,5 +172,4 @@ def plot_design(result, path, *, units: dict[str, str], names: dict[str, str] | 
             if hasattr(fmt, "set_useOffset"):
                 fmt.set_useOffset(False)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
     return fig

@@ -78,6 +78,51 @@ class _Tube:
     def max_offset(dev) -> float:
         return dev.tube_inner_radius - dev.ball_radius
 
+    @staticmethod
+    def followed(base: dict, values: dict) -> dict:
+        return _tube_followed(base, values)
+
+    #: the length ``tengfield design`` states beside the varied keys: (key, words)
+    derived = ("plate_spacing_mm", "plate spacing h = stroke + ball diameter")
+
+    @staticmethod
+    def derived_mm(device: dict) -> float:
+        return device["stroke_mm"] + device["ball_diameter_mm"]
+
+    @staticmethod
+    def default_design_vary(dev) -> dict:
+        """The default design study's ranges (file units): stroke and ball diameter."""
+        return {"stroke_mm": _around(dev.stroke, (0.5, 1.5)),
+                "ball_diameter_mm": _around(dev.ball_diameter, (0.7, 1.3))}
+
+
+def _around(x: float, factors) -> list[float]:
+    """[x f_lo, x f_hi] in mm, 3 significant digits."""
+    return [float(f"{x * 1e3 * f:.3g}") for f in factors]
+
+
+def _tube_followed(base: dict, values: dict) -> dict:
+    """The tube's ``geometry = "follow"`` rule (file units): the base scene's radial
+    clearance (bore - ball radius), wall (outer - inner radius) and electrode inset (bore -
+    electrode radius) are kept, so a bigger ball gets a bigger bore and the wall and the
+    electrode follow the bore. A varied key never follows."""
+    b, out = base, {}
+    bore = b["tube_inner_radius_mm"]
+    if "ball_diameter_mm" in values and "tube_inner_radius_mm" not in values:
+        clearance = b["tube_inner_radius_mm"] - 0.5 * b["ball_diameter_mm"]
+        bore = 0.5 * values["ball_diameter_mm"] + clearance
+        out["tube_inner_radius_mm"] = bore
+    elif "tube_inner_radius_mm" in values:
+        bore = values["tube_inner_radius_mm"]
+    if bore != b["tube_inner_radius_mm"]:
+        if "electrode_radius_mm" not in values:
+            out["electrode_radius_mm"] = bore - (b["tube_inner_radius_mm"]
+                                                 - b["electrode_radius_mm"])
+        if "tube_outer_radius_mm" not in values:
+            out["tube_outer_radius_mm"] = bore + (b["tube_outer_radius_mm"]
+                                                  - b["tube_inner_radius_mm"])
+    return out
+
 
 def _ball_fits(ball: float, cavity: float) -> None:
     if ball >= cavity:
@@ -132,6 +177,29 @@ class _SphericalShell:
         """The cavity's diameter (Paschen's low-pressure bound; ``SphericalShell``'s)."""
         return dev.cavity_diameter
 
+    @staticmethod
+    def followed(base: dict, values: dict) -> dict:
+        """``geometry = "follow"`` (file units): a varied ball takes the cavity along,
+        the stroke (cavity - ball) kept; the band and the shell's thickness stay. A
+        varied cavity never follows."""
+        if "ball_diameter_mm" in values and "cavity_diameter_mm" not in values:
+            stroke = base["cavity_diameter_mm"] - base["ball_diameter_mm"]
+            return {"cavity_diameter_mm": values["ball_diameter_mm"] + stroke}
+        return {}
+
+    derived = ("stroke_mm", "stroke = cavity - ball diameter")
+
+    @staticmethod
+    def derived_mm(device: dict) -> float:
+        return device["cavity_diameter_mm"] - device["ball_diameter_mm"]
+
+    @staticmethod
+    def default_design_vary(dev) -> dict:
+        """The default design study's ranges: cavity and ball diameter (the stroke is
+        derived); a ball that does not fit its cavity is a skipped candidate."""
+        return {"cavity_diameter_mm": _around(dev.cavity_diameter, (0.8, 1.2)),
+                "ball_diameter_mm": _around(dev.ball_diameter, (0.7, 1.3))}
+
 
 class _Hexagonal:
     """The honeycomb cell (Fig. 10): the tube's keys with the hexagon's meaning
@@ -139,6 +207,10 @@ class _Hexagonal:
     apothems, axis to a flat), electrodes over the whole bore."""
     name = "hexagonal"
     stroke = _Tube.stroke
+    followed = _Tube.followed   # the apothems follow the ball as the tube's radii
+    derived = _Tube.derived
+    derived_mm = _Tube.derived_mm
+    default_design_vary = _Tube.default_design_vary
 
     @staticmethod
     def check(dev) -> None:
@@ -185,6 +257,41 @@ def shape_of(shape: str):
     if shape in NOT_RUNNABLE:
         raise SceneError(f"[device] shape = {shape!r}: {NOT_RUNNABLE[shape]}")
     return SHAPES[shape]
+
+
+def design_vary_problem(shape: str, key: str) -> str | None:
+    """Why ``[design.vary] key`` does not apply to ``shape`` (None: it does): the keys of
+    another shape, and for the shell the stroke (derived: cavity - ball)."""
+    if shape == "spherical-shell" and key in ("stroke_mm", "gap_mm"):
+        return (f"[design.vary] {key} does not apply to shape = 'spherical-shell': its stroke "
+                "is cavity_diameter_mm - ball_diameter_mm; vary cavity_diameter_mm (and "
+                "ball_diameter_mm)")
+    own = SHAPE_KEYS.get(shape, ())
+    for other, keys in SHAPE_KEYS.items():
+        if key in keys and key not in own and other != shape:
+            return (f"[design.vary] {key} does not apply to shape = {shape!r} (a key of "
+                    f"shape = {other!r}); allowed for it: " + ", ".join(
+                        k for k in own if k not in ("stroke_mm",)
+                        or shape != "spherical-shell") + " and the shared [device] keys")
+    return None
+
+
+def followed_keys(shape: str, base: dict, values: dict) -> dict:
+    """``[device]`` keys (file units) that follow the varied ``values`` of a design
+    candidate under ``geometry = "follow"`` (the shape's rule, :data:`SHAPES`), rounded
+    to 12 digits. ``base``: the base scene's ``[device]`` (``to_dict``)."""
+    out = shape_of(shape).followed(base, values)
+    return {k: float(f"{v:.12g}") for k, v in out.items()}
+
+
+def derived_stroke(shape: str, raw_device: dict, device: dict) -> dict:
+    """A shape whose stroke is derived (the shell), written with ``stroke_mm`` (or its old
+    name) in the base scene: that key at the candidate's derived value (``device``: the
+    candidate's ``[device]``, file units), so a varied cavity or ball is not refused."""
+    if shape != "spherical-shell":
+        return {}
+    stroke = _SphericalShell.derived_mm(device)
+    return {k: float(f"{stroke:.12g}") for k in ("stroke_mm", "gap_mm") if k in raw_device}
 
 
 def check_shape_scene(scene) -> None:
