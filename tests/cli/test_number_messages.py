@@ -42,3 +42,29 @@ def test_dynamics_duration_beyond_its_bound_shows_its_digits(tmp_path, run_cli, 
                    tmp_path / "out", env=cli_env(MPLBACKEND="Agg"))
     assert done.returncode == 2
     assert done.stderr.startswith("tengfield: error: --duration-s = 1000000.0000001: ")
+
+
+def test_show_number_adds_the_digits_that_tell_a_value_from_its_bound():
+    from tengfield.scene.limits import show_number
+
+    assert show_number(3.5, 0.0, 3.0) == "3.5" and show_number(3.0, 0.0, 3.0) == "3"
+    assert show_number(3.0000000001e-3 * 1e3, 0.0, 3.0) == "3.0000000001"
+    assert show_number(-1e-13, 0.0, 3.0) == "-1e-13"
+    assert show_number(0.5 + 2e-16, 0.5) == repr(0.5 + 2e-16)
+
+
+@pytest.mark.parametrize("sections, expected", [
+    ({"initial": {"gap_mm": 3.0000000001}},
+     "[initial] gap_mm = 3.0000000001 is out of range: allowed [0, 3]"),
+    ({"field": {"method": "3d", "ball_offset_mm": 0.5000000001}},
+     "[field] ball_offset_mm = 0.5000000001 is out of range: allowed [0, 0.5] mm"),
+])
+def test_scene_rules_between_keys_show_the_digits_too(sections, expected):
+    """The rules between keys (`--set` or the file) said `gap_mm = 3 is out of range:
+    allowed [0, 3]`; the keys' own ranges already showed the value as written."""
+    from tengfield.errors import SceneError
+    from tengfield.scene import check_field, default_scene
+
+    with pytest.raises(SceneError) as info:
+        check_field(default_scene().with_values(**sections))
+    assert expected in str(info.value)
