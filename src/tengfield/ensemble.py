@@ -117,10 +117,28 @@ def realisation_row(index: int, seed: int, summary: dict) -> dict:
             "array_quantity": arr.get("compared")}
 
 
-def ensemble_block(rows: list[dict]) -> dict:
+class EnsembleBlock(dict):
+    """``summary.json -> ensemble`` (``RunResult.ensemble``): a dict, written as it is,
+    that also keeps the realisations' ``rows`` (ensemble.csv's) for :meth:`plot`."""
+
+    def __init__(self, data=(), rows=()):
+        super().__init__(data)
+        self.rows = list(rows)
+
+    def plot(self):
+        """The ensemble figure (a matplotlib Figure): each output over the realisations
+        with its running mean and 95 % interval, and the regime fractions; ``tengfield
+        run`` saves this figure as ensemble.png."""
+        from .plotting.ensemble import ensemble_figure   # the edge, imported on use
+
+        return ensemble_figure(self.rows, self)
+
+
+def ensemble_block(rows: list[dict]) -> EnsembleBlock:
     """``summary.json -> ensemble``: per quantity its statistics (:func:`statistics`),
     and per regime the fraction of realisations in it with its exact binomial interval
-    (:func:`fraction_statistics`)."""
+    (:func:`fraction_statistics`); an :class:`EnsembleBlock` (a dict holding ``rows`` too:
+    ``block.plot()``)."""
     block = {"realisations": len(rows), "confidence": CONFIDENCE,
              "seeds": [r["seed"] for r in rows],
              "seed_rule": "realisation k uses [excitation] seed + k",
@@ -139,4 +157,4 @@ def ensemble_block(rows: list[dict]) -> dict:
     for label in sorted({r["regime"] for r in rows}):
         block["regime_fractions"][label] = fraction_statistics(
             [1.0 if r["regime"] == label else 0.0 for r in rows])
-    return block
+    return EnsembleBlock(block, rows)

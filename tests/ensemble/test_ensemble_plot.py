@@ -31,3 +31,29 @@ def test_the_figure_is_drawn_with_a_missing_value_and_two_regimes(tmp_path):
     rows = _rows([1.0, math.nan, 3.0, 5.0])
     path = plot_ensemble(rows, ensemble_block(rows), tmp_path / "ensemble.png")
     assert path.stat().st_size > 10_000
+
+
+def test_the_block_plots_itself_and_stays_the_summary_dict(tmp_path):
+    """#29: ``ensemble_block(rows).plot()`` (``RunResult.ensemble.plot()``) is the figure
+    plot_ensemble saves; the block is still the plain summary.json dict (pickled too, as
+    mpirun ranks send it)."""
+    import json
+    import pickle
+
+    from matplotlib.figure import Figure
+
+    from tengfield.plotting.ensemble import plot_ensemble
+    from tengfield.quantities import axis_label
+
+    rows = _rows([1.0, 2.0, 4.0])
+    block = ensemble_block(rows)
+    fig = block.plot()
+    assert isinstance(fig, Figure)
+    assert fig.axes[0].get_ylabel() == axis_label("V_oc_V", statistic="peak_to_peak")
+    assert list(fig.axes[0].get_lines()[0].get_ydata()) == [1.0, 2.0, 4.0]
+    plot_ensemble(rows, block, tmp_path / "cli.png")
+    fig.savefig(tmp_path / "notebook.png", dpi=110)
+    assert (tmp_path / "cli.png").read_bytes() == (tmp_path / "notebook.png").read_bytes()
+    assert json.loads(json.dumps(block)) == json.loads(json.dumps(dict(block)))
+    again = pickle.loads(pickle.dumps(block))
+    assert again == block and again.rows == rows

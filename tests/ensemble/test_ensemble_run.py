@@ -217,3 +217,30 @@ def test_the_library_runs_the_ensemble_the_cli_writes(run_cli, tmp_path, plate_c
     assert written == json.loads(json.dumps(block))
     csv_rows = list(csv.DictReader((out / "ensemble.csv").open()))
     assert [float(r["I_sc_pp_A"]) for r in csv_rows] == [r["I_sc_pp_A"] for r in rows]
+
+
+@pytest.mark.slow
+def test_result_ensemble_plot_is_the_figure_run_saves(cache, tmp_path):
+    """#29 notebook use: ``r.ensemble.plot()`` returns the figure ``tengfield run`` saves
+    as ensemble.png (figures on), and summary.json's block is the same dict as before."""
+    from matplotlib.figure import Figure
+
+    from tengfield.io import write_run_outputs
+
+    scene = _scene(realisations=3)
+    result = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    fig = result.ensemble.plot()
+    assert isinstance(fig, Figure)
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels == ["V_OC peak-to-peak [V]", "Q_SC peak-to-peak [nC]",
+                      "I_SC peak-to-peak [nA]", "fraction of realisations"]
+    q = fig.axes[1].get_lines()[0].get_ydata()
+    assert list(q) == pytest.approx([r["Q_sc_pp_C"] * 1e9 for r in result.ensemble_rows],
+                                    rel=1e-12)
+    written = write_run_outputs(result, tmp_path, plots=True)
+    assert tmp_path / "ensemble.png" in written
+    fig.savefig(tmp_path / "notebook.png", dpi=110)
+    assert (tmp_path / "notebook.png").read_bytes() == (tmp_path / "ensemble.png").read_bytes()
+    saved = json.loads((tmp_path / "summary.json").read_text())["ensemble"]
+    assert saved == json.loads(json.dumps(dict(result.ensemble)))
+    assert "rows" not in saved

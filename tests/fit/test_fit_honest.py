@@ -146,8 +146,8 @@ def test_targets_residuals_are_printed_in_their_units_and_as_percent(setup, main
         assert r["percent"] == pytest.approx(100 * (r["fitted"] - r["measured"]) / r["measured"],
                                              rel=1e-9)
         assert r["difference"] == pytest.approx(r["fitted"] - r["measured"], rel=1e-12)
-        line = re.search(rf"{label}: measured (\S+), fitted (\S+) {r['unit']} \((\S+) %\)",
-                         printed)
+        line = re.search(rf"{label} \(tool: [^)]+\): measured (\S+), fitted (\S+) "
+                         rf"{r['unit']} \((\S+) %\)", printed)
         assert line, printed
         assert float(line[2]) == pytest.approx(r["fitted"], rel=1e-3)
         assert float(line[3]) == pytest.approx(r["percent"], rel=1e-2, abs=1e-6)

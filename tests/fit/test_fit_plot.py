@@ -19,7 +19,8 @@ def test_fit_result_plot_is_the_fit_figure(plate_scene, plate_surrogate, tmp_pat
     result = fit_trace(plate_scene, plate_surrogate[0], plate_surrogate[1], trace, spec)
     fig = result.plot()
     assert isinstance(fig, Figure)
-    assert [ax.get_ylabel() for ax in fig.axes] == ["V [V]", "resid.", "Q [nC]", "resid."]
+    assert [ax.get_ylabel() for ax in fig.axes] == ["V_read [V]", "resid.", "Q_SC [nC]",
+                                                  "resid."]  # the quantity table's labels
     assert fig.axes[-1].get_xlabel() == "measured time [s]"
     assert "surface_charge_uC_per_m2 = " in fig.axes[0].get_title()
     measured = fig.axes[0].get_lines()[0].get_ydata()

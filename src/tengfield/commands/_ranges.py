@@ -8,6 +8,19 @@ from ..errors import SceneError
 MAX_POINTS = 100_000
 
 
+def number_text(value) -> str:
+    """A command-line number for a message: ``:g`` when that is the number itself (``3.5``,
+    ``1e-06``), else the shortest text that is (``repr``: ``3.0000000001``), so a value
+    just beyond a bound never reads as the bound (``3 is out of range: allowed [0, 3]``);
+    the rule of the scene's values (``scene.schema.show``: the value as written)."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return repr(value)
+    text = f"{value:g}"
+    return text if not math.isfinite(value) or float(text) == value else repr(value)
+
+
 def parse_range(text: str, option: str, *, positive: bool = True, log: bool = False):
     """``START:STOP:N`` -> N values, both ends included (linear, or logarithmic with
     ``log``); a single number ``X`` -> [X]. Values must be finite and > 0

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..errors import SceneError
 from ._common import scene_command
-from ._ranges import parse_range
+from ._ranges import number_text, parse_range
 
 
 def register(sub) -> None:
@@ -67,7 +67,7 @@ def _dynamics(args, figures) -> int:
         try:   # the scene of that length: a noise record is drawn for it, its limits hold
             scene = scene.with_values(run={"duration_s": args.duration_s})
         except SceneError as exc:
-            raise SceneError(f"--duration-s = {args.duration_s:g}: {exc}") from None
+            raise SceneError(f"--duration-s = {number_text(args.duration_s)}: {exc}") from None
     result = simulate(scene)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)

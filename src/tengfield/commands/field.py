@@ -9,6 +9,7 @@ import warnings
 from pathlib import Path
 
 from ._common import scene_command
+from ._ranges import number_text
 
 
 def register(sub) -> None:
@@ -61,11 +62,16 @@ def _run(args) -> int:
     comm = MPI.COMM_WORLD
     scene = _resolved_charge(load_scene(args.scene), comm)
     if args.offset_mm is not None:
-        if not (math.isfinite(args.offset_mm) and args.offset_mm >= 0):
-            raise FieldError(f"offset_mm = {args.offset_mm:g} is out of range: allowed "
-                             f"[0, {(scene.device.tube_inner_radius - scene.device.ball_radius) * 1e3:g}] mm")
+        from ..scene.shapes import shape_of
+
+        widest = shape_of(scene.device.shape).max_offset(scene.device)   # the scene's rule
+        if not (math.isfinite(args.offset_mm) and 0 <= args.offset_mm * 1e-3 <= widest + 1e-15):
+            raise FieldError(f"offset_mm = {number_text(args.offset_mm)} is out of range: "
+                             f"allowed [0, {widest * 1e3:g}] mm (the ball must stay inside "
+                             "the tube)")
         scene = scene.with_values(field={"ball_offset_mm": args.offset_mm})
     position = args.position_mm * 1e-3
+    _check_position(scene, args.position_mm)
     check_position(scene, position)
     reference = args.reference or scene.circuit.reference
     method = resolve_method(scene, args.method, scene.field.ball_offset)
@@ -96,6 +102,18 @@ def _run(args) -> int:
                 written.append(out / "field.png")
         print("wrote " + ", ".join(str(w) for w in written))
     return 0
+
+
+def _check_position(scene, position_mm: float) -> None:
+    """FieldError unless 0 <= ``position_mm`` <= the stroke (the library's rule,
+    ``field.check_position``), the value shown with the digits that tell it from the bound
+    (``3.0000000001``, not ``3``)."""
+    from ..errors import FieldError
+
+    stroke = scene.device.stroke
+    if not (math.isfinite(position_mm) and 0.0 <= position_mm * 1e-3 <= stroke * (1.0 + 1e-12)):
+        raise FieldError(f"position_mm = {number_text(position_mm)} is out of range: allowed "
+                         f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] stroke_mm)")
 
 
 def _on_rank_zero(comm, work):

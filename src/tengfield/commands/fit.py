@@ -23,7 +23,10 @@ def register(sub) -> None:
     source.add_argument("--targets", nargs="+", metavar="NAME=VALUE[+-SIGMA]",
                         help="scalar targets instead of a trace, e.g. V_pp_V=4.2 Q_pp_nC=1.42 "
                              "I_peak_uA=0.16 (pp = peak-to-peak, peak = max |x| over the steady "
-                             "window; default uncertainty 5 %%)")
+                             "window; default uncertainty 5 %%). V is compared with the voltage "
+                             "read through C_p (the ideal V_OC when C_p = 0), Q with Q_SC, I "
+                             "with I_SC (with a load: the load's V and I); fit.json and the "
+                             "terminal name each tool quantity")
     p.add_argument("--free", metavar="NAME[,NAME...]", default=None,
                    help="free parameters (overrides [fit.parameters]; bounds and starts from "
                         "there or the defaults): surface_charge_uC_per_m2, "

@@ -68,8 +68,69 @@ class _BelowWarning(logging.Filter):
         return record.levelno >= logging.WARNING
 
 
+def jit_cache_dir():
+    """The form compiler's (dolfinx/FFCx JIT) cache directory: ``$XDG_CACHE_HOME/fenics``,
+    by default ``~/.cache/fenics`` (read by dolfinx when it is imported)."""
+    from pathlib import Path
+
+    import dolfinx.jit
+    options = dolfinx.jit.get_parameters() if LEGACY else dolfinx.jit.get_options()
+    return Path(str(options["cache_dir"])).expanduser()
+
+
+def _jit_cache_message(cache, reason: str) -> str:
+    return (f"the form compiler's cache (dolfinx/FFCx JIT) {cache} cannot be written "
+            f"({reason}): point XDG_CACHE_HOME at a writable directory (the cache is then "
+            "$XDG_CACHE_HOME/fenics; tengfield's surrogate cache moves with it unless "
+            "TENGFIELD_CACHE_DIR or --cache-dir is set), e.g. XDG_CACHE_HOME=/tmp/cache")
+
+
+@functools.lru_cache(maxsize=None)
+def jit_cache_problem() -> str | None:
+    """One line when the form compiler's cache directory cannot be created (a read-only
+    ``$HOME``: dolfinx said ``Read-only file system: .../.cache``), else None. Checked
+    the same way on every rank before a compile (a failure inside dolfinx's MPI compile
+    is a bare RuntimeError on the other ranks). An existing cache that is read-only is
+    not refused: its compiled modules are read from it."""
+    cache = jit_cache_dir()
+    try:
+        cache.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        return _jit_cache_message(cache, f"{exc.strerror or exc}: {exc.filename or cache}")
+    return None
+
+
+@contextlib.contextmanager
+def _cache_errors_named():
+    """An OSError of the compiler on a file of its cache (a new module in a read-only
+    cache) as the one line of :func:`jit_cache_problem` (a FieldError)."""
+    from pathlib import Path
+
+    try:
+        yield
+    except OSError as exc:
+        cache = jit_cache_dir()
+        name = Path(str(exc.filename)) if exc.filename else None
+        if name is None or not (name == cache or cache in name.parents):
+            raise
+        from ..errors import FieldError
+        raise FieldError(_jit_cache_message(cache, f"{exc.strerror or exc}: {name}")) from None
+
+
 @contextlib.contextmanager
 def quiet_compiler():
+    """:func:`_quiet_output` of a compile, its cache checked first and its cache errors
+    named (:func:`jit_cache_problem`: a :class:`~tengfield.errors.FieldError`)."""
+    problem = jit_cache_problem()
+    if problem is not None:
+        from ..errors import FieldError
+        raise FieldError(problem)
+    with _cache_errors_named(), _quiet_output():
+        yield
+
+
+@contextlib.contextmanager
+def _quiet_output():
     """The form compiler (ffcx -> cffi -> setuptools -> the C compiler) says nothing on
     stderr meanwhile: setuptools logs ``running build_ext`` and the compiler's command
     lines at INFO on the root logger (raising its level to INFO, with ffcx's

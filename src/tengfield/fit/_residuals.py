@@ -37,9 +37,12 @@ def display_unit(quantity: str, unit: str, magnitude: float) -> str:
     return fitting[-1] if fitting else min(units, key=units.get)
 
 
-def trace_residuals(trace, fitted: dict) -> dict:
-    """``{quantity: {unit, residual_rms, signal_rms, percent_of_signal_rms, column}}``."""
+def trace_residuals(trace, fitted: dict, tools: dict | None = None) -> dict:
+    """``{quantity: {unit, residual_rms, signal_rms, percent_of_signal_rms, column}}``, with
+    ``tools[quantity]`` (:func:`tengfield.fit.compared.compared`: the tool quantity the
+    column is compared with, its words and unit) merged in."""
     out = {}
+    tools = tools or {}
     for c in trace.columns:
         y = np.asarray(trace.values[c.quantity], dtype=float)
         rms = float(np.sqrt(np.mean((np.asarray(fitted[c.quantity]) - y) ** 2)))
@@ -50,17 +53,19 @@ def trace_residuals(trace, fitted: dict) -> dict:
                            "signal_rms": signal / factor,
                            # a flat column is refused before the fit (_check_signal)
                            "percent_of_signal_rms": 100.0 * rms / signal if signal > 0
-                           else None}
+                           else None, **tools.get(c.quantity, {})}
     return out
 
 
-def target_residuals(targets, scalars: dict) -> dict:
+def target_residuals(targets, scalars: dict, tools: dict | None = None) -> dict:
     """``{label: {unit, measured, fitted, difference, percent, uncertainty}}`` (the
-    target's unit; ``difference`` = fitted − measured)."""
+    target's unit; ``difference`` = fitted − measured), with ``tools[label]`` (the tool
+    quantity the target is compared with: ``tool_key``, ``tool_label``, ``tool_unit``)."""
     out = {}
+    tools = tools or {}
     for t in targets:
         fitted = float(scalars[t.key])
-        out[t.label] = {"unit": t.unit, "measured": t.value / t.factor,
+        out[t.label] = {**tools.get(t.label, {}), "unit": t.unit, "measured": t.value / t.factor,
                         "fitted": fitted / t.factor,
                         "difference": (fitted - t.value) / t.factor,
                         "percent": 100.0 * (fitted - t.value) / t.value,
@@ -71,10 +76,15 @@ def target_residuals(targets, scalars: dict) -> dict:
 
 def residual_lines(mode: str, residuals: dict) -> list[str]:
     """What ``tengfield fit`` prints for the residuals, one line per column / target."""
+    def tool(r, before, after=""):   # the tool quantity compared with (tengfield.quantities)
+        return f"{before}tool: {r['tool_label']}{after}" if r.get("tool_label") else ""
+
     if mode == "targets":
-        return [f"{label}: measured {r['measured']:.4g}, fitted {r['fitted']:.4g} {r['unit']} "
+        return [f"{label}{tool(r, ' (', ')')}: measured "
+                f"{r['measured']:.4g}, fitted {r['fitted']:.4g} {r['unit']} "
                 f"({r['percent']:+.3g} %)" for label, r in residuals.items()]
-    return [f"{q} (column {r['column']!r}): residual RMS {r['residual_rms']:.3g} {r['unit']} "
+    return [f"{q} (column {r['column']!r}{tool(r, '; ')}): residual RMS "
+            f"{r['residual_rms']:.3g} {r['unit']} "
             + (f"= {r['percent_of_signal_rms']:.3g} % of " if r["percent_of_signal_rms"]
                is not None else "beside ")
             + f"the signal RMS {r['signal_rms']:.3g} {r['unit']}" for q, r in residuals.items()]

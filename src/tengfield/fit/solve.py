@@ -29,6 +29,7 @@ from ._problem import _optimise, _Problem, _Space
 from ._residuals import bound_notes, on_bound, target_residuals, trace_residuals
 from ._scan import SCAN_POINTS, _start_scan
 from ._signal import _check_signal, _explained_note
+from .compared import compared
 from .result import FitError, FitResult
 from .spec import FitSpec, Target, Trace
 
@@ -140,7 +141,9 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
                        "units": {c.quantity: c.unit for c in trace.columns}}
     result.fitted = model.waveforms(result.values, model.model_times(trace.time, shift),
                                     quantities)
-    result.residuals = trace_residuals(trace, result.fitted)
+    c_p, _ = model.circuit(result.values)
+    result.residuals = trace_residuals(trace, result.fitted, {
+        c.quantity: compared(c.quantity, "", scene, c_p) for c in trace.columns})
     bound_notes(result, on_bound(problem.space, res.x))
     _explained_note(result, trace, spec.loss)
     if spec.bootstrap:
@@ -193,7 +196,9 @@ def fit_targets(scene, curves, reference_sigma: float, targets: list[Target], sp
     scalars = model.scalars(result.values)
     result.measured = {t.label: t.value / t.factor for t in targets}
     result.fitted = {t.label: scalars[t.key] / t.factor for t in targets}
-    result.residuals = target_residuals(targets, scalars)
+    c_p, _ = model.circuit(result.values)
+    result.residuals = target_residuals(targets, scalars, {
+        t.label: compared(t.quantity, t.statistic, scene, c_p) for t in targets})
     bound_notes(result, on_bound(problem.space, res.x))
     result.wall_time = time.perf_counter() - t0
     return result

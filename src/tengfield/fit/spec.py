@@ -38,6 +38,7 @@ from ..electrical import CIRCUITS, Circuit, circuit_for
 from ..errors import SceneError
 from ..scene.recorded import check_magnitude, check_time_steps, read_table
 from ..scene.schema import suggest as _suggest
+from .compared import INFIXES, LETTERS, MEASURED_KEYS
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
@@ -347,7 +348,11 @@ def read_trace(path, spec: FitSpec) -> Trace:
 
 
 # ---------------------------------------------------------------------------
-_TARGET = re.compile(r"^(?P<q>[VQI])_(?P<kind>pp|peak)_(?P<unit>[A-Za-z]+)$")
+#: a target's name: {V,Q,I}_{pp,peak}_{unit}, the letters and infixes of the quantity table
+_TARGET = re.compile(rf"^(?P<q>[{''.join(LETTERS)}])_(?P<kind>{'|'.join(INFIXES)})"
+                     r"_(?P<unit>[A-Za-z]+)$")
+#: examples of target names for the messages: the [reference] keys of the table
+TARGET_EXAMPLES = ", ".join(dict.fromkeys(MEASURED_KEYS.values()))
 
 
 @dataclass
@@ -372,6 +377,16 @@ class Target:
     def factor(self) -> float:
         return UNITS[self.quantity][self.unit]
 
+    @property
+    def statistic(self) -> str:
+        """``peak_to_peak`` or ``peak`` (tengfield.quantities.STATISTICS)."""
+        return INFIXES[self.kind]
+
+    @property
+    def measured_key(self) -> str:
+        """The ``[reference]`` key of this measured value (``V_pp_mV`` -> ``V_pp_V``)."""
+        return MEASURED_KEYS[(self.quantity, self.statistic)]
+
 
 #: relative 1-sigma uncertainty of a target given without ``+-``
 DEFAULT_TARGET_UNCERTAINTY = 0.05
@@ -386,7 +401,8 @@ def parse_targets(items) -> list[Target]:
         match = _TARGET.match(name.strip())
         if not match or not value:
             raise SceneError(f"--targets {text!r}: expected NAME=VALUE[+-SIGMA] with NAME like "
-                             "V_pp_V, Q_pp_nC, I_peak_uA ({V,Q,I}_{pp,peak}_{unit})")
+                             f"{TARGET_EXAMPLES} ({{{','.join(LETTERS)}}}_"
+                             f"{{{','.join(INFIXES)}}}_{{unit}})")
         q, kind, unit = match["q"], match["kind"], match["unit"]
         if unit not in UNITS[q]:
             raise SceneError(f"--targets {text!r}: unit {unit!r} is not allowed for {q}: choose "

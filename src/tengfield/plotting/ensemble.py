@@ -6,13 +6,19 @@ from pathlib import Path
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
-_SHOWN = (("V_oc_pp_V", "V_OC peak-to-peak [V]", 1.0),
-          ("Q_sc_pp_C", "Q_SC peak-to-peak [nC]", 1e9),
-          ("I_sc_pp_A", "I_SC peak-to-peak [nA]", 1e9),
-          ("mean_power_W", "mean load power [µW]", 1e6),
-          ("average_harvested_power_W", "harvested power [µW]", 1e6))
+
+def _shown() -> tuple:
+    """(ensemble.csv column, axis label, SI -> shown factor) of the outputs drawn, named
+    by the one table of output quantities (tengfield.quantities)."""
+    from ..quantities import TERMINAL, axis_label, column_name, quantity
+
+    shown = [(column_name(n, "peak_to_peak"), axis_label(n, statistic="peak_to_peak"),
+              quantity(n).display_scale) for n in TERMINAL]
+    shown += [(n, axis_label(n), quantity(n).display_scale)
+              for n in ("mean_power_W", "average_harvested_power_W")]
+    return tuple(shown)
 
 
 def _running_interval(values: np.ndarray):
@@ -38,10 +44,17 @@ def _running_interval(values: np.ndarray):
 
 
 def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
-    """ensemble.png: one row of panels per output (realisations and running mean +- CI)."""
+    """ensemble.png: :func:`ensemble_figure` saved to ``path``."""
+    return Path(save_figure(ensemble_figure(rows, block), path, dpi=110))
+
+
+def ensemble_figure(rows: list[dict], block: dict):
+    """One row of panels per output (realisations and running mean +- CI) and the regime
+    fractions; ``rows``: ensemble.csv's, ``block``: summary.json's ``ensemble``. A
+    matplotlib Figure (``result.ensemble.plot()`` in a notebook)."""
     from matplotlib.ticker import MaxNLocator
 
-    items = _SHOWN + (("array_value", f"array: {block.get('array_quantity', '')}", 1.0),)
+    items = _shown() + (("array_value", f"array: {block.get('array_quantity', '')}", 1.0),)
     shown = [(k, label, scale) for k, label, scale in items
              if k in block["quantities"] and block["quantities"][k]["mean"] is not None]
     fig = new_figure((9.0, 2.3 * len(shown) + 2.0))
@@ -73,5 +86,4 @@ def plot_ensemble(rows: list[dict], block: dict, path: str | Path) -> Path:
     fig.suptitle(f"ensemble of {block['realisations']} realisations "
                  "(95 % confidence intervals, Student t)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return fig

@@ -9,8 +9,18 @@ import numpy as np
 from . import new_figure, save_figure
 
 
-_SI_LABEL = {"V": "V", "Q": "C", "I": "A"}
-_DISPLAY = {"V": ("V", 1.0), "Q": ("nC", 1e-9), "I": ("nA", 1e-9)}
+#: the tool quantity of V, Q, I when a result names none (tengfield.quantities' names)
+_DEFAULT_TOOL = {"V": "V_oc_V", "Q": "Q_sc_C", "I": "I_sc_A"}
+
+
+def _axis(result, q: str) -> tuple[str, float]:
+    """(axis label, SI -> shown factor) of measured column ``q`` (V, Q, I): the tool
+    quantity it is compared with (``result.residuals[q]["tool_key"]``), labelled and
+    scaled by the quantity table."""
+    from ..quantities import axis_label, quantity
+
+    name = (result.residuals.get(q) or {}).get("tool_key") or _DEFAULT_TOOL[q]
+    return axis_label(name), quantity(name).display_scale
 
 
 def plot_fit(result, path) -> Path:
@@ -43,13 +53,13 @@ def fit_figure(result):
         axes = axes[:, 0]
         t = np.asarray(result.measured["time"])
         for i, q in enumerate(quantities):
-            unit, factor = _DISPLAY[q]
-            measured = np.asarray(result.measured[q]) / factor
-            fitted = np.asarray(result.fitted[q]) / factor
+            label, scale = _axis(result, q)
+            measured = np.asarray(result.measured[q]) * scale
+            fitted = np.asarray(result.fitted[q]) * scale
             ax, axr = axes[2 * i], axes[2 * i + 1]
             ax.plot(t, measured, ".", ms=1.5, color="0.5", label="measured")
             ax.plot(t, fitted, lw=1.0, color="C3", label="fitted")
-            ax.set_ylabel(f"{q} [{unit}]")
+            ax.set_ylabel(label, fontsize=8)
             ax.legend(fontsize=7, loc="upper right")
             axr.plot(t, measured - fitted, lw=0.6, color="C0")
             axr.axhline(0.0, color="0.3", lw=0.5)

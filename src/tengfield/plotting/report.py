@@ -4,15 +4,24 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import new_figure
+from . import new_figure, save_figure
 
 
-def plot_stage(path: Path, rows: list, stage: str, title: str, targets=(1e-2, 1e-3)) -> Path:
+def plot_stage(path: Path, rows: list, stage: str, title: str, targets=(1e-2, 1e-3), *,
+               ylabel: str = "relative error") -> Path:
+    """``<stage>.png``: :func:`stage_figure` saved to ``path``."""
+    return Path(save_figure(stage_figure(rows, stage, title, targets, ylabel=ylabel), path,
+                            dpi=100))
+
+
+def stage_figure(rows: list, stage: str, title: str, targets=(1e-2, 1e-3), *,
+                 ylabel: str = "relative error"):
     """Log-log error against wall time for one stage of ``tengfield report`` (``rows``:
-    :class:`tengfield.report.plan.Row`; one marker series per group), titled ``title``."""
+    :class:`tengfield.report.plan.Row`; one marker series per group), titled ``title``,
+    the y axis ``ylabel`` (the report names the errors' quantities); a matplotlib Figure."""
     fig = new_figure((6.4, 4.2), dpi=100)
     ax = fig.subplots()
-    groups: dict[str, list[Row]] = {}
+    groups: dict[str, list] = {}
     for row in rows:
         groups.setdefault(_group(row), []).append(row)
     markers = "osD^v<>ph*"
@@ -33,14 +42,12 @@ def plot_stage(path: Path, rows: list, stage: str, title: str, targets=(1e-2, 1e
         ax.text(ax.get_xlim()[0] if ax.lines else 1, t, f" {t:g}", va="bottom", fontsize=7,
                 color="0.4")
     ax.set_xlabel("wall time [s]")
-    ax.set_ylabel("relative error" + (" (max of V_OC, Q_SC, I_SC peaks)"
-                                      if stage != "circuit" else " (mean power, V_load peak)"))
+    ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
-    fig.savefig(path)
-    return path
+    return fig
 
 
 def _group(row) -> str:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
 #: display unit of an output by its name's unit suffix: (suffix, unit text, scale)
 _UNITS = (("_V", "V", 1.0), ("_C", "nC", 1e9), ("_A", "µA", 1e6), ("_W", "µW", 1e6),
@@ -23,8 +23,15 @@ def display_unit(name: str) -> tuple[str, float]:
 
 
 def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
+    """uncertainty.png: :func:`uncertainty_figure` saved to ``path``."""
+    return Path(save_figure(uncertainty_figure(rows, summary), path, dpi=110))
+
+
+def uncertainty_figure(rows: list[dict], summary: dict):
     """One row of panels per main output (``summary["main_outputs"]``; ``rows``: each
-    evaluation's outputs)."""
+    evaluation's outputs): its distribution with the 5-95 % band, the median and the
+    nominal value, and (Sobol) its S1 / ST bars per input. A matplotlib Figure
+    (``Study.plot()`` in a notebook)."""
     shown = summary["main_outputs"] or summary["output_keys"][:3]
     sobol = summary["method"] == "sobol"
     height = 2.6 * max(len(shown), 1) + 1.0
@@ -73,5 +80,4 @@ def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
     fig.suptitle(f"uncertainty: {summary['evaluations']} evaluations ({summary['method']}, "
                  f"N = {summary['samples']}){bars}", fontsize=9)
     fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.4 / height))   # the title above the panels
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return fig

@@ -12,15 +12,10 @@ from pathlib import Path
 from .._files import atomic_path, scene_dir, scene_toml, toml_value, write_text
 from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
-from .plan import QUANTITIES
+from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
+                   error_words)
 from .study import Report
 
-STAGE_TITLES = {
-    "field": "Field: mesh size, degree, axisymmetric vs 3D, far field",
-    "surrogate": "Surrogate: number of positions",
-    "dynamics": "Dynamics: output sampling and soft-contact stiffness",
-    "circuit": "Circuit: load-integrator step for stiff to slow loads",
-}
 
 
 def scene_text(scene, sections: dict, header: str) -> str:
@@ -45,9 +40,9 @@ def markdown(report: Report, images: dict) -> str:
              f"regime {report.trajectory.get('regime', '?')}. Total wall time "
              f"{report.wall_time_s:.0f} s.",
              "",
-             "Errors are relative errors of the peak-to-peak V_OC, Q_SC and I_SC over the "
-             "steady window (`error_max` = the largest of the three); for the circuit, of the "
-             "mean load power and the peak-to-peak load voltage. Wall times are measured on this "
+             f"Errors are relative errors over the steady window, of the {error_words()} "
+             "(`error_max` = the largest of these); for the circuit, of the "
+             f"{error_words(CIRCUIT_ERRORS)}. Wall times are measured on this "
              "machine, which may be shared: they vary with its load.",
              "", "## References", ""]
     for key in ("field", "surrogate", "dynamics", "overall"):
@@ -64,15 +59,17 @@ def markdown(report: Report, images: dict) -> str:
         if stage in images:
             lines += [f"![{stage}]({images[stage].name})", ""]
         if stage == "circuit":
-            lines += ["| setting | τ = R C_T [s] | wall time [s] | error P_mean | error V_load |",
-                      "|---|---|---|---|---|"]
+            lines += ["| setting | τ = R C_T [s] | wall time [s] | "
+                      + " | ".join(f"error {error_symbol(e)}" for e in CIRCUIT_ERRORS) + " |",
+                      "|---|---|---|" + "---|" * len(CIRCUIT_ERRORS)]
             for r in rows:
                 lines.append(f"| {r.setting} | {r.knobs['time_constant_s']:.2g} | "
-                             f"{r.wall_time_s:.3g} | {_num(r.errors['P_load'])} | "
-                             f"{_num(r.errors['V_load'])} |")
+                             f"{r.wall_time_s:.3g} | "
+                             + " | ".join(_num(r.errors.get(e)) for e in CIRCUIT_ERRORS) + " |")
             continue
         extra = " | error C, q |" if stage == "field" else " |"
-        head = "| setting | wall time [s] | error V_OC | error Q_SC | error I_SC | max" + extra
+        head = ("| setting | wall time [s] | "
+                + " | ".join(f"error {error_symbol(q)}" for q in QUANTITIES) + " | max" + extra)
         lines += [head, "|" + "---|" * (head.count("|") - 1)]
         for r in rows:
             entries = [r.setting, f"{r.wall_time_s:.3g}"]
@@ -88,7 +85,7 @@ def markdown(report: Report, images: dict) -> str:
               "`[field] tolerance`, which may refine beyond the chosen size) and measured "
               "against the overall reference.", "",
               "| target | [field] | sample_rate_hz | positions | predicted error | measured error "
-              "(V_OC, Q_SC, I_SC) | wall time [s] | reached |", "|---|---|---|---|---|---|---|---|"]
+              f"({error_symbols()}) | wall time [s] | reached |", "|---|---|---|---|---|---|---|---|"]
     for rec in report.recommendations:
         f = rec.field
         field_text = (f"{f['method']}, degree {f['degree']}, mesh {f['mesh_size_mm']:g} mm, "
@@ -109,26 +106,24 @@ def markdown(report: Report, images: dict) -> str:
 def write_report(report: Report, out_dir) -> list[Path]:
     """Write report.csv, report.json, report.md, one PNG per stage and
     ``recommended-<target>.toml`` scene files to ``out_dir`` (each atomically)."""
-    from ..plotting.report import plot_stage
+    from ..plotting import save_figure
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = [write_report_csv(out / "report.csv", report),
                write_report_json(out / "report.json", report)]
     images = {}
-    for stage in ("field", "surrogate", "dynamics", "circuit"):
-        rows = [r for r in report.rows if r.stage == stage]
-        if rows:
-            with atomic_path(out / f"{stage}.png") as tmp:
-                plot_stage(tmp, rows, stage, STAGE_TITLES.get(stage, stage))   # plotting/report.py
-            images[stage] = out / f"{stage}.png"
-            written.append(images[stage])
+    for stage, fig in report.plot().items():    # the figures a notebook gets
+        with atomic_path(out / f"{stage}.png") as tmp:
+            save_figure(fig, tmp, dpi=100)
+        images[stage] = out / f"{stage}.png"
+        written.append(images[stage])
     for rec in report.recommendations:
         path = out / f"recommended-{rec.target:g}.toml"
         write_text(path, scene_text(report.scene, rec.scene_sections(),
                                    f"{report.scene.source} with the cheapest settings measured by "
                                    f"`tengfield report`\nto reach {rec.target:g} on the peak-to-peak "
-                                   f"V_OC, Q_SC, I_SC (measured: {rec.measured_error:.2g})"))
+                                   f"{error_symbols()} (measured: {rec.measured_error:.2g})"))
         written.append(path)
     md = out / "report.md"
     write_text(md, markdown(report, images))

@@ -14,9 +14,50 @@ from typing import Callable, Iterable
 
 import numpy as np
 
+from ..quantities import TERMINAL, describe, quantity
 from ..surrogate import FEWEST_POSITIONS
 
-QUANTITIES = ("V_oc", "Q_sc", "I_sc")
+#: the waveform quantities whose errors the report measures (the terminal's: the keys of
+#: ``electrical.terminal_peaks``, short names of the quantity table's ``TERMINAL``)
+QUANTITIES = tuple(quantity(name).short for name in TERMINAL)
+#: every error the report measures -> the dotted key of its quantity in the one table of
+#: output quantities (tengfield.quantities): the terminal's peak-to-peak values and the
+#: circuit stage's mean load power and peak-to-peak load voltage
+ERROR_KEYS = {**{quantity(name).short: f"peak_to_peak.{name}" for name in TERMINAL},
+              "P_load": "load.mean_power_W", "V_load": "peak_to_peak.V_load_V"}
+#: the circuit stage's errors
+CIRCUIT_ERRORS = ("P_load", "V_load")
+
+
+def error_symbol(error: str) -> str:
+    """The table's symbol of an error's quantity: ``"V_oc"`` -> ``"V_OC"``."""
+    return quantity(ERROR_KEYS[error].rpartition(".")[2]).symbol
+
+
+def error_symbols(errors=QUANTITIES) -> str:
+    """``"V_OC, Q_SC, I_SC"``: the symbols of ``errors``."""
+    return ", ".join(error_symbol(e) for e in errors)
+
+
+#: the stages of a report and their titles (report.md's sections, the figures' titles)
+STAGE_TITLES = {
+    "field": "Field: mesh size, degree, axisymmetric vs 3D, far field",
+    "surrogate": "Surrogate: number of positions",
+    "dynamics": "Dynamics: output sampling and soft-contact stiffness",
+    "circuit": "Circuit: load-integrator step for stiff to slow loads",
+}
+
+
+def stage_error_label(stage: str) -> str:
+    """The y axis of a stage's figure: which errors it shows, by the table's symbols."""
+    if stage == "circuit":
+        return f"relative error ({error_symbols(CIRCUIT_ERRORS)})"
+    return f"relative error (max of {error_symbols()} peak-to-peak)"
+
+
+def error_words(errors=QUANTITIES) -> str:
+    """The table's words for ``errors``: ``"open-circuit voltage V_OC, peak-to-peak; ..."``."""
+    return "; ".join(describe(ERROR_KEYS[e], unit=False) for e in errors)
 TARGETS = (1e-2, 1e-3)
 #: the surrogate's ``[field] tolerance`` is at most this share of the target
 BUDGET_SHARE = 1.0 / 3.0

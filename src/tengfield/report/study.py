@@ -43,7 +43,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from .. import electrical
-from .plan import TARGETS, FieldSetting, Plan, make_plan, peak_errors, solves_needed
+from .plan import (STAGE_TITLES, TARGETS, FieldSetting, Plan, make_plan, peak_errors,
+                   solves_needed, stage_error_label)
 from .recommend import Recommendation, recommend
 from .stages import (_Solver, _trajectory, circuit_rows, dynamics_rows, field_rows,
                      planned_solves, surrogate_rows)
@@ -62,6 +63,22 @@ class Report:
     trajectory: dict
     wall_time_s: float
     fast: bool
+
+    def plot(self) -> dict:
+        """The report's figures, one per stage measured: ``{"field": Figure, "surrogate":
+        ..., "dynamics": ..., "circuit": ...}`` (matplotlib Figures, in that order; a
+        stage without rows has none). Each is the error against wall time that
+        ``tengfield report`` saves as ``<stage>.png``; a dict because the report has no
+        single main figure (a notebook shows ``report.plot()["field"]``)."""
+        from ..plotting.report import stage_figure   # the edge, imported on use
+
+        figures = {}
+        for stage, title in STAGE_TITLES.items():
+            rows = [r for r in self.rows if r.stage == stage]
+            if rows:
+                figures[stage] = stage_figure(rows, stage, title, TARGETS,
+                                              ylabel=stage_error_label(stage))
+        return figures
 
 
 def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Solver",

@@ -13,6 +13,17 @@ import math
 from ..errors import SceneError
 from .shapes import shape_mesh_features, shape_of
 
+
+def show_number(value: float, *bounds: float) -> str:
+    """``value`` for an out-of-range message beside its ``bounds``: ``:g``, with as many
+    more digits as it takes not to read as a bound it differs from (``3.0000000001`` beside
+    3, not ``3 is out of range: allowed [0, 3]``)."""
+    for digits in range(6, 18):
+        text = f"{value:.{digits}g}"
+        if not any(b != value and text == f"{b:.{digits}g}" for b in bounds):
+            return text
+    return repr(value)
+
 # -- limits of work, checked at load --
 #: Output samples per run, ``duration_s x sample_rate_hz``: 2e7 is 1000 s at 20 kHz
 #: (four float64 arrays of 0.64 GB; the CSV holds about 1 GB).
@@ -335,7 +346,8 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
     max_offset = shape_of(dev.shape).max_offset(dev)
     if fld.ball_offset > max_offset + 1e-15:
         problems.append(
-            f"[field] ball_offset_mm = {fld.ball_offset * 1e3:g} is out of range: allowed "
+            f"[field] ball_offset_mm = {show_number(fld.ball_offset * 1e3, max_offset * 1e3)} "
+            "is out of range: allowed "
             f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
     if fld.ball_offset > 0 and fld.method == "axisymmetric":
         problems.append("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "

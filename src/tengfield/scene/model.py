@@ -26,7 +26,8 @@ from ..paschen import STREAMER_PD
 from .constants import G
 from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_array_work,
                      check_ensemble_work,
-                     check_steady_window, check_vibration_work, check_work, field_problems)
+                     check_steady_window, check_vibration_work, check_work, field_problems,
+                     show_number)
 from .recorded import read_psd, read_recorded
 from .shapes import (check_shape_scene, shape_field_inputs, shape_field_problems, shape_of,
                      shape_scene_field_problems)
@@ -395,7 +396,8 @@ class Scene:
         """The rules between sections (the field's are checked by :func:`check_field`)."""
         dev, exc, run, arr = self.device, self.excitation, self.run, self.array
         if self.initial.gap > dev.stroke:
-            raise SceneError(f"[initial] gap_mm = {self.initial.gap * 1e3:g} is out of range: "
+            raise SceneError(f"[initial] gap_mm = {show_number(self.initial.gap * 1e3, dev.stroke * 1e3)}"
+                             " is out of range: "
                              f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] stroke_mm)")
         check_steady_window(exc, run.settle_periods, run.duration)
         check_work(exc, run)

@@ -31,9 +31,9 @@ def write_outputs(study, out, *, plots: bool = True) -> list[Path]:
     written = [write_rows(out / "uncertainty.csv", header, rows),
                write_json(out / "uncertainty.json", jsonable(study.summary))]
     if plots:
-        from ..plotting.uncertainty import plot_uncertainty
+        from ..plotting import save_figure
         with atomic_path(out / "uncertainty.png") as tmp:
-            plot_uncertainty(study.evaluations.rows, study.summary, tmp)
+            save_figure(study.plot(), tmp, dpi=110)     # the figure a notebook gets
         written.append(out / "uncertainty.png")
     return written
 

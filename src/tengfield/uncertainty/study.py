@@ -36,6 +36,15 @@ class Study:
     def main(self) -> list[str]:
         return self.summary.get("main_outputs", main_outputs(self.output_keys))
 
+    def plot(self):
+        """The study's figure (a matplotlib Figure): per main output its distribution over
+        the evaluations with the 5-95 % band, the median and the nominal value, and (Sobol
+        method) its S1 / ST indices per input; ``tengfield uncertainty`` saves this figure
+        as uncertainty.png."""
+        from ..plotting.uncertainty import uncertainty_figure   # the edge, imported on use
+
+        return uncertainty_figure(self.evaluations.rows, self.summary)
+
 
 def output_keys(evaluations: Evaluations) -> list[str]:
     """Every output any evaluation (or the nominal run) has, in order of appearance."""
