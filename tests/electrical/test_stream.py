@@ -1,0 +1,131 @@
+"""The streamed electrical stage of a long run (issue #28 last item, #30.11) equals the
+whole-record one: a short run with tiny chunks (many of them, impacts on their
+boundaries) against the same run computed whole, for each streamed circuit kind, with
+and without the instrument's C_p. Columns and peaks bit-identical, energy sums to
+1e-12 relative. The field is the analytic plate model (no dolfinx)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import tengfield as tf
+from tengfield.electrical import stream
+from tengfield.electrical.stream import StreamedWaveforms
+
+import plate_model as fx
+
+RUN = {"duration_s": 0.6, "settle_periods": 3, "sample_rate_hz": 5000.0}
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("surrogates")
+
+
+def _both(cache, monkeypatch, chunk_rows, **sections):
+    scene = fx.scene_with(run=RUN, **sections)
+    whole = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    monkeypatch.setattr(stream, "STREAM_ROWS", 10)
+    monkeypatch.setattr(stream, "CHUNK_ROWS", chunk_rows)
+    streamed = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    monkeypatch.undo()
+    return whole, streamed
+
+
+def _same_numbers(a, b, path="", rel=1e-12):
+    """Equal JSON-like trees: floats to ``rel`` relative (of the larger), the rest exactly."""
+    if isinstance(a, dict):
+        assert set(a) == set(b), path
+        for k in a:
+            _same_numbers(a[k], b[k], f"{path}.{k}", rel)
+    elif isinstance(a, (list, tuple)):
+        assert len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b)):
+            _same_numbers(x, y, f"{path}[{i}]", rel)
+    elif isinstance(a, float) and isinstance(b, float):
+        if math.isnan(a):
+            assert math.isnan(b), path
+        else:
+            assert abs(a - b) <= rel * max(abs(a), abs(b)), (path, a, b)
+    else:
+        assert a == b, (path, a, b)
+
+
+def _summary_without_timing(summary):
+    out = dict(summary)
+    stages = {k: dict(v) for k, v in out.pop("stages").items()}
+    return out, stages
+
+
+@pytest.mark.parametrize("sections", [
+    {"circuit": {"kind": "open"}},
+    {"circuit": {"kind": "open", "parallel_capacitance_pF": 338.0}},
+    {"circuit": {"kind": "short"}},
+    {"circuit": {"kind": "load", "load_ohm": 1e8}},
+    {"circuit": {"kind": "load", "load_ohm": 3e9, "parallel_capacitance_pF": 338.0}},
+    {"circuit": {"kind": "load", "load_ohm": 1e5}},       # τ far below the output step
+], ids=["open", "open-Cp", "short", "load", "load-Cp", "load-fast"])
+@pytest.mark.parametrize("chunk_rows", [97, 1024])
+def test_streamed_equals_whole(cache, monkeypatch, sections, chunk_rows):
+    whole, streamed = _both(cache, monkeypatch, chunk_rows, **sections)
+    assert not isinstance(whole.waveforms, StreamedWaveforms)
+    assert isinstance(streamed.waveforms, StreamedWaveforms)
+    rows = len(whole.t)
+    assert rows > 2 * chunk_rows                      # many chunks
+    assert streamed.stages["circuit"].details["streamed_chunks"] == -(-rows // chunk_rows)
+    # every column bit-identical, also read chunk by chunk
+    assert list(streamed.waveforms) == [c for c in list(streamed.waveforms)
+                                        if c in whole.waveforms]
+    assert set(streamed.waveforms) == set(whole.waveforms)
+    chunks = list(streamed.waveforms.chunks())
+    for column, values in whole.waveforms.items():
+        np.testing.assert_array_equal(streamed.waveforms[column], values, err_msg=column)
+        np.testing.assert_array_equal(np.concatenate([c[column] for c in chunks]), values,
+                                      err_msg=column)
+    assert streamed.peaks == whole.peaks              # the same extremes, bit for bit
+    assert streamed.peak == whole.peak
+    a, sa = _summary_without_timing(whole.summary)
+    b, sb = _summary_without_timing(streamed.summary)
+    _same_numbers(a, b)
+    assert sa["circuit"]["status"] == sb["circuit"]["status"]
+    # the last 5 periods kept whole: the rows waveforms.png draws
+    t = np.asarray(whole.t)
+    last = t >= t[-1] - 5.0 * whole.scene.excitation.period
+    for column, values in streamed.waveforms.tail.items():
+        np.testing.assert_array_equal(values, np.asarray(whole.waveforms[column])[last])
+
+
+def test_the_load_books_are_the_whole_runs(cache, monkeypatch):
+    """The load's mean power and energy balance from sums over chunks (1e-12), and the
+    V-Q loop of the last period (vq.png) from the kept tail, bit for bit."""
+    whole, streamed = _both(cache, monkeypatch, 64, circuit={"kind": "load", "load_ohm": 1e8})
+    wl, sl = whole.summary["load"], streamed.summary["load"]
+    assert sl["mean_power_W"] > 0
+    assert sl["integration_points"] == wl["integration_points"]
+    for key in ("mean_power_W", "V_load_peak_to_peak_V", "I_load_peak_to_peak_A"):
+        assert sl[key] == pytest.approx(wl[key], rel=1e-12, abs=0)
+    for key, value in wl["energy_balance_J"].items():
+        assert sl["energy_balance_J"][key] == pytest.approx(value, rel=1e-12, abs=0)
+    (qa, va, area_a), (qb, vb, area_b) = whole.extras["_vq"]["load"], \
+        streamed.extras["_vq"]["load"]
+    np.testing.assert_array_equal(qa, qb)
+    np.testing.assert_array_equal(va, vb)
+    assert area_a == area_b
+
+
+def test_envelope_brackets_every_sample(cache, monkeypatch):
+    """The min/max envelope built while streaming holds every sample of its bin."""
+    whole, streamed = _both(cache, monkeypatch, 200, circuit={"kind": "load", "load_ohm": 1e8})
+    env = streamed.extras["_envelope"]
+    lo, hi = env["V_load_V"]
+    v = np.asarray(whole.waveforms["V_load_V"])
+    assert np.min(lo) == np.min(v) and np.max(hi) == np.max(v)
+    assert np.all(lo <= hi) and len(env["time_s"]) == len(lo)
+
+
+def test_short_runs_keep_whole_arrays(cache):
+    """Below STREAM_ROWS nothing changes: RunResult.waveforms is a dict of arrays."""
+    r = tf.run(fx.scene_with(run=RUN), cache_dir=cache, solve=fx.plate_model_solve)
+    assert isinstance(r.waveforms, dict)
