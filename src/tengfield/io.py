@@ -66,9 +66,11 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
     if plots:
         from .plotting.waveforms import plot_surrogate, plot_waveforms, visited_positions
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
-        t = np.asarray(result.waveforms["time_s"])
+        # a streamed run (tengfield.electrical.stream) kept them: its columns are not held
+        source = getattr(result.waveforms, "tail", None) or result.waveforms
+        t = np.asarray(source["time_s"])
         last = t >= t[-1] - shown                          # sent, not the whole run
-        waveforms = {k: np.asarray(v)[last] for k, v in result.waveforms.items()}
+        waveforms = {k: np.asarray(v)[last] for k, v in source.items()}
         written.append(_figure(
             figures, plot_waveforms, waveforms, path=out / "waveforms.png",
             title=run_title(result) + ", last 5 periods",
@@ -137,7 +139,10 @@ def write_run_hdf5(path: str | Path, result) -> Path:
 
     waveforms = result.waveforms
     columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
-    tables = {"waveforms": {c: waveforms[c] for c in columns}}
+    if hasattr(waveforms, "chunks"):   # a streamed run: written a chunk at a time
+        tables = {"waveforms": _WithoutRead(waveforms, columns)}
+    else:
+        tables = {"waveforms": {c: waveforms[c] for c in columns}}
     tables.update(dynamics_tables(result.dynamics, result.scene))
     return write_tables(path, tables, attrs={
         "tengfield_version": __version__, "scene_text": result.scene.text or "",
@@ -145,6 +150,27 @@ def write_run_hdf5(path: str | Path, result) -> Path:
         "layout": "one group per table (waveforms, trajectory, impacts[, contacts]), one "
                   "dataset per column with its 'units' attribute; trajectory columns equal "
                   "to waveform columns are hard links"})
+
+
+class _WithoutRead:
+    """The chunked columns of a streamed run that run.h5 writes (``columns``, in order)."""
+
+    def __init__(self, waveforms, columns):
+        self._w, self._columns = waveforms, [c for c in columns if c in waveforms]
+        self.rows = waveforms.rows
+
+    def __iter__(self):
+        return iter(self._columns)
+
+    def __contains__(self, name) -> bool:
+        return name in self._columns
+
+    def source_of(self, name):
+        return self._w.source_of(name)
+
+    def chunks(self):
+        for chunk in self._w.chunks():
+            yield {c: chunk[c] for c in self._columns}
 
 
 def dynamics_tables(dynamics, scene) -> dict:

@@ -178,3 +178,40 @@ def test_run_trajectory_csv_does_not_repeat_the_waveform_columns(tmp_path):
     tio.write_dynamics_files(result.dynamics, result.scene, tmp_path / "dyn", plots=False)
     assert list(pd.read_csv(tmp_path / "dyn" / "trajectory.csv").columns) == [
         "time_s", "gap_m", "gap_velocity_m_per_s", "table_m"]
+
+
+@pytest.mark.parametrize("kind", ["open", "load"])
+def test_a_streamed_run_writes_the_same_run_h5(tmp_path, monkeypatch, kind):
+    """A long run's electrical stage streams (tengfield.electrical.stream: forced here with
+    tiny chunks): run.h5 holds the same numbers as the whole-record run's, bit for bit,
+    written a chunk at a time (the trajectory columns still hard links), and its
+    figures (the last 5 periods, the V-Q loop) are drawn from what the stream kept."""
+    from tengfield.electrical import stream
+
+    scene = fx.scene_with(run={"duration_s": 1.0, "settle_periods": 2,
+                               "output_format": "hdf5"},
+                          circuit={"kind": kind, "load_ohm": 1e8})
+    whole = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    tio.write_run_outputs(whole, tmp_path / "whole", plots=True)
+    monkeypatch.setattr(stream, "STREAM_ROWS", 100)
+    monkeypatch.setattr(stream, "CHUNK_ROWS", 3000)
+    monkeypatch.setattr(io_hdf5, "CHUNK_ROWS", 1000)
+    streamed = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    assert isinstance(streamed.waveforms, stream.StreamedWaveforms)
+    written = tio.write_run_outputs(streamed, tmp_path / "streamed", plots=True)
+    written += tio.write_dynamics_outputs(streamed, tmp_path / "streamed", plots=True)
+    names = {p.name for p in written}
+    assert {"run.h5", "waveforms.png", "summary.json"} <= names
+    if kind == "load":
+        assert "vq.png" in names
+    a = io_hdf5.read_tables(tmp_path / "whole" / "run.h5")
+    b = io_hdf5.read_tables(tmp_path / "streamed" / "run.h5")
+    assert list(a["waveforms"]) == list(b["waveforms"])
+    for column, values in a["waveforms"].items():
+        np.testing.assert_array_equal(b["waveforms"][column], values, err_msg=column)
+    with h5py.File(tmp_path / "streamed" / "run.h5", "r") as f:
+        assert f["trajectory/time_s"].id == f["waveforms/time_s"].id
+        assert f["waveforms/V_oc_V"].chunks == (1000,)
+        assert f["waveforms"].attrs["rows"] == len(whole.t)
+        summary = json.loads(f.attrs["summary_json"])
+    assert summary["peak_to_peak"] == whole.summary["peak_to_peak"]

@@ -35,10 +35,10 @@ from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times,
                         impact_values, peak_quantities, scene_terminal_waveforms,
                         steady_window_index)
 
-#: runs with more output samples than this stream their electrical stage
-STREAM_ROWS = 1 << 21
-#: output rows per chunk (4 of run.h5's chunks): ~60 MB of temporaries for a load
-CHUNK_ROWS = 1 << 20
+#: runs with more output samples than this (52 s at 20 kHz) stream their electrical stage
+STREAM_ROWS = 1 << 20
+#: output rows per chunk (one of run.h5's chunks): ~30 MB of temporaries
+CHUNK_ROWS = 1 << 18
 #: the ``[circuit] kind`` values streamed (others keep whole-record arrays)
 STREAMED = ("open", "short", "load")
 #: time bins of the min/max envelope of a streamed run (a figure's pixel columns)
