@@ -129,3 +129,52 @@ def test_short_runs_keep_whole_arrays(cache):
     """Below STREAM_ROWS nothing changes: RunResult.waveforms is a dict of arrays."""
     r = tf.run(fx.scene_with(run=RUN), cache_dir=cache, solve=fx.plate_model_solve)
     assert isinstance(r.waveforms, dict)
+
+
+#: a small store and chip levels the plate model's cell reaches in 0.6 s (the chip
+#: switches on and off several times; tests/harvest/test_harvest_run.py)
+SMALL_CHIP = {"kind": "rectifier", "storage_capacitance_uF": 1e-4, "pmic": "uvlo",
+              "pmic_quiescent_current_A": 0.0, "uvlo_rising_V": 20.0, "uvlo_falling_V": 10.0,
+              "pmic_output_V": 3.3, "pmic_load_ohm": 1e7, "pmic_shunt_V": 100.0}
+
+
+def _close(a, b, err_msg=""):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    scale = float(np.max(np.abs(a))) if a.size else 0.0
+    np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12 * scale, err_msg=err_msg)
+
+
+@pytest.mark.parametrize("circuit", [
+    {"kind": "rectifier"},
+    SMALL_CHIP,
+    {**SMALL_CHIP, "parallel_capacitance_pF": 338.0, "pmic_quiescent_current_A": 1e-9},
+], ids=["rectifier", "rectifier-uvlo", "rectifier-uvlo-Cp-quiescent"])
+@pytest.mark.parametrize("chunk_rows", [97, 1024])
+@pytest.mark.filterwarnings("ignore:rectifier. numerical_dissipation_J")
+def test_streamed_rectifier_equals_whole(cache, monkeypatch, circuit, chunk_rows):
+    """The rectifier (and its UVLO chip) streamed: the harvester's state carried from
+    chunk to chunk; columns, the rectifier block (switch counts, crossings, books) and
+    the V-Q loop equal the whole record's (1e-12: the bridge charge is summed per chunk);
+    charging.png's envelope holds the record's extremes."""
+    whole, streamed = _both(cache, monkeypatch, chunk_rows, circuit=circuit)
+    assert isinstance(streamed.waveforms, StreamedWaveforms)
+    for column, values in whole.waveforms.items():
+        _close(values, streamed.waveforms[column], err_msg=column)
+    np.testing.assert_array_equal(streamed.waveforms["pmic_on"], whole.waveforms["pmic_on"])
+    assert streamed.peaks == whole.peaks
+    a, _ = _summary_without_timing(whole.summary)
+    b, _ = _summary_without_timing(streamed.summary)
+    _same_numbers(a, b)
+    rect = streamed.summary["rectifier"]
+    if circuit is SMALL_CHIP:
+        assert rect["chip_switch_on_count"] >= 2           # the chip did switch
+        assert math.isfinite(rect["time_to_uvlo_rising_V_s"])
+    (qa, va, area_a), (qb, vb, area_b) = whole.extras["_vq"]["rectifier"], \
+        streamed.extras["_vq"]["rectifier"]
+    _close(qa, qb)
+    _close(va, vb)
+    assert area_b == pytest.approx(area_a, rel=1e-12)
+    fine, env = whole.extras["_fine"], streamed.extras["_fine"]
+    assert np.max(env.store_voltage) == np.max(fine.store_voltage)
+    assert np.min(env.store_voltage) == np.min(fine.store_voltage)
+    assert np.all(np.diff(env.time) >= 0) and env.chip_on.any() == fine.chip_on.any()

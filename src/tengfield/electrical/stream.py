@@ -40,7 +40,7 @@ STREAM_ROWS = 1 << 20
 #: output rows per chunk (one of run.h5's chunks): ~30 MB of temporaries
 CHUNK_ROWS = 1 << 18
 #: the ``[circuit] kind`` values streamed (others keep whole-record arrays)
-STREAMED = ("open", "short", "load")
+STREAMED = ("open", "short", "load", "rectifier")
 #: time bins of the min/max envelope of a streamed run (a figure's pixel columns)
 ENVELOPE_BINS = 2000
 #: excitation periods kept whole at the end of a streamed run (waveforms.png, V-Q loop)
@@ -54,8 +54,10 @@ def streams(scene, dynamics, curves) -> bool:
     """Whether the electrical stage of ``scene`` along ``dynamics`` is streamed: more
     than :data:`STREAM_ROWS` samples, a kind in :data:`STREAMED`, the ball on the axis
     (no (z, r) surrogate), a dynamics result with its table column."""
-    return (len(dynamics.t) > STREAM_ROWS and scene.circuit.kind in STREAMED
+    kind = scene.circuit.kind
+    return (len(dynamics.t) > STREAM_ROWS and kind in STREAMED
             and (curves is None or not curves.radial)
+            and not (kind == "rectifier" and curves is None)     # nothing to rectify
             and getattr(dynamics, "table", None) is not None)
 
 
@@ -85,15 +87,18 @@ class StreamedRun:
 
     def _circuit(self):
         """A fresh chunked circuit (None: nothing to integrate)."""
+        start = float(self.elapsed[self.window])
+        if self.entry.name == "rectifier":
+            from .circuits.rectifier import RectifierChunks
+            return RectifierChunks(self.scene, self.dynamics, self.curves, start, ENVELOPE_BINS)
         if not self.entry.has_load or self.curves is None:
             return None
         from .circuits.load import LoadChunks
-        return LoadChunks(self.scene, self.dynamics, self.curves,
-                          float(self.elapsed[self.window]), self.chunk_rows)
+        return LoadChunks(self.scene, self.dynamics, self.curves, start, self.chunk_rows)
 
     def chunks(self):
         """Yield ``(i0, i1, {column: array})`` for every chunk of output rows, in order."""
-        load = self._circuit()
+        load = self._circuit()       # the circuit's state, carried from chunk to chunk
         dyn, scene = self.dynamics, self.scene
         for i0, i1 in chunk_bounds(self.rows, self.chunk_rows):
             gap = np.asarray(dyn.gap[i0:i1], dtype=float)
@@ -112,7 +117,7 @@ class StreamedRun:
                 out.update({c: np.zeros(i1 - i0) for c in self.entry.columns})
             if self.read_at_samples:
                 out[READ_COLUMN] = out[self.entry.read_column]
-            self._last_load = load
+            self._last_circuit = load
             yield i0, i1, out
 
     def reduce(self) -> dict:
@@ -132,7 +137,7 @@ class StreamedRun:
                                          side="left"))
         tail: dict = {}
         envelope = _Envelope(self.elapsed, self.columns)
-        self._last_load = None
+        self._last_circuit = None
         for i0, i1, cols in self.chunks():
             envelope.add(i0, i1, cols)
             if i1 > tail_start:
@@ -159,8 +164,9 @@ class StreamedRun:
                 lo[name] = min(lo[name], float(np.min(x)))
                 hi[name] = max(hi[name], float(np.max(x)))
                 top[name] = max(top[name], float(np.max(np.abs(x))))
-        load = self._last_load
-        return {"extremes": {"peak_to_peak": {n: hi[n] - lo[n] for n in quantities},
+        circuit = self._last_circuit
+        load = circuit if self.entry.has_load else None
+        return {"circuit": circuit,"extremes": {"peak_to_peak": {n: hi[n] - lo[n] for n in quantities},
                              "peak": dict(top)},
                 "max_gap": max_gap, "tail": {c: np.concatenate(v) for c, v in tail.items()},
                 "load": None if load is None else load.numbers(),
@@ -272,6 +278,20 @@ def streamed_stage(scene, dynamics, curves) -> tuple:
                          f"{run.chunk_rows} rows)",
                          {"energy_balance_relative_residual": balance_residual(load)},
                          data=data)
+    elif entry.name == "rectifier":
+        rect = reduced["circuit"]
+        books = rect.last.balance()
+        c = scene.circuit
+        ran = CircuitRun({}, f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} "
+                         f"uF, pmic = {c.pmic!r} (streamed: "
+                         f"{len(chunk_bounds(run.rows, run.chunk_rows))} chunks of "
+                         f"{run.chunk_rows} rows)",
+                         {"integration_points": int(rect.points),
+                          "energy_balance_relative_residual": max(
+                              books["terminal_residual"], books["bridge_residual"],
+                              books["store_residual"])},
+                         data={"fine": rect.last_period(), "numbers": rect.numbers(),
+                               "charging": rect.charging()})
     else:
         ran = entry.run(scene, dynamics, curves)
     return waveforms, ran, reduced["extremes"], reduced
