@@ -56,7 +56,9 @@ def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
                       figures=None) -> list[Path]:
     """waveforms.csv, summary.json and, with ``plots``, waveforms.png and surrogate.png
-    of a :class:`tengfield.pipeline.RunResult` (see also :func:`write_dynamics_outputs`).
+    of a :class:`tengfield.pipeline.RunResult` (see also :func:`write_dynamics_outputs`);
+    a streamed long run (:mod:`tengfield.electrical.stream`) also record.png, the whole
+    run as a min/max envelope, and its tables a chunk at a time.
 
     With ``figures`` (a :class:`tengfield.plotting.process.FigureProcess`) the figures
     are sent to it and complete after ``figures.finish()``, which the caller calls."""
@@ -75,6 +77,13 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
             figures, plot_waveforms, waveforms, path=out / "waveforms.png",
             title=run_title(result) + ", last 5 periods",
             parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
+        envelope = (getattr(result, "extras", None) or {}).get("_envelope")
+        if envelope is not None:      # a streamed run: the whole record, min/max per bin
+            from .plotting.record import plot_record
+            written.append(_figure(
+                figures, plot_record, envelope, path=out / "record.png",
+                title=run_title(result) + ", whole run: min/max per time bin",
+                parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
                                    path=out / "surrogate.png", cells=result.scene.device.cells,

@@ -63,6 +63,16 @@ class RunResult:
     ``curves``: the pieces the plots need (``table``/``curves`` None when
     the field was not needed). ``t``, ``V_oc``, ``Q_sc``, ``I_sc`` are the
     waveform columns by short name.
+
+    A long run (more than :data:`tengfield.electrical.stream.STREAM_ROWS` samples, 2^20;
+    circuit kinds open, short, load, rectifier) computes its electrical stage a chunk at a
+    time (:mod:`tengfield.electrical.stream`): its ``waveforms`` is then a read-only
+    mapping, not a dict of arrays. The trajectory columns are the dynamics' arrays; the
+    first request of another column (``r.V_oc``, ``r.waveforms["I_sc_A"]``,
+    ``to_dataframe()``) computes the columns again, whole (memory proportional to the run,
+    as before); ``r.waveforms.chunks()`` yields them a chunk at a time, ``.tail`` holds
+    the last 5 periods (``plot()``), ``.envelope`` a min/max envelope of the run
+    (docs/long_runs.md). ``summary``, ``peaks``, ``peak`` are the same numbers either way.
     """
     scene: Any
     waveforms: dict[str, np.ndarray]
@@ -102,6 +112,9 @@ class RunResult:
         from .plotting.waveforms import run_title, waveforms_figure   # the edge, on use
 
         waveforms, title = self.waveforms, run_title(self)
+        tail = getattr(waveforms, "tail", None)     # a streamed run kept its last 5 periods
+        if tail is not None and last_periods is not None and last_periods <= 5.0:
+            waveforms = tail
         if last_periods is not None:
             t = np.asarray(waveforms["time_s"])
             last = t >= t[-1] - last_periods * self.scene.excitation.period

@@ -222,5 +222,7 @@ def test_a_streamed_run_writes_the_same_run_h5(tmp_path, monkeypatch, kind):
         assert f["waveforms"].attrs["rows"] == len(whole.t)
         summary = json.loads(f.attrs["summary_json"])
     assert summary["peak_to_peak"] == whole.summary["peak_to_peak"]
+    # the same figures, and record.png: the whole run as a min/max envelope
     assert sorted(p.name for p in (tmp_path / "streamed").iterdir() if p.suffix == ".png") \
-        == sorted(p.name for p in (tmp_path / "whole").iterdir() if p.suffix == ".png")
+        == sorted(["record.png"] + [p.name for p in (tmp_path / "whole").iterdir()
+                                    if p.suffix == ".png"])
