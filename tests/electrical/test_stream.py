@@ -178,3 +178,13 @@ def test_streamed_rectifier_equals_whole(cache, monkeypatch, circuit, chunk_rows
     assert np.max(env.store_voltage) == np.max(fine.store_voltage)
     assert np.min(env.store_voltage) == np.min(fine.store_voltage)
     assert np.all(np.diff(env.time) >= 0) and env.chip_on.any() == fine.chip_on.any()
+
+
+def test_series_rc_keeps_whole_arrays(cache, monkeypatch):
+    """series-rc does not stream yet (Circuit.can_stream): a long run keeps the whole
+    record and gives its usual numbers."""
+    whole, forced = _both(cache, monkeypatch, 97, circuit={"kind": "series-rc",
+                                                          "load_ohm": 1e8})
+    assert isinstance(forced.waveforms, dict) and "streamed_chunks" not in \
+        forced.stages["circuit"].details
+    assert forced.summary["load"]["mean_power_W"] == whole.summary["load"]["mean_power_W"]

@@ -1,14 +1,18 @@
 """The electrical stage of a long run a chunk of output rows at a time: memory bounded by
 the chunk, not by the run.
 
-A run with more than :data:`STREAM_ROWS` output samples, a circuit kind in
-:data:`STREAMED` and the ball on the axis is evaluated here instead of as whole-record
-arrays (:func:`tengfield.pipeline.electrical_stage` decides, :func:`streams`):
+A run with more than :data:`STREAM_ROWS` output samples, a circuit kind that can
+(:meth:`~tengfield.electrical.circuits.Circuit.can_stream`: open, short, load,
+rectifier; series-rc not yet) and the ball on the axis is evaluated here instead of as
+whole-record arrays (:func:`tengfield.pipeline.electrical_stage` decides,
+:func:`streams`); the entry's :meth:`~tengfield.electrical.circuits.Circuit.chunked`
+carries its state from chunk to chunk and its
+:meth:`~tengfield.electrical.circuits.Circuit.streamed` gives the stage's record:
 
 * :class:`StreamedRun` walks the output rows in chunks of :data:`CHUNK_ROWS`: the
   trajectory rows, the terminal (V_OC, Q_SC, I_SC, V_read) and the circuit's columns
-  (:class:`tengfield.electrical.circuits.load.LoadChunks` carries the load's state from
-  one chunk to the next), and :meth:`StreamedRun.reduce` takes in one pass what the
+  (:class:`~tengfield.electrical.circuits.load.LoadChunks`,
+  :class:`~tengfield.electrical.circuits.rectifier.RectifierChunks`), and :meth:`StreamedRun.reduce` takes in one pass what the
   summary needs as running reductions: peak and peak-to-peak over the steady window
   with the impact instants (:func:`tengfield.electrical.waveforms.impact_values`), the
   largest gap, the load's energy sums, the last 5 periods (waveforms.png, the V-Q loop)
@@ -39,8 +43,6 @@ from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times,
 STREAM_ROWS = 1 << 20
 #: output rows per chunk (one of run.h5's chunks): ~30 MB of temporaries
 CHUNK_ROWS = 1 << 18
-#: the ``[circuit] kind`` values streamed (others keep whole-record arrays)
-STREAMED = ("open", "short", "load", "rectifier")
 #: time bins of the min/max envelope of a streamed run (a figure's pixel columns)
 ENVELOPE_BINS = 2000
 #: excitation periods kept whole at the end of a streamed run (waveforms.png, V-Q loop)
@@ -52,12 +54,12 @@ _TRAJECTORY = {"time_s": "t", "gap_m": "gap", "gap_velocity_m_per_s": "gap_veloc
 
 def streams(scene, dynamics, curves) -> bool:
     """Whether the electrical stage of ``scene`` along ``dynamics`` is streamed: more
-    than :data:`STREAM_ROWS` samples, a kind in :data:`STREAMED`, the ball on the axis
+    than :data:`STREAM_ROWS` samples, a kind that can (:meth:`Circuit.can_stream`: open,
+    short, load, rectifier; series-rc keeps whole arrays), the ball on the axis
     (no (z, r) surrogate), a dynamics result with its table column."""
-    kind = scene.circuit.kind
-    return (len(dynamics.t) > STREAM_ROWS and kind in STREAMED
+    return (len(dynamics.t) > STREAM_ROWS
+            and circuit_for(scene).can_stream(scene, curves)
             and (curves is None or not curves.radial)
-            and not (kind == "rectifier" and curves is None)     # nothing to rectify
             and getattr(dynamics, "table", None) is not None)
 
 
@@ -87,14 +89,8 @@ class StreamedRun:
 
     def _circuit(self):
         """A fresh chunked circuit (None: nothing to integrate)."""
-        start = float(self.elapsed[self.window])
-        if self.entry.name == "rectifier":
-            from .circuits.rectifier import RectifierChunks
-            return RectifierChunks(self.scene, self.dynamics, self.curves, start, ENVELOPE_BINS)
-        if not self.entry.has_load or self.curves is None:
-            return None
-        from .circuits.load import LoadChunks
-        return LoadChunks(self.scene, self.dynamics, self.curves, start, self.chunk_rows)
+        return self.entry.chunked(self.scene, self.dynamics, self.curves,
+                                  float(self.elapsed[self.window]), self.chunk_rows)
 
     def chunks(self):
         """Yield ``(i0, i1, {column: array})`` for every chunk of output rows, in order."""
@@ -113,7 +109,7 @@ class StreamedRun:
                 out[READ_COLUMN] = terminal["V_read"]
             if load is not None:
                 out.update(load.chunk(i0, i1))
-            elif self.entry.has_load:           # Q_SC = 0: nothing moves
+            elif self.entry.columns:            # Q_SC = 0: nothing moves
                 out.update({c: np.zeros(i1 - i0) for c in self.entry.columns})
             if self.read_at_samples:
                 out[READ_COLUMN] = out[self.entry.read_column]
@@ -123,7 +119,7 @@ class StreamedRun:
     def reduce(self) -> dict:
         """One pass over the chunks: what the summary and the figures need (see the module
         docstring): ``extremes`` ({"peak_to_peak", "peak"} by short name), ``max_gap``
-        [m], ``load`` (the load's numbers or None), ``tail`` (the columns over the last
+        [m], ``circuit`` (the chunked circuit after the last chunk, or None), ``tail`` (the columns over the last
         :data:`TAIL_PERIODS` periods, with ``_elapsed``), ``envelope``."""
         scene, w = self.scene, self.window
         quantities = peak_quantities(scene)
@@ -164,12 +160,10 @@ class StreamedRun:
                 lo[name] = min(lo[name], float(np.min(x)))
                 hi[name] = max(hi[name], float(np.max(x)))
                 top[name] = max(top[name], float(np.max(np.abs(x))))
-        circuit = self._last_circuit
-        load = circuit if self.entry.has_load else None
-        return {"circuit": circuit,"extremes": {"peak_to_peak": {n: hi[n] - lo[n] for n in quantities},
+        return {"circuit": self._last_circuit,
+                "extremes": {"peak_to_peak": {n: hi[n] - lo[n] for n in quantities},
                              "peak": dict(top)},
                 "max_gap": max_gap, "tail": {c: np.concatenate(v) for c, v in tail.items()},
-                "load": None if load is None else load.numbers(),
                 "column_peak_to_peak": {c: b[1] - b[0] for c, b in own.items()},
                 "envelope": envelope.result(self.dynamics)}
 
@@ -261,39 +255,11 @@ def streamed_stage(scene, dynamics, curves) -> tuple:
     :meth:`StreamedRun.reduce`'s record."""
     run = StreamedRun(scene, dynamics, curves)
     reduced = run.reduce()
-    entry = run.entry
     waveforms = StreamedWaveforms(run, reduced)
-    if entry.has_load:
-        load = reduced["load"]
-        if load is None:                        # Q_SC = 0
-            load = {"mean_power_W": 0.0, "delivered_energy_J": 0.0, "dissipated_energy_J": 0.0,
-                    "stored_energy_change_J": 0.0, "integration_points": run.rows,
-                    "time_constant_s": 0.0}
-        from .circuits.load import balance_residual
-        tail = reduced["tail"]
-        data = dict(load, V_load=tail["V_load_V"], I_load=tail["I_load_A"],
-                    P_load=tail["P_load_W"])
-        ran = CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm (streamed: "
-                         f"{len(chunk_bounds(run.rows, run.chunk_rows))} chunks of "
-                         f"{run.chunk_rows} rows)",
-                         {"energy_balance_relative_residual": balance_residual(load)},
-                         data=data)
-    elif entry.name == "rectifier":
-        rect = reduced["circuit"]
-        books = rect.last.balance()
-        c = scene.circuit
-        ran = CircuitRun({}, f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} "
-                         f"uF, pmic = {c.pmic!r} (streamed: "
-                         f"{len(chunk_bounds(run.rows, run.chunk_rows))} chunks of "
-                         f"{run.chunk_rows} rows)",
-                         {"integration_points": int(rect.points),
-                          "energy_balance_relative_residual": max(
-                              books["terminal_residual"], books["bridge_residual"],
-                              books["store_residual"])},
-                         data={"fine": rect.last_period(), "numbers": rect.numbers(),
-                               "charging": rect.charging()})
-    else:
-        ran = entry.run(scene, dynamics, curves)
+    note = (f" (streamed: {len(chunk_bounds(run.rows, run.chunk_rows))} chunks of "
+            f"{run.chunk_rows} rows)")
+    ran = run.entry.streamed(scene, dynamics, curves, reduced["circuit"], reduced["tail"],
+                             note)
     return waveforms, ran, reduced["extremes"], reduced
 
 

@@ -301,6 +301,22 @@ class Load(Circuit):
         numbers, loop = resistive_loop(scene, run.data, t, scene.excitation.period)
         return {"energy_per_cycle": numbers, "_vq": {"load": loop}}
 
+    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+        return None if curves is None else LoadChunks(scene, dynamics, curves, window_start,
+                                                      chunk_rows)
+
+    def streamed(self, scene, dynamics, curves, chunked, tail, note) -> CircuitRun:
+        if chunked is None:                      # Q_SC = 0: nothing moves
+            load = {k: v for k, v in no_charge(dynamics).items()
+                    if not isinstance(v, np.ndarray)}
+        else:
+            load = chunked.numbers()
+        data = dict(load, V_load=tail["V_load_V"], I_load=tail["I_load_A"],
+                    P_load=tail["P_load_W"])
+        return CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm{note}",
+                          {"energy_balance_relative_residual": balance_residual(load)},
+                          data=data)
+
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:
         if curves is None:
             return super().array_identical(scaled, dynamics, curves, waves)

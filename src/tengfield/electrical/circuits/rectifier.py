@@ -456,6 +456,24 @@ class Rectifier(Circuit):
                  books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
             data=rect)
 
+    def can_stream(self, scene, curves) -> bool:
+        return curves is not None            # Q_SC = 0: the whole path's zeros, skipped
+
+    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+        return RectifierChunks(scene, dynamics, curves, window_start)
+
+    def streamed(self, scene, dynamics, curves, chunked, tail, note) -> CircuitRun:
+        books = chunked.last.balance()
+        c = scene.circuit
+        return CircuitRun(
+            {}, f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} uF, "
+                f"pmic = {c.pmic!r}{note}",
+            {"integration_points": int(chunked.points),
+             "energy_balance_relative_residual": max(
+                 books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
+            data={"fine": chunked.last_period(), "numbers": chunked.numbers(),
+                  "charging": chunked.charging()})
+
     def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
         """The bridge's V-Q loop, summary.json's ``rectifier`` block and charging.png's
         record (no resistive-load loop: a rectifier run has no load to compare)."""

@@ -102,6 +102,9 @@ class SeriesRC(Load):
     fit_load = False             # fit's forward model is the R ∥ C_p load, not R + C_s
     fit_columns = Circuit.fit_columns
 
+    def can_stream(self, scene, curves) -> bool:
+        return False     # not yet: its whole-run choice of form (DEFICIT_FORM_RATIO)
+
     def run(self, scene, dynamics, curves) -> CircuitRun:
         result = steady_series(scene, dynamics, curves)
         c = scene.circuit
