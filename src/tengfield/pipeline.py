@@ -376,8 +376,8 @@ def _streamed_stage(scene, dynamics, curves, table, stages) -> ElectricalStage:
                               {**ran.details, "streamed_chunks": len(stream.chunk_bounds(
                                   waveforms.rows, waveforms._run.chunk_rows))})
     summary = _summary(scene, dynamics, waveforms, stages, table, extremes=extremes,
-                       circuit_blocks=lambda mask: stream.streamed_summary_blocks(
-                           scene, ran, reduced, waveforms), entry=entry)
+                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask),
+                       entry=entry)
     extras: dict = {"_envelope": reduced["envelope"]}
     if curves is not None:
         tail = reduced["tail"]

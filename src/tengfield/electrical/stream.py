@@ -258,22 +258,5 @@ def streamed_stage(scene, dynamics, curves) -> tuple:
     waveforms = StreamedWaveforms(run, reduced)
     note = (f" (streamed: {len(chunk_bounds(run.rows, run.chunk_rows))} chunks of "
             f"{run.chunk_rows} rows)")
-    ran = run.entry.streamed(scene, dynamics, curves, reduced["circuit"], reduced["tail"],
-                             note)
+    ran = run.entry.streamed(scene, dynamics, curves, reduced["circuit"], reduced, note)
     return waveforms, ran, reduced["extremes"], reduced
-
-
-def streamed_summary_blocks(scene, run_record: CircuitRun, reduced: dict,
-                            waveforms: StreamedWaveforms) -> dict:
-    """summary.json's ``load`` block (and ``load_reason``) of a streamed run."""
-    entry = circuit_for(scene)
-    if not entry.has_load:
-        return no_load(scene)
-    from .circuits.load import load_block_of
-    run = waveforms._run
-    settle = float(run.elapsed[run.window] - run.elapsed[0])
-    ext = reduced["column_peak_to_peak"]
-    return {"load": load_block_of(scene, run_record.data, ext["V_load_V"], ext["I_load_A"],
-                                  settle)}
-
-

@@ -107,11 +107,13 @@ class Circuit:
         nothing to integrate; ``window_start`` [s] on the run's own axis."""
         return None
 
-    def streamed(self, scene, dynamics, curves, chunked, tail: dict, note: str) -> CircuitRun:
+    def streamed(self, scene, dynamics, curves, chunked, reduced: dict,
+                 note: str) -> CircuitRun:
         """The :class:`CircuitRun` of a streamed run from ``chunked`` after its last chunk
-        and ``tail`` (the columns over the last periods, with ``_elapsed``): no whole
-        columns; ``data`` what :meth:`summary` and :meth:`cycle` read. ``note`` ends
-        the stage text."""
+        and ``reduced`` (:meth:`tengfield.electrical.stream.StreamedRun.reduce`: ``tail``,
+        the columns over the last periods with ``_elapsed``; ``column_peak_to_peak``, this
+        kind's columns over the window): no whole columns; ``data`` what :meth:`summary`
+        and :meth:`cycle` read. ``note`` ends the stage text."""
         run = self.run(scene, dynamics, curves)          # closed forms: no columns
         run.reason += note
         return run

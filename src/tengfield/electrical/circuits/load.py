@@ -135,13 +135,15 @@ class LoadChunks:
     window after ``window_start`` (the run's own axis). Feed every chunk in order to
     :meth:`chunk`; :meth:`numbers` then gives :func:`load_waveforms`' numbers."""
 
-    def __init__(self, scene, dynamics, curves, window_start: float, first_rows: int):
+    def __init__(self, scene, dynamics, curves, window_start: float, first_rows: int,
+                 time_constant: float | None = None):
         self.scene, self.dynamics, self.curves = scene, dynamics, curves
         self.window_start = window_start
         self.t = elapsed_times(dynamics)                  # the dynamics' own array, no copy
         n_cells, c_p = scene.device.cells, scene.circuit.parallel_capacitance
         c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
-        self.tau = scene.circuit.load * c_min
+        # the relaxation points' time constant (fine_terminal's): R (C_min + C_p) here
+        self.tau = scene.circuit.load * c_min if time_constant is None else time_constant
         t = self.t
         self.impacts = impact_elapsed(dynamics, t[0], t[-1])
         head = t[:first_rows + 1]    # (a median over the whole run would copy it)
@@ -155,6 +157,37 @@ class LoadChunks:
 
     def chunk(self, i0: int, i1: int) -> dict:
         """V_load [V], I_load [A], P_load [W] at the output rows ``i0:i1``."""
+        grid, fine, output_index = self.fine(i0, i1)
+        scene = self.scene
+        c_p, load = scene.circuit.parallel_capacitance, scene.circuit.load
+        # Q_SC = 0 and Q_R(0) = -D: the integrator starts from the carried deficit D
+        # exactly and returns -D as its charge (every step as load_waveforms' own)
+        d0 = fine["Q_sc"][0] if self.deficit is None else self.deficit
+        response = circuit.load_response(grid, np.zeros_like(grid), fine["I_sc"], fine["C_T"],
+                                         load, c_p, initial_load_charge=-d0)
+        self.deficit = -response.charge[-1]
+        delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+        stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+        self.add(grid, i0, response.power, delivered, stored)
+        keep = output_index[:i1 - i0]
+        return {"V_load_V": response.voltage[keep], "I_load_A": response.current[keep],
+                "P_load_W": response.power[keep]}
+
+    def add(self, grid, i0: int, dissipated, delivered, stored) -> None:
+        """The chunk's grid points and energy sums over the window (trapezoidal)."""
+        self.points += grid.size - (1 if i0 > 0 else 0)
+        in_window = grid >= self.window_start
+        if in_window.any():
+            g = grid[in_window]
+            stored = stored[in_window]
+            self.sums["dissipated"] += float(trapezoid(dissipated[in_window], g))
+            self.sums["delivered"] += float(trapezoid(delivered[in_window], g))
+            first = self.window or (g[0], stored[0])
+            self.window = (first[0], first[1], g[-1], stored[-1])
+
+    def fine(self, i0: int, i1: int):
+        """``(grid, terminal, output_index)`` of :func:`fine_terminal` over the output rows
+        ``i0:i1`` and the next chunk's first sample (which closes the last step)."""
         scene, dynamics, t_all = self.scene, self.dynamics, self.t
         n = t_all.size
         j1 = min(i1 + 1, n)                     # the next chunk's first sample closes it
@@ -184,28 +217,7 @@ class LoadChunks:
         order = np.lexsort((tag, grid))
         grid, gap, vel = grid[order], gap[order], vel[order]
         output_index = np.flatnonzero(order < t.size)
-        fine = scene_terminal_waveforms(scene, self.curves, gap, vel)
-        c_p, load = scene.circuit.parallel_capacitance, scene.circuit.load
-        # Q_SC = 0 and Q_R(0) = -D: the integrator starts from the carried deficit D
-        # exactly and returns -D as its charge (every step as load_waveforms' own)
-        d0 = fine["Q_sc"][0] if self.deficit is None else self.deficit
-        response = circuit.load_response(grid, np.zeros_like(grid), fine["I_sc"], fine["C_T"],
-                                         load, c_p, initial_load_charge=-d0)
-        self.deficit = -response.charge[-1]
-        self.points += grid.size - (1 if i0 > 0 else 0)
-        in_window = grid >= self.window_start
-        if in_window.any():
-            g = grid[in_window]
-            delivered = circuit.delivered_power(response.voltage, fine["I_sc"],
-                                                fine["dC_T_dt"])
-            stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)[in_window]
-            self.sums["dissipated"] += float(trapezoid(response.power[in_window], g))
-            self.sums["delivered"] += float(trapezoid(delivered[in_window], g))
-            first = self.window or (g[0], stored[0])
-            self.window = (first[0], first[1], g[-1], stored[-1])
-        keep = output_index[:i1 - i0]
-        return {"V_load_V": response.voltage[keep], "I_load_A": response.current[keep],
-                "P_load_W": response.power[keep]}
+        return grid, scene_terminal_waveforms(scene, self.curves, gap, vel), output_index
 
     def numbers(self) -> dict:
         """Mean power [W], the energy books [J] over the window, integration points,
@@ -217,6 +229,20 @@ class LoadChunks:
                 "dissipated_energy_J": self.sums["dissipated"],
                 "stored_energy_change_J": float(s1 - s0),
                 "integration_points": int(self.points), "time_constant_s": self.time_constant}
+
+
+def streamed_load(dynamics, chunked, reduced) -> tuple[dict, dict]:
+    """``(details, data)`` of a streamed load-like run: the numbers of ``chunked``
+    (:class:`LoadChunks`; None: Q_SC = 0), the window's peak-to-peak of its columns and
+    the columns of its last periods (the V-Q loop) from ``reduced``."""
+    if chunked is None:                      # Q_SC = 0: nothing moves
+        load = {k: v for k, v in no_charge(dynamics).items() if not isinstance(v, np.ndarray)}
+    else:
+        load = chunked.numbers()
+    tail = reduced["tail"]
+    data = dict(load, V_load=tail["V_load_V"], I_load=tail["I_load_A"], P_load=tail["P_load_W"],
+                peak_to_peak=reduced["column_peak_to_peak"])
+    return {"energy_balance_relative_residual": balance_residual(load)}, data
 
 
 def steady_load(scene, dynamics, curves) -> dict:
@@ -239,11 +265,14 @@ def resistive_loop(scene, load: dict, t, period: float) -> tuple[dict, tuple]:
 
 def load_block(scene, load: dict, waveforms, mask, **extra) -> dict:
     """summary.json's ``load`` block of a load run (``waveforms``: with the
-    ``LOAD_COLUMNS``; ``mask``: the steady window over its ``time_s``)."""
+    ``LOAD_COLUMNS``; ``mask``: the steady window over its ``time_s``; ``load``'s
+    ``peak_to_peak``, if given, the V_load and I_load ones over that window)."""
     t = waveforms["time_s"]
-    return load_block_of(scene, load, circuit.peak_to_peak(waveforms["V_load_V"][mask]),
-                         circuit.peak_to_peak(waveforms["I_load_A"][mask]),
-                         float(t[mask][0] - t[0]), **extra)
+    pp = load.get("peak_to_peak")          # a streamed run's, taken while it streamed
+    v_pp, i_pp = (pp["V_load_V"], pp["I_load_A"]) if pp is not None else (
+        circuit.peak_to_peak(waveforms["V_load_V"][mask]),
+        circuit.peak_to_peak(waveforms["I_load_A"][mask]))
+    return load_block_of(scene, load, v_pp, i_pp, float(t[mask][0] - t[0]), **extra)
 
 
 def load_block_of(scene, load: dict, v_pp: float, i_pp: float, settle_time: float,
@@ -305,16 +334,9 @@ class Load(Circuit):
         return None if curves is None else LoadChunks(scene, dynamics, curves, window_start,
                                                       chunk_rows)
 
-    def streamed(self, scene, dynamics, curves, chunked, tail, note) -> CircuitRun:
-        if chunked is None:                      # Q_SC = 0: nothing moves
-            load = {k: v for k, v in no_charge(dynamics).items()
-                    if not isinstance(v, np.ndarray)}
-        else:
-            load = chunked.numbers()
-        data = dict(load, V_load=tail["V_load_V"], I_load=tail["I_load_A"],
-                    P_load=tail["P_load_W"])
-        return CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm{note}",
-                          {"energy_balance_relative_residual": balance_residual(load)},
+    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
+        details, data = streamed_load(dynamics, chunked, reduced)
+        return CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm{note}", details,
                           data=data)
 
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:

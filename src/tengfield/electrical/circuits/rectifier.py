@@ -462,7 +462,7 @@ class Rectifier(Circuit):
     def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
         return RectifierChunks(scene, dynamics, curves, window_start)
 
-    def streamed(self, scene, dynamics, curves, chunked, tail, note) -> CircuitRun:
+    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
         books = chunked.last.balance()
         c = scene.circuit
         return CircuitRun(
