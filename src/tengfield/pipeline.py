@@ -65,7 +65,7 @@ class RunResult:
     waveform columns by short name.
 
     A long run (more than :data:`tengfield.electrical.stream.STREAM_ROWS` samples, 2^20;
-    circuit kinds open, short, load, rectifier) computes its electrical stage a chunk at a
+    every circuit kind, the ball on the axis, no ``[array]``) computes its electrical stage a chunk at a
     time (:mod:`tengfield.electrical.stream`): its ``waveforms`` is then a read-only
     mapping, not a dict of arrays. The trajectory columns are the dynamics' arrays; the
     first request of another column (``r.V_oc``, ``r.waveforms["I_sc_A"]``,

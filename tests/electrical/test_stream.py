@@ -66,7 +66,11 @@ def _summary_without_timing(summary):
     {"circuit": {"kind": "load", "load_ohm": 1e8}},
     {"circuit": {"kind": "load", "load_ohm": 3e9, "parallel_capacitance_pF": 338.0}},
     {"circuit": {"kind": "load", "load_ohm": 1e5}},       # τ far below the output step
-], ids=["open", "open-Cp", "short", "load", "load-Cp", "load-fast"])
+    {"circuit": {"kind": "series-rc", "load_ohm": 1e8}},  # C_s large: the deficit form
+    {"circuit": {"kind": "series-rc", "load_ohm": 1e8, "series_capacitance_pF": 1.0,
+                 "parallel_capacitance_pF": 338.0}},      # C_s small: the charge form
+], ids=["open", "open-Cp", "short", "load", "load-Cp", "load-fast", "series-rc",
+        "series-rc-small"])
 @pytest.mark.parametrize("chunk_rows", [97, 1024])
 def test_streamed_equals_whole(cache, monkeypatch, sections, chunk_rows):
     whole, streamed = _both(cache, monkeypatch, chunk_rows, **sections)
@@ -178,13 +182,3 @@ def test_streamed_rectifier_equals_whole(cache, monkeypatch, circuit, chunk_rows
     assert np.max(env.store_voltage) == np.max(fine.store_voltage)
     assert np.min(env.store_voltage) == np.min(fine.store_voltage)
     assert np.all(np.diff(env.time) >= 0) and env.chip_on.any() == fine.chip_on.any()
-
-
-def test_series_rc_keeps_whole_arrays(cache, monkeypatch):
-    """series-rc does not stream yet (Circuit.can_stream): a long run keeps the whole
-    record and gives its usual numbers."""
-    whole, forced = _both(cache, monkeypatch, 97, circuit={"kind": "series-rc",
-                                                          "load_ohm": 1e8})
-    assert isinstance(forced.waveforms, dict) and "streamed_chunks" not in \
-        forced.stages["circuit"].details
-    assert forced.summary["load"]["mean_power_W"] == whole.summary["load"]["mean_power_W"]

@@ -2,8 +2,8 @@
 the chunk, not by the run.
 
 A run with more than :data:`STREAM_ROWS` output samples, a circuit kind that can
-(:meth:`~tengfield.electrical.circuits.Circuit.can_stream`: open, short, load,
-rectifier; series-rc not yet) and the ball on the axis is evaluated here instead of as
+(:meth:`~tengfield.electrical.circuits.Circuit.can_stream`: every kind; a rectifier
+with Q_SC = 0 has nothing to rectify) and the ball on the axis is evaluated here instead of as
 whole-record arrays (:func:`tengfield.pipeline.electrical_stage` decides,
 :func:`streams`); the entry's :meth:`~tengfield.electrical.circuits.Circuit.chunked`
 carries its state from chunk to chunk and its
@@ -54,8 +54,8 @@ _TRAJECTORY = {"time_s": "t", "gap_m": "gap", "gap_velocity_m_per_s": "gap_veloc
 
 def streams(scene, dynamics, curves) -> bool:
     """Whether the electrical stage of ``scene`` along ``dynamics`` is streamed: more
-    than :data:`STREAM_ROWS` samples, a kind that can (:meth:`Circuit.can_stream`: open,
-    short, load, rectifier; series-rc keeps whole arrays), the ball on the axis
+    than :data:`STREAM_ROWS` samples, a kind that can (:meth:`Circuit.can_stream`), the
+    ball on the axis
     (no (z, r) surrogate), a dynamics result with its table column."""
     return (len(dynamics.t) > STREAM_ROWS
             and circuit_for(scene).can_stream(scene, curves)
