@@ -97,9 +97,10 @@ class Circuit:
 
     # -- a long run, a chunk at a time (tengfield.electrical.stream) ------------
     def can_stream(self, scene, curves) -> bool:
-        """Whether a long run of this kind may stream its electrical stage (the closed
-        forms: yes; an entry whose state it cannot carry from chunk to chunk: no)."""
-        return True
+        """Whether a long run of this kind may stream its electrical stage: the closed
+        forms (no columns of its own) may; an entry with columns says so itself, with
+        :meth:`chunked` and :meth:`streamed` (a new kind keeps whole arrays until then)."""
+        return not self.columns
 
     def chunked(self, scene, dynamics, curves, window_start: float, chunk_rows: int):
         """The circuit fed a chunk of output rows at a time (an object with

@@ -330,6 +330,9 @@ class Load(Circuit):
         numbers, loop = resistive_loop(scene, run.data, t, scene.excitation.period)
         return {"energy_per_cycle": numbers, "_vq": {"load": loop}}
 
+    def can_stream(self, scene, curves) -> bool:
+        return True
+
     def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
         return None if curves is None else LoadChunks(scene, dynamics, curves, window_start,
                                                       chunk_rows)
