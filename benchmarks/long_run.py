@@ -12,16 +12,25 @@ Measured (2 shared cores, load average 3-8, surrogate cached). "CSV" = commit 71
 arrays); "streamed" = branch stream (the electrical stage a chunk at a time past 2^20
 samples, docs/long_runs.md):
 
-| case | output CSV | run.h5 | wall CSV / run.h5 / streamed | peak RSS CSV / run.h5 / streamed |
+| case | output CSV | run.h5 | wall CSV / run.h5 | peak RSS CSV / run.h5 |
 |---|---|---|---|---|
-| 100 s (2e6 rows) | 348 MB | 25 MB | 58.9 s / 5.5 s / 7.8 s | 877 MB / 411 MB / 300 MB |
-| 900 s (1.8e7 rows) | 3.14 GB | 260 MB | 147 s / 21 s / 65 s (load 8) | 4.72 GB / 2.03 GB / 0.94 GB |
-| 999 s (2e7 rows) | - | 290 MB | - / 47 s / - | 5.17 GB / 2.23 GB / (not measured) |
-| rectifier + uvlo, 500 s (1e7 rows) | CSV | 141 MB | 118 s / 30 s / 55 s (load 7.5) | 5.41 GB / 5.04 GB / 0.74 GB |
+| 100 s (2e6 rows) | 348 MB | 25 MB | 58.9 s / 5.5 s | 877 MB / 411 MB |
+| 900 s (1.8e7 rows) | 3.14 GB | 260 MB | 147 s / 21 s | 4.72 GB / 2.03 GB |
+| 999 s (2e7 rows) | - | 290 MB | - / 47 s | 5.17 GB / 2.23 GB |
+| rectifier + uvlo, 500 s (1e7 rows) | CSV | 141 MB | 118 s / 30 s | 5.41 GB / 5.04 GB |
 
-The streamed wall times were taken with the machine's load average at 6-8 (the
-run.h5 ones at 3-6): they are not a like-for-like comparison; the streamed stage
-computes the electrical columns twice (once for the summary, once while writing).
+Streamed (branch stream), paired with its parent commit 6631751 in one session (load
+average 2-6; the same run.h5 files):
+
+| case | wall before / streamed | peak RSS before / streamed |
+|---|---|---|
+| 100 s | 2.6 s / 3.0 s | 427 MB / 301 MB |
+| 900 s | 13.3 s / 12.3 s | 2069 MB / 937 MB |
+| 999 s | 17.5 s / 13.8 s | 2276 MB / 1016 MB |
+| rectifier + uvlo, 500 s | 33.5 s / 11.5 s | 5715 MB / 737 MB |
+
+The streamed stage computes the electrical columns twice (once for the summary, once
+while writing run.h5), which the smaller allocations pay for.
 What is left of the peak is the dynamics' result: its five whole-record float64
 arrays (t, elapsed, gap, velocity, table: 40 bytes per sample, 720 MB at 900 s); the
 electrical stage, the summary, run.h5 and the figures add a bounded ~20-60 MB
