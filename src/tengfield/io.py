@@ -46,11 +46,17 @@ VALUE_FORMAT = "%.10g"
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
     """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``V_read_V``, the voltage read
     through C_p, when present; + the circuit's columns present, in the registry's
-    order: :func:`tengfield.electrical.all_columns`)."""
+    order: :func:`tengfield.electrical.all_columns`); a streamed run's a chunk at a
+    time."""
     columns = WAVEFORM_COLUMNS + [c for c in [READ_COLUMN] + all_columns() if c in waveforms]
+    formats = {c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)}
+    if hasattr(waveforms, "chunks"):   # a streamed run (tengfield.electrical.stream)
+        for k, chunk in enumerate(waveforms.chunks()):
+            data = np.column_stack([chunk[c] for c in columns])
+            write_csv(path, columns, list(data.T), formats=formats, append=k > 0)
+        return Path(path)
     data = np.column_stack([waveforms[c] for c in columns])   # one dtype, as numpy.savetxt
-    return write_csv(path, columns, list(data.T), formats={
-        c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)})
+    return write_csv(path, columns, list(data.T), formats=formats)
 
 
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,

@@ -229,3 +229,24 @@ def test_a_streamed_run_writes_the_same_run_h5(tmp_path, monkeypatch, kind):
     assert sorted(p.name for p in (tmp_path / "streamed").iterdir() if p.suffix == ".png") \
         == sorted(["record.png"] + [p.name for p in (tmp_path / "whole").iterdir()
                                     if p.suffix == ".png"])
+
+
+def test_a_streamed_run_writes_the_same_waveforms_csv(tmp_path, monkeypatch):
+    """Under the CSV bound a streamed run writes waveforms.csv a chunk at a time (no
+    whole column held): the same bytes as the whole-record run's."""
+    from tengfield.electrical import stream
+
+    scene = fx.scene_with(run={"duration_s": 1.0, "settle_periods": 2},
+                          circuit={"kind": "load", "load_ohm": 1e8,
+                                   "parallel_capacitance_pF": 338.0})
+    whole = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    tio.write_run_outputs(whole, tmp_path / "whole", plots=False)
+    monkeypatch.setattr(stream, "STREAM_ROWS", 100)
+    monkeypatch.setattr(stream, "CHUNK_ROWS", 3000)
+    streamed = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    assert isinstance(streamed.waveforms, stream.StreamedWaveforms)
+    tio.write_run_outputs(streamed, tmp_path / "streamed", plots=False)
+    assert streamed.waveforms._whole is None          # never held whole
+    text = (tmp_path / "streamed" / "waveforms.csv").read_bytes()
+    assert text == (tmp_path / "whole" / "waveforms.csv").read_bytes()
+    assert text.count(b"time_s") == 1 and text.count(b"\n") == len(whole.t) + 1
