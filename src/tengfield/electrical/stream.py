@@ -34,7 +34,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .circuits import CircuitRun, circuit_for, no_load
+from .circuits import circuit_for
 from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times,
                         impact_values, peak_quantities, scene_terminal_waveforms,
                         steady_window_index)
@@ -250,9 +250,9 @@ class StreamedWaveforms(Mapping):
 
 def streamed_stage(scene, dynamics, curves) -> tuple:
     """``(waveforms, ran, extremes, reduced)`` of a streamed run: the
-    :class:`StreamedWaveforms`, the circuit's :class:`CircuitRun` (its ``data`` the
-    load's numbers and its last rows for the V-Q loop), the peak blocks, and
-    :meth:`StreamedRun.reduce`'s record."""
+    :class:`StreamedWaveforms`, the circuit's
+    :class:`~tengfield.electrical.circuits.CircuitRun` (from the entry's ``streamed``:
+    no whole columns), the peak blocks, and :meth:`StreamedRun.reduce`'s record."""
     run = StreamedRun(scene, dynamics, curves)
     reduced = run.reduce()
     waveforms = StreamedWaveforms(run, reduced)
