@@ -7,25 +7,34 @@ first); the machine may be shared: the load average is printed with every figure
 
     .venv/bin/python benchmarks/long_run.py [--cases 100s 900s 999s rect500] [--keep DIR]
 
-Measured (2 shared cores, load average 3-6, surrogate cached; before = commit 713fd0e,
-CSV tables; after = branch relcore, run.h5 past the 2e6-row CSV bound):
+Measured (2 shared cores, load average 3-8, surrogate cached). "CSV" = commit 713fd0e;
+"run.h5" = branch relcore (the tables in run.h5 past the 2e6-row CSV bound, whole-record
+arrays); "streamed" = branch stream (the electrical stage a chunk at a time past 2^20
+samples, docs/long_runs.md):
 
-| case | output before | after | wall before | after | peak RSS before | after |
-|---|---|---|---|---|---|---|
-| 100 s (2e6 rows) | 348 MB (waveforms.csv 205 MB, trajectory.csv 142 MB) | 25 MB (run.h5) | 58.9 s | 5.5 s | 877 MB | 411 MB |
-| 900 s (1.8e7 rows) | 3.14 GB (1.84 GB + 1.29 GB CSV) | 260 MB | 147 s | 21 s | 4.72 GB | 2.03 GB |
-| 999 s (2e7 rows) | (issue #30.11: 5.17 GB peak) | 290 MB | - | 47 s | 5.17 GB | 2.23 GB |
-| rectifier + uvlo, 500 s (1e7 rows) | (CSV; issue #30.11: 5.53 GB) | 141 MB | 118 s | 30 s | 5.41 GB | 5.04 GB |
+| case | output CSV | run.h5 | wall CSV / run.h5 | peak RSS CSV / run.h5 |
+|---|---|---|---|---|
+| 100 s (2e6 rows) | 348 MB | 25 MB | 58.9 s / 5.5 s | 877 MB / 411 MB |
+| 900 s (1.8e7 rows) | 3.14 GB | 260 MB | 147 s / 21 s | 4.72 GB / 2.03 GB |
+| 999 s (2e7 rows) | - | 290 MB | - / 47 s | 5.17 GB / 2.23 GB |
+| rectifier + uvlo, 500 s (1e7 rows) | CSV | 141 MB | 118 s / 30 s | 5.41 GB / 5.04 GB |
 
-The rectifier's peak is its own: the whole-run ``HarvestResult`` (about 170 bytes per
-sample, kept for the summary, charging.png and the V-Q loop) and the resistive load it
-is compared with (an ODE over the whole run, about 210 bytes per sample at its peak);
-chunks are no longer held twice (``concat_results``), the rest needs a streaming
-summary in ``electrical/circuits`` (not done). What is left of the default run's peak
-is the run itself: every output column is one float64 array
-of the whole record (8 bytes x 1.8e7 samples = 144 MB each; the dynamics' t, gap,
-velocity, table, the waveforms' V, Q, I and the terminal curves' temporaries), not
-the writing (run.h5 is written a chunk of 2.6e5 rows at a time).
+Streamed (branch stream), paired with its parent commit 6631751 in one session (load
+average 2-6; the same run.h5 files):
+
+| case | wall before / streamed | peak RSS before / streamed |
+|---|---|---|
+| 100 s | 2.6 s / 3.0 s | 427 MB / 301 MB |
+| 900 s | 13.3 s / 12.3 s | 2069 MB / 937 MB |
+| 999 s | 17.5 s / 13.8 s | 2276 MB / 1016 MB |
+| rectifier + uvlo, 500 s | 33.5 s / 11.5 s | 5715 MB / 737 MB |
+
+The streamed stage computes the electrical columns twice (once for the summary, once
+while writing run.h5), which the smaller allocations pay for.
+What is left of the peak is the dynamics' result: its five whole-record float64
+arrays (t, elapsed, gap, velocity, table: 40 bytes per sample, 720 MB at 900 s); the
+electrical stage, the summary, run.h5 and the figures add a bounded ~20-60 MB
+(tests/electrical/test_stream_memory.py).
 """
 from __future__ import annotations
 

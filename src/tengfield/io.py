@@ -46,17 +46,25 @@ VALUE_FORMAT = "%.10g"
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
     """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``V_read_V``, the voltage read
     through C_p, when present; + the circuit's columns present, in the registry's
-    order: :func:`tengfield.electrical.all_columns`)."""
+    order: :func:`tengfield.electrical.all_columns`); a streamed run's a chunk at a
+    time."""
     columns = WAVEFORM_COLUMNS + [c for c in [READ_COLUMN] + all_columns() if c in waveforms]
+    formats = {c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)}
+    if hasattr(waveforms, "chunks"):   # a streamed run (tengfield.electrical.stream)
+        for k, chunk in enumerate(waveforms.chunks()):
+            data = np.column_stack([chunk[c] for c in columns])
+            write_csv(path, columns, list(data.T), formats=formats, append=k > 0)
+        return Path(path)
     data = np.column_stack([waveforms[c] for c in columns])   # one dtype, as numpy.savetxt
-    return write_csv(path, columns, list(data.T), formats={
-        c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)})
+    return write_csv(path, columns, list(data.T), formats=formats)
 
 
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
                       figures=None) -> list[Path]:
     """waveforms.csv, summary.json and, with ``plots``, waveforms.png and surrogate.png
-    of a :class:`tengfield.pipeline.RunResult` (see also :func:`write_dynamics_outputs`).
+    of a :class:`tengfield.pipeline.RunResult` (see also :func:`write_dynamics_outputs`);
+    a streamed long run (:mod:`tengfield.electrical.stream`) also record.png, the whole
+    run as a min/max envelope, and its tables a chunk at a time.
 
     With ``figures`` (a :class:`tengfield.plotting.process.FigureProcess`) the figures
     are sent to it and complete after ``figures.finish()``, which the caller calls."""
@@ -66,13 +74,22 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
     if plots:
         from .plotting.waveforms import plot_surrogate, plot_waveforms, visited_positions
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
-        t = np.asarray(result.waveforms["time_s"])
+        # a streamed run (tengfield.electrical.stream) kept them: its columns are not held
+        source = getattr(result.waveforms, "tail", None) or result.waveforms
+        t = np.asarray(source["time_s"])
         last = t >= t[-1] - shown                          # sent, not the whole run
-        waveforms = {k: np.asarray(v)[last] for k, v in result.waveforms.items()}
+        waveforms = {k: np.asarray(v)[last] for k, v in source.items()}
         written.append(_figure(
             figures, plot_waveforms, waveforms, path=out / "waveforms.png",
             title=run_title(result) + ", last 5 periods",
             parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
+        envelope = (getattr(result, "extras", None) or {}).get("_envelope")
+        if envelope is not None:      # a streamed run: the whole record, min/max per bin
+            from .plotting.record import plot_record
+            written.append(_figure(
+                figures, plot_record, envelope, path=out / "record.png",
+                title=run_title(result) + ", whole run: min/max per time bin",
+                parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
                                    path=out / "surrogate.png", cells=result.scene.device.cells,
@@ -137,7 +154,10 @@ def write_run_hdf5(path: str | Path, result) -> Path:
 
     waveforms = result.waveforms
     columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
-    tables = {"waveforms": {c: waveforms[c] for c in columns}}
+    if hasattr(waveforms, "chunks"):   # a streamed run: written a chunk at a time
+        tables = {"waveforms": _WithoutRead(waveforms, columns)}
+    else:
+        tables = {"waveforms": {c: waveforms[c] for c in columns}}
     tables.update(dynamics_tables(result.dynamics, result.scene))
     return write_tables(path, tables, attrs={
         "tengfield_version": __version__, "scene_text": result.scene.text or "",
@@ -145,6 +165,27 @@ def write_run_hdf5(path: str | Path, result) -> Path:
         "layout": "one group per table (waveforms, trajectory, impacts[, contacts]), one "
                   "dataset per column with its 'units' attribute; trajectory columns equal "
                   "to waveform columns are hard links"})
+
+
+class _WithoutRead:
+    """The chunked columns of a streamed run that run.h5 writes (``columns``, in order)."""
+
+    def __init__(self, waveforms, columns):
+        self._w, self._columns = waveforms, [c for c in columns if c in waveforms]
+        self.rows = waveforms.rows
+
+    def __iter__(self):
+        return iter(self._columns)
+
+    def __contains__(self, name) -> bool:
+        return name in self._columns
+
+    def source_of(self, name):
+        return self._w.source_of(name)
+
+    def chunks(self):
+        for chunk in self._w.chunks():
+            yield {c: chunk[c] for c in self._columns}
 
 
 def dynamics_tables(dynamics, scene) -> dict:

@@ -91,6 +91,48 @@ def _same(a, b) -> bool:
                for i in range(0, a.shape[0], CHUNK_ROWS))
 
 
+def _chunked(columns) -> bool:
+    """A table given a chunk at a time (``columns``, ``rows``, ``chunks()``: e.g. a
+    streamed run's :class:`tengfield.electrical.stream.StreamedWaveforms`)."""
+    return hasattr(columns, "chunks") and hasattr(columns, "rows")
+
+
+def _table_bytes(columns) -> int:
+    if _chunked(columns):
+        return 8 * columns.rows * len(list(columns))
+    return sum(np.asarray(v).nbytes for v in columns.values())
+
+
+def _chunked_columns(group, columns) -> None:
+    """Datasets of a chunked table (float64 columns of ``columns.rows`` rows), filled a
+    chunk at a time as ``columns.chunks()`` yields them: memory is one chunk."""
+    n = columns.rows
+    options = {}
+    if n:
+        options = dict(chunks=(min(n, CHUNK_ROWS),), compression="gzip",
+                       compression_opts=DEFLATE_LEVEL, shuffle=True)
+    datasets = {}
+    for name in columns:
+        datasets[name] = group.create_dataset(name, shape=(n,), dtype=np.float64, **options)
+        datasets[name].attrs["units"] = unit_of(name)
+    start = 0
+    for chunk in columns.chunks():
+        rows = len(next(iter(chunk.values())))
+        for name, dataset in datasets.items():
+            dataset[start:start + rows] = chunk[name]
+        start += rows
+    if start != n:
+        raise RuntimeError(f"chunked table wrote {start} rows of {n}")
+
+
+def _link_source(shared, column):
+    """The array ``shared[column]`` stands for, without computing a chunked table's."""
+    if _chunked(shared):
+        source_of = getattr(shared, "source_of", None)
+        return None if source_of is None else source_of(column)
+    return shared.get(column)
+
+
 def _check_room(path: Path, tables: dict) -> None:
     """``OSError(ENOSPC)`` naming ``path`` if its filesystem has less room than the
     uncompressed columns need: HDF5 meeting a full disk mid-write can crash the
@@ -98,7 +140,7 @@ def _check_room(path: Path, tables: dict) -> None:
     import errno
     import shutil
 
-    need = sum(np.asarray(v).nbytes for columns in tables.values() for v in columns.values())
+    need = sum(_table_bytes(columns) for columns in tables.values())
     need += 1 << 20                                  # metadata, chunk index
     free = shutil.disk_usage(path.parent).free
     if free < need:
@@ -108,7 +150,9 @@ def _check_room(path: Path, tables: dict) -> None:
 
 def write_tables(path: str | Path, tables: dict, *, attrs: dict | None = None,
                  link_to: str | None = "waveforms") -> Path:
-    """Write ``tables`` (group name -> {column name -> 1-D array}, in order) to the HDF5
+    """Write ``tables`` (group name -> {column name -> 1-D array}, in order; or a chunked
+    table of float64 columns: a mapping with ``rows`` and ``chunks()`` yielding
+    ``{column: array}`` for consecutive rows, written as they come) to the HDF5
     file ``path``, through a temporary file replaced at the end (a reader never sees
     half a file; an error leaves none). A column of another group equal to the column of
     the same name in group ``link_to`` is a hard link to it (stored once). ``attrs``:
@@ -123,10 +167,15 @@ def write_tables(path: str | Path, tables: dict, *, attrs: dict | None = None,
                 f.attrs[name] = value
             for group_name, columns in tables.items():
                 group = f.create_group(group_name, track_order=True)
+                if _chunked(columns):
+                    group.attrs["rows"] = columns.rows
+                    _chunked_columns(group, columns)
+                    continue
                 group.attrs["rows"] = len(next(iter(columns.values()))) if columns else 0
                 shared = tables.get(link_to, {}) if group_name != link_to else {}
                 for column, values in columns.items():
-                    if column in shared and _same(values, shared[column]):
+                    source = _link_source(shared, column) if column in shared else None
+                    if source is not None and _same(values, source):
                         group[column] = f[f"{link_to}/{column}"]     # hard link
                     else:
                         _column(group, column, values)

@@ -63,6 +63,16 @@ class RunResult:
     ``curves``: the pieces the plots need (``table``/``curves`` None when
     the field was not needed). ``t``, ``V_oc``, ``Q_sc``, ``I_sc`` are the
     waveform columns by short name.
+
+    A long run (more than :data:`tengfield.electrical.stream.STREAM_ROWS` samples, 2^20;
+    every circuit kind, the ball on the axis, no ``[array]``) computes its electrical stage a chunk at a
+    time (:mod:`tengfield.electrical.stream`): its ``waveforms`` is then a read-only
+    mapping, not a dict of arrays. The trajectory columns are the dynamics' arrays; the
+    first request of another column (``r.V_oc``, ``r.waveforms["I_sc_A"]``,
+    ``to_dataframe()``) computes the columns again, whole (memory proportional to the run,
+    as before); ``r.waveforms.chunks()`` yields them a chunk at a time, ``.tail`` holds
+    the last 5 periods (``plot()``), ``.envelope`` a min/max envelope of the run
+    (docs/long_runs.md). ``summary``, ``peaks``, ``peak`` are the same numbers either way.
     """
     scene: Any
     waveforms: dict[str, np.ndarray]
@@ -102,6 +112,9 @@ class RunResult:
         from .plotting.waveforms import run_title, waveforms_figure   # the edge, on use
 
         waveforms, title = self.waveforms, run_title(self)
+        tail = getattr(waveforms, "tail", None)     # a streamed run kept its last 5 periods
+        if tail is not None and last_periods is not None and last_periods <= 5.0:
+            waveforms = tail
         if last_periods is not None:
             t = np.asarray(waveforms["time_s"])
             last = t >= t[-1] - last_periods * self.scene.excitation.period
@@ -325,6 +338,9 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
     per cycle), peaks. ``stages`` (if given) gets its ``"circuit"`` entry. Used by
     :func:`run` and by the uncertainty study (one electrical stage, not a copy)."""
     stages = {} if stages is None else stages
+    from .electrical import stream
+    if stream.streams(scene, dynamics, curves):
+        return _streamed_stage(scene, dynamics, curves, table, stages)
     start = time.perf_counter()
     entry = electrical.circuit_for(scene)
     waveforms = electrical.scene_waveforms(scene, dynamics, curves)
@@ -344,6 +360,34 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
     if curves is not None:
         extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
         summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
+    return ElectricalStage(waveforms, summary, extremes["peak_to_peak"], extremes["peak"], extras)
+
+
+def _streamed_stage(scene, dynamics, curves, table, stages) -> ElectricalStage:
+    """:func:`electrical_stage` of a long run, a chunk at a time
+    (:mod:`tengfield.electrical.stream`: the same numbers, memory bounded by the chunk);
+    ``waveforms`` is a :class:`~tengfield.electrical.stream.StreamedWaveforms`."""
+    from .electrical import stream
+
+    start = time.perf_counter()
+    entry = electrical.circuit_for(scene)
+    waveforms, ran, extremes, reduced = stream.streamed_stage(scene, dynamics, curves)
+    stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start,
+                              {**ran.details, "streamed_chunks": len(stream.chunk_bounds(
+                                  waveforms.rows, waveforms._run.chunk_rows))})
+    summary = _summary(scene, dynamics, waveforms, stages, table, extremes=extremes,
+                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask),
+                       entry=entry)
+    extras: dict = {"_envelope": reduced["envelope"]}
+    if curves is not None:
+        tail = reduced["tail"]
+        out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, reduced["max_gap"])}
+        added = entry.cycle(scene, dynamics, curves, ran, tail["_elapsed"], None,
+                            reduced["max_gap"])
+        out["energy_per_cycle"].update(added.pop("energy_per_cycle", {}))
+        out.update(added)
+        extras.update(out)
+        summary.update(_jsonable({k: v for k, v in out.items() if not k.startswith("_")}))
     return ElectricalStage(waveforms, summary, extremes["peak_to_peak"], extremes["peak"], extras)
 
 
@@ -446,7 +490,10 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
     if entry.has_load:
         circuit_block["load_ohm"] = scene.circuit.load
     t = waveforms["time_s"]
-    mask, window_reason = electrical.steady_window(t, scene)
+    first, window_reason = electrical.steady_window_index(t, scene)
+    # the steady window over the rows (a streamed run: a slice, no n-sized mask)
+    mask = slice(first, None) if hasattr(waveforms, "chunks") else \
+        electrical.steady_window(t, scene)[0]
     summary: dict[str, Any] = {
         "scene": scene.source,
         # no field stage ran for a scene whose field values are refused (uncharged ball)
@@ -456,7 +503,7 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
                            "the external circuit; reference state: ball on the lower electrode",
         "cells": scene.device.cells,
         "circuit": circuit_block,
-        "window": {"start_s": float(t[mask][0]), "end_s": float(t[mask][-1]),
+        "window": {"start_s": float(t[first]), "end_s": float(t[-1]),
                    "rule": window_reason},
         "peak_to_peak": blocks["peak_to_peak"],
         "peak_to_peak_rule": "over the output samples of the steady window and just before "

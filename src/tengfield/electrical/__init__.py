@@ -22,7 +22,8 @@ from .cycle import cmeo, cumulative, last_period, loop_area
 from .waveforms import (IMPACT_OFFSET_PERIODS, PEAK_QUANTITIES, READ_COLUMN, WAVEFORM_COLUMNS,
                         elapsed_times, extreme_times, extremes, impact_elapsed, impact_states,
                         impact_times, peak_quantities, sample_elapsed, scene_terminal_waveforms,
-                        scene_waveforms, steady_start, steady_window, terminal_extremes,
+                        scene_waveforms, steady_start, steady_window, steady_window_index,
+                        terminal_extremes,
                         terminal_peaks, terminal_waveforms, terminal_waveforms_zr, time_origin,
                         trapezoid)
 

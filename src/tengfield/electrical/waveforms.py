@@ -207,10 +207,25 @@ def steady_window(times, scene) -> tuple[np.ndarray, str]:
     t = np.asarray(times, dtype=float)
     start = t[0] + steady_start(scene)
     mask = t >= start
-    if np.count_nonzero(mask) < 2:
-        return np.ones_like(t, dtype=bool), (f"whole run: settle_periods x period = "
-                                             f"{start - t[0]:g} s leaves fewer than 2 samples")
-    return mask, f"t >= {start:g} s (after settle_periods = {scene.run.settle_periods} periods)"
+    whole = np.count_nonzero(mask) < 2
+    return (np.ones_like(t, dtype=bool) if whole else mask), _window_rule(scene, t, start, whole)
+
+
+def steady_window_index(times, scene) -> tuple[int, str]:
+    """The first sample of :func:`steady_window` for non-decreasing ``times`` and its rule,
+    without an n-sized mask (the streamed stage of a long run)."""
+    t = np.asarray(times, dtype=float)
+    start = t[0] + steady_start(scene)
+    index = int(np.searchsorted(t, start, side="left"))   # the first t >= start
+    whole = t.size - index < 2
+    return (0 if whole else index), _window_rule(scene, t, start, whole)
+
+
+def _window_rule(scene, t, start: float, whole: bool) -> str:
+    if whole:
+        return (f"whole run: settle_periods x period = {start - t[0]:g} s leaves fewer "
+                "than 2 samples")
+    return f"t >= {start:g} s (after settle_periods = {scene.run.settle_periods} periods)"
 
 
 def impact_times(dynamics, start: float, end: float) -> np.ndarray:
@@ -302,24 +317,35 @@ def terminal_extremes(scene, dynamics, curves, waveforms: dict | None = None, *,
     values = {name: [np.asarray(waveforms[column])[mask]]
               for name, column in quantities.items()}
     at_impacts = [n for n in quantities if not (n == "V_read" and read_at_samples)]
-    if curves is not None:
-        impacts = impact_elapsed(dynamics, t[mask][0], t[-1])
-        gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
-        if gap_pre.size:
-            eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
-            extra = scene_terminal_waveforms(
-                scene, curves, np.concatenate([gap_pre, gap_post]),
-                np.concatenate([vel_pre, vel_post]),
-                *_radial(dynamics, curves, time_origin(dynamics)
-                         + np.concatenate([impacts - eps, impacts + eps])))
-            for name in at_impacts:
-                values[name].append(extra[name])
+    for name, v in impact_values(scene, dynamics, curves, t[mask][0], t[-1],
+                                 at_impacts).items():
+        values[name].append(v)
     out: dict = {"peak_to_peak": {}, "peak": {}}
     for name, v in values.items():
         x = np.concatenate(v)
         out["peak_to_peak"][name] = circuit.peak_to_peak(x)
         out["peak"][name] = float(np.max(np.abs(x))) if x.size else 0.0
     return out
+
+
+def impact_values(scene, dynamics, curves, start: float, end: float, names) -> dict:
+    """``{name: values}`` of the terminal quantities ``names`` (``V_oc``, ``Q_sc``...)
+    just before and after every impact in (``start``, ``end``) (the run's own axis),
+    where I_SC jumps: the impact half of :func:`terminal_extremes`' instants (empty
+    without curves or impacts)."""
+    if curves is None:
+        return {}
+    impacts = impact_elapsed(dynamics, start, end)
+    gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
+    if not gap_pre.size:
+        return {}
+    eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+    extra = scene_terminal_waveforms(
+        scene, curves, np.concatenate([gap_pre, gap_post]),
+        np.concatenate([vel_pre, vel_post]),
+        *_radial(dynamics, curves, time_origin(dynamics)
+                 + np.concatenate([impacts - eps, impacts + eps])))
+    return {name: extra[name] for name in names}
 
 
 def extremes(values) -> tuple[float, float]:

@@ -362,12 +362,19 @@ def warn_quiescent_starvation(result: HarvestResult, quiescent_current: float,
     bridges deliver (:func:`mean_bridge_current`): the chip takes the charge as it
     comes, nothing is stored or harvested (the kernel books no energy into the store
     then; issue #30.5)."""
-    import warnings
-
     if quiescent_current <= 0.0 or float(np.max(result.store_voltage[start:])) > 0.0:
         return False
-    current = mean_bridge_current(result, start)
-    if current >= quiescent_current:
+    return warn_starved_store(float(np.max(result.store_voltage[start:])),
+                              mean_bridge_current(result, start), quiescent_current)
+
+
+def warn_starved_store(max_store_voltage: float, current: float,
+                       quiescent_current: float) -> bool:
+    """:func:`warn_quiescent_starvation` from its numbers: the store's largest voltage [V]
+    and the bridges' mean current [A] over the window (a streamed run's reductions)."""
+    import warnings
+
+    if quiescent_current <= 0.0 or max_store_voltage > 0.0 or current >= quiescent_current:
         return False
     warnings.warn(
         f"rectifier: the chip's quiescent current ([circuit] pmic_quiescent_current_A = "

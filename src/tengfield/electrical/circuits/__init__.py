@@ -95,6 +95,30 @@ class Circuit:
         gap in it."""
         return {}
 
+    # -- a long run, a chunk at a time (tengfield.electrical.stream) ------------
+    def can_stream(self, scene, curves) -> bool:
+        """Whether a long run of this kind may stream its electrical stage: the closed
+        forms (no columns of its own) may; an entry with columns says so itself, with
+        :meth:`chunked` and :meth:`streamed` (a new kind keeps whole arrays until then)."""
+        return not self.columns
+
+    def chunked(self, scene, dynamics, curves, window_start: float, chunk_rows: int):
+        """The circuit fed a chunk of output rows at a time (an object with
+        ``chunk(i0, i1) -> {column: array}``, its state carried), or None when there is
+        nothing to integrate; ``window_start`` [s] on the run's own axis."""
+        return None
+
+    def streamed(self, scene, dynamics, curves, chunked, reduced: dict,
+                 note: str) -> CircuitRun:
+        """The :class:`CircuitRun` of a streamed run from ``chunked`` after its last chunk
+        and ``reduced`` (:meth:`tengfield.electrical.stream.StreamedRun.reduce`: ``tail``,
+        the columns over the last periods with ``_elapsed``; ``column_peak_to_peak``, this
+        kind's columns over the window): no whole columns; ``data`` what :meth:`summary`
+        and :meth:`cycle` read. ``note`` ends the stage text."""
+        run = self.run(scene, dynamics, curves)          # closed forms: no columns
+        run.reason += note
+        return run
+
     # -- arrays (tengfield.array) -------------------------------------------
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:
         """An array without spread (``scaled``: one cell with [device] cells = N): adds

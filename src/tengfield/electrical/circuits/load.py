@@ -12,8 +12,9 @@ import numpy as np
 
 from ... import circuit
 from ..cycle import cumulative, last_period, loop_area
-from ..waveforms import (_impact_states, _radial, elapsed_times, impact_elapsed, sample_elapsed,
-                         scene_terminal_waveforms, steady_window, time_origin, trapezoid)
+from ..waveforms import (IMPACT_OFFSET_PERIODS, _impact_states, _radial, elapsed_times,
+                         impact_elapsed, sample_elapsed, scene_terminal_waveforms, steady_window,
+                         time_origin, trapezoid)
 from . import Circuit, CircuitRun, SpreadCircuit
 
 #: extra columns of ``waveforms.csv`` when a load is connected
@@ -126,6 +127,124 @@ def window_energies(dynamics, grid, window_start, dissipated_power, delivered_po
             "stored_energy_change_J": float(stored_window[-1] - stored_window[0])}
 
 
+class LoadChunks:
+    """The load ODE a chunk of output rows at a time (the streamed stage of a long run,
+    :mod:`tengfield.electrical.stream`): the same grid, terminal and exponential integrator
+    as :func:`load_waveforms`, the load's deficit carried exactly from one chunk to the
+    next (the chunks share their boundary sample), the energy sums accumulated over the
+    window after ``window_start`` (the run's own axis). Feed every chunk in order to
+    :meth:`chunk`; :meth:`numbers` then gives :func:`load_waveforms`' numbers."""
+
+    def __init__(self, scene, dynamics, curves, window_start: float, first_rows: int,
+                 time_constant: float | None = None):
+        self.scene, self.dynamics, self.curves = scene, dynamics, curves
+        self.window_start = window_start
+        self.t = elapsed_times(dynamics)                  # the dynamics' own array, no copy
+        n_cells, c_p = scene.device.cells, scene.circuit.parallel_capacitance
+        c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
+        # the relaxation points' time constant (fine_terminal's): R (C_min + C_p) here
+        self.tau = scene.circuit.load * c_min if time_constant is None else time_constant
+        t = self.t
+        self.impacts = impact_elapsed(dynamics, t[0], t[-1])
+        head = t[:first_rows + 1]    # (a median over the whole run would copy it)
+        self.step = float(np.median(np.diff(head))) if head.size > 1 else 0.0
+        self.deficit = None
+        self.sums = {"delivered": 0.0, "dissipated": 0.0}
+        self.window = None           # (first time, its stored energy, last time, stored)
+        self.points = 0
+        self.time_constant = scene.circuit.load * (
+            float(np.max(curves.capacitance_samples)) * n_cells + c_p)
+
+    def chunk(self, i0: int, i1: int) -> dict:
+        """V_load [V], I_load [A], P_load [W] at the output rows ``i0:i1``."""
+        grid, fine, output_index = self.fine(i0, i1)
+        scene = self.scene
+        c_p, load = scene.circuit.parallel_capacitance, scene.circuit.load
+        # Q_SC = 0 and Q_R(0) = -D: the integrator starts from the carried deficit D
+        # exactly and returns -D as its charge (every step as load_waveforms' own)
+        d0 = fine["Q_sc"][0] if self.deficit is None else self.deficit
+        response = circuit.load_response(grid, np.zeros_like(grid), fine["I_sc"], fine["C_T"],
+                                         load, c_p, initial_load_charge=-d0)
+        self.deficit = -response.charge[-1]
+        delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+        stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+        self.add(grid, i0, response.power, delivered, stored)
+        keep = output_index[:i1 - i0]
+        return {"V_load_V": response.voltage[keep], "I_load_A": response.current[keep],
+                "P_load_W": response.power[keep]}
+
+    def add(self, grid, i0: int, dissipated, delivered, stored) -> None:
+        """The chunk's grid points and energy sums over the window (trapezoidal)."""
+        self.points += grid.size - (1 if i0 > 0 else 0)
+        in_window = grid >= self.window_start
+        if in_window.any():
+            g = grid[in_window]
+            stored = stored[in_window]
+            self.sums["dissipated"] += float(trapezoid(dissipated[in_window], g))
+            self.sums["delivered"] += float(trapezoid(delivered[in_window], g))
+            first = self.window or (g[0], stored[0])
+            self.window = (first[0], first[1], g[-1], stored[-1])
+
+    def fine(self, i0: int, i1: int):
+        """``(grid, terminal, output_index)`` of :func:`fine_terminal` over the output rows
+        ``i0:i1`` and the next chunk's first sample (which closes the last step)."""
+        scene, dynamics, t_all = self.scene, self.dynamics, self.t
+        n = t_all.size
+        j1 = min(i1 + 1, n)                     # the next chunk's first sample closes it
+        t = t_all[i0:j1]
+        lo, hi = t[0], t[-1]
+        imp = self.impacts
+        pre = imp[(imp > lo) & (imp <= hi)]     # pre-impact states sort before a sample
+        post = imp[(imp >= lo) & (imp < hi)]    # at the same time, post-impact after it
+        starts = np.concatenate([t_all[:1], imp])
+        starts = starts[(starts > lo - 5.0 * self.step) & (starts <= hi)]   # offsets < 4 steps
+        extra = relaxation_times(starts, self.tau, self.step, t_all[-1])
+        extra = extra[(extra >= lo) & (extra < hi)]
+        eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
+        gap_pre, vel_pre, _ = (sample_elapsed(dynamics, pre - eps) if pre.size
+                               else (np.empty(0),) * 3)
+        gap_post, vel_post, _ = (sample_elapsed(dynamics, post + eps) if post.size
+                                 else (np.empty(0),) * 3)
+        gap_extra, vel_extra, _ = (sample_elapsed(dynamics, extra) if extra.size
+                                   else (np.empty(0),) * 3)
+        grid = np.concatenate([t, pre, post, extra])
+        gap = np.concatenate([np.asarray(dynamics.gap[i0:j1], dtype=float), gap_pre, gap_post,
+                              gap_extra])
+        vel = np.concatenate([np.asarray(dynamics.gap_velocity[i0:j1], dtype=float), vel_pre,
+                              vel_post, vel_extra])
+        tag = np.concatenate([np.ones(t.size), np.zeros(pre.size), np.full(post.size, 2.0),
+                              np.full(extra.size, 3.0)])
+        order = np.lexsort((tag, grid))
+        grid, gap, vel = grid[order], gap[order], vel[order]
+        output_index = np.flatnonzero(order < t.size)
+        return grid, scene_terminal_waveforms(scene, self.curves, gap, vel), output_index
+
+    def numbers(self) -> dict:
+        """Mean power [W], the energy books [J] over the window, integration points,
+        time constant [s]: :func:`load_waveforms`' numbers."""
+        t0, s0, t1, s1 = self.window or (0.0, 0.0, 0.0, 0.0)
+        length = t1 - t0
+        return {"mean_power_W": self.sums["dissipated"] / length if length > 0 else 0.0,
+                "delivered_energy_J": self.sums["delivered"],
+                "dissipated_energy_J": self.sums["dissipated"],
+                "stored_energy_change_J": float(s1 - s0),
+                "integration_points": int(self.points), "time_constant_s": self.time_constant}
+
+
+def streamed_load(dynamics, chunked, reduced) -> tuple[dict, dict]:
+    """``(details, data)`` of a streamed load-like run: the numbers of ``chunked``
+    (:class:`LoadChunks`; None: Q_SC = 0), the window's peak-to-peak of its columns and
+    the columns of its last periods (the V-Q loop) from ``reduced``."""
+    if chunked is None:                      # Q_SC = 0: nothing moves
+        load = {k: v for k, v in no_charge(dynamics).items() if not isinstance(v, np.ndarray)}
+    else:
+        load = chunked.numbers()
+    tail = reduced["tail"]
+    data = dict(load, V_load=tail["V_load_V"], I_load=tail["I_load_A"], P_load=tail["P_load_W"],
+                peak_to_peak=reduced["column_peak_to_peak"])
+    return {"energy_balance_relative_residual": balance_residual(load)}, data
+
+
 def steady_load(scene, dynamics, curves) -> dict:
     """:func:`load_waveforms` with energies over the :func:`steady_window`."""
     t = elapsed_times(dynamics)
@@ -146,21 +265,33 @@ def resistive_loop(scene, load: dict, t, period: float) -> tuple[dict, tuple]:
 
 def load_block(scene, load: dict, waveforms, mask, **extra) -> dict:
     """summary.json's ``load`` block of a load run (``waveforms``: with the
-    ``LOAD_COLUMNS``; ``mask``: the steady window over its ``time_s``)."""
+    ``LOAD_COLUMNS``; ``mask``: the steady window over its ``time_s``; ``load``'s
+    ``peak_to_peak``, if given, the V_load and I_load ones over that window)."""
     t = waveforms["time_s"]
+    pp = load.get("peak_to_peak")          # a streamed run's, taken while it streamed
+    v_pp, i_pp = (pp["V_load_V"], pp["I_load_A"]) if pp is not None else (
+        circuit.peak_to_peak(waveforms["V_load_V"][mask]),
+        circuit.peak_to_peak(waveforms["I_load_A"][mask]))
+    return load_block_of(scene, load, v_pp, i_pp, float(t[mask][0] - t[0]), **extra)
+
+
+def load_block_of(scene, load: dict, v_pp: float, i_pp: float, settle_time: float,
+                  **extra) -> dict:
+    """:func:`load_block` from its numbers: V_load and I_load peak-to-peak over the window
+    [V], [A], ``settle_time`` [s] from the start to the window (the streamed stage)."""
     volume = scene.device.cell_volume * scene.device.cells
     power = load["mean_power_W"]
     return {
         "mean_power_W": power,
         "device_volume_m3": volume,
         "power_density_W_per_m3": power / volume,
-        "V_load_peak_to_peak_V": circuit.peak_to_peak(waveforms["V_load_V"][mask]),
-        "I_load_peak_to_peak_A": circuit.peak_to_peak(waveforms["I_load_A"][mask]),
+        "V_load_peak_to_peak_V": v_pp,
+        "I_load_peak_to_peak_A": i_pp,
         "energy_balance_J": {k: load[k] for k in ("delivered_energy_J", "dissipated_energy_J",
                                                   "stored_energy_change_J")},
         "integration_points": load["integration_points"],
         "time_constant_s": load["time_constant_s"],
-        "settled": bool(5.0 * load["time_constant_s"] <= float(t[mask][0] - t[0])),
+        "settled": bool(5.0 * load["time_constant_s"] <= settle_time),
         "settled_rule": "5 R (C_T + C_p) <= settle time before the window; otherwise the "
                         "window still holds the load's start-up transient (longer run or "
                         "more settle_periods)",
@@ -198,6 +329,18 @@ class Load(Circuit):
     def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
         numbers, loop = resistive_loop(scene, run.data, t, scene.excitation.period)
         return {"energy_per_cycle": numbers, "_vq": {"load": loop}}
+
+    def can_stream(self, scene, curves) -> bool:
+        return True
+
+    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+        return None if curves is None else LoadChunks(scene, dynamics, curves, window_start,
+                                                      chunk_rows)
+
+    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
+        details, data = streamed_load(dynamics, chunked, reduced)
+        return CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm{note}", details,
+                          data=data)
 
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:
         if curves is None:

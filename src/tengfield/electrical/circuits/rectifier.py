@@ -200,47 +200,74 @@ def rectifier_summary(scene, fine, window_start: float, curves=None, max_gap=Non
     energy books and their residuals, and the ideal bridge's saturation voltage
     (docs/harvest.md). Instants are reported as absolute times (``fine.time_origin``
     + the time on the run's axis), as in ``waveforms.csv``."""
-    from ...harvest import saturation_voltage
+    return summary_block(scene, record_numbers(scene, fine, window_start), curves, max_gap)
+
+
+def record_numbers(scene, fine, window_start: float) -> dict:
+    """What :func:`summary_block` reads of a whole record ``fine`` (a
+    :class:`tengfield.harvest.HarvestResult`); :class:`RectifierChunks` takes the same
+    numbers a chunk at a time."""
+    from ...harvest import mean_bridge_current
 
     c = scene.circuit
     t = fine.time
-    origin = float(getattr(fine, "time_origin", 0.0))
-    period = scene.excitation.period
     inside = t >= window_start
     k0 = int(np.flatnonzero(inside)[0]) if inside.any() else 0
-    length = float(t[-1] - t[k0])
-    into_store = float(fine.store_input[-1] - fine.store_input[k0])
-    bridge = float(fine.bridge_energy[-1] - fine.bridge_energy[k0])
     on = fine.chip_on
-    switch_on = int(np.count_nonzero(on[1:] & ~on[:-1]))
-    switch_off = int(np.count_nonzero(~on[1:] & on[:-1]))
     dt = np.diff(t)
-    on_time = float(np.sum(dt[on[1:]]))
-    books = fine.balance()
+    return {
+        "t0": float(t[0]), "t_end": float(t[-1]), "t_k0": float(t[k0]),
+        "store_input_k0": float(fine.store_input[k0]),
+        "bridge_energy_k0": float(fine.bridge_energy[k0]),
+        "switch_on": int(np.count_nonzero(on[1:] & ~on[:-1])),
+        "switch_off": int(np.count_nonzero(~on[1:] & on[:-1])),
+        "on_time": float(np.sum(dt[on[1:]])),
+        "max_store_voltage": float(np.max(fine.store_voltage)),
+        "max_store_voltage_window": float(np.max(fine.store_voltage[k0:])),
+        "mean_bridge_current_window": mean_bridge_current(fine, k0),
+        "crossing_falling": first_crossing(t, fine.store_voltage, c.uvlo_falling),
+        "crossing_rising": first_crossing(t, fine.store_voltage, c.uvlo_rising),
+        "last": fine, "origin": float(getattr(fine, "time_origin", 0.0))}
+
+
+def summary_block(scene, numbers: dict, curves=None, max_gap=None) -> dict:
+    """summary.json's ``rectifier`` block from :func:`record_numbers` (or the streamed
+    :meth:`RectifierChunks.numbers`): ``numbers["last"]`` is the record (or its last
+    chunk) whose final values and threshold times it reads."""
+    from ...harvest import saturation_voltage, warn_starved_store
+
+    c = scene.circuit
+    n_ = numbers
+    last = n_["last"]
+    origin = n_["origin"]
+    period = scene.excitation.period
+    length = n_["t_end"] - n_["t_k0"]
+    into_store = float(last.store_input[-1] - n_["store_input_k0"])
+    bridge = float(last.bridge_energy[-1] - n_["bridge_energy_k0"])
+    books = last.balance()
     warn_numerical_dissipation(books)
     if c.pmic == "uvlo":
-        from ...harvest import warn_quiescent_starvation
-        warn_quiescent_starvation(fine, c.pmic_quiescent_current, k0)
+        warn_starved_store(n_["max_store_voltage_window"], n_["mean_bridge_current_window"],
+                           c.pmic_quiescent_current)
+    span = n_["t_end"] - n_["t0"]
     out = {
         "diode": c.diode, "storage_capacitance_F": c.storage_capacitance, "pmic": c.pmic,
-        "final_store_voltage_V": float(fine.store_voltage[-1]),
-        "final_stored_energy_J": float(fine.stored_energy[-1]),
-        "max_store_voltage_V": float(np.max(fine.store_voltage)),
-        "time_to_uvlo_falling_V_s": origin + first_crossing(t, fine.store_voltage,
-                                                            c.uvlo_falling),
+        "final_store_voltage_V": float(last.store_voltage[-1]),
+        "final_stored_energy_J": float(last.stored_energy[-1]),
+        "max_store_voltage_V": n_["max_store_voltage"],
+        "time_to_uvlo_falling_V_s": origin + n_["crossing_falling"],
         "time_to_uvlo_rising_V_s": origin + _first_of(
-            first_crossing(t, fine.store_voltage, c.uvlo_rising),
-            fine.threshold_times["uvlo_rising_s"]),
+            n_["crossing_rising"], last.threshold_times["uvlo_rising_s"]),
         "uvlo_levels_V": [c.uvlo_falling, c.uvlo_rising],
-        "record_length_s": float(t[-1] - t[0]),
-        "chip_first_on_s": origin + fine.threshold_times["uvlo_rising_s"],
-        "chip_first_lockout_s": origin + fine.threshold_times["uvlo_falling_s"],
-        "chip_switch_on_count": switch_on, "chip_switch_off_count": switch_off,
-        "chip_duty_cycle": on_time / float(t[-1] - t[0]) if t[-1] > t[0] else 0.0,
-        "chip_output_energy_J": float(fine.chip_input_energy[-1]) * c.pmic_efficiency,
+        "record_length_s": span,
+        "chip_first_on_s": origin + last.threshold_times["uvlo_rising_s"],
+        "chip_first_lockout_s": origin + last.threshold_times["uvlo_falling_s"],
+        "chip_switch_on_count": n_["switch_on"], "chip_switch_off_count": n_["switch_off"],
+        "chip_duty_cycle": n_["on_time"] / span if span > 0 else 0.0,
+        "chip_output_energy_J": float(last.chip_input_energy[-1]) * c.pmic_efficiency,
         "average_harvested_power_W": into_store / length if length > 0 else 0.0,
         "energy_per_cycle_J": bridge * period / length if length > 0 else 0.0,
-        "window_start_s": origin + float(t[k0]),
+        "window_start_s": origin + n_["t_k0"],
         "energy_books_J": {k: v for k, v in books.items() if k.endswith("_J")},
         "energy_residuals": {k: v for k, v in books.items() if k.endswith("_residual")},
         "energy_residuals_rule": "relative to the energy delivered into the bridges; the "
@@ -286,6 +313,25 @@ class Rectifier(Circuit):
                  books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
             data=rect)
 
+    def can_stream(self, scene, curves) -> bool:
+        return curves is not None            # Q_SC = 0: the whole path's zeros, skipped
+
+    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+        from .rectifier_stream import RectifierChunks
+        return RectifierChunks(scene, dynamics, curves, window_start)
+
+    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
+        books = chunked.last.balance()
+        c = scene.circuit
+        return CircuitRun(
+            {}, f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} uF, "
+                f"pmic = {c.pmic!r}{note}",
+            {"integration_points": int(chunked.points),
+             "energy_balance_relative_residual": max(
+                 books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
+            data={"fine": chunked.last_period(), "numbers": chunked.numbers(),
+                  "charging": chunked.charging()})
+
     def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
         """The bridge's V-Q loop, summary.json's ``rectifier`` block and charging.png's
         record (no resistive-load loop: a rectifier run has no load to compare)."""
@@ -295,10 +341,12 @@ class Rectifier(Circuit):
         v = fine.voltage[fine_last, 0]
         q = fine.bridge_charge[fine_last, 0]
         vq = {"rectifier": (q - q[0], v, loop_area(v, q))}
-        start = float(t[mask][0])
+        numbers = run.data.get("numbers")       # a streamed run's reductions
+        if numbers is None:
+            numbers = record_numbers(scene, fine, float(t[mask][0]))
         return {"energy_per_cycle": {"rectifier_loop_area_J": vq["rectifier"][2]},
-                "rectifier": rectifier_summary(scene, fine, start, curves, max_gap),
-                "_fine": fine, "_vq": vq}
+                "rectifier": summary_block(scene, numbers, curves, max_gap),
+                "_fine": run.data.get("charging", fine), "_vq": vq}
 
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:
         if curves is None:

@@ -19,8 +19,8 @@ import numpy as np
 
 from ... import circuit
 from . import Circuit, CircuitRun, SpreadCircuit
-from .load import (Load, balance_residual, fine_terminal, load_block, no_charge,
-                   window_energies)
+from .load import (Load, LoadChunks, balance_residual, fine_terminal, load_block, no_charge,
+                   streamed_load, window_energies)
 from ..waveforms import elapsed_times, steady_window, trapezoid
 
 COLUMNS = ("V_load_V", "I_load_A", "P_load_W", "V_series_C_V")
@@ -94,6 +94,61 @@ def _columns(result) -> dict:
             "P_load_W": result["P_load"], "V_series_C_V": result["V_series_C"]}
 
 
+class SeriesChunks(LoadChunks):
+    """:func:`series_waveforms` a chunk of output rows at a time (the streamed stage,
+    :class:`.load.LoadChunks`' grid): a first pass takes the largest C_T + C_p of the
+    grid (it chooses the form, as :func:`series_response` does on the whole grid), then
+    the chosen form's state (D or Q) is carried from chunk to chunk."""
+
+    def __init__(self, scene, dynamics, curves, window_start, first_rows):
+        c = scene.circuit
+        c_min = float(np.min(curves.capacitance_samples)) * scene.device.cells \
+            + c.parallel_capacitance
+        c_max = float(np.max(curves.capacitance_samples)) * scene.device.cells \
+            + c.parallel_capacitance
+        super().__init__(scene, dynamics, curves, window_start, first_rows,
+                         time_constant=c.load * c_min * c.series_capacitance
+                         / (c_min + c.series_capacitance))
+        self.time_constant = c.load * c_max * c.series_capacitance / (
+            c_max + c.series_capacitance)
+        from ..stream import chunk_bounds
+        largest = max(float(np.max(self.fine(i0, i1)[1]["C_T"]))
+                      for i0, i1 in chunk_bounds(self.t.size, first_rows))
+        self.deficit_form = c.series_capacitance >= DEFICIT_FORM_RATIO * (
+            largest + c.parallel_capacitance)
+
+    def chunk(self, i0: int, i1: int) -> dict:
+        grid, fine, output_index = self.fine(i0, i1)
+        c = self.scene.circuit
+        load, c_s = c.load, c.series_capacitance
+        cap = np.asarray(fine["C_T"], dtype=float) + c.parallel_capacitance
+        q_sc = np.asarray(fine["Q_sc"], dtype=float)
+        c_eff = cap * c_s / (cap + c_s)
+        zero = np.zeros_like(q_sc)
+        if self.deficit_form:     # D = Q_SC - Q carried; series_response's first branch
+            d0 = q_sc[0] if self.deficit is None else self.deficit
+            res = circuit.load_response(grid, zero, np.asarray(fine["I_sc"], dtype=float)
+                                        + q_sc / (load * c_s), c_eff, load, 0.0,
+                                        initial_load_charge=-d0)
+            q = q_sc - (-res.charge)
+        else:                     # Q on C_s carried; its second branch
+            d0 = 0.0 if self.deficit is None else self.deficit
+            res = circuit.load_response(grid, zero, q_sc / (load * cap), c_eff, load, 0.0,
+                                        initial_load_charge=-d0)
+            q = res.voltage * c_eff
+        self.deficit = -res.charge[-1]
+        voltage = (q_sc - q) / cap
+        v_cs = q / c_s
+        current = (voltage - v_cs) / load
+        power = current * current * load
+        delivered = circuit.delivered_power(voltage, fine["I_sc"], fine["dC_T_dt"])
+        stored = 0.5 * cap * voltage ** 2 + 0.5 * q ** 2 / c_s
+        self.add(grid, i0, power, delivered, stored)
+        keep = output_index[:i1 - i0]
+        return {"V_load_V": voltage[keep], "I_load_A": current[keep], "P_load_W": power[keep],
+                "V_series_C_V": v_cs[keep]}
+
+
 class SeriesRC(Load):
     """The load's summary, V-Q loop and array comparison, with C_s in the branch."""
     name = "series-rc"
@@ -101,6 +156,17 @@ class SeriesRC(Load):
     keys = ("load_ohm", "series_capacitance_pF")
     fit_load = False             # fit's forward model is the R ∥ C_p load, not R + C_s
     fit_columns = Circuit.fit_columns
+
+    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+        return None if curves is None else SeriesChunks(scene, dynamics, curves, window_start,
+                                                        chunk_rows)
+
+    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
+        c = scene.circuit
+        details, data = streamed_load(dynamics, chunked, reduced)
+        return CircuitRun({}, f"series R + C ODE, R = {c.load:g} ohm, "
+                              f"C_s = {c.series_capacitance * 1e12:g} pF{note}", details,
+                          data=data)
 
     def run(self, scene, dynamics, curves) -> CircuitRun:
         result = steady_series(scene, dynamics, curves)

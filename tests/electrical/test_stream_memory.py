@@ -1,0 +1,95 @@
+"""Memory of a streamed run does not grow with the run (issue #28 last item, #30.11):
+everything after the dynamics (surrogate, circuit, summary, run.h5, figures) peaks at
+the same memory for a run 4x longer, where the whole-record stage (the control, streaming
+switched off) grows with it. Measured in a child process: tracemalloc's peak of what is
+allocated after the dynamics (numpy's arrays included), and ru_maxrss's rise over the
+dynamics' level. The dynamics' own arrays (40 bytes per sample) are not the electrical
+stage's: they are measured apart (docs/long_runs.md)."""
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import pytest
+
+TESTS = Path(__file__).resolve().parents[1]
+
+CHILD = """
+import json, resource, sys, tracemalloc
+sys.path.insert(0, {tests!r})
+import plate_model as fx
+import tengfield as tf
+from tengfield import io as tio
+from tengfield.dynamics import simulate
+from tengfield.electrical import stream
+
+stream.STREAM_ROWS = {stream_rows}
+stream.CHUNK_ROWS = 1 << 14
+cache, out = {cache!r}, {out!r}
+
+def scene_of(duration):
+    return fx.scene_with(run={{"duration_s": duration, "settle_periods": 2,
+                               "output_format": "hdf5"}}, circuit={circuit!r})
+
+def outputs(scene, dynamics, directory):
+    r = tf.run(scene, simulate=lambda s: dynamics, cache_dir=cache,
+               solve=fx.plate_model_solve)
+    tio.write_run_outputs(r, directory, plots=True)
+    tio.write_dynamics_outputs(r, directory, plots=True)
+    return r
+
+warm = scene_of(0.5)                  # the surrogate, imports, matplotlib: not measured
+outputs(warm, simulate(warm), out + "-warm")
+scene = scene_of({duration})
+dynamics = simulate(scene)
+rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+tracemalloc.start()
+r = outputs(scene, dynamics, out)
+peak = tracemalloc.get_traced_memory()[1]
+rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps({{"traced_peak_MB": peak / 1e6, "rss_rise_MB": (rss1 - rss0) / 1e3,
+                  "rows": len(r.t), "streamed": hasattr(r.waveforms, "chunks")}}))
+"""
+
+
+LOAD = {"kind": "load", "load_ohm": 1e8, "parallel_capacitance_pF": 338.0}
+#: the plate model's cell charges this store through the chip's levels many times
+UVLO = {"kind": "rectifier", "storage_capacitance_uF": 1e-4, "pmic": "uvlo",
+        "pmic_quiescent_current_A": 0.0, "uvlo_rising_V": 20.0, "uvlo_falling_V": 10.0,
+        "pmic_output_V": 3.3, "pmic_load_ohm": 1e7, "pmic_shunt_V": 100.0}
+
+
+def _measure(python, env, tmp_path, duration, stream_rows, circuit):
+    name = f"d{duration:g}-s{stream_rows}-{circuit['kind']}"
+    code = CHILD.format(tests=str(TESTS), stream_rows=stream_rows, duration=duration,
+                        cache=str(tmp_path / "cache"), out=str(tmp_path / name),
+                        circuit=circuit)
+    proc = subprocess.run([python, "-c", code], capture_output=True, text=True, env=env,
+                          timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("circuit", [LOAD, UVLO], ids=["load-Cp", "rectifier-uvlo"])
+def test_a_run_4x_longer_streams_in_the_same_memory(tmp_path, python, cli_env, circuit):
+    env = cli_env(MPLBACKEND="Agg")
+    short = _measure(python, env, tmp_path, 10.0, 1 << 14, circuit)
+    long = _measure(python, env, tmp_path, 40.0, 1 << 14, circuit)
+    assert short["streamed"] and long["streamed"]
+    assert long["rows"] > 3.9 * short["rows"] > 7e5
+    assert long["traced_peak_MB"] < 1.3 * short["traced_peak_MB"], (short, long)
+    assert long["rss_rise_MB"] < 1.3 * short["rss_rise_MB"] + 20.0, (short, long)
+    print("streamed", circuit["kind"], short, long)
+    if circuit is not LOAD:
+        return
+    # the control: the same outputs from whole-record arrays grow with the run (so the
+    # bound above is one a proportional implementation would exceed)
+    whole_short = _measure(python, env, tmp_path, 10.0, 1 << 40, circuit)
+    whole_long = _measure(python, env, tmp_path, 40.0, 1 << 40, circuit)
+    assert not whole_long["streamed"]
+    assert whole_long["traced_peak_MB"] > 2.5 * whole_short["traced_peak_MB"], \
+        (whole_short, whole_long)
+    assert long["traced_peak_MB"] < 0.5 * whole_long["traced_peak_MB"]
+    print("whole", whole_short, whole_long)
