@@ -13,6 +13,7 @@ against a direct 3D solve at a held-out off-axis position.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -264,10 +265,12 @@ def test_the_zr_surrogate_reproduces_a_held_out_direct_3d_solve():
 
     scene = Scene.from_dict({"device": SHELL_KEYS, "field": {"method": "3d"}})
     settings = {"mesh_size_mm": 4.0, "degree": 1}
-    with pytest.warns(RuntimeWarning, match="interpolation error estimate"):
+    with warnings.catch_warnings():   # the estimate above the (unreachable) tolerance
+        warnings.simplefilter("ignore", RuntimeWarning)
         table = precompute_radial(scene, comm=_comm(), initial_positions=3, initial_offsets=2,
                                   max_positions=5, max_offsets=3, tolerance=1e-3, **settings)
     assert table.offset_coordinate == "scaled" and table.shape == (5, 3)
+    assert not table.converged
     assert table.max_offset == pytest.approx(6e-3)
     # the ends of the stroke are the axis at every u: one solve each, the same numbers
     np.testing.assert_array_equal(table.induced_charge[0, 0], table.induced_charge[0, -1])
