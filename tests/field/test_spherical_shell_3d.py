@@ -154,7 +154,7 @@ def test_scaled_curves_interpolate_in_real_offsets_with_chain_rule_derivatives()
     np.testing.assert_allclose(curves.charge(zz, rr), q_grid, rtol=1e-9,
                                atol=1e-12 * np.max(np.abs(q_grid)))
     np.testing.assert_allclose(curves.capacitance(zz, rr), c_grid, rtol=1e-9)
-    np.testing.assert_allclose(curves.grid_charge(zz, uu), q_grid, rtol=1e-9,
+    np.testing.assert_allclose(curves.grid_values(zz, uu)[0], q_grid, rtol=1e-9,
                                atol=1e-12 * np.max(np.abs(q_grid)))
     # derivatives in (z, r) by the chain rule = finite differences of the curves
     for z, fraction in ((3e-3, 0.4), (6e-3, 0.7), (8.5e-3, 0.2), (5e-3, 0.0)):

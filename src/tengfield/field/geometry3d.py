@@ -27,6 +27,11 @@ Electrodes are zero-thickness conductor surfaces embedded in the mesh
 walls have εr = 1), ``air``; surfaces ``ball_surface``,
 ``electrode_lower``, ``electrode_upper``, ``far_boundary``.
 
+:func:`build_model` asks the cell for its parts (``placement_3d``,
+``contact_rule_3d``, ``extent_3d``, ``occ_parts``, ``rim_distance_expr``,
+``gap_refinements_3d``), so another cell shape brings its own: the spherical shell's
+are in :mod:`tengfield.field.cells.shell_model3d`.
+
 gmsh is imported inside the functions that need it.
 """
 from __future__ import annotations

@@ -290,7 +290,7 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     ball.points += np.array([s_ball, centre[2] * mm, 0.05])
     plotter.add_mesh(ball.extract_feature_edges(), color="black", line_width=2.5)
     plotter.add_text(title, position="upper_edge", font_size=11, color="black")
-    plotter.add_text(f"meridian section through the axis and the ball centre; "
+    plotter.add_text("meridian section through the axis and the ball centre; "
                      + (f"shell outer radius {ro:.3g} mm" if cell is not None
                         else f"plate outer radius {ro:.3g} mm"),
                      position="lower_edge", font_size=9, color="black")

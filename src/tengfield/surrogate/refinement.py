@@ -306,7 +306,7 @@ def held_out_error_zr(coarse: RadialTable, fine: RadialTable) -> tuple[float, fl
         curves = RadialTerminalCurves(coarse, reference)
         q_fine, c_fine = terminal_grid(fine, reference)
         v_fine = q_fine / c_fine
-        q_coarse, c_coarse = curves.grid_charge(zz, rr), curves.grid_capacitance(zz, rr)
+        q_coarse, c_coarse = curves.grid_values(zz, rr)
         deviations = [(q_coarse, q_fine), (c_coarse, c_fine),
                       (terminals.open_circuit_voltage(q_coarse, c_coarse), v_fine)]
         for interpolated, direct in deviations:

@@ -161,3 +161,16 @@ def offset_refinement(largest: float, count: int) -> np.ndarray:
 def grid_key(z: float, r: float) -> tuple[int, int]:
     """The dictionary key of the grid point (z, r) [m]."""
     return (round(z * 1e13), round(r * 1e13))   # 0.1 pm: exact for the nested sets
+
+
+def scaled_offset_jacobian(z, r, u, stroke: float, largest: float):
+    """``(∂u/∂z, ∂u/∂r)`` of the scaled coordinate ``u`` [m] of offset ``r`` at gap ``z``:
+    ``u (z − Δh/2) / r_max²`` and ``R / r_max``; 0 where u is clipped (r >= r_max) or
+    r_max = 0 (the ends of the stroke)."""
+    z, r = np.broadcast_arrays(np.clip(np.asarray(z, dtype=float), 0.0, stroke),
+                               np.abs(np.asarray(r, dtype=float)))
+    r_max = admissible_offset(z, stroke, largest)
+    inside = (r_max > 0.0) & (r < r_max)
+    safe = np.where(inside, r_max, 1.0)
+    return (np.where(inside, u * (z - 0.5 * stroke) / safe**2, 0.0),
+            np.where(inside, largest / safe, 0.0))

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from .. import circuit, terminals
 from ..errors import TengfieldError
-from .sampling import admissible_offset, grid_key, scaled_offset
+from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
 
 
 class SurrogateError(TengfieldError, RuntimeError):
@@ -347,15 +347,12 @@ class RadialTable(SolveRecord):
     max_offset: float
     method: str = field(default="3d", kw_only=True)
     mesh_size: float = field(default=math.nan, kw_only=True)
-    #: "radial": ``offsets`` are the offsets r [m]; "scaled": they are u = R r / r_max(z)
-    #: [m] (R = ``max_offset``, r_max(z) = sqrt(R² − (z − Δh/2)²): the spherical shell,
-    #: :func:`tengfield.surrogate.sampling.offset_coordinate`)
+    #: "radial": offsets r [m]; "scaled": u = R r / r_max(z) [m] (sampling.offset_coordinate)
     offset_coordinate: str = field(default="radial", kw_only=True)
 
     def __post_init__(self) -> None:
         if self.offset_coordinate not in ("radial", "scaled"):
-            raise SurrogateError(f"offset_coordinate = {self.offset_coordinate!r}: allowed "
-                                 "'radial', 'scaled'")
+            raise SurrogateError(f"offset_coordinate {self.offset_coordinate!r}: not radial/scaled")
         self.positions = np.asarray(self.positions, dtype=float)
         self.offsets = np.asarray(self.offsets, dtype=float)
         grid = (self.positions.size, self.offsets.size)
@@ -484,11 +481,8 @@ class RadialTerminalCurves(OffAxisCurves):
     (z, s = r²), cubic where the grid has 4 or more values (else of degree
     count − 1); the derivatives are those of the splines, and ∂/∂r = 0 at
     r = 0 exactly. Q_SC is referred to the ball on the lower plate on the axis.
-    A ``"scaled"`` table (the spherical shell) is a spline in (z, s = u²) with
-    u = R r / r_max(z); r is clipped to r_max(z) and the derivatives follow by the
-    chain rule (∂u/∂r = R / r_max, ∂u/∂z = u (z − Δh/2) / r_max²; 0 where
-    r_max(z) = 0, at the ends of the stroke). :meth:`grid_charge` and
-    :meth:`grid_capacitance` take the table's own coordinates.
+    A ``"scaled"`` table (the spherical shell): splines in (z, u²), u = R r / r_max(z), r
+    clipped to r_max(z), the chain rule (:func:`scaled_offset_jacobian`); see :meth:`grid_values`.
     """
 
     def __init__(self, table: RadialTable, reference: str = "floating"):
@@ -514,44 +508,29 @@ class RadialTerminalCurves(OffAxisCurves):
         self._c = RectBivariateSpline(self.positions, s, self.capacitance_grid, kx=kz, ky=ks, s=0)
 
     def _zs(self, z, r):
-        """(z, table coordinate) of gap ``z`` and offset ``r`` [m], clipped to the region."""
         z, r = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(r, dtype=float))
         z = np.clip(z, 0.0, self.stroke)
         if self.scaled:
             return z, scaled_offset(z, r, self.stroke, self.max_offset)
-        r = np.clip(np.abs(r), 0.0, self.max_offset)
-        return z, r
+        return z, np.clip(np.abs(r), 0.0, self.max_offset)
 
     def _eval(self, spline, z, r, dz=0, ds=0):
         z, r = self._zs(z, r)
         return spline.ev(z, r**2, dx=dz, dy=ds).reshape(z.shape), r
 
     def _gradient(self, spline, z, r):
-        """``(d/dz, d/dr)`` of ``spline`` over (z, s = u²) (u = r for a radial table):
-        d/dr = 2 u d/ds du/dr (0 on the axis), plus 2 u d/ds du/dz in d/dz if scaled."""
+        """``(d/dz, d/dr)`` of ``spline`` over (z, s = u²); d/dr = 2u d/ds du/dr, 0 on the axis."""
         d_z = self._eval(spline, z, r, dz=1)[0]
         d_s, u = self._eval(spline, z, r, ds=1)
         if not self.scaled:
             return d_z, 2.0 * u * d_s
-        zc, rc = np.broadcast_arrays(np.clip(np.asarray(z, dtype=float), 0.0, self.stroke),
-                                     np.abs(np.asarray(r, dtype=float)))
-        r_max = admissible_offset(zc, self.stroke, self.max_offset)
-        inside = (r_max > 0.0) & (rc < r_max)      # clipped points do not move with r
-        safe = np.where(inside, r_max, 1.0)
-        du_dr = np.where(inside, self.max_offset / safe, 0.0)
-        du_dz = np.where(inside, u * (zc - 0.5 * self.stroke) / safe**2, 0.0)
-        d_u = 2.0 * u * d_s
-        return d_z + d_u * du_dz, d_u * du_dr
+        du_dz, du_dr = scaled_offset_jacobian(z, r, u, self.stroke, self.max_offset)
+        return d_z + 2.0 * u * d_s * du_dz, 2.0 * u * d_s * du_dr
 
-    def grid_charge(self, z, u):
-        """Q_SC [C] at gap ``z`` and table coordinate ``u`` [m] (= r for a radial table)."""
+    def grid_values(self, z, u):
+        """``(Q_SC [C], C_T [F])`` at gap ``z`` and table coordinate ``u`` [m] (= r if radial)."""
         z, u = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(u, dtype=float))
-        return self._q.ev(z, u**2).reshape(z.shape)
-
-    def grid_capacitance(self, z, u):
-        """C_T [F] at gap ``z`` and table coordinate ``u`` [m]."""
-        z, u = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(u, dtype=float))
-        return self._c.ev(z, u**2).reshape(z.shape)
+        return self._q.ev(z, u**2).reshape(z.shape), self._c.ev(z, u**2).reshape(z.shape)
 
     def charge(self, z, r):
         """Q_SC(z, r) [C]."""
