@@ -336,3 +336,40 @@ def test_tengfield_field_solves_an_off_axis_ball_in_the_shell(tmp_path, run_cli,
     lines = proc.stderr.strip().splitlines()
     assert lines[-1].startswith("tengfield: error: ") and "offset_mm = 5 is out of range" \
         in lines[-1], proc.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.field
+def test_tengfield_run_with_3d_solves_on_a_shell(tmp_path, run_cli, cli_env):
+    """``tengfield run`` with ``[field] method = "3d"`` on a shell (figures on): the 1-D
+    surrogate along the axis from 3D solves; Q_SC's peak-to-peak is the short-circuit
+    charge moved between the ball on the bottom and at its highest point by the
+    (independent) axisymmetric solver, within the 3D solves' own error estimate."""
+    import json
+
+    from tengfield.field import solve_position
+    from tengfield.scene import load_scene
+    from tengfield.terminals import upper_short_circuit_charge
+
+    path = tmp_path / "shell.toml"
+    path.write_text(SHELL_TOML.replace("mesh_size_mm = 3", "mesh_size_mm = 4\ntolerance = 0.5")
+                    + "\n[excitation]\nfrequency_hz = 20\namplitude_mm = 3\n\n"
+                      "[run]\nduration_s = 0.4\nsettle_periods = 2\n")
+    out = tmp_path / "run"
+    proc = run_cli("run", path, "-o", out, env=cli_env(TENGFIELD_CACHE_DIR=tmp_path / "cache"))
+    assert proc.returncode == 0, proc.stderr
+    for name in ("waveforms.csv", "summary.json", "waveforms.png", "surrogate.png"):
+        assert (out / name).is_file(), name
+    summary = json.loads((out / "summary.json").read_text())
+    details = summary["stages"]["field"]["details"]
+    assert details["method"] == "3d" and details["positions"] >= 17
+    estimate = details["max_relative_error_estimate"]
+    assert 0.0 < estimate < 0.5
+    top = summary["regime"]["max_gap_m"]
+    scene = load_scene(path).with_values(field={"method": "axisymmetric"})
+    results = [solve_position(scene, z, comm=_comm(), estimate_error=False, mesh_size_mm=1.0,
+                              degree=2) for z in (0.0, top)]
+    charges = [upper_short_circuit_charge(*r.capacitance[0], r.capacitance[1, 1],
+                                          *r.induced_charge, r.ball_charge) for r in results]
+    moved = abs(charges[1] - charges[0])
+    assert summary["peak_to_peak"]["Q_sc_C"] == pytest.approx(moved, rel=estimate)
