@@ -12,6 +12,7 @@ against a direct 3D solve at a held-out off-axis position.
 """
 from __future__ import annotations
 
+import json
 import math
 import warnings
 
@@ -295,21 +296,10 @@ def test_the_zr_surrogate_reproduces_a_held_out_direct_3d_solve():
     assert max(dev_q, dev_c) <= table.interpolation_error   # measured 1.4e-2 <= 9.5e-2
 
 
-SHELL_TOML = """\
-[device]
-shape = "spherical-shell"
-cavity_diameter_mm = 20
-shell_thickness_mm = 2
-electrode_band_mm = 2
-ball_diameter_mm = 8
-wall_permittivity = 3.0
-surface_charge_uC_per_m2 = -50
-
-[field]
-method = "3d"
-degree = 1
-mesh_size_mm = 3
-"""
+#: the shell's scene file: SHELL_KEYS with 3D solves at a coarse mesh
+SHELL_TOML = ("[device]\n" + "".join(f"{key} = {json.dumps(value)}\n"
+                                    for key, value in SHELL_KEYS.items())
+              + '\n[field]\nmethod = "3d"\ndegree = 1\nmesh_size_mm = 3\n')
 
 
 @pytest.mark.slow
@@ -318,8 +308,6 @@ def test_tengfield_field_solves_an_off_axis_ball_in_the_shell(tmp_path, run_cli,
     """``tengfield field --method 3d --offset-mm R`` on a shell (figures on): field.json
     names the 3D solve at the offset, field.png is drawn with the shell's outline; an
     offset the cavity cannot hold at that height is one line (exit 2)."""
-    import json
-
     path = tmp_path / "shell.toml"
     path.write_text(SHELL_TOML)
     env = cli_env(TENGFIELD_CACHE_DIR=tmp_path / "cache")
@@ -345,7 +333,6 @@ def test_tengfield_run_with_3d_solves_on_a_shell(tmp_path, run_cli, cli_env):
     surrogate along the axis from 3D solves; Q_SC's peak-to-peak is the short-circuit
     charge moved between the ball on the bottom and at its highest point by the
     (independent) axisymmetric solver, within the 3D solves' own error estimate."""
-    import json
 
     from tengfield.field import solve_position
     from tengfield.scene import load_scene

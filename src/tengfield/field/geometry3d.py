@@ -102,6 +102,18 @@ def _plate_cell_gap_refinements(cell, centre, size: float, ball_factor: float) -
     return out
 
 
+def _plates_and_bore(cell, occ, solid, outer: float, inner: float) -> list[int]:
+    """The wall volumes of a cell between two plates (none when εr = 1): the two plates
+    and the tube, ``solid(size, z0, height)`` a prism of the cross-section (a cylinder
+    of radius ``size``, a hexagonal prism of apothem ``size``) from ``z0`` up."""
+    if cell.wall_permittivity == 1.0:
+        return []
+    half, t = 0.5 * cell.electrode_spacing, cell.plate_thickness
+    walls = [solid(outer, -half - t, t), solid(outer, half, t)]
+    tube, _ = occ.cut([(3, solid(outer, -half, 2 * half))], [(3, solid(inner, -half, 2 * half))])
+    return walls + [tag for _, tag in tube]
+
+
 def _plane_rims(cell, lateral: str) -> str:
     """Distance to the nearest rim of two plane electrodes at z = ±h/2 whose in-plane
     distance to the rim is the MathEval expression ``lateral``."""
@@ -110,8 +122,22 @@ def _plane_rims(cell, lateral: str) -> str:
     return f"sqrt({lateral}^2+{axial}^2)"
 
 
+class _PlateCell:
+    """What the tube and the honeycomb share: the ball between two plane electrodes
+    h = d + Δh apart; the 3D model's placement, contact rule, extent and gap sizes."""
+    placement_3d = _plate_cell_placement
+    contact_rule_3d = _plate_cell_contact_rule
+    extent_3d = _plate_cell_extent
+    gap_refinements_3d = _plate_cell_gap_refinements
+
+    @property
+    def electrode_spacing(self) -> float:
+        """h = d + Δh [m]."""
+        return self.ball_diameter + self.stroke
+
+
 @dataclass(frozen=True)
-class CylindricalCell:
+class CylindricalCell(_PlateCell):
     """The paper's device: round tube, round plates, disk electrodes (SI)."""
     ball_diameter: float        # d [m]
     stroke: float               # Δh = h - d [m]
@@ -123,11 +149,6 @@ class CylindricalCell:
     wall_permittivity: float    # relative; 1 leaves tube and plates out
 
     @property
-    def electrode_spacing(self) -> float:
-        """h = d + Δh [m]."""
-        return self.ball_diameter + self.stroke
-
-    @property
     def bounding_radius(self) -> float:
         """Radius of the smallest origin-centred sphere holding the device [m]."""
         return math.hypot(self.tube_outer_radius, 0.5 * self.electrode_spacing + self.plate_thickness)
@@ -137,28 +158,17 @@ class CylindricalCell:
         """Largest lateral ball offset that keeps the ball inside the tube [m]."""
         return self.tube_inner_radius - 0.5 * self.ball_diameter
 
-    # -- the 3D model (build_model asks the cell) ----------------------------------
-    placement_3d = _plate_cell_placement
-    contact_rule_3d = _plate_cell_contact_rule
-    extent_3d = _plate_cell_extent
-    gap_refinements_3d = _plate_cell_gap_refinements
-
     def occ_parts(self, occ) -> tuple[list[int], list[int]]:
         """Add the electrodes (two disks) and, unless εr = 1, the plates and the tube
         to the OCC model: ``([lower, upper] surface tags, wall volume tags)``."""
         half = 0.5 * self.electrode_spacing
         rim = self.electrode_radius
         electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in (-half, half)]
-        walls = []
-        if self.wall_permittivity != 1.0:
-            t = self.plate_thickness
-            walls.append(occ.addCylinder(0, 0, -half - t, 0, 0, t, self.tube_outer_radius))
-            walls.append(occ.addCylinder(0, 0, half, 0, 0, t, self.tube_outer_radius))
-            outer = occ.addCylinder(0, 0, -half, 0, 0, 2 * half, self.tube_outer_radius)
-            inner = occ.addCylinder(0, 0, -half, 0, 0, 2 * half, self.tube_inner_radius)
-            tube, _ = occ.cut([(3, outer)], [(3, inner)])
-            walls.extend(tag for _, tag in tube)
-        return electrodes, walls
+        def cylinder(radius, z0, height):
+            return occ.addCylinder(0, 0, z0, 0, 0, height, radius)
+
+        return electrodes, _plates_and_bore(self, occ, cylinder, self.tube_outer_radius,
+                                            self.tube_inner_radius)
 
     def rim_distance_expr(self) -> str:
         """gmsh MathEval expression of the distance [m] to the nearest disk rim (exact)."""
@@ -171,7 +181,7 @@ class CylindricalCell:
 
 
 @dataclass(frozen=True)
-class HexagonalCell:
+class HexagonalCell(_PlateCell):
     """One cell of the Fig. 10 honeycomb (SI).
 
     Hexagons have two flats parallel to the x axis; "apothem" is the
@@ -190,10 +200,6 @@ class HexagonalCell:
     wall_permittivity: float = 3.0
 
     @property
-    def electrode_spacing(self) -> float:
-        return self.ball_diameter + self.stroke
-
-    @property
     def outer_apothem(self) -> float:
         return self.inner_apothem + self.wall_thickness
 
@@ -206,27 +212,16 @@ class HexagonalCell:
     def max_offset(self) -> float:
         return self.inner_apothem - 0.5 * self.ball_diameter
 
-    # -- the 3D model (build_model asks the cell) ----------------------------------
-    placement_3d = _plate_cell_placement
-    contact_rule_3d = _plate_cell_contact_rule
-    extent_3d = _plate_cell_extent
-    gap_refinements_3d = _plate_cell_gap_refinements
-
     def occ_parts(self, occ) -> tuple[list[int], list[int]]:
         """Add the hexagonal electrodes and, unless εr = 1, the plates and the hexagonal
         tube: ``([lower, upper] surface tags, wall volume tags)``."""
         half = 0.5 * self.electrode_spacing
         electrodes = [_hexagon(occ, self.inner_apothem, z) for z in (-half, half)]
-        walls = []
-        if self.wall_permittivity != 1.0:
-            t = self.plate_thickness
-            walls.append(_hex_prism(occ, self.outer_apothem, -half - t, t))
-            walls.append(_hex_prism(occ, self.outer_apothem, half, t))
-            outer = _hex_prism(occ, self.outer_apothem, -half, 2 * half)
-            inner = _hex_prism(occ, self.inner_apothem, -half, 2 * half)
-            tube, _ = occ.cut([(3, outer)], [(3, inner)])
-            walls.extend(tag for _, tag in tube)
-        return electrodes, walls
+        def prism(apothem, z0, height):
+            return _hex_prism(occ, apothem, z0, height)
+
+        return electrodes, _plates_and_bore(self, occ, prism, self.outer_apothem,
+                                            self.inner_apothem)
 
     def rim_distance_expr(self) -> str:
         """gmsh MathEval distance [m] to the nearest hexagon rim (exact off the corners)."""
