@@ -194,6 +194,69 @@ def test_a_scaled_table_keeps_its_coordinate_through_hdf5_and_a_tubes_file_is_un
     assert read_radial_table(tmp_path / "tube.h5").offset_coordinate == "radial"
 
 
+def _shell_model_solve(calls):
+    """An analytic stand-in for the shell's 3D solve (smooth in the ball's real offset r,
+    mirror-symmetric in z); records each (position, offset)."""
+    from tengfield.field.result import PositionResult
+
+    def solve(scene, position, *, comm=None, offset=0.0, **_):
+        calls.append((float(position), float(offset)))
+        s, rho2 = position / scene.device.stroke, (offset / 6e-3) ** 2
+        wall = rho2 / (1.2 - rho2)                  # steepens toward the wall
+        c_ll = 2.2e-12 * (1 + 0.1 * s + 0.05 * wall)
+        c_uu = 2.2e-12 * (1 + 0.1 * (1 - s) + 0.05 * wall)
+        c_lu = -1.6e-12 * (1 + 0.02 * wall)
+        ball = scene.device.ball_charge
+        share = -ball * (1 - 0.02 * wall * (0.5 + math.sin(math.pi * s)))
+        return PositionResult(position=float(position), offset=float(offset),
+                              capacitance=[[c_ll, c_lu], [c_lu, c_uu]],
+                              induced_charge=[share * (0.9 - 0.8 * s), share * (0.1 + 0.8 * s)],
+                              ball_charge=ball, dofs=1000, cells=2000, method="3d", degree=2,
+                              wall_time=0.01, relative_error_estimate=1e-6, solve_time=0.005)
+    return solve
+
+
+def test_the_shells_zr_table_solves_real_offsets_inside_the_cavity_once_each():
+    """precompute_radial on a shell: every solve is at a real offset the cavity holds at
+    that height (the wall column at r_max(z)), the ends of the stroke (r_max = 0) are
+    solved once, and the table's curves in real offsets meet its held-out estimate."""
+    from tengfield.surrogate import precompute_radial
+
+    scene = Scene.from_dict({"device": SHELL_KEYS, "field": {"method": "3d"}})
+    calls: list = []
+    table = precompute_radial(scene, solve=_shell_model_solve(calls), solve_comm=object(),
+                              tolerance=1e-3, max_positions=65, max_offsets=17)
+    stroke = scene.device.stroke
+    assert table.offset_coordinate == "scaled" and table.converged
+    assert len(calls) == len(set(calls))                    # no place solved twice
+    for z, r in calls:
+        assert r <= SHELL.admissible_offset(z) * (1 + 1e-12) + 1e-18
+    assert [r for z, r in calls if z == 0.0] == [0.0]         # the bottom: the axis, once
+    walls = [(z, r) for z, r in calls if 0.0 < z < stroke and r > 0.0
+             and r == pytest.approx(SHELL.admissible_offset(z), rel=1e-12)]
+    assert len(walls) >= 3                                   # the u = R column: the wall
+    check: list = []
+    truth = _shell_model_solve(check)
+    curves = RadialTerminalCurves(table)
+    q_grid, c_grid = terminal_grid(table)
+    reference = truth(scene, 0.0)
+    worst = 0.0
+    for z in np.linspace(0.3e-3, stroke - 0.3e-3, 23):
+        for fraction in (0.13, 0.5, 0.77, 0.95):
+            r = fraction * SHELL.admissible_offset(z)
+            res = truth(scene, z, offset=r)
+            C, q = res.capacitance, res.induced_charge
+            q_sc = (terminals.upper_short_circuit_charge(C[0][0], C[0][1], C[1][1], q[0], q[1],
+                                                         res.ball_charge)
+                    - terminals.upper_short_circuit_charge(
+                        *reference.capacitance[0], reference.capacitance[1][1],
+                        *reference.induced_charge, res.ball_charge))
+            c_t = terminals.terminal_capacitance(C[0][0], C[0][1], C[1][1], "floating")
+            worst = max(worst, abs(float(curves.charge(z, r)) - q_sc) / np.max(np.abs(q_grid)),
+                        abs(float(curves.capacitance(z, r)) - c_t) / np.max(np.abs(c_grid)))
+    assert 1e-7 < worst <= table.interpolation_error         # an honest, not a vacuous, bound
+
+
 # ---------------------------------------------------------------------------
 # real solves (slow)
 @pytest.fixture(scope="module")

@@ -415,6 +415,7 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
             bar.update(n)
 
     solved: dict = {}
+    by_place: dict = {}   # the solves by the ball's (z, r): a scaled grid's ends share one
     measured = math.nan
 
     def solve_grid(positions, offsets) -> None:
@@ -428,6 +429,8 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         for z, u in todo:
             r = offset_of(z, u)
             estimate = grid_key(z, u) in sample_keys
+            if grid_key(z, r) in by_place:
+                continue                     # solved in an earlier round
             if grid_key(z, r) in places:
                 places[grid_key(z, r)][2] |= estimate
             else:
@@ -439,7 +442,7 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         farmed = farm(comm, tasks, work, progress=advance)
         if sampled:
             farmed, measured = _sampled_field_errors(farmed, [t[2] for t in tasks], measured)
-        by_place = dict(zip(places, farmed))
+        by_place.update(zip(places, farmed))
         results = [by_place[grid_key(z, offset_of(z, r))] for z, r in todo]
         for (z, r), res in zip(todo, results):
             solved[grid_key(z, r)] = res
