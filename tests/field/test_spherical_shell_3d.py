@@ -387,6 +387,14 @@ def test_tengfield_field_solves_an_off_axis_ball_in_the_shell(tmp_path, run_cli,
     lines = proc.stderr.strip().splitlines()
     assert lines[-1].startswith("tengfield: error: ") and "offset_mm = 5 is out of range" \
         in lines[-1], proc.stderr
+    # a run at a fixed offset would take the ball out of the cavity at the stroke's ends
+    path.write_text(SHELL_TOML + "ball_offset_mm = 1\n")
+    proc = run_cli("run", path, "--no-plots", "-o", tmp_path / "run", env=env)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert lines[-1].startswith("tengfield: error: offset_mm = 1 is out of range at "
+                                "position_mm = 0: allowed [0, 0] mm") \
+        and "a shell's run needs 0 there" in lines[-1], proc.stderr
 
 
 @pytest.mark.slow

@@ -64,7 +64,10 @@ def _check(shell, position: float, offset: float) -> None:
     if not (math.isfinite(offset) and 0.0 <= offset <= largest * (1 + 1e-9) + 1e-15):
         raise FieldError(f"offset_mm = {offset * 1e3:g} is out of range at position_mm = "
                          f"{position * 1e3:g}: allowed [0, {largest * 1e3:.6g}] mm (the ball "
-                         "must stay inside the cavity: |centre| <= cavity radius - ball radius)")
+                         "must stay inside the cavity: |centre| <= cavity radius - ball radius; "
+                         "a run tabulates the whole stroke at [field] ball_offset_mm, so a "
+                         "shell's run needs 0 there, tengfield field --offset-mm solves one "
+                         "position)")
     g_min = contact.minimum_gap(shell.electrode_spacing)
     if centre_radius(shell) < 4 * g_min:
         raise FieldError(f"[device] ball_diameter_mm = {shell.ball_diameter * 1e3:g} nearly fills "
