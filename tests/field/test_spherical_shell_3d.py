@@ -313,6 +313,8 @@ def test_a_ball_at_the_centres_height_offset_sideways_induces_equal_charges():
     q, C = res.induced_charge, res.capacitance
     assert abs(q[0] - q[1]) <= estimate * abs(q[0])
     assert abs(C[0, 0] - C[1, 1]) <= estimate * C[0, 0]
+    # far below the estimate (4e-2): the mesh's own asymmetry, measured 5e-6 and 1.3e-5
+    assert abs(q[0] - q[1]) <= 1e-3 * abs(q[0]) and abs(C[0, 0] - C[1, 1]) <= 1e-3 * C[0, 0]
     np.testing.assert_allclose(res.info["ball_centre_m"],
                                [4e-3 * math.cos(0.7), 4e-3 * math.sin(0.7), 0.0], atol=1e-15)
     assert -(q[0] + q[1]) / res.ball_charge == pytest.approx(1.0, abs=0.01)
