@@ -109,12 +109,14 @@ def test_what_the_shell_does_not_do_yet_is_refused_naming_the_key():
                                          r"'spherical-shell': the field stage needs") as info:
         check_field(scene)
     assert "\n" not in str(info.value)
-    for fld, key in (({"method": "3d"}, "method"), ({"ball_offset_mm": 1.0}, "ball_offset_mm"),
-                     ({"environment": "grounded-table"}, "environment")):
+    for fld, key in (({"environment": "grounded-table"}, "environment"),):
         scene = Scene.from_dict({"device": SHELL, "field": fld})   # dynamics-only runs may
         with pytest.raises(SceneError, match=rf"\[field\] .*{key}") as info:
             check_field(scene)
         assert "\n" not in str(info.value)
+    # the 3D solves and an off-axis ball work (tests/field/test_spherical_shell_3d.py)
+    for fld in ({"method": "3d"}, {"ball_offset_mm": 1.0}, {"method": "3d", "ball_offset_mm": 6}):
+        check_field(Scene.from_dict({"device": SHELL, "field": fld}))
 
 
 def test_the_field_hash_of_a_shell_holds_its_keys_and_not_the_tubes():

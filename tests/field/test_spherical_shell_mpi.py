@@ -40,3 +40,24 @@ def test_error_on_rank_zero_is_raised_on_every_rank():
     with pytest.raises(FieldError, match="domain_radius_mm = 12 is too small"):
         solve_cell_position(shell(), 2.5e-3, comm=MPI.COMM_WORLD, mesh_size=1e-3,
                             domain_radius=12e-3, estimate_error=False)
+
+
+def test_off_axis_3d_solve_distributed_equals_serial_on_every_rank():
+    """The shell's 3D model (an off-axis ball touching the wall: the contact rule along the
+    radius) meshed on rank 0 and distributed: the serial numbers within the solver's
+    tolerance, the same on every rank."""
+    from mpi4py import MPI
+
+    world = MPI.COMM_WORLD
+    cell = shell()
+    z = 4e-3
+    opts = dict(offset=cell.admissible_offset(z), offset_angle=0.3, sigma=-1e-5,
+                mesh_size=3e-3, degree=1, estimate_error=False)
+    shared = cell.solve_3d(z, comm=world, **opts)
+    serial = cell.solve_3d(z, comm=MPI.COMM_SELF, **opts)
+    assert "contact_rule" in shared.info and shared.dofs == serial.dofs
+    np.testing.assert_allclose(shared.capacitance, serial.capacitance, rtol=1e-7)
+    np.testing.assert_allclose(shared.induced_charge, serial.induced_charge, rtol=1e-7)
+    everyone = world.allgather(shared.induced_charge)
+    for charges in everyone:
+        np.testing.assert_allclose(charges, everyone[0], rtol=1e-12)

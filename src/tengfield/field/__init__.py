@@ -40,7 +40,7 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
                   "geometry3d.py", "geometry_axisymmetric.py", "solver3d.py",
                   "cells/__init__.py", "cells/hexagonal.py", "cells/shell_model.py",
-                  "cells/solve.py",
+                  "cells/shell_model3d.py", "cells/solve.py",
                   "cells/spherical_shell.py", "cells/tube.py")
 
 

@@ -254,16 +254,16 @@ def permittivities(device, lay) -> dict[str, float]:
             "air": 1.0, "exterior": 1.0}
 
 
-def build_mesh(scene, position: float, comm, **layout_overrides):
-    """(layout, mesh, cell_tags, facet_tags) for the ball at ``position`` (on ``comm``)."""
+def mesh_model(build, comm, failure):
+    """(mesh, cell_tags, facet_tags): ``build(gmsh)`` creates and meshes the current gmsh
+    model (gmsh initialised here unless it is), distributed on ``comm`` from rank 0; a
+    gmsh/OpenCASCADE failure is the one :class:`FieldError` line ``failure(exc)``. Shared
+    by the tube (:func:`build_mesh`) and the cells (``field/cells/solve.py``)."""
     import gmsh
 
     from . import _dolfinx as dx_api
     from ._gmsh import initialize as initialize_gmsh
 
-    lay = geometry.layout(scene, position, **layout_overrides)
-    geometry.check_mesh_budget(lay, scene.field.degree,
-                               mesh_size_mm=geometry.base_mesh_size(scene) * 1e3)
     initialised_here = not gmsh.isInitialized()
     if initialised_here:
         # interruptible=False: gmsh leaves Python's SIGINT handler alone (Ctrl-C
@@ -272,16 +272,27 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     gmsh.option.setNumber("General.Terminal", 0)
     try:
         try:
-            geometry.build_model(gmsh, lay, geometry_order=2)
+            build(gmsh)
         except FieldError:
             raise
         except Exception as exc:  # noqa: BLE001 - gmsh/OpenCASCADE: one line naming the keys
-            raise FieldError(geometry.meshing_failure(scene, exc)) from None
+            raise FieldError(failure(exc)) from None
         mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=2)
         gmsh.model.remove()
     finally:
         if initialised_here:
             gmsh.finalize()
+    return mesh, cell_tags, facet_tags
+
+
+def build_mesh(scene, position: float, comm, **layout_overrides):
+    """(layout, mesh, cell_tags, facet_tags) for the ball at ``position`` (on ``comm``)."""
+    lay = geometry.layout(scene, position, **layout_overrides)
+    geometry.check_mesh_budget(lay, scene.field.degree,
+                               mesh_size_mm=geometry.base_mesh_size(scene) * 1e3)
+    mesh, cell_tags, facet_tags = mesh_model(
+        lambda gmsh: geometry.build_model(gmsh, lay, geometry_order=2), comm,
+        lambda exc: geometry.meshing_failure(scene, exc))
     return lay, mesh, cell_tags, facet_tags
 
 
@@ -296,24 +307,40 @@ def solve_serial(scene, position: float, comm, **options) -> PositionResult:
     anchors = contact.contact_anchors(position, dev.stroke, dev.plate_spacing)
     if anchors is None:
         return solve_meshed(scene, position, comm, **options)
+    return solve_by_contact_rule(position, anchors, dev.stroke,
+                                 lambda z, **opts: solve_meshed(scene, z, comm, **opts), options)
+
+
+#: ``info`` entries of a solve that the contact rule extrapolates like C and q (the
+#: electrode charges of the source solve, the charge to infinity, the breakdown lines)
+EXTRAPOLATED_INFO = ("source_electrode_charge_C", "far_field_charge_C", *LINE_KEYS)
+
+
+def solve_by_contact_rule(position: float, anchors, stroke: float, solve_at_gap,
+                          options: dict) -> PositionResult:
+    """The contact rule (:func:`tengfield.field.contact.extrapolate_to_contact`) over an
+    axisymmetric solver ``solve_at_gap(z, **options)`` -> PositionResult: C, q and the
+    :data:`EXTRAPOLATED_INFO` entries extrapolated from the ``anchors``; the potentials
+    kept (``keep_solution``) are those of the nearest anchor. Shared by the tube and the
+    cells (``field/cells/solve.py``)."""
     t0 = time.perf_counter()
     later = {**options, "keep_solution": False}
 
     def solve_at(z):
-        res = solve_meshed(scene, z, comm, **(options if z == anchors[0] else later))
+        res = solve_at_gap(z, **(options if z == anchors[0] else later))
         if "source_electrode_charge_C" in res.info:
             res.extras = {"source": np.asarray(res.info["source_electrode_charge_C"])}
-        for key in LINE_KEYS:   # breakdown lines: extrapolated like C and q
+        for key in EXTRAPOLATED_INFO[1:]:   # the charge to infinity, the breakdown lines
             if key in res.info:
                 res.extras = {**getattr(res, "extras", {}), key: np.asarray(res.info[key])}
         return res
 
-    rule = contact.extrapolate_to_contact(position, anchors, dev.stroke, solve_at)
+    rule = contact.extrapolate_to_contact(position, anchors, stroke, solve_at)
     solves = rule["solves"]
     result = solves[0]
     if "source" in rule["extras"]:
         result.info["source_electrode_charge_C"] = rule["extras"]["source"]
-    for key in LINE_KEYS:
+    for key in EXTRAPOLATED_INFO[1:]:
         if key in rule["extras"]:
             result.info[key] = rule["extras"][key]
     result.capacitance = rule["capacitance"]
@@ -413,22 +440,30 @@ def solve_position_axisymmetric(scene, position: float, *, comm, **options) -> P
     needed for plots), ``keep_solution`` (serial only: keep mesh and potentials
     in ``result.solution``), ``linear_solver`` ("direct" MUMPS or "cg-amg").
     """
-    from mpi4py import MPI
-
     from . import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
 
     unknown = set(options) - set(SOLVER_OPTIONS)
     if unknown:
         raise FieldError(f"unknown axisymmetric solver option(s) {sorted(unknown)}; "
                          f"allowed: {', '.join(SOLVER_OPTIONS)}")
+    return solved_on_rank_zero(comm, lambda here: solve_serial(scene, position, here, **options),
+                               keep_solution=bool(options.get("keep_solution")))
+
+
+def solved_on_rank_zero(comm, solve, *, keep_solution: bool = False):
+    """``solve(here)`` on ``comm`` itself when it has one rank, else on rank 0 (``here`` =
+    ``COMM_SELF``) with its result (or exception) broadcast to every rank; the tube's and
+    the cells' axisymmetric solves."""
+    from mpi4py import MPI
+
     if comm.size == 1:
-        return solve_serial(scene, position, comm, **options)
-    if options.get("keep_solution"):
+        return solve(comm)
+    if keep_solution:
         raise FieldError("keep_solution needs a communicator of size 1")
     outcome = None
     if comm.rank == 0:
         try:
-            outcome = solve_serial(scene, position, MPI.COMM_SELF, **options)
+            outcome = solve(MPI.COMM_SELF)
         except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
             outcome = exc
     outcome = comm.bcast(outcome, root=0)

@@ -27,6 +27,11 @@ Electrodes are zero-thickness conductor surfaces embedded in the mesh
 walls have εr = 1), ``air``; surfaces ``ball_surface``,
 ``electrode_lower``, ``electrode_upper``, ``far_boundary``.
 
+:func:`build_model` asks the cell for its parts (``placement_3d``,
+``contact_rule_3d``, ``extent_3d``, ``occ_parts``, ``rim_distance_expr``,
+``gap_refinements_3d``), so another cell shape brings its own: the spherical shell's
+are in :mod:`tengfield.field.cells.shell_model3d`.
+
 gmsh is imported inside the functions that need it.
 """
 from __future__ import annotations
@@ -51,8 +56,88 @@ SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_bou
 _model_counter = itertools.count()
 
 
+# -- what build_model asks a cell between two plates (the tube and the honeycomb);
+# -- the spherical shell answers the same questions in field/cells/shell_model3d.py
+def _plate_cell_placement(cell, position: float, offset: float,
+                          offset_angle: float = 0.0) -> tuple[np.ndarray, float]:
+    """(ball centre [m], meshed gap [m]) for gap ``position`` and lateral ``offset`` [m]."""
+    return ball_centre(cell, position, offset, offset_angle), meshed_gap(cell, position)
+
+
+def _plate_cell_contact_rule(cell, position: float, offset: float,
+                             offset_angle: float = 0.0) -> dict | None:
+    """The contact rule of :func:`contact_anchors` (along z, at the same offset):
+    ``None`` when ``position`` is meshable, else ``{"coordinate", "anchors", "span",
+    "place"}`` for :func:`tengfield.field.contact.extrapolate_to_contact`
+    (``place(z) -> (position, offset)``)."""
+    anchors = contact_anchors(cell, position)
+    if anchors is None:
+        return None
+    return {"coordinate": position, "anchors": anchors, "span": cell.stroke,
+            "place": lambda z: (z, offset)}
+
+
+def _plate_cell_extent(cell, offset: float) -> float:
+    """Radius [m] around the origin the device and an offset ball fit in."""
+    return cell.bounding_radius + offset
+
+
+def _plate_cell_gap_refinements(cell, centre, size: float, ball_factor: float) -> list:
+    """``[(s_min [m], point [m])]``: the gaps the mesh refines (the ball's poles to the
+    plates, the lateral gap to the wall when smaller than ``ball_factor · size``)."""
+    h = size
+    radius = 0.5 * cell.ball_diameter
+    half = 0.5 * cell.electrode_spacing
+    x0, y0, zc = (float(c) for c in centre)
+    out = []
+    for z_pole, z_plane in ((zc - radius, -half), (zc + radius, half)):
+        gap = abs(z_pole - z_plane)
+        s_min = min(max(0.5 * gap, 0.02 * h), ball_factor * h)
+        z_mid = 0.5 * (z_pole + z_plane)
+        out.append((s_min, (x0, y0, z_mid)))
+    lateral = _lateral_gap(cell, centre)
+    if lateral is not None and lateral[0] < ball_factor * h:
+        gap, mid = lateral
+        out.append((max(0.5 * gap, 0.02 * h), mid))
+    return out
+
+
+def _plates_and_bore(cell, occ, solid, outer: float, inner: float) -> list[int]:
+    """The wall volumes of a cell between two plates (none when εr = 1): the two plates
+    and the tube, ``solid(size, z0, height)`` a prism of the cross-section (a cylinder
+    of radius ``size``, a hexagonal prism of apothem ``size``) from ``z0`` up."""
+    if cell.wall_permittivity == 1.0:
+        return []
+    half, t = 0.5 * cell.electrode_spacing, cell.plate_thickness
+    walls = [solid(outer, -half - t, t), solid(outer, half, t)]
+    tube, _ = occ.cut([(3, solid(outer, -half, 2 * half))], [(3, solid(inner, -half, 2 * half))])
+    return walls + [tag for _, tag in tube]
+
+
+def _plane_rims(cell, lateral: str) -> str:
+    """Distance to the nearest rim of two plane electrodes at z = ±h/2 whose in-plane
+    distance to the rim is the MathEval expression ``lateral``."""
+    half = 0.5 * cell.electrode_spacing
+    axial = f"min(abs(z-{_num(half)}),abs(z+{_num(half)}))"
+    return f"sqrt({lateral}^2+{axial}^2)"
+
+
+class _PlateCell:
+    """What the tube and the honeycomb share: the ball between two plane electrodes
+    h = d + Δh apart; the 3D model's placement, contact rule, extent and gap sizes."""
+    placement_3d = _plate_cell_placement
+    contact_rule_3d = _plate_cell_contact_rule
+    extent_3d = _plate_cell_extent
+    gap_refinements_3d = _plate_cell_gap_refinements
+
+    @property
+    def electrode_spacing(self) -> float:
+        """h = d + Δh [m]."""
+        return self.ball_diameter + self.stroke
+
+
 @dataclass(frozen=True)
-class CylindricalCell:
+class CylindricalCell(_PlateCell):
     """The paper's device: round tube, round plates, disk electrodes (SI)."""
     ball_diameter: float        # d [m]
     stroke: float               # Δh = h - d [m]
@@ -64,11 +149,6 @@ class CylindricalCell:
     wall_permittivity: float    # relative; 1 leaves tube and plates out
 
     @property
-    def electrode_spacing(self) -> float:
-        """h = d + Δh [m]."""
-        return self.ball_diameter + self.stroke
-
-    @property
     def bounding_radius(self) -> float:
         """Radius of the smallest origin-centred sphere holding the device [m]."""
         return math.hypot(self.tube_outer_radius, 0.5 * self.electrode_spacing + self.plate_thickness)
@@ -78,9 +158,30 @@ class CylindricalCell:
         """Largest lateral ball offset that keeps the ball inside the tube [m]."""
         return self.tube_inner_radius - 0.5 * self.ball_diameter
 
+    def occ_parts(self, occ) -> tuple[list[int], list[int]]:
+        """Add the electrodes (two disks) and, unless εr = 1, the plates and the tube
+        to the OCC model: ``([lower, upper] surface tags, wall volume tags)``."""
+        half = 0.5 * self.electrode_spacing
+        rim = self.electrode_radius
+        electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in (-half, half)]
+        def cylinder(radius, z0, height):
+            return occ.addCylinder(0, 0, z0, 0, 0, height, radius)
+
+        return electrodes, _plates_and_bore(self, occ, cylinder, self.tube_outer_radius,
+                                            self.tube_inner_radius)
+
+    def rim_distance_expr(self) -> str:
+        """gmsh MathEval expression of the distance [m] to the nearest disk rim (exact)."""
+        lateral = f"(sqrt(x*x+y*y)-{_num(self.electrode_radius)})"
+        return _plane_rims(self, lateral)
+
+    def lateral_wall(self, direction) -> float:
+        """Distance [m] from the axis to the tube's inner wall along ``direction`` (unit, xy)."""
+        return self.tube_inner_radius
+
 
 @dataclass(frozen=True)
-class HexagonalCell:
+class HexagonalCell(_PlateCell):
     """One cell of the Fig. 10 honeycomb (SI).
 
     Hexagons have two flats parallel to the x axis; "apothem" is the
@@ -99,10 +200,6 @@ class HexagonalCell:
     wall_permittivity: float = 3.0
 
     @property
-    def electrode_spacing(self) -> float:
-        return self.ball_diameter + self.stroke
-
-    @property
     def outer_apothem(self) -> float:
         return self.inner_apothem + self.wall_thickness
 
@@ -114,6 +211,29 @@ class HexagonalCell:
     @property
     def max_offset(self) -> float:
         return self.inner_apothem - 0.5 * self.ball_diameter
+
+    def occ_parts(self, occ) -> tuple[list[int], list[int]]:
+        """Add the hexagonal electrodes and, unless εr = 1, the plates and the hexagonal
+        tube: ``([lower, upper] surface tags, wall volume tags)``."""
+        half = 0.5 * self.electrode_spacing
+        electrodes = [_hexagon(occ, self.inner_apothem, z) for z in (-half, half)]
+        def prism(apothem, z0, height):
+            return _hex_prism(occ, apothem, z0, height)
+
+        return electrodes, _plates_and_bore(self, occ, prism, self.outer_apothem,
+                                            self.inner_apothem)
+
+    def rim_distance_expr(self) -> str:
+        """gmsh MathEval distance [m] to the nearest hexagon rim (exact off the corners)."""
+        c = _num(math.cos(math.pi / 6))
+        lateral = (f"(max(abs(y),max(abs(0.5*y+{c}*x),abs(0.5*y-{c}*x)))"
+                   f"-{_num(self.inner_apothem)})")
+        return _plane_rims(self, lateral)
+
+    def lateral_wall(self, direction) -> float:
+        """Distance [m] from the axis to the hexagonal bore along ``direction`` (unit, xy)."""
+        normals = [(0.0, 1.0), (math.cos(math.pi / 6), 0.5), (-math.cos(math.pi / 6), 0.5)]
+        return self.inner_apothem / max(abs(direction @ np.array(n)) for n in normals)
 
 
 @dataclass(frozen=True)
@@ -229,42 +349,17 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
     import gmsh
 
     occ = gmsh.model.occ
-    if settings.domain_radius <= 1.2 * (cell.bounding_radius + offset):
+    extent = cell.extent_3d(offset)
+    if settings.domain_radius <= 1.2 * extent:
         raise FieldError(
             f"domain_radius_mm = {settings.domain_radius * 1e3:g} is too small: it must exceed "
-            f"{1.2e3 * (cell.bounding_radius + offset):.3g} mm (1.2 x the device's bounding radius)")
-    centre = ball_centre(cell, position, offset, offset_angle)
-    half = 0.5 * cell.electrode_spacing
+            f"{1.2e3 * extent:.3g} mm (1.2 x the device's bounding radius)")
+    centre, gap = cell.placement_3d(position, offset, offset_angle)
     radius = 0.5 * cell.ball_diameter
-    walls_present = cell.wall_permittivity != 1.0
 
     domain = occ.addSphere(0, 0, 0, settings.domain_radius)
     ball = occ.addSphere(*centre, radius)
-    if isinstance(cell, CylindricalCell):
-        rim = cell.electrode_radius
-        electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in (-half, half)]
-        walls = []
-        if walls_present:
-            t = cell.plate_thickness
-            walls.append(occ.addCylinder(0, 0, -half - t, 0, 0, t, cell.tube_outer_radius))
-            walls.append(occ.addCylinder(0, 0, half, 0, 0, t, cell.tube_outer_radius))
-            outer = occ.addCylinder(0, 0, -half, 0, 0, 2 * half, cell.tube_outer_radius)
-            inner = occ.addCylinder(0, 0, -half, 0, 0, 2 * half, cell.tube_inner_radius)
-            tube, _ = occ.cut([(3, outer)], [(3, inner)])
-            walls.extend(tag for _, tag in tube)
-    elif isinstance(cell, HexagonalCell):
-        electrodes = [_hexagon(occ, cell.inner_apothem, z) for z in (-half, half)]
-        walls = []
-        if walls_present:
-            t = cell.plate_thickness
-            walls.append(_hex_prism(occ, cell.outer_apothem, -half - t, t))
-            walls.append(_hex_prism(occ, cell.outer_apothem, half, t))
-            outer = _hex_prism(occ, cell.outer_apothem, -half, 2 * half)
-            inner = _hex_prism(occ, cell.inner_apothem, -half, 2 * half)
-            tube, _ = occ.cut([(3, outer)], [(3, inner)])
-            walls.extend(tag for _, tag in tube)
-    else:  # pragma: no cover - programming error
-        raise TypeError(f"unknown cell type {type(cell).__name__}")
+    electrodes, walls = cell.occ_parts(occ)
 
     objects = [(3, domain)]
     tools = [(3, ball)] + [(3, w) for w in walls] + [(2, e) for e in electrodes]
@@ -304,7 +399,7 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
             gmsh.model.mesh.setOrder(2)
             _untangle_curved_elements()
     return {"groups": groups, "ball_centre": centre,
-            "meshed_gap": meshed_gap(cell, position),
+            "meshed_gap": gap,
             "meshed_offset": float(math.hypot(centre[0], centre[1]))}
 
 
@@ -356,11 +451,7 @@ def _lateral_gap(cell, centre):
     if offset == 0.0 or cell.wall_permittivity == 1.0:
         return None
     direction = np.array([centre[0], centre[1]]) / offset
-    if isinstance(cell, CylindricalCell):
-        wall = cell.tube_inner_radius
-    else:  # distance to the hexagon's boundary along the offset direction
-        normals = [(0.0, 1.0), (math.cos(math.pi / 6), 0.5), (-math.cos(math.pi / 6), 0.5)]
-        wall = cell.inner_apothem / max(abs(direction @ np.array(n)) for n in normals)
+    wall = cell.lateral_wall(direction)
     radius = 0.5 * cell.ball_diameter
     gap = wall - offset - radius
     mid = offset + radius + 0.5 * gap
@@ -380,20 +471,6 @@ def _gap_size(s_min, point) -> str:
     return f"{_num(s_min)} + 0.35*sqrt((x-({x}))^2+(y-({y}))^2+(z-({z}))^2)"
 
 
-def _rim_distance(cell) -> str:
-    """gmsh MathEval expression of the distance [m] to the nearest electrode rim
-    (exact for the disks, exact off the corners for the hexagons)."""
-    half = 0.5 * cell.electrode_spacing
-    if isinstance(cell, CylindricalCell):
-        lateral = f"(sqrt(x*x+y*y)-{_num(cell.electrode_radius)})"
-    else:
-        c = _num(math.cos(math.pi / 6))
-        lateral = (f"(max(abs(y),max(abs(0.5*y+{c}*x),abs(0.5*y-{c}*x)))"
-                   f"-{_num(cell.inner_apothem)})")
-    axial = f"min(abs(z-{_num(half)}),abs(z+{_num(half)}))"
-    return f"sqrt({lateral}^2+{axial}^2)"
-
-
 def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -> None:
     """Background size: min of rim, ball-surface, gap and far-field gradings."""
     import gmsh
@@ -406,7 +483,7 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     reach = 0.25 * cell.electrode_spacing
     rim = fld.add("MathEval")
     fld.setString(rim, "F", f"max({_num(settings.rim_floor * h)}, "
-                            f"{_num(h)}*({_rim_distance(cell)}/{_num(reach)})^{_num(power)})")
+                            f"{_num(h)}*({cell.rim_distance_expr()}/{_num(reach)})^{_num(power)})")
     fields.append(rim)
 
     ball_dist = fld.add("Distance")
@@ -421,23 +498,10 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     fld.setNumber(ball, "StopAtDistMax", 1)
     fields.append(ball)
 
-    # contact gaps: size grows linearly with the distance from the ball's poles
-    radius = 0.5 * cell.ball_diameter
-    half = 0.5 * cell.electrode_spacing
-    x0, y0, zc = (float(c) for c in centre)
-    for z_pole, z_plane in ((zc - radius, -half), (zc + radius, half)):
-        gap = abs(z_pole - z_plane)
-        s_min = min(max(0.5 * gap, 0.02 * h), settings.ball_factor * h)
-        z_mid = 0.5 * (z_pole + z_plane)
+    # contact gaps: size grows linearly with the distance from the gap's midpoint
+    for s_min, point in cell.gap_refinements_3d(centre, h, settings.ball_factor):
         gap_field = fld.add("MathEval")
-        fld.setString(gap_field, "F", _gap_size(s_min, (x0, y0, z_mid)))
-        fields.append(gap_field)
-    lateral = _lateral_gap(cell, centre)
-    if lateral is not None and lateral[0] < settings.ball_factor * h:
-        gap, mid = lateral
-        s_min = max(0.5 * gap, 0.02 * h)
-        gap_field = fld.add("MathEval")
-        fld.setString(gap_field, "F", _gap_size(s_min, mid))
+        fld.setString(gap_field, "F", _gap_size(s_min, point))
         fields.append(gap_field)
 
     device_r = cell.bounding_radius

@@ -237,16 +237,7 @@ def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> st
     image = half_disk(zK + lay.shift, R, lay.table) if lay.kelvin else None
     occ.synchronize()
 
-    groups: dict[str, list[int]] = {k: [] for k in (*CELL_TAGS, *FACET_TAGS)}
-    for _, s in gmsh.model.getEntities(2):
-        if s == image:
-            groups["exterior"].append(s)
-        elif s in ball_parts:
-            groups["ball"].append(s)
-        elif s in wall_parts:
-            groups["walls"].append(s)
-        else:
-            groups["air"].append(s)
+    groups = surface_groups(gmsh, image, ball_parts, wall_parts)
 
     # -- classify curves by a point in their parametric middle -------------
     tol = 1e-9 * R
@@ -275,24 +266,8 @@ def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> st
         elif abs(y - zu) < tol and bb[3] <= a + pad:
             groups["electrode_upper"].append(c)
 
-    for key in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper", "far_boundary"):
-        if not groups[key]:
-            raise FieldError(f"axisymmetric geometry: no {key!r} entity found (gmsh model {name})")
-    if image is not None:
-        masters = sorted(groups["far_boundary"], key=mids.get)
-        slaves = sorted(groups["far_boundary_image"], key=mids.get)
-        if len(masters) != len(slaves):
-            raise FieldError("axisymmetric geometry: the Kelvin arcs do not pair up")
-        translation = [1, 0, 0, 0, 0, 1, 0, lay.shift, 0, 0, 1, 0, 0, 0, 0, 1]
-        gmsh.model.mesh.setPeriodic(1, slaves, masters, translation)
-    for key, tag in CELL_TAGS.items():
-        if groups[key]:
-            gmsh.model.addPhysicalGroup(2, groups[key], tag)
-            gmsh.model.setPhysicalName(2, tag, key)
-    for key, tag in FACET_TAGS.items():
-        if groups[key]:
-            gmsh.model.addPhysicalGroup(1, groups[key], tag)
-            gmsh.model.setPhysicalName(1, tag, key)
+    register_groups(gmsh, groups, mids, kelvin_shift=None if image is None else lay.shift,
+                    what="axisymmetric", name=name)
 
     interfaces = []
     if wall_parts:
@@ -307,6 +282,49 @@ def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> st
     if geometry_order > 1:
         gmsh.model.mesh.setOrder(geometry_order)
     return name
+
+
+def surface_groups(gmsh, image, ball_parts, wall_parts) -> dict[str, list[int]]:
+    """Every group name of :data:`CELL_TAGS` and :data:`FACET_TAGS` -> [] but the
+    surfaces: the Kelvin image (``exterior``), the ball, the walls, the rest air."""
+    groups: dict[str, list[int]] = {k: [] for k in (*CELL_TAGS, *FACET_TAGS)}
+    for _, s in gmsh.model.getEntities(2):
+        if s == image:
+            groups["exterior"].append(s)
+        elif s in ball_parts:
+            groups["ball"].append(s)
+        elif s in wall_parts:
+            groups["walls"].append(s)
+        else:
+            groups["air"].append(s)
+    return groups
+
+
+def register_groups(gmsh, groups: dict, mids: dict, *, kelvin_shift: float | None, what: str,
+                    name: str) -> None:
+    """Check that the model has its required groups, pair the Kelvin image's arcs with the
+    far boundary's (periodic, shifted by ``kelvin_shift``; None: no image) by their
+    middles' heights ``mids``, and add the physical groups (:data:`CELL_TAGS`,
+    :data:`FACET_TAGS`); ``what`` names the geometry in the messages (the tube's and the
+    spherical shell's models)."""
+    for key in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper", "far_boundary"):
+        if not groups[key]:
+            raise FieldError(f"{what} geometry: no {key!r} entity found (gmsh model {name})")
+    if kelvin_shift is not None:
+        masters = sorted(groups["far_boundary"], key=mids.get)
+        slaves = sorted(groups["far_boundary_image"], key=mids.get)
+        if len(masters) != len(slaves):
+            raise FieldError(f"{what} geometry: the Kelvin arcs do not pair up")
+        translation = [1, 0, 0, 0, 0, 1, 0, kelvin_shift, 0, 0, 1, 0, 0, 0, 0, 1]
+        gmsh.model.mesh.setPeriodic(1, slaves, masters, translation)
+    for key, tag in CELL_TAGS.items():
+        if groups[key]:
+            gmsh.model.addPhysicalGroup(2, groups[key], tag)
+            gmsh.model.setPhysicalName(2, tag, key)
+    for key, tag in FACET_TAGS.items():
+        if groups[key]:
+            gmsh.model.addPhysicalGroup(1, groups[key], tag)
+            gmsh.model.setPhysicalName(1, tag, key)
 
 
 def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
@@ -362,6 +380,17 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
     extent = lay.info["bulk_length_m"]
     zK = lay.inversion_centre_z
     math_eval(f"({h!r}) * Max(1, Sqrt(x^2 + (y - ({zK!r}))^2) / ({extent!r}))")
+    finish_size_fields(gmsh, lay, sizes, fields, centre_z=zK)
+
+
+def finish_size_fields(gmsh, lay, sizes: list, fields: list, *, centre_z: float = 0.0) -> None:
+    """The end of a (r, z) model's size fields (the tube's and the spherical shell's,
+    ``field/cells/shell_model.py``): with ``lay.kelvin`` the Kelvin image's box (size
+    h R / bulk_length around ``centre_z + lay.shift``) joins ``fields``; the Min of the
+    MathEval expressions ``sizes`` and of ``fields`` is the background mesh; the
+    mesher's options."""
+    fld = gmsh.model.mesh.field
+    h, extent = lay.mesh_size, lay.info["bulk_length_m"]
     if lay.kelvin:
         arc_size = h * lay.domain_radius / extent
         box = fld.add("Box")
@@ -369,8 +398,8 @@ def _size_fields(gmsh, lay: AxisymmetricLayout, interface_curves=()) -> None:
         fld.setNumber(box, "VOut", 1e22)
         fld.setNumber(box, "XMin", -1.0)
         fld.setNumber(box, "XMax", 1.0)
-        fld.setNumber(box, "YMin", zK + lay.shift - 1.5 * lay.domain_radius)
-        fld.setNumber(box, "YMax", zK + lay.shift + 1.5 * lay.domain_radius)
+        fld.setNumber(box, "YMin", centre_z + lay.shift - 1.5 * lay.domain_radius)
+        fld.setNumber(box, "YMax", centre_z + lay.shift + 1.5 * lay.domain_radius)
         fields.append(box)
     # one MathEval for the Min of all the expressions: the same sizes to the bit (the
     # same arithmetic) as one field each, and 20 % less meshing time (gmsh evaluates

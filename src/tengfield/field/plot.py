@@ -248,10 +248,15 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     s = section.points[:, 0] * math.cos(angle) + section.points[:, 1] * math.sin(angle)
     flat = section.copy()
     flat.points = np.column_stack([s * mm, section.points[:, 2] * mm, np.zeros(len(s))])
-    half_h = 0.5 * device.plate_spacing * mm
-    t, ro = device.plate_thickness * mm, device.tube_outer_radius * mm
-    flat = flat.clip_box((-ro - 2.0, ro + 2.0, -half_h - t - 1.5, half_h + t + 1.5, -1.0, 1.0),
-                         invert=False)
+    cell = solution.geometry if hasattr(solution.geometry, "outline") else None
+    if cell is not None:   # a cell of field/cells (the spherical shell): its own outline
+        ro = cell.bounding_radius * mm
+        flat = flat.clip_box((-ro - 2.0, ro + 2.0, -ro - 1.5, ro + 1.5, -1.0, 1.0), invert=False)
+    else:
+        half_h = 0.5 * device.plate_spacing * mm
+        t, ro = device.plate_thickness * mm, device.tube_outer_radius * mm
+        flat = flat.clip_box((-ro - 2.0, ro + 2.0, -half_h - t - 1.5, half_h + t + 1.5,
+                              -1.0, 1.0), invert=False)
 
     plotter = pv.Plotter(off_screen=True, window_size=window_size)
     plotter.set_background("white")
@@ -263,22 +268,32 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     contours = flat.contour(isosurfaces=np.linspace(0.05, 0.95, 19), scalars="psi")
     if contours.n_points:
         plotter.add_mesh(contours, color="white", line_width=1.0, opacity=0.6)
-    a = device.electrode_radius * mm
-    for z in (-half_h, half_h):
-        plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333", line_width=6)
-    ri = device.tube_inner_radius * mm
-    for x0, x1, z0, z1 in ((ri, ro, -half_h, half_h), (-ro, -ri, -half_h, half_h),
-                           (-ro, ro, half_h, half_h + t), (-ro, ro, -half_h - t, -half_h)):
-        box = pv.Rectangle([(x0, z0, 0.04), (x1, z0, 0.04), (x1, z1, 0.04)])
-        plotter.add_mesh(box.extract_feature_edges(), color="black", line_width=1.5)
+    if cell is not None:   # outline(): electrodes first (copper), then walls, both halves
+        for k, line in enumerate(cell.outline()):
+            for side in (1.0, -1.0):
+                xyz = np.column_stack([side * line[:, 0] * mm, line[:, 1] * mm,
+                                       np.full(len(line), 0.05)])
+                plotter.add_mesh(pv.lines_from_points(xyz), line_width=6 if k < 2 else 1.5,
+                                 color="#b87333" if k < 2 else "black")
+    else:
+        a = device.electrode_radius * mm
+        for z in (-half_h, half_h):
+            plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333",
+                             line_width=6)
+        ri = device.tube_inner_radius * mm
+        for x0, x1, z0, z1 in ((ri, ro, -half_h, half_h), (-ro, -ri, -half_h, half_h),
+                               (-ro, ro, half_h, half_h + t), (-ro, ro, -half_h - t, -half_h)):
+            box = pv.Rectangle([(x0, z0, 0.04), (x1, z0, 0.04), (x1, z1, 0.04)])
+            plotter.add_mesh(box.extract_feature_edges(), color="black", line_width=1.5)
     s_ball = (centre[0] * math.cos(angle) + centre[1] * math.sin(angle)) * mm
     ball = pv.Circle(radius=device.ball_radius * mm, resolution=128)
     ball.points += np.array([s_ball, centre[2] * mm, 0.05])
     plotter.add_mesh(ball.extract_feature_edges(), color="black", line_width=2.5)
     plotter.add_text(title, position="upper_edge", font_size=11, color="black")
-    plotter.add_text(f"meridian section through the axis and the ball centre; "
-                     f"plate outer radius {ro:.3g} mm", position="lower_edge", font_size=9,
-                     color="black")
+    plotter.add_text("meridian section through the axis and the ball centre; "
+                     + (f"shell outer radius {ro:.3g} mm" if cell is not None
+                        else f"plate outer radius {ro:.3g} mm"),
+                     position="lower_edge", font_size=9, color="black")
     plotter.view_xy()
     plotter.camera.zoom(1.15)
     plotter.screenshot(str(path))

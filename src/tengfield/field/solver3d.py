@@ -53,8 +53,7 @@ import numpy as np
 from ..errors import FieldError
 from ..scene.constants import EPS0
 from . import contact
-from .geometry3d import (MeshSettings, build_model, contact_anchors, cylindrical_cell,
-                         unique_model_name)
+from .geometry3d import MeshSettings, build_model, cylindrical_cell, unique_model_name
 from .result import FieldSolution, PositionResult
 
 #: Observed convergence order of C and q under uniform refinement, by degree
@@ -429,7 +428,10 @@ def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float
 def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
                   surface_charge: float, settings: Solve3DSettings, comm,
                   keep_solution: bool = False) -> PositionResult:
-    """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell` or :class:`HexagonalCell`).
+    """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell`, a :class:`HexagonalCell`
+    or a :class:`~tengfield.field.cells.SphericalShell`: any cell with the 3D model's
+    methods ``placement_3d``, ``contact_rule_3d``, ``extent_3d``, ``occ_parts``,
+    ``rim_distance_expr``, ``gap_refinements_3d``, see :func:`geometry3d.build_model`).
 
     ``surface_charge`` σ [C/m²] on the ball; ``position`` z [m] in [0, Δh];
     ``offset`` [m] lateral, at ``offset_angle`` [rad] from +x. A position
@@ -440,26 +442,34 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
     """
     start = time.perf_counter()
 
-    def solve_here(z: float, with_estimate: bool):
-        sol = solve_cell(cell, z, offset, settings, comm=comm, offset_angle=offset_angle)
+    def solve_here(z: float, with_estimate: bool, r: float = offset):
+        sol = solve_cell(cell, z, r, settings, comm=comm, offset_angle=offset_angle)
         sol.estimate = math.nan
         if with_estimate:
-            coarse = solve_cell(cell, z, offset, settings, comm=comm, coarsen=2.0,
+            coarse = solve_cell(cell, z, r, settings, comm=comm, coarsen=2.0,
                                 offset_angle=offset_angle)
             sol.estimate = (contact.relative_change(coarse, sol)
                             / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0))
         return sol
 
-    anchors = contact_anchors(cell, position)
+    # the cell's contact rule: None, or the anchors along its own coordinate (the gap
+    # along z for the tube, the gap to the spherical wall for the shell) and where
+    # each anchor puts the ball (place(x) -> (position, offset))
+    rule_at = cell.contact_rule_3d(position, offset, offset_angle)
     info: dict[str, Any] = {}
-    if anchors is None:
+    if rule_at is None:
         fine = solve_here(position, settings.estimate_error)
         capacitance, fraction = fine.capacitance, fine.induced_fraction
         solve_time, estimate = fine.potentials.solve_time, fine.estimate
     else:
-        rule = contact.extrapolate_to_contact(
-            position, anchors, cell.stroke,
-            lambda z: solve_here(z, settings.estimate_error and z == anchors[0]))
+        anchors = rule_at["anchors"]
+
+        def solve_anchor(x: float):
+            z, r = rule_at["place"](x)
+            return solve_here(z, settings.estimate_error and x == anchors[0], r)
+
+        rule = contact.extrapolate_to_contact(rule_at["coordinate"], anchors, rule_at["span"],
+                                              solve_anchor)
         fine = rule["solves"][0]
         capacitance, fraction = rule["capacitance"], rule["induced_fraction"]
         solve_time = sum(s.potentials.solve_time for s in rule["solves"])

@@ -133,6 +133,9 @@ def _ball_fits(ball: float, cavity: float) -> None:
 
 class _SphericalShell:
     name = "spherical-shell"
+    #: the (z, r) table's offsets are scaled to the admissible radius at each height
+    #: (tengfield.surrogate.sampling.offset_coordinate)
+    offset_coordinate = "scaled"
 
     @staticmethod
     def stroke(device_values: dict, given: dict) -> float:
@@ -318,7 +321,9 @@ def shape_scene_field_problems(scene) -> list[str]:
 
 
 def shape_field_problems(dev, fld) -> list[str]:
-    """Field-only problems of a non-tube shape (its solver is axisymmetric, free space)."""
+    """Field-only problems of a non-tube shape: the honeycomb has 3D solves only; the
+    shell has both solvers (an off-axis ball's offset is checked against its height by
+    the cell, field/cells/shell_model3d.py); both are free-space cells."""
     if dev.shape == "tube":
         return []
     problems = []
@@ -326,11 +331,6 @@ def shape_field_problems(dev, fld) -> list[str]:
         if fld.method != "3d":
             problems.append(f"[field] method = {fld.method!r}: shape = 'hexagonal' is a 3D "
                             "cell; use method = '3d'")
-    elif fld.method == "3d" or fld.ball_offset > 0.0:
-        problems.append(f"[field] method = {fld.method!r}, ball_offset_mm = "
-                        f"{fld.ball_offset * 1e3:g}: shape = {dev.shape!r} has the axisymmetric "
-                        "solver only (the ball on the axis) yet: use method = 'auto' or "
-                        "'axisymmetric' with ball_offset_mm = 0")
     if fld.environment != "free-space":
         problems.append(f"[field] environment = {fld.environment!r} is not available for "
                         f"shape = {dev.shape!r}: allowed 'free-space'")

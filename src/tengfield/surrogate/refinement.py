@@ -38,8 +38,9 @@ from .provenance import provenance, radial_hash, solver_fingerprint
 from .sampling import (DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE, INITIAL_OFFSETS,
                        INITIAL_POSITIONS, MAX_OFFSETS, MAX_POSITIONS, MAX_POSITIONS_ZR,
                        contact_first_order, grid_key, is_lobatto_count, is_mirror_symmetric,
-                       lobatto_positions, max_offset, mirrored, offset_positions,
-                       offset_refinement, refinement_positions)
+                       lobatto_positions, max_offset, mirrored, offset_coordinate,
+                       offset_positions, offset_refinement, physical_offset,
+                       refinement_positions)
 from .table import (RadialTable, RadialTerminalCurves, SurrogateError, SurrogateTable,
                     TerminalCurves, table_from_grid, table_from_results, terminal_grid,
                     terminal_samples)
@@ -305,8 +306,9 @@ def held_out_error_zr(coarse: RadialTable, fine: RadialTable) -> tuple[float, fl
         curves = RadialTerminalCurves(coarse, reference)
         q_fine, c_fine = terminal_grid(fine, reference)
         v_fine = q_fine / c_fine
-        deviations = [(curves.charge(zz, rr), q_fine), (curves.capacitance(zz, rr), c_fine),
-                      (curves.voltage(zz, rr), v_fine)]
+        q_coarse, c_coarse = curves.grid_values(zz, rr)
+        deviations = [(q_coarse, q_fine), (c_coarse, c_fine),
+                      (terminals.open_circuit_voltage(q_coarse, c_coarse), v_fine)]
         for interpolated, direct in deviations:
             scale = float(np.max(np.abs(direct)))
             if scale <= 0.0:
@@ -381,9 +383,16 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         raise ValueError(f"tolerance = {tolerance!r}: must be > 0")
     stroke = scene.device.stroke
     largest = max_offset(scene.device)
+    coordinate = offset_coordinate(scene.device)
     if not largest > 0.0:
         raise SurrogateError(f"the ball fills the tube (tube inner radius - ball radius = "
                              f"{largest * 1e3:g} mm): no radial offset to tabulate")
+
+    def offset_of(z: float, u: float) -> float:
+        """The ball's offset [m] at grid point (z, u): u itself, or scaled to r_max(z)."""
+        if coordinate == "scaled":
+            return float(physical_offset(z, u, stroke, largest))
+        return float(u)
     symmetric = is_mirror_symmetric(scene)
     sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
     sample_z = error_sample_positions(stroke, symmetric, nz)
@@ -394,11 +403,11 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         bar = progress_bar(0, "3D field solves (z, r)", unit="solve")
 
     def work(point):
-        z, r = point
-        kwargs = dict(comm=solve_comm, offset=float(r), method="3d",
+        z, r, estimate = point
+        kwargs = dict(comm=solve_comm, offset=r, method="3d",
                       mesh_size_mm=mesh_size_mm, degree=degree)
         if sampled:
-            kwargs["estimate_error"] = grid_key(z, r) in sample_keys
+            kwargs["estimate_error"] = estimate
         return solve(scene, float(z), **kwargs)
 
     def advance(n):
@@ -406,6 +415,7 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
             bar.update(n)
 
     solved: dict = {}
+    by_place: dict = {}   # the solves by the ball's (z, r): a scaled grid's ends share one
     measured = math.nan
 
     def solve_grid(positions, offsets) -> None:
@@ -413,20 +423,35 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         todo_z = positions[positions <= 0.5 * stroke * (1 + 1e-12)] if symmetric else positions
         todo_z = todo_z[contact_first_order(todo_z, stroke)]
         todo = [(z, r) for z in todo_z for r in offsets[::-1] if grid_key(z, r) not in solved]
+        # grid points that put the ball at the same place (a scaled table's ends of the
+        # stroke, where r_max = 0) are solved once
+        places: dict = {}   # grid_key of the ball's (z, r) -> [z, r, estimate_error]
+        for z, u in todo:
+            r = offset_of(z, u)
+            estimate = grid_key(z, u) in sample_keys
+            if grid_key(z, r) in by_place:
+                continue                     # solved in an earlier round
+            if grid_key(z, r) in places:
+                places[grid_key(z, r)][2] |= estimate
+            else:
+                places[grid_key(z, r)] = [float(z), r, estimate]
+        tasks = [tuple(task) for task in places.values()]
         if bar is not None:
-            bar.total += len(todo)
+            bar.total += len(tasks)
             bar.refresh()
-        results = farm(comm, todo, work, progress=advance)
+        farmed = farm(comm, tasks, work, progress=advance)
         if sampled:
-            results, measured = _sampled_field_errors(
-                results, [grid_key(*p) in sample_keys for p in todo], measured)
+            farmed, measured = _sampled_field_errors(farmed, [t[2] for t in tasks], measured)
+        by_place.update(zip(places, farmed))
+        results = [by_place[grid_key(z, offset_of(z, r))] for z, r in todo]
         for (z, r), res in zip(todo, results):
             solved[grid_key(z, r)] = res
             if symmetric and not math.isclose(z, 0.5 * stroke, rel_tol=1e-12):
                 solved[grid_key(stroke - z, r)] = mirrored(res, stroke)
 
     def grid(positions, offsets) -> RadialTable:
-        return table_from_grid(solved, positions, offsets, stroke=stroke, largest_offset=largest)
+        return table_from_grid(solved, positions, offsets, stroke=stroke, largest_offset=largest,
+                               offset_coordinate=coordinate)
 
     z_now, r_now = lobatto_positions(stroke, nz), offset_positions(largest, nr)
     z_next = np.sort(np.concatenate([z_now, refinement_positions(stroke, nz)]))

@@ -6,6 +6,8 @@ the (z, r) surrogate), mirror symmetry, and the sampling defaults.
 angular midpoints, so ``n -> 2n - 1`` and every earlier solve is reused. The
 radial offsets ``r`` of an off-axis ball are Lobatto-spaced in ``s = r²`` over
 ``[0, r_max²]`` (``r_max`` = tube inner radius − ball radius), from ``{0, r_max}``.
+For the spherical shell the ball's region is a sphere, so the admissible offset
+depends on z; its table's offsets are scaled to it (:func:`offset_coordinate`).
 """
 from __future__ import annotations
 
@@ -103,8 +105,45 @@ def contact_first_order(positions: np.ndarray, stroke: float, estimated=()) -> n
 # ---------------------------------------------------------------------------
 # sampling in r (the (z, r) surrogate)
 def max_offset(device) -> float:
-    """Largest radial offset of the ball centre [m]: tube inner radius − ball radius."""
-    return float(device.tube_inner_radius - device.ball_radius)
+    """Largest radial offset of the ball centre [m], the (z, r) table's last offset: the
+    cell's (``scene/shapes.py``): tube inner radius − ball radius for the tube, the
+    centre's sphere radius a − d/2 for the spherical shell."""
+    from ..scene.shapes import shape_of
+
+    return float(shape_of(device.shape).max_offset(device))
+
+
+def offset_coordinate(device) -> str:
+    """How the (z, r) table's offsets read (``scene/shapes.py`` per shape):
+    ``"radial"``: the offset r [m] itself (the tube: r <= r_max at every z);
+    ``"scaled"``: ``u = R r / r_max(z)`` [m] with ``R`` = :func:`max_offset` and
+    ``r_max(z) = sqrt(R² − (z − Δh/2)²)`` (the spherical shell, whose ball centre stays
+    in a sphere of radius R = Δh/2: u = R is the wall at every height)."""
+    from ..scene.shapes import shape_of
+
+    return str(getattr(shape_of(device.shape), "offset_coordinate", "radial"))
+
+
+def admissible_offset(z, stroke: float, largest: float):
+    """r_max(z) [m] of a ``"scaled"`` table: ``sqrt(max(R² − (z − Δh/2)², 0))``."""
+    z = np.asarray(z, dtype=float)
+    return np.sqrt(np.maximum(largest**2 - (z - 0.5 * stroke) ** 2, 0.0))
+
+
+def physical_offset(z, u, stroke: float, largest: float):
+    """The offset r [m] of the ``"scaled"`` table coordinate ``u`` [m] at gap ``z`` [m]."""
+    return np.asarray(u, dtype=float) * admissible_offset(z, stroke, largest) / largest
+
+
+def scaled_offset(z, r, stroke: float, largest: float):
+    """The ``"scaled"`` table coordinate u [m] of the offset ``r`` [m] at gap ``z`` [m]
+    (``|r|`` clipped to r_max(z); 0 where r_max(z) = 0, the ends of the stroke)."""
+    r_max = admissible_offset(z, stroke, largest)
+    r = np.abs(np.asarray(r, dtype=float))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = np.where(r_max > 0.0, largest * np.minimum(r / np.where(r_max > 0.0, r_max, 1.0),
+                                                       1.0), 0.0)
+    return u
 
 
 def offset_positions(largest: float, count: int) -> np.ndarray:
@@ -122,3 +161,16 @@ def offset_refinement(largest: float, count: int) -> np.ndarray:
 def grid_key(z: float, r: float) -> tuple[int, int]:
     """The dictionary key of the grid point (z, r) [m]."""
     return (round(z * 1e13), round(r * 1e13))   # 0.1 pm: exact for the nested sets
+
+
+def scaled_offset_jacobian(z, r, u, stroke: float, largest: float):
+    """``(∂u/∂z, ∂u/∂r)`` of the scaled coordinate ``u`` [m] of offset ``r`` at gap ``z``:
+    ``u (z − Δh/2) / r_max²`` and ``R / r_max``; 0 where u is clipped (r >= r_max) or
+    r_max = 0 (the ends of the stroke)."""
+    z, r = np.broadcast_arrays(np.clip(np.asarray(z, dtype=float), 0.0, stroke),
+                               np.abs(np.asarray(r, dtype=float)))
+    r_max = admissible_offset(z, stroke, largest)
+    inside = (r_max > 0.0) & (r < r_max)
+    safe = np.where(inside, r_max, 1.0)
+    return (np.where(inside, u * (z - 0.5 * stroke) / safe**2, 0.0),
+            np.where(inside, largest / safe, 0.0))

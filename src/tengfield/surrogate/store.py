@@ -65,6 +65,9 @@ SCALARS_ZR = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
               "method": "method", "degree": "degree", "mesh_size": "mesh_size_m"}
 #: table attribute -> type of its value: the 1-D surrogate's and the 3D ones
 SCALAR_TYPES_ZR = {**SCALAR_TYPES, "max_offset": float, "mesh_size": float}
+#: scalars written only when not at their default (a tube's file stays as it was):
+#: table attribute -> (file attribute, type, default)
+OPTIONAL_SCALARS_ZR = {"offset_coordinate": ("offset_coordinate", str, "radial")}
 
 
 # ---------------------------------------------------------------------------
@@ -276,7 +279,7 @@ def _read_checked(f, name: str) -> np.ndarray:
 def read_checked_file(path: str | Path, *, check_format, array_names: dict, scalar_names: dict,
                       scalar_types: dict, build, expected_hash: str | None = None,
                       expected_solver: str | None = None, hash_label: str = "field hash",
-                      optional_names: dict | None = None):
+                      optional_names: dict | None = None, optional_scalars: dict | None = None):
     """Read a file written by :func:`write_checked_file`; raise :class:`SurrogateError`
     (naming ``path``) unless it is complete, of the format ``check_format(attrs)``
     accepts (it raises :class:`SurrogateError` otherwise), unchanged since written
@@ -306,6 +309,9 @@ def read_checked_file(path: str | Path, *, check_format, array_names: dict, scal
             history = _read_checked(f, "error_history")
             scalars = typed_scalars({attr: f.attrs[name] for attr, name in scalar_names.items()},
                                     scalar_types)
+            scalars.update({attr: kind(f.attrs[name])
+                            for attr, (name, kind, _) in (optional_scalars or {}).items()
+                            if name in f.attrs})
             if str(f.attrs.get("scalars_sha256", "")) != scalars_digest(scalars):
                 raise SurrogateError("scalar attributes do not match their checksum")
             provenance_text = str(f.attrs["provenance"])
@@ -435,7 +441,11 @@ def write_radial_table(path, table: RadialTable) -> Path:
     arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
     arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
     scalars = typed_scalars(vars(table), SCALAR_TYPES_ZR)
-    return write_checked_file(path, arrays, scalars, SCALARS_ZR, {
+    names = dict(SCALARS_ZR)
+    for attr, (name, kind, default) in OPTIONAL_SCALARS_ZR.items():
+        if getattr(table, attr) != default:
+            scalars[attr], names[attr] = kind(getattr(table, attr)), name
+    return write_checked_file(path, arrays, scalars, names, {
         "format_version": FORMAT_VERSION_ZR, "kind": "zr",
         "provenance": json.dumps(table.provenance, default=str)})
 
@@ -469,4 +479,5 @@ def read_radial_table(path, expected_hash: str | None = None,
     return read_checked_file(path, check_format=_check_format_zr, array_names=ARRAYS_ZR,
                              scalar_names=SCALARS_ZR, scalar_types=SCALAR_TYPES_ZR,
                              build=_build_radial_table, expected_hash=expected_hash,
-                             expected_solver=expected_solver, hash_label="hash")
+                             expected_solver=expected_solver, hash_label="hash",
+                             optional_scalars=OPTIONAL_SCALARS_ZR)

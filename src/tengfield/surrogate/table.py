@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from .. import circuit, terminals
 from ..errors import TengfieldError
-from .sampling import grid_key
+from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
 
 
 class SurrogateError(TengfieldError, RuntimeError):
@@ -347,8 +347,12 @@ class RadialTable(SolveRecord):
     max_offset: float
     method: str = field(default="3d", kw_only=True)
     mesh_size: float = field(default=math.nan, kw_only=True)
+    #: "radial": offsets r [m]; "scaled": u = R r / r_max(z) [m] (sampling.offset_coordinate)
+    offset_coordinate: str = field(default="radial", kw_only=True)
 
     def __post_init__(self) -> None:
+        if self.offset_coordinate not in ("radial", "scaled"):
+            raise SurrogateError(f"offset_coordinate {self.offset_coordinate!r}: not radial/scaled")
         self.positions = np.asarray(self.positions, dtype=float)
         self.offsets = np.asarray(self.offsets, dtype=float)
         grid = (self.positions.size, self.offsets.size)
@@ -404,7 +408,7 @@ def _indices(values: np.ndarray, wanted) -> np.ndarray:
 
 
 def table_from_grid(solved: dict, positions, offsets, *, stroke: float,
-                    largest_offset: float) -> RadialTable:
+                    largest_offset: float, offset_coordinate: str = "radial") -> RadialTable:
     """A :class:`RadialTable` from ``solved[grid_key(z, r)]`` PositionResults on the grid."""
     positions = np.sort(np.asarray(positions, dtype=float))
     offsets = np.sort(np.asarray(offsets, dtype=float))
@@ -424,7 +428,7 @@ def table_from_grid(solved: dict, positions, offsets, *, stroke: float,
         wall_time=grid(lambda res: res.wall_time),
         solve_time=grid(lambda res: getattr(res, "solve_time", math.nan)),
         field_error=grid(lambda res: res.relative_error_estimate),
-        method=str(first.method), degree=int(first.degree))
+        method=str(first.method), degree=int(first.degree), offset_coordinate=offset_coordinate)
 
 
 def terminal_grid(table: RadialTable, reference: str = "floating"):
@@ -477,6 +481,8 @@ class RadialTerminalCurves(OffAxisCurves):
     (z, s = r²), cubic where the grid has 4 or more values (else of degree
     count − 1); the derivatives are those of the splines, and ∂/∂r = 0 at
     r = 0 exactly. Q_SC is referred to the ball on the lower plate on the axis.
+    A ``"scaled"`` table (the spherical shell): splines in (z, u²), u = R r / r_max(z), r
+    clipped to r_max(z), the chain rule (:func:`scaled_offset_jacobian`); see :meth:`grid_values`.
     """
 
     def __init__(self, table: RadialTable, reference: str = "floating"):
@@ -489,6 +495,7 @@ class RadialTerminalCurves(OffAxisCurves):
         self.reference = reference
         self.stroke = float(table.stroke)
         self.max_offset = float(table.max_offset)
+        self.scaled = table.offset_coordinate == "scaled"
         self.positions = table.positions.copy()
         self.offsets = table.offsets.copy()
         self.charge_grid, self.capacitance_grid = terminal_grid(table, reference)
@@ -503,18 +510,27 @@ class RadialTerminalCurves(OffAxisCurves):
     def _zs(self, z, r):
         z, r = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(r, dtype=float))
         z = np.clip(z, 0.0, self.stroke)
-        r = np.clip(np.abs(r), 0.0, self.max_offset)
-        return z, r
+        if self.scaled:
+            return z, scaled_offset(z, r, self.stroke, self.max_offset)
+        return z, np.clip(np.abs(r), 0.0, self.max_offset)
 
     def _eval(self, spline, z, r, dz=0, ds=0):
         z, r = self._zs(z, r)
         return spline.ev(z, r**2, dx=dz, dy=ds).reshape(z.shape), r
 
     def _gradient(self, spline, z, r):
-        """``(d/dz, d/dr)`` of ``spline`` over (z, s = r²): d/dr = 2 r d/ds (0 on the axis)."""
+        """``(d/dz, d/dr)`` of ``spline`` over (z, s = u²); d/dr = 2u d/ds du/dr, 0 on the axis."""
         d_z = self._eval(spline, z, r, dz=1)[0]
-        d_s, r_used = self._eval(spline, z, r, ds=1)
-        return d_z, 2.0 * r_used * d_s
+        d_s, u = self._eval(spline, z, r, ds=1)
+        if not self.scaled:
+            return d_z, 2.0 * u * d_s
+        du_dz, du_dr = scaled_offset_jacobian(z, r, u, self.stroke, self.max_offset)
+        return d_z + 2.0 * u * d_s * du_dz, 2.0 * u * d_s * du_dr
+
+    def grid_values(self, z, u):
+        """``(Q_SC [C], C_T [F])`` at gap ``z`` and table coordinate ``u`` [m] (= r if radial)."""
+        z, u = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(u, dtype=float))
+        return self._q.ev(z, u**2).reshape(z.shape), self._c.ev(z, u**2).reshape(z.shape)
 
     def charge(self, z, r):
         """Q_SC(z, r) [C]."""

@@ -14,6 +14,10 @@ field (axisymmetric)        ``axisymmetric_layout(position, ...)`` and
                             (``CELL_TAGS``, ``FACET_TAGS``), which the tube's
                             solver (``axisymmetric.discretise`` and
                             ``solve_discretisation``) assembles and solves as is
+field (3D)                  ``placement_3d``, ``contact_rule_3d``, ``extent_3d``,
+                            ``occ_parts``, ``rim_distance_expr``,
+                            ``gap_refinements_3d`` (the shell; see
+                            :func:`tengfield.field.geometry3d.build_model`)
 field (default mesh size)   ``mesh_features()``: {scene key: length [m]}
 surrogate, dynamics (1-D)   ``stroke``: the ball's travel on the axis [m]
                             (position z = gap below the ball, in [0, stroke]);
@@ -38,8 +42,12 @@ run, ``tengfield field``) dispatches on the shape. ``"tube"`` is an adapter over
 the scene and the existing tube modules (:mod:`.tube`), ``"spherical-shell"``
 the shell (:mod:`.spherical_shell`, its scene keys in ``scene/schema.py``, the
 scene-level rules in ``scene/shapes.py``), ``"hexagonal"`` an adapter over the
-honeycomb's 3D cell (:mod:`.hexagonal`). The 3D gmsh models are not cell methods yet; docs/architecture.md ("Where a new cell shape goes") and
-docs/spherical_shell.md say what is left.
+honeycomb's 3D cell (:mod:`.hexagonal`). The 3D gmsh model is built by
+:func:`tengfield.field.geometry3d.build_model` from the 3D cell's answers
+(``placement_3d``, ``contact_rule_3d``, ``extent_3d``, ``occ_parts``,
+``rim_distance_expr``, ``gap_refinements_3d``): the tube's and the honeycomb's in
+``geometry3d.py``, the shell's in :mod:`.shell_model3d`. docs/architecture.md ("Where a
+new cell shape goes") and docs/spherical_shell.md say what is left.
 """
 from __future__ import annotations
 

@@ -35,8 +35,8 @@ import numpy as np
 
 from ...errors import FieldError
 from .. import contact
-from ..geometry_axisymmetric import (CELL_TAGS, FACET_TAGS, GRADING_REACH, INTERFACE_GROWTH,
-                                     LC_INTEGRATION_PRECISION, RIM_EXPONENT)
+from ..geometry_axisymmetric import (GRADING_REACH, INTERFACE_GROWTH, RIM_EXPONENT,
+                                     finish_size_fields, register_groups, surface_groups)
 
 _model_counter = itertools.count()
 
@@ -167,16 +167,7 @@ def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
     gmsh.model.occ.remove([(0, centre)])   # the arcs' centre point, if left unused
     occ.synchronize()
 
-    groups: dict[str, list[int]] = {k: [] for k in (*CELL_TAGS, *FACET_TAGS)}
-    for _, s in gmsh.model.getEntities(2):
-        if s == image:
-            groups["exterior"].append(s)
-        elif s in ball_parts:
-            groups["ball"].append(s)
-        elif s in wall_parts:
-            groups["walls"].append(s)
-        else:
-            groups["air"].append(s)
+    groups = surface_groups(gmsh, image, ball_parts, wall_parts)
 
     tol = 1e-9 * R
     pad = 2e-7 + 1e-6 * R
@@ -207,26 +198,8 @@ def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
         elif abs(math.hypot(x, y) - b) < 1e3 * tol:
             interfaces.append(c)
 
-    for key in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper",
-                "far_boundary"):
-        if not groups[key]:
-            raise FieldError(f"spherical shell geometry: no {key!r} entity found (gmsh model "
-                             f"{name})")
-    if image is not None:
-        masters = sorted(groups["far_boundary"], key=mids.get)
-        slaves = sorted(groups["far_boundary_image"], key=mids.get)
-        if len(masters) != len(slaves):
-            raise FieldError("spherical shell geometry: the Kelvin arcs do not pair up")
-        translation = [1, 0, 0, 0, 0, 1, 0, lay.shift, 0, 0, 1, 0, 0, 0, 0, 1]
-        gmsh.model.mesh.setPeriodic(1, slaves, masters, translation)
-    for key, tag in CELL_TAGS.items():
-        if groups[key]:
-            gmsh.model.addPhysicalGroup(2, groups[key], tag)
-            gmsh.model.setPhysicalName(2, tag, key)
-    for key, tag in FACET_TAGS.items():
-        if groups[key]:
-            gmsh.model.addPhysicalGroup(1, groups[key], tag)
-            gmsh.model.setPhysicalName(1, tag, key)
+    register_groups(gmsh, groups, mids, kelvin_shift=None if image is None else lay.shift,
+                    what="spherical shell", name=name)
     _size_fields(gmsh, lay)
     gmsh.model.mesh.generate(2)
     if geometry_order > 1:
@@ -237,7 +210,6 @@ def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
 def _size_fields(gmsh, lay: ShellLayout) -> None:
     """Background mesh size (one MathEval: the Min of the expressions of the module
     docstring), plus the Kelvin image's box."""
-    fld = gmsh.model.mesh.field
     h, mu, a = lay.mesh_size, lay.grading_exponent, lay.cavity_radius
     sizes = []
     L = lay.info["rim_reach_m"]
@@ -260,28 +232,4 @@ def _size_fields(gmsh, lay: ShellLayout) -> None:
         sizes.append(f"({h!r}) + {INTERFACE_GROWTH!r} * Abs(Sqrt(x^2 + y^2) - ({a!r}))")
     extent = lay.info["bulk_length_m"]
     sizes.append(f"({h!r}) * Max(1, Sqrt(x^2 + y^2) / ({extent!r}))")
-    fields = []
-    if lay.kelvin:
-        box = fld.add("Box")
-        fld.setNumber(box, "VIn", h * lay.domain_radius / extent)
-        fld.setNumber(box, "VOut", 1e22)
-        fld.setNumber(box, "XMin", -1.0)
-        fld.setNumber(box, "XMax", 1.0)
-        fld.setNumber(box, "YMin", lay.shift - 1.5 * lay.domain_radius)
-        fld.setNumber(box, "YMax", lay.shift + 1.5 * lay.domain_radius)
-        fields.append(box)
-    combined = sizes[0]
-    for expr in sizes[1:]:
-        combined = f"Min({combined}, {expr})"
-    size = fld.add("MathEval")
-    fld.setString(size, "F", combined)
-    fmin = fld.add("Min")
-    fld.setNumbers(fmin, "FieldsList", [size, *fields])
-    fld.setAsBackgroundMesh(fmin)
-    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25 * lay.domain_radius)
-    gmsh.option.setNumber("Mesh.Algorithm", 6)
-    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", LC_INTEGRATION_PRECISION)
-    gmsh.option.setNumber("Mesh.Smoothing", 0)
+    finish_size_fields(gmsh, lay, sizes, [])

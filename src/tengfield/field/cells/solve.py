@@ -24,12 +24,11 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
-
 from ...errors import FieldError
 from ...scene.constants import EPS0
 from .. import contact
-from ..axisymmetric import LINE_KEYS, discretise, field_solution, richardson_error, solve_discretisation
+from ..axisymmetric import (discretise, field_solution, mesh_model, richardson_error,
+                            solve_by_contact_rule, solve_discretisation, solved_on_rank_zero)
 from ..geometry_axisymmetric import FACET_TAGS
 from ..result import PositionResult
 
@@ -42,33 +41,17 @@ SOLVER_OPTIONS = ("sigma", "mesh_size", "degree", "far_field", "domain_radius",
 def build_mesh(cell, position: float, comm, *, mesh_size: float, degree: int,
                far_field: str, domain_radius: float | None, grading_size: float | None = None):
     """(layout, mesh, cell_tags, facet_tags) of ``cell`` with the ball at ``position``."""
-    import gmsh
-
-    from .. import _dolfinx as dx_api
-    from .._gmsh import initialize as initialize_gmsh
-
     lay = cell.axisymmetric_layout(position, mesh_size=mesh_size, degree=degree,
                                    domain_radius=domain_radius, far_field=far_field,
                                    grading_size=grading_size)
-    initialised_here = not gmsh.isInitialized()
-    if initialised_here:
-        initialize_gmsh(["-nt", "1"], readConfigFiles=False, interruptible=False)
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        try:
-            cell.build_axisymmetric_model(gmsh, lay, geometry_order=2)
-        except FieldError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - gmsh/OpenCASCADE: one line naming the keys
-            first = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
-            raise FieldError(f"gmsh could not mesh the {cell.name} cell ({first}): check its "
-                             f"dimensions and [field] mesh_size_mm = {mesh_size * 1e3:g}"
-                             ) from None
-        mesh, cell_tags, facet_tags = dx_api.mesh_from_gmsh(gmsh.model, comm, rank=0, gdim=2)
-        gmsh.model.remove()
-    finally:
-        if initialised_here:
-            gmsh.finalize()
+
+    def failure(exc) -> str:
+        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:160]
+        return (f"gmsh could not mesh the {cell.name} cell ({first}): check its dimensions "
+                f"and [field] mesh_size_mm = {mesh_size * 1e3:g}")
+
+    mesh, cell_tags, facet_tags = mesh_model(
+        lambda gmsh: cell.build_axisymmetric_model(gmsh, lay, geometry_order=2), comm, failure)
     return lay, mesh, cell_tags, facet_tags
 
 
@@ -148,41 +131,13 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
 
 
 def _solve_serial(cell, position: float, comm, **options) -> PositionResult:
-    """With the contact rule: near the wall, extrapolated from three meshable gaps."""
+    """With the contact rule: near the wall, extrapolated from three meshable gaps (the
+    tube's :func:`~tengfield.field.axisymmetric.solve_by_contact_rule`)."""
     anchors = contact.contact_anchors(position, cell.stroke, cell.electrode_spacing)
     if anchors is None:
         return _solve_meshed(cell, position, comm, **options)
-    t0 = time.perf_counter()
-
-    later = {**options, "keep_solution": False}
-
-    def solve_at(z):   # the potentials kept are those of the nearest anchor gap
-        res = _solve_meshed(cell, z, comm, **(options if z == anchors[0] else later))
-        res.extras = {key: np.asarray(res.info[key]) for key in LINE_KEYS
-                      if key in res.info}   # breakdown lines: extrapolated like C and q
-        return res
-
-    rule = contact.extrapolate_to_contact(position, anchors, cell.stroke, solve_at)
-    result = rule["solves"][0]
-    for key in LINE_KEYS:
-        if key in rule["extras"]:
-            result.info[key] = rule["extras"][key]
-    for res in rule["solves"]:
-        res.__dict__.pop("extras", None)
-    result.capacitance = rule["capacitance"]
-    result.induced_fraction = rule["induced_fraction"]
-    result.induced_charge = rule["induced_fraction"] * result.ball_charge
-    result.info.pop("source_electrode_charge_C", None)   # the nearest anchor's, not this z's
-    result.info.pop("far_field_charge_C", None)
-    result.relative_error_estimate = max(max(r.relative_error_estimate
-                                             for r in rule["solves"]), rule["error"])
-    result.position = position
-    result.solve_time = sum(r.solve_time for r in rule["solves"])
-    result.wall_time = time.perf_counter() - t0
-    result.info["contact_rule"] = ("power-law extrapolation from gaps "
-                                   + ", ".join(f"{d:.6g}" for d in rule["distances"]) + " m")
-    result.info["contact_extrapolation_error"] = rule["error"]
-    return result
+    return solve_by_contact_rule(position, anchors, cell.stroke,
+                                 lambda z, **opts: _solve_meshed(cell, z, comm, **opts), options)
 
 
 def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
@@ -203,8 +158,6 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
     (the lines' lengths: ``cell.breakdown_feet``). ``keep_solution`` (a communicator
     of size 1): ``result.solution``, the tube's :class:`FieldSolution` (mesh, ψ_lower,
     ψ_upper, with ``source_solve`` φ_σ)."""
-    from mpi4py import MPI
-
     from .. import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
 
     if not (0.0 <= position <= cell.stroke):
@@ -217,20 +170,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
                    estimate_error=estimate_error, source_solve=source_solve,
                    linear_solver=linear_solver, grading_size=grading_size,
                    breakdown_lines=breakdown_lines, keep_solution=keep_solution)
-    if comm.size == 1:
-        return _solve_serial(cell, position, comm, **options)
-    if keep_solution:
-        raise FieldError("keep_solution needs a communicator of size 1")
-    outcome = None
-    if comm.rank == 0:
-        try:
-            outcome = _solve_serial(cell, position, MPI.COMM_SELF, **options)
-        except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
-            outcome = exc
-    outcome = comm.bcast(outcome, root=0)
-    if isinstance(outcome, Exception):
-        raise outcome
-    return outcome
+    return solved_on_rank_zero(comm, lambda here: _solve_serial(cell, position, here, **options),
+                               keep_solution=keep_solution)
 
 
 __all__ = ["solve_cell_position", "far_field_charge", "build_mesh", "SOLVER_OPTIONS"]

@@ -87,19 +87,39 @@ class SphericalShell:
         """:func:`tengfield.field.solve_position` for this cell: the axisymmetric solve
         (:func:`~tengfield.field.cells.solve.solve_cell_position`) at the scene's σ and
         ``[field]`` discretisation (the default mesh size scaled as the tube's)."""
-        if method != "axisymmetric" or offset != 0.0:
-            raise FieldError(f"method = {method!r}, offset_mm = {offset * 1e3:g}: the "
-                             f"{self.name} has the axisymmetric solver only (the ball on the "
-                             "axis) yet")
         from ..geometry_axisymmetric import base_mesh_size
-        from .solve import solve_cell_position
 
         fld = scene.field
+        if method == "3d":
+            return self.solve_3d(position, offset=offset, sigma=scene.device.surface_charge,
+                                 mesh_size=base_mesh_size(scene), degree=fld.degree,
+                                 far_field=fld.far_field, comm=comm, **options)
+        if offset != 0.0:
+            raise FieldError(f"method = 'axisymmetric' needs offset_mm = 0 (got "
+                             f"{offset * 1e3:g}); use method = '3d' for an off-axis ball")
+        from .solve import solve_cell_position
+
         return solve_cell_position(self, position, comm=comm,
                                    sigma=scene.device.surface_charge,
                                    mesh_size=base_mesh_size(scene), degree=fld.degree,
                                    far_field=fld.far_field, domain_radius=fld.domain_radius,
                                    **options)
+
+    def solve_3d(self, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
+                 sigma: float, mesh_size: float, degree: int = 2, far_field: str = "kelvin",
+                 comm, estimate_error: bool = True, keep_solution: bool = False):
+        """A 3D solve (:func:`tengfield.field.solver3d.solve_cell_3d`, the tube's solver on
+        :mod:`.shell_model3d`'s model) with the ball at gap ``position`` [m] and lateral
+        ``offset`` [m] (at most :meth:`admissible_offset`), at angle ``offset_angle``
+        [rad] from +x; the far-field sphere :attr:`far_radius`."""
+        from ..solver3d import Solve3DSettings, solve_cell_3d
+
+        settings = Solve3DSettings(degree=degree, mesh_size=mesh_size,
+                                   domain_radius=self.far_radius, far_field=far_field,
+                                   estimate_error=estimate_error)
+        return solve_cell_3d(self, position, offset=offset, offset_angle=offset_angle,
+                             surface_charge=sigma, settings=settings, comm=comm,
+                             keep_solution=keep_solution)
 
     def __post_init__(self) -> None:
         for key, value in (("cavity_diameter_mm", self.cavity_diameter),
@@ -285,3 +305,33 @@ class SphericalShell:
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         from .shell_model import build_model
         return build_model(gmsh, layout, geometry_order=geometry_order)
+
+    # -- the 3D model (field/cells/shell_model3d.py; geometry3d.build_model asks these) --
+    def admissible_offset(self, position: float) -> float:
+        """Largest lateral offset [m] of the ball at gap ``position`` [m]: sqrt(z (stroke - z))."""
+        from .shell_model3d import admissible_offset
+        return admissible_offset(self, position)
+
+    def placement_3d(self, position: float, offset: float, offset_angle: float = 0.0):
+        from .shell_model3d import placement
+        return placement(self, position, offset, offset_angle)
+
+    def contact_rule_3d(self, position: float, offset: float, offset_angle: float = 0.0):
+        from .shell_model3d import contact_rule
+        return contact_rule(self, position, offset, offset_angle)
+
+    def extent_3d(self, offset: float) -> float:
+        """The shell holds the ball wherever it is: its outer radius [m]."""
+        return self.outer_radius
+
+    def occ_parts(self, occ):
+        from .shell_model3d import occ_parts
+        return occ_parts(self, occ)
+
+    def rim_distance_expr(self) -> str:
+        from .shell_model3d import rim_distance_expr
+        return rim_distance_expr(self)
+
+    def gap_refinements_3d(self, centre, size: float, ball_factor: float) -> list:
+        from .shell_model3d import gap_refinements
+        return gap_refinements(self, centre, size, ball_factor)
