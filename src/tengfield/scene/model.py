@@ -29,8 +29,7 @@ from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_ar
                      check_steady_window, check_vibration_work, check_work, field_problems,
                      show_number)
 from .recorded import read_psd, read_recorded
-from .shapes import (check_shape_scene, shape_field_inputs, shape_field_problems, shape_of,
-                     shape_scene_field_problems)
+from .shapes import check_shape_scene, shape_field_inputs, shape_field_problems, shape_of
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
                      SCHEMA, check_section, convert, harmonic_components, suggest,
                      update_section, with_defaults)
@@ -504,7 +503,7 @@ def check_field(scene: Scene) -> None:
     field``/``run``/``precompute``/``sweep``): field-only values (``[field]``
     keys and the geometry ranges a mesh needs) never fail a dynamics-only run.
     """
-    problems = list(scene.field_problems) + shape_scene_field_problems(scene)
+    problems = list(scene.field_problems)
     if problems:
         raise SceneError("; ".join(problems))
 

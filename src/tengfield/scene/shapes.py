@@ -299,25 +299,12 @@ def derived_stroke(shape: str, raw_device: dict, device: dict) -> dict:
 
 def check_shape_scene(scene) -> None:
     """Rules between the shape and other sections: what a shape does not support yet
-    (the honeycomb's 3D contact; the shell's field side of it:
-    :func:`shape_scene_field_problems`)."""
+    (the honeycomb's 3D contact)."""
     dev = scene.device
     if dev.shape == "hexagonal" and scene.contact.model == "3d":
         raise SceneError(f"[contact] model = '3d' is not available for shape = {dev.shape!r} "
                          "yet (the contact on the hexagonal wall is not done): use 'impact' "
                          "or 'soft'")
-
-
-def shape_scene_field_problems(scene) -> list[str]:
-    """Field-stage problems between the shape and other sections (``check_field``): the
-    shell's 3D contact moves the ball off the axis, whose field (the shell's (z, r)
-    surrogate) is not there yet; its dynamics alone (``tengfield dynamics``) run."""
-    if scene.device.shape == "spherical-shell" and scene.contact.model == "3d":
-        return ["[contact] model = '3d' on shape = 'spherical-shell': the field stage needs "
-                "the shell's (z, r) surrogate (the ball off the axis), not available yet; "
-                "`tengfield dynamics` runs the 3D motion, for run and the field commands use "
-                "model = 'impact' or 'soft'"]
-    return []
 
 
 def shape_field_problems(dev, fld) -> list[str]:
