@@ -30,6 +30,7 @@ rounding, 1e-12 relative: a sum in pieces). Units SI, signs as
 """
 from __future__ import annotations
 
+import bisect
 from collections.abc import Mapping
 
 import numpy as np
@@ -128,9 +129,9 @@ class StreamedRun:
         top = {n: 0.0 for n in quantities}
         own = {c: [np.inf, -np.inf] for c in self.entry.columns}   # the circuit's columns
         max_gap = -np.inf
-        t_abs = self.dynamics.t
-        tail_start = int(np.searchsorted(t_abs, t_abs[-1] - TAIL_PERIODS * scene.excitation.period,
-                                         side="left"))
+        t_abs = self.dynamics.t        # sorted; a long run's sampled on request: bisection
+        tail_start = bisect.bisect_left(t_abs, float(t_abs[-1])
+                                        - TAIL_PERIODS * scene.excitation.period)
         tail: dict = {}
         envelope = _Envelope(self.elapsed, self.columns)
         self._last_circuit = None
@@ -238,9 +239,13 @@ class StreamedWaveforms(Mapping):
 
     def source_of(self, name):
         """The dynamics' own array of a trajectory column (``time_s``, ``gap_m``...),
-        else None: run.h5 stores those once (hard links)."""
+        else None: run.h5 stores those once (hard links). A long run's are its columns
+        sampled on request (:class:`tengfield.dynamics.columns.SampledColumn`)."""
         attr = _TRAJECTORY.get(name)
-        return None if attr is None else np.asarray(getattr(self._run.dynamics, attr))
+        if attr is None:
+            return None
+        column = getattr(self._run.dynamics, attr)
+        return column if hasattr(column, "chunks") else np.asarray(column)
 
     def chunks(self):
         """Yield ``{column: array}`` for consecutive chunks of rows (all columns)."""
