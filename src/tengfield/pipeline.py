@@ -406,8 +406,12 @@ def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:
 
 
 def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunResult:
-    """``[array]``: every cell its own dynamics (tengfield.array), one surrogate."""
+    """``[array]``: every cell its own dynamics (tengfield.array), one surrogate. The
+    nominal cell's columns are whole arrays (a long run's sampled ones are built:
+    tengfield.array holds its outputs whole)."""
     from .array import run_array
+    from .dynamics.columns import with_arrays
+    dynamics = with_arrays(dynamics)
 
     start = time.perf_counter()
     arr = run_array(scene, curves, dynamics, comm=comm, progress=progress)

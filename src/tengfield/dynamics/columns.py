@@ -194,3 +194,16 @@ def iter_chunks(column, size: int = CHUNK):
 def is_sampled(column) -> bool:
     """Whether ``column`` is sampled on request (a long run's)."""
     return isinstance(column, SampledColumn)
+
+
+def with_arrays(result):
+    """``result`` (a DynamicsResult) with its sampled columns built as arrays (memory
+    proportional to the run: for code that needs them whole, e.g. an ``[array]`` run);
+    ``result`` itself when it holds arrays."""
+    import dataclasses
+
+    names = ("t", "elapsed", "gap", "gap_velocity", "table")
+    if not any(is_sampled(getattr(result, c, None)) for c in names):
+        return result
+    return dataclasses.replace(result, **{c: np.asarray(getattr(result, c)) for c in names
+                                          if is_sampled(getattr(result, c, None))})
