@@ -18,7 +18,9 @@ carries its state from chunk to chunk and its
   largest gap, the load's energy sums, the last 5 periods (waveforms.png, the V-Q loop)
   and a min/max envelope of every column in :data:`ENVELOPE_BINS` time bins;
 * :class:`StreamedWaveforms` is ``RunResult.waveforms`` of such a run: a read-only
-  mapping whose trajectory columns are the dynamics' arrays, whose other columns are
+  mapping whose trajectory columns are the dynamics' own (a long 1-D run's sampled on
+  request: :class:`tengfield.dynamics.columns.SampledColumn`, read here a chunk at a
+  time, the steady window and the tail found by bisection), whose other columns are
   computed again on request (whole, cached: memory proportional to the run, for the
   library user who asks) and whose :meth:`~StreamedWaveforms.chunks` feed run.h5 a chunk
   at a time (:func:`tengfield.io_hdf5.write_tables`).
@@ -203,7 +205,7 @@ class _Envelope:
 
 class StreamedWaveforms(Mapping):
     """``RunResult.waveforms`` of a streamed run (module docstring): the trajectory
-    columns are the dynamics' arrays; asking for another column computes every column
+    columns are the dynamics' own (arrays, or columns sampled on request); asking for another column computes every column
     again, whole (cached). ``chunks()`` yields ``{column: array}`` a chunk at a time
     (run.h5); ``tail`` holds the last :data:`TAIL_PERIODS` periods, ``envelope`` the
     min/max envelope; ``rows`` the number of samples."""
