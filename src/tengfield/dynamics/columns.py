@@ -169,8 +169,9 @@ class SampledColumn(NDArrayOperatorsMixin):
         return getattr(ufunc, method)(*inputs, **kwargs)
 
     def __getattr__(self, attr):
-        # ndarray methods (max, min, copy, ...) on the whole column (costly)
-        if attr.startswith("_") or attr in ("samples", "name"):
+        # ndarray methods (max, min, copy, ...) on the whole column (costly); any other
+        # name is missing without building it (hasattr probes stay cheap)
+        if attr.startswith("_") or attr in ("samples", "name") or not hasattr(np.ndarray, attr):
             raise AttributeError(attr)
         return getattr(np.asarray(self), attr)
 
