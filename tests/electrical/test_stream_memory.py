@@ -3,8 +3,9 @@ everything after the dynamics (surrogate, circuit, summary, run.h5, figures) pea
 the same memory for a run 4x longer, where the whole-record stage (the control, streaming
 switched off) grows with it. Measured in a child process: tracemalloc's peak of what is
 allocated after the dynamics (numpy's arrays included), and ru_maxrss's rise over the
-dynamics' level. The dynamics' own arrays (40 bytes per sample) are not the electrical
-stage's: they are measured apart (docs/long_runs.md)."""
+dynamics' level. The dynamics' own columns are not the electrical stage's: past
+LAZY_ROWS they are sampled on request (tengfield/dynamics/columns.py); the last test
+measures the whole process, dynamics included (docs/long_runs.md)."""
 from __future__ import annotations
 
 import json
