@@ -95,3 +95,18 @@ def test_short_runs_keep_their_arrays():
     result = simulate(scene)
     assert len(result.t) <= columns.LAZY_ROWS
     assert all(type(getattr(result, c)) is np.ndarray for c in NAMES)
+
+
+def test_trajectory_csv_of_sampled_columns_is_written_in_chunks_with_the_same_bytes(
+        monkeypatch, tmp_path):
+    """`tengfield dynamics` of a long run: trajectory.csv a chunk at a time (chunks of
+    1000 rows here), the same bytes as from the arrays."""
+    from tengfield import io as tio
+
+    whole, lazy = _both(monkeypatch, run={"duration_s": 0.6, "settle_periods": 2})
+    monkeypatch.setattr(columns, "CHUNK", 1000)
+    tio.write_trajectory_csv(whole, tmp_path / "whole.csv")
+    tio.write_trajectory_csv(lazy, tmp_path / "lazy.csv")
+    text = (tmp_path / "lazy.csv").read_bytes()
+    assert text == (tmp_path / "whole.csv").read_bytes()
+    assert text.count(b"\n") == len(whole.t) + 1 > 10_000
