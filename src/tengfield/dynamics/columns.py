@@ -22,25 +22,27 @@ LAZY_ROWS = 1 << 20
 #: rows sampled at a time when a whole column is built or iterated
 CHUNK = 1 << 18
 
+#: recent ranges whose samples are kept (the streamed stage's chunk and its circuit's)
+KEEP = 2
+
 #: the columns of a run: elapsed / absolute time, then the sampler's outputs in order
 COLUMNS = ("elapsed", "t", "gap", "gap_velocity", "table")
 
 
 class Samples:
     """The shared source of a run's columns: ``count`` samples at ``i / rate`` [s] after
-    ``origin`` [s], ``sampler(elapsed) -> (gap, gap velocity, table)``; the last range
-    sampled is kept (one chunk), so the three trajectory columns of a range cost one
-    evaluation."""
+    ``origin`` [s], ``sampler(elapsed) -> (gap, gap velocity, table)``; the last
+    :data:`KEEP` ranges sampled are kept (a chunk each), so the three trajectory columns
+    of a range cost one evaluation (and a circuit's chunk one row longer, another)."""
 
     def __init__(self, count: int, rate: float, origin: float, sampler):
         self.count, self.rate, self.origin, self.sampler = int(count), float(rate), \
             float(origin), sampler
-        self._key = None
-        self._value = None
+        self._kept: tuple = ()          # ((key, values), ...), replaced whole (threads)
 
     def __getstate__(self):
         state = dict(self.__dict__)
-        state["_key"] = state["_value"] = None
+        state["_kept"] = ()
         return state
 
     def elapsed(self, index: np.ndarray) -> np.ndarray:
@@ -49,19 +51,19 @@ class Samples:
 
     def column(self, name: str, index: np.ndarray, key=None) -> np.ndarray:
         """Column ``name`` at the integer sample indices ``index`` (``key``: a hashable
-        name of that range, to reuse the last evaluation)."""
+        name of that range, to reuse a recent evaluation)."""
         elapsed = self.elapsed(index)
         if name == "elapsed":
             return elapsed
         if name == "t":
             return self.origin + elapsed
-        if key is None or key != self._key:
+        kept = self._kept
+        values = next((v for k, v in kept if key is not None and k == key), None)
+        if values is None:
             values = self._sample(index, elapsed)
-            if key is None:
-                return np.asarray(values[COLUMNS.index(name) - 2], dtype=float)
-            self._key, self._value = key, values
-        return np.asarray(self._value[COLUMNS.index(name) - 2], dtype=float)
-
+            if key is not None:
+                self._kept = ((key, values),) + kept[:KEEP - 1]
+        return np.asarray(values[COLUMNS.index(name) - 2], dtype=float)
 
     def _sample(self, index: np.ndarray, elapsed: np.ndarray):
         """The sampler at ``elapsed``; a sampler with ``cover(lo, hi)`` (the soft model's
