@@ -57,3 +57,22 @@ def test_a_long_run_reads_its_dynamics_a_range_at_a_time(cache, tmp_path, monkey
     assert output_format == "hdf5" or "impacts.csv" in names
     with pytest.raises(AssertionError, match="whole column"):
         r.dynamics.gap.max()                # what building one does here
+
+
+@pytest.mark.slow
+def test_an_array_run_keeps_whole_arrays_and_the_same_waveforms(cache, monkeypatch):
+    """`[array]` runs hold whole arrays (tengfield.array): the nominal cell's sampled
+    columns are built first (dynamics.columns.with_arrays), the waveforms unchanged."""
+    import numpy as np
+
+    scene = fx.scene_with(run={"duration_s": 0.4, "settle_periods": 2},
+                          circuit={"kind": "load", "load_ohm": 3e9},
+                          array={"cells": 4, "initial_phase_spread_deg": 90.0, "seed": 3})
+    plain = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    monkeypatch.setattr(columns, "LAZY_ROWS", 100)
+    sampled = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    assert type(sampled.dynamics.gap) is np.ndarray
+    assert list(sampled.waveforms) == list(plain.waveforms)
+    for name, values in plain.waveforms.items():
+        np.testing.assert_array_equal(sampled.waveforms[name], values, err_msg=name)
+    assert sampled.summary["array"]["array_value"] == plain.summary["array"]["array_value"]
