@@ -255,9 +255,16 @@ def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
 # ---------------------------------------------------------------------------
 # dynamics
 def write_trajectory_csv(result, path: str | Path) -> Path:
-    """time_s, gap_m, gap_velocity_m_per_s, table_m of a DynamicsResult (full precision)."""
-    return write_csv(path, ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m"],
-                     [result.t, result.gap, result.gap_velocity, result.table])
+    """time_s, gap_m, gap_velocity_m_per_s, table_m of a DynamicsResult (full precision);
+    a long run's columns sampled on request are sampled and written a chunk at a time."""
+    header = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m"]
+    columns = [result.t, result.gap, result.gap_velocity, result.table]
+    if not hasattr(result.t, "chunks") or isinstance(result.t, np.ndarray):
+        return write_csv(path, header, columns)
+    from .dynamics.columns import CHUNK
+    for i0 in range(0, len(result.t), CHUNK):
+        write_csv(path, header, [c[i0:i0 + CHUNK] for c in columns], append=i0 > 0)
+    return Path(path)
 
 
 def write_impacts_csv(result, path: str | Path) -> Path:
@@ -378,7 +385,10 @@ def _waveform_columns(result) -> list[str]:
 
 def _same_times(result) -> bool:
     """waveforms.csv and the trajectory share their time samples (and so their rows)."""
-    a, b = np.asarray(result.waveforms["time_s"]), np.asarray(result.dynamics.t)
+    a, b = result.waveforms["time_s"], result.dynamics.t
+    if a is b:                     # e.g. a long run's column sampled on request
+        return True
+    a, b = np.asarray(a), np.asarray(b)
     return a is b or (a.shape == b.shape and bool(np.array_equal(a, b)))
 
 

@@ -61,9 +61,26 @@ def _h5py():
     return _import_h5py()
 
 
+def _sampled(column) -> bool:
+    """A column sampled on request (:class:`tengfield.dynamics.columns.SampledColumn`):
+    not an array, but sliceable."""
+    return not isinstance(column, np.ndarray) and hasattr(column, "chunks") \
+        and hasattr(column, "__len__")
+
+
 def _column(group, name: str, values) -> None:
     """Dataset ``name`` of ``group`` from a 1-D array, written ``CHUNK_ROWS`` at a time
-    (a view per write: no copy of the column)."""
+    (a view per write: no copy of the column; a long run's column sampled on request
+    is sampled a write at a time)."""
+    if _sampled(values):
+        n = len(values)
+        options = dict(chunks=(min(n, CHUNK_ROWS),), compression="gzip",
+                       compression_opts=DEFLATE_LEVEL, shuffle=True) if n else {}
+        dataset = group.create_dataset(name, shape=(n,), dtype=np.float64, **options)
+        for start in range(0, n, CHUNK_ROWS):
+            dataset[start:start + CHUNK_ROWS] = values[start:start + CHUNK_ROWS]
+        dataset.attrs["units"] = unit_of(name)
+        return
     values = np.asarray(values)
     if values.dtype.kind in "UO":                  # text cells (impacts' plate)
         values = np.asarray(values, dtype=bytes)
@@ -82,6 +99,12 @@ def _column(group, name: str, values) -> None:
 
 def _same(a, b) -> bool:
     """Equal 1-D columns (compared a chunk at a time: no n-sized temporary)."""
+    if a is b:                   # e.g. a long run's column sampled on request, not built
+        return True
+    if _sampled(a) or _sampled(b):
+        return len(a) == len(b) and all(
+            np.array_equal(np.asarray(a[i:i + CHUNK_ROWS]), np.asarray(b[i:i + CHUNK_ROWS]))
+            for i in range(0, len(a), CHUNK_ROWS))
     a, b = np.asarray(a), np.asarray(b)
     if a is b:
         return True
@@ -100,7 +123,7 @@ def _chunked(columns) -> bool:
 def _table_bytes(columns) -> int:
     if _chunked(columns):
         return 8 * columns.rows * len(list(columns))
-    return sum(np.asarray(v).nbytes for v in columns.values())
+    return sum(v.nbytes if _sampled(v) else np.asarray(v).nbytes for v in columns.values())
 
 
 def _chunked_columns(group, columns) -> None:

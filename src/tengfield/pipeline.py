@@ -234,7 +234,7 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
     """``(scene, table, curves, limit)``: the surrogate (cached or solved) at the charge the
     run uses (``scene`` at −σ_max for "breakdown"), the terminal curves (with the off-axis
     change of a ball that leaves the axis), the breakdown limit; Nones when Q_SC = 0."""
-    gap = np.asarray(dynamics.gap, dtype=float)
+    gap = dynamics.gap       # a long run's sampled on request: read a chunk at a time
     table = curves = limit = None
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
@@ -406,8 +406,12 @@ def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:
 
 
 def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunResult:
-    """``[array]``: every cell its own dynamics (tengfield.array), one surrogate."""
+    """``[array]``: every cell its own dynamics (tengfield.array), one surrogate. The
+    nominal cell's columns are whole arrays (a long run's sampled ones are built:
+    tengfield.array holds its outputs whole)."""
     from .array import run_array
+    from .dynamics.columns import with_arrays
+    dynamics = with_arrays(dynamics)
 
     start = time.perf_counter()
     arr = run_array(scene, curves, dynamics, comm=comm, progress=progress)
@@ -468,10 +472,18 @@ def _breakdown_summary(summary, scene, hashed, limit) -> None:
             summary["energy_per_cycle"], limit, scene.device.surface_charge)))
 
 
+def _leaves_zero(gap) -> bool:
+    """Whether any sample of ``gap`` is not 0 (a column sampled on request: a chunk at a
+    time, stopping at the first)."""
+    if isinstance(gap, np.ndarray) or not hasattr(gap, "chunks"):
+        return not np.all(np.asarray(gap) == 0.0)
+    return any(np.any(values != 0.0) for _, _, values in gap.chunks())
+
+
 def _needs_field(scene, gap) -> tuple[bool, str]:
     if scene.device.ball_charge == 0.0:
         return False, "ball charge is zero ([device] surface_charge_uC_per_m2 = 0): Q_SC = 0"
-    if np.all(np.asarray(gap) == 0.0):
+    if not _leaves_zero(gap):
         return False, "the ball never leaves the lower electrode: Q_SC = 0 (reference state)"
     return True, ""
 

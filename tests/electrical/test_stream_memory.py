@@ -3,8 +3,9 @@ everything after the dynamics (surrogate, circuit, summary, run.h5, figures) pea
 the same memory for a run 4x longer, where the whole-record stage (the control, streaming
 switched off) grows with it. Measured in a child process: tracemalloc's peak of what is
 allocated after the dynamics (numpy's arrays included), and ru_maxrss's rise over the
-dynamics' level. The dynamics' own arrays (40 bytes per sample) are not the electrical
-stage's: they are measured apart (docs/long_runs.md)."""
+dynamics' level. The dynamics' own columns are not the electrical stage's: past
+LAZY_ROWS they are sampled on request (tengfield/dynamics/columns.py); the last test
+measures the whole process, dynamics included (docs/long_runs.md)."""
 from __future__ import annotations
 
 import json
@@ -92,4 +93,58 @@ def test_a_run_4x_longer_streams_in_the_same_memory(tmp_path, python, cli_env, c
     assert whole_long["traced_peak_MB"] > 2.5 * whole_short["traced_peak_MB"], \
         (whole_short, whole_long)
     assert long["traced_peak_MB"] < 0.5 * whole_long["traced_peak_MB"]
+    print("whole", whole_short, whole_long)
+
+
+#: the whole process: the dynamics (its columns sampled on request past LAZY_ROWS), the
+#: surrogate, the streamed electrical stage, run.h5 and the figures
+WHOLE = """
+import json, resource, sys
+sys.path.insert(0, {tests!r})
+import plate_model as fx
+import tengfield as tf
+from tengfield import io as tio
+from tengfield.dynamics import columns, simulate
+
+columns.LAZY_ROWS = {lazy_rows}
+scene = fx.scene_with(run={{"duration_s": {duration}, "settle_periods": 2,
+                           "output_format": "hdf5"}}, circuit={circuit!r})
+r = tf.run(scene, cache_dir={cache!r}, solve=fx.plate_model_solve)
+tio.write_run_outputs(r, {out!r}, plots=True)
+tio.write_dynamics_outputs(r, {out!r}, plots=True)
+print(json.dumps({{"peak_rss_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3,
+                  "rows": len(r.t), "streamed": hasattr(r.waveforms, "chunks"),
+                  "sampled": type(r.dynamics.gap).__name__ == "SampledColumn"}}))
+"""
+
+
+def _whole(python, env, tmp_path, duration, lazy_rows, circuit):
+    name = f"whole-d{duration:g}-l{lazy_rows}"
+    code = WHOLE.format(tests=str(TESTS), lazy_rows=lazy_rows, duration=duration,
+                        cache=str(tmp_path / "cache"), out=str(tmp_path / name),
+                        circuit=circuit)
+    proc = subprocess.run([python, "-c", code], capture_output=True, text=True, env=env,
+                          timeout=1800)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.slow
+def test_a_run_4x_longer_has_the_same_peak_memory_dynamics_included(tmp_path, python, cli_env):
+    """Issue #28 / #30.11: the whole process's peak RSS (ru_maxrss of a child: the
+    dynamics, surrogate, streamed circuit, run.h5, figures) of a run 4x longer is < 1.2x
+    that of the shorter one, now that the dynamics' columns are sampled on request; the
+    control (whole dynamics arrays, LAZY_ROWS out of reach) grows past that bound."""
+    env = cli_env(MPLBACKEND="Agg")
+    short = _whole(python, env, tmp_path, 60.0, 1 << 20, LOAD)
+    long = _whole(python, env, tmp_path, 240.0, 1 << 20, LOAD)
+    assert short["sampled"] and long["sampled"] and short["streamed"] and long["streamed"]
+    assert long["rows"] > 3.9 * short["rows"] > 1.1e6
+    assert long["peak_rss_MB"] < 1.2 * short["peak_rss_MB"], (short, long)
+    print("sampled", short, long)
+    whole_short = _whole(python, env, tmp_path, 60.0, 1 << 40, LOAD)
+    whole_long = _whole(python, env, tmp_path, 240.0, 1 << 40, LOAD)
+    assert not whole_long["sampled"] and whole_long["streamed"]
+    assert whole_long["peak_rss_MB"] > 1.2 * whole_short["peak_rss_MB"], \
+        (whole_short, whole_long)
     print("whole", whole_short, whole_long)

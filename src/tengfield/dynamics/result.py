@@ -65,6 +65,12 @@ class DynamicsResult:
     ``t`` = time_origin + elapsed is rounded, e.g. at t ~ 1e12 s).
     ``sample(times)`` evaluates the exact trajectory at absolute times,
     ``sample_elapsed(s)`` at elapsed times.
+
+    A run of more than :data:`tengfield.dynamics.columns.LAZY_ROWS` samples (2^20) holds
+    no whole-record arrays: ``t``, ``elapsed``, ``gap``, ``gap_velocity`` and ``table``
+    are :class:`~tengfield.dynamics.columns.SampledColumn` objects, sampled on request
+    (slices cost what they return; ``np.asarray`` builds the whole column; the same
+    numbers, bit for bit).
     """
     t: np.ndarray
     gap: np.ndarray

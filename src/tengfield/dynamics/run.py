@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import DynamicsError, SceneError
 from ..scene.constants import G
 from ..scene.limits import MAX_SAMPLES, check_steady_window  # MAX_SAMPLES: also for simulate(duration=)
+from . import columns as _columns
 from .excitation import table_from_scene
 from .regime import classify
 from .result import PLATE_NAMES, DynamicsResult, Impacts
@@ -66,7 +67,9 @@ def run_result(scene, traj, contacts, n_events: int, *, model: str, t0: float, d
     ``upper_stuck(window_start, t_end)``: whether the ball rests on the upper plate
     (None: it never does, as in the soft model); ``gap_on_grid(start, step, count)``: the
     gap on a uniform grid in one pass, if the model has one (:func:`.regime.classify`);
-    ``wall0``: ``time.perf_counter()`` at the start."""
+    ``wall0``: ``time.perf_counter()`` at the start. A run of more than
+    :data:`~.columns.LAZY_ROWS` samples keeps ``traj`` and samples its columns on request
+    (:class:`~.columns.SampledColumn`: the same numbers, memory bounded)."""
     times, plates, before, after = contacts
     period = scene.excitation.period
     stroke = scene.device.stroke
@@ -75,10 +78,17 @@ def run_result(scene, traj, contacts, n_events: int, *, model: str, t0: float, d
     regime = classify(traj, times, plates, before, window_start=window, t_end=duration,
                       period=period, stroke=stroke, g=G, upper_stuck=stuck,
                       gap_on_grid=gap_on_grid)
-    elapsed = sample_times(scene, duration)
-    z, v, y = traj(elapsed)
+    count = _sample_count(scene, duration)
+    if count > _columns.LAZY_ROWS:
+        cols = _columns.sampled_columns(count, scene.run.sample_rate, t0, traj)
+        elapsed, t, z, v, y = (cols[c] for c in ("elapsed", "t", "gap", "gap_velocity",
+                                                   "table"))
+    else:
+        elapsed = sample_times(scene, duration)
+        z, v, y = traj(elapsed)
+        t = t0 + elapsed
     names = PLATE_NAMES[plates] if plates.size else np.zeros(0, dtype="<U5")
-    return DynamicsResult(t=t0 + elapsed, gap=z, gap_velocity=v, table=y,
+    return DynamicsResult(t=t, gap=z, gap_velocity=v, table=y,
                           impacts=Impacts(t0 + times, names, before, after), regime=regime,
                           n_events=n_events, wall_time=time.perf_counter() - wall0, model=model,
                           stroke=stroke, period=period, window_start=t0 + window,

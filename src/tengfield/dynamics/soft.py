@@ -104,6 +104,23 @@ class SoftTrajectory:
         self.starts.append(t0)
         self.solutions.append(sol)
 
+    def cover(self, lo: float, hi: float) -> tuple[float, float]:
+        """An interval [a, b] [s] holding every solver step that meets [lo, hi] whole,
+        with one step to spare on each side: sampling all samples of [a, b] evaluates each
+        of those steps' interpolants on the same points as sampling the whole record (the
+        interpolant's matrix product gives the same bits; a long run's columns are sampled
+        a range at a time, :mod:`.columns`)."""
+        bounds = getattr(self, "_bounds", None)
+        if bounds is None or bounds.size == 0:
+            bounds = self._bounds = np.unique(np.concatenate(
+                [np.asarray(sol.ts, dtype=float) for sol in self.solutions]
+                + [np.asarray(self.starts, dtype=float)]))
+        i = int(np.searchsorted(bounds, lo, side="right")) - 2
+        j = int(np.searchsorted(bounds, hi, side="left")) + 1
+        a = bounds[i] if i >= 0 else -np.inf
+        b = bounds[j] if j < bounds.size else np.inf
+        return float(a), float(b)
+
     def __call__(self, times):
         t = np.atleast_1d(np.asarray(times, dtype=float))
         z = np.empty(t.size)

@@ -18,7 +18,9 @@ carries its state from chunk to chunk and its
   largest gap, the load's energy sums, the last 5 periods (waveforms.png, the V-Q loop)
   and a min/max envelope of every column in :data:`ENVELOPE_BINS` time bins;
 * :class:`StreamedWaveforms` is ``RunResult.waveforms`` of such a run: a read-only
-  mapping whose trajectory columns are the dynamics' arrays, whose other columns are
+  mapping whose trajectory columns are the dynamics' own (a long 1-D run's sampled on
+  request: :class:`tengfield.dynamics.columns.SampledColumn`, read here a chunk at a
+  time, the steady window and the tail found by bisection), whose other columns are
   computed again on request (whole, cached: memory proportional to the run, for the
   library user who asks) and whose :meth:`~StreamedWaveforms.chunks` feed run.h5 a chunk
   at a time (:func:`tengfield.io_hdf5.write_tables`).
@@ -30,6 +32,7 @@ rounding, 1e-12 relative: a sum in pieces). Units SI, signs as
 """
 from __future__ import annotations
 
+import bisect
 from collections.abc import Mapping
 
 import numpy as np
@@ -128,9 +131,9 @@ class StreamedRun:
         top = {n: 0.0 for n in quantities}
         own = {c: [np.inf, -np.inf] for c in self.entry.columns}   # the circuit's columns
         max_gap = -np.inf
-        t_abs = self.dynamics.t
-        tail_start = int(np.searchsorted(t_abs, t_abs[-1] - TAIL_PERIODS * scene.excitation.period,
-                                         side="left"))
+        t_abs = self.dynamics.t        # sorted; a long run's sampled on request: bisection
+        tail_start = bisect.bisect_left(t_abs, float(t_abs[-1])
+                                        - TAIL_PERIODS * scene.excitation.period)
         tail: dict = {}
         envelope = _Envelope(self.elapsed, self.columns)
         self._last_circuit = None
@@ -202,7 +205,7 @@ class _Envelope:
 
 class StreamedWaveforms(Mapping):
     """``RunResult.waveforms`` of a streamed run (module docstring): the trajectory
-    columns are the dynamics' arrays; asking for another column computes every column
+    columns are the dynamics' own (arrays, or columns sampled on request); asking for another column computes every column
     again, whole (cached). ``chunks()`` yields ``{column: array}`` a chunk at a time
     (run.h5); ``tail`` holds the last :data:`TAIL_PERIODS` periods, ``envelope`` the
     min/max envelope; ``rows`` the number of samples."""
@@ -238,9 +241,13 @@ class StreamedWaveforms(Mapping):
 
     def source_of(self, name):
         """The dynamics' own array of a trajectory column (``time_s``, ``gap_m``...),
-        else None: run.h5 stores those once (hard links)."""
+        else None: run.h5 stores those once (hard links). A long run's are its columns
+        sampled on request (:class:`tengfield.dynamics.columns.SampledColumn`)."""
         attr = _TRAJECTORY.get(name)
-        return None if attr is None else np.asarray(getattr(self._run.dynamics, attr))
+        if attr is None:
+            return None
+        column = getattr(self._run.dynamics, attr)
+        return column if hasattr(column, "chunks") else np.asarray(column)
 
     def chunks(self):
         """Yield ``{column: array}`` for consecutive chunks of rows (all columns)."""

@@ -57,11 +57,19 @@ def elapsed_times(dynamics) -> np.ndarray:
     """The output times of ``dynamics`` on the run's own axis, ``t - time_origin`` [s]
     (exact: ``dynamics.elapsed`` when it has one). Every circuit is integrated on this
     axis, so its precision does not depend on the absolute time (at t ~ 1.7e9 s the
-    doubles are 2.4e-7 s apart, far coarser than the impact offsets)."""
+    doubles are 2.4e-7 s apart, far coarser than the impact offsets). A long run's
+    column sampled on request (:class:`tengfield.dynamics.columns.SampledColumn`: len,
+    slices, items) is returned as it is: the streamed stage reads it a chunk at a time."""
     elapsed = getattr(dynamics, "elapsed", None)
     if elapsed is not None:
-        return np.asarray(elapsed, dtype=float)
+        return elapsed if _sampled(elapsed) else np.asarray(elapsed, dtype=float)
     return np.asarray(dynamics.t, dtype=float) - time_origin(dynamics)
+
+
+def _sampled(column) -> bool:
+    """A column sampled on request (a long run's): not an array, but sliceable."""
+    return not isinstance(column, np.ndarray) and hasattr(column, "chunks") \
+        and hasattr(column, "__len__")
 
 
 def sample_elapsed(dynamics, elapsed):
@@ -213,11 +221,18 @@ def steady_window(times, scene) -> tuple[np.ndarray, str]:
 
 def steady_window_index(times, scene) -> tuple[int, str]:
     """The first sample of :func:`steady_window` for non-decreasing ``times`` and its rule,
-    without an n-sized mask (the streamed stage of a long run)."""
-    t = np.asarray(times, dtype=float)
-    start = t[0] + steady_start(scene)
-    index = int(np.searchsorted(t, start, side="left"))   # the first t >= start
-    whole = t.size - index < 2
+    without an n-sized mask (the streamed stage of a long run; a column sampled on
+    request is searched by bisection, a sample at a time)."""
+    if _sampled(times):
+        import bisect
+        t = times
+        start = float(t[0]) + steady_start(scene)
+        index = bisect.bisect_left(t, start)                # the first t >= start
+    else:
+        t = np.asarray(times, dtype=float)
+        start = t[0] + steady_start(scene)
+        index = int(np.searchsorted(t, start, side="left"))   # the first t >= start
+    whole = len(t) - index < 2
     return (0 if whole else index), _window_rule(scene, t, start, whole)
 
 
