@@ -19,3 +19,14 @@ class FieldError(TengfieldError, RuntimeError):
 
 class OutputError(TengfieldError):
     """The output location cannot be used (not a directory, not writable, locked)."""
+
+
+def show_number(value: float, *bounds: float) -> str:
+    """``value`` for an out-of-range message beside its ``bounds``: ``:g``, with as many
+    more digits as it takes not to read as a bound it differs from (``3.0000000001`` beside
+    3, not ``3 is out of range: allowed [0, 3]``)."""
+    for digits in range(6, 18):
+        text = f"{value:.{digits}g}"
+        if not any(b != value and text == f"{b:.{digits}g}" for b in bounds):
+            return text
+    return repr(value)

@@ -158,7 +158,7 @@ def _default_simulate():
 def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         simulate: Callable | None = None, progress: bool = False,
         command_line: str = "", write_cache: bool = True,
-        jobs: int | None = None) -> RunResult:
+        jobs: int | None = None, radial_settings: dict | None = None) -> RunResult:
     """Dynamics, surrogate and circuit for ``scene``; with ``[run] realisations`` = N > 1
     also the other N - 1 noise realisations (:func:`run_ensemble`: ``result.ensemble``,
     ``result.ensemble_rows``, what ``tengfield run`` writes as ensemble.csv).
@@ -169,6 +169,9 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     the field solves (and the realisations) over its ranks, ``jobs`` the realisations
     over worker processes (default: all cores). ``scene``: a :class:`~tengfield.Scene`, or
     a dict of sections with file-level keys (``{"excitation": {"frequency_hz": 30.0}}``).
+    ``radial_settings``: ``mesh_size_mm``, ``degree``, ``tolerance`` of the (z, r)
+    surrogate a ball leaving the axis needs (default: its 1.5 mm, P2; a different
+    setting is a different cache file).
     """
     from .scene import as_scene
     scene = as_scene(scene, "run")
@@ -176,7 +179,8 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         from ._mpi import check_jobs
         check_jobs(jobs, comm)
     result = run_one(scene, comm=comm, cache_dir=cache_dir, solve=solve, simulate=simulate,
-                     progress=progress, command_line=command_line, write_cache=write_cache)
+                     progress=progress, command_line=command_line, write_cache=write_cache,
+                     radial_settings=radial_settings)
     if scene.run.realisations > 1:
         rows, block = run_ensemble(scene, result, comm=comm, jobs=jobs, cache_dir=cache_dir,
                                    progress=progress, solve=solve)
@@ -187,7 +191,8 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
 
 def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
             simulate: Callable | None = None, progress: bool = False,
-            command_line: str = "", write_cache: bool = True) -> RunResult:
+            command_line: str = "", write_cache: bool = True,
+            radial_settings: dict | None = None) -> RunResult:
     """One realisation of ``scene`` (its own seed), in four stages: dynamics, field and
     surrogate, circuit, summary (arguments as :func:`run`)."""
     stages: dict[str, Stage] = {}
@@ -199,7 +204,8 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     hashed = scene   # as loaded: its field hash, its σ (may be "breakdown")
     scene, table, curves, limit = _field_stage(
         scene, dynamics, stages, cache_dir=cache_dir, comm=comm, solve=solve,
-        progress=progress, command_line=command_line, write_cache=write_cache)
+        progress=progress, command_line=command_line, write_cache=write_cache,
+        radial_settings=radial_settings)
     if scene.array.cells > 0:
         return _run_array(scene, dynamics, curves, table, stages, comm, progress)
     stage = electrical_stage(scene, dynamics, curves, table, stages)
@@ -230,7 +236,7 @@ def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
 
 
 def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, command_line,
-                 write_cache):
+                 write_cache, radial_settings=None):
     """``(scene, table, curves, limit)``: the surrogate (cached or solved) at the charge the
     run uses (``scene`` at −σ_max for "breakdown"), the terminal curves (with the off-axis
     change of a ball that leaves the axis), the breakdown limit; Nones when Q_SC = 0."""
@@ -257,7 +263,7 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
         if leaves_axis(scene, dynamics):   # [contact] model = "3d", off the axis
             zr_table, zr_outcome = obtain_radial_table(
                 scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
-                command_line=command_line, write=write_cache)
+                command_line=command_line, write=write_cache, **(radial_settings or {}))
             curves = AnchoredTerminalCurves(zr_table.curves(scene.circuit.reference), curves)
             stages["field_zr"] = Stage(
                 "cached" if zr_outcome.status == "cached" else "ran", zr_outcome.reason,

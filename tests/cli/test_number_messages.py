@@ -68,3 +68,32 @@ def test_scene_rules_between_keys_show_the_digits_too(sections, expected):
     with pytest.raises(SceneError) as info:
         check_field(default_scene().with_values(**sections))
     assert expected in str(info.value)
+
+
+
+def test_python_callers_see_the_digits_too():
+    """tf.solve_position's check and the cells' own (the Python route, no CLI): a position
+    or an offset just past its bound reads as itself, not as the bound."""
+    from tengfield.errors import FieldError
+    from tengfield.field import check_position
+    from tengfield.field.cells import SphericalShell
+    from tengfield.field.cells.shell_model3d import _check
+    from tengfield.field.cells.solve import solve_cell_position
+    from tengfield.field.geometry3d import check_position as check_3d
+    from tengfield.field.geometry3d import cylindrical_cell
+    from tengfield.scene import default_scene
+
+    scene = default_scene()                                   # stroke 3 mm
+    with pytest.raises(FieldError, match=r"position_mm = 3\.0000000003 is out"):
+        check_position(scene, 3.0000000003e-3)
+    with pytest.raises(FieldError, match=r"position_mm = 3\.0000000003 is out"):
+        check_3d(cylindrical_cell(scene.device), 3.0000000003e-3)
+    shell = SphericalShell(cavity_diameter=20e-3, shell_thickness=2e-3, electrode_band=2e-3,
+                           ball_diameter=8e-3)                # stroke 12 mm
+    with pytest.raises(FieldError, match=r"position_mm = 12\.00000001\d* is out"):
+        _check(shell, 12.000000012e-3, 0.0)
+    with pytest.raises(FieldError, match=r"offset_mm = 6\.00000001\d* is out"):
+        _check(shell, 6e-3, 6.000000012e-3)                   # the centre: a - R = 6 mm
+    with pytest.raises(FieldError, match=r"position = 12\.00000001\d* mm is out"):
+        from mpi4py import MPI
+        solve_cell_position(shell, 12.000000012e-3, comm=MPI.COMM_SELF, mesh_size=2e-3)

@@ -27,7 +27,7 @@ import math
 
 from pathlib import Path
 
-from ..errors import FieldError
+from ..errors import FieldError, show_number
 from .result import FieldSolution, PositionResult
 
 __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
@@ -71,7 +71,8 @@ def check_position(scene, position: float) -> None:
     except (TypeError, ValueError):
         raise FieldError(f"position_mm = {position!r}: expected a number") from None
     if not math.isfinite(value) or value < 0.0 or value > stroke * (1.0 + 1e-12):
-        raise FieldError(f"position_mm = {value * 1e3:g} is out of range: allowed "
+        raise FieldError(f"position_mm = {show_number(value * 1e3, 0.0, stroke * 1e3)} is out "
+                         "of range: allowed "
                          f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] stroke_mm)")
 
 

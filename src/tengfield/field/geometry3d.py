@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import FieldError
+from ..errors import FieldError, show_number
 
 # The z → 0 / z → Δh rule is :mod:`tengfield.field.contact` (one rule for both
 # solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``.
@@ -288,7 +288,8 @@ def check_position(cell, position: float) -> None:
     """Raise :class:`FieldError` unless ``0 <= position <= Δh``."""
     stroke = cell.stroke
     if not (math.isfinite(position) and 0.0 <= position <= stroke * (1 + 1e-12)):
-        raise FieldError(f"position_mm = {position * 1e3:g} is out of range: allowed "
+        raise FieldError(f"position_mm = {show_number(position * 1e3, 0.0, stroke * 1e3)} is "
+                         "out of range: allowed "
                          f"[0, {stroke * 1e3:g}] mm (the free stroke, [device] stroke_mm)")
 
 
@@ -315,7 +316,8 @@ def meshed_offset(cell, offset: float) -> float:
     (the ball never touches the tube wall in the mesh)."""
     max_offset = cell.max_offset
     if not (math.isfinite(offset) and 0.0 <= offset <= max_offset * (1 + 1e-12) + 1e-15):
-        raise FieldError(f"offset_mm = {offset * 1e3:g} is out of range: allowed "
+        raise FieldError(f"offset_mm = {show_number(offset * 1e3, 0.0, max_offset * 1e3)} is "
+                         "out of range: allowed "
                          f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
     return min(offset, max(max_offset - minimum_gap(cell), 0.0))
 

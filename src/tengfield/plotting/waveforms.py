@@ -158,21 +158,34 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
 
 def _plot_radial_change(ax, curves, cells: int, visited) -> None:
     """Q_SC(z, r) − Q_SC(z, 0) [pC] over (z, r) (filled contours), the grid's solves,
-    and where the ball went."""
-    z = np.linspace(0.0, curves.stroke, 120)
-    r = np.linspace(0.0, curves.max_offset, 60)
+    and where the ball went. A table whose offsets are scaled to the admissible radius at
+    each height (the spherical shell: r_max(z) = sqrt(R² − (z − Δh/2)²)) is drawn inside
+    r <= r_max(z) only, its solves at their real offsets, the wall as a line."""
+    scaled = bool(getattr(getattr(curves, "zr", curves), "scaled", False))
+    stroke, largest = curves.stroke, curves.max_offset
+    z = np.linspace(0.0, stroke, 120)
+    r = np.linspace(0.0, largest, 60)
     zz, rr = np.meshgrid(z, r, indexing="ij")
     change = (curves.charge(zz, rr) - curves.charge(zz, np.zeros_like(rr))) * cells * 1e12
-    levels = 21 if np.ptp(change) > 0 else 2
+    gz, gu = np.meshgrid(curves.positions, curves.offsets, indexing="ij")
+    gr = gu
+    if scaled:
+        def wall(height):
+            return np.sqrt(np.maximum(largest**2 - (height - 0.5 * stroke) ** 2, 0.0))
+        change = np.where(rr <= wall(zz) * (1 + 1e-9), change, np.nan)
+        gr = gu * wall(gz) / largest
+    finite = change[np.isfinite(change)]
+    levels = 21 if finite.size and np.ptp(finite) > 0 else 2
     filled = ax.contourf(zz * 1e3, rr * 1e3, change, levels=levels, cmap="RdBu_r")
     ax.figure.colorbar(filled, ax=ax, label="Q_SC(z, r) − Q_SC(z, 0) [pC]")
-    gz, gr = np.meshgrid(curves.positions, curves.offsets, indexing="ij")
+    if scaled:
+        ax.plot(z * 1e3, wall(z) * 1e3, "-", color="0.3", lw=1, label="cavity wall r_max(z)")
     ax.plot(gz.ravel() * 1e3, gr.ravel() * 1e3, "+", ms=4, color="0.2", label="3D solves")
     if visited is not None:
         ax.plot(np.asarray(visited[0]) * 1e3, np.asarray(visited[1]) * 1e3, ".", ms=1.5,
                 color="C1", alpha=0.5, label="trajectory")
-    ax.set_xlim(0.0, curves.stroke * 1e3)
-    ax.set_ylim(0.0, curves.max_offset * 1e3 * 1.04)   # the outer solves stay visible
+    ax.set_xlim(0.0, stroke * 1e3)
+    ax.set_ylim(0.0, largest * 1e3 * 1.04)   # the outer solves stay visible
     ax.set_xlabel("gap z [mm]")
     ax.set_ylabel("radial offset r [mm]")
     ax.legend(fontsize=7, loc="upper right")

@@ -11,18 +11,9 @@ from __future__ import annotations
 import math
 
 from ..errors import SceneError
+from ..errors import show_number  # noqa: F401 - its home is the bottom layer (errors.py)
 from .shapes import shape_mesh_features, shape_of
 
-
-def show_number(value: float, *bounds: float) -> str:
-    """``value`` for an out-of-range message beside its ``bounds``: ``:g``, with as many
-    more digits as it takes not to read as a bound it differs from (``3.0000000001`` beside
-    3, not ``3 is out of range: allowed [0, 3]``)."""
-    for digits in range(6, 18):
-        text = f"{value:.{digits}g}"
-        if not any(b != value and text == f"{b:.{digits}g}" for b in bounds):
-            return text
-    return repr(value)
 
 # -- limits of work, checked at load --
 #: Output samples per run, ``duration_s x sample_rate_hz``: 2e7 is 1000 s at 20 kHz
@@ -348,7 +339,8 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
         problems.append(
             f"[field] ball_offset_mm = {show_number(fld.ball_offset * 1e3, max_offset * 1e3)} "
             "is out of range: allowed "
-            f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
+            f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the "
+            f"{'cavity' if dev.shape == 'spherical-shell' else 'tube'})")
     if fld.ball_offset > 0 and fld.method == "axisymmetric":
         problems.append("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "
                         "use method = '3d' or 'auto' for an off-axis ball")

@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from ...errors import FieldError
+from ...errors import FieldError, show_number
 from .. import contact
 
 
@@ -57,12 +57,14 @@ def admissible_offset(shell, position: float) -> float:
 def _check(shell, position: float, offset: float) -> None:
     stroke = shell.stroke
     if not (math.isfinite(position) and 0.0 <= position <= stroke * (1 + 1e-12)):
-        raise FieldError(f"position_mm = {position * 1e3:g} is out of range: allowed "
+        raise FieldError(f"position_mm = {show_number(position * 1e3, 0.0, stroke * 1e3)} is "
+                         "out of range: allowed "
                          f"[0, {stroke * 1e3:g}] mm (the stroke, cavity_diameter_mm - "
                          "ball_diameter_mm)")
     largest = admissible_offset(shell, position)
     if not (math.isfinite(offset) and 0.0 <= offset <= largest * (1 + 1e-9) + 1e-15):
-        raise FieldError(f"offset_mm = {offset * 1e3:g} is out of range at position_mm = "
+        raise FieldError(f"offset_mm = {show_number(offset * 1e3, 0.0, largest * 1e3)} is out "
+                         "of range at position_mm = "
                          f"{position * 1e3:g}: allowed [0, {largest * 1e3:.6g}] mm (the ball "
                          "must stay inside the cavity: |centre| <= cavity radius - ball radius; "
                          "a run tabulates the whole stroke at [field] ball_offset_mm, so a "

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import time
 
-from ...errors import FieldError
+from ...errors import FieldError, show_number
 from ...scene.constants import EPS0
 from .. import contact
 from ..axisymmetric import (discretise, field_solution, mesh_model, richardson_error,
@@ -161,7 +161,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
     from .. import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
 
     if not (0.0 <= position <= cell.stroke):
-        raise FieldError(f"position = {position * 1e3:g} mm is out of range: allowed "
+        raise FieldError(f"position = {show_number(position * 1e3, 0.0, cell.stroke * 1e3)} mm "
+                         "is out of range: allowed "
                          f"[0, {cell.stroke * 1e3:g}] mm (the {cell.name}'s stroke)")
     if degree not in (1, 2, 3):
         raise FieldError(f"[field] degree = {degree} is out of range: allowed 1, 2, 3")
