@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, time_origin
-from .rectifier import check_store_resolution, first_crossing, harvester_options
+from .rectifier_store import check_store_resolution, first_crossing, harvester_options
 
 
 class RectifierChunks:
