@@ -7,6 +7,7 @@ import csv
 import json
 
 import pytest
+from shell_model import SHELL, shell_device_toml  # noqa: F401
 
 from tengfield.design import candidate_scene, evaluate, followed_geometry, parse_design_section
 from tengfield.design.spec import default_design_section
@@ -103,16 +104,7 @@ def test_the_default_study_of_a_shell_varies_its_cavity_and_ball():
     assert "(tube and electrodes follow the ball)" in said
 
 
-SHELL_TOML = """\
-[device]
-shape = "spherical-shell"
-cavity_diameter_mm = 20
-shell_thickness_mm = 2
-electrode_band_mm = 2
-ball_diameter_mm = 8
-wall_permittivity = 3.0
-surface_charge_uC_per_m2 = -50
-
+SHELL_TOML = shell_device_toml() + """\
 [excitation]
 frequency_hz = 20
 amplitude_mm = 3

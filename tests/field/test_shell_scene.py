@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from shell_model import SHELL, shell_device_toml  # noqa: F401
 
 from tengfield.errors import SceneError
 from tengfield.scene import Scene, check_field, default_scene
@@ -14,20 +15,7 @@ from tengfield.scene.schema import CELL_SHAPES
 
 field = pytest.mark.field
 
-SHELL = {"shape": "spherical-shell", "cavity_diameter_mm": 20.0, "shell_thickness_mm": 2.0,
-         "electrode_band_mm": 2.0, "ball_diameter_mm": 8.0, "wall_permittivity": 3.0,
-         "surface_charge_uC_per_m2": -50.0}
-
-SHELL_TOML = """\
-[device]
-shape = "spherical-shell"
-cavity_diameter_mm = 20
-shell_thickness_mm = 2
-electrode_band_mm = 2
-ball_diameter_mm = 8
-wall_permittivity = 3.0
-surface_charge_uC_per_m2 = -50
-{extra_device}
+SHELL_TOML = shell_device_toml(extra="{extra_device}") + """\
 [excitation]
 frequency_hz = 20
 amplitude_mm = 3

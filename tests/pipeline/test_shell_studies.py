@@ -9,19 +9,11 @@ import json
 
 import numpy as np
 import pytest
+from shell_model import SHELL, shell_device_toml  # noqa: F401
 
 pytestmark = [pytest.mark.slow, pytest.mark.field]
 
-SHELL_TOML = """\
-[device]
-shape = "spherical-shell"
-cavity_diameter_mm = 20
-shell_thickness_mm = 2
-electrode_band_mm = 2
-ball_diameter_mm = 8
-wall_permittivity = 3.0
-surface_charge_uC_per_m2 = {sigma}
-
+SHELL_TOML = shell_device_toml(sigma="{sigma}") + """\
 [excitation]
 {excitation}
 

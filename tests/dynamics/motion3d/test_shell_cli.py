@@ -6,19 +6,11 @@ import json
 
 import numpy as np
 import pytest
+from shell_model import SHELL, shell_device_toml  # noqa: F401
 
 from tengfield.cli import main
 
-SHELL_3D = """\
-[device]
-shape = "spherical-shell"
-cavity_diameter_mm = 20
-shell_thickness_mm = 2
-electrode_band_mm = 2
-ball_diameter_mm = 8
-wall_permittivity = 3.0
-surface_charge_uC_per_m2 = -50
-
+SHELL_3D = shell_device_toml() + """\
 [excitation]
 frequency_hz = 20
 amplitude_mm = 3
