@@ -135,6 +135,15 @@ class _PlateCell:
         """h = d + Δh [m]."""
         return self.ball_diameter + self.stroke
 
+    def outline(self) -> list[np.ndarray]:
+        """(r, z) polylines [m] for plots, r >= 0 (mirrored by the plot): the lower and the
+        upper electrode, then the plates' and the bore's outline (``outline_radii``)."""
+        h, t = 0.5 * self.electrode_spacing, self.plate_thickness
+        electrode, inner, outer = self.outline_radii
+        return [np.array([[0.0, -h], [electrode, -h]]), np.array([[0.0, h], [electrode, h]]),
+                np.array([[0.0, -h - t], [outer, -h - t], [outer, h + t], [0.0, h + t]]),
+                np.array([[0.0, -h], [inner, -h], [inner, h], [0.0, h]])]
+
 
 @dataclass(frozen=True)
 class CylindricalCell(_PlateCell):
@@ -179,6 +188,11 @@ class CylindricalCell(_PlateCell):
         """Distance [m] from the axis to the tube's inner wall along ``direction`` (unit, xy)."""
         return self.tube_inner_radius
 
+    @property
+    def outline_radii(self) -> tuple[float, float, float]:
+        """(electrode, bore, outside) radii [m] of the plot's outline."""
+        return self.electrode_radius, self.tube_inner_radius, self.tube_outer_radius
+
 
 @dataclass(frozen=True)
 class HexagonalCell(_PlateCell):
@@ -202,6 +216,12 @@ class HexagonalCell(_PlateCell):
     @property
     def outer_apothem(self) -> float:
         return self.inner_apothem + self.wall_thickness
+
+    @property
+    def outline_radii(self) -> tuple[float, float, float]:
+        """(electrode, bore, outside) of the plot's outline [m]: the section through two
+        flats (the electrodes cover the bore)."""
+        return self.inner_apothem, self.inner_apothem, self.outer_apothem
 
     @property
     def bounding_radius(self) -> float:

@@ -114,6 +114,30 @@ class AxisymmetricLayout:
     def z_table(self) -> float:
         return self.z_lower - self.plate_thickness
 
+    def plot_outline(self) -> dict:
+        """What field.png draws (SI, (r, z) polylines for r >= 0, mirrored by the plot):
+        ``electrodes`` (the two disks), ``walls`` (the plates and the tube, with walls),
+        ``half_width`` and ``z_range`` of the frame, ``on_electrode(r, z, tol)`` where
+        field lines stop, ``height_label``, ``table_z`` (the grounded table's face, or
+        None): the keys of every cell's ``plot_outline``."""
+        import numpy as np
+
+        zl, zu, t = self.z_lower, self.z_upper, self.plate_thickness
+        a, ri, ro = self.electrode_radius, self.tube_inner_radius, self.tube_outer_radius
+        walls = []
+        if self.walls:
+            walls = [np.array([[0.0, zl - t], [ro, zl - t], [ro, zl], [0.0, zl]]),
+                     np.array([[0.0, zu], [ro, zu], [ro, zu + t], [0.0, zu + t]]),
+                     np.array([[ri, zl], [ro, zl], [ro, zu], [ri, zu], [ri, zl]])]
+
+        def on_electrode(r, z, tol):
+            return (np.abs(np.abs(z) - zu) < tol) & (np.abs(r) <= a)
+
+        return {"electrodes": [np.array([[0.0, zl], [a, zl]]), np.array([[0.0, zu], [a, zu]])],
+                "walls": walls, "half_width": ro + 2e-3, "z_range": (zl - t - 1.5e-3, zu + t + 1.5e-3),
+                "on_electrode": on_electrode, "height_label": "the lower electrode",
+                "table_z": zl - t if self.table else None}
+
 
 def mesh_size_written(scene) -> bool:
     """Whether ``[field] mesh_size_mm`` is in the scene (its file or an override)."""

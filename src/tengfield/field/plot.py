@@ -67,16 +67,9 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     mm = 1e3
     full.points[:] *= mm  # plot in mm
 
-    cell = lay.plot_outline() if hasattr(lay, "plot_outline") else None   # a cell's (field/cells)
-    if cell is None:   # the tube
-        zl, zu, t = lay.z_lower * mm, lay.z_upper * mm, lay.plate_thickness * mm
-        ro, ri, a = (lay.tube_outer_radius * mm, lay.tube_inner_radius * mm,
-                     lay.electrode_radius * mm)
-        half_w = ro + 2.0
-        z0, z1 = zl - t - 1.5, zu + t + 1.5
-    else:
-        half_w = cell["half_width"] * mm
-        z0, z1 = (z * mm for z in cell["z_range"])
+    cell = lay.plot_outline()   # every layout draws its own cell (the tube's, field/cells)
+    half_w = cell["half_width"] * mm
+    z0, z1 = (z * mm for z in cell["z_range"])
     n_r = 400  # even: no sample sits exactly on the axis (the seam of the mirrored halves)
     step = 2 * half_w / n_r
     plane = pv.ImageData(dimensions=(n_r, int((z1 - z0) / step), 1), spacing=(step, step, 1.0),
@@ -119,9 +112,7 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
         return ~valid_grid[i, j]
 
     def on_electrode(p):
-        if cell is not None:
-            return cell["on_electrode"](p[:, 0] / mm, p[:, 1] / mm, 0.5 * step / mm)
-        return (np.abs(np.abs(p[:, 1]) - zu) < 0.5 * step) & (np.abs(p[:, 0]) <= a)
+        return cell["on_electrode"](p[:, 0] / mm, p[:, 1] / mm, 0.5 * step / mm)
 
     lines = trace_field_lines(-grad_r, -grad_z, xs, ys, seeds, step_length=0.4 * step,
                               max_steps=3000,
@@ -142,28 +133,22 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     circle.points[:, 2] = 0.05
     plotter.add_mesh(circle.extract_feature_edges(), color="black", line_width=4,
                      render_lines_as_tubes=True)
-    if cell is not None:   # the cell's outline, both halves of the meridian plane
-        for kind, colour, width in (("electrodes", "#b87333", 8), ("walls", "#555555", 2)):
-            for line in cell[kind]:
-                for sign in (1.0, -1.0):
-                    xyz = np.column_stack([sign * line[:, 0] * mm, line[:, 1] * mm,
-                                           np.full(len(line), 0.05)])
-                    plotter.add_mesh(pv.lines_from_points(xyz), color=colour, line_width=width)
-    for z in (() if cell is not None else (zl, zu)):
-        plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333", line_width=8)  # copper
-    if lay.walls and cell is None:
-        for x0, x1, y0, y1 in ((-ro, ro, zl - t, zl), (-ro, ro, zu, zu + t),
-                               (ri, ro, zl, zu), (-ro, -ri, zl, zu)):
-            box = pv.Rectangle([(x0, y0, 0.03), (x1, y0, 0.03), (x1, y1, 0.03)])
-            plotter.add_mesh(box.extract_feature_edges(), color="#555555", line_width=2)
-    if lay.table:
-        plotter.add_mesh(pv.Line((-half_w, zl - t, 0.05), (half_w, zl - t, 0.05)),
+    # the cell's outline, both halves of the meridian plane: electrodes copper, walls grey
+    for kind, colour, width in (("electrodes", "#b87333", 8), ("walls", "#555555", 2)):
+        for line in cell[kind]:
+            for sign in (1.0, -1.0):
+                xyz = np.column_stack([sign * line[:, 0] * mm, line[:, 1] * mm,
+                                       np.full(len(line), 0.05)])
+                plotter.add_mesh(pv.lines_from_points(xyz), color=colour, line_width=width)
+    if cell.get("table_z") is not None:   # the grounded table
+        zt = cell["table_z"] * mm
+        plotter.add_mesh(pv.Line((-half_w, zt, 0.05), (half_w, zt, 0.05)),
                          color="black", line_width=6)
     plotter.add_text(title, position="upper_edge", font_size=14, color="black")
     # the vertical axis is the title's z: height above the lower electrode's face (the
     # mesh's origin is the midplane); the ball's bottom sits at the gap z
     base = height_origin(lay) * mm
-    height = cell["height_label"] if cell is not None else "the lower electrode"
+    height = cell["height_label"]
     plotter.show_bounds(xtitle="r (mm)", ytitle=f"z: height above {height} (mm)",
                         color="black", font_size=14, location="outer", ticks="outside",
                         bounds=(-half_w, half_w, z0, z1, 0, 0),
@@ -248,15 +233,10 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     s = section.points[:, 0] * math.cos(angle) + section.points[:, 1] * math.sin(angle)
     flat = section.copy()
     flat.points = np.column_stack([s * mm, section.points[:, 2] * mm, np.zeros(len(s))])
-    cell = solution.geometry if hasattr(solution.geometry, "outline") else None
-    if cell is not None:   # a cell of field/cells (the spherical shell): its own outline
-        ro = cell.bounding_radius * mm
-        flat = flat.clip_box((-ro - 2.0, ro + 2.0, -ro - 1.5, ro + 1.5, -1.0, 1.0), invert=False)
-    else:
-        half_h = 0.5 * device.plate_spacing * mm
-        t, ro = device.plate_thickness * mm, device.tube_outer_radius * mm
-        flat = flat.clip_box((-ro - 2.0, ro + 2.0, -half_h - t - 1.5, half_h + t + 1.5,
-                              -1.0, 1.0), invert=False)
+    outline = solution.geometry.outline()   # every 3D cell draws its own (electrodes first)
+    points = np.vstack(outline)
+    ro, zo = float(np.max(np.abs(points[:, 0]))) * mm, float(np.max(np.abs(points[:, 1]))) * mm
+    flat = flat.clip_box((-ro - 2.0, ro + 2.0, -zo - 1.5, zo + 1.5, -1.0, 1.0), invert=False)
 
     plotter = pv.Plotter(off_screen=True, window_size=window_size)
     plotter.set_background("white")
@@ -268,31 +248,19 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     contours = flat.contour(isosurfaces=np.linspace(0.05, 0.95, 19), scalars="psi")
     if contours.n_points:
         plotter.add_mesh(contours, color="white", line_width=1.0, opacity=0.6)
-    if cell is not None:   # outline(): electrodes first (copper), then walls, both halves
-        for k, line in enumerate(cell.outline()):
-            for side in (1.0, -1.0):
-                xyz = np.column_stack([side * line[:, 0] * mm, line[:, 1] * mm,
-                                       np.full(len(line), 0.05)])
-                plotter.add_mesh(pv.lines_from_points(xyz), line_width=6 if k < 2 else 1.5,
-                                 color="#b87333" if k < 2 else "black")
-    else:
-        a = device.electrode_radius * mm
-        for z in (-half_h, half_h):
-            plotter.add_mesh(pv.Line((-a, z, 0.05), (a, z, 0.05)), color="#b87333",
-                             line_width=6)
-        ri = device.tube_inner_radius * mm
-        for x0, x1, z0, z1 in ((ri, ro, -half_h, half_h), (-ro, -ri, -half_h, half_h),
-                               (-ro, ro, half_h, half_h + t), (-ro, ro, -half_h - t, -half_h)):
-            box = pv.Rectangle([(x0, z0, 0.04), (x1, z0, 0.04), (x1, z1, 0.04)])
-            plotter.add_mesh(box.extract_feature_edges(), color="black", line_width=1.5)
+    for k, line in enumerate(outline):   # electrodes first (copper), then walls, both halves
+        for side in (1.0, -1.0):
+            xyz = np.column_stack([side * line[:, 0] * mm, line[:, 1] * mm,
+                                   np.full(len(line), 0.05)])
+            plotter.add_mesh(pv.lines_from_points(xyz), line_width=6 if k < 2 else 1.5,
+                             color="#b87333" if k < 2 else "black")
     s_ball = (centre[0] * math.cos(angle) + centre[1] * math.sin(angle)) * mm
     ball = pv.Circle(radius=device.ball_radius * mm, resolution=128)
     ball.points += np.array([s_ball, centre[2] * mm, 0.05])
     plotter.add_mesh(ball.extract_feature_edges(), color="black", line_width=2.5)
     plotter.add_text(title, position="upper_edge", font_size=11, color="black")
     plotter.add_text("meridian section through the axis and the ball centre; "
-                     + (f"shell outer radius {ro:.3g} mm" if cell is not None
-                        else f"plate outer radius {ro:.3g} mm"),
+                     f"outer radius {ro:.3g} mm",
                      position="lower_edge", font_size=9, color="black")
     plotter.view_xy()
     plotter.camera.zoom(1.15)
