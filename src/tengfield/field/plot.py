@@ -133,8 +133,8 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     circle.points[:, 2] = 0.05
     plotter.add_mesh(circle.extract_feature_edges(), color="black", line_width=4,
                      render_lines_as_tubes=True)
-    # the cell's outline, both halves of the meridian plane: electrodes copper, walls grey
-    for kind, colour, width in (("electrodes", "#b87333", 8), ("walls", "#555555", 2)):
+    # the cell's outline, both halves of the meridian plane: walls grey, electrodes copper over them
+    for kind, colour, width in (("walls", "#555555", 2), ("electrodes", "#b87333", 8)):
         for line in cell[kind]:
             for sign in (1.0, -1.0):
                 xyz = np.column_stack([sign * line[:, 0] * mm, line[:, 1] * mm,
@@ -248,7 +248,8 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     contours = flat.contour(isosurfaces=np.linspace(0.05, 0.95, 19), scalars="psi")
     if contours.n_points:
         plotter.add_mesh(contours, color="white", line_width=1.0, opacity=0.6)
-    for k, line in enumerate(outline):   # electrodes first (copper), then walls, both halves
+    # walls (black), then the electrodes over them (copper: outline's first two), both halves
+    for k, line in [*list(enumerate(outline))[2:], *list(enumerate(outline))[:2]]:
         for side in (1.0, -1.0):
             xyz = np.column_stack([side * line[:, 0] * mm, line[:, 1] * mm,
                                    np.full(len(line), 0.05)])
