@@ -13,11 +13,11 @@ then ``electrical.terminal_peaks(...)``, ``electrical.steady_load(...)``.
 from .circuits import (CIRCUITS, Circuit, CircuitRun, SpreadCircuit, all_columns, circuit_for,
                        no_load)
 from .circuits.load import LOAD_COLUMNS, load_waveforms, relaxation_times, steady_load
-from .circuits.rectifier import (CHUNK_VALUES, NUMERICAL_DISSIPATION_WARN, RECTIFIER_COLUMNS,
-                                 check_store_resolution, concat_results, first_crossing,
-                                 harvester_options, rectifier_grid, rectifier_summary,
-                                 rectifier_waveforms, smallest_resolved_store,
-                                 warn_numerical_dissipation)
+from .circuits.rectifier import (CHUNK_VALUES, RECTIFIER_COLUMNS, concat_results,
+                                 rectifier_grid, rectifier_summary, rectifier_waveforms)
+from .circuits.rectifier_store import (NUMERICAL_DISSIPATION_WARN, check_store_resolution,
+                                       first_crossing, harvester_options,
+                                       smallest_resolved_store, warn_numerical_dissipation)
 from .cycle import cmeo, cumulative, last_period, loop_area
 from .waveforms import (IMPACT_OFFSET_PERIODS, PEAK_QUANTITIES, READ_COLUMN, WAVEFORM_COLUMNS,
                         elapsed_times, extreme_times, extremes, impact_elapsed, impact_states,

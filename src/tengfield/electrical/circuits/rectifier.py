@@ -17,8 +17,7 @@ import numpy as np
 from ..cycle import last_period, loop_area
 from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, steady_window, time_origin
 from . import Circuit, CircuitRun, SpreadCircuit
-from .rectifier_store import (NUMERICAL_DISSIPATION_WARN, check_store_resolution,  # noqa: F401
-                              first_crossing, harvester_options, smallest_resolved_store,
+from .rectifier_store import (check_store_resolution, first_crossing, harvester_options,
                               warn_numerical_dissipation)
 
 #: extra columns of ``waveforms.csv`` for ``[circuit] kind = "rectifier"``
