@@ -13,7 +13,7 @@ export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 
-.PHONY: setup system run test test-serial test-mpi test-fast bench clean
+.PHONY: setup system run test test-serial test-mpi test-release test-release-serial test-fast bench clean
 
 setup: $(STAMP)
 
@@ -40,12 +40,25 @@ run: setup
 
 test: setup test-serial test-mpi
 
+# the serial suite on every core (pytest-xdist; a file's tests stay together on one worker,
+# in order); TEST_JOBS=1 runs it in one process
+TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+XDIST = $(if $(filter-out 0 1,$(TEST_JOBS)),-n $(TEST_JOBS) --dist loadfile,)
+
 test-serial: setup
-	$(PY) -m pytest -q -p no:cacheprovider tests
+	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) tests
+
+# what differs between Debian releases (marker `release`, tests/conftest.py: field,
+# surrogate, cli, parallel, the Quick start), then the MPI tier: the Debian 13 image's
+# share of CI (scripts/test-container), the host's `make test` running everything
+test-release: setup test-release-serial test-mpi
+
+test-release-serial: setup
+	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) -m release tests
 
 # the fast tier (no subprocess CLI runs, demos, 3D fields or tests over ~1 s): minutes
 test-fast: setup
-	$(PY) -m pytest -q -p no:cacheprovider -m "not slow" tests
+	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) -m "not slow" tests
 
 test-mpi: setup
 	mpirun -n 2 $(PY) -m pytest -q -p no:cacheprovider --color=no -m mpi tests

@@ -30,10 +30,29 @@ def cli_environment(**extra) -> dict:
 
 
 
+#: the folders whose tests depend on what differs between Debian releases (dolfinx 0.5 /
+#: 0.9, HDF5, numpy 1 / 2, Open MPI 4 / 5, pyvista/VTK): marked ``release`` here, run again
+#: in the Debian 13 image by ``make test-release`` (the host's ``make test`` runs them all)
+RELEASE_FOLDERS = ("field", "surrogate", "cli", "parallel")
+RELEASE_FILES = ("test_readme_quickstart.py", "test_warmup.py")
+
+
+def _is_release_dependent(item) -> bool:
+    relative = Path(str(item.fspath)).resolve().relative_to(ROOT / "tests")
+    return (relative.parts[0] in RELEASE_FOLDERS or relative.name in RELEASE_FILES
+            or item.get_closest_marker("field") is not None)
+
+
+@pytest.hookimpl(tryfirst=True)   # before ``-m`` selects by marker
 def pytest_collection_modifyitems(config, items):
-    """``mpi`` tests need ``mpirun -n 2``: outside mpirun they are deselected, so that a
-    ``-m`` given on the command line (``-m "not slow"``, the fast tier) replacing the
-    ``-m 'not mpi'`` of pyproject's addopts still leaves them out of a serial run."""
+    """Every test in :data:`RELEASE_FOLDERS`, :data:`RELEASE_FILES` or marked ``field`` is
+    marked ``release`` too. ``mpi`` tests need ``mpirun -n 2``: outside mpirun they are
+    deselected, so that a ``-m`` given on the command line (``-m "not slow"``, the fast
+    tier) replacing the ``-m 'not mpi'`` of pyproject's addopts still leaves them out of a
+    serial run."""
+    for item in items:
+        if _is_release_dependent(item):
+            item.add_marker(pytest.mark.release)
     if os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE"):
         return
     mpi = [item for item in items if item.get_closest_marker("mpi")]
