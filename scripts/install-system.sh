@@ -53,5 +53,13 @@ echo "install-system: $RELEASE: installing ${missing[*]}"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -q
-$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+# one apt-get at a time on this machine (.ci/run builds the containers while this
+# runs: scripts/test-container installs podman under the same lock); apt's own
+# lock is waited for too, not failed on
+APT=(apt-get -o DPkg::Lock::Timeout=600)
+if [ -z "$SUDO" ] && [ -w /var/lock ] && command -v flock >/dev/null; then
+  exec 9>/var/lock/tengfield-apt.lock
+  flock 9
+fi
+$SUDO "${APT[@]}" update -q
+$SUDO "${APT[@]}" install -y -q --no-install-recommends "${missing[@]}"
