@@ -101,6 +101,7 @@ class StressTrack:
     position: np.ndarray
     threshold: np.ndarray
     volume: np.ndarray
+    smaller_gap: np.ndarray
 
     def over_stressed_volume(self, sigma: float) -> np.ndarray:
         """V_s(t) [m^3] at |σ| = ``sigma``."""
@@ -121,13 +122,15 @@ def stress_track(lines: Lines, paschen: Paschen, states, reference: str,
     for state in states:
         lengths, _, limits = _dense_minimum(lines, paschen, state, reference, z)
         thresholds = limits if thresholds is None else np.minimum(thresholds, limits)
+    smaller = _smaller_gap(lines, z)
     lengths = np.where(np.isfinite(lengths), lengths, 0.0)
     foot = getattr(lines, "foot_areas", None)
     if foot is not None:     # given per line (the planar stand-in): no refinement
-        return StressTrack(trajectory.time, z, thresholds, lengths * np.asarray(foot)[None, None])
+        return StressTrack(trajectory.time, z, thresholds,
+                           lengths * np.asarray(foot)[None, None], smaller)
     theta = lines.angles
     if theta.size < 2:
-        return StressTrack(trajectory.time, z, thresholds, np.zeros_like(lengths))
+        return StressTrack(trajectory.time, z, thresholds, np.zeros_like(lengths), smaller)
     fraction = (np.arange(REFINE) + 0.5) / REFINE
     j = np.repeat(np.arange(theta.size - 1), REFINE)
     f = np.tile(fraction, theta.size - 1)
@@ -137,7 +140,7 @@ def stress_track(lines: Lines, paschen: Paschen, states, reference: str,
     band_area = math.pi * lines.ball_radius**2 * np.diff(np.sin(edges) ** 2)
     thr = (1.0 - f) * thresholds[..., j] + f * thresholds[..., j + 1]   # inf stays inf
     length = (1.0 - f) * lengths[..., j] + f * lengths[..., j + 1]
-    return StressTrack(trajectory.time, z, thr, length * band_area)
+    return StressTrack(trajectory.time, z, thr, length * band_area, smaller)
 
 
 def expected_seeds(track: StressTrack, sigma: float, seeds: Seeds) -> dict:
@@ -179,6 +182,8 @@ class Band:
     seeds_at_estimate: dict
     paschen_curve: str
     track: StressTrack | None = field(default=None, repr=False)
+    #: the static limit σ_max [C/m²] at each γ taken (the range's ends and the scene's)
+    static_by_gamma: dict = field(default_factory=dict)
 
     def edges(self) -> dict:
         return {"lower": self.lower, "estimate": self.estimate, "upper": self.upper}
@@ -196,6 +201,8 @@ class Band:
                 "estimate_binds_at": {"gap_m": self.estimate_gap},
                 "estimate_rule": self.estimate_rule,
                 "static_limit_at_gamma_uC_per_m2": self.static_at_gamma * 1e6,
+                "static_limit_by_gamma_uC_per_m2": {f"{g:g}": v * 1e6 for g, v in
+                                                    self.static_by_gamma.items()},
                 "seeds_at_estimate": self.seeds_at_estimate,
                 "assumptions": assumption_lines(self)}
 
@@ -214,6 +221,16 @@ def assumption_lines(band: Band) -> dict:
         "upper": f"upper    {band.upper * 1e6:.4g} uC/m^2: breaks down even where the smaller "
                  f"gap is widest along the trajectory ({band.upper_gap * 1e3:.3g} mm), "
                  f"gamma = {band.gamma_upper:g}"}
+
+
+def gamma_line(band: Band) -> str:
+    """``tengfield breakdown``'s line: σ_max over the γ range and at the scene's γ."""
+    by = band.static_by_gamma
+    lo, hi = min(by, key=by.get), max(by, key=by.get)
+    return (f"sigma_max over gamma in [{band.gamma_range[0]:g}, {band.gamma_range[1]:g}]: "
+            f"{by[lo] * 1e6:.4g} (gamma {lo:g}) to {by[hi] * 1e6:.4g} uC/m^2 (gamma {hi:g}); "
+            f"at the scene's gamma {band.gamma:g}: {band.static_at_gamma * 1e6:.4g} uC/m^2 "
+            f"({band.paschen_curve})")
 
 
 def _gammas(paschen: Paschen, gamma_range) -> list[float]:
@@ -237,11 +254,17 @@ def compute_band(lines: Lines, paschen: Paschen, states, reference: str,
     static = {g: evaluate(lines, paschen.with_gamma(g), states, reference) for g in gammas}
     gamma_lower = min(gammas, key=lambda g: static[g].sigma_max)
     lower = static[gamma_lower].sigma_max
-    moving = trajectory is not None and trajectory.duration > 0 and np.any(
-        _smaller_gap(lines, np.clip(trajectory.position, 0.0, lines.stroke)) > 0)
-    z_path = (np.clip(trajectory.position, 0.0, lines.stroke) if moving
-              else np.linspace(0.0, lines.stroke, 801))
-    widest = int(np.nanargmax(_smaller_gap(lines, z_path)))
+    track = None
+    if trajectory is not None and trajectory.duration > 0:
+        track = stress_track(lines, paschen, states, reference, trajectory)
+        if not np.any(track.smaller_gap > 0):
+            track = None          # a ball at rest
+    if track is not None:
+        z_path, smaller = track.position, track.smaller_gap
+    else:
+        z_path = np.linspace(0.0, lines.stroke, 801)
+        smaller = _smaller_gap(lines, z_path)
+    widest = int(np.nanargmax(smaller))
     z_wide = float(z_path[widest])
     at_wide = {}
     for g in gammas:
@@ -250,11 +273,10 @@ def compute_band(lines: Lines, paschen: Paschen, states, reference: str,
         at_wide[g] = float(min(limits))
     gamma_upper = max(gammas, key=lambda g: at_wide[g])
     upper = max(at_wide[gamma_upper], lower)
-    track = None
     static_scene = static[paschen.gamma].sigma_max
-    if moving:
-        track = stress_track(lines, paschen, states, reference, trajectory)
-        estimate, rule = _seed_limited(track, seeds, static_scene, upper)
+    if track is not None:
+        start = min(max(static_scene, float(np.min(track.threshold))), upper)
+        estimate, rule = _seed_limited(track, seeds, start, upper)
     else:
         estimate, rule = upper, "ball at rest: no trajectory, the upper edge"
     estimate = min(max(estimate, lower), upper)
@@ -262,16 +284,17 @@ def compute_band(lines: Lines, paschen: Paschen, states, reference: str,
     if track is not None:
         volume = track.over_stressed_volume(estimate * (1 + 1e-9))
         i = int(np.argmax(volume)) if np.any(volume > 0) else int(np.argmax(track.ratio(1.0)))
-        gap = float(_smaller_gap(lines, track.position[i:i + 1])[0])
+        gap = float(track.smaller_gap[i])
     return Band(lower=lower, estimate=estimate, upper=upper, gamma_range=tuple(gamma_range),
                 gamma=paschen.gamma, gamma_lower=gamma_lower, gamma_upper=gamma_upper,
                 seeds=seeds, lower_position=static[gamma_lower].binding.position,
                 lower_gap=static[gamma_lower].binding.gap, upper_position=z_wide,
-                upper_gap=float(_smaller_gap(lines, np.array([z_wide]))[0]),
+                upper_gap=float(smaller[widest]),
                 estimate_gap=gap, estimate_rule=rule, static_at_gamma=static_scene,
                 seeds_at_estimate=(expected_seeds(track, estimate, seeds) if track is not None
                                    else {}),
-                paschen_curve=paschen.curve, track=track)
+                paschen_curve=paschen.curve, track=track,
+                static_by_gamma={g: static[g].sigma_max for g in gammas})
 
 
 def _seed_limited(track: StressTrack, seeds: Seeds, start: float, upper: float):
