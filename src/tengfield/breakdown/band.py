@@ -107,10 +107,31 @@ class StressTrack:
         """V_s(t) [m^3] at |σ| = ``sigma``."""
         return np.sum(np.where(self.threshold < sigma, self.volume, 0.0), axis=(1, 2))
 
+    def below(self, cap: float) -> "StressTrack":
+        """The same track holding only the columns whose threshold is below ``cap``
+        (flattened: V_s(σ ≤ cap) unchanged, a fraction of the work)."""
+        keep = self.threshold < cap
+        return _CompactTrack(self.time, np.nonzero(keep)[0], self.threshold[keep],
+                             self.volume[keep])
+
     def ratio(self, sigma: float) -> np.ndarray:
         """max over lines of |V_gap| / V_b at each sample (|σ| = ``sigma``)."""
         with np.errstate(divide="ignore"):
             return sigma / np.min(self.threshold, axis=(1, 2))
+
+
+@dataclass
+class _CompactTrack:
+    """:meth:`StressTrack.below`: sample index, threshold and volume of each column kept."""
+    time: np.ndarray
+    sample: np.ndarray
+    threshold: np.ndarray
+    volume: np.ndarray
+
+    def over_stressed_volume(self, sigma: float) -> np.ndarray:
+        hot = self.threshold < sigma
+        return np.bincount(self.sample[hot], weights=self.volume[hot],
+                           minlength=self.time.size).astype(float)
 
 
 def stress_track(lines: Lines, paschen: Paschen, states, reference: str,
@@ -301,6 +322,7 @@ def _seed_limited(track: StressTrack, seeds: Seeds, start: float, upper: float):
     """The smallest σ in [start, upper] whose expected seeded breakdowns per second reach
     the criterion (a scan, then bisection), or ``upper`` when they do not."""
     target = seeds.breakdowns_per_s
+    track = track.below(upper * (1 + 1e-9))
 
     def reached(sigma):
         return expected_seeds(track, sigma, seeds)["per_s"] >= target
@@ -371,4 +393,23 @@ def output_band(summary: dict, band: Band, sigma: float, linear: bool = True) ->
             continue
         out[key] = {edge: float(value) * (s / abs(sigma)) ** power
                     for edge, s in band.edges().items()}
+    return out
+
+
+def band_summary(summary: dict, scene, given, result, dynamics) -> dict:
+    """A run's additions to ``summary["breakdown"]``: ``band``, ``trajectory`` (at the
+    scene's σ) and, for σ = "breakdown" (``given``: the scene as loaded), ``outputs``:
+    each main output at the band's three σ (``summary.json["breakdown_band"]``)."""
+    from .charge import uses_breakdown_charge
+
+    band = scene_band(scene, result, dynamics)
+    sigma = scene.device.surface_charge
+    out = {"band": band.to_json(), "trajectory": trajectory_block(band, sigma)}
+    if uses_breakdown_charge(given):
+        linear = scene.circuit.kind in LINEAR_CIRCUITS
+        out["outputs"] = output_band(summary, band, sigma, linear)
+        if not linear:
+            out["outputs"] = {"available": False,
+                              "reason": f"[circuit] kind = {scene.circuit.kind!r} is not "
+                                        "linear in sigma (its diodes): run at each edge's sigma"}
     return out
