@@ -174,3 +174,31 @@ def test_output_band_scales_each_output_with_its_edge():
     assert out["load.mean_power_W"]["estimate"] == pytest.approx(
         1e-6 * (band.estimate / sigma) ** 2)
     assert bandmod.output_band(summary, band, -sigma, linear=False) == {}
+
+
+def test_breakdown_keys_of_the_band(tmp_path):
+    """[breakdown] gamma (read under its old name secondary_emission with one warning),
+    gamma_range as [low, high], the curve's name."""
+    import warnings
+
+    from tengfield.errors import SceneError
+    from tengfield.scene import load_scene
+
+    path = tmp_path / "old.toml"
+    path.write_text("[breakdown]\nsecondary_emission = 0.001\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = load_scene(path)
+    assert scene.breakdown.gamma == 0.001
+    assert any("gamma" in str(w.message) for w in caught)
+    assert Paschen.from_scene(scene).gamma == 0.001
+    path.write_text('[breakdown]\ngamma_range = [0.1, 0.001]\n')
+    with pytest.raises(SceneError, match=r"gamma_range = \[0.1, 0.001\].*low <= high"):
+        load_scene(path)
+    path.write_text('[breakdown]\npaschen = "dakin"\n')
+    with pytest.raises(SceneError, match="paschen"):
+        load_scene(path)
+    path.write_text('[breakdown]\npaschen = "empirical"\nion_density_per_cm3 = 100\n')
+    scene = load_scene(path)
+    assert Paschen.from_scene(scene).curve == "empirical"
+    assert bandmod.Seeds.from_scene(scene).ion_density == pytest.approx(1e8)
