@@ -55,8 +55,12 @@ def breakdown_figure(result, sigma: float, *, title: str | None = None, band=Non
     paschen = result.paschen
     d = np.geomspace(1e-6, 2e-2, 400)
     left.loglog(d * 1e3, paschen.voltage(d), color="k", lw=2.0,
-                label=f"Paschen, air, {paschen.pressure / 1e3:.4g} kPa")
-    landmarks = [(paschen.d_min, "minimum"), (paschen.d_streamer, "streamer above")]
+                label=f"Paschen, air, {paschen.pressure / 1e3:.4g} kPa"
+                + (" (measured, Dakin 1974)" if getattr(paschen, "curve", "") == "empirical"
+                   else ""))
+    landmarks = [(paschen.d_min, "minimum")]
+    if getattr(paschen, "curve", "townsend") == "townsend":   # the measured curve has no switch
+        landmarks.append((paschen.d_streamer, "streamer above"))
     if np.isfinite(paschen.longest_path):
         landmarks.append((paschen.longest_path, "longest path"))
     for edge, text in landmarks:
