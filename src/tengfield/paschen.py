@@ -262,7 +262,8 @@ class Paschen:
                     "source": "Dakin et al., Electra 32 (1974): uniform-field air at 20 C, "
                               "minimum 327 V at 0.757 Pa m; V = 24.36 x + 6.72 sqrt(x) kV "
                               "(x in bar cm) over 0.005-10 bar cm; gamma does not enter"}
-        return {"curve": "townsend", "A_per_Pa_m": self.A, "B_V_per_Pa_m": self.B, "secondary_emission": self.gamma,
+        return {"curve": "townsend", "A_per_Pa_m": self.A, "B_V_per_Pa_m": self.B,
+                "gamma": self.gamma, "secondary_emission": self.gamma,
                 "pressure_Pa": self.pressure, "V_min_V": self.v_min, "d_min_m": self.d_min,
                 "field_emission_field_V_per_m": self.field_emission,
                 "field_emission_below_m": self.d_field_emission,

@@ -21,7 +21,8 @@ from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, PLACEHOLDER_SIGMA, 
                     gap_voltages, limited_energy, lines_from_table)
 from .output import summary_lines, write_outputs
 
-__all__ = ["Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band", "trajectory_of",
+__all__ = ["Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band",
+           "trajectory_of",
            "CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "PLACEHOLDER_SIGMA", "SIDES",
            "STATE_TEXT", "STATES", "Binding", "BreakdownResult", "Lines", "charge_line",
            "electrode_potentials", "evaluate", "gap_voltages", "limited_energy",

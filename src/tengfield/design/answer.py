@@ -383,7 +383,8 @@ def best_breakdown_band(result, *, cache_dir=None) -> dict | None:
         edges.append({e: s * 1e6 for e, s in band.edges().items()})
         for edge, sigma in band.edges().items():
             at[edge].append(best["band_values"][objective][k] * (sigma / limit.sigma_max) ** power)
-    out = {edge: float(aggregate_values(values, spec.band_aggregate)) for edge, values in at.items()}
+    out = {edge: float(aggregate_values(values, spec.band_aggregate))
+           for edge, values in at.items()}
     return {**out, "sigma_edges_uC_per_m2": edges, "sigma_max_uC_per_m2": limit.sigma_max * 1e6,
             "rule": f"the objective scales with sigma^{power}: its value at -sigma_max times "
                     "(edge / sigma_max)^power at each band point, aggregated as the objective"}
