@@ -110,7 +110,8 @@ def band_lines(summary: dict) -> list[str]:
              f"{band['estimate_uC_per_m2']:.4g}, upper {band['upper_uC_per_m2']:.4g} uC/m^2"
              + (f"; along the trajectory max |V_gap|/V_b = "
                 f"{path['peak_gap_voltage_over_breakdown']:.3g} at this sigma, above 1 for "
-                f"{path['time_above_breakdown_s']:.3g} s" if path else "")]
+                f"{path['time_above_breakdown_s']:.3g} of {path.get('over_s', 0.0):.3g} s"
+                if path else "")]
     lines += [f"    {text}" for text in band.get("assumptions", {}).values()]
     outputs = summary.get("breakdown_band") or {}
     for key, edges in outputs.items():
