@@ -202,3 +202,33 @@ def test_breakdown_keys_of_the_band(tmp_path):
     scene = load_scene(path)
     assert Paschen.from_scene(scene).curve == "empirical"
     assert bandmod.Seeds.from_scene(scene).ion_density == pytest.approx(1e8)
+
+
+@pytest.mark.parametrize("kind, linear", [("open", True), ("rectifier", False)])
+def test_a_runs_band_block_and_which_circuits_scale(kind, linear):
+    """band_summary on the planar lines and a prescribed trajectory (plate_model's
+    FakeDynamics): the band, the trajectory at the run's σ and, for σ = "breakdown", the
+    outputs scaled (open) or said to need runs (a rectifier: its diodes)."""
+    from plate_model import FakeDynamics
+
+    from tengfield.scene import default_scene
+
+    scene = default_scene().with_values(device={"stroke_mm": 3.0}, circuit={"kind": kind},
+                                        run={"duration_s": 0.4, "settle_periods": 4})
+    given = scene.with_values(device={"surface_charge_uC_per_m2": "breakdown"})
+    lines = planar_lines(3e-3, 1e-3)
+    result = evaluate(lines, Paschen(), ("open",), "grounded-lower")
+    at = scene.with_values(device={"surface_charge_uC_per_m2": -result.sigma_max * 1e6})
+    summary = {"peak_to_peak": {"Q_sc_C": 1e-9}, "peak": {"I_sc_A": 1e-7}}
+    block = bandmod.band_summary(summary, at, given, result, FakeDynamics(at))
+    band = block["band"]
+    assert band["lower_uC_per_m2"] <= band["estimate_uC_per_m2"] <= band["upper_uC_per_m2"]
+    assert block["trajectory"]["peak_gap_voltage_over_breakdown"] == pytest.approx(1.0, abs=1e-3)
+    if linear:
+        q = block["outputs"]["peak_to_peak.Q_sc_C"]
+        assert q["upper"] == pytest.approx(1e-9 * band["upper_uC_per_m2"] /
+                                           (result.sigma_max * 1e6), rel=1e-12)
+    else:
+        assert block["outputs"]["available"] is False
+    # a scene sigma that is not "breakdown": no outputs' band
+    assert "outputs" not in bandmod.band_summary(summary, at, at, result, FakeDynamics(at))
