@@ -61,7 +61,35 @@ STREAMER_PD = 200.0 * 133.322 * 1e-2
 #: Dakin et al. (1974) uniform-field law of air, V [kV] = a x + b sqrt(x), x in bar cm
 DAKIN = (24.36, 6.72)
 
-REGIMES = ("field-emission", "plateau", "long-path", "vacuum", "townsend", "streamer")
+REGIMES = ("field-emission", "plateau", "long-path", "vacuum", "townsend", "streamer",
+           "empirical")
+#: the curves ``[breakdown] paschen`` can name
+CURVES = ("townsend", "empirical")
+#: the default range of γ over which the band's edges are taken ([breakdown] gamma_range)
+GAMMA_RANGE = (1e-4, 0.1)
+
+
+def _dakin_kv(x):
+    """Dakin et al. (1974), uniform-field breakdown of air at 20 C: V [kV] of x = p d [bar cm]."""
+    a, b = DAKIN
+    return a * x + b * math.sqrt(x)
+
+
+#: Empirical uniform-field breakdown of air at 20 C (``[breakdown] paschen = "empirical"``):
+#: (p·d [Pa m], V_b [V]). The first row is the measured minimum of air, 327 V at
+#: 0.567 Torr cm = 0.757 Pa m (Dakin et al., Electra 32, 1974, Fig. 2 / Table; the value
+#: quoted throughout the literature); the others are Dakin's fit to the measured air data,
+#: V = 24.36 x + 6.72 sqrt(x) kV (x = p d in bar cm), at x = 0.005 ... 10 bar cm
+#: (50 µm ... 10 cm at 1 atm), the range the fit was made over. Between rows: log-log
+#: interpolation; between the minimum and 0.005 bar cm the table is the interpolation of
+#: the two (no fit there); above 10 bar cm Dakin's law is extrapolated; below the
+#: minimum the left branch is handled as for the Townsend curve (plateau at the
+#: minimum, field emission).
+EMPIRICAL_AIR = ((0.757, 327.0),) + tuple(
+    (x * 1e3, _dakin_kv(x) * 1e3) for x in
+    (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0))
+#: p·d range [Pa m] the empirical table covers (its validity range)
+EMPIRICAL_RANGE = (EMPIRICAL_AIR[0][0], EMPIRICAL_AIR[-1][0])
 
 
 @dataclass(frozen=True)
@@ -76,8 +104,12 @@ class Paschen:
     field_emission: float = FIELD_EMISSION_FIELD
     streamer_pd: float = STREAMER_PD
     longest_path: float = math.inf
+    #: "townsend" (the formula with A, B, γ) or "empirical" (:data:`EMPIRICAL_AIR`)
+    curve: str = "townsend"
 
     def __post_init__(self):
+        if self.curve not in CURVES:
+            raise ValueError(f"Paschen curve = {self.curve!r}: choose one of {CURVES}")
         if not (self.longest_path > 0.0):     # inf allowed: an unbounded gas
             raise ValueError(f"Paschen longest_path = {self.longest_path!r}: must be positive")
         for name in ("A", "B", "gamma", "pressure", "field_emission", "streamer_pd"):
@@ -96,8 +128,13 @@ class Paschen:
         path = scene.device.longest_path if getattr(scene, "device", None) else math.inf
         if bd is None:
             return cls(longest_path=path)
-        return cls(A=bd.paschen_A, B=bd.paschen_B, gamma=bd.secondary_emission,
-                   pressure=bd.pressure, longest_path=path)
+        return cls(A=bd.paschen_A, B=bd.paschen_B, gamma=bd.gamma,
+                   pressure=bd.pressure, longest_path=path, curve=bd.paschen)
+
+    def with_gamma(self, gamma: float) -> "Paschen":
+        """The same curve with secondary-emission coefficient ``gamma``."""
+        import dataclasses
+        return dataclasses.replace(self, gamma=float(gamma))
 
     # -- the Townsend formula and its minimum ---------------------------------
     @property
@@ -107,12 +144,17 @@ class Paschen:
 
     @property
     def pd_min(self) -> float:
-        """p·d [Pa m] of the minimum of the Townsend curve: e^(1 + ln ln(1+1/γ)) / A."""
+        """p·d [Pa m] of the curve's minimum: e^(1 + ln ln(1+1/γ)) / A (Townsend), the
+        table's first row (empirical)."""
+        if self.curve == "empirical":
+            return EMPIRICAL_AIR[0][0]
         return math.exp(1.0 + self.log_term) / self.A
 
     @property
     def v_min(self) -> float:
-        """Minimum breakdown voltage [V]: B·(p·d)_min."""
+        """Minimum breakdown voltage [V]: B·(p·d)_min (Townsend), 327 V (empirical)."""
+        if self.curve == "empirical":
+            return EMPIRICAL_AIR[0][1]
         return self.B * self.pd_min
 
     @property
@@ -127,6 +169,9 @@ class Paschen:
         (inf when no avalanche can sustain itself on it: vacuum)."""
         if self.pressure * self.longest_path >= self.pd_min:
             return self.v_min
+        if self.curve == "empirical":   # the table has no left branch: Townsend's
+            import dataclasses
+            return dataclasses.replace(self, curve="townsend").v_left
         value = float(self.townsend(self.longest_path))
         return value if math.isfinite(value) else math.inf
 
@@ -148,6 +193,18 @@ class Paschen:
             denominator = np.log(self.A * pd) - self.log_term
             return np.where(denominator > 0.0, self.B * pd / denominator, np.nan)
 
+    def empirical(self, d):
+        """V_b [V] of the empirical air table (:data:`EMPIRICAL_AIR`) at gap(s) ``d`` [m]:
+        log-log interpolation in p·d, Dakin's law above the table, NaN below its minimum."""
+        pd = self.pressure * np.asarray(d, dtype=float)
+        table = np.asarray(EMPIRICAL_AIR)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inside = np.exp(np.interp(np.log(pd), np.log(table[:, 0]), np.log(table[:, 1])))
+            x = pd / 1e5 * 1e2
+            beyond = (DAKIN[0] * x + DAKIN[1] * np.sqrt(x)) * 1e3
+        out = np.where(pd > table[-1, 0], beyond, inside)
+        return np.where(pd >= table[0, 0], out, np.nan)
+
     def _dakin(self, pd):
         x = np.asarray(pd, dtype=float) / 1e5 * 1e2     # Pa m -> bar cm
         a, b = DAKIN
@@ -159,6 +216,13 @@ class Paschen:
         continuous and non-decreasing in d; 0 at d = 0; NaN for NaN or negative d."""
         d = np.asarray(d, dtype=float)
         pd = self.pressure * d
+        if self.curve == "empirical":
+            with np.errstate(invalid="ignore", divide="ignore"):
+                out = self.empirical(np.maximum(d, self.d_min))
+                out = np.where(pd < self.pd_min, np.minimum(self.v_left, self.field_emission * d),
+                               out)
+                out = np.where(d >= 0.0, out, np.nan)
+            return out if out.ndim else float(out)
         with np.errstate(invalid="ignore", divide="ignore"):
             townsend = self.townsend(np.clip(d, self.d_min, self.d_streamer))
             v_s = float(self.townsend(self.d_streamer))
@@ -177,12 +241,29 @@ class Paschen:
                                            else "vacuum")
         out[(d > self.d_field_emission) & (d < self.d_min)] = (
             "plateau" if self.v_left == self.v_min else "long-path")
-        out[d > self.d_streamer] = "streamer"
+        if self.curve == "empirical":
+            out[d >= self.d_min] = "empirical"
+        else:
+            out[d > self.d_streamer] = "streamer"
         return out
 
     def to_json(self) -> dict:
         """The constants and the curve's landmarks (file-level units in the keys)."""
-        return {"A_per_Pa_m": self.A, "B_V_per_Pa_m": self.B, "secondary_emission": self.gamma,
+        if self.curve == "empirical":
+            return {"curve": "empirical", "pressure_Pa": self.pressure, "V_min_V": self.v_min,
+                    "d_min_m": self.d_min, "table_pd_Pa_m_V": [list(r) for r in EMPIRICAL_AIR],
+                    "valid_pd_Pa_m": list(EMPIRICAL_RANGE),
+                    "field_emission_field_V_per_m": self.field_emission,
+                    "field_emission_below_m": self.d_field_emission,
+                    "longest_path_m": self.longest_path if math.isfinite(self.longest_path)
+                    else None,
+                    "formula": "log-log interpolation of the table in p d; Dakin's law above "
+                               "it; below its minimum the plateau V_min capped by E_fe d",
+                    "source": "Dakin et al., Electra 32 (1974): uniform-field air at 20 C, "
+                              "minimum 327 V at 0.757 Pa m; V = 24.36 x + 6.72 sqrt(x) kV "
+                              "(x in bar cm) over 0.005-10 bar cm; gamma does not enter"}
+        return {"curve": "townsend", "A_per_Pa_m": self.A, "B_V_per_Pa_m": self.B,
+                "gamma": self.gamma, "secondary_emission": self.gamma,
                 "pressure_Pa": self.pressure, "V_min_V": self.v_min, "d_min_m": self.d_min,
                 "field_emission_field_V_per_m": self.field_emission,
                 "field_emission_below_m": self.d_field_emission,

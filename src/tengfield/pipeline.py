@@ -226,7 +226,7 @@ def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
     """summary.json's breakdown and measured blocks, and the :class:`RunResult`."""
     summary = stage.summary
     if table is not None:
-        _breakdown_summary(summary, scene, hashed, limit)
+        _breakdown_summary(summary, scene, hashed, limit, dynamics)
     _measured_comparison(summary, scene)
     result = RunResult(scene=scene, waveforms=stage.waveforms, summary=summary,
                        dynamics=dynamics, table=table, curves=curves,
@@ -467,12 +467,19 @@ def _measured_comparison(summary, scene) -> None:
         summary["measured_comparison"] = _jsonable(block)
 
 
-def _breakdown_summary(summary, scene, hashed, limit) -> None:
-    """summary["breakdown"] and the breakdown-limited CMEO / FOM beside the ideal ones."""
+def _breakdown_summary(summary, scene, hashed, limit, dynamics=None) -> None:
+    """summary["breakdown"] (with the band and the trajectory's V_gap/V_b at the scene's
+    σ), ``breakdown_band`` (σ = "breakdown": each main output at the band's three σ) and
+    the breakdown-limited CMEO / FOM beside the ideal ones."""
     from . import breakdown
 
     summary["field_hash"] = hashed.field_hash()     # the surrogate's (σ = "breakdown" too)
     summary["breakdown"] = _jsonable(breakdown.summary_block(limit, scene, hashed))
+    if limit is not None and dynamics is not None:
+        summary["breakdown"].update(_jsonable(breakdown.band_summary(
+            summary, scene, hashed, limit, dynamics)))
+        if "outputs" in summary["breakdown"]:
+            summary["breakdown_band"] = summary["breakdown"].pop("outputs")
     if limit is not None and summary.get("energy_per_cycle"):
         summary["energy_per_cycle"].update(_jsonable(breakdown.limited_energy(
             summary["energy_per_cycle"], limit, scene.device.surface_charge)))

@@ -10,23 +10,7 @@ import pytest
 from tengfield import breakdown
 from tengfield.paschen import ATMOSPHERE, Paschen
 from tengfield.scene import EPS0
-from tengfield.surrogate import lobatto_positions
-
-
-def planar_lines(x_max: float, d0: float, count: int = 33) -> breakdown.Lines:
-    """Per unit area: lower electrode at 0, air gap x, the charged surface, a dielectric of
-    thickness d0 eps_r on the upper electrode (the 'ball' is the charged sheet)."""
-    x = lobatto_positions(x_max, count)
-    c = EPS0 / (x + d0)
-    C = np.stack([np.stack([c, -c], -1), np.stack([-c, c], -1)], -2)
-    fractions = np.column_stack([-d0 / (x + d0), -x / (x + d0)])
-    # potential of the sheet with both electrodes grounded: sigma / (eps0/x + eps0/d0)
-    phi1 = x * d0 / (EPS0 * (x + d0))
-    lower = np.column_stack([phi1, d0 / (x + d0), x / (x + d0)])
-    basis = np.stack([lower, np.full_like(lower, np.nan)], axis=1)[:, :, None, :]
-    return breakdown.Lines(positions=x, capacitance=C, fractions=fractions, ball_area=1.0,
-                           basis=basis, angles=np.array([0.0]), ball_radius=0.0, stroke=x_max,
-                           electrode_radius=1.0, sides=(True, False))
+from planar_lines import planar_lines
 
 
 @pytest.mark.parametrize("x_max", [1e-3, 3e-3])

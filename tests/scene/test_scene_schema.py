@@ -47,6 +47,7 @@ COMPANIONS = {
 }
 #: the alternative value of a key, where the generic candidates do not build
 ALTERNATIVES = {
+    ("breakdown", "gamma_range"): [(1e-3, 0.05)],
     ("excitation", "file"): ["table2.csv"],
     ("excitation", "time_column"): ["t2_s"],
     ("excitation", "signal_column"): ["d2_m"],

@@ -5,10 +5,14 @@
   at σ_max;
 * :mod:`.charge` the charge a run uses (its σ, or −σ_max for ``"breakdown"``) and the
   surrogate at it (:func:`obtain_run_table`, the one place that decides it);
+* :mod:`.band` the charge a device holds as a band (lower, seed-limited estimate,
+  upper) from the field and the trajectory (issue #38);
 * :mod:`.output` what ``tengfield breakdown`` prints and writes.
 """
 from __future__ import annotations
 
+from .band import (Band, Seeds, Trajectory, band_summary, compute_band, scene_band,
+                   trajectory_of)
 from .charge import (charge_line, obtain_breakdown_table, obtain_run_table, resolve_for_run,
                      scaled_table, scene_breakdown, scene_sigma, scene_states, summary_block,
                      uses_breakdown_charge)
@@ -17,7 +21,9 @@ from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, PLACEHOLDER_SIGMA, 
                     gap_voltages, limited_energy, lines_from_table)
 from .output import summary_lines, write_outputs
 
-__all__ = ["CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "PLACEHOLDER_SIGMA", "SIDES",
+__all__ = ["Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band",
+           "trajectory_of",
+           "CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "PLACEHOLDER_SIGMA", "SIDES",
            "STATE_TEXT", "STATES", "Binding", "BreakdownResult", "Lines", "charge_line",
            "electrode_potentials", "evaluate", "gap_voltages", "limited_energy",
            "lines_from_table", "obtain_breakdown_table", "obtain_run_table",

@@ -82,6 +82,9 @@ class Lines:
     #: a cell's own lines: ``line_lengths(z, angles)`` -> (len(z), 2, lines) [m] (a
     #: spherical shell's, field/cells); None: the tube's lines parallel to the axis
     line_lengths: object = None
+    #: the area [m^2] of the column each line stands for (None: the ball's surface band
+    #: around it projected on the electrode, :mod:`.band`; the planar stand-in gives its own)
+    foot_areas: np.ndarray | None = None
 
     def lengths(self, z) -> np.ndarray:
         """Line lengths [m], shape (len(z), 2, lines); NaN for lines not used."""
@@ -155,12 +158,20 @@ def gap_voltages(lines: Lines, state: str, reference: str = "floating",
     return phi - V[:, :, None]
 
 
+#: gaps shorter than this [m] are taken as closed: the field solves do not resolve them
+#: (the first sampled position after contact lies µm away; between them the per-σ gap
+#: voltage is the spline's, whose residual at contact, paired with a field-emission V_b
+#: that falls to 0 with the gap, would "break down" a trajectory sample nm after
+#: lift-off). The static limit's dense grid (3.75 µm steps) never reaches below it.
+CLOSED_GAP = 1e-6
+
+
 def _limits(paschen: Paschen, lengths, dv) -> np.ndarray:
     """σ at which each line breaks down [C/m²] (inf for a closed gap, no voltage or no line)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         vb = paschen.voltage(np.where(np.isfinite(lengths), lengths, 0.0))
         out = vb / np.abs(dv)
-    bad = ~np.isfinite(lengths) | (lengths <= 0.0) | ~np.isfinite(out) | (np.abs(dv) == 0.0)
+    bad = ~np.isfinite(lengths) | (lengths < CLOSED_GAP) | ~np.isfinite(out) | (np.abs(dv) == 0.0)
     return np.where(bad, np.inf, out)
 
 
@@ -200,6 +211,8 @@ class BreakdownResult:
     rows: list
     curves: dict
     error: dict = field(default_factory=dict)
+    #: the lines it was evaluated on (the band's input, :mod:`.band`)
+    lines: Lines | None = field(default=None, repr=False)
 
     @property
     def relative_error_estimate(self) -> float:
@@ -294,7 +307,7 @@ def evaluate(lines: Lines, paschen: Paschen, states=STATES, reference: str = "fl
                      "is measured) + the surrogate's field error estimate"}
     return BreakdownResult(sigma_max=sigma_max, binding=binding, per_state=per_state,
                            states=states, reference=reference, paschen=paschen, rows=rows,
-                           curves=curves, error=error)
+                           curves=curves, error=error, lines=lines)
 
 
 def _mesh_change(lines: Lines, paschen, states, reference) -> float:

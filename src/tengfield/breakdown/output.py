@@ -7,8 +7,9 @@ import math
 from .charge import scene_sigma, uses_breakdown_charge
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
 
-def summary_lines(result: BreakdownResult, scene) -> list[str]:
-    """What ``tengfield breakdown`` prints."""
+def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
+    """What ``tengfield breakdown`` prints (with ``band``: σ_max over the γ range and one
+    line per edge of the band saying what it assumes)."""
     b = result.binding
     sigma = scene_sigma(scene, result)
     lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} uC/m^2 (relative error estimate "
@@ -21,12 +22,18 @@ def summary_lines(result: BreakdownResult, scene) -> list[str]:
                      f"{bind.position * 1e3:.4g} mm, {bind.side} gap {bind.gap * 1e3:.4g} mm")
     lines.append(f"scene sigma = {sigma * 1e6:.4g} uC/m^2: |sigma| / sigma_max = "
                  f"{result.margin(sigma):.3g}")
+    if band is not None:
+        from .band import assumption_lines, gamma_line
+        lines.append(gamma_line(band))
+        lines.append("the charge the device holds, as a band (docs/breakdown.md):")
+        lines.extend("  " + text for text in assumption_lines(band).values())
     return lines
 
 
 def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
-                  field_status: str = "") -> list:
-    """breakdown.json, breakdown.csv and (``plots``) breakdown.png in directory ``out``."""
+                  field_status: str = "", band=None) -> list:
+    """breakdown.json, breakdown.csv and (``plots``) breakdown.png in directory ``out``
+    (with ``band``: breakdown.json's ``band`` and its panel in the figure)."""
     from pathlib import Path
 
     from .._files import atomic_path, write_csv, write_json
@@ -38,6 +45,10 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
     data.update({"scene": scene.source, "field_hash": scene.field_hash(),
                  "field_stage": field_status,
                  "sigma_mode": "breakdown" if uses_breakdown_charge(scene) else "scene"})
+    if band is not None:
+        from .band import trajectory_block
+        data["band"] = band.to_json()
+        data["trajectory"] = trajectory_block(band, sigma)
     written = [write_json(out / "breakdown.json", data)]
     columns = [[row[c] for row in result.rows] for c in CSV_COLUMNS]
     with atomic_path(out / "breakdown.csv") as tmp:
@@ -51,6 +62,6 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
             title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
                      f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
         with atomic_path(out / "breakdown.png") as tmp:
-            plot_breakdown(result, drawn, tmp, title=title)
+            plot_breakdown(result, drawn, tmp, title=title, band=band)
         written.append(out / "breakdown.png")
     return written

@@ -40,10 +40,11 @@ def _run(args) -> int:
         return 0
     states = breakdown.STATES if args.states == "all" else None
     result = breakdown.scene_breakdown(scene, table, states)
+    band = breakdown.scene_band(scene, result)   # the scene's own trajectory (dynamics)
     out = Path(args.output)
     written = breakdown.write_outputs(result, scene, out, plots=not args.no_plots,
-                                      field_status=outcome.status)
-    for line in breakdown.summary_lines(result, scene):
+                                      field_status=outcome.status, band=band)
+    for line in breakdown.summary_lines(result, scene, band):
         print(line)
     print(f"field: {outcome.status} ({outcome.wall_time:.2f} s), {outcome.path}")
     print("wrote " + ", ".join(str(p) for p in written))

@@ -74,6 +74,10 @@ def _run(args) -> int:
           f"infeasible, {counts['skipped']} skipped) in {result.wall_time:.1f} s on "
           f"{result.ranks} rank(s)", file=sys.stderr)
     print("\n".join(answer_lines(result)))
+    from ..design.answer import best_breakdown_band, breakdown_band_lines   # issue #38
+    for line in breakdown_band_lines(result, best_breakdown_band(result,
+                                                                 cache_dir=args.cache_dir)):
+        print(line)
     sys.stdout.flush()
     from ..design.answer import design_warnings
     for text in design_warnings(result):    # one `tengfield: warning: ...` line each

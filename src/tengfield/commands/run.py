@@ -97,6 +97,35 @@ def terminal_lines(summary: dict) -> list[str]:
     return lines
 
 
+def band_lines(summary: dict) -> list[str]:
+    """The band of the charge the device holds (docs/breakdown.md), the trajectory's
+    |V_gap|/V_b at the run's σ and, for σ = "breakdown", each main output as its band."""
+    from ..quantities import describe, display
+
+    bd = summary.get("breakdown") or {}
+    band, path = bd.get("band"), bd.get("trajectory")
+    if not band:
+        return []
+    lines = [f"  band: lower {band['lower_uC_per_m2']:.4g}, estimate "
+             f"{band['estimate_uC_per_m2']:.4g}, upper {band['upper_uC_per_m2']:.4g} uC/m^2"
+             + (f"; along the trajectory max |V_gap|/V_b = "
+                f"{path['peak_gap_voltage_over_breakdown']:.3g} at this sigma, above 1 for "
+                f"{path['time_above_breakdown_s']:.3g} of {path.get('over_s', 0.0):.3g} s"
+                if path else "")]
+    lines += [f"    {text}" for text in band.get("assumptions", {}).values()]
+    outputs = summary.get("breakdown_band") or {}
+    for key, edges in outputs.items():
+        if not isinstance(edges, dict):
+            continue
+        name = key.rpartition(".")[2]
+        lines.append(f"  {describe(key, unit=False)}: " + " / ".join(
+            display(name, edges[e]) for e in ("lower", "estimate", "upper"))
+            + " (lower / estimate / upper)")
+    if outputs.get("available") is False:
+        lines.append(f"  outputs at the band: {outputs['reason']}")
+    return lines
+
+
 def comparison_lines(summary: dict) -> list[str]:
     """The table of ``summary["measured_comparison"]``: tool value, measured value and %
     difference per measured figure, naming the tool quantity each is compared with."""
@@ -146,6 +175,8 @@ def print_summary(summary: dict) -> None:
         print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} uC/m^2, "
               f"|sigma| / sigma_max = {bd['margin']:.3g} (sigma = {bd['sigma_uC_per_m2']:.4g} "
               f"uC/m^2, from the {bd['sigma_from']})")
+        for line in band_lines(summary):
+            print(line)
     rect = summary.get("rectifier")
     if rect:
         length = rect.get("record_length_s")

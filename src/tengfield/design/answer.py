@@ -348,3 +348,53 @@ def answer_lines(result) -> list[str]:
                          "error bars of the best")
     return lines
 
+
+
+#: how each objective scales with σ (issue #38: its band costs no solve); a rectifier's
+#: harvested power is not a power of σ (its diodes) and has no band here
+SIGMA_POWER = {"charge": 1, "voltage": 1, "current": 1, "power": 2, "power_density": 2,
+               "stroke": 0}
+
+
+def best_breakdown_band(result, *, cache_dir=None) -> dict | None:
+    """With ``[device] surface_charge_uC_per_m2 = "breakdown"``: the best design's objective
+    at the edges of its breakdown band (docs/breakdown.md), ``{"lower", "estimate",
+    "upper"}`` aggregated over the band points like the objective, and the σ edges of
+    each band point [µC/m²] (its own trajectory). None when not asked for (another σ,
+    no feasible design, a percentile aggregate, an objective not a power of σ). Reads
+    the best geometry's surrogate from ``cache_dir`` (the design's) and reruns its
+    dynamics at each band point (seconds)."""
+    from ..breakdown import obtain_breakdown_table, scene_band, scene_breakdown
+    from .candidate import aggregate_values, band_scene, candidate_scene
+
+    best, spec = result.best, result.spec
+    objective = spec.objective
+    if best is None or not describe(result, best)["breakdown"] or \
+            spec.percentile is not None or objective not in SIGMA_POWER:
+        return None
+    scene = candidate_scene(result.scene, spec, best["values"])
+    table, _ = obtain_breakdown_table(scene, cache_dir=cache_dir)
+    limit = scene_breakdown(scene, table)
+    power = SIGMA_POWER[objective]
+    at = {"lower": [], "estimate": [], "upper": []}
+    edges = []
+    for k, (f, a) in enumerate(spec.band):
+        band = scene_band(band_scene(scene, spec, f, a), limit)
+        edges.append({e: s * 1e6 for e, s in band.edges().items()})
+        for edge, sigma in band.edges().items():
+            at[edge].append(best["band_values"][objective][k] * (sigma / limit.sigma_max) ** power)
+    out = {edge: float(aggregate_values(values, spec.band_aggregate))
+           for edge, values in at.items()}
+    return {**out, "sigma_edges_uC_per_m2": edges, "sigma_max_uC_per_m2": limit.sigma_max * 1e6,
+            "rule": f"the objective scales with sigma^{power}: its value at -sigma_max times "
+                    "(edge / sigma_max)^power at each band point, aggregated as the objective"}
+
+
+def breakdown_band_lines(result, band: dict | None) -> list[str]:
+    """The terminal's line for :func:`best_breakdown_band`."""
+    if band is None:
+        return []
+    unit = OBJECTIVES[result.spec.objective][0]
+    return [f"  {result.spec.objective} over the breakdown band (lower / estimate / upper): "
+            + " / ".join(_fmt(band[e], unit) for e in ("lower", "estimate", "upper"))
+            + f" (sigma_max {band['sigma_max_uC_per_m2']:.4g} uC/m^2; docs/breakdown.md)"]

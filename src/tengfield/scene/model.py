@@ -334,18 +334,35 @@ class Array:
 @dataclass(frozen=True)
 class Breakdown:
     """``[breakdown]``: ``pressure`` [Pa], Paschen's ``paschen_A`` [1/(Pa m)],
-    ``paschen_B`` [V/(Pa m)] and ``secondary_emission`` (γ)."""
+    ``paschen_B`` [V/(Pa m)], ``gamma`` (γ, secondary emission) and ``gamma_range`` (the
+    band's γ), ``paschen`` (the curve), the seed-limited estimate's ``seed_rate``
+    S_v [1/(m^3 s)], ``ion_density`` n_ion [1/m^3] and ``breakdowns_per_s`` [1/s]."""
     pressure: float = 101325.0
     paschen_A: float = 11.25
     paschen_B: float = 273.75
-    secondary_emission: float = 0.01
+    gamma: float = 0.01
+    gamma_range: tuple = (1e-4, 0.1)
+    paschen: str = "townsend"
+    seed_rate: float = 1e7
+    ion_density: float = 5e8
+    breakdowns_per_s: float = 1.0
+
+    @property
+    def secondary_emission(self) -> float:
+        """γ under its name before issue #38."""
+        return self.gamma
 
     def __post_init__(self):
-        check_section("breakdown", self, "Breakdown")   # the Townsend range must not be empty:
-        lowest = math.exp(1.0 + math.log(math.log1p(1.0 / self.secondary_emission))) / STREAMER_PD
+        check_section("breakdown", self, "Breakdown")
+        if len(self.gamma_range) != 2 or not self.gamma_range[0] <= self.gamma_range[1]:
+            raise SceneError(f"[breakdown] gamma_range = {list(self.gamma_range)}: allowed two "
+                             "numbers [low, high] with 0 < low <= high <= 1")
+        # the Townsend range must not be empty for any γ used (the scene's, the range's)
+        gamma = min(self.gamma, *self.gamma_range)
+        lowest = math.exp(1.0 + math.log(math.log1p(1.0 / gamma))) / STREAMER_PD
         if self.paschen_A <= lowest:
             raise SceneError(f"[breakdown] paschen_A_per_Pa_m = {self.paschen_A:g} is out of range "
-                             f"with secondary_emission = {self.secondary_emission:g}: allowed "
+                             f"with gamma = {gamma:g}: allowed "
                              f"({lowest:.4g}, 10000] (Paschen's minimum must lie below the "
                              f"streamer regime, p d = {STREAMER_PD:.4g} Pa m)")
 

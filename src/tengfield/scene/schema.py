@@ -257,8 +257,20 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "pressure_kPa": Key("pressure", float, 101.325, 1e3, _rng(0.0, 1e4, lo_open=True)),
         "paschen_A_per_Pa_m": Key("paschen_A", float, 11.25, 1.0, _rng(0.0, 1e4, lo_open=True)),
         "paschen_B_V_per_Pa_m": Key("paschen_B", float, 273.75, 1.0, _rng(0.0, 1e6, lo_open=True)),
-        "secondary_emission": Key("secondary_emission", float, 0.01, 1.0,
-                                  _rng(0.0, 1.0, lo_open=True)),
+        # secondary-emission coefficient γ of the cathode (the charged PTFE; issue #38:
+        # called secondary_emission before, RENAMED_KEYS) and the range the band's edges
+        # take it over (10^-4 ... 0.1: what is reported; docs/breakdown.md)
+        "gamma": Key("gamma", float, 0.01, 1.0, _rng(0.0, 1.0, lo_open=True)),
+        "gamma_range": Key("gamma_range", tuple, (1e-4, 0.1), 1.0, _rng(0.0, 1.0, lo_open=True)),
+        # which breakdown curve: the Townsend formula (A, B, γ) or Dakin's measured air data
+        "paschen": Key("paschen", str, "townsend", None, _choice("townsend", "empirical")),
+        # the seed-limited estimate (issue #38): natural volume ionisation S_v (cosmic rays
+        # and radon, ~10 pairs cm^-3 s^-1), small negative ions in air n_ion (10^2-10^3
+        # cm^-3), and the breakdown rate that defines the estimate
+        "seed_rate_per_cm3_s": Key("seed_rate", float, 10.0, 1e6, _rng(0.0, 1e12)),
+        "ion_density_per_cm3": Key("ion_density", float, 500.0, 1e6, _rng(0.0, 1e12)),
+        "breakdowns_per_s": Key("breakdowns_per_s", float, 1.0, 1.0,
+                                _rng(0.0, 1e9, lo_open=True)),
     },
     # measured values to compare the run with (tengfield run: summary.json ->
     # measured_comparison, the terminal's table). 0 (the default): not given. Which tool
@@ -283,7 +295,8 @@ FIELD_KEYS: dict[str, list[str]] = {
 #: Renamed keys: (section, old name) -> new name. The old name is read for one release,
 #: with one warning line saying what to write ([initial] gap_mm keeps its name: it is
 #: the ball's gap, the stroke was the [device] gap_mm).
-RENAMED_KEYS = {("device", "gap_mm"): "stroke_mm"}
+RENAMED_KEYS = {("device", "gap_mm"): "stroke_mm",
+                ("breakdown", "secondary_emission"): "gamma"}
 #: The name a renamed field key has in the surrogate cache hash (its name when the cache
 #: was first keyed): renaming a key never invalidates a cached surrogate.
 HASH_NAMES = {("device", "stroke_mm"): "gap_mm"}

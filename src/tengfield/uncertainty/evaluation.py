@@ -25,7 +25,7 @@ from .. import electrical
 from .._json import regime_dict
 from ..quantities import summary_keys
 from ..surrogate.cache import solved_scene
-from .spec import UncertaintySpec, sections_of
+from .spec import UncertaintySpec, band_sigma, draws_from_band, sections_of
 
 SIGMA_KEY = "device.surface_charge_uC_per_m2"
 #: sections whose keys change neither the dynamics nor the field: the electrical stage only
@@ -191,15 +191,37 @@ def _group_task(task):
             ref_at, table, status, sigma_max = _obtain(ref, cache_dir, solve)
             sigma_table = ref_at.device.surface_charge
             at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
+        band = _group_band(scene, at, table, dynamics)   # σ from the breakdown band
         for index, values in group.members:
+            if band is not None and SIGMA_KEY in values:
+                values = {**values, SIGMA_KEY: band_sigma(band, values[SIGMA_KEY])}
             point = at.with_values(**sections_of(values)) if values else at
             scaled = None
             if table is not None and point.device.ball_charge != 0.0:
                 scaled = scaled_table(table, point.device.surface_charge / sigma_table)
-            above = None if sigma_max is None or table is None else \
+            above = None if sigma_max is None or table is None or band is not None else \
                 bool(abs(point.device.surface_charge) > sigma_max)
             rows.append((index, *_outputs(point, dynamics, scaled), above))
     return rows, digest, status, _caught(caught)
+
+
+def _group_band(scene, at, table, dynamics):
+    """The breakdown band of the group's geometry and trajectory when ``[uncertainty.vary]``
+    draws σ from it (docs/breakdown.md), else None."""
+    if not draws_from_band(scene) or table is None:
+        return None
+    from ..breakdown import compute_band, lines_from_table, scene_states
+    from ..breakdown.band import Seeds, trajectory_of
+    from ..paschen import Paschen
+
+    if table.line_potential is None:
+        from ..errors import TengfieldError
+        raise TengfieldError(f'[uncertainty.vary] "{SIGMA_KEY}" = {{ distribution = '
+                             '"breakdown-band" }: the surrogate has no breakdown lines (3D '
+                             'solver); use [field] method = "axisymmetric"')
+    return compute_band(lines_from_table(table, at), Paschen.from_scene(at), scene_states(at),
+                        at.circuit.reference, trajectory_of(dynamics, at),
+                        at.breakdown.gamma_range, Seeds.from_scene(at))
 
 
 def _default_simulate():

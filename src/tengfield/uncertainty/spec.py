@@ -8,6 +8,10 @@ scene schema, in the file's units) to a distribution:
 * ``{ distribution = "lognormal", median = .., factor = .. }`` (``factor``: the
   geometric standard deviation, > 1; ln x is normal with mean ln(median), std ln(factor))
 * ``{ distribution = "triangular", low = .., mode = .., high = .. }``
+* ``"device.surface_charge_uC_per_m2" = { distribution = "breakdown-band" }`` (σ only,
+  issue #38): σ log-uniform between the edges of the breakdown band of each geometry
+  (:mod:`tengfield.breakdown.band`); the study's column holds the draw's place in the
+  band, u in (0, 1): σ = −lower·(upper/lower)^u
 
 :func:`uncertainty_spec` validates it the way every scene key is validated (one-line
 :class:`~tengfield.errors.SceneError` naming key, value and allowed range): unknown keys
@@ -27,7 +31,11 @@ SECTION = "uncertainty"
 METHODS = ("sobol", "monte-carlo")
 #: parameters of each distribution, in the order they are written
 DISTRIBUTIONS = {"uniform": ("low", "high"), "normal": ("mean", "std"),
-                 "lognormal": ("median", "factor"), "triangular": ("low", "mode", "high")}
+                 "lognormal": ("median", "factor"), "triangular": ("low", "mode", "high"),
+                 "breakdown-band": ()}
+#: the distribution drawn from each geometry's breakdown band, and the key it takes
+BAND = "breakdown-band"
+BAND_KEY = "device.surface_charge_uC_per_m2"
 KEYS = ("samples", "method", "seed", "vary")
 DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0}
 #: the tail probability whose quantiles must lie inside the key's allowed range
@@ -73,6 +81,8 @@ class Distribution:
             return stats.norm.ppf(u, loc=p["mean"], scale=p["std"])
         if self.kind == "lognormal":
             return p["median"] * np.exp(math.log(p["factor"]) * stats.norm.ppf(u))
+        if self.kind == BAND:        # the place in the band; σ per geometry (band_sigma)
+            return u
         width = p["high"] - p["low"]
         return stats.triang.ppf(u, (p["mode"] - p["low"]) / width, loc=p["low"], scale=width)
 
@@ -81,6 +91,8 @@ class Distribution:
         quantiles (normal, lognormal)."""
         if self.kind in ("uniform", "triangular"):
             return self.params["low"], self.params["high"]
+        if self.kind == BAND:
+            return 0.0, 1.0
         lo, hi = self.ppf([TAIL, 1.0 - TAIL])
         return float(lo), float(hi)
 
@@ -138,6 +150,9 @@ def _distribution(key: str, given) -> Distribution:
         choices = ", ".join(repr(k) for k in DISTRIBUTIONS)
         raise SceneError(f"{where}: distribution = {show(kind)} is not allowed: choose one of "
                          f"{choices}" + (suggest(kind, DISTRIBUTIONS) if isinstance(kind, str) else ""))
+    if kind == BAND and key != BAND_KEY:
+        raise SceneError(f"{where}: distribution = {show(kind)} is for {BAND_KEY!r} only "
+                         "(the breakdown band of each geometry)")
     names = DISTRIBUTIONS[kind]
     for name in given:
         if name != "distribution" and name not in names:
@@ -190,7 +205,7 @@ def _check_support(dist: Distribution) -> None:
     """The values the distribution can draw lie inside the key's own allowed range."""
     spec = SCHEMA[dist.section][dist.name]
     constraint = spec.check
-    if not constraint or constraint[0] != "range":
+    if not constraint or constraint[0] != "range" or dist.kind == BAND:
         return
     lo, hi = dist.support()
     _, a, b, a_open, b_open = constraint[:5]
@@ -274,10 +289,25 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
     return spec
 
 
+def draws_from_band(scene) -> bool:
+    """Whether the scene's ``[uncertainty.vary]`` draws σ from the breakdown band."""
+    vary = (scene.raw.get(SECTION) or {}).get("vary") if isinstance(scene.raw, dict) else None
+    given = vary.get(BAND_KEY) if isinstance(vary, dict) else None
+    return isinstance(given, dict) and given.get("distribution") == BAND
+
+
+def band_sigma(band, place: float) -> float:
+    """σ [µC/m², negative: PTFE] at ``place`` u in [0, 1] of ``band`` (a
+    :class:`tengfield.breakdown.Band`): log-uniform, −lower·(upper/lower)^u."""
+    return -1e6 * band.lower * (band.upper / band.lower) ** float(place)
+
+
 def _check_scenes(scene, spec: UncertaintySpec) -> None:
     """Each input at either end of what it can draw (the others nominal) builds a valid
     scene: a rule between keys (a ball wider than the bore...) is named before any work."""
     for dist in spec.inputs:
+        if dist.kind == BAND:
+            continue          # its σ comes from each geometry's band
         for value in dist.support():
             try:
                 scene.with_values(**sections_of({dist.key: value}))
