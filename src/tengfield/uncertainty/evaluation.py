@@ -250,14 +250,20 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
             ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
             geometry.setdefault(ref.field_hash(), ref)
-    field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
-                              comm=comm, jobs=jobs)
+    shown = progress and rank_of(comm) == 0 and sys.stderr.isatty()
+    bar = tqdm(total=len(geometry), desc="uncertainty: fields", unit="geometry",
+               file=sys.stderr, disable=not (shown and len(geometry) > 1))
+    try:
+        field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
+                                  comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
     solved = {digest for digest, status, _ in field_results if status != "cached"}
     messages = [m for _, _, caught in field_results for m in caught]
     # phase 2: the groups (the nominal run first)
     tasks = [(scene, g, cache_dir, solve, simulate) for g in [nominal, *groups]]
     bar = tqdm(total=len(tasks), desc="uncertainty", unit="group", file=sys.stderr,
-               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+               disable=not shown)
     try:
         results = run_tasks(_group_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:

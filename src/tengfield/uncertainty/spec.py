@@ -28,8 +28,8 @@ METHODS = ("sobol", "monte-carlo")
 #: parameters of each distribution, in the order they are written
 DISTRIBUTIONS = {"uniform": ("low", "high"), "normal": ("mean", "std"),
                  "lognormal": ("median", "factor"), "triangular": ("low", "mode", "high")}
-KEYS = ("samples", "method", "seed", "vary")
-DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0}
+KEYS = ("samples", "method", "seed", "vary", "max_field_solves")
+DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0, "max_field_solves": 1000}
 #: the tail probability whose quantiles must lie inside the key's allowed range
 #: (normal, lognormal): no scrambled Sobol point of a study under ~1e6 evaluations
 #: comes nearer to 0 or 1
@@ -95,6 +95,9 @@ class UncertaintySpec:
     method: str
     seed: int
     inputs: tuple[Distribution, ...] = field(default_factory=tuple)
+    #: field solves a study may start (``[uncertainty] max_field_solves``; each takes
+    #: seconds to minutes and adds a surrogate to the cache): checked before the work
+    max_field_solves: int = DEFAULTS["max_field_solves"]
 
     @property
     def keys(self) -> list[str]:
@@ -266,7 +269,12 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
         raise SceneError(f"[uncertainty] samples = {samples} is too small for method = "
                          f"\"monte-carlo\" with {d} input{'s' * (d > 1)}: allowed >= "
                          f"{max(MIN_MC_SAMPLES, d + 1)}")
-    spec = UncertaintySpec(samples=samples, method=method, seed=seed, inputs=tuple(inputs))
+    limit = raw.get("max_field_solves", DEFAULTS["max_field_solves"])
+    if isinstance(limit, bool) or not isinstance(limit, int) or not 0 <= limit <= 10**9:
+        raise SceneError(f"[uncertainty] max_field_solves = {show(limit)}: allowed a whole "
+                         "number in [0, 1000000000] (the field solves a study may start)")
+    spec = UncertaintySpec(samples=samples, method=method, seed=seed, inputs=tuple(inputs),
+                           max_field_solves=limit)
     if spec.evaluations > MAX_EVALUATIONS:
         raise SceneError(f"[uncertainty] samples = {samples} gives {spec.evaluations} "
                          f"evaluations: allowed <= {MAX_EVALUATIONS:.0e}")

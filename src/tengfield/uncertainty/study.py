@@ -128,9 +128,23 @@ def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
 def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: int | None = None,
               cache_dir=None, solve: Callable | None = None, simulate: Callable | None = None,
               progress: bool = False) -> Study:
-    """The study of ``scene``'s ``[uncertainty]`` section (or ``spec``)."""
+    """The study of ``scene``'s ``[uncertainty]`` section (or ``spec``). Its work is
+    counted first (:func:`~tengfield.uncertainty.cost.study_cost`) and refused past
+    ``[uncertainty] max_field_solves`` or the memory at hand; with ``progress`` the count
+    is printed (stderr, rank 0) before the work starts."""
+    import sys
+
+    from .._mpi import rank_of
+    from .cost import check_cost, study_cost
+
     spec = spec or uncertainty_spec(scene)
     values = study_values(spec)
+    cost = study_cost(scene, spec, values)
+    check_cost(cost, field_limit=spec.max_field_solves,
+               field_key="[uncertainty] max_field_solves",
+               size_key=f"[uncertainty] samples = {spec.samples}")
+    if progress and rank_of(comm) == 0:
+        print(cost.line(), file=sys.stderr, flush=True)
     evaluations = evaluate_study(scene, spec, values, comm=comm, jobs=jobs, cache_dir=cache_dir,
                                  solve=solve, simulate=simulate, progress=progress)
     return Study(spec, values, evaluations, summarise(scene, spec, values, evaluations))
