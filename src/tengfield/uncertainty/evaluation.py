@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import sys
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -180,7 +181,8 @@ def _group_task(task):
     scene, group, cache_dir, solve, simulate = task
     simulate = simulate or _default_simulate()
     rows, digest, status = [], None, "skipped"
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, _tagged(group.dynamic,
+                                                                 group.members):
         base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
         dynamics = simulate(base)
         table, at, sigma_table, sigma_max = None, base, 0.0, None
@@ -192,14 +194,41 @@ def _group_task(task):
             sigma_table = ref_at.device.surface_charge
             at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
         for index, values in group.members:
-            point = at.with_values(**sections_of(values)) if values else at
-            scaled = None
-            if table is not None and point.device.ball_charge != 0.0:
-                scaled = scaled_table(table, point.device.surface_charge / sigma_table)
-            above = None if sigma_max is None or table is None else \
-                bool(abs(point.device.surface_charge) > sigma_max)
-            rows.append((index, *_outputs(point, dynamics, scaled), above))
+            with _tagged({**group.dynamic, **values}, [(index, values)]):
+                point = at.with_values(**sections_of(values)) if values else at
+                scaled = None
+                if table is not None and point.device.ball_charge != 0.0:
+                    scaled = scaled_table(table, point.device.surface_charge / sigma_table)
+                above = None if sigma_max is None or table is None else \
+                    bool(abs(point.device.surface_charge) > sigma_max)
+                rows.append((index, *_outputs(point, dynamics, scaled), above))
     return rows, digest, status, _caught(caught)
+
+
+@contextmanager
+def _tagged(values: dict, members: list):
+    """Re-raise a :class:`~tengfield.errors.TengfieldError` of the evaluations
+    ``members`` with the draw that led to it: ``evaluation 17 of the study
+    ([uncertainty.vary] draws 'circuit.uvlo_falling_V' = 4.8): ...`` (issue #43.11: a
+    mid-study error named values nobody wrote and no word of the study). Tagged once."""
+    from ..errors import TengfieldError
+
+    try:
+        yield
+    except TengfieldError as exc:
+        text = str(exc)
+        if text.startswith(_TAG) or not values and members[0][0] < 0:
+            raise
+        indices = [i for i, _ in members if i >= 0]
+        which = (f"evaluation {indices[0]}" if len(indices) == 1 else
+                 f"evaluations {indices[0]}.. ({len(indices)} sharing these draws)")
+        drawn = ", ".join(f"{k!r} = {v:.12g}" for k, v in values.items()) or \
+            "only electrical keys; the dynamics at the scene's own values"
+        raise type(exc)(f"{_TAG}{which} of the study ([uncertainty.vary] draws {drawn}): "
+                        f"{text}") from None
+
+
+_TAG = "uncertainty: "
 
 
 def _default_simulate():
