@@ -40,6 +40,8 @@ def load_scene(path: "str | Path | Scene | None") -> Scene:
         return path
     if path is None:
         return default_scene()
+    from .._args import check_path_argument
+    check_path_argument("tengfield.load_scene", path)
     p = Path(path)
     if p.is_dir():
         raise SceneError(f"scene file {str(p)!r} is a directory: give a .toml file")

@@ -134,9 +134,16 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
     is printed (stderr, rank 0) before the work starts."""
     import sys
 
+    from .._args import check_instance, check_jobs_argument
     from .._mpi import rank_of
+    from ..scene import as_scene
     from .cost import check_cost, study_cost
 
+    function = "tengfield.uncertainty.run_study"
+    scene = as_scene(scene, "uncertainty.run_study")
+    check_instance(function, spec, "spec", UncertaintySpec, "an UncertaintySpec "
+                   "(tengfield.uncertainty.uncertainty_spec(scene)) or None", allow_none=True)
+    jobs = check_jobs_argument(function, jobs, comm)
     spec = spec or uncertainty_spec(scene)
     values = study_values(spec)
     cost = study_cost(scene, spec, values)
