@@ -15,6 +15,7 @@ Nothing is written: an evaluation returns the run summary's numeric quantities
 from __future__ import annotations
 
 import sys
+import uuid
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -93,6 +94,23 @@ class Group:
     ``members`` (evaluation index, its electrical values); index -1: the nominal run."""
     dynamic: dict
     members: list = field(default_factory=list)
+
+
+#: evaluations of one task at most: a group larger than this (a σ- or circuit-only study
+#: is ONE group of every evaluation: 98k electrical stages on one worker, issue #43.21) is
+#: split into chunks of this many members, each its own task, so that --jobs and mpirun
+#: share it. A fixed size: the tasks, and so the files, do not depend on the workers
+CHUNK_EVALUATIONS = 128
+
+
+def chunked(groups: list[Group], size: int = CHUNK_EVALUATIONS) -> list[Group]:
+    """``groups`` with every group of more than ``size`` members split into consecutive
+    chunks of at most ``size`` (same dynamics inputs; the members in their order)."""
+    out = []
+    for group in groups:
+        for start in range(0, max(len(group.members), 1), size):
+            out.append(Group(group.dynamic, group.members[start:start + size]))
+    return out
 
 
 def groups_of(keys: list[str], values: np.ndarray) -> list[Group]:
@@ -178,13 +196,19 @@ def _group_task(task):
     of its geometry (None when the table has no gap lines)."""
     from ..breakdown import scaled_table
 
-    scene, group, cache_dir, solve, simulate = task
+    scene, group, cache_dir, solve, simulate, study = task
     simulate = simulate or _default_simulate()
     rows, digest, status = [], None, "skipped"
     with warnings.catch_warnings(record=True) as caught, _tagged(group.dynamic,
                                                                  group.members):
         base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
-        dynamics = simulate(base)
+        memo = (study, tuple(group.dynamic.items()))
+        if memo in _DYNAMICS:          # an earlier chunk of this group, on this worker
+            dynamics = _DYNAMICS[memo]
+        else:
+            dynamics = simulate(base)
+            _DYNAMICS.clear()          # chunks of a group are consecutive tasks: keep one
+            _DYNAMICS[memo] = dynamics
         table, at, sigma_table, sigma_max = None, base, 0.0, None
         charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
@@ -231,6 +255,11 @@ def _tagged(values: dict, members: list):
 _TAG = "uncertainty: "
 
 
+#: the dynamics of the last group this process ran, keyed by (study token, its dynamic
+#: values): the next chunk of the same group reuses it (the same dynamics, not rerun)
+_DYNAMICS: dict = {}
+
+
 def _default_simulate():
     from ..dynamics import simulate
     return simulate
@@ -251,6 +280,9 @@ class Evaluations:
     #: evaluations whose |σ| exceeds their geometry's air-breakdown limit (None: unknown,
     #: no surrogate with gap lines)
     beyond_breakdown: int | None = None
+    #: tasks the evaluations were farmed as (the nominal run, the groups split into
+    #: chunks of at most CHUNK_EVALUATIONS): what --jobs and mpirun share
+    tasks: int = 0
 
 
 def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=None,
@@ -290,8 +322,9 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     solved = {digest for digest, status, _ in field_results if status != "cached"}
     messages = [m for _, _, caught in field_results for m in caught]
     # phase 2: the groups (the nominal run first)
-    tasks = [(scene, g, cache_dir, solve, simulate) for g in [nominal, *groups]]
-    bar = tqdm(total=len(tasks), desc="uncertainty", unit="group", file=sys.stderr,
+    study = uuid.uuid4().hex       # this study's dynamics memo key (workers included)
+    tasks = [(scene, g, cache_dir, solve, simulate, study) for g in [nominal, *chunked(groups)]]
+    bar = tqdm(total=len(tasks), desc="uncertainty", unit="task", file=sys.stderr,
                disable=not shown)
     try:
         results = run_tasks(_group_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
@@ -319,5 +352,6 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     distinct = list(dict.fromkeys(messages))
     return Evaluations(rows=rows, regimes=regimes, nominal=nominal_out,
                        nominal_regime=nominal_regime, field_solves=len(solved),
-                       geometries=len(geometry), dynamics_runs=len(tasks), warnings=distinct,
-                       beyond_breakdown=beyond)
+                       geometries=len(geometry), dynamics_runs=1 + len(groups),
+                       warnings=distinct,
+                       beyond_breakdown=beyond, tasks=len(tasks))
