@@ -34,17 +34,6 @@ def check_jobs_argument(function: str, jobs, comm=None) -> int | None:
     return int(jobs)
 
 
-def check_scene_argument(function: str, scene, name: str = "scene"):
-    """``scene`` is a :class:`tengfield.Scene` (``function`` needs a whole scene)."""
-    from .scene import Scene
-
-    if not isinstance(scene, Scene):
-        raise TypeError(f"{function}({name}={_shown(scene)}): expected a tengfield.Scene "
-                        "(tengfield.default_scene(), tengfield.load_scene(path)), got "
-                        f"{type(scene).__name__}")
-    return scene
-
-
 def check_instance(function: str, value, name: str, kind: type, what: str,
                    allow_none: bool = False):
     """``value`` is a ``kind`` (``what`` says how to get one), or None if allowed."""

@@ -183,7 +183,8 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     ``tables``: an in-process memo {field hash: table} (a repeated geometry is free even
     without a disk cache). Never raises for a bad candidate: skipped rows carry ``reason``.
     """
-    from .._args import check_instance, check_scene_argument
+    from .._args import check_instance
+    from ..scene.parse import check_scene_argument
     from ..dynamics import simulate as default_simulate
     from ..breakdown import obtain_breakdown_table, uses_breakdown_charge
 

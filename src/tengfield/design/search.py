@@ -232,7 +232,8 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     over its ranks (every rank returns the same result); else ``jobs`` worker processes.
     ``solve``/``simulate`` replace the field solver and the dynamics (tests);
     ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
-    from .._args import check_jobs_argument, check_scene_argument
+    from .._args import check_jobs_argument
+    from ..scene.parse import check_scene_argument
     from .._mpi import rank_of, size_of
 
     start = time.perf_counter()

@@ -216,6 +216,17 @@ def _where(path: str) -> str:
     return f"{sec}] {rest}" if dot else path
 
 
+def check_scene_argument(function: str, scene, name: str = "scene") -> Scene:
+    """``scene`` is a :class:`Scene` (``function`` needs a whole scene): else one
+    TypeError naming the function and the argument (issue #43.19)."""
+    if not isinstance(scene, Scene):
+        shown = repr(scene) if len(repr(scene)) <= 60 else repr(scene)[:57] + "..."
+        raise TypeError(f"{function}({name}={shown}): expected a tengfield.Scene "
+                        "(tengfield.default_scene(), tengfield.load_scene(path)), got "
+                        f"{type(scene).__name__}")
+    return scene
+
+
 def as_scene(scene, function: str) -> Scene:
     """``scene`` itself, or the scene of a dict of sections (``{"excitation":
     {"frequency_hz": 30.0}, ...}``, file-level keys; the rest default); a
