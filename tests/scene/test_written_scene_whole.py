@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import tomllib
 
+import pytest
+
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -125,3 +127,16 @@ def test_fitted_toml_keeps_every_section(tmp_path):
     assert written.contact.restitution == 0.3125
     for sec in ("fit", "design", "uncertainty", "device", "circuit"):
         assert written.raw[sec] == scene.raw[sec], sec
+
+
+@pytest.mark.slow
+def test_tengfield_scene_accepts_the_written_file(tmp_path, run_cli):
+    """The probe's symptom: `tengfield scene` refused the tool's own file
+    ("[uncertainty.vary] is missing or empty")."""
+    path = tmp_path / "study.toml"
+    path.write_text(STUDY_SCENE)
+    written = tmp_path / "written.toml"
+    written.write_text(scene_toml(load_scene(path).raw, "written by the test"))
+    proc = run_cli("scene", written)
+    assert proc.returncode == 0, proc.stderr
+    assert "is missing or empty" not in proc.stderr
