@@ -82,3 +82,17 @@ def test_the_cli_says_the_work_before_it_starts(tmp_path, run_cli):
                                        "field solve"), proc.stderr
     assert "2 dynamics runs" in said[0]
     assert "20 evaluations" in proc.stdout       # the summary after the work
+
+
+def test_a_shell_cavity_counts_as_geometry():
+    """A spherical shell's cavity_diameter_mm changes its field (the shape's own key,
+    not a FIELD_KEYS one): each distinct cavity drawn is a field solve."""
+    from shell_model import shell_device_toml
+    from tengfield.scene import parse_scene
+
+    scene = parse_scene(shell_device_toml() + '\n[uncertainty]\nsamples = 24\nmethod = '
+                        '"monte-carlo"\n[uncertainty.vary]\n"device.cavity_diameter_mm" = '
+                        '{ distribution = "uniform", low = 11.0, high = 12.0 }\n')
+    spec = uncertainty_spec(scene)
+    cost = study_cost(scene, spec, study_values(spec))
+    assert cost.field_solves == 25 and cost.dynamics_runs == 25

@@ -102,17 +102,15 @@ def study_cost(scene, spec, values) -> WorkCost:
     solved."""
     import numpy as np
 
-    from .evaluation import SIGMA_KEY, is_electrical
+    from .evaluation import SIGMA_KEY, is_electrical, is_field_key
     from .statistics import bootstrap_bytes
-    from ..scene.schema import FIELD_KEYS
 
     keys = spec.keys
     values = np.asarray(values, dtype=float).reshape(len(values), len(keys))
     dynamic = [j for j, k in enumerate(keys) if not is_electrical(k)]
     groups = len({tuple(row) for row in values[:, dynamic]}) if dynamic else (1 if len(values)
                                                                             else 0)
-    geometry = [j for j, k in enumerate(keys)
-                if k.split(".", 1)[1] in FIELD_KEYS.get(k.split(".", 1)[0], ())]
+    geometry = [j for j, k in enumerate(keys) if is_field_key(k, scene.device.shape)]
     charged = scene.device.ball_charge != 0.0 or SIGMA_KEY in keys
     if not charged:
         solves = 0

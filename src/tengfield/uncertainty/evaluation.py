@@ -74,13 +74,22 @@ def main_outputs(keys) -> list[str]:
     return [k for k in MAIN_OUTPUTS if k in keys]
 
 
-def changes_field(values: dict) -> bool:
-    """True when a ``"section.key"`` of ``values`` is one the field hash depends on
-    (:data:`tengfield.scene.schema.FIELD_KEYS`); else the scene's own geometry."""
+def is_field_key(key: str, shape: str = "tube") -> bool:
+    """True when the ``"section.key"`` is one the field hash of a cell of ``shape``
+    depends on: :data:`tengfield.scene.schema.FIELD_KEYS`, and the shape's own keys
+    (:data:`tengfield.scene.shapes.SHAPE_KEYS`: a shell's cavity_diameter_mm)."""
     from ..scene.schema import FIELD_KEYS
+    from ..scene.shapes import SHAPE_KEYS
 
-    return any(key.split(".", 1)[1] in FIELD_KEYS.get(key.split(".", 1)[0], ())
-               for key in values)
+    sec, name = key.split(".", 1)
+    return name in FIELD_KEYS.get(sec, ()) or (sec == "device"
+                                               and name in SHAPE_KEYS.get(shape, ()))
+
+
+def changes_field(values: dict, shape: str = "tube") -> bool:
+    """True when a ``"section.key"`` of ``values`` is one the field hash depends on
+    (:func:`is_field_key`); else the scene's own geometry."""
+    return any(is_field_key(key, shape) for key in values)
 
 
 def is_electrical(key: str) -> bool:
@@ -306,7 +315,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     geometry: dict[str, object] = {}
     if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
         for group in [nominal, *groups]:
-            if group.dynamic and not changes_field(group.dynamic):
+            if group.dynamic and not changes_field(group.dynamic, scene.device.shape):
                 continue       # the nominal geometry (no field key varied): no scene built
             ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
