@@ -14,7 +14,6 @@ Nothing is written: an evaluation returns the run summary's numeric quantities
 """
 from __future__ import annotations
 
-import sys
 import uuid
 import warnings
 from contextlib import contextmanager
@@ -303,9 +302,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     outcome does not depend on how the work was spread.
 
     ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
-    from tqdm import tqdm
-
-    from .._mpi import rank_of
+    from .._console import progress_bar
     from ..sweep import run_tasks
 
     keys = spec.keys
@@ -320,9 +317,8 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
             ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
             geometry.setdefault(ref.field_hash(), ref)
-    shown = progress and rank_of(comm) == 0 and sys.stderr.isatty()
-    bar = tqdm(total=len(geometry), desc="uncertainty: fields", unit="geometry",
-               file=sys.stderr, disable=not (shown and len(geometry) > 1))
+    bar = progress_bar(len(geometry), "uncertainty: field solves", progress and len(geometry) > 1,
+                       unit="geometry", comm=comm)
     try:
         field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
                                   comm=comm, jobs=jobs, progress=bar.update)
@@ -333,8 +329,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     # phase 2: the groups (the nominal run first)
     study = uuid.uuid4().hex       # this study's dynamics memo key (workers included)
     tasks = [(scene, g, cache_dir, solve, simulate, study) for g in [nominal, *chunked(groups)]]
-    bar = tqdm(total=len(tasks), desc="uncertainty", unit="task", file=sys.stderr,
-               disable=not shown)
+    bar = progress_bar(len(tasks), "uncertainty", progress, unit="task", comm=comm)
     try:
         results = run_tasks(_group_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:
