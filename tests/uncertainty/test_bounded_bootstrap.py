@@ -60,3 +60,13 @@ def test_indices_match_salib_and_the_intervals_its_bootstrap():
         assert ours[key]["S1_conf"] == pytest.approx(ref["S1_conf"][j], rel=0.15)
         assert ours[key]["ST_conf"] == pytest.approx(ref["ST_conf"][j], rel=0.15)
     assert sobol_indices(spec.keys, y, seed=3) == ours      # the seed fixes the intervals
+
+
+def test_the_resamples_follow_the_stated_rule():
+    from tengfield.uncertainty.statistics import bootstrap_resamples
+
+    assert bootstrap_resamples(16) == bootstrap_resamples(32768) == 1000
+    assert bootstrap_resamples(65536) == 512
+    assert bootstrap_resamples(262144) == 128
+    assert bootstrap_resamples(10**7) == 100
+    assert bootstrap_bytes(262144) <= bootstrap_bytes(1024) * 2    # blocks, not N x R

@@ -89,8 +89,9 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
             "sampling": ("Saltelli's scheme on a scrambled Sobol sequence (SALib), N (D + 2) "
                          "evaluations" if spec.method == "sobol" else
                          "scrambled Sobol sequence (scipy.stats.qmc), N evaluations"),
-            "sobol": "SALib.analyze.sobol: S1 (Saltelli 2010), ST (Jansen); *_conf: half-width "
-                     "of the bootstrap 95 % interval",
+            "sobol": "S1 (Saltelli 2010), ST (Jansen), SALib's estimators; *_conf: half-width "
+                     "of the bootstrap 95 % interval (1000 resamples up to N = 32768, beyond "
+                     "max(100, 2^25 / N))",
             "percentiles": "numpy.percentile (linear) over the evaluations",
             "regimes": "exact binomial (Clopper-Pearson) 95 % interval",
             "cost": "evaluations grouped by their dynamics-relevant inputs: one dynamics run and "
