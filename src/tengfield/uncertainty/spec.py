@@ -18,9 +18,8 @@ the number of inputs. ``tengfield scene`` calls it too.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-
 import warnings
+from dataclasses import dataclass, field
 
 from .._mpi import launched_rank
 from ..errors import SceneError
