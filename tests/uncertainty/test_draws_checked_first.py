@@ -119,3 +119,23 @@ def test_a_huge_lognormal_factor_is_refused_without_a_numpy_warning():
         with pytest.raises(SceneError, match=r"factor = 1e\+300 is out of range: .* allowed "
                                              r"\(1, "):
             uncertainty_spec(scene)
+
+
+def test_a_field_solve_error_names_the_draw(tmp_path):
+    import plate_model
+    from tengfield.errors import FieldError
+
+    scene = plate_model.scene_with(uncertainty={"samples": 20, "method": "monte-carlo", "vary": {
+        "device.ball_diameter_mm": {"distribution": "uniform", "low": 6.0, "high": 6.5}}})
+
+    def solve(s, position, **kwargs):
+        if s.device.ball_diameter != scene.device.ball_diameter:
+            raise FieldError("the solver ran out of memory")
+        return plate_model.plate_model_solve(s, position, **kwargs)
+
+    with pytest.raises(FieldError) as err:
+        run_study(scene, jobs=1, cache_dir=tmp_path, solve=solve)
+    text = str(err.value)
+    assert text.startswith("uncertainty: the field solve of the study ([uncertainty.vary] draws "
+                           "'device.ball_diameter_mm' = 6."), text
+    assert text.endswith(": the solver ran out of memory")

@@ -170,9 +170,10 @@ def _obtain(scene, cache_dir, solve):
 
 
 def _field_task(task):
-    """Phase 1: obtain one geometry's surrogate; its field hash and cache status."""
-    scene, cache_dir, solve = task
-    with warnings.catch_warnings(record=True) as caught:
+    """Phase 1: obtain one geometry's surrogate; its field hash and cache status (an
+    error names the draw of the first group with this geometry)."""
+    scene, cache_dir, solve, values = task
+    with warnings.catch_warnings(record=True) as caught, _tagged(values, None):
         _, _, status, _ = _obtain(scene, cache_dir, solve)
     return scene.field_hash(), status, _caught(caught)
 
@@ -240,7 +241,7 @@ def _group_task(task):
 @contextmanager
 def _tagged(values: dict, members: list):
     """Re-raise a :class:`~tengfield.errors.TengfieldError` of the evaluations
-    ``members`` with the draw that led to it: ``evaluation 17 of the study
+    ``members`` (None: the field phase) with the draw that led to it: ``evaluation 17 of the study
     ([uncertainty.vary] draws 'circuit.uvlo_falling_V' = 4.8): ...`` (issue #43.11: a
     mid-study error named values nobody wrote and no word of the study). Tagged once."""
     from ..errors import TengfieldError
@@ -249,11 +250,14 @@ def _tagged(values: dict, members: list):
         yield
     except TengfieldError as exc:
         text = str(exc)
-        if text.startswith(_TAG) or not values and members[0][0] < 0:
+        if text.startswith(_TAG) or not values and (members is None or members[0][0] < 0):
             raise
-        indices = [i for i, _ in members if i >= 0]
-        which = (f"evaluation {indices[0]}" if len(indices) == 1 else
-                 f"evaluations {indices[0]}.. ({len(indices)} sharing these draws)")
+        if members is None:          # the field phase: a geometry, before any evaluation
+            which = "the field solve"
+        else:
+            indices = [i for i, _ in members if i >= 0]
+            which = (f"evaluation {indices[0]}" if len(indices) == 1 else
+                     f"evaluations {indices[0]}.. ({len(indices)} sharing these draws)")
         drawn = ", ".join(f"{k!r} = {v:.12g}" for k, v in values.items()) or \
             "only electrical keys; the dynamics at the scene's own values"
         raise type(exc)(f"{_TAG}{which} of the study ([uncertainty.vary] draws {drawn}): "
@@ -316,11 +320,12 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
                 continue       # the nominal geometry (no field key varied): no scene built
             ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
-            geometry.setdefault(ref.field_hash(), ref)
+            geometry.setdefault(ref.field_hash(), (ref, group.dynamic))
     bar = progress_bar(len(geometry), "uncertainty: field solves", progress and len(geometry) > 1,
                        unit="geometry", comm=comm)
     try:
-        field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
+        field_results = run_tasks(_field_task, [(s, cache_dir, solve, drawn)
+                                                  for s, drawn in geometry.values()],
                                   comm=comm, jobs=jobs, progress=bar.update)
     finally:
         bar.close()
