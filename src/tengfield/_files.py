@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import stat
 from contextlib import contextmanager
 from pathlib import Path
@@ -136,7 +137,20 @@ def toml_value(value) -> str:
         return json.dumps(value)          # a TOML basic string is a JSON string
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):           # an inline table (a table inside a list)
+        return "{ " + ", ".join(f"{toml_key(k)} = {toml_value(v)}" for k, v in value.items()
+                                if v is not None) + " }"
     raise TypeError(f"cannot write {value!r} to TOML")
+
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def toml_key(key) -> str:
+    """A TOML key: bare when it can be (``samples``), else quoted
+    (``"contact.restitution"``: a dotted name inside ``[uncertainty.vary]`` is one key)."""
+    key = str(key)
+    return key if _BARE_KEY.match(key) else json.dumps(key)
 
 
 def scene_dir(source: str) -> Path:
@@ -166,19 +180,28 @@ def _file_value(key: str, value, base_dir: Path | None):
 
 def scene_toml(data: dict, header: str = "", *, base_dir: str | Path | None = None) -> str:
     """TOML text of a scene dict (``{section: {key: value}}``): ``header`` as comment
-    lines, then one table per section. What a scene file of scalars cannot hold is
-    left out: an entry at the top level that is no section, a sub-table, a None.
-    ``base_dir``: the folder the original scene's relative file names (``file``,
-    ``psd_file``) resolve from (:func:`scene_dir`); they are written as absolute paths,
-    since the written scene lives elsewhere (in ``-o``)."""
+    lines, then one table per section, each written whole: its scalars, then each
+    sub-table under its own header (``[uncertainty.vary]``, ``[design.excitation]``,
+    nested as deep as given), so that reading the text back gives ``data`` (issue #43.1:
+    sub-tables were dropped while their parent's scalars stayed). Left out: an entry at
+    the top level that is no section, a None. ``base_dir``: the folder the original
+    scene's relative file names (``file``, ``psd_file``) resolve from
+    (:func:`scene_dir`); they are written as absolute paths, since the written scene
+    lives elsewhere (in ``-o``)."""
     lines = [f"# {line}" for line in header.splitlines()]
     base = None if base_dir is None else Path(base_dir)
+
+    def table(path: list[str], values: dict) -> None:
+        lines.extend(["", "[" + ".".join(toml_key(p) for p in path) + "]"])
+        lines.extend(f"{toml_key(key)} = {toml_value(_file_value(key, v, base))}"
+                     for key, v in values.items() if v is not None and not isinstance(v, dict))
+        for key, v in values.items():
+            if isinstance(v, dict):
+                table([*path, key], v)
+
     for sec, values in data.items():
-        if not isinstance(values, dict):
-            continue
-        lines += ["", f"[{sec}]"]
-        lines += [f"{key} = {toml_value(_file_value(key, v, base))}"
-                  for key, v in values.items() if v is not None and not isinstance(v, dict)]
+        if isinstance(values, dict):
+            table([sec], values)
     return "\n".join(lines).lstrip("\n") + "\n"
 
 

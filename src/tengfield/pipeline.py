@@ -173,11 +173,10 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     surrogate a ball leaving the axis needs (default: its 1.5 mm, P2; a different
     setting is a different cache file).
     """
+    from ._args import check_jobs_argument
     from .scene import as_scene
     scene = as_scene(scene, "run")
-    if scene.run.realisations > 1:   # before any work: the workers must be allowed
-        from ._mpi import check_jobs
-        check_jobs(jobs, comm)
+    jobs = check_jobs_argument("tengfield.run", jobs, comm)   # before any work
     result = run_one(scene, comm=comm, cache_dir=cache_dir, solve=solve, simulate=simulate,
                      progress=progress, command_line=command_line, write_cache=write_cache,
                      radial_settings=radial_settings)

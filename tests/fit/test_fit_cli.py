@@ -81,7 +81,7 @@ def test_fit_trace_end_to_end(setup, main, tmp_path, capsys):
     assert len(summary["correlation"]["matrix"]) == 3
     assert (out / "fit.png").stat().st_size > 1000
     fitted = load_scene(out / "fitted.toml")           # ready for `tengfield run`
-    assert "fit" not in fitted.raw
+    assert fitted.raw["fit"] == scene.raw["fit"]        # every section whole (#43.1)
     assert fitted.device.surface_charge * 1e6 == pytest.approx(
         params["surface_charge_uC_per_m2"]["value"], rel=1e-5)
     assert fitted.circuit.parallel_capacitance * 1e12 == pytest.approx(

@@ -183,8 +183,15 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     ``tables``: an in-process memo {field hash: table} (a repeated geometry is free even
     without a disk cache). Never raises for a bad candidate: skipped rows carry ``reason``.
     """
+    from .._args import check_instance
+    from ..scene.parse import check_scene_argument
     from ..dynamics import simulate as default_simulate
     from ..breakdown import obtain_breakdown_table, uses_breakdown_charge
+
+    check_scene_argument("design.evaluate", base, "base")
+    check_instance("design.evaluate", spec, "spec", DesignSpec,
+                   "a DesignSpec (tengfield.design.parse_design_section(scene))")
+    check_instance("design.evaluate", values, "values", dict, "a dict of varied keys")
     from ..surrogate import TerminalCurves, obtain_table
     from ..surrogate.table import at_ball_charge
 

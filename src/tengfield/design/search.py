@@ -232,11 +232,14 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     over its ranks (every rank returns the same result); else ``jobs`` worker processes.
     ``solve``/``simulate`` replace the field solver and the dynamics (tests);
     ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
-    from .._mpi import check_jobs, rank_of, size_of
+    from .._args import check_jobs_argument
+    from ..scene.parse import check_scene_argument
+    from .._mpi import rank_of, size_of
 
     start = time.perf_counter()
+    check_scene_argument("tengfield.design", scene)
+    jobs = check_jobs_argument("tengfield.design", jobs, comm)
     spec = parse_design_section(scene, overrides)
-    check_jobs(jobs, comm)
     _TABLES.clear()
     space = _Space(spec)
     rows: list[dict] = []
@@ -351,6 +354,12 @@ def check_optimum(result: DesignResult, *, fraction: float = 0.2, candidates: in
                   **kwargs) -> dict:
     """A narrower search around the best (:func:`narrowed_scene`): is anything better beyond
     the error bars? Returns both bests and the verdict ``confirmed``."""
+    from .._args import check_count, check_fraction, check_instance
+
+    check_instance("check_optimum", result, "result", DesignResult,
+                   "a DesignResult (tengfield.design(scene))")
+    fraction = check_fraction("check_optimum", fraction, "fraction")
+    candidates = check_count("check_optimum", candidates, "candidates")
     narrow = design(narrowed_scene(result, fraction, candidates), **kwargs)
     best, other = result.best, narrow.best
     gain = (other["objective"] - best["objective"]) if other else -math.inf

@@ -16,8 +16,12 @@ SCENE_KEYS = {
 
 
 def fitted_scene_dict(scene, result: FitResult) -> dict:
-    """``scene.raw`` with the fitted values (the [fit] section dropped)."""
-    data = {sec: dict(values) for sec, values in scene.raw.items() if sec != "fit"}
+    """``scene.raw`` with the fitted values, every section whole ([fit], [design.vary],
+    [uncertainty.vary] ... kept: issue #43.1; :func:`tengfield._files.scene_toml` writes
+    the sub-tables)."""
+    import copy
+
+    data = copy.deepcopy(dict(scene.raw))
     for name, value in result.values.items():
         if name in SCENE_KEYS:
             sec, key = SCENE_KEYS[name]

@@ -40,6 +40,8 @@ def load_scene(path: "str | Path | Scene | None") -> Scene:
         return path
     if path is None:
         return default_scene()
+    from .._args import check_path_argument
+    check_path_argument("tengfield.load_scene", path)
     p = Path(path)
     if p.is_dir():
         raise SceneError(f"scene file {str(p)!r} is a directory: give a .toml file")
@@ -212,6 +214,17 @@ def _where(path: str) -> str:
     """``[run].duration_s`` -> ``[run] duration_s`` (how messages name scene keys)."""
     sec, dot, rest = path.partition("].")
     return f"{sec}] {rest}" if dot else path
+
+
+def check_scene_argument(function: str, scene, name: str = "scene") -> Scene:
+    """``scene`` is a :class:`Scene` (``function`` needs a whole scene): else one
+    TypeError naming the function and the argument (issue #43.19)."""
+    if not isinstance(scene, Scene):
+        shown = repr(scene) if len(repr(scene)) <= 60 else repr(scene)[:57] + "..."
+        raise TypeError(f"{function}({name}={shown}): expected a tengfield.Scene "
+                        "(tengfield.default_scene(), tengfield.load_scene(path)), got "
+                        f"{type(scene).__name__}")
+    return scene
 
 
 def as_scene(scene, function: str) -> Scene:

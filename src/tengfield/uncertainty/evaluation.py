@@ -14,8 +14,9 @@ Nothing is written: an evaluation returns the run summary's numeric quantities
 """
 from __future__ import annotations
 
-import sys
+import uuid
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -72,13 +73,22 @@ def main_outputs(keys) -> list[str]:
     return [k for k in MAIN_OUTPUTS if k in keys]
 
 
-def changes_field(values: dict) -> bool:
-    """True when a ``"section.key"`` of ``values`` is one the field hash depends on
-    (:data:`tengfield.scene.schema.FIELD_KEYS`); else the scene's own geometry."""
+def is_field_key(key: str, shape: str = "tube") -> bool:
+    """True when the ``"section.key"`` is one the field hash of a cell of ``shape``
+    depends on: :data:`tengfield.scene.schema.FIELD_KEYS`, and the shape's own keys
+    (:data:`tengfield.scene.shapes.SHAPE_KEYS`: a shell's cavity_diameter_mm)."""
     from ..scene.schema import FIELD_KEYS
+    from ..scene.shapes import SHAPE_KEYS
 
-    return any(key.split(".", 1)[1] in FIELD_KEYS.get(key.split(".", 1)[0], ())
-               for key in values)
+    sec, name = key.split(".", 1)
+    return name in FIELD_KEYS.get(sec, ()) or (sec == "device"
+                                               and name in SHAPE_KEYS.get(shape, ()))
+
+
+def changes_field(values: dict, shape: str = "tube") -> bool:
+    """True when a ``"section.key"`` of ``values`` is one the field hash depends on
+    (:func:`is_field_key`); else the scene's own geometry."""
+    return any(is_field_key(key, shape) for key in values)
 
 
 def is_electrical(key: str) -> bool:
@@ -92,6 +102,23 @@ class Group:
     ``members`` (evaluation index, its electrical values); index -1: the nominal run."""
     dynamic: dict
     members: list = field(default_factory=list)
+
+
+#: evaluations of one task at most: a group larger than this (a σ- or circuit-only study
+#: is ONE group of every evaluation: 98k electrical stages on one worker, issue #43.21) is
+#: split into chunks of this many members, each its own task, so that --jobs and mpirun
+#: share it. A fixed size: the tasks, and so the files, do not depend on the workers
+CHUNK_EVALUATIONS = 128
+
+
+def chunked(groups: list[Group], size: int = CHUNK_EVALUATIONS) -> list[Group]:
+    """``groups`` with every group of more than ``size`` members split into consecutive
+    chunks of at most ``size`` (same dynamics inputs; the members in their order)."""
+    out = []
+    for group in groups:
+        for start in range(0, max(len(group.members), 1), size):
+            out.append(Group(group.dynamic, group.members[start:start + size]))
+    return out
 
 
 def groups_of(keys: list[str], values: np.ndarray) -> list[Group]:
@@ -143,9 +170,10 @@ def _obtain(scene, cache_dir, solve):
 
 
 def _field_task(task):
-    """Phase 1: obtain one geometry's surrogate; its field hash and cache status."""
-    scene, cache_dir, solve = task
-    with warnings.catch_warnings(record=True) as caught:
+    """Phase 1: obtain one geometry's surrogate; its field hash and cache status (an
+    error names the draw of the first group with this geometry)."""
+    scene, cache_dir, solve, values = task
+    with warnings.catch_warnings(record=True) as caught, _tagged(values, None):
         _, _, status, _ = _obtain(scene, cache_dir, solve)
     return scene.field_hash(), status, _caught(caught)
 
@@ -177,12 +205,19 @@ def _group_task(task):
     of its geometry (None when the table has no gap lines)."""
     from ..breakdown import scaled_table
 
-    scene, group, cache_dir, solve, simulate = task
+    scene, group, cache_dir, solve, simulate, study = task
     simulate = simulate or _default_simulate()
     rows, digest, status = [], None, "skipped"
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, _tagged(group.dynamic,
+                                                                 group.members):
         base = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
-        dynamics = simulate(base)
+        memo = (study, tuple(group.dynamic.items()))
+        if memo in _DYNAMICS:          # an earlier chunk of this group, on this worker
+            dynamics = _DYNAMICS[memo]
+        else:
+            dynamics = simulate(base)
+            _DYNAMICS.clear()          # chunks of a group are consecutive tasks: keep one
+            _DYNAMICS[memo] = dynamics
         table, at, sigma_table, sigma_max = None, base, 0.0, None
         charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
@@ -193,15 +228,16 @@ def _group_task(task):
             at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
         band = _group_band(scene, at, table, dynamics)   # σ from the breakdown band
         for index, values in group.members:
-            if band is not None and SIGMA_KEY in values:
-                values = {**values, SIGMA_KEY: band_sigma(band, values[SIGMA_KEY])}
-            point = at.with_values(**sections_of(values)) if values else at
-            scaled = None
-            if table is not None and point.device.ball_charge != 0.0:
-                scaled = scaled_table(table, point.device.surface_charge / sigma_table)
-            above = None if sigma_max is None or table is None or band is not None else \
-                bool(abs(point.device.surface_charge) > sigma_max)
-            rows.append((index, *_outputs(point, dynamics, scaled), above))
+            with _tagged({**group.dynamic, **values}, [(index, values)]):
+                if band is not None and SIGMA_KEY in values:
+                    values = {**values, SIGMA_KEY: band_sigma(band, values[SIGMA_KEY])}
+                point = at.with_values(**sections_of(values)) if values else at
+                scaled = None
+                if table is not None and point.device.ball_charge != 0.0:
+                    scaled = scaled_table(table, point.device.surface_charge / sigma_table)
+                above = None if sigma_max is None or table is None or band is not None else \
+                    bool(abs(point.device.surface_charge) > sigma_max)
+                rows.append((index, *_outputs(point, dynamics, scaled), above))
     return rows, digest, status, _caught(caught)
 
 
@@ -224,6 +260,41 @@ def _group_band(scene, at, table, dynamics):
                         at.breakdown.gamma_range, Seeds.from_scene(at))
 
 
+
+@contextmanager
+def _tagged(values: dict, members: list):
+    """Re-raise a :class:`~tengfield.errors.TengfieldError` of the evaluations
+    ``members`` (None: the field phase) with the draw that led to it: ``evaluation 17 of the study
+    ([uncertainty.vary] draws 'circuit.uvlo_falling_V' = 4.8): ...`` (issue #43.11: a
+    mid-study error named values nobody wrote and no word of the study). Tagged once."""
+    from ..errors import TengfieldError
+
+    try:
+        yield
+    except TengfieldError as exc:
+        text = str(exc)
+        if text.startswith(_TAG) or not values and (members is None or members[0][0] < 0):
+            raise
+        if members is None:          # the field phase: a geometry, before any evaluation
+            which = "the field solve"
+        else:
+            indices = [i for i, _ in members if i >= 0]
+            which = (f"evaluation {indices[0]}" if len(indices) == 1 else
+                     f"evaluations {indices[0]}.. ({len(indices)} sharing these draws)")
+        drawn = ", ".join(f"{k!r} = {v:.12g}" for k, v in values.items()) or \
+            "only electrical keys; the dynamics at the scene's own values"
+        raise type(exc)(f"{_TAG}{which} of the study ([uncertainty.vary] draws {drawn}): "
+                        f"{text}") from None
+
+
+_TAG = "uncertainty: "
+
+
+#: the dynamics of the last group this process ran, keyed by (study token, its dynamic
+#: values): the next chunk of the same group reuses it (the same dynamics, not rerun)
+_DYNAMICS: dict = {}
+
+
 def _default_simulate():
     from ..dynamics import simulate
     return simulate
@@ -244,6 +315,9 @@ class Evaluations:
     #: evaluations whose |σ| exceeds their geometry's air-breakdown limit (None: unknown,
     #: no surrogate with gap lines)
     beyond_breakdown: int | None = None
+    #: tasks the evaluations were farmed as (the nominal run, the groups split into
+    #: chunks of at most CHUNK_EVALUATIONS): what --jobs and mpirun share
+    tasks: int = 0
 
 
 def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=None,
@@ -255,9 +329,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     outcome does not depend on how the work was spread.
 
     ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
-    from tqdm import tqdm
-
-    from .._mpi import rank_of
+    from .._console import progress_bar
     from ..sweep import run_tasks
 
     keys = spec.keys
@@ -267,19 +339,25 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     geometry: dict[str, object] = {}
     if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
         for group in [nominal, *groups]:
-            if group.dynamic and not changes_field(group.dynamic):
+            if group.dynamic and not changes_field(group.dynamic, scene.device.shape):
                 continue       # the nominal geometry (no field key varied): no scene built
             ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
                              if group.dynamic else scene)
-            geometry.setdefault(ref.field_hash(), ref)
-    field_results = run_tasks(_field_task, [(s, cache_dir, solve) for s in geometry.values()],
-                              comm=comm, jobs=jobs)
+            geometry.setdefault(ref.field_hash(), (ref, group.dynamic))
+    bar = progress_bar(len(geometry), "uncertainty: field solves", progress and len(geometry) > 1,
+                       unit="geometry", comm=comm)
+    try:
+        field_results = run_tasks(_field_task, [(s, cache_dir, solve, drawn)
+                                                  for s, drawn in geometry.values()],
+                                  comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
     solved = {digest for digest, status, _ in field_results if status != "cached"}
     messages = [m for _, _, caught in field_results for m in caught]
     # phase 2: the groups (the nominal run first)
-    tasks = [(scene, g, cache_dir, solve, simulate) for g in [nominal, *groups]]
-    bar = tqdm(total=len(tasks), desc="uncertainty", unit="group", file=sys.stderr,
-               disable=not (progress and rank_of(comm) == 0 and sys.stderr.isatty()))
+    study = uuid.uuid4().hex       # this study's dynamics memo key (workers included)
+    tasks = [(scene, g, cache_dir, solve, simulate, study) for g in [nominal, *chunked(groups)]]
+    bar = progress_bar(len(tasks), "uncertainty", progress, unit="task", comm=comm)
     try:
         results = run_tasks(_group_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
     finally:
@@ -306,5 +384,6 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     distinct = list(dict.fromkeys(messages))
     return Evaluations(rows=rows, regimes=regimes, nominal=nominal_out,
                        nominal_regime=nominal_regime, field_solves=len(solved),
-                       geometries=len(geometry), dynamics_runs=len(tasks), warnings=distinct,
-                       beyond_breakdown=beyond)
+                       geometries=len(geometry), dynamics_runs=1 + len(groups),
+                       warnings=distinct,
+                       beyond_breakdown=beyond, tasks=len(tasks))

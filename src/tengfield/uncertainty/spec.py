@@ -22,10 +22,13 @@ the number of inputs. ``tengfield scene`` calls it too.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
+from .._mpi import launched_rank
 from ..errors import SceneError
-from ..scene.schema import SCHEMA, fmt_range, show, suggest
+from ..scene.schema import (HARMONIC_KEYS, RENAMED_KEYS, SCHEMA, fmt_range, show,
+                            suggest)
 
 SECTION = "uncertainty"
 METHODS = ("sobol", "monte-carlo")
@@ -36,8 +39,8 @@ DISTRIBUTIONS = {"uniform": ("low", "high"), "normal": ("mean", "std"),
 #: the distribution drawn from each geometry's breakdown band, and the key it takes
 BAND = "breakdown-band"
 BAND_KEY = "device.surface_charge_uC_per_m2"
-KEYS = ("samples", "method", "seed", "vary")
-DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0}
+KEYS = ("samples", "method", "seed", "vary", "max_field_solves")
+DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0, "max_field_solves": 1000}
 #: the tail probability whose quantiles must lie inside the key's allowed range
 #: (normal, lognormal): no scrambled Sobol point of a study under ~1e6 evaluations
 #: comes nearer to 0 or 1
@@ -51,6 +54,16 @@ MIN_MC_SAMPLES = 20
 #: evaluations of one study (each runs the electrical stage, ~10 ms, and perhaps the
 #: dynamics): 1e6 is hours on one core
 MAX_EVALUATIONS = 1_000_000
+#: sections whose keys are no input of a run: varying them changes no output
+NOT_INPUTS = {"reference": "holds measured values to compare the run with, not inputs of "
+                           "the run (varying it changes no output)"}
+#: (scene source, written key) whose rename this process has warned about
+_WARNED_RENAMES: set = set()
+#: the standard normal quantile of 1 - TAIL (4.753...)
+_TAIL_Z = 4.753424308817087
+#: logarithms of the largest and smallest positive normal doubles
+_LOG_MAX = math.log(1.7976931348623157e308)
+_LOG_MIN = math.log(2.2250738585072014e-308)
 
 
 @dataclass(frozen=True)
@@ -107,6 +120,9 @@ class UncertaintySpec:
     method: str
     seed: int
     inputs: tuple[Distribution, ...] = field(default_factory=tuple)
+    #: field solves a study may start (``[uncertainty] max_field_solves``; each takes
+    #: seconds to minutes and adds a surrogate to the cache): checked before the work
+    max_field_solves: int = DEFAULTS["max_field_solves"]
 
     @property
     def keys(self) -> list[str]:
@@ -178,16 +194,41 @@ def _distribution(key: str, given) -> Distribution:
         if not p["factor"] > 1.0:
             raise SceneError(f"{where}: factor = {p['factor']:g} is out of range: allowed (1, "
                              "inf) (the geometric standard deviation)")
+        # its TAIL quantiles median x factor^(+-z) must be finite doubles: checked in
+        # logarithms, before numpy overflows (issue #43.16: factor = 1e300)
+        z = _TAIL_Z
+        top = math.log(p["median"]) + z * math.log(p["factor"])
+        low = math.log(p["median"]) - z * math.log(p["factor"])
+        if top >= _LOG_MAX or low <= _LOG_MIN:
+            limit = math.exp(min(_LOG_MAX - math.log(p["median"]),
+                                 math.log(p["median"]) - _LOG_MIN) / z)
+            raise SceneError(f"{where}: factor = {p['factor']:g} is out of range: its {TAIL:g} "
+                             f"quantiles median x factor^(+-{z:.3g}) leave the doubles; allowed "
+                             f"(1, {limit:.6g}) with median = {p['median']:g}")
     return Distribution(key, kind, p)
 
 
-def _check_key(key: str) -> None:
-    """``key`` is ``"section.key"`` of a float key of the schema."""
+def _check_key(key: str, scene=None) -> str:
+    """``key`` is ``"section.key"`` of a float key of the schema that is an input of a
+    run; returns it under its current name (``device.gap_mm`` -> ``device.stroke_mm``,
+    with the warning the scene's own ``gap_mm`` gets)."""
     where = f"[uncertainty.vary] {key!r}"
     if not isinstance(key, str) or "." not in key:
         raise SceneError(f"{where}: write the scene key as \"section.key\", e.g. "
                          "\"contact.restitution\"")
     sec, name = key.split(".", 1)
+    new = RENAMED_KEYS.get((sec, name))
+    if new is not None:
+        source = getattr(scene, "source", "<scene>")
+        if (source, key) not in _WARNED_RENAMES and launched_rank() == 0:
+            _WARNED_RENAMES.add((source, key))
+            warnings.warn(f"{source}: [uncertainty.vary] {key!r} is now called "
+                          f"'{sec}.{new}': write \"{sec}.{new}\" ({name} is read until the "
+                          "next release)", FutureWarning, stacklevel=3)
+        name = new
+    if sec in NOT_INPUTS:
+        raise SceneError(f"{where}: [{sec}] {NOT_INPUTS[sec]}; vary an input of the run "
+                         "([device], [excitation], [contact], [initial], [circuit], ...)")
     if sec not in SCHEMA:
         raise SceneError(f"{where}: unknown section [{sec}]" + suggest(sec, SCHEMA)
                          + f"; sections are {', '.join(SCHEMA)}")
@@ -199,6 +240,12 @@ def _check_key(key: str) -> None:
         kind = {str: "a text key", int: "a whole-number key", tuple: "a list key"}[spec.type]
         raise SceneError(f"{where}: [{sec}] {name} is {kind}; only numeric (real-valued) keys "
                          "can be varied")
+    if (sec == "excitation" and name in HARMONIC_KEYS and scene is not None
+            and scene.excitation.kind == "harmonics"):
+        raise SceneError(f"{where}: with [excitation] kind = 'harmonics' {name} is a list (one "
+                         "entry per component); a list key cannot be varied (allowed with kind "
+                         "'sine', 'random' or 'recorded')")
+    return f"{sec}.{name}"
 
 
 def _check_support(dist: Distribution) -> None:
@@ -259,9 +306,13 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
         raise SceneError("[uncertainty.vary] is missing or empty: give at least one input, e.g. "
                          "\"contact.restitution\" = { distribution = \"uniform\", low = 0.05, "
                          "high = 0.5 }")
-    inputs = []
-    for key, given in vary.items():
-        _check_key(key)
+    inputs, named = [], {}
+    for written, given in vary.items():
+        key = _check_key(written, scene)
+        if key in named:
+            raise SceneError(f"[uncertainty.vary] {named[key]!r} and {written!r} are the same "
+                             f"key ({key}): give {key!r} only")
+        named[key] = written
         dist = _distribution(key, given)
         _check_support(dist)
         inputs.append(dist)
@@ -281,7 +332,12 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
         raise SceneError(f"[uncertainty] samples = {samples} is too small for method = "
                          f"\"monte-carlo\" with {d} input{'s' * (d > 1)}: allowed >= "
                          f"{max(MIN_MC_SAMPLES, d + 1)}")
-    spec = UncertaintySpec(samples=samples, method=method, seed=seed, inputs=tuple(inputs))
+    limit = raw.get("max_field_solves", DEFAULTS["max_field_solves"])
+    if isinstance(limit, bool) or not isinstance(limit, int) or not 0 <= limit <= 10**9:
+        raise SceneError(f"[uncertainty] max_field_solves = {show(limit)}: allowed a whole "
+                         "number in [0, 1000000000] (the field solves a study may start)")
+    spec = UncertaintySpec(samples=samples, method=method, seed=seed, inputs=tuple(inputs),
+                           max_field_solves=limit)
     if spec.evaluations > MAX_EVALUATIONS:
         raise SceneError(f"[uncertainty] samples = {samples} gives {spec.evaluations} "
                          f"evaluations: allowed <= {MAX_EVALUATIONS:.0e}")
@@ -302,18 +358,41 @@ def band_sigma(band, place: float) -> float:
     return -1e6 * band.lower * (band.upper / band.lower) ** float(place)
 
 
+#: inputs up to which every corner of the joint box is built (2^D scenes); beyond, the
+#: corners of every pair of inputs (rules between keys are between two keys)
+MAX_CORNER_INPUTS = 8
+
+
 def _check_scenes(scene, spec: UncertaintySpec) -> None:
-    """Each input at either end of what it can draw (the others nominal) builds a valid
-    scene: a rule between keys (a ball wider than the bore...) is named before any work."""
-    for dist in spec.inputs:
-        if dist.kind == BAND:
-            continue          # its σ comes from each geometry's band
-        for value in dist.support():
-            try:
-                scene.with_values(**sections_of({dist.key: value}))
-            except SceneError as exc:
-                raise SceneError(f"[uncertainty.vary] {dist.key!r} = {value:.6g} (an end of its "
-                                 f"{dist.kind} distribution): {exc}") from None
+    """The draws' box builds valid scenes at its corners: each input at either end of
+    what it can draw (the others nominal), every pair of inputs at their four joint
+    corners, and (up to :data:`MAX_CORNER_INPUTS` inputs) every corner of the joint
+    box, so a rule between keys (a ball wider than the bore, a falling threshold above
+    the rising one) is named before any work (issue #43.11). σ drawn from the breakdown
+    band is left out: it comes from each geometry's band."""
+    import itertools
+
+    inputs = [dist for dist in spec.inputs if dist.kind != BAND]
+    ends = [dist.support() for dist in inputs]
+
+    def check(indices, corner):
+        values = {inputs[j].key: v for j, v in zip(indices, corner)}
+        try:
+            scene.with_values(**sections_of(values))
+        except SceneError as exc:
+            if len(indices) == 1:
+                dist = inputs[indices[0]]
+                raise SceneError(f"[uncertainty.vary] {dist.key!r} = {corner[0]:.6g} (an end of "
+                                 f"its {dist.kind} distribution): {exc}") from None
+            named = " with ".join(f"{k!r} = {v:.6g}" for k, v in values.items())
+            raise SceneError(f"[uncertainty.vary] {named} (a corner of their joint draws, "
+                             f"which the study reaches): {exc}") from None
+
+    d = len(inputs)
+    for size in (1, 2, d) if d > 2 and d <= MAX_CORNER_INPUTS else (1, 2):
+        for indices in itertools.combinations(range(d), size):
+            for corner in itertools.product(*(ends[j] for j in indices)):
+                check(indices, corner)
 
 
 #: the default study's restitution range: 0.1 fits the paper's thresholds, PTFE on

@@ -89,8 +89,9 @@ def summarise(scene, spec: UncertaintySpec, values, evaluations: Evaluations) ->
             "sampling": ("Saltelli's scheme on a scrambled Sobol sequence (SALib), N (D + 2) "
                          "evaluations" if spec.method == "sobol" else
                          "scrambled Sobol sequence (scipy.stats.qmc), N evaluations"),
-            "sobol": "SALib.analyze.sobol: S1 (Saltelli 2010), ST (Jansen); *_conf: half-width "
-                     "of the bootstrap 95 % interval",
+            "sobol": "S1 (Saltelli 2010), ST (Jansen), SALib's estimators; *_conf: half-width "
+                     "of the bootstrap 95 % interval (1000 resamples up to N = 32768, beyond "
+                     "max(100, 2^25 / N))",
             "percentiles": "numpy.percentile (linear) over the evaluations",
             "regimes": "exact binomial (Clopper-Pearson) 95 % interval",
             "cost": "evaluations grouped by their dynamics-relevant inputs: one dynamics run and "
@@ -128,9 +129,30 @@ def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
 def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: int | None = None,
               cache_dir=None, solve: Callable | None = None, simulate: Callable | None = None,
               progress: bool = False) -> Study:
-    """The study of ``scene``'s ``[uncertainty]`` section (or ``spec``)."""
+    """The study of ``scene``'s ``[uncertainty]`` section (or ``spec``). Its work is
+    counted first (:func:`~tengfield.uncertainty.cost.study_cost`) and refused past
+    ``[uncertainty] max_field_solves`` or the memory at hand; with ``progress`` the count
+    is printed (stderr, rank 0) before the work starts."""
+    import sys
+
+    from .._args import check_instance, check_jobs_argument
+    from .._mpi import rank_of
+    from ..scene import as_scene
+    from .cost import check_cost, study_cost
+
+    function = "tengfield.uncertainty.run_study"
+    scene = as_scene(scene, "uncertainty.run_study")
+    check_instance(function, spec, "spec", UncertaintySpec, "an UncertaintySpec "
+                   "(tengfield.uncertainty.uncertainty_spec(scene)) or None", allow_none=True)
+    jobs = check_jobs_argument(function, jobs, comm)
     spec = spec or uncertainty_spec(scene)
     values = study_values(spec)
+    cost = study_cost(scene, spec, values)
+    check_cost(cost, field_limit=spec.max_field_solves,
+               field_key="[uncertainty] max_field_solves",
+               size_key=f"[uncertainty] samples = {spec.samples}")
+    if progress and rank_of(comm) == 0:
+        print(cost.line(), file=sys.stderr, flush=True)
     evaluations = evaluate_study(scene, spec, values, comm=comm, jobs=jobs, cache_dir=cache_dir,
                                  solve=solve, simulate=simulate, progress=progress)
     return Study(spec, values, evaluations, summarise(scene, spec, values, evaluations))
