@@ -172,6 +172,7 @@ def test_nothing_to_vary_is_refused():
         tf.sweep(short_scene())
 
 
+@pytest.mark.slow
 def test_figure_per_key_is_labelled_in_words_and_units(tmp_path):
     rows = tf.sweep(short_scene(), vary={"device.surface_charge_uC_per_m2": [-10, -20],
                                          "circuit.kind": ["load", "open"]},
@@ -192,3 +193,20 @@ def test_figure_per_key_is_labelled_in_words_and_units(tmp_path):
     assert list(table[0])[:3] == ["device.surface_charge_uC_per_m2", "circuit.kind",
                                   "frequency_hz"]
     assert len(table) == 4
+
+
+@pytest.mark.mpi
+def test_vary_on_two_ranks_equals_the_serial_rows(tmp_path_factory):
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    assert comm.size >= 2
+    cache = comm.bcast(str(tmp_path_factory.mktemp("cache")) if comm.rank == 0 else None)
+    vary = {"device.stroke_mm": [2.5, 3.0], "contact.restitution": [0.5, 0.7]}
+    parallel = tf.sweep(short_scene(), vary=vary, frequency_hz=[15, 25], load_ohm=[1e8],
+                        cache_dir=cache, solve=fx.plate_model_solve, comm=comm)
+    serial = tf.sweep(short_scene(), vary=vary, frequency_hz=[15, 25], load_ohm=[1e8],
+                      cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    assert len(serial) == 8 and list(parallel) == list(serial)
+    for other in comm.allgather(list(parallel)):
+        assert other == list(serial)
