@@ -16,6 +16,7 @@ Scene syntax (every key optional except ``[design.vary]``)::
     seed = 1
     require = "none"              # or "upper-contact" / "regular-contact" at every band point
     load = "one"                  # matched load: "one" resistor for the band, or "each" point's own
+    load_ohm = [1e6, 1e9]         # optional: the matched load searched inside this range [ohm]
     geometry = "follow"           # tube and electrode follow a varied ball (docs/design.md), "fixed"
     field = "coarse"              # the design's field settings (degree 2, h = min(1 mm, d/5)), "scene"
     batch = 16                    # candidates per refinement round
