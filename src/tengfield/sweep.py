@@ -291,13 +291,49 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
 AXIS_KEYS = {"excitation.frequency_hz": "--frequency-hz", "excitation.amplitude_mm": "--amplitude-mm"}
 
 
+#: most values one --vary range may give (as a command-line START:STOP:N range)
+MAX_RANGE_VALUES = 100_000
+
+
+def _number_text(value: float) -> str:
+    """``:g`` when that is the number itself, else the shortest text that is (``repr``)."""
+    text = f"{value:g}"
+    return text if not math.isfinite(value) or float(text) == value else repr(value)
+
+
+def _range_values(text: str, where: str, *, log: bool = False) -> list | None:
+    """``START:STOP:N`` -> N values, both ends included (linear, or logarithmic with
+    ``log``), each the shortest decimal of its double; None when ``text`` is no range.
+    Raises :class:`SceneError` naming ``where`` for a bad range."""
+    from .errors import SceneError
+
+    parts = text.split(":")
+    if len(parts) == 1:
+        return None
+    if len(parts) != 3:
+        raise SceneError(f"{where}: expected START:STOP:N (e.g. 1:5:9) or a list v1,v2,...")
+    try:
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise SceneError(f"{where}: START and STOP must be numbers and N a whole number, "
+                         "e.g. 1:5:9") from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise SceneError(f"{where}: START and STOP must be finite")
+    if not 1 <= count <= MAX_RANGE_VALUES:
+        raise SceneError(f"{where}: N = {count} is out of range: allowed [1, {MAX_RANGE_VALUES}]")
+    if log and min(start, stop) <= 0:
+        raise SceneError(f"{where}: every value must be > 0 (spaced logarithmically)")
+    values = np.logspace(math.log10(start), math.log10(stop), count) if log else \
+        np.linspace(start, stop, count)
+    return [float(_number_text(float(v))) for v in values]
+
+
 def parse_vary(text: str) -> tuple[str, list]:
     """``section.key=START:STOP:N`` (N values, both ends included, linear), a list
     ``section.key=1,2,4`` or ``section.key=[1, 2, 4]`` (TOML values: numbers, strings,
     ``true``), or one value -> (``"section.key"``, values in file units). Raises
     :class:`SceneError` naming the text and what is allowed; the values are checked
     later, in each point's scene (:func:`vary_points`)."""
-    from .commands._ranges import MAX_POINTS, number_text
     from .errors import SceneError
     from .scene.parse import parse_setting
 
@@ -306,23 +342,9 @@ def parse_vary(text: str) -> tuple[str, list]:
     if not eq or key.count(".") < 1 or not all(key.split(".")) or not value:
         raise SceneError(f"--vary {text!r}: write section.key=START:STOP:N or "
                          "section.key=v1,v2,..., e.g. --vary device.stroke_mm=1:5:9")
-    parts = value.split(":")
-    if len(parts) == 3:
-        try:
-            start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
-        except ValueError:
-            raise SceneError(f"--vary {text!r}: START and STOP must be numbers and N a whole "
-                             "number, e.g. device.stroke_mm=1:5:9") from None
-        if not (math.isfinite(start) and math.isfinite(stop)):
-            raise SceneError(f"--vary {text!r}: START and STOP must be finite")
-        if not 1 <= count <= MAX_POINTS:
-            raise SceneError(f"--vary {text!r}: N = {count} is out of range: allowed "
-                             f"[1, {MAX_POINTS}]")
-        values = [float(number_text(v)) for v in np.linspace(start, stop, count)]
+    values = _range_values(value, f"--vary {text!r}")
+    if values is not None:
         return key, values
-    if len(parts) != 1:
-        raise SceneError(f"--vary {text!r}: expected START:STOP:N (e.g. 1:5:9) or a list "
-                         "v1,v2,...")
     items = value[1:-1] if value.startswith("[") and value.endswith("]") else value
     values = [parse_setting(f"{key}={item.strip()}")[1] for item in items.split(",")
               if item.strip()]
@@ -369,11 +391,9 @@ def _vary_values(key: str, values) -> list:
 
 def point_label(values: dict) -> str:
     """``device.stroke_mm = 2, circuit.load_ohm = 1e+08`` (a point's varied values)."""
-    from .commands._ranges import number_text
-
     def text(v):
         number = isinstance(v, (int, float)) and not isinstance(v, bool)
-        return number_text(v) if number else repr(v)
+        return _number_text(float(v)) if number else repr(v)
 
     return ", ".join(f"{k} = {text(v)}" for k, v in values.items())
 
@@ -594,8 +614,15 @@ def _file_axis(values, scale: float, name: str, log: bool = False):
     if values is None:
         return None
     if isinstance(values, str):
-        from .commands._ranges import parse_range
-        return [float(v) * scale for v in parse_range(values, name, log=log)]
+        ranged = _range_values(values, f"{name} = {values!r}", log=log)
+        if ranged is None:
+            from .errors import SceneError
+            try:
+                ranged = [float(v) for v in values.split(",")]
+            except ValueError:
+                raise SceneError(f"{name} = {values!r}: expected START:STOP:N, a number or "
+                                 "numbers v1,v2,...") from None
+        values = ranged
     arr = np.atleast_1d(np.asarray(values, dtype=float))
     return [float(v) * scale for v in arr]
 

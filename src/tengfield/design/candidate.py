@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import electrical
 from ..errors import TengfieldError
-from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, periodic
+from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, band_run, periodic
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
 #: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
@@ -96,14 +96,6 @@ def candidate_scene(base, spec: DesignSpec, values: dict):
     if "field" in sections:
         scene = scene.with_values(field=sections["field"])   # checks the field values
     return scene
-
-
-def band_run(spec: DesignSpec, frequency: float) -> dict:
-    """``[run]`` keys of a band point at ``frequency`` [Hz]: settle + window periods, sampled
-    ``samples_per_period`` times a period (the run a candidate is scored on)."""
-    periods = spec.settle_periods + spec.window_periods
-    return {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
-            "sample_rate_hz": spec.samples_per_period * frequency}
 
 
 def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):

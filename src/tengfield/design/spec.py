@@ -425,13 +425,19 @@ def _load_range(value) -> tuple[float, float]:
     return lo, hi
 
 
+def band_run(spec: DesignSpec, frequency: float) -> dict:
+    """``[run]`` keys of a band point at ``frequency`` [Hz]: settle + window periods, sampled
+    ``samples_per_period`` times a period (the run a candidate is scored on)."""
+    periods = spec.settle_periods + spec.window_periods
+    return {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
+            "sample_rate_hz": spec.samples_per_period * frequency}
+
+
 def _check_band_runs(scene, spec: DesignSpec) -> None:
     """Every band point's run (settle + window periods, samples_per_period a period) as
     the scene's [run] checks would take it, before any work: a run past a limit is one
     line naming the [design] keys that set it (every candidate would be skipped)."""
-    from .candidate import band_run
-    from .answer import point_label
-
+    kind = scene.excitation.kind
     for f, a in spec.band:
         run = band_run(spec, f)
         try:
@@ -443,7 +449,8 @@ def _check_band_runs(scene, spec: DesignSpec) -> None:
             raise SceneError(
                 f"[design] settle_periods = {spec.settle_periods}, window_periods = "
                 f"{spec.window_periods}, samples_per_period = {spec.samples_per_period}: the "
-                f"run of band point {point_label(f, a, scene.excitation.kind)} "
+                f"run of band point {f:g} Hz" + (f" / {a * 1e3:g} mm" if periodic(kind) else
+                                                  f" ({kind})") + " "
                 f"({run['duration_s']:.4g} s at {run['sample_rate_hz']:.4g} Hz) is refused: "
                 f"{exc}") from None
 
