@@ -210,3 +210,18 @@ def test_vary_on_two_ranks_equals_the_serial_rows(tmp_path_factory):
     assert len(serial) == 8 and list(parallel) == list(serial)
     for other in comm.allgather(list(parallel)):
         assert other == list(serial)
+
+
+def test_vary_alone_runs_an_excitation_without_frequency_and_amplitude(tmp_path):
+    """A harmonics excitation has no one frequency/amplitude to sweep, but its other keys
+    can be varied; adding a frequency axis is the existing one-line refusal."""
+    scene = parse_scene('[excitation]\nkind = "harmonics"\nfrequency_hz = [20.0, 40.0]\n'
+                        'amplitude_mm = [1.5, 0.1]\n' + SHORT)
+    rows = tf.sweep(scene, vary={"contact.restitution": [0.5, 0.7]}, cache_dir=tmp_path,
+                    solve=fx.plate_model_solve, jobs=1)
+    assert [r["contact.restitution"] for r in rows] == [0.5, 0.7]
+    assert all(r["Q_sc_pp_C"] > 0 for r in rows)
+    with pytest.raises(SceneError, match=r"sweep point contact.restitution = 0.5: \[excitation\] "
+                                         r"kind = 'harmonics': a sweep varies a sine's"):
+        tf.sweep(scene, vary={"contact.restitution": [0.5]}, frequency_hz=[20],
+                 cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
