@@ -492,16 +492,24 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
 
 
 def _vary_task(args):
-    """One point of a varied sweep: its rows, each led by the varied values."""
+    """One point of a varied sweep: its rows, each led by the varied values; a one-line
+    error (a TengfieldError) names the varied values of the point it happened at."""
+    from .errors import TengfieldError
+
     values, scene, table, frequency, amplitude, loads = args
-    rows = _sweep_task((scene, table, frequency, amplitude, loads)) \
-        if frequency is not None or amplitude is not None else None
-    if rows is None:
-        from .errors import TengfieldError
-        try:
+    try:
+        if frequency is None and amplitude is None:
             rows = sweep_point(scene, table, None, None, loads)
-        except TengfieldError as exc:
-            raise type(exc)(f"sweep point {point_label(values)}: {exc}") from None
+        else:
+            rows = _sweep_task((scene, table, frequency, amplitude, loads))
+    except TengfieldError as exc:
+        if not values:
+            raise
+        try:
+            named = type(exc)(f"sweep point {point_label(values)}: {exc}")
+        except TypeError:     # an error class with other arguments: as it is
+            raise exc from None
+        raise named from None
     return [{**values, **row} for row in rows]
 
 

@@ -225,3 +225,25 @@ def test_vary_alone_runs_an_excitation_without_frequency_and_amplitude(tmp_path)
                                          r"kind = 'harmonics': a sweep varies a sine's"):
         tf.sweep(scene, vary={"contact.restitution": [0.5]}, frequency_hz=[20],
                  cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
+
+
+def test_an_error_mid_sweep_names_the_varied_point(tmp_path, monkeypatch):
+    from tengfield.errors import DynamicsError
+
+    real = sweep_module.sweep_point
+
+    def point(scene, table, frequency, amplitude, loads=(), simulate=None):
+        if scene.contact.restitution == 0.7:
+            raise DynamicsError("impact map diverged")
+        return real(scene, table, frequency, amplitude, loads, simulate)
+
+    monkeypatch.setattr(sweep_module, "sweep_point", point)
+    with pytest.raises(DynamicsError, match=r"^sweep point contact.restitution = 0.7: sweep "
+                                            r"point frequency_hz = 25, amplitude_mm = 1.5: "
+                                            r"impact map diverged$"):
+        tf.sweep(short_scene(), vary={"contact.restitution": [0.5, 0.7]}, frequency_hz=[25],
+                 cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
+    with pytest.raises(DynamicsError, match=r"^sweep point contact.restitution = 0.7: impact "
+                                            r"map diverged$"):
+        tf.sweep(short_scene(), vary={"contact.restitution": [0.5, 0.7]},
+                 cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
