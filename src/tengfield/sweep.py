@@ -586,6 +586,9 @@ def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes
     from .errors import SceneError
 
     check_jobs(jobs, comm)
+    if vary is not None and not isinstance(vary, dict):
+        raise TypeError(f"sweep(vary={vary!r:.60}): expected a dict {{'section.key': values}}, "
+                        "e.g. vary={'device.stroke_mm': '1:5:9'}")
     vary = dict(vary or {})
     freqs = None if frequencies is None or not len(frequencies) else [float(f) for f in frequencies]
     amps = None if amplitudes is None or not len(amplitudes) else [float(a) for a in amplitudes]

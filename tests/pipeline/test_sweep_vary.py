@@ -247,3 +247,9 @@ def test_an_error_mid_sweep_names_the_varied_point(tmp_path, monkeypatch):
                                             r"map diverged$"):
         tf.sweep(short_scene(), vary={"contact.restitution": [0.5, 0.7]},
                  cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
+
+
+def test_vary_that_is_not_a_dict_is_a_type_error_naming_it():
+    with pytest.raises(TypeError, match=r"sweep\(vary='device.stroke_mm=1:5:9'\): expected a "
+                                        r"dict"):
+        tf.sweep(short_scene(), vary="device.stroke_mm=1:5:9")
