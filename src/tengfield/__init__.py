@@ -12,6 +12,7 @@ V_OC, Q_SC, I_SC. In a notebook::
     ball = tf.simulate_3d(scene)          # the rigid ball in 3D (wall, friction, spin)
     fit = tf.calibrate(scene, measured=trace)    # sigma, C_p, ... fitted to a trace
     best = tf.design(scene)               # the geometry that serves [design]'s band best
+    rows = tf.sweep(scene, vary={"device.stroke_mm": "1:5:9"}, frequency_hz=[20, 30])
     tf.harvest.harvest(t, q_sc, c_t, storage_capacitance=10e-6)   # bridges into a store
 
 Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
@@ -40,7 +41,8 @@ _LAZY = {
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", *_LAZY]
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
+           *_LAZY]
 
 
 def __getattr__(name: str):

@@ -9,7 +9,10 @@ processes, or over the ranks of an MPI job (``mpirun -n N tengfield sweep``,
 """
 from __future__ import annotations
 
+import math
 from typing import Callable, Sequence
+
+import numpy as np
 
 from . import electrical
 from ._json import regime_dict
@@ -39,17 +42,22 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     amplitude [m]) and the mean power into each load [ohm] (steady window).
 
     ``table``: the scene's :class:`tengfield.surrogate.SurrogateTable`. One
-    row per load (``load_ohm`` None and no power without loads).
+    row per load (``load_ohm`` None and no power without loads). ``frequency`` and
+    ``amplitude`` None: the scene's own excitation as it is (a ``--vary`` sweep without
+    those axes).
     """
     from .surrogate import TerminalCurves
 
     simulate = simulate or _default_simulate()
-    point = point_scene(scene, frequency, amplitude)
+    point = scene if frequency is None and amplitude is None else \
+        point_scene(scene, frequency, amplitude)
     dynamics = simulate(point)
     curves = TerminalCurves(table, point.circuit.reference)
     extremes = electrical.terminal_extremes(point, dynamics, curves)
     regime = regime_dict(dynamics.regime) or {}
-    base = {"frequency_hz": float(frequency), "amplitude_mm": float(amplitude) * 1e3,
+    exc = point.excitation
+    base = {"frequency_hz": float(exc.frequency if frequency is None else frequency),
+            "amplitude_mm": float(exc.amplitude if amplitude is None else amplitude) * 1e3,
             "regime": regime.get("regime", ""), "period": regime.get("period", 0)}
     for column, stat, name in TERMINAL_COLUMNS:
         base[column] = extremes[stat].get(name)
@@ -274,3 +282,389 @@ def sweep(scene, table, frequencies, amplitudes, loads=(), *,
     finally:
         bar.close()
     return SweepRows(row for rows in results for row in rows)
+
+
+# ---------------------------------------------------------------------------
+# a parametric sweep over any scene key (``--vary section.key=START:STOP:N``)
+#: the excitation keys the frequency/amplitude axes set (a --vary of one of them beside
+#: its axis would be two settings of one key)
+AXIS_KEYS = {"excitation.frequency_hz": "--frequency-hz", "excitation.amplitude_mm": "--amplitude-mm"}
+
+
+#: most values one --vary range may give (as a command-line START:STOP:N range)
+MAX_RANGE_VALUES = 100_000
+
+
+def _number_text(value: float) -> str:
+    """``:g`` when that is the number itself, else the shortest text that is (``repr``)."""
+    text = f"{value:g}"
+    return text if not math.isfinite(value) or float(text) == value else repr(value)
+
+
+def _range_values(text: str, where: str, *, log: bool = False) -> list | None:
+    """``START:STOP:N`` -> N values, both ends included (linear, or logarithmic with
+    ``log``), each the shortest decimal of its double; None when ``text`` is no range.
+    Raises :class:`SceneError` naming ``where`` for a bad range."""
+    from .errors import SceneError
+
+    parts = text.split(":")
+    if len(parts) == 1:
+        return None
+    if len(parts) != 3:
+        raise SceneError(f"{where}: expected START:STOP:N (e.g. 1:5:9) or a list v1,v2,...")
+    try:
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise SceneError(f"{where}: START and STOP must be numbers and N a whole number, "
+                         "e.g. 1:5:9") from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise SceneError(f"{where}: START and STOP must be finite")
+    if not 1 <= count <= MAX_RANGE_VALUES:
+        raise SceneError(f"{where}: N = {count} is out of range: allowed [1, {MAX_RANGE_VALUES}]")
+    if log and min(start, stop) <= 0:
+        raise SceneError(f"{where}: every value must be > 0 (spaced logarithmically)")
+    values = np.logspace(math.log10(start), math.log10(stop), count) if log else \
+        np.linspace(start, stop, count)
+    return [float(_number_text(float(v))) for v in values]
+
+
+def parse_vary(text: str) -> tuple[str, list]:
+    """``section.key=START:STOP:N`` (N values, both ends included, linear), a list
+    ``section.key=1,2,4`` or ``section.key=[1, 2, 4]`` (TOML values: numbers, strings,
+    ``true``), or one value -> (``"section.key"``, values in file units). Raises
+    :class:`SceneError` naming the text and what is allowed; the values are checked
+    later, in each point's scene (:func:`vary_points`)."""
+    from .errors import SceneError
+    from .scene.parse import parse_setting
+
+    key, eq, value = text.partition("=")
+    key, value = key.strip(), value.strip()
+    if not eq or key.count(".") < 1 or not all(key.split(".")) or not value:
+        raise SceneError(f"--vary {text!r}: write section.key=START:STOP:N or "
+                         "section.key=v1,v2,..., e.g. --vary device.stroke_mm=1:5:9")
+    values = _range_values(value, f"--vary {text!r}")
+    if values is not None:
+        return key, values
+    items = value[1:-1] if value.startswith("[") and value.endswith("]") else value
+    values = [parse_setting(f"{key}={item.strip()}")[1] for item in items.split(",")
+              if item.strip()]
+    if not values:
+        raise SceneError(f"--vary {text!r}: no values; write section.key=v1,v2,...")
+    return key, values
+
+
+def _toml_value(value) -> str:
+    """``value`` as the text of a TOML value (what ``--set key=TEXT`` reads)."""
+    import json
+
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"a --vary value must be a number, a string or a list, not {value!r:.60}")
+
+
+def _vary_values(key: str, values) -> list:
+    """The values of one ``vary`` entry: a list/array, one value, or a range text."""
+    if isinstance(values, str):
+        return parse_vary(f"{key}={values}")[1]
+    if isinstance(values, (list, tuple, np.ndarray)):
+        out = [v.item() if isinstance(v, np.generic) else v for v in values]
+    else:
+        out = [values.item() if isinstance(values, np.generic) else values]
+    if not out:
+        from .errors import SceneError
+        raise SceneError(f"vary {key!r}: no values")
+    return out
+
+
+def point_label(values: dict) -> str:
+    """``device.stroke_mm = 2, circuit.load_ohm = 1e+08`` (a point's varied values)."""
+    def text(v):
+        number = isinstance(v, (int, float)) and not isinstance(v, bool)
+        return _number_text(float(v)) if number else repr(v)
+
+    return ", ".join(f"{k} = {text(v)}" for k, v in values.items())
+
+
+def vary_points(scene, vary: dict, frequencies=None, amplitudes=None) -> list[tuple[dict, object]]:
+    """``[(values, point scene)]`` over the product of ``vary`` ({``"section.key"``:
+    values in file units}; the first key outermost), each scene built from ``scene``
+    through the path of ``--set`` (:func:`tengfield.scene.with_settings`), so every check
+    of a scene file applies. A bad key or value raises :class:`SceneError` naming the
+    point, the key, the value and the allowed range, before any work; with frequency or
+    amplitude axes each point's corners are checked too (:func:`check_grid`)."""
+    import itertools
+
+    from .errors import SceneError
+    from .scene import with_settings
+
+    vary = {str(k): _vary_values(str(k), v) for k, v in (vary or {}).items()}
+    for key in vary:
+        axis = AXIS_KEYS.get(key)
+        given = {"--frequency-hz": frequencies, "--amplitude-mm": amplitudes}.get(axis)
+        if axis and given is not None and len(given):
+            raise SceneError(f"--vary {key} and {axis} both set {key}: give one of them")
+    count = math.prod(len(v) for v in vary.values())
+    axes = max(1, len(frequencies) if frequencies is not None else 1) * \
+        max(1, len(amplitudes) if amplitudes is not None else 1)
+    if count * axes > MAX_SWEEP_POINTS:
+        sizes = " x ".join(f"{len(v)} {k}" for k, v in vary.items())
+        raise SceneError(f"sweep points = {sizes} x {axes} excitations = {count * axes:.3g}: "
+                         f"allowed <= {MAX_SWEEP_POINTS:.0e} (each point runs the dynamics)")
+    points = []
+    for combo in itertools.product(*vary.values()):
+        values = dict(zip(vary, combo))
+        try:
+            point = with_settings(scene, [f"{k}={_toml_value(v)}" for k, v in values.items()])
+        except TypeError as exc:
+            raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
+        except SceneError as exc:
+            text = str(exc).replace(f"{scene.source} with --set: ", "").replace(
+                "<default scene> with --set: ", "")
+            raise SceneError(f"sweep point {point_label(values)}: {text}") from None
+        if frequencies is not None or amplitudes is not None:
+            try:
+                check_grid(point, _axis(point, frequencies, "frequency"),
+                           _axis(point, amplitudes, "amplitude"))
+            except SceneError as exc:
+                raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
+        points.append((values, point))
+    return points
+
+
+def _axis(scene, values, which: str) -> list:
+    """An excitation axis, or the scene's own value when the sweep has none (SI)."""
+    if values is not None and len(values):
+        return [float(v) for v in values]
+    return [scene.excitation.frequency if which == "frequency" else scene.excitation.amplitude]
+
+
+def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
+                 command_line: str = "", tables: dict | None = None):
+    """Each point's ``(scene, table)`` at the charge it runs with
+    (:func:`tengfield.breakdown.obtain_run_table`, the path of ``tengfield run``), and
+    ``{"computed": n, "cached": n, "reused": n, "geometries": n}``. Points of one geometry
+    (one field hash) share one surrogate: the first obtains it (solved over ``comm``'s
+    ranks or read from the cache), the others reuse it at their own charge (``reused``,
+    no field solve: a σ or circuit key never solves a field)."""
+    from .breakdown import obtain_run_table, uses_breakdown_charge
+    from .errors import SceneError
+    from .surrogate.table import at_ball_charge
+
+    tables = {} if tables is None else tables
+    counts = {"computed": 0, "cached": 0, "reused": 0, "geometries": 0}
+    out = []
+    for values, scene in points:
+        try:
+            key = scene.field_hash()
+        except SceneError as exc:
+            raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
+        memo = tables.get(key)
+        if memo is not None and not uses_breakdown_charge(scene) \
+                and scene.device.ball_charge != 0.0 and memo.ball_charge != 0.0:
+            out.append((scene, at_ball_charge(memo, scene.device.ball_charge)))
+            counts["reused"] += 1
+            continue
+        try:
+            resolved, table, outcome, _ = obtain_run_table(
+                scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
+                command_line=command_line)
+        except SceneError as exc:
+            raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
+        if key not in tables:
+            counts["geometries"] += 1
+        tables.setdefault(key, table)
+        counts["computed" if outcome.status == "computed" else "cached"] += 1
+        out.append((resolved, table))
+    return out, counts
+
+
+def _vary_task(args):
+    """One point of a varied sweep: its rows, each led by the varied values; a one-line
+    error (a TengfieldError) names the varied values of the point it happened at."""
+    from .errors import TengfieldError
+
+    values, scene, table, frequency, amplitude, loads = args
+    try:
+        if frequency is None and amplitude is None:
+            rows = sweep_point(scene, table, None, None, loads)
+        else:
+            rows = _sweep_task((scene, table, frequency, amplitude, loads))
+    except TengfieldError as exc:
+        if not values:
+            raise
+        try:
+            named = type(exc)(f"sweep point {point_label(values)}: {exc}")
+        except TypeError:     # an error class with other arguments: as it is
+            raise exc from None
+        raise named from None
+    return [{**values, **row} for row in rows]
+
+
+class SweepResult(SweepRows):
+    """The rows of :func:`sweep_study` (a list of dicts, one per point and load; the
+    varied keys lead each row) with ``scene``, ``vary`` (the varied keys), ``summary``,
+    :meth:`plot` and :meth:`write` (what ``tengfield sweep`` writes)."""
+
+    def __init__(self, rows, *, scene=None, vary=(), surrogates=None):
+        super().__init__(rows)
+        self.scene, self.vary, self.surrogates = scene, list(vary), dict(surrogates or {})
+
+    @property
+    def columns(self) -> list[str]:
+        """sweep.csv's columns: the varied keys, then :data:`SWEEP_COLUMNS`."""
+        return [*self.vary, *SWEEP_COLUMNS]
+
+    @property
+    def summary(self) -> dict:
+        return {"rows": len(self), "vary": list(self.vary), "surrogates": self.surrogates}
+
+    def plot(self, key: str | None = None):
+        """The figure of one varied key (default: the first; peak-to-peak V_OC, Q_SC,
+        I_SC and, with loads, the mean power against its values), or sweep.png's figure
+        when nothing is varied."""
+        if not self.vary:
+            return super().plot()
+        from .plotting.sweep_vary import vary_figure
+
+        return vary_figure(self, key or self.vary[0])
+
+    def figure_names(self) -> dict[str, str]:
+        """{varied key: its figure's file name} (``sweep_device.stroke_mm.png``)."""
+        return {key: f"sweep_{key}.png" for key in self.vary}
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """sweep.csv and the figures (sweep.png when frequency x amplitude is swept without
+        --vary; one ``sweep_<key>.png`` per varied key) in ``out_dir``; the paths written."""
+        from pathlib import Path
+
+        from ._files import atomic_path, write_rows
+        from .plotting import save_figure
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        columns = self.columns
+        write_rows(out / "sweep.csv", columns, (["" if row.get(k) is None else row[k]
+                                                 for k in columns] for row in self))
+        written = [out / "sweep.csv"]
+        if plots:
+            names = self.figure_names() if self.vary else {None: "sweep.png"}
+            for key, name in names.items():
+                with atomic_path(out / name) as tmp:
+                    save_figure(self.plot(key), tmp, dpi=120)
+                written.append(out / name)
+        return written
+
+
+def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes=None,
+                loads=(), cache_dir=None, solve: Callable | None = None,
+                jobs: int | None = None, comm=None, progress: bool = False,
+                command_line: str = "", on_surrogates: Callable | None = None) -> SweepResult:
+    """A sweep over any scene keys and/or the excitation: every point of
+    ``vary`` ({``"section.key"``: values, file units}) x ``frequencies`` [Hz] x
+    ``amplitudes`` [m] x ``loads`` [ohm] (None or empty: the axis is the scene's own).
+    Each point's scene is built through ``--set``'s path (:func:`vary_points`, all
+    checked before any work); each geometry's surrogate is obtained once (cached by field
+    hash, :func:`point_tables`); the points are farmed like :func:`sweep` (``comm``'s
+    ranks, or ``jobs`` worker processes) and every rank returns every row.
+    ``on_surrogates(counts, [(scene, table)])``: called (on every rank) once the
+    surrogates are at hand (the CLI's lines)."""
+    from ._console import progress_bar
+    from ._mpi import check_jobs
+    from .errors import SceneError
+
+    check_jobs(jobs, comm)
+    if vary is not None and not isinstance(vary, dict):
+        raise TypeError(f"sweep(vary={vary!r:.60}): expected a dict {{'section.key': values}}, "
+                        "e.g. vary={'device.stroke_mm': '1:5:9'}")
+    vary = dict(vary or {})
+    freqs = None if frequencies is None or not len(frequencies) else [float(f) for f in frequencies]
+    amps = None if amplitudes is None or not len(amplitudes) else [float(a) for a in amplitudes]
+    if not vary and freqs is None and amps is None:
+        raise SceneError("sweep: nothing to vary: give --vary section.key=START:STOP:N and/or "
+                         "--frequency-hz and --amplitude-mm")
+    loads = tuple(float(x) for x in loads)
+    if vary:
+        points = vary_points(scene, vary, freqs, amps)
+    else:
+        check_grid(scene, _axis(scene, freqs, "frequency"), _axis(scene, amps, "amplitude"))
+        points = [({}, scene)]
+    check_sweep_size(scene, len(points) * len(freqs or [None]), len(amps or [None]), len(loads))
+    with_tables, counts = point_tables(points, cache_dir=cache_dir, comm=comm, solve=solve,
+                                       progress=progress, command_line=command_line)
+    if on_surrogates is not None:
+        on_surrogates(counts, with_tables)
+    tasks = []
+    for (values, _), (point, table) in zip(points, with_tables):
+        fs = freqs or ([None] if amps is None else [point.excitation.frequency])
+        amps_here = amps or ([None] if freqs is None else [point.excitation.amplitude])
+        tasks += [(values, point, table, f, a, loads) for f in fs for a in amps_here]
+    bar = progress_bar(len(tasks), "sweep", progress, unit="point", comm=comm)
+    try:
+        results = run_tasks(_vary_task, tasks, comm=comm, jobs=jobs, progress=bar.update)
+    finally:
+        bar.close()
+    return SweepResult((row for rows in results for row in rows), scene=scene,
+                       vary=list(vary), surrogates=counts)
+
+
+def _file_axis(values, scale: float, name: str, log: bool = False):
+    """A ``tf.sweep`` axis in file units (a list, one number or ``"START:STOP:N"``) -> SI."""
+    if values is None:
+        return None
+    if isinstance(values, str):
+        ranged = _range_values(values, f"{name} = {values!r}", log=log)
+        if ranged is None:
+            from .errors import SceneError
+            try:
+                ranged = [float(v) for v in values.split(",")]
+            except ValueError:
+                raise SceneError(f"{name} = {values!r}: expected START:STOP:N, a number or "
+                                 "numbers v1,v2,...") from None
+        values = ranged
+    arr = np.atleast_1d(np.asarray(values, dtype=float))
+    return [float(v) * scale for v in arr]
+
+
+def study(scene, *, vary: dict | None = None, frequency_hz=None, amplitude_mm=None,
+          load_ohm=(), cache_dir=None, jobs: int | None = None, comm=None,
+          progress: bool = False, solve: Callable | None = None) -> SweepResult:
+    """``tf.sweep(scene, ...)``: :func:`sweep_study` in file units, as ``tengfield sweep``
+    takes them: ``vary={"device.stroke_mm": "1:5:9", "circuit.load_ohm": [1e6, 1e8]}``,
+    ``frequency_hz`` [Hz] and ``amplitude_mm`` [mm] (lists, one number or
+    ``"START:STOP:N"``), ``load_ohm`` [ohm]. Returns a :class:`SweepResult` (rows,
+    ``.plot(key)``, ``.write(out_dir)``)."""
+    from .scene import load_scene
+
+    scene = load_scene(scene)
+    loads = _file_axis(load_ohm, 1.0, "load_ohm", log=True) if load_ohm is not None else ()
+    return sweep_study(scene, vary=vary,
+                       frequencies=_file_axis(frequency_hz, 1.0, "frequency_hz"),
+                       amplitudes=_file_axis(amplitude_mm, 1e-3, "amplitude_mm"),
+                       loads=loads or (),
+                       cache_dir=cache_dir, solve=solve, jobs=jobs, comm=comm,
+                       progress=progress)
+
+
+class _CallableModule(__import__("types").ModuleType):
+    """``tf.sweep(scene, vary=..., frequency_hz=..., amplitude_mm=...)`` calls :func:`study`;
+    ``tengfield.sweep.sweep(scene, table, frequencies, amplitudes)`` (SI, one table) and
+    the rest of the module stay as they were."""
+
+    def __call__(self, scene, **kwargs) -> SweepResult:
+        return study(scene, **kwargs)
+
+
+__import__("sys").modules[__name__].__class__ = _CallableModule

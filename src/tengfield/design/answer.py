@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from .candidate import followed_geometry
-from .spec import OBJECTIVES, OTHER_VARY, LOG_KEYS, periodic
+from .spec import BENCH_MAX_LOAD_OHM, LOG_KEYS, OBJECTIVES, OTHER_VARY, periodic
 
 #: a varied value within this fraction of its range from an end is "on the bound"
 BOUND_FRACTION = 0.02
@@ -110,7 +110,8 @@ def _load(result, row) -> dict:
     if spec.objective == "harvested_power":
         return {"rule": "the [circuit] rectifier and store", "ohm": None}
     if row["load_ohm"] is None:
-        return {"rule": "none (the objective needs no load)", "ohm": None}
+        return {"rule": "none (the ball rests at every band point: no power at any load)"
+                if row.get("at_rest") else "none (the objective needs no load)", "ohm": None}
     if "load_ohm" in spec.vary:
         return {"rule": "varied", "ohm": row["load_ohm"]}
     if isinstance(row["load_ohm"], list):
@@ -216,6 +217,12 @@ def design_warnings(result) -> list[str]:
                    "another" + ("; a band point where every design scores 0 decides the "
                                 "minimum: use aggregate = 'mean' or drop that point"
                                 if ok[0] == 0 and spec.aggregate == "min" else ""))
+    loads = best["load_ohm"] if isinstance(best["load_ohm"], list) else [best["load_ohm"]]
+    high = max((r for r in loads if r is not None), default=0.0)
+    if high > BENCH_MAX_LOAD_OHM and spec.load_range is None and "load_ohm" not in spec.vary:
+        out.append(f"the best design's matched load {_ohm(high)} is past what a bench builds "
+                   f"and reads (resistors and meter inputs reach ~{_ohm(BENCH_MAX_LOAD_OHM)}): "
+                   "set [design] load_ohm = [1e6, 1e9] to match within loads a bench can build")
     chaotic = [i for i, r in enumerate(best["regimes"]) if r == "chaos"]
     if chaotic:
         pts = band_points(result, best)
@@ -340,7 +347,13 @@ def answer_lines(result) -> list[str]:
         verdict = "within the error bars of the best" if second["within_error_bars"] \
             else "outside the error bars"
         lines += _design_lines(result, second, f"runner-up #{second['index']} ({verdict})")
-        if conf.get("margin_over_error_bars") is not None:
+        ratio = conf.get("margin_over_error_bars")
+        if ratio is not None and math.isinf(ratio):   # both bars 0 (design.json: null)
+            unit = OBJECTIVES[result.spec.objective][0]
+            lines.append(f"  margin {_fmt(conf['margin'], unit)}; the error bars are 0 (no "
+                         "field, surrogate or dynamics error enters this objective), so the "
+                         "best leads by the margin alone")
+        elif ratio is not None:
             unit = OBJECTIVES[result.spec.objective][0]
             lines.append(f"  margin {_fmt(conf['margin'], unit)} = "
                          f"{conf['margin_over_error_bars']:.3g} x the error bars; "

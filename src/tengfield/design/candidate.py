@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import electrical
 from ..errors import TengfieldError
-from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, periodic
+from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, band_run, periodic
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
 #: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
@@ -98,14 +98,6 @@ def candidate_scene(base, spec: DesignSpec, values: dict):
     return scene
 
 
-def band_run(spec: DesignSpec, frequency: float) -> dict:
-    """``[run]`` keys of a band point at ``frequency`` [Hz]: settle + window periods, sampled
-    ``samples_per_period`` times a period (the run a candidate is scored on)."""
-    periods = spec.settle_periods + spec.window_periods
-    return {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
-            "sample_rate_hz": spec.samples_per_period * frequency}
-
-
 def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
     """``scene`` driven at one band point (``amplitude`` [m]) for settle + window periods.
     A random or harmonics excitation is kept as the scene gives it (its one band point is
@@ -123,11 +115,13 @@ def _load_power(point, dynamics, curves, load: float) -> float:
     return float(electrical.steady_load(loaded, dynamics, curves)["mean_power_W"])
 
 
-def matched_load(points, dynamics, curves, aggregate: str) -> tuple[float, list[float]]:
+def matched_load(points, dynamics, curves, aggregate: str,
+                 bounds: tuple | None = None) -> tuple[float, list[float]]:
     """(R [ohm], powers [W] per point) maximising the aggregate mean power of ``points``
     (band scenes with their ``dynamics``) into one resistor: a log grid of LOAD_GRID
     loads over +- LOAD_DECADES around 1 / (2 pi f C_T) (f, C_T: means over the points),
-    then Brent's bounded search (scipy) between the best grid point's neighbours."""
+    then Brent's bounded search (scipy) between the best grid point's neighbours.
+    ``bounds`` ([design] load_ohm, [ohm]): every load searched lies in [lo, hi]."""
     from scipy.optimize import minimize_scalar
 
     n_cells = points[0].device.cells
@@ -147,15 +141,22 @@ def matched_load(points, dynamics, curves, aggregate: str) -> tuple[float, list[
         p = powers(log_r)
         return float(np.mean(p) if aggregate == "mean" else np.min(p))
 
-    grid = np.linspace(centre - LOAD_DECADES, centre + LOAD_DECADES, LOAD_GRID)
+    floor, ceiling = (math.log10(bounds[0]), math.log10(bounds[1])) if bounds else \
+        (-math.inf, math.inf)
+    start, stop = max(centre - LOAD_DECADES, floor), min(centre + LOAD_DECADES, ceiling)
+    if start >= stop:   # the range lies wholly on one side of 1 / (2 pi f C_T): all of it
+        start, stop = floor, ceiling
+    grid = np.linspace(start, stop, LOAD_GRID)
     scores = [score(x) for x in grid]
     k = int(np.argmax(scores))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, LOAD_GRID - 1)]
     if k in (0, LOAD_GRID - 1):   # the optimum at the grid's edge: widen once
         lo, hi = (grid[0] - 2 * LOAD_DECADES, grid[1]) if k == 0 else \
             (grid[-2], grid[-1] + 2 * LOAD_DECADES)
+        lo, hi = max(lo, floor), min(hi, ceiling)
     if all(s == 0 for s in scores):
-        return 10.0**centre, powers(centre)
+        x = min(max(centre, floor), ceiling)
+        return 10.0**x, powers(x)
     best = minimize_scalar(lambda x: -score(x), bounds=(lo, hi), method="bounded",
                            options={"xatol": LOAD_XATOL_DECADES})
     x = float(best.x) if -best.fun >= scores[k] else float(grid[k])
@@ -238,6 +239,9 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
                    reason=f"require = {spec.require!r} not met at {len(missed)} of "
                           f"{len(spec.band)} band points (first: {f:g} Hz, {a * 1e3:g} mm)")
         return row
+    if needs_field and spec.percentile is None and all(d.regime.name == "rest"
+                                                       for d in dynamics):
+        return _decided_at_rest(row, spec, points)
     # field surrogate (cached by the field hash)
     curves = table = None
     if needs_field:
@@ -315,6 +319,30 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
         row["dynamics_error"][objective] = dyn_part
     row["objective"] = row["objectives"][spec.objective]["value"]
     row["objective_error"] = row["objectives"][spec.objective]["error"]
+    return row
+
+
+#: design.csv's field_status of a candidate decided by its dynamics alone
+AT_REST_STATUS = "not solved (at rest at every band point)"
+
+
+def _decided_at_rest(row: dict, spec: DesignSpec, points) -> dict:
+    """A candidate whose ball rests on the lower electrode in every band point's window
+    (regime "rest": it never lifts off): Q_SC, V_OC, I_SC, the load and harvested power
+    are 0 whatever the field, so it is scored 0 (exactly, error 0) without a field solve
+    (issue #40); the stroke objective keeps its value. ``field_status`` names it."""
+    n = len(points)
+    band_values = {o: [float(p.device.stroke) if o == "stroke" else 0.0 for p in points]
+                   for o in spec.objectives}
+    row.update(band_values=band_values, band_spread={o: [0.0] * n for o in spec.objectives},
+               windows=[1] * n, field_status=AT_REST_STATUS, relative_error=0.0,
+               at_rest=True)
+    for objective, values in band_values.items():
+        row["objectives"][objective] = {"value": aggregate_values(values, spec.band_aggregate),
+                                        "error": 0.0}
+        row["dynamics_error"][objective] = 0.0
+    row["objective"] = row["objectives"][spec.objective]["value"]
+    row["objective_error"] = 0.0
     return row
 
 
@@ -402,12 +430,13 @@ def _objective_values(objective, spec, scene, points, dynamics, curves, volume, 
         powers = [_load_power(p, d, curves, load) for p, d in zip(points, dynamics)]
         row["load_ohm"] = load
     elif spec.load == "one":
-        load, powers = matched_load(points, dynamics, curves, spec.band_aggregate)
+        load, powers = matched_load(points, dynamics, curves, spec.band_aggregate,
+                                    spec.load_range)
         row["load_ohm"] = load
     else:
         loads, powers = [], []
         for p, d in zip(points, dynamics):
-            r, (power,) = matched_load([p], [d], curves, "mean")
+            r, (power,) = matched_load([p], [d], curves, "mean", spec.load_range)
             loads.append(r)
             powers.append(power)
         row["load_ohm"] = loads

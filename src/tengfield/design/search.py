@@ -143,6 +143,25 @@ class _Space:
         return tuple(values[k] for k in self.keys)
 
 
+def fresh_candidates(space: _Space, units, seen: dict, room: int) -> list[dict]:
+    """The varied values of ``units`` (unit-cube points, snapped) not in ``seen`` (keys of
+    the candidates scored so far) nor earlier in ``units``, at most ``room`` of them, in
+    order. One :meth:`_Space.key` per unit and a set lookup: linear in ``len(units)``
+    (``[design] candidates = 100000`` de-duplicates in a moment)."""
+    fresh: list[dict] = []
+    keys: set = set()
+    for u in units:
+        if len(fresh) >= room:
+            break
+        values = space.values(space.snap(u))
+        k = space.key(values)
+        if k in seen or k in keys:
+            continue
+        keys.add(k)
+        fresh.append(values)
+    return fresh
+
+
 def _sobol(d: int, n: int, seed) -> np.ndarray:
     from scipy.stats import qmc
 
@@ -248,15 +267,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     bar = progress_bar(spec.candidates, progress and rank_of(comm) == 0)
 
     def run_round(units: np.ndarray, phase: str) -> int:
-        fresh = []
-        for u in units:
-            values = space.values(space.snap(u))
-            k = space.key(values)
-            if k in seen or any(space.key(v) == k for v in fresh):
-                continue
-            if len(rows) + len(fresh) >= spec.candidates:
-                break
-            fresh.append(values)
+        fresh = fresh_candidates(space, units, seen, spec.candidates - len(rows))
         if not fresh:
             return 0
         tasks = [(scene, spec, v, cache_dir, solve, simulate) for v in fresh]

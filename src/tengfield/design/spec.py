@@ -16,6 +16,7 @@ Scene syntax (every key optional except ``[design.vary]``)::
     seed = 1
     require = "none"              # or "upper-contact" / "regular-contact" at every band point
     load = "one"                  # matched load: "one" resistor for the band, or "each" point's own
+    load_ohm = [1e6, 1e9]         # optional: the matched load searched inside this range [ohm]
     geometry = "follow"           # tube and electrode follow a varied ball (docs/design.md), "fixed"
     field = "coarse"              # the design's field settings (degree 2, h = min(1 mm, d/5)), "scene"
     batch = 16                    # candidates per refinement round
@@ -93,7 +94,11 @@ MAX_BAND_POINTS = 1000
 
 KEYS = ("objective", "aggregate", "candidates", "seed", "require", "load", "geometry", "field",
         "batch", "settle_periods", "window_periods", "samples_per_period", "resolution",
-        "initial_candidates", "vary", "excitation")
+        "initial_candidates", "load_ohm", "vary", "excitation")
+#: the largest load a bench builds and reads (resistors, electrometer inputs ~1 GΩ): a
+#: matched load past it is flagged, and [design] load_ohm = [lo, hi] keeps the search in
+#: a range that can be built
+BENCH_MAX_LOAD_OHM = 1e9
 
 
 @dataclass
@@ -113,6 +118,8 @@ class DesignSpec:
     samples_per_period: int = 200
     resolution: float = 1e-3
     initial_candidates: int = 0          # 0: the rule of initial_count()
+    #: [design] load_ohm = [lo, hi] [ohm]: the matched load is searched inside it (None: free)
+    load_range: tuple | None = None
     #: aggregate "pNN": NN, and the validated [uncertainty] study it is taken over
     percentile: float | None = None
     uncertainty: object = None
@@ -147,6 +154,7 @@ class DesignSpec:
                 "window_periods": self.window_periods,
                 "samples_per_period": self.samples_per_period, "resolution": self.resolution,
                 "initial_candidates": self.initial_count(),
+                **({"load_ohm": list(self.load_range)} if self.load_range else {}),
                 "vary": {k: list(v) for k, v in self.vary.items()},
                 "band": [{"frequency_hz": f, "amplitude_mm": a * 1e3} for f, a in self.band],
                 **({"uncertainty": robust_dict(self)} if self.percentile is not None else {})}
@@ -303,6 +311,31 @@ def _vary(raw, scene=None) -> dict:
     return out
 
 
+#: two band values closer than this (relative) are one band point: refused (design.csv's
+#: columns name a point by its values' 6 significant digits, and the band mean would count
+#: it twice)
+BAND_DUPLICATE_RTOL = 1e-5
+
+
+def _check_distinct(key: str, written: list, values: list[float]) -> None:
+    """Refuse two values of ``[design.excitation] key`` within BAND_DUPLICATE_RTOL."""
+    order = sorted(range(len(values)), key=values.__getitem__)
+    for i, j in zip(order, order[1:]):
+        a, b = values[i], values[j]
+        if b - a <= BAND_DUPLICATE_RTOL * max(abs(a), abs(b)) or f"{a:g}" == f"{b:g}":
+            first, second = sorted((i, j))
+            raise SceneError(f"[design.excitation] {key} = {written!r}: "
+                             f"{_number(values[first])} and {_number(values[second])} are one "
+                             f"band point (within a relative {BAND_DUPLICATE_RTOL:g}): give "
+                             "each value once")
+
+
+def _number(value: float) -> str:
+    """``:g`` when that is the number, else its shortest exact text (1.0000001)."""
+    text = f"{value:g}"
+    return text if float(text) == value else repr(value)
+
+
 def _band(raw, scene) -> list[tuple[float, float]]:
     if raw is None:
         raw = {}
@@ -328,6 +361,7 @@ def _band(raw, scene) -> list[tuple[float, float]]:
                 raise SceneError(f"[design.excitation] {key} = {v!r} is out of range: "
                                  f"allowed {rng}")
         lists[key] = [float(v) for v in values]
+        _check_distinct(key, values, lists[key])
     band = [(f, a * 1e-3) for f in lists["frequency_hz"] for a in lists["amplitude_mm"]]
     if len(band) > MAX_BAND_POINTS:
         raise SceneError(f"[design.excitation] {len(band)} band points: allowed <= "
@@ -374,6 +408,51 @@ def recorded(kind: str) -> bool:
     """Is ``[excitation] kind`` a measured record (fixed length, no band)?"""
     from ..dynamics.excitation import EXCITATIONS
     return lookup(EXCITATIONS, kind, "[excitation] kind").recorded
+
+
+def _load_range(value) -> tuple[float, float]:
+    """``[design] load_ohm = [min, max]`` [ohm], 0 < min < max, finite."""
+    ok = (isinstance(value, list) and len(value) == 2
+          and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                  for v in value))
+    if not ok:
+        raise SceneError(f"[design] load_ohm = {value!r}: expected [min, max] in ohm, e.g. "
+                         "[1e6, 1e9] (the range the matched load is searched in)")
+    lo, hi = float(value[0]), float(value[1])
+    if not 0 < lo < hi:
+        raise SceneError(f"[design] load_ohm = {value!r}: expected [min, max] with "
+                         "0 < min < max, e.g. [1e6, 1e9]")
+    return lo, hi
+
+
+def band_run(spec: DesignSpec, frequency: float) -> dict:
+    """``[run]`` keys of a band point at ``frequency`` [Hz]: settle + window periods, sampled
+    ``samples_per_period`` times a period (the run a candidate is scored on)."""
+    periods = spec.settle_periods + spec.window_periods
+    return {"duration_s": periods / frequency, "settle_periods": spec.settle_periods,
+            "sample_rate_hz": spec.samples_per_period * frequency}
+
+
+def _check_band_runs(scene, spec: DesignSpec) -> None:
+    """Every band point's run (settle + window periods, samples_per_period a period) as
+    the scene's [run] checks would take it, before any work: a run past a limit is one
+    line naming the [design] keys that set it (every candidate would be skipped)."""
+    kind = scene.excitation.kind
+    for f, a in spec.band:
+        run = band_run(spec, f)
+        try:
+            if periodic(scene.excitation.kind):
+                scene.with_values(excitation={"frequency_hz": f}, run=run)
+            else:
+                scene.with_values(run=run)
+        except SceneError as exc:
+            raise SceneError(
+                f"[design] settle_periods = {spec.settle_periods}, window_periods = "
+                f"{spec.window_periods}, samples_per_period = {spec.samples_per_period}: the "
+                f"run of band point {f:g} Hz" + (f" / {a * 1e3:g} mm" if periodic(kind) else
+                                                  f" ({kind})") + " "
+                f"({run['duration_s']:.4g} s at {run['sample_rate_hz']:.4g} Hz) is refused: "
+                f"{exc}") from None
 
 
 def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
@@ -431,6 +510,12 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
     spec.band = _band(raw.get("excitation"), scene)
     if spec.percentile is not None:
         spec.uncertainty = _robust_study(scene, spec)
+    if "load_ohm" in raw:
+        spec.load_range = _load_range(raw["load_ohm"])
+        if "load_ohm" in spec.vary:
+            raise SceneError("[design] load_ohm and [design.vary] load_ohm: the load is either "
+                             "matched within [design] load_ohm or varied, not both; give one")
+    _check_band_runs(scene, spec)
     if "load_ohm" in spec.vary and spec.load == "each":
         raise SceneError("[design] load = 'each' and [design.vary] load_ohm: the load is either "
                          "varied or matched, not both; allowed load = 'one' here")

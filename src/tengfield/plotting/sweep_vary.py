@@ -1,0 +1,89 @@
+"""sweep_<key>.png: a ``--vary`` sweep's outputs against one varied scene key."""
+from __future__ import annotations
+
+import math
+
+from . import new_figure
+
+#: most lines one panel draws (one per setting of the other axes); past it, the first ones
+MAX_LINES = 8
+
+
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _text(value) -> str:
+    return f"{value:g}" if _number(value) else str(value)
+
+
+def _legend_text(key: str, value) -> str:
+    """``ball diameter d = 6 mm`` (a varied key or an axis at one value)."""
+    from .design import key_label
+
+    name = key.rpartition(".")[2]
+    label = {"frequency_hz": "f [Hz]", "amplitude_mm": "A [mm]"}.get(name) or key_label(name)
+    if label.endswith("]") and " [" in label:
+        words, unit = label[:-1].rsplit(" [", 1)
+        return f"{words} = {_text(value)} {unit}"
+    return f"{label} = {_text(value)}"
+
+
+def _groups(rows, others) -> dict[tuple, list]:
+    groups: dict[tuple, list] = {}
+    for row in rows:
+        groups.setdefault(tuple(row.get(k) for k in others), []).append(row)
+    return groups
+
+
+def vary_figure(result, key: str):
+    """Peak-to-peak V_OC, Q_SC, I_SC (at the first load; they do not depend on it) and,
+    with loads, the mean power against the values of the varied scene key ``key`` (its
+    label and unit as design.png names them), one line per setting of the other varied
+    keys, frequency, amplitude (and load, in the power panel): at most :data:`MAX_LINES`,
+    said in the title when more."""
+    from ..quantities import QUANTITIES, TERMINAL, axis_label, column_name
+    from .design import key_label
+
+    rows = list(result)
+    loads = sorted({r["load_ohm"] for r in rows if r.get("load_ohm") is not None})
+    others = [k for k in result.vary if k != key] + ["frequency_hz", "amplitude_mm"]
+    first = [r for r in rows if r.get("load_ohm") == (loads[0] if loads else None)]
+    panels = [(column_name(n, "peak_to_peak"), axis_label(n, statistic="peak_to_peak"),
+               QUANTITIES[n].display_scale, _groups(first, others), others) for n in TERMINAL]
+    if loads:
+        with_load = others + ["load_ohm"]
+        panels.append(("P_mean_W", "mean power P [µW]", 1e6, _groups(rows, with_load),
+                       with_load))
+    values = []
+    for row in rows:
+        if row[key] not in values:
+            values.append(row[key])
+    numeric = all(_number(v) for v in values)
+    position = {v: (float(v) if numeric else i) for i, v in enumerate(values)}
+    fig = new_figure((4 * len(panels), 3.6))
+    axes = fig.subplots(1, len(panels))
+    section, _, name = key.rpartition(".")
+    more = 0
+    for ax, (column, label, factor, groups, names) in zip(axes, panels):
+        varying = [k for i, k in enumerate(names) if len({g[i] for g in groups}) > 1]
+        more = max(more, len(groups))
+        for setting, members in list(groups.items())[:MAX_LINES]:
+            pts = sorted((position[r[key]], r[column]) for r in members
+                         if r.get(column) is not None and math.isfinite(r[column]))
+            words = ", ".join(_legend_text(k, v) for k, v in zip(names, setting)
+                              if k in varying)
+            ax.plot([p[0] for p in pts], [p[1] * factor for p in pts], "o-", ms=3,
+                    label=words or None)
+        ax.set_xlabel(f"[{section}] {key_label(name)}")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        if not numeric:
+            ax.set_xticks(range(len(values)), [_text(v) for v in values])
+        if varying and len(groups) > 1:
+            ax.legend(fontsize=7)
+    note = f" (first {MAX_LINES} of {more} settings per panel)" if more > MAX_LINES else ""
+    at = f", Q_SC/V_OC/I_SC at load R = {_text(loads[0])} Ω" if len(loads) > 1 else ""
+    fig.suptitle(f"sweep over {key_label(name)}{at}{note}", fontsize=10)
+    fig.tight_layout()
+    return fig
