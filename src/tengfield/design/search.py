@@ -259,6 +259,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     check_scene_argument("tengfield.design", scene)
     jobs = check_jobs_argument("tengfield.design", jobs, comm)
     spec = parse_design_section(scene, overrides)
+    announce_cost(scene, spec, progress and rank_of(comm) == 0)
     _TABLES.clear()
     space = _Space(spec)
     rows: list[dict] = []
@@ -335,6 +336,20 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
                         wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,
                         rounds=rounds)
+
+
+def announce_cost(scene, spec, say: bool) -> None:
+    """Count the design's work before any of it (:func:`~tengfield.design.spec.design_cost`),
+    refuse it in one line past ``[design] max_field_solves`` or the memory at hand, and
+    with ``say`` print the count (stderr) (issue #43.6)."""
+    from ..uncertainty.cost import check_cost
+    from .spec import design_cost
+
+    cost = design_cost(scene, spec)
+    check_cost(cost, field_limit=spec.max_field_solves, field_key="[design] max_field_solves",
+               size_key=f"[design] candidates = {spec.candidates}", what="design")
+    if say:
+        print(cost.line("design"), file=sys.stderr, flush=True)
 
 
 def narrowed_scene(result: DesignResult, fraction: float = 0.2, candidates: int = 24):

@@ -17,6 +17,7 @@ Scene syntax (every key optional except ``[design.vary]``)::
     require = "none"              # or "upper-contact" / "regular-contact" at every band point
     load = "one"                  # matched load: "one" resistor for the band, or "each" point's own
     load_ohm = [1e6, 1e9]         # optional: the matched load searched inside this range [ohm]
+    max_field_solves = 1000       # refuse a design that may need more field solves than this
     geometry = "follow"           # tube and electrode follow a varied ball (docs/design.md), "fixed"
     field = "coarse"              # the design's field settings (degree 2, h = min(1 mm, d/5)), "scene"
     batch = 16                    # candidates per refinement round
@@ -94,7 +95,7 @@ MAX_BAND_POINTS = 1000
 
 KEYS = ("objective", "aggregate", "candidates", "seed", "require", "load", "geometry", "field",
         "batch", "settle_periods", "window_periods", "samples_per_period", "resolution",
-        "initial_candidates", "load_ohm", "vary", "excitation")
+        "initial_candidates", "load_ohm", "max_field_solves", "vary", "excitation")
 #: the largest load a bench builds and reads (resistors, electrometer inputs ~1 GΩ): a
 #: matched load past it is flagged, and [design] load_ohm = [lo, hi] keeps the search in
 #: a range that can be built
@@ -118,6 +119,8 @@ class DesignSpec:
     samples_per_period: int = 200
     resolution: float = 1e-3
     initial_candidates: int = 0          # 0: the rule of initial_count()
+    #: field solves a design may start (``[design] max_field_solves``): refused past it
+    max_field_solves: int = 1000
     #: [design] load_ohm = [lo, hi] [ohm]: the matched load is searched inside it (None: free)
     load_range: tuple | None = None
     #: aggregate "pNN": NN, and the validated [uncertainty] study it is taken over
@@ -498,6 +501,8 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
                                      20, 100000)
     spec.initial_candidates = _whole("initial_candidates", raw.get("initial_candidates", 0),
                                      0, 100000)
+    spec.max_field_solves = _whole("max_field_solves",
+                                   raw.get("max_field_solves", spec.max_field_solves), 1, 10**7)
     res = raw.get("resolution", spec.resolution)
     if isinstance(res, bool) or not isinstance(res, (int, float)) or not 0 <= res <= 0.1:
         raise SceneError(f"[design] resolution = {res!r} is out of range: allowed [0, 0.1] "
@@ -520,3 +525,30 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
         raise SceneError("[design] load = 'each' and [design.vary] load_ohm: the load is either "
                          "varied or matched, not both; allowed load = 'one' here")
     return spec
+
+
+def design_cost(scene, spec: DesignSpec):
+    """What the design ``spec`` of ``scene`` will do at most, counted before any of it
+    (issue #43.6; :class:`tengfield.uncertainty.cost.WorkCost`): ``candidates`` x band
+    points evaluations (x the ``[uncertainty]`` draws for a percentile aggregate), one
+    field solve per candidate when a geometry key is varied (else one; none for an
+    uncharged ball), a dynamics run per evaluation."""
+    from ..uncertainty.cost import EVALUATION_BYTES, SURROGATE_BYTES, WorkCost
+    from ..uncertainty.evaluation import is_field_key
+
+    band = max(len(spec.band), 1)
+    draws = 1
+    if spec.uncertainty is not None:
+        from ..uncertainty.sampling import study_values
+        draws = len(study_values(spec.uncertainty))
+    evaluations = spec.candidates * band * draws
+    keys = [f"{OTHER_VARY.get(key, 'device')}.{key}" for key in spec.vary]
+    geometry = any(is_field_key(key, scene.device.shape) for key in keys)
+    charged = scene.device.ball_charge != 0.0 or "surface_charge_uC_per_m2" in spec.vary
+    solves = 0 if not charged else (spec.candidates if geometry else 1)
+    if spec.uncertainty is not None and charged:
+        solves *= max(1, draws if any(is_field_key(k, scene.device.shape)
+                                      for k in spec.uncertainty.keys) else 1)
+    return WorkCost(evaluations=evaluations, field_solves=solves,
+                    dynamics_runs=evaluations, cache_bytes=solves * SURROGATE_BYTES,
+                    memory_bytes=evaluations * EVALUATION_BYTES)

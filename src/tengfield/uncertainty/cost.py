@@ -76,21 +76,21 @@ def available_memory() -> int | None:
 
 
 def check_cost(cost: WorkCost, *, field_limit: int, field_key: str, size_key: str,
-               memory: int | None = None) -> None:
+               memory: int | None = None, what: str = "study") -> None:
     """Refuse ``cost`` in one line (SceneError) when its field solves exceed
     ``field_limit`` (set by the scene key ``field_key``) or its memory exceeds
     :data:`MEMORY_FRACTION` of ``memory`` (default: :func:`available_memory`; the key
     ``size_key`` is what to lower)."""
     if cost.field_solves > field_limit:
         raise SceneError(
-            f"{field_key} = {field_limit}: the study needs up to {cost.field_solves:,} field "
+            f"{field_key} = {field_limit}: the {what} needs up to {cost.field_solves:,} field "
             f"solves (~{show_bytes(cost.cache_bytes)} of surrogate cache, each solve seconds to "
             f"minutes): allowed <= {field_limit} (raise {field_key} to run it, or lower "
             f"{size_key} or vary fewer geometry keys)")
     memory = available_memory() if memory is None else memory
     if memory is not None and cost.memory_bytes > MEMORY_FRACTION * memory:
         raise SceneError(
-            f"{size_key}: the study would hold ~{show_bytes(cost.memory_bytes)} "
+            f"{size_key}: the {what} would hold ~{show_bytes(cost.memory_bytes)} "
             f"({cost.evaluations:,} evaluations x ~{show_bytes(EVALUATION_BYTES)} and the "
             f"bootstrap): allowed up to {MEMORY_FRACTION:.0%} of the "
             f"{show_bytes(memory)} available; lower {size_key}")
