@@ -240,6 +240,7 @@ def _check_key(key: str, scene=None) -> str:
         kind = {str: "a text key", int: "a whole-number key", tuple: "a list key"}[spec.type]
         raise SceneError(f"{where}: [{sec}] {name} is {kind}; only numeric (real-valued) keys "
                          "can be varied")
+    # kept: 'harmonics' is the one kind whose HARMONIC_KEYS are lists (the schema's own rule)
     if (sec == "excitation" and name in HARMONIC_KEYS and scene is not None
             and scene.excitation.kind == "harmonics"):
         raise SceneError(f"{where}: with [excitation] kind = 'harmonics' {name} is a list (one "
