@@ -167,6 +167,7 @@ def test_an_array_whose_trajectories_would_not_fit_is_refused_at_load():
         parse_scene(f"[array]\ncells = {cells + 1}\nrestitution_spread = 0.1\n")
 
 
+@pytest.mark.slow
 def test_trajectory_bundle_equals_each_trajectory_bit_for_bit():
     """The compiled bundle (one call per chunk for every cell) gives exactly the values of
     sampling each cell's trajectory, for chunks of any size and cells of any phase;

@@ -56,6 +56,7 @@ def test_lower_pressure_lowers_the_limit_at_mm_gaps():
     assert math.isfinite(half) and half > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pressure", [ATMOSPHERE, 50.0])
 def test_figure_marks_only_landmarks_it_shows(tmp_path, pressure, monkeypatch):
     """breakdown.png at 1 atm and at 50 Pa (where Paschen's minimum lies at 22 mm and the

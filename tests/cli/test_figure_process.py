@@ -24,6 +24,7 @@ def jobs_importable(monkeypatch):
     monkeypatch.delenv("TENGFIELD_FIGURE_PROCESS", raising=False)
 
 
+@pytest.mark.slow
 def test_the_child_draws_the_same_figure(tmp_path, monkeypatch):
     import matplotlib.image
 

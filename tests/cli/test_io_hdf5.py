@@ -193,6 +193,7 @@ def test_run_trajectory_csv_does_not_repeat_the_waveform_columns(tmp_path):
         "time_s", "gap_m", "gap_velocity_m_per_s", "table_m"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["open", "load", "rectifier"])
 def test_a_streamed_run_writes_the_same_run_h5(tmp_path, monkeypatch, kind):
     """A long run's electrical stage streams (tengfield.electrical.stream: forced here with

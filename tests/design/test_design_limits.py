@@ -72,6 +72,7 @@ def test_candidate_deduplication_calls_key_once_per_unit():
     assert space.key_calls <= 4000 + 1998
 
 
+@pytest.mark.slow
 def test_a_hundred_thousand_candidates_deduplicate_in_linear_work():
     spec = parse_design_section(design_scene(resolution=0.0, candidates=100_000,
                                              vary={"stroke_mm": [1.0, 5.0],

@@ -33,6 +33,7 @@ def test_no_warning_without_a_lateral_drive_or_in_3d():
                              + RUN))
 
 
+@pytest.mark.slow
 def test_cli_prints_one_line(tmp_path, run_cli):
     (tmp_path / "lat.toml").write_text("[excitation]\namplitude_x_mm = 0.5\n" + RUN)
     done = run_cli("dynamics", "lat.toml", "-o", "out", cwd=tmp_path, timeout=300)

@@ -38,6 +38,7 @@ def test_large_start_times_change_nothing(origin):
     np.testing.assert_allclose(z, ref.gap[::7], rtol=0, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_trajectory_csv_keeps_every_time_at_1e9(tmp_path, capsys):
     """Times are written at full precision: 1e9 s + k / 2 kHz stay distinct."""
     scene = tmp_path / "late.toml"
@@ -177,6 +178,7 @@ def test_map_jobs_bound_is_named():
         regime_map(default_scene(), [20.0], [1e-3], jobs=max_jobs() + 1, progress=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["impact", "soft", "3d"])
 def test_a_duration_override_inside_the_settle_window_is_refused(model):
     """simulate(duration=) follows the scene file's rule: a run that ends before its regime

@@ -81,6 +81,7 @@ def test_impact_map_columns_sampled_on_request_equal_the_arrays(monkeypatch):
     np.testing.assert_array_equal(again.gap[100:200], whole.gap[100:200])
 
 
+@pytest.mark.slow
 def test_soft_model_columns_sampled_on_request_equal_the_arrays(monkeypatch):
     """The soft model's dense output is evaluated over whole solver steps (a step's
     interpolant is a matrix product: cut in two it could differ in the last bit)."""

@@ -18,6 +18,7 @@ def test_damping_ratio_eq3_limits():
         assert math.exp(-z * math.pi / math.sqrt(1 - z * z)) == pytest.approx(e, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_soft_contact_converges_to_impact_map():
     f, amplitude, e, stroke, mass = 20.0, 1.5e-3, 0.6, 3e-3, 3.95e-4
     table = sine_table(amplitude, 2 * math.pi * f, 0.0)

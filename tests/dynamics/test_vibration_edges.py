@@ -10,6 +10,7 @@ from tengfield.errors import SceneError
 from tengfield.scene import parse_scene
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("band", [(100.0, 102.0), (100.5, 102.0), (300.0, 301.0)])
 def test_a_band_narrower_than_its_lowest_frequency_keeps_its_rms(band):
     """A 1-2 Hz wide band at 100-300 Hz was synthesised on a grid of f1/32 (3-9 Hz)
@@ -25,6 +26,7 @@ def test_a_band_narrower_than_its_lowest_frequency_keeps_its_rms(band):
     assert np.mean(ms) / 400.0 == pytest.approx(1.0, abs=0.25)
 
 
+@pytest.mark.slow
 def test_a_narrow_tabulated_psd_keeps_its_rms():
     psd = tabulated_psd([200.0, 201.0, 202.0], [1.0, 4.0, 1.0]).scaled(10.0)
     duration, rate = 40.0, 1000.0

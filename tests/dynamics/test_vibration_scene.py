@@ -48,6 +48,7 @@ def test_same_seed_same_run_other_seed_other():
     assert not np.array_equal(a.gap, c.gap)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["impact", "soft"])
 def test_random_table_rms_and_ball_stays_between_plates(model):
     scene = _scene('kind = "random"\nband_hz = [10.0, 200.0]\nrms_acceleration_m_per_s2 = 40.0\n',

@@ -57,6 +57,7 @@ def _fraction(hits: int, n: int) -> dict:
     return ensemble_block(rows)["regime_fractions"].get("chaos")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("p, n", [(0.9, 4), (0.2, 20), (0.05, 100), (0.5, 6)])
 def test_regime_fraction_interval_covers_the_true_fraction(p, n):
     """The interval of a regime's fraction must cover the true probability p at least

@@ -33,6 +33,7 @@ def test_the_figure_is_drawn_with_a_missing_value_and_two_regimes(tmp_path):
     assert path.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_the_block_plots_itself_and_stays_the_summary_dict(tmp_path):
     """#29: ``ensemble_block(rows).plot()`` (``RunResult.ensemble.plot()``) is the figure
     plot_ensemble saves; the block is still the plain summary.json dict (pickled too, as

@@ -59,6 +59,7 @@ def assert_png(path):
     assert pixels.std() > 1.0, f"{path} is blank"
 
 
+@pytest.mark.slow
 def test_surrogate_figure_of_zr_curves_shows_the_visited_offsets(tmp_path):
     from tengfield.plotting.waveforms import plot_surrogate, surrogate_lines
 

@@ -27,6 +27,7 @@ def test_sweep_refuses_an_excitation_without_frequency_and_amplitude(kind):
     check_grid(parse_scene(RUN), [10.0, 20.0], [1e-3, 2e-3])     # a sine: accepted
 
 
+@pytest.mark.slow
 def test_cli_sweep_refuses_and_map_names_it(tmp_path, run_cli):
     (tmp_path / "r.toml").write_text(SCENES["random"] + RUN)
     grid = ("--frequency-hz", "10:30:3", "--amplitude-mm", "1:2:2")

@@ -46,6 +46,7 @@ def test_the_error_table_names_its_quantities_from_the_table():
     assert "| 0.05 |" in text     # the circuit row's V_load error, its own column
 
 
+@pytest.mark.slow
 def test_report_plot_returns_one_figure_per_stage_and_the_cli_saves_them(tmp_path):
     report = _report(("field", "dynamics", "circuit"))
     figures = report.plot()

@@ -28,6 +28,7 @@ def _alive(pid: int) -> bool:
         return False
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("jobs", ["2", "1"])
 def test_sigterm_ends_map_like_ctrl_c(tmp_path, cli_command, cli_env, jobs):
     out = tmp_path / "out"

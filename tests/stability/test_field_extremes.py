@@ -199,6 +199,7 @@ def test_contact_exponent_near_one_is_a_straight_line(exponent):
     assert contact.contact_exponent([1.0 + k ** 0.9 for k in (1, 2, 4)]) == pytest.approx(0.9)
 
 
+@pytest.mark.slow
 def test_permittivity_contrast_trends(refinement):
     """A near-conducting ball (εr = 100) touching the lower electrode hands it more of
     its image charge than the PTFE ball does; εr = 100 walls couple the electrodes

@@ -45,6 +45,7 @@ def test_ball_and_bore_corners_are_checked_too():
         uncertainty_spec(scene)
 
 
+@pytest.mark.slow
 def test_a_mid_study_error_names_the_draw_and_the_study():
     from tengfield.dynamics import simulate
 
