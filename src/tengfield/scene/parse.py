@@ -123,11 +123,15 @@ def parse_setting(text: str) -> tuple[list[str], object]:
     """``section.key=value`` (``--set``) -> (``["section", "key"]``, value). The value is
     read as a TOML value (``30``, ``1e8``, ``"rectifier"``, ``[1.0, 4.0]``, ``true``);
     a bare word that is no TOML value is a string (``kind=rectifier``)."""
-    name, eq, value = text.partition("=")
-    path = [part.strip() for part in name.split(".")]
-    if not eq or len(path) < 2 or not all(path):
+    if "\n" in text or "\r" in text:   # TOML would read the first line and drop the rest
+        raise SceneError(f"--set {text.splitlines()[0][:80]!r}...: the value holds a line "
+                         "break; allowed one line (a list as [a, b], a string in quotes)")
+    name, eq, value = _split_setting(text)
+    path = _key_path(name)
+    if not eq or path is None or len(path) < 2 or not all(path):
         raise SceneError(f"--set {text!r}: write section.key=value, e.g. "
-                         "--set excitation.frequency_hz=30")
+                         "--set excitation.frequency_hz=30 (a dotted key quoted: "
+                         "--set 'uncertainty.vary.\"contact.restitution\".high=0.8')")
     value = value.strip()
     try:
         parsed = tomllib.loads(f"v = {value}")["v"]
@@ -138,6 +142,37 @@ def parse_setting(text: str) -> tuple[list[str], object]:
         parsed = value
     _check_values({"v": parsed}, "--set")
     return path, parsed
+
+
+def _split_setting(text: str) -> tuple[str, str, str]:
+    """``text`` split at its first ``=`` outside a quoted key part."""
+    quote = None
+    for i, ch in enumerate(text):
+        if quote is not None:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "=":
+            return text[:i], "=", text[i + 1:]
+    return text, "", ""
+
+
+def _key_path(name: str) -> list[str] | None:
+    """The parts of a TOML dotted key (``uncertainty.vary."contact.restitution"`` ->
+    ``["uncertainty", "vary", "contact.restitution"]``), or None if it is none."""
+    if not name.strip():
+        return None
+    if '"' not in name and "'" not in name:
+        return [part.strip() for part in name.split(".")]
+    try:
+        node = tomllib.loads(f"{name} = 0")
+    except (tomllib.TOMLDecodeError, ValueError, RecursionError):
+        return None
+    path = []
+    while isinstance(node, dict) and len(node) == 1:
+        (key, node), = node.items()
+        path.append(key)
+    return path
 
 
 def with_settings(scene: Scene, settings: list[str]) -> Scene:
