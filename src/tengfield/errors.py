@@ -30,3 +30,29 @@ def show_number(value: float, *bounds: float) -> str:
         if not any(b != value and text == f"{b:.{digits}g}" for b in bounds):
             return text
     return repr(value)
+
+
+# -- a data file's text is never shown (#43 item 10) -------------------------------------
+# A message about a file the user named (a recorded excitation, a PSD table, fit's measured
+# trace) names the file, the line and what was expected, never the file's own text: the
+# file may be any file (``--set excitation.file=/etc/shadow``, a credentials file), and a
+# 100 KB header would be a 100 KB line. The readers' error paths describe a file's header
+# and cells through these two helpers only.
+def header_described(header) -> str:
+    """A file's header as a message names it: how many columns it has, never their names."""
+    n = len(header)
+    return f"its header has {n} column{'s' if n != 1 else ''}"
+
+
+def same_name_in_file(name: str, header) -> str:
+    """`` (the header has 'Time_s': names are case sensitive)`` when one of a file's
+    column names is ``name`` written another way (case, spaces, ``-``/``_``): what the user
+    wrote, nothing else of the file's text; else ``""``."""
+    def folded(text):
+        return "".join(ch for ch in str(text).lower() if ch not in " -_")
+
+    target = folded(name)
+    for column in header:
+        if column != name and target and folded(column) == target and len(column) <= 64:
+            return f" (the header has {column!r}: names are case and spelling sensitive)"
+    return ""

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..dynamics.excitation import excitation_kind as _excitation
 from ..electrical import CIRCUITS, Circuit, circuit_for
-from ..errors import SceneError
+from ..errors import SceneError, header_described, same_name_in_file
 from ..scene.recorded import check_magnitude, check_time_steps, read_table
 from ..scene.schema import suggest as _suggest
 from .compared import INFIXES, LETTERS, MEASURED_KEYS
@@ -317,13 +317,13 @@ def read_trace(path, spec: FitSpec) -> Trace:
         if not columns:
             raise SceneError(f"{what} has none of the columns "
                              f"{', '.join(c for c, _ in defaults.values())}; name the columns "
-                             f"in [fit.columns] (columns are {', '.join(header)})")
+                             f"in [fit.columns] ({header_described(header)})")
     wanted = [("[fit] time_column", spec.time_column)] + \
              [(f"[fit.columns.{c.quantity}] column", c.column) for c in columns]
     for where, col in wanted:
         if col not in header:
-            raise SceneError(f"{where} = {col!r} is not a column of {name!r}; columns are "
-                             f"{', '.join(header)}" + _suggest(col, header))
+            raise SceneError(f"{where} = {col!r} is not a column of {name!r}; "
+                             f"{header_described(header)}" + same_name_in_file(col, header))
     if len(table.rows) < MIN_SAMPLES:
         raise SceneError(f"{what} has {len(table.rows)} data rows: at least "
                          f"{MIN_SAMPLES} are needed")
