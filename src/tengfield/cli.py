@@ -107,14 +107,45 @@ def _output_option(parser: argparse.ArgumentParser, command: str):
     return None
 
 
+#: a line that says files were written ("wrote DIR/run.h5, ...", "3 rows; wrote ...")
+_WROTE = re.compile(r"(^|[\s;,(])wrote\s")
+
+
 class _PathRewriter(io.TextIOBase):
-    """Writes through to ``stream`` with the staging directory's path shown as DIR."""
+    """Writes through to ``stream`` with the staging directory's path shown as DIR; a line
+    saying "wrote DIR/..." is held until the set is in place (:meth:`release`) and
+    dropped if it never is (#43 item 9: it named files that were not written)."""
 
     def __init__(self, stream, staging: str, target: str):
         self._stream, self._staging, self._target = stream, staging, target
+        self._partial = ""      # the start of a line that says "wrote"
+        self._held: list[str] = []
 
     def write(self, text):
-        return self._stream.write(text.replace(self._staging, self._target))
+        shown = text.replace(self._staging, self._target)
+        pending = self._partial + shown
+        self._partial = ""
+        lines = pending.split("\n")
+        for line in lines[:-1]:
+            if _WROTE.search(line) and self._target in line:
+                self._held.append(line + "\n")
+            else:
+                self._stream.write(line + "\n")
+        if _WROTE.search(lines[-1]):
+            self._partial = lines[-1]          # held until its line ends
+        elif lines[-1]:
+            self._stream.write(lines[-1])
+        return len(text)
+
+    def release(self, written: bool = True) -> None:
+        """The held "wrote" lines, printed once the set is in place (``written``) or
+        dropped."""
+        held, self._held = self._held + ([self._partial] if self._partial else []), []
+        self._partial = ""
+        if written:
+            for line in held:
+                self._stream.write(line)
+            self.flush()
 
     def flush(self):
         # also called when the rewriter is collected (IOBase.__del__ -> close), possibly
@@ -154,26 +185,41 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     staging = str(staged.open())
     setattr(args, action.dest, staging)
     out, err = sys.stdout, sys.stderr
-    sys.stdout = _PathRewriter(out, staging, str(target))
-    sys.stderr = _PathRewriter(err, staging, str(target))
+    rewriters = (_PathRewriter(out, staging, str(target)),
+                 _PathRewriter(err, staging, str(target)))
+    sys.stdout, sys.stderr = rewriters
     try:
         code = int(args.func(args) or 0)
     except OSError as exc:
+        _release(rewriters, False)
         staged.abort()
         if exc.filename is None:     # e.g. a full disk while a PNG was flushed: the
             exc.filename = target    # directory written is the one to name
         raise
     except BaseException:
+        _release(rewriters, False)
         staged.abort()
         raise
     finally:
         sys.stdout, sys.stderr = out, err
         setattr(args, action.dest, target)
     if code == 0:
-        staged.commit()
+        try:
+            staged.commit()
+        except BaseException:
+            _release(rewriters, False)
+            raise
+        _release(rewriters, True)     # "wrote ..." only now that the files are there
     else:
+        _release(rewriters, False)    # nothing was moved into place
         staged.abort()
     return code
+
+
+def _release(rewriters, written: bool) -> None:
+    for rewriter in rewriters:
+        if isinstance(rewriter, _PathRewriter):
+            rewriter.release(written)
 
 
 @contextlib.contextmanager
@@ -474,6 +520,7 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
                 staged.abort() if anyone_failed else staged.commit()
         except BaseException as exc:  # noqa: BLE001
             mine = _outcome_of(exc)
+        _release((sys.stdout, sys.stderr), mine is None and not anyone_failed)
     failed = _agree(control, mine)
     if failed is not None:
         _remove_if_empty(created)
