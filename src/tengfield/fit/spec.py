@@ -303,7 +303,12 @@ def read_trace(path, spec: FitSpec) -> Trace:
     scene's CSV reader, :func:`tengfield.scene.recorded.read_table`)."""
     name = str(path)
     what = f"--measured {name!r}"
-    table = read_table(name, None, what, max_bytes=MAX_TRACE_BYTES, max_rows=MAX_TRACE_ROWS)
+    from ..io_hdf5 import is_hdf5, read_waveform_table
+
+    if is_hdf5(name):     # tengfield run's own run.h5: its /waveforms table
+        table = read_waveform_table(name, what, max_rows=MAX_TRACE_ROWS)
+    else:
+        table = read_table(name, None, what, max_bytes=MAX_TRACE_BYTES, max_rows=MAX_TRACE_ROWS)
     header = table.header
     if not header:
         raise SceneError(f"{what} is empty: expected a header row and at least "
