@@ -230,3 +230,148 @@ def _shared_counter(comm):
     except Exception:  # noqa: BLE001 - fall back to the static schedule
         return None
     return _SharedCounter(comm, window)
+
+
+# -- Ctrl-C / SIGTERM under mpirun (#43 item 7) -------------------------------------------
+#: rank 0's janitor: a small process (no tengfield, no MPI) that receives the signal's
+#: byte straight from the interpreter's C-level handler (signal.set_wakeup_fd), so it
+#: acts even while rank 0 holds the GIL (an import, a compiled kernel) or waits in an
+#: MPI call; it removes what rank 0 told it (the staging directory, unless a move into
+#: place is under way: its journal is undone by the next command; the lock and the
+#: directories this command created, when empty) and prints the one line. Rank 0 ending
+#: without a signal closes its pipe: the janitor leaves quietly.
+_JANITOR = r"""
+import json, os, select, shutil, sys, time
+signals, commands, state, pending = int(sys.argv[1]), 0, {}, b""
+while True:
+    ready = select.select([signals, commands], [], [])[0]
+    if signals in ready and os.read(signals, 64):
+        break
+    if commands in ready:
+        chunk = os.read(commands, 1 << 16)
+        if not chunk:
+            sys.exit(0)
+        pending += chunk
+        while b"\n" in pending:
+            line, pending = pending.split(b"\n", 1)
+            state = json.loads(line)
+staging, target = state.get("staging"), state.get("target")
+if staging and not os.path.lexists(os.path.join(staging, ".tengfield-tx")):
+    for attempt in range(20):
+        shutil.rmtree(staging, ignore_errors=True)
+        if not os.path.lexists(staging):
+            break
+        time.sleep(0.01)
+for d in state.get("created", []):
+    try:
+        if set(os.listdir(d)) <= {".tengfield.lock"}:
+            if os.path.lexists(os.path.join(d, ".tengfield.lock")):
+                os.unlink(os.path.join(d, ".tengfield.lock"))
+            os.rmdir(d)
+    except OSError:
+        break
+os.write(2, b"tengfield: interrupted\n")
+"""
+
+
+class SignalExit:
+    """Under ``mpirun -n N``: SIGINT or SIGTERM (Open MPI 4's mpirun forwards both to every
+    rank as SIGTERM, and SIGKILLs them a second later) ends every rank at once, also one
+    blocked in an MPI call that waits for another rank, with nothing left behind:
+
+    * rank 0 hands the signal to its janitor (:data:`_JANITOR`, told what to remove by
+      :meth:`clean_up`), which removes the staging directory, the lock and a new -o and
+      prints ``tengfield: interrupted`` once, whatever rank 0 is doing;
+    * every rank's main thread, when it next runs Python, stops writing and exits with
+      128 + the signal (130 for SIGINT, 143 for SIGTERM; rank 0 after its janitor is
+      through), except while :meth:`moving` the set into place, which completes first;
+      a watcher thread ends a rank blocked in an MPI call (the signal's byte through
+      :func:`signal.set_wakeup_fd`) the same way.
+    """
+
+    SIGNALS = ("SIGINT", "SIGTERM")
+
+    def __init__(self, rank: int):
+        import threading
+
+        self.rank = rank
+        self._moving = threading.Lock()
+        self._janitor = None
+        self._installed = False
+
+    def clean_up(self, *, staging=None, created=()) -> None:
+        """What a signal removes (rank 0): ``staging``, and the directories in
+        ``created`` (deepest first) when they hold nothing but the lock."""
+        if self._janitor is None:
+            return
+        import json
+
+        try:
+            self._janitor.stdin.write((json.dumps(
+                {"staging": None if staging is None else str(staging),
+                 "created": [str(d) for d in created]}) + "\n").encode())
+            self._janitor.stdin.flush()
+        except OSError:
+            pass
+
+    def moving(self):
+        """``with exit.moving(): commit()``: a signal lets the move into place finish."""
+        return self._moving
+
+    def install(self) -> "SignalExit":
+        import signal
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        read_end, write_end = os.pipe()
+        os.set_blocking(write_end, False)
+        if self.rank == 0:
+            self._janitor = _start_janitor(read_end)
+        if self._janitor is None:    # the ranks > 0 (and rank 0 without a janitor)
+            threading.Thread(target=self._watch, args=(read_end,), daemon=True,
+                             name="tengfield-signal-exit").start()
+        else:
+            os.close(read_end)
+        for name in self.SIGNALS:
+            signal.signal(getattr(signal, name), self._exit_in_main)
+        signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+        self._installed = True
+        return self
+
+    def _exit_in_main(self, signum, frame) -> None:
+        """The main thread's handler: exit (rank 0: once its janitor is through), unless
+        the set is being moved into place (the janitor, or the next signal, ends it)."""
+        if self._moving.locked():
+            return
+        self._finish(signum)
+
+    def _watch(self, read_end: int) -> None:
+        while True:
+            data = os.read(read_end, 1)
+            if data:
+                break
+        self._moving.acquire(timeout=2.0)      # a move into place under way ends first
+        self._finish(data[0])
+
+    def _finish(self, signum: int) -> None:
+        if self._janitor is not None:
+            try:
+                self._janitor.wait(timeout=5.0)
+            except Exception:  # noqa: BLE001 - the exit must happen
+                pass
+        elif self.rank == 0:   # straight to the descriptor: the main thread may hold sys.stderr
+            os.write(2, b"tengfield: interrupted\n")
+        os._exit(128 + signum)
+
+
+def _start_janitor(signals: int):
+    """Rank 0's janitor process (:data:`_JANITOR`) reading ``signals``, or None."""
+    import subprocess
+
+    try:
+        return subprocess.Popen([sys.executable, "-I", "-S", "-c", _JANITOR, str(signals)],
+                                stdin=subprocess.PIPE, pass_fds=(signals,),
+                                start_new_session=True)   # not in the launcher's kill
+    except OSError:
+        return None

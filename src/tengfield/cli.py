@@ -319,6 +319,10 @@ def _caused_by_interrupt(exc: BaseException) -> bool:
 # no output directory. A rank that fails on its own while the others are blocked in the
 # command's collective calls prints its error and aborts them all after
 # _mpi.FAILURE_GRACE_S seconds (never a hang).
+#: under mpirun: how SIGINT/SIGTERM end this rank (_mpi.SignalExit), None otherwise
+_SIGNAL_EXIT = None
+
+
 class _Outcome(NamedTuple):
     """How one rank ended a step: exit code and the text main() prints ('' = none)."""
 
@@ -440,7 +444,11 @@ def _agree(control, mine: _Outcome | None) -> _Outcome | None:
 
 
 def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
+    from ._mpi import SignalExit
+
     out, err = sys.stdout, sys.stderr      # _open_staging rewrites the staging path
+    global _SIGNAL_EXIT
+    _SIGNAL_EXIT = SignalExit(world.rank).install()   # Ctrl-C/SIGTERM: clean, prompt
     try:
         return _agreed_run(parser, argv, world)
     except BaseException as exc:      # noqa: BLE001 - a fault of the agreement itself:
@@ -488,11 +496,15 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
         if failed is not None:
             _remove_if_empty(created)
             return failed.code
+        if _SIGNAL_EXIT is not None and control.rank == 0:
+            _SIGNAL_EXIT.clean_up(created=created)     # a signal: no new -o left
         if action.metavar != "FILE":   # all or nothing, as a single process (#30 item 2)
             staged, failed = _open_staging(control, args, action, bool(created))
             if failed is not None:
                 _remove_if_empty(created)
                 return failed.code
+    if _SIGNAL_EXIT is not None and control.rank == 0:   # what a signal removes at once
+        _SIGNAL_EXIT.clean_up(staging=getattr(staged, "staging", None), created=created)
     try:
         code = int(args.func(args) or 0)
         mine = _Outcome(code) if code else None
@@ -517,7 +529,8 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
         anyone_failed = any(control.allgather(mine is not None))
         try:
             if control.rank == 0:
-                staged.abort() if anyone_failed else staged.commit()
+                with _SIGNAL_EXIT.moving() if _SIGNAL_EXIT else contextlib.nullcontext():
+                    staged.abort() if anyone_failed else staged.commit()
         except BaseException as exc:  # noqa: BLE001
             mine = _outcome_of(exc)
         _release((sys.stdout, sys.stderr), mine is None and not anyone_failed)
