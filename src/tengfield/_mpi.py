@@ -122,6 +122,17 @@ def all_arrived(comm, timeout: float | None = None) -> bool:
     return True
 
 
+class FailedOnAnotherRank(RuntimeError):
+    """Raised by :func:`farm` on the ranks whose items went well when another rank's
+    ``work`` raised (``original``: that exception, when it could be sent; ``rank``: where):
+    the CLI's agreement prints the failing rank's own line once, every rank ends with its
+    exit code, and -o DIR is cleaned up as in one process (#43 item 8)."""
+
+    def __init__(self, rank: int, size: int, original: BaseException | None, detail: str):
+        super().__init__(f"tengfield: error on rank {rank} of {size}: {detail}")
+        self.rank, self.original = rank, original
+
+
 def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
          progress: Callable[[int], None] | None = None, dynamic: bool = True) -> list:
     """``[work(item) for item in items]`` with the items spread over the ranks.
@@ -136,9 +147,11 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
     next decision; results must be picklable, and do not depend on which
     rank computed them.
 
-    An exception in ``work`` on a multi-rank communicator prints the message
-    with its rank and calls ``comm.Abort`` (never a hang); on one rank it is
-    simply raised.
+    An exception in ``work`` on a multi-rank communicator stops the farm on every rank
+    (never a hang, no ``MPI_Abort``): the failing rank moves the shared counter past the
+    end (the others start no further item), every rank meets at the final ``allgather``,
+    the failing rank raises its exception and the others :class:`FailedOnAnotherRank`
+    (with it); on one rank it is simply raised.
 
     ``progress(n)`` is called on rank 0 with the number of further jobs
     started on all ranks (dynamic) or an estimate (static).
@@ -154,6 +167,7 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
     counter = _shared_counter(comm) if dynamic else None
     results: dict[int, Any] = {}
     started_seen = 0
+    failure = None
     if counter is None:
         indices = iter(range(comm.rank, len(items), size))
     else:
@@ -163,12 +177,11 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
             break
         try:
             results[index] = work(items[index])
-        except BaseException as exc:  # noqa: BLE001 - every failure must abort all ranks
-            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            if not isinstance(exc, Exception):
-                detail = f"interrupted ({type(exc).__name__})"
-            abort_with_message(comm, detail)
-            raise  # only reached with a fake communicator whose Abort returns
+        except BaseException as exc:  # noqa: BLE001 - every rank must reach the allgather
+            failure = exc
+            if counter is not None:
+                counter.stop(len(items))
+            break
         if progress is not None and comm.rank == 0:
             started = min(counter.peek(), len(items)) if counter is not None \
                 else min(started_seen + size, len(items))
@@ -176,11 +189,33 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
             started_seen = started
     if counter is not None:
         counter.free()
-    gathered = comm.allgather(results)
+    gathered = comm.allgather((results if failure is None else {}, _sendable(failure)))
+    failed = [(rank, sent) for rank, (_, sent) in enumerate(gathered) if sent is not None]
+    if failure is not None:
+        raise failure
+    if failed:
+        rank, (original, detail) = failed[0]
+        raise FailedOnAnotherRank(rank, size, original, detail)
     merged: dict[int, Any] = {}
-    for part in gathered:
+    for part, _ in gathered:
         merged.update(part)
     return [merged[i] for i in range(len(items))]
+
+
+def _sendable(exc: BaseException | None):
+    """(``exc`` if it pickles, else None; its one-line text) for the other ranks."""
+    if exc is None:
+        return None
+    import pickle
+
+    detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+    if not isinstance(exc, Exception):
+        detail = f"interrupted ({type(exc).__name__})"
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:  # noqa: BLE001 - an exception that does not travel: its text does
+        return None, detail
+    return exc, detail
 
 
 class _SharedCounter:
@@ -213,6 +248,10 @@ class _SharedCounter:
     def fetch_next(self) -> int:
         """The next unstarted index (each index is handed out once)."""
         return self._fetch(1)
+
+    def stop(self, past: int) -> None:
+        """Move the counter past ``past``: no rank starts another item."""
+        self._fetch(past + 1)
 
     def peek(self) -> int:
         """How many indices have been handed out so far."""

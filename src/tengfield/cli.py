@@ -340,6 +340,10 @@ def _launched_world():
 
 def _outcome_of(exc: BaseException) -> _Outcome:
     """What the one-process main() prints and returns for ``exc``."""
+    from ._mpi import FailedOnAnotherRank
+
+    if isinstance(exc, FailedOnAnotherRank):   # the failing rank says it: its exit code
+        return _Outcome(1 if exc.original is None else _outcome_of(exc.original).code)
     if isinstance(exc, TengfieldError):
         return _Outcome(2, f"tengfield: error: {exc}")
     if isinstance(exc, KeyboardInterrupt):
