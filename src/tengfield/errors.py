@@ -45,14 +45,17 @@ def header_described(header) -> str:
 
 
 def same_name_in_file(name: str, header) -> str:
-    """`` (the header has 'Time_s': names are case sensitive)`` when one of a file's
-    column names is ``name`` written another way (case, spaces, ``-``/``_``): what the user
-    wrote, nothing else of the file's text; else ``""``."""
+    """`` (did you mean 'Time_s'?)`` when one of a file's column names is ``name`` written
+    another way (case, spaces, ``-``/``_``, a letter or two: difflib ratio >= 0.8 of
+    the folded names) and is a plain name (letters, digits, ``_ -.()/``, at most 64
+    characters): what the user wrote, nearly; nothing else of the file's text; else ``""``."""
+    import difflib
+    import re
+
     def folded(text):
         return "".join(ch for ch in str(text).lower() if ch not in " -_")
 
-    target = folded(name)
-    for column in header:
-        if column != name and target and folded(column) == target and len(column) <= 64:
-            return f" (the header has {column!r}: names are case and spelling sensitive)"
-    return ""
+    plain = [c for c in header if c != name and re.fullmatch(r"[A-Za-z0-9_ .()/-]{1,64}", c)]
+    by_fold = {folded(c): c for c in plain}
+    close = difflib.get_close_matches(folded(name), list(by_fold), n=1, cutoff=0.8)
+    return f" (did you mean {by_fold[close[0]]!r}?)" if close and folded(name) else ""

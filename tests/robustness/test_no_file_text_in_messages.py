@@ -90,4 +90,4 @@ def test_a_column_spelled_another_way_is_pointed_at(tmp_path, capsys):
     (tmp_path / "rec.csv").write_text("Time_s,displacement_m\n0.0,0.0\n")
     err = _error(capsys, ["scene", _scene(
         tmp_path, '[excitation]\nkind = "recorded"\nfile = "rec.csv"\n')])
-    assert "'Time_s'" in err and "time_column = 'time_s'" in err, err
+    assert "(did you mean 'Time_s'?)" in err and "time_column = 'time_s'" in err, err

@@ -22,6 +22,7 @@ from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
 from .recorded import decode_utf8
 from .schema import RENAMED_KEYS, show, update_section
+from .shapes import keys_of_other_shapes, switched_shape
 
 
 def default_text() -> str:
@@ -111,6 +112,12 @@ def check_rules(scene: Scene) -> None:
         raise SceneError(f"[excitation] seed = {exc.seed} with [run] realisations = {runs}: the "
                          f"realisations use seeds {exc.seed} ... {exc.seed + runs - 1}; allowed "
                          f"seed + realisations - 1 <= {MAX_SEED} (seed <= {MAX_SEED - runs + 1})")
+    others = keys_of_other_shapes(scene.device.shape, (scene.raw.get("device") or {}))
+    if others and scene.device.shape != "spherical-shell" and launched_rank() == 0:
+        import warnings
+        warnings.warn(f"[device] {', '.join(others)} left out: key(s) of another shape than "
+                      f"shape = {scene.device.shape!r} (set [device] shape to use them)",
+                      RuntimeWarning, stacklevel=3)
     contact = scene.contact
     if contact.law == "hertz" and contact.penetration_max > 0.0:
         import warnings
@@ -180,6 +187,8 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
     checked as the same key in the file would be (unknown keys with the did-you-mean,
     values with their range)."""
     data = copy.deepcopy(scene.raw)
+    shape_before = (data.get("device") or {}).get("shape", "tube")
+    set_device_keys = set()
     for text in settings:
         path, value = parse_setting(text)
         new = RENAMED_KEYS.get(tuple(path)) if len(path) == 2 else None
@@ -198,6 +207,12 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
                 raise SceneError(f"--set {text!r}: {part} is a value, not a table")
             node = child
         node[path[-1]] = value
+        if path[0] == "device" and len(path) == 2:
+            set_device_keys.add(path[1])
+    shape = (data.get("device") or {}).get("shape", "tube")
+    if isinstance(shape, str) and isinstance(data.get("device"), dict):
+        # --set device.shape=...: the other shape's keys go (a file would not write them)
+        data["device"] = switched_shape(data["device"], shape_before, shape, set_device_keys)
     base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
     source = scene.source if scene.source != "<default>" else "<default scene>"
     scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)
