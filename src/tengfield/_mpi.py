@@ -372,11 +372,30 @@ class SignalExit:
                              name="tengfield-signal-exit").start()
         else:
             os.close(read_end)
-        for name in self.SIGNALS:
-            signal.signal(getattr(signal, name), self._exit_in_main)
-        signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+        self._previous = {name: signal.signal(getattr(signal, name), self._exit_in_main)
+                          for name in self.SIGNALS}
+        self._previous_fd = signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+        self._write_end = write_end
         self._installed = True
         return self
+
+    def uninstall(self) -> None:
+        """The handlers as they were; the janitor leaves (its pipe closes)."""
+        import signal
+
+        if not self._installed:
+            return
+        signal.set_wakeup_fd(self._previous_fd)
+        for name, previous in self._previous.items():
+            signal.signal(getattr(signal, name), previous)
+        os.close(self._write_end)
+        if self._janitor is not None:
+            try:
+                self._janitor.stdin.close()
+                self._janitor.wait(timeout=5.0)
+            except Exception:  # noqa: BLE001 - it leaves by itself on the closed pipe
+                pass
+        self._installed = False
 
     def _exit_in_main(self, signum, frame) -> None:
         """The main thread's handler: exit (rank 0: once its janitor is through), unless

@@ -463,6 +463,8 @@ def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
         raise
     finally:
         sys.stdout, sys.stderr = out, err
+        _SIGNAL_EXIT.uninstall()       # the process's handlers as they were (a test's)
+        _SIGNAL_EXIT = None
 
 
 def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
