@@ -38,3 +38,13 @@ def test_a_large_difference_is_a_few_digits():
     small = comparison_lines({"measured_comparison": {"quantities": {
         "Q_pp_nC": dict(row, difference_percent=-12.34)}}})
     assert "-12.3 %" in small[1]
+
+
+@pytest.mark.parametrize("value", ["5e-324", "1e-300"])
+def test_a_tiny_value_in_the_file_is_refused_not_dropped(tmp_path, capsys, value):
+    """In the file too: 5e-324 nC is 0 C, which meant "not given" (dropped silently)."""
+    path = tmp_path / "ref.toml"
+    path.write_text(f"[reference]\nQ_pp_nC = {value}\n")
+    assert main(["scene", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"[reference] Q_pp_nC = {value} is out of range" in err, err

@@ -22,6 +22,7 @@ from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
 from .recorded import decode_utf8
 from .schema import RENAMED_KEYS, show, update_section
+from ..quantities import MAX_MEASURED, MIN_MEASURED
 from .shapes import keys_of_other_shapes, switched_shape
 
 
@@ -112,6 +113,12 @@ def check_rules(scene: Scene) -> None:
         raise SceneError(f"[excitation] seed = {exc.seed} with [run] realisations = {runs}: the "
                          f"realisations use seeds {exc.seed} ... {exc.seed + runs - 1}; allowed "
                          f"seed + realisations - 1 <= {MAX_SEED} (seed <= {MAX_SEED - runs + 1})")
+    for key, value in (scene.raw.get("reference") or {}).items():
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value != 0 \
+                and abs(value) < MIN_MEASURED:   # its SI value would be 0: "not given"
+            raise SceneError(f"[reference] {key} = {value!r} is out of range: allowed 0 (not "
+                             f"given) or [{MIN_MEASURED:g}, {MAX_MEASURED:g}] (a measured "
+                             "magnitude in the key's unit)")
     others = keys_of_other_shapes(scene.device.shape, (scene.raw.get("device") or {}))
     if others and scene.device.shape != "spherical-shell" and launched_rank() == 0:
         import warnings
