@@ -48,13 +48,24 @@ def test_switching_back_to_the_tube_drops_the_shell_keys(capsys):
 
 def test_shell_keys_on_a_tube_are_named_in_one_warning(tmp_path, capsys):
     path = tmp_path / "tube.toml"
-    path.write_text("[device]\ncavity_diameter_mm = 20\nshell_thickness_mm = 2\n")
+    path.write_text("[device]\ncavity_diameter_mm = 24\nshell_thickness_mm = 3\n")
     assert main(["scene", str(path)]) == 0
     err = capsys.readouterr().err
     warnings = [line for line in err.splitlines() if "warning" in line]
     assert warnings == ["tengfield: warning: [device] cavity_diameter_mm, shell_thickness_mm "
                         "left out: key(s) of another shape than shape = 'tube' (set [device] "
                         "shape to use them)"], err
+
+
+def test_a_tools_own_file_of_every_key_does_not_warn(tmp_path, capsys):
+    """A file of every key at its default (report's recommended-*.toml, scene.to_dict())
+    holds the shell's keys at their defaults: not a user's value, no warning."""
+    from tengfield._files import scene_toml
+
+    path = tmp_path / "every.toml"
+    path.write_text(scene_toml(load_scene(None).to_dict()))
+    assert main(["scene", str(path)]) == 0
+    assert "warning" not in capsys.readouterr().err
 
 
 def test_a_hexagonal_cell_with_method_auto_is_solved_in_3d(tmp_path, capsys):

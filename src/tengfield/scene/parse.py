@@ -21,7 +21,7 @@ from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
 from .recorded import decode_utf8
-from .schema import RENAMED_KEYS, show, update_section
+from .schema import RENAMED_KEYS, SCHEMA, show, update_section
 from ..quantities import MAX_MEASURED, MIN_MEASURED
 from .shapes import keys_of_other_shapes, switched_shape
 
@@ -119,7 +119,10 @@ def check_rules(scene: Scene) -> None:
             raise SceneError(f"[reference] {key} = {value!r} is out of range: allowed 0 (not "
                              f"given) or [{MIN_MEASURED:g}, {MAX_MEASURED:g}] (a measured "
                              "magnitude in the key's unit)")
-    others = keys_of_other_shapes(scene.device.shape, (scene.raw.get("device") or {}))
+    device = scene.raw.get("device") or {}
+    others = keys_of_other_shapes(scene.device.shape, [   # a default (a tool's own file of
+        k for k, v in device.items()                      # every key) is not a user's value
+        if not (k in SCHEMA["device"] and v == SCHEMA["device"][k].default)])
     if others and scene.device.shape != "spherical-shell" and launched_rank() == 0:
         import warnings
         warnings.warn(f"[device] {', '.join(others)} left out: key(s) of another shape than "
