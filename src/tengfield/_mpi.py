@@ -284,7 +284,8 @@ import json, os, select, shutil, sys, time
 signals, commands, state, pending = int(sys.argv[1]), 0, {}, b""
 while True:
     ready = select.select([signals, commands], [], [])[0]
-    if signals in ready and os.read(signals, 64):
+    received = os.read(signals, 64) if signals in ready else b""
+    if received:
         break
     if commands in ready:
         chunk = os.read(commands, 1 << 16)
@@ -310,6 +311,7 @@ for d in state.get("created", []):
     except OSError:
         break
 os.write(2, b"tengfield: interrupted\n")
+sys.exit(received[0])     # rank 0 exits with 128 + this (_follow_janitor)
 """
 
 
@@ -370,8 +372,10 @@ class SignalExit:
         if self._janitor is None:    # the ranks > 0 (and rank 0 without a janitor)
             threading.Thread(target=self._watch, args=(read_end,), daemon=True,
                              name="tengfield-signal-exit").start()
-        else:
+        else:                        # rank 0 ends when its janitor is through
             os.close(read_end)
+            threading.Thread(target=self._follow_janitor, daemon=True,
+                             name="tengfield-signal-exit").start()
         self._previous = {name: signal.signal(getattr(signal, name), self._exit_in_main)
                           for name in self.SIGNALS}
         self._previous_fd = signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
@@ -411,6 +415,16 @@ class SignalExit:
                 break
         self._moving.acquire(timeout=2.0)      # a move into place under way ends first
         self._finish(data[0])
+
+    def _follow_janitor(self) -> None:
+        """Rank 0, also while blocked in an MPI call: exit once the janitor has cleaned
+        up after a signal (its exit code: the signal; 0: rank 0 ended by itself)."""
+        import signal
+
+        code = self._janitor.wait()
+        if code in (signal.SIGINT, signal.SIGTERM) and self._installed:
+            self._moving.acquire(timeout=2.0)
+            os._exit(128 + code)
 
     def _finish(self, signum: int) -> None:
         if self._janitor is not None:
