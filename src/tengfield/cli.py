@@ -208,6 +208,7 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
             staged.commit()
         except BaseException:
             _release(rewriters, False)
+            staged.abort()     # a new DIR goes again (the previous set was put back)
             raise
         _release(rewriters, True)     # "wrote ..." only now that the files are there
     else:
@@ -539,7 +540,11 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
                     staged.abort() if anyone_failed else staged.commit()
         except BaseException as exc:  # noqa: BLE001
             mine = _outcome_of(exc)
-        _release((sys.stdout, sys.stderr), mine is None and not anyone_failed)
+            staged.abort()     # a new DIR goes again (the previous set was put back)
+        # "wrote ..." (any rank's) only if rank 0 moved the set into place
+        moved = control.bcast(mine is None and not anyone_failed if control.rank == 0
+                              else None, root=0)
+        _release((sys.stdout, sys.stderr), bool(moved) and mine is None)
     failed = _agree(control, mine)
     if failed is not None:
         _remove_if_empty(created)
