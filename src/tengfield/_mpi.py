@@ -122,6 +122,17 @@ def all_arrived(comm, timeout: float | None = None) -> bool:
     return True
 
 
+class FailedOnAnotherRank(RuntimeError):
+    """Raised by :func:`farm` on the ranks whose items went well when another rank's
+    ``work`` raised (``original``: that exception, when it could be sent; ``rank``: where):
+    the CLI's agreement prints the failing rank's own line once, every rank ends with its
+    exit code, and -o DIR is cleaned up as in one process (#43 item 8)."""
+
+    def __init__(self, rank: int, size: int, original: BaseException | None, detail: str):
+        super().__init__(f"tengfield: error on rank {rank} of {size}: {detail}")
+        self.rank, self.original = rank, original
+
+
 def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
          progress: Callable[[int], None] | None = None, dynamic: bool = True) -> list:
     """``[work(item) for item in items]`` with the items spread over the ranks.
@@ -136,9 +147,11 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
     next decision; results must be picklable, and do not depend on which
     rank computed them.
 
-    An exception in ``work`` on a multi-rank communicator prints the message
-    with its rank and calls ``comm.Abort`` (never a hang); on one rank it is
-    simply raised.
+    An exception in ``work`` on a multi-rank communicator stops the farm on every rank
+    (never a hang, no ``MPI_Abort``): the failing rank moves the shared counter past the
+    end (the others start no further item), every rank meets at the final ``allgather``,
+    the failing rank raises its exception and the others :class:`FailedOnAnotherRank`
+    (with it); on one rank it is simply raised.
 
     ``progress(n)`` is called on rank 0 with the number of further jobs
     started on all ranks (dynamic) or an estimate (static).
@@ -154,6 +167,7 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
     counter = _shared_counter(comm) if dynamic else None
     results: dict[int, Any] = {}
     started_seen = 0
+    failure = None
     if counter is None:
         indices = iter(range(comm.rank, len(items), size))
     else:
@@ -163,12 +177,11 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
             break
         try:
             results[index] = work(items[index])
-        except BaseException as exc:  # noqa: BLE001 - every failure must abort all ranks
-            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            if not isinstance(exc, Exception):
-                detail = f"interrupted ({type(exc).__name__})"
-            abort_with_message(comm, detail)
-            raise  # only reached with a fake communicator whose Abort returns
+        except BaseException as exc:  # noqa: BLE001 - every rank must reach the allgather
+            failure = exc
+            if counter is not None:
+                counter.stop(len(items))
+            break
         if progress is not None and comm.rank == 0:
             started = min(counter.peek(), len(items)) if counter is not None \
                 else min(started_seen + size, len(items))
@@ -176,11 +189,33 @@ def farm(comm, items: Sequence[Any], work: Callable[[Any], Any], *,
             started_seen = started
     if counter is not None:
         counter.free()
-    gathered = comm.allgather(results)
+    gathered = comm.allgather((results if failure is None else {}, _sendable(failure)))
+    failed = [(rank, sent) for rank, (_, sent) in enumerate(gathered) if sent is not None]
+    if failure is not None:
+        raise failure
+    if failed:
+        rank, (original, detail) = failed[0]
+        raise FailedOnAnotherRank(rank, size, original, detail)
     merged: dict[int, Any] = {}
-    for part in gathered:
+    for part, _ in gathered:
         merged.update(part)
     return [merged[i] for i in range(len(items))]
+
+
+def _sendable(exc: BaseException | None):
+    """(``exc`` if it pickles, else None; its one-line text) for the other ranks."""
+    if exc is None:
+        return None
+    import pickle
+
+    detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+    if not isinstance(exc, Exception):
+        detail = f"interrupted ({type(exc).__name__})"
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:  # noqa: BLE001 - an exception that does not travel: its text does
+        return None, detail
+    return exc, detail
 
 
 class _SharedCounter:
@@ -214,6 +249,10 @@ class _SharedCounter:
         """The next unstarted index (each index is handed out once)."""
         return self._fetch(1)
 
+    def stop(self, past: int) -> None:
+        """Move the counter past ``past``: no rank starts another item."""
+        self._fetch(past + 1)
+
     def peek(self) -> int:
         """How many indices have been handed out so far."""
         return self._fetch(0)
@@ -230,3 +269,181 @@ def _shared_counter(comm):
     except Exception:  # noqa: BLE001 - fall back to the static schedule
         return None
     return _SharedCounter(comm, window)
+
+
+# -- Ctrl-C / SIGTERM under mpirun (#43 item 7) -------------------------------------------
+#: rank 0's janitor: a small process (no tengfield, no MPI) that receives the signal's
+#: byte straight from the interpreter's C-level handler (signal.set_wakeup_fd), so it
+#: acts even while rank 0 holds the GIL (an import, a compiled kernel) or waits in an
+#: MPI call; it removes what rank 0 told it (the staging directory, unless a move into
+#: place is under way: its journal is undone by the next command; the lock and the
+#: directories this command created, when empty) and prints the one line. Rank 0 ending
+#: without a signal closes its pipe: the janitor leaves quietly.
+_JANITOR = r"""
+import json, os, select, shutil, sys, time
+signals, commands, state, pending = int(sys.argv[1]), 0, {}, b""
+while True:
+    ready = select.select([signals, commands], [], [])[0]
+    received = os.read(signals, 64) if signals in ready else b""
+    if received:
+        break
+    if commands in ready:
+        chunk = os.read(commands, 1 << 16)
+        if not chunk:
+            sys.exit(0)
+        pending += chunk
+        while b"\n" in pending:
+            line, pending = pending.split(b"\n", 1)
+            state = json.loads(line)
+staging, target = state.get("staging"), state.get("target")
+if staging and not os.path.lexists(os.path.join(staging, ".tengfield-tx")):
+    for attempt in range(20):
+        shutil.rmtree(staging, ignore_errors=True)
+        if not os.path.lexists(staging):
+            break
+        time.sleep(0.01)
+for d in state.get("created", []):
+    try:
+        if set(os.listdir(d)) <= {".tengfield.lock"}:
+            if os.path.lexists(os.path.join(d, ".tengfield.lock")):
+                os.unlink(os.path.join(d, ".tengfield.lock"))
+            os.rmdir(d)
+    except OSError:
+        break
+os.write(2, b"tengfield: interrupted\n")
+sys.exit(received[0])     # rank 0 exits with 128 + this (_follow_janitor)
+"""
+
+
+class SignalExit:
+    """Under ``mpirun -n N``: SIGINT or SIGTERM (Open MPI 4's mpirun forwards both to every
+    rank as SIGTERM, and SIGKILLs them a second later) ends every rank at once, also one
+    blocked in an MPI call that waits for another rank, with nothing left behind:
+
+    * rank 0 hands the signal to its janitor (:data:`_JANITOR`, told what to remove by
+      :meth:`clean_up`), which removes the staging directory, the lock and a new -o and
+      prints ``tengfield: interrupted`` once, whatever rank 0 is doing;
+    * every rank's main thread, when it next runs Python, stops writing and exits with
+      128 + the signal (130 for SIGINT, 143 for SIGTERM; rank 0 after its janitor is
+      through), except while :meth:`moving` the set into place, which completes first;
+      a watcher thread ends a rank blocked in an MPI call (the signal's byte through
+      :func:`signal.set_wakeup_fd`) the same way.
+    """
+
+    SIGNALS = ("SIGINT", "SIGTERM")
+
+    def __init__(self, rank: int):
+        import threading
+
+        self.rank = rank
+        self._moving = threading.Lock()
+        self._janitor = None
+        self._installed = False
+
+    def clean_up(self, *, staging=None, created=()) -> None:
+        """What a signal removes (rank 0): ``staging``, and the directories in
+        ``created`` (deepest first) when they hold nothing but the lock."""
+        if self._janitor is None:
+            return
+        import json
+
+        try:
+            self._janitor.stdin.write((json.dumps(
+                {"staging": None if staging is None else str(staging),
+                 "created": [str(d) for d in created]}) + "\n").encode())
+            self._janitor.stdin.flush()
+        except OSError:
+            pass
+
+    def moving(self):
+        """``with exit.moving(): commit()``: a signal lets the move into place finish."""
+        return self._moving
+
+    def install(self) -> "SignalExit":
+        import signal
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        read_end, write_end = os.pipe()
+        os.set_blocking(write_end, False)
+        if self.rank == 0:
+            self._janitor = _start_janitor(read_end)
+        if self._janitor is None:    # the ranks > 0 (and rank 0 without a janitor)
+            threading.Thread(target=self._watch, args=(read_end,), daemon=True,
+                             name="tengfield-signal-exit").start()
+        else:                        # rank 0 ends when its janitor is through
+            os.close(read_end)
+            threading.Thread(target=self._follow_janitor, daemon=True,
+                             name="tengfield-signal-exit").start()
+        self._previous = {name: signal.signal(getattr(signal, name), self._exit_in_main)
+                          for name in self.SIGNALS}
+        self._previous_fd = signal.set_wakeup_fd(write_end, warn_on_full_buffer=False)
+        self._write_end = write_end
+        self._installed = True
+        return self
+
+    def uninstall(self) -> None:
+        """The handlers as they were; the janitor leaves (its pipe closes)."""
+        import signal
+
+        if not self._installed:
+            return
+        signal.set_wakeup_fd(self._previous_fd)
+        for name, previous in self._previous.items():
+            signal.signal(getattr(signal, name), previous)
+        os.close(self._write_end)
+        if self._janitor is not None:
+            try:
+                self._janitor.stdin.close()
+                self._janitor.wait(timeout=5.0)
+            except Exception:  # noqa: BLE001 - it leaves by itself on the closed pipe
+                pass
+        self._installed = False
+
+    def _exit_in_main(self, signum, frame) -> None:
+        """The main thread's handler: exit (rank 0: once its janitor is through), unless
+        the set is being moved into place (the janitor, or the next signal, ends it)."""
+        if self._moving.locked():
+            return
+        self._finish(signum)
+
+    def _watch(self, read_end: int) -> None:
+        while True:
+            data = os.read(read_end, 1)
+            if data:
+                break
+        self._moving.acquire(timeout=2.0)      # a move into place under way ends first
+        self._finish(data[0])
+
+    def _follow_janitor(self) -> None:
+        """Rank 0, also while blocked in an MPI call: exit once the janitor has cleaned
+        up after a signal (its exit code: the signal; 0: rank 0 ended by itself)."""
+        import signal
+
+        code = self._janitor.wait()
+        if code in (signal.SIGINT, signal.SIGTERM) and self._installed:
+            self._moving.acquire(timeout=2.0)
+            os._exit(128 + code)
+
+    def _finish(self, signum: int) -> None:
+        if self._janitor is not None:
+            try:
+                self._janitor.wait(timeout=5.0)
+            except Exception:  # noqa: BLE001 - the exit must happen
+                pass
+        elif self.rank == 0:   # straight to the descriptor: the main thread may hold sys.stderr
+            os.write(2, b"tengfield: interrupted\n")
+        os._exit(128 + signum)
+
+
+def _start_janitor(signals: int):
+    """Rank 0's janitor process (:data:`_JANITOR`) reading ``signals``, or None."""
+    import subprocess
+
+    try:
+        return subprocess.Popen([sys.executable, "-I", "-S", "-c", _JANITOR, str(signals)],
+                                stdin=subprocess.PIPE, pass_fds=(signals,),
+                                start_new_session=True)   # not in the launcher's kill
+    except OSError:
+        return None

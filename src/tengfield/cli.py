@@ -107,14 +107,45 @@ def _output_option(parser: argparse.ArgumentParser, command: str):
     return None
 
 
+#: a line that says files were written ("wrote DIR/run.h5, ...", "3 rows; wrote ...")
+_WROTE = re.compile(r"(^|[\s;,(])wrote\s")
+
+
 class _PathRewriter(io.TextIOBase):
-    """Writes through to ``stream`` with the staging directory's path shown as DIR."""
+    """Writes through to ``stream`` with the staging directory's path shown as DIR; a line
+    saying "wrote DIR/..." is held until the set is in place (:meth:`release`) and
+    dropped if it never is (#43 item 9: it named files that were not written)."""
 
     def __init__(self, stream, staging: str, target: str):
         self._stream, self._staging, self._target = stream, staging, target
+        self._partial = ""      # the start of a line that says "wrote"
+        self._held: list[str] = []
 
     def write(self, text):
-        return self._stream.write(text.replace(self._staging, self._target))
+        shown = text.replace(self._staging, self._target)
+        pending = self._partial + shown
+        self._partial = ""
+        lines = pending.split("\n")
+        for line in lines[:-1]:
+            if _WROTE.search(line) and self._target in line:
+                self._held.append(line + "\n")
+            else:
+                self._stream.write(line + "\n")
+        if _WROTE.search(lines[-1]):
+            self._partial = lines[-1]          # held until its line ends
+        elif lines[-1]:
+            self._stream.write(lines[-1])
+        return len(text)
+
+    def release(self, written: bool = True) -> None:
+        """The held "wrote" lines, printed once the set is in place (``written``) or
+        dropped."""
+        held, self._held = self._held + ([self._partial] if self._partial else []), []
+        self._partial = ""
+        if written:
+            for line in held:
+                self._stream.write(line)
+            self.flush()
 
     def flush(self):
         # also called when the rewriter is collected (IOBase.__del__ -> close), possibly
@@ -154,26 +185,42 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     staging = str(staged.open())
     setattr(args, action.dest, staging)
     out, err = sys.stdout, sys.stderr
-    sys.stdout = _PathRewriter(out, staging, str(target))
-    sys.stderr = _PathRewriter(err, staging, str(target))
+    rewriters = (_PathRewriter(out, staging, str(target)),
+                 _PathRewriter(err, staging, str(target)))
+    sys.stdout, sys.stderr = rewriters
     try:
         code = int(args.func(args) or 0)
     except OSError as exc:
+        _release(rewriters, False)
         staged.abort()
         if exc.filename is None:     # e.g. a full disk while a PNG was flushed: the
             exc.filename = target    # directory written is the one to name
         raise
     except BaseException:
+        _release(rewriters, False)
         staged.abort()
         raise
     finally:
         sys.stdout, sys.stderr = out, err
         setattr(args, action.dest, target)
     if code == 0:
-        staged.commit()
+        try:
+            staged.commit()
+        except BaseException:
+            _release(rewriters, False)
+            staged.abort()     # a new DIR goes again (the previous set was put back)
+            raise
+        _release(rewriters, True)     # "wrote ..." only now that the files are there
     else:
+        _release(rewriters, False)    # nothing was moved into place
         staged.abort()
     return code
+
+
+def _release(rewriters, written: bool) -> None:
+    for rewriter in rewriters:
+        if isinstance(rewriter, _PathRewriter):
+            rewriter.release(written)
 
 
 @contextlib.contextmanager
@@ -273,6 +320,10 @@ def _caused_by_interrupt(exc: BaseException) -> bool:
 # no output directory. A rank that fails on its own while the others are blocked in the
 # command's collective calls prints its error and aborts them all after
 # _mpi.FAILURE_GRACE_S seconds (never a hang).
+#: under mpirun: how SIGINT/SIGTERM end this rank (_mpi.SignalExit), None otherwise
+_SIGNAL_EXIT = None
+
+
 class _Outcome(NamedTuple):
     """How one rank ended a step: exit code and the text main() prints ('' = none)."""
 
@@ -290,6 +341,10 @@ def _launched_world():
 
 def _outcome_of(exc: BaseException) -> _Outcome:
     """What the one-process main() prints and returns for ``exc``."""
+    from ._mpi import FailedOnAnotherRank
+
+    if isinstance(exc, FailedOnAnotherRank):   # the failing rank says it: its exit code
+        return _Outcome(1 if exc.original is None else _outcome_of(exc.original).code)
     if isinstance(exc, TengfieldError):
         return _Outcome(2, f"tengfield: error: {exc}")
     if isinstance(exc, KeyboardInterrupt):
@@ -394,7 +449,11 @@ def _agree(control, mine: _Outcome | None) -> _Outcome | None:
 
 
 def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
+    from ._mpi import SignalExit
+
     out, err = sys.stdout, sys.stderr      # _open_staging rewrites the staging path
+    global _SIGNAL_EXIT
+    _SIGNAL_EXIT = SignalExit(world.rank).install()   # Ctrl-C/SIGTERM: clean, prompt
     try:
         return _agreed_run(parser, argv, world)
     except BaseException as exc:      # noqa: BLE001 - a fault of the agreement itself:
@@ -405,6 +464,8 @@ def _main_under_mpirun(parser: argparse.ArgumentParser, argv, world) -> int:
         raise
     finally:
         sys.stdout, sys.stderr = out, err
+        _SIGNAL_EXIT.uninstall()       # the process's handlers as they were (a test's)
+        _SIGNAL_EXIT = None
 
 
 def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
@@ -442,11 +503,15 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
         if failed is not None:
             _remove_if_empty(created)
             return failed.code
+        if _SIGNAL_EXIT is not None and control.rank == 0:
+            _SIGNAL_EXIT.clean_up(created=created)     # a signal: no new -o left
         if action.metavar != "FILE":   # all or nothing, as a single process (#30 item 2)
             staged, failed = _open_staging(control, args, action, bool(created))
             if failed is not None:
                 _remove_if_empty(created)
                 return failed.code
+    if _SIGNAL_EXIT is not None and control.rank == 0:   # what a signal removes at once
+        _SIGNAL_EXIT.clean_up(staging=getattr(staged, "staging", None), created=created)
     try:
         code = int(args.func(args) or 0)
         mine = _Outcome(code) if code else None
@@ -471,9 +536,15 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
         anyone_failed = any(control.allgather(mine is not None))
         try:
             if control.rank == 0:
-                staged.abort() if anyone_failed else staged.commit()
+                with _SIGNAL_EXIT.moving() if _SIGNAL_EXIT else contextlib.nullcontext():
+                    staged.abort() if anyone_failed else staged.commit()
         except BaseException as exc:  # noqa: BLE001
             mine = _outcome_of(exc)
+            staged.abort()     # a new DIR goes again (the previous set was put back)
+        # "wrote ..." (any rank's) only if rank 0 moved the set into place
+        moved = control.bcast(mine is None and not anyone_failed if control.rank == 0
+                              else None, root=0)
+        _release((sys.stdout, sys.stderr), bool(moved) and mine is None)
     failed = _agree(control, mine)
     if failed is not None:
         _remove_if_empty(created)

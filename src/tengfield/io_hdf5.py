@@ -227,3 +227,66 @@ def read_tables(path: str | Path) -> dict:
                     values = values.astype(str)
                 out[group_name][column] = values
     return out
+
+
+#: the first bytes of an HDF5 file (its superblock's signature)
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def is_hdf5(path: str | Path) -> bool:
+    """Whether ``path`` is a regular file that starts as an HDF5 file does (False for
+    anything that cannot be read: the caller's reader names the problem)."""
+    try:
+        if not Path(path).is_file():
+            return False
+        with open(path, "rb") as fh:
+            return fh.read(len(HDF5_SIGNATURE)) == HDF5_SIGNATURE
+    except OSError:
+        return False
+
+
+class WaveformTable:
+    """The ``/waveforms`` table of a run.h5 read as a measured trace is read from a CSV:
+    ``header`` (its column names), ``rows`` (one entry per sample: only its length is
+    used) and ``column(name)`` as floats (fit's ``--measured out/run.h5``)."""
+
+    def __init__(self, what: str, columns: dict):
+        self.what = what
+        self._columns = columns
+        self.header = list(columns)
+        self.rows = range(len(next(iter(columns.values()))) if columns else 0)
+
+    def column(self, col: str, *, allow_blank: bool = False) -> np.ndarray:
+        return np.asarray(self._columns[col], dtype=float)
+
+
+def read_waveform_table(path: str | Path, what: str, *, max_rows: int) -> WaveformTable:
+    """The numeric columns of ``path``'s ``/waveforms`` group (a run.h5 of tengfield
+    run), as a table of a measured trace; a file without it, more than ``max_rows``
+    samples, or one HDF5 cannot read: one-line SceneError starting with ``what``."""
+    from ._files import note_input
+    from .errors import SceneError
+
+    h5py = _h5py()
+    note_input(Path(path))
+    try:
+        with h5py.File(path, "r") as f:
+            group = f.get("waveforms")
+            if not isinstance(group, h5py.Group):
+                raise SceneError(f"{what} is an HDF5 file without a /waveforms table: "
+                                 "expected tengfield run's run.h5 (or a CSV with a header)")
+            columns = {}
+            for name, dataset in group.items():
+                if not isinstance(dataset, h5py.Dataset) or dataset.ndim != 1 \
+                        or dataset.dtype.kind not in "fiu":
+                    continue
+                if dataset.shape[0] > max_rows:
+                    raise SceneError(f"{what} has {dataset.shape[0]:,} samples in /waveforms: "
+                                     f"allowed at most {max_rows:,} (decimate it)")
+                columns[str(name)] = dataset[()]
+    except OSError as exc:
+        raise SceneError(f"{what} could not be read as HDF5: "
+                         f"{exc.strerror or type(exc).__name__}") from None
+    if len({len(v) for v in columns.values()}) > 1:
+        raise SceneError(f"{what}: the /waveforms columns differ in length")
+    return WaveformTable(what, columns)

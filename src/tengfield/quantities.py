@@ -219,11 +219,33 @@ def parse_measured(items) -> dict[str, float]:
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ValueError(f"--reference {key} is not a measured quantity{hint}; known: "
                              + ", ".join(MEASURED))
+        if key in out:
+            raise ValueError(f"--reference {key} is given twice ({out[key]:g} and "
+                             f"{text.strip()}): allowed once")
         try:
-            out[key] = float(text)
+            value = float(text)
         except ValueError:
             raise ValueError(f"--reference {key} = {text!r}: expected a number") from None
+        unit = MEASURED[key][2]
+        if not MIN_MEASURED <= value <= MAX_MEASURED:   # NaN too; 0 would mean "not given"
+            raise ValueError(f"--reference {key} = {text.strip()} is out of range: allowed "
+                             f"[{MIN_MEASURED:g}, {MAX_MEASURED:g}] {unit} (a measured "
+                             "magnitude; leave a key out that was not measured)")
+        out[key] = value
     return out
+
+
+#: a measured magnitude ``--reference`` accepts, in its key's unit (V, nC, uA, uW): below
+#: 1e-12 of the unit no instrument reads, and the difference in % would be meaningless
+MIN_MEASURED = 1e-12
+MAX_MEASURED = 1e30
+
+
+def percent_text(percent: float | None) -> str:
+    """A difference in % as the terminal shows it: ``+12.3 %``, ``+1.2e+06 %`` when large."""
+    if percent is None or not math.isfinite(percent):
+        return "n/a"
+    return f"{percent:+.1f} %" if abs(percent) < 1e4 else f"{percent:+.3g} %"
 
 
 def compare_measured(summary: dict, measured: dict[str, float]) -> dict | None:

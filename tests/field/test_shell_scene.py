@@ -298,9 +298,11 @@ def test_the_hexagonal_cell_is_a_3d_scene_cell():
     assert scene.field_hash() != Scene.from_dict(
         {**HEXAGONAL, "device": {k: v for k, v in HEXAGONAL["device"].items()
                                  if k != "shape"}}).field_hash()
-    with pytest.raises(SceneError, match=r"\[field\] method = 'auto': shape = 'hexagonal' is "
-                                         r"a 3D cell; use method = '3d'"):
-        check_field(Scene.from_dict({"device": HEXAGONAL["device"]}))
+    check_field(Scene.from_dict({"device": HEXAGONAL["device"]}))   # "auto": 3D (#43 item 17)
+    with pytest.raises(SceneError, match=r"\[field\] method = 'axisymmetric': shape = "
+                                         r"'hexagonal' is a 3D cell; use method = '3d'"):
+        check_field(Scene.from_dict({"device": HEXAGONAL["device"],
+                                     "field": {"method": "axisymmetric"}}))
     with pytest.raises(SceneError, match=r"^\[device\] ball_diameter_mm = 6: the ball does not "
                                          r"fit the hexagonal bore"):
         Scene.from_dict({**HEXAGONAL, "device": {**HEXAGONAL["device"],

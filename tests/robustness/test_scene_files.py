@@ -154,5 +154,5 @@ def test_a_header_naming_a_column_twice_is_refused(tmp_path):
     (tmp_path / "t.csv").write_text("time_s,z_m,z_m\n" + "\n".join(rows) + "\n")
     (tmp_path / "s.toml").write_text('[excitation]\nkind = "recorded"\nfile = "t.csv"\n'
                                      'time_column = "time_s"\nsignal_column = "z_m"\n')
-    with pytest.raises(SceneError, match=r"names column 'z_m' twice \(columns 2 and 3\)"):
+    with pytest.raises(SceneError, match=r"names one column twice \(columns 2 and 3\)"):
         load_scene(tmp_path / "s.toml")

@@ -68,7 +68,7 @@ def _run(args) -> int:
         if not (math.isfinite(args.offset_mm) and 0 <= args.offset_mm * 1e-3 <= widest + 1e-15):
             raise FieldError(f"offset_mm = {number_text(args.offset_mm)} is out of range: "
                              f"allowed [0, {widest * 1e3:g}] mm (the ball must stay inside "
-                             "the tube)")
+                             f"the {shape_of(scene.device.shape).enclosure})")
         scene = scene.with_values(field={"ball_offset_mm": args.offset_mm})
     position = args.position_mm * 1e-3
     _check_position(scene, args.position_mm)

@@ -129,13 +129,14 @@ def band_lines(summary: dict) -> list[str]:
 def comparison_lines(summary: dict) -> list[str]:
     """The table of ``summary["measured_comparison"]``: tool value, measured value and %
     difference per measured figure, naming the tool quantity each is compared with."""
+    from ..quantities import percent_text
+
     block = summary.get("measured_comparison")
     if not block:
         return []
     lines = ["measured comparison (tool vs measured, difference = (tool - measured) / measured):"]
     for name, row in block["quantities"].items():
-        diff = row["difference_percent"]
-        diff_text = "n/a" if diff is None else f"{diff:+.1f} %"
+        diff_text = percent_text(row["difference_percent"])
         tool = "n/a" if row["tool_value"] is None else f"{row['tool_value']:.4g}"
         lines.append(f"  {name:16s} tool {tool} vs measured {row['measured_value']:.4g} "
                      f"{row['unit']}: {diff_text}  [{row['tool_key']}: {row['tool_label']}]")

@@ -78,10 +78,12 @@ def check_position(scene, position: float) -> None:
 
 def resolve_method(scene, method: str | None = None, offset: float = 0.0) -> str:
     """"axisymmetric" or "3d": ``None`` takes ``[field] method``; "auto" picks
-    the axisymmetric solver whenever the ball is on the axis (``offset == 0``)."""
+    the axisymmetric solver whenever the ball is on the axis (``offset == 0``) of an
+    axisymmetric cell, 3D otherwise (``shape = "hexagonal"``: a 3D cell)."""
     method = scene.field.method if method is None else method
     if method == "auto":
-        return "axisymmetric" if offset == 0.0 else "3d"
+        return "axisymmetric" if offset == 0.0 and scene.device.shape != "hexagonal" \
+            else "3d"
     if method == "axisymmetric" and offset != 0.0:
         raise FieldError(f"method = 'axisymmetric' needs offset_mm = 0 (got {offset * 1e3:g}); "
                          "use method = '3d' or 'auto' for an off-axis ball")

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import FieldError, show_number
+from ..scene.shapes import enclosure
 
 # The z → 0 / z → Δh rule is :mod:`tengfield.field.contact` (one rule for both
 # solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``.
@@ -338,7 +339,8 @@ def meshed_offset(cell, offset: float) -> float:
     if not (math.isfinite(offset) and 0.0 <= offset <= max_offset * (1 + 1e-12) + 1e-15):
         raise FieldError(f"offset_mm = {show_number(offset * 1e3, 0.0, max_offset * 1e3)} is "
                          "out of range: allowed "
-                         f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the tube)")
+                         f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the "
+                         f"{enclosure(getattr(cell, 'name', 'tube'))})")
     return min(offset, max(max_offset - minimum_gap(cell), 0.0))
 
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..dynamics.excitation import excitation_kind as _excitation
 from ..electrical import CIRCUITS, Circuit, circuit_for
-from ..errors import SceneError
+from ..errors import SceneError, header_described, same_name_in_file
 from ..scene.recorded import check_magnitude, check_time_steps, read_table
 from ..scene.schema import suggest as _suggest
 from .compared import INFIXES, LETTERS, MEASURED_KEYS
@@ -303,7 +303,12 @@ def read_trace(path, spec: FitSpec) -> Trace:
     scene's CSV reader, :func:`tengfield.scene.recorded.read_table`)."""
     name = str(path)
     what = f"--measured {name!r}"
-    table = read_table(name, None, what, max_bytes=MAX_TRACE_BYTES, max_rows=MAX_TRACE_ROWS)
+    from ..io_hdf5 import is_hdf5, read_waveform_table
+
+    if is_hdf5(name):     # tengfield run's own run.h5: its /waveforms table
+        table = read_waveform_table(name, what, max_rows=MAX_TRACE_ROWS)
+    else:
+        table = read_table(name, None, what, max_bytes=MAX_TRACE_BYTES, max_rows=MAX_TRACE_ROWS)
     header = table.header
     if not header:
         raise SceneError(f"{what} is empty: expected a header row and at least "
@@ -317,13 +322,13 @@ def read_trace(path, spec: FitSpec) -> Trace:
         if not columns:
             raise SceneError(f"{what} has none of the columns "
                              f"{', '.join(c for c, _ in defaults.values())}; name the columns "
-                             f"in [fit.columns] (columns are {', '.join(header)})")
+                             f"in [fit.columns] ({header_described(header)})")
     wanted = [("[fit] time_column", spec.time_column)] + \
              [(f"[fit.columns.{c.quantity}] column", c.column) for c in columns]
     for where, col in wanted:
         if col not in header:
-            raise SceneError(f"{where} = {col!r} is not a column of {name!r}; columns are "
-                             f"{', '.join(header)}" + _suggest(col, header))
+            raise SceneError(f"{where} = {col!r} is not a column of {name!r}; "
+                             f"{header_described(header)}" + same_name_in_file(col, header))
     if len(table.rows) < MIN_SAMPLES:
         raise SceneError(f"{what} has {len(table.rows)} data rows: at least "
                          f"{MIN_SAMPLES} are needed")

@@ -340,7 +340,7 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
             f"[field] ball_offset_mm = {show_number(fld.ball_offset * 1e3, max_offset * 1e3)} "
             "is out of range: allowed "
             f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the "
-            f"{'cavity' if dev.shape == 'spherical-shell' else 'tube'})")
+            f"{shape_of(dev.shape).enclosure})")
     if fld.ball_offset > 0 and fld.method == "axisymmetric":
         problems.append("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "
                         "use method = '3d' or 'auto' for an off-axis ball")
@@ -389,8 +389,9 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
             f"smallest meshed gap, {MIN_GAP_FRACTION:g} x that, must be >= "
             f"{MIN_MESHED_LENGTH * 1e6:g} µm for gmsh's geometry); dynamics-only runs accept it")
     method = fld.method
-    if method == "auto":
-        method = "axisymmetric" if fld.ball_offset == 0.0 else "3d"
+    if method == "auto":   # as tengfield.field.resolve_method: a 3D cell is solved in 3D
+        method = "axisymmetric" if fld.ball_offset == 0.0 and dev.shape != "hexagonal" \
+            else "3d"
     finest = MESH_MIN_FRACTION[method] * feature
     # the size the mesher uses: as written, or the default scaled by the smallest feature
     mesh_size = fld.mesh_size if "mesh_size_mm" in explicit \

@@ -21,7 +21,9 @@ from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH
 from .model import Scene, build
 from .recorded import decode_utf8
-from .schema import RENAMED_KEYS, show, update_section
+from .schema import RENAMED_KEYS, SCHEMA, show, update_section
+from ..quantities import MAX_MEASURED, MIN_MEASURED
+from .shapes import keys_of_other_shapes, switched_shape
 
 
 def default_text() -> str:
@@ -113,6 +115,21 @@ def check_rules(scene: Scene) -> None:
         raise SceneError(f"[excitation] seed = {exc.seed} with [run] realisations = {runs}: the "
                          f"realisations use seeds {exc.seed} ... {exc.seed + runs - 1}; allowed "
                          f"seed + realisations - 1 <= {MAX_SEED} (seed <= {MAX_SEED - runs + 1})")
+    for key, value in (scene.raw.get("reference") or {}).items():
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value != 0 \
+                and abs(value) < MIN_MEASURED:   # its SI value would be 0: "not given"
+            raise SceneError(f"[reference] {key} = {value!r} is out of range: allowed 0 (not "
+                             f"given) or [{MIN_MEASURED:g}, {MAX_MEASURED:g}] (a measured "
+                             "magnitude in the key's unit)")
+    device = scene.raw.get("device") or {}
+    others = keys_of_other_shapes(scene.device.shape, [   # a default (a tool's own file of
+        k for k, v in device.items()                      # every key) is not a user's value
+        if not (k in SCHEMA["device"] and v == SCHEMA["device"][k].default)])
+    if others and scene.device.shape != "spherical-shell" and launched_rank() == 0:
+        import warnings
+        warnings.warn(f"[device] {', '.join(others)} left out: key(s) of another shape than "
+                      f"shape = {scene.device.shape!r} (set [device] shape to use them)",
+                      RuntimeWarning, stacklevel=3)
     contact = scene.contact
     if contact.law == "hertz" and contact.penetration_max > 0.0:
         import warnings
@@ -125,11 +142,15 @@ def parse_setting(text: str) -> tuple[list[str], object]:
     """``section.key=value`` (``--set``) -> (``["section", "key"]``, value). The value is
     read as a TOML value (``30``, ``1e8``, ``"rectifier"``, ``[1.0, 4.0]``, ``true``);
     a bare word that is no TOML value is a string (``kind=rectifier``)."""
-    name, eq, value = text.partition("=")
-    path = [part.strip() for part in name.split(".")]
-    if not eq or len(path) < 2 or not all(path):
+    if "\n" in text or "\r" in text:   # TOML would read the first line and drop the rest
+        raise SceneError(f"--set {text.splitlines()[0][:80]!r}...: the value holds a line "
+                         "break; allowed one line (a list as [a, b], a string in quotes)")
+    name, eq, value = _split_setting(text)
+    path = _key_path(name)
+    if not eq or path is None or len(path) < 2 or not all(path):
         raise SceneError(f"--set {text!r}: write section.key=value, e.g. "
-                         "--set excitation.frequency_hz=30")
+                         "--set excitation.frequency_hz=30 (a dotted key quoted: "
+                         "--set 'uncertainty.vary.\"contact.restitution\".high=0.8')")
     value = value.strip()
     try:
         parsed = tomllib.loads(f"v = {value}")["v"]
@@ -142,11 +163,44 @@ def parse_setting(text: str) -> tuple[list[str], object]:
     return path, parsed
 
 
+def _split_setting(text: str) -> tuple[str, str, str]:
+    """``text`` split at its first ``=`` outside a quoted key part."""
+    quote = None
+    for i, ch in enumerate(text):
+        if quote is not None:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "=":
+            return text[:i], "=", text[i + 1:]
+    return text, "", ""
+
+
+def _key_path(name: str) -> list[str] | None:
+    """The parts of a TOML dotted key (``uncertainty.vary."contact.restitution"`` ->
+    ``["uncertainty", "vary", "contact.restitution"]``), or None if it is none."""
+    if not name.strip():
+        return None
+    if '"' not in name and "'" not in name:
+        return [part.strip() for part in name.split(".")]
+    try:
+        node = tomllib.loads(f"{name} = 0")
+    except (tomllib.TOMLDecodeError, ValueError, RecursionError):
+        return None
+    path = []
+    while isinstance(node, dict) and len(node) == 1:
+        (key, node), = node.items()
+        path.append(key)
+    return path
+
+
 def with_settings(scene: Scene, settings: list[str]) -> Scene:
     """``scene`` with the ``--set section.key=value`` settings applied, in order, each
     checked as the same key in the file would be (unknown keys with the did-you-mean,
     values with their range)."""
     data = copy.deepcopy(scene.raw)
+    shape_before = (data.get("device") or {}).get("shape", "tube")
+    set_device_keys = set()
     for text in settings:
         path, value = parse_setting(text)
         new = RENAMED_KEYS.get(tuple(path)) if len(path) == 2 else None
@@ -165,6 +219,12 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
                 raise SceneError(f"--set {text!r}: {part} is a value, not a table")
             node = child
         node[path[-1]] = value
+        if path[0] == "device" and len(path) == 2:
+            set_device_keys.add(path[1])
+    shape = (data.get("device") or {}).get("shape", "tube")
+    if isinstance(shape, str) and isinstance(data.get("device"), dict):
+        # --set device.shape=...: the other shape's keys go (a file would not write them)
+        data["device"] = switched_shape(data["device"], shape_before, shape, set_device_keys)
     base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
     source = scene.source if scene.source != "<default>" else "<default scene>"
     scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)

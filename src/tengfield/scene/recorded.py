@@ -22,12 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from .._files import file_kind, note_input
-from ..errors import SceneError
+from ..errors import SceneError, header_described, same_name_in_file
 from .constants import G
 from .limits import (MAX_PSD_ROWS, MAX_RECORDED_ACCELERATION, MAX_RECORDED_BYTES,
                      MAX_RECORDED_DISPLACEMENT, MAX_RECORDED_ROWS, MAX_RECORDED_TIME,
                      MAX_STEP_FACTOR, MIN_RECORDED_ROWS, MIN_STEP_FRACTION)
-from .schema import suggest
 
 
 def decode_utf8(blob: bytes, what: str) -> str:
@@ -104,12 +103,11 @@ def check_header(fields: list[str], what: str) -> list[str]:
         for sep, called in ((";", "';'"), ("\t", "tabs")):
             if sep in header[0]:
                 raise SceneError(f"{what} is separated by {called}, not by commas: "
-                                 "save it as comma-separated with '.' decimals "
-                                 f"(header {header[0][:60]!r})")
+                                 "save it as comma-separated with '.' decimals")
     seen = set()
     for i, col in enumerate(header):
         if col in seen:
-            raise SceneError(f"{what}: the header names column {col[:40]!r} twice (columns "
+            raise SceneError(f"{what}: the header names one column twice (columns "
                              f"{header.index(col) + 1} and {i + 1}): give each column its own name")
         seen.add(col)
     return header
@@ -135,8 +133,7 @@ def read_csv_rows(text: str, what: str, max_rows: int) -> tuple[list[str], list[
             continue
         if len(fields) != len(header):
             raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
-                             f"{len(fields)} field(s): expected {len(header)} "
-                             f"({','.join(header)}): {line.strip()[:60]!r}")
+                             f"{len(fields)} field(s): expected {len(header)}, as the header")
         rows.append((number, fields))
         if len(rows) > max_rows:
             raise SceneError(f"{what} has more than {max_rows:,} data rows: allowed at most "
@@ -172,8 +169,9 @@ class CsvTable:
                     raise ValueError(cell)
                 out[i] = float(cell)
             except ValueError:
-                raise SceneError(f"{self.what}: column {col!r} holds {cell[:40]!r} at line "
-                                 f"{number} (data row {i + 1}): expected a number") from None
+                raise SceneError(f"{self.what}: column {col!r} holds a cell that is not a "
+                                 f"number at line {number} (data row {i + 1}): expected a "
+                                 "number (digits, '.', an exponent)") from None
         return out
 
 
@@ -305,8 +303,8 @@ def _check_columns(header: list[str], exc: dict, wanted: list[str]) -> None:
         col = exc[col_key]
         if col not in header:
             raise SceneError(f"[excitation] {col_key} = {col!r} is not a column of "
-                             f"{exc['file']!r}; columns are {', '.join(h[:40] for h in header[:50])}"
-                             + suggest(col, header))
+                             f"{exc['file']!r}; {header_described(header)}"
+                             + same_name_in_file(col, header))
 
 
 def _python_columns(text: str, exc: dict, wanted: list[str], what: str) -> dict:
@@ -374,10 +372,10 @@ def read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
     units = {"psd_g2_per_hz": G**2, "psd_m2_per_s4_per_hz": 1.0}
     value_cols = [h for h in header if h in units]
     if len(value_cols) > 1:
-        raise SceneError(f"{where}: header {','.join(header)!r} has both psd_g2_per_hz and "
+        raise SceneError(f"{where}: the header has both psd_g2_per_hz and "
                          "psd_m2_per_s4_per_hz: keep exactly one of them")
     if "frequency_hz" not in header or len(value_cols) != 1:
-        raise SceneError(f"{where}: header {','.join(header)!r} needs the columns frequency_hz "
+        raise SceneError(f"{where}: the header needs the columns frequency_hz "
                          "and one of psd_g2_per_hz, psd_m2_per_s4_per_hz")
     freqs = table.column("frequency_hz")
     vals = table.column(value_cols[0])

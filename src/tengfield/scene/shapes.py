@@ -38,6 +38,8 @@ def _mm(x: float) -> str:
 
 class _Tube:
     name = "tube"
+    #: what holds the ball, in messages ("the ball must stay inside the tube")
+    enclosure = "tube"
 
     @staticmethod
     def stroke(device_values: dict, given: dict) -> float:
@@ -133,6 +135,7 @@ def _ball_fits(ball: float, cavity: float) -> None:
 
 class _SphericalShell:
     name = "spherical-shell"
+    enclosure = "cavity"
     #: the (z, r) table's offsets are scaled to the admissible radius at each height
     #: (tengfield.surrogate.sampling.offset_coordinate)
     offset_coordinate = "scaled"
@@ -209,6 +212,7 @@ class _Hexagonal:
     (``tube_inner_radius_mm``/``tube_outer_radius_mm``: the bore's and the outside's
     apothems, axis to a flat), electrodes over the whole bore."""
     name = "hexagonal"
+    enclosure = "hexagonal bore"
     stroke = _Tube.stroke
     followed = _Tube.followed   # the apothems follow the ball as the tube's radii
     derived = _Tube.derived
@@ -315,13 +319,39 @@ def shape_field_problems(dev, fld) -> list[str]:
         return []
     problems = []
     if dev.shape == "hexagonal":
-        if fld.method != "3d":
+        if fld.method == "axisymmetric":     # "auto" chooses 3D (resolve_method)
             problems.append(f"[field] method = {fld.method!r}: shape = 'hexagonal' is a 3D "
                             "cell; use method = '3d'")
     if fld.environment != "free-space":
         problems.append(f"[field] environment = {fld.environment!r} is not available for "
                         f"shape = {dev.shape!r}: allowed 'free-space'")
     return problems
+
+
+def enclosure(shape: str) -> str:
+    """What holds the ball in ``shape``, as messages name it (tube, cavity, ...)."""
+    return getattr(SHAPES.get(shape), "enclosure", "tube")
+
+
+def keys_of_other_shapes(shape: str, given) -> list[str]:
+    """The keys among ``given`` ([device] keys as written) that belong to another shape
+    only (a tube's ``cavity_diameter_mm``): the scene leaves them out."""
+    own = set(SHAPE_KEYS.get(shape, ())) | {"gap_mm"}
+    return [key for key in given if key not in own
+            and any(key in keys for keys in SHAPE_KEYS.values())]
+
+
+def switched_shape(device: dict, previous: str, shape: str, kept) -> dict:
+    """``[device]`` (file keys) after ``--set device.shape`` switched ``previous`` to
+    ``shape``: the keys of the previous shape that the new one does not have are dropped
+    (and the shell's derived ``stroke_mm``), except those set in the same command
+    (``kept``)."""
+    if previous == shape:
+        return device
+    drop = set(SHAPE_KEYS.get(previous, ())) - set(SHAPE_KEYS.get(shape, ()))
+    if shape == "spherical-shell":
+        drop |= {"stroke_mm", "gap_mm"}
+    return {k: v for k, v in device.items() if k not in drop or k in kept}
 
 
 def shape_mesh_features(dev) -> dict[str, float] | None:
