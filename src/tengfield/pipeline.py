@@ -356,6 +356,8 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
     read_at_samples = electrical.READ_COLUMN in waveforms and entry.read_column in ran.columns
     if read_at_samples:
         waveforms[electrical.READ_COLUMN] = waveforms[entry.read_column]
+    # [instrument]: what it records (bandwidth, aperture, sample rate, R_in)
+    electrical.read_instrument(scene, dynamics, waveforms, loaded=not read_at_samples)
     stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start, ran.details)
     extremes = electrical.terminal_extremes(scene, dynamics, curves, waveforms,
                                             read_at_samples=read_at_samples)

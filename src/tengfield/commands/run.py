@@ -94,6 +94,12 @@ def terminal_lines(summary: dict) -> list[str]:
         lines.append(f"V read through C_p = {c_p:g} pF: peak {display('V_read_V', summary['peak']['V_read_V'])}, "
                      f"peak-to-peak {display('V_read_V', summary['peak_to_peak']['V_read_V'])} "
                      "(V_OC above is the ideal open-circuit voltage)")
+    read = [n for n in ("Q_read_C", "I_read_A") if n in (summary.get("peak") or {})]
+    if read:
+        lines.append("read by the [instrument] (bandwidth, aperture, sample rate): "
+                     + ", ".join(f"{QUANTITIES[n].symbol} peak {display(n, summary['peak'][n])}, "
+                                 f"peak-to-peak {display(n, summary['peak_to_peak'][n])}"
+                                 for n in read))
     return lines
 
 
@@ -108,6 +114,10 @@ def comparison_lines(summary: dict) -> list[str]:
         diff = row["difference_percent"]
         diff_text = "n/a" if diff is None else f"{diff:+.1f} %"
         tool = "n/a" if row["tool_value"] is None else f"{row['tool_value']:.4g}"
+        if row["tool_key"] is None:
+            lines.append(f"  {name:16s} measured {row['measured_value']:.4g} {row['unit']}: "
+                         f"{row['tool_label']}")
+            continue
         lines.append(f"  {name:16s} tool {tool} vs measured {row['measured_value']:.4g} "
                      f"{row['unit']}: {diff_text}  [{row['tool_key']}: {row['tool_label']}]")
     return lines
