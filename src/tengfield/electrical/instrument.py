@@ -72,7 +72,8 @@ class FirstOrder:
             slope = np.where(h > 0, np.diff(xx) / np.where(h > 0, h, 1.0), 0.0)
         decay = np.exp(-h / self.tau)
         target = xx[1:] - slope * self.tau        # the particular solution at the step's end
-        offset = slope * self.tau - xx[:-1]       # y0 - x0 + s τ = y0 + offset
+        # y0 - x0 + s τ = y0 + offset; a step of zero length (a jump of x) keeps y
+        offset = np.where(h > 0, slope * self.tau - xx[:-1], -xx[1:])
         out = np.empty(h.size)
         prev = y0
         for k in range(h.size):                   # linear recurrence, O(n)

@@ -101,8 +101,8 @@ class StreamedRun:
     def chunks(self):
         """Yield ``(i0, i1, {column: array})`` for every chunk of output rows, in order."""
         load = self._circuit()       # the circuit's state, carried from chunk to chunk
-        reader = Reader(scene, not self.read_at_samples) if scene.instrument.given else None
         dyn, scene = self.dynamics, self.scene
+        reader = Reader(scene, not self.read_at_samples) if scene.instrument.given else None
         for i0, i1 in chunk_bounds(self.rows, self.chunk_rows):
             gap = np.asarray(dyn.gap[i0:i1], dtype=float)
             velocity = np.asarray(dyn.gap_velocity[i0:i1], dtype=float)
