@@ -369,7 +369,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
     columns = {"time_s": np.asarray(nominal.t, dtype=float), "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
                "table_m": np.asarray(table), "V_oc_V": sums["Q"] / sums["C"],
-               "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
+               "Q_sc_C": sums["Q"], "I_sc_A": sums["I"], "C_T_F": sums["C"]}
     if c_p > 0.0:
         columns[electrical.READ_COLUMN] = sums["Q"] / (sums["C"] + c_p)
     out = {"columns": columns, "fundamental": fundamental,
