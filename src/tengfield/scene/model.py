@@ -123,6 +123,7 @@ class Excitation:
     phase_y: float = 0.0
     signal_x_column: str = ""
     signal_y_column: str = ""
+    header_row: int = 0         # the CSV's header line (1-based); 0: found (issue #39)
     smoothing: float = 0.0      # [Hz] zero-phase low-pass of a recorded signal, 0 = off
     # random and harmonics (issue #25): components (frequency [Hz], amplitude [m],
     # phase [rad]); noise PSD: a flat band [Hz] with rms_acceleration [m/s^2], or a

@@ -119,6 +119,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "time_column": Key("time_column", str, "time_s", None, None),
         "signal_column": Key("signal_column", str, "displacement_m", None, None),
         "signal": Key("signal", str, "displacement", None, _choice("displacement", "acceleration")),
+        # the header's line in the file (1-based); 0: the first line naming time_column
+        # (an oscilloscope's metadata lines before it are skipped)
+        "header_row": Key("header_row", int, 0, 1, _rng(0, 10**7)),
         "smoothing_hz": Key("smoothing", float, 0.0, 1.0, _rng(0.0, 1e9)),
         # random and harmonics (issue #25): a Gaussian table acceleration with a flat PSD
         # on band_hz and rms_acceleration_m_per_s2, or the PSD of psd_file; either may
