@@ -12,9 +12,11 @@
 All three hold the same 0.2 s of one trace: a ``tengfield run`` of the embedded default
 scene (σ = -8 µC/m², 20 Hz, 1.5 mm) with ``[instrument] capacitance_pF = 338``, its steady
 part from t = 0.5 s sampled at 5 kHz, without noise, so a test can hold the three readings
-equal. ``examples/teng_load.cir`` is written by ``tengfield run --spice`` (README).
+equal. It also writes ``teng.lib`` (the device as a SPICE subcircuit, ``tengfield run
+--spice``) and ``teng_load.cir`` (it on a 100 Mohm resistor; ``cd examples && ngspice -b
+teng_load.cir`` writes V(out) to teng_load.csv).
 
-    python examples/make_bench_exports.py        # rewrites the three files
+    python examples/make_bench_exports.py        # rewrites the five files
 """
 from __future__ import annotations
 
@@ -67,12 +69,33 @@ def write_semicolon(path: Path, t, v, q) -> None:
             f.write(f"{ti:.6f};{vi:.6f};{qi * 1e9:.6f}\n".replace(".", ","))
 
 
+#: the SPICE example: the default scene on this load, this long, sampled at this rate
+SPICE_LOAD_OHM, SPICE_DURATION_S, SPICE_RATE_HZ = 1e8, 0.5, 10000.0
+
+
+def write_spice(lib: Path, netlist: Path) -> None:
+    """examples/teng.lib (the default scene's device, 0.5 s) and examples/teng_load.cir
+    (it on a 100 Mohm resistor: ``cd examples && ngspice -b teng_load.cir``)."""
+    from tengfield import spice
+
+    scene = tf.default_scene().with_values(
+        circuit={"kind": "load", "load_ohm": SPICE_LOAD_OHM},
+        run={"duration_s": SPICE_DURATION_S, "settle_periods": 4,
+             "sample_rate_hz": SPICE_RATE_HZ})
+    r = tf.run(scene)
+    spice.export(r, lib)
+    netlist.write_text(spice.load_netlist(SPICE_LOAD_OHM, float(r.t[-1] - r.t[0]),
+                                          float(r.t[1] - r.t[0])))
+
+
 def main() -> list[Path]:
     t, v, q = trace()
-    paths = [HERE / "tek_scope.csv", HERE / "electrometer_log.tsv", HERE / "scope_semicolon.csv"]
+    paths = [HERE / "tek_scope.csv", HERE / "electrometer_log.tsv", HERE / "scope_semicolon.csv",
+             HERE / "teng.lib", HERE / "teng_load.cir"]
     write_tek(paths[0], t, v)
     write_electrometer(paths[1], t, q)
     write_semicolon(paths[2], t, v, q)
+    write_spice(paths[3], paths[4])
     return paths
 
 

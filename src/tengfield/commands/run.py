@@ -24,6 +24,10 @@ def register(sub) -> None:
                    help="measured values to compare with, as in a [reference] section "
                         "(e.g. V_pp_V=4.2 Q_pp_nC=1.42 I_peak_uA=0.16): the tool's values, "
                         "the measured ones and the %% difference (docs/outputs.md)")
+    p.add_argument("--spice", action="store_true",
+                   help="also write DIR/teng.lib: the device as a SPICE subcircuit 'teng' "
+                        "(two pins; V_OC(t) and C_T(t) tables) for ngspice and LTspice "
+                        "(README, 'Simulate your own circuit')")
     p.set_defaults(func=_run)
 
 
@@ -53,6 +57,11 @@ def _run_scene(args, comm, figures) -> int:
         plots = not args.no_plots
         written = write_run_outputs(result, args.output, plots=plots, figures=figures)
         written += write_dynamics_outputs(result, args.output, plots=plots, figures=figures)
+        if getattr(args, "spice", False):
+            from pathlib import Path
+
+            from ..spice import export
+            written.append(export(result, Path(args.output) / "teng.lib"))
         if figures is not None:
             figures.finish()
         print_summary(result.summary)
