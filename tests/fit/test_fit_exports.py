@@ -64,7 +64,7 @@ SECRET = "s3cr3t-cell"
 
 
 @pytest.mark.parametrize("case, expected", [
-    ("short-row", "line 16 (data row 3) has 1 cell(s) separated by ';': expected 2"),
+    ("short-row", "line 16 (data row 3) has 1 field(s): expected 2 (separated by ';'"),
     ("missing-column", "expected it on the header line 13"),
     ("bad-time-unit", "expected one of s, sec, ms"),
 ])

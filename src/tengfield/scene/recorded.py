@@ -528,8 +528,8 @@ def read_export(name: str, base_dir: Path | None, what: str, *, time_column: str
         if len(fields) != len(header):
             sep = {",": "','", ";": "';'", "\t": "tabs"}[layout.delimiter]
             raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
-                             f"{len(fields)} cell(s) separated by {sep}: expected "
-                             f"{len(header)} (as the header on line {layout.header_line})")
+                             f"{len(fields)} field(s): expected {len(header)} (separated "
+                             f"by {sep}, as the header on line {layout.header_line})")
         if layout.decimal_comma:
             fields = [f.strip().replace(",", ".") if _DECIMAL_COMMA.fullmatch(f.strip())
                       else f for f in fields]
