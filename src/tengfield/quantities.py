@@ -230,6 +230,9 @@ def reference_key(measured_key: str, summary: dict) -> tuple[str | None, str]:
         return key, ("what the instrument records" if read else "the terminal's own")
     if stat == "peak_to_peak" and summary_value(summary, "load.V_load_peak_to_peak_V") is not None:
         return "load.V_load_peak_to_peak_V", "the load's voltage (what a meter across it reads)"
+    if summary_value(summary, "load.V_load_peak_to_peak_V") is not None:
+        return None, ("not compared: of the load's voltage the run reports the peak-to-peak "
+                      "(give V_pp_V), or give [instrument] capacitance_pF for V_read_V")
     return None, ("not compared: a bench's voltage needs the instrument's capacitance "
                   "([instrument] capacitance_pF; the ideal V_OC is what no instrument reads)")
 
