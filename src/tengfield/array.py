@@ -391,7 +391,7 @@ def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
     instants in the output steps whose samples are nearest a sampled extreme are taken.
     ``t`` and ``impacts`` are on the run's own axis."""
     mask, _ = electrical.steady_window(t, scene)
-    names = electrical.peak_quantities(scene)
+    names = {k: c for k, c in electrical.peak_quantities(scene).items() if c in columns}
     low = {k: float(np.min(columns[c][mask])) for k, c in names.items()}
     high = {k: float(np.max(columns[c][mask])) for k, c in names.items()}
     instants = np.unique(np.concatenate([np.asarray(i, dtype=float) for i in impacts]))

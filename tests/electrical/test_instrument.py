@@ -187,3 +187,17 @@ def test_the_old_key_is_read_with_one_warning(tmp_path):
     both.write_text("[circuit]\nparallel_capacitance_pF = 1.0\n[instrument]\ncapacitance_pF = 2.0\n")
     with pytest.raises(tf.SceneError, match="capacitance_pF"):
         tf.load_scene(both)
+
+
+@pytest.mark.parametrize("array", [{"cells": 3}, {"cells": 3, "restitution_spread": 0.1}],
+                         ids=["identical", "spread"])
+def test_an_array_is_read_by_the_instrument_too(cache, array):
+    """[array] cells read through one instrument: its three columns and peaks, the read
+    current below the array's I_SC (a 100 Hz front end)."""
+    r = tf.run(fx.scene_with(run=RUN, array=array,
+                             instrument={"capacitance_pF": 100.0, "bandwidth_hz": 100.0}),
+               cache_dir=cache, solve=fx.plate_model_solve)
+    assert {"V_read_V", "Q_read_C", "I_read_A", "C_T_F"} <= set(r.waveforms)
+    assert r.summary["peak"]["I_read_A"] < r.summary["peak"]["I_sc_A"]
+    w = r.waveforms
+    np.testing.assert_allclose(w["V_oc_V"], w["Q_sc_C"] / w["C_T_F"], rtol=1e-12)

@@ -353,7 +353,8 @@ def terminal_extremes(scene, dynamics, curves, waveforms: dict | None = None, *,
     """
     if waveforms is None:
         waveforms = scene_waveforms(scene, dynamics, curves)
-    quantities = peak_quantities(scene)
+    # the read columns are there once the instrument has read them (an array reads later)
+    quantities = {n: c for n, c in peak_quantities(scene).items() if c in waveforms}
     t = elapsed_times(dynamics)          # the rows of waveforms, on the run's own axis
     mask, _ = steady_window(t, scene)
     values = {name: [np.asarray(waveforms[column])[mask]]
