@@ -58,15 +58,12 @@ class FirstOrder:
         x = np.asarray(x, dtype=float)
         if self.tau == 0.0 or x.size == 0:
             return x.copy()
-        y = np.empty_like(x)
-        if self.last is None:
-            t0, x0, y0 = t[0], x[0], x[0]
-            start = 0
-        else:
-            t0, x0, y0 = self.last
-            start = -1
-        tt = np.concatenate([[t0], t[start + 1:] if start == 0 else t])
-        xx = np.concatenate([[x0], x[start + 1:] if start == 0 else x])
+        if self.last is None:               # at rest on the first input
+            first = x[0]
+            tt, xx = t, x
+        else:                               # from the previous call's last sample
+            t0, x0, first = self.last
+            tt, xx = np.r_[t0, t], np.r_[x0, x]
         h = np.diff(tt)
         with np.errstate(divide="ignore", invalid="ignore"):
             slope = np.where(h > 0, np.diff(xx) / np.where(h > 0, h, 1.0), 0.0)
@@ -74,16 +71,12 @@ class FirstOrder:
         target = xx[1:] - slope * self.tau        # the particular solution at the step's end
         # y0 - x0 + s τ = y0 + offset; a step of zero length (a jump of x) keeps y
         offset = np.where(h > 0, slope * self.tau - xx[:-1], -xx[1:])
-        out = np.empty(h.size)
-        prev = y0
+        steps = np.empty(h.size)
+        prev = first
         for k in range(h.size):                   # linear recurrence, O(n)
             prev = target[k] + (prev + offset[k]) * decay[k]
-            out[k] = prev
-        if start == 0:
-            y[0] = y0
-            y[1:] = out
-        else:
-            y[:] = out
+            steps[k] = prev
+        y = np.r_[first, steps] if self.last is None else steps
         self.last = (float(t[-1]), float(x[-1]), float(y[-1]))
         return y
 
@@ -121,8 +114,7 @@ class Aperture:
         all_t = np.concatenate([self.t, new_t])
         all_y = np.concatenate([self.y, new_y])
         all_int = np.concatenate([self.integral, new_int])
-        start = max(float(all_t[0]), -math.inf)
-        lower = np.maximum(new_t - self.aperture, start)
+        lower = np.maximum(new_t - self.aperture, all_t[0])    # since the first sample
         width = new_t - lower
         at_lower = _integral_at(all_t, all_y, all_int, lower)
         with np.errstate(divide="ignore", invalid="ignore"):
