@@ -51,3 +51,28 @@ def test_a_filtered_current_fits_back_sigma_through_the_instrument(plate_surroga
     assert abs(ideal.values["surface_charge_uC_per_m2"]) < 7.5           # -7.10
     assert ideal.residuals["I"]["percent_of_signal_rms"] > 10.0           # 23 %
     assert read.residuals["I"]["percent_of_signal_rms"] < 1.0
+
+
+@pytest.mark.parametrize("given", [{"circuit": {"parallel_capacitance_pF": 100.0}},
+                                   {"instrument": {"capacitance_pF": 100.0,
+                                                   "bandwidth_hz": 100.0}}],
+                         ids=["old-key", "instrument"])
+def test_a_fitted_capacitance_is_written_as_the_instruments(given, tmp_path):
+    """fitted.toml holds the fitted C_p once, as [instrument] capacitance_pF: a scene with
+    an [instrument] and the old [circuit] key both given was refused on reading."""
+    import types
+    import warnings
+
+    from tengfield.fit.output import fitted_scene_dict
+    from tengfield._files import scene_toml
+
+    scene = tf.default_scene().with_values(**given)
+    result = types.SimpleNamespace(values={"parallel_capacitance_pF": 250.0})
+    path = tmp_path / "fitted.toml"
+    path.write_text(scene_toml(fitted_scene_dict(scene, result), "test", base_dir=None))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                 # no deprecation warning either
+        fitted = tf.load_scene(path)
+    assert fitted.circuit.parallel_capacitance == pytest.approx(250e-12)
+    assert fitted.instrument.capacitance == pytest.approx(250e-12)
+    assert fitted.instrument.bandwidth == scene.instrument.bandwidth
