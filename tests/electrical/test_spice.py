@@ -122,3 +122,16 @@ def test_the_shipped_example_runs_in_ngspice(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     v = np.loadtxt(tmp_path / "teng_load.csv")[:, 1]
     assert 0.5 < np.max(v) < 100 and -100 < np.min(v) < -0.5
+
+
+def test_a_streamed_run_exports_the_same_subcircuit(cache, monkeypatch):
+    """A long run's columns come a chunk at a time (electrical/stream.py): the same text."""
+    from tengfield.electrical import stream
+
+    scene = fx.scene_with(run={**RUN, "duration_s": 0.3}, circuit={"kind": "load"})
+    whole = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    monkeypatch.setattr(stream, "STREAM_ROWS", 10)
+    monkeypatch.setattr(stream, "CHUNK_ROWS", 97)
+    streamed = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    assert isinstance(streamed.waveforms, stream.StreamedWaveforms)
+    assert spice.subcircuit(streamed) == spice.subcircuit(whole)
