@@ -201,3 +201,19 @@ def test_an_array_is_read_by_the_instrument_too(cache, array):
     assert r.summary["peak"]["I_read_A"] < r.summary["peak"]["I_sc_A"]
     w = r.waveforms
     np.testing.assert_allclose(w["V_oc_V"], w["Q_sc_C"] / w["C_T_F"], rtol=1e-12)
+
+
+def test_with_values_changes_the_one_capacitance_under_either_name():
+    """An uncertainty study or a fit sets [circuit] parallel_capacitance_pF on a scene
+    with an [instrument]: the instrument's capacitance changes (it was refused as two
+    different values of one capacitance); a new [instrument] value replaces the old key."""
+    inst = tf.default_scene().with_values(instrument={"capacitance_pF": 338.0,
+                                                      "bandwidth_hz": 50.0})
+    moved = inst.with_values(circuit={"parallel_capacitance_pF": 100.0})
+    assert moved.instrument.capacitance == pytest.approx(100e-12)
+    assert moved.circuit.parallel_capacitance == pytest.approx(100e-12)
+    assert moved.instrument.bandwidth == 50.0
+    old = tf.default_scene().with_values(circuit={"parallel_capacitance_pF": 338.0})
+    new = old.with_values(instrument={"capacitance_pF": 10.0})
+    assert new.circuit.parallel_capacitance == pytest.approx(10e-12)
+    assert "parallel_capacitance_pF" not in new.raw.get("circuit", {})

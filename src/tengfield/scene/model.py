@@ -469,7 +469,9 @@ class Scene:
                 raise TypeError(f"with_values({sec}={values!r:.60}): expected a dict of "
                                 f"[{sec}] keys and file-level values, e.g. "
                                 f"with_values({sec}={{'key': value}})")
-            update_section(data, sec, {k: _python_value(v) for k, v in values.items()})
+            values = {k: _python_value(v) for k, v in values.items()}
+            _one_capacitance(data, sec, values)
+            update_section(data, sec, values)
         base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
         scene = build(data, base_dir=base, source=self.source, text=self.text, warn=False)
         if "field" in sections:   # explicit field settings: refuse bad ones at once
@@ -653,3 +655,17 @@ def _instrument(data: dict, values: dict, source: str, warn: bool) -> Instrument
     else:
         inst["capacitance"] = values["circuit"]["parallel_capacitance"]
     return Instrument(**inst, given=section is not None)
+
+
+def _one_capacitance(data: dict, sec: str, values: dict) -> None:
+    """C_p changed by :meth:`Scene.with_values` under either name (``[circuit]
+    parallel_capacitance_pF``, ``[instrument] capacitance_pF``) replaces it under both: a
+    scene with an ``[instrument]`` takes a new ``[circuit]`` value as the instrument's (an
+    uncertainty study or a fit varies the old name), and a new ``[instrument]`` value
+    drops the old key. Changes ``values`` and ``data`` in place."""
+    if sec == "circuit" and "parallel_capacitance_pF" in values and "instrument" in data:
+        data["instrument"] = dict(data["instrument"])
+        data["instrument"]["capacitance_pF"] = values.pop("parallel_capacitance_pF")
+    elif sec == "instrument" and "capacitance_pF" in values and "circuit" in data:
+        data["circuit"] = {k: v for k, v in data["circuit"].items()
+                           if k != "parallel_capacitance_pF"}
