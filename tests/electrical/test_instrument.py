@@ -217,3 +217,15 @@ def test_with_values_changes_the_one_capacitance_under_either_name():
     new = old.with_values(instrument={"capacitance_pF": 10.0})
     assert new.circuit.parallel_capacitance == pytest.approx(10e-12)
     assert "parallel_capacitance_pF" not in new.raw.get("circuit", {})
+
+
+def test_equal_steps_take_the_compiled_recurrence_with_the_loops_numbers():
+    from tengfield.electrical.instrument import _recurrence
+
+    rng = np.random.default_rng(0)
+    decay, source = np.full(5000, 0.97), rng.normal(size=5000)
+    expected, prev = np.empty(5000), 0.3
+    for k in range(5000):
+        prev = decay[k] * prev + source[k]
+        expected[k] = prev
+    np.testing.assert_allclose(_recurrence(decay, source, 0.3), expected, rtol=0, atol=1e-12)

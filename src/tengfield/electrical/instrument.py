@@ -71,14 +71,27 @@ class FirstOrder:
         target = xx[1:] - slope * self.tau        # the particular solution at the step's end
         # y0 - x0 + s τ = y0 + offset; a step of zero length (a jump of x) keeps y
         offset = np.where(h > 0, slope * self.tau - xx[:-1], -xx[1:])
-        steps = np.empty(h.size)
-        prev = first
-        for k in range(h.size):                   # linear recurrence, O(n)
-            prev = target[k] + (prev + offset[k]) * decay[k]
-            steps[k] = prev
+        steps = _recurrence(decay, target + offset * decay, first)
         y = np.r_[first, steps] if self.last is None else steps
         self.last = (float(t[-1]), float(x[-1]), float(y[-1]))
         return y
+
+
+def _recurrence(decay, source, first: float) -> np.ndarray:
+    """y_k = decay_k y_(k-1) + source_k from y_(-1) = ``first``: by SciPy's compiled
+    ``lfilter`` when the steps are equal (the run's output samples: decay the same to
+    1e-12), else a loop."""
+    if decay.size and np.max(np.abs(decay - decay[0])) <= 1e-12 * abs(decay[0]):
+        from scipy.signal import lfilter
+        d = float(decay[0])
+        out, _ = lfilter([1.0], [1.0, -d], source, zi=[d * first])
+        return out
+    out = np.empty(decay.size)
+    prev = first
+    for k in range(decay.size):                  # linear recurrence, O(n)
+        prev = decay[k] * prev + source[k]
+        out[k] = prev
+    return out
 
 
 class Aperture:
