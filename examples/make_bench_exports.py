@@ -10,9 +10,10 @@
   commas, units in brackets (``TIME [s];CH1 [V];CH2 [nC]``).
 
 All three hold the same 0.2 s of one trace: a ``tengfield run`` of the embedded default
-scene (σ = -8 µC/m², 20 Hz, 1.5 mm) with ``[instrument] capacitance_pF = 338``, its steady
-part from t = 0.5 s sampled at 5 kHz, without noise, so a test can hold the three readings
-equal. It also writes ``teng.lib`` (the device as a SPICE subcircuit, ``tengfield run
+scene (σ = -8 µC/m², 20 Hz, 1.5 mm) read through the front end of examples/bench.toml's
+``[instrument]`` (338 pF, a 1.667 ms aperture; exported at 5 kHz, the trace's own readings),
+its steady part from t = 0.5 s, without noise, so a test can hold the three readings equal
+and ``tengfield fit examples/bench.toml --measured ...`` gives σ = -8 back. It also writes ``teng.lib`` (the device as a SPICE subcircuit, ``tengfield run
 --spice``) and ``teng_load.cir`` (it on a 100 Mohm resistor; ``cd examples && ngspice -b
 teng_load.cir`` writes V(out) to teng_load.csv).
 
@@ -27,16 +28,17 @@ import numpy as np
 import tengfield as tf
 
 HERE = Path(__file__).resolve().parent
-START_S, SPAN_S, RATE_HZ, C_P_PF = 0.5, 0.2, 5000.0, 338.0
+START_S, SPAN_S, RATE_HZ, C_P_PF, APERTURE_S = 0.5, 0.2, 5000.0, 338.0, 1.667e-3
 
 
 def trace():
-    """(t [s] from the first sample, V read through C_p [V], Q_SC [C])."""
-    scene = tf.default_scene().with_values(instrument={"capacitance_pF": C_P_PF})
+    """(t [s] from the first sample, V read [V], Q read [C])."""
+    scene = tf.default_scene().with_values(instrument={"capacitance_pF": C_P_PF,
+                                                       "aperture_s": APERTURE_S})
     r = tf.run(scene)
     step = int(round(1.0 / (RATE_HZ * (r.t[1] - r.t[0]))))
     keep = np.flatnonzero((r.t >= START_S - 1e-12) & (r.t < START_S + SPAN_S - 1e-9))[::step]
-    return r.t[keep] - r.t[keep[0]], r.waveforms["V_read_V"][keep], r.waveforms["Q_sc_C"][keep]
+    return r.t[keep] - r.t[keep[0]], r.waveforms["V_read_V"][keep], r.waveforms["Q_read_C"][keep]
 
 
 def write_tek(path: Path, t, v) -> None:
