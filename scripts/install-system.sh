@@ -26,6 +26,7 @@ PACKAGES=(
   openmpi-bin libopenmpi-dev
   libglu1-mesa libgl1 libegl1 libosmesa6 libxrender1 libxcursor1 libxft2
   libxinerama1 libxext6 libx11-6 libxi6 libxrandr2
+  ngspice   # the SPICE tests (tests/electrical/test_spice*.py) and examples/teng_load.cir
   git make
 )
 

@@ -369,7 +369,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     gap, vel, table = nominal.gap, nominal.gap_velocity, nominal.table
     columns = {"time_s": np.asarray(nominal.t, dtype=float), "gap_m": np.asarray(gap), "gap_velocity_m_per_s": np.asarray(vel),
                "table_m": np.asarray(table), "V_oc_V": sums["Q"] / sums["C"],
-               "Q_sc_C": sums["Q"], "I_sc_A": sums["I"]}
+               "Q_sc_C": sums["Q"], "I_sc_A": sums["I"], "C_T_F": sums["C"]}
     if c_p > 0.0:
         columns[electrical.READ_COLUMN] = sums["Q"] / (sums["C"] + c_p)
     out = {"columns": columns, "fundamental": fundamental,
@@ -391,7 +391,7 @@ def _spread_peaks(scene, curves, bundle, weights, impacts, t, columns) -> dict:
     instants in the output steps whose samples are nearest a sampled extreme are taken.
     ``t`` and ``impacts`` are on the run's own axis."""
     mask, _ = electrical.steady_window(t, scene)
-    names = electrical.peak_quantities(scene)
+    names = {k: c for k, c in electrical.peak_quantities(scene).items() if c in columns}
     low = {k: float(np.min(columns[c][mask])) for k, c in names.items()}
     high = {k: float(np.max(columns[c][mask])) for k, c in names.items()}
     instants = np.unique(np.concatenate([np.asarray(i, dtype=float) for i in impacts]))

@@ -48,7 +48,8 @@ def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
     through C_p, when present; + the circuit's columns present, in the registry's
     order: :func:`tengfield.electrical.all_columns`); a streamed run's a chunk at a
     time."""
-    columns = WAVEFORM_COLUMNS + [c for c in [READ_COLUMN] + all_columns() if c in waveforms]
+    read = [READ_COLUMN, "Q_read_C", "I_read_A"]     # with an instrument
+    columns = WAVEFORM_COLUMNS + [c for c in read + all_columns() if c in waveforms]
     formats = {c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)}
     if hasattr(waveforms, "chunks"):   # a streamed run (tengfield.electrical.stream)
         for k, chunk in enumerate(waveforms.chunks()):

@@ -355,6 +355,8 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
     read_at_samples = electrical.READ_COLUMN in waveforms and entry.read_column in ran.columns
     if read_at_samples:
         waveforms[electrical.READ_COLUMN] = waveforms[entry.read_column]
+    # [instrument]: what it records (bandwidth, aperture, sample rate, R_in)
+    electrical.read_instrument(scene, dynamics, waveforms, loaded=not read_at_samples)
     stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start, ran.details)
     extremes = electrical.terminal_extremes(scene, dynamics, curves, waveforms,
                                             read_at_samples=read_at_samples)
@@ -438,6 +440,17 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
         read = np.asarray(waveforms[entry.read_column])[mask]
         peaks["V_read"] = float(np.max(read) - np.min(read))
         peak["V_read"] = float(np.max(np.abs(read)))
+    if scene.instrument.given:     # what the [instrument] records of the array's terminals
+        if electrical.READ_COLUMN not in waveforms:
+            waveforms[electrical.READ_COLUMN] = waveforms["Q_sc_C"] / (
+                waveforms["C_T_F"] + scene.circuit.parallel_capacitance)
+        electrical.read_instrument(scene, dynamics, waveforms,
+                                   loaded=entry.read_column not in waveforms)
+        mask, _ = electrical.steady_window(electrical.elapsed_times(dynamics), scene)
+        for name, (column, _) in electrical.READ_COLUMNS.items():
+            read = np.asarray(waveforms[column])[mask]
+            peaks[name] = float(np.max(read) - np.min(read))
+            peak[name] = float(np.max(np.abs(read)))
     summary = _summary(scene, dynamics, waveforms, stages, table,
                        extremes={"peak_to_peak": peaks, "peak": peak},
                        circuit_blocks=lambda mask: electrical.no_load(scene), entry=entry)

@@ -75,7 +75,16 @@ QUANTITIES: dict[str, Quantity] = dict([
     _q("V_read_V", "V", "V_read", "voltage read through C_p",
        "what an instrument of capacitance C_p reads: Q_SC / (C_T + C_p); with "
        "[circuit] kind = \"load\" the voltage across R || C_p (= V_load_V)",
-       when="[circuit] parallel_capacitance_pF > 0"),
+       when="[instrument] (or [circuit] parallel_capacitance_pF > 0)"),
+    _q("Q_read_C", "C", "Q_read", "charge read by the instrument",
+       "Q_SC through [instrument]'s bandwidth, aperture and sample rate (charge mode: a "
+       "virtual-ground input)", "nC", 1e9, when="[instrument]"),
+    _q("I_read_A", "A", "I_read", "current read by the instrument",
+       "I_SC through [instrument]'s bandwidth, aperture and sample rate (ammeter: a "
+       "virtual-ground input)", "nA", 1e9, when="[instrument]"),
+    _q("C_T_F", "F", "C_T", "device capacitance C_T",
+       "C_T(z) of the surrogate x cells (V = V_OC - Q / C_T; the SPICE model's table)",
+       "pF", 1e12),
     _q("V_load_V", "V", "V_load", "load voltage", "the load ODE, R || C_p",
        when="[circuit] kind = \"load\" or \"series-rc\""),
     _q("I_load_A", "A", "I_load", "load current", "V_load / R", "nA", 1e9,
@@ -191,14 +200,41 @@ MEASURED: dict[str, tuple[str, str, str, float]] = {
 }
 
 
+#: the quantity an ``[instrument]`` records in place of a terminal one
+READ_OF = {"Q_sc_C": "Q_read_C", "I_sc_A": "I_read_A"}
+
+
 def tool_key(measured_key: str, summary: dict) -> str:
     """The dotted summary key a ``[reference]`` value is compared with in ``summary``
-    (``"I_peak_uA"`` -> ``"peak.I_sc_A"``; a voltage -> ``V_read_V`` with an
-    instrument, ``V_oc_V`` without)."""
+    (``"I_peak_uA"`` -> ``"peak.I_sc_A"``, ``"peak.I_read_A"`` with an ``[instrument]``;
+    a voltage -> ``V_read_V`` with an instrument, ``V_oc_V`` without: a fit's model V)."""
     stat, name, _, _ = MEASURED[measured_key]
     if name == "V_read_V" and "V_read_V" not in (summary.get(stat) or {}):
         name = "V_oc_V"
+    if READ_OF.get(name) in (summary.get(stat) or {}):
+        name = READ_OF[name]
     return f"{stat}.{name}"
+
+
+def reference_key(measured_key: str, summary: dict) -> tuple[str | None, str]:
+    """The dotted summary key a bench's ``[reference]`` value is compared with, and why
+    (None: nothing of the run can be compared). A measured voltage is what the instrument
+    reads (``V_read_V``); with a load and no instrument, the load's voltage (what a meter
+    across it reads: ``load.V_load_peak_to_peak_V``); with neither, nothing: the ideal
+    V_OC of an unloaded cell is kilovolts, no bench reads it (give ``[instrument]
+    capacitance_pF``). A charge or current: the read one with an ``[instrument]``."""
+    stat, name, _, _ = MEASURED[measured_key]
+    if name != "V_read_V" or "V_read_V" in (summary.get(stat) or {}):
+        key = tool_key(measured_key, summary)
+        read = key.rpartition(".")[2] in READ_OF.values() or key.endswith("V_read_V")
+        return key, ("what the instrument records" if read else "the terminal's own")
+    if stat == "peak_to_peak" and summary_value(summary, "load.V_load_peak_to_peak_V") is not None:
+        return "load.V_load_peak_to_peak_V", "the load's voltage (what a meter across it reads)"
+    if summary_value(summary, "load.V_load_peak_to_peak_V") is not None:
+        return None, ("not compared: of the load's voltage the run reports the peak-to-peak "
+                      "(give V_pp_V), or give [instrument] capacitance_pF for V_read_V")
+    return None, ("not compared: a bench's voltage needs the instrument's capacitance "
+                  "([instrument] capacitance_pF; the ideal V_OC is what no instrument reads)")
 
 
 def parse_measured(items) -> dict[str, float]:
@@ -259,15 +295,20 @@ def compare_measured(summary: dict, measured: dict[str, float]) -> dict | None:
     rows = {}
     for key, value in measured.items():
         _, _, unit, factor = MEASURED[key]
-        dotted = tool_key(key, summary)
-        tool = summary_value(summary, dotted)
+        dotted, why = reference_key(key, summary)
+        tool = None if dotted is None else summary_value(summary, dotted)
         rows[key] = {
             "measured_value": value / factor, "unit": unit,
             "tool_value": None if tool is None else tool / factor,
             "difference_percent": (None if tool is None
                                    else 100.0 * (tool - value) / value),
-            "tool_key": dotted, "tool_label": describe(dotted, unit=False)}
+            "tool_key": dotted, "tool_label": (why if dotted is None else describe(
+                dotted.replace("load.V_load_peak_to_peak_V", "peak_to_peak.V_load_V"),
+                unit=False)),
+            "compared_with": why}
     return {"quantities": rows,
             "rule": "difference_percent = 100 (tool - measured) / measured; a measured "
-                    "voltage is compared with the voltage read through C_p (V_read_V) when "
-                    "[circuit] parallel_capacitance_pF > 0, else with the ideal V_OC"}
+                    "voltage is compared with the voltage the instrument reads (V_read_V, "
+                    "[instrument] capacitance_pF > 0), with a load's voltage without one, "
+                    "else with nothing; with an [instrument] a charge or current with the "
+                    "read one (Q_read_C, I_read_A)"}

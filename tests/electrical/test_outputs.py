@@ -129,10 +129,12 @@ def test_reference_table_gives_the_percent_differences(cache):
             100.0 * (tool[key] - value) / value, rel=1e-9)
     assert block["V_pp_V"]["tool_key"] == "peak_to_peak.V_read_V"
     assert block["Q_pp_nC"]["unit"] == "nC" and block["I_peak_uA"]["tool_key"] == "peak.I_sc_A"
-    # without an instrument a measured voltage is compared with the ideal V_OC
+    # without an instrument a measured voltage is compared with nothing (issue #42: the
+    # ideal V_OC is kilovolts, no bench reads it), and the row says why
     bare = model_run(cache, reference={"V_pp_V": 4.2})
-    assert bare.summary["measured_comparison"]["quantities"]["V_pp_V"]["tool_key"] == \
-        "peak_to_peak.V_oc_V"
+    row = bare.summary["measured_comparison"]["quantities"]["V_pp_V"]
+    assert row["tool_key"] is None and row["difference_percent"] is None
+    assert "capacitance" in row["compared_with"]
     assert "measured_comparison" not in model_run(cache).summary
 
 
@@ -257,7 +259,7 @@ def test_no_load_ohm_without_a_load(cache, kind):
 def test_cli_run_with_instrument_and_reference(tmp_path, run_cli, cli_env):
     (tmp_path / "meter.toml").write_text(
         "[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 5000.0\n"
-        "[circuit]\nparallel_capacitance_pF = 338.0\n[reference]\nV_pp_V = 4.2\n")
+        "[instrument]\ncapacitance_pF = 338.0\n[reference]\nV_pp_V = 4.2\n")
     scene = tf.load_scene(tmp_path / "meter.toml")
     tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)   # fills the cache
     env = cli_env(MPLBACKEND="Agg", TENGFIELD_CACHE_DIR=tmp_path / "cache")
@@ -268,7 +270,7 @@ def test_cli_run_with_instrument_and_reference(tmp_path, run_cli, cli_env):
     assert (out / "waveforms.png").stat().st_size > 0
     with open(out / "waveforms.csv") as f:
         header = next(csv.reader(f))
-    assert header == electrical.WAVEFORM_COLUMNS + ["V_read_V"]
+    assert header == electrical.WAVEFORM_COLUMNS + ["V_read_V", "Q_read_C", "I_read_A"]
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["measured_comparison"]["quantities"]) == {"V_pp_V", "Q_pp_nC",
                                                                  "I_peak_uA"}

@@ -124,10 +124,7 @@ def _error(main, capsys, argv):
     ("not-increasing", "time is not strictly increasing"),
     ("utf-16", "is UTF-16 text: save it as UTF-8"),
     ("binary", "is binary data (byte 0x"),
-    # a European spreadsheet's or a scope's export: it said "has none of the columns ...
-    # (columns are time_ms;V_meas;Q_meas)"
-    ("semicolon", "is separated by ';', not by commas: save it as comma-separated"),
-    ("tab", "is separated by tabs, not by commas: save it as comma-separated"),
+    # ';'- and tab-separated exports are read since issue #39 (tests/fit/test_fit_exports.py)
 ])
 def test_bad_traces_are_one_line_errors(setup, main, tmp_path, capsys, case, expected):
     path, cache, _, _ = setup

@@ -24,6 +24,10 @@ def register(sub) -> None:
                    help="measured values to compare with, as in a [reference] section "
                         "(e.g. V_pp_V=4.2 Q_pp_nC=1.42 I_peak_uA=0.16): the tool's values, "
                         "the measured ones and the %% difference (docs/outputs.md)")
+    p.add_argument("--spice", action="store_true",
+                   help="also write DIR/teng.lib: the device as a SPICE subcircuit 'teng' "
+                        "(two pins; V_OC(t) and C_T(t) tables) for ngspice and LTspice "
+                        "(README, 'Simulate your own circuit')")
     p.set_defaults(func=_run)
 
 
@@ -53,6 +57,11 @@ def _run_scene(args, comm, figures) -> int:
         plots = not args.no_plots
         written = write_run_outputs(result, args.output, plots=plots, figures=figures)
         written += write_dynamics_outputs(result, args.output, plots=plots, figures=figures)
+        if getattr(args, "spice", False):
+            from pathlib import Path
+
+            from ..spice import export
+            written.append(export(result, Path(args.output) / "teng.lib"))
         if figures is not None:
             figures.finish()
         print_summary(result.summary)
@@ -94,6 +103,12 @@ def terminal_lines(summary: dict) -> list[str]:
         lines.append(f"V read through C_p = {c_p:g} pF: peak {display('V_read_V', summary['peak']['V_read_V'])}, "
                      f"peak-to-peak {display('V_read_V', summary['peak_to_peak']['V_read_V'])} "
                      "(V_OC above is the ideal open-circuit voltage)")
+    read = [n for n in ("Q_read_C", "I_read_A") if n in (summary.get("peak") or {})]
+    if read:
+        lines.append("read by the [instrument] (bandwidth, aperture, sample rate): "
+                     + ", ".join(f"{QUANTITIES[n].symbol} peak {display(n, summary['peak'][n])}, "
+                                 f"peak-to-peak {display(n, summary['peak_to_peak'][n])}"
+                                 for n in read))
     return lines
 
 
@@ -138,6 +153,10 @@ def comparison_lines(summary: dict) -> list[str]:
     for name, row in block["quantities"].items():
         diff_text = percent_text(row["difference_percent"])
         tool = "n/a" if row["tool_value"] is None else f"{row['tool_value']:.4g}"
+        if row["tool_key"] is None:
+            lines.append(f"  {name:16s} measured {row['measured_value']:.4g} {row['unit']}: "
+                         f"{row['tool_label']}")
+            continue
         lines.append(f"  {name:16s} tool {tool} vs measured {row['measured_value']:.4g} "
                      f"{row['unit']}: {diff_text}  [{row['tool_key']}: {row['tool_label']}]")
     return lines

@@ -18,10 +18,11 @@ from .circuits.rectifier import (CHUNK_VALUES, RECTIFIER_COLUMNS, concat_results
 from .circuits.rectifier_store import (NUMERICAL_DISSIPATION_WARN, check_store_resolution,
                                        first_crossing, harvester_options,
                                        smallest_resolved_store, warn_numerical_dissipation)
+from .instrument import READ_COLUMNS, has_read, read_names
 from .cycle import cmeo, cumulative, last_period, loop_area
 from .waveforms import (IMPACT_OFFSET_PERIODS, PEAK_QUANTITIES, READ_COLUMN, WAVEFORM_COLUMNS,
                         elapsed_times, extreme_times, extremes, impact_elapsed, impact_states,
-                        impact_times, peak_quantities, sample_elapsed, scene_terminal_waveforms,
+                        impact_times, peak_quantities, read_instrument, sample_elapsed, scene_terminal_waveforms,
                         scene_waveforms, steady_start, steady_window, steady_window_index,
                         terminal_extremes,
                         terminal_peaks, terminal_waveforms, terminal_waveforms_zr, time_origin,

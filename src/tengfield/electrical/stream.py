@@ -38,7 +38,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from .circuits import circuit_for
-from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times,
+from .instrument import READ_COLUMNS, Reader, has_read
+from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times, impact_names,
                         impact_values, peak_quantities, scene_terminal_waveforms,
                         steady_window_index)
 
@@ -84,8 +85,10 @@ class StreamedRun:
         self.elapsed = elapsed_times(dynamics)
         self.window, self.window_rule = steady_window_index(self.elapsed, scene)
         self.columns = list(WAVEFORM_COLUMNS)
-        if scene.circuit.parallel_capacitance > 0.0:
+        if has_read(scene):
             self.columns.append(READ_COLUMN)
+        if scene.instrument.given:
+            self.columns += [c for c, _ in READ_COLUMNS.values() if c != READ_COLUMN]
         self.columns += list(self.entry.columns)
         self.read_at_samples = READ_COLUMN in self.columns and \
             self.entry.read_column in self.entry.columns
@@ -99,6 +102,7 @@ class StreamedRun:
         """Yield ``(i0, i1, {column: array})`` for every chunk of output rows, in order."""
         load = self._circuit()       # the circuit's state, carried from chunk to chunk
         dyn, scene = self.dynamics, self.scene
+        reader = Reader(scene, not self.read_at_samples) if scene.instrument.given else None
         for i0, i1 in chunk_bounds(self.rows, self.chunk_rows):
             gap = np.asarray(dyn.gap[i0:i1], dtype=float)
             velocity = np.asarray(dyn.gap_velocity[i0:i1], dtype=float)
@@ -107,7 +111,7 @@ class StreamedRun:
                    "gap_velocity_m_per_s": velocity,
                    "table_m": np.asarray(dyn.table[i0:i1], dtype=float),
                    "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"],
-                   "I_sc_A": terminal["I_sc"]}
+                   "I_sc_A": terminal["I_sc"], "C_T_F": terminal["C_T"]}
             if READ_COLUMN in self.columns:
                 out[READ_COLUMN] = terminal["V_read"]
             if load is not None:
@@ -116,6 +120,8 @@ class StreamedRun:
                 out.update({c: np.zeros(i1 - i0) for c in self.entry.columns})
             if self.read_at_samples:
                 out[READ_COLUMN] = out[self.entry.read_column]
+            if reader is not None:     # the instrument's state, carried too
+                out.update(reader.read(self.elapsed[i0:i1], out, out["C_T_F"]))
             self._last_circuit = load
             yield i0, i1, out
 
@@ -156,9 +162,11 @@ class StreamedRun:
             for c, bounds in own.items():
                 bounds[0] = min(bounds[0], float(np.min(cols[c][a:])))
                 bounds[1] = max(bounds[1], float(np.max(cols[c][a:])))
-        at_impacts = [n for n in quantities if not (n == "V_read" and self.read_at_samples)]
-        for name, x in impact_values(scene, self.dynamics, self.curves, self.elapsed[w],
-                                     self.elapsed[-1], at_impacts).items():
+        at_impacts = impact_names(scene, self.read_at_samples)
+        found = impact_values(scene, self.dynamics, self.curves, self.elapsed[w],
+                              self.elapsed[-1], set(at_impacts.values()))
+        for name, source in at_impacts.items():
+            x = found.get(source, np.empty(0))
             if x.size:
                 lo[name] = min(lo[name], float(np.min(x)))
                 hi[name] = max(hi[name], float(np.max(x)))

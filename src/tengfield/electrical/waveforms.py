@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from .. import circuit
+from .instrument import READ_COLUMNS, Reader, has_read, read_names
 
 #: ∫ y dx by the trapezoidal rule: numpy 2's name (numpy 1 has only ``trapz``, which
 #: numpy 2 deprecates)
@@ -37,7 +38,7 @@ trapezoid = np.trapezoid if hasattr(np, "trapezoid") else np.trapz
 
 #: columns of ``waveforms.csv`` (SI units in the names)
 WAVEFORM_COLUMNS = ["time_s", "gap_m", "gap_velocity_m_per_s", "table_m",
-                    "V_oc_V", "Q_sc_C", "I_sc_A"]
+                    "V_oc_V", "Q_sc_C", "I_sc_A", "C_T_F"]
 #: the peak-to-peak quantities and their ``waveforms`` column
 PEAK_QUANTITIES = {"V_oc": "V_oc_V", "Q_sc": "Q_sc_C", "I_sc": "I_sc_A"}
 #: the column of the voltage read through C_p (``[circuit] parallel_capacitance_pF`` > 0)
@@ -186,18 +187,44 @@ def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
     table = getattr(dynamics, "table", None)
     out = {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
            "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
-           "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"]}
-    if scene.circuit.parallel_capacitance > 0.0:
+           "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"],
+           "C_T_F": terminal["C_T"]}
+    if has_read(scene):
         out[READ_COLUMN] = terminal["V_read"]
     return out
+
+
+def read_instrument(scene, dynamics, waveforms: dict, loaded: bool) -> None:
+    """With an ``[instrument]``: ``waveforms``' ``V_read_V`` (the voltage across the
+    instrument: the terminal's through C_p, or the circuit's), ``Q_read_C`` and
+    ``I_read_A`` become what the instrument records (:mod:`.instrument`); ``loaded``:
+    its input resistance loads the open terminal. Without one: nothing changes."""
+    if not scene.instrument.given:
+        return
+    reader = Reader(scene, loaded)
+    waveforms.update(reader.read(elapsed_times(dynamics), waveforms, waveforms.get("C_T_F")))
 
 
 def peak_quantities(scene) -> dict[str, str]:
     """The quantities :func:`terminal_extremes` reports for ``scene`` and their
     ``waveforms`` column: ``PEAK_QUANTITIES`` (+ ``V_read`` with C_p > 0)."""
-    if scene.circuit.parallel_capacitance > 0.0:
-        return {**PEAK_QUANTITIES, "V_read": READ_COLUMN}
-    return dict(PEAK_QUANTITIES)
+    out = dict(PEAK_QUANTITIES)
+    for name in read_names(scene):
+        out[name] = READ_COLUMNS[name][0]
+    return out
+
+
+def impact_names(scene, read_at_samples: bool = False) -> dict[str, str]:
+    """``{peak quantity: terminal quantity}`` of the quantities whose extremes are also
+    sought just before and after every impact: the terminal's, and a read one only when it
+    is the terminal's own (an ideal instrument; not a circuit's voltage, continuous at the
+    impacts). A filtered reading is taken at its samples alone."""
+    out = {name: name for name in PEAK_QUANTITIES}
+    ideal = not scene.instrument.given or scene.instrument.ideal
+    for name in read_names(scene):
+        if ideal and not (name == "V_read" and read_at_samples):
+            out[name] = {"Q_read": "Q_sc", "I_read": "I_sc"}.get(name, name)
+    return out
 
 
 # ---------------------------------------------------------------------------
@@ -326,15 +353,17 @@ def terminal_extremes(scene, dynamics, curves, waveforms: dict | None = None, *,
     """
     if waveforms is None:
         waveforms = scene_waveforms(scene, dynamics, curves)
-    quantities = peak_quantities(scene)
+    # the read columns are there once the instrument has read them (an array reads later)
+    quantities = {n: c for n, c in peak_quantities(scene).items() if c in waveforms}
     t = elapsed_times(dynamics)          # the rows of waveforms, on the run's own axis
     mask, _ = steady_window(t, scene)
     values = {name: [np.asarray(waveforms[column])[mask]]
               for name, column in quantities.items()}
-    at_impacts = [n for n in quantities if not (n == "V_read" and read_at_samples)]
-    for name, v in impact_values(scene, dynamics, curves, t[mask][0], t[-1],
-                                 at_impacts).items():
-        values[name].append(v)
+    at_impacts = impact_names(scene, read_at_samples)
+    found = impact_values(scene, dynamics, curves, t[mask][0], t[-1], set(at_impacts.values()))
+    for name, source in at_impacts.items():
+        if source in found:
+            values[name].append(found[source])
     out: dict = {"peak_to_peak": {}, "peak": {}}
     for name, v in values.items():
         x = np.concatenate(v)

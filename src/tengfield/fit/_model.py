@@ -156,8 +156,31 @@ class ForwardModel:
         t = np.asarray(times, dtype=float)
         return self.window_start + (t - t[0]) + shift
 
-    def waveforms(self, values: dict, model_times, quantities=QUANTITIES) -> dict:
-        """{quantity: array [SI]} at ``model_times`` (ascending) for ``values``.
+    def waveforms(self, values: dict, model_times, quantities=QUANTITIES, *,
+                  readings: bool = False) -> dict:
+        """{quantity: array [SI]} at ``model_times`` (ascending) for ``values``: what the
+        scene's ``[instrument]`` records when it has one that is not ideal (bandwidth and
+        aperture; its sample rate too with ``readings``, the scalar targets' case: a
+        measured trace's own samples are the instrument's readings), else
+        :meth:`terminal`."""
+        inst = self.scene.instrument
+        if not inst.given or inst.ideal:
+            return self.terminal(values, model_times, quantities)
+        import dataclasses
+
+        from ..electrical.instrument import Chain, time_constant
+        t = np.asarray(model_times, dtype=float)
+        rate = inst.sample_rate if readings else 0.0
+        lead = 10.0 * time_constant(inst.bandwidth) + inst.aperture + (1.0 / rate if rate else 0.0)
+        own = np.asarray(self.dynamics(values).t, dtype=float)
+        grid = np.union1d(own[(own >= t[0] - lead) & (own <= t[-1])], t)
+        raw = self.terminal(values, grid, quantities)
+        where = np.searchsorted(grid, t)
+        reader = dataclasses.replace(inst, sample_rate=rate, input_resistance=0.0)
+        return {q: Chain(reader)(grid, x)[where] for q, x in raw.items()}
+
+    def terminal(self, values: dict, model_times, quantities=QUANTITIES) -> dict:
+        """{quantity: array [SI]} of the terminal at ``model_times`` (ascending).
 
         Open or short circuit: V is what an instrument of capacitance C_p reads,
         Q_SC / (C_T + C_p); Q = Q_SC; I = I_SC. ``[circuit] kind = "load"``: V and I
@@ -196,6 +219,6 @@ class ForwardModel:
         """
         grid = extreme_times(self.scene, self.dynamics(values), self.window_start)
         out = {}
-        for q, x in self.waveforms(values, grid).items():
+        for q, x in self.waveforms(values, grid, readings=True).items():
             out[f"{q}_pp"], out[f"{q}_peak"] = extremes(x)
         return out

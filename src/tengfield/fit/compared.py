@@ -47,6 +47,8 @@ def compared_key(letter: str, statistic: str, scene, parallel_capacitance: float
         return f"{statistic}.{name}" if statistic else name
     stat = statistic or "peak_to_peak"
     reads = {stat: {"V_read_V": True}} if parallel_capacitance > 0 else {}
+    if scene.instrument.given:       # what the [instrument] records (issue #39)
+        reads = {stat: {"V_read_V": True, "Q_read_C": True, "I_read_A": True}}
     key = tool_key(MEASURED_KEYS[(letter, stat)], reads)
     return key if statistic else key.rpartition(".")[2]
 

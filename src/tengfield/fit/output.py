@@ -9,7 +9,8 @@ from .solve import FitResult
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
 SCENE_KEYS = {
     "surface_charge_uC_per_m2": ("device", "surface_charge_uC_per_m2"),
-    "parallel_capacitance_pF": ("circuit", "parallel_capacitance_pF"),
+    # the instrument's C_p (issue #39: [circuit] parallel_capacitance_pF is its old name)
+    "parallel_capacitance_pF": ("instrument", "capacitance_pF"),
     "restitution": ("contact", "restitution"),
     "load_ohm": ("circuit", "load_ohm"),
 }
@@ -26,6 +27,8 @@ def fitted_scene_dict(scene, result: FitResult) -> dict:
         if name in SCENE_KEYS:
             sec, key = SCENE_KEYS[name]
             data.setdefault(sec, {})[key] = float(f"{value:.6g}")
+            if name == "parallel_capacitance_pF":        # one name of C_p, the new one
+                data.get("circuit", {}).pop("parallel_capacitance_pF", None)
         elif name == "amplitude_scale":
             data.setdefault("excitation", {})["amplitude_mm"] = float(
                 f"{scene.excitation.amplitude * 1e3 * value:.6g}")

@@ -4,7 +4,8 @@ Scene syntax (every key optional)::
 
     [fit]
     time_column = "time_s"        # the measured CSV's time column
-    time_unit = "s"               # s, ms, us
+    time_unit = "s"               # s, ms, us (default: the header's, "TIME [ms]", else s)
+    header_row = 0                # the header's line (1-based); 0: the first naming time_column
     loss = "linear"               # or soft_l1, huber, cauchy, arctan (robust)
     loss_scale = 1.0              # residual (in noise units) where a robust loss turns over
     max_evaluations = 200
@@ -36,7 +37,8 @@ import numpy as np
 from ..dynamics.excitation import excitation_kind as _excitation
 from ..electrical import CIRCUITS, Circuit, circuit_for
 from ..errors import SceneError, header_described, same_name_in_file
-from ..scene.recorded import check_magnitude, check_time_steps, read_table
+from ..scene.recorded import (HEADER_TIME_UNITS, Export, check_magnitude, check_time_steps,
+                              read_export, split_unit)
 from ..scene.schema import suggest as _suggest
 from .compared import INFIXES, LETTERS, MEASURED_KEYS
 
@@ -124,6 +126,7 @@ class Column:
     column: str
     unit: str
     noise: float | None     # SI, 1-sigma
+    unit_given: bool = False   # [fit.columns.X] unit given (else a header's unit is used)
 
     @property
     def factor(self) -> float:
@@ -139,6 +142,8 @@ class FitSpec:
     max_evaluations: int = 200
     profile: bool = False
     bootstrap: int = 0
+    header_row: int = 0
+    time_unit_given: bool = False
     columns: list[Column] | None = None
     parameters: list[Parameter] = field(default_factory=list)
     #: columns used without [fit.columns]: :func:`run_columns` of the scene's circuit
@@ -149,7 +154,7 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
     """Validate ``scene.raw["fit"]``; ``free`` (names) overrides the free parameters."""
     raw = scene.raw.get("fit", {}) or {}
     known = ("time_column", "time_unit", "loss", "loss_scale", "max_evaluations", "profile",
-             "bootstrap", "columns", "parameters")
+             "bootstrap", "columns", "parameters", "header_row")
     for key in raw:
         if key not in known:
             raise SceneError(f"unknown key [fit] {key}" + _suggest(key, known)
@@ -177,6 +182,10 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
         if not isinstance(raw["profile"], bool):
             raise SceneError(f"[fit] profile = {raw['profile']!r}: expected true or false")
         spec.profile = raw["profile"]
+    spec.time_unit_given = "time_unit" in raw
+    if "header_row" in raw:
+        spec.header_row = _whole_number("[fit] header_row", raw["header_row"], 0, 10**7,
+                                        "a line number (0: found)")
     if "bootstrap" in raw:
         spec.bootstrap = _whole_number("[fit] bootstrap", raw["bootstrap"], 0, 10000,
                                        "a whole number of replicas")
@@ -211,7 +220,7 @@ def _columns(raw, defaults: dict = RUN_COLUMNS) -> list[Column]:
             if noise <= 0:
                 raise SceneError(f"{where} noise = {entry['noise']!r} is out of range: allowed (0, inf)")
             noise *= UNITS[quantity][unit]
-        columns.append(Column(quantity, column, unit, noise))
+        columns.append(Column(quantity, column, unit, noise, unit_given="unit" in entry))
     return columns
 
 
@@ -305,15 +314,21 @@ def read_trace(path, spec: FitSpec) -> Trace:
     what = f"--measured {name!r}"
     from ..io_hdf5 import is_hdf5, read_waveform_table
 
-    if is_hdf5(name):     # tengfield run's own run.h5: its /waveforms table
+    if is_hdf5(name):     # tengfield run's own run.h5: its /waveforms table (SI columns)
         table = read_waveform_table(name, what, max_rows=MAX_TRACE_ROWS)
+        layout = Export(1, ",", False, {})
     else:
-        table = read_table(name, None, what, max_bytes=MAX_TRACE_BYTES, max_rows=MAX_TRACE_ROWS)
+        table, layout = read_export(name, None, what, time_column=spec.time_column,
+                                    header_row=spec.header_row, max_bytes=MAX_TRACE_BYTES,
+                                    max_rows=MAX_TRACE_ROWS)
     header = table.header
     if not header:
         raise SceneError(f"{what} is empty: expected a header row and at least "
                          f"{MIN_SAMPLES} data rows")
     columns = spec.columns
+    if columns is not None:     # a name given with its unit ("CH1(V)") names the column
+        columns = [Column(c.quantity, split_unit(c.column)[0], c.unit, c.noise, c.unit_given)
+                   for c in columns]
     if columns is None:
         defaults = dict(spec.default_columns)
         if defaults.get("V", ("",))[0] == "V_oc_V" and "V_read_V" in header:
@@ -321,14 +336,19 @@ def read_trace(path, spec: FitSpec) -> Trace:
         columns = [Column(q, c, u, None) for q, (c, u) in defaults.items() if c in header]
         if not columns:
             raise SceneError(f"{what} has none of the columns "
-                             f"{', '.join(c for c, _ in defaults.values())}; name the columns "
-                             f"in [fit.columns] ({header_described(header)})")
-    wanted = [("[fit] time_column", spec.time_column)] + \
+                             f"{', '.join(c for c, _ in defaults.values())} on its header line "
+                             f"{layout.header_line}: name the columns in [fit.columns] "
+                             f"({header_described(header)})")
+    columns = [_header_unit(c, layout, what) for c in columns]
+    time_column = split_unit(spec.time_column)[0]
+    wanted = [("[fit] time_column", time_column)] + \
              [(f"[fit.columns.{c.quantity}] column", c.column) for c in columns]
     for where, col in wanted:
         if col not in header:
-            raise SceneError(f"{where} = {col!r} is not a column of {name!r}; "
-                             f"{header_described(header)}" + same_name_in_file(col, header))
+            raise SceneError(f"{where} = {col!r} is not a column of {name!r}: expected it "
+                             f"on the header line {layout.header_line} (with or without its "
+                             "unit; give [fit] header_row = N when the header is elsewhere; "
+                             f"{header_described(header)})" + same_name_in_file(col, header))
     if len(table.rows) < MIN_SAMPLES:
         raise SceneError(f"{what} has {len(table.rows)} data rows: at least "
                          f"{MIN_SAMPLES} are needed")
@@ -341,7 +361,7 @@ def read_trace(path, spec: FitSpec) -> Trace:
                              f"data row {bad[0] + 1} ({bad.size} such rows); remove or fill them")
         return out
 
-    time = column(spec.time_column) * TIME_UNITS[spec.time_unit]
+    time = column(time_column) * _time_factor(spec, layout, time_column, what)
     check_magnitude(time, MAX_TRACE_TIME, what, f"time column {spec.time_column!r}", "s")
     check_time_steps(time, what)
     values = {}
@@ -350,6 +370,33 @@ def read_trace(path, spec: FitSpec) -> Trace:
         check_magnitude(values[c.quantity], MAX_TRACE_VALUE[c.quantity], what,
                         f"column {c.column!r} (SI)", RUN_COLUMNS[c.quantity][1])
     return Trace(name, time, values, columns)
+
+
+def _time_factor(spec: FitSpec, layout, column: str, what: str) -> float:
+    """Seconds per unit of the trace's time column: ``[fit] time_unit`` when given, else
+    the header's (``TIME [ms]``), else s."""
+    unit = layout.units.get(column, "")
+    if spec.time_unit_given or not unit:
+        return TIME_UNITS[spec.time_unit]
+    if unit not in HEADER_TIME_UNITS:
+        raise SceneError(f"{what}: the header gives the time column {column!r} a unit "
+                         f"tengfield does not know: expected one of {', '.join(HEADER_TIME_UNITS)}"
+                         " (or give [fit] time_unit)")
+    return HEADER_TIME_UNITS[unit]
+
+
+def _header_unit(c: Column, layout, what: str) -> Column:
+    """``c`` with the unit its header gives (``CH1(V)``, ``Q [nC]``) unless ``[fit.columns]``
+    gave one."""
+    unit = layout.units.get(c.column, "")
+    if c.unit_given or not unit:
+        return c
+    unit = {"µV": "uV", "µC": "uC", "µA": "uA"}.get(unit, unit)
+    if unit not in UNITS[c.quantity]:
+        raise SceneError(f"{what}: the header gives column {c.column!r} a unit tengfield does "
+                         f"not know for {c.quantity}: expected one of "
+                         f"{', '.join(UNITS[c.quantity])} (or give [fit.columns.{c.quantity}] unit)")
+    return Column(c.quantity, c.column, unit, c.noise, c.unit_given)
 
 
 # ---------------------------------------------------------------------------

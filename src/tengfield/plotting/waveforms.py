@@ -16,6 +16,10 @@ import numpy as np
 from . import new_figure, save_figure
 
 
+#: a terminal panel -> the [instrument]'s reading drawn over it (issue #39)
+READ_OVERLAYS = {"Q_sc_C": "Q_read_C", "I_sc_A": "I_read_A"}
+
+
 def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> list:
     """``(column, axis label, factor)`` of each panel of :func:`plot_waveforms`, names and
     units from :mod:`tengfield.quantities`: V_OC (ideal), the voltage read through C_p
@@ -60,6 +64,11 @@ def waveforms_figure(waveforms: dict, *, title: str = "", last_seconds: float | 
     axes = fig.subplots(len(panels), 1, sharex=True)
     for ax, (key, label, factor) in zip(np.atleast_1d(axes), panels):
         ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0)
+        read = READ_OVERLAYS.get(key)
+        if read in waveforms:     # what the [instrument] records, over the terminal's own
+            ax.plot(t[mask] * 1e3, np.asarray(waveforms[read])[mask] * factor, color="C3",
+                    lw=1.0, label="read by the instrument")
+            ax.legend(loc="upper right", fontsize=7)
         ax.set_ylabel(label, color="C0")
         twin = ax.twinx()
         twin.plot(t[mask] * 1e3, np.asarray(waveforms["gap_m"])[mask] * 1e3, color="0.6", lw=0.8)

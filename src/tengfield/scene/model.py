@@ -15,6 +15,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,6 +35,8 @@ from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUG
                      SCHEMA, check_section, convert, harmonic_components, suggest,
                      update_section, with_defaults)
 from .schema import renamed as _renamed
+from .schema import show
+from .._mpi import launched_rank as _launched_rank
 
 
 @dataclass(frozen=True)
@@ -120,6 +123,7 @@ class Excitation:
     phase_y: float = 0.0
     signal_x_column: str = ""
     signal_y_column: str = ""
+    header_row: int = 0         # the CSV's header line (1-based); 0: found (issue #39)
     smoothing: float = 0.0      # [Hz] zero-phase low-pass of a recorded signal, 0 = off
     # random and harmonics (issue #25): components (frequency [Hz], amplitude [m],
     # phase [rad]); noise PSD: a flat band [Hz] with rms_acceleration [m/s^2], or a
@@ -368,6 +372,33 @@ class Breakdown:
 
 
 @dataclass(frozen=True)
+class Instrument:
+    """``[instrument]``: what the bench's electrometer or scope records (SI; 0 means none
+    for each, :mod:`tengfield.electrical.instrument`): ``capacitance`` C_p [F] across the
+    terminals, ``input_resistance`` R_in [ohm] (0: infinite), ``bandwidth`` [Hz] of a
+    first-order analog low-pass (0: unlimited), ``aperture`` [s] the integration time of
+    one reading (0: instantaneous), ``sample_rate`` [Hz] of the readings (0: one per output
+    sample). ``given``: the scene has the section (without it no read quantity but the
+    deprecated ``[circuit] parallel_capacitance_pF``'s ``V_read_V`` exists)."""
+    capacitance: float = 0.0
+    input_resistance: float = 0.0
+    bandwidth: float = 0.0
+    aperture: float = 0.0
+    sample_rate: float = 0.0
+    given: bool = False
+
+    def __post_init__(self):
+        check_section("instrument", self, "Instrument")
+
+    @property
+    def ideal(self) -> bool:
+        """No bandwidth limit, no aperture, a reading at every sample, no input resistance:
+        the read quantities are the terminal's own (V through C_p)."""
+        return (self.bandwidth == 0.0 and self.aperture == 0.0 and self.sample_rate == 0.0
+                and self.input_resistance == 0.0)
+
+
+@dataclass(frozen=True)
 class Reference:
     """``[reference]``: measured values [SI] to compare the run with (0: not given):
     ``V_pp``, ``V_peak`` [V], ``Q_pp``, ``Q_peak`` [C], ``I_pp``, ``I_peak`` [A],
@@ -404,6 +435,7 @@ class Scene:
     array: Array = Array()
     breakdown: Breakdown = Breakdown()
     reference: Reference = Reference()
+    instrument: Instrument = Instrument()
     raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
     source: str = dataclasses.field(compare=False, repr=False, default="<default>")
     text: str = dataclasses.field(compare=False, repr=False, default="")
@@ -454,7 +486,9 @@ class Scene:
                 raise TypeError(f"with_values({sec}={values!r:.60}): expected a dict of "
                                 f"[{sec}] keys and file-level values, e.g. "
                                 f"with_values({sec}={{'key': value}})")
-            update_section(data, sec, {k: _python_value(v) for k, v in values.items()})
+            values = {k: _python_value(v) for k, v in values.items()}
+            _one_capacitance(data, sec, values)
+            update_section(data, sec, values)
         base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
         scene = build(data, base_dir=base, source=self.source, text=self.text, warn=False)
         if "field" in sections:   # explicit field settings: refuse bad ones at once
@@ -603,10 +637,52 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                         f'method = {fld.method!r}, ball_offset_mm = {fld.ball_offset * 1e3:g} '
                         f'has none: use method = "axisymmetric" with ball_offset_mm = 0, or give '
                         f'sigma in uC/m^2')
+    instrument = _instrument(data, values, source, warn)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]),
                  initial=Initial(**values["initial"]), run=Run(**values["run"]),
                  field=_RefusedField(problems) if problems else fld,
                  circuit=Circuit(**values["circuit"]), array=Array(**values["array"]),
                  breakdown=Breakdown(**values["breakdown"]),
-                 reference=Reference(**values["reference"]), raw=copy.deepcopy(given_names),
+                 reference=Reference(**values["reference"]), instrument=instrument,
+                 raw=copy.deepcopy(given_names),
                  source=source, text=text)
+
+
+def _instrument(data: dict, values: dict, source: str, warn: bool) -> Instrument:
+    """The ``[instrument]`` of a scene being built; its ``capacitance_pF`` becomes the
+    circuit's C_p (``values["circuit"]["parallel_capacitance"]``, which every circuit
+    reads). ``[circuit] parallel_capacitance_pF`` (its name before issue #39) is read with
+    one warning (``warn``); both given with different values are refused."""
+    circuit = data.get("circuit") if isinstance(data.get("circuit"), dict) else {}
+    section = data.get("instrument") if isinstance(data.get("instrument"), dict) else None
+    old_given = "parallel_capacitance_pF" in circuit
+    if old_given and warn and _launched_rank() == 0:
+        warnings.warn(f"{source}: [circuit] parallel_capacitance_pF is now [instrument] "
+                      f"capacitance_pF: write [instrument] capacitance_pF = "
+                      f"{show(circuit['parallel_capacitance_pF'])} (the old key is read until "
+                      "the next release)", FutureWarning, stacklevel=4)
+    inst = dict(values["instrument"])
+    if section is not None and "capacitance_pF" in section:
+        if old_given and values["circuit"]["parallel_capacitance"] != inst["capacitance"]:
+            raise SceneError(f"{source}: [instrument] capacitance_pF = "
+                             f"{show(section['capacitance_pF'])} and [circuit] "
+                             f"parallel_capacitance_pF = {show(circuit['parallel_capacitance_pF'])} "
+                             "are the same capacitance: give [instrument] capacitance_pF only")
+        values["circuit"]["parallel_capacitance"] = inst["capacitance"]
+    else:
+        inst["capacitance"] = values["circuit"]["parallel_capacitance"]
+    return Instrument(**inst, given=section is not None)
+
+
+def _one_capacitance(data: dict, sec: str, values: dict) -> None:
+    """C_p changed by :meth:`Scene.with_values` under either name (``[circuit]
+    parallel_capacitance_pF``, ``[instrument] capacitance_pF``) replaces it under both: a
+    scene with an ``[instrument]`` takes a new ``[circuit]`` value as the instrument's (an
+    uncertainty study or a fit varies the old name), and a new ``[instrument]`` value
+    drops the old key. Changes ``values`` and ``data`` in place."""
+    if sec == "circuit" and "parallel_capacitance_pF" in values and "instrument" in data:
+        data["instrument"] = dict(data["instrument"])
+        data["instrument"]["capacitance_pF"] = values.pop("parallel_capacitance_pF")
+    elif sec == "instrument" and "capacitance_pF" in values and "circuit" in data:
+        data["circuit"] = {k: v for k, v in data["circuit"].items()
+                           if k != "parallel_capacitance_pF"}

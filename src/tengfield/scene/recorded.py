@@ -271,10 +271,16 @@ def read_recorded(exc: dict, base_dir: Path | None) -> Record:
         raise SceneError(f"{what} is empty: expected a header line "
                          f"({exc['time_column']},{exc['signal_column']}) and at least "
                          f"{MIN_RECORDED_ROWS} data rows")
-    columns = _fast_columns(blob, exc, wanted, what) if b"#" not in blob else None
-    if columns is None:     # comments, or a row Arrow refuses: Python's reader names it
-        columns = _python_columns(decode_utf8(blob, what), exc, wanted, what)
-    del blob
+    head = decode_utf8(blob[:1 << 16], what) if len(blob) > 1 << 16 else None
+    layout = _recorded_layout(head if head is not None else decode_utf8(blob, what), exc, what)
+    if not layout.plain or layout.header_line > 1:     # an instrument's export
+        del blob
+        columns = _export_columns(exc, wanted, what, base_dir)
+    else:
+        columns = _fast_columns(blob, exc, wanted, what) if b"#" not in blob else None
+        if columns is None:     # comments, or a row Arrow refuses: Python's reader names it
+            columns = _python_columns(decode_utf8(blob, what), exc, wanted, what)
+        del blob
     rows = len(columns["time_column"])
     if rows < MIN_RECORDED_ROWS:
         raise SceneError(f"{what} has {rows} data rows: at least "
@@ -397,3 +403,180 @@ def read_psd(name: str, base_dir: Path | None) -> tuple[np.ndarray, np.ndarray]:
                          "the PSD is interpolated log-log, so a segment with a zero end is zero "
                          "everywhere; give two neighbouring rows > 0")
     return freqs, vals * units[value_cols[0]]
+
+
+# ---------------------------------------------------------------------------
+# instruments' exports (issue #39): metadata lines before the header, ';' or tab
+# separators, decimal commas, units in the header
+#: separators an export may use, in the order they are tried
+DELIMITERS = (",", ";", "\t")
+#: a header cell with its unit: ``TIME [s]``, ``CH1(V)``, ``Current (nA)``
+_UNIT = re.compile(r"^(?P<name>.*?\S)\s*[\[(]\s*(?P<unit>[^\[\]()]+?)\s*[\])]\s*$")
+#: a number written with a decimal comma: ``-1,25``, ``3,0E-4``
+_DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?|[+-]?\d+,(?:[eE][+-]?\d+)?")
+#: lines looked at for the header when it is not given
+MAX_HEADER_SEARCH = 200
+
+
+def split_unit(cell: str) -> tuple[str, str]:
+    """``"TIME [s]"`` -> ``("TIME", "s")``; a name without a unit -> ``(name, "")``."""
+    cell = cell.strip()
+    m = _UNIT.match(cell)
+    return (m["name"], m["unit"].strip()) if m else (cell, "")
+
+
+def _split(line: str, delimiter: str) -> list[str]:
+    try:
+        return next(csv.reader([line], delimiter=delimiter))
+    except (csv.Error, StopIteration):
+        return []
+
+
+@dataclass(frozen=True)
+class Export:
+    """How an instrument's export is laid out: ``header_line`` (1-based), ``delimiter``,
+    ``decimal_comma``, ``units`` (column name -> the unit its header gives, "" none)."""
+    header_line: int
+    delimiter: str
+    decimal_comma: bool
+    units: dict
+
+    @property
+    def plain(self) -> bool:
+        """A comma-separated file with its header on the first line and no units: the
+        fast reader's."""
+        return (self.delimiter == "," and not self.decimal_comma
+                and not any(self.units.values()))
+
+
+def _names_time(cells: list[str], time_column: str) -> bool:
+    wanted = split_unit(time_column)[0].casefold()
+    return any(split_unit(c)[0].casefold() == wanted for c in cells)
+
+
+def find_export(lines: list[str], what: str, time_column: str, header_row: int = 0) -> Export:
+    """The layout of an export whose lines are ``lines``: the header is line
+    ``header_row`` (1-based) when given, else the first line naming ``time_column`` (with
+    or without its unit), else the first non-blank line (the plain CSV's rule). The
+    separator is the one that splits the header into cells naming the time column (else
+    the one giving the most cells); with ';' or tabs, numbers may use a decimal comma.
+    Messages name the line and what was expected, never the file's text."""
+    if header_row:
+        if header_row > len(lines):
+            raise SceneError(f"{what}: header_row = {header_row}, but the file has "
+                             f"{len(lines)} line(s): expected a line number in [1, {len(lines)}]")
+        number = header_row
+    else:
+        number = 0
+        first = 0
+        for i, line in enumerate(lines[:MAX_HEADER_SEARCH], start=1):
+            text = line.split("#", 1)[0] if line.lstrip().startswith("#") else line
+            if not text.strip():
+                continue
+            first = first or i
+            if any(_names_time(_split(text, d), time_column) for d in DELIMITERS):
+                number = i
+                break
+        number = number or first or 1
+    line = lines[number - 1] if lines else ""
+    if not line.strip():
+        raise SceneError(f"{what}: line {number} is blank: expected the header line "
+                         "(the column names)")
+    splits = {d: _split(line, d) for d in DELIMITERS}
+    named = [d for d in DELIMITERS if _names_time(splits[d], time_column)]
+    delimiter = named[0] if named else max(DELIMITERS, key=lambda d: len(splits[d]))
+    if not named and len(splits[delimiter]) == 1:
+        delimiter = ","
+    units = {}
+    for cell in splits[delimiter]:
+        name, unit = split_unit(cell)
+        units[name] = unit
+    decimal_comma = delimiter != "," and any(
+        _DECIMAL_COMMA.fullmatch(c.strip())
+        for ln in lines[number:number + 50] for c in _split(ln, delimiter))
+    return Export(number, delimiter, decimal_comma, units)
+
+
+def read_export(name: str, base_dir: Path | None, what: str, *, time_column: str,
+                header_row: int = 0, max_bytes: int, max_rows: int) -> tuple[CsvTable, Export]:
+    """An instrument's export as a :class:`CsvTable` (header: the column names without
+    their units; cells with '.' decimals) and its :class:`Export` layout (the units).
+    Lines before the header (an oscilloscope's metadata) are skipped; blank lines and
+    ``#`` comments too. A row with another number of cells than the header is refused
+    naming its line and the count expected."""
+    text = read_text(name, base_dir, what, max_bytes)
+    lines = text.splitlines()
+    del text
+    layout = find_export(lines, what, time_column, header_row)
+    header = [split_unit(c)[0] for c in _split(lines[layout.header_line - 1], layout.delimiter)]
+    seen = set()
+    for i, col in enumerate(header, start=1):
+        if col in seen:
+            raise SceneError(f"{what}: line {layout.header_line} (the header) names one "
+                             f"column twice (cell {i}): expected distinct column names")
+        seen.add(col)
+    rows: list[tuple] = []
+    for number in range(layout.header_line + 1, len(lines) + 1):
+        line = lines[number - 1].split("#", 1)[0]
+        if not line.strip():
+            continue
+        fields = _split(line, layout.delimiter)
+        if len(fields) == len(header) + 1 and not fields[-1].strip():
+            fields = fields[:-1]                       # a trailing separator
+        if len(fields) != len(header):
+            sep = {",": "','", ";": "';'", "\t": "tabs"}[layout.delimiter]
+            raise SceneError(f"{what}: line {number} (data row {len(rows) + 1}) has "
+                             f"{len(fields)} field(s): expected {len(header)} (separated "
+                             f"by {sep}, as the header on line {layout.header_line})")
+        if layout.decimal_comma:
+            fields = [f.strip().replace(",", ".") if _DECIMAL_COMMA.fullmatch(f.strip())
+                      else f for f in fields]
+        rows.append((number, fields))
+        if len(rows) > max_rows:
+            raise SceneError(f"{what} has more than {max_rows:,} data rows: allowed at most "
+                             f"{max_rows:,} (checked while reading; decimate or split it)")
+    return CsvTable(what, header, rows), layout
+
+
+#: a time unit as an export's header writes it -> seconds
+HEADER_TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6,
+                     "ns": 1e-9}
+
+
+#: a recorded signal's unit as an export's header writes it -> SI, by [excitation] signal
+HEADER_SIGNAL_UNITS = {"displacement": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6},
+                       "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "m/s²": 1.0, "g": G}}
+
+
+def _recorded_layout(text: str, exc: dict, what: str) -> Export:
+    """:func:`find_export` of a recorded excitation (a truncated head may cut the last
+    line: only the header and a few rows after it are looked at)."""
+    lines = text.splitlines()[:MAX_HEADER_SEARCH + 60]
+    layout = find_export(lines, what, exc["time_column"], exc.get("header_row", 0))
+    first = next((i for i, ln in enumerate(lines, start=1)
+                  if ln.split("#", 1)[0].strip()), 1)
+    return layout if layout.header_line != first or not layout.plain else \
+        Export(1, layout.delimiter, layout.decimal_comma, layout.units)
+
+
+def _export_columns(exc: dict, wanted: list[str], what: str, base_dir) -> dict:
+    """The wanted columns of an instrument's export (:func:`read_export`) in SI: a
+    header's unit (``TIME [ms]``, ``Z (mm)``) converts its column."""
+    table, layout = read_export(exc["file"], base_dir, what, time_column=exc["time_column"],
+                                header_row=exc.get("header_row", 0),
+                                max_bytes=MAX_RECORDED_BYTES, max_rows=MAX_RECORDED_ROWS)
+    names = {key: split_unit(exc[key])[0] for key in wanted}
+    for key, col in names.items():
+        if col not in table.header:
+            raise SceneError(f"[excitation] {key} = {exc[key]!r} is not a column of "
+                             f"{exc['file']!r}: expected it on the header line "
+                             f"{layout.header_line} (with or without a unit)")
+    out = {}
+    for key, col in names.items():
+        unit = layout.units.get(col, "")
+        units = HEADER_TIME_UNITS if key == "time_column" else HEADER_SIGNAL_UNITS[exc["signal"]]
+        if unit and unit not in units:
+            raise SceneError(f"{what}: the header gives column {col!r} a unit tengfield does "
+                             f"not know: expected one of {', '.join(units)}")
+        out[key] = table.column(col, allow_blank=True) * (units[unit] if unit else 1.0)
+    return out

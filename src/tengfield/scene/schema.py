@@ -119,6 +119,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "time_column": Key("time_column", str, "time_s", None, None),
         "signal_column": Key("signal_column", str, "displacement_m", None, None),
         "signal": Key("signal", str, "displacement", None, _choice("displacement", "acceleration")),
+        # the header's line in the file (1-based); 0: the first line naming time_column
+        # (an oscilloscope's metadata lines before it are skipped)
+        "header_row": Key("header_row", int, 0, 1, _rng(0, 10**7)),
         "smoothing_hz": Key("smoothing", float, 0.0, 1.0, _rng(0.0, 1e9)),
         # random and harmonics (issue #25): a Gaussian table acceleration with a flat PSD
         # on band_hz and rms_acceleration_m_per_s2, or the PSD of psd_file; either may
@@ -272,6 +275,20 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "breakdowns_per_s": Key("breakdowns_per_s", float, 1.0, 1.0,
                                 _rng(0.0, 1e9, lo_open=True)),
     },
+    # the bench's instrument (issue #39; tengfield.electrical.instrument, docs/outputs.md):
+    # what an electrometer or a scope records. Optional: without the section nothing of a
+    # run changes. 0 means "none" for each key (no input resistance: infinite, as an
+    # electrometer's charge mode; no bandwidth limit; an instantaneous reading; a reading
+    # at every output sample of the run).
+    "instrument": {
+        "capacitance_pF": Key("capacitance", float, 0.0, 1e-12, _rng(0.0, 1e9)),
+        "input_resistance_ohm": Key("input_resistance", float, 0.0, 1.0,
+                                    _rng(0.0, 1e30, why="0: infinite (charge mode)")),
+        "bandwidth_hz": Key("bandwidth", float, 0.0, 1.0, _rng(0.0, 1e12, why="0: unlimited")),
+        "aperture_s": Key("aperture", float, 0.0, 1.0, _rng(0.0, 1e4, why="0: instantaneous")),
+        "sample_rate_hz": Key("sample_rate", float, 0.0, 1.0,
+                              _rng(0.0, 1e12, why="0: a reading at every output sample")),
+    },
     # measured values to compare the run with (tengfield run: summary.json ->
     # measured_comparison, the terminal's table). 0 (the default): not given. Which tool
     # quantity each is compared with: tengfield.quantities.MEASURED (docs/outputs.md).
@@ -363,11 +380,21 @@ def update_section(data: dict, sec: str, values: dict) -> None:
         target[new] = value
 
 
+#: Sections that a scene without them does not hold at all (``to_dict``, the written
+#: scenes and the provenance hashes stay those of a scene written before them)
+OPTIONAL_SECTIONS = ("instrument",)
+#: (old section, old key) -> (new section, new key): a key that moved to another section,
+#: read for one release with one warning (the value is used as the new key's)
+MOVED_KEYS = {("circuit", "parallel_capacitance_pF"): ("instrument", "capacitance_pF")}
+
+
 def with_defaults(raw: dict) -> dict:
     """File-level values of every key of every section (defaults filled in; a renamed key
-    under its new name)."""
+    under its new name; an optional section only when given)."""
     full = {}
     for sec, keys in SCHEMA.items():
+        if sec in OPTIONAL_SECTIONS and sec not in raw:
+            continue
         given = renamed_section(sec, raw.get(sec, {}))
         full[sec] = {k: given.get(k, spec.default) for k, spec in keys.items()}
     return full
