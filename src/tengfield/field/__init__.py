@@ -122,6 +122,9 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
     offset = scene.field.ball_offset
     check_position(scene, position)
     chosen = resolve_method(scene, method, offset)
+    from .cost import check_memory, solve_cost   # before any meshing (issue #40)
+    check_memory(scene, solve_cost(scene, method=chosen, position=position,
+                                   estimate_error=overrides.get("estimate_error", True)))
     from .cells import cell_of   # the cell's own solver (field/cells: CELLS)
     return cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen, offset=offset,
                                       **overrides)

@@ -264,6 +264,10 @@ class Field:
     environment: str
     far_field: str
     ball_offset: float     # [m]
+    max_memory_gb: float = 0.0       # one solve's estimated peak; 0: 80 % of the machine
+    radial_mesh_size: float = 1.5e-3  # [m] the (z, r) surrogate's 3D solves
+    radial_degree: int = 2
+    radial_tolerance: float = 1e-2
 
     def __post_init__(self):
         check_section("field", self, "Field")

@@ -32,7 +32,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import terminals
-from .._mpi import farm, rank_of
+from .._mpi import farm, rank_of, size_of
 from ..errors import FieldError
 from .provenance import provenance, radial_hash, solver_fingerprint
 from .sampling import (DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE, INITIAL_OFFSETS,
@@ -149,6 +149,28 @@ def warn_accuracy(table, comm) -> None:
     warn_problems(accuracy_problems(table), comm, stacklevel=3)
 
 
+def _announce(scene, solves: int, comm, *, method, what: str, mesh_size=None,
+              degree=None) -> None:
+    """One line on stderr (a terminal only, :func:`tengfield._console.progress_shown`):
+    how many solves and what each costs, estimated before meshing
+    (:mod:`tengfield.field.cost`); a scene past ``[field] max_memory_gb`` is refused
+    by the solve itself."""
+    import sys
+
+    from .._console import progress_shown
+    if not progress_shown(True):
+        return
+    try:
+        from ..field import cost, resolve_method
+        chosen = method or resolve_method(scene)
+        estimate = cost.solve_cost(scene, method=chosen, mesh_size=mesh_size, degree=degree,
+                                   position=0.5 * scene.device.stroke)
+    except Exception:  # noqa: BLE001 - an estimate never stops the work; the solve says why
+        return
+    print(f"tengfield: {cost.describe(estimate, solves, what=what, ranks=size_of(comm))}",
+          file=sys.stderr, flush=True)
+
+
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
@@ -190,6 +212,11 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     symmetric = is_mirror_symmetric(scene)
     sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
     sample_at = error_sample_positions(stroke, symmetric, count)
+    if bar is not None:   # the cost before the work (issue #40), on a terminal
+        first = 2 * count - 1
+        _announce(scene, (first + 1) // 2 if symmetric else first, comm, method=None,
+                  what=f"field solves (at least; {first} positions"
+                       + (", mirror symmetry)" if symmetric else ")"))
 
     def estimated_here(z: float) -> bool:
         return not sampled or bool(np.any(np.abs(sample_at - z) <= 1e-12 * stroke))
@@ -401,6 +428,10 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     if progress and rank_of(comm) == 0:
         from .._console import progress_bar
         bar = progress_bar(0, "3D field solves (z, r)", unit="solve")
+        first = (2 * nz - 1) * (2 * nr - 1 if nr > 2 else 3)
+        _announce(scene, (first + 1) // 2 if symmetric else first, comm, method="3d",
+                  what=f"3D field solves (z, r) (at least; mesh_size_mm = {mesh_size_mm:g}, "
+                       f"degree = {degree})", mesh_size=mesh_size_mm * 1e-3, degree=degree)
 
     def work(point):
         z, r, estimate = point
