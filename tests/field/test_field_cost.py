@@ -136,3 +136,13 @@ def test_the_thin_shells_mesh_stays_local_to_its_gaps():
     # the ball at mid-stroke of a symmetric cell: q_lower = q_upper, C_ll = C_uu
     assert mid.induced_charge[0] == pytest.approx(mid.induced_charge[1], rel=1e-3)
     assert np.isclose(mid.capacitance[0, 0], mid.capacitance[1, 1], rtol=1e-3)
+
+
+def test_the_field_command_refuses_past_max_memory_gb_before_writing(run_cli, tmp_path):
+    out = tmp_path / "field"
+    done = run_cli("field", "--position-mm", "1.5", "--set", "field.max_memory_gb=0.05",
+                   "--no-plots", "-o", out)
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "max_memory_gb = 0.05" in lines[0] and "GB" in lines[0]
+    assert not out.exists()
