@@ -254,6 +254,13 @@ def geometry_degree(mesh) -> int:
     return int(mesh.geometry.cmap.degree)
 
 
+def cell_vertex_nodes(mesh) -> np.ndarray:
+    """(local cells, 3) rows of ``mesh.geometry.x`` holding each triangle's vertices
+    (a curved cell's geometry nodes list its vertices first)."""
+    cells = np.arange(num_local_cells(mesh), dtype=np.int32)
+    return np.ascontiguousarray(_rows(mesh.geometry.dofmap, cells)[:, :3])
+
+
 def submesh(mesh, cells) -> object:
     """A new serial mesh of the local ``cells`` of ``mesh`` (same coordinate
     element, so the same curved geometry)."""

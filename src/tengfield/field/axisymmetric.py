@@ -125,6 +125,7 @@ class Discretisation:
     upper: np.ndarray
     grounded: np.ndarray  # table / Dirichlet far boundary dofs
     degree: int = 1
+    forms: tuple = ()    # compiled (operator, ball load): assembled again on a moved mesh
 
 
 def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str, float],
@@ -142,10 +143,10 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     kappa = far_field_weight(far_field, lay.table)
     if kappa:
         a += (kappa / lay.domain_radius) * u * v * r * ds(geometry.FACET_TAGS["far_boundary"])
-    A = dx_api.assemble_matrix(dx_api.form(a))
-    load = dx_api.assemble_vector(dx_api.form(
-        v("+") * r("+") * dS(geometry.FACET_TAGS["ball_surface"])))
-    ball_load = load.array.copy()
+    a_form = dx_api.form(a)
+    load_form = dx_api.form(v("+") * r("+") * dS(geometry.FACET_TAGS["ball_surface"]))
+    A = dx_api.assemble_matrix(a_form)
+    ball_load = dx_api.assemble_vector(load_form).array.copy()
 
     def dofs(name):
         tags = facet_tags.values
@@ -167,7 +168,17 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     indptr, indices, data, n_red = restriction(n_full, fixed, pairs)
     P = dx_api.matrix_from_csr(comm, (n_full, n_red), indptr, indices, data)
     return Discretisation(mesh, cell_tags, facet_tags, V, A, ball_load, P, n_red,
-                          lower.astype(np.int64), upper.astype(np.int64), grounded, degree)
+                          lower.astype(np.int64), upper.astype(np.int64), grounded, degree,
+                          (a_form, load_form))
+
+
+def reassemble(dx_api, disc: Discretisation) -> None:
+    """The operator and the ball's load of ``disc`` assembled again (its mesh moved:
+    :mod:`tengfield.field.moving`), with the same compiled forms, dofs and sparsity."""
+    a_form, load_form = disc.forms
+    disc.A.destroy()
+    disc.A = dx_api.assemble_matrix(a_form)
+    disc.ball_load = dx_api.assemble_vector(load_form).array.copy()
 
 
 @dataclass
@@ -360,6 +371,29 @@ def solve_by_contact_rule(position: float, anchors, stroke: float, solve_at_gap,
     return result
 
 
+def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool,
+                grading_size: float | None = None):
+    """``(layout, Discretisation)`` of ``scene`` with the ball at ``position``: meshed
+    (gmsh), or with ``moving`` a reference mesh of the same scene and mesh size moved
+    there (:func:`tengfield.field.moving.placed`, which meshes when the move would
+    spoil the mesh)."""
+    fld = scene.field
+    extra = {} if grading_size is None else {"grading_size": grading_size}
+
+    def mesh_and_discretise(lay=None):
+        lay, *meshed = build_mesh(scene, position, comm, **extra)
+        return lay, discretise(dx_api, *meshed, lay, eps, fld.degree, fld.far_field)
+
+    if not moving:
+        return mesh_and_discretise()
+    from . import moving as motion
+
+    key = (scene.field_hash(), geometry.base_mesh_size(scene), grading_size)
+    lay = geometry.layout(scene, position, **extra)
+    return motion.placed(key, lay, lambda _: mesh_and_discretise()[1],
+                         lambda disc: reassemble(dx_api, disc), dx_api)
+
+
 def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
                  keep_solution: bool = False, source_solve: bool = False,
                  linear_solver: str = "direct", breakdown_lines: bool = False) -> PositionResult:
@@ -374,18 +408,19 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     if estimate_error:   # refuse before any meshing if the finer mesh would not fit
         geometry.check_mesh_budget(geometry.layout(half, position, grading_size=size),
                                    fld.degree, mesh_size_mm=size * 1e3, refinement=2.0)
-    lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
+    moving = getattr(fld, "mesh_motion", "remesh") == "move" and not keep_solution
+    eps = permittivities(scene.device, geometry.layout(scene, position))
+    lay, disc = discretised(dx_api, scene, position, comm, eps, moving=moving)
+    mesh = disc.mesh
     sigma = scene.device.surface_charge
-    eps = permittivities(scene.device, lay)
-    disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, fld.degree, fld.far_field)
     diameter = scene.device.ball_diameter
     sol = solve_discretisation(dx_api, disc, sigma, diameter, source_solve=source_solve,
                                linear_solver=linear_solver, unit_source=breakdown_lines)
     estimate = math.nan
     if estimate_error:
         # same grading lengths as the coarse mesh: a uniform halving of one mesh family
-        lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=size)
-        finer = discretise(dx_api, *fine_mesh, lay_half, eps, fld.degree, fld.far_field)
+        lay_half, finer = discretised(dx_api, half, position, comm, eps, moving=moving,
+                                      grading_size=size)
         fine = solve_discretisation(dx_api, finer, sigma, diameter, source_solve=False,
                                     linear_solver=linear_solver, unit_source=breakdown_lines)
         estimate = richardson_error(contact.relative_change(sol, fine), fld.degree)
@@ -393,6 +428,7 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
             from .breakdown import line_basis
             lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
     info = {"mesh_size_m": lay.mesh_size, "domain_radius_m": lay.domain_radius,
+            "mesh_motion": "move" if moving else "remesh",
             "far_field": fld.far_field, "environment": fld.environment,
             "meshed_gap_m": lay.effective_gap,
             "minimum_gap_m": contact.minimum_gap(scene.device.plate_spacing),

@@ -268,6 +268,7 @@ class Field:
     radial_mesh_size: float = 1.5e-3  # [m] the (z, r) surrogate's 3D solves
     radial_degree: int = 2
     radial_tolerance: float = 1e-2
+    mesh_motion: str = "remesh"       # "move": one mesh per table moved with the ball
 
     def __post_init__(self):
         check_section("field", self, "Field")
@@ -465,6 +466,8 @@ class Scene:
                 out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
         out["device"] = shape_field_inputs(out["device"], self.device.shape, full["device"],
                                            HASH_NAMES)
+        if full["field"].get("mesh_motion", "remesh") != "remesh":   # moved meshes (#40)
+            out["field"]["mesh_motion"] = full["field"]["mesh_motion"]
         return out
 
     def field_hash(self) -> str:

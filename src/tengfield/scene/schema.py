@@ -212,6 +212,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                    _rng(0.0, 100.0, lo_open=True)),
         "radial_degree": Key("radial_degree", int, 2, 1, _rng(1, 2)),
         "radial_tolerance": Key("radial_tolerance", float, 1e-2, 1.0, _rng(1e-8, 0.5)),
+        # the axisymmetric tube's positions: each meshed by gmsh ("remesh"), or one
+        # reference mesh moved with the ball ("move": tengfield.field.moving). In the
+        # field hash only when "move" (Scene.field_inputs): "remesh" keeps today's keys
+        "mesh_motion": Key("mesh_motion", str, "remesh", None, _choice("remesh", "move")),
     },
     # kind = "rectifier": harvesting electronics (issue #11; tengfield.harvest); the
     # chip's defaults are the LTC3588-1's (docs/harvest.md)

@@ -1,0 +1,128 @@
+"""One mesh per geometry, moved with the ball (issue #40; ``[field] mesh_motion = "move"``).
+
+The axisymmetric tube's positions of one surrogate table share a reference mesh: the
+ball is placed at gap z by moving the mesh nodes along the axis by ``δ · w(x)`` with
+``δ`` the ball's displacement from the reference and the analytic blending weight
+
+    w = d_fixed / (d_fixed + d_ball)   inside the cavity, 0 outside it,
+
+where ``d_ball`` is the distance to the ball (0 in it: the ball moves rigidly) and
+``d_fixed`` the distance to the cavity's walls (the electrode planes z = ±h/2 and the
+bore r = r_i), so the electrodes, the walls, the far field and the Kelvin image do
+not move, nodes on the axis stay on it, and the same compiled forms, dofs, sparsity
+and restriction P are reused: only the operator and the ball's load are assembled
+again (and factored).
+
+A move is accepted only if every triangle keeps its orientation and its area changes
+by at most :data:`QUALITY_BOUND` (either way) against the reference mesh; otherwise
+the geometry is meshed again at the new position (gmsh, as ``mesh_motion =
+"remesh"``) and that mesh becomes a further reference. Contact-scale gaps (the
+contact rule's anchors g, 2g, 4g) follow the same rule: the first is meshed, the
+others are moves of it. :data:`COUNTS` says how often each happened in this process.
+
+The numbers differ from a remeshed solve by the discretisation error (the tables
+agree within their error estimates: ``tests/field/test_moving_mesh.py``), so
+``mesh_motion = "move"`` is part of the field hash; "remesh" (the default) leaves the
+hash as it was.
+"""
+from __future__ import annotations
+
+import dataclasses
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+
+#: largest factor by which a moved triangle's area may differ from its reference's
+QUALITY_BOUND = 4.0
+#: reference meshes kept per (scene, mesh size) in this process, and keys kept
+MAX_REFERENCES = 6
+MAX_KEYS = 4
+#: how often a position was placed by moving a mesh, and how often it was meshed
+COUNTS = {"moved": 0, "meshed": 0}
+
+_references: OrderedDict = OrderedDict()
+
+
+@dataclass
+class Reference:
+    """A meshed and discretised geometry and what moving it needs."""
+    lay: object              # the layout it was meshed for
+    disc: object             # axisymmetric.Discretisation (its mesh is moved in place)
+    x0: np.ndarray           # the geometry nodes' coordinates as meshed
+    weight: np.ndarray       # blending weight w per geometry node
+    triangles: np.ndarray    # (cells, 3) vertex nodes of every cell
+    area0: np.ndarray        # signed areas as meshed
+    centre: float            # the ball centre's z as meshed [m]
+    placed_at: float = np.nan  # the centre's z now [m]
+
+
+def blending_weight(x: np.ndarray, lay) -> np.ndarray:
+    """w(x) for the geometry nodes ``x`` (n, >= 2: r, z) of the tube layout ``lay``."""
+    r, z = x[:, 0], x[:, 1]
+    d_fixed = np.minimum.reduce([z - lay.z_lower, lay.z_upper - z, lay.tube_inner_radius - r])
+    d_ball = np.maximum(np.hypot(r, z - lay.ball_centre_z) - lay.ball_radius, 0.0)
+    inside = d_fixed > 0.0
+    w = np.zeros_like(r)
+    w[inside] = d_fixed[inside] / (d_fixed[inside] + d_ball[inside])
+    return w
+
+
+def signed_areas(x: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    a, b, c = (x[triangles[:, k], :2] for k in range(3))
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                  - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+
+def quality_ok(ref: Reference, shift: float) -> bool:
+    """Whether moving ``ref``'s ball by ``shift`` [m] keeps every triangle's orientation
+    and its area within :data:`QUALITY_BOUND` of the reference's."""
+    x = ref.x0.copy()
+    x[:, 1] += shift * ref.weight
+    ratio = signed_areas(x, ref.triangles) / ref.area0
+    return bool(np.all(ratio > 1.0 / QUALITY_BOUND) and np.all(ratio < QUALITY_BOUND))
+
+
+def _new_reference(dx_api, lay, disc) -> Reference:
+    x0 = np.array(disc.mesh.geometry.x, copy=True)
+    triangles = dx_api.cell_vertex_nodes(disc.mesh)
+    return Reference(lay=lay, disc=disc, x0=x0, weight=blending_weight(x0, lay),
+                     triangles=triangles, area0=signed_areas(x0, triangles),
+                     centre=lay.ball_centre_z, placed_at=lay.ball_centre_z)
+
+
+def placed(key, lay, mesh_and_discretise, reassemble, dx_api):
+    """``(layout, Discretisation)`` with the ball where ``lay`` puts it: a reference of
+    ``key`` moved there when the quality bound allows, else ``mesh_and_discretise(lay)``
+    (-> Discretisation), kept as a new reference. ``reassemble(disc)`` assembles the
+    operator and the ball's load again on the moved mesh."""
+    refs = _references.setdefault(key, [])
+    _references.move_to_end(key)
+    while len(_references) > MAX_KEYS:
+        _references.popitem(last=False)
+    for ref in sorted(refs, key=lambda ref: abs(ref.centre - lay.ball_centre_z)):
+        shift = lay.ball_centre_z - ref.centre
+        if quality_ok(ref, shift):
+            if ref.placed_at != lay.ball_centre_z:
+                x = ref.disc.mesh.geometry.x
+                x[:, 1] = ref.x0[:, 1] + shift * ref.weight
+                reassemble(ref.disc)
+                ref.placed_at = lay.ball_centre_z
+            COUNTS["moved"] += 1
+            moved = dataclasses.replace(ref.lay, ball_centre_z=lay.ball_centre_z,
+                                        gap_lower=lay.gap_lower, gap_upper=lay.gap_upper,
+                                        requested_gap=lay.requested_gap,
+                                        effective_gap=lay.effective_gap)
+            return moved, ref.disc
+    disc = mesh_and_discretise(lay)
+    COUNTS["meshed"] += 1
+    refs.append(_new_reference(dx_api, lay, disc))
+    if len(refs) > MAX_REFERENCES:
+        refs.pop(0)
+    return lay, disc
+
+
+def clear() -> None:
+    """Forget every reference mesh (and the counts)."""
+    _references.clear()
+    COUNTS.update(moved=0, meshed=0)
