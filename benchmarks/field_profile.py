@@ -12,6 +12,7 @@ surrogate cache; warm: the same process run again on the caches the cold one fil
 Each case runs in its own process so that imports are counted.
 
     .venv/bin/python benchmarks/field_profile.py [--case axisymmetric|3d|all] [--repeat 3]
+        [--mesh-motion remesh|move]
 
 The machine may be shared (2 cores, other jobs): the load average is printed with
 every table; whole-command figures for the README come from a process-timing tool
@@ -151,6 +152,8 @@ def child(case: str) -> dict:
     from tengfield.scene import default_scene
     imports = time.perf_counter() - start
     scene = default_scene()
+    if os.environ.get("FIELD_PROFILE_MESH_MOTION"):
+        scene = scene.with_values(field={"mesh_motion": os.environ["FIELD_PROFILE_MESH_MOTION"]})
     out = {"case": case}
     with Profile() as profile:
         profile.seconds["imports"] = imports
@@ -188,6 +191,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--case", default="all", choices=("axisymmetric", "3d", "all"))
     parser.add_argument("--repeat", type=int, default=1, help="cold/warm pairs (median)")
+    parser.add_argument("--mesh-motion", default="remesh", choices=("remesh", "move"),
+                        help="[field] mesh_motion of the axisymmetric surrogate")
     parser.add_argument("--child", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -199,10 +204,11 @@ def main() -> None:
         for _ in range(args.repeat):
             with tempfile.TemporaryDirectory() as tmp:
                 env = dict(os.environ, XDG_CACHE_HOME=tmp, TENGFIELD_CACHE_DIR=f"{tmp}/surrogate",
-                           PYTHONPATH=str(ROOT / "src"), MPLBACKEND="Agg")
+                           PYTHONPATH=str(ROOT / "src"), MPLBACKEND="Agg",
+                           FIELD_PROFILE_MESH_MOTION=args.mesh_motion)
                 runs["cold"].append(run_case(case, env))
                 runs["warm"].append(run_case(case, env))
-        print(f"\n{case}: default scene, {runs['cold'][0]['dofs']} dofs per solve, solver "
+        print(f"\n{case} (mesh_motion = {args.mesh_motion!r}): default scene, {runs['cold'][0]['dofs']} dofs per solve, solver "
               f"{', '.join(runs['cold'][0]['solvers'])}; load {os.getloadavg()[0]:.1f}")
         print(f"{'phase':18s} {'cold [s]':>9s} {'warm [s]':>9s}")
         for phase in PHASES:
