@@ -1,7 +1,8 @@
 """One mesh per geometry moved with the ball (issue #40, ``[field] mesh_motion = "move"``):
 the blending map moves the ball rigidly and nothing else that is fixed, a move that
-would spoil the mesh is meshed instead, and the moved table of the tube agrees with
-the remeshed one within each table's error estimate at every position."""
+would spoil the mesh is meshed instead, and the moved tables of the tube and the
+spherical shell (axisymmetric) agree with the remeshed ones within each table's error
+estimate at every position."""
 import warnings
 
 import numpy as np
@@ -62,13 +63,25 @@ def test_a_move_that_would_invert_or_crush_cells_is_refused():
     assert not moving.quality_ok(ref, -1.6e-3)    # through the electrode: inverted
 
 
+def _tube():
+    return default_scene().with_values(field={"mesh_size_mm": 0.8})
+
+
+def _shell():
+    from shell_model import SHELL
+
+    from tengfield.scene import Scene
+    return Scene.from_dict({"device": SHELL, "field": {"mesh_size_mm": 2.0, "tolerance": 0.01}})
+
+
 @field
 @pytest.mark.slow
-def test_the_moved_tube_table_agrees_with_the_remeshed_one_within_its_error_estimate():
+@pytest.mark.parametrize("make_scene", [_tube, _shell], ids=["tube", "spherical-shell"])
+def test_the_moved_table_agrees_with_the_remeshed_one_within_its_error_estimate(make_scene):
     from tengfield import surrogate
     from tengfield.field import moving
 
-    scene = default_scene().with_values(field={"mesh_size_mm": 0.8})
+    scene = make_scene()
     moving.clear()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)

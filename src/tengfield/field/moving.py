@@ -1,14 +1,15 @@
 """One mesh per geometry, moved with the ball (issue #40; ``[field] mesh_motion = "move"``).
 
-The axisymmetric tube's positions of one surrogate table share a reference mesh: the
+The axisymmetric positions of one surrogate table (the tube's and the spherical
+shell's) share a reference mesh: the
 ball is placed at gap z by moving the mesh nodes along the axis by ``δ · w(x)`` with
 ``δ`` the ball's displacement from the reference and the analytic blending weight
 
     w = d_fixed / (d_fixed + d_ball)   inside the cavity, 0 outside it,
 
 where ``d_ball`` is the distance to the ball (0 in it: the ball moves rigidly) and
-``d_fixed`` the distance to the cavity's walls (the electrode planes z = ±h/2 and the
-bore r = r_i), so the electrodes, the walls, the far field and the Kelvin image do
+``d_fixed`` the distance to the cavity's walls (the tube's electrode planes z = ±h/2
+and bore r = r_i; the shell's cavity sphere), so the electrodes, the walls, the far field and the Kelvin image do
 not move, nodes on the axis stay on it, and the same compiled forms, dofs, sparsity
 and restriction P are reused: only the operator and the ball's load are assembled
 again (and factored).
@@ -58,9 +59,15 @@ class Reference:
 
 
 def blending_weight(x: np.ndarray, lay) -> np.ndarray:
-    """w(x) for the geometry nodes ``x`` (n, >= 2: r, z) of the tube layout ``lay``."""
+    """w(x) for the geometry nodes ``x`` (n, >= 2: r, z) of the layout ``lay``: the
+    tube's (cavity: the electrode planes and the bore) or the spherical shell's (cavity:
+    the sphere of radius ``cavity_radius`` around the origin)."""
     r, z = x[:, 0], x[:, 1]
-    d_fixed = np.minimum.reduce([z - lay.z_lower, lay.z_upper - z, lay.tube_inner_radius - r])
+    if hasattr(lay, "cavity_radius"):
+        d_fixed = lay.cavity_radius - np.hypot(r, z)
+    else:
+        d_fixed = np.minimum.reduce([z - lay.z_lower, lay.z_upper - z,
+                                     lay.tube_inner_radius - r])
     d_ball = np.maximum(np.hypot(r, z - lay.ball_centre_z) - lay.ball_radius, 0.0)
     inside = d_fixed > 0.0
     w = np.zeros_like(r)
