@@ -116,9 +116,19 @@ def progress_shown(enabled: bool = True, comm=None) -> bool:
     if comm is not None and comm.Get_rank() != 0:
         return False
     try:
-        return bool(sys.stderr.isatty())
+        if sys.stderr.isatty():
+            return True
+        # under mpirun a rank's stderr is a pipe to the launcher even on a terminal, while
+        # Open MPI gives its stdout a pseudo-terminal: the (z, r) table's minutes of 3D
+        # solves were silent under `mpirun -n 2` (issue #40)
+        return _under_mpi_launcher() and bool(sys.stdout.isatty())
     except (AttributeError, ValueError):   # a closed or replaced stream
         return False
+
+
+def _under_mpi_launcher() -> bool:
+    """Whether an MPI launcher (Open MPI, MPICH/Hydra, Slurm's PMI) started this process."""
+    return any(name in os.environ for name in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"))
 
 
 def progress_bar(total: int | None, what: str, enabled: bool = True, *, unit: str = "task",

@@ -146,3 +146,32 @@ def test_the_field_command_refuses_past_max_memory_gb_before_writing(run_cli, tm
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "max_memory_gb = 0.05" in lines[0] and "GB" in lines[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize("launched, shown", [(False, "False"), (True, "True")])
+def test_progress_shows_under_mpirun_on_a_terminal(python, launched, shown):
+    """Under mpirun a rank's stderr is a pipe to the launcher and its stdout a
+    pseudo-terminal (Open MPI): the field phases' progress (the (z, r) table's minutes of
+    3D solves) showed nothing there."""
+    import os
+    import pty
+    import subprocess
+
+    from conftest import cli_environment
+
+    master, slave = pty.openpty()
+    env = cli_environment()
+    env.pop("TENGFIELD_QUIET", None)
+    for name in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"):
+        env.pop(name, None)
+    if launched:
+        env["OMPI_COMM_WORLD_SIZE"] = "2"
+    code = ("import sys; from tengfield._console import progress_shown; "
+            "sys.stderr.write(str(progress_shown(True)))")
+    try:
+        done = subprocess.run([python, "-c", code], stdout=slave, stderr=subprocess.PIPE,
+                              env=env, timeout=60)
+    finally:
+        os.close(slave)
+        os.close(master)
+    assert done.stderr.decode().strip() == shown
