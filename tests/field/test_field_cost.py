@@ -175,3 +175,47 @@ def test_progress_shows_under_mpirun_on_a_terminal(python, launched, shown):
         os.close(slave)
         os.close(master)
     assert done.stderr.decode().strip() == shown
+
+
+@field
+@pytest.mark.slow
+def test_precompute_on_a_terminal_says_the_solves_and_their_cost_first(cli_command, tmp_path):
+    """`tengfield precompute` on a terminal: the number of solves and the estimate in one
+    line before the progress bar (read through a pseudo-terminal)."""
+    import os
+    import pty
+    import select
+    import subprocess
+
+    from conftest import cli_environment
+
+    scene = tmp_path / "coarse.toml"
+    scene.write_text("[field]\nmesh_size_mm = 1.0\ntolerance = 0.01\n")
+    master, slave = pty.openpty()
+    env = cli_environment(TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("TENGFIELD_QUIET", None)
+    proc = subprocess.Popen(cli_command("precompute", scene), stdout=subprocess.DEVNULL,
+                            stderr=slave, env=env)
+    os.close(slave)
+    seen = b""
+    while True:
+        ready, _, _ = select.select([master], [], [], 1.0)
+        if ready:
+            try:
+                chunk = os.read(master, 4096)
+            except OSError:
+                break
+            if not chunk:
+                break
+            seen += chunk
+        elif proc.poll() is not None:
+            break
+    proc.wait(timeout=600)
+    os.close(master)
+    text = seen.decode(errors="replace").replace("\r", "\n")
+    assert proc.returncode == 0
+    lines = [line for line in text.splitlines() if line.strip()]
+    first = lines[0]
+    assert first.startswith("tengfield: field solves (at least; 17 positions, mirror symmetry): 9,")
+    assert "dofs each" in first and "GB" in first and "estimated before meshing" in first
+    assert any(line.startswith("field solves:") for line in lines[1:])

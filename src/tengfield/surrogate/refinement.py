@@ -204,19 +204,18 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     count = int(initial_positions)
     if not is_lobatto_count(count):
         raise ValueError(f"initial_positions = {count}: must be 2^k + 1 >= 3")
+    symmetric = is_mirror_symmetric(scene)
     bar = None
     if progress and rank_of(comm) == 0:
-        from .._console import progress_bar
-        bar = progress_bar(count, "field solves", unit="position")
-
-    symmetric = is_mirror_symmetric(scene)
-    sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
-    sample_at = error_sample_positions(stroke, symmetric, count)
-    if bar is not None:   # the cost before the work (issue #40), on a terminal
-        first = 2 * count - 1
+        first = 2 * count - 1   # the cost before the work (issue #40), on a terminal
         _announce(scene, (first + 1) // 2 if symmetric else first, comm, method=None,
                   what=f"field solves (at least; {first} positions"
                        + (", mirror symmetry)" if symmetric else ")"))
+        from .._console import progress_bar
+        bar = progress_bar(count, "field solves", unit="position")
+
+    sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
+    sample_at = error_sample_positions(stroke, symmetric, count)
 
     def estimated_here(z: float) -> bool:
         return not sampled or bool(np.any(np.abs(sample_at - z) <= 1e-12 * stroke))
@@ -426,12 +425,12 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     sample_keys = {grid_key(z, r) for z in sample_z for r in (0.0, largest)}
     bar = None
     if progress and rank_of(comm) == 0:
-        from .._console import progress_bar
-        bar = progress_bar(0, "3D field solves (z, r)", unit="solve")
         first = (2 * nz - 1) * (2 * nr - 1 if nr > 2 else 3)
         _announce(scene, (first + 1) // 2 if symmetric else first, comm, method="3d",
                   what=f"3D field solves (z, r) (at least; mesh_size_mm = {mesh_size_mm:g}, "
                        f"degree = {degree})", mesh_size=mesh_size_mm * 1e-3, degree=degree)
+        from .._console import progress_bar
+        bar = progress_bar(0, "3D field solves (z, r)", unit="solve")
 
     def work(point):
         z, r, estimate = point
