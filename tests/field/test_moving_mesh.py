@@ -81,13 +81,29 @@ def test_the_moved_table_agrees_with_the_remeshed_one_within_its_error_estimate(
     from tengfield import surrogate
     from tengfield.field import moving
 
+    from tengfield.field import _dolfinx as dx_api
+
     scene = make_scene()
     moving.clear()
+    set_up = []
+    original = dx_api.create_ksp
+
+    def create_ksp(*args, **kwargs):
+        set_up.append(kwargs["prefix"])
+        return original(*args, **kwargs)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         remeshed = surrogate.precompute(scene)
-        moved = surrogate.precompute(scene.with_values(field={"mesh_motion": "move"}))
+        dx_api.create_ksp = create_ksp
+        try:
+            moved = surrogate.precompute(scene.with_values(field={"mesh_motion": "move"}))
+        finally:
+            dx_api.create_ksp = original
     assert moving.COUNTS["moved"] >= 5 and moving.COUNTS["meshed"] >= 1
+    # the solver is set up once per mesh (its own options prefix), refactored on a move
+    assert len(set_up) == len(set(set_up)) == moving.COUNTS["meshed"]
+    moving.clear()
+    assert not any(key.startswith(tuple(set_up)) for key in dx_api.PETSc.Options().getAll())
     np.testing.assert_allclose(moved.positions, remeshed.positions, rtol=0, atol=1e-15)
     n = len(remeshed.positions)
     scale_c = np.abs(remeshed.capacitance).reshape(n, -1).max(axis=1)

@@ -364,6 +364,15 @@ def assemble_matrix(a, bcs=()):
     return A
 
 
+def assemble_matrix_into(A, a) -> None:
+    """Assemble the compiled bilinear form ``a`` into the existing matrix ``A`` (the same
+    sparsity: a moved mesh), its entries zeroed first (``assemble_matrix``'s
+    ``PETSc.Mat`` overload, the same in 0.5 and 0.9)."""
+    A.zeroEntries()
+    dolfinx.fem.petsc.assemble_matrix(A, a)
+    A.assemble()
+
+
 def assemble_vector(L, a=None, bcs=()):
     """PETSc vector of the compiled linear form ``L``; with ``a`` and ``bcs`` lifted and set."""
     b = dolfinx.fem.petsc.assemble_vector(L)
@@ -453,6 +462,19 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
         from ..errors import FieldError
         raise FieldError(solver_failure(exc, kind, A.getSize()[0], symmetric)) from None
     return ksp
+
+
+def refactor(ksp, K, *, kind: str = "direct", symmetric: bool = False) -> None:
+    """Set ``ksp`` up again on ``K`` (the same matrix object, new values): a direct
+    solver keeps its symbolic analysis (ordering) and factors the values again."""
+    if symmetric:
+        K.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    ksp.setOperators(K, K)
+    try:
+        ksp.setUp()
+    except PETSc.Error as exc:
+        from ..errors import FieldError
+        raise FieldError(solver_failure(exc, kind, K.getSize()[0], symmetric)) from None
 
 
 #: MUMPS INFOG(1) codes of a failed allocation or too small a workspace (its manual, §8)

@@ -126,6 +126,16 @@ class Discretisation:
     grounded: np.ndarray  # table / Dirichlet far boundary dofs
     degree: int = 1
     forms: tuple = ()    # compiled (operator, ball load): assembled again on a moved mesh
+    solver: dict | None = None  # a reference mesh's {kind: (K, KSP, prefix)}, set up once
+
+
+def release_solvers(dx_api, disc: Discretisation) -> None:
+    """Destroy the solvers a reference mesh kept (and their PETSc options)."""
+    for K, ksp, prefix in (disc.solver or {}).values():
+        ksp.destroy()
+        K.destroy()
+        dx_api.clear_options(prefix)
+    disc.solver = None
 
 
 def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str, float],
@@ -176,8 +186,7 @@ def reassemble(dx_api, disc: Discretisation) -> None:
     """The operator and the ball's load of ``disc`` assembled again (its mesh moved:
     :mod:`tengfield.field.moving`), with the same compiled forms, dofs and sparsity."""
     a_form, load_form = disc.forms
-    disc.A.destroy()
-    disc.A = dx_api.assemble_matrix(a_form)
+    dx_api.assemble_matrix_into(disc.A, a_form)
     disc.ball_load = dx_api.assemble_vector(load_form).array.copy()
 
 
@@ -200,9 +209,15 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
     """Both weighting potentials (and optionally the σ source) with one factorisation."""
     comm = disc.mesh.comm
     t0 = time.perf_counter()
-    K = disc.A.ptap(disc.P)
-    prefix = dx_api.unique_prefix("axisym")
-    ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver, symmetric=True)
+    kept = disc.solver.get(linear_solver) if disc.solver is not None else None
+    if kept is not None:   # a moved mesh: same sparsity, the factorisation's analysis kept
+        K, ksp, prefix = kept
+        disc.A.ptap(disc.P, K)
+        dx_api.refactor(ksp, K, kind=linear_solver, symmetric=True)
+    else:
+        K = disc.A.ptap(disc.P)
+        prefix = dx_api.unique_prefix("axisym")
+        ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver, symmetric=True)
     n_full = disc.ball_load.size
 
     def full(x, lift):
@@ -231,9 +246,12 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
         disc.P.multTranspose(dx_api.vector(comm, disc.ball_load / EPS0), rhs)
         unit = full(dx_api.solve(ksp, rhs), np.zeros(n_full))
     solve_time = time.perf_counter() - t0
-    ksp.destroy()
-    K.destroy()
-    dx_api.clear_options(prefix)
+    if disc.solver is not None:   # a reference mesh (field/moving.py) keeps its solver
+        disc.solver[linear_solver] = (K, ksp, prefix)
+    else:
+        ksp.destroy()
+        K.destroy()
+        dx_api.clear_options(prefix)
 
     def apply_A(x):
         y = disc.A.createVecLeft()

@@ -11,8 +11,9 @@ where ``d_ball`` is the distance to the ball (0 in it: the ball moves rigidly) a
 ``d_fixed`` the distance to the cavity's walls (the tube's electrode planes z = ±h/2
 and bore r = r_i; the shell's cavity sphere), so the electrodes, the walls, the far field and the Kelvin image do
 not move, nodes on the axis stay on it, and the same compiled forms, dofs, sparsity
-and restriction P are reused: only the operator and the ball's load are assembled
-again (and factored).
+and restriction P are reused: only the operator (into the same matrix) and the ball's
+load are assembled again, and the reference's solver (its own options prefix, set up
+once) factors the new values with its symbolic analysis kept.
 
 A move is accepted only if every triangle keeps its orientation and its area changes
 by at most :data:`QUALITY_BOUND` (either way) against the reference mesh; otherwise
@@ -91,6 +92,7 @@ def quality_ok(ref: Reference, shift: float) -> bool:
 
 
 def _new_reference(dx_api, lay, disc) -> Reference:
+    disc.solver = {}   # the solver is set up once per reference (its own options prefix)
     x0 = np.array(disc.mesh.geometry.x, copy=True)
     triangles = dx_api.cell_vertex_nodes(disc.mesh)
     return Reference(lay=lay, disc=disc, x0=x0, weight=blending_weight(x0, lay),
@@ -106,7 +108,8 @@ def placed(key, lay, mesh_and_discretise, reassemble, dx_api):
     refs = _references.setdefault(key, [])
     _references.move_to_end(key)
     while len(_references) > MAX_KEYS:
-        _references.popitem(last=False)
+        for old in _references.popitem(last=False)[1]:
+            _release(dx_api, old)
     for ref in sorted(refs, key=lambda ref: abs(ref.centre - lay.ball_centre_z)):
         shift = lay.ball_centre_z - ref.centre
         if quality_ok(ref, shift):
@@ -125,11 +128,21 @@ def placed(key, lay, mesh_and_discretise, reassemble, dx_api):
     COUNTS["meshed"] += 1
     refs.append(_new_reference(dx_api, lay, disc))
     if len(refs) > MAX_REFERENCES:
-        refs.pop(0)
+        _release(dx_api, refs.pop(0))
     return lay, disc
 
 
+def _release(dx_api, ref: Reference) -> None:
+    from .axisymmetric import release_solvers
+    release_solvers(dx_api, ref.disc)
+
+
 def clear() -> None:
-    """Forget every reference mesh (and the counts)."""
+    """Forget every reference mesh (their solvers destroyed) and the counts."""
+    if _references:
+        from . import _dolfinx as dx_api
+        for refs in _references.values():
+            for ref in refs:
+                _release(dx_api, ref)
     _references.clear()
     COUNTS.update(moved=0, meshed=0)
