@@ -466,8 +466,8 @@ class Scene:
                 out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
         out["device"] = shape_field_inputs(out["device"], self.device.shape, full["device"],
                                            HASH_NAMES)
-        if full["field"].get("mesh_motion", "remesh") != "remesh":   # moved meshes (#40)
-            out["field"]["mesh_motion"] = full["field"]["mesh_motion"]
+        if out["field"].get("mesh_motion") == "remesh":   # the hash of every cache before #40
+            del out["field"]["mesh_motion"]
         return out
 
     def field_hash(self) -> str:

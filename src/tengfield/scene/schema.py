@@ -215,7 +215,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # the axisymmetric tube's positions: each meshed by gmsh ("remesh"), or one
         # reference mesh moved with the ball ("move": tengfield.field.moving). In the
         # field hash only when "move" (Scene.field_inputs): "remesh" keeps today's keys
-        "mesh_motion": Key("mesh_motion", str, "remesh", None, _choice("remesh", "move")),
+        "mesh_motion": Key("mesh_motion", str, "remesh", None, _choice("remesh", "move"),
+                           field=True),
     },
     # kind = "rectifier": harvesting electronics (issue #11; tengfield.harvest); the
     # chip's defaults are the LTC3588-1's (docs/harvest.md)
