@@ -113,3 +113,28 @@ def test_the_moved_table_agrees_with_the_remeshed_one_within_its_error_estimate(
         np.abs(moved.induced_charge - remeshed.induced_charge).max(axis=1) / scale_q)
     bound = np.minimum(moved.field_error, remeshed.field_error)
     assert np.all(change <= bound), (change, bound)
+
+
+@field
+def test_moved_numbers_do_not_depend_on_the_order_of_the_solves():
+    """The reference of a position is a function of the position alone (a ladder of
+    gaps), so a table's numbers are the same whatever order its solves ran in (and
+    however they were spread over the ranks)."""
+    from mpi4py import MPI
+
+    from tengfield.field import moving, solve_position
+
+    scene = default_scene().with_values(field={"mesh_size_mm": 1.0, "mesh_motion": "move"})
+    positions = [0.3e-3, 1.2e-3, 0.6e-3, 2.1e-3]
+
+    def solved(order):
+        moving.clear()
+        out = {z: solve_position(scene, z, comm=MPI.COMM_SELF, estimate_error=False)
+               for z in order}
+        return [out[z] for z in positions]
+    forward, backward = solved(positions), solved(positions[::-1])
+    assert moving.COUNTS["moved"] >= 2
+    for a, b in zip(forward, backward):
+        assert np.array_equal(a.capacitance, b.capacitance)
+        assert np.array_equal(a.induced_charge, b.induced_charge)
+    moving.clear()

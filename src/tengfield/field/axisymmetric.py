@@ -127,6 +127,16 @@ class Discretisation:
     degree: int = 1
     forms: tuple = ()    # compiled (operator, ball load): assembled again on a moved mesh
     solver: dict | None = None  # a reference mesh's {kind: (K, KSP, prefix)}, set up once
+    placement: str = "meshed"   # "moved": a reference mesh moved here (field/moving.py)
+    meshings: int = 1           # gmsh meshings the last placement of this mesh took
+
+
+def placements(*discs) -> dict:
+    """``{"moved": n, "meshed": m}`` over the meshes of one solve (info["mesh_placements"]):
+    how many were reference meshes moved there, how many gmsh meshings it took."""
+    discs = [d for d in discs if d is not None]
+    return {"moved": sum(1 for d in discs if d.placement == "moved"),
+            "meshed": sum(int(d.meshings) for d in discs)}
 
 
 def release_solvers(dx_api, disc: Discretisation) -> None:
@@ -383,6 +393,9 @@ def solve_by_contact_rule(position: float, anchors, stroke: float, solve_at_gap,
     result.info["contact_rule"] = ("power-law extrapolation from gaps "
                                    + ", ".join(f"{d:.6g}" for d in rule["distances"]) + " m")
     result.info["contact_extrapolation_error"] = rule["error"]
+    if all("mesh_placements" in r.info for r in solves):   # every anchor's meshes
+        result.info["mesh_placements"] = {
+            key: sum(r.info["mesh_placements"][key] for r in solves) for key in ("moved", "meshed")}
     result.info["contact_exponent"] = rule["exponent"]
     for r in solves:
         r.__dict__.pop("extras", None)
@@ -398,18 +411,20 @@ def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool
     fld = scene.field
     extra = {} if grading_size is None else {"grading_size": grading_size}
 
-    def mesh_and_discretise(lay=None):
-        lay, *meshed = build_mesh(scene, position, comm, **extra)
+    def mesh_and_discretise(z):
+        lay, *meshed = build_mesh(scene, z, comm, **extra)
         return lay, discretise(dx_api, *meshed, lay, eps, fld.degree, fld.far_field)
 
     if not moving:
-        return mesh_and_discretise()
+        return mesh_and_discretise(position)
     from . import moving as motion
 
     key = (scene.field_hash(), geometry.base_mesh_size(scene), grading_size)
-    lay = geometry.layout(scene, position, **extra)
-    return motion.placed(key, lay, lambda _: mesh_and_discretise()[1],
-                         lambda disc: reassemble(dx_api, disc), dx_api)
+    return motion.placed(key, geometry.layout(scene, position, **extra),
+                         lambda z: geometry.layout(scene, z, **extra),
+                         lambda z: mesh_and_discretise(z)[1],
+                         lambda disc: reassemble(dx_api, disc), dx_api,
+                         minimum_gap=contact.minimum_gap(scene.device.plate_spacing))
 
 
 def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
@@ -435,6 +450,7 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     sol = solve_discretisation(dx_api, disc, sigma, diameter, source_solve=source_solve,
                                linear_solver=linear_solver, unit_source=breakdown_lines)
     estimate = math.nan
+    finer = None
     if estimate_error:
         # same grading lengths as the coarse mesh: a uniform halving of one mesh family
         lay_half, finer = discretised(dx_api, half, position, comm, eps, moving=moving,
@@ -447,6 +463,7 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
             lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
     info = {"mesh_size_m": lay.mesh_size, "domain_radius_m": lay.domain_radius,
             "mesh_motion": "move" if moving else "remesh",
+            "mesh_placements": placements(disc, finer),
             "far_field": fld.far_field, "environment": fld.environment,
             "meshed_gap_m": lay.effective_gap,
             "minimum_gap_m": contact.minimum_gap(scene.device.plate_spacing),

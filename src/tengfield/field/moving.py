@@ -15,12 +15,17 @@ and restriction P are reused: only the operator (into the same matrix) and the b
 load are assembled again, and the reference's solver (its own options prefix, set up
 once) factors the new values with its symbolic analysis kept.
 
-A move is accepted only if every triangle keeps its orientation and its area changes
-by at most :data:`QUALITY_BOUND` (either way) against the reference mesh; otherwise
-the geometry is meshed again at the new position (gmsh, as ``mesh_motion =
-"remesh"``) and that mesh becomes a further reference. Contact-scale gaps (the
+The reference of a position is the mesh at a fixed rung of a ladder of gaps
+(g, 4g, 16g, ... and half the stroke, g the smallest meshed gap; on the side of the
+nearer wall), the rung nearest in ratio (:func:`reference_position`): a function of
+the position alone, so the numbers do not depend on the order of the solves or on the
+ranks. A move is accepted only if every triangle keeps its orientation and its area
+changes by at most :data:`QUALITY_BOUND` (either way) against the reference mesh;
+otherwise the position is meshed on its own (gmsh, as ``mesh_motion = "remesh"``). Each solve says how its meshes
+were placed (``info["mesh_placements"]``), a table sums them (its provenance's
+``mesh_placements``, printed by ``tengfield precompute``). Contact-scale gaps (the
 contact rule's anchors g, 2g, 4g) follow the same rule: the first is meshed, the
-others are moves of it. :data:`COUNTS` says how often each happened in this process.
+others are the rungs or moves of them. :data:`COUNTS` says how often each happened in this process.
 
 The numbers differ from a remeshed solve by the discretisation error (the tables
 agree within their error estimates: ``tests/field/test_moving_mesh.py``), so
@@ -30,6 +35,7 @@ hash as it was.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -37,10 +43,13 @@ import numpy as np
 
 #: largest factor by which a moved triangle's area may differ from its reference's
 QUALITY_BOUND = 4.0
+#: the reference gaps: g, 4 g, 16 g, ... (g the smallest meshed gap) and half the stroke
+LADDER_FACTOR = 4.0
 #: reference meshes kept per (scene, mesh size) in this process, and keys kept
 MAX_REFERENCES = 6
 MAX_KEYS = 4
-#: how often a position was placed by moving a mesh, and how often it was meshed
+#: how many positions were placed by moving a reference mesh, and how many gmsh
+#: meshings were done (the references and the positions a move would have spoilt)
 COUNTS = {"moved": 0, "meshed": 0}
 
 _references: OrderedDict = OrderedDict()
@@ -100,35 +109,67 @@ def _new_reference(dx_api, lay, disc) -> Reference:
                      centre=lay.ball_centre_z, placed_at=lay.ball_centre_z)
 
 
-def placed(key, lay, mesh_and_discretise, reassemble, dx_api):
-    """``(layout, Discretisation)`` with the ball where ``lay`` puts it: a reference of
-    ``key`` moved there when the quality bound allows, else ``mesh_and_discretise(lay)``
-    (-> Discretisation), kept as a new reference. ``reassemble(disc)`` assembles the
-    operator and the ball's load again on the moved mesh."""
-    refs = _references.setdefault(key, [])
+def reference_position(lay, minimum_gap: float) -> float:
+    """The gap [m] whose mesh the position of ``lay`` is moved from: on the side of the
+    nearer wall, the ladder gap ``g · LADDER_FACTOR^k`` (g the smallest meshed gap; the
+    last rung half the stroke) nearest to that side's gap in ratio. A function of the
+    position alone, so a table's numbers do not depend on the order of its solves or
+    on how the positions were spread over the ranks."""
+    stroke = lay.gap_lower + lay.gap_upper
+    near = max(min(lay.gap_lower, lay.gap_upper), minimum_gap)
+    half = 0.5 * stroke
+    ladder, rung = [], minimum_gap
+    while rung < half * (1.0 - 1e-9):
+        ladder.append(rung)
+        rung *= LADDER_FACTOR
+    ladder.append(half)
+    best = min(ladder, key=lambda rung: abs(math.log(near / rung)))
+    return best if lay.gap_lower <= lay.gap_upper else stroke - best
+
+
+def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
+           minimum_gap: float):
+    """``(layout, Discretisation)`` with the ball where ``lay`` puts it: the reference
+    mesh of ``key`` at :func:`reference_position` (meshed on first use:
+    ``layout_at(z)`` -> layout, ``mesh_and_discretise(z)`` -> Discretisation) moved
+    there when the quality bound allows, else the position meshed on its own.
+    ``reassemble(disc)`` assembles the operator and the ball's load again on the moved
+    mesh."""
+    refs = _references.setdefault(key, {})
     _references.move_to_end(key)
     while len(_references) > MAX_KEYS:
-        for old in _references.popitem(last=False)[1]:
+        for old in _references.popitem(last=False)[1].values():
             _release(dx_api, old)
-    for ref in sorted(refs, key=lambda ref: abs(ref.centre - lay.ball_centre_z)):
-        shift = lay.ball_centre_z - ref.centre
-        if quality_ok(ref, shift):
-            if ref.placed_at != lay.ball_centre_z:
-                x = ref.disc.mesh.geometry.x
-                x[:, 1] = ref.x0[:, 1] + shift * ref.weight
-                reassemble(ref.disc)
-                ref.placed_at = lay.ball_centre_z
-            COUNTS["moved"] += 1
-            moved = dataclasses.replace(ref.lay, ball_centre_z=lay.ball_centre_z,
-                                        gap_lower=lay.gap_lower, gap_upper=lay.gap_upper,
-                                        requested_gap=lay.requested_gap,
-                                        effective_gap=lay.effective_gap)
-            return moved, ref.disc
-    disc = mesh_and_discretise(lay)
-    COUNTS["meshed"] += 1
-    refs.append(_new_reference(dx_api, lay, disc))
-    if len(refs) > MAX_REFERENCES:
-        _release(dx_api, refs.pop(0))
+    z_ref = reference_position(lay, minimum_gap)
+    slot = round(z_ref / minimum_gap, 6)
+    ref = refs.get(slot)
+    fresh = ref is None
+    if fresh:
+        ref_lay = layout_at(z_ref)
+        ref = _new_reference(dx_api, ref_lay, mesh_and_discretise(z_ref))
+        refs[slot] = ref
+        if len(refs) > MAX_REFERENCES:
+            _release(dx_api, refs.pop(next(iter(refs))))
+    shift = lay.ball_centre_z - ref.centre
+    if shift == 0.0 or quality_ok(ref, shift):
+        if ref.placed_at != lay.ball_centre_z:
+            x = ref.disc.mesh.geometry.x
+            x[:, 1] = ref.x0[:, 1] + shift * ref.weight
+            reassemble(ref.disc)
+            ref.placed_at = lay.ball_centre_z
+        COUNTS["meshed"] += int(fresh)
+        COUNTS["moved"] += int(shift != 0.0)
+        ref.disc.placement = "moved" if shift != 0.0 else "reference"
+        ref.disc.meshings = int(fresh)
+        moved = dataclasses.replace(ref.lay, ball_centre_z=lay.ball_centre_z,
+                                    gap_lower=lay.gap_lower, gap_upper=lay.gap_upper,
+                                    requested_gap=lay.requested_gap,
+                                    effective_gap=lay.effective_gap)
+        return moved, ref.disc
+    disc = mesh_and_discretise(lay.requested_gap)   # the move would spoil the mesh
+    disc.placement = "meshed"
+    disc.meshings = 1 + int(fresh)
+    COUNTS["meshed"] += 1 + int(fresh)
     return lay, disc
 
 
@@ -142,7 +183,7 @@ def clear() -> None:
     if _references:
         from . import _dolfinx as dx_api
         for refs in _references.values():
-            for ref in refs:
+            for ref in refs.values():
                 _release(dx_api, ref)
     _references.clear()
     COUNTS.update(moved=0, meshed=0)

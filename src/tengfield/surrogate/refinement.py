@@ -233,6 +233,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
             bar.update(min(n, bar.total - bar.n))
 
     measured = math.nan   # largest field error estimate at the sampled positions
+    placed = {"moved": 0, "meshed": 0}   # how the solves' meshes were placed (#40)
 
     def solve_level(positions: np.ndarray) -> SurrogateTable:
         """Solve ``positions`` (with mirror symmetry: only those in the lower half)."""
@@ -243,6 +244,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
             bar.refresh()
         todo = todo[contact_first_order(todo, stroke, sample_at if sampled else ())]
         results = farm(comm, list(todo), work, progress=advance)
+        for r in results:
+            for key, count in (getattr(r, "info", None) or {}).get("mesh_placements", {}).items():
+                placed[key] = placed.get(key, 0) + int(count)
         if sampled:
             results, measured = _sampled_field_errors(
                 results, [estimated_here(r.position) for r in results], measured)
@@ -284,7 +288,8 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         field_hash=scene.field_hash(),
         provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
                     **({"breakdown_line_angles_deg": list(_line_angles())} if lines else {}),
-                    "field_error_rule": rule, "solver_fingerprint": solver_fingerprint()})
+                    "field_error_rule": rule, "solver_fingerprint": solver_fingerprint(),
+                    **({"mesh_placements": placed} if sum(placed.values()) else {})})
     warn_accuracy(table, comm)
     return table
 

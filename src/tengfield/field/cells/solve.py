@@ -87,18 +87,21 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
 
     def discretised(size, grading):
         """(layout, Discretisation): meshed, or a reference mesh moved (field/moving.py)."""
-        def meshed(_=None):
-            lay, *mesh = build_mesh(cell, position, comm, mesh_size=size, grading_size=grading,
+        def meshed(z):
+            lay, *mesh = build_mesh(cell, z, comm, mesh_size=size, grading_size=grading,
                                     **common)
             return lay, discretise(dx_api, *mesh, lay, eps, degree, far_field)
+
+        def layout_at(z):
+            return cell.axisymmetric_layout(z, mesh_size=size, grading_size=grading, **common)
         if not moving:
-            return meshed()
+            return meshed(position)
         from .. import moving as motion
         from ..axisymmetric import reassemble
-        lay = cell.axisymmetric_layout(position, mesh_size=size, grading_size=grading, **common)
         key = (repr(cell), size, grading, degree, far_field, domain_radius)
-        return motion.placed(key, lay, lambda _: meshed()[1],
-                             lambda disc: reassemble(dx_api, disc), dx_api)
+        return motion.placed(key, layout_at(position), layout_at, lambda z: meshed(z)[1],
+                             lambda disc: reassemble(dx_api, disc), dx_api,
+                             minimum_gap=contact.minimum_gap(cell.electrode_spacing))
 
     lay, disc = discretised(mesh_size, grading_size)
     mesh = disc.mesh
@@ -107,6 +110,7 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
                                unit_source=breakdown_lines)
     estimate = math.nan
     lines_check = None
+    finer = None
     if estimate_error:   # half the size, the coarse mesh's grading lengths: one family
         lay_half, finer = discretised(0.5 * mesh_size, grading_size or mesh_size)
         fine = solve_discretisation(dx_api, finer, sigma, cell.ball_diameter,
@@ -116,7 +120,9 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         if breakdown_lines:   # the lines on the half-size mesh: their error estimate
             from ..breakdown import line_basis
             lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
+    from ..axisymmetric import placements
     info = {"shape": cell.name, "mesh_size_m": lay.mesh_size,
+            "mesh_placements": placements(disc, finer),
             "domain_radius_m": lay.domain_radius, "far_field": far_field,
             "meshed_gap_m": lay.effective_gap,
             "minimum_gap_m": contact.minimum_gap(cell.electrode_spacing),
