@@ -180,10 +180,15 @@ def _release(dx_api, ref: Reference) -> None:
 
 def clear() -> None:
     """Forget every reference mesh (their solvers destroyed) and the counts."""
+    release_references()
+    COUNTS.update(moved=0, meshed=0)
+
+
+def release_references() -> None:
+    """Forget every reference mesh, their solvers destroyed (a table is done)."""
     if _references:
         from . import _dolfinx as dx_api
         for refs in _references.values():
             for ref in refs.values():
                 _release(dx_api, ref)
     _references.clear()
-    COUNTS.update(moved=0, meshed=0)

@@ -280,6 +280,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     if bar is not None:
         bar.n = bar.total
         bar.close()
+    if getattr(scene.field, "mesh_motion", "remesh") == "move":   # the table is done:
+        from ..field import moving   # its reference meshes and their solvers are freed
+        moving.release_references()
     rule = (_field_error_rule(sample_at, "", "at the other positions") if sampled
             else "measured at every position")
     table = dataclasses.replace(
