@@ -123,8 +123,13 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
     check_position(scene, position)
     chosen = resolve_method(scene, method, offset)
     from .cost import check_memory, solve_cost   # before any meshing (issue #40)
-    check_memory(scene, solve_cost(scene, method=chosen, position=position,
-                                   estimate_error=overrides.get("estimate_error", True)))
+    try:
+        estimate = solve_cost(scene, method=chosen, position=position,
+                              estimate_error=overrides.get("estimate_error", True))
+    except FieldError:   # a geometry the estimate cannot lay out: the cell's solver says why
+        estimate = None
+    if estimate is not None:
+        check_memory(scene, estimate)
     from .cells import cell_of   # the cell's own solver (field/cells: CELLS)
     return cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen, offset=offset,
                                       **overrides)
