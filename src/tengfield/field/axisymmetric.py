@@ -139,14 +139,6 @@ def placements(*discs) -> dict:
             "meshed": sum(int(d.meshings) for d in discs)}
 
 
-def release_solvers(dx_api, disc: Discretisation) -> None:
-    """Destroy the solvers a reference mesh kept (and their PETSc options)."""
-    for K, ksp, prefix in (disc.solver or {}).values():
-        ksp.destroy()
-        K.destroy()
-        dx_api.clear_options(prefix)
-    disc.solver = None
-
 
 def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str, float],
                degree: int, far_field: str) -> Discretisation:

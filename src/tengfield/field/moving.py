@@ -174,8 +174,12 @@ def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
 
 
 def _release(dx_api, ref: Reference) -> None:
-    from .axisymmetric import release_solvers
-    release_solvers(dx_api, ref.disc)
+    """Destroy the solvers the reference kept (and their PETSc options)."""
+    for K, ksp, prefix in (ref.disc.solver or {}).values():
+        ksp.destroy()
+        K.destroy()
+        dx_api.clear_options(prefix)
+    ref.disc.solver = None
 
 
 def clear() -> None:
