@@ -116,9 +116,44 @@ def progress_shown(enabled: bool = True, comm=None) -> bool:
     if comm is not None and comm.Get_rank() != 0:
         return False
     try:
-        return bool(sys.stderr.isatty())
+        if sys.stderr.isatty():
+            return True
+        # under mpirun a rank's stderr is a pipe to the launcher even on a terminal: the
+        # (z, r) table's minutes of 3D solves were silent under `mpirun -n 2` (issue #40)
+        return _launcher_on_a_terminal()
     except (AttributeError, ValueError):   # a closed or replaced stream
         return False
+
+
+#: process names of MPI launchers (their daemons are looked through to the launcher)
+_LAUNCHERS = ("mpirun", "mpiexec", "orterun", "prterun", "mpiexec.hydra")
+_DAEMONS = ("orted", "prted", "hydra_pmi_proxy")
+
+
+def _launcher_on_a_terminal() -> bool:
+    """Whether this process was started by an MPI launcher (an ancestor named in
+    :data:`_LAUNCHERS`, through its daemons) whose own stderr is a terminal (Linux
+    ``/proc``; False wherever that cannot be read)."""
+    if not any(name in os.environ for name in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE",
+                                               "PMIX_RANK")):
+        return False
+    pid = os.getpid()
+    try:
+        for _ in range(6):
+            with open(f"/proc/{pid}/stat") as stat:
+                pid = int(stat.read().rsplit(")", 1)[1].split()[1])
+            if pid <= 1:
+                return False
+            with open(f"/proc/{pid}/comm") as comm:
+                name = comm.read().strip()
+            if name in _LAUNCHERS:
+                target = os.path.realpath(f"/proc/{pid}/fd/2")
+                return target.startswith(("/dev/pts/", "/dev/tty"))
+            if name not in _DAEMONS:
+                return False
+    except (OSError, ValueError, IndexError):
+        return False
+    return False
 
 
 def progress_bar(total: int | None, what: str, enabled: bool = True, *, unit: str = "task",

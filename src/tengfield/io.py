@@ -94,7 +94,8 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
                                    path=out / "surrogate.png", cells=result.scene.device.cells,
-                                   visited=visited_positions(result.dynamics)))
+                                   visited=visited_positions(result.dynamics),
+                                   error_estimate=result.summary.get("surrogate_error_estimate")))
         written += write_harvest_plots(result, out, figures=figures)
     rows = (getattr(result, "extras", None) or {}).get("ensemble_rows")
     if rows:

@@ -234,6 +234,14 @@ def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
     return result
 
 
+def _radial_settings(scene) -> dict:
+    """The (z, r) surrogate's settings from ``[field] radial_mesh_size_mm``,
+    ``radial_degree``, ``radial_tolerance`` (issue #40)."""
+    fld = scene.field
+    return {"mesh_size_mm": fld.radial_mesh_size * 1e3, "degree": fld.radial_degree,
+            "tolerance": fld.radial_tolerance}
+
+
 def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, command_line,
                  write_cache, radial_settings=None):
     """``(scene, table, curves, limit)``: the surrogate (cached or solved) at the charge the
@@ -262,7 +270,8 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
         if leaves_axis(scene, dynamics):   # [contact] model = "3d", off the axis
             zr_table, zr_outcome = obtain_radial_table(
                 scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
-                command_line=command_line, write=write_cache, **(radial_settings or {}))
+                command_line=command_line, write=write_cache,
+                **(radial_settings or _radial_settings(scene)))
             curves = AnchoredTerminalCurves(zr_table.curves(scene.circuit.reference), curves)
             stages["field_zr"] = Stage(
                 "cached" if zr_outcome.status == "cached" else "ran", zr_outcome.reason,
@@ -560,5 +569,14 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
             + "; V_oc_V is the ideal open-circuit voltage")
     if table is not None:
         summary["surrogate_error_estimate"] = table.interpolation_error
+        zr = stages.get("field_zr")
+        if zr is not None and zr.details:   # the (z, r) table governs off the axis (#42)
+            governing = max(float(zr.details.get("interpolation_error_estimate", 0.0)),
+                            float(zr.details.get("max_relative_error_estimate", 0.0)),
+                            float(table.interpolation_error))
+            summary["surrogate_error_estimate"] = governing
+            summary["surrogate_error_rule"] = (
+                "the largest of the axis table's interpolation estimate and the (z, r) "
+                "table's interpolation and field error estimates")
     summary.update(circuit_blocks(mask))
     return _jsonable(summary)

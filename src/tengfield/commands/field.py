@@ -75,6 +75,13 @@ def _run(args) -> int:
     check_position(scene, position)
     reference = args.reference or scene.circuit.reference
     method = resolve_method(scene, args.method, scene.field.ball_offset)
+    from ..field import cost   # before any meshing: refused past [field] max_memory_gb
+    estimate = cost.solve_cost(scene, method=method, position=position)
+    cost.check_memory(scene, estimate)
+    from .._console import progress_shown
+    if progress_shown(True, comm):   # the cost before the work, on a terminal (issue #40)
+        print(f"tengfield: {cost.describe(estimate, 1, what='field solve')}", file=sys.stderr,
+              flush=True)
     out = Path(args.output)
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)

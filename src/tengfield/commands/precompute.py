@@ -89,5 +89,9 @@ def _run(args) -> int:
               f"{table.interpolation_error:.3g} (tolerance {table.tolerance:g}, "
               f"{'converged' if table.converged else 'NOT converged'}), "
               f"sum of solve times {table.total_solve_wall_time:.1f} s")
+        placed = (table.provenance or {}).get("mesh_placements")
+        if placed and placed.get("moved"):   # [field] mesh_motion = "move" (issue #40)
+            print(f"meshes: {placed['moved']} positions moved with the ball, "
+                  f"{placed['meshed']} gmsh meshings")
         print(f"wrote {target}")
     return 0

@@ -38,7 +38,7 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 #: only these: io.py, plot.py, potential.py and result.py write, draw or
 #: post-process and may change without invalidating stored solves.
 SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
-                  "geometry3d.py", "geometry_axisymmetric.py", "solver3d.py",
+                  "geometry3d.py", "geometry_axisymmetric.py", "moving.py", "solver3d.py",
                   "cells/__init__.py", "cells/hexagonal.py", "cells/shell_model.py",
                   "cells/shell_model3d.py", "cells/solve.py",
                   "cells/spherical_shell.py", "cells/tube.py")
@@ -124,6 +124,14 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
     offset = scene.field.ball_offset
     check_position(scene, position)
     chosen = resolve_method(scene, method, offset)
+    from .cost import check_memory, solve_cost   # before any meshing (issue #40)
+    try:
+        estimate = solve_cost(scene, method=chosen, position=position,
+                              estimate_error=overrides.get("estimate_error", True))
+    except FieldError:   # a geometry the estimate cannot lay out: the cell's solver says why
+        estimate = None
+    if estimate is not None:
+        check_memory(scene, estimate)
     from .cells import cell_of   # the cell's own solver (field/cells: CELLS)
     return cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen, offset=offset,
                                       **overrides)

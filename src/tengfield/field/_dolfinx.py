@@ -254,6 +254,13 @@ def geometry_degree(mesh) -> int:
     return int(mesh.geometry.cmap.degree)
 
 
+def cell_vertex_nodes(mesh) -> np.ndarray:
+    """(local cells, 3) rows of ``mesh.geometry.x`` holding each triangle's vertices
+    (a curved cell's geometry nodes list its vertices first)."""
+    cells = np.arange(num_local_cells(mesh), dtype=np.int32)
+    return np.ascontiguousarray(_rows(mesh.geometry.dofmap, cells)[:, :3])
+
+
 def submesh(mesh, cells) -> object:
     """A new serial mesh of the local ``cells`` of ``mesh`` (same coordinate
     element, so the same curved geometry)."""
@@ -357,6 +364,15 @@ def assemble_matrix(a, bcs=()):
     return A
 
 
+def assemble_matrix_into(A, a) -> None:
+    """Assemble the compiled bilinear form ``a`` into the existing matrix ``A`` (the same
+    sparsity: a moved mesh), its entries zeroed first (``assemble_matrix``'s
+    ``PETSc.Mat`` overload, the same in 0.5 and 0.9)."""
+    A.zeroEntries()
+    dolfinx.fem.petsc.assemble_matrix(A, a)
+    A.assemble()
+
+
 def assemble_vector(L, a=None, bcs=()):
     """PETSc vector of the compiled linear form ``L``; with ``a`` and ``bcs`` lifted and set."""
     b = dolfinx.fem.petsc.assemble_vector(L)
@@ -438,8 +454,52 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
     ksp.setOptionsPrefix(prefix)
     ksp.setOperators(A, A if preconditioner_matrix is None else preconditioner_matrix)
     ksp.setFromOptions()
-    ksp.setUp()
+    try:
+        ksp.setUp()
+    except PETSc.Error as exc:
+        ksp.destroy()
+        clear_options(prefix)
+        from ..errors import FieldError
+        raise FieldError(solver_failure(exc, kind, A.getSize()[0], symmetric)) from None
     return ksp
+
+
+def refactor(ksp, K, *, kind: str = "direct", symmetric: bool = False) -> None:
+    """Set ``ksp`` up again on ``K`` (the same matrix object, new values): a direct
+    solver keeps its symbolic analysis (ordering) and factors the values again."""
+    if symmetric:
+        K.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    ksp.setOperators(K, K)
+    try:
+        ksp.setUp()
+    except PETSc.Error as exc:
+        from ..errors import FieldError
+        raise FieldError(solver_failure(exc, kind, K.getSize()[0], symmetric)) from None
+
+
+#: MUMPS INFOG(1) codes of a failed allocation or too small a workspace (its manual, §8)
+MUMPS_MEMORY_CODES = (-8, -9, -11, -13, -14, -15, -17, -19, -20, -27)
+
+
+def solver_failure(exc, kind: str, unknowns: int, symmetric: bool = False) -> str:
+    """One line for a PETSc failure while factoring / setting up the preconditioner of a
+    field solve (issue #43 item 4: MUMPS' ``INFOG(1)=-13`` was a raw traceback)."""
+    import re
+
+    text = str(exc)
+    for line in (getattr(exc, "args", None) or ()):
+        text += f" {line}"
+    code = re.search(r"INFOG\(1\)\s*=\s*(-?\d+)", text)
+    solver = ("MUMPS LDLT" if symmetric else "MUMPS LU") if kind == "direct" else \
+        "CG + BoomerAMG"
+    memory = getattr(exc, "ierr", None) == 55 or (
+        code is not None and int(code.group(1)) in MUMPS_MEMORY_CODES)
+    what = (f"ran out of memory (MUMPS INFOG(1) = {code.group(1)})" if code and memory
+            else "ran out of memory" if memory
+            else f"failed (MUMPS INFOG(1) = {code.group(1)})" if code
+            else f"failed (PETSc error {getattr(exc, 'ierr', '?')})")
+    return (f"the field's linear solver ({solver}, {unknowns} unknowns) {what}: coarsen "
+            "[field] mesh_size_mm, lower degree, or run where more memory is free")
 
 
 def clear_options(prefix: str) -> None:

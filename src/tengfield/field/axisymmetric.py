@@ -125,6 +125,19 @@ class Discretisation:
     upper: np.ndarray
     grounded: np.ndarray  # table / Dirichlet far boundary dofs
     degree: int = 1
+    forms: tuple = ()    # compiled (operator, ball load): assembled again on a moved mesh
+    solver: dict | None = None  # a reference mesh's {kind: (K, KSP, prefix)}, set up once
+    placement: str = "meshed"   # "moved": a reference mesh moved here (field/moving.py)
+    meshings: int = 1           # gmsh meshings the last placement of this mesh took
+
+
+def placements(*discs) -> dict:
+    """``{"moved": n, "meshed": m}`` over the meshes of one solve (info["mesh_placements"]):
+    how many were reference meshes moved there, how many gmsh meshings it took."""
+    discs = [d for d in discs if d is not None]
+    return {"moved": sum(1 for d in discs if d.placement == "moved"),
+            "meshed": sum(int(d.meshings) for d in discs)}
+
 
 
 def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str, float],
@@ -142,10 +155,10 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     kappa = far_field_weight(far_field, lay.table)
     if kappa:
         a += (kappa / lay.domain_radius) * u * v * r * ds(geometry.FACET_TAGS["far_boundary"])
-    A = dx_api.assemble_matrix(dx_api.form(a))
-    load = dx_api.assemble_vector(dx_api.form(
-        v("+") * r("+") * dS(geometry.FACET_TAGS["ball_surface"])))
-    ball_load = load.array.copy()
+    a_form = dx_api.form(a)
+    load_form = dx_api.form(v("+") * r("+") * dS(geometry.FACET_TAGS["ball_surface"]))
+    A = dx_api.assemble_matrix(a_form)
+    ball_load = dx_api.assemble_vector(load_form).array.copy()
 
     def dofs(name):
         tags = facet_tags.values
@@ -167,7 +180,16 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     indptr, indices, data, n_red = restriction(n_full, fixed, pairs)
     P = dx_api.matrix_from_csr(comm, (n_full, n_red), indptr, indices, data)
     return Discretisation(mesh, cell_tags, facet_tags, V, A, ball_load, P, n_red,
-                          lower.astype(np.int64), upper.astype(np.int64), grounded, degree)
+                          lower.astype(np.int64), upper.astype(np.int64), grounded, degree,
+                          (a_form, load_form))
+
+
+def reassemble(dx_api, disc: Discretisation) -> None:
+    """The operator and the ball's load of ``disc`` assembled again (its mesh moved:
+    :mod:`tengfield.field.moving`), with the same compiled forms, dofs and sparsity."""
+    a_form, load_form = disc.forms
+    dx_api.assemble_matrix_into(disc.A, a_form)
+    disc.ball_load = dx_api.assemble_vector(load_form).array.copy()
 
 
 @dataclass
@@ -189,9 +211,15 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
     """Both weighting potentials (and optionally the σ source) with one factorisation."""
     comm = disc.mesh.comm
     t0 = time.perf_counter()
-    K = disc.A.ptap(disc.P)
-    prefix = dx_api.unique_prefix("axisym")
-    ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver, symmetric=True)
+    kept = disc.solver.get(linear_solver) if disc.solver is not None else None
+    if kept is not None:   # a moved mesh: same sparsity, the factorisation's analysis kept
+        K, ksp, prefix = kept
+        disc.A.ptap(disc.P, K)
+        dx_api.refactor(ksp, K, kind=linear_solver, symmetric=True)
+    else:
+        K = disc.A.ptap(disc.P)
+        prefix = dx_api.unique_prefix("axisym")
+        ksp = dx_api.create_ksp(comm, K, prefix=prefix, kind=linear_solver, symmetric=True)
     n_full = disc.ball_load.size
 
     def full(x, lift):
@@ -220,9 +248,12 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
         disc.P.multTranspose(dx_api.vector(comm, disc.ball_load / EPS0), rhs)
         unit = full(dx_api.solve(ksp, rhs), np.zeros(n_full))
     solve_time = time.perf_counter() - t0
-    ksp.destroy()
-    K.destroy()
-    dx_api.clear_options(prefix)
+    if disc.solver is not None:   # a reference mesh (field/moving.py) keeps its solver
+        disc.solver[linear_solver] = (K, ksp, prefix)
+    else:
+        ksp.destroy()
+        K.destroy()
+        dx_api.clear_options(prefix)
 
     def apply_A(x):
         y = disc.A.createVecLeft()
@@ -354,10 +385,38 @@ def solve_by_contact_rule(position: float, anchors, stroke: float, solve_at_gap,
     result.info["contact_rule"] = ("power-law extrapolation from gaps "
                                    + ", ".join(f"{d:.6g}" for d in rule["distances"]) + " m")
     result.info["contact_extrapolation_error"] = rule["error"]
+    if all("mesh_placements" in r.info for r in solves):   # every anchor's meshes
+        result.info["mesh_placements"] = {
+            key: sum(r.info["mesh_placements"][key] for r in solves) for key in ("moved", "meshed")}
     result.info["contact_exponent"] = rule["exponent"]
     for r in solves:
         r.__dict__.pop("extras", None)
     return result
+
+
+def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool,
+                grading_size: float | None = None):
+    """``(layout, Discretisation)`` of ``scene`` with the ball at ``position``: meshed
+    (gmsh), or with ``moving`` a reference mesh of the same scene and mesh size moved
+    there (:func:`tengfield.field.moving.placed`, which meshes when the move would
+    spoil the mesh)."""
+    fld = scene.field
+    extra = {} if grading_size is None else {"grading_size": grading_size}
+
+    def mesh_and_discretise(z):
+        lay, *meshed = build_mesh(scene, z, comm, **extra)
+        return lay, discretise(dx_api, *meshed, lay, eps, fld.degree, fld.far_field)
+
+    if not moving:
+        return mesh_and_discretise(position)
+    from . import moving as motion
+
+    key = (scene.field_hash(), geometry.base_mesh_size(scene), grading_size)
+    return motion.placed(key, geometry.layout(scene, position, **extra),
+                         lambda z: geometry.layout(scene, z, **extra),
+                         lambda z: mesh_and_discretise(z)[1],
+                         lambda disc: reassemble(dx_api, disc), dx_api,
+                         minimum_gap=contact.minimum_gap(scene.device.plate_spacing))
 
 
 def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
@@ -374,18 +433,20 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     if estimate_error:   # refuse before any meshing if the finer mesh would not fit
         geometry.check_mesh_budget(geometry.layout(half, position, grading_size=size),
                                    fld.degree, mesh_size_mm=size * 1e3, refinement=2.0)
-    lay, mesh, cell_tags, facet_tags = build_mesh(scene, position, comm)
+    moving = getattr(fld, "mesh_motion", "remesh") == "move" and not keep_solution
+    eps = permittivities(scene.device, geometry.layout(scene, position))
+    lay, disc = discretised(dx_api, scene, position, comm, eps, moving=moving)
+    mesh = disc.mesh
     sigma = scene.device.surface_charge
-    eps = permittivities(scene.device, lay)
-    disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, fld.degree, fld.far_field)
     diameter = scene.device.ball_diameter
     sol = solve_discretisation(dx_api, disc, sigma, diameter, source_solve=source_solve,
                                linear_solver=linear_solver, unit_source=breakdown_lines)
     estimate = math.nan
+    finer = None
     if estimate_error:
         # same grading lengths as the coarse mesh: a uniform halving of one mesh family
-        lay_half, *fine_mesh = build_mesh(half, position, comm, grading_size=size)
-        finer = discretise(dx_api, *fine_mesh, lay_half, eps, fld.degree, fld.far_field)
+        lay_half, finer = discretised(dx_api, half, position, comm, eps, moving=moving,
+                                      grading_size=size)
         fine = solve_discretisation(dx_api, finer, sigma, diameter, source_solve=False,
                                     linear_solver=linear_solver, unit_source=breakdown_lines)
         estimate = richardson_error(contact.relative_change(sol, fine), fld.degree)
@@ -393,6 +454,8 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
             from .breakdown import line_basis
             lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
     info = {"mesh_size_m": lay.mesh_size, "domain_radius_m": lay.domain_radius,
+            "mesh_motion": "move" if moving else "remesh",
+            "mesh_placements": placements(disc, finer),
             "far_field": fld.far_field, "environment": fld.environment,
             "meshed_gap_m": lay.effective_gap,
             "minimum_gap_m": contact.minimum_gap(scene.device.plate_spacing),

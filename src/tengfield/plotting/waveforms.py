@@ -116,7 +116,8 @@ def surrogate_lines(curves, *, cells: int = 1, visited=None, points: int = 400) 
                  "C_T": curves.capacitance(z, r) * cells}) for r in offsets]
 
 
-def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=None) -> Path:
+def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=None,
+                   error_estimate: float | None = None) -> Path:
     """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots.
 
     ``curves``: the 1-D surrogate, or the (z, r) one of a ball off the axis
@@ -124,7 +125,9 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
     those of :func:`surrogate_lines` (r = 0 and the offsets the ball reached, the band
     between shaded) and a fourth panel maps the change of Q_SC with r over (z, r)
     with the field solves of the grid and the trajectory's (z, r) samples
-    (``visited``: ``(gap, r)`` [m], :func:`visited_positions`)."""
+    (``visited``: ``(gap, r)`` [m], :func:`visited_positions`). ``error_estimate``: the
+    one the title gives (summary.json's ``surrogate_error_estimate``: off the axis the
+    (z, r) table's, which governs); None: the axis table's interpolation estimate."""
     radial = curves.radial
     lines = surrogate_lines(curves, cells=cells, visited=visited)
     z = np.linspace(0.0, curves.stroke, 400)
@@ -154,7 +157,7 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
     title = (f"surrogate ({curves.reference}, {cells} cell(s)): {table.count} positions, "
-             f"error estimate {table.interpolation_error:.2g}")
+             f"error estimate {table.interpolation_error if error_estimate is None else error_estimate:.2g}")
     if radial:
         _plot_radial_change(axes[3], curves, cells, visited)
         title += (f"; (z, r): {len(curves.positions)} x {len(curves.offsets)} 3D solves "

@@ -268,6 +268,11 @@ class Field:
     environment: str
     far_field: str
     ball_offset: float     # [m]
+    max_memory_gb: float = 0.0       # one solve's estimated peak; 0: 80 % of the machine
+    radial_mesh_size: float = 1.5e-3  # [m] the (z, r) surrogate's 3D solves
+    radial_degree: int = 2
+    radial_tolerance: float = 1e-2
+    mesh_motion: str = "remesh"       # "move": one mesh per table moved with the ball
 
     def __post_init__(self):
         check_section("field", self, "Field")
@@ -512,6 +517,8 @@ class Scene:
                 out[sec][key] = _auto_mm(getattr(getattr(self, sec), SCHEMA[sec][key].attr))
         out["device"] = shape_field_inputs(out["device"], self.device.shape, full["device"],
                                            HASH_NAMES)
+        if out["field"].get("mesh_motion") == "remesh":   # the hash of every cache before #40
+            del out["field"]["mesh_motion"]
         return out
 
     def field_hash(self) -> str:

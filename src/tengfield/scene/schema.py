@@ -206,6 +206,20 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "far_field": Key("far_field", str, "kelvin", None,
                          _choice("kelvin", "robin", "dirichlet"), field=True),
         "ball_offset_mm": Key("ball_offset", float, 0.0, 1e-3, _rng(0.0, 1e4), field=True),
+        # issue #40 (tengfield.field.cost): the estimated peak memory of one field solve
+        # is refused past this many GB before any meshing; 0: 80 % of the machine's memory
+        "max_memory_gb": Key("max_memory_gb", float, 0.0, 1.0, _rng(0.0, 1e6)),
+        # the (z, r) surrogate's 3D solves (tengfield.surrogate.precompute_radial; its cache
+        # key holds them, not the axis surrogate's): mesh size, degree, tolerance
+        "radial_mesh_size_mm": Key("radial_mesh_size", float, 1.5, 1e-3,
+                                   _rng(0.0, 100.0, lo_open=True)),
+        "radial_degree": Key("radial_degree", int, 2, 1, _rng(1, 2)),
+        "radial_tolerance": Key("radial_tolerance", float, 1e-2, 1.0, _rng(1e-8, 0.5)),
+        # the axisymmetric tube's positions: each meshed by gmsh ("remesh"), or one
+        # reference mesh moved with the ball ("move": tengfield.field.moving). In the
+        # field hash only when "move" (Scene.field_inputs): "remesh" keeps today's keys
+        "mesh_motion": Key("mesh_motion", str, "remesh", None, _choice("remesh", "move"),
+                           field=True),
     },
     # kind = "rectifier": harvesting electronics (issue #11; tengfield.harvest); the
     # chip's defaults are the LTC3588-1's (docs/harvest.md)

@@ -32,7 +32,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import terminals
-from .._mpi import farm, rank_of
+from .._mpi import farm, rank_of, size_of
 from ..errors import FieldError
 from .provenance import provenance, radial_hash, solver_fingerprint
 from .sampling import (DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE, INITIAL_OFFSETS,
@@ -149,6 +149,28 @@ def warn_accuracy(table, comm) -> None:
     warn_problems(accuracy_problems(table), comm, stacklevel=3)
 
 
+def _announce(scene, solves: int, comm, *, method, what: str, mesh_size=None,
+              degree=None) -> None:
+    """One line on stderr (a terminal only, :func:`tengfield._console.progress_shown`):
+    how many solves and what each costs, estimated before meshing
+    (:mod:`tengfield.field.cost`); a scene past ``[field] max_memory_gb`` is refused
+    by the solve itself."""
+    import sys
+
+    from .._console import progress_shown
+    if not progress_shown(True):
+        return
+    try:
+        from ..field import cost, resolve_method
+        chosen = method or resolve_method(scene)
+        estimate = cost.solve_cost(scene, method=chosen, mesh_size=mesh_size, degree=degree,
+                                   position=0.5 * scene.device.stroke)
+    except Exception:  # noqa: BLE001 - an estimate never stops the work; the solve says why
+        return
+    print(f"tengfield: {cost.describe(estimate, solves, what=what, ranks=size_of(comm))}",
+          file=sys.stderr, flush=True)
+
+
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
@@ -182,12 +204,16 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     count = int(initial_positions)
     if not is_lobatto_count(count):
         raise ValueError(f"initial_positions = {count}: must be 2^k + 1 >= 3")
+    symmetric = is_mirror_symmetric(scene)
     bar = None
     if progress and rank_of(comm) == 0:
+        first = 2 * count - 1   # the cost before the work (issue #40), on a terminal
+        _announce(scene, (first + 1) // 2 if symmetric else first, comm, method=None,
+                  what=f"field solves (at least; {first} positions"
+                       + (", mirror symmetry)" if symmetric else ")"))
         from .._console import progress_bar
         bar = progress_bar(count, "field solves", unit="position")
 
-    symmetric = is_mirror_symmetric(scene)
     sampled = field_error == "sampled" and _accepts_keyword(solve, "estimate_error")
     sample_at = error_sample_positions(stroke, symmetric, count)
 
@@ -207,6 +233,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
             bar.update(min(n, bar.total - bar.n))
 
     measured = math.nan   # largest field error estimate at the sampled positions
+    placed = {"moved": 0, "meshed": 0}   # how the solves' meshes were placed (#40)
 
     def solve_level(positions: np.ndarray) -> SurrogateTable:
         """Solve ``positions`` (with mirror symmetry: only those in the lower half)."""
@@ -217,6 +244,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
             bar.refresh()
         todo = todo[contact_first_order(todo, stroke, sample_at if sampled else ())]
         results = farm(comm, list(todo), work, progress=advance)
+        for r in results:
+            for key, count in (getattr(r, "info", None) or {}).get("mesh_placements", {}).items():
+                placed[key] = placed.get(key, 0) + int(count)
         if sampled:
             results, measured = _sampled_field_errors(
                 results, [estimated_here(r.position) for r in results], measured)
@@ -250,6 +280,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     if bar is not None:
         bar.n = bar.total
         bar.close()
+    if getattr(scene.field, "mesh_motion", "remesh") == "move":   # the table is done:
+        from ..field import moving   # its reference meshes and their solvers are freed
+        moving.release_references()
     rule = (_field_error_rule(sample_at, "", "at the other positions") if sampled
             else "measured at every position")
     table = dataclasses.replace(
@@ -258,7 +291,8 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         field_hash=scene.field_hash(),
         provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
                     **({"breakdown_line_angles_deg": list(_line_angles())} if lines else {}),
-                    "field_error_rule": rule, "solver_fingerprint": solver_fingerprint()})
+                    "field_error_rule": rule, "solver_fingerprint": solver_fingerprint(),
+                    **({"mesh_placements": placed} if sum(placed.values()) else {})})
     warn_accuracy(table, comm)
     return table
 
@@ -399,6 +433,10 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     sample_keys = {grid_key(z, r) for z in sample_z for r in (0.0, largest)}
     bar = None
     if progress and rank_of(comm) == 0:
+        first = (2 * nz - 1) * (2 * nr - 1 if nr > 2 else 3)
+        _announce(scene, (first + 1) // 2 if symmetric else first, comm, method="3d",
+                  what=f"3D field solves (z, r) (at least; mesh_size_mm = {mesh_size_mm:g}, "
+                       f"degree = {degree})", mesh_size=mesh_size_mm * 1e-3, degree=degree)
         from .._console import progress_bar
         bar = progress_bar(0, "3D field solves (z, r)", unit="solve")
 

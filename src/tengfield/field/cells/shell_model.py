@@ -20,7 +20,9 @@ Mesh grading (sizes scale with the base size h), as for the tube:
   ``s = h (ρ/L)^(1-μ)``, μ = RIM_EXPONENT / degree;
 * ``0.4 h`` on the ball surface, growing linearly away;
 * in the ball-wall gaps at the bottom and top, ``(h / 1 mm)·w(ρ)`` with the
-  local gap width ``w(ρ) = g + ρ²/2 (1/r_b - 1/a)``;
+  local gap width ``w(ρ) = g + ρ²/2 (1/r_b - 1/a)``, and outside the gaps no finer than
+  ``(h / 1 mm)·(d_ball + d_cavity)`` (the distances to the two surfaces: their sum is
+  the width in a gap and grows away from it, so the rule stays local);
 * ``h`` on the shell's surfaces (dielectric interfaces), growing linearly;
 * far away the size grows with the distance to the cell.
 """
@@ -220,10 +222,15 @@ def _size_fields(gmsh, lay: ShellLayout) -> None:
     d_ball = f"Abs(Sqrt(x^2 + (y - ({lay.ball_centre_z!r}))^2) - ({lay.ball_radius!r}))"
     sizes.append(f"({0.4 * h!r}) + 0.3 * {d_ball}")
     curvature = 0.5 * (1.0 / lay.ball_radius - 1.0 / a)
+    # the gap rule holds in the gap only: there the distances to the ball and to the
+    # cavity add up to the local width w(ρ); away from it their sum grows, so a nearly
+    # concentric ball (small curvature: w(ρ) stays below h out to many cavity radii)
+    # does not refine the whole domain (issue #40: 3.7 GB for a 0.31 mm stroke)
+    d_cavity = f"Abs(Sqrt(x^2 + y^2) - ({a!r}))"
     for gap, z0 in ((lay.gap_lower, -a), (lay.gap_upper, a)):
         if gap < 2.0 * h:
-            sizes.append(f"({h / 1e-3!r}) * (({gap!r}) + (x^2 + (y - ({z0!r}))^2) * "
-                         f"({curvature!r}))")
+            sizes.append(f"({h / 1e-3!r}) * Max(({gap!r}) + (x^2 + (y - ({z0!r}))^2) * "
+                         f"({curvature!r}), {d_ball} + {d_cavity})")
     if lay.walls:
         radius = "Sqrt(x^2 + y^2)"
         sizes.append(f"({h!r}) + {INTERFACE_GROWTH!r} * Min(Abs({radius} - ({a!r})), "

@@ -35,7 +35,7 @@ from ..result import PositionResult
 #: options of :func:`solve_cell_position` besides the cell and the position
 SOLVER_OPTIONS = ("sigma", "mesh_size", "degree", "far_field", "domain_radius",
                   "estimate_error", "source_solve", "linear_solver", "grading_size",
-                  "breakdown_lines", "keep_solution")
+                  "breakdown_lines", "keep_solution", "mesh_motion")
 
 
 def build_mesh(cell, position: float, comm, *, mesh_size: float, degree: int,
@@ -74,8 +74,8 @@ def far_field_charge(dx_api, disc, potential, lay, far_field: str) -> float:
 def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float, degree: int,
                   far_field: str, domain_radius: float | None, estimate_error: bool,
                   source_solve: bool, linear_solver: str, grading_size: float | None,
-                  breakdown_lines: bool = False, keep_solution: bool = False
-                  ) -> PositionResult:
+                  breakdown_lines: bool = False, keep_solution: bool = False,
+                  mesh_motion: str = "remesh") -> PositionResult:
     """One solve of the meshable ``position`` (one process)."""
     from .. import _dolfinx as dx_api
 
@@ -83,18 +83,36 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
     eps = {"ball": cell.ball_permittivity, "walls": cell.wall_permittivity, "air": 1.0,
            "exterior": 1.0}
     common = dict(degree=degree, far_field=far_field, domain_radius=domain_radius)
-    lay, mesh, cell_tags, facet_tags = build_mesh(cell, position, comm, mesh_size=mesh_size,
-                                                  grading_size=grading_size, **common)
-    disc = discretise(dx_api, mesh, cell_tags, facet_tags, lay, eps, degree, far_field)
+    moving = mesh_motion == "move" and not keep_solution
+
+    def discretised(size, grading):
+        """(layout, Discretisation): meshed, or a reference mesh moved (field/moving.py)."""
+        def meshed(z):
+            lay, *mesh = build_mesh(cell, z, comm, mesh_size=size, grading_size=grading,
+                                    **common)
+            return lay, discretise(dx_api, *mesh, lay, eps, degree, far_field)
+
+        def layout_at(z):
+            return cell.axisymmetric_layout(z, mesh_size=size, grading_size=grading, **common)
+        if not moving:
+            return meshed(position)
+        from .. import moving as motion
+        from ..axisymmetric import reassemble
+        key = (repr(cell), size, grading, degree, far_field, domain_radius)
+        return motion.placed(key, layout_at(position), layout_at, lambda z: meshed(z)[1],
+                             lambda disc: reassemble(dx_api, disc), dx_api,
+                             minimum_gap=contact.minimum_gap(cell.electrode_spacing))
+
+    lay, disc = discretised(mesh_size, grading_size)
+    mesh = disc.mesh
     sol = solve_discretisation(dx_api, disc, sigma, cell.ball_diameter,
                                source_solve=source_solve, linear_solver=linear_solver,
                                unit_source=breakdown_lines)
     estimate = math.nan
     lines_check = None
+    finer = None
     if estimate_error:   # half the size, the coarse mesh's grading lengths: one family
-        lay_half, *fine_mesh = build_mesh(cell, position, comm, mesh_size=0.5 * mesh_size,
-                                          grading_size=grading_size or mesh_size, **common)
-        finer = discretise(dx_api, *fine_mesh, lay_half, eps, degree, far_field)
+        lay_half, finer = discretised(0.5 * mesh_size, grading_size or mesh_size)
         fine = solve_discretisation(dx_api, finer, sigma, cell.ball_diameter,
                                     source_solve=False, linear_solver=linear_solver,
                                     unit_source=breakdown_lines)
@@ -102,7 +120,9 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         if breakdown_lines:   # the lines on the half-size mesh: their error estimate
             from ..breakdown import line_basis
             lines_check = line_basis(dx_api, finer, fine.unit_source, fine.weighting, lay_half)
+    from ..axisymmetric import placements
     info = {"shape": cell.name, "mesh_size_m": lay.mesh_size,
+            "mesh_placements": placements(disc, finer),
             "domain_radius_m": lay.domain_radius, "far_field": far_field,
             "meshed_gap_m": lay.effective_gap,
             "minimum_gap_m": contact.minimum_gap(cell.electrode_spacing),
@@ -145,7 +165,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
                         domain_radius: float | None = None, estimate_error: bool = True,
                         source_solve: bool = False, linear_solver: str = "direct",
                         grading_size: float | None = None, breakdown_lines: bool = False,
-                        keep_solution: bool = False) -> PositionResult:
+                        keep_solution: bool = False, mesh_motion: str = "remesh"
+                        ) -> PositionResult:
     """:class:`PositionResult` of ``cell`` with the ball on the axis at gap ``position``
     [m] in [0, cell.stroke] (computed on rank 0 of ``comm``, broadcast).
 
@@ -157,7 +178,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
     :data:`tengfield.field.breakdown.LINE_ANGLES_DEG` (2 sides, n, 3), as the tube's
     (the lines' lengths: ``cell.breakdown_feet``). ``keep_solution`` (a communicator
     of size 1): ``result.solution``, the tube's :class:`FieldSolution` (mesh, ψ_lower,
-    ψ_upper, with ``source_solve`` φ_σ)."""
+    ψ_upper, with ``source_solve`` φ_σ). ``mesh_motion = "move"``: a reference mesh of
+    this cell and mesh size moved to the position (:mod:`tengfield.field.moving`)."""
     from .. import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
 
     if not (0.0 <= position <= cell.stroke):
@@ -170,7 +192,8 @@ def solve_cell_position(cell, position: float, *, comm, sigma: float = 0.0,
                    far_field=far_field, domain_radius=domain_radius,
                    estimate_error=estimate_error, source_solve=source_solve,
                    linear_solver=linear_solver, grading_size=grading_size,
-                   breakdown_lines=breakdown_lines, keep_solution=keep_solution)
+                   breakdown_lines=breakdown_lines, keep_solution=keep_solution,
+                   mesh_motion=mesh_motion)
     return solved_on_rank_zero(comm, lambda here: _solve_serial(cell, position, here, **options),
                                keep_solution=keep_solution)
 

@@ -103,7 +103,8 @@ class SphericalShell:
                                    sigma=scene.device.surface_charge,
                                    mesh_size=base_mesh_size(scene), degree=fld.degree,
                                    far_field=fld.far_field, domain_radius=fld.domain_radius,
-                                   **options)
+                                   **{"mesh_motion": getattr(fld, "mesh_motion", "remesh"),
+                                      **options})
 
     def solve_3d(self, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
                  sigma: float, mesh_size: float, degree: int = 2, far_field: str = "kelvin",

@@ -1,0 +1,190 @@
+"""What a field solve costs, known before any meshing (issue #40): dofs, memory, time.
+
+The estimate comes from the mesh rule itself (the size fields of
+:mod:`.geometry_axisymmetric` and :mod:`.cells.shell_model`, integrated in closed
+form: :func:`~tengfield.field.geometry_axisymmetric.estimated_cells`) for the
+axisymmetric solver, and from a fit to measured 3D meshes for the 3D solver; memory
+and time are per-dof rates measured on this project's machine (docs/field.md, "The
+cost before the work"). They are rough (a factor ~2) and are said so; they exist so
+that a run that cannot fit is refused in one line before it starts, and a long one
+says how long before it starts.
+
+``[field] max_memory_gb`` bounds the estimated peak of one solve (its error-estimate
+mesh included); 0 (the default) means 80 % of the machine's memory.
+
+Importing this module loads neither dolfinx nor gmsh.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+from ..errors import FieldError
+
+#: the process before its first mesh: Python, dolfinx, PETSc, gmsh (measured 0.25-0.30 GB)
+BASE_MEMORY_BYTES = 0.25e9
+#: peak bytes per dof of an axisymmetric solve (mesh, P2 space, MUMPS LDLᵀ factors, gmsh's
+#: own mesh): 1.05 GB for the thin shell's 72k + 290k dofs (its error-estimate mesh)
+BYTES_PER_DOF_2D = 2.2e3
+#: ... of a 3D solve (CG + BoomerAMG): 0.46 GB for the tube's 172k + 33k dofs (1 mm)
+BYTES_PER_DOF_3D = 1.3e3
+#: wall seconds per dof, meshing included (quiet machine; a loaded one: 2-3 x):
+#: the default tube's 13k + 50k dofs in 0.8 s; the 3D tube's 172k + 33k dofs in ~50 s
+SECONDS_PER_DOF_2D = 1.5e-5
+SECONDS_PER_DOF_3D = 2.5e-4
+#: 3D dofs of the paper's tube (P2) at mesh size 2 mm, and how they grow as the size
+#: falls (measured: 32.5k at 2 mm, 172k at 1 mm, 1.11M at 0.5 mm: exponent 2.4-2.7)
+DOFS_3D_REFERENCE = 32.5e3
+MESH_SIZE_3D_REFERENCE = 2.0e-3
+DOFS_3D_EXPONENT = 2.55
+#: the paper's tube seen from its centre [m] (the 3D fit's device size)
+BOUNDING_RADIUS_REFERENCE = 8.9e-3
+#: share of the machine's memory that ``max_memory_gb = 0`` allows
+MACHINE_SHARE = 0.8
+
+
+@dataclass(frozen=True)
+class SolveCost:
+    """Estimated cost of one field solve: ``dofs`` of its mesh, ``check_dofs`` of its
+    error-estimate mesh (0 without), ``memory_bytes`` peak, ``seconds`` wall."""
+    method: str
+    dofs: float
+    check_dofs: float
+    memory_bytes: float
+    seconds: float
+
+    @property
+    def memory_gb(self) -> float:
+        return self.memory_bytes / 1e9
+
+
+def machine_memory_bytes() -> float:
+    """Physical memory of this machine [bytes] (``os.sysconf``; 8 GB when it cannot say)."""
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, OSError, ValueError):
+        return 8e9
+
+
+def memory_limit_bytes(scene) -> float:
+    """``[field] max_memory_gb`` in bytes; 0: :data:`MACHINE_SHARE` of the machine."""
+    limit = float(getattr(scene.field, "max_memory_gb", 0.0) or 0.0)
+    return limit * 1e9 if limit > 0 else MACHINE_SHARE * machine_memory_bytes()
+
+
+def _shell_cells(lay) -> float:
+    """Triangles of the spherical shell's (r, z) mesh (:mod:`.cells.shell_model`'s size
+    fields, as :func:`~.geometry_axisymmetric.estimated_cells` does the tube's)."""
+    h = lay.mesh_size
+    area = 0.433 * h * h
+    B, R = lay.info["bulk_length_m"], lay.domain_radius
+    bulk = 0.5 * math.pi * B * B / area * (1.0 + 2.0 * math.log(max(R / B, 1.0)))
+    L, mu = lay.info["rim_reach_m"], lay.grading_exponent
+    rims = 2 * math.pi * L * L / (2.0 * mu * area)
+    ball = math.pi * lay.ball_radius / (0.433 * 0.3 * 0.4 * h)
+    a = lay.cavity_radius
+    surfaces = math.pi * (a + (lay.outer_radius if lay.walls else 0.0))
+    interfaces = 2.0 * surfaces / (0.433 * 0.3 * h)
+    c = h / 1e-3
+    kappa = max(0.5 * (1.0 / lay.ball_radius - 1.0 / a), 1e-12)
+    gaps = 0.0
+    for gap in (lay.gap_lower, lay.gap_upper):
+        # the gap rule holds in the gap only (width w = g + κρ², size c w): a strip of
+        # ∫ dρ / (0.433 c² w(ρ)) triangles out to where c w reaches h or the ball ends
+        if 0.0 < gap < 2.0 * h and gap < h / c:
+            reach = min(lay.ball_radius, math.sqrt((h / c - gap) / kappa))
+            root = math.sqrt(gap * kappa)
+            gaps += math.atan(reach * kappa / root) / (root * 0.433 * c * c)
+    image = bulk * 0.5 if lay.kelvin else 0.0
+    return bulk + rims + ball + interfaces + gaps + image
+
+
+def _axisymmetric_dofs(scene, position: float, mesh_size: float, grading_size=None) -> float:
+    from . import geometry_axisymmetric as geometry
+    from .cells import cell_of
+
+    degree = scene.field.degree
+    cell = cell_of(scene)
+    if scene.device.shape == "spherical-shell":
+        lay = cell.axisymmetric_layout(position, mesh_size=mesh_size, degree=degree,
+                                        far_field=scene.field.far_field,
+                                        domain_radius=scene.field.domain_radius,
+                                        grading_size=grading_size)
+        cells = _shell_cells(lay)
+    else:
+        lay = geometry.layout(scene, position, mesh_size=mesh_size, grading_size=grading_size)
+        cells = geometry.estimated_cells(lay)
+    return cells * (0.5 + (1.5 if degree >= 2 else 0.0))
+
+
+def _dofs_3d(scene, mesh_size: float, degree: int) -> float:
+    radius = max(float(scene.device.bounding_radius), 1e-9)
+    scale = radius / BOUNDING_RADIUS_REFERENCE
+    dofs = DOFS_3D_REFERENCE * (MESH_SIZE_3D_REFERENCE * scale / mesh_size) ** DOFS_3D_EXPONENT
+    return dofs if degree >= 2 else dofs / 7.5
+
+
+def solve_cost(scene, *, method: str = "axisymmetric", position: float | None = None,
+               estimate_error: bool = True, mesh_size: float | None = None,
+               degree: int | None = None) -> SolveCost:
+    """Estimated :class:`SolveCost` of one solve of ``scene`` with the ball at gap
+    ``position`` [m] (default: the smallest meshed gap, the dearest solve), before any
+    meshing. ``mesh_size`` [m] and ``degree`` default to the scene's (3D: the (z, r)
+    table passes its own)."""
+    from .geometry_axisymmetric import base_mesh_size
+
+    size = base_mesh_size(scene) if mesh_size is None else float(mesh_size)
+    degree = scene.field.degree if degree is None else int(degree)
+    if method == "3d":
+        dofs = _dofs_3d(scene, size, degree)
+        check = _dofs_3d(scene, 2.0 * size, degree) if estimate_error else 0.0
+        per_dof, rate = BYTES_PER_DOF_3D, SECONDS_PER_DOF_3D
+    else:
+        if position is None:   # the layouts clamp it to the smallest meshed gap
+            position = 0.0
+        dofs = _axisymmetric_dofs(scene, position, size)
+        check = _axisymmetric_dofs(scene, position, 0.5 * size, grading_size=size) \
+            if estimate_error else 0.0
+        per_dof, rate = BYTES_PER_DOF_2D, SECONDS_PER_DOF_2D
+    return SolveCost(method, dofs, check, BASE_MEMORY_BYTES + per_dof * (dofs + check),
+                     rate * (dofs + check))
+
+
+def check_memory(scene, cost: SolveCost) -> None:
+    """Raise :class:`FieldError` (one line naming ``[field] max_memory_gb``) when the
+    estimated peak of ``cost`` exceeds the scene's limit."""
+    limit = memory_limit_bytes(scene)
+    if cost.memory_bytes <= limit:
+        return
+    written = float(getattr(scene.field, "max_memory_gb", 0.0) or 0.0)
+    how = (f"{written:g}" if written > 0 else
+           f"0 (= {MACHINE_SHARE:.0%} of this machine's {machine_memory_bytes() / 1e9:.3g} GB)")
+    raise FieldError(
+        f"[field] max_memory_gb = {how}: one {cost.method} field solve of this scene needs "
+        f"about {cost.memory_gb:.3g} GB ({cost.dofs:.3g} dofs"
+        + (f" + {cost.check_dofs:.3g} for its error estimate" if cost.check_dofs else "")
+        + f"): allowed <= {limit / 1e9:.3g} GB; raise max_memory_gb or mesh_size_mm")
+
+
+def describe(cost: SolveCost, solves: int, *, what: str = "field solves",
+             ranks: int = 1) -> str:
+    """One line: ``field: N solves, ~D dofs each (+ its error estimate), ~M GB, ~T s each,
+    ~W s in all on R ranks (estimated before meshing)``."""
+    total = cost.seconds * solves / max(ranks, 1)
+    check = f" (+{_count(cost.check_dofs)} for the error estimate)" if cost.check_dofs else ""
+    return (f"{what}: {solves}, ~{_count(cost.dofs)} dofs each{check}, ~{cost.memory_gb:.2g} GB "
+            f"and ~{_seconds(cost.seconds)} per solve, ~{_seconds(total)} in all"
+            + (f" on {ranks} ranks" if ranks > 1 else "") + " (estimated before meshing)")
+
+
+def _count(n: float) -> str:
+    if n >= 1e6:
+        return f"{n / 1e6:.2g}M"
+    if n >= 1e4:
+        return f"{n / 1e3:.0f}k"
+    return f"{n / 1e3:.2g}k" if n >= 1e3 else f"{n:.0f}"
+
+
+def _seconds(s: float) -> str:
+    return f"{s / 60:.2g} min" if s >= 120 else f"{s:.2g} s"
