@@ -70,9 +70,9 @@ def test_run_joins_the_shells_3d_contact_to_its_zr_surrogate(shell_file, tmp_pat
     from tengfield import pipeline
 
     monkeypatch.setattr(pipeline, "obtain_radial_table", functools.partial(
-        pipeline.obtain_radial_table, mesh_size_mm=4.0, degree=1,
-        max_positions=9, max_offsets=3))
-    shell_file.write_text(SHELL_3D.replace("[run]", "[field]\nmesh_size_mm = 2\ndegree = 1\n\n[run]"))
+        pipeline.obtain_radial_table, max_positions=9, max_offsets=3))
+    shell_file.write_text(SHELL_3D.replace("[run]", "[field]\nmesh_size_mm = 2\ndegree = 1\n"
+                                           "radial_mesh_size_mm = 4\nradial_degree = 1\n\n[run]"))
     out = tmp_path / "run"
     assert main(["run", str(shell_file), "-o", str(out), "--cache-dir", str(tmp_path / "cache")]) == 0
     summary = json.loads((out / "summary.json").read_text())
