@@ -146,3 +146,55 @@ def _terminal_width() -> int:
         return os.get_terminal_size(sys.stderr.fileno()).columns
     except (AttributeError, OSError, ValueError):
         return 0
+
+
+# -- a closed stdout -------------------------------------------------------------------
+#: exit status of a command whose stdout reader went away (128 + SIGPIPE, as a Unix tool
+#: killed by SIGPIPE reports it)
+CLOSED_PIPE_STATUS = 141
+
+
+class PipeSafeStdout:
+    """stdout that survives its reader going away (``tengfield run ... | head -1``).
+
+    The first write or flush that fails with EPIPE (BrokenPipeError) marks the stream
+    :attr:`broken` and drops that and every later text: the command goes on and writes
+    its files; :func:`tengfield.cli.main` then exits with :data:`CLOSED_PIPE_STATUS` and
+    nothing on stderr. Every other error of the stream is raised as before."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.broken = False
+
+    def _guard(self, call, *args):
+        if self.broken:
+            return None
+        try:
+            return call(*args)
+        except BrokenPipeError:
+            self.broken = True
+            _silence_fd(self._stream)
+            return None
+
+    def write(self, text):
+        self._guard(self._stream.write, text)
+        return len(text)
+
+    def flush(self):
+        if not getattr(self._stream, "closed", False):
+            self._guard(self._stream.flush)
+
+    def __getattr__(self, name):      # isatty, fileno, encoding, buffer, ...
+        return getattr(self._stream, name)
+
+
+def _silence_fd(stream) -> None:
+    """Point the stream's file descriptor at /dev/null: what its buffer still holds (and
+    the interpreter's flush at exit) goes nowhere instead of raising again."""
+    try:
+        fd = stream.fileno()
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, fd)
+        os.close(null)
+    except (OSError, ValueError, AttributeError):
+        pass

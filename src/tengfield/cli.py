@@ -35,7 +35,7 @@ import traceback
 from typing import NamedTuple
 
 from . import __version__
-from ._console import configure_output, set_quiet
+from ._console import CLOSED_PIPE_STATUS, PipeSafeStdout, configure_output, set_quiet
 from ._mpi import launched_size
 from .errors import TengfieldError
 
@@ -220,6 +220,22 @@ def _take_quiet(argv) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; a stdout whose reader went away (``| head -1``) stops the
+    printing, not the command: its files are written, and the exit status is
+    :data:`~tengfield._console.CLOSED_PIPE_STATUS` with nothing on stderr."""
+    stdout = sys.stdout
+    safe = stdout if isinstance(stdout, PipeSafeStdout) else PipeSafeStdout(stdout)
+    sys.stdout = safe
+    try:
+        code = _main(argv)
+        safe.flush()
+    finally:
+        if sys.stdout is safe:
+            sys.stdout = stdout
+    return CLOSED_PIPE_STATUS if safe.broken and code == 0 else code
+
+
+def _main(argv: list[str] | None = None) -> int:
     configure_output()
     parser = build_parser()
     argv = _take_quiet(argv)
