@@ -124,7 +124,11 @@ def print_summary(summary: dict) -> None:
     regime = summary.get("regime") or {}
     from ..dynamics.regime import regime_label
 
-    print(f"regime: {regime_label(regime.get('regime', '?'), regime.get('period', 0))} "
+    label = regime_label(regime.get("regime", "?"), regime.get("period", 0),
+                         settled_by_s=regime.get("settled_by_s"),
+                         checked_to_s=regime.get("regime_checked_to_s") or 0.0,
+                         duration_s=regime.get("regime_run_s") or None)
+    print(f"regime: {label} "
           f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
     for line in terminal_lines(summary):
         print(line)

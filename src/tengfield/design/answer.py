@@ -83,7 +83,7 @@ def chosen_band_point(result, row) -> int:
 
     regimes = row["regimes"] or [""] * len(values)
     return min(live, key=lambda i: (round(math.hypot(rel(f, i), rel(a, i)), 12),
-                                    regimes[i] == "chaos", -values[i], i))
+                                    regimes[i] in ("chaos", "not-settled"), -values[i], i))
 
 
 def on_bounds(result, row) -> list[tuple[str, str, float]]:
@@ -216,14 +216,18 @@ def design_warnings(result) -> list[str]:
                    "another" + ("; a band point where every design scores 0 decides the "
                                 "minimum: use aggregate = 'mean' or drop that point"
                                 if ok[0] == 0 and spec.aggregate == "min" else ""))
-    chaotic = [i for i, r in enumerate(best["regimes"]) if r == "chaos"]
-    if chaotic:
-        pts = band_points(result, best)
-        names = ", ".join(f"{point_label(*spec.band[i], kind)} "
-                          f"(±{_pct(pts[i]['spread'], pts[i]['value'])} over windows)"
-                          for i in chaotic)
-        out.append(f"the best design is chaotic at {len(chaotic)} of {len(spec.band)} band "
-                   f"point(s): {names}; its ± includes that spread")
+    for name, said in (("chaos", "chaotic (aperiodic over the settling check's longest "
+                                 "run)"),
+                       ("not-settled", "not settled (aperiodic, no repeating motion within "
+                                       "the settling check's bound)")):
+        chaotic = [i for i, r in enumerate(best["regimes"]) if r == name]
+        if chaotic:
+            pts = band_points(result, best)
+            names = ", ".join(f"{point_label(*spec.band[i], kind)} "
+                              f"(±{_pct(pts[i]['spread'], pts[i]['value'])} over windows)"
+                              for i in chaotic)
+            out.append(f"the best design is {said} at {len(chaotic)} of {len(spec.band)} "
+                       f"band point(s): {names}; its ± includes that spread")
     return out
 
 

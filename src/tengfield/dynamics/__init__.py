@@ -54,7 +54,41 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
                              "allowed (0, inf)")
     scene = as_scene(scene, "simulate")
     _warn_lateral_left_out(scene)
-    return model_of(scene)(scene, duration=duration)
+    model = model_of(scene)
+    result = model(scene, duration=duration)
+    return _settled(scene, model, result, scene.run.duration if duration is None else duration)
+
+
+def _settled(scene, model, result, duration: float):
+    """``result`` with its regime checked for settling
+    (:func:`tengfield.dynamics.regime.settled_regime`: the run continued to twice, four
+    times, ... its length) when the excitation is periodic and the model is the exact
+    impact map (fast); other runs keep the regime of their own window."""
+    import dataclasses
+
+    from ..errors import TengfieldError
+    from .excitation import excitation_kind
+    from .regime import settled_regime
+
+    if not (model.event_map and excitation_kind(scene).periodic):
+        return result
+    def regime_of(span):
+        if span <= duration * (1 + 1e-12):
+            return result.regime
+        try:
+            return model(scene, duration=span).regime
+        except TengfieldError:     # too many samples or events: the check stops here
+            raise _Unchecked from None
+
+    try:
+        regime = settled_regime(regime_of, duration, scene.excitation.period)
+    except _Unchecked:
+        return result
+    return dataclasses.replace(result, regime=regime)
+
+
+class _Unchecked(Exception):
+    """A longer run of the settling check could not be simulated."""
 
 
 def _warn_lateral_left_out(scene) -> None:

@@ -13,6 +13,7 @@ REGIME_COLOURS = {
     "rest": "#d9d9d9",
     "bounce": "#9ecae1",
     "chaos": "#fdae6b",
+    "not-settled": "#bcbddc",
     "critical-contact": "#a1d99b",
     "regular-contact": "#31a354",
     "error": "#e31a1c",
