@@ -379,7 +379,7 @@ def scene(work):
     for key, value in SMALL.items():
         text = edit(text, key, value)
     (where / "small.toml").write_text(text)
-    checked = json.loads(cli("scene", "small.toml").stdout)
+    checked = json.loads(cli("scene", "small.toml", "--json").stdout)
     assert checked["run"]["duration_s"] == 0.3 and checked["field"]["mesh_size_mm"] == 1.5
     return where / "small.toml"
 

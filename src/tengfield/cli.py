@@ -150,8 +150,16 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     if action.metavar == "FILE":
         ensure_file_parent(target, option)
         return int(args.func(args) or 0)
+    from ._files import record_command, refuse_another_commands_directory
+
+    refuse_another_commands_directory(target, args.command, option)
     staged = StagedOutput(target, option=option)
     staging = str(staged.open())
+    try:
+        record_command(staging, args.command)
+    except BaseException:
+        staged.abort()
+        raise
     setattr(args, action.dest, staging)
     out, err = sys.stdout, sys.stderr
     sys.stdout = _PathRewriter(out, staging, str(target))
@@ -506,9 +514,18 @@ def _open_staging(control, args, action, created: bool):
     staged, mine, where = None, None, None
     if control.rank == 0:
         try:
+            from ._files import record_command, refuse_another_commands_directory
+
+            refuse_another_commands_directory(getattr(args, action.dest), args.command,
+                                              action.option_strings[0])
             staged = StagedOutput(getattr(args, action.dest), option=action.option_strings[0],
                                   created=created)
             where = str(staged.open())
+            try:
+                record_command(where, args.command)
+            except BaseException:
+                staged.abort()
+                raise
         except BaseException as exc:  # noqa: BLE001
             staged, mine = None, _outcome_of(exc)
     where = control.bcast(where)
