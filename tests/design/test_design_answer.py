@@ -175,7 +175,7 @@ def test_the_answer_is_stated_in_design_json_and_on_the_terminal(tmp_path, cache
                                    "within_error_bars"} <= set(second)
     text = "\n".join(answer_lines(result))
     assert f"plate spacing h = stroke + ball diameter = {best['plate_spacing_mm']:g} mm" in text
-    assert "σ = -8 µC/m² (the scene's)" in text and "load: matched" in text
+    assert "σ = -8 µC/m^2 (the scene's)" in text and "load: matched" in text
     assert re.search(r"25 Hz +0\.3 mm +rest +0\n", text)
     assert "runner-up #" in text
     if best["changed"]:
@@ -185,8 +185,8 @@ def test_the_answer_is_stated_in_design_json_and_on_the_terminal(tmp_path, cache
 def test_readable_units():
     assert readable_unit("W", 2.67e-6) == ("µW", 1e6)
     assert readable_unit("W", 0.0) == ("µW", 1e6)
-    assert readable_unit("W/m^3", 2.15) == ("µW/cm³", 1.0)
-    assert readable_unit("W/m^3", 2150.0) == ("mW/cm³", 1e-3)
+    assert readable_unit("W/m^3", 2.15) == ("µW/cm^3", 1.0)
+    assert readable_unit("W/m^3", 2150.0) == ("mW/cm^3", 1e-3)
     assert readable_unit("C", 4.6e-10) == ("pC", 1e12)
     assert readable_unit("m", 2e-3) == ("mm", 1e3)
 

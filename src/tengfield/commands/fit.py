@@ -89,7 +89,7 @@ def print_result(result) -> None:
         print(f"    {line}")
     if result.breakdown:
         b = result.breakdown
-        print(f"  air breakdown: sigma_max = {b['sigma_max_uC_per_m2']:.3g} uC/m^2 of the scene, "
+        print(f"  air breakdown: sigma_max = {b['sigma_max_uC_per_m2']:.3g} µC/m^2 of the scene, "
               f"|fitted sigma| / sigma_max = {b['margin']:.3g}")
     for note in result.notes:
         print(f"  note: {note}")

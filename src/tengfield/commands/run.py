@@ -135,7 +135,7 @@ def print_summary(summary: dict) -> None:
     if summary.get("load"):
         load = summary["load"]
         print(f"load {summary['circuit']['load_ohm']:.3g} ohm: mean power "
-              f"{load['mean_power_W'] * 1e6:.4g} uW, {load['power_density_W_per_m3']:.4g} W/m^3")
+              f"{load['mean_power_W'] * 1e6:.4g} µW, {load['power_density_W_per_m3']:.4g} W/m^3")
     energy = summary.get("energy_per_cycle")
     if energy:
         line = f"energy per cycle: CMEO bound {energy['max_energy_per_cycle_J']:.4g} J"
@@ -147,19 +147,19 @@ def print_summary(summary: dict) -> None:
         print(line + f" (FOM_S = {energy['figure_of_merit_structural']:.4g})")
     bd = summary.get("breakdown")
     if bd and bd.get("available"):
-        print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} uC/m^2, "
+        print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} µC/m^2, "
               f"|sigma| / sigma_max = {bd['margin']:.3g} (sigma = {bd['sigma_uC_per_m2']:.4g} "
-              f"uC/m^2, from the {bd['sigma_from']})")
+              f"µC/m^2, from the {bd['sigma_from']})")
     rect = summary.get("rectifier")
     if rect:
         length = rect.get("record_length_s")
-        line = (f"store {rect['storage_capacitance_F'] * 1e6:.4g} uF: U = "
+        line = (f"store {rect['storage_capacitance_F'] * 1e6:.4g} µF: U = "
                 f"{rect['final_store_voltage_V']:.4g} V at the end")
         if rect["pmic"] != "none":    # the UVLO levels are the chip's
             falling, rising = rect["uvlo_levels_V"]
             line += (f"; {_level(falling, rect['time_to_uvlo_falling_V_s'], length)}, "
                      f"{_level(rising, rect['time_to_uvlo_rising_V_s'], length)}")
-        print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} uW, "
+        print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} µW, "
               f"{rect['energy_per_cycle_J']:.4g} J per cycle")
         if rect["pmic"] != "none":
             print(f"chip: on {rect['chip_switch_on_count']} time(s), duty cycle "
@@ -177,8 +177,8 @@ def print_summary(summary: dict) -> None:
         parts = []
         for key, label, scale, unit in (("V_oc_pp_V", "V_OC", 1.0, "V"),
                                         ("Q_sc_pp_C", "Q_SC", 1e9, "nC"),
-                                        ("mean_power_W", "P", 1e6, "uW"),
-                                        ("average_harvested_power_W", "harvested", 1e6, "uW")):
+                                        ("mean_power_W", "P", 1e6, "µW"),
+                                        ("average_harvested_power_W", "harvested", 1e6, "µW")):
             s = stats.get(key)
             if s and s["mean"] is not None:
                 half = s["ci95_half_width"]
