@@ -120,6 +120,39 @@ def _level(level: float, x, length: float | None) -> str:
     return f"{level:g} V not reached" + ("" if length is None else f" in {length:.4g} s")
 
 
+def ensemble_line(ens: dict) -> str:
+    """The terminal line of ``summary -> ensemble``: each output's mean +- 95 % CI (peak-
+    to-peak V_OC, Q_SC, I_SC; power), in the quantity table's units; an output whose
+    spread is round-off (:data:`tengfield.ensemble.ROUNDOFF_RELATIVE`) is said to be the
+    same in every realisation, without a +-."""
+    from ..ensemble import ROUNDOFF_RELATIVE
+    from ..quantities import quantity
+
+    stats = ens["quantities"]
+    parts, same = [], False
+    for key, name, label in (("V_oc_pp_V", "V_oc_V", "V_OC"), ("Q_sc_pp_C", "Q_sc_C", "Q_SC"),
+                             ("I_sc_pp_A", "I_sc_A", "I_SC"),
+                             ("mean_power_W", "mean_power_W", "P"),
+                             ("average_harvested_power_W", "average_harvested_power_W",
+                              "harvested")):
+        s = stats.get(key)
+        if not s or s["mean"] is None:
+            continue
+        q = quantity(name)
+        scale, unit = q.display_scale, q.display_unit
+        if s.get("equal_within_round_off"):
+            same = True
+            parts.append(f"{label} {s['mean'] * scale:.4g} {unit} (same in every realisation)")
+            continue
+        half = s["ci95_half_width"]
+        spread = "" if half is None else f" +- {half * scale:.3g}"
+        parts.append(f"{label} {s['mean'] * scale:.4g}{spread} {unit}")
+    note = (f"; same = spread below {ROUNDOFF_RELATIVE:g} of the value (round-off)"
+            if same else "")
+    return (f"ensemble of {ens['realisations']} realisations (mean +- 95 % CI, peak-to-peak): "
+            + ", ".join(parts) + note)
+
+
 def print_summary(summary: dict) -> None:
     regime = summary.get("regime") or {}
     from ..dynamics.regime import regime_label
@@ -173,19 +206,7 @@ def print_summary(summary: dict) -> None:
               f"{arr['phase_std_deg']:.3g} deg, coherence {arr['phase_coherence']:.3g}")
     ens = summary.get("ensemble")
     if ens:
-        stats = ens["quantities"]
-        parts = []
-        for key, label, scale, unit in (("V_oc_pp_V", "V_OC", 1.0, "V"),
-                                        ("Q_sc_pp_C", "Q_SC", 1e9, "nC"),
-                                        ("mean_power_W", "P", 1e6, "µW"),
-                                        ("average_harvested_power_W", "harvested", 1e6, "µW")):
-            s = stats.get(key)
-            if s and s["mean"] is not None:
-                half = s["ci95_half_width"]
-                spread = "" if half is None else f" +- {half * scale:.3g}"
-                parts.append(f"{label} {s['mean'] * scale:.4g}{spread} {unit}")
-        print(f"ensemble of {ens['realisations']} realisations (mean +- 95 % CI): "
-              + ", ".join(parts))
+        print(ensemble_line(ens))
     for line in comparison_lines(summary):
         print(line)
     for name, stage in summary["stages"].items():
