@@ -86,6 +86,10 @@ def _dynamics(args, figures) -> int:
     print(f"regime {label}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")
+    from ..dynamics.regime import contacts_text
+
+    print(contacts_text(summary["lower_contacts_per_period"],
+                        summary["upper_contacts_per_period"], summary["period"]))
     return 0
 
 

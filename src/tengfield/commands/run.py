@@ -1,10 +1,11 @@
 """``tengfield run``: dynamics -> surrogate (cached) -> circuit, end to end.
 
-Writes DIR/waveforms.csv, DIR/summary.json, DIR/waveforms.png,
+Writes DIR/waveforms.csv (the motion's columns too), DIR/summary.json, DIR/waveforms.png,
 DIR/surrogate.png (charging.png and vq.png for a rectifier, vq.png for a
 load, array.png for an [array]; ensemble.csv and ensemble.png for [run]
-realisations > 1, farmed over the ranks or --jobs workers) and the dynamics' trajectory.csv,
-impacts.csv and trajectory.png. Under ``mpirun -n N`` the field solves (if the surrogate
+realisations > 1, farmed over the ranks or --jobs workers) and the dynamics'
+impacts.csv and trajectory.png ([contact] model = "3d": also contacts.csv and
+trajectory3d.png). Under ``mpirun -n N`` the field solves (if the surrogate
 is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
@@ -171,12 +172,14 @@ def print_summary(summary: dict) -> None:
               f"{load['mean_power_W'] * 1e6:.4g} µW, {load['power_density_W_per_m3']:.4g} W/m^3")
     energy = summary.get("energy_per_cycle")
     if energy:
-        line = f"energy per cycle: CMEO bound {energy['max_energy_per_cycle_J']:.4g} J"
+        line = (f"energy per cycle: CMEO bound (the device's most) "
+                f"{energy['max_energy_per_cycle_J']:.4g} J")
         if "load_loop_area_J" in energy:
             line += (f"; V-Q loop area, load {energy['load_ohm']:.3g} ohm: "
                      f"{energy['load_loop_area_J']:.4g} J")
         if "rectifier_loop_area_J" in energy:
-            line += f"; rectifier: {energy['rectifier_loop_area_J']:.4g} J"
+            line += (f"; V-Q loop area of the last period through the rectifier: "
+                     f"{energy['rectifier_loop_area_J']:.4g} J")
         print(line + f" (FOM_S = {energy['figure_of_merit_structural']:.4g})")
     bd = summary.get("breakdown")
     if bd and bd.get("available"):
@@ -193,7 +196,8 @@ def print_summary(summary: dict) -> None:
             line += (f"; {_level(falling, rect['time_to_uvlo_falling_V_s'], length)}, "
                      f"{_level(rising, rect['time_to_uvlo_rising_V_s'], length)}")
         print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} µW, "
-              f"{rect['energy_per_cycle_J']:.4g} J per cycle")
+              f"into the store {rect['energy_per_cycle_J']:.4g} J per excitation period "
+              "(averaged over the steady window)")
         if rect["pmic"] != "none":
             print(f"chip: on {rect['chip_switch_on_count']} time(s), duty cycle "
                   f"{rect['chip_duty_cycle']:.4g}")

@@ -171,6 +171,17 @@ def regime_label(name: str, period: int, *, settled_by_s: float | None = None,
     return text
 
 
+def contacts_text(lower: float, upper: float, period: int) -> str:
+    """The contacts per excitation period, said so that they do not read as the period:
+    ``"contacts per excitation period: lower 2.1, upper 1 (a period-1 motion may touch a
+    plate more than once per period; averaged over the window)"``."""
+    why = (f" (a period-{period} motion repeats every {period} excitation period"
+           f"{'s' if period != 1 else ''}; a contact is an impact or a chatter sequence "
+           "ending on the plate, averaged over the window)" if period else
+           " (averaged over the window)")
+    return f"contacts per excitation period: lower {lower:.3g}, upper {upper:.3g}{why}"
+
+
 def settled_regime(regime_of, duration: float, period: float, *,
                    bound_periods: int = SETTLE_BOUND_PERIODS) -> Regime:
     """The regime of a run of ``duration`` [s], checked for settling (module doc).
