@@ -78,9 +78,9 @@ def _run(args) -> int:
             if rank == 0:
                 print(f"already cached, nothing solved: {target} ({table.count} positions, "
                       f"error estimate {table.interpolation_error:.2g}) is the surrogate "
-                      f"`tengfield run` of this scene reads; a scene with other geometry or "
-                      f"[field] settings is solved (e.g. --set device.ball_diameter_mm=6), "
-                      f"--force solves this one again")
+                      f"`tengfield run` of this scene reads; a scene of another geometry or "
+                      f"other [field] settings is solved and cached (e.g. --set "
+                      f"device.ball_diameter_mm=...), --force solves this one again")
             return 0
     table = surrogate.precompute(scene, comm=comm, progress=True, max_positions=max_positions,
                                  command_line=command_line())
