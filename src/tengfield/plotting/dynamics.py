@@ -72,12 +72,11 @@ def trajectory_figure(result, *, title: str | None = None,
             upper = imp.plate[sel] != "lower"
     reg = result.regime
     head = title or "ball between two vibrating plates"
-    from ..dynamics.regime import contacts_text, regime_label
-
-    full_title = (f"{head}\nregime: {regime_label(reg.name, reg.period)}, max gap "
-                  f"{reg.max_gap * 1e3:.3g} mm\n"
-                  + contacts_text(reg.lower_contacts_per_period,
-                                  reg.upper_contacts_per_period, 0))
+    said = (f"{reg.name}, period {reg.period}" if reg.period and reg.name != "rest"
+            else reg.name)
+    full_title = (f"{head}\nregime: {said}, max gap {reg.max_gap * 1e3:.3g} mm; contacts "
+                  f"per excitation period: lower {reg.lower_contacts_per_period:.3g}, upper "
+                  f"{reg.upper_contacts_per_period:.3g}")
     return TrajectoryFigure(t=t, y=np.asarray(y), z=np.asarray(z), impact_time=ti,
                             impact_y=np.asarray(yi), impact_z=np.asarray(zi),
                             impact_upper=np.asarray(upper, dtype=bool),
