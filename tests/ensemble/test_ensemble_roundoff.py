@@ -6,7 +6,6 @@ from __future__ import annotations
 import re
 
 import numpy as np
-import pytest
 
 from tengfield.commands.run import ensemble_line
 from tengfield.ensemble import ROUNDOFF_RELATIVE, ensemble_block, statistics

@@ -3,10 +3,7 @@ statistic (never `peak_to_peak.I_sc_A ... µA`, an SI key beside a display unit)
 nominal value outside every draw said and warned of."""
 from __future__ import annotations
 
-import warnings
 from types import SimpleNamespace
-
-import pytest
 
 from tengfield.uncertainty.output import nominal_outside_warnings, summary_lines
 
