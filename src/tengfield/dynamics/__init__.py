@@ -72,11 +72,19 @@ def _settled(scene, model, result, duration: float):
 
     if not (model.event_map and excitation_kind(scene).periodic):
         return result
+    # the longer runs sampled sparsely: only their regime is used (the exact event map's
+    # trajectory and regime do not depend on the sample rate)
+    sparse = []
+
     def regime_of(span):
         if span <= duration * (1 + 1e-12):
             return result.regime
         try:
-            return model(scene, duration=span).regime
+            if not sparse:
+                rate = min(scene.run.sample_rate,
+                           CHECK_SAMPLES_PER_PERIOD * scene.excitation.frequency)
+                sparse.append(scene.with_values(run={"sample_rate_hz": rate}))
+            return model(sparse[0], duration=span).regime
         except TengfieldError:     # too many samples or events: the check stops here
             raise _Unchecked from None
 
@@ -85,6 +93,11 @@ def _settled(scene, model, result, duration: float):
     except _Unchecked:
         return result
     return dataclasses.replace(result, regime=regime)
+
+
+#: samples per excitation period of the settling check's longer runs (their sampled
+#: columns are not used)
+CHECK_SAMPLES_PER_PERIOD = 16
 
 
 class _Unchecked(Exception):
