@@ -63,14 +63,22 @@ def _settled(scene, model, result, duration: float):
     """``result`` with its regime checked for settling
     (:func:`tengfield.dynamics.regime.settled_regime`: the run continued to twice, four
     times, ... its length) when the excitation is periodic and the model is the exact
-    impact map (fast); other runs keep the regime of their own window."""
+    impact map (fast); other runs keep the regime of their own window (an aperiodic
+    window of a random drive is chaos (aperiodic), never "not-settled")."""
     import dataclasses
 
     from ..errors import TengfieldError
     from .excitation import excitation_kind
     from .regime import settled_regime
 
-    if not (model.event_map and excitation_kind(scene).periodic):
+    if not excitation_kind(scene).periodic:
+        # a random or noisy drive never settles: aperiodic motion is the drive's, and is
+        # called chaos (aperiodic) whatever the window's length, as before issue #42
+        if result.regime.name == "not-settled":
+            return dataclasses.replace(result, regime=dataclasses.replace(result.regime,
+                                                                          name="chaos"))
+        return result
+    if not model.event_map:
         return result
     # the longer runs sampled sparsely: only their regime is used (the exact event map's
     # trajectory and regime do not depend on the sample rate)
