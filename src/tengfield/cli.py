@@ -35,7 +35,8 @@ import traceback
 from typing import NamedTuple
 
 from . import __version__
-from ._console import CLOSED_PIPE_STATUS, PipeSafeStdout, configure_output, set_quiet
+from ._console import (CLOSED_PIPE_STATUS, PipeSafeStdout, configure_output,
+                       python_only_stdout, set_quiet)
 from ._mpi import launched_size
 from .errors import TengfieldError
 
@@ -232,7 +233,9 @@ def main(argv: list[str] | None = None) -> int:
     printing, not the command: its files are written, and the exit status is
     :data:`~tengfield._console.CLOSED_PIPE_STATUS` with nothing on stderr."""
     stdout = sys.stdout
-    safe = stdout if isinstance(stdout, PipeSafeStdout) else PipeSafeStdout(stdout)
+    split = None if isinstance(stdout, PipeSafeStdout) else python_only_stdout(stdout)
+    safe = stdout if isinstance(stdout, PipeSafeStdout) else PipeSafeStdout(
+        stdout if split is None else split[0])
     sys.stdout = safe
     try:
         code = _main(argv)
@@ -240,6 +243,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if sys.stdout is safe:
             sys.stdout = stdout
+        if split is not None:
+            split[1](safe.broken)
     return CLOSED_PIPE_STATUS if safe.broken and code == 0 else code
 
 
