@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> dict:
     ax1.set_ylabel("gap z [mm] (offset 3.5 mm per frequency)")
     ax1.set_title("Fig. 5a: A = 0.5 mm, 5-70 Hz")
     ax1.set_xlim(0, 0.23)
-    colours = {"rest": "0.6", "bounce": "#1f77b4", "chaos": "#ff7f0e",
+    colours = {"rest": "0.6", "bounce": "#1f77b4", "chaos": "#ff7f0e", "not-settled": "#9e9ac8",
                "critical-contact": "#2ca02c", "regular-contact": "#006d2c"}
     for f, res in results.items():
         ax2.plot(f, res.regime.max_gap * 1e3, "o", color=colours[res.regime.name])

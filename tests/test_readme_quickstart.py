@@ -5,7 +5,10 @@ that stands for a fresh clone after ``make run``: the Makefile and the files its
 stamp depends on (symlinks), ``examples/``, and ``.venv/bin/tengfield`` running this
 checkout's CLI, with the stamp made so ``make run`` does not set up again. The scene is
 the one the block writes (``scene --default > my.toml``, the full default scene), the
-``mpirun -n 2`` lines run under mpirun when it exists, figures are on. Each line must
+``mpirun -n 2`` lines run under mpirun when it exists, figures are on. The environment
+has no ``OMPI_ALLOW_RUN_AS_ROOT*`` variables (a fresh root shell): the block's own
+``export`` line sets them, and each line runs after the block's ``export`` lines before
+it, as one shell running the block would (issue #42). Each line must
 exit 0 with only tengfield's own lines on stderr, and write the files README's
 "Outputs" table lists (non-empty, PNGs decode, CSVs without ``nan``).
 
@@ -42,7 +45,14 @@ def quick_start_commands() -> list[str]:
     return [line.split("#")[0].strip() for line in block.splitlines() if line.split("#")[0].strip()]
 
 
+def quick_start_script(lines: list[str]) -> str:
+    """``lines`` as one bash script that stops at the first failing line."""
+    return "set -e\n" + "\n".join(lines) + "\n"
+
+
 def subcommand(line: str) -> str:
+    if line.startswith("export "):
+        return "export"
     if line.startswith("make "):
         return line.split()[1]                         # make run = tengfield run
     words = line.split()
@@ -73,8 +83,9 @@ def foreign_lines(stderr: str) -> list[str]:
 
 
 MPI_ENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1",
-           "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
-           "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+           "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe"}
+#: set by the block's own ``export`` line, not by the test
+ROOT_VARS = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM")
 
 
 @pytest.fixture(scope="module")
@@ -94,24 +105,31 @@ def clone(tmp_path_factory, python, cli_env):
     (where / ".venv" / ".tengfield-installed").touch()
     env = cli_env(TENGFIELD_CACHE_DIR=where / "cache", XDG_CACHE_HOME=where / "xdg",
                   **MPI_ENV)
+    for name in ROOT_VARS:
+        env.pop(name, None)
     return where, env
 
 
 @pytest.fixture(scope="module")
 def quick_start(clone):
     """{line: CompletedProcess}: every Quick start line run by bash in the clone, in
-    order, as written (``mpirun -n 2 ...`` without mpirun when there is none)."""
+    order, as written, after the block's ``export`` lines above it (``mpirun -n 2 ...``
+    without mpirun when there is none)."""
     import shutil
     import subprocess
 
     where, env = clone
-    done = {}
+    done, exports = {}, []
     for line in quick_start_commands():
+        if line.startswith("export "):
+            exports.append(line)
+            continue
         command = line
         if line.startswith("mpirun ") and not shutil.which("mpirun"):
             command = line.split(None, 3)[3]
-        done[line] = subprocess.run(["bash", "-c", command], cwd=where, env=env,
-                                    capture_output=True, text=True, timeout=1800)
+        done[line] = subprocess.run(["bash", "-c", quick_start_script(exports + [command])],
+                                    cwd=where, env=env, capture_output=True, text=True,
+                                    timeout=1800)
     return done
 
 
@@ -165,7 +183,7 @@ COVERED = {"run", "scene", "dynamics", "map", "field", "precompute", "sweep", "r
 def test_every_quick_start_command_is_covered():
     commands = quick_start_commands()
     assert len(commands) >= 10
-    assert {subcommand(line) for line in commands} == COVERED
+    assert {subcommand(line) for line in commands} - {"export"} == COVERED
     text = (ROOT / "README.md").read_text()
     first_block = re.search(r"```bash\n(.*?)```", text, re.S).group(1)
     assert [ln.split()[:2] for ln in first_block.splitlines()[:2]] == [["make", "run"],
@@ -243,9 +261,12 @@ def test_field(quick_start, clone):
 
 
 def test_precompute(quick_start, clone):
-    where, _ = ran(quick_start, clone, "precompute")
+    """The block's precompute solves a scene `make run` did not cache (it teaches: the
+    solves farmed over the ranks, then "wrote"), not "already cached"."""
+    where, proc = ran(quick_start, clone, "precompute")
     files = list((where / "cache").glob("surrogate-*.h5"))
-    assert files and all(f.stat().st_size > 0 for f in files)
+    assert len(files) >= 2 and all(f.stat().st_size > 0 for f in files)
+    assert "wrote " in proc.stdout and "already cached" not in proc.stdout
 
 
 def test_sweep(quick_start, clone):
@@ -358,7 +379,7 @@ def scene(work):
     for key, value in SMALL.items():
         text = edit(text, key, value)
     (where / "small.toml").write_text(text)
-    checked = json.loads(cli("scene", "small.toml").stdout)
+    checked = json.loads(cli("scene", "small.toml", "--json").stdout)
     assert checked["run"]["duration_s"] == 0.3 and checked["field"]["mesh_size_mm"] == 1.5
     return where / "small.toml"
 

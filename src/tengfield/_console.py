@@ -181,3 +181,110 @@ def _terminal_width() -> int:
         return os.get_terminal_size(sys.stderr.fileno()).columns
     except (AttributeError, OSError, ValueError):
         return 0
+
+
+# -- a closed stdout -------------------------------------------------------------------
+#: exit status of a command whose stdout reader went away (128 + SIGPIPE, as a Unix tool
+#: killed by SIGPIPE reports it)
+CLOSED_PIPE_STATUS = 141
+
+
+class PipeSafeStdout:
+    """stdout that survives its reader going away (``tengfield run ... | head -1``).
+
+    The first write or flush that fails with EPIPE (BrokenPipeError) marks the stream
+    :attr:`broken` and drops that and every later text: the command goes on and writes
+    its files; :func:`tengfield.cli.main` then exits with :data:`CLOSED_PIPE_STATUS` and
+    nothing on stderr. Every other error of the stream is raised as before."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.broken = False
+
+    def _guard(self, call, *args):
+        if self.broken:
+            return None
+        _ignore_sigpipe()
+        try:
+            return call(*args)
+        except BrokenPipeError:
+            self.broken = True
+            _silence_fd(self._stream)
+            return None
+
+    def write(self, text):
+        self._guard(self._stream.write, text)
+        return len(text)
+
+    def flush(self):
+        if not getattr(self._stream, "closed", False):
+            self._guard(self._stream.flush)
+
+    def __getattr__(self, name):      # isatty, fileno, encoding, buffer, ...
+        return getattr(self._stream, name)
+
+
+def _ignore_sigpipe() -> None:
+    """SIGPIPE ignored again (as Python starts): PETSc, once initialised, installs its own
+    handler, which turns the EPIPE of a write to a closed pipe into an MPI abort or a
+    crash instead of a BrokenPipeError. Only the main thread may set a handler."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread() and hasattr(signal, "SIGPIPE"):
+        try:
+            signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+        except (OSError, ValueError):
+            pass
+
+
+def _silence_fd(stream) -> None:
+    """Point the stream's file descriptor at /dev/null: what its buffer still holds (and
+    the interpreter's flush at exit) goes nowhere instead of raising again."""
+    try:
+        fd = stream.fileno()
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, fd)
+        os.close(null)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def python_only_stdout(stream):
+    """When ``stream`` writes to file descriptor 1 and that is a pipe (``| head -1``):
+    give the C libraries (gmsh, PETSc: they abort or die of SIGPIPE when a write to a
+    closed pipe fails, and tengfield shows none of their lines) /dev/null as fd 1, and
+    return a text stream for Python's own lines on a duplicate of the pipe, plus the
+    function that puts fd 1 back; ``None`` otherwise (a terminal, a file, a capture, or a
+    process started by mpirun, whose launcher owns fd 1)."""
+    import io
+    import stat
+
+    from ._mpi import launched_size
+
+    try:
+        if stream.fileno() != 1 or not stat.S_ISFIFO(os.fstat(1).st_mode):
+            return None
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
+        return None
+    if launched_size() > 1:
+        return None
+    stream.flush()
+    keep = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 1)
+    os.close(null)
+    text = io.TextIOWrapper(io.FileIO(keep, "w", closefd=False),
+                            encoding=getattr(stream, "encoding", None) or "utf-8",
+                            errors=getattr(stream, "errors", None) or "strict")
+
+    def restore(broken: bool) -> None:
+        try:
+            text.flush()
+        except (OSError, ValueError):
+            pass
+        if not broken:          # the pipe back on fd 1 (an in-process caller goes on)
+            os.dup2(keep, 1)
+        os.close(keep)
+
+    return text, restore

@@ -291,3 +291,43 @@ def write_rows(path: str | Path, header: list[str], rows) -> Path:
         writer.writerow(header)
         writer.writerows(rows)
     return Path(path)
+
+
+# ---------------------------------------------------------------------------
+# whose files an output directory holds (issue #42)
+#: in -o DIR: the name of the tengfield command whose files DIR holds (written with them)
+COMMAND_RECORD = ".tengfield-command"
+
+
+def record_command(staging: str | Path, command: str) -> None:
+    """Note in the staging directory of ``-o DIR`` which command writes its files (moved
+    into DIR with them, listed in its manifest)."""
+    Path(staging, COMMAND_RECORD).write_text(command + "\n")
+
+
+def refuse_another_commands_directory(target: str | Path, command: str,
+                                      option: str = "-o") -> None:
+    """Raise :class:`~tengfield.errors.OutputError` (one line) when ``-o DIR`` holds the
+    files of a different tengfield command: writing there would remove them (a
+    directory keeps one command's complete set). Nothing is checked for a DIR with no
+    record (new, or not written by tengfield)."""
+    from .errors import OutputError
+
+    record = Path(target, COMMAND_RECORD)
+    try:
+        owner = record.read_text().strip() if record.is_file() else ""
+    except OSError:
+        return
+    if not owner or owner == command:
+        return
+    manifest = Path(target, ".tengfield-manifest.json")
+    try:
+        names = [n for n in json.loads(manifest.read_text()).get("files", [])
+                 if n != COMMAND_RECORD and Path(target, n).is_file()]
+    except (OSError, ValueError, AttributeError):
+        names = []
+    shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    raise OutputError(f"{option} {str(target)!r} holds the files of `tengfield {owner}`"
+                      + (f" ({shown})" if shown else "")
+                      + f"; `tengfield {command}` would replace them: nothing was written; "
+                        f"choose another {option} directory")

@@ -35,7 +35,8 @@ import traceback
 from typing import NamedTuple
 
 from . import __version__
-from ._console import configure_output, set_quiet
+from ._console import (CLOSED_PIPE_STATUS, PipeSafeStdout, configure_output,
+                       python_only_stdout, set_quiet)
 from ._mpi import launched_size
 from .errors import TengfieldError
 
@@ -181,8 +182,16 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     if action.metavar == "FILE":
         ensure_file_parent(target, option)
         return int(args.func(args) or 0)
+    from ._files import record_command, refuse_another_commands_directory
+
+    refuse_another_commands_directory(target, args.command, option)
     staged = StagedOutput(target, option=option)
     staging = str(staged.open())
+    try:
+        record_command(staging, args.command)
+    except BaseException:
+        staged.abort()
+        raise
     setattr(args, action.dest, staging)
     out, err = sys.stdout, sys.stderr
     rewriters = (_PathRewriter(out, staging, str(target)),
@@ -267,6 +276,26 @@ def _take_quiet(argv) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; a stdout whose reader went away (``| head -1``) stops the
+    printing, not the command: its files are written, and the exit status is
+    :data:`~tengfield._console.CLOSED_PIPE_STATUS` with nothing on stderr."""
+    stdout = sys.stdout
+    split = None if isinstance(stdout, PipeSafeStdout) else python_only_stdout(stdout)
+    safe = stdout if isinstance(stdout, PipeSafeStdout) else PipeSafeStdout(
+        stdout if split is None else split[0])
+    sys.stdout = safe
+    try:
+        code = _main(argv)
+        safe.flush()
+    finally:
+        if sys.stdout is safe:
+            sys.stdout = stdout
+        if split is not None:
+            split[1](safe.broken)
+    return CLOSED_PIPE_STATUS if safe.broken and code == 0 else code
+
+
+def _main(argv: list[str] | None = None) -> int:
     configure_output()
     parser = build_parser()
     argv = _take_quiet(argv)
@@ -561,9 +590,18 @@ def _open_staging(control, args, action, created: bool):
     staged, mine, where = None, None, None
     if control.rank == 0:
         try:
+            from ._files import record_command, refuse_another_commands_directory
+
+            refuse_another_commands_directory(getattr(args, action.dest), args.command,
+                                              action.option_strings[0])
             staged = StagedOutput(getattr(args, action.dest), option=action.option_strings[0],
                                   created=created)
             where = str(staged.open())
+            try:
+                record_command(where, args.command)
+            except BaseException:
+                staged.abort()
+                raise
         except BaseException as exc:  # noqa: BLE001
             staged, mine = None, _outcome_of(exc)
     where = control.bcast(where)

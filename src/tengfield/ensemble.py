@@ -21,16 +21,24 @@ import numpy as np
 from .quantities import TERMINAL, column_name
 
 CONFIDENCE = 0.95
+#: a spread (sample standard deviation) at most this fraction of |mean| is round-off of
+#: one value, not a spread of the realisations: such a quantity is reported as the same
+#: in every realisation (its ``equal_within_round_off``), e.g. the ideal V_OC, which the
+#: excitation's noise does not change (the ball reaches the same gaps)
+ROUNDOFF_RELATIVE = 1e-9
 
 
 def statistics(values) -> dict:
-    """``{"n", "mean", "std", "ci95_low", "ci95_high", "ci95_half_width"}`` of ``values``
-    (NaN entries are left out and counted in ``"missing"``)."""
+    """``{"n", "mean", "std", "ci95_low", "ci95_high", "ci95_half_width",
+    "equal_within_round_off"}`` of ``values`` (NaN entries are left out and counted in
+    ``"missing"``); ``equal_within_round_off``: the standard deviation is at most
+    :data:`ROUNDOFF_RELATIVE` x |mean| (the values are one value up to round-off)."""
     x = np.asarray(values, dtype=float).ravel()
     finite = x[np.isfinite(x)]
     n = int(finite.size)
     out = {"n": n, "missing": int(x.size - n), "mean": None, "std": None,
-           "ci95_low": None, "ci95_high": None, "ci95_half_width": None}
+           "ci95_low": None, "ci95_high": None, "ci95_half_width": None,
+           "equal_within_round_off": False}
     if n == 0:
         return out
     mean = float(finite.mean())
@@ -40,7 +48,8 @@ def statistics(values) -> dict:
     from scipy.stats import t as student_t
     std = float(finite.std(ddof=1))
     half = float(student_t.ppf(0.5 + CONFIDENCE / 2.0, n - 1)) * std / math.sqrt(n)
-    out.update(std=std, ci95_low=mean - half, ci95_high=mean + half, ci95_half_width=half)
+    out.update(std=std, ci95_low=mean - half, ci95_high=mean + half, ci95_half_width=half,
+               equal_within_round_off=bool(std <= ROUNDOFF_RELATIVE * abs(mean)))
     return out
 
 
@@ -145,6 +154,8 @@ def ensemble_block(rows: list[dict]) -> EnsembleBlock:
              "interval_rule": "mean +- t(0.975, N-1) s / sqrt(N) (Student); s with ddof = 1",
              "fraction_interval_rule": "exact binomial (Clopper-Pearson): [beta.ppf(0.025, k, "
                                        "N-k+1), beta.ppf(0.975, k+1, N-k)]",
+             "round_off_rule": f"std <= {ROUNDOFF_RELATIVE:g} x |mean|: the same value in "
+                               "every realisation (equal_within_round_off)",
              "quantities": {}, "regime_fractions": {}}
     labels = {r.get("array_quantity") for r in rows} - {None}
     if labels:   # [array]: what array_value is (one circuit: one label)

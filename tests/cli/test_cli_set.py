@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import tomllib
 
 import pytest
 
@@ -94,7 +95,7 @@ def _scene_cli(tmp_path, capsys, text):
 def test_scene_accepts_good_design_and_fit(tmp_path, capsys):
     code, out = _scene_cli(tmp_path, capsys, SMALL + DESIGN + '[fit]\nloss = "soft_l1"\n')
     assert code == 0, out.err
-    assert json.loads(out.out)["run"]["duration_s"] == 0.3
+    assert tomllib.loads(out.out)["run"]["duration_s"] == 0.3
 
 
 @pytest.mark.parametrize("text, needle", [

@@ -106,10 +106,12 @@ def test_a_worst_case_aggregate_that_ties_is_named_not_an_infinite_margin(tmp_pa
 
 
 def _chaotic_scene(**keys):
-    """33 Hz / 0.75 mm at gap 4 mm: chaotic (plate model, restitution 0.1)."""
+    """20 Hz / 5 mm at gap 3.9-4.1 mm, restitution 0.5: chaotic (aperiodic over every
+    run of the settling check; 33 Hz / 0.75 mm at restitution 0.1, chaotic in one
+    window, settles: issue #42)."""
     section = {"objective": "charge", "vary": {"stroke_mm": [3.5, 4.5]},
-               "excitation": {"frequency_hz": [33.0], "amplitude_mm": [0.75]}}
-    return design_scene(**{**section, **keys})
+               "excitation": {"frequency_hz": [20.0], "amplitude_mm": [5.0]}}
+    return design_scene(**{**section, **keys}).with_values(contact={"restitution": 0.5})
 
 
 def test_a_chaotic_band_point_carries_its_spread_over_windows_in_the_error_bar(cache):
@@ -123,7 +125,7 @@ def test_a_chaotic_band_point_carries_its_spread_over_windows_in_the_error_bar(c
     from tengfield.design.candidate import band_scene, candidate_scene, window_values
     from tengfield.surrogate import TerminalCurves, precompute
     cand = candidate_scene(scene, spec, {"stroke_mm": 4.0})
-    point = band_scene(cand, spec, 33.0, 0.75e-3)
+    point = band_scene(cand, spec, 20.0, 5.0e-3)
     curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve))
     more = window_values("charge", spec, point, curves, 1.0, None, tf.simulate)
     assert spread == pytest.approx(np.std([row["objective"], *more], ddof=1), rel=1e-12)
@@ -142,7 +144,7 @@ def test_chaos_in_the_best_design_is_a_warning(cache):
                     solve=fx.plate_model_solve, jobs=1)
     assert result.best["regimes"] == ["chaos"]
     chaos = [w for w in design_warnings(result) if "chaotic" in w]
-    assert len(chaos) == 1 and "33 Hz / 0.75 mm (±" in chaos[0]
+    assert len(chaos) == 1 and "20 Hz / 5 mm (±" in chaos[0]
     assert "its ± includes that spread" in chaos[0]
 
 
@@ -173,7 +175,7 @@ def test_the_answer_is_stated_in_design_json_and_on_the_terminal(tmp_path, cache
                                    "within_error_bars"} <= set(second)
     text = "\n".join(answer_lines(result))
     assert f"plate spacing h = stroke + ball diameter = {best['plate_spacing_mm']:g} mm" in text
-    assert "σ = -8 µC/m² (the scene's)" in text and "load: matched" in text
+    assert "σ = -8 µC/m^2 (the scene's)" in text and "load: matched" in text
     assert re.search(r"25 Hz +0\.3 mm +rest +0\n", text)
     assert "runner-up #" in text
     if best["changed"]:
@@ -183,8 +185,8 @@ def test_the_answer_is_stated_in_design_json_and_on_the_terminal(tmp_path, cache
 def test_readable_units():
     assert readable_unit("W", 2.67e-6) == ("µW", 1e6)
     assert readable_unit("W", 0.0) == ("µW", 1e6)
-    assert readable_unit("W/m^3", 2.15) == ("µW/cm³", 1.0)
-    assert readable_unit("W/m^3", 2150.0) == ("mW/cm³", 1e-3)
+    assert readable_unit("W/m^3", 2.15) == ("µW/cm^3", 1.0)
+    assert readable_unit("W/m^3", 2150.0) == ("mW/cm^3", 1e-3)
     assert readable_unit("C", 4.6e-10) == ("pC", 1e12)
     assert readable_unit("m", 2e-3) == ("mm", 1e3)
 
@@ -247,9 +249,15 @@ def test_design_csv_has_the_spread_and_windows_per_band_point(tmp_path, cache):
                     solve=fx.plate_model_solve, jobs=1)
     write_design_outputs(result, tmp_path, plots=False)
     rows = list(csv.DictReader(open(tmp_path / "design.csv")))
+    chaotic = 0
     for rec, row in zip(rows, result.rows):
+        if row["regimes"] != ["chaos"]:      # a candidate whose motion settles
+            assert rec["windows"] == "1" and float(rec["charge_spread_per_band_point"]) == 0
+            continue
+        chaotic += 1
         assert rec["windows"] == "3"
         assert float(rec["charge_spread_per_band_point"]) == row["band_spread"]["charge"][0] > 0
+    assert chaotic >= 1
 
 
 def test_best_toml_band_point_prefers_the_centre_then_regular_motion_then_the_value():

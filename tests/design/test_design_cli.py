@@ -54,7 +54,7 @@ def test_cli_states_the_answer_warns_and_best_toml_runs_to_its_value(tmp_path, r
     best = summary["best"]
     assert f"plate spacing h = stroke + ball diameter = {best['plate_spacing_mm']:g} mm" \
         in proc.stdout
-    assert "σ = -8 µC/m² (the scene's)" in proc.stdout and "load: matched" in proc.stdout
+    assert "σ = -8 µC/m^2 (the scene's)" in proc.stdout and "load: matched" in proc.stdout
     assert "25 Hz" in proc.stdout and "rest" in proc.stdout
     assert best["band_points"][0]["regime"] == "rest" and best["band_points"][0]["value"] == 0
     # one warning line: the band point where nothing moves

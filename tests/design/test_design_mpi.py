@@ -124,7 +124,7 @@ def test_cli_design_end_to_end_and_mpirun_gives_the_serial_files(tmp_path, run_c
     serial = run_cli("design", scene, "-o", tmp_path / "serial", "--cache-dir",
                      tmp_path / "cache-serial", "--jobs", "1")
     assert serial.returncode == 0, serial.stderr
-    assert "best: stroke_mm = " in serial.stdout and "µW/cm³" in serial.stdout
+    assert "best: stroke_mm = " in serial.stdout and "µW/cm^3" in serial.stdout
     out = tmp_path / "serial"
     for name in ("design.csv", "design.json", "design.png", "best.toml"):
         assert (out / name).stat().st_size > 0

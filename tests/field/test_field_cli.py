@@ -107,7 +107,7 @@ def test_field_command_solves_at_the_breakdown_charge(tmp_path, run_cli, cli_env
     data = json.loads((tmp_path / "out" / "field.json").read_text())
     area = math.pi * 7e-3 ** 2                       # the default ball, 7 mm
     assert data["ball_charge_C"] == pytest.approx(-sigma_max * 1e-6 * area, rel=1e-9)
-    assert f"-sigma_max = {-sigma_max:.4g} uC/m^2" in done.stdout
+    assert f"-sigma_max = {-sigma_max:.4g} µC/m^2" in done.stdout
     assert (tmp_path / "out" / "field.png").stat().st_size > 50_000
     (tmp_path / "num.toml").write_text(f"[device]\nsurface_charge_uC_per_m2 = {-sigma_max!r}\n"
                                        + coarse)

@@ -175,7 +175,7 @@ def test_fit_of_the_papers_peaks_warns_of_breakdown(tmp_path, run_cli, cli_env):
     assert sigma == pytest.approx(-35.8, rel=0.01) and limit == pytest.approx(25.9, rel=0.01)
     assert abs(sigma) > limit and summary["breakdown"]["margin"] == pytest.approx(
         abs(sigma) / limit, rel=1e-9)
-    assert f"{sigma:.4g}" in lines[0] and f"sigma_max = {limit:.3g} uC/m^2" in lines[0]
+    assert f"{sigma:.4g}" in lines[0] and f"sigma_max = {limit:.3g} µC/m^2" in lines[0]
     assert (out / "fit.png").exists()
 
 

@@ -3,7 +3,7 @@ one release with one warning line saying what to write; `[initial] gap_mm` (the 
 gap) keeps its name; the cached surrogates keep their field hash."""
 from __future__ import annotations
 
-import json
+import tomllib
 import warnings
 
 import pytest
@@ -65,7 +65,7 @@ def test_cli_warns_once(tmp_path, capsys):
     lines = [ln for ln in out.err.splitlines() if "gap_mm" in ln]
     assert len(lines) == 1 and lines[0].startswith("tengfield: warning: ")
     assert "write stroke_mm = 2.5" in lines[0]
-    assert json.loads(out.out)["device"]["stroke_mm"] == 2.5
+    assert tomllib.loads(out.out)["device"]["stroke_mm"] == 2.5
 
 
 def test_set_with_the_old_name_warns_once_and_sets_the_stroke(tmp_path, capsys):
@@ -77,4 +77,4 @@ def test_set_with_the_old_name_warns_once_and_sets_the_stroke(tmp_path, capsys):
     out = capsys.readouterr()
     lines = [ln for ln in out.err.splitlines() if "gap_mm" in ln]
     assert len(lines) == 1 and "write --set device.stroke_mm=2" in lines[0]
-    assert json.loads(out.out)["device"]["stroke_mm"] == 2
+    assert tomllib.loads(out.out)["device"]["stroke_mm"] == 2

@@ -42,8 +42,9 @@ def test_serial_jobs_and_mpirun_write_the_same_csv(tmp_path, run_cli, cli_comman
     assert data["field_solves"] <= 1
     assert abs(sum(r["fraction"] for r in data["regimes"].values()) - 1.0) < 1e-12
     lines = serial.stdout.splitlines()
-    assert any(line.strip().startswith("peak_to_peak.Q_sc_C: nominal") and "90 % in [" in line
-               and "dominated by" in line for line in lines), serial.stdout
+    assert any(line.strip().startswith("Q_SC peak-to-peak [nC]: nominal")
+               and "90 % in [" in line and "dominated by" in line
+               for line in lines), serial.stdout
     rows = (out / "uncertainty.csv").read_text().splitlines()
     assert len(rows) == 1 + 64
     assert rows[0].startswith("evaluation,device.surface_charge_uC_per_m2,contact.restitution,"

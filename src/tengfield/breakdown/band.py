@@ -236,15 +236,15 @@ def assumption_lines(band: Band) -> dict:
         words = {"lower": f"gamma = {band.gamma_lower:g}", "estimate": f"gamma = {band.gamma:g}",
                  "upper": f"gamma = {band.gamma_upper:g}"}
     return {
-        "lower": f"lower    {band.lower * 1e6:.4g} uC/m^2: breaks down the moment the critical "
+        "lower": f"lower    {band.lower * 1e6:.4g} µC/m^2: breaks down the moment the critical "
                  f"gap ({band.lower_gap * 1e3:.3g} mm) exceeds Paschen's V_b, "
                  f"{words['lower']} (a seed electron always present)",
-        "estimate": f"estimate {band.estimate * 1e6:.4g} uC/m^2: {band.seeds.breakdowns_per_s:g} "
+        "estimate": f"estimate {band.estimate * 1e6:.4g} µC/m^2: {band.seeds.breakdowns_per_s:g} "
                     f"seeded breakdown(s) per second from S_v = {band.seeds.seed_rate * 1e-6:g} "
                     f"/cm^3/s and n_ion = {band.seeds.ion_density * 1e-6:g} /cm^3 in the "
                     f"over-stressed volume along the trajectory, {words['estimate']} "
                     f"({band.estimate_rule})",
-        "upper": f"upper    {band.upper * 1e6:.4g} uC/m^2: breaks down even where the smaller "
+        "upper": f"upper    {band.upper * 1e6:.4g} µC/m^2: breaks down even where the smaller "
                  f"gap is widest along the trajectory ({band.upper_gap * 1e3:.3g} mm), "
                  f"{words['upper']}"}
 
@@ -253,12 +253,12 @@ def gamma_line(band: Band) -> str:
     """``tengfield breakdown``'s line: σ_max over the γ range and at the scene's γ."""
     by = band.static_by_gamma
     if band.paschen_curve == "empirical":
-        return (f"sigma_max = {band.static_at_gamma * 1e6:.4g} uC/m^2 (empirical air curve: "
+        return (f"sigma_max = {band.static_at_gamma * 1e6:.4g} µC/m^2 (empirical air curve: "
                 "gamma does not enter)")
     lo, hi = min(by, key=by.get), max(by, key=by.get)
     return (f"sigma_max over gamma in [{band.gamma_range[0]:g}, {band.gamma_range[1]:g}]: "
-            f"{by[lo] * 1e6:.4g} (gamma {lo:g}) to {by[hi] * 1e6:.4g} uC/m^2 (gamma {hi:g}); "
-            f"at the scene's gamma {band.gamma:g}: {band.static_at_gamma * 1e6:.4g} uC/m^2 "
+            f"{by[lo] * 1e6:.4g} (gamma {lo:g}) to {by[hi] * 1e6:.4g} µC/m^2 (gamma {hi:g}); "
+            f"at the scene's gamma {band.gamma:g}: {band.static_at_gamma * 1e6:.4g} µC/m^2 "
             f"({band.paschen_curve})")
 
 

@@ -104,7 +104,7 @@ def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: 
 def charge_line(scene) -> str:
     """What ``sweep`` and ``field`` print for a scene resolved by :func:`obtain_run_table`
     from ``"breakdown"``: the σ it runs with."""
-    return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} uC/m^2 "
+    return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} µC/m^2 "
             f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
 
 
@@ -122,7 +122,7 @@ def resolve_for_run(scene, table, comm=None):
             raise TengfieldError(
                 '[device] surface_charge_uC_per_m2 = "breakdown": the surrogate has no '
                 "breakdown lines (made by the 3D solver or a custom solve), so sigma_max is "
-                "unknown; give sigma in uC/m^2 or use [field] method = \"axisymmetric\"")
+                "unknown; give sigma in µC/m^2 or use [field] method = \"axisymmetric\"")
         return scene, table, None
     result = scene_breakdown(scene, table)
     if uses_breakdown_charge(scene):
@@ -135,7 +135,7 @@ def resolve_for_run(scene, table, comm=None):
         b = result.binding
         warnings.warn(
             f"[device] surface_charge_uC_per_m2 = {scene.device.surface_charge * 1e6:g} exceeds "
-            f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} uC/m^2 "
+            f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} µC/m^2 "
             f"({b.state}, {b.side} gap {b.gap * 1e3:.3g} mm at z = {b.position * 1e3:.3g} mm): "
             "the gap would discharge first (tengfield breakdown; \"breakdown\" runs at the limit)",
             RuntimeWarning, stacklevel=3)

@@ -12,15 +12,15 @@ def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     line per edge of the band saying what it assumes)."""
     b = result.binding
     sigma = scene_sigma(scene, result)
-    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} uC/m^2 (relative error estimate "
+    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2 (relative error estimate "
              f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
              f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
              f"{math.degrees(b.angle):.0f} deg, ball at z = {b.position * 1e3:.4g} mm: gap "
              f"{b.gap * 1e3:.4g} mm, V_b = {b.breakdown_voltage:.4g} V ({b.regime})"]
     for state, bind in result.per_state.items():
-        lines.append(f"  {state:8s} sigma_max = {bind.sigma * 1e6:8.4g} uC/m^2 at z = "
+        lines.append(f"  {state:8s} sigma_max = {bind.sigma * 1e6:8.4g} µC/m^2 at z = "
                      f"{bind.position * 1e3:.4g} mm, {bind.side} gap {bind.gap * 1e3:.4g} mm")
-    lines.append(f"scene sigma = {sigma * 1e6:.4g} uC/m^2: |sigma| / sigma_max = "
+    lines.append(f"scene sigma = {sigma * 1e6:.4g} µC/m^2: |sigma| / sigma_max = "
                  f"{result.margin(sigma):.3g}")
     if band is not None:
         from .band import assumption_lines, gamma_line

@@ -79,9 +79,17 @@ def _dynamics(args, figures) -> int:
         figures.finish()
     from ..dynamics.regime import regime_label
 
-    print(f"regime {regime_label(summary['regime'], summary['period'])}, max gap "
+    label = regime_label(summary["regime"], summary["period"],
+                         settled_by_s=summary.get("settled_by_s"),
+                         checked_to_s=summary.get("regime_checked_to_s") or 0.0,
+                         duration_s=summary.get("duration_s"))
+    print(f"regime {label}, max gap "
           f"{summary['max_gap_mm']:.4g} mm, {summary['impacts']} impacts, "
           f"{summary['wall_time_s']:.3g} s -> {out}/")
+    from ..dynamics.regime import contacts_text
+
+    print(contacts_text(summary["lower_contacts_per_period"],
+                        summary["upper_contacts_per_period"], summary["period"]))
     return 0
 
 

@@ -84,12 +84,55 @@ def print_result(result) -> None:
               f"{result.standard_errors[name]:.3g} {unit}{flag}")
     from ..fit._residuals import residual_lines
 
-    print(f"  reduced chi^2 = {result.chi2_reduced:.3g}; residuals:")
+    for line in statistics_lines(result):
+        print(f"  {line}")
+    print("  residuals:")
     for line in residual_lines(result.mode, result.residuals):
         print(f"    {line}")
     if result.breakdown:
         b = result.breakdown
-        print(f"  air breakdown: sigma_max = {b['sigma_max_uC_per_m2']:.3g} uC/m^2 of the scene, "
+        print(f"  air breakdown: sigma_max = {b['sigma_max_uC_per_m2']:.3g} µC/m^2 of the scene, "
               f"|fitted sigma| / sigma_max = {b['margin']:.3g}")
     for note in result.notes:
         print(f"  note: {note}")
+
+
+def statistics_lines(result) -> list[str]:
+    """What the fit's chi^2 and standard errors rest on, in the data's units: the noise
+    levels (given, or estimated from the residuals, when the reduced chi^2 is 1 by
+    construction), a targets fit's assumed 1-sigma uncertainties (5 % by default)."""
+    from ..fit._residuals import UNITS
+
+    chi2 = result.chi2_reduced
+    if result.mode == "targets":
+        parts = []
+        for label, noise in result.noise.items():
+            r = result.residuals.get(label, {})
+            text = f"{label} +- {r.get('uncertainty', float('nan')):.3g} {r.get('unit', '')}"
+            if noise.get("how", "").startswith("given"):
+                parts.append(text + " (given)")
+            else:
+                parts.append(text + f" ({100 * noise.get('relative', 0.0):.3g} %, the default: "
+                                    "write NAME=VALUE+-SIGMA)")
+        lines = ["assumed 1-sigma uncertainty of each target (weights of the fit and its "
+                 "standard errors): " + ", ".join(parts)]
+        free = len(result.residuals) - len(result.names)
+        lines.append(f"reduced chi^2 = {chi2:.3g}" if free > 0 else
+                     "reduced chi^2: none (no degrees of freedom: as many targets as "
+                     "parameters)")
+        return lines
+    levels, estimated = [], []
+    for q, noise in result.noise.items():
+        r = result.residuals.get(q, {})
+        unit = r.get("unit", "")
+        factor = UNITS.get(q, {}).get(unit, 1.0)
+        levels.append(f"{q} {noise['value_SI'] / factor:.3g} {unit}")
+        if noise.get("how", "").startswith("estimated"):
+            estimated.append(q)
+    if estimated and len(estimated) == len(result.noise):
+        return [f"reduced chi^2 = {chi2:.3g}: 1 by construction (the noise of every column is "
+                f"estimated from the residuals: {', '.join(levels)}); standard errors assume "
+                "that noise, independent between samples; give [fit.columns] noise levels "
+                "for a test of the model"]
+    how = ", ".join(f"{lv} ({result.noise[q]['how']})" for lv, q in zip(levels, result.noise))
+    return [f"reduced chi^2 = {chi2:.3g} with the noise levels {how}"]

@@ -3,13 +3,44 @@ from __future__ import annotations
 
 import importlib
 import platform
+import subprocess
+from pathlib import Path
+
+
+def package_root() -> Path:
+    """The directory two levels above the package (a checkout's root: src/tengfield)."""
+    return Path(__file__).resolve().parents[3]
+
+
+def git_commit() -> str:
+    """The checkout's commit (12 hex digits) and ", modified" when tracked files differ
+    from it; "not a git checkout" for an installed package (or without git)."""
+    root = package_root()
+
+    def git(*args) -> str | None:
+        try:
+            proc = subprocess.run(["git", "-C", str(root), *args], capture_output=True,
+                                  text=True, timeout=10)
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return proc.stdout.strip() if proc.returncode == 0 else None
+
+    top = git("rev-parse", "--show-toplevel")
+    if not top or Path(top).resolve() != root or not (root / "src" / "tengfield").is_dir():
+        return "not a git checkout"
+    head = git("rev-parse", "HEAD")
+    if not head:
+        return "not a git checkout"
+    changed = git("status", "--porcelain", "--untracked-files=no")
+    return head[:12] + (", modified (uncommitted changes)" if changed else "")
 
 
 def versions() -> dict[str, str]:
     """Versions of tengfield and of every library it may use ('missing' if absent)."""
     from .. import __version__
 
-    out = {"tengfield": __version__, "python": platform.python_version(),
+    out = {"tengfield": __version__, "git commit": git_commit(),
+           "python": platform.python_version(),
            "platform": platform.platform()}
     # pyvista before dolfinx: the reverse order breaks VTK text rendering here
     for name in ["numpy", "scipy", "matplotlib", "numba", "h5py", "pyvista", "vtk", "gmsh",

@@ -76,8 +76,11 @@ def _run(args) -> int:
         table, status, _ = surrogate.load_cached(target, scene, comm)   # rank 0 decides
         if table is not None:
             if rank == 0:
-                print(f"cached: {target} ({table.count} positions, error estimate "
-                      f"{table.interpolation_error:.2g}); use --force to recompute")
+                print(f"already cached, nothing solved: {target} ({table.count} positions, "
+                      f"error estimate {table.interpolation_error:.2g}) is the surrogate "
+                      f"`tengfield run` of this scene reads; a scene of another geometry or "
+                      f"other [field] settings is solved and cached (e.g. --set "
+                      f"device.ball_diameter_mm=...), --force solves this one again")
             return 0
     table = surrogate.precompute(scene, comm=comm, progress=True, max_positions=max_positions,
                                  command_line=command_line())

@@ -1,10 +1,11 @@
 """``tengfield run``: dynamics -> surrogate (cached) -> circuit, end to end.
 
-Writes DIR/waveforms.csv, DIR/summary.json, DIR/waveforms.png,
+Writes DIR/waveforms.csv (the motion's columns too), DIR/summary.json, DIR/waveforms.png,
 DIR/surrogate.png (charging.png and vq.png for a rectifier, vq.png for a
 load, array.png for an [array]; ensemble.csv and ensemble.png for [run]
-realisations > 1, farmed over the ranks or --jobs workers) and the dynamics' trajectory.csv,
-impacts.csv and trajectory.png. Under ``mpirun -n N`` the field solves (if the surrogate
+realisations > 1, farmed over the ranks or --jobs workers) and the dynamics'
+impacts.csv and trajectory.png ([contact] model = "3d": also contacts.csv and
+trajectory3d.png). Under ``mpirun -n N`` the field solves (if the surrogate
 is not cached) are spread over the ranks; rank 0 writes every file.
 """
 from __future__ import annotations
@@ -122,7 +123,7 @@ def band_lines(summary: dict) -> list[str]:
     if not band:
         return []
     lines = [f"  band: lower {band['lower_uC_per_m2']:.4g}, estimate "
-             f"{band['estimate_uC_per_m2']:.4g}, upper {band['upper_uC_per_m2']:.4g} uC/m^2"
+             f"{band['estimate_uC_per_m2']:.4g}, upper {band['upper_uC_per_m2']:.4g} µC/m^2"
              + (f"; along the trajectory max |V_gap|/V_b = "
                 f"{path['peak_gap_voltage_over_breakdown']:.3g} at this sigma, above 1 for "
                 f"{path['time_above_breakdown_s']:.3g} of {path.get('over_s', 0.0):.3g} s"
@@ -169,45 +170,85 @@ def _level(level: float, x, length: float | None) -> str:
     return f"{level:g} V not reached" + ("" if length is None else f" in {length:.4g} s")
 
 
+def ensemble_line(ens: dict) -> str:
+    """The terminal line of ``summary -> ensemble``: each output's mean +- 95 % CI (peak-
+    to-peak V_OC, Q_SC, I_SC; power), in the quantity table's units; an output whose
+    spread is round-off (:data:`tengfield.ensemble.ROUNDOFF_RELATIVE`) is said to be the
+    same in every realisation, without a +-."""
+    from ..ensemble import ROUNDOFF_RELATIVE
+    from ..quantities import quantity
+
+    stats = ens["quantities"]
+    parts, same = [], False
+    for key, name, label in (("V_oc_pp_V", "V_oc_V", "V_OC"), ("Q_sc_pp_C", "Q_sc_C", "Q_SC"),
+                             ("I_sc_pp_A", "I_sc_A", "I_SC"),
+                             ("mean_power_W", "mean_power_W", "P"),
+                             ("average_harvested_power_W", "average_harvested_power_W",
+                              "harvested")):
+        s = stats.get(key)
+        if not s or s["mean"] is None:
+            continue
+        q = quantity(name)
+        scale, unit = q.display_scale, q.display_unit
+        if s.get("equal_within_round_off"):
+            same = True
+            parts.append(f"{label} {s['mean'] * scale:.4g} {unit} (same in every realisation)")
+            continue
+        half = s["ci95_half_width"]
+        spread = "" if half is None else f" +- {half * scale:.3g}"
+        parts.append(f"{label} {s['mean'] * scale:.4g}{spread} {unit}")
+    note = (f"; same = spread below {ROUNDOFF_RELATIVE:g} of the value (round-off)"
+            if same else "")
+    return (f"ensemble of {ens['realisations']} realisations (mean +- 95 % CI, peak-to-peak): "
+            + ", ".join(parts) + note)
+
+
 def print_summary(summary: dict) -> None:
     regime = summary.get("regime") or {}
     from ..dynamics.regime import regime_label
 
-    print(f"regime: {regime_label(regime.get('regime', '?'), regime.get('period', 0))} "
+    label = regime_label(regime.get("regime", "?"), regime.get("period", 0),
+                         settled_by_s=regime.get("settled_by_s"),
+                         checked_to_s=regime.get("regime_checked_to_s") or 0.0,
+                         duration_s=regime.get("regime_run_s") or None)
+    print(f"regime: {label} "
           f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
     for line in terminal_lines(summary):
         print(line)
     if summary.get("load"):
         load = summary["load"]
         print(f"load {summary['circuit']['load_ohm']:.3g} ohm: mean power "
-              f"{load['mean_power_W'] * 1e6:.4g} uW, {load['power_density_W_per_m3']:.4g} W/m^3")
+              f"{load['mean_power_W'] * 1e6:.4g} µW, {load['power_density_W_per_m3']:.4g} W/m^3")
     energy = summary.get("energy_per_cycle")
     if energy:
-        line = f"energy per cycle: CMEO bound {energy['max_energy_per_cycle_J']:.4g} J"
+        line = (f"energy per cycle: CMEO bound (the device's most) "
+                f"{energy['max_energy_per_cycle_J']:.4g} J")
         if "load_loop_area_J" in energy:
             line += (f"; V-Q loop area, load {energy['load_ohm']:.3g} ohm: "
                      f"{energy['load_loop_area_J']:.4g} J")
         if "rectifier_loop_area_J" in energy:
-            line += f"; rectifier: {energy['rectifier_loop_area_J']:.4g} J"
+            line += (f"; V-Q loop area of the last period through the rectifier: "
+                     f"{energy['rectifier_loop_area_J']:.4g} J")
         print(line + f" (FOM_S = {energy['figure_of_merit_structural']:.4g})")
     bd = summary.get("breakdown")
     if bd and bd.get("available"):
-        print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} uC/m^2, "
+        print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} µC/m^2, "
               f"|sigma| / sigma_max = {bd['margin']:.3g} (sigma = {bd['sigma_uC_per_m2']:.4g} "
-              f"uC/m^2, from the {bd['sigma_from']})")
+              f"µC/m^2, from the {bd['sigma_from']})")
         for line in band_lines(summary):
             print(line)
     rect = summary.get("rectifier")
     if rect:
         length = rect.get("record_length_s")
-        line = (f"store {rect['storage_capacitance_F'] * 1e6:.4g} uF: U = "
+        line = (f"store {rect['storage_capacitance_F'] * 1e6:.4g} µF: U = "
                 f"{rect['final_store_voltage_V']:.4g} V at the end")
         if rect["pmic"] != "none":    # the UVLO levels are the chip's
             falling, rising = rect["uvlo_levels_V"]
             line += (f"; {_level(falling, rect['time_to_uvlo_falling_V_s'], length)}, "
                      f"{_level(rising, rect['time_to_uvlo_rising_V_s'], length)}")
-        print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} uW, "
-              f"{rect['energy_per_cycle_J']:.4g} J per cycle")
+        print(line + f"; harvested {rect['average_harvested_power_W'] * 1e6:.4g} µW, "
+              f"into the store {rect['energy_per_cycle_J']:.4g} J per excitation period "
+              "(averaged over the steady window)")
         if rect["pmic"] != "none":
             print(f"chip: on {rect['chip_switch_on_count']} time(s), duty cycle "
                   f"{rect['chip_duty_cycle']:.4g}")
@@ -220,19 +261,7 @@ def print_summary(summary: dict) -> None:
               f"{arr['phase_std_deg']:.3g} deg, coherence {arr['phase_coherence']:.3g}")
     ens = summary.get("ensemble")
     if ens:
-        stats = ens["quantities"]
-        parts = []
-        for key, label, scale, unit in (("V_oc_pp_V", "V_OC", 1.0, "V"),
-                                        ("Q_sc_pp_C", "Q_SC", 1e9, "nC"),
-                                        ("mean_power_W", "P", 1e6, "uW"),
-                                        ("average_harvested_power_W", "harvested", 1e6, "uW")):
-            s = stats.get(key)
-            if s and s["mean"] is not None:
-                half = s["ci95_half_width"]
-                spread = "" if half is None else f" +- {half * scale:.3g}"
-                parts.append(f"{label} {s['mean'] * scale:.4g}{spread} {unit}")
-        print(f"ensemble of {ens['realisations']} realisations (mean +- 95 % CI): "
-              + ", ".join(parts))
+        print(ensemble_line(ens))
     for line in comparison_lines(summary):
         print(line)
     for name, stage in summary["stages"].items():

@@ -10,9 +10,13 @@ def register(sub) -> None:
                        description="`tengfield scene --default > my.toml` writes the embedded "
                                    "default scene with its comments; `tengfield scene FILE` "
                                    "checks FILE (every section any command reads, [design], "
-                                   "[fit] and [uncertainty] included) and prints every key in SI-free file units.")
+                                   "[fit] and [uncertainty] included) and prints every key in "
+                                   "file units as TOML, a scene file that loads back to the "
+                                   "same scene (--json: as JSON).")
     p.add_argument("scene", nargs="?", help="scene file to check")
     p.add_argument("--default", action="store_true", help="print the commented default scene")
+    p.add_argument("--json", action="store_true",
+                   help="print the checked scene as JSON instead of TOML")
     p.set_defaults(func=_run)
 
 
@@ -43,6 +47,49 @@ def _run(args) -> int:
         return 0
     scene = load_scene(args.scene)
     check_sections(scene)
-    print(json.dumps(scene.to_dict(), indent=2))
+    data = scene.to_dict()
+    for name, section in scene.raw.items():   # [design], [fit], [uncertainty] as given
+        if name not in data and isinstance(section, dict):
+            data[name] = section
+    if args.json:
+        print(json.dumps(data, indent=2))
+    else:
+        sys.stdout.write(toml_text(data, f"tengfield scene: {scene.source}, every key "
+                                         "checked, in file units"))
     print(f"# field hash {scene.field_hash()}", file=sys.stderr)
     return 0
+
+
+def toml_text(data: dict, header: str = "") -> str:
+    """``{section: {key: value or sub-table}}`` as TOML: ``header`` as comment lines, each
+    table's values, then its sub-tables (``[design.vary]``); a None value (a key left
+    unset) as a comment."""
+    from .._files import toml_value
+
+    lines = [f"# {line}" for line in header.splitlines()]
+
+    def table(name: str, values: dict) -> None:
+        lines.extend(["", f"[{name}]"])
+        for key, value in values.items():
+            if isinstance(value, dict):
+                continue
+            if value is None:
+                lines.append(f"# {key}: unset")
+            else:
+                plain = list(value) if isinstance(value, tuple) else value
+                lines.append(f"{_key(key)} = {toml_value(plain)}")
+        for key, value in values.items():
+            if isinstance(value, dict):
+                table(f"{name}.{_key(key)}", value)
+
+    for name, values in data.items():
+        if isinstance(values, dict):
+            table(_key(name), values)
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def _key(key: str) -> str:
+    """A TOML key: bare when it can be (letters, digits, _ and -), else quoted."""
+    import re
+
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)

@@ -59,6 +59,10 @@ def _run(args) -> int:
         return 0
     for category, message in study.evaluations.warnings:
         warnings.warn(message, category, stacklevel=1)
+    from ..uncertainty.output import nominal_outside_warnings
+
+    for message in nominal_outside_warnings(study):
+        warnings.warn(message, RuntimeWarning, stacklevel=1)
     written = write_outputs(study, Path(args.output), plots=not args.no_plots)
     for line in summary_lines(study):
         print(line)

@@ -21,7 +21,7 @@ BOUND_FRACTION = 0.02
 #: SI unit -> (label, factor) choices for readable numbers (value x factor)
 _PREFIXED = {
     "W": [("pW", 1e12), ("nW", 1e9), ("µW", 1e6), ("mW", 1e3), ("W", 1.0)],
-    "W/m^3": [("nW/cm³", 1e3), ("µW/cm³", 1.0), ("mW/cm³", 1e-3), ("W/cm³", 1e-6)],
+    "W/m^3": [("nW/cm^3", 1e3), ("µW/cm^3", 1.0), ("mW/cm^3", 1e-3), ("W/cm^3", 1e-6)],
     "C": [("pC", 1e12), ("nC", 1e9), ("µC", 1e6), ("C", 1.0)],
     "V": [("mV", 1e3), ("V", 1.0), ("kV", 1e-3)],
     "A": [("pA", 1e12), ("nA", 1e9), ("µA", 1e6), ("mA", 1e3), ("A", 1.0)],
@@ -31,7 +31,8 @@ _PREFIXED = {
 
 def readable_unit(unit: str, magnitude: float) -> tuple[str, float]:
     """(label, factor) of ``unit`` for numbers around ``magnitude`` (SI): the largest
-    prefix that keeps ``magnitude x factor`` >= 1 (µW, mW/cm³, nC...)."""
+    prefix that keeps ``magnitude x factor`` >= 1 (µW, mW/cm^3, nC...: the quantity
+    table's style, µ and ^)."""
     choices = _PREFIXED.get(unit, [(unit, 1.0)])
     m = abs(float(magnitude)) if magnitude is not None and np.isfinite(magnitude) else 0.0
     if m == 0.0:
@@ -83,7 +84,7 @@ def chosen_band_point(result, row) -> int:
 
     regimes = row["regimes"] or [""] * len(values)
     return min(live, key=lambda i: (round(math.hypot(rel(f, i), rel(a, i)), 12),
-                                    regimes[i] == "chaos", -values[i], i))
+                                    regimes[i] in ("chaos", "not-settled"), -values[i], i))
 
 
 def on_bounds(result, row) -> list[tuple[str, str, float]]:
@@ -223,14 +224,18 @@ def design_warnings(result) -> list[str]:
         out.append(f"the best design's matched load {_ohm(high)} is past what a bench builds "
                    f"and reads (resistors and meter inputs reach ~{_ohm(BENCH_MAX_LOAD_OHM)}): "
                    "set [design] load_ohm = [1e6, 1e9] to match within loads a bench can build")
-    chaotic = [i for i, r in enumerate(best["regimes"]) if r == "chaos"]
-    if chaotic:
-        pts = band_points(result, best)
-        names = ", ".join(f"{point_label(*spec.band[i], kind)} "
-                          f"(±{_pct(pts[i]['spread'], pts[i]['value'])} over windows)"
-                          for i in chaotic)
-        out.append(f"the best design is chaotic at {len(chaotic)} of {len(spec.band)} band "
-                   f"point(s): {names}; its ± includes that spread")
+    for name, said in (("chaos", "chaotic (aperiodic over the settling check's longest "
+                                 "run)"),
+                       ("not-settled", "not settled (aperiodic, no repeating motion within "
+                                       "the settling check's bound)")):
+        chaotic = [i for i, r in enumerate(best["regimes"]) if r == name]
+        if chaotic:
+            pts = band_points(result, best)
+            names = ", ".join(f"{point_label(*spec.band[i], kind)} "
+                              f"(±{_pct(pts[i]['spread'], pts[i]['value'])} over windows)"
+                              for i in chaotic)
+            out.append(f"the best design is {said} at {len(chaotic)} of {len(spec.band)} "
+                       f"band point(s): {names}; its ± includes that spread")
     return out
 
 
@@ -284,7 +289,7 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
         lines.append("  changed to follow: " + ", ".join(
             f"{k} {c['from']:g} -> {c['to']:g}" for k, c in d["changed"].items()))
     sigma = d["surface_charge_uC_per_m2"]
-    lines.append(f"  σ = {sigma:.4g} µC/m²" + (" (the air-breakdown limit of this geometry)"
+    lines.append(f"  σ = {sigma:.4g} µC/m^2" + (" (the air-breakdown limit of this geometry)"
                                               if d["breakdown"] else " (the scene's)"))
     load = d["load"]
     if load["ohm"] is not None:

@@ -446,9 +446,10 @@ def _objective_values(objective, spec, scene, points, dynamics, curves, volume, 
 
 
 def irregular(regime) -> bool:
-    """A band point whose motion does not repeat in the window (``chaos``, or a period
-    longer than the window can hold whole): one window's value is one sample of it."""
-    return regime.name == "chaos"
+    """A band point whose motion does not repeat in the window (``chaos``, or
+    ``not-settled``: aperiodic within the settling check's bound): one window's value
+    is one sample of it."""
+    return regime.name in ("chaos", "not-settled")
 
 
 def _load_of(row, i):

@@ -54,7 +54,62 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
                              "allowed (0, inf)")
     scene = as_scene(scene, "simulate")
     _warn_lateral_left_out(scene)
-    return model_of(scene)(scene, duration=duration)
+    model = model_of(scene)
+    result = model(scene, duration=duration)
+    return _settled(scene, model, result, scene.run.duration if duration is None else duration)
+
+
+def _settled(scene, model, result, duration: float):
+    """``result`` with its regime checked for settling
+    (:func:`tengfield.dynamics.regime.settled_regime`: the run continued to twice, four
+    times, ... its length) when the excitation is periodic and the model is the exact
+    impact map (fast); other runs keep the regime of their own window (an aperiodic
+    window of a random drive is chaos (aperiodic), never "not-settled")."""
+    import dataclasses
+
+    from ..errors import TengfieldError
+    from .excitation import excitation_kind
+    from .regime import settled_regime
+
+    if not excitation_kind(scene).periodic:
+        # a random or noisy drive never settles: aperiodic motion is the drive's, and is
+        # called chaos (aperiodic) whatever the window's length, as before issue #42
+        if result.regime.name == "not-settled":
+            return dataclasses.replace(result, regime=dataclasses.replace(result.regime,
+                                                                          name="chaos"))
+        return result
+    if not model.event_map:
+        return result
+    # the longer runs sampled sparsely: only their regime is used (the exact event map's
+    # trajectory and regime do not depend on the sample rate)
+    sparse = []
+
+    def regime_of(span):
+        if span <= duration * (1 + 1e-12):
+            return result.regime
+        try:
+            if not sparse:
+                rate = min(scene.run.sample_rate,
+                           CHECK_SAMPLES_PER_PERIOD * scene.excitation.frequency)
+                sparse.append(scene.with_values(run={"sample_rate_hz": rate}))
+            return model(sparse[0], duration=span).regime
+        except TengfieldError:     # too many samples or events: the check stops here
+            raise _Unchecked from None
+
+    try:
+        regime = settled_regime(regime_of, duration, scene.excitation.period)
+    except _Unchecked:
+        return result
+    return dataclasses.replace(result, regime=regime)
+
+
+#: samples per excitation period of the settling check's longer runs (their sampled
+#: columns are not used)
+CHECK_SAMPLES_PER_PERIOD = 16
+
+
+class _Unchecked(Exception):
+    """A longer run of the settling check could not be simulated."""
 
 
 def _warn_lateral_left_out(scene) -> None:

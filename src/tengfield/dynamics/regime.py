@@ -21,12 +21,22 @@ Definitions (also in docs/dynamics.md). The steady window is
   (error below ``g (1+Gamma) (T/64)^2 / 8`` only if two different apexes
   differ by less than that), dh if the upper plate was reached.
 * names: ``rest`` when the ball never leaves the lower plate
-  (max gap < REST_GAP and no impact); ``chaos`` when aperiodic;
+  (max gap < REST_GAP and no impact); ``chaos`` when aperiodic over a window of at
+  least CHAOS_MIN_PERIODS excitation periods, ``not-settled`` when aperiodic over a
+  shorter one (a transient is aperiodic too: too short a window cannot tell);
   otherwise ``bounce`` without upper contacts, ``regular-contact`` with at
   least one upper contact per excitation period and an upper impact that
   would have overshot by >= CRITICAL_OVERSHOOT dh (``v^2 / 2g``) or sticking
   to the upper plate, else ``critical-contact`` (the ball just reaches the
   upper plate, or not in every period).
+* settled (:func:`settled_regime`, what :func:`tengfield.simulate` reports for a
+  periodic excitation): the run is continued to twice, four times, ... its length, at
+  most to SETTLE_BOUND_PERIODS excitation periods (and never shorter than the run),
+  and the regime of each length's window is compared with the next one's: the first
+  periodic regime that the next, twice as long run repeats (same name and period) is
+  the regime, settled by that length; if none repeats within the bound, the last
+  window's regime: ``chaos`` (aperiodic over >= CHAOS_MIN_PERIODS), or periodic over
+  the second half of that long window (settled by its length).
 """
 from __future__ import annotations
 
@@ -43,6 +53,8 @@ SAMPLES_PER_PERIOD = 64
 REST_GAP = 1e-9          # [m]
 CRITICAL_OVERSHOOT = 0.1  # fraction of the stroke
 CONTACT_MERGE_HEIGHT = 0.01  # fraction of the stroke
+CHAOS_MIN_PERIODS = 100  # an aperiodic window this long (excitation periods) is chaos
+SETTLE_BOUND_PERIODS = 400  # the settling check runs at most this many periods
 
 
 def detect_period(z_section: np.ndarray, v_section: np.ndarray, stroke: float, g: float,
@@ -132,14 +144,69 @@ def _grid_gap(sampler, start: float, step: float, count: int, gap_on_grid=None) 
     return sampler(start + step * np.arange(count))[0]
 
 
-def regime_label(name: str, period: int) -> str:
+def regime_label(name: str, period: int, *, settled_by_s: float | None = None,
+                 checked_to_s: float = 0.0, duration_s: float | None = None) -> str:
     """How a regime is said in one line: ``"bounce, period 2"``, ``"chaos (aperiodic)"``
-    (a chaotic window has no period: ``period`` 0), ``"rest"``."""
+    (a chaotic window has no period: ``period`` 0), ``"rest"``, ``"not settled in 20 s
+    (aperiodic)"``; with the settling check's lengths [s] (:func:`settled_regime`) and
+    the run's ``duration_s``, how it was checked (``"settled by 2 s, checked on a run of
+    4 s; the 1 s run is still settling"``)."""
+    if name == "not-settled":
+        within = checked_to_s or duration_s
+        return (f"not settled in {within:g} s (aperiodic)" if within
+                else "not settled (aperiodic)")
     if name == "chaos" or not period:
-        return f"{name} (aperiodic)" if name == "chaos" else name
-    if name == "rest":
-        return name
-    return f"{name}, period {period}"
+        text = f"{name} (aperiodic)" if name == "chaos" else name
+    elif name == "rest":
+        text = name
+    else:
+        text = f"{name}, period {period}"
+    if name == "chaos" and checked_to_s:
+        text += f", over a run of {checked_to_s:g} s"
+    elif settled_by_s is not None and checked_to_s:
+        text += f" (settled by {settled_by_s:g} s, checked on a run of {checked_to_s:g} s"
+        if duration_s is not None and settled_by_s > duration_s * (1 + 1e-9):
+            text += f"; the {duration_s:g} s run is still settling: raise [run] duration_s"
+        text += ")"
+    return text
+
+
+def contacts_text(lower: float, upper: float, period: int) -> str:
+    """The contacts per excitation period, said so that they do not read as the period:
+    ``"contacts per excitation period: lower 2.1, upper 1 (a period-1 motion may touch a
+    plate more than once per period; averaged over the window)"``."""
+    why = (f" (a period-{period} motion repeats every {period} excitation period"
+           f"{'s' if period != 1 else ''}; a contact is an impact or a chatter sequence "
+           "ending on the plate, averaged over the window)" if period else
+           " (averaged over the window)")
+    return f"contacts per excitation period: lower {lower:.3g}, upper {upper:.3g}{why}"
+
+
+def settled_regime(regime_of, duration: float, period: float, *,
+                   bound_periods: int = SETTLE_BOUND_PERIODS) -> Regime:
+    """The regime of a run of ``duration`` [s], checked for settling (module doc).
+
+    ``regime_of(length)``: the :class:`Regime` of the same run continued to ``length``
+    [s] (its window after the same settle periods); ``regime_of(duration)`` is the run's
+    own. Lengths double from ``duration`` up to ``max(duration, bound_periods *
+    period)``. Returns the regime with ``settled_by_s`` (None if not settled) and
+    ``checked_to_s`` (the longest length simulated)."""
+    from dataclasses import replace
+
+    bound = max(duration, bound_periods * period) * (1 + 1e-12)
+    length, current = duration, regime_of(duration)
+    while 2.0 * length <= bound:
+        following = regime_of(2.0 * length)
+        if current.period > 0 and (following.name, following.period) == (current.name,
+                                                                         current.period):
+            return replace(current, settled_by_s=length, checked_to_s=2.0 * length,
+                           run_s=duration)
+        length, current = 2.0 * length, following
+    if current.period == 0 or current.name == "not-settled":
+        return replace(current, settled_by_s=None, checked_to_s=length, run_s=duration)
+    # periodic over the second half of a window of at least bound_periods / 2 periods
+    # (or of the run itself when it is that long already): repeating over that many
+    return replace(current, settled_by_s=length, checked_to_s=length, run_s=duration)
 
 
 def regime_table(counts: dict, order=()) -> str:
@@ -193,7 +260,7 @@ def classify(sampler, impact_time: np.ndarray, impact_plate: np.ndarray,
         name = "rest"
         period_p = 1
     elif period_p == 0:
-        name = "chaos"
+        name = "chaos" if n_periods >= CHAOS_MIN_PERIODS else "not-settled"
     elif n_upper == 0 and not upper_stuck:
         name = "bounce"
     else:

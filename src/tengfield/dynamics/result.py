@@ -9,7 +9,7 @@ import numpy as np
 #: plate index of a contact -> its name
 PLATE_NAMES = np.array(["lower", "upper"])
 
-REGIMES = ("rest", "bounce", "chaos", "critical-contact", "regular-contact")
+REGIMES = ("rest", "bounce", "chaos", "not-settled", "critical-contact", "regular-contact")
 
 
 @dataclass(frozen=True)
@@ -40,12 +40,20 @@ class Regime:
     lower_contacts_per_period: float
     upper_contacts_per_period: float
     max_gap: float
+    #: the settling check (:func:`tengfield.dynamics.regime.settled_regime`): the run's
+    #: length [s] from which the regime no longer changed (None: not checked, or not
+    #: settled), and the longest run the check simulated [s] (0: not checked)
+    settled_by_s: float | None = None
+    checked_to_s: float = 0.0
+    #: the length of the run itself [s] (0: not checked)
+    run_s: float = 0.0
 
     def as_dict(self) -> dict:
         return {"regime": self.name, "period": self.period,
                 "lower_contacts_per_period": self.lower_contacts_per_period,
                 "upper_contacts_per_period": self.upper_contacts_per_period,
-                "max_gap_m": self.max_gap}
+                "max_gap_m": self.max_gap, "settled_by_s": self.settled_by_s,
+                "regime_checked_to_s": self.checked_to_s, "regime_run_s": self.run_s}
 
 
 @dataclass
@@ -116,6 +124,8 @@ class DynamicsResult:
             "max_gap_mm": self.regime.max_gap * 1e3,
             "upper_contacts_per_period": self.regime.upper_contacts_per_period,
             "lower_contacts_per_period": self.regime.lower_contacts_per_period,
+            "settled_by_s": self.regime.settled_by_s,
+            "regime_checked_to_s": self.regime.checked_to_s,
             "impacts": len(self.impacts),
             "impacts_lower": int(np.sum(plates == "lower")),
             "impacts_upper": int(np.sum(plates == "upper")),

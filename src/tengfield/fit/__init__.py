@@ -71,7 +71,7 @@ def breakdown_check(scene, table, result: FitResult) -> None:
     if margin > 1.0:
         b = limit.binding
         text = (f"fitted {name} = {result.values[name]:.4g} exceeds the scene's air-breakdown "
-                f"limit sigma_max = {limit.sigma_max * 1e6:.3g} uC/m^2 ({b.state}, {b.side} "
+                f"limit sigma_max = {limit.sigma_max * 1e6:.3g} µC/m^2 ({b.state}, {b.side} "
                 f"gap {b.gap * 1e3:.3g} mm): the gap would discharge first, so the data "
                 "need another explanation (geometry, C_p, the instrument) or the charge is "
                 "not the ball's alone")

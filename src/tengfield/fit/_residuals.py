@@ -115,20 +115,30 @@ def on_bound(space, u) -> dict:
     return out
 
 
-def bound_notes(result, bounds_hit: dict) -> None:
+def bound_notes(result, bounds_hit: dict, period: float | None = None) -> None:
     """A note per parameter on its bound (``bounds_hit`` from :func:`on_bound`) and,
-    when the residual is large too, one warning naming them."""
+    when the residual is large too, one warning naming them. ``period`` [s]: the
+    excitation's period when it is periodic; a ``time_shift_s`` whose bounds are at
+    least a period apart wraps (a shift on a bound is the shift a whole number of
+    periods inside): a note says so, no alarm."""
     if not bounds_hit:
         return
     named = []
     for name, bound in bounds_hit.items():
         lo, hi = result.bounds[name]
+        if name == "time_shift_s" and period and hi - lo >= period * (1 - 1e-9):
+            result.notes.append(f"time_shift_s = {result.values[name]:.6g} s is on its bound "
+                                f"{bound:g} s of [{lo:g}, {hi:g}] s, which spans whole periods "
+                                f"of the periodic excitation (T = {period:.6g} s): the shift "
+                                "wraps (the same as a whole number of periods inside), "
+                                "not a limit of the fit")
+            continue
         named.append(f"{name} = {result.values[name]:.6g}")
         result.notes.append(f"{name} = {result.values[name]:.6g} sits on its bound {bound:g} "
                             f"(of [{lo:g}, {hi:g}]): the best value may lie outside; widen "
                             "the bound or check the model")
     large = large_residuals(result.mode, result.residuals)
-    if large:
+    if large and named:
         warnings.warn(f"fit: {', '.join(named)} ended on {'its bound' if len(named) == 1 else 'their bounds'}"
                       f" and the fit misses the data ({'; '.join(large)}): widen the "
                       "bound in [fit.parameters] or check the model", RuntimeWarning,

@@ -144,7 +144,11 @@ def fit_trace(scene, curves, reference_sigma: float, trace: Trace, spec: FitSpec
     c_p, _ = model.circuit(result.values)
     result.residuals = trace_residuals(trace, result.fitted, {
         c.quantity: compared(c.quantity, "", scene, c_p) for c in trace.columns})
-    bound_notes(result, on_bound(problem.space, res.x))
+    from ..dynamics.excitation import excitation_kind
+
+    periodic = excitation_kind(scene).periodic
+    bound_notes(result, on_bound(problem.space, res.x),
+                period=scene.excitation.period if periodic else None)
     _explained_note(result, trace, spec.loss)
     if spec.bootstrap:
         result.bootstrap = _bootstrap(problem, res.x, residual, result.fitted, trace, spec,

@@ -44,7 +44,7 @@ from .compared import INFIXES, LETTERS, MEASURED_KEYS
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
-    "surface_charge_uC_per_m2": ((-200.0, 200.0), "linear", "uC/m^2", "ball surface charge σ"),
+    "surface_charge_uC_per_m2": ((-200.0, 200.0), "linear", "µC/m^2", "ball surface charge σ"),
     "parallel_capacitance_pF": ((0.0, 1.0e5), "linear", "pF", "instrument + cable capacitance C_p"),
     "restitution": ((0.0, 0.99), "linear", "", "coefficient of restitution e"),
     "load_ohm": ((1.0, 1.0e14), "log", "ohm", "load resistance R"),

@@ -13,6 +13,7 @@ REGIME_COLOURS = {
     "rest": "#d9d9d9",
     "bounce": "#9ecae1",
     "chaos": "#fdae6b",
+    "not-settled": "#bcbddc",
     "critical-contact": "#a1d99b",
     "regular-contact": "#31a354",
     "error": "#e31a1c",
@@ -71,9 +72,10 @@ def trajectory_figure(result, *, title: str | None = None,
             upper = imp.plate[sel] != "lower"
     reg = result.regime
     head = title or "ball between two vibrating plates"
-    full_title = (f"{head}\nregime: {reg.name}, period {reg.period}, max gap "
-                  f"{reg.max_gap * 1e3:.3g} mm, contacts/period lower "
-                  f"{reg.lower_contacts_per_period:.3g}, upper "
+    said = (f"{reg.name}, period {reg.period}" if reg.period and reg.name != "rest"
+            else reg.name)
+    full_title = (f"{head}\nregime: {said}, max gap {reg.max_gap * 1e3:.3g} mm; contacts "
+                  f"per excitation period: lower {reg.lower_contacts_per_period:.3g}, upper "
                   f"{reg.upper_contacts_per_period:.3g}")
     return TrajectoryFigure(t=t, y=np.asarray(y), z=np.asarray(z), impact_time=ti,
                             impact_y=np.asarray(yi), impact_z=np.asarray(zi),

@@ -68,6 +68,13 @@ def ensemble_figure(rows: list[dict], block: dict):
                         label="95 % CI of the mean")
         ax.set_ylabel(label, fontsize=8)
         ax.ticklabel_format(axis="y", useOffset=False)
+        if block["quantities"][key].get("equal_within_round_off"):
+            # one value up to round-off: an axis of +-5 % around it, not its last bits
+            centre = float(block["quantities"][key]["mean"]) * scale
+            width = 0.05 * abs(centre) or 1.0
+            ax.set_ylim(centre - width, centre + width)
+            ax.set_title(f"{label.split(' [')[0]}: the same in every realisation "
+                         "(spread below round-off)", fontsize=8)
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))   # N is a count
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="best")

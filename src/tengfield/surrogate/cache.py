@@ -132,7 +132,7 @@ def _at_scene_charge(table, scene, reason: str):
     stored_sigma = stored / (math.pi * scene.device.ball_diameter**2)
     return (at_ball_charge(table, scene.device.ball_charge),
             f"{reason}; charges scaled from sigma = {stored_sigma * 1e6:.6g} to "
-            f"{scene.device.surface_charge * 1e6:.6g} uC/m^2 (no field solve)")
+            f"{scene.device.surface_charge * 1e6:.6g} µC/m^2 (no field solve)")
 
 
 def _legacy(scene, path: Path, comm, write: bool):

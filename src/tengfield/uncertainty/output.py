@@ -55,9 +55,13 @@ def summary_lines(study) -> list[str]:
             lines.append(f"  {name}: no values")
             continue
         nominal = block.get("nominal")
-        text = (f"  {name}: nominal {'-' if nominal is None else f'{nominal * scale:.4g}'}, "
+        text = (f"  {output_label(name, unit)}: nominal "
+                f"{'-' if nominal is None else f'{nominal * scale:.4g}'}, "
                 f"median {p['50'] * scale:.4g}, 90 % in [{p['5'] * scale:.4g}, "
-                f"{p['95'] * scale:.4g}]" + (f" {unit}" if unit else ""))
+                f"{p['95'] * scale:.4g}]")
+        side = _outside(study, name, nominal)
+        if side:
+            text += f" (the nominal lies outside every draw: {side[0]} them)"
         top = dominant_input(block.get("sobol"))
         if top is not None:
             text += f"; dominated by {top[0]} (ST = {top[1]:.2f})"
@@ -65,3 +69,59 @@ def summary_lines(study) -> list[str]:
     regimes = ", ".join(f"{k} {v['fraction']:.0%}" for k, v in s["regimes"].items())
     lines.append(f"  regimes: {regimes}")
     return lines
+
+
+def output_label(name: str, unit: str = "") -> str:
+    """``"peak_to_peak.I_sc_A"`` as the terminal says it: ``"I_SC peak-to-peak [µA]"``
+    (the quantity table's symbol and the unit shown; the SI key only for a name the
+    table does not hold)."""
+    from ..quantities import QUANTITIES
+
+    stat, _, base = name.rpartition(".")
+    q = QUANTITIES.get(base)
+    if q is None:
+        return name + (f" [{unit}]" if unit else "")
+    words = {"peak_to_peak": " peak-to-peak", "peak": " peak"}.get(stat, "")
+    return f"{q.symbol}{words}" + (f" [{unit}]" if unit else "")
+
+
+def _draws(study, name) -> list[float]:
+    return [float(r[name]) for r in study.evaluations.rows
+            if r.get(name) is not None and r[name] == r[name]]
+
+
+def _outside(study, name, nominal) -> tuple[str, int] | None:
+    """("below" | "above", draws) when the nominal value lies outside every draw."""
+    if nominal is None:
+        return None
+    draws = _draws(study, name)
+    if not draws:
+        return None
+    if nominal < min(draws):
+        return "below", len(draws)
+    if nominal > max(draws):
+        return "above", len(draws)
+    return None
+
+
+def nominal_outside_warnings(study) -> list[str]:
+    """One warning line per main output whose nominal value lies outside every draw (the
+    scene's own values are not inside the varied ranges, or the output is not monotone
+    where they are)."""
+    from ..plotting.uncertainty import display_unit
+
+    s = study.summary
+    out = []
+    for name in study.main or s["output_keys"][:3]:
+        nominal = s["outputs"][name].get("nominal")
+        side = _outside(study, name, nominal)
+        if side:
+            unit, scale = display_unit(name)
+            draws = _draws(study, name)
+            edge = min(draws) if side[0] == "below" else max(draws)
+            out.append(f"uncertainty: {output_label(name)} of the nominal scene, "
+                       f"{nominal * scale:.4g} {unit}, lies {side[0]} every one of the "
+                       f"{side[1]} draws ({'lowest' if side[0] == 'below' else 'highest'} "
+                       f"{edge * scale:.4g} {unit}): the scene's own values are outside the "
+                       "[uncertainty.vary] ranges, or the output is not monotone in them")
+    return out
