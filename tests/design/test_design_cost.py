@@ -4,6 +4,9 @@ geometry key is varied (one otherwise, none for an uncharged ball), counted from
 [design] section alone; past [design] max_field_solves it is one line, before any solve."""
 from __future__ import annotations
 
+import io
+import sys
+
 import pytest
 
 import plate_model as fx
@@ -56,12 +59,25 @@ def test_a_bad_limit_names_the_key(value):
         parse_design_section(design_scene(max_field_solves=value))
 
 
-def test_the_count_is_said_before_the_work(tmp_path, capsys):
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_the_count_is_said_before_the_work_on_a_terminal(tmp_path, monkeypatch):
+    """Said where the progress bar shows (a terminal, rank 0, not --quiet); a piped
+    stderr stays silent."""
     scene = design_scene(candidates=4, excitation={"frequency_hz": [33.0],
                                                    "amplitude_mm": [1.0]})
     solver = fx.CountingSolver()
+    piped = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", piped)
     design(scene, cache_dir=tmp_path, solve=solver, progress=True)
-    err = capsys.readouterr().err
+    assert "tengfield: design:" not in piped.getvalue()
+    screen = _Terminal()
+    monkeypatch.setattr(sys, "stderr", screen)
+    design(scene, cache_dir=tmp_path, solve=solver, progress=True)
+    err = screen.getvalue()
     said = [ln for ln in err.splitlines() if ln.startswith("tengfield: design:")]
     assert said == ["tengfield: design: 4 evaluations: at most 4 field solves (~320 kB of "
                     "surrogate cache), 4 dynamics runs, ~20 kB of memory"]

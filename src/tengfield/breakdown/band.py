@@ -43,8 +43,11 @@ from .limit import Lines, _dense_minimum, evaluate
 
 #: sub-intervals per interval between two lines (the volume's quadrature in θ)
 REFINE = 4
-#: the trajectory's samples used at most (the last ones of the steady window)
-MAX_SAMPLES = 2**18
+#: the trajectory's samples used at most (the last ones of the steady window): the
+#: stress track holds samples x 2 sides x refined lines (~250) doubles per array, so
+#: 2^15 keeps it under ~0.1 GB (2^18 took a 900 s run to 1.6 GB); a steady window's
+#: seeds per second do not depend on its length
+MAX_SAMPLES = 2**15
 #: the output quantities a band is given for, and how they scale with σ
 LINEAR_QUANTITIES = ("V_oc_V", "Q_sc_C", "I_sc_A", "V_read_V")
 #: circuits whose outputs are linear in σ (a rectifier's diodes are not)

@@ -252,6 +252,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     ``solve``/``simulate`` replace the field solver and the dynamics (tests);
     ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
     from .._args import check_jobs_argument
+    from .._console import progress_shown
     from ..scene.parse import check_scene_argument
     from .._mpi import rank_of, size_of
 
@@ -259,7 +260,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     check_scene_argument("tengfield.design", scene)
     jobs = check_jobs_argument("tengfield.design", jobs, comm)
     spec = parse_design_section(scene, overrides)
-    announce_cost(scene, spec, progress and rank_of(comm) == 0)
+    announce_cost(scene, spec, progress_shown(progress, comm))
     _TABLES.clear()
     space = _Space(spec)
     rows: list[dict] = []
@@ -341,7 +342,8 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
 def announce_cost(scene, spec, say: bool) -> None:
     """Count the design's work before any of it (:func:`~tengfield.design.spec.design_cost`),
     refuse it in one line past ``[design] max_field_solves`` or the memory at hand, and
-    with ``say`` print the count (stderr) (issue #43.6)."""
+    with ``say`` (where the progress bar shows: a terminal, rank 0, not quiet) print the
+    count on stderr (issue #43.6)."""
     from ..uncertainty.cost import check_cost
     from .spec import design_cost
 

@@ -136,6 +136,7 @@ def solve_cost(scene, *, method: str = "axisymmetric", position: float | None = 
 
     size = base_mesh_size(scene) if mesh_size is None else float(mesh_size)
     degree = scene.field.degree if degree is None else int(degree)
+    # kept: the field method's name until [field] method gets its registry (issue #41)
     if method == "3d":
         dofs = _dofs_3d(scene, size, degree)
         check = _dofs_3d(scene, 2.0 * size, degree) if estimate_error else 0.0

@@ -663,7 +663,10 @@ def _instrument(data: dict, values: dict, source: str, warn: bool) -> Instrument
     circuit = data.get("circuit") if isinstance(data.get("circuit"), dict) else {}
     section = data.get("instrument") if isinstance(data.get("instrument"), dict) else None
     old_given = "parallel_capacitance_pF" in circuit
-    if old_given and warn and _launched_rank() == 0:
+    # a file of every key at its default (scene.to_dict(), report's recommended-*.toml)
+    # holds the old key at 0 (no instrument): not a user's value, no warning
+    if (old_given and warn and _launched_rank() == 0
+            and circuit["parallel_capacitance_pF"] not in (0, 0.0)):
         warnings.warn(f"{source}: [circuit] parallel_capacitance_pF is now [instrument] "
                       f"capacitance_pF: write [instrument] capacitance_pF = "
                       f"{show(circuit['parallel_capacitance_pF'])} (the old key is read until "
