@@ -7,38 +7,16 @@ import numpy as np
 import pytest
 
 import plate_model as fx
-from fit_synthetic import SHIFT, TRUE, synthetic, write_csv
+from fit_synthetic import SHIFT, TRUE, synthetic, trace_scene, write_csv
 
 from tengfield import cli
 from tengfield.fit import reference_surrogate
 from tengfield.fit._model import ForwardModel
 from tengfield.scene import load_scene
 
-SCENE = """
-[run]
-duration_s = 1.0
-settle_periods = 10
-
-[circuit]
-parallel_capacitance_pF = 100.0
-
-[fit]
-time_column = "time_ms"
-time_unit = "ms"
-
-[fit.columns.V]
-column = "V_meas"
-unit = "V"
-
-[fit.columns.Q]
-column = "Q_meas"
-unit = "nC"
-
-[fit.parameters]
-surface_charge_uC_per_m2 = {min = -100.0, max = 0.0}
-parallel_capacitance_pF = {start = 250.0, min = 0.0, max = 1000.0}
-time_shift_s = {}
-"""
+SCENE = trace_scene("surface_charge_uC_per_m2 = {min = -100.0, max = 0.0}\n"
+                    "parallel_capacitance_pF = {start = 250.0, min = 0.0, max = 1000.0}\n"
+                    "time_shift_s = {}\n")
 
 
 @pytest.fixture
