@@ -8,6 +8,14 @@ from pathlib import Path
 
 import pytest
 
+# a pytest-xdist worker ignores SIGINT, and an ignored signal is inherited across exec:
+# the Ctrl-C tests' children would never see theirs. Python's own handler here is reset
+# to the default in every child (docs/development.md)
+import signal  # noqa: E402
+
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 

@@ -179,7 +179,7 @@ def test_sweep_runs_at_the_breakdown_charge(tmp_path, run_cli, cli_env):
     grid = ("--frequency-hz", "20:30:2", "--amplitude-mm", "1.5:1.5:1")
     done = run_cli("sweep", "bd.toml", *grid, "-o", "bd", cwd=tmp_path, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
-    sigma = float(re.search(r"-sigma_max = (\S+) uC/m\^2", done.stderr).group(1))
+    sigma = float(re.search(r"-sigma_max = (\S+) [uµ]C/m\^2", done.stderr).group(1))
     assert -60 < sigma < -10
     assert (tmp_path / "bd" / "sweep.png").stat().st_size > 10_000
     table, _ = breakdown.obtain_breakdown_table(

@@ -33,7 +33,11 @@ def test_simulate_dispatches_through_models(monkeypatch):
         calls.append(duration)
         return "ran"
 
+    import tengfield.dynamics as dynamics
+
     monkeypatch.setitem(MODELS, "impact", ContactModel(fake, event_map=True))
+    # the settling check (which continues a real run) is not what is tested here
+    monkeypatch.setattr(dynamics, "_settled", lambda scene, model, result, duration: result)
     assert simulate(default_scene(), duration=0.5) == "ran" and calls == [0.5]
 
 
