@@ -27,12 +27,10 @@ def test_one_harmonic_run_equals_the_sine_run_bit_for_bit():
                  'phase_deg = [20.0]\n')
     a, b = simulate(sine), simulate(one)
     assert np.array_equal(a.gap, b.gap) and np.array_equal(a.impacts.time, b.impacts.time)
-    # the same window, the same window statistics. The regime's name is not compared: only
-    # a periodic kind (sine) is checked for settling by longer runs, a harmonics drive is
-    # not yet (issue #42), so a short window of the one may say "bounce" where the other
-    # says "chaos"
-    window = ("lower_contacts_per_period", "upper_contacts_per_period", "max_gap")
-    assert [getattr(a.regime, f) for f in window] == [getattr(b.regime, f) for f in window]
+    # the same window, the same largest gap. The regime is not compared: only a periodic
+    # kind (sine) is checked for settling by longer runs, a harmonics drive is not yet
+    # (issue #42), so the one may say "bounce, period 4" where the other says "chaos"
+    assert a.regime.max_gap == b.regime.max_gap
 
 
 def test_acceleration_amplitudes_are_displacements_over_omega_squared():
