@@ -7,24 +7,13 @@ import shutil
 import subprocess
 
 import pytest
+from band_scene import band_scene
 from test_farm_mpi import mpi_env
 
 pytestmark = [pytest.mark.slow, pytest.mark.field]
 
-SCENE = """
-[device]
-surface_charge_uC_per_m2 = {sigma}
-[circuit]
-parallel_capacitance_pF = 338
-[field]
-degree = 1
-mesh_size_mm = 1.0
-tolerance = 0.03
-[run]
-duration_s = 0.4
-settle_periods = 4
-sample_rate_hz = 5000
-"""
+def scene_text(sigma: str) -> str:
+    return band_scene(sigma, "[instrument]\ncapacitance_pF = 338\n")
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +23,7 @@ def env(tmp_path_factory, cli_env):
 
 def test_breakdown_writes_the_band_and_mpirun_agrees(tmp_path, run_cli, cli_command, env):
     scene = tmp_path / "scene.toml"
-    scene.write_text(SCENE.format(sigma="-8"))
+    scene.write_text(scene_text("-8"))
     proc = run_cli("breakdown", scene, "-o", tmp_path / "serial", env=env)
     assert proc.returncode == 0, proc.stderr
     data = json.loads((tmp_path / "serial" / "breakdown.json").read_text())
@@ -61,7 +50,7 @@ def test_breakdown_writes_the_band_and_mpirun_agrees(tmp_path, run_cli, cli_comm
 
 def test_run_at_the_breakdown_charge_prints_each_output_as_its_band(tmp_path, run_cli, env):
     scene = tmp_path / "scene.toml"
-    scene.write_text(SCENE.format(sigma='"breakdown"'))
+    scene.write_text(scene_text('"breakdown"'))
     proc = run_cli("run", scene, "-o", tmp_path / "run", env=env)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())

@@ -4,6 +4,7 @@ breakdown band."""
 import math
 
 import pytest
+from band_scene import band_scene
 
 from tengfield.errors import SceneError
 from tengfield.pipeline import run
@@ -11,18 +12,7 @@ from tengfield.scene import load_scene
 from tengfield.uncertainty import run_study
 from tengfield.uncertainty.spec import uncertainty_spec
 
-SCENE = """
-[device]
-surface_charge_uC_per_m2 = {sigma}
-[field]
-degree = 1
-mesh_size_mm = 1.0
-tolerance = 0.03
-[run]
-duration_s = 0.4
-settle_periods = 4
-sample_rate_hz = 5000
-[uncertainty]
+STUDY = """[uncertainty]
 samples = 20
 method = "monte-carlo"
 seed = 3
@@ -34,7 +24,7 @@ BAND = '"device.surface_charge_uC_per_m2" = { distribution = "breakdown-band" }'
 
 def scene_file(tmp_path, sigma="-8", vary=BAND):
     path = tmp_path / "scene.toml"
-    path.write_text(SCENE.format(sigma=sigma, vary=vary))
+    path.write_text(band_scene(sigma, STUDY.format(vary=vary)))
     return load_scene(path)
 
 
