@@ -227,7 +227,11 @@ class PipeSafeStdout:
 def _ignore_sigpipe() -> None:
     """SIGPIPE ignored again (as Python starts): PETSc, once initialised, installs its own
     handler, which turns the EPIPE of a write to a closed pipe into an MPI abort or a
-    crash instead of a BrokenPipeError. Only the main thread may set a handler."""
+    crash instead of a BrokenPipeError. Only the main thread may set a handler. Nothing
+    while Python shuts down (a wrapper collected then flushes: Python 3.13 refuses
+    imports by that time)."""
+    if sys.is_finalizing():
+        return
     import signal
     import threading
 

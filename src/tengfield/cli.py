@@ -151,7 +151,7 @@ class _PathRewriter(io.TextIOBase):
     def flush(self):
         # also called when the rewriter is collected (IOBase.__del__ -> close), possibly
         # after the stream it wraps was closed (pytest's capture, Python 3.13)
-        if not getattr(self._stream, "closed", False):
+        if not getattr(self._stream, "closed", False) and not sys.is_finalizing():
             self._stream.flush()
 
     def isatty(self):
