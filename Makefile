@@ -10,6 +10,10 @@ export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
 # the same for OpenMPI 5 (Debian 13), whose launcher (PRRTE) ignores the line above
 export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
+# one machine: Open MPI's TCP transport on the loopback only (Open MPI 5 on Debian 13 printed
+# 'Unable to find reachable pairing between local and remote interfaces' for every
+# mpirun in a container or chroot that shares the host's interfaces)
+export OMPI_MCA_btl_tcp_if_include := lo
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 

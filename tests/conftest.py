@@ -33,6 +33,7 @@ def cli_environment(**extra) -> dict:
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(SRC), env.get("PYTHONPATH")) if p)
     env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
     env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    env.setdefault("OMPI_MCA_btl_tcp_if_include", "lo")    # one machine (Makefile)
     env.update({k: str(v) for k, v in extra.items()})
     return env
 
