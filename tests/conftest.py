@@ -40,22 +40,36 @@ def cli_environment(**extra) -> dict:
 
 
 #: the folders whose tests depend on what differs between Debian releases (dolfinx 0.5 /
-#: 0.9, HDF5, numpy 1 / 2, Open MPI 4 / 5, pyvista/VTK): marked ``release`` here, run again
-#: in the Debian 13 image by ``make test-release`` (the host's ``make test`` runs them all)
+#: 0.9, HDF5, numpy 1 / 2, Open MPI 4 / 5, pyvista/VTK): their fast tests are marked
+#: ``release`` here and run again in the Debian 13 image by ``make test-release`` (the
+#: host's ``make test`` runs every test); so are the files below (the Quick start, the
+#: warm-up) and the slow tests of :data:`RELEASE_SLOW` (one per code path that differs)
 RELEASE_FOLDERS = ("field", "surrogate", "cli", "parallel")
 RELEASE_FILES = ("test_readme_quickstart.py", "test_warmup.py")
+RELEASE_SLOW = (
+    "field/test_field_3d.py::test_offset_direction_does_not_matter_in_a_round_tube",  # 3D
+    "field/test_spherical_shell_3d.py::test_the_3d_solve_on_the_axis_equals_the_axisymmetric_one",
+    "field/test_field_cli.py::test_field_command_3d_on_two_ranks_equals_serial",  # + pyvista
+    "cli/test_io_hdf5.py::test_the_papers_15_minute_record_runs_in_hdf5_with_bounded_memory",
+    "parallel/test_mpi_interrupt.py::test_an_interrupted_design_ends_every_rank_cleanly",
+    "parallel/test_mpi_interrupt.py::test_an_interrupted_uncertainty_study_leaves_no_new_directory",
+)
 
 
 def _is_release_dependent(item) -> bool:
     relative = Path(str(item.fspath)).resolve().relative_to(ROOT / "tests")
-    return (relative.parts[0] in RELEASE_FOLDERS or relative.name in RELEASE_FILES
-            or item.get_closest_marker("field") is not None)
+    if relative.name in RELEASE_FILES:
+        return True
+    if f"{relative.as_posix()}::{item.originalname}" in RELEASE_SLOW:
+        return True
+    in_folder = relative.parts[0] in RELEASE_FOLDERS or item.get_closest_marker("field")
+    return bool(in_folder) and item.get_closest_marker("slow") is None
 
 
 @pytest.hookimpl(tryfirst=True)   # before ``-m`` selects by marker
 def pytest_collection_modifyitems(config, items):
-    """Every test in :data:`RELEASE_FOLDERS`, :data:`RELEASE_FILES` or marked ``field`` is
-    marked ``release`` too. ``mpi`` tests need ``mpirun -n 2``: outside mpirun they are
+    """Every fast test in :data:`RELEASE_FOLDERS` or marked ``field``, every test in
+    :data:`RELEASE_FILES` and those of :data:`RELEASE_SLOW` are marked ``release`` too. ``mpi`` tests need ``mpirun -n 2``: outside mpirun they are
     deselected, so that a ``-m`` given on the command line (``-m "not slow"``, the fast
     tier) replacing the ``-m 'not mpi'`` of pyproject's addopts still leaves them out of a
     serial run."""
