@@ -45,7 +45,9 @@ def test_a_file_in_a_subfolder_is_read(tmp_path):
     (tmp_path / "a" / "data").mkdir()
     rows = "\n".join(f"{i * 1e-3},{1e-3 * (i % 7)}" for i in range(200))
     (tmp_path / "a" / "data" / "t.csv").write_text("time_s,z_m\n" + rows + "\n")
-    assert load_scene(path).excitation is not None
+    excitation = load_scene(path).excitation
+    np.testing.assert_allclose(excitation.times, 1e-3 * np.arange(200))
+    np.testing.assert_allclose(excitation.values, 1e-3 * (np.arange(200) % 7))
 
 
 @pytest.mark.parametrize("kind", ["directory", "fifo", "device"])
@@ -85,7 +87,9 @@ def test_a_gap_in_a_recorded_trace_is_refused_naming_the_rows(tmp_path):
 def test_a_few_missing_samples_are_interpolated(tmp_path):
     """Two missing samples (3 x the median step) are within the limit: read."""
     t = np.delete(np.arange(0, 0.5, 2e-4), [100, 101])
-    assert load_scene(write_record(tmp_path, t)).excitation is not None
+    excitation = load_scene(write_record(tmp_path, t)).excitation
+    assert len(excitation.times) == len(t)
+    assert np.diff(excitation.times).max() == pytest.approx(3 * 2e-4)
 
 
 # -- #30 item 9: the recorded CSV is read column by column, in blocks ----------------------
