@@ -27,10 +27,33 @@ def test_one_harmonic_run_equals_the_sine_run_bit_for_bit():
                  'phase_deg = [20.0]\n')
     a, b = simulate(sine), simulate(one)
     assert np.array_equal(a.gap, b.gap) and np.array_equal(a.impacts.time, b.impacts.time)
-    # the same window, the same largest gap. The regime is not compared: only a periodic
-    # kind (sine) is checked for settling by longer runs, a harmonics drive is not yet
-    # (issue #42), so the one may say "bounce, period 4" where the other says "chaos"
+    # the same window, the same largest gap, and the same regime: a harmonics drive
+    # without noise repeats each period, so it is checked for settling as the sine is
     assert a.regime.max_gap == b.regime.max_gap
+    assert (b.regime.name, b.regime.period, b.regime.settled_by_s, b.regime.checked_to_s) \
+        == (a.regime.name, a.regime.period, a.regime.settled_by_s, a.regime.checked_to_s)
+
+
+def test_whole_harmonics_are_checked_for_settling_and_others_are_not():
+    from tengfield.dynamics.excitation import repeats_each_period
+
+    whole = _scene('kind = "harmonics"\nfrequency_hz = [20.0, 40.0, 60.0]\n'
+                   'amplitude_mm = [0.6, 0.2, 0.05]\n')
+    beating = _scene('kind = "harmonics"\nfrequency_hz = [20.0, 28.2842712]\n'
+                     'amplitude_mm = [0.6, 0.2]\n')
+    noisy = _scene('kind = "harmonics"\nfrequency_hz = [20.0, 40.0]\namplitude_mm = [0.6, 0.2]\n'
+                   'band_hz = [10.0, 200.0]\nrms_acceleration_m_per_s2 = 1.0\n')
+    assert repeats_each_period(whole)
+    assert not repeats_each_period(beating) and not repeats_each_period(noisy)
+    checked = simulate(whole).regime
+    assert checked.checked_to_s >= 0.5
+    # settled: the longer run it was checked against has the same regime
+    if checked.settled_by_s is not None:
+        longer = simulate(whole.with_values(run={"duration_s": checked.checked_to_s}))
+        assert (longer.regime.name, longer.regime.period) == (checked.name, checked.period)
+    for scene in (beating, noisy):      # the window's own regime, never "not-settled"
+        regime = simulate(scene).regime
+        assert regime.name != "not-settled" and not regime.checked_to_s   # unchecked: 0
 
 
 def test_acceleration_amplitudes_are_displacements_over_omega_squared():

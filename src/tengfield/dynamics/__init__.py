@@ -62,16 +62,17 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
 def _settled(scene, model, result, duration: float):
     """``result`` with its regime checked for settling
     (:func:`tengfield.dynamics.regime.settled_regime`: the run continued to twice, four
-    times, ... its length) when the excitation is periodic and the model is the exact
+    times, ... its length) when the table motion repeats each period (a sine, or
+    harmonics of it without noise) and the model is the exact
     impact map (fast); other runs keep the regime of their own window (an aperiodic
     window of a random drive is chaos (aperiodic), never "not-settled")."""
     import dataclasses
 
     from ..errors import TengfieldError
-    from .excitation import excitation_kind
+    from .excitation import excitation_kind, repeats_each_period
     from .regime import settled_regime
 
-    if not excitation_kind(scene).periodic:
+    if not repeats_each_period(scene):
         # a random or noisy drive never settles: aperiodic motion is the drive's, and is
         # called chaos (aperiodic) whatever the window's length, as before issue #42
         if result.regime.name == "not-settled":
@@ -92,7 +93,10 @@ def _settled(scene, model, result, duration: float):
                 rate = min(scene.run.sample_rate,
                            CHECK_SAMPLES_PER_PERIOD * scene.excitation.frequency)
                 sparse.append(scene.with_values(run={"sample_rate_hz": rate}))
-            return model(sparse[0], duration=span).regime
+            longer = sparse[0]
+            if not excitation_kind(scene).periodic:   # harmonics: a table built per run
+                longer = longer.with_values(run={"duration_s": span})
+            return model(longer, duration=span).regime
         except TengfieldError:     # too many samples or events: the check stops here
             raise _Unchecked from None
 

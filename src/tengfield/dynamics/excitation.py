@@ -101,6 +101,21 @@ def excitation_kind(scene) -> ExcitationKind:
     return lookup(EXCITATIONS, scene.excitation.kind, "[excitation] kind")
 
 
+def repeats_each_period(scene) -> bool:
+    """The table motion repeats with the drive's period ``1 / frequency_hz``: a periodic
+    kind (the sine), or a harmonics drive with no noise whose components are all whole
+    multiples of its fundamental (to 1e-9). Such a run can be continued to check that
+    its regime settled (:func:`tengfield.dynamics._settled`)."""
+    kind = excitation_kind(scene)
+    if kind.periodic:
+        return True
+    exc = scene.excitation
+    if kind.recorded or exc.has_noise or not exc.harmonics:
+        return False
+    ratios = [f / exc.frequency for f, _, _ in exc.harmonics]
+    return all(round(r) >= 1 and abs(r - round(r)) <= 1e-9 * r for r in ratios)
+
+
 def table_from_scene(scene, origin: float = 0.0, *, phase: float | None = None) -> TableMotion:
     """The vertical table motion of ``scene.excitation`` on the time axis ``t - origin`` [s].
 
