@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .circuit import open_circuit_voltage  # noqa: F401 - V_OC = Q_SC / (C_T + C_p), one definition
+from .lumped import open_circuit_voltage  # noqa: F401 - V_OC = Q_SC / (C_T + C_p), one definition
 
 REFERENCES = ("floating", "grounded-lower")
 

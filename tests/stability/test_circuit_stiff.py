@@ -2,7 +2,7 @@
 
 τ = R (C_T + C_p) spans 3e-13 s … 1e6 s against a 50 ms excitation
 period: 18 orders of magnitude, from far stiffer than any explicit step to
-a pure integrator. ``circuit.load_response`` (exponential integrator) must
+a pure integrator. ``lumped.load_response`` (exponential integrator) must
 stay finite, match the exact solution of the linear ODE, converge at second
 order when the step is refined, conserve charge (Q_R = ∫ V/R dt) and
 energy (work in = dissipated + stored); the whole pipeline on real impact
@@ -17,7 +17,7 @@ from scipy.integrate import trapezoid
 from stability_checks import assert_finite, scene_with
 from plate_model import plate_model_solve
 
-from tengfield import circuit, pipeline
+from tengfield import lumped, pipeline
 
 LOADS = [1.0, 1e3, 1e6, 1e9, 1e12, 1e15]
 PARALLEL = [0.0, 1e-12, 1e-9]
@@ -42,7 +42,7 @@ def smooth_drive(n):
 
 def voltage_error(load, c_p, n):
     t, q, i, c = smooth_drive(n)
-    res = circuit.load_response(t, q, i, c, load, c_p)
+    res = lumped.load_response(t, q, i, c, load, c_p)
     exact = exact_deficit(t, load * (C_T + c_p)) / (C_T + c_p)
     return res, float(np.max(np.abs(res.voltage - exact)) / np.max(np.abs(exact)))
 
@@ -72,8 +72,8 @@ def test_exact_solution_second_order_and_conservation(load, c_p):
                                                 * np.diff(t))])
     assert np.max(np.abs(passed - fine_res.charge)) <= 1e-4 * Q0
     # energy: ∫ V dQ_SC/dt dt = ∫ V²/R dt + Δ[(C_T + C_p) V²/2] (C_T constant)
-    p_in = circuit.delivered_power(fine_res.voltage, i, np.zeros_like(t))
-    stored = circuit.stored_energy(fine_res.voltage, c, c_p)
+    p_in = lumped.delivered_power(fine_res.voltage, i, np.zeros_like(t))
+    stored = lumped.stored_energy(fine_res.voltage, c, c_p)
     throughput = trapezoid(np.abs(p_in), t)
     imbalance = trapezoid(p_in, t) - trapezoid(fine_res.power, t) - (stored[-1] - stored[0])
     assert abs(imbalance) <= 1e-5 * throughput

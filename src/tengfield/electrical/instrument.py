@@ -8,7 +8,7 @@ read ones, in this order:
 
 1. the voltage across the instrument: Q_SC / (C_T + C_p) with R_in infinite (or the
    connected circuit's voltage, ``read_column``); with a finite R_in across an open
-   terminal the instrument is the load R_in || C_p (:func:`tengfield.circuit.load_response`).
+   terminal the instrument is the load R_in || C_p (:func:`tengfield.lumped.load_response`).
    Charge and current are read in short circuit (a virtual-ground input: Q_SC, I_SC);
 2. a first-order low-pass of bandwidth f_c (τ = 1 / (2π f_c)), integrated exactly for
    an input linear between samples (:class:`FirstOrder`);
@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from .. import circuit
+from .. import lumped
 
 #: the read columns: short name -> (the waveforms column, the terminal column it reads)
 READ_COLUMNS = {"V_read": ("V_read_V", "V_read_V"), "Q_read": ("Q_read_C", "Q_sc_C"),
@@ -233,12 +233,12 @@ class Reader:
         i = np.asarray(columns["I_sc_A"], dtype=float)
         c = np.asarray(c_t, dtype=float)
         if self.previous is None:
-            response = circuit.load_response(t, q, i, c, self.instrument.input_resistance,
+            response = lumped.load_response(t, q, i, c, self.instrument.input_resistance,
                                              self.c_p)
             v = response.voltage
         else:
             t0, q0, i0, c0, charge0 = self.previous
-            response = circuit.load_response(np.r_[t0, t], np.r_[q0, q], np.r_[i0, i],
+            response = lumped.load_response(np.r_[t0, t], np.r_[q0, q], np.r_[i0, i],
                                              np.r_[c0, c], self.instrument.input_resistance,
                                              self.c_p, initial_load_charge=charge0)
             v = response.voltage[1:]

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .. import circuit
+from .. import lumped
 from .instrument import READ_COLUMNS, Reader, has_read, read_names
 
 #: ∫ y dx by the trapezoidal rule: numpy 2's name (numpy 1 has only ``trapz``, which
@@ -140,9 +140,9 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
     q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial, radial_velocity,
                                                   cells=cells)
-    v_oc = circuit.open_circuit_voltage(q_sc, c_t)
+    v_oc = lumped.open_circuit_voltage(q_sc, c_t)
     v_read = v_oc if parallel_capacitance == 0.0 else \
-        circuit.open_circuit_voltage(q_sc, c_t, parallel_capacitance)
+        lumped.open_circuit_voltage(q_sc, c_t, parallel_capacitance)
     return {"V_oc": v_oc, "V_read": v_read,
             "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
 
@@ -367,7 +367,7 @@ def terminal_extremes(scene, dynamics, curves, waveforms: dict | None = None, *,
     out: dict = {"peak_to_peak": {}, "peak": {}}
     for name, v in values.items():
         x = np.concatenate(v)
-        out["peak_to_peak"][name] = circuit.peak_to_peak(x)
+        out["peak_to_peak"][name] = lumped.peak_to_peak(x)
         out["peak"][name] = float(np.max(np.abs(x))) if x.size else 0.0
     return out
 
@@ -397,4 +397,4 @@ def extremes(values) -> tuple[float, float]:
     (:func:`extreme_times`): the numbers :func:`terminal_peaks` reports, and fit's
     ``*_pp`` / ``*_peak`` targets."""
     x = np.asarray(values, dtype=float)
-    return circuit.peak_to_peak(x), float(np.max(np.abs(x)))
+    return lumped.peak_to_peak(x), float(np.max(np.abs(x)))

@@ -2,7 +2,7 @@
 capacitor with leakage and a power-management chip with an under-voltage lockout
 (pure numerics, SI; DESIGN §6 and §8).
 
-Conventions of :mod:`tengfield.terminals` and :mod:`tengfield.circuit`: the
+Conventions of :mod:`tengfield.terminals` and :mod:`tengfield.lumped`: the
 terminal voltage of a cell is ``V = V_lower - V_upper`` [V]; with ``Q_SC(z)``
 [C] and ``C_T(z)`` [F] of the cell, ``C = C_T + C_p`` and ``Q_b`` the charge
 that has left the lower terminal through the bridge (lower -> upper outside

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import circuit, electrical
+from .. import lumped, electrical
 from .plan import (QUANTITIES, FieldSetting, Plan, Row, max_relative_deviation, peak_errors,
                    relative_error, richardson, solves_needed)
 
@@ -257,7 +257,7 @@ def _load_task(scene, curves, load, rate):
     start = time.perf_counter()
     out = electrical.steady_load(run_scene, dyn, curves)
     wall = time.perf_counter() - start
-    return out["mean_power_W"], circuit.peak_to_peak(out["V_load"][mask]), wall
+    return out["mean_power_W"], lumped.peak_to_peak(out["V_load"][mask]), wall
 
 
 def circuit_rows(plan: Plan, scene, curves, progress=None, farm_comm=None) -> list:

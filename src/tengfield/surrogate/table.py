@@ -21,7 +21,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
-from .. import circuit, terminals
+from .. import lumped, terminals
 from ..errors import TengfieldError
 from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
 
@@ -269,10 +269,10 @@ class OnAxisCurves(Curves):
         ``I_SC = (dQ_SC/dz) ż`` and ``dC_T/dt = (dC_T/dz) ż`` of the scaled cells."""
         z = np.asarray(z, dtype=float)
         z_rate = np.asarray(z_rate, dtype=float)
-        q_sc, dq_dz, c_t, dc_dz = circuit.scale_cells(
+        q_sc, dq_dz, c_t, dc_dz = lumped.scale_cells(
             self.charge(z), self.charge_derivative(z), self.capacitance(z),
             self.capacitance_derivative(z), cells)
-        return q_sc, circuit.short_circuit_current(dq_dz, z_rate), c_t, dc_dz * z_rate
+        return q_sc, lumped.short_circuit_current(dq_dz, z_rate), c_t, dc_dz * z_rate
 
 
 class TerminalCurves(OnAxisCurves):
@@ -467,7 +467,7 @@ class OffAxisCurves(Curves):
         q_rate = dq_dz * z_rate + dq_dr * r_rate
         c_rate = dc_dz * z_rate + dc_dr * r_rate
         # scale_cells is linear in each argument: pass the rates as "derivatives" at unit speed
-        q_sc, dq_dt, c_t, dc_dt = circuit.scale_cells(self.charge(z, radial), q_rate,
+        q_sc, dq_dt, c_t, dc_dt = lumped.scale_cells(self.charge(z, radial), q_rate,
                                                       self.capacitance(z, radial), c_rate, cells)
         return q_sc, dq_dt, c_t, dc_dt
 

@@ -25,7 +25,7 @@ import pkgutil
 from dataclasses import dataclass, field
 from typing import Any
 
-from ... import circuit as _circuit
+from ... import lumped
 from ..._registry import lookup
 from ..waveforms import steady_window
 
@@ -126,7 +126,7 @@ class Circuit:
         ``reference_value``, ``compared``, ``output``, ``reference``, ``label``), and
         ``load``, ``fine``, ``summary`` blocks where the kind has them."""
         mask, _ = steady_window(waves["time_s"], scaled)
-        p2p = _circuit.peak_to_peak(waves["Q_sc_C"][mask])
+        p2p = lumped.peak_to_peak(waves["Q_sc_C"][mask])
         return dict(value=p2p, reference_value=p2p, compared="Q_SC peak-to-peak [C]",
                     output=waves["Q_sc_C"], reference=waves["Q_sc_C"], label="Q_SC [C]")
 
@@ -152,8 +152,8 @@ class SpreadCircuit:
 
     def finish(self, sums, ref, columns, mask) -> dict:
         """What array.png compares; may add columns to ``columns``."""
-        p2p = _circuit.peak_to_peak(sums["Q"][mask])
-        ref_p2p = _circuit.peak_to_peak(ref["Q"][mask])
+        p2p = lumped.peak_to_peak(sums["Q"][mask])
+        ref_p2p = lumped.peak_to_peak(ref["Q"][mask])
         return dict(value=p2p, reference_value=ref_p2p, compared="Q_SC peak-to-peak [C]",
                     output=sums["Q"], reference=ref["Q"], label="Q_SC [C]")
 

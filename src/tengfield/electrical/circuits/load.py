@@ -1,7 +1,7 @@
 """``[circuit] kind = "load"``: a resistor R (``load_ohm``) across the terminal and C_p.
 
 The load ODE along a trajectory with impacts (:func:`load_waveforms`: the
-exponential integrator of :func:`tengfield.circuit.load_response` on a grid
+exponential integrator of :func:`tengfield.lumped.load_response` on a grid
 refined at every impact), its summary block (mean power, energy balance), the
 resistive V-Q loop of vq.png (also drawn beside a rectifier's) and the array's
 load (the cells' terminals in parallel into one R).
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ... import circuit
+from ... import lumped
 from ..cycle import cumulative, last_period, loop_area
 from ..waveforms import (IMPACT_OFFSET_PERIODS, _impact_states, _radial, elapsed_times,
                          impact_elapsed, sample_elapsed, scene_terminal_waveforms, steady_window,
@@ -41,7 +41,7 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
     """V_load [V], I_load [A], P_load [W] at the output samples, mean power and energy balance.
 
     The load is ``[circuit] load_ohm`` with ``cells`` and C_p of ``scene``.
-    The exponential integrator of :func:`tengfield.circuit.load_response`
+    The exponential integrator of :func:`tengfield.lumped.load_response`
     runs on a fine grid: the output times, every impact time twice (pre- and
     post-impact velocity, so the jumps of I_SC are exact) and
     :func:`relaxation_times` after the start and each impact. Energies are
@@ -63,9 +63,9 @@ def _load_waveforms(scene, dynamics, curves, window_start) -> dict:
         return no_charge(dynamics)
     c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
     grid, fine, output_index = fine_terminal(scene, dynamics, curves, load * c_min)
-    response = circuit.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
-    delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
-    stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+    response = lumped.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
+    delivered = lumped.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+    stored = lumped.stored_energy(response.voltage, fine["C_T"], c_p)
     return {"V_load": response.voltage[output_index], "I_load": response.current[output_index],
             "P_load": response.power[output_index],
             **window_energies(dynamics, grid, window_start, response.power, delivered, stored),
@@ -163,11 +163,11 @@ class LoadChunks:
         # Q_SC = 0 and Q_R(0) = -D: the integrator starts from the carried deficit D
         # exactly and returns -D as its charge (every step as load_waveforms' own)
         d0 = fine["Q_sc"][0] if self.deficit is None else self.deficit
-        response = circuit.load_response(grid, np.zeros_like(grid), fine["I_sc"], fine["C_T"],
+        response = lumped.load_response(grid, np.zeros_like(grid), fine["I_sc"], fine["C_T"],
                                          load, c_p, initial_load_charge=-d0)
         self.deficit = -response.charge[-1]
-        delivered = circuit.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
-        stored = circuit.stored_energy(response.voltage, fine["C_T"], c_p)
+        delivered = lumped.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
+        stored = lumped.stored_energy(response.voltage, fine["C_T"], c_p)
         self.add(grid, i0, response.power, delivered, stored)
         keep = output_index[:i1 - i0]
         return {"V_load_V": response.voltage[keep], "I_load_A": response.current[keep],
@@ -270,8 +270,8 @@ def load_block(scene, load: dict, waveforms, mask, **extra) -> dict:
     t = waveforms["time_s"]
     pp = load.get("peak_to_peak")          # a streamed run's, taken while it streamed
     v_pp, i_pp = (pp["V_load_V"], pp["I_load_A"]) if pp is not None else (
-        circuit.peak_to_peak(waveforms["V_load_V"][mask]),
-        circuit.peak_to_peak(waveforms["I_load_A"][mask]))
+        lumped.peak_to_peak(waveforms["V_load_V"][mask]),
+        lumped.peak_to_peak(waveforms["I_load_A"][mask]))
     return load_block_of(scene, load, v_pp, i_pp, float(t[mask][0] - t[0]), **extra)
 
 
@@ -363,8 +363,8 @@ class _SpreadLoad(SpreadCircuit):
         t = self.t
         load = self.scene.circuit.load
         c_p = self.scene.circuit.parallel_capacitance
-        resp = circuit.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
-        ref_resp = circuit.load_response(t, ref["Q"], ref["I"], ref["C"], load, c_p)
+        resp = lumped.load_response(t, sums["Q"], sums["I"], sums["C"], load, c_p)
+        ref_resp = lumped.load_response(t, ref["Q"], ref["I"], ref["C"], load, c_p)
         columns.update({"V_load_V": resp.voltage, "I_load_A": resp.current,
                         "P_load_W": resp.power})
         length = t[mask][-1] - t[mask][0]

@@ -7,7 +7,7 @@ zero at the start). With the deficit D = Q_SC - Q = C V on the terminal:
     R dQ/dt = V - Q / C_s = Q_SC / C - Q / C_eff,   1 / C_eff = 1 / C + 1 / C_s,
 
 the load's ODE (for its deficit, here Q) with C_eff for C and Q_SC / (R C) for I_SC,
-so the load's exponential integrator (:func:`tengfield.circuit.load_response`)
+so the load's exponential integrator (:func:`tengfield.lumped.load_response`)
 solves it on the load's grid (:func:`.load.fine_terminal`). C_s -> inf is the plain load; C_s -> 0
 passes no charge. Columns: ``V_load_V`` the branch's voltage (the terminal's),
 ``I_load_A`` its current, ``P_load_W`` = I^2 R, ``V_series_C_V`` = Q / C_s. Energy
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ... import circuit
+from ... import lumped
 from . import Circuit, CircuitRun, SpreadCircuit
 from .load import (Load, LoadChunks, balance_residual, fine_terminal, load_block, no_charge,
                    streamed_load, window_energies)
@@ -41,13 +41,13 @@ def series_response(times, q_sc, i_sc, c_t, load: float, c_p: float, c_s: float)
     c_eff = c * c_s / (c + c_s)
     if c_s >= DEFICIT_FORM_RATIO * float(np.max(c)):
         # dD/dt = I_SC + Q_SC / (R C_s) - D / (R C_eff), D(0) = Q_SC(0)
-        res = circuit.load_response(times, q_sc,
+        res = lumped.load_response(times, q_sc,
                                     np.asarray(i_sc, dtype=float) + q_sc / (load * c_s),
                                     c_eff, load, 0.0)
         q = res.charge
     else:
         # R dQ/dt = Q_SC / C - Q / C_eff, Q(0) = 0
-        res = circuit.load_response(times, np.zeros_like(q_sc), q_sc / (load * c), c_eff,
+        res = lumped.load_response(times, np.zeros_like(q_sc), q_sc / (load * c), c_eff,
                                     load, 0.0)
         q = res.voltage * c_eff
     voltage = (q_sc - q) / c
@@ -72,7 +72,7 @@ def series_waveforms(scene, dynamics, curves, window_start=None) -> dict:
                                       / (c_min + c.series_capacitance))
     r = series_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], c.load,
                         c.parallel_capacitance, c.series_capacitance)
-    delivered = circuit.delivered_power(r["V"], fine["I_sc"], fine["dC_T_dt"])
+    delivered = lumped.delivered_power(r["V"], fine["I_sc"], fine["dC_T_dt"])
     stored = 0.5 * r["C"] * r["V"] ** 2 + 0.5 * r["Q"] ** 2 / c.series_capacitance
     return {"V_load": r["V"][index], "I_load": r["I"][index], "P_load": r["P"][index],
             "V_series_C": r["V_Cs"][index],
@@ -127,13 +127,13 @@ class SeriesChunks(LoadChunks):
         zero = np.zeros_like(q_sc)
         if self.deficit_form:     # D = Q_SC - Q carried; series_response's first branch
             d0 = q_sc[0] if self.deficit is None else self.deficit
-            res = circuit.load_response(grid, zero, np.asarray(fine["I_sc"], dtype=float)
+            res = lumped.load_response(grid, zero, np.asarray(fine["I_sc"], dtype=float)
                                         + q_sc / (load * c_s), c_eff, load, 0.0,
                                         initial_load_charge=-d0)
             q = q_sc - (-res.charge)
         else:                     # Q on C_s carried; its second branch
             d0 = 0.0 if self.deficit is None else self.deficit
-            res = circuit.load_response(grid, zero, q_sc / (load * cap), c_eff, load, 0.0,
+            res = lumped.load_response(grid, zero, q_sc / (load * cap), c_eff, load, 0.0,
                                         initial_load_charge=-d0)
             q = res.voltage * c_eff
         self.deficit = -res.charge[-1]
@@ -141,7 +141,7 @@ class SeriesChunks(LoadChunks):
         v_cs = q / c_s
         current = (voltage - v_cs) / load
         power = current * current * load
-        delivered = circuit.delivered_power(voltage, fine["I_sc"], fine["dC_T_dt"])
+        delivered = lumped.delivered_power(voltage, fine["I_sc"], fine["dC_T_dt"])
         stored = 0.5 * cap * voltage ** 2 + 0.5 * q ** 2 / c_s
         self.add(grid, i0, power, delivered, stored)
         keep = output_index[:i1 - i0]

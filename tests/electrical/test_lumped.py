@@ -8,7 +8,7 @@ from scipy.integrate import trapezoid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tengfield import circuit
+from tengfield import lumped
 
 import plate_model as fx
 
@@ -30,15 +30,15 @@ def smooth_drive(times):
 def test_short_and_open_closed_forms():
     q = np.array([0.0, 1e-10, 2e-10])
     c = np.array([1e-12, 2e-12, 4e-12])
-    np.testing.assert_allclose(circuit.open_circuit_voltage(q, c), [0, 50, 50])
-    np.testing.assert_allclose(circuit.open_circuit_voltage(q, c, 1e-12), [0, 100 / 3, 40])
-    np.testing.assert_allclose(circuit.short_circuit_current([2.0, -1.0], [0.5, 3.0]), [1.0, -3.0])
+    np.testing.assert_allclose(lumped.open_circuit_voltage(q, c), [0, 50, 50])
+    np.testing.assert_allclose(lumped.open_circuit_voltage(q, c, 1e-12), [0, 100 / 3, 40])
+    np.testing.assert_allclose(lumped.short_circuit_current([2.0, -1.0], [0.5, 3.0]), [1.0, -3.0])
 
 
 def test_small_load_reproduces_short_circuit():
     t = np.linspace(0, 2 * PERIOD, 4001)
     q, i, c, _ = smooth_drive(t)
-    res = circuit.load_response(t, q, i, c, load_ohm=1.0)
+    res = lumped.load_response(t, q, i, c, load_ohm=1.0)
     # after the initial transient (R C = 1 ps) the load current is I_SC
     np.testing.assert_allclose(res.current[10:], i[10:], rtol=0, atol=1e-9 * np.abs(i).max())
     np.testing.assert_allclose(res.voltage[10:], 1.0 * i[10:], atol=1e-9 * np.abs(i).max())
@@ -48,8 +48,8 @@ def test_large_load_reproduces_open_circuit():
     t = np.linspace(0, 2 * PERIOD, 4001)
     q, i, c, _ = smooth_drive(t)
     cp = 3e-13
-    res = circuit.load_response(t, q, i, c, load_ohm=1e15, parallel_capacitance=cp)
-    v_open = circuit.open_circuit_voltage(q, c, cp)
+    res = lumped.load_response(t, q, i, c, load_ohm=1e15, parallel_capacitance=cp)
+    v_open = lumped.open_circuit_voltage(q, c, cp)
     # R C = 1.3e3 s >> 0.1 s: the drift is ~ t / RC ~ 1e-4
     np.testing.assert_allclose(res.voltage, v_open, rtol=0, atol=2e-4 * np.abs(v_open).max())
 
@@ -57,10 +57,10 @@ def test_large_load_reproduces_open_circuit():
 def test_loads_from_1_ohm_to_1_petaohm_stay_between_the_limits():
     t = np.linspace(0, 3 * PERIOD, 3001)
     q, i, c, _ = smooth_drive(t)
-    v_open = np.abs(circuit.open_circuit_voltage(q, c)).max()
+    v_open = np.abs(lumped.open_circuit_voltage(q, c)).max()
     amplitudes = []
     for load in np.logspace(0, 15, 16):
-        res = circuit.load_response(t, q, i, c, load_ohm=load)
+        res = lumped.load_response(t, q, i, c, load_ohm=load)
         assert np.all(np.isfinite(res.voltage))
         amplitudes.append(np.abs(res.voltage[t > PERIOD]).max())
         assert amplitudes[-1] <= 1.0001 * v_open
@@ -74,10 +74,10 @@ def test_energy_balance_with_a_load(load):
     t = np.linspace(0, 3 * PERIOD, 30001)
     q, i, c, dc = smooth_drive(t)
     cp = 2e-13
-    res = circuit.load_response(t, q, i, c, load_ohm=load, parallel_capacitance=cp)
-    delivered = trapezoid(circuit.delivered_power(res.voltage, i, dc), t)
+    res = lumped.load_response(t, q, i, c, load_ohm=load, parallel_capacitance=cp)
+    delivered = trapezoid(lumped.delivered_power(res.voltage, i, dc), t)
     dissipated = trapezoid(res.power, t)
-    stored = circuit.stored_energy(res.voltage, c, cp)
+    stored = lumped.stored_energy(res.voltage, c, cp)
     assert dissipated > 0
     assert delivered == pytest.approx(dissipated + stored[-1] - stored[0], rel=1e-6)
 
@@ -86,12 +86,12 @@ def test_load_integrator_converges_at_second_order():
     load = 5e10  # R C ~ period / 1000 .. period: neither limit
     reference_t = np.linspace(0, PERIOD, 2**14 + 1)
     q, i, c, _ = smooth_drive(reference_t)
-    reference = circuit.load_response(reference_t, q, i, c, load)
+    reference = lumped.load_response(reference_t, q, i, c, load)
     steps, errors = [], []
     for n in (64, 128, 256, 512):
         t = np.linspace(0, PERIOD, n + 1)
         q, i, c, _ = smooth_drive(t)
-        v = circuit.load_response(t, q, i, c, load).voltage
+        v = lumped.load_response(t, q, i, c, load).voltage
         exact = reference.voltage[:: 2**14 // n]
         steps.append(PERIOD / n)
         errors.append(np.abs(v - exact).max())
@@ -114,7 +114,7 @@ def test_constant_capacitance_matches_the_phasor_steady_state(log_tau):
     lag = np.arctan(wt)
     v_steady = q0 * OMEGA * load / np.hypot(1.0, wt) * np.cos(OMEGA * t - lag)
     # start on the steady state: Q_R(0) = Q_SC(0) - C V(0)
-    res = circuit.load_response(t, q, i, c, load, initial_load_charge=q[0] - C_MEAN * v_steady[0])
+    res = lumped.load_response(t, q, i, c, load, initial_load_charge=q[0] - C_MEAN * v_steady[0])
     scale = np.abs(v_steady).max()
     assert np.abs(res.voltage - v_steady).max() <= 2e-5 * scale
 
@@ -133,8 +133,8 @@ def test_cells_scale_charge_current_capacitance_not_voltage():
         np.testing.assert_allclose(five[key], 5 * one[key], rtol=1e-12)
     # N cells on R / N with N C_p: the same voltage, N times the current
     t = dyn.t
-    a = circuit.load_response(t, one["Q_sc"], one["I_sc"], one["C_T"], 1e10, 1e-13)
-    b = circuit.load_response(t, five["Q_sc"], five["I_sc"], five["C_T"], 2e9, 5e-13)
+    a = lumped.load_response(t, one["Q_sc"], one["I_sc"], one["C_T"], 1e10, 1e-13)
+    b = lumped.load_response(t, five["Q_sc"], five["I_sc"], five["C_T"], 2e9, 5e-13)
     np.testing.assert_allclose(b.voltage, a.voltage, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(b.current, 5 * a.current, rtol=1e-9, atol=1e-21)
 
@@ -142,4 +142,4 @@ def test_cells_scale_charge_current_capacitance_not_voltage():
 def test_bad_load_is_rejected():
     t = np.linspace(0, 1, 5)
     with pytest.raises(ValueError, match="load_ohm"):
-        circuit.load_response(t, t, t, t + 1, load_ohm=-1.0)
+        lumped.load_response(t, t, t, t + 1, load_ohm=-1.0)

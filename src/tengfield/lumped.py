@@ -1,4 +1,6 @@
-"""External circuit of the BB-TENG (pure numerics, SI, DESIGN §6).
+"""The device as a lumped element with its load (pure numerics, SI, DESIGN §6): the
+terminal quantities Q_SC(z), C_T(z) across R || C_p. (Was ``tengfield.circuit``; the
+circuit kinds of ``[circuit] kind`` are :mod:`tengfield.electrical.circuits`.)
 
 Conventions follow :mod:`tengfield.terminals`: the terminal voltage is
 ``V = V_lower - V_upper`` [V]; ``Q_SC(z)`` [C] is the charge that moves from the
