@@ -15,7 +15,7 @@ exit 0 with only tengfield's own lines on stderr, and write the files README's
 Beyond the block, on a small scene made from my.toml (0.3 s, coarse field): a 3D run
 with a lateral drive, a rectifier run and an ``[array]`` with spread, all figures on.
 The 3D run's (z, r) surrogate (3D solves, minutes) is pre-cached from the analytic
-(z, r) stand-in of ``tests/surrogate/test_surrogate_zr.py``; its axis part is the real one.
+(z, r) stand-in of ``tests/zr_model.py``; its axis part is the real one.
 """
 from __future__ import annotations
 
@@ -24,10 +24,9 @@ import json
 import re
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from test_run_3d_figures import assert_png
+from helpers import assert_png, quick_start_commands, quick_start_script
 
 pytestmark = pytest.mark.slow
 
@@ -36,18 +35,6 @@ ROOT = Path(__file__).resolve().parents[1]
 #: [key] value -> small value: a 0.3 s run at 5 kHz, a coarse field
 SMALL = {"duration_s": "0.3", "settle_periods": "2", "sample_rate_hz": "5000.0",
          "degree": "1", "mesh_size_mm": "1.5", "tolerance": "0.2"}
-
-
-def quick_start_commands() -> list[str]:
-    """The command lines of README's Quick start block (comments dropped)."""
-    text = (ROOT / "README.md").read_text()
-    block = re.search(r"## Quick start\s*```bash\n(.*?)```", text, re.S).group(1)
-    return [line.split("#")[0].strip() for line in block.splitlines() if line.split("#")[0].strip()]
-
-
-def quick_start_script(lines: list[str]) -> str:
-    """``lines`` as one bash script that stops at the first failing line."""
-    return "set -e\n" + "\n".join(lines) + "\n"
 
 
 def subcommand(line: str) -> str:
@@ -404,7 +391,7 @@ def small_run(work, precomputed):
 
 
 def test_run_3d_lateral(work, scene, precomputed):
-    import test_surrogate_zr as tz
+    import zr_model as tz
     from tengfield.scene import load_scene
     from tengfield.surrogate import obtain_radial_table
 

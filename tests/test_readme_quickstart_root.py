@@ -13,7 +13,7 @@ import subprocess
 
 import pytest
 
-from test_readme_quickstart import quick_start_commands, quick_start_script
+from helpers import quick_start_commands, quick_start_script
 
 ROOT_VARS = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM")
 

@@ -8,7 +8,7 @@ import subprocess
 
 import pytest
 from band_scene import band_scene
-from test_farm_mpi import mpi_env
+from helpers import mpi_env
 
 pytestmark = [pytest.mark.slow, pytest.mark.field]
 

@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from test_farm_mpi import mpi_env, needs_mpirun
+from helpers import mpi_env, needs_mpirun
 
 MAP = ["--frequency-hz", "10:20:2", "--amplitude-mm", "1:2:2", "--no-plots"]
 

@@ -88,7 +88,7 @@ def test_under_mpirun_a_failed_move_prints_no_wrote(tmp_path):
     import subprocess
     import sys
 
-    from test_farm_mpi import mpi_env
+    from helpers import mpi_env
 
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")

@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from test_farm_mpi import mpi_env as env
+from helpers import mpi_env as env
 
 SCENE = """
 [field]

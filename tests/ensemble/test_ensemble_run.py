@@ -17,7 +17,7 @@ from tengfield.ensemble import QUANTITIES, realisation_row
 from tengfield.pipeline import run_ensemble, run_one
 
 import plate_model as fx
-from test_farm_mpi import mpi_env, needs_mpirun, same_rows
+from helpers import mpi_env, needs_mpirun, same_rows
 
 RANDOM = {"kind": "random", "band_hz": [10.0, 200.0], "rms_acceleration_m_per_s2": 40.0,
           "seed": 11}

@@ -10,10 +10,7 @@ from __future__ import annotations
 
 import csv
 import math
-import os
-import shutil
 import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -24,6 +21,7 @@ from tengfield import sweep as sweep_module
 from tengfield.errors import SceneError
 
 import plate_model as fx
+from helpers import mpi_env, needs_mpirun, same_rows
 
 ROOT = Path(__file__).resolve().parents[2]
 SHORT_RUN = {"duration_s": 2.0}
@@ -32,36 +30,8 @@ AMPLITUDES = [1.0e-3, 1.5e-3]
 LOADS = [1e6, 1e9]
 
 
-def mpi_env():
-    return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
-                PYTHONPATH=os.pathsep.join(p for p in (str(ROOT / "src"),
-                                                       os.environ.get("PYTHONPATH")) if p))
-
-
-def needs_mpirun():
-    if shutil.which("mpirun") is None:
-        pytest.skip("mpirun not installed")
-
-
 def plate_table(scene):
     return surrogate.precompute(scene, comm=None, solve=fx.plate_model_solve)
-
-
-def same_rows(a: list[dict], b: list[dict]) -> bool:
-    """Row lists equal exactly (None and NaN compare equal to themselves)."""
-    if len(a) != len(b):
-        return False
-    for x, y in zip(a, b):
-        if x.keys() != y.keys():
-            return False
-        for k in x:
-            u, v = x[k], y[k]
-            if isinstance(u, float) and isinstance(v, float) and math.isnan(u) and math.isnan(v):
-                continue
-            if u != v:
-                return False
-    return True
 
 
 # ---------------------------------------------------------------------------

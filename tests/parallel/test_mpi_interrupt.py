@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from conftest import ROOT, cli_environment
-from test_farm_mpi import needs_mpirun
+from helpers import needs_mpirun
 
 pytestmark = pytest.mark.slow
 

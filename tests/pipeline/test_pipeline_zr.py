@@ -3,7 +3,7 @@ ball leaves the axis (analytic (z, r) stand-in for the field solver)."""
 import numpy as np
 
 import plate_model as fx
-import test_surrogate_zr as tz
+import zr_model as tz
 from tengfield import pipeline
 from tengfield.surrogate import AnchoredTerminalCurves, radial_motion
 

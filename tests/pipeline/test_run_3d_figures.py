@@ -2,7 +2,7 @@
 
 The figure of the surrogate used to call ``voltage(z)`` of the (z, r) curves without
 r and crash the figure process. The surrogates are pre-cached from the analytic
-(z, r) stand-in of ``tests/surrogate/test_surrogate_zr.py`` (the CLI finds them by the scene's
+(z, r) stand-in of ``tests/zr_model.py`` (the CLI finds them by the scene's
 hash and imports no dolfinx), so the test costs a dynamics run, not 3D field solves.
 """
 from __future__ import annotations
@@ -12,52 +12,10 @@ import json
 import numpy as np
 import pytest
 
-import test_surrogate_zr as tz
+from helpers import assert_png
+from zr_model import LATERAL, seed_cache
 from tengfield.scene import load_scene
-from tengfield.surrogate import (AnchoredTerminalCurves, TerminalCurves, obtain_radial_table,
-                                 obtain_table)
-
-LATERAL = """\
-[excitation]
-frequency_hz = 30.0
-amplitude_mm = 1.0
-amplitude_x_mm = 0.5
-phase_x_deg = 30.0
-
-[contact]
-model = "3d"
-
-[run]
-duration_s = 0.3
-settle_periods = 2
-sample_rate_hz = 5000.0
-
-[field]
-mesh_size_mm = 1.5
-degree = 1
-tolerance = 0.05
-"""
-
-
-def seed_cache(scene, cache):
-    """Both surrogates of ``scene`` in ``cache`` (analytic stand-in): (table, zr_table)."""
-    table, _ = obtain_table(scene, cache_dir=cache, solve=tz.zr_model_solve)
-    zr_table, _ = obtain_radial_table(scene, cache_dir=cache, solve=tz.zr_model_solve)
-    return table, zr_table
-
-
-def assert_png(path):
-    """``path`` is a non-empty PNG that decodes to an image with content."""
-    from PIL import Image
-
-    assert path.stat().st_size > 0, path
-    with Image.open(path) as image:
-        assert image.format == "PNG"
-        image.load()
-        pixels = np.asarray(image.convert("L"))
-    assert pixels.shape[0] > 100 and pixels.shape[1] > 100
-    assert pixels.std() > 1.0, f"{path} is blank"
-
+from tengfield.surrogate import AnchoredTerminalCurves, TerminalCurves
 
 @pytest.mark.slow
 def test_surrogate_figure_of_zr_curves_shows_the_visited_offsets(tmp_path):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from test_run_3d_figures import LATERAL, seed_cache
+from zr_model import LATERAL, seed_cache
 from tengfield import pipeline
 from tengfield.scene import load_scene
 

@@ -8,7 +8,7 @@ import subprocess
 
 import pytest
 
-from test_farm_mpi import mpi_env, needs_mpirun
+from helpers import mpi_env, needs_mpirun
 
 MAP = ["map", "--frequency-hz", "10:20:2", "--amplitude-mm", "1:2:2"]
 BIGGER = ["map", "--frequency-hz", "10:30:4", "--amplitude-mm", "1:2:3"]

@@ -10,44 +10,14 @@ import numpy as np
 import pytest
 
 from tengfield import electrical, surrogate, terminals
-from tengfield.field.result import PositionResult
 from tengfield.surrogate import SurrogateError
 
 h5py = surrogate._import_h5py()
 
 import plate_model as fx
+from zr_model import zr_model, zr_model_solve
 
 SOLVE_COMM = object()   # the analytic model needs no communicator
-
-
-# ---------------------------------------------------------------------------
-# an analytic stand-in with an r-dependence (test only)
-def zr_model(scene, z, r):
-    """(C_ll, C_lu, C_uu, q_l, q_u) of the plate model with a radial dependence.
-
-    Even in r (a smooth function of rho² = (r / r_max)²), steepening toward the
-    wall like a dielectric wall coming close, and mirror-symmetric in z at any r.
-    """
-    c_ll, c_lu, c_uu, q_l, q_u = fx.plate_model(scene, z)
-    stroke = scene.device.stroke
-    rho2 = (np.asarray(r, dtype=float) / surrogate.max_offset(scene.device))**2
-    wall = 0.02 * rho2 / (1.5 - rho2)            # grows fast toward rho = 1
-    z = np.asarray(z, dtype=float)
-    bulge = np.sin(np.pi * z / stroke)          # the offset matters most mid-stroke
-    mutual = -c_lu * (1.0 + 0.5 * wall)
-    c_ll = c_ll * (1.0 + wall) - c_lu * 0.5 * wall
-    c_uu = c_uu * (1.0 + wall) - c_lu * 0.5 * wall
-    share = 1.0 - 0.05 * rho2 * (0.5 + bulge)   # field lines escape to the wall
-    return c_ll, -mutual, c_uu, q_l * share, q_u * share
-
-
-def zr_model_solve(scene, position, *, comm=None, offset=0.0, method="3d", **_):
-    c_ll, c_lu, c_uu, q_l, q_u = (float(v) for v in zr_model(scene, position, offset))
-    return PositionResult(position=float(position), offset=float(offset),
-                          capacitance=[[c_ll, c_lu], [c_lu, c_uu]],
-                          induced_charge=[q_l, q_u], ball_charge=scene.device.ball_charge,
-                          dofs=1000, cells=2000, method="3d", degree=2, wall_time=0.01,
-                          relative_error_estimate=1e-6, solve_time=0.005)
 
 
 class Counting:

@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 
-from test_farm_mpi import mpi_env
+from helpers import mpi_env
 
 pytestmark = pytest.mark.slow
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import plate_model
-from test_farm_mpi import mpi_env
+from helpers import mpi_env
 from tengfield.uncertainty import run_study
 from tengfield.uncertainty.evaluation import CHUNK_EVALUATIONS, Group, chunked
 
