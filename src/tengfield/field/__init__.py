@@ -39,7 +39,8 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 #: post-process and may change without invalidating stored solves.
 SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
                   "geometry3d.py", "geometry_axisymmetric.py", "moving.py", "solver3d.py",
-                  "cells/__init__.py", "cells/hexagonal.py", "cells/shell_model.py",
+                  "cells/__init__.py", "cells/_methods.py", "cells/hexagonal.py",
+                  "cells/shell_model.py",
                   "cells/shell_model3d.py", "cells/solve.py",
                   "cells/spherical_shell.py", "cells/tube.py")
 

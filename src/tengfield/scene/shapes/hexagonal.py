@@ -22,6 +22,12 @@ NAME = "hexagonal"
 COS30 = math.cos(math.pi / 6)
 
 
+def bounding_radius_of(outer_apothem: float, half_height: float) -> float:
+    """The honeycomb's bounding radius [m]: hypot(outer corner radius, half the spacing +
+    a plate); the scene's device and the 3D cell (field/geometry3d.py) both ask this."""
+    return math.hypot(outer_apothem / COS30, half_height)
+
+
 class Hexagonal:
     """The honeycomb cell (Fig. 10)."""
     name = NAME
@@ -55,8 +61,8 @@ class Hexagonal:
     @staticmethod
     def bounding_radius(dev) -> float:
         """hypot(outer corner radius, h/2 + plate thickness) [m]."""
-        return math.hypot(dev.tube_outer_radius / COS30,
-                          0.5 * dev.plate_spacing + dev.plate_thickness)
+        return bounding_radius_of(dev.tube_outer_radius,
+                                  0.5 * dev.plate_spacing + dev.plate_thickness)
 
     @staticmethod
     def volume(dev) -> float:

@@ -16,6 +16,11 @@ from ._common import around, ball_fits, mm
 NAME = "spherical-shell"
 
 
+def bounding_radius_of(cavity_diameter: float, shell_thickness: float) -> float:
+    """The shell's outer radius a + t [m] (the device's and the field cell's)."""
+    return 0.5 * cavity_diameter + shell_thickness
+
+
 class SphericalShell:
     name = NAME
     keys = ("cavity_diameter_mm", "shell_thickness_mm", "electrode_band_mm")
@@ -57,7 +62,7 @@ class SphericalShell:
     @staticmethod
     def bounding_radius(dev) -> float:
         """The shell's outer radius a + t [m]."""
-        return 0.5 * dev.cavity_diameter + dev.shell_thickness
+        return bounding_radius_of(dev.cavity_diameter, dev.shell_thickness)
 
     @staticmethod
     def volume(dev) -> float:

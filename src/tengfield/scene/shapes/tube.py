@@ -15,6 +15,12 @@ from ._common import around, mm
 NAME = "tube"
 
 
+def bounding_radius_of(outer_radius: float, half_height: float) -> float:
+    """The tube's bounding radius [m]: hypot(outer radius, half the spacing + a plate);
+    the scene's device and the 3D cell (field/geometry3d.py) both ask this one formula."""
+    return math.hypot(outer_radius, half_height)
+
+
 class Tube:
     name = NAME
     #: the ``[device]`` keys of this shape besides the shared ones (ball, permittivities,
@@ -61,7 +67,8 @@ class Tube:
     @staticmethod
     def bounding_radius(dev) -> float:
         """Radius [m] of the smallest sphere about the centre holding the cell."""
-        return math.hypot(dev.tube_outer_radius, 0.5 * dev.plate_spacing + dev.plate_thickness)
+        return bounding_radius_of(dev.tube_outer_radius,
+                                  0.5 * dev.plate_spacing + dev.plate_thickness)
 
     @staticmethod
     def volume(dev) -> float:
