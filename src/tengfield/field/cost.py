@@ -21,6 +21,7 @@ import os
 from dataclasses import dataclass
 
 from ..errors import FieldError
+from ..scene.shapes.methods import field_method
 
 #: the process before its first mesh: Python, dolfinx, PETSc, gmsh (measured 0.25-0.30 GB)
 BASE_MEMORY_BYTES = 0.25e9
@@ -73,7 +74,7 @@ def memory_limit_bytes(scene) -> float:
     return limit * 1e9 if limit > 0 else MACHINE_SHARE * machine_memory_bytes()
 
 
-def _shell_cells(lay) -> float:
+def shell_cells(lay) -> float:
     """Triangles of the spherical shell's (r, z) mesh (:mod:`.cells.shell_model`'s size
     fields, as :func:`~.geometry_axisymmetric.estimated_cells` does the tube's)."""
     h = lay.mesh_size
@@ -101,20 +102,11 @@ def _shell_cells(lay) -> float:
 
 
 def _axisymmetric_dofs(scene, position: float, mesh_size: float, grading_size=None) -> float:
-    from . import geometry_axisymmetric as geometry
     from .cells import cell_of
 
     degree = scene.field.degree
-    cell = cell_of(scene)
-    if scene.device.shape == "spherical-shell":
-        lay = cell.axisymmetric_layout(position, mesh_size=mesh_size, degree=degree,
-                                        far_field=scene.field.far_field,
-                                        domain_radius=scene.field.domain_radius,
-                                        grading_size=grading_size)
-        cells = _shell_cells(lay)
-    else:
-        lay = geometry.layout(scene, position, mesh_size=mesh_size, grading_size=grading_size)
-        cells = geometry.estimated_cells(lay)
+    cells = cell_of(scene).estimated_axisymmetric_cells(scene, position, mesh_size,
+                                                        grading_size)
     return cells * (0.5 + (1.5 if degree >= 2 else 0.0))
 
 
@@ -136,8 +128,7 @@ def solve_cost(scene, *, method: str = "axisymmetric", position: float | None = 
 
     size = base_mesh_size(scene) if mesh_size is None else float(mesh_size)
     degree = scene.field.degree if degree is None else int(degree)
-    # kept: the field method's name until [field] method gets its registry (issue #41)
-    if method == "3d":
+    if field_method(method).dimension == 3:
         dofs = _dofs_3d(scene, size, degree)
         check = _dofs_3d(scene, 2.0 * size, degree) if estimate_error else 0.0
         per_dof, rate = BYTES_PER_DOF_3D, SECONDS_PER_DOF_3D

@@ -22,6 +22,7 @@ import numpy as np
 from ...errors import FieldError
 from ...scene.limits import mesh_features
 from ._methods import solve_with
+from .tube import Tube
 
 #: unit normals of the hexagon's six flats (two parallel to x)
 _NORMALS = np.array([[math.cos(math.pi / 2 + k * math.pi / 3),
@@ -135,6 +136,10 @@ class Hexagonal:
 
     def axisymmetric_layout(self, position: float, **settings):
         raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
+
+    #: the cost estimate's (r, z) count is the tube's rule on the same keys (a 3D cell
+    #: has no (r, z) model; asked only for an explicit "axisymmetric" estimate)
+    estimated_axisymmetric_cells = Tube.estimated_axisymmetric_cells
 
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")

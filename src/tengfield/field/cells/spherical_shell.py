@@ -318,6 +318,16 @@ class SphericalShell:
                       domain_radius=domain_radius, far_field=far_field,
                       grading_size=grading_size)
 
+    def estimated_axisymmetric_cells(self, scene, position: float, mesh_size: float,
+                                     grading_size: float | None = None) -> float:
+        """Triangles of the (r, z) mesh before meshing (:mod:`tengfield.field.cost`)."""
+        from ..cost import shell_cells
+        lay = self.axisymmetric_layout(position, mesh_size=mesh_size, degree=scene.field.degree,
+                                       far_field=scene.field.far_field,
+                                       domain_radius=scene.field.domain_radius,
+                                       grading_size=grading_size)
+        return shell_cells(lay)
+
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         from .shell_model import build_model
         return build_model(gmsh, layout, geometry_order=geometry_order)

@@ -128,6 +128,13 @@ class Tube:
                       domain_radius=domain_radius, far_field=far_field,
                       grading_size=grading_size)
 
+    def estimated_axisymmetric_cells(self, scene, position: float, mesh_size: float,
+                                     grading_size: float | None = None) -> float:
+        """Triangles of the (r, z) mesh before meshing (:mod:`tengfield.field.cost`)."""
+        from ..geometry_axisymmetric import estimated_cells, layout
+        return estimated_cells(layout(scene, position, mesh_size=mesh_size,
+                                      grading_size=grading_size))
+
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         from ..geometry_axisymmetric import build_model
         return build_model(gmsh, layout, geometry_order=geometry_order)

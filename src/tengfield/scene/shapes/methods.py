@@ -19,13 +19,25 @@ class FieldMethod:
     name: str
     #: only a ball on the axis (offset 0): the (r, z) half-plane's solve
     on_axis_only: bool
+    #: the mesh's dimension: 2 (the (r, z) half-plane) or 3 (the volume)
+    dimension: int
+    #: small enough to solve (and draw) on one rank, the outcome shared
+    #: (``tengfield field``); else collective over the communicator
+    serial: bool
 
 
 #: ``[field] method`` -> its entry (the scene file's names)
-FIELD_METHODS = {"axisymmetric": FieldMethod("axisymmetric", on_axis_only=True),
-                 "3d": FieldMethod("3d", on_axis_only=False)}
+FIELD_METHODS = {"axisymmetric": FieldMethod("axisymmetric", on_axis_only=True, dimension=2,
+                                             serial=True),
+                 "3d": FieldMethod("3d", on_axis_only=False, dimension=3, serial=False)}
 
 AUTO = "auto"
+
+
+def field_method(method: str) -> FieldMethod:
+    """The entry of a resolved ``method`` (not "auto"); ``SceneError`` naming the
+    allowed ones."""
+    return lookup(FIELD_METHODS, method, "[field] method")
 
 
 def takes(method: str, offset: float) -> bool:
