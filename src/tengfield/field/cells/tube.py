@@ -56,9 +56,22 @@ class Tube:
     def device(self):
         return self.scene.device
 
+    # what solve_cell_position asks every cell (the ball and the walls' permittivities)
+    @property
+    def ball_diameter(self) -> float:
+        return self.device.ball_diameter
+
     @property
     def ball_radius(self) -> float:
         return self.device.ball_radius
+
+    @property
+    def ball_permittivity(self) -> float:
+        return self.device.ball_permittivity
+
+    @property
+    def wall_permittivity(self) -> float:
+        return self.device.wall_permittivity
 
     @property
     def stroke(self) -> float:
