@@ -16,7 +16,6 @@ Importing this module loads neither dolfinx nor gmsh.
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
 
@@ -72,33 +71,6 @@ def memory_limit_bytes(scene) -> float:
     """``[field] max_memory_gb`` in bytes; 0: :data:`MACHINE_SHARE` of the machine."""
     limit = float(getattr(scene.field, "max_memory_gb", 0.0) or 0.0)
     return limit * 1e9 if limit > 0 else MACHINE_SHARE * machine_memory_bytes()
-
-
-def shell_cells(lay) -> float:
-    """Triangles of the spherical shell's (r, z) mesh (:mod:`.cells.shell_model`'s size
-    fields, as :func:`~.geometry_axisymmetric.estimated_cells` does the tube's)."""
-    h = lay.mesh_size
-    area = 0.433 * h * h
-    B, R = lay.info["bulk_length_m"], lay.domain_radius
-    bulk = 0.5 * math.pi * B * B / area * (1.0 + 2.0 * math.log(max(R / B, 1.0)))
-    L, mu = lay.info["rim_reach_m"], lay.grading_exponent
-    rims = 2 * math.pi * L * L / (2.0 * mu * area)
-    ball = math.pi * lay.ball_radius / (0.433 * 0.3 * 0.4 * h)
-    a = lay.cavity_radius
-    surfaces = math.pi * (a + (lay.outer_radius if lay.walls else 0.0))
-    interfaces = 2.0 * surfaces / (0.433 * 0.3 * h)
-    c = h / 1e-3
-    kappa = max(0.5 * (1.0 / lay.ball_radius - 1.0 / a), 1e-12)
-    gaps = 0.0
-    for gap in (lay.gap_lower, lay.gap_upper):
-        # the gap rule holds in the gap only (width w = g + κρ², size c w): a strip of
-        # ∫ dρ / (0.433 c² w(ρ)) triangles out to where c w reaches h or the ball ends
-        if 0.0 < gap < 2.0 * h and gap < h / c:
-            reach = min(lay.ball_radius, math.sqrt((h / c - gap) / kappa))
-            root = math.sqrt(gap * kappa)
-            gaps += math.atan(reach * kappa / root) / (root * 0.433 * c * c)
-    image = bulk * 0.5 if lay.kelvin else 0.0
-    return bulk + rims + ball + interfaces + gaps + image
 
 
 def _axisymmetric_dofs(scene, position: float, mesh_size: float, grading_size=None) -> float:

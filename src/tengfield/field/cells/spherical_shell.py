@@ -321,7 +321,7 @@ class SphericalShell:
     def estimated_axisymmetric_cells(self, scene, position: float, mesh_size: float,
                                      grading_size: float | None = None) -> float:
         """Triangles of the (r, z) mesh before meshing (:mod:`tengfield.field.cost`)."""
-        from ..cost import shell_cells
+        from .shell_model import shell_cells
         lay = self.axisymmetric_layout(position, mesh_size=mesh_size, degree=scene.field.degree,
                                        far_field=scene.field.far_field,
                                        domain_radius=scene.field.domain_radius,
