@@ -21,6 +21,7 @@ import numpy as np
 
 from ...errors import FieldError
 from ...scene.limits import mesh_features
+from ...scene.shapes import hexagonal as hexagonal_shape
 from ._methods import solve_with
 from .tube import Tube
 
@@ -145,10 +146,6 @@ class Hexagonal:
         raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
 
     def outline(self) -> list[np.ndarray]:
-        """(r, z) polylines of the section through two flats: electrodes, bore, outside."""
-        dev = self.scene.device
-        h, t = 0.5 * dev.plate_spacing, dev.plate_thickness
-        ri, ro = dev.tube_inner_radius, dev.tube_outer_radius
-        return [np.array([[0.0, -h], [ri, -h]]), np.array([[0.0, h], [ri, h]]),
-                np.array([[0.0, -h - t], [ro, -h - t], [ro, h + t], [0.0, h + t]]),
-                np.array([[0.0, -h], [ri, -h], [ri, h], [0.0, h]])]
+        """(r, z) polylines of the section through two flats: electrodes, bore, outside
+        (:mod:`tengfield.scene.shapes.hexagonal`)."""
+        return [np.array(line) for line in hexagonal_shape.Hexagonal.outline(self.scene.device)]

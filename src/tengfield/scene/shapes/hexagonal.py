@@ -75,6 +75,16 @@ class Hexagonal:
         return dev.tube_inner_radius - dev.ball_radius
 
     @staticmethod
+    def outline(dev) -> list[tuple]:
+        """(r, z) polylines [m] of the section through two flats: the electrodes (over the
+        whole bore), the outside, the bore."""
+        h, t = 0.5 * dev.plate_spacing, dev.plate_thickness
+        ri, ro = dev.tube_inner_radius, dev.tube_outer_radius
+        return [((0.0, -h), (ri, -h)), ((0.0, h), (ri, h)),
+                ((0.0, -h - t), (ro, -h - t), (ro, h + t), (0.0, h + t)),
+                ((0.0, -h), (ri, -h), (ri, h), (0.0, h))]
+
+    @staticmethod
     def longest_path(dev) -> float:
         """Hypot of the plate spacing and the bore's corner-to-corner width."""
         return math.hypot(dev.plate_spacing, 2.0 * dev.tube_inner_radius / COS30)
