@@ -1,5 +1,5 @@
 """``tengfield design`` over a spherical shell (issue #32): the varied cavity and ball
-through the shape's rules (scene/shapes.py), the one-line refusals, impossible
+through the shape's rules (scene/shapes/), the one-line refusals, impossible
 candidates skipped with their reason, and the CLI end to end (small mesh, figures on)."""
 from __future__ import annotations
 

@@ -8,6 +8,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from ..scene.shapes.methods import field_method
 from ._common import scene_command
 from ._ranges import number_text
 
@@ -86,8 +87,8 @@ def _run(args) -> int:
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     plot = not args.no_plot
-    # kept: the resolved solver picks how this command solves and draws (rank 0 or all)
-    if method == "axisymmetric":
+    serial = field_method(method).serial   # solved and drawn on rank 0, or by all ranks
+    if serial:
         # a small problem: solved and drawn on rank 0, the outcome shared
         result, potentials = _on_rank_zero(
             comm, lambda: _axisymmetric(scene, position, reference, out, plot=plot))
@@ -105,7 +106,7 @@ def _run(args) -> int:
         written = [out / "field.json"]
         if plot:
             written += [out / "potential.xdmf"]
-            if method == "axisymmetric" or comm.size == 1:   # kept: field.png of one rank
+            if serial or comm.size == 1:   # field.png of one rank
                 written.append(out / "field.png")
         print("wrote " + ", ".join(str(w) for w in written))
     return 0

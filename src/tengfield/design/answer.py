@@ -123,7 +123,7 @@ def _load(result, row) -> dict:
 
 def derived_length(result, device: dict) -> dict:
     """The length the answer states beside the varied keys, by the shape's rule
-    (``scene/shapes.py``): the tube's plate spacing h = stroke + ball diameter, the
+    (``scene/shapes/``): the tube's plate spacing h = stroke + ball diameter, the
     shell's stroke = cavity - ball diameter -> {"key", "words", "value_mm"}."""
     from ..scene.shapes import shape_of
 

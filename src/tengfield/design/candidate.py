@@ -46,7 +46,7 @@ def design_field_settings(ball_diameter_mm: float) -> dict:
 def followed_geometry(base_device: dict, values: dict) -> dict:
     """``[device]`` keys that follow the varied ones (``geometry = "follow"``), file units.
 
-    The rule is the shape's (``base_device["shape"]``; ``scene/shapes.py``): the tube keeps
+    The rule is the shape's (``base_device["shape"]``; ``scene/shapes/``): the tube keeps
     its radial clearance (bore - ball radius), wall and electrode inset, so a bigger ball
     gets a bigger bore; the spherical shell keeps its stroke (cavity - ball), so a bigger
     ball gets a bigger cavity. A key that is itself varied never follows.

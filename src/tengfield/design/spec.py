@@ -373,7 +373,7 @@ def _band(raw, scene) -> list[tuple[float, float]]:
 
 
 #: the default study of a scene without [design] (its ranges: each shape's
-#: ``default_design_vary`` in scene/shapes.py, fractions of the scene's values)
+#: ``default_design_vary`` in scene/shapes/, fractions of the scene's values)
 DEFAULT_CANDIDATES = 24
 
 

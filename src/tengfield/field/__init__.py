@@ -39,7 +39,8 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 #: post-process and may change without invalidating stored solves.
 SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
                   "geometry3d.py", "geometry_axisymmetric.py", "moving.py", "solver3d.py",
-                  "cells/__init__.py", "cells/hexagonal.py", "cells/shell_model.py",
+                  "cells/__init__.py", "cells/_methods.py", "cells/hexagonal.py",
+                  "cells/shell_model.py",
                   "cells/shell_model3d.py", "cells/solve.py",
                   "cells/spherical_shell.py", "cells/tube.py")
 
@@ -80,16 +81,17 @@ def resolve_method(scene, method: str | None = None, offset: float = 0.0) -> str
     """"axisymmetric" or "3d": ``None`` takes ``[field] method``; "auto" picks
     the axisymmetric solver whenever the ball is on the axis (``offset == 0``) of an
     axisymmetric cell, 3D otherwise (``shape = "hexagonal"``: a 3D cell)."""
+    from ..scene.shapes import methods, shape_of
+
     method = scene.field.method if method is None else method
-    if method == "auto":
-        return "axisymmetric" if offset == 0.0 and scene.device.shape != "hexagonal" \
-            else "3d"
-    if method == "axisymmetric" and offset != 0.0:
-        raise FieldError(f"method = 'axisymmetric' needs offset_mm = 0 (got {offset * 1e3:g}); "
-                         "use method = '3d' or 'auto' for an off-axis ball")
-    if method not in ("axisymmetric", "3d"):
+    if method == methods.AUTO:   # kept: "auto" is the one name that is not a method
+        return methods.resolve(shape_of(scene.device.shape).field_methods, method, offset)
+    if method not in methods.FIELD_METHODS:
         raise FieldError(f"method = {method!r} is not allowed: choose one of "
-                         "'auto', 'axisymmetric', '3d'")
+                         + ", ".join(map(repr, (methods.AUTO, *methods.FIELD_METHODS))))
+    if not methods.takes(method, offset):
+        raise FieldError(f"method = {method!r} needs offset_mm = 0 (got {offset * 1e3:g}); "
+                         "use method = '3d' or 'auto' for an off-axis ball")
     return method
 
 

@@ -16,11 +16,11 @@ Importing this module loads neither dolfinx nor gmsh.
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
 
 from ..errors import FieldError
+from ..scene.shapes.methods import field_method
 
 #: the process before its first mesh: Python, dolfinx, PETSc, gmsh (measured 0.25-0.30 GB)
 BASE_MEMORY_BYTES = 0.25e9
@@ -73,48 +73,12 @@ def memory_limit_bytes(scene) -> float:
     return limit * 1e9 if limit > 0 else MACHINE_SHARE * machine_memory_bytes()
 
 
-def _shell_cells(lay) -> float:
-    """Triangles of the spherical shell's (r, z) mesh (:mod:`.cells.shell_model`'s size
-    fields, as :func:`~.geometry_axisymmetric.estimated_cells` does the tube's)."""
-    h = lay.mesh_size
-    area = 0.433 * h * h
-    B, R = lay.info["bulk_length_m"], lay.domain_radius
-    bulk = 0.5 * math.pi * B * B / area * (1.0 + 2.0 * math.log(max(R / B, 1.0)))
-    L, mu = lay.info["rim_reach_m"], lay.grading_exponent
-    rims = 2 * math.pi * L * L / (2.0 * mu * area)
-    ball = math.pi * lay.ball_radius / (0.433 * 0.3 * 0.4 * h)
-    a = lay.cavity_radius
-    surfaces = math.pi * (a + (lay.outer_radius if lay.walls else 0.0))
-    interfaces = 2.0 * surfaces / (0.433 * 0.3 * h)
-    c = h / 1e-3
-    kappa = max(0.5 * (1.0 / lay.ball_radius - 1.0 / a), 1e-12)
-    gaps = 0.0
-    for gap in (lay.gap_lower, lay.gap_upper):
-        # the gap rule holds in the gap only (width w = g + κρ², size c w): a strip of
-        # ∫ dρ / (0.433 c² w(ρ)) triangles out to where c w reaches h or the ball ends
-        if 0.0 < gap < 2.0 * h and gap < h / c:
-            reach = min(lay.ball_radius, math.sqrt((h / c - gap) / kappa))
-            root = math.sqrt(gap * kappa)
-            gaps += math.atan(reach * kappa / root) / (root * 0.433 * c * c)
-    image = bulk * 0.5 if lay.kelvin else 0.0
-    return bulk + rims + ball + interfaces + gaps + image
-
-
 def _axisymmetric_dofs(scene, position: float, mesh_size: float, grading_size=None) -> float:
-    from . import geometry_axisymmetric as geometry
     from .cells import cell_of
 
     degree = scene.field.degree
-    cell = cell_of(scene)
-    if scene.device.shape == "spherical-shell":
-        lay = cell.axisymmetric_layout(position, mesh_size=mesh_size, degree=degree,
-                                        far_field=scene.field.far_field,
-                                        domain_radius=scene.field.domain_radius,
-                                        grading_size=grading_size)
-        cells = _shell_cells(lay)
-    else:
-        lay = geometry.layout(scene, position, mesh_size=mesh_size, grading_size=grading_size)
-        cells = geometry.estimated_cells(lay)
+    cells = cell_of(scene).estimated_axisymmetric_cells(scene, position, mesh_size,
+                                                        grading_size)
     return cells * (0.5 + (1.5 if degree >= 2 else 0.0))
 
 
@@ -136,8 +100,7 @@ def solve_cost(scene, *, method: str = "axisymmetric", position: float | None = 
 
     size = base_mesh_size(scene) if mesh_size is None else float(mesh_size)
     degree = scene.field.degree if degree is None else int(degree)
-    # kept: the field method's name until [field] method gets its registry (issue #41)
-    if method == "3d":
+    if field_method(method).dimension == 3:
         dofs = _dofs_3d(scene, size, degree)
         check = _dofs_3d(scene, 2.0 * size, degree) if estimate_error else 0.0
         per_dof, rate = BYTES_PER_DOF_3D, SECONDS_PER_DOF_3D

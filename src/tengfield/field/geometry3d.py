@@ -45,6 +45,8 @@ import numpy as np
 
 from ..errors import FieldError, show_number
 from ..scene.shapes import enclosure
+from ..scene.shapes import hexagonal as hexagonal_shape
+from ..scene.shapes import tube as tube_shape
 
 # The z → 0 / z → Δh rule is :mod:`tengfield.field.contact` (one rule for both
 # solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``.
@@ -161,7 +163,8 @@ class CylindricalCell(_PlateCell):
     @property
     def bounding_radius(self) -> float:
         """Radius of the smallest origin-centred sphere holding the device [m]."""
-        return math.hypot(self.tube_outer_radius, 0.5 * self.electrode_spacing + self.plate_thickness)
+        return tube_shape.bounding_radius_of(self.tube_outer_radius,
+                                             0.5 * self.electrode_spacing + self.plate_thickness)
 
     @property
     def max_offset(self) -> float:
@@ -226,8 +229,8 @@ class HexagonalCell(_PlateCell):
 
     @property
     def bounding_radius(self) -> float:
-        corner = self.outer_apothem / math.cos(math.pi / 6)
-        return math.hypot(corner, 0.5 * self.electrode_spacing + self.plate_thickness)
+        return hexagonal_shape.bounding_radius_of(
+            self.outer_apothem, 0.5 * self.electrode_spacing + self.plate_thickness)
 
     @property
     def max_offset(self) -> float:

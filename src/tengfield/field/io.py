@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 
+from ..scene.shapes.methods import field_method
+
 
 def field_json(result, reference: str, potentials=None) -> dict:
     """The content of ``field.json``: :meth:`PositionResult.to_json` plus, when
@@ -40,7 +42,7 @@ def write_xdmf(path, solution, potentials=None) -> None:
     """
     from . import _dolfinx as dx_api
 
-    if solution.method == "3d":   # kept: the field package's own solution types
+    if field_method(solution.method).dimension == 3:
         dx_api.write_xdmf(path, solution.mesh, list(solution.weighting), solution.mesh.comm)
         return
     from mpi4py import MPI

@@ -76,6 +76,7 @@ def open_circuit(scene, position: float, *, comm, reference: str | None = None,
     computed). ``method``, ``offset`` and ``overrides`` as in
     :func:`tengfield.field.solve_position`.
     """
+    from ..scene.shapes.methods import field_method
     from . import FIELD_OVERRIDES, resolve_method, solve_position
 
     reference = reference or scene.circuit.reference
@@ -83,7 +84,7 @@ def open_circuit(scene, position: float, *, comm, reference: str | None = None,
     field_keys = {k: v for k, v in overrides.items() if k in FIELD_OVERRIDES}
     options = dict(overrides)
     chosen = resolve_method(scene, method, scene.field.ball_offset if offset is None else offset)
-    if keep_solution and chosen == "axisymmetric":
+    if keep_solution and field_method(chosen).dimension == 2:   # the (r, z) solver's σ solve
         options["source_solve"] = True
     result = solve_position(scene, position, comm=comm, method=chosen, offset=offset,
                             keep_solution=keep_solution, **options)

@@ -19,8 +19,10 @@ import numpy as np
 
 from .. import terminals
 from .._json import jsonable as _jsonable
+from ..scene.shapes.methods import FIELD_METHODS
 
-METHODS = ("axisymmetric", "3d")
+#: the resolved ``[field] method`` names (scene/shapes/methods.py's table)
+METHODS = tuple(FIELD_METHODS)
 
 
 @dataclass

@@ -14,7 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import lumped, electrical
+from .. import electrical, lumped
+from ..scene.shapes.methods import field_method
 from .plan import (QUANTITIES, FieldSetting, Plan, Row, max_relative_deviation, peak_errors,
                    relative_error, richardson, solves_needed)
 
@@ -72,8 +73,7 @@ class _Solver:
             if key not in self.cache and key not in todo:
                 todo[key] = (setting, float(z))
         # dearest first (3D, then the most cells x degree^2), so the dynamic schedule balances;
-        # kept: a report setting's solver name (not a scene's choice), only a cost estimate
-        items = sorted(todo.values(), key=lambda p: (p[0].method == "3d",
+        items = sorted(todo.values(), key=lambda p: (field_method(p[0].method).dimension,
                                                      p[0].degree**2 / p[0].mesh_size_mm**2),
                        reverse=True)
         progress = self.progress if rank_of(farm_comm) == 0 else None

@@ -13,6 +13,7 @@ import math
 from ..errors import SceneError
 from ..errors import show_number  # noqa: F401 - its home is the bottom layer (errors.py)
 from .shapes import shape_mesh_features, shape_of
+from .shapes.methods import AUTO, FIELD_METHODS, resolve, takes
 
 
 # -- limits of work, checked at load --
@@ -341,8 +342,8 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
             "is out of range: allowed "
             f"[0, {max_offset * 1e3:g}] mm (the ball must stay inside the "
             f"{shape_of(dev.shape).enclosure})")
-    if fld.ball_offset > 0 and fld.method == "axisymmetric":
-        problems.append("[field] method = 'axisymmetric' needs ball_offset_mm = 0; "
+    if fld.method in FIELD_METHODS and not takes(fld.method, fld.ball_offset):
+        problems.append(f"[field] method = {fld.method!r} needs ball_offset_mm = 0; "
                         "use method = '3d' or 'auto' for an off-axis ball")
     how = "" if "domain_radius_mm" in explicit else " ('auto')"
     lowest = DOMAIN_MIN_FACTOR * (b + fld.ball_offset)
@@ -389,9 +390,8 @@ def field_problems(dev, fld, *, explicit: set[str]) -> list[str]:
             f"smallest meshed gap, {MIN_GAP_FRACTION:g} x that, must be >= "
             f"{MIN_MESHED_LENGTH * 1e6:g} µm for gmsh's geometry); dynamics-only runs accept it")
     method = fld.method
-    if method == "auto":   # as tengfield.field.resolve_method: a 3D cell is solved in 3D
-        method = "axisymmetric" if fld.ball_offset == 0.0 and dev.shape != "hexagonal" \
-            else "3d"
+    if method == AUTO:   # kept: as tengfield.field.resolve_method, through the shape's table
+        method = resolve(shape_of(dev.shape).field_methods, method, fld.ball_offset)
     finest = MESH_MIN_FRACTION[method] * feature
     # the size the mesher uses: as written, or the default scaled by the smallest feature
     mesh_size = fld.mesh_size if "mesh_size_mm" in explicit \

@@ -56,7 +56,7 @@ class Device:
     # 3D motion: gravity tilted by ``tilt`` from -z toward azimuth ``tilt_azimuth`` [rad]
     tilt: float = 0.0
     tilt_azimuth: float = 0.0
-    # the cell's shape and the spherical shell's keys (scene/shapes.py) [m]
+    # the cell's shape and the spherical shell's keys (scene/shapes/) [m]
     shape: str = "tube"
     cavity_diameter: float = 20e-3
     shell_thickness: float = 2e-3
@@ -92,7 +92,7 @@ class Device:
     @property
     def longest_path(self) -> float:
         """The longest discharge path [m] between the ball and an electrode (Paschen's
-        low-pressure bound; each shape's own, scene/shapes.py)."""
+        low-pressure bound; each shape's own, scene/shapes/)."""
         return shape_of(self.shape).longest_path(self)
 
     @property

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 from .._mpi import launched_rank as _launched_rank
 from ..errors import SceneError
 from .limits import MAX_HARMONICS
+from .shapes import SHAPES
 
 #: Bumped whenever the field solver changes what it computes for the same
 #: inputs; part of the surrogate cache hash. 2: the ball's surface charge left the
@@ -40,9 +41,10 @@ class Key(NamedTuple):
 
 _INF = math.inf
 
-#: ``[device] shape``: the cells a scene can name (``tengfield.field.cells.CELLS`` holds
-#: their geometry; ``tests/field/test_shell_scene.py`` holds the two equal)
-CELL_SHAPES = ("tube", "hexagonal", "spherical-shell")
+#: ``[device] shape``: the cells a scene can name, the shape registry's (scene/shapes/;
+#: ``tengfield.field.cells.CELLS`` holds their field models, tests/field/
+#: test_shape_registry.py holds the two equal)
+CELL_SHAPES = tuple(SHAPES)
 
 
 def _rng(lo=-_INF, hi=_INF, lo_open=False, hi_open=False, why=""):
@@ -96,13 +98,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # 3D motion (issue #13): gravity tilted by tilt from -z toward tilt_azimuth
         "tilt_deg": Key("tilt", float, 0.0, _DEG, _rng(0.0, 180.0)),
         "tilt_azimuth_deg": Key("tilt_azimuth", float, 0.0, _DEG, _ANGLE),
-        # the cell's shape (issue #32; scene/shapes.py, field/cells/): "hexagonal" reads the
+        # the cell's shape (issue #32; scene/shapes/, field/cells/): "hexagonal" reads the
         # tube's keys as the hexagon's apothems (3D solves). In the field hash only when
         # not "tube" (a tube's hash is the one before the key existed)
         "shape": Key("shape", str, "tube", None, _choice(*CELL_SHAPES), field=True),
         # shape = "spherical-shell": the cavity (its stroke is cavity - ball diameter), the
         # shell behind the electrodes (wall_permittivity), the insulating band at the
-        # equator. In the field hash of a shell only (scene/shapes.py SHAPE_KEYS)
+        # equator. In the field hash of a shell only (scene/shapes/ SHAPE_KEYS)
         "cavity_diameter_mm": Key("cavity_diameter", float, 20.0, 1e-3, _LENGTH),
         "shell_thickness_mm": Key("shell_thickness", float, 2.0, 1e-3, _LENGTH),
         "electrode_band_mm": Key("electrode_band", float, 2.0, 1e-3, _LENGTH),

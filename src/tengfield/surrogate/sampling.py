@@ -106,7 +106,7 @@ def contact_first_order(positions: np.ndarray, stroke: float, estimated=()) -> n
 # sampling in r (the (z, r) surrogate)
 def max_offset(device) -> float:
     """Largest radial offset of the ball centre [m], the (z, r) table's last offset: the
-    cell's (``scene/shapes.py``): tube inner radius − ball radius for the tube, the
+    cell's (``scene/shapes/``): tube inner radius − ball radius for the tube, the
     centre's sphere radius a − d/2 for the spherical shell."""
     from ..scene.shapes import shape_of
 
@@ -114,7 +114,7 @@ def max_offset(device) -> float:
 
 
 def offset_coordinate(device) -> str:
-    """How the (z, r) table's offsets read (``scene/shapes.py`` per shape):
+    """How the (z, r) table's offsets read (``scene/shapes/`` per shape):
     ``"radial"``: the offset r [m] itself (the tube: r <= r_max at every z);
     ``"scaled"``: ``u = R r / r_max(z)`` [m] with ``R`` = :func:`max_offset` and
     ``r_max(z) = sqrt(R² − (z − Δh/2)²)`` (the spherical shell, whose ball centre stays

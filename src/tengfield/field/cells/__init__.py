@@ -35,14 +35,17 @@ plots                       ``outline()``: polylines in (r, z) [m]
 Coordinates: the cell's centre at the origin, z up (the drive's axis), SI.
 A ball centre is ``(x, y, z)`` [m].
 
-``CELLS`` maps a ``[device] shape`` name to the class of its cell; each class
-has ``from_scene(scene)`` (``cell_of(scene)``) and ``solve_scene(scene, z, ...)``,
-the one place :func:`tengfield.field.solve_position` (and so the surrogate, the
-run, ``tengfield field``) dispatches on the shape. ``"tube"`` is an adapter over
-the scene and the existing tube modules (:mod:`.tube`), ``"spherical-shell"``
-the shell (:mod:`.spherical_shell`, its scene keys in ``scene/schema.py``, the
-scene-level rules in ``scene/shapes.py``), ``"hexagonal"`` an adapter over the
-honeycomb's 3D cell (:mod:`.hexagonal`). The 3D gmsh model is built by
+``CELLS`` maps a ``[device] shape`` name to the class of its cell, the field models
+of the shape whose pure geometry is the same-named module of
+:mod:`tengfield.scene.shapes` (``SHAPES``). Each class has ``from_scene(scene)``
+(``cell_of(scene)``), ``field_models`` (``[field] method`` -> its solver, the names of
+the shape's ``field_methods``; ``solve_scene`` looks the method up there, the one place
+:func:`tengfield.field.solve_position`, and so the surrogate, the run, ``tengfield
+field``, dispatches on the shape) and ``contact_walls`` (the 3D contact model's
+surfaces, :mod:`.contact_surfaces`). ``"tube"`` (:mod:`.tube`) reads the scene's
+device, ``"spherical-shell"`` (:mod:`.spherical_shell`) is the shell with its own
+(r, z) and 3D gmsh models, ``"hexagonal"`` (:mod:`.hexagonal`) is built on the
+honeycomb's 3D cell. The 3D gmsh model is built by
 :func:`tengfield.field.geometry3d.build_model` from the 3D cell's answers
 (``placement_3d``, ``contact_rule_3d``, ``extent_3d``, ``occ_parts``,
 ``rim_distance_expr``, ``gap_refinements_3d``): the tube's and the honeycomb's in
@@ -54,6 +57,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+
+from ..._registry import lookup
 
 from .hexagonal import Hexagonal
 from .spherical_shell import SphericalShell
@@ -77,10 +82,6 @@ class Cell(Protocol):
     def electrode_spacing(self) -> float:
         """Distance between the electrodes along the axis [m] (the contact rule's
         minimum gap is ``MIN_GAP_FRACTION`` of it)."""
-
-    @property
-    def bounding_radius(self) -> float:
-        """Radius [m] of the smallest sphere around the origin holding the cell."""
 
     def ball_centre_z(self, position: float) -> float:
         """z [m] of the ball centre for the ball at gap ``position`` on the axis."""
@@ -121,10 +122,18 @@ class Cell(Protocol):
         """Create and mesh the (r, z) model of ``layout``; returns its unique name."""
 
 
+    #: ``[field] method`` -> the solver ``(cell, scene, position, *, comm, offset,
+    #: **options)`` (the names of the shape's ``field_methods``, scene/shapes/)
+    field_models: dict
+
+    #: the walls of the 3D contact model (``contact_surfaces.tube_surfaces``, ...), or
+    #: None while the shape's walls are not described
+    contact_walls: object
+
     def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
                     **options):
         """:func:`tengfield.field.solve_position` of a scene of this shape (``method``
-        resolved, "axisymmetric" or "3d"): a :class:`PositionResult`."""
+        resolved): ``field_models[method]`` (``_methods.solve_with``)."""
 
 
 #: ``[device] shape`` -> the class of its cell
@@ -139,8 +148,7 @@ def cell_of(scene):
 
 def cell_class(shape: str) -> type:
     """The class of ``shape``; ``ValueError`` naming the registered shapes otherwise."""
-    try:
-        return CELLS[shape]
-    except KeyError:
+    if shape not in CELLS:
         raise ValueError(f"shape = {shape!r} is not a registered cell: allowed "
-                         f"{', '.join(sorted(CELLS))}") from None
+                         f"{', '.join(sorted(CELLS))}")
+    return lookup(CELLS, shape, "[device] shape")

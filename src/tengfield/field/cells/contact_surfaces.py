@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._registry import lookup
+
 FLOOR, CEILING, CYLINDER, SPHERE = 0, 1, 2, 3
 KIND_NAMES = ("floor", "ceiling", "cylinder", "sphere")
 TABLE_WIDTH = 6
@@ -111,15 +113,15 @@ def shell_surfaces(cell) -> ContactSurfaces:
 
 
 def contact_surfaces(cell) -> ContactSurfaces:
-    """The contact surfaces of ``cell`` (a ``CELLS`` entry); ``ValueError`` naming the
-    shape when its walls are not described yet (the honeycomb's hexagonal bore)."""
-    from .spherical_shell import SphericalShell
-    from .tube import Tube
+    """The contact surfaces of ``cell`` (a ``CELLS`` entry): its shape's ``contact_walls``
+    (looked up in ``CELLS``); ``ValueError`` naming the shape when its walls are not
+    described yet (the honeycomb's hexagonal bore)."""
+    from . import CELLS
 
-    if isinstance(cell, Tube):
-        return tube_surfaces(cell)
-    if isinstance(cell, SphericalShell):
-        return shell_surfaces(cell)
-    raise ValueError(f"shape = {getattr(cell, 'name', type(cell).__name__)!r}: its walls are "
-                     "not described for the 3D contact model yet; allowed 'tube', "
-                     "'spherical-shell'")
+    walls = lookup(CELLS, cell.name, "[device] shape").contact_walls
+    if walls is None:
+        described = ", ".join(repr(name) for name, entry in CELLS.items()
+                              if entry.contact_walls is not None)
+        raise ValueError(f"shape = {cell.name!r}: its walls are not described for the 3D "
+                         f"contact model yet; allowed {described}")
+    return walls(cell)

@@ -21,6 +21,9 @@ import numpy as np
 
 from ...errors import FieldError
 from ...scene.limits import mesh_features
+from ...scene.shapes import hexagonal as hexagonal_shape
+from ._methods import solve_with
+from .tube import Tube
 
 #: unit normals of the hexagon's six flats (two parallel to x)
 _NORMALS = np.array([[math.cos(math.pi / 2 + k * math.pi / 3),
@@ -52,13 +55,9 @@ class Hexagonal:
                              ball_permittivity=dev.ball_permittivity,
                              wall_permittivity=dev.wall_permittivity)
 
-    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
-                    **options):
+    def _solve_3d(self, scene, position: float, *, comm, offset: float, **options):
         """The 3D solve (:func:`tengfield.field.solver3d.solve_cell_3d`) at the scene's σ
         and ``[field]`` settings; options ``estimate_error``, ``keep_solution``."""
-        if method != "3d":
-            raise FieldError("[field] method = 'axisymmetric': shape = 'hexagonal' is a 3D "
-                             "cell; use method = '3d'")
         unknown = set(options) - {"estimate_error", "keep_solution"}
         if unknown:
             raise FieldError(f"unknown 3D solver option(s) {sorted(unknown)}; allowed: "
@@ -74,6 +73,17 @@ class Hexagonal:
                              surface_charge=scene.device.surface_charge, settings=settings,
                              comm=comm, keep_solution=options.get("keep_solution", False))
 
+    #: ``[field] method`` -> its solver: a 3D cell (the shape's ``field_methods``)
+    field_models = {"3d": _solve_3d}
+    #: the hexagonal bore is not described for the 3D contact model yet
+    contact_walls = None
+
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """:func:`tengfield.field.solve_position` for the honeycomb: ``method``'s solver."""
+        return solve_with(self, scene, position, comm=comm, method=method, offset=offset,
+                          **options)
+
     # -- geometry ----------------------------------------------------------------
     @property
     def ball_radius(self) -> float:
@@ -86,10 +96,6 @@ class Hexagonal:
     @property
     def electrode_spacing(self) -> float:
         return self.scene.device.plate_spacing
-
-    @property
-    def bounding_radius(self) -> float:
-        return self.cell.bounding_radius
 
     def ball_centre_z(self, position: float) -> float:
         return -0.5 * self.electrode_spacing + float(position) + self.ball_radius
@@ -132,14 +138,14 @@ class Hexagonal:
     def axisymmetric_layout(self, position: float, **settings):
         raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
 
+    #: the cost estimate's (r, z) count is the tube's rule on the same keys (a 3D cell
+    #: has no (r, z) model; asked only for an explicit "axisymmetric" estimate)
+    estimated_axisymmetric_cells = Tube.estimated_axisymmetric_cells
+
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
 
     def outline(self) -> list[np.ndarray]:
-        """(r, z) polylines of the section through two flats: electrodes, bore, outside."""
-        dev = self.scene.device
-        h, t = 0.5 * dev.plate_spacing, dev.plate_thickness
-        ri, ro = dev.tube_inner_radius, dev.tube_outer_radius
-        return [np.array([[0.0, -h], [ri, -h]]), np.array([[0.0, h], [ri, h]]),
-                np.array([[0.0, -h - t], [ro, -h - t], [ro, h + t], [0.0, h + t]]),
-                np.array([[0.0, -h], [ri, -h], [ri, h], [0.0, h]])]
+        """(r, z) polylines of the section through two flats: electrodes, bore, outside
+        (:mod:`tengfield.scene.shapes.hexagonal`)."""
+        return [np.array(line) for line in hexagonal_shape.Hexagonal.outline(self.scene.device)]

@@ -240,3 +240,31 @@ def _size_fields(gmsh, lay: ShellLayout) -> None:
     extent = lay.info["bulk_length_m"]
     sizes.append(f"({h!r}) * Max(1, Sqrt(x^2 + y^2) / ({extent!r}))")
     finish_size_fields(gmsh, lay, sizes, [])
+
+
+def shell_cells(lay) -> float:
+    """Triangles of the spherical shell's (r, z) mesh of ``lay`` (this module's size
+    fields, as :func:`~tengfield.field.geometry_axisymmetric.estimated_cells` does the
+    tube's; :mod:`tengfield.field.cost` counts the dofs from it)."""
+    h = lay.mesh_size
+    area = 0.433 * h * h
+    B, R = lay.info["bulk_length_m"], lay.domain_radius
+    bulk = 0.5 * math.pi * B * B / area * (1.0 + 2.0 * math.log(max(R / B, 1.0)))
+    L, mu = lay.info["rim_reach_m"], lay.grading_exponent
+    rims = 2 * math.pi * L * L / (2.0 * mu * area)
+    ball = math.pi * lay.ball_radius / (0.433 * 0.3 * 0.4 * h)
+    a = lay.cavity_radius
+    surfaces = math.pi * (a + (lay.outer_radius if lay.walls else 0.0))
+    interfaces = 2.0 * surfaces / (0.433 * 0.3 * h)
+    c = h / 1e-3
+    kappa = max(0.5 * (1.0 / lay.ball_radius - 1.0 / a), 1e-12)
+    gaps = 0.0
+    for gap in (lay.gap_lower, lay.gap_upper):
+        # the gap rule holds in the gap only (width w = g + κρ², size c w): a strip of
+        # ∫ dρ / (0.433 c² w(ρ)) triangles out to where c w reaches h or the ball ends
+        if 0.0 < gap < 2.0 * h and gap < h / c:
+            reach = min(lay.ball_radius, math.sqrt((h / c - gap) / kappa))
+            root = math.sqrt(gap * kappa)
+            gaps += math.atan(reach * kappa / root) / (root * 0.433 * c * c)
+    image = bulk * 0.5 if lay.kelvin else 0.0
+    return bulk + rims + ball + interfaces + gaps + image

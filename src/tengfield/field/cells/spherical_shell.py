@@ -26,6 +26,9 @@ import numpy as np
 
 from ...errors import FieldError
 from ...scene.limits import DOMAIN_AUTO_FACTOR, DOMAIN_MIN_FACTOR
+from ...scene.shapes import spherical_shell as shell_shape
+from ._methods import solve_with
+from .contact_surfaces import shell_surfaces
 
 #: allowed ranges (open below, closed above) of the lengths [mm]
 _RANGES_MM = {"cavity_diameter_mm": (0.0, 1000.0), "shell_thickness_mm": (0.0, 100.0),
@@ -82,18 +85,14 @@ class SphericalShell:
                    ball_permittivity=dev.ball_permittivity,
                    domain_radius=scene.field.domain_radius)
 
-    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
-                    **options):
-        """:func:`tengfield.field.solve_position` for this cell: the axisymmetric solve
-        (:func:`~tengfield.field.cells.solve.solve_cell_position`) at the scene's σ and
-        ``[field]`` discretisation (the default mesh size scaled as the tube's)."""
+    def _solve_axisymmetric(self, scene, position: float, *, comm, offset: float,
+                            **options):
+        """The axisymmetric solve (:func:`~tengfield.field.cells.solve.solve_cell_position`)
+        at the scene's σ and ``[field]`` discretisation (the default mesh size scaled as
+        the tube's)."""
         from ..geometry_axisymmetric import base_mesh_size
 
         fld = scene.field
-        if method == "3d":
-            return self.solve_3d(position, offset=offset, sigma=scene.device.surface_charge,
-                                 mesh_size=base_mesh_size(scene), degree=fld.degree,
-                                 far_field=fld.far_field, comm=comm, **options)
         if offset != 0.0:
             raise FieldError(f"method = 'axisymmetric' needs offset_mm = 0 (got "
                              f"{offset * 1e3:g}); use method = '3d' for an off-axis ball")
@@ -105,6 +104,26 @@ class SphericalShell:
                                    far_field=fld.far_field, domain_radius=fld.domain_radius,
                                    **{"mesh_motion": getattr(fld, "mesh_motion", "remesh"),
                                       **options})
+
+    def _solve_scene_3d(self, scene, position: float, *, comm, offset: float, **options):
+        """The 3D solve (:meth:`solve_3d`) at the scene's σ and ``[field]`` settings."""
+        from ..geometry_axisymmetric import base_mesh_size
+
+        fld = scene.field
+        return self.solve_3d(position, offset=offset, sigma=scene.device.surface_charge,
+                             mesh_size=base_mesh_size(scene), degree=fld.degree,
+                             far_field=fld.far_field, comm=comm, **options)
+
+    #: ``[field] method`` -> its solver (the names of the shape's ``field_methods``)
+    field_models = {"axisymmetric": _solve_axisymmetric, "3d": _solve_scene_3d}
+    #: the walls of the 3D contact model (:mod:`.contact_surfaces`)
+    contact_walls = staticmethod(shell_surfaces)
+
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """:func:`tengfield.field.solve_position` for this cell: ``method``'s solver."""
+        return solve_with(self, scene, position, comm=comm, method=method, offset=offset,
+                          **options)
 
     def solve_3d(self, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
                  sigma: float, mesh_size: float, degree: int = 2, far_field: str = "kelvin",
@@ -175,7 +194,7 @@ class SphericalShell:
 
     @property
     def bounding_radius(self) -> float:
-        return self.outer_radius
+        return shell_shape.bounding_radius_of(self.cavity_diameter, self.shell_thickness)
 
     @property
     def far_radius(self) -> float:
@@ -225,13 +244,13 @@ class SphericalShell:
 
     # -- breakdown, volume, plots ---------------------------------------------------
     def volume(self) -> float:
-        """The shell's volume [m³]: the sphere of its outer radius."""
-        return 4.0 / 3.0 * math.pi * self.outer_radius**3
+        """The shell's volume [m³]: the sphere of its outer radius (the shape's)."""
+        return shell_shape.SphericalShell.volume(self)
 
     def longest_path(self) -> float:
         """Longest straight path [m] inside the cavity: its diameter (a bound on every
-        line and field line from the ball to an electrode)."""
-        return self.cavity_diameter
+        line and field line from the ball to an electrode; the shape's)."""
+        return shell_shape.SphericalShell.longest_path(self)
 
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
         """Lines from the ball surface to each electrode: from the surface point at polar
@@ -275,12 +294,8 @@ class SphericalShell:
                          for z in np.atleast_1d(np.asarray(positions, dtype=float))])
 
     def mesh_features(self) -> dict[str, float]:
-        """Lengths [m] the default mesh must resolve, by scene key."""
-        features = {"ball_diameter_mm": self.ball_diameter, "stroke_mm": self.stroke,
-                    "electrode_band_mm": self.electrode_band}
-        if self.wall_permittivity != 1.0:
-            features["shell_thickness_mm"] = self.shell_thickness
-        return features
+        """Lengths [m] the default mesh must resolve, by scene key (the shape's)."""
+        return shell_shape.SphericalShell.mesh_features(self)
 
     def outline(self, points: int = 91) -> list[np.ndarray]:
         """(r, z) polylines [m]: lower electrode, upper electrode (cavity surface), band,
@@ -302,6 +317,16 @@ class SphericalShell:
         return layout(self, position, mesh_size=mesh_size, degree=degree,
                       domain_radius=domain_radius, far_field=far_field,
                       grading_size=grading_size)
+
+    def estimated_axisymmetric_cells(self, scene, position: float, mesh_size: float,
+                                     grading_size: float | None = None) -> float:
+        """Triangles of the (r, z) mesh before meshing (:mod:`tengfield.field.cost`)."""
+        from .shell_model import shell_cells
+        lay = self.axisymmetric_layout(position, mesh_size=mesh_size, degree=scene.field.degree,
+                                       far_field=scene.field.far_field,
+                                       domain_radius=scene.field.domain_radius,
+                                       grading_size=grading_size)
+        return shell_cells(lay)
 
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         from .shell_model import build_model

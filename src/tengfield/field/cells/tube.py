@@ -1,7 +1,8 @@
-"""The paper's tube as a :class:`~tengfield.field.cells.Cell`: an adapter over the
-scene's ``[device]`` and the existing tube modules (nothing of the tube is
-re-implemented here; the stages still read the tube directly until they are
-moved onto ``CELLS``).
+"""The paper's tube's field models (``[device] shape = "tube"``): its pure geometry
+is :mod:`tengfield.scene.shapes.tube`; this is the :class:`~tengfield.field.cells.Cell`
+the field stages ask, with :data:`Tube.field_models`, the table of its field methods
+(the (r, z) solver of :mod:`tengfield.field.axisymmetric`, the 3D one of
+:mod:`tengfield.field.solver3d`) that ``[field] method`` resolves through.
 
 Geometry: the electrodes are the discs ``z = ±h/2, r <= a`` (h = plate spacing),
 the tube's inner wall is the cylinder ``r = r_i``; the ball moves in
@@ -15,6 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...scene.limits import mesh_features
+from ...scene.shapes import tube as tube_shape
+from ._methods import solve_with
+from .contact_surfaces import tube_surfaces
 
 
 @dataclass(frozen=True)
@@ -29,19 +33,30 @@ class Tube:
     def from_scene(cls, scene) -> "Tube":
         return cls(scene)
 
-    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
-                    **options):
-        """:func:`tengfield.field.solve_position` for the tube: the tube's own solvers."""
-        if method == "axisymmetric":
-            from ..axisymmetric import solve_position_axisymmetric
-            return solve_position_axisymmetric(scene, position, comm=comm, **options)
+    def _solve_axisymmetric(self, scene, position: float, *, comm, offset: float, **options):
+        from ..axisymmetric import solve_position_axisymmetric
+        return solve_position_axisymmetric(scene, position, comm=comm, **options)
+
+    def _solve_3d(self, scene, position: float, *, comm, offset: float, **options):
         from ..solver3d import solve_position_3d
         return solve_position_3d(scene, position, offset=offset, comm=comm, **options)
+
+    #: ``[field] method`` -> its solver (the names of ``scene.shapes.tube.Tube.field_methods``)
+    field_models = {"axisymmetric": _solve_axisymmetric, "3d": _solve_3d}
+    #: the walls of the 3D contact model (:mod:`.contact_surfaces`)
+    contact_walls = staticmethod(tube_surfaces)
+
+    def solve_scene(self, scene, position: float, *, comm, method: str, offset: float,
+                    **options):
+        """:func:`tengfield.field.solve_position` for the tube: ``method``'s solver."""
+        return solve_with(self, scene, position, comm=comm, method=method, offset=offset,
+                          **options)
 
     @property
     def device(self):
         return self.scene.device
 
+    # what solve_cell_position asks every cell (the ball and the walls' permittivities)
     @property
     def ball_diameter(self) -> float:
         return self.device.ball_diameter
@@ -65,10 +80,6 @@ class Tube:
     @property
     def electrode_spacing(self) -> float:
         return self.device.plate_spacing
-
-    @property
-    def bounding_radius(self) -> float:
-        return self.device.bounding_radius
 
     def ball_centre_z(self, position: float) -> float:
         return -0.5 * self.device.plate_spacing + float(position) + self.ball_radius
@@ -99,8 +110,8 @@ class Tube:
         return self.device.cell_volume
 
     def longest_path(self) -> float:
-        """The tube's inner diagonal (``scene.device.longest_path`` of a tube)."""
-        return math.hypot(self.device.plate_spacing, 2.0 * self.device.tube_inner_radius)
+        """The tube's inner diagonal (:mod:`tengfield.scene.shapes.tube`)."""
+        return self.device.longest_path
 
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
         """Lines parallel to the axis from the ball surface to the electrode planes
@@ -120,12 +131,7 @@ class Tube:
 
     def outline(self) -> list[np.ndarray]:
         """(r, z) polylines: the electrodes, the plates' and the tube's outlines."""
-        dev = self.device
-        h, t = 0.5 * dev.plate_spacing, dev.plate_thickness
-        ri, ro, a = dev.tube_inner_radius, dev.tube_outer_radius, dev.electrode_radius
-        return [np.array([[0.0, -h], [a, -h]]), np.array([[0.0, h], [a, h]]),
-                np.array([[0.0, -h - t], [ro, -h - t], [ro, h + t], [0.0, h + t]]),
-                np.array([[0.0, -h], [ri, -h], [ri, h], [0.0, h]])]
+        return [np.array(line) for line in tube_shape.Tube.outline(self.device)]
 
     def axisymmetric_layout(self, position: float, *, mesh_size: float, degree: int = 2,
                             domain_radius: float | None = None, far_field: str = "kelvin",
@@ -134,6 +140,13 @@ class Tube:
         return layout(self.scene, position, degree=degree, mesh_size=mesh_size,
                       domain_radius=domain_radius, far_field=far_field,
                       grading_size=grading_size)
+
+    def estimated_axisymmetric_cells(self, scene, position: float, mesh_size: float,
+                                     grading_size: float | None = None) -> float:
+        """Triangles of the (r, z) mesh before meshing (:mod:`tengfield.field.cost`)."""
+        from ..geometry_axisymmetric import estimated_cells, layout
+        return estimated_cells(layout(scene, position, mesh_size=mesh_size,
+                                      grading_size=grading_size))
 
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         from ..geometry_axisymmetric import build_model
