@@ -185,7 +185,8 @@ def test_the_old_key_is_read_with_one_warning(tmp_path):
     assert scene.instrument.capacitance == pytest.approx(338e-12)
     both = tmp_path / "both.toml"
     both.write_text("[circuit]\nparallel_capacitance_pF = 1.0\n[instrument]\ncapacitance_pF = 2.0\n")
-    with pytest.raises(tf.SceneError, match="capacitance_pF"):
+    with pytest.raises(tf.SceneError, match="capacitance_pF"), \
+            pytest.warns(FutureWarning, match="parallel_capacitance_pF is now"):
         tf.load_scene(both)
 
 

@@ -15,8 +15,8 @@ UNITS = {"V": ("V", 1.0), "Q": ("nC", 1e-9), "I": ("nA", 1e-9)}
 def trace_scene(parameters: str) -> str:
     """The scene text the trace-fit CLI tests share (V and Q columns in V and nC, time in
     ms, C_p = 100 pF, a 1 s run), with ``parameters`` as its ``[fit.parameters]`` lines."""
-    return ("\n[run]\nduration_s = 1.0\nsettle_periods = 10\n\n[circuit]\n"
-            "parallel_capacitance_pF = 100.0\n\n[fit]\ntime_column = \"time_ms\"\n"
+    return ("\n[run]\nduration_s = 1.0\nsettle_periods = 10\n\n[instrument]\n"
+            "capacitance_pF = 100.0\n\n[fit]\ntime_column = \"time_ms\"\n"
             "time_unit = \"ms\"\n\n[fit.columns.V]\ncolumn = \"V_meas\"\nunit = \"V\"\n\n"
             "[fit.columns.Q]\ncolumn = \"Q_meas\"\nunit = \"nC\"\n\n[fit.parameters]\n"
             + parameters)

@@ -25,8 +25,8 @@ SCENE = """
 duration_s = 1.0
 settle_periods = 10
 
-[circuit]
-parallel_capacitance_pF = 100.0
+[instrument]
+capacitance_pF = 100.0
 
 [fit]
 time_column = "time_ms"

@@ -23,9 +23,7 @@ SCENE = """
 duration_s = 1.0
 settle_periods = 10
 
-[circuit]
-parallel_capacitance_pF = {cp}
-
+{instrument}
 [fit]
 time_column = "time_ms"
 time_unit = "ms"
@@ -49,16 +47,19 @@ def main(monkeypatch):
 
 def _setup(tmp_path, cp):
     path = tmp_path / f"scene-{cp}.toml"
-    path.write_text(SCENE.format(cp=cp))
+    # an instrument of C_p = cp across the terminals (none at 0: the ideal quantities)
+    path.write_text(SCENE.format(
+        instrument=f"[instrument]\ncapacitance_pF = {cp}\n" if cp > 0 else ""))
     scene = load_scene(path)
     cache = tmp_path / "cache"
     surrogate = reference_surrogate(scene, cache_dir=cache, solve=fx.plate_model_solve)[:2]
     return path, cache, scene, surrogate
 
 
-@pytest.mark.parametrize("cp, voltage", [(100.0, "V_read_V"), (0.0, "V_oc_V")])
+@pytest.mark.parametrize("cp, voltage, charge, current", [
+    (100.0, "V_read_V", "Q_read_C", "I_read_A"), (0.0, "V_oc_V", "Q_sc_C", "I_sc_A")])
 def test_targets_name_the_tool_quantity_they_are_compared_with(tmp_path, main, capsys, cp,
-                                                               voltage):
+                                                               voltage, charge, current):
     path, cache, scene, _ = _setup(tmp_path, cp)
     out = tmp_path / "out"
     assert main(["fit", str(path), "--targets", "V_pp_V=300", "Q_pp_pC=500",
@@ -66,8 +67,8 @@ def test_targets_name_the_tool_quantity_they_are_compared_with(tmp_path, main, c
                  "--cache-dir", str(cache), "--no-plots"]) == 0
     printed = capsys.readouterr().out
     res = json.loads((out / "fit.json").read_text())["residuals"]
-    expected = {"V_pp_V": f"peak_to_peak.{voltage}", "Q_pp_pC": "peak_to_peak.Q_sc_C",
-                "I_peak_uA": "peak.I_sc_A"}
+    expected = {"V_pp_V": f"peak_to_peak.{voltage}", "Q_pp_pC": f"peak_to_peak.{charge}",
+                "I_peak_uA": f"peak.{current}"}
     for label, key in expected.items():
         r = res[label]
         assert r["tool_key"] == key
@@ -103,8 +104,9 @@ def test_a_trace_names_the_waveform_each_column_is_compared_with(tmp_path, main,
                  str(cache)]) == 0
     printed = capsys.readouterr().out
     res = json.loads((out / "fit.json").read_text())["residuals"]
-    assert res["V"]["tool_key"] == "V_read_V" and res["Q"]["tool_key"] == "Q_sc_C"
-    assert res["Q"]["tool_label"] == quantity("Q_sc_C").label
+    # an instrument is given: each column is compared with what it reads
+    assert res["V"]["tool_key"] == "V_read_V" and res["Q"]["tool_key"] == "Q_read_C"
+    assert res["Q"]["tool_label"] == quantity("Q_read_C").label
     assert f"V (column 'V_meas'; tool: {quantity('V_read_V').label}): residual RMS" in printed
     assert (out / "fit.png").exists()
 
