@@ -38,7 +38,7 @@ from . import __version__
 from ._console import (CLOSED_PIPE_STATUS, PipeSafeStdout, configure_output,
                        python_only_stdout, set_quiet)
 from ._mpi import launched_size
-from .errors import TengfieldError
+from .errors import SceneError, TengfieldError
 
 # command modules, in the order `tengfield --help` lists them
 COMMAND_MODULES = [
@@ -72,6 +72,11 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMAND_MODULES:
         importlib.import_module(f"tengfield.commands.{name}").register(sub)
     for command in sub.choices.values():
+        if any(a.dest in ("no_plots", "no_plot") for a in command._actions):  # noqa: SLF001
+            command.add_argument(
+                "--dpi", type=float, default=None, metavar="N",
+                help="resolution of the figures written [dots per inch] (default: each "
+                     "figure's own, 110-120; e.g. 300 for a paper); field.png scales with it")
         if any(a.dest == "scene" for a in command._actions):     # noqa: SLF001
             command.add_argument(
                 "--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
@@ -83,7 +88,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _apply_settings(args) -> None:
     """``--set section.key=value``: the command gets the scene (file or default) with
-    them applied, checked as the same keys in the file (raises SceneError)."""
+    them applied, checked as the same keys in the file (raises SceneError); ``--dpi``:
+    the resolution every figure of the command is saved at (checked here, before any
+    output exists)."""
+    from .plotting import set_figure_dpi
+
+    try:
+        set_figure_dpi(getattr(args, "dpi", None))
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
     settings = getattr(args, "settings", None)
     if settings:
         from .scene import load_scene, with_settings

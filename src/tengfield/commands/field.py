@@ -153,10 +153,19 @@ def _axisymmetric(scene, position, reference, out, *, plot: bool):
         io.write_xdmf(out / "potential.xdmf", result.solution, state.potentials)
         field_plot.render_potential_png(
             out / "field.png", result.solution, state.potential_values(),
+            window_size=_window((1400, 1100)),
             title=(f"potential, ball's bottom at z = {position * 1e3:.3g} mm, "
                    f"V_OC = {state.V_oc:.4g} V ({reference})"))
     result.solution = None   # stays on rank 0
     return result, state.potentials
+
+
+def _window(size: tuple[int, int]) -> tuple[int, int]:
+    """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``."""
+    from ..plotting import figure_dpi
+
+    scale = figure_dpi(120.0) / 120.0
+    return tuple(max(200, round(n * scale)) for n in size)
 
 
 def _three_d(scene, position, out, comm, *, plot: bool):
@@ -168,6 +177,7 @@ def _three_d(scene, position, out, comm, *, plot: bool):
         if comm.size == 1:
             field_plot.render_weighting_png_3d(
                 out / "field.png", result.solution, scene.device,
+                window_size=_window((1200, 1100)),
                 title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
                        f"z = {position * 1e3:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
         elif comm.rank == 0:

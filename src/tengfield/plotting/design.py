@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
 #: [design.vary] key -> axis label (others: the key's name with its unit suffix)
 KEY_LABELS = {
@@ -34,7 +34,7 @@ def key_label(key: str) -> str:
 def plot_design(result, path, **options):
     """design.png: :func:`design_figure` saved to ``path``; returns the Figure."""
     fig = design_figure(result, **options)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, 110)
     return fig
 
 

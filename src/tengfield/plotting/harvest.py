@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import new_figure
+from . import new_figure, save_figure
 
 
 def plot_charging(fine, scene, path: str | Path, *, title: str = "") -> Path:
@@ -40,7 +40,7 @@ def plot_charging(fine, scene, path: str | Path, *, title: str = "") -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, 120)
     return Path(path)
 
 
@@ -65,7 +65,7 @@ def plot_vq(loops: dict, energy: dict, path: str | Path, *, title: str = "") -> 
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, 120)
     return Path(path)
 
 
@@ -94,5 +94,5 @@ def plot_array(array, summary: dict, path: str | Path, *, title: str = "") -> Pa
     ax_t.legend(fontsize=8)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, 120)
     return Path(path)

@@ -129,7 +129,9 @@ class FigureProcess:
         message = None
         if self._proc is not None:
             try:
-                message = _pack((function.__module__, function.__qualname__, args, kwargs))
+                from . import _DPI      # the command line's --dpi, for the child too
+                message = _pack((function.__module__, function.__qualname__, args, kwargs,
+                                 _DPI["dpi"]))
             except Exception:  # noqa: BLE001 - not picklable: drawn here
                 message = None
         if message is not None:
@@ -230,8 +232,10 @@ def _serve(stdin, stdout) -> int:
         job = _receive(stdin)
         if job is None:
             return 0
-        module, qualname, args, kwargs = job
+        module, qualname, args, kwargs, dpi = job
         try:
+            from . import set_figure_dpi
+            set_figure_dpi(dpi)
             function = importlib.import_module(module)
             for part in qualname.split("."):
                 function = getattr(function, part)

@@ -164,7 +164,7 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
                   f"up to r = {curves.max_offset * 1e3:.3g} mm")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, 120)
     return Path(path)
 
 

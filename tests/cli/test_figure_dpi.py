@@ -1,0 +1,57 @@
+"""``--dpi N``: every figure of a command at N dots per inch, the ones drawn by the figure
+process included (issue #42: figures for a paper); a bad value is one line naming the
+option, the value and the range, before any output exists."""
+from __future__ import annotations
+
+import pytest
+
+from tengfield.plotting import DPI_RANGE
+
+SCENE = "[run]\nduration_s = 0.3\nsettle_periods = 2\n"
+
+
+def _size(path):
+    from PIL import Image
+
+    with Image.open(path) as image:
+        return image.size
+
+
+@pytest.mark.slow
+def test_dpi_scales_every_figure_in_proportion(tmp_path, run_cli):
+    (tmp_path / "s.toml").write_text(SCENE)
+    sizes = {}
+    for dpi in (60, 120):
+        out = tmp_path / f"out{dpi}"
+        proc = run_cli("dynamics", "s.toml", "-o", out, "--dpi", str(dpi), cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        sizes[dpi] = _size(out / "trajectory.png")
+    assert sizes[120][0] == pytest.approx(2 * sizes[60][0], abs=2)
+    assert sizes[120][1] == pytest.approx(2 * sizes[60][1], abs=2)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("value", ["5", "1e9", "nan"])
+def test_a_bad_dpi_is_one_line_and_writes_nothing(tmp_path, run_cli, value):
+    (tmp_path / "s.toml").write_text(SCENE)
+    proc = run_cli("dynamics", "s.toml", "-o", tmp_path / "out", "--dpi", value, cwd=tmp_path)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("tengfield: error: --dpi "), proc.stderr
+    assert f"allowed [{DPI_RANGE[0]:g}, {DPI_RANGE[1]:g}]" in lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_setting_reaches_save_figure(tmp_path):
+    from tengfield import plotting
+
+    fig = plotting.new_figure((2.0, 1.0))
+    fig.subplots().plot([0, 1], [0, 1])
+    try:
+        plotting.set_figure_dpi(50)
+        plotting.save_figure(fig, tmp_path / "a.png", 120)
+    finally:
+        plotting.set_figure_dpi(None)
+    plotting.save_figure(fig, tmp_path / "b.png", 120)
+    assert _size(tmp_path / "a.png") == (100, 50)
+    assert _size(tmp_path / "b.png") == (240, 120)
