@@ -71,7 +71,7 @@ def _dynamics(args, figures) -> int:
     result = simulate(scene)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    summary = result.summary()
+    summary = dict(result.summary)
     summary["scene"] = scene.source
     write_json(out / "summary.json", summary)
     write_dynamics_files(result, scene, out, plots=not args.no_plots, figures=figures)

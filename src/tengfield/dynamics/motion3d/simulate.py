@@ -68,8 +68,8 @@ class Motion3DResult(DynamicsResult):
         sel = (c["surface"] == surface) & ~c["initial"] & np.isfinite(c["time_out"])
         return c["time_out"][sel] - c["time_in"][sel]
 
-    def summary(self) -> dict:
-        out = super().summary()
+    def _summary_fields(self) -> dict:
+        out = super()._summary_fields()
         r = self.radial
         out.update({
             "wall_contacts": int(self.wall_contacts),
