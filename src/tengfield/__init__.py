@@ -13,6 +13,7 @@ V_OC, Q_SC, I_SC. In a notebook::
     fit = tf.calibrate(scene, measured=trace)    # sigma, C_p, ... fitted to a trace
     best = tf.design(scene)               # the geometry that serves [design]'s band best
     rows = tf.sweep(scene, vary={"device.stroke_mm": "1:5:9"}, frequency_hz=[20, 30])
+    grid = tf.map(scene, frequency_hz="5:70:40", amplitude_mm="0.1:5:40")   # regime map
     tf.harvest.harvest(t, q_sc, c_t, storage_capacitance=10e-6)   # bridges into a store
 
 Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
@@ -41,8 +42,24 @@ _LAZY = {
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep", "map",
            *_LAZY]
+
+
+def map(scene, *, frequency_hz, amplitude_mm, periods: int = 200, jobs: int | None = None,
+        progress: bool = False, comm=None):
+    """``tengfield map`` from Python: the regime on a frequency x amplitude grid in file
+    units (``frequency_hz`` [Hz], ``amplitude_mm`` [mm]: lists, one number or
+    ``"START:STOP:N"``); ``scene``: a path, TOML text or Scene. Returns a
+    :class:`tengfield.dynamics.MapResult` (``.summary``, ``.plot()``, ``.write(out_dir)``)."""
+    import numpy as np
+
+    from .dynamics import regime_map
+    from .sweep import _file_axis
+
+    return regime_map(load_scene(scene), np.array(_file_axis(frequency_hz, 1.0, "frequency_hz")),
+                      np.array(_file_axis(amplitude_mm, 1e-3, "amplitude_mm")), jobs=jobs,
+                      progress=progress, periods=periods, comm=comm)
 
 
 def __getattr__(name: str):

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -217,6 +218,24 @@ class BreakdownResult:
     @property
     def relative_error_estimate(self) -> float:
         return float(self.error.get("relative", math.nan))
+
+    scene: Any = field(default=None, repr=False, compare=False)   # the scene bounded
+
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: breakdown.json's content at the binding limit (``to_json()``)."""
+        return self.to_json()
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield breakdown -o out_dir`` writes (the band of the scene's
+        own trajectory included); returns the paths."""
+        from pathlib import Path
+
+        from .band import scene_band
+        from .output import write_outputs
+
+        band = scene_band(self.scene, self)
+        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band)
 
     def plot(self, sigma: float | None = None, *, title: str | None = None):
         """The breakdown figure (a matplotlib Figure; ``tengfield breakdown`` saves it as

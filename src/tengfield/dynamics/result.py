@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .._summary import Summary
+from .._face import Summary
 
 #: plate index of a contact -> its name
 PLATE_NAMES = np.array(["lower", "upper"])

@@ -113,7 +113,7 @@ def write_report(report: Report, out_dir) -> list[Path]:
     written = [write_report_csv(out / "report.csv", report),
                write_report_json(out / "report.json", report)]
     images = {}
-    for stage, fig in report.plot().items():    # the figures a notebook gets
+    for stage, fig in report.stage_figures().items():    # the figures a notebook gets
         with atomic_path(out / f"{stage}.png") as tmp:
             save_figure(fig, tmp, dpi=100)
         images[stage] = out / f"{stage}.png"

@@ -1,0 +1,131 @@
+"""The one face of every result (issue #41): ``.scene``, ``.summary`` (a JSON-able dict, a
+property), ``.plot()`` -> a matplotlib Figure, ``.write(out_dir, plots=True)`` writing
+what the command line writes, and ``.t`` where the result has a time axis. Tiny scenes:
+dynamics only, or the analytic plate model standing in for the field solve."""
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import plate_model as fx
+import pytest
+from matplotlib.figure import Figure
+
+import tengfield as tf
+
+pytestmark = pytest.mark.slow
+
+SHORT_RUN = {"duration_s": 1.0}
+
+
+@pytest.fixture(scope="module")
+def cached(tmp_path_factory):
+    return tmp_path_factory.mktemp("surrogates")
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return fx.scene_with(run=SHORT_RUN)
+
+
+def check_face(result, out_dir, *, expected_files, has_time=False):
+    """The face every result shows; returns the summary."""
+    summary = result.summary
+    assert isinstance(summary, dict) and summary
+    json.dumps(summary, allow_nan=True)               # plain JSON-able data
+    fig = result.plot()
+    assert isinstance(fig, Figure) and fig.axes
+    fig.clear()
+    written = result.write(out_dir, plots=True)
+    names = {p.name for p in out_dir.iterdir()}
+    assert set(expected_files) <= names, names
+    assert all(p.exists() and p.stat().st_size > 0 for p in map(__import__("pathlib").Path,
+                                                                 written))
+    if has_time:
+        t = np.asarray(result.t)
+        assert t.ndim == 1 and t.size > 2 and np.all(np.diff(t) > 0)
+    return summary
+
+
+def test_dynamics_face_and_cli_files(scene, tmp_path, run_cli):
+    """A trajectory's face; its files are the CLI's, byte for byte apart from wall time."""
+    result = tf.simulate(scene)
+    assert result.scene is scene
+    summary = check_face(result, tmp_path / "api", has_time=True,
+                         expected_files={"summary.json", "trajectory.csv", "impacts.csv",
+                                         "trajectory.png"})
+    assert summary["impacts"] == len(result.impacts)
+    with pytest.warns(DeprecationWarning, match="summary"):
+        assert result.summary() == summary          # the old spelling, still answered
+    path = tmp_path / "scene.toml"
+    path.write_text("[run]\nduration_s = 1.0\n")
+    done = run_cli("dynamics", path, "-o", tmp_path / "cli")
+    assert done.returncode == 0, done.stderr
+    api = tmp_path / "api2"
+    tf.simulate(tf.load_scene(path)).write(api)
+    assert_same_files(api, tmp_path / "cli", timing=("wall_time_s",))
+
+
+def test_map_face_and_cli_files(tmp_path, run_cli):
+    path = tmp_path / "scene.toml"
+    path.write_text("[run]\nduration_s = 1.0\n")
+    result = tf.map(path, frequency_hz="20:40:3", amplitude_mm=[1.0, 2.0], periods=30, jobs=1)
+    assert result.scene.source == tf.load_scene(path).source
+    summary = check_face(result, tmp_path / "api", expected_files={"map.csv", "map.png"})
+    assert summary["points"] == 6 and sum(summary["regimes"].values()) == 6
+    done = run_cli("map", path, "--frequency-hz", "20:40:3", "--amplitude-mm", "1:2:2",
+                   "--periods", "30", "-j", "1", "-o", tmp_path / "cli")
+    assert done.returncode == 0, done.stderr
+    assert_same_files(tmp_path / "api", tmp_path / "cli")
+
+
+def test_run_face(scene, cached, tmp_path):
+    result = tf.run(scene, cache_dir=cached, solve=fx.plate_model_solve)
+    assert result.scene is scene
+    summary = check_face(result, tmp_path / "out", has_time=True,
+                         expected_files={"summary.json", "waveforms.csv", "waveforms.png"})
+    written = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert written["peak_to_peak"] == pytest.approx(summary["peak_to_peak"])
+
+
+def test_sweep_face(scene, cached, tmp_path):
+    """``tf.sweep`` in file units: one row per frequency, the face of every result."""
+    result = tf.sweep(scene, frequency_hz=[20, 30], cache_dir=cached,
+                      solve=fx.plate_model_solve)
+    assert len(result) == 2
+    assert [r["frequency_hz"] for r in result] == pytest.approx([20.0, 30.0])
+    check_face(result, tmp_path / "out", expected_files={"sweep.csv"})
+
+
+def test_breakdown_face(scene, cached, tmp_path):
+    from tengfield import breakdown
+    from tengfield.surrogate import obtain_table
+
+    table, _ = obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)
+    result = breakdown.scene_breakdown(scene, table)
+    assert result.scene is scene
+    summary = check_face(result, tmp_path / "out", expected_files={"breakdown.json"})
+    assert summary == result.to_json()
+
+
+def assert_same_files(a, b, timing=()):
+    """The same result files (the CLI's own dot-files: its lock, manifest and command line
+    aside); CSV and JSON files with the same bytes (JSON: apart from the ``timing`` keys)."""
+    def results(d):
+        return sorted(p.name for p in d.iterdir() if not p.name.startswith("."))
+
+    names = results(a)
+    assert names == results(b)
+    for name in names:
+        if name.endswith(".csv"):
+            assert (a / name).read_bytes() == (b / name).read_bytes(), name
+        elif name.endswith(".json"):
+            if not timing:
+                assert (a / name).read_bytes() == (b / name).read_bytes(), name
+            left, right = (json.loads((d / name).read_text()) for d in (a, b))
+            for key in timing:
+                assert key in left and key in right
+                left.pop(key)
+                right.pop(key)
+            assert left == right, name
