@@ -98,15 +98,21 @@ def test_sweep_face(scene, cached, tmp_path):
     check_face(result, tmp_path / "out", expected_files={"sweep.csv"})
 
 
-def test_breakdown_face(scene, cached, tmp_path):
+@pytest.mark.field
+def test_breakdown_face_and_cli_files(tmp_path, run_cli):
+    """Coarse field solves (P1, 1 mm; the surrogate cache shared with the CLI)."""
     from tengfield import breakdown
-    from tengfield.surrogate import obtain_table
 
-    table, _ = obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)
-    result = breakdown.scene_breakdown(scene, table)
-    assert result.scene is scene
-    summary = check_face(result, tmp_path / "out", expected_files={"breakdown.json"})
+    path = tmp_path / "scene.toml"
+    path.write_text("[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.03\n")
+    result = breakdown.study(path)
+    assert result.scene.source == tf.load_scene(path).source
+    summary = check_face(result, tmp_path / "api", expected_files={"breakdown.json",
+                                                                   "breakdown.png"})
     assert summary == result.to_json()
+    done = run_cli("breakdown", path, "-o", tmp_path / "cli")
+    assert done.returncode == 0, done.stderr
+    assert_same_files(tmp_path / "api", tmp_path / "cli")
 
 
 def assert_same_files(a, b, timing=()):

@@ -220,6 +220,7 @@ class BreakdownResult:
         return float(self.error.get("relative", math.nan))
 
     scene: Any = field(default=None, repr=False, compare=False)   # the scene bounded
+    field_status: str = ""       # how the surrogate was obtained ("cached", "solved", ...)
 
     @property
     def summary(self) -> dict:
@@ -235,7 +236,8 @@ class BreakdownResult:
         from .output import write_outputs
 
         band = scene_band(self.scene, self)
-        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band)
+        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band,
+                             field_status=self.field_status)
 
     def plot(self, sigma: float | None = None, *, title: str | None = None):
         """The breakdown figure (a matplotlib Figure; ``tengfield breakdown`` saves it as
