@@ -135,3 +135,27 @@ def assert_same_files(a, b, timing=()):
                 left.pop(key)
                 right.pop(key)
             assert left == right, name
+
+
+def test_uncertainty_face(cached, tmp_path):
+    from tengfield.uncertainty.study import run_study
+
+    scene = fx.scene_with(run=SHORT_RUN, uncertainty={
+        "samples": 16, "method": "sobol", "seed": 2,
+        "vary": {"device.surface_charge_uC_per_m2": {"distribution": "normal", "mean": -20.0,
+                                                     "std": 2.0}}})
+    result = run_study(scene, cache_dir=cached, solve=fx.plate_model_solve, jobs=1)
+    assert result.scene is scene
+    summary = check_face(result, tmp_path / "out", expected_files={"uncertainty.json"})
+    written = json.loads((tmp_path / "out" / "uncertainty.json").read_text())
+    assert written["output_keys"] == summary["output_keys"]
+
+
+def test_design_face(cached, tmp_path):
+    scene = fx.scene_with(design={"objective": "charge", "candidates": 4, "seed": 1,
+                                  "settle_periods": 10, "window_periods": 10,
+                                  "samples_per_period": 120, "vary": {"stroke_mm": [1.0, 5.0]}})
+    result = tf.design(scene, cache_dir=cached, solve=fx.plate_model_solve, jobs=1)
+    summary = check_face(result, tmp_path / "out", expected_files={"design.json", "design.csv"})
+    written = json.loads((tmp_path / "out" / "design.json").read_text())
+    assert written.keys() == json.loads(json.dumps(summary)).keys()
