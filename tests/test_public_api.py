@@ -159,3 +159,33 @@ def test_design_face(cached, tmp_path):
     summary = check_face(result, tmp_path / "out", expected_files={"design.json", "design.csv"})
     written = json.loads((tmp_path / "out" / "design.json").read_text())
     assert written.keys() == json.loads(json.dumps(summary)).keys()
+
+
+def test_report_face(tmp_path):
+    """A report from rows alone (no measuring): one Figure with a panel per stage."""
+    from tengfield.report import Report, Row, make_plan
+
+    rows = [Row(stage, f"{stage} {i}", {"model": "impact"}, wall,
+                {"V_oc": 10.0 ** -i, "Q_sc": 10.0 ** -i, "I_sc": 10.0 ** -i}, "ref")
+            for stage in ("field", "dynamics") for i, wall in enumerate((0.1, 0.4, 1.6))]
+    report = Report(tf.default_scene(), make_plan(fast=True), rows, [], {"field": "p2"},
+                    {"regime": "period-1"}, 3.0, True)
+    assert report.scene.source == tf.default_scene().source
+    summary = check_face(report, tmp_path / "out",
+                         expected_files={"report.json", "report.csv", "report.md", "field.png",
+                                         "dynamics.png"})
+    assert len(report.plot().axes) == 2
+    assert summary == json.loads((tmp_path / "out" / "report.json").read_text())
+
+
+def test_harvest_and_array_time_axis():
+    """``.t`` where the result has a time axis; ``.time``, the older name, stays."""
+    from tengfield.array import ArrayResult
+    from tengfield.harvest import HarvestResult
+
+    for cls in (HarvestResult, ArrayResult):
+        assert isinstance(cls.t, property)
+    t = np.linspace(0.0, 1.0, 5)
+    array = ArrayResult(time=t, columns={}, output=t, reference=t, output_label="V",
+                        phases_deg=np.zeros(3), period=0.1, summary={})
+    assert array.t is array.time
