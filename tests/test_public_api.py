@@ -179,13 +179,23 @@ def test_report_face(tmp_path):
 
 
 def test_harvest_and_array_time_axis():
-    """``.t`` where the result has a time axis; ``.time``, the older name, stays."""
+    """``.t`` where the result has a time axis (``.time``, the older name, stays); a
+    harvest's summary is its energy balance, its figure the store voltage."""
     from tengfield.array import ArrayResult
-    from tengfield.harvest import HarvestResult
+    from tengfield.harvest import harvest
 
-    for cls in (HarvestResult, ArrayResult):
-        assert isinstance(cls.t, property)
-    t = np.linspace(0.0, 1.0, 5)
+    t = np.linspace(0.0, 0.2, 2001)
+    q_sc = 1e-9 * np.sin(2 * np.pi * 30.0 * t)            # 1 nC at 30 Hz
+    c_t = np.full_like(t, 10e-12)                          # 10 pF
+    charged = harvest(t, q_sc, c_t, storage_capacitance=1e-9)
+    assert charged.t is charged.time
+    summary = charged.summary
+    json.dumps(summary, allow_nan=True)
+    assert summary["final_store_voltage_V"] == pytest.approx(charged.store_voltage[-1])
+    assert summary["final_store_voltage_V"] > 0.0          # the store charged
+    fig = charged.plot()
+    assert isinstance(fig, Figure)
+    assert list(fig.axes[0].get_lines()[0].get_ydata()) == list(charged.store_voltage)
     array = ArrayResult(time=t, columns={}, output=t, reference=t, output_label="V",
                         phases_deg=np.zeros(3), period=0.1, summary={})
     assert array.t is array.time
