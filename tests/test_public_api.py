@@ -199,3 +199,20 @@ def test_harvest_and_array_time_axis():
     array = ArrayResult(time=t, columns={}, output=t, reference=t, output_label="V",
                         phases_deg=np.zeros(3), period=0.1, summary={})
     assert array.t is array.time
+
+
+def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
+    """The cached surrogate (plate model) and one position's electrostatics."""
+    from tengfield.surrogate import obtain_table
+
+    table, _ = obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)
+    summary = table.summary
+    json.dumps(summary, allow_nan=True)
+    assert summary["positions_m"] == pytest.approx(list(table.positions))
+    fig = table.plot()
+    assert isinstance(fig, Figure)
+    position = fx.plate_model_solve(scene, 1e-3)
+    face = position.summary
+    assert face == position.to_json()
+    written = position.write(tmp_path / "field")
+    assert json.loads(written[0].read_text())["position_m"] == pytest.approx(1e-3)
