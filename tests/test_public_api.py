@@ -216,3 +216,19 @@ def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
     assert face == position.to_json()
     written = position.write(tmp_path / "field")
     assert json.loads(written[0].read_text())["position_m"] == pytest.approx(1e-3)
+
+
+def test_fit_face(cached, tmp_path):
+    """A targets fit (σ from a peak-to-peak Q_SC) on the plate model."""
+    from tengfield.fit import calibrate
+
+    scene = fx.scene_with(run=SHORT_RUN, circuit={"parallel_capacitance_pF": 100.0})
+    result = calibrate(scene, targets=["Q_pp_nC=0.3"], free=["surface_charge_uC_per_m2"],
+                       cache_dir=cached, solve=fx.plate_model_solve)
+    assert result.scene is scene
+    summary = check_face(result, tmp_path / "out", expected_files={"fit.json", "fitted.toml",
+                                                                   "fit.png"})
+    assert summary == result.as_dict()
+    written = json.loads((tmp_path / "out" / "fit.json").read_text())
+    assert written.pop("scene") == scene.source
+    assert written.keys() == summary.keys()
