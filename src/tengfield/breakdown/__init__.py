@@ -15,11 +15,11 @@ from .band import (Band, Seeds, Trajectory, band_summary, compute_band, scene_ba
                    trajectory_of)
 from .charge import (charge_line, obtain_breakdown_table, obtain_run_table, resolve_for_run,
                      scaled_table, scene_breakdown, scene_sigma, scene_states, summary_block,
-                     study, uses_breakdown_charge)
+                     uses_breakdown_charge)
 from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, PLACEHOLDER_SIGMA, SIDES, STATE_TEXT,
                     STATES, Binding, BreakdownResult, Lines, electrode_potentials, evaluate,
                     gap_voltages, limited_energy, lines_from_table)
-from .output import summary_lines, write_outputs
+from .output import BreakdownStudy, study, summary_lines, write_outputs
 
 __all__ = ["study", "Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band",
            "trajectory_of",

@@ -161,18 +161,3 @@ def summary_block(result: BreakdownResult | None, scene, given=None) -> dict:
             "binding": result.binding.to_json(), "states_checked": list(result.states),
             "pressure_Pa": result.paschen.pressure}
 
-
-def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = False,
-          solve=None) -> BreakdownResult:
-    """``tengfield breakdown`` from Python: the scene (a path, TOML text or Scene), its
-    surrogate with breakdown lines (cached), :func:`scene_breakdown`. Returns the
-    :class:`BreakdownResult` (``.summary``, ``.plot()``, ``.write(out_dir)``)."""
-    from ..scene import check_field, load_scene
-
-    scene = load_scene(scene)
-    check_field(scene)
-    table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
-                                            progress=progress, solve=solve)
-    result = scene_breakdown(scene, table, states)
-    result.field_status = outcome.status
-    return result

@@ -227,18 +227,6 @@ class BreakdownResult:
         """JSON-ready: breakdown.json's content at the binding limit (``to_json()``)."""
         return self.to_json()
 
-    def write(self, out_dir, plots: bool = True) -> list:
-        """Write what ``tengfield breakdown -o out_dir`` writes (the band of the scene's
-        own trajectory included); returns the paths."""
-        from pathlib import Path
-
-        from .band import scene_band
-        from .output import write_outputs
-
-        band = scene_band(self.scene, self)
-        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band,
-                             field_status=self.field_status)
-
     def plot(self, sigma: float | None = None, *, title: str | None = None):
         """The breakdown figure (a matplotlib Figure; ``tengfield breakdown`` saves it as
         breakdown.png): the gap voltages at ``sigma`` [C/m²] (default −σ_max) against
