@@ -39,27 +39,12 @@ _LAZY = {
     "build_surrogate": ("tengfield.surrogate", "obtain_table"),
     "simulate_3d": ("tengfield.dynamics.motion3d", "simulate_3d"),
     "calibrate": ("tengfield.fit", "calibrate"),
+    "map": ("tengfield.dynamics.mapping", "map_study"),
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep", "map",
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
            *_LAZY]
-
-
-def map(scene, *, frequency_hz, amplitude_mm, periods: int = 200, jobs: int | None = None,
-        progress: bool = False, comm=None):
-    """``tengfield map`` from Python: the regime on a frequency x amplitude grid in file
-    units (``frequency_hz`` [Hz], ``amplitude_mm`` [mm]: lists, one number or
-    ``"START:STOP:N"``); ``scene``: a path, TOML text or Scene. Returns a
-    :class:`tengfield.dynamics.MapResult` (``.summary``, ``.plot()``, ``.write(out_dir)``)."""
-    import numpy as np
-
-    from .dynamics import regime_map
-    from .sweep import _file_axis
-
-    return regime_map(load_scene(scene), np.array(_file_axis(frequency_hz, 1.0, "frequency_hz")),
-                      np.array(_file_axis(amplitude_mm, 1e-3, "amplitude_mm")), jobs=jobs,
-                      progress=progress, periods=periods, comm=comm)
 
 
 def __getattr__(name: str):

@@ -71,7 +71,8 @@ class MapResult:
         map.png; returns the paths."""
         from pathlib import Path
 
-        from ..io import writable_target, write_map_csv
+        from .._files import writable_target
+        from .output import write_map_csv
         from ..plotting.dynamics import plot_regime_map
 
         out = Path(out_dir)
@@ -237,3 +238,39 @@ def liftoff_amplitude(frequency_hz, g: float = G):
     """Analytic lift-off threshold A = g / w^2 [m] (Gamma = A w^2 / g = 1)."""
     w = 2.0 * np.pi * np.asarray(frequency_hz, dtype=float)
     return g / w**2
+
+
+def _file_axis(values, scale: float, name: str) -> np.ndarray:
+    """A grid axis in file units (a list, one number or ``"START:STOP:N"``) -> SI."""
+    if isinstance(values, str) and values.count(":") == 2:
+        start, stop, count = values.split(":")
+        try:
+            n = int(count)
+            axis = np.linspace(float(start), float(stop), n)
+        except ValueError:
+            raise SceneError(f"{name} = {values!r}: expected START:STOP:N (N a whole "
+                             "number >= 1)") from None
+        if n < 1:
+            raise SceneError(f"{name} = {values!r}: N = {n} is out of range: allowed >= 1")
+    else:
+        try:
+            axis = np.atleast_1d(np.asarray(values, dtype=float))
+        except (TypeError, ValueError):
+            raise SceneError(f"{name} = {values!r}: expected START:STOP:N, a number or a "
+                             "list of numbers") from None
+    return axis * scale
+
+
+def map_study(scene, *, frequency_hz, amplitude_mm, periods: int = 200,
+              jobs: int | None = None, progress: bool = False, comm=None) -> MapResult:
+    """``tf.map``, ``tengfield map`` from Python: the regime on a frequency x amplitude
+    grid in file units (``frequency_hz`` [Hz], ``amplitude_mm`` [mm]: a list, one number
+    or ``"START:STOP:N"``); ``scene``: a path, TOML text or Scene. Returns the
+    :class:`MapResult` (``.summary``, ``.plot()``, ``.write(out_dir)``)."""
+    from ..scene import load_scene
+
+    frequencies = _file_axis(frequency_hz, 1.0, "frequency_hz")
+    amplitudes = _file_axis(amplitude_mm, 1e-3, "amplitude_mm")
+    check_map_size(frequencies.size * amplitudes.size, periods)
+    return regime_map(load_scene(scene), frequencies, amplitudes, jobs=jobs, progress=progress,
+                      periods=periods, comm=comm)

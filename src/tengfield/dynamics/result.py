@@ -127,7 +127,8 @@ class DynamicsResult:
         impacts.csv and, with ``plots``, trajectory.png); returns the paths."""
         from pathlib import Path
 
-        from ..io import write_dynamics_files, write_json
+        from .._files import write_json
+        from .output import write_dynamics_files
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
