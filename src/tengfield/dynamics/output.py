@@ -18,8 +18,7 @@ def dynamics_tables(dynamics, scene) -> dict:
     tables = {"trajectory": {"time_s": dynamics.t, "gap_m": dynamics.gap,
                              "gap_velocity_m_per_s": dynamics.gap_velocity,
                              "table_m": dynamics.table}}
-    from .models import model_of
-    lateral = model_of(scene).lateral       # the 3D model: its own columns and contacts
+    lateral = dynamics.lateral       # the 3D model: its own columns and contacts
     if lateral:
         tables["trajectory"].update(trajectory_columns(dynamics))
     imp = dynamics.impacts
@@ -95,8 +94,7 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
 
     out = Path(out_dir)
     want_tables = tables
-    from .models import model_of
-    three_d = model_of(scene).lateral   # trajectory3d.csv, contacts.csv
+    three_d = dynamics.lateral   # trajectory3d.csv, contacts.csv
     if three_d:
         tables = [(write_trajectory3d_csv, "trajectory.csv"), (write_contacts_csv, "contacts.csv")]
     else:

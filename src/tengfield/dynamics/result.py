@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, ClassVar
 
 import numpy as np
 
@@ -98,6 +98,8 @@ class DynamicsResult:
     elapsed: np.ndarray | None = None    # t - time_origin [s], exact
     _sampler: Callable | None = field(default=None, repr=False)
     scene: Any = field(default=None, repr=False, compare=False)   # the scene simulated
+    #: the ball moves sideways (the 3D model): trajectory.csv has more columns, contacts.csv
+    lateral: ClassVar[bool] = False
 
     def sample(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(gap [m], gap_velocity [m/s], table [m]) exactly at absolute ``times`` [s]."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -41,6 +42,8 @@ class Motion3DResult(DynamicsResult):
     ``steps_per_contact`` the mean number of integrator steps per episode.
     ``sample3d(times)`` gives the full state at any times.
     """
+
+    lateral: ClassVar[bool] = True
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     y: np.ndarray = field(default_factory=lambda: np.zeros(0))
     radial: np.ndarray = field(default_factory=lambda: np.zeros(0))
