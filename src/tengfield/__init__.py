@@ -44,7 +44,7 @@ _LAZY = {
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
            "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
-           *_LAZY]
+           *(name for name in _LAZY if name != "map")]   # tf.map: never shadow the builtin on *
 
 
 def __getattr__(name: str):
