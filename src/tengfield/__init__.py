@@ -13,6 +13,7 @@ V_OC, Q_SC, I_SC. In a notebook::
     fit = tf.calibrate(scene, measured=trace)    # sigma, C_p, ... fitted to a trace
     best = tf.design(scene)               # the geometry that serves [design]'s band best
     rows = tf.sweep(scene, vary={"device.stroke_mm": "1:5:9"}, frequency_hz=[20, 30])
+    grid = tf.map(scene, frequency_hz="5:70:40", amplitude_mm="0.1:5:40")   # regime map
     tf.harvest.harvest(t, q_sc, c_t, storage_capacitance=10e-6)   # bridges into a store
 
 Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
@@ -38,11 +39,12 @@ _LAZY = {
     "build_surrogate": ("tengfield.surrogate", "obtain_table"),
     "simulate_3d": ("tengfield.dynamics.motion3d", "simulate_3d"),
     "calibrate": ("tengfield.fit", "calibrate"),
+    "map": ("tengfield.dynamics.mapping", "map_study"),
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
            "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
-           *_LAZY]
+           *(name for name in _LAZY if name != "map")]   # tf.map: never shadow the builtin on *
 
 
 def __getattr__(name: str):

@@ -192,6 +192,18 @@ class ArrayResult:
     #: peak max |x| of the same quantities over the same instants
     peak: dict = field(default_factory=dict)
 
+    @property
+    def t(self) -> np.ndarray:
+        """The output times [s] (``time``, the older name)."""
+        return self.time
+
+    def plot(self):
+        """array.png's figure (phase histogram; the array against N x one cell)."""
+        from ._face import figure_of_png
+        from .plotting.harvest import plot_array
+
+        return figure_of_png(lambda path: plot_array(self, self.summary, path))
+
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
               progress: bool = False) -> ArrayResult:

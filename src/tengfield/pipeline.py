@@ -104,6 +104,14 @@ class RunResult:
         R || C_p); only with ``[circuit] parallel_capacitance_pF`` > 0 (else KeyError)."""
         return self.waveforms[electrical.READ_COLUMN]
 
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield run -o out_dir`` writes (waveforms.csv, summary.json,
+        trajectory/impacts files and, with ``plots``, the PNGs); returns the paths."""
+        from .io import write_dynamics_outputs, write_run_outputs
+
+        written = write_run_outputs(self, out_dir, plots=plots)
+        return written + write_dynamics_outputs(self, out_dir, plots=plots)
+
     def plot(self, *, last_periods: float | None = 5.0):
         """The waveforms figure (a matplotlib Figure; a notebook shows it): V_OC, Q_SC, I_SC
         (and the load's V and P) against time with the gap, over the last ``last_periods``

@@ -1,6 +1,6 @@
 """The report's names and figures (issues #28, #29): report.md's error table and the
 stage figures name their quantities from the one table of output quantities
-(``tengfield.quantities``), and ``Report.plot()`` returns the figures ``tengfield
+(``tengfield.quantities``), and ``Report.stage_figures()`` returns the figures ``tengfield
 report`` saves (one matplotlib Figure per stage), drawn from the rows alone."""
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ def test_the_error_table_names_its_quantities_from_the_table():
 @pytest.mark.slow
 def test_report_plot_returns_one_figure_per_stage_and_the_cli_saves_them(tmp_path):
     report = _report(("field", "dynamics", "circuit"))
-    figures = report.plot()
+    figures = report.stage_figures()
     assert list(figures) == ["field", "dynamics", "circuit"]
     for stage, fig in figures.items():
         assert isinstance(fig, Figure)

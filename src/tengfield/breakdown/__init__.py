@@ -19,9 +19,9 @@ from .charge import (charge_line, obtain_breakdown_table, obtain_run_table, reso
 from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, PLACEHOLDER_SIGMA, SIDES, STATE_TEXT,
                     STATES, Binding, BreakdownResult, Lines, electrode_potentials, evaluate,
                     gap_voltages, limited_energy, lines_from_table)
-from .output import summary_lines, write_outputs
+from .output import BreakdownStudy, study, summary_lines, write_outputs
 
-__all__ = ["Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band",
+__all__ = ["study", "Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band",
            "trajectory_of",
            "CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "PLACEHOLDER_SIGMA", "SIDES",
            "STATE_TEXT", "STATES", "Binding", "BreakdownResult", "Lines", "charge_line",

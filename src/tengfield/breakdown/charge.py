@@ -27,9 +27,11 @@ def scene_breakdown(scene, table, states=None) -> BreakdownResult:
     """:func:`evaluate` for a scene and its surrogate table (the scene's states,
     ``[circuit] reference``, ``[breakdown]`` Paschen constants and the scene's σ)."""
     sigma = None if uses_breakdown_charge(scene) else scene.device.surface_charge
-    return evaluate(lines_from_table(table, scene), Paschen.from_scene(scene),
-                    scene_states(scene) if states is None else states,
-                    scene.circuit.reference, sigma)
+    result = evaluate(lines_from_table(table, scene), Paschen.from_scene(scene),
+                      scene_states(scene) if states is None else states,
+                      scene.circuit.reference, sigma)
+    result.scene = scene
+    return result
 
 
 def scaled_table(table, factor: float):
@@ -158,3 +160,4 @@ def summary_block(result: BreakdownResult | None, scene, given=None) -> dict:
             "relative_error_estimate": result.relative_error_estimate,
             "binding": result.binding.to_json(), "states_checked": list(result.states),
             "pressure_Pa": result.paschen.pressure}
+

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -217,6 +218,14 @@ class BreakdownResult:
     @property
     def relative_error_estimate(self) -> float:
         return float(self.error.get("relative", math.nan))
+
+    scene: Any = field(default=None, repr=False, compare=False)   # the scene bounded
+    field_status: str = ""       # how the surrogate was obtained ("cached", "solved", ...)
+
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: breakdown.json's content at the binding limit (``to_json()``)."""
+        return self.to_json()
 
     def plot(self, sigma: float | None = None, *, title: str | None = None):
         """The breakdown figure (a matplotlib Figure; ``tengfield breakdown`` saves it as

@@ -3,8 +3,11 @@ breakdown.csv and breakdown.png (the figure through :mod:`tengfield.plotting`)."
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, fields
+from pathlib import Path
 
-from .charge import scene_sigma, uses_breakdown_charge
+from .band import scene_band
+from .charge import obtain_breakdown_table, scene_breakdown, scene_sigma, uses_breakdown_charge
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
 
 def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
@@ -65,3 +68,31 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
             plot_breakdown(result, drawn, tmp, title=title, band=band)
         written.append(out / "breakdown.png")
     return written
+
+
+@dataclass
+class BreakdownStudy(BreakdownResult):
+    """The :class:`BreakdownResult` of :func:`study`, with :meth:`write`."""
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield breakdown -o out_dir`` writes (the band of the scene's
+        own trajectory included); returns the paths."""
+        band = scene_band(self.scene, self)
+        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band,
+                             field_status=self.field_status)
+
+
+def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = False,
+          solve=None) -> BreakdownStudy:
+    """``tengfield breakdown`` from Python: the scene (a path, TOML text or Scene), its
+    surrogate with breakdown lines (cached), :func:`scene_breakdown`. Returns a
+    :class:`BreakdownResult` with ``.summary``, ``.plot()`` and ``.write(out_dir)``."""
+    from ..scene import check_field, load_scene
+
+    scene = load_scene(scene)
+    check_field(scene)
+    table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
+                                            progress=progress, solve=solve)
+    result = scene_breakdown(scene, table, states)
+    values = {f.name: getattr(result, f.name) for f in fields(result) if f.init}
+    return BreakdownStudy(**{**values, "field_status": outcome.status})

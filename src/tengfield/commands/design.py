@@ -48,7 +48,7 @@ def register(sub) -> None:
 def _run(args) -> int:
     import warnings
 
-    from ..design import design, parse_design_section, write_design_outputs
+    from ..design import design, parse_design_section
     from ..design.answer import answer_lines
     from ..design.spec import default_design_section
     from ..scene import load_scene
@@ -67,7 +67,7 @@ def _run(args) -> int:
                     progress=not args.quiet, overrides=overrides or None)   # SIGTERM: cli.py
     if comm is not None and comm.rank != 0:
         return 0
-    written = write_design_outputs(result, args.output, plots=not args.no_plots)
+    written = result.write(args.output, plots=not args.no_plots)
     counts = {s: sum(r["status"] == s for r in result.rows) for s in ("ok", "infeasible",
                                                                        "skipped")}
     print(f"{len(result.rows)} candidates ({counts['ok']} scored, {counts['infeasible']} "

@@ -71,7 +71,7 @@ def _dynamics(args, figures) -> int:
     result = simulate(scene)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    summary = result.summary()
+    summary = dict(result.summary)
     summary["scene"] = scene.source
     write_json(out / "summary.json", summary)
     write_dynamics_files(result, scene, out, plots=not args.no_plots, figures=figures)
@@ -99,8 +99,6 @@ def _run_map(args) -> int:
     from .._mpi import check_jobs, rank_of, world_if_parallel
     from ..dynamics import regime_map
     from ..dynamics.mapping import check_map_size
-    from ..io import writable_target, write_map_csv
-    from ..plotting.dynamics import plot_regime_map
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
@@ -122,11 +120,7 @@ def _run_map(args) -> int:
         return 0
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    write_map_csv(result, out / "map.csv")
-    if not args.no_plots:
-        plot_regime_map(result, writable_target(out / "map.png"),
-                        title=f"regimes, e = {scene.contact.restitution:g}, dh = "
-                              f"{scene.device.stroke * 1e3:g} mm, {args.periods} periods per point")
+    result.write(out, plots=not args.no_plots)
     from ..dynamics.regime import regime_table
     from ..dynamics.result import REGIMES
 

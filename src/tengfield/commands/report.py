@@ -25,7 +25,7 @@ def register(sub) -> None:
 def _report(args) -> int:
     from mpi4py import MPI
 
-    from ..report import build_report, write_report
+    from ..report import build_report
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
@@ -34,7 +34,7 @@ def _report(args) -> int:
                           farm_comm=farm_comm)
     if farm_comm is not None and farm_comm.rank != 0:
         return 0
-    written = write_report(report, args.output)
+    written = report.write(args.output)
     for rec in report.recommendations:
         f = rec.field
         print(f"target {rec.target:g}: {f['method']} degree {f['degree']} mesh "

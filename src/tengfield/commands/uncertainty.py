@@ -34,12 +34,10 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from pathlib import Path
-
     from .._mpi import check_jobs, world_if_parallel
     from ..scene import load_scene
     from ..uncertainty import run_study, uncertainty_spec
-    from ..uncertainty.output import summary_lines, write_outputs
+    from ..uncertainty.output import summary_lines
 
     from ..uncertainty.spec import default_uncertainty_section
 
@@ -63,7 +61,7 @@ def _run(args) -> int:
 
     for message in nominal_outside_warnings(study):
         warnings.warn(message, RuntimeWarning, stacklevel=1)
-    written = write_outputs(study, Path(args.output), plots=not args.no_plots)
+    written = study.write(args.output, plots=not args.no_plots)
     for line in summary_lines(study):
         print(line)
     print(f"wrote {', '.join(map(str, written))}", file=sys.stderr)

@@ -73,6 +73,19 @@ class DesignResult:
         from ..scene import Scene
         return Scene.from_dict(best_scene_dict(self), source=f"best of {self.scene.source}")
 
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: design.json's content."""
+        from .output import design_summary
+
+        return design_summary(self)
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield design -o out_dir`` writes; returns the paths."""
+        from .output import write_design_outputs
+
+        return write_design_outputs(self, out_dir, plots=plots)
+
     def plot(self):
         """design.png's figure (a matplotlib Figure, not saved): the objective over the
         varied keys with error bars, the best marked; with several objectives the Pareto

@@ -56,7 +56,9 @@ def simulate(scene, *, duration: float | None = None) -> DynamicsResult:
     _warn_lateral_left_out(scene)
     model = model_of(scene)
     result = model(scene, duration=duration)
-    return _settled(scene, model, result, scene.run.duration if duration is None else duration)
+    result = _settled(scene, model, result, scene.run.duration if duration is None else duration)
+    result.scene = scene
+    return result
 
 
 def _settled(scene, model, result, duration: float):

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -53,6 +54,42 @@ class MapResult:
     lower_contacts_per_period: np.ndarray
     upper_contacts_per_period: np.ndarray
     error: np.ndarray            # message where a point failed, else ''
+    scene: Any = field(default=None, repr=False, compare=False)   # the scene mapped
+    periods: int = 0             # excitation periods simulated per point
+
+    @property
+    def summary(self) -> dict:
+        """JSON-ready counts: grid size, periods per point and points per regime."""
+        names, counts = np.unique(self.regime, return_counts=True)
+        return {"points": int(self.regime.size), "frequencies": int(self.frequency.size),
+                "amplitudes": int(self.amplitude.size), "periods": int(self.periods),
+                "regimes": {str(n): int(c) for n, c in zip(names, counts)},
+                "failed": int(np.sum(self.error != ""))}
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield map -o out_dir`` writes: map.csv and, with ``plots``,
+        map.png; returns the paths."""
+        from pathlib import Path
+
+        from .._files import writable_target
+        from .output import write_map_csv
+        from ..plotting.dynamics import plot_regime_map
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        write_map_csv(self, out / "map.csv")
+        paths = [out / "map.csv"]
+        if plots:
+            plot_regime_map(self, writable_target(out / "map.png"), title=self.plot_title())
+            paths.append(out / "map.png")
+        return paths
+
+    def plot_title(self) -> str:
+        """map.png's title (restitution, stroke, periods per point)."""
+        if self.scene is None:
+            return f"regimes, {self.periods} periods per point"
+        return (f"regimes, e = {self.scene.contact.restitution:g}, dh = "
+                f"{self.scene.device.stroke * 1e3:g} mm, {self.periods} periods per point")
 
     def plot(self, *, title: str | None = None):
         """The regime map (a matplotlib Figure; ``tengfield map`` saves it as map.png)."""
@@ -193,10 +230,47 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
                     store(results)
     finally:
         bar.close()
-    return MapResult(freqs, amps, names, per, gapmax, low, up, errors.astype(str))
+    return MapResult(freqs, amps, names, per, gapmax, low, up, errors.astype(str),
+                     scene=scene, periods=periods)
 
 
 def liftoff_amplitude(frequency_hz, g: float = G):
     """Analytic lift-off threshold A = g / w^2 [m] (Gamma = A w^2 / g = 1)."""
     w = 2.0 * np.pi * np.asarray(frequency_hz, dtype=float)
     return g / w**2
+
+
+def _file_axis(values, scale: float, name: str) -> np.ndarray:
+    """A grid axis in file units (a list, one number or ``"START:STOP:N"``) -> SI."""
+    if isinstance(values, str) and values.count(":") == 2:
+        start, stop, count = values.split(":")
+        try:
+            n = int(count)
+            axis = np.linspace(float(start), float(stop), n)
+        except ValueError:
+            raise SceneError(f"{name} = {values!r}: expected START:STOP:N (N a whole "
+                             "number >= 1)") from None
+        if n < 1:
+            raise SceneError(f"{name} = {values!r}: N = {n} is out of range: allowed >= 1")
+    else:
+        try:
+            axis = np.atleast_1d(np.asarray(values, dtype=float))
+        except (TypeError, ValueError):
+            raise SceneError(f"{name} = {values!r}: expected START:STOP:N, a number or a "
+                             "list of numbers") from None
+    return axis * scale
+
+
+def map_study(scene, *, frequency_hz, amplitude_mm, periods: int = 200,
+              jobs: int | None = None, progress: bool = False, comm=None) -> MapResult:
+    """``tf.map``, ``tengfield map`` from Python: the regime on a frequency x amplitude
+    grid in file units (``frequency_hz`` [Hz], ``amplitude_mm`` [mm]: a list, one number
+    or ``"START:STOP:N"``); ``scene``: a path, TOML text or Scene. Returns the
+    :class:`MapResult` (``.summary``, ``.plot()``, ``.write(out_dir)``)."""
+    from ..scene import load_scene
+
+    frequencies = _file_axis(frequency_hz, 1.0, "frequency_hz")
+    amplitudes = _file_axis(amplitude_mm, 1e-3, "amplitude_mm")
+    check_map_size(frequencies.size * amplitudes.size, periods)
+    return regime_map(load_scene(scene), frequencies, amplitudes, jobs=jobs, progress=progress,
+                      periods=periods, comm=comm)

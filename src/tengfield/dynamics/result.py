@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable, ClassVar
 
 import numpy as np
+
+from .._face import Summary
 
 #: plate index of a contact -> its name
 PLATE_NAMES = np.array(["lower", "upper"])
@@ -95,6 +97,9 @@ class DynamicsResult:
     time_origin: float = 0.0             # [s] start of the run, [initial] time_s
     elapsed: np.ndarray | None = None    # t - time_origin [s], exact
     _sampler: Callable | None = field(default=None, repr=False)
+    scene: Any = field(default=None, repr=False, compare=False)   # the scene simulated
+    #: the ball moves sideways (the 3D model): trajectory.csv has more columns, contacts.csv
+    lateral: ClassVar[bool] = False
 
     def sample(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(gap [m], gap_velocity [m/s], table [m]) exactly at absolute ``times`` [s]."""
@@ -114,8 +119,27 @@ class DynamicsResult:
 
         return trajectory_plot(trajectory_figure(self, title=title, max_periods=max_periods))
 
+    @property
     def summary(self) -> dict:
-        """JSON-ready summary (the CLI's summary.json)."""
+        """JSON-ready summary (the CLI's summary.json, without its ``scene`` path)."""
+        return Summary(self._summary_fields())
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield dynamics -o out_dir`` writes (summary.json, trajectory.csv,
+        impacts.csv and, with ``plots``, trajectory.png); returns the paths."""
+        from pathlib import Path
+
+        from .._files import write_json
+        from .output import write_dynamics_files
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        summary = dict(self.summary)
+        summary["scene"] = getattr(self.scene, "source", None)
+        paths = [write_json(out / "summary.json", summary)]
+        return paths + list(write_dynamics_files(self, self.scene, out, plots=plots))
+
+    def _summary_fields(self) -> dict:
         plates = self.impacts.plate
         return {
             "model": self.model,

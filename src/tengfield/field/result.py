@@ -171,6 +171,25 @@ class PositionResult:
         """[q_lower, q_upper] / q_ball: each in [-1, 0] by the maximum principle."""
         return self.induced_fraction.copy()
 
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: field.json's content for the floating reference (``to_json`` gives
+        another reference's)."""
+        return self.to_json()
+
+    def write(self, out_dir, plots: bool = True, *, reference: str = "floating") -> list:
+        """Write field.json (as ``tengfield field`` does, without the open-circuit
+        potentials it adds) to ``out_dir``; returns the paths. ``plots``: accepted for the
+        common face (field.png and potential.xdmf need the kept solution: the CLI)."""
+        from pathlib import Path
+
+        from .io import write_field_json
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        write_field_json(out / "field.json", self, reference)
+        return [out / "field.json"]
+
     def to_json(self, reference: str = "floating") -> dict:
         """The content of ``field.json`` (SI, keys carry the unit)."""
         return {

@@ -111,6 +111,7 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
         result = fit_trace(scene, curves, sigma_ref, goal, spec, simulate=simulate,
                            progress=progress)
     breakdown_check(scene, table, result)
+    result.scene = scene
     return result
 
 

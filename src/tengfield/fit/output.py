@@ -4,7 +4,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._files import scene_dir, scene_toml, write_json, write_text
-from .solve import FitResult
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
 SCENE_KEYS = {
@@ -16,7 +15,7 @@ SCENE_KEYS = {
 }
 
 
-def fitted_scene_dict(scene, result: FitResult) -> dict:
+def fitted_scene_dict(scene, result) -> dict:
     """``scene.raw`` with the fitted values, every section whole ([fit], [design.vary],
     [uncertainty.vary] ... kept: issue #43.1; :func:`tengfield._files.scene_toml` writes
     the sub-tables)."""
@@ -35,7 +34,7 @@ def fitted_scene_dict(scene, result: FitResult) -> dict:
     return data
 
 
-def write_fit_outputs(scene, result: FitResult, out_dir, *, plots: bool = True) -> list[Path]:
+def write_fit_outputs(scene, result, out_dir, *, plots: bool = True) -> list[Path]:
     """Write fit.json, fitted.toml and (with ``plots``) fit.png to ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

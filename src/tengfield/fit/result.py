@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -53,6 +54,24 @@ class FitResult:
         from ..plotting.fit import fit_figure   # the edge, imported on use
 
         return fit_figure(self)
+
+    scene: Any = field(default=None, repr=False, compare=False)   # the scene fitted
+
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: what fit.json holds (``as_dict()``, the older spelling)."""
+        return self.as_dict()
+
+    @property
+    def t(self):
+        """The measured trace's times [s] (a trace fit), else None."""
+        return self.measured.get("time")
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield fit -o out_dir`` writes; returns the paths."""
+        from .output import write_fit_outputs
+
+        return write_fit_outputs(self.scene, self, out_dir, plots=plots)
 
     def as_dict(self) -> dict:
         """JSON-ready summary (fit.json)."""

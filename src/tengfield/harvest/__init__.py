@@ -193,6 +193,32 @@ class HarvestResult:
     #: own axis (``[initial] time_s`` subtracted), the step lengths exact at any origin
     time_origin: float = 0.0
 
+    @property
+    def t(self) -> np.ndarray:
+        """The sample times [s] on the run's own axis (``time``, the older name)."""
+        return self.time
+
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: the energy balance at the end [J], the UVLO crossing times [s]
+        and the store's final voltage [V]."""
+        out = dict(self.balance())
+        out.update({k: float(v) for k, v in self.threshold_times.items()})
+        out["final_store_voltage_V"] = float(self.store_voltage[-1])
+        return out
+
+    def plot(self):
+        """The store voltage U(t) [V] (a matplotlib Figure)."""
+        from ..plotting import new_figure
+
+        fig = new_figure((8, 3.5))
+        ax = fig.subplots()
+        ax.plot(self.time, self.store_voltage, lw=1.0)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("U store [V]")
+        ax.grid(alpha=0.3)
+        return fig
+
     def balance(self) -> dict:
         """Energy accounts at the end of the run [J] and the residuals of the three
         balances relative to the energy delivered into the bridges.

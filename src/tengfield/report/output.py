@@ -14,7 +14,6 @@ from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
 from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
                    error_words)
-from .study import Report
 
 
 
@@ -29,7 +28,7 @@ def scene_text(scene, sections: dict, header: str) -> str:
                       base_dir=scene_dir(scene.source))
 
 
-def markdown(report: Report, images: dict) -> str:
+def markdown(report, images: dict) -> str:
     """The text of report.md."""
     sc = report.scene
     lines = [f"# tengfield report: error against run time{' (fast mode)' if report.fast else ''}",
@@ -103,7 +102,7 @@ def markdown(report: Report, images: dict) -> str:
     return "\n".join(lines)
 
 
-def write_report(report: Report, out_dir) -> list[Path]:
+def write_report(report, out_dir) -> list[Path]:
     """Write report.csv, report.json, report.md, one PNG per stage and
     ``recommended-<target>.toml`` scene files to ``out_dir`` (each atomically)."""
     from ..plotting import save_figure
@@ -113,7 +112,7 @@ def write_report(report: Report, out_dir) -> list[Path]:
     written = [write_report_csv(out / "report.csv", report),
                write_report_json(out / "report.json", report)]
     images = {}
-    for stage, fig in report.plot().items():    # the figures a notebook gets
+    for stage, fig in report.stage_figures().items():    # the figures a notebook gets
         with atomic_path(out / f"{stage}.png") as tmp:
             save_figure(fig, tmp, dpi=100)
         images[stage] = out / f"{stage}.png"

@@ -64,7 +64,49 @@ class Report:
     wall_time_s: float
     fast: bool
 
-    def plot(self) -> dict:
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: report.json's content."""
+        import json
+        import tempfile
+        from pathlib import Path
+
+        from ..io import write_report_json
+
+        with tempfile.TemporaryDirectory() as tmp:
+            path = write_report_json(Path(tmp) / "report.json", self)
+            return json.loads(Path(path).read_text())
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield report -o out_dir`` writes; returns the paths (the stage
+        PNGs are part of the report: ``plots`` is accepted for the common face)."""
+        from .output import write_report
+
+        return write_report(self, out_dir)
+
+    def plot(self):
+        """One matplotlib Figure, one panel per stage measured (the stage figures of
+        :meth:`stage_figures`, side by side)."""
+        import io
+
+        import matplotlib.image as mpimg
+
+        from ..plotting import new_figure, save_figure
+
+        figures = self.stage_figures()
+        fig = new_figure((5.5 * max(len(figures), 1), 4.5))
+        axes = fig.subplots(1, max(len(figures), 1), squeeze=False)[0]
+        for ax, (stage, stage_fig) in zip(axes, figures.items()):
+            buffer = io.BytesIO()
+            save_figure(stage_fig, buffer, dpi=100)
+            buffer.seek(0)
+            ax.imshow(mpimg.imread(buffer, format="png"))
+            ax.set_title(stage)
+        for ax in axes:
+            ax.set_axis_off()
+        return fig
+
+    def stage_figures(self) -> dict:
         """The report's figures, one per stage measured: ``{"field": Figure, "surrogate":
         ..., "dynamics": ..., "circuit": ...}`` (matplotlib Figures, in that order; a
         stage without rows has none). Each is the error against wall time that

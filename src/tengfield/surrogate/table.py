@@ -94,6 +94,27 @@ class SurrogateTable(SolveRecord):
     line_potential: np.ndarray | None = None
     line_check: np.ndarray | None = None
 
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: the solved positions [m], C_T-relevant matrices [F], charges [C],
+        the ball's charge [C], the stroke [m] and the accuracy figures."""
+        return {"positions_m": self.positions.tolist(),
+                "capacitance_F": self.capacitance.tolist(),
+                "induced_charge_C": self.induced_charge.tolist(),
+                "ball_charge_C": float(self.ball_charge), "stroke_m": float(self.stroke),
+                "method": self.method, "degree": int(self.degree),
+                "field_hash": self.field_hash, "converged": bool(self.converged),
+                "interpolation_error": float(self.interpolation_error),
+                "tolerance": float(self.tolerance)}
+
+    def plot(self, reference: str = "floating"):
+        """surrogate.png's figure: V_OC, Q_SC, C_T against z, solved positions as dots."""
+        from .._face import figure_of_png
+        from ..plotting.waveforms import plot_surrogate
+
+        curves = TerminalCurves(self, reference)
+        return figure_of_png(lambda path: plot_surrogate(self, curves, path))
+
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")
         for name in OPTIONAL_PER_POSITION:

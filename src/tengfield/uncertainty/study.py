@@ -7,8 +7,8 @@ scores one design candidate by a percentile of its objective over ``[uncertainty
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Callable
+from dataclasses import dataclass, field
+from typing import Any, Callable
 
 import numpy as np
 
@@ -27,6 +27,15 @@ class Study:
     values: np.ndarray
     evaluations: Evaluations
     summary: dict
+    scene: Any = field(default=None, repr=False, compare=False)   # the scene studied
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield uncertainty -o out_dir`` writes; returns the paths."""
+        from pathlib import Path
+
+        from .output import write_outputs
+
+        return write_outputs(self, Path(out_dir), plots=plots)
 
     @property
     def output_keys(self) -> list[str]:
@@ -155,7 +164,8 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
         print(cost.line(), file=sys.stderr, flush=True)
     evaluations = evaluate_study(scene, spec, values, comm=comm, jobs=jobs, cache_dir=cache_dir,
                                  solve=solve, simulate=simulate, progress=progress)
-    return Study(spec, values, evaluations, summarise(scene, spec, values, evaluations))
+    return Study(spec, values, evaluations, summarise(scene, spec, values, evaluations),
+                 scene=scene)
 
 
 def candidate_percentile(candidate, spec: UncertaintySpec, objective: str, percentile: float, *,

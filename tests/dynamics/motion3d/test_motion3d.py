@@ -166,7 +166,7 @@ def test_lateral_drive_moves_the_ball_off_axis_and_onto_the_wall():
     assert r.wall_contacts > 0
     assert np.max(r.radial) <= r.tube_clearance + 1e-5   # compliant wall: microns
     assert np.max(r.radial) > 0.9 * r.tube_clearance
-    s = r.summary()
+    s = r.summary
     assert s["wall_contacts"] == r.wall_contacts and s["steps_per_contact"] > 20
     assert r.min_steps_per_contact >= 10
     # the sampler reproduces the samples

@@ -183,14 +183,14 @@ def test_lateral_drive_rolls_and_bounces_around_the_cavity():
                   run={"duration_s": 0.5, "settle_periods": 2, "sample_rate_hz": 5000.0})
     r = simulate_3d(scene)
     surfaces = set(r.contacts["surface"])
-    print(r.summary(), np.unique(r.contacts["surface"], return_counts=True))
+    print(r.summary, np.unique(r.contacts["surface"], return_counts=True))
     assert {"lower", "upper", "band"} <= surfaces and "wall" not in surfaces
     assert r.wall_contacts == np.count_nonzero(r.contacts["surface"] == "band") > 0
     assert r.surface_names == ("lower", "upper", "band")
     centre = np.column_stack([r.x, r.y, r.gap + R - A])
     assert np.max(np.linalg.norm(centre, axis=1)) <= A - R + 2e-5
     assert np.max(r.radial) > 0.5 * (A - R)
-    assert r.summary()["max_spin_rad_per_s"] > 10.0
+    assert r.summary["max_spin_rad_per_s"] > 10.0
     assert set(r.impacts.plate) == {"lower", "upper"}
     # an impact comes from flight (approaching); most electrode episodes here start by
     # sliding across a rim from the band, and those are not impacts

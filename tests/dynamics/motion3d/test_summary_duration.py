@@ -19,9 +19,9 @@ def test_3d_summary_duration_is_the_simulated_time_as_in_1d(start):
                                         excitation={"amplitude_x_mm": 0.5})
     r3 = simulate_3d(scene)
     r1 = simulate_soft(scene.with_values(contact={"model": "soft"}))
-    assert r1.summary()["duration_s"] == pytest.approx(RUN["duration_s"], rel=1e-12)
-    assert r3.summary()["duration_s"] == pytest.approx(r1.summary()["duration_s"], rel=1e-12)
-    assert r3.summary()["time_origin_s"] == pytest.approx(start)
+    assert r1.summary["duration_s"] == pytest.approx(RUN["duration_s"], rel=1e-12)
+    assert r3.summary["duration_s"] == pytest.approx(r1.summary["duration_s"], rel=1e-12)
+    assert r3.summary["time_origin_s"] == pytest.approx(start)
     # the samples start at [initial] time_s and cover the duration
     assert r3.t[0] == pytest.approx(start) and r3.t[-1] - r3.t[0] == pytest.approx(0.25)
     # sample(t) at the sample times gives back the sampled trajectory (absolute times)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -41,6 +42,8 @@ class Motion3DResult(DynamicsResult):
     ``steps_per_contact`` the mean number of integrator steps per episode.
     ``sample3d(times)`` gives the full state at any times.
     """
+
+    lateral: ClassVar[bool] = True
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     y: np.ndarray = field(default_factory=lambda: np.zeros(0))
     radial: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -68,8 +71,8 @@ class Motion3DResult(DynamicsResult):
         sel = (c["surface"] == surface) & ~c["initial"] & np.isfinite(c["time_out"])
         return c["time_out"][sel] - c["time_in"][sel]
 
-    def summary(self) -> dict:
-        out = super().summary()
+    def _summary_fields(self) -> dict:
+        out = super()._summary_fields()
         r = self.radial
         out.update({
             "wall_contacts": int(self.wall_contacts),
