@@ -2,6 +2,8 @@
 the same names the scene file allows, and simulate dispatching through them."""
 import re
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -31,14 +33,17 @@ def test_simulate_dispatches_through_models(monkeypatch):
 
     def fake(scene, *, duration=None):
         calls.append(duration)
-        return "ran"
+        return SimpleNamespace(ran=True)
 
     import tengfield.dynamics as dynamics
 
     monkeypatch.setitem(MODELS, "impact", ContactModel(fake, event_map=True))
     # the settling check (which continues a real run) is not what is tested here
     monkeypatch.setattr(dynamics, "_settled", lambda scene, model, result, duration: result)
-    assert simulate(default_scene(), duration=0.5) == "ran" and calls == [0.5]
+    scene = default_scene()
+    result = simulate(scene, duration=0.5)
+    assert result.ran and calls == [0.5]
+    assert result.scene is scene          # the result keeps the scene it ran (#41)
 
 
 def test_only_a_phased_kind_takes_another_phase():

@@ -289,7 +289,7 @@ def test_writers_never_write_through_a_symlink_or_into_a_pipe(tmp_path):
     victim = tmp_path / "victim.csv"
     victim.write_text("keep me")
     three = np.arange(3.0)
-    dynamics = SimpleNamespace(t=three, gap=three, gap_velocity=three, table=three,
+    dynamics = SimpleNamespace(lateral=False, t=three, gap=three, gap_velocity=three, table=three,
                                impacts=SimpleNamespace(time=three, plate=np.array(["upper"] * 3),
                                                        speed_before=three, speed_after=three))
     scene = SimpleNamespace(contact=SimpleNamespace(model="impact"))

@@ -226,7 +226,7 @@ def trajectory3d_figure(result, *, title: str | None = None):
     ax_top.set_title("top view (centre; dashed: wall contact)")
     ax_top.grid(alpha=0.3)
     head = title or "ball in 3D"
-    s = result.summary()
+    s = result.summary
     third = "band" if shell else "wall"
     fig.suptitle(f"{head}: regime {s['regime']}, {s['impacts']} "
                  f"{'electrode' if shell else 'plate'} impacts, "
