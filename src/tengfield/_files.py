@@ -331,3 +331,24 @@ def refuse_another_commands_directory(target: str | Path, command: str,
                       + (f" ({shown})" if shown else "")
                       + f"; `tengfield {command}` would replace them: nothing was written; "
                         f"choose another {option} directory")
+
+
+#: the figure formats ``--figure-format`` offers (matplotlib writes each by its suffix)
+FIGURE_FORMATS = ("png", "pdf", "svg")
+_FIGURE_FORMAT = {"format": "png"}
+
+
+def set_figure_format(fmt: str) -> None:
+    """The format of every figure written from now on (``--figure-format``): one of
+    :data:`FIGURE_FORMATS`; raises ValueError naming the allowed ones."""
+    fmt = str(fmt).lower().lstrip(".")
+    if fmt not in FIGURE_FORMATS:
+        raise ValueError(f"--figure-format {fmt!r} is not offered: allowed "
+                         f"{', '.join(FIGURE_FORMATS)}")
+    _FIGURE_FORMAT["format"] = fmt
+
+
+def figure_file(stem: str) -> str:
+    """A figure's file name: ``stem`` with the format's suffix (``waveforms.png``, or
+    ``waveforms.pdf`` under ``--figure-format pdf``)."""
+    return f"{stem}.{_FIGURE_FORMAT['format']}"

@@ -74,6 +74,10 @@ def build_parser() -> argparse.ArgumentParser:
     for command in sub.choices.values():
         if any(a.dest in ("no_plots", "no_plot") for a in command._actions):  # noqa: SLF001
             command.add_argument(
+                "--figure-format", default="png", metavar="png|pdf|svg",
+                help="format of the figures written (default png; field.png, drawn by "
+                     "pyvista, stays a PNG)")
+            command.add_argument(
                 "--dpi", type=float, default=None, metavar="N",
                 help="resolution of the figures written [dots per inch] (default: each "
                      "figure's own, 110-120; e.g. 300 for a paper); field.png scales with it")
@@ -88,13 +92,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _apply_settings(args) -> None:
     """``--set section.key=value``: the command gets the scene (file or default) with
-    them applied, checked as the same keys in the file (raises SceneError); ``--dpi``:
-    the resolution every figure of the command is saved at (checked here, before any
-    output exists)."""
+    them applied, checked as the same keys in the file (raises SceneError); ``--dpi``
+    and ``--figure-format``: how every figure of the command is saved (checked here,
+    before any output exists; reset by every call)."""
+    from ._files import set_figure_format
     from .plotting import set_figure_dpi
 
     try:
         set_figure_dpi(getattr(args, "dpi", None))
+        set_figure_format(getattr(args, "figure_format", "png"))
     except ValueError as exc:
         raise SceneError(str(exc)) from None
     settings = getattr(args, "settings", None)

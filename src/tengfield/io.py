@@ -31,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._files import atomic_path, writable_target, write_csv, write_json, write_rows
+from ._files import (atomic_path, figure_file, writable_target, write_csv, write_json,
+                     write_rows)
 from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
 from .plotting.waveforms import run_title
 from .dynamics.output import (EXTRA_COLUMNS, MAP_COLUMNS, _trajectory_without,  # noqa: F401
@@ -85,19 +86,19 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
         last = t >= t[-1] - shown                          # sent, not the whole run
         waveforms = {k: np.asarray(v)[last] for k, v in source.items()}
         written.append(_figure(
-            figures, plot_waveforms, waveforms, path=out / "waveforms.png",
+            figures, plot_waveforms, waveforms, path=out / figure_file("waveforms"),
             title=run_title(result) + ", last 5 periods",
             parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         envelope = (getattr(result, "extras", None) or {}).get("_envelope")
         if envelope is not None:      # a streamed run: the whole record, min/max per bin
             from .plotting.record import plot_record
             written.append(_figure(
-                figures, plot_record, envelope, path=out / "record.png",
+                figures, plot_record, envelope, path=out / figure_file("record"),
                 title=run_title(result) + ", whole run: min/max per time bin",
                 parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
             written.append(_figure(figures, plot_surrogate, result.table, result.curves,
-                                   path=out / "surrogate.png", cells=result.scene.device.cells,
+                                   path=out / figure_file("surrogate"), cells=result.scene.device.cells,
                                    visited=visited_positions(result.dynamics),
                                    error_estimate=result.summary.get("surrogate_error_estimate")))
         written += write_harvest_plots(result, out, figures=figures)
@@ -113,7 +114,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
         if plots:
             from .plotting.ensemble import plot_ensemble
             written.append(_figure(figures, plot_ensemble, rows, result.summary["ensemble"],
-                                   path=out / "ensemble.png"))
+                                   path=out / figure_file("ensemble")))
     if run_tables_format(result, warn=True) == "hdf5":
         written.insert(0, write_run_hdf5(writable_target(out / HDF5_FILE), result))
     else:
@@ -216,14 +217,14 @@ def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
     written = []
     if extras.get("_fine") is not None:
         written.append(_figure(figures, hp.plot_charging, extras["_fine"], result.scene,
-                               path=out / "charging.png", title=run_title(result)))
+                               path=out / figure_file("charging"), title=run_title(result)))
     if extras.get("_vq"):
         written.append(_figure(figures, hp.plot_vq, extras["_vq"],
-                               result.summary.get("energy_per_cycle", {}), path=out / "vq.png",
+                               result.summary.get("energy_per_cycle", {}), path=out / figure_file("vq"),
                                title=run_title(result)))
     if extras.get("_array") is not None:
         written.append(_figure(figures, hp.plot_array, extras["_array"],
-                               result.summary.get("array", {}), path=out / "array.png",
+                               result.summary.get("array", {}), path=out / figure_file("array"),
                                title=run_title(result)))
     return written
 

@@ -17,6 +17,7 @@ import numpy as np
 from . import electrical
 from ._json import regime_dict
 from .quantities import TERMINAL, column_name
+from ._files import figure_file
 
 #: the terminal statistics of a sweep row: (column, statistic, short name), names from
 #: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
@@ -543,7 +544,7 @@ class SweepResult(SweepRows):
 
     def figure_names(self) -> dict[str, str]:
         """{varied key: its figure's file name} (``sweep_device.stroke_mm.png``)."""
-        return {key: f"sweep_{key}.png" for key in self.vary}
+        return {key: figure_file(f"sweep_{key}") for key in self.vary}
 
     def write(self, out_dir, plots: bool = True) -> list:
         """sweep.csv and the figures (sweep.png when frequency x amplitude is swept without
@@ -560,7 +561,7 @@ class SweepResult(SweepRows):
                                                  for k in columns] for row in self))
         written = [out / "sweep.csv"]
         if plots:
-            names = self.figure_names() if self.vary else {None: "sweep.png"}
+            names = self.figure_names() if self.vary else {None: figure_file("sweep")}
             for key, name in names.items():
                 with atomic_path(out / name) as tmp:
                     save_figure(self.plot(key), tmp, dpi=120)

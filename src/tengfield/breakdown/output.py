@@ -9,6 +9,7 @@ from pathlib import Path
 from .band import scene_band
 from .charge import obtain_breakdown_table, scene_breakdown, scene_sigma, uses_breakdown_charge
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
+from .._files import figure_file
 
 def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     """What ``tengfield breakdown`` prints (with ``band``: σ_max over the γ range and one
@@ -64,9 +65,9 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
             drawn = -result.sigma_max
             title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
                      f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
-        with atomic_path(out / "breakdown.png") as tmp:
+        with atomic_path(out / figure_file("breakdown")) as tmp:
             plot_breakdown(result, drawn, tmp, title=title, band=band)
-        written.append(out / "breakdown.png")
+        written.append(out / figure_file("breakdown"))
     return written
 
 

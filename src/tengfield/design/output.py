@@ -11,6 +11,7 @@ from .answer import (aggregate_words, band_table_lines, chosen_band_point, descr
 from .candidate import band_run, followed_geometry
 from ..scene.schema import update_section
 from .spec import OBJECTIVES, OTHER_VARY, objective_label, periodic
+from .._files import figure_file
 
 
 def _band_label(f: float, a: float, kind: str = "sine") -> str:
@@ -271,7 +272,7 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
         written.append(out / "best.toml")
     if plots:
         from ..plotting.design import plot_design
-        with atomic_path(out / "design.png") as tmp:
+        with atomic_path(out / figure_file("design")) as tmp:
             plot_design(result, tmp, **plot_options(result))
-        written.append(out / "design.png")
+        written.append(out / figure_file("design"))
     return written

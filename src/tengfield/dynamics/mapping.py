@@ -21,6 +21,7 @@ from ..scene.constants import G
 from .impact import Restitution, integrate
 from .regime import classify
 from .result import REGIMES, Regime
+from .._files import figure_file
 
 #: At most this many grid points in one map (result arrays ~130 bytes per point).
 MAX_MAP_POINTS = 4_000_000
@@ -80,8 +81,8 @@ class MapResult:
         write_map_csv(self, out / "map.csv")
         paths = [out / "map.csv"]
         if plots:
-            plot_regime_map(self, writable_target(out / "map.png"), title=self.plot_title())
-            paths.append(out / "map.png")
+            plot_regime_map(self, writable_target(out / figure_file("map")), title=self.plot_title())
+            paths.append(out / figure_file("map"))
         return paths
 
     def plot_title(self) -> str:

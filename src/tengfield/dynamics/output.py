@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_csv, write_rows, writable_target
+from .._files import figure_file
 
 
 def dynamics_tables(dynamics, scene) -> dict:
@@ -118,10 +119,10 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
                  f"e = {scene.contact.restitution:g}" if excitation_kind(scene).periodic
                  else "recorded excitation")
         data = trajectory_figure(dynamics, max_periods=max_periods, title=title)
-        for name in ("trajectory.png", "trajectory3d.png") if three_d else ("trajectory.png",):
+        for name in (figure_file("trajectory"), figure_file("trajectory3d")) if three_d else (figure_file("trajectory"),):
             writable_target(out / name)
         if figures is not None:
-            drawing = figures.draw(draw_trajectory, data, out / "trajectory.png")
+            drawing = figures.draw(draw_trajectory, data, out / figure_file("trajectory"))
     # the figure process draws on a core of its own: leave it one
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     threads = max(1, min(len(tables) or 1, (cores or 1) - (drawing is not None)))
@@ -129,11 +130,11 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
         pending = [pool.submit(write, dynamics, out / name) for write, name in tables]
         if plots:
             if three_d:
-                plot_trajectory3d(dynamics, out / "trajectory3d.png")
-                written.append(out / "trajectory3d.png")
+                plot_trajectory3d(dynamics, out / figure_file("trajectory3d"))
+                written.append(out / figure_file("trajectory3d"))
             if drawing is None:
-                draw_trajectory(data, out / "trajectory.png")
-            written.append(out / "trajectory.png")
+                draw_trajectory(data, out / figure_file("trajectory"))
+            written.append(out / figure_file("trajectory"))
         for job in pending:
             job.result()
     return written

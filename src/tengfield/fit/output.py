@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._files import scene_dir, scene_toml, write_json, write_text
+from .._files import figure_file
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
 SCENE_KEYS = {
@@ -55,5 +56,5 @@ def write_fit_outputs(scene, result, out_dir, *, plots: bool = True) -> list[Pat
     written.append(out / "fitted.toml")
     if plots:
         from ..plotting.fit import plot_fit
-        written.append(plot_fit(result, out / "fit.png"))
+        written.append(plot_fit(result, out / figure_file("fit")))
     return written

@@ -14,6 +14,7 @@ from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
 from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
                    error_words)
+from .._files import figure_file
 
 
 
@@ -113,9 +114,9 @@ def write_report(report, out_dir) -> list[Path]:
                write_report_json(out / "report.json", report)]
     images = {}
     for stage, fig in report.stage_figures().items():    # the figures a notebook gets
-        with atomic_path(out / f"{stage}.png") as tmp:
+        with atomic_path(out / figure_file(stage)) as tmp:
             save_figure(fig, tmp, dpi=100)
-        images[stage] = out / f"{stage}.png"
+        images[stage] = out / figure_file(stage)
         written.append(images[stage])
     for rec in report.recommendations:
         path = out / f"recommended-{rec.target:g}.toml"

@@ -7,6 +7,7 @@ from pathlib import Path
 from .._files import atomic_path, write_json, write_rows
 from .._json import jsonable
 from .statistics import dominant_input
+from .._files import figure_file
 
 
 def csv_rows(study) -> tuple[list[str], list[list]]:
@@ -32,9 +33,9 @@ def write_outputs(study, out, *, plots: bool = True) -> list[Path]:
                write_json(out / "uncertainty.json", jsonable(study.summary))]
     if plots:
         from ..plotting import save_figure
-        with atomic_path(out / "uncertainty.png") as tmp:
+        with atomic_path(out / figure_file("uncertainty")) as tmp:
             save_figure(study.plot(), tmp, dpi=110)     # the figure a notebook gets
-        written.append(out / "uncertainty.png")
+        written.append(out / figure_file("uncertainty"))
     return written
 
 
