@@ -121,9 +121,9 @@ from tengfield.field import solve_position
 from tengfield.scene import default_scene
 print("ready", flush=True)
 try:
-    for _ in range(20):
+    for _ in range(20):   # ~1 s each: the signal lands inside one and is handled soon after
         solve_position(default_scene(), 1.5e-3, comm=MPI.COMM_SELF, method="axisymmetric",
-                       mesh_size_mm=0.2)
+                       mesh_size_mm=0.5)
 except KeyboardInterrupt:
     print("interrupted", flush=True)
     sys.exit(3)
