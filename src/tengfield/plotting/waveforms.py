@@ -1,7 +1,7 @@
 """Plots of the electrical waveforms and of the surrogate (matplotlib Figure objects, saved as PNG; no pyplot).
 
 ``plot_waveforms``: V_OC, Q_SC, I_SC (and the load voltage/power when
-present) against time, each with the gap z(t) on a twin axis, in the style
+present) against time, with the gap z(t) on its own panel below, in the style
 of the paper's Figs. 8c-d and 9b-d. ``plot_surrogate``: V_OC, Q_SC and C_T
 against z with the solved positions marked (a (z, r) surrogate: at r = 0 and at the
 offsets the ball reached, plus the change of Q_SC with r). ``plot_sweep``: peak-to-peak
@@ -54,15 +54,16 @@ def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
 
 def waveforms_figure(waveforms: dict, *, title: str = "", last_seconds: float | None = None,
                      parallel_capacitance_pF: float = 0.0):
-    """Waveform panels against time [ms] with the gap [mm] in grey (right axis)
+    """Waveform panels against time [ms] and, below them, the gap z [mm] on its own panel
     (:func:`waveform_panels`; ``parallel_capacitance_pF``: the instrument's C_p, named
     on the V_read panel)."""
     t = np.asarray(waveforms["time_s"])
     mask = np.ones_like(t, dtype=bool) if last_seconds is None else t >= t[-1] - last_seconds
     panels = waveform_panels(waveforms, parallel_capacitance_pF)
-    fig = new_figure((8, 2.1 * len(panels)))
-    axes = fig.subplots(len(panels), 1, sharex=True)
-    for ax, (key, label, factor) in zip(np.atleast_1d(axes), panels):
+    heights = [1.0] * len(panels) + [0.6]       # the gap: its own, lower panel
+    fig = new_figure((8, 2.1 * len(panels) + 1.3))
+    axes = fig.subplots(len(panels) + 1, 1, sharex=True, gridspec_kw={"height_ratios": heights})
+    for ax, (key, label, factor) in zip(axes, panels):
         ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0)
         read = READ_OVERLAYS.get(key)
         if read in waveforms:     # what the [instrument] records, over the terminal's own
@@ -70,10 +71,11 @@ def waveforms_figure(waveforms: dict, *, title: str = "", last_seconds: float | 
                     lw=1.0, label="read by the instrument")
             ax.legend(loc="upper right", fontsize=7)
         ax.set_ylabel(label, color="C0")
-        twin = ax.twinx()
-        twin.plot(t[mask] * 1e3, np.asarray(waveforms["gap_m"])[mask] * 1e3, color="0.6", lw=0.8)
-        twin.set_ylabel("gap z [mm]", color="0.45")
         ax.grid(alpha=0.3)
+    gap_ax = axes[-1]
+    gap_ax.plot(t[mask] * 1e3, np.asarray(waveforms["gap_m"])[mask] * 1e3, color="0.4", lw=0.9)
+    gap_ax.set_ylabel("gap z [mm]")
+    gap_ax.grid(alpha=0.3)
     np.atleast_1d(axes)[-1].set_xlabel("time [ms]")
     if title:
         fig.suptitle(title)
