@@ -158,7 +158,8 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    title = (f"surrogate ({curves.reference}, {cells} cell(s)): {table.count} positions, "
+    title = (f"surrogate ({', '.join(p for p in (curves.reference, cells_phrase(cells)) if p)}): "
+             f"{table.count} positions, "
              f"error estimate {table.interpolation_error if error_estimate is None else error_estimate:.2g}")
     if radial:
         _plot_radial_change(axes[3], curves, cells, visited)
@@ -253,12 +254,25 @@ def sweep_figure(rows: list[dict]):
     return fig
 
 
+def cells_phrase(cells: int) -> str:
+    """``"4 cells"`` for more than one cell, ``""`` for one (a title says nothing then)."""
+    return f"{int(cells)} cells" if int(cells) > 1 else ""
+
+
+def _signed(value: float) -> str:
+    """``value`` with ``{:g}`` and a typographic minus (−8, not -8)."""
+    return f"{value:g}".replace("-", "−")
+
+
 def run_title(result) -> str:
-    """The title of a run's figures: excitation, cells, reference, regime."""
-    exc = result.scene.excitation
+    """The title of a run's figures: the device (σ [µC/m²], stroke Δh [mm]), the
+    excitation, the cell count when > 1, the reference and the regime."""
+    exc, dev = result.scene.excitation, result.scene.device
     regime = result.summary.get("regime") or {}
     name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
-    return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
-            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
-            f"{result.scene.circuit.reference}"
-            + (f", {name}" if name else ""))
+    parts = [f"σ = {_signed(dev.surface_charge * 1e6)} µC/m²",
+             f"Δh = {dev.stroke * 1e3:g} mm", f"{exc.frequency:g} Hz",
+             f"A = {exc.amplitude * 1e3:g} mm",
+             cells_phrase(result.summary.get("cells", dev.cells)),
+             result.scene.circuit.reference, name]
+    return ", ".join(p for p in parts if p)
