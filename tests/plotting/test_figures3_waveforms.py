@@ -32,3 +32,18 @@ def test_gap_is_drawn_on_its_own_panel_not_over_the_terminal_curves():
     gap_box = gap_axes[0].get_position()
     for ax in terminal:
         assert ax.get_position().y0 >= gap_box.y1 - 1e-9
+
+
+def test_v_read_label_is_short_and_fits_its_panel_the_instrument_in_the_legend():
+    w = _waveforms(read=True)
+    fig = waveforms_figure(w, parallel_capacitance_pF=338.0)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    (ax,) = [ax for ax in fig.get_axes() if ax.get_ylabel().startswith("V_read")]
+    assert ax.get_ylabel() == "V_read [V]"
+    legend = ax.get_legend()
+    assert legend is not None
+    assert any("C_p = 338 pF" in t.get_text() for t in legend.get_texts())
+    for each in fig.get_axes():                   # every y label within its panel's height
+        label_box = each.yaxis.label.get_window_extent(renderer)
+        assert label_box.height <= each.get_window_extent(renderer).height + 1e-6, each.get_ylabel()

@@ -23,7 +23,7 @@ READ_OVERLAYS = {"Q_sc_C": "Q_read_C", "I_sc_A": "I_read_A"}
 def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> list:
     """``(column, axis label, factor)`` of each panel of :func:`plot_waveforms`, names and
     units from :mod:`tengfield.quantities`: V_OC (ideal), the voltage read through C_p
-    when the waveforms have it, Q_SC, I_SC, and a load's V_load and P_load."""
+    when the waveforms have it (short label "V_read [V]"; C_p is named in its legend), Q_SC, I_SC, and a load's V_load and P_load."""
     from ..quantities import QUANTITIES, axis_label
 
     names = ["V_oc_V"]
@@ -35,8 +35,8 @@ def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> li
     panels = []
     for name in names:
         label = axis_label(name)
-        if name == "V_read_V":
-            label = f"V read through C_p = {parallel_capacitance_pF:.3g} pF [V]"
+        if name == "V_read_V":   # short: the instrument is named in the panel's legend
+            label = "V_read [V]"
         elif name == "V_oc_V":
             label = "V_OC (ideal) [V]" if "V_read_V" in waveforms else label
         panels.append((name, label, QUANTITIES[name].display_scale))
@@ -64,7 +64,11 @@ def waveforms_figure(waveforms: dict, *, title: str = "", last_seconds: float | 
     fig = new_figure((8, 2.1 * len(panels) + 1.3))
     axes = fig.subplots(len(panels) + 1, 1, sharex=True, gridspec_kw={"height_ratios": heights})
     for ax, (key, label, factor) in zip(axes, panels):
-        ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0)
+        ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0,
+                label=(f"V read through C_p = {parallel_capacitance_pF:.3g} pF"
+                       if key == "V_read_V" else None))
+        if key == "V_read_V":
+            ax.legend(loc="upper right", fontsize=7)
         read = READ_OVERLAYS.get(key)
         if read in waveforms:     # what the [instrument] records, over the terminal's own
             ax.plot(t[mask] * 1e3, np.asarray(waveforms[read])[mask] * factor, color="C3",
