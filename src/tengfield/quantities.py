@@ -121,6 +121,54 @@ STATISTICS: dict[str, tuple[str, str]] = {
 TERMINAL = ("V_oc_V", "Q_sc_C", "I_sc_A")
 
 
+#: scene/fit parameter key (its section's prefix, ``device.``, dropped) -> (symbol, shown
+#: unit, words for a unitless one). Figures label a scene key with these (issue #42).
+SCENE_SYMBOLS: dict[str, tuple[str, str, str]] = {
+    "surface_charge_uC_per_m2": ("σ", "µC/m²", ""),
+    "stroke_mm": ("Δh", "mm", ""),
+    "gap_mm": ("Δh", "mm", ""),
+    "ball_diameter_mm": ("d", "mm", ""),
+    "electrode_radius_mm": ("r_e", "mm", ""),
+    "ball_density_kg_per_m3": ("ρ", "kg/m³", ""),
+    "restitution": ("e", "", "restitution"),
+    "parallel_capacitance_pF": ("C_p", "pF", ""),
+    "capacitance_pF": ("C_p", "pF", ""),
+    "load_ohm": ("R", "Ω", ""),
+    "frequency_hz": ("f", "Hz", ""),
+    "amplitude_mm": ("A", "mm", ""),
+    "time_shift_s": ("t_0", "s", ""),
+    "amplitude_scale": ("A/A_scene", "", "amplitude scale"),
+    "duration_s": ("T_run", "s", ""),
+}
+
+
+def scene_symbol(key: str) -> tuple[str, str, str] | None:
+    """(symbol, unit, words) of scene key ``key`` (``"device.restitution"`` or
+    ``"restitution"``), None when the table has none."""
+    return SCENE_SYMBOLS.get(key.rpartition(".")[2])
+
+
+def scene_label(key: str) -> str:
+    """An axis label of scene key ``key``: ``"σ [µC/m²]"``, ``"e (restitution)"``; a key
+    the table lacks: its name with underscores as spaces."""
+    entry = scene_symbol(key)
+    if entry is None:
+        return key.rpartition(".")[2].replace("_", " ")
+    symbol, unit, words = entry
+    return f"{symbol} [{unit}]" if unit else f"{symbol} ({words})" if words else symbol
+
+
+def scene_value_text(key: str, value: float, digits: int = 3) -> str:
+    """``"σ = −35.8 µC/m²"``: scene key ``key`` at ``value`` (its file unit), typographic
+    minus; a key the table lacks: ``"name = value"``."""
+    number = f"{value:.{digits}g}".replace("-", "\u2212")
+    entry = scene_symbol(key)
+    if entry is None:
+        return f"{key.rpartition('.')[2]} = {number}"
+    symbol, unit, _ = entry
+    return f"{symbol} = {number}" + (f" {unit}" if unit else "")
+
+
 def quantity(name: str) -> Quantity:
     """The entry of ``name`` (KeyError naming the known ones)."""
     try:

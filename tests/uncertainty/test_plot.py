@@ -36,9 +36,9 @@ def test_study_plot_returns_the_figure_the_cli_saves(tmp_path):
     fig = study.plot()
     assert isinstance(fig, Figure)
     hist, bars = fig.axes[:2]
-    assert hist.get_xlabel() == f"{Q} [nC]" and hist.get_ylabel() == "evaluations"
+    assert hist.get_xlabel() == "Q_SC peak-to-peak [nC]" and hist.get_ylabel() == "evaluations"
     assert bars.get_ylabel() == "share of variance"
-    assert [t.get_text() for t in bars.get_xticklabels()] == [SIGMA, REST]
+    assert [t.get_text() for t in bars.get_xticklabels()] == ["σ [µC/m²]", "e (restitution)"]
     # the histogram holds every evaluation, in nC
     counts = sum(p.get_height() for p in hist.containers[0])
     assert counts == len(study.evaluations.rows)
@@ -54,5 +54,5 @@ def test_study_plot_returns_the_figure_the_cli_saves(tmp_path):
 def test_a_monte_carlo_study_plots_one_panel_per_output():
     fig = _study("monte-carlo").plot()
     assert isinstance(fig, Figure) and len(fig.axes) == 1
-    assert fig.axes[0].get_xlabel() == f"{Q} [nC]"
+    assert fig.axes[0].get_xlabel() == "Q_SC peak-to-peak [nC]"
     assert "monte-carlo" in fig.texts[0].get_text()

@@ -88,6 +88,7 @@ def with_measured(scene, items):
 def terminal_lines(summary: dict) -> list[str]:
     """The ``peak:`` and ``peak-to-peak:`` lines of a run's summary (names and units from
     :mod:`tengfield.quantities`), and the instrument's reading when there is one."""
+    from ..plotting.waveforms import cells_phrase
     from ..quantities import QUANTITIES, TERMINAL, display
 
     lines = []
@@ -96,7 +97,9 @@ def terminal_lines(summary: dict) -> list[str]:
         if not values:
             continue
         names = [n for n in TERMINAL if n in values]
-        lines.append(f"{words} ({summary['reference']} reference, {summary['cells']} cell(s)): "
+        where = ", ".join(p for p in (f"{summary['reference']} reference",
+                                       cells_phrase(summary["cells"])) if p)
+        lines.append(f"{words} ({where}): "
                      + ", ".join(f"{QUANTITIES[n].symbol} = {display(n, values[n])}"
                                  for n in names))
     if "V_read_V" in (summary.get("peak") or {}):

@@ -37,6 +37,37 @@ def colour_bar_labels(limit: float, n_labels: int = 5) -> list[str]:
     return [fmt % v for v in values]
 
 
+def nice_ticks(lo: float, hi: float, target: int = 5) -> tuple[float, float, int, str]:
+    """Round axis labels over [lo, hi] (mm): ``(start, stop, count, printf format)`` with
+    start <= lo, stop >= hi, both on a grid of step 1, 2 or 5 x 10^k, and ``count``
+    labels start, start + step, ..., stop: of the steps giving 4 to 10 labels (about
+    ``target``), the one padding [lo, hi] least."""
+    span = hi - lo
+    if not (math.isfinite(span) and span > 0.0):
+        return lo, hi, 2, "%g"
+    power = 10.0 ** math.floor(math.log10(span / max(target - 1, 1)))
+    best = None
+    for step in (m * power * k for k in (0.1, 1.0, 10.0) for m in (1.0, 2.0, 5.0)):
+        start = math.floor(lo / step + 1e-9) * step
+        stop = math.ceil(hi / step - 1e-9) * step
+        count = int(round((stop - start) / step)) + 1
+        if 4 <= count <= 10:
+            key = ((stop - start) - span, abs(count - target))
+            if best is None or key < best[0]:
+                best = (key, step, start, stop, count)
+    if best is None:
+        return lo, hi, 2, "%g"
+    _, step, start, stop, count = best
+    decimals = max(0, -int(math.floor(math.log10(step) + 1e-9)))
+    return start, stop, count, f"%.{decimals}f"
+
+
+#: the potential colour bar (pyvista scalar_bar_args, viewport fractions): right of the
+#: plot's frame, its title (drawn above the bar) below the figure's title
+COLOUR_BAR = dict(vertical=True, position_x=0.87, position_y=0.12, height=0.62, width=0.04,
+                  title_font_size=22, label_font_size=18, color="black")
+
+
 def height_origin(lay) -> float:
     """Where field.png's vertical axis has its zero [m, mesh coordinates]: the lower
     electrode's face, so the axis reads the gap z of the title (the mesh's own origin
@@ -82,17 +113,19 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     phi_grid[~valid] = np.nan            # outside the mesh (below a grounded table)
     sampled.point_data["phi"] = phi_grid
     lim = float(np.nanmax(np.abs(phi_grid), initial=0.0)) if np.any(valid) else 0.0
-    n_labels = 5
-    factor, unit, fmt = colour_bar_scale(lim, n_labels)
+    factor, unit, _ = colour_bar_scale(lim, 5)
     lim = lim or 1.0
+    # round colour-bar labels: the symmetric range widened to a round limit (in the unit)
+    low, high, n_labels, fmt = nice_ticks(-lim / factor, lim / factor)
+    lim = max(-low, high) * factor
+    if -low != high:
+        low, high, n_labels, fmt = nice_ticks(-lim / factor, lim / factor)
     sampled.point_data["phi"] = phi_grid / factor
     grad_z, grad_r = np.gradient(np.nan_to_num(phi_grid).reshape(shape), step)
 
     plotter = pv.Plotter(off_screen=True, window_size=window_size)
     plotter.set_background("white")
-    bar = dict(title=f"potential ({unit})", vertical=True, position_x=0.82, position_y=0.15,
-               height=0.7, width=0.05, title_font_size=24, label_font_size=20, fmt=fmt,
-               color="black", n_labels=n_labels)
+    bar = dict(COLOUR_BAR, title=f"potential ({unit})", fmt=fmt, n_labels=n_labels)
     plotter.add_mesh(sampled, scalars="phi", cmap="RdBu_r", clim=(-lim / factor, lim / factor),
                      scalar_bar_args=bar, show_edges=False, nan_opacity=0.0)
     contours = sampled.contour(isosurfaces=np.linspace(-lim, lim, 25)[1:-1] / factor,
@@ -149,10 +182,15 @@ def render_potential_png(path, solution, phi: np.ndarray, *, title: str,
     # mesh's origin is the midplane); the ball's bottom sits at the gap z
     base = height_origin(lay) * mm
     height = cell["height_label"]
+    # round tick values in mm: the axes span round bounds holding the cell
+    r_lo, r_hi, n_r_labels, r_fmt = nice_ticks(-half_w, half_w)
+    h_lo, h_hi, n_z_labels, z_fmt = nice_ticks(z0 - base, z1 - base)
     plotter.show_bounds(xtitle="r (mm)", ytitle=f"z: height above {height} (mm)",
                         color="black", font_size=14, location="outer", ticks="outside",
-                        bounds=(-half_w, half_w, z0, z1, 0, 0),
-                        axes_ranges=[-half_w, half_w, z0 - base, z1 - base, 0, 0])
+                        bounds=(r_lo, r_hi, h_lo + base, h_hi + base, 0, 0),
+                        axes_ranges=[r_lo, r_hi, h_lo, h_hi, 0, 0],
+                        n_xlabels=n_r_labels, n_ylabels=n_z_labels,
+                        fmt=max(r_fmt, z_fmt, key=lambda f: int(f[2:-1])))   # more decimals
     plotter.view_xy()
     plotter.camera.zoom(1.15)
     plotter.screenshot(str(Path(path)))

@@ -31,7 +31,8 @@ class TrajectoryFigure:
     """What trajectory.png shows, as plain numbers (small and picklable, so that a
     figure process can draw it): the exact trajectory at PLOT_POINTS times ``t`` [s],
     the lower plate ``y`` and the gap ``z`` [m], the impacts in that span, the plate
-    distance ``stroke`` [m], the start of the steady window [s] and the title."""
+    distance ``stroke`` [m], the start of the steady window [s], the title and whether
+    the cell is a spherical shell (``shell``: its bottom and top are the cavity wall)."""
 
     t: np.ndarray
     y: np.ndarray
@@ -43,6 +44,7 @@ class TrajectoryFigure:
     stroke: float
     window_start: float
     title: str
+    shell: bool = False          # a spherical shell: the "plates" are the cavity wall
 
 
 def trajectory_figure(result, *, title: str | None = None,
@@ -72,8 +74,9 @@ def trajectory_figure(result, *, title: str | None = None,
             upper = imp.plate[sel] != "lower"
     reg = result.regime
     head = title or "ball between two vibrating plates"
-    said = (f"{reg.name}, period {reg.period}" if reg.period and reg.name != "rest"
-            else reg.name)
+    period = int(reg.period) if reg.period is not None and np.isfinite(reg.period) else 0
+    said = (f"{reg.name}, period {period}" if period > 0 and reg.name != "rest"
+            else reg.name)          # a period of 0 (aperiodic, at rest): the name alone
     full_title = (f"{head}\nregime: {said}, max gap {reg.max_gap * 1e3:.3g} mm; contacts "
                   f"per excitation period: lower {reg.lower_contacts_per_period:.3g}, upper "
                   f"{reg.upper_contacts_per_period:.3g}")
@@ -81,7 +84,8 @@ def trajectory_figure(result, *, title: str | None = None,
                             impact_y=np.asarray(yi), impact_z=np.asarray(zi),
                             impact_upper=np.asarray(upper, dtype=bool),
                             stroke=float(result.stroke),
-                            window_start=float(result.window_start), title=full_title)
+                            window_start=float(result.window_start), title=full_title,
+                            shell=getattr(result, "cavity_radius", 0.0) > 0.0)
 
 
 def plot_trajectory(result, path, *, title: str | None = None, max_periods: float | None = None):
@@ -107,9 +111,11 @@ def trajectory_plot(data: TrajectoryFigure):
     stroke_mm = data.stroke * 1e3
     fig = new_figure((9, 6))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
-    ax1.plot(t, y * 1e3, color="0.35", lw=1.2, label="lower plate $y(t)$")
+    bottom, top = (("cavity wall, bottom", "cavity wall, top") if data.shell
+                   else ("lower plate", "upper plate"))
+    ax1.plot(t, y * 1e3, color="0.35", lw=1.2, label=f"{bottom} $y(t)$")
     ax1.plot(t, (y + data.stroke) * 1e3, color="0.6", lw=1.2, ls="--",
-             label=r"upper plate $y + \Delta h$")
+             label=f"{top} $y + \\Delta h$")
     ax1.plot(t, (y + z) * 1e3, color="#d62728", lw=1.4, label="ball bottom $y + z$")
     ax1.fill_between(t, (y + z) * 1e3, y * 1e3, color="#d62728", alpha=0.08)
     ax2.plot(t, z * 1e3, color="#1f77b4", lw=1.3, label="gap $z(t)$")
@@ -117,8 +123,9 @@ def trajectory_plot(data: TrajectoryFigure):
     ax2.axhline(stroke_mm, color="0.6", lw=0.8, ls="--")
     ti, yi, zi = data.impact_time, data.impact_y, data.impact_z
     upper = data.impact_upper
-    for which, marker, colour, label in ((~upper, "v", "k", "impact, lower"),
-                                         (upper, "^", "#9467bd", "impact, upper")):
+    where = ("bottom", "top") if data.shell else ("lower", "upper")
+    for which, marker, colour, label in ((~upper, "v", "k", f"impact, {where[0]}"),
+                                         (upper, "^", "#9467bd", f"impact, {where[1]}")):
         if np.any(which):
             ax1.plot(ti[which], (yi[which] + zi[which]) * 1e3, marker, ms=4,
                      color=colour, label=label)

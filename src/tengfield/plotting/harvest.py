@@ -45,28 +45,52 @@ def plot_charging(fine, scene, path: str | Path, *, title: str = "") -> Path:
 
 
 def plot_vq(loops: dict, energy: dict, path: str | Path, *, title: str = "") -> Path:
-    """V [V] against transferred charge Q [nC] over the last period; legend: ∮V dQ."""
-    fig = new_figure((6.4, 4.8))
-    ax = fig.subplots()
+    """vq.png: :func:`vq_figure` saved to ``path``."""
+    save_figure(vq_figure(loops, energy, title=title), path, 120)
+    return Path(path)
+
+
+def _draw_loops(ax, loops: dict, energy: dict) -> None:
+    """Each loop's V [V] against Q [nC], labelled with its ∮V dQ."""
     for k, (name, (q, v, area)) in enumerate(loops.items()):
         label = (f"resistive load {energy.get('load_ohm', float('nan')):.3g} Ω"
                  if name == "load" else "rectifier (bridge terminal)")
         ax.plot(np.asarray(q) * 1e9, v, color=f"C{k}", lw=1.2,
                 label=f"{label}: ∮V dQ = {area:.4g} J")
-    if energy.get("max_energy_per_cycle_J"):
-        q_max = energy["Q_sc_max_C"] * 1e9
-        v_up, v_down = energy["V_oc_max_V"], energy["V_return_max_V"]
-        ax.plot([0, 0, q_max, q_max, 0], [0, v_up, 0, -v_down, 0], color="0.4", ls=":",
-                label=f"CMEO bound: {energy['max_energy_per_cycle_J']:.4g} J")
+
+
+def _label_vq(ax, title: str) -> None:
     ax.axhline(0, color="0.7", lw=0.6)
     ax.set_xlabel("charge through the circuit Q [nC]")
     ax.set_ylabel("terminal voltage V [V]")
-    ax.set_title(f"{title}\nV-Q cycle of the last period (area = energy per cycle)", fontsize=9)
+    ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    ax.legend(fontsize=7, loc="best")
+
+
+def vq_figure(loops: dict, energy: dict, *, title: str = ""):
+    """V [V] against transferred charge Q [nC] over the last period; legend: ∮V dQ. With
+    the CMEO bound (``energy["max_energy_per_cycle_J"]``) two panels: the loops under the
+    bound's triangle (left), and the loops alone on their own limits (right), since a
+    loop far inside the bound would be a flat line at the triangle's scale."""
+    cmeo = bool(energy.get("max_energy_per_cycle_J"))
+    fig = new_figure((11.5, 4.8) if cmeo else (6.4, 4.8))
+    axes = fig.subplots(1, 2 if cmeo else 1, squeeze=False)[0]
+    _draw_loops(axes[0], loops, energy)
+    if cmeo:
+        q_max = energy["Q_sc_max_C"] * 1e9
+        v_up, v_down = energy["V_oc_max_V"], energy["V_return_max_V"]
+        axes[0].plot([0, 0, q_max, q_max, 0], [0, v_up, 0, -v_down, 0], color="0.4", ls=":",
+                     label=f"CMEO bound: {energy['max_energy_per_cycle_J']:.4g} J")
+        _draw_loops(axes[1], loops, energy)     # autoscaled on the loops alone
+        _label_vq(axes[0], "with the CMEO bound")
+        _label_vq(axes[1], "the run's V-Q loop, zoomed")
+    else:
+        _label_vq(axes[0], "")
+    fig.suptitle(f"{title}\nV-Q cycle of the last period (area = energy per cycle)",
+                 fontsize=9)
     fig.tight_layout()
-    save_figure(fig, path, 120)
-    return Path(path)
+    return fig
 
 
 def plot_array(array, summary: dict, path: str | Path, *, title: str = "") -> Path:

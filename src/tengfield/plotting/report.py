@@ -5,6 +5,7 @@ import math
 from pathlib import Path
 
 from . import new_figure, save_figure
+from ..scene.shapes.methods import FIELD_METHODS
 
 
 def plot_stage(path: Path, rows: list, stage: str, title: str, targets=(1e-2, 1e-3), *,
@@ -53,7 +54,7 @@ def stage_figure(rows: list, stage: str, title: str, targets=(1e-2, 1e-3), *,
 def _group(row) -> str:
     k = row.knobs
     if row.stage == "field":
-        if k.get("method") == "3d":
+        if k.get("method") in FIELD_METHODS and FIELD_METHODS[k["method"]].dimension == 3:
             return "3D (C, q at mid-stroke)"
         if k.get("far_field") != "kelvin":
             return f"{k.get('far_field')} far field"

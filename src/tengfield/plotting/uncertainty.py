@@ -22,6 +22,18 @@ def display_unit(name: str) -> tuple[str, float]:
     return "", 1.0
 
 
+def output_axis(name: str) -> tuple[str, float]:
+    """(axis label, SI -> shown factor) of output ``name``: a quantity-table output
+    (``peak_to_peak.Q_sc_C``) as ``"Q_SC peak-to-peak [nC]"``; others by unit suffix."""
+    from ..quantities import QUANTITIES, axis_label
+
+    stat, _, leaf = name.rpartition(".")
+    if leaf in QUANTITIES and stat in ("", "peak", "peak_to_peak"):
+        return axis_label(leaf, statistic=stat), QUANTITIES[leaf].display_scale
+    unit, scale = display_unit(name)
+    return (f"{name} [{unit}]" if unit else name), scale
+
+
 def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
     """uncertainty.png: :func:`uncertainty_figure` saved to ``path``."""
     return Path(save_figure(uncertainty_figure(rows, summary), path, dpi=110))
@@ -35,12 +47,14 @@ def uncertainty_figure(rows: list[dict], summary: dict):
     shown = summary["main_outputs"] or summary["output_keys"][:3]
     sobol = summary["method"] == "sobol"
     height = 2.6 * max(len(shown), 1) + 1.0
-    fig = new_figure((11.0 if sobol else 6.5, height))
+    fig = new_figure((11.0 if sobol else 6.5, height), layout="constrained")   # ticks kept in
     axes = fig.subplots(max(len(shown), 1), 2 if sobol else 1, squeeze=False)
+    from ..quantities import scene_label
+
     inputs = list(summary["distributions"])
     for row_axes, name in zip(axes, shown):
         block = summary["outputs"][name]
-        unit, scale = display_unit(name)
+        label, scale = output_axis(name)
         values = np.array([np.nan if r.get(name) is None else r[name] for r in rows], float)
         values = values[np.isfinite(values)] * scale
         ax = row_axes[0]
@@ -53,7 +67,7 @@ def uncertainty_figure(rows: list[dict], summary: dict):
             ax.axvline(p["50"] * scale, color="C1", lw=1.2, label="median")
         if block.get("nominal") is not None:
             ax.axvline(block["nominal"] * scale, color="k", ls="--", lw=1.2, label="nominal")
-        ax.set_xlabel(f"{name} [{unit}]" if unit else name, fontsize=8)
+        ax.set_xlabel(label, fontsize=8)
         ax.set_ylabel("evaluations", fontsize=8)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="best")
@@ -67,7 +81,7 @@ def uncertainty_figure(rows: list[dict], summary: dict):
                            yerr=[indices[k][which + "_conf"] for k in inputs], capsize=3,
                            color=colour, alpha=0.75, label=which)
                 ax.set_xticks(x)
-                ax.set_xticklabels(inputs, fontsize=7, rotation=15 if len(inputs) > 2 else 0,
+                ax.set_xticklabels([scene_label(k) for k in inputs], fontsize=7, rotation=15 if len(inputs) > 2 else 0,
                                    ha="right" if len(inputs) > 2 else "center")
                 ax.set_ylim(min(0.0, ax.get_ylim()[0]), max(1.05, ax.get_ylim()[1]))
                 ax.legend(fontsize=7, loc="best")
@@ -79,5 +93,4 @@ def uncertainty_figure(rows: list[dict], summary: dict):
     bars = "; bars: Sobol S1 / ST with bootstrap 95 % intervals" if sobol else ""
     fig.suptitle(f"uncertainty: {summary['evaluations']} evaluations ({summary['method']}, "
                  f"N = {summary['samples']}){bars}", fontsize=9)
-    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.4 / height))   # the title above the panels
     return fig

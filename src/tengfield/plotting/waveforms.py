@@ -1,7 +1,7 @@
 """Plots of the electrical waveforms and of the surrogate (matplotlib Figure objects, saved as PNG; no pyplot).
 
 ``plot_waveforms``: V_OC, Q_SC, I_SC (and the load voltage/power when
-present) against time, each with the gap z(t) on a twin axis, in the style
+present) against time, with the gap z(t) on its own panel below, in the style
 of the paper's Figs. 8c-d and 9b-d. ``plot_surrogate``: V_OC, Q_SC and C_T
 against z with the solved positions marked (a (z, r) surrogate: at r = 0 and at the
 offsets the ball reached, plus the change of Q_SC with r). ``plot_sweep``: peak-to-peak
@@ -23,7 +23,7 @@ READ_OVERLAYS = {"Q_sc_C": "Q_read_C", "I_sc_A": "I_read_A"}
 def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> list:
     """``(column, axis label, factor)`` of each panel of :func:`plot_waveforms`, names and
     units from :mod:`tengfield.quantities`: V_OC (ideal), the voltage read through C_p
-    when the waveforms have it, Q_SC, I_SC, and a load's V_load and P_load."""
+    when the waveforms have it (short label "V_read [V]"; C_p is named in its legend), Q_SC, I_SC, and a load's V_load and P_load."""
     from ..quantities import QUANTITIES, axis_label
 
     names = ["V_oc_V"]
@@ -35,8 +35,8 @@ def waveform_panels(waveforms: dict, parallel_capacitance_pF: float = 0.0) -> li
     panels = []
     for name in names:
         label = axis_label(name)
-        if name == "V_read_V":
-            label = f"V read through C_p = {parallel_capacitance_pF:.3g} pF [V]"
+        if name == "V_read_V":   # short: the instrument is named in the panel's legend
+            label = "V_read [V]"
         elif name == "V_oc_V":
             label = "V_OC (ideal) [V]" if "V_read_V" in waveforms else label
         panels.append((name, label, QUANTITIES[name].display_scale))
@@ -54,26 +54,32 @@ def plot_waveforms(waveforms: dict, path: str | Path, *, title: str = "",
 
 def waveforms_figure(waveforms: dict, *, title: str = "", last_seconds: float | None = None,
                      parallel_capacitance_pF: float = 0.0):
-    """Waveform panels against time [ms] with the gap [mm] in grey (right axis)
+    """Waveform panels against time [ms] and, below them, the gap z [mm] on its own panel
     (:func:`waveform_panels`; ``parallel_capacitance_pF``: the instrument's C_p, named
     on the V_read panel)."""
     t = np.asarray(waveforms["time_s"])
     mask = np.ones_like(t, dtype=bool) if last_seconds is None else t >= t[-1] - last_seconds
     panels = waveform_panels(waveforms, parallel_capacitance_pF)
-    fig = new_figure((8, 2.1 * len(panels)))
-    axes = fig.subplots(len(panels), 1, sharex=True)
-    for ax, (key, label, factor) in zip(np.atleast_1d(axes), panels):
-        ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0)
+    heights = [1.0] * len(panels) + [0.6]       # the gap: its own, lower panel
+    fig = new_figure((8, 2.1 * len(panels) + 1.3))
+    axes = fig.subplots(len(panels) + 1, 1, sharex=True, gridspec_kw={"height_ratios": heights})
+    for ax, (key, label, factor) in zip(axes, panels):
+        ax.plot(t[mask] * 1e3, np.asarray(waveforms[key])[mask] * factor, color="C0", lw=1.0,
+                label=(f"V read through C_p = {parallel_capacitance_pF:.3g} pF"
+                       if key == "V_read_V" else None))
+        if key == "V_read_V":
+            ax.legend(loc="upper right", fontsize=7)
         read = READ_OVERLAYS.get(key)
         if read in waveforms:     # what the [instrument] records, over the terminal's own
             ax.plot(t[mask] * 1e3, np.asarray(waveforms[read])[mask] * factor, color="C3",
                     lw=1.0, label="read by the instrument")
             ax.legend(loc="upper right", fontsize=7)
         ax.set_ylabel(label, color="C0")
-        twin = ax.twinx()
-        twin.plot(t[mask] * 1e3, np.asarray(waveforms["gap_m"])[mask] * 1e3, color="0.6", lw=0.8)
-        twin.set_ylabel("gap z [mm]", color="0.45")
         ax.grid(alpha=0.3)
+    gap_ax = axes[-1]
+    gap_ax.plot(t[mask] * 1e3, np.asarray(waveforms["gap_m"])[mask] * 1e3, color="0.4", lw=0.9)
+    gap_ax.set_ylabel("gap z [mm]")
+    gap_ax.grid(alpha=0.3)
     np.atleast_1d(axes)[-1].set_xlabel("time [ms]")
     if title:
         fig.suptitle(title)
@@ -156,7 +162,8 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    title = (f"surrogate ({curves.reference}, {cells} cell(s)): {table.count} positions, "
+    title = (f"surrogate ({', '.join(p for p in (curves.reference, cells_phrase(cells)) if p)}): "
+             f"{table.count} positions, "
              f"error estimate {table.interpolation_error if error_estimate is None else error_estimate:.2g}")
     if radial:
         _plot_radial_change(axes[3], curves, cells, visited)
@@ -251,12 +258,25 @@ def sweep_figure(rows: list[dict]):
     return fig
 
 
+def cells_phrase(cells: int) -> str:
+    """``"4 cells"`` for more than one cell, ``""`` for one (a title says nothing then)."""
+    return f"{int(cells)} cells" if int(cells) > 1 else ""
+
+
+def _signed(value: float) -> str:
+    """``value`` with ``{:g}`` and a typographic minus (−8, not -8)."""
+    return f"{value:g}".replace("-", "−")
+
+
 def run_title(result) -> str:
-    """The title of a run's figures: excitation, cells, reference, regime."""
-    exc = result.scene.excitation
+    """The title of a run's figures: the device (σ [µC/m²], stroke Δh [mm]), the
+    excitation, the cell count when > 1, the reference and the regime."""
+    exc, dev = result.scene.excitation, result.scene.device
     regime = result.summary.get("regime") or {}
     name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
-    return (f"{exc.frequency:g} Hz, A = {exc.amplitude * 1e3:g} mm, "
-            f"{result.summary.get('cells', result.scene.device.cells)} cell(s), "
-            f"{result.scene.circuit.reference}"
-            + (f", {name}" if name else ""))
+    parts = [f"σ = {_signed(dev.surface_charge * 1e6)} µC/m²",
+             f"Δh = {dev.stroke * 1e3:g} mm", f"{exc.frequency:g} Hz",
+             f"A = {exc.amplitude * 1e3:g} mm",
+             cells_phrase(result.summary.get("cells", dev.cells)),
+             result.scene.circuit.reference, name]
+    return ", ".join(p for p in parts if p)
