@@ -66,3 +66,50 @@ def quick_start_commands() -> list[str]:
 def quick_start_script(lines: list[str]) -> str:
     """``lines`` as one bash script that stops at the first failing line."""
     return "set -e\n" + "\n".join(lines) + "\n"
+
+
+#: a scene key written raw ("device.surface_charge_uC_per_m2", "contact.restitution")
+_RAW_KEY = re.compile(r"\b(device|contact|excitation|circuit|instrument|run|field|initial|"
+                      r"breakdown|array|design|uncertainty|peak|peak_to_peak|"
+                      r"energy_per_cycle|load|rectifier)\.[a-z_0-9]+", re.I)
+#: unit spellings of a terminal, not of a figure: the quantity table writes µ, ², ³, Ω
+_ASCII_UNITS = re.compile(r"\b(uC|uW|uA|uJ|uF|nC/m\^2)\b|/m\^[23]|\bohm\b")
+
+
+def figure_texts(fig) -> list[str]:
+    """Every piece of text of a matplotlib Figure: titles, axis and tick labels, legends,
+    free text."""
+    texts = [t.get_text() for t in fig.findobj(lambda o: hasattr(o, "get_text"))]
+    return [t for t in texts if t and t.strip()]
+
+
+def _names_its_axis(ax, axis: str, fig) -> bool:
+    """An axis is labelled by its label, by category tick labels (a bar per input), or
+    through an axes sharing it that carries the label (stacked panels)."""
+    which = ax.xaxis if axis == "x" else ax.yaxis
+    if which.get_label().get_text().strip():
+        return True
+    ticks = [t.get_text() for t in which.get_ticklabels() if t.get_text().strip()]
+    numeric = re.compile(r"[−\-+0-9.,e×^${} ]*")     # 1.5, −2, 1e-3, $10^{-3}$
+    if ticks and not all(numeric.fullmatch(t.replace("\\mathdefault", "")) for t in ticks):
+        return True
+    shared = ax.get_shared_x_axes() if axis == "x" else ax.get_shared_y_axes()
+    return any(o is not ax and shared.joined(o, ax)
+               and (o.xaxis if axis == "x" else o.yaxis).get_label().get_text().strip()
+               for o in fig.axes)
+
+
+def assert_labelled(fig) -> None:
+    """A figure as a paper writes it (issue #42): every axes that draws data names both
+    axes, no raw ``section.key`` names, no "cell(s)", units in the quantity table's style
+    (µC/m², µW, Ω)."""
+    for ax in fig.axes:
+        has_data = bool(ax.lines or ax.collections or ax.patches or ax.images)
+        if has_data and ax.get_visible() and ax.axison:
+            for axis in "xy":
+                assert _names_its_axis(ax, axis, fig), \
+                    f"an unlabelled {axis} axis (title {ax.get_title()!r})"
+    for text in figure_texts(fig):
+        assert not _RAW_KEY.search(text), f"a raw scene key in {text!r}"
+        assert "cell(s)" not in text, text
+        assert not _ASCII_UNITS.search(text), f"an ASCII unit in {text!r}"

@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 import plate_model as fx
+from helpers import assert_labelled
 import pytest
 from matplotlib.figure import Figure
 
@@ -36,6 +37,7 @@ def check_face(result, out_dir, *, expected_files, has_time=False):
     json.dumps(summary, allow_nan=True)               # plain JSON-able data
     fig = result.plot()
     assert isinstance(fig, Figure) and fig.axes
+    assert_labelled(fig)            # the figure the command line saves, as a paper writes it
     fig.clear()
     written = result.write(out_dir, plots=True)
     names = {p.name for p in out_dir.iterdir()}
@@ -196,6 +198,7 @@ def test_harvest_and_array_time_axis():
     assert summary["final_store_voltage_V"] > 0.0          # the store charged
     fig = charged.plot()
     assert isinstance(fig, Figure)
+    assert_labelled(fig)
     assert list(fig.axes[0].get_lines()[0].get_ydata()) == list(charged.store_voltage)
     array = ArrayResult(time=t, columns={}, output=t, reference=t, output_label="V",
                         phases_deg=np.zeros(3), period=0.1, summary={})
@@ -212,6 +215,7 @@ def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
     assert summary["positions_m"] == pytest.approx(list(table.positions))
     fig = table.plot()
     assert isinstance(fig, Figure)
+    assert_labelled(fig)
     position = fx.plate_model_solve(scene, 1e-3)
     face = position.summary
     assert face == position.to_json()

@@ -26,7 +26,7 @@ def _band_panel(ax, band) -> None:
     for edge, sigma in band.edges().items():
         colour, ls = _EDGE_STYLE[edge]
         ax.plot(smaller * 1e3, track.ratio(sigma), color=colour, ls=ls, lw=1.0,
-                label=f"{edge}: {sigma * 1e6:.3g} uC/m2")
+                label=f"{edge}: {sigma * 1e6:.3g} µC/m²")
     ax.axhline(1.0, color="k", lw=1.0)
     for gap_m, text in ((band.lower_gap, "lower binds"), (band.upper_gap, "upper binds")):
         if np.isfinite(gap_m):
@@ -90,7 +90,7 @@ def breakdown_figure(result, sigma: float, *, title: str | None = None, band=Non
     v_at = s * abs(b.dv_per_sigma)
     left.plot([b.gap * 1e3], [v_at], "o", color="k", ms=7, mfc="none")
     left.plot([b.gap * 1e3], [b.breakdown_voltage], "*", color="k", ms=11,
-              label=f"binds: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 ({b.state}, {b.side} "
+              label=f"binds: σ_max = {result.sigma_max * 1e6:.3g} µC/m² ({b.state}, {b.side} "
                     f"gap, z = {b.position * 1e3:.3g} mm)")
     left.set_xlabel("gap length along the line [mm]")
     left.set_ylabel("voltage across the gap [V]")
@@ -104,6 +104,6 @@ def breakdown_figure(result, sigma: float, *, title: str | None = None, band=Non
     right.set_yscale("log")
     right.legend(fontsize=7)
     right.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or f"air breakdown at sigma = {sigma * 1e6:.3g} uC/m2: "
-                 f"sigma_max = {result.sigma_max * 1e6:.3g} uC/m2", fontsize=10)
+    fig.suptitle(title or f"air breakdown at σ = {sigma * 1e6:.3g} µC/m²: "
+                 f"σ_max = {result.sigma_max * 1e6:.3g} µC/m²", fontsize=10)
     return fig

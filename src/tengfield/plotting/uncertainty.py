@@ -28,8 +28,11 @@ def output_axis(name: str) -> tuple[str, float]:
     from ..quantities import QUANTITIES, axis_label
 
     stat, _, leaf = name.rpartition(".")
-    if leaf in QUANTITIES and stat in ("", "peak", "peak_to_peak"):
-        return axis_label(leaf, statistic=stat), QUANTITIES[leaf].display_scale
+    if leaf in QUANTITIES:          # a statistic's or a block's (energy_per_cycle) output
+        q = QUANTITIES[leaf]
+        if q.display_unit in ("", "1"):                  # dimensionless: FOM_S
+            return q.symbol, q.display_scale
+        return axis_label(leaf, statistic=stat), q.display_scale
     unit, scale = display_unit(name)
     return (f"{name} [{unit}]" if unit else name), scale
 
