@@ -205,8 +205,9 @@ def test_run(quick_start, clone):
 def test_run_beside_the_bench(quick_start, clone):
     """`run --set instrument.capacitance_pF=338 --reference ...`: the instrument's
     reading V_read_V beside the ideal V_OC, and the measured values compared per
-    quantity, with the tool quantity each is compared with (issue #28); the line uses
-    today's keys (no warning of a renamed one)."""
+    quantity, with the tool quantity each is compared with (issue #28): with an
+    [instrument], what it reads (V_read, I_read: #39); the line uses today's keys (no
+    warning of a renamed one)."""
     line = line_of("run", "--reference")
     where, proc = ran(quick_start, clone, "run", "--reference")
     out = where / output_of(line)
@@ -216,7 +217,7 @@ def test_run_beside_the_bench(quick_start, clone):
     assert 0 < v_read < v_oc / 100          # 338 pF beside C_T ~ 0.28 pF
     rows = summary["measured_comparison"]["quantities"]
     assert rows["V_pp_V"]["tool_key"] == "peak_to_peak.V_read_V"
-    assert rows["I_peak_uA"]["tool_key"] == "peak.I_sc_A"
+    assert rows["I_peak_uA"]["tool_key"] == "peak.I_read_A"     # what the instrument reads
     for name, measured in (("V_pp_V", 4.2), ("Q_pp_nC", 1.42), ("I_peak_uA", 0.16)):
         row = rows[name]
         assert row["measured_value"] == pytest.approx(measured)
