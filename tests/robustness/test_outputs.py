@@ -93,7 +93,7 @@ def test_success_replaces_the_set_and_prints_the_real_directory(tmp_path, short_
 
 @pytest.mark.slow
 def test_failing_command_keeps_the_previous_set(tmp_path, short_scene, capsys, monkeypatch):
-    import tengfield.io as writers       # the dynamics command takes its writers from here
+    import tengfield.dynamics.output as writers   # the dynamics command's table writers
 
     out_dir = tmp_path / "out"
     assert run_main(["dynamics", short_scene, "-o", out_dir], capsys)[0] == 0
