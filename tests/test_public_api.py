@@ -215,6 +215,7 @@ def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
     assert summary["positions_m"] == pytest.approx(list(table.positions))
     fig = table.plot()
     assert isinstance(fig, Figure)
+    assert len(fig.axes) >= 3 and all(ax.lines for ax in fig.axes[:3])   # V_OC, Q_SC, C_T
     assert_labelled(fig)
     position = fx.plate_model_solve(scene, 1e-3)
     face = position.summary

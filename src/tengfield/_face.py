@@ -17,23 +17,3 @@ class Summary(dict):
                       DeprecationWarning, stacklevel=2)
         return dict(self)
 
-
-def figure_of_png(draw) -> "object":
-    """A matplotlib Figure showing the PNG that ``draw(path)`` writes (for the plotting
-    functions that only write a file); the figure is the picture, axes hidden."""
-    import tempfile
-    from pathlib import Path
-
-    import matplotlib.image as mpimg
-    from matplotlib.figure import Figure
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "figure.png"
-        draw(path)
-        image = mpimg.imread(path)
-    height, width = image.shape[:2]
-    fig = Figure(figsize=(width / 100, height / 100), dpi=100)
-    ax = fig.add_axes((0, 0, 1, 1))
-    ax.imshow(image)
-    ax.set_axis_off()
-    return fig

@@ -199,10 +199,9 @@ class ArrayResult:
 
     def plot(self):
         """array.png's figure (phase histogram; the array against N x one cell)."""
-        from ._face import figure_of_png
-        from .plotting.harvest import plot_array
+        from .plotting.harvest import array_figure
 
-        return figure_of_png(lambda path: plot_array(self, self.summary, path))
+        return array_figure(self, self.summary)
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,

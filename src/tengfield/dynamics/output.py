@@ -8,8 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import write_csv, write_rows, writable_target
-from .._files import figure_file
+from .._files import figure_file, writable_target, write_csv, write_rows
 
 
 def dynamics_tables(dynamics, scene) -> dict:

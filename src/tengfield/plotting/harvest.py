@@ -94,6 +94,12 @@ def vq_figure(loops: dict, energy: dict, *, title: str = ""):
 
 
 def plot_array(array, summary: dict, path: str | Path, *, title: str = "") -> Path:
+    """array.png: :func:`array_figure` saved to ``path``."""
+    save_figure(array_figure(array, summary, title=title), path, 120)
+    return Path(path)
+
+
+def array_figure(array, summary: dict, *, title: str = ""):
     """Histogram of the per-cell phases and the array's output against N x one cell."""
     fig = new_figure((10, 4))
     ax_h, ax_t = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.6]})
@@ -118,5 +124,4 @@ def plot_array(array, summary: dict, path: str | Path, *, title: str = "") -> Pa
     ax_t.legend(fontsize=8)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    save_figure(fig, path, 120)
-    return Path(path)
+    return fig

@@ -124,6 +124,14 @@ def surrogate_lines(curves, *, cells: int = 1, visited=None, points: int = 400) 
 
 def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=None,
                    error_estimate: float | None = None) -> Path:
+    """surrogate.png: :func:`surrogate_figure` saved to ``path``."""
+    save_figure(surrogate_figure(table, curves, cells=cells, visited=visited,
+                                 error_estimate=error_estimate), path, 120)
+    return Path(path)
+
+
+def surrogate_figure(table, curves, *, cells: int = 1, visited=None,
+                     error_estimate: float | None = None):
     """V_OC, Q_SC, C_T of ``cells`` cells against z [mm], solved positions as dots.
 
     ``curves``: the 1-D surrogate, or the (z, r) one of a ball off the axis
@@ -171,8 +179,7 @@ def plot_surrogate(table, curves, path: str | Path, *, cells: int = 1, visited=N
                   f"up to r = {curves.max_offset * 1e3:.3g} mm")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    save_figure(fig, path, 120)
-    return Path(path)
+    return fig
 
 
 def _plot_radial_change(ax, curves, cells: int, visited) -> None:

@@ -109,11 +109,9 @@ class SurrogateTable(SolveRecord):
 
     def plot(self, reference: str = "floating"):
         """surrogate.png's figure: V_OC, Q_SC, C_T against z, solved positions as dots."""
-        from .._face import figure_of_png
-        from ..plotting.waveforms import plot_surrogate
+        from ..plotting.waveforms import surrogate_figure
 
-        curves = TerminalCurves(self, reference)
-        return figure_of_png(lambda path: plot_surrogate(self, curves, path))
+        return surrogate_figure(self, TerminalCurves(self, reference))
 
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")
