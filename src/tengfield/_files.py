@@ -335,7 +335,27 @@ def refuse_another_commands_directory(target: str | Path, command: str,
 
 #: the figure formats ``--figure-format`` offers (matplotlib writes each by its suffix)
 FIGURE_FORMATS = ("png", "pdf", "svg")
-_FIGURE_FORMAT = {"format": "png"}
+#: the range ``--dpi`` accepts [dots per inch]
+DPI_RANGE = (20.0, 1200.0)
+#: how the command's figures are written: ``--figure-format`` and ``--dpi`` (None: each
+#: figure's own resolution)
+_FIGURE_OUTPUT = {"format": "png", "dpi": None}
+
+
+def set_figure_dpi(dpi: float | None) -> None:
+    """Every figure saved from now on at ``dpi`` dots per inch (None: each figure's own,
+    110-150 for the CLI's PNGs). Raises ValueError outside :data:`DPI_RANGE`."""
+    if dpi is not None:
+        dpi = float(dpi)
+        if not DPI_RANGE[0] <= dpi <= DPI_RANGE[1]:
+            raise ValueError(f"--dpi {dpi:g} is out of range: allowed "
+                             f"[{DPI_RANGE[0]:g}, {DPI_RANGE[1]:g}] dots per inch")
+    _FIGURE_OUTPUT["dpi"] = dpi
+
+
+def figure_dpi(default: float) -> float:
+    """The resolution a figure is saved at: ``--dpi`` if given, else ``default``."""
+    return default if _FIGURE_OUTPUT["dpi"] is None else _FIGURE_OUTPUT["dpi"]
 
 
 def set_figure_format(fmt: str) -> None:
@@ -345,10 +365,10 @@ def set_figure_format(fmt: str) -> None:
     if fmt not in FIGURE_FORMATS:
         raise ValueError(f"--figure-format {fmt!r} is not offered: allowed "
                          f"{', '.join(FIGURE_FORMATS)}")
-    _FIGURE_FORMAT["format"] = fmt
+    _FIGURE_OUTPUT["format"] = fmt
 
 
 def figure_file(stem: str) -> str:
     """A figure's file name: ``stem`` with the format's suffix (``waveforms.png``, or
     ``waveforms.pdf`` under ``--figure-format pdf``)."""
-    return f"{stem}.{_FIGURE_FORMAT['format']}"
+    return f"{stem}.{_FIGURE_OUTPUT['format']}"

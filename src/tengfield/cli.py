@@ -95,8 +95,7 @@ def _apply_settings(args) -> None:
     them applied, checked as the same keys in the file (raises SceneError); ``--dpi``
     and ``--figure-format``: how every figure of the command is saved (checked here,
     before any output exists; reset by every call)."""
-    from ._files import set_figure_format
-    from .plotting import set_figure_dpi
+    from ._files import set_figure_dpi, set_figure_format
 
     try:
         set_figure_dpi(getattr(args, "dpi", None))

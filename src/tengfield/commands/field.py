@@ -162,7 +162,7 @@ def _axisymmetric(scene, position, reference, out, *, plot: bool):
 
 def _window(size: tuple[int, int]) -> tuple[int, int]:
     """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``."""
-    from ..plotting import figure_dpi
+    from .._files import figure_dpi
 
     scale = figure_dpi(120.0) / 120.0
     return tuple(max(200, round(n * scale)) for n in size)
