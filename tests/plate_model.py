@@ -116,3 +116,17 @@ def scene_with(**sections):
     """The default scene with file-level overrides, e.g. ``circuit={"kind": "load"}``."""
     from tengfield.scene import default_scene
     return default_scene().with_values(**sections)
+
+
+#: a short run with a coarse field (seconds of work): the CLI tests' small scene
+SMALL_SCENE = """\
+[run]
+duration_s = 0.3
+settle_periods = 2
+sample_rate_hz = 5000.0
+
+[field]
+mesh_size_mm = 1.5
+degree = 1
+tolerance = 0.05
+"""

@@ -53,16 +53,7 @@ phase_x_deg = 30.0
 [contact]
 model = "3d"
 
-[run]
-duration_s = 0.3
-settle_periods = 2
-sample_rate_hz = 5000.0
-
-[field]
-mesh_size_mm = 1.5
-degree = 1
-tolerance = 0.05
-"""
+""" + fx.SMALL_SCENE
 
 
 def seed_cache(scene, cache):

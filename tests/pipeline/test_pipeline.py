@@ -17,17 +17,7 @@ from tengfield import electrical, pipeline, surrogate
 import plate_model as fx
 
 ROOT = Path(__file__).resolve().parents[2]
-SMALL_SCENE = """\
-[run]
-duration_s = 0.3
-settle_periods = 2
-sample_rate_hz = 5000.0
-
-[field]
-mesh_size_mm = 1.5
-degree = 1
-tolerance = 0.05
-"""
+SMALL_SCENE = fx.SMALL_SCENE
 
 
 def model_run(scene, tmp_path, kind="bounce", **kw):
