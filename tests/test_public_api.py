@@ -103,12 +103,12 @@ def test_sweep_face(scene, cached, tmp_path):
 @pytest.mark.field
 def test_breakdown_face_and_cli_files(tmp_path, run_cli):
     """Coarse field solves (P1, 1 mm; the surrogate cache shared with the CLI)."""
-    from tengfield import breakdown
+    from tengfield import air_breakdown
 
     path = tmp_path / "scene.toml"
     path.write_text("[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.03\n")
     with pytest.warns(RuntimeWarning, match="field error estimate"):   # coarse on purpose
-        result = breakdown.study(path)
+        result = air_breakdown.study(path)
     assert result.scene.source == tf.load_scene(path).source
     summary = check_face(result, tmp_path / "api", expected_files={"breakdown.json",
                                                                    "breakdown.png"})
@@ -141,7 +141,7 @@ def assert_same_files(a, b, timing=()):
 
 
 def test_uncertainty_face(cached, tmp_path):
-    from tengfield.uncertainty.study import run_study
+    from tengfield.uncertainty_study.study import run_study
 
     scene = fx.scene_with(run=SHORT_RUN, uncertainty={
         "samples": 16, "method": "sobol", "seed": 2,
@@ -166,7 +166,7 @@ def test_design_face(cached, tmp_path):
 
 def test_report_face(tmp_path):
     """A report from rows alone (no measuring): one Figure with a panel per stage."""
-    from tengfield.report import Report, Row, make_plan
+    from tengfield.accuracy_report import Report, Row, make_plan
 
     rows = [Row(stage, f"{stage} {i}", {"model": "impact"}, wall,
                 {"V_oc": 10.0 ** -i, "Q_sc": 10.0 ** -i, "I_sc": 10.0 ** -i}, "ref")

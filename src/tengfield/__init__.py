@@ -40,10 +40,11 @@ _LAZY = {
     "simulate_3d": ("tengfield.dynamics.motion3d", "simulate_3d"),
     "calibrate": ("tengfield.fit", "calibrate"),
     "map": ("tengfield.dynamics.mapping", "map_study"),
+    "design": ("tengfield.design_study", "design"),
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", "sweep",
            *(name for name in _LAZY if name != "map")]   # tf.map: never shadow the builtin on *
 
 

@@ -259,8 +259,8 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
     table = curves = limit = None
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
-        from . import breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": at -sigma_max
-        scene, table, outcome, limit = breakdown.obtain_run_table(
+        from . import air_breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": at -sigma_max
+        scene, table, outcome, limit = air_breakdown.obtain_run_table(
             scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
             command_line=command_line, write=write_cache)
         if outcome.status == "cached":
@@ -330,7 +330,7 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
-        from .breakdown import obtain_run_table   # the surrogate run_one would cache
+        from .air_breakdown import obtain_run_table   # the surrogate run_one would cache
         obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
@@ -500,17 +500,17 @@ def _breakdown_summary(summary, scene, hashed, limit, dynamics=None) -> None:
     """summary["breakdown"] (with the band and the trajectory's V_gap/V_b at the scene's
     σ), ``breakdown_band`` (σ = "breakdown": each main output at the band's three σ) and
     the breakdown-limited CMEO / FOM beside the ideal ones."""
-    from . import breakdown
+    from . import air_breakdown
 
     summary["field_hash"] = hashed.field_hash()     # the surrogate's (σ = "breakdown" too)
-    summary["breakdown"] = _jsonable(breakdown.summary_block(limit, scene, hashed))
+    summary["breakdown"] = _jsonable(air_breakdown.summary_block(limit, scene, hashed))
     if limit is not None and dynamics is not None:
-        summary["breakdown"].update(_jsonable(breakdown.band_summary(
+        summary["breakdown"].update(_jsonable(air_breakdown.band_summary(
             summary, scene, hashed, limit, dynamics)))
         if "outputs" in summary["breakdown"]:
             summary["breakdown_band"] = summary["breakdown"].pop("outputs")
     if limit is not None and summary.get("energy_per_cycle"):
-        summary["energy_per_cycle"].update(_jsonable(breakdown.limited_energy(
+        summary["energy_per_cycle"].update(_jsonable(air_breakdown.limited_energy(
             summary["energy_per_cycle"], limit, scene.device.surface_charge)))
 
 

@@ -455,12 +455,12 @@ def _axis(scene, values, which: str) -> list:
 def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
                  command_line: str = "", tables: dict | None = None):
     """Each point's ``(scene, table)`` at the charge it runs with
-    (:func:`tengfield.breakdown.obtain_run_table`, the path of ``tengfield run``), and
+    (:func:`tengfield.air_breakdown.obtain_run_table`, the path of ``tengfield run``), and
     ``{"computed": n, "cached": n, "reused": n, "geometries": n}``. Points of one geometry
     (one field hash) share one surrogate: the first obtains it (solved over ``comm``'s
     ranks or read from the cache), the others reuse it at their own charge (``reused``,
     no field solve: a σ or circuit key never solves a field)."""
-    from .breakdown import obtain_run_table, uses_breakdown_charge
+    from .air_breakdown import obtain_run_table, uses_breakdown_charge
     from .errors import SceneError
     from .surrogate.table import at_ball_charge
 

@@ -43,7 +43,7 @@ def test_run_refuses_bad_jobs_before_any_work(jobs, error):
 
 
 def test_run_study_names_a_bad_spec_and_jobs():
-    from tengfield.uncertainty import run_study
+    from tengfield.uncertainty_study import run_study
 
     with pytest.raises(TypeError, match=r"run_study\(spec='abc'\): expected an UncertaintySpec"):
         run_study(tf.default_scene(), spec="abc")
@@ -52,8 +52,8 @@ def test_run_study_names_a_bad_spec_and_jobs():
 
 
 def test_design_entry_points_name_their_arguments():
-    from tengfield.design import evaluate
-    from tengfield.design.search import DesignResult, check_optimum
+    from tengfield.design_study import evaluate
+    from tengfield.design_study.search import DesignResult, check_optimum
 
     with pytest.raises(TypeError, match=r"tengfield.design\(scene=None\): expected a "
                                         r"tengfield.Scene"):

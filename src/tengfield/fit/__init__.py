@@ -51,7 +51,7 @@ def _reference_table(scene, *, cache_dir=None, solve=None, comm=None, progress=F
 
 def breakdown_check(scene, table, result: FitResult) -> None:
     """A fitted σ beyond the scene's air-breakdown limit σ_max (from the same surrogate's
-    gap lines, :func:`tengfield.breakdown.scene_breakdown`): one warning naming both, a
+    gap lines, :func:`tengfield.air_breakdown.scene_breakdown`): one warning naming both, a
     note, and ``result.breakdown``. Nothing when σ is not fitted or the surrogate has no
     gap lines (3D solver, a custom solve)."""
     import warnings
@@ -59,7 +59,7 @@ def breakdown_check(scene, table, result: FitResult) -> None:
     name = "surface_charge_uC_per_m2"
     if name not in result.values or table.line_potential is None:
         return
-    from ..breakdown import scene_breakdown
+    from ..air_breakdown import scene_breakdown
 
     limit = scene_breakdown(scene, table)
     sigma = result.values[name] * 1e-6

@@ -269,7 +269,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                                _rng(0.0, 100.0)),
         "seed": Key("seed", int, 0, 1, _rng(0, 2**32 - 1)),
     },
-    # air breakdown (issue #23; tengfield.breakdown, tengfield.paschen): Paschen constants
+    # air breakdown (issue #23; tengfield.air_breakdown, tengfield.paschen): Paschen constants
     # of air (Raizer 1991, Table 4.1) and the pressure. They change the breakdown check
     # made from the surrogate's lines, not the field solve.
     "breakdown": {
@@ -344,7 +344,7 @@ KEYWORD_VALUES = {("device", "surface_charge_uC_per_m2"): ("breakdown", BREAKDOW
 HARMONIC_KEYS = ("frequency_hz", "amplitude_mm", "acceleration_m_per_s2", "phase_deg")
 #: Sections passed through unvalidated to ``scene.raw`` (each is validated by
 #: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`, ``[design]`` by
-#: :mod:`tengfield.design`, ``[uncertainty]`` by :mod:`tengfield.uncertainty`).
+#: :mod:`tengfield.design_study`, ``[uncertainty]`` by :mod:`tengfield.uncertainty_study`).
 PASSTHROUGH_SECTIONS = ("fit", "design", "uncertainty")
 
 

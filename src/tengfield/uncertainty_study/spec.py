@@ -10,7 +10,7 @@ scene schema, in the file's units) to a distribution:
 * ``{ distribution = "triangular", low = .., mode = .., high = .. }``
 * ``"device.surface_charge_uC_per_m2" = { distribution = "breakdown-band" }`` (σ only,
   issue #38): σ log-uniform between the edges of the breakdown band of each geometry
-  (:mod:`tengfield.breakdown.band`); the study's column holds the draw's place in the
+  (:mod:`tengfield.air_breakdown.band`); the study's column holds the draw's place in the
   band, u in (0, 1): σ = −lower·(upper/lower)^u
 
 :func:`uncertainty_spec` validates it the way every scene key is validated (one-line
@@ -355,7 +355,7 @@ def draws_from_band(scene) -> bool:
 
 def band_sigma(band, place: float) -> float:
     """σ [µC/m², negative: PTFE] at ``place`` u in [0, 1] of ``band`` (a
-    :class:`tengfield.breakdown.Band`): log-uniform, −lower·(upper/lower)^u."""
+    :class:`tengfield.air_breakdown.Band`): log-uniform, −lower·(upper/lower)^u."""
     return -1e6 * band.lower * (band.upper / band.lower) ** float(place)
 
 

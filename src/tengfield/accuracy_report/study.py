@@ -30,9 +30,9 @@ applies them to the keys a scene file does not set.
 
 All numbers are SI; errors are relative (|x − x_ref| / |x_ref|).
 
-The settings and the plan live in :mod:`tengfield.report.plan`, the
-measurement of each stage in :mod:`tengfield.report.stages`, the
-recommendation logic in :mod:`tengfield.report.recommend`; this module runs
+The settings and the plan live in :mod:`tengfield.accuracy_report.plan`, the
+measurement of each stage in :mod:`tengfield.accuracy_report.stages`, the
+recommendation logic in :mod:`tengfield.accuracy_report.recommend`; this module runs
 them in order (:func:`build_report`) and verifies the recommendations.
 """
 from __future__ import annotations

@@ -61,12 +61,12 @@ def candidate_charge(scene, table=None):
     THE one place that decides it: the scene's own ``[device] surface_charge_uC_per_m2``
     (or its varied value); with ``surface_charge_uC_per_m2 = "breakdown"`` each geometry
     at its own air-breakdown limit, σ = −σ_max from its surrogate's gap lines
-    (:func:`tengfield.breakdown.resolve_for_run`: the table is rescaled, no new field
+    (:func:`tengfield.air_breakdown.resolve_for_run`: the table is rescaled, no new field
     solve), so designs are compared at charges they can hold. Raises
     :class:`~tengfield.errors.TengfieldError` when the limit is asked for and the surrogate
     has no gap lines.
     """
-    from ..breakdown import resolve_for_run, uses_breakdown_charge
+    from ..air_breakdown import resolve_for_run, uses_breakdown_charge
 
     if table is None or not uses_breakdown_charge(scene):
         return scene, table
@@ -187,11 +187,11 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     from .._args import check_instance
     from ..scene.parse import check_scene_argument
     from ..dynamics import simulate as default_simulate
-    from ..breakdown import obtain_breakdown_table, uses_breakdown_charge
+    from ..air_breakdown import obtain_breakdown_table, uses_breakdown_charge
 
     check_scene_argument("design.evaluate", base, "base")
     check_instance("design.evaluate", spec, "spec", DesignSpec,
-                   "a DesignSpec (tengfield.design.parse_design_section(scene))")
+                   "a DesignSpec (tengfield.design_study.parse_design_section(scene))")
     check_instance("design.evaluate", values, "values", dict, "a dict of varied keys")
     from ..surrogate import TerminalCurves, obtain_table
     from ..surrogate.table import at_ball_charge
@@ -355,14 +355,14 @@ ROBUST_OUTPUTS = {"power": "load.mean_power_W", "power_density": "load.power_den
 
 def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=None) -> dict:
     """``[design] aggregate = "pNN"``: at each band point the study of ``[uncertainty]``
-    (:func:`tengfield.uncertainty.study.candidate_percentiles`, on this process) on the
+    (:func:`tengfield.uncertainty_study.study.candidate_percentiles`, on this process) on the
     candidate's band scene, with the matched (or varied) load of the nominal search kept
     for power objectives and the ``[circuit]`` rectifier for harvested power ->
     ``{"objectives": {objective: {"band_percentiles", "band_intervals", "band_nominal",
     "percentile_error"}}, "evaluations", "field_solves"}`` (field_solves: surrogates the
     studies did not find in the cache; 0 when the candidate's own was cached). The percentile error: the half-widths of the
     percentiles' 95 % intervals combined over the band as sqrt(sum s^2) / n."""
-    from ..uncertainty.study import candidate_percentiles
+    from ..uncertainty_study.study import candidate_percentiles
 
     power = [o for o in spec.objectives if o in ("power", "power_density")]
 

@@ -180,7 +180,7 @@ def best_scene_dict(result) -> dict:
     its followed geometry, (for a power objective) the matched load, (for harvested power)
     the rectifier, the chosen band point as a sine ``[excitation]`` (a random or harmonics
     excitation is kept as given) and the run a band point was scored on (settle + window
-    periods) at the band point :func:`~tengfield.design.answer.chosen_band_point` names
+    periods) at the band point :func:`~tengfield.design_study.answer.chosen_band_point` names
     (nearest the band's centre among those where the design scored non-zero):
     ``tengfield run`` on it gives the design's value there."""
     best = result.best

@@ -1,6 +1,6 @@
 """The design's answer, stated: what to build, how much it gives, what it rests on.
 
-Pure functions of a :class:`~tengfield.design.search.DesignResult` (numbers and text,
+Pure functions of a :class:`~tengfield.design_study.search.DesignResult` (numbers and text,
 no files): :func:`design_answer` (the best design and the runner-up: every varied key,
 the shape's derived length (the tube's plate spacing h = stroke + ball diameter, the
 shell's stroke = cavity - ball diameter), the sizes that followed, σ, the load, the
@@ -382,7 +382,7 @@ def best_breakdown_band(result, *, cache_dir=None) -> dict | None:
     no feasible design, a percentile aggregate, an objective not a power of σ). Reads
     the best geometry's surrogate from ``cache_dir`` (the design's) and reruns its
     dynamics at each band point (seconds)."""
-    from ..breakdown import obtain_breakdown_table, scene_band, scene_breakdown
+    from ..air_breakdown import obtain_breakdown_table, scene_band, scene_breakdown
     from .candidate import aggregate_values, band_scene, candidate_scene
 
     best, spec = result.best, result.spec

@@ -4,7 +4,7 @@ Samples are grouped by their dynamics-relevant inputs (every varied key except �
 ``[circuit]`` keys): one group runs the dynamics once and obtains
 its surrogate once (cached by the field hash, at the group's reference σ). Every
 evaluation in the group then only runs the electrical stage with the table scaled to its
-own σ (:func:`tengfield.breakdown.scaled_table`: every charge is linear in σ, C does not
+own σ (:func:`tengfield.air_breakdown.scaled_table`: every charge is linear in σ, C does not
 depend on it) and its own circuit values: σ alone is a scaling, no field solve and no new
 dynamics. Geometry keys give one field solve per distinct geometry (phase 1, farmed over
 the workers before the groups, so two workers never solve the same geometry).
@@ -145,10 +145,10 @@ def _obtain(scene, cache_dir, solve):
     """``(scene at its charge, table, status, σ_max [C/m²] or None)`` of ``scene``'s
     surrogate (σ_max: its air-breakdown limit, None without gap lines): from this
     process's memory when an earlier group had the same field (status "cached"), else
-    from the cache or a field solve (:func:`tengfield.breakdown.obtain_run_table`)."""
+    from the cache or a field solve (:func:`tengfield.air_breakdown.obtain_run_table`)."""
     import json
 
-    from ..breakdown import obtain_run_table
+    from ..air_breakdown import obtain_run_table
 
     raw = scene.to_dict()
     key = (str(cache_dir), scene.field_hash(), json.dumps(raw["breakdown"], sort_keys=True),
@@ -203,7 +203,7 @@ def _group_task(task):
     Returns ``(rows, field hash or None, cache status, warnings)``; a row is
     ``(index, outputs, regime, above)``, ``above``: |σ| beyond the air-breakdown limit
     of its geometry (None when the table has no gap lines)."""
-    from ..breakdown import scaled_table
+    from ..air_breakdown import scaled_table
 
     scene, group, cache_dir, solve, simulate, study = task
     simulate = simulate or _default_simulate()
@@ -246,8 +246,8 @@ def _group_band(scene, at, table, dynamics):
     draws σ from it (docs/breakdown.md), else None."""
     if not draws_from_band(scene) or table is None:
         return None
-    from ..breakdown import compute_band, lines_from_table, scene_states
-    from ..breakdown.band import Seeds, trajectory_of
+    from ..air_breakdown import compute_band, lines_from_table, scene_states
+    from ..air_breakdown.band import Seeds, trajectory_of
     from ..paschen import Paschen
 
     if table.line_potential is None:
