@@ -162,7 +162,8 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
 
 def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = None,
                  progress: bool = False, solve=None, farm_comm=None) -> Report:
-    """Measure every stage of ``scene`` at several accuracy levels (see the module docstring).
+    """``tf.report(scene)``: measure every stage of ``scene`` at several accuracy levels
+    (see the module docstring); ``fast``: the CI-sized plan (``tengfield report --fast``).
 
     ``comm``: communicator of each field solve (default ``MPI.COMM_SELF``);
     ``solve``: the field solver (default :func:`tengfield.field.solve_position`,
@@ -175,7 +176,9 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     on whichever rank ran the job).
     """
     from .._console import progress_bar
+    from ..scene.parse import check_scene_argument
 
+    check_scene_argument("tengfield.report", scene)
     if comm is None:
         from mpi4py import MPI
         comm = MPI.COMM_SELF

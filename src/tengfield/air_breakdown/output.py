@@ -85,11 +85,18 @@ class BreakdownStudy(BreakdownResult):
 
 def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = False,
           solve=None) -> BreakdownStudy:
-    """``tengfield breakdown`` from Python: the scene (a path, TOML text or Scene), its
-    surrogate with breakdown lines (cached), :func:`scene_breakdown`. Returns a
+    """``tf.breakdown(scene)``, ``tengfield breakdown`` from Python: the scene (a Scene, a
+    scene file's path, or None: the default scene), its surrogate with breakdown lines
+    (cached), :func:`scene_breakdown` (``states``: the circuit states checked, default
+    the scene's; :data:`STATES` all of them, the CLI's ``--states all``). Returns a
     :class:`BreakdownResult` with ``.summary``, ``.plot()`` and ``.write(out_dir)``."""
-    from ..scene import check_field, load_scene
+    import os
 
+    from ..scene import check_field, load_scene
+    from ..scene.parse import check_scene_argument
+
+    if not isinstance(scene, (str, os.PathLike)) and scene is not None:
+        check_scene_argument("tengfield.breakdown", scene)
     scene = load_scene(scene)
     check_field(scene)
     table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
