@@ -259,8 +259,8 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
     table = curves = limit = None
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
-        from . import air_breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": at -sigma_max
-        scene, table, outcome, limit = air_breakdown.obtain_run_table(
+        from .run_surrogate import surrogate_for_run   # "breakdown": at -sigma_max
+        scene, table, outcome, limit = surrogate_for_run(
             scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
             command_line=command_line, write=write_cache)
         if outcome.status == "cached":
@@ -330,8 +330,8 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
-        from .air_breakdown import obtain_run_table   # the surrogate run_one would cache
-        obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
+        from .run_surrogate import surrogate_for_run   # the surrogate run_one would cache
+        surrogate_for_run(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
     bar = progress_bar(len(seeds), "realisations", progress, unit="run", comm=comm, initial=1)

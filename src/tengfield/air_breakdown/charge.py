@@ -1,7 +1,7 @@
 """The charge a run uses: the scene's σ, or −σ_max for ``[device]
-surface_charge_uC_per_m2 = "breakdown"``, decided in one place for run, sweep, field,
-design, the ensemble and uncertainty (:func:`obtain_run_table`), with the surrogate
-scaled to it (charges are linear in σ: no new field solve)."""
+surface_charge_uC_per_m2 = "breakdown"`` (:func:`resolve_for_run`), with the surrogate
+scaled to it (charges are linear in σ: no new field solve); the run's surrogate at that
+charge is :func:`tengfield.run_surrogate.surrogate_for_run`'s."""
 from __future__ import annotations
 
 from ..paschen import Paschen
@@ -87,24 +87,9 @@ def scene_sigma(scene, result: BreakdownResult) -> float:
     return -result.sigma_max if uses_breakdown_charge(scene) else scene.device.surface_charge
 
 
-def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
-                     command_line: str = "", write: bool = True):
-    """``(scene, table, outcome, result)``: the surrogate a command that uses the charge
-    runs with (``run``, ``sweep``, ``field``), at that charge: with ``"breakdown"`` the
-    surrogate with its lines (:func:`obtain_breakdown_table`) and the scene and table at
-    σ = −σ_max, otherwise the scene's own (:func:`resolve_for_run`; ``result`` None
-    when the table has no lines). The one place that decides it."""
-    from ..surrogate import obtain_table
-
-    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
-    table, outcome = obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve,
-                            progress=progress, command_line=command_line, write=write)
-    scene, table, result = resolve_for_run(scene, table, comm)
-    return scene, table, outcome, result
-
-
 def charge_line(scene) -> str:
-    """What ``sweep`` and ``field`` print for a scene resolved by :func:`obtain_run_table`
+    """What ``sweep`` and ``field`` print for a scene resolved by
+    :func:`tengfield.run_surrogate.surrogate_for_run`
     from ``"breakdown"``: the σ it runs with."""
     return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} µC/m^2 "
             f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')

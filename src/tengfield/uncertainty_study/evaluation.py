@@ -145,10 +145,10 @@ def _obtain(scene, cache_dir, solve):
     """``(scene at its charge, table, status, σ_max [C/m²] or None)`` of ``scene``'s
     surrogate (σ_max: its air-breakdown limit, None without gap lines): from this
     process's memory when an earlier group had the same field (status "cached"), else
-    from the cache or a field solve (:func:`tengfield.air_breakdown.obtain_run_table`)."""
+    from the cache or a field solve (:func:`tengfield.run_surrogate.surrogate_for_run`)."""
     import json
 
-    from ..air_breakdown import obtain_run_table
+    from ..run_surrogate import surrogate_for_run
 
     raw = scene.to_dict()
     key = (str(cache_dir), scene.field_hash(), json.dumps(raw["breakdown"], sort_keys=True),
@@ -160,7 +160,7 @@ def _obtain(scene, cache_dir, solve):
             isinstance(scene.raw.get("device", {}).get("surface_charge_uC_per_m2"), str) \
             else scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
         return resolved, table, "cached", sigma_max
-    resolved, table, outcome, limit = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+    resolved, table, outcome, limit = surrogate_for_run(scene, cache_dir=cache_dir, solve=solve)
     sigma_max = None if limit is None else float(limit.sigma_max)
     if len(_OBTAINED) >= _OBTAINED_MAX:
         _OBTAINED.clear()
