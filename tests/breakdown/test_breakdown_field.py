@@ -185,7 +185,7 @@ def test_sweep_runs_at_the_breakdown_charge(tmp_path, run_cli, cli_env):
     table, _ = air_breakdown.obtain_breakdown_table(
         parse_scene('[device]\nsurface_charge_uC_per_m2 = "breakdown"\n' + common),
         cache_dir=tmp_path / "cache")
-    exact = -breakdown.scene_breakdown(parse_scene(common), table).sigma_max * 1e6
+    exact = -air_breakdown.scene_breakdown(parse_scene(common), table).sigma_max * 1e6
     assert sigma == pytest.approx(exact, rel=1e-3)
     (tmp_path / "num.toml").write_text(f"[device]\nsurface_charge_uC_per_m2 = {exact!r}\n"
                                        + common)
