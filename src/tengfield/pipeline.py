@@ -33,6 +33,7 @@ from .ensemble import ensemble_block, realisation_row, realisation_seeds
 from .scene import check_field
 from .surrogate import (AnchoredTerminalCurves, SurrogateTable, TerminalCurves, leaves_axis,
                         obtain_radial_table)
+from .scene.schema import SURFACE_CHARGE_KEY
 
 
 @dataclass
@@ -524,7 +525,7 @@ def _leaves_zero(gap) -> bool:
 
 def _needs_field(scene, gap) -> tuple[bool, str]:
     if scene.device.ball_charge == 0.0:
-        return False, "ball charge is zero ([device] surface_charge_uC_per_m2 = 0): Q_SC = 0"
+        return False, f"ball charge is zero ([device] {SURFACE_CHARGE_KEY} = 0): Q_SC = 0"
     if not _leaves_zero(gap):
         return False, "the ball never leaves the lower electrode: Q_SC = 0 (reference state)"
     return True, ""

@@ -4,7 +4,7 @@ in one place for ``run``, ``sweep``, ``field``, the ensemble and ``uncertainty``
 
 A numeric σ runs with the scene's own surrogate (cached by field hash, or solved), checked
 against the air-breakdown limit when the table has gap lines; ``[device]
-surface_charge_uC_per_m2 = "breakdown"`` takes the surrogate with its gap lines and runs at
+σ = "breakdown"`` takes the surrogate with its gap lines and runs at
 σ = −σ_max, the table scaled to it (charges are linear in σ: no new field solve;
 :mod:`tengfield.air_breakdown` holds the physics).
 """

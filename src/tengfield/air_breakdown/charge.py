@@ -1,11 +1,12 @@
 """The charge a run uses: the scene's σ, or −σ_max for ``[device]
-surface_charge_uC_per_m2 = "breakdown"`` (:func:`resolve_for_run`), with the surrogate
+σ = "breakdown"`` (:func:`resolve_for_run`), with the surrogate
 scaled to it (charges are linear in σ: no new field solve); the run's surrogate at that
 charge is :func:`tengfield.run_surrogate.surrogate_for_run`'s."""
 from __future__ import annotations
 
 from ..paschen import Paschen
 from .limit import BreakdownResult, evaluate, lines_from_table
+from ..scene.schema import SURFACE_CHARGE_KEY, stated_surface_charge
 
 
 def scene_states(scene) -> tuple[str, ...]:
@@ -18,9 +19,8 @@ def scene_states(scene) -> tuple[str, ...]:
 
 
 def uses_breakdown_charge(scene) -> bool:
-    """True when ``[device] surface_charge_uC_per_m2 = "breakdown"``."""
-    return (scene.raw.get("device", {}) if isinstance(scene.raw, dict) else {}).get(
-        "surface_charge_uC_per_m2") == "breakdown"
+    """True when ``σ = "breakdown"``."""
+    return stated_surface_charge(scene) == "breakdown"
 
 
 def scene_breakdown(scene, table, states=None) -> BreakdownResult:
@@ -92,12 +92,12 @@ def charge_line(scene) -> str:
     :func:`tengfield.run_surrogate.surrogate_for_run`
     from ``"breakdown"``: the σ it runs with."""
     return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} µC/m^2 "
-            f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
+            f'(air-breakdown limit, [device] {SURFACE_CHARGE_KEY} = "breakdown")')
 
 
 def resolve_for_run(scene, table, comm=None):
     """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
-    surface_charge_uC_per_m2 = "breakdown"`` the scene gets σ = −σ_max and the table is
+    σ = "breakdown"`` the scene gets σ = −σ_max and the table is
     scaled to it (no new field solve); otherwise both are returned as they are.
     ``result`` is None when the table has no breakdown lines. Rank 0 of ``comm`` warns
     once when |σ| exceeds σ_max."""
@@ -107,7 +107,7 @@ def resolve_for_run(scene, table, comm=None):
         if uses_breakdown_charge(scene):   # never run at the stand-in sigma
             from ..errors import TengfieldError
             raise TengfieldError(
-                '[device] surface_charge_uC_per_m2 = "breakdown": the surrogate has no '
+                f'[device] {SURFACE_CHARGE_KEY} = "breakdown": the surrogate has no '
                 "breakdown lines (made by the 3D solver or a custom solve), so sigma_max is "
                 "unknown; give sigma in µC/m^2 or use [field] method = \"axisymmetric\"")
         return scene, table, None
@@ -116,12 +116,12 @@ def resolve_for_run(scene, table, comm=None):
         from ..surrogate.table import at_ball_charge
 
         sigma = -result.sigma_max
-        scene = scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
+        scene = scene.with_values(device={SURFACE_CHARGE_KEY: sigma * 1e6})
         table = at_ball_charge(table, scene.device.ball_charge)   # whatever σ it was solved at
     elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
         b = result.binding
         warnings.warn(
-            f"[device] surface_charge_uC_per_m2 = {scene.device.surface_charge * 1e6:g} exceeds "
+            f"[device] {SURFACE_CHARGE_KEY} = {scene.device.surface_charge * 1e6:g} exceeds "
             f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} µC/m^2 "
             f"({b.state}, {b.side} gap {b.gap * 1e3:.3g} mm at z = {b.position * 1e3:.3g} mm): "
             "the gap would discharge first (tengfield breakdown; \"breakdown\" runs at the limit)",

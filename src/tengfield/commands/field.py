@@ -36,7 +36,7 @@ def register(sub) -> None:
 
 
 def _resolved_charge(scene, comm):
-    """The scene with ``[device] surface_charge_uC_per_m2 = "breakdown"`` replaced by
+    """The scene with ``σ = "breakdown"`` replaced by
     -sigma_max (from the cached surrogate's breakdown lines, computed once if missing),
     so the solve is at the charge a run would use; any other scene as it is."""
     from .. import air_breakdown

@@ -19,6 +19,7 @@ import numpy as np
 from .. import electrical
 from ..errors import TengfieldError
 from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, band_run, periodic
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
 #: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
@@ -58,8 +59,8 @@ def followed_geometry(base_device: dict, values: dict) -> dict:
 def candidate_charge(scene, table=None):
     """``(scene, table)`` at the ball's surface charge density σ a candidate is scored at.
 
-    THE one place that decides it: the scene's own ``[device] surface_charge_uC_per_m2``
-    (or its varied value); with ``surface_charge_uC_per_m2 = "breakdown"`` each geometry
+    THE one place that decides it: the scene's own ``σ``
+    (or its varied value); with ``σ = "breakdown"`` each geometry
     at its own air-breakdown limit, σ = −σ_max from its surrogate's gap lines
     (:func:`tengfield.air_breakdown.resolve_for_run`: the table is rescaled, no new field
     solve), so designs are compared at charges they can hold. Raises
@@ -203,7 +204,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
            "regimes": [], "upper_contacts_per_period": [], "upper_contact_fraction": math.nan,
            "load_ohm": None, "field_hash": "", "field_error": math.nan,
            "interpolation_error": math.nan, "field_status": "", "positions": 0,
-           "device_volume_m3": math.nan, "surface_charge_uC_per_m2": math.nan,
+           "device_volume_m3": math.nan, SURFACE_CHARGE_KEY: math.nan,
            "wall_s": {"field": 0.0, "dynamics": 0.0, "circuit": 0.0}}
     try:
         scene = candidate_scene(base, spec, values)
@@ -278,7 +279,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
         if charged is not scene:   # the band scenes at the charge the geometry can hold
             scene = charged        # (the motion does not depend on the charge)
             points = [band_scene(scene, spec, f, a) for f, a in spec.band]
-        row["surface_charge_uC_per_m2"] = scene.device.surface_charge * 1e6
+        row[SURFACE_CHARGE_KEY] = scene.device.surface_charge * 1e6
         curves = TerminalCurves(table, scene.circuit.reference)
     # circuit
     start = time.perf_counter()

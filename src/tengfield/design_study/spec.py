@@ -41,7 +41,7 @@ from dataclasses import field as _field
 
 from ..errors import SceneError
 from .._registry import lookup
-from ..scene.schema import RENAMED_KEYS, SCHEMA
+from ..scene.schema import RENAMED_KEYS, SCHEMA, SURFACE_CHARGE_KEY
 from ..scene.schema import convert as _convert
 
 #: objective -> the output quantity it scores (tengfield.quantities: name, unit, label);
@@ -246,7 +246,7 @@ def _robust_study(scene, spec: DesignSpec):
             raise SceneError(f"[uncertainty.vary] {key!r} with {where}: the design sets this "
                              "key (a [design.vary] key, the band's excitation and run, the "
                              "load); allowed: the other numeric keys (e.g. "
-                             "device.surface_charge_uC_per_m2, contact.restitution)")
+                             f"device.{SURFACE_CHARGE_KEY}, contact.restitution)")
     return study
 
 
@@ -544,7 +544,7 @@ def design_cost(scene, spec: DesignSpec):
     evaluations = spec.candidates * band * draws
     keys = [f"{OTHER_VARY.get(key, 'device')}.{key}" for key in spec.vary]
     geometry = any(is_field_key(key, scene.device.shape) for key in keys)
-    charged = scene.device.ball_charge != 0.0 or "surface_charge_uC_per_m2" in spec.vary
+    charged = scene.device.ball_charge != 0.0 or SURFACE_CHARGE_KEY in spec.vary
     solves = 0 if not charged else (spec.candidates if geometry else 1)
     if spec.uncertainty is not None and charged:
         solves *= max(1, draws if any(is_field_key(k, scene.device.shape)
