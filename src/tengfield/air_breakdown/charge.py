@@ -82,7 +82,7 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
     return table, outcome
 
 
-def scene_sigma(scene, result: BreakdownResult) -> float:
+def scene_surface_charge(scene, result: BreakdownResult) -> float:
     """The σ [C/m²] a scene runs with: its own, or −σ_max for ``"breakdown"``."""
     return -result.sigma_max if uses_breakdown_charge(scene) else scene.device.surface_charge
 

@@ -7,7 +7,8 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from .band import scene_band
-from .charge import obtain_breakdown_table, scene_breakdown, scene_sigma, uses_breakdown_charge
+from .charge import (obtain_breakdown_table, scene_breakdown, scene_surface_charge,
+                     uses_breakdown_charge)
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
 from .._files import figure_file
 
@@ -15,7 +16,7 @@ def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     """What ``tengfield breakdown`` prints (with ``band``: σ_max over the γ range and one
     line per edge of the band saying what it assumes)."""
     b = result.binding
-    sigma = scene_sigma(scene, result)
+    sigma = scene_surface_charge(scene, result)
     lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2 (relative error estimate "
              f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
              f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
@@ -44,7 +45,7 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    sigma = scene_sigma(scene, result)
+    sigma = scene_surface_charge(scene, result)
     data = result.to_json(sigma)
     data.update({"scene": scene.source, "field_hash": scene.field_hash(),
                  "field_stage": field_status,

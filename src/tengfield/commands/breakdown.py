@@ -34,8 +34,8 @@ def _run(args) -> int:
     scene = load_scene(args.scene)
     check_field(scene)
     comm = world_if_parallel()
-    table, outcome = air_breakdown.obtain_breakdown_table(scene, cache_dir=args.cache_dir, comm=comm,
-                                                      progress=True, command_line=command_line())
+    table, outcome = air_breakdown.obtain_breakdown_table(
+        scene, cache_dir=args.cache_dir, comm=comm, progress=True, command_line=command_line())
     if comm is not None and comm.rank != 0:
         return 0
     states = air_breakdown.STATES if args.states == "all" else None

@@ -40,7 +40,8 @@ def csv_columns(result) -> list[str]:
     cols += [f"{spec.objective}_spread_per_band_point", "windows",
              "regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
-             "device_volume_m3", SURFACE_CHARGE_KEY, "field_relative_error", "interpolation_error", "positions",
+             "device_volume_m3", SURFACE_CHARGE_KEY, "field_relative_error",
+             "interpolation_error", "positions",
              "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
              "field_hash"]
     return cols

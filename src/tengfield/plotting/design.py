@@ -41,8 +41,8 @@ def plot_design(result, path, **options):
 
 def design_figure(result, *, units: dict[str, str], names: dict[str, str] | None = None,
                   scales: dict | None = None, on_bound=()):
-    """The figure of a :class:`tengfield.design_study.DesignResult` (design.png). ``units``: objective -> its
-    SI unit; ``names``: objective -> its words (the quantity table's); ``scales``: objective -> (label, factor) of the readable unit (value x factor;
+    """The figure of a :class:`tengfield.design_study.DesignResult` (design.png). ``units``:
+    objective -> its SI unit; ``names``: objective -> its words (the quantity table's); ``scales``: objective -> (label, factor) of the readable unit (value x factor;
     default the SI unit); ``on_bound``: [(key, "lower" | "upper", bound)] the best sits on
     (passed in: plotting stays below the packages whose results it draws)."""
     spec = result.spec

@@ -220,7 +220,8 @@ def _group_task(task):
             _DYNAMICS.clear()          # chunks of a group are consecutive tasks: keep one
             _DYNAMICS[memo] = dynamics
         table, at, sigma_table, sigma_max = None, base, 0.0, None
-        charged = base.device.ball_charge != 0.0 or any(SURFACE_CHARGE_SETTING in v for _, v in group.members)
+        charged = base.device.ball_charge != 0.0 or any(SURFACE_CHARGE_SETTING in v
+                                                         for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
             ref = solved_scene(base)
             digest = ref.field_hash()
@@ -231,7 +232,8 @@ def _group_task(task):
         for index, values in group.members:
             with _tagged({**group.dynamic, **values}, [(index, values)]):
                 if band is not None and SURFACE_CHARGE_SETTING in values:
-                    values = {**values, SURFACE_CHARGE_SETTING: band_sigma(band, values[SURFACE_CHARGE_SETTING])}
+                    values = {**values, SURFACE_CHARGE_SETTING: band_sigma(
+                        band, values[SURFACE_CHARGE_SETTING])}
                 point = at.with_values(**sections_of(values)) if values else at
                 scaled = None
                 if table is not None and point.device.ball_charge != 0.0:

@@ -167,7 +167,8 @@ def _distribution(key: str, given) -> Distribution:
         raise SceneError(f"{where}: distribution = {show(kind)} is not allowed: choose one of "
                          f"{choices}" + (suggest(kind, DISTRIBUTIONS) if isinstance(kind, str) else ""))
     if kind == BAND and key != SURFACE_CHARGE_SETTING:
-        raise SceneError(f"{where}: distribution = {show(kind)} is for {SURFACE_CHARGE_SETTING!r} only "
+        raise SceneError(f"{where}: distribution = {show(kind)} is for "
+                         f"{SURFACE_CHARGE_SETTING!r} only "
                          "(the breakdown band of each geometry)")
     names = DISTRIBUTIONS[kind]
     for name in given:
