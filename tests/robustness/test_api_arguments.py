@@ -59,7 +59,8 @@ def test_design_entry_points_name_their_arguments():
     with pytest.raises(TypeError, match=r"tengfield.design\(scene=None\): expected a "
                                         r"tengfield.Scene"):
         tf.design(None)
-    with pytest.raises(TypeError, match=r"design.evaluate\(spec=None\): expected a DesignSpec"):
+    with pytest.raises(TypeError, match=r"design_study\.evaluate\(spec=None\): expected a "
+                                        r"DesignSpec"):
         evaluate(tf.default_scene(), None, {"stroke_mm": 2.0})
     with pytest.raises(TypeError, match=r"check_optimum\(result=None\)"):
         check_optimum(None)

@@ -190,10 +190,10 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     from ..dynamics import simulate as default_simulate
     from ..air_breakdown import obtain_breakdown_table, uses_breakdown_charge
 
-    check_scene_argument("design.evaluate", base, "base")
-    check_instance("design.evaluate", spec, "spec", DesignSpec,
+    check_scene_argument("design_study.evaluate", base, "base")
+    check_instance("design_study.evaluate", spec, "spec", DesignSpec,
                    "a DesignSpec (tengfield.design_study.parse_design_section(scene))")
-    check_instance("design.evaluate", values, "values", dict, "a dict of varied keys")
+    check_instance("design_study.evaluate", values, "values", dict, "a dict of varied keys")
     from ..surrogate import TerminalCurves, obtain_table
     from ..surrogate.table import at_ball_charge
 
