@@ -18,7 +18,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--no-lines", action="store_true")
     args = parser.parse_args()
-    from tengfield import breakdown
+    from tengfield import air_breakdown
     from tengfield.scene import default_scene
     from tengfield.surrogate import precompute
 
@@ -29,7 +29,7 @@ def main() -> None:
     line = f"precompute {took:.2f} s, {table.count} positions"
     if not args.no_lines:
         start = time.perf_counter()
-        res = breakdown.scene_breakdown(scene, table, breakdown.STATES)
+        res = air_breakdown.scene_breakdown(scene, table, air_breakdown.STATES)
         line += (f"; sigma_max {res.sigma_max * 1e6:.4g} uC/m^2 "
                  f"(evaluation {time.perf_counter() - start:.3f} s)")
     print(line)

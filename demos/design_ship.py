@@ -36,7 +36,7 @@ from demo_mpi import is_root, world  # noqa: E402
 from electrical_common import demo_arguments, pyplot, save_small_png  # noqa: E402
 
 import tengfield as tf  # noqa: E402
-from tengfield.design import check_optimum, design, write_design_outputs  # noqa: E402
+from tengfield.design_study import check_optimum, design, write_design_outputs  # noqa: E402
 
 PAPER_STROKE_MM = 2.0
 SHIP_BAND = {"frequency_hz": [33.0], "amplitude_mm": [0.5, 0.75, 1.0]}
@@ -109,7 +109,7 @@ def main(argv: list[str] | None = None) -> dict:
     out["confidence"] = {k: v for k, v in power.confidence().items()
                          if k != "within_error_bars"}
     # the paper's 2 mm scored the same way
-    from tengfield.design import evaluate, parse_design_section
+    from tengfield.design_study import evaluate, parse_design_section
     spec = parse_design_section(power.scene)
     paper = evaluate(power.scene, spec, {"stroke_mm": PAPER_STROKE_MM}, cache_dir=args.cache_dir)
     out["paper_stroke_power_density_W_per_m3"] = paper["objective"]
@@ -189,7 +189,7 @@ def main(argv: list[str] | None = None) -> dict:
         for o, unit in (("charge", "Q_SC pp"), ("voltage", "V_OC pp"), ("current", "I_SC pp")):
             values = np.array(t[o])
             ax.plot(t["x"], values / values.max(), "o-", ms=3,
-                    label=f"{unit} / {values.max():.3g} {tf.design.OBJECTIVES[o][0]}")
+                    label=f"{unit} / {values.max():.3g} {tf.design_study.OBJECTIVES[o][0]}")
         ax.set_ylabel("relative to the largest")
         ax.set_xlabel(label)
         ax.set_title(title + ", 35 Hz, 1.5 mm", fontsize=9)

@@ -102,13 +102,12 @@ def test_sweep_face(scene, cached, tmp_path):
 
 @pytest.mark.field
 def test_breakdown_face_and_cli_files(tmp_path, run_cli):
-    """Coarse field solves (P1, 1 mm; the surrogate cache shared with the CLI)."""
-    from tengfield import breakdown
-
+    """``tf.breakdown``: coarse field solves (P1, 1 mm; the surrogate cache shared with
+    the CLI)."""
     path = tmp_path / "scene.toml"
     path.write_text("[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.03\n")
     with pytest.warns(RuntimeWarning, match="field error estimate"):   # coarse on purpose
-        result = breakdown.study(path)
+        result = tf.breakdown(path)
     assert result.scene.source == tf.load_scene(path).source
     summary = check_face(result, tmp_path / "api", expected_files={"breakdown.json",
                                                                    "breakdown.png"})
@@ -141,13 +140,11 @@ def assert_same_files(a, b, timing=()):
 
 
 def test_uncertainty_face(cached, tmp_path):
-    from tengfield.uncertainty.study import run_study
-
     scene = fx.scene_with(run=SHORT_RUN, uncertainty={
         "samples": 16, "method": "sobol", "seed": 2,
         "vary": {"device.surface_charge_uC_per_m2": {"distribution": "normal", "mean": -20.0,
                                                      "std": 2.0}}})
-    result = run_study(scene, cache_dir=cached, solve=fx.plate_model_solve, jobs=1)
+    result = tf.uncertainty(scene, cache_dir=cached, solve=fx.plate_model_solve, jobs=1)
     assert result.scene is scene
     summary = check_face(result, tmp_path / "out", expected_files={"uncertainty.json"})
     written = json.loads((tmp_path / "out" / "uncertainty.json").read_text())
@@ -164,9 +161,22 @@ def test_design_face(cached, tmp_path):
     assert written.keys() == json.loads(json.dumps(summary)).keys()
 
 
+def test_report_verb_measures_the_scene(tmp_path):
+    """``tf.report(scene, fast=True)`` with the plate model standing in for the field: a
+    row per stage level, a verified recommendation per target, the report's files."""
+    scene = fx.scene_with(run=SHORT_RUN)
+    report = tf.report(scene, fast=True, solve=fx.plate_model_solve)
+    assert report.scene is scene
+    assert {row.stage for row in report.rows} == {"field", "surrogate", "dynamics", "circuit"}
+    assert [rec.target for rec in report.recommendations] == [1e-2, 1e-3]
+    summary = check_face(report, tmp_path / "out",
+                         expected_files={"report.json", "report.csv", "report.md", "field.png"})
+    assert summary == json.loads((tmp_path / "out" / "report.json").read_text())
+
+
 def test_report_face(tmp_path):
     """A report from rows alone (no measuring): one Figure with a panel per stage."""
-    from tengfield.report import Report, Row, make_plan
+    from tengfield.accuracy_report import Report, Row, make_plan
 
     rows = [Row(stage, f"{stage} {i}", {"model": "impact"}, wall,
                 {"V_oc": 10.0 ** -i, "Q_sc": 10.0 ** -i, "I_sc": 10.0 ** -i}, "ref")

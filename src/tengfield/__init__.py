@@ -12,14 +12,18 @@ V_OC, Q_SC, I_SC. In a notebook::
     ball = tf.simulate_3d(scene)          # the rigid ball in 3D (wall, friction, spin)
     fit = tf.calibrate(scene, measured=trace)    # sigma, C_p, ... fitted to a trace
     best = tf.design(scene)               # the geometry that serves [design]'s band best
+    study = tf.uncertainty(scene)         # bands and Sobol indices over [uncertainty.vary]
+    limit = tf.breakdown(scene)           # the air-breakdown limit on sigma (Paschen)
+    rep = tf.report(scene, fast=True)     # error against run time, cheapest settings
     rows = tf.sweep(scene, vary={"device.stroke_mm": "1:5:9"}, frequency_hz=[20, 30])
     grid = tf.map(scene, frequency_hz="5:70:40", amplitude_mm="0.1:5:40")   # regime map
     tf.harvest.harvest(t, q_sc, c_t, storage_capacitance=10e-6)   # bridges into a store
 
 Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
 ``simulate``, ``solve_position``, ``build_surrogate``, ``simulate_3d``,
-``calibrate`` (and the submodules)
-are imported on first use.
+``calibrate``, the study verbs ``design``, ``uncertainty``, ``breakdown``, ``report``
+(their packages: ``design_study``, ``uncertainty_study``, ``air_breakdown``,
+``accuracy_report``) and the submodules are imported on first use.
 """
 from __future__ import annotations
 
@@ -40,10 +44,14 @@ _LAZY = {
     "simulate_3d": ("tengfield.dynamics.motion3d", "simulate_3d"),
     "calibrate": ("tengfield.fit", "calibrate"),
     "map": ("tengfield.dynamics.mapping", "map_study"),
+    "design": ("tengfield.design_study", "design"),
+    "uncertainty": ("tengfield.uncertainty_study", "run_study"),
+    "breakdown": ("tengfield.air_breakdown", "study"),
+    "report": ("tengfield.accuracy_report", "build_report"),
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", "design", "sweep",
+           "TengfieldError", "DynamicsError", "FieldError", "__version__", "sweep",
            *(name for name in _LAZY if name != "map")]   # tf.map: never shadow the builtin on *
 
 

@@ -287,7 +287,7 @@ def format_number(x) -> str:
 
 
 def report_row_record(row) -> dict:
-    """A CSV/JSON record of one :class:`tengfield.report.Row`."""
+    """A CSV/JSON record of one :class:`tengfield.accuracy_report.Row`."""
     rec = {"stage": row.stage, "setting": row.setting, "wall_time_s": row.wall_time_s,
            "error_max": row.error, "error_position": row.error_position,
            "knobs": json.dumps(row.knobs, sort_keys=True), "reference": row.reference,
@@ -298,7 +298,7 @@ def report_row_record(row) -> dict:
 
 
 def write_report_csv(path: str | Path, report) -> Path:
-    """``report.csv``: one line per measured row of a :class:`tengfield.report.Report`."""
+    """``report.csv``: one line per measured row of a :class:`tengfield.accuracy_report.Report`."""
     records = (report_row_record(row) for row in report.rows)
     return write_rows(path, REPORT_COLUMNS, ([format_number(v) if isinstance(v, float) else v
                                               for v in (rec[k] for k in REPORT_COLUMNS)]

@@ -33,6 +33,7 @@ from .ensemble import ensemble_block, realisation_row, realisation_seeds
 from .scene import check_field
 from .surrogate import (AnchoredTerminalCurves, SurrogateTable, TerminalCurves, leaves_axis,
                         obtain_radial_table)
+from .scene.schema import SURFACE_CHARGE_KEY
 
 
 @dataclass
@@ -259,8 +260,8 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
     table = curves = limit = None
     needs_field, why_not = _needs_field(scene, gap)
     if needs_field:
-        from . import breakdown   # [device] surface_charge_uC_per_m2 = "breakdown": at -sigma_max
-        scene, table, outcome, limit = breakdown.obtain_run_table(
+        from .run_surrogate import surrogate_for_run   # "breakdown": at -sigma_max
+        scene, table, outcome, limit = surrogate_for_run(
             scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
             command_line=command_line, write=write_cache)
         if outcome.status == "cached":
@@ -330,8 +331,8 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:
-        from .breakdown import obtain_run_table   # the surrogate run_one would cache
-        obtain_run_table(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
+        from .run_surrogate import surrogate_for_run   # the surrogate run_one would cache
+        surrogate_for_run(scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress)
     rows = [realisation_row(0, seeds[0], first.summary)]
     tasks = [(k, seeds[k], scene, cache_dir) for k in range(1, len(seeds))]
     bar = progress_bar(len(seeds), "realisations", progress, unit="run", comm=comm, initial=1)
@@ -500,17 +501,17 @@ def _breakdown_summary(summary, scene, hashed, limit, dynamics=None) -> None:
     """summary["breakdown"] (with the band and the trajectory's V_gap/V_b at the scene's
     σ), ``breakdown_band`` (σ = "breakdown": each main output at the band's three σ) and
     the breakdown-limited CMEO / FOM beside the ideal ones."""
-    from . import breakdown
+    from . import air_breakdown
 
     summary["field_hash"] = hashed.field_hash()     # the surrogate's (σ = "breakdown" too)
-    summary["breakdown"] = _jsonable(breakdown.summary_block(limit, scene, hashed))
+    summary["breakdown"] = _jsonable(air_breakdown.summary_block(limit, scene, hashed))
     if limit is not None and dynamics is not None:
-        summary["breakdown"].update(_jsonable(breakdown.band_summary(
+        summary["breakdown"].update(_jsonable(air_breakdown.band_summary(
             summary, scene, hashed, limit, dynamics)))
         if "outputs" in summary["breakdown"]:
             summary["breakdown_band"] = summary["breakdown"].pop("outputs")
     if limit is not None and summary.get("energy_per_cycle"):
-        summary["energy_per_cycle"].update(_jsonable(breakdown.limited_energy(
+        summary["energy_per_cycle"].update(_jsonable(air_breakdown.limited_energy(
             summary["energy_per_cycle"], limit, scene.device.surface_charge)))
 
 
@@ -524,7 +525,7 @@ def _leaves_zero(gap) -> bool:
 
 def _needs_field(scene, gap) -> tuple[bool, str]:
     if scene.device.ball_charge == 0.0:
-        return False, "ball charge is zero ([device] surface_charge_uC_per_m2 = 0): Q_SC = 0"
+        return False, f"ball charge is zero ([device] {SURFACE_CHARGE_KEY} = 0): Q_SC = 0"
     if not _leaves_zero(gap):
         return False, "the ball never leaves the lower electrode: Q_SC = 0 (reference state)"
     return True, ""

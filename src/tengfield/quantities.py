@@ -121,10 +121,16 @@ STATISTICS: dict[str, tuple[str, str]] = {
 TERMINAL = ("V_oc_V", "Q_sc_C", "I_sc_A")
 
 
+#: the scene key of the ball's surface charge density σ in [device] (µC/m², or the keyword
+#: "breakdown"); code names the quantity ``surface_charge`` [C/m²]. Its one spelling in src
+#: (tests/scene/test_surface_charge_key.py), here in the base layer so that this table and
+#: the scene's schema (:data:`tengfield.scene.schema.SURFACE_CHARGE_KEY`) share it.
+SURFACE_CHARGE_KEY = "surface_charge_uC_per_m2"
+
 #: scene/fit parameter key (its section's prefix, ``device.``, dropped) -> (symbol, shown
 #: unit, words for a unitless one). Figures label a scene key with these (issue #42).
 SCENE_SYMBOLS: dict[str, tuple[str, str, str]] = {
-    "surface_charge_uC_per_m2": ("σ", "µC/m²", ""),
+    SURFACE_CHARGE_KEY: ("σ", "µC/m²", ""),
     "stroke_mm": ("Δh", "mm", ""),
     "gap_mm": ("Δh", "mm", ""),
     "ball_diameter_mm": ("d", "mm", ""),

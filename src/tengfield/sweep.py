@@ -455,12 +455,13 @@ def _axis(scene, values, which: str) -> list:
 def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
                  command_line: str = "", tables: dict | None = None):
     """Each point's ``(scene, table)`` at the charge it runs with
-    (:func:`tengfield.breakdown.obtain_run_table`, the path of ``tengfield run``), and
+    (:func:`tengfield.run_surrogate.surrogate_for_run`, the path of ``tengfield run``), and
     ``{"computed": n, "cached": n, "reused": n, "geometries": n}``. Points of one geometry
     (one field hash) share one surrogate: the first obtains it (solved over ``comm``'s
     ranks or read from the cache), the others reuse it at their own charge (``reused``,
     no field solve: a σ or circuit key never solves a field)."""
-    from .breakdown import obtain_run_table, uses_breakdown_charge
+    from .air_breakdown import uses_breakdown_charge
+    from .run_surrogate import surrogate_for_run
     from .errors import SceneError
     from .surrogate.table import at_ball_charge
 
@@ -479,7 +480,7 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
             counts["reused"] += 1
             continue
         try:
-            resolved, table, outcome, _ = obtain_run_table(
+            resolved, table, outcome, _ = surrogate_for_run(
                 scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
                 command_line=command_line)
         except SceneError as exc:

@@ -1,4 +1,4 @@
-"""The charge a device holds as a band (issue #38, tengfield.breakdown.band) on the planar
+"""The charge a device holds as a band (issue #38, tengfield.air_breakdown.band) on the planar
 contact-separation device, whose static limits are known in closed form: Paschen with
 its γ, the empirical air table, the seed count, the edges' order and where they bind."""
 import math
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from planar_lines import planar_lines
 
-from tengfield.breakdown import band as bandmod
-from tengfield.breakdown import evaluate
+from tengfield.air_breakdown import band as bandmod
+from tengfield.air_breakdown import evaluate
 from tengfield.paschen import ATMOSPHERE, EMPIRICAL_AIR, Paschen
 from tengfield.scene import EPS0
 

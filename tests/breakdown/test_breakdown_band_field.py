@@ -6,7 +6,7 @@ import math
 import pytest
 from shell_model import SHELL
 
-from tengfield import breakdown
+from tengfield import air_breakdown
 from tengfield.pipeline import run
 from tengfield.quantities import summary_value
 from tengfield.scene import Scene, default_scene
@@ -37,19 +37,19 @@ def shell():
 @pytest.mark.parametrize("make", [tube, shell], ids=["tube", "spherical-shell"])
 def test_edges_are_ordered_for_every_cell(make, cache):
     scene = make()
-    table, _ = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
-    result = breakdown.scene_breakdown(scene, table)
-    band = breakdown.scene_band(scene, result)
+    table, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+    result = air_breakdown.scene_breakdown(scene, table)
+    band = air_breakdown.scene_band(scene, result)
     assert 0.0 < band.lower <= band.static_at_gamma <= band.estimate <= band.upper < math.inf
     assert band.static_at_gamma == pytest.approx(result.sigma_max, rel=1e-12)
     # the upper edge binds where the smaller gap is widest along the trajectory
     assert band.upper_gap == pytest.approx(max(band.track.smaller_gap), rel=1e-12)
     assert band.upper_gap > band.lower_gap
     # more ions: the estimate cannot rise; none at all: it is clamped to the upper edge
-    more = breakdown.scene_band(scene.with_values(breakdown={"ion_density_per_cm3": 5e4}),
+    more = air_breakdown.scene_band(scene.with_values(breakdown={"ion_density_per_cm3": 5e4}),
                                 result)
     assert band.lower <= more.estimate <= band.estimate
-    none = breakdown.scene_band(scene.with_values(breakdown={
+    none = air_breakdown.scene_band(scene.with_values(breakdown={
         "ion_density_per_cm3": 0.0, "seed_rate_per_cm3_s": 0.0}), result)
     assert none.estimate == none.upper
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tengfield import breakdown
+from tengfield import air_breakdown
 from tengfield.scene import default_scene, parse_scene
 from tengfield.surrogate import read_table
 
@@ -32,8 +32,8 @@ def test_sigma_max_does_not_depend_on_the_scene_sigma(cache):
     limits = []
     for sigma in (-8.0, -30.0):
         scene = coarse(surface_charge_uC_per_m2=sigma)
-        table, _ = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
-        limits.append(breakdown.scene_breakdown(scene, table, breakdown.STATES).sigma_max)
+        table, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+        limits.append(air_breakdown.scene_breakdown(scene, table, air_breakdown.STATES).sigma_max)
     assert limits[1] == pytest.approx(limits[0], rel=1e-9)
     assert 10e-6 < limits[0] < 60e-6
 
@@ -43,14 +43,14 @@ def test_an_uncharged_ball_has_the_same_limit(cache, tmp_path):
     sigma_max is the charged scene's (it was inf, written as null), the figure drawn at
     the limit."""
     charged = coarse(surface_charge_uC_per_m2=-8.0)
-    table, _ = breakdown.obtain_breakdown_table(charged, cache_dir=cache)
-    expected = breakdown.scene_breakdown(charged, table).sigma_max
+    table, _ = air_breakdown.obtain_breakdown_table(charged, cache_dir=cache)
+    expected = air_breakdown.scene_breakdown(charged, table).sigma_max
     scene = coarse(surface_charge_uC_per_m2=0.0)
-    table0, _ = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
-    result = breakdown.scene_breakdown(scene, table0)
+    table0, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+    result = air_breakdown.scene_breakdown(scene, table0)
     assert result.sigma_max == pytest.approx(expected, rel=1e-9)
     assert result.margin(0.0) == 0.0
-    breakdown.write_outputs(result, scene, tmp_path, plots=True)
+    air_breakdown.write_outputs(result, scene, tmp_path, plots=True)
     data = json.loads((tmp_path / "breakdown.json").read_text())
     assert data["sigma_max_uC_per_m2"] == pytest.approx(expected * 1e6, rel=1e-9)
     assert (tmp_path / "breakdown.png").stat().st_size > 10_000
@@ -58,7 +58,7 @@ def test_an_uncharged_ball_has_the_same_limit(cache, tmp_path):
 
 def test_lines_are_stored_with_the_surrogate_and_mirror_symmetric(cache):
     scene = coarse(surface_charge_uC_per_m2=-8.0)
-    table, outcome = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+    table, outcome = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
     again = read_table(outcome.path)
     np.testing.assert_array_equal(again.line_potential, table.line_potential)
     assert again.line_potential.shape == (table.count, 2, 18, 3)
@@ -98,9 +98,9 @@ def test_mirror_image_agrees_with_a_direct_solve():
 
 def test_lower_pressure_lowers_sigma_max_at_mm_gaps(cache):
     scene = coarse()
-    table, _ = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
-    one = breakdown.scene_breakdown(scene, table).sigma_max
-    low = breakdown.scene_breakdown(scene.with_values(breakdown={"pressure_kPa": 30.0}),
+    table, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+    one = air_breakdown.scene_breakdown(scene, table).sigma_max
+    low = air_breakdown.scene_breakdown(scene.with_values(breakdown={"pressure_kPa": 30.0}),
                                     table).sigma_max
     assert low < 0.7 * one
 
@@ -112,8 +112,8 @@ def test_mesh_convergence_of_sigma_max(cache):
     for h in (1.0, 0.5, 0.25):
         scene = default_scene().with_values(field={"degree": 1, "mesh_size_mm": h,
                                                    "tolerance": 0.03})
-        table, _ = breakdown.obtain_breakdown_table(scene, cache_dir=cache)
-        res = breakdown.scene_breakdown(scene, table, breakdown.STATES)
+        table, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
+        res = air_breakdown.scene_breakdown(scene, table, air_breakdown.STATES)
         values.append(res.sigma_max)
         estimates.append(res.relative_error_estimate)
     first, second = abs(values[1] - values[0]), abs(values[2] - values[1])
@@ -160,7 +160,7 @@ def test_cli_breakdown_writes_its_files(tmp_path, cache):
     assert data["pressure_Pa"] == 90e3 and data["paschen"]["A_per_Pa_m"] == 11.25
     assert math.isfinite(data["sigma_max_uC_per_m2"]) and data["binding"]["gap_length_m"] > 0
     header = (out / "breakdown.csv").read_text().splitlines()[0].split(",")
-    assert list(header) == list(breakdown.CSV_COLUMNS)
+    assert list(header) == list(air_breakdown.CSV_COLUMNS)
     assert (out / "breakdown.png").stat().st_size > 10_000
     assert "sigma_max" in proc.stdout
 
@@ -182,10 +182,10 @@ def test_sweep_runs_at_the_breakdown_charge(tmp_path, run_cli, cli_env):
     sigma = float(re.search(r"-sigma_max = (\S+) [uµ]C/m\^2", done.stderr).group(1))
     assert -60 < sigma < -10
     assert (tmp_path / "bd" / "sweep.png").stat().st_size > 10_000
-    table, _ = breakdown.obtain_breakdown_table(
+    table, _ = air_breakdown.obtain_breakdown_table(
         parse_scene('[device]\nsurface_charge_uC_per_m2 = "breakdown"\n' + common),
         cache_dir=tmp_path / "cache")
-    exact = -breakdown.scene_breakdown(parse_scene(common), table).sigma_max * 1e6
+    exact = -air_breakdown.scene_breakdown(parse_scene(common), table).sigma_max * 1e6
     assert sigma == pytest.approx(exact, rel=1e-3)
     (tmp_path / "num.toml").write_text(f"[device]\nsurface_charge_uC_per_m2 = {exact!r}\n"
                                        + common)

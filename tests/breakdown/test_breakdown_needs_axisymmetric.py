@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tengfield import breakdown
+from tengfield import air_breakdown
 from tengfield.errors import TengfieldError
 from tengfield.scene import SceneError, check_field
 from tengfield.scene import parse_scene as load_scene_text
@@ -34,7 +34,7 @@ def test_breakdown_table_of_a_3d_scene_is_refused_before_solving(tmp_path):
     def solve_must_not_run(*args, **kwargs):
         raise AssertionError("a field solve ran")
     with pytest.raises(TengfieldError, match="axisymmetric"):
-        breakdown.obtain_breakdown_table(scene, cache_dir=tmp_path)
+        air_breakdown.obtain_breakdown_table(scene, cache_dir=tmp_path)
     assert not any(tmp_path.iterdir())
 
 
@@ -46,10 +46,10 @@ def test_a_run_never_uses_the_stand_in_sigma(tmp_path):
     class NoLines:
         line_potential = None
     with pytest.raises(TengfieldError, match="no breakdown lines"):
-        breakdown.resolve_for_run(scene, NoLines())
+        air_breakdown.resolve_for_run(scene, NoLines())
     # with a numeric sigma the run goes on without a breakdown block
     numeric = load_scene_text("[device]\nsurface_charge_uC_per_m2 = -8.0\n")
-    out_scene, table, result = breakdown.resolve_for_run(numeric, NoLines())
+    out_scene, table, result = air_breakdown.resolve_for_run(numeric, NoLines())
     assert result is None and out_scene is numeric
     assert np.isclose(out_scene.device.surface_charge, -8e-6)
 

@@ -1,4 +1,4 @@
-"""The breakdown arithmetic (tengfield.breakdown) on a planar contact-separation device,
+"""The breakdown arithmetic (tengfield.air_breakdown) on a planar contact-separation device,
 whose limits are known in closed form (Zi et al., Adv. Funct. Mater. 27:1700049, 2017):
 open circuit sigma_max = eps0 V_b(x_max) / x_max, short circuit
 sigma_max = min_x eps0 V_b(x) (d0 + x) / (d0 x), d0 = thickness / eps_r."""
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from tengfield import breakdown
+from tengfield import air_breakdown
 from tengfield.paschen import ATMOSPHERE, Paschen
 from tengfield.scene import EPS0
 from planar_lines import planar_lines
@@ -16,7 +16,7 @@ from planar_lines import planar_lines
 @pytest.mark.parametrize("x_max", [1e-3, 3e-3])
 def test_open_circuit_limit_is_the_parallel_plate_one(x_max):
     paschen = Paschen()
-    res = breakdown.evaluate(planar_lines(x_max, 1e-3), paschen, ("open",), "grounded-lower")
+    res = air_breakdown.evaluate(planar_lines(x_max, 1e-3), paschen, ("open",), "grounded-lower")
     expected = EPS0 * paschen.voltage(x_max) / x_max
     assert res.sigma_max == pytest.approx(expected, rel=1e-9)
     assert res.binding.position == pytest.approx(x_max)
@@ -29,7 +29,7 @@ def test_open_circuit_limit_is_the_parallel_plate_one(x_max):
 def test_short_circuit_limit_is_the_parallel_plate_one(d0, design):
     paschen = Paschen()
     x_max = 3e-3
-    res = breakdown.evaluate(planar_lines(x_max, d0), paschen, ("short",), "grounded-lower")
+    res = air_breakdown.evaluate(planar_lines(x_max, d0), paschen, ("short",), "grounded-lower")
     x = np.geomspace(1e-7, x_max, 400001)
     closed_form = np.min(EPS0 * paschen.voltage(x) * (d0 + x) / (d0 * x))
     assert res.sigma_max == pytest.approx(closed_form, rel=1e-3)
@@ -37,7 +37,7 @@ def test_short_circuit_limit_is_the_parallel_plate_one(d0, design):
 
 
 def test_both_states_bind_at_the_smaller_and_rows_are_consistent():
-    res = breakdown.evaluate(planar_lines(3e-3, 1e-3), Paschen(), breakdown.STATES[::2],
+    res = air_breakdown.evaluate(planar_lines(3e-3, 1e-3), Paschen(), air_breakdown.STATES[::2],
                              "grounded-lower", sigma=-10e-6)
     assert res.sigma_max == min(b.sigma for b in res.per_state.values())
     assert res.binding.state == "open"
@@ -49,8 +49,8 @@ def test_both_states_bind_at_the_smaller_and_rows_are_consistent():
 
 def test_lower_pressure_lowers_the_limit_at_mm_gaps():
     lines = planar_lines(3e-3, 1e-3)
-    one = breakdown.evaluate(lines, Paschen(), ("open",), "grounded-lower").sigma_max
-    half = breakdown.evaluate(lines, Paschen(pressure=0.5 * ATMOSPHERE), ("open",),
+    one = air_breakdown.evaluate(lines, Paschen(), ("open",), "grounded-lower").sigma_max
+    half = air_breakdown.evaluate(lines, Paschen(pressure=0.5 * ATMOSPHERE), ("open",),
                               "grounded-lower").sigma_max
     assert half < 0.6 * one
     assert math.isfinite(half) and half > 0
@@ -72,7 +72,7 @@ def test_figure_marks_only_landmarks_it_shows(tmp_path, pressure, monkeypatch):
         return original(self, x, y, s, *args, **kwargs)
     monkeypatch.setattr(matplotlib.axes.Axes, "text", spy)
     lines = planar_lines(3e-3, 1e-3)
-    res = breakdown.evaluate(lines, Paschen(pressure=pressure, longest_path=12.8e-3),
+    res = air_breakdown.evaluate(lines, Paschen(pressure=pressure, longest_path=12.8e-3),
                              ("open",), "grounded-lower")
     plot_breakdown(res, -10e-6, tmp_path / "b.png")
     assert (tmp_path / "b.png").stat().st_size > 10_000

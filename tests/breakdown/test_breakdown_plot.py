@@ -3,7 +3,7 @@
 import pytest
 from matplotlib.figure import Figure
 
-from tengfield import breakdown
+from tengfield import air_breakdown
 from tengfield.scene import default_scene
 
 
@@ -12,8 +12,8 @@ from tengfield.scene import default_scene
 def test_breakdown_result_plot_is_the_breakdown_figure(tmp_path):
     scene = default_scene().with_values(field={"degree": 1, "mesh_size_mm": 1.0,
                                                "tolerance": 0.03})
-    table, _ = breakdown.obtain_breakdown_table(scene, cache_dir=tmp_path / "cache")
-    result = breakdown.scene_breakdown(scene, table)
+    table, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=tmp_path / "cache")
+    result = air_breakdown.scene_breakdown(scene, table)
     fig = result.plot(scene.device.surface_charge)
     assert isinstance(fig, Figure)
     left, right = fig.axes
@@ -21,7 +21,7 @@ def test_breakdown_result_plot_is_the_breakdown_figure(tmp_path):
     assert right.get_ylabel() == "|V_gap| / V_b (worst line)"
     assert f"σ_max = {result.sigma_max * 1e6:.3g} µC/m²" in fig._suptitle.get_text()
     assert "-" + f"{result.sigma_max * 1e6:.3g}" in result.plot()._suptitle.get_text()
-    breakdown.write_outputs(result, scene, tmp_path / "cli", plots=True)
+    air_breakdown.write_outputs(result, scene, tmp_path / "cli", plots=True)
     fig.savefig(tmp_path / "notebook.png", dpi=130)
     assert (tmp_path / "notebook.png").read_bytes() == \
         (tmp_path / "cli" / "breakdown.png").read_bytes()

@@ -7,7 +7,7 @@ import re
 import pytest
 
 from tengfield import quantities
-from tengfield.design.answer import readable_unit
+from tengfield.design_study.answer import readable_unit
 
 ASCII_MICRO = re.compile(r"(?<![A-Za-z_])u(W|C|F|A|V|m)\b")
 SUPERSCRIPT = re.compile("[²³]")

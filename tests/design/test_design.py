@@ -1,4 +1,4 @@
-"""tengfield.design with the analytic plate model (no dolfinx): the [design] section,
+"""tengfield.design_study with the analytic plate model (no dolfinx): the [design] section,
 one candidate's score, the geometry rule, the cache, the search and its outputs."""
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import pytest
 import plate_model as fx
 import tengfield as tf
 from tengfield import electrical
-from tengfield.design import (candidate_scene, design, evaluate, followed_geometry,
+from tengfield.design_study import (candidate_scene, design, evaluate, followed_geometry,
                               parse_design_section, write_design_outputs)
-from tengfield.design.candidate import _load_power, band_scene
+from tengfield.design_study.candidate import _load_power, band_scene
 from tengfield.errors import SceneError
 from tengfield.surrogate import TerminalCurves, precompute
 
@@ -181,12 +181,12 @@ def test_harvested_power_and_stroke_objectives(cache):
 
 def test_the_charge_comes_from_one_function(monkeypatch, cache):
     """candidate_charge is the one place that sets σ (the breakdown limit goes there)."""
-    from tengfield.design import candidate as module
+    from tengfield.design_study import candidate as module
 
     scene = design_scene(objective="charge")
     spec = parse_design_section(scene)
     base = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
-    from tengfield.breakdown import scaled_table
+    from tengfield.air_breakdown import scaled_table
     monkeypatch.setattr(module, "candidate_charge", lambda s, t=None: (s, scaled_table(t, 2.0)))
     doubled = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert doubled["objective"] == pytest.approx(2 * base["objective"], rel=1e-9)
@@ -239,7 +239,7 @@ def test_tf_design_is_the_api_and_the_outputs_are_complete(tmp_path, cache):
     scene = design_scene(candidates=8, batch=4,
                          vary={"stroke_mm": [1.0, 5.0], "ball_diameter_mm": [5.0, 10.0]})
     result = tf.design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
-    assert isinstance(result, tf.design.DesignResult)
+    assert isinstance(result, tf.design_study.DesignResult)
     written = write_design_outputs(result, tmp_path)
     assert {p.name for p in written} == {"design.csv", "design.json", "best.toml", "design.png"}
     rows = list(csv.DictReader(open(tmp_path / "design.csv")))
@@ -284,8 +284,8 @@ def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
     """[device] surface_charge_uC_per_m2 = "breakdown": each candidate runs at -sigma_max of
     its own geometry (the limit `tengfield breakdown` reports for that scene), so Q_SC is
     the breakdown-limited charge; the two strokes get different limits."""
-    from tengfield.breakdown import obtain_breakdown_table, scene_breakdown
-    from tengfield.design import candidate_scene
+    from tengfield.air_breakdown import obtain_breakdown_table, scene_breakdown
+    from tengfield.design_study import candidate_scene
 
     scene = design_scene(objective="charge").with_values(
         device={"surface_charge_uC_per_m2": "breakdown"})
@@ -301,8 +301,8 @@ def test_breakdown_charge_scores_each_geometry_at_its_own_limit(tmp_path):
         limits.append(sigma_max)
     assert limits[0] != pytest.approx(limits[1], rel=1e-3)
     # the answer says which σ and that it is the breakdown limit
-    from tengfield.design import DesignResult, answer_lines
-    from tengfield.design.answer import describe
+    from tengfield.design_study import DesignResult, answer_lines
+    from tengfield.design_study.answer import describe
     rows = [{"index": i, "phase": "test", **r} for i, r in enumerate(rows)]
     result = DesignResult(scene=scene, spec=spec, rows=rows, ranking=[0, 1])
     stated = describe(result, rows[0])
@@ -357,7 +357,7 @@ def test_best_toml_runs_to_the_designs_value_at_its_band_point(tmp_path, cache,
     own matched load: `tengfield run` on it gives the design's value at the band point it
     names (it ran the scene's own [run], and an open circuit for harvested_power and for
     load = "each": no power at all)."""
-    from tengfield.design.answer import chosen_band_point
+    from tengfield.design_study.answer import chosen_band_point
 
     scene = design_scene(objective=objective, candidates=4, field="scene", load=load,
                          settle_periods=6, window_periods=8).with_values(
@@ -427,8 +427,8 @@ def test_the_old_stroke_key_is_read_once_under_its_new_name(tmp_path):
     both names at once are refused."""
     import warnings
 
-    from tengfield.design.output import csv_columns
-    from tengfield.design.search import DesignResult
+    from tengfield.design_study.output import csv_columns
+    from tengfield.design_study.search import DesignResult
 
     path = tmp_path / "old.toml"
     path.write_text('[design]\nobjective = "stroke"\n[design.vary]\ngap_mm = [1.0, 5.0]\n')

@@ -14,8 +14,8 @@ import pytest
 
 import plate_model as fx
 import tengfield as tf
-from tengfield.design import design, evaluate, parse_design_section, write_design_outputs
-from tengfield.design.answer import (answer_lines, chosen_band_point, design_warnings,
+from tengfield.design_study import design, evaluate, parse_design_section, write_design_outputs
+from tengfield.design_study.answer import (answer_lines, chosen_band_point, design_warnings,
                                      readable_unit)
 
 #: 25 Hz / 0.3 mm: Γ = Aω²/g = 0.75, below lift-off for every ball (first in the band)
@@ -122,7 +122,7 @@ def test_a_chaotic_band_point_carries_its_spread_over_windows_in_the_error_bar(c
     spread = row["band_spread"]["charge"][0]
     assert spread > 0
     # the spread is the standard deviation of the value over three consecutive windows
-    from tengfield.design.candidate import band_scene, candidate_scene, window_values
+    from tengfield.design_study.candidate import band_scene, candidate_scene, window_values
     from tengfield.surrogate import TerminalCurves, precompute
     cand = candidate_scene(scene, spec, {"stroke_mm": 4.0})
     point = band_scene(cand, spec, 20.0, 5.0e-3)
@@ -195,8 +195,8 @@ def test_readable_units():
 def test_design_png_is_readable_with_error_bars_and_the_bound_optimum_marked(cache):
     """Readable units and axis labels, error bars, the bound optimum marked, no Pareto panel
     for one objective (it drew W with a 1e-6 offset, raw key names, no error bars)."""
-    from tengfield.design.output import plot_scales
-    from tengfield.design.spec import OBJECTIVES, objective_label
+    from tengfield.design_study.output import plot_scales
+    from tengfield.design_study.spec import OBJECTIVES, objective_label
     from tengfield.plotting.design import plot_design
 
     result = design(design_scene(candidates=6, batch=2, vary={"stroke_mm": [1.0, 3.0]}),
@@ -285,8 +285,8 @@ def test_design_result_plot_returns_the_figure_design_png_is(cache, tmp_path):
     from matplotlib.figure import Figure
     from PIL import Image
 
-    from tengfield.design.output import plot_scales
-    from tengfield.design.spec import objective_label
+    from tengfield.design_study.output import plot_scales
+    from tengfield.design_study.spec import objective_label
 
     result = design(design_scene(objective="charge", candidates=6, batch=3,
                                  vary={"stroke_mm": [1.0, 3.0], "ball_diameter_mm": [6.0, 8.0]}),

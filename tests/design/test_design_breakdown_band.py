@@ -2,9 +2,9 @@
 (issue #38): the objective at each band point scaled to the band's edges."""
 import pytest
 
-from tengfield.breakdown import obtain_breakdown_table, scene_breakdown
-from tengfield.design import DesignResult, candidate_scene, evaluate, parse_design_section
-from tengfield.design.answer import best_breakdown_band, breakdown_band_lines
+from tengfield.air_breakdown import obtain_breakdown_table, scene_breakdown
+from tengfield.design_study import DesignResult, candidate_scene, evaluate, parse_design_section
+from tengfield.design_study.answer import best_breakdown_band, breakdown_band_lines
 from tengfield.scene import default_scene
 
 

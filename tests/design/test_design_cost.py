@@ -10,8 +10,8 @@ import sys
 import pytest
 
 import plate_model as fx
-from tengfield.design import design, parse_design_section
-from tengfield.design.spec import design_cost
+from tengfield.design_study import design, parse_design_section
+from tengfield.design_study.spec import design_cost
 from tengfield.errors import SceneError
 
 

@@ -27,11 +27,11 @@ def solve(scene, position, **kw):
 DRIVER = '''
 import functools, sys
 import sleepy
-import tengfield.design
+import tengfield.design_study
 from tengfield import cli
 
 if __name__ == "__main__":   # spawned workers import this module too
-    tengfield.design.design = functools.partial(tengfield.design.design, solve=sleepy.solve)
+    tengfield.design_study.design = functools.partial(tengfield.design_study.design, solve=sleepy.solve)
     sys.exit(cli.main(sys.argv[1:]))
 '''
 

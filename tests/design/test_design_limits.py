@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import plate_model as fx
-from tengfield.design import design, evaluate, parse_design_section, write_design_outputs
-from tengfield.design.answer import answer_lines, design_warnings
-from tengfield.design.search import _Space, fresh_candidates
+from tengfield.design_study import design, evaluate, parse_design_section, write_design_outputs
+from tengfield.design_study.answer import answer_lines, design_warnings
+from tengfield.design_study.search import _Space, fresh_candidates
 from tengfield.errors import SceneError
 
 

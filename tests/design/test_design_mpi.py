@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import plate_model as fx
-from tengfield.design import design
+from tengfield.design_study import design
 
 ROOT = Path(__file__).resolve().parents[2]
 #: columns that depend on the machine and the cache, not on the result

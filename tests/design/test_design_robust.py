@@ -8,8 +8,8 @@ import math
 import pytest
 
 import plate_model as fx
-from tengfield.design import answer_lines, design, evaluate, parse_design_section
-from tengfield.design import write_design_outputs
+from tengfield.design_study import answer_lines, design, evaluate, parse_design_section
+from tengfield.design_study import write_design_outputs
 from tengfield.errors import SceneError
 
 RESTITUTION = {"contact.restitution": {"distribution": "uniform", "low": 0.05, "high": 0.8}}

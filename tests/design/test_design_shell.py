@@ -9,8 +9,8 @@ import json
 import pytest
 from shell_model import SHELL, shell_device_toml  # noqa: F401
 
-from tengfield.design import candidate_scene, evaluate, followed_geometry, parse_design_section
-from tengfield.design.spec import default_design_section
+from tengfield.design_study import candidate_scene, evaluate, followed_geometry, parse_design_section
+from tengfield.design_study.spec import default_design_section
 from tengfield.errors import SceneError
 from tengfield.scene import Scene, default_scene
 

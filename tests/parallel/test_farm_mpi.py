@@ -94,12 +94,12 @@ def test_fast_report_on_two_ranks_equals_serial_where_deterministic():
     (and so the recommendations, which weigh them) are measurements and may differ."""
     from mpi4py import MPI
 
-    from tengfield import report
+    from tengfield import accuracy_report
 
     comm = MPI.COMM_WORLD
     scene = fx.scene_with()
-    parallel = report.build_report(scene, fast=True, solve=fx.plate_model_solve, farm_comm=comm)
-    serial = report.build_report(scene, fast=True, solve=fx.plate_model_solve) \
+    parallel = accuracy_report.build_report(scene, fast=True, solve=fx.plate_model_solve, farm_comm=comm)
+    serial = accuracy_report.build_report(scene, fast=True, solve=fx.plate_model_solve) \
         if comm.rank == 0 else None
     serial = comm.bcast(serial, root=0)
     assert len(parallel.rows) == len(serial.rows) > 20

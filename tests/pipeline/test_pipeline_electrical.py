@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import tengfield as tf
-from tengfield import electrical, io, report, sweep
+from tengfield import electrical, io, accuracy_report, sweep
 
 import plate_model as fx
 
@@ -46,9 +46,9 @@ def test_run_sweep_and_report_agree_with_cells_and_parallel_capacitance(cached):
     swept = {"V_oc": row["V_oc_pp_V"], "Q_sc": row["Q_sc_pp_C"], "I_sc": row["I_sc_pp_A"]}
 
     rate = scene.run.sample_rate    # report's dynamics stage with its reference = run's sampling
-    plan = dataclasses.replace(report.make_plan(fast=True), sample_rates=(rate,),
+    plan = dataclasses.replace(accuracy_report.make_plan(fast=True), sample_rates=(rate,),
                                reference_sample_rate=rate, stiffnesses=())
-    rows, (_, _, reported) = report.dynamics_rows(plan, scene, result.curves)
+    rows, (_, _, reported) = accuracy_report.dynamics_rows(plan, scene, result.curves)
 
     swept["V_read"] = row["V_read_pp_V"]
     for name in ("V_oc", "Q_sc", "I_sc", "V_read"):

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tengfield import breakdown
+from tengfield import air_breakdown
 from tengfield._registry import lookup
 from tengfield.dynamics.excitation import EXCITATIONS, excitation_kind
 from tengfield.dynamics.models import MODELS, model_of
@@ -52,7 +52,7 @@ def _choice_comparisons() -> list[str]:
 
 def test_at_most_one_name_comparison_remains_with_its_reason():
     # 6 before the shape registry (#41): commands/field.py (2), field/cost.py, field/io.py,
-    # report/stages.py ask the [field] method table's entries now
+    # accuracy_report/stages.py ask the [field] method table's entries now
     found = _choice_comparisons()
     assert len(found) <= 1, "\n".join(found)
     for hit in found:
@@ -81,7 +81,7 @@ def test_excitation_capabilities_drive_the_callers(monkeypatch):
     assert excitation_kind(default_scene()).periodic
     assert all(not (e.periodic and e.random) for e in EXCITATIONS.values())
     assert [k for k, e in EXCITATIONS.items() if e.recorded] == ["recorded"]
-    from tengfield.design.answer import point_label
+    from tengfield.design_study.answer import point_label
     assert point_label(33.0, 5e-4, "harmonics") == "33 Hz (harmonics)"
     # the caller asks the entry, not the name: a kind that says it is periodic gets a band
     monkeypatch.setitem(EXCITATIONS, "harmonics",
@@ -97,11 +97,11 @@ def test_contact_model_capabilities():
 
 @pytest.mark.parametrize("kind, c_p, states", [
     ("open", 0.0, ("open",)), ("open", 100.0, ("open", "short")), ("short", 0.0, ("short",)),
-    ("load", 0.0, breakdown.STATES), ("rectifier", 0.0, breakdown.STATES),
-    ("series-rc", 0.0, breakdown.STATES)])
+    ("load", 0.0, air_breakdown.STATES), ("rectifier", 0.0, air_breakdown.STATES),
+    ("series-rc", 0.0, air_breakdown.STATES)])
 def test_breakdown_states_come_from_the_circuit_entry(kind, c_p, states):
     scene = fx.scene_with(circuit={"kind": kind, "parallel_capacitance_pF": c_p})
-    assert breakdown.scene_states(scene) == states == circuit_for(scene).states(scene)
+    assert air_breakdown.scene_states(scene) == states == circuit_for(scene).states(scene)
 
 
 def test_a_circuit_has_a_load_where_it_reads_load_ohm():

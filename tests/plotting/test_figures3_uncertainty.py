@@ -3,10 +3,10 @@ units, tick labels inside the figure."""
 from __future__ import annotations
 
 from tengfield.scene import default_scene
-from tengfield.uncertainty import uncertainty_spec
-from tengfield.uncertainty.evaluation import Evaluations
-from tengfield.uncertainty.sampling import study_values
-from tengfield.uncertainty.study import Study, summarise
+from tengfield.uncertainty_study import uncertainty_spec
+from tengfield.uncertainty_study.evaluation import Evaluations
+from tengfield.uncertainty_study.sampling import study_values
+from tengfield.uncertainty_study.study import Study, summarise
 
 SIGMA = "device.surface_charge_uC_per_m2"
 REST = "contact.restitution"

@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tengfield import report
+from tengfield import accuracy_report
 from tengfield.errors import SceneError
-from tengfield.report import FieldSetting, Recommendation, Row
+from tengfield.accuracy_report import FieldSetting, Recommendation, Row
 from tengfield.scene import default_scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -31,13 +31,13 @@ def test_richardson_is_exact_for_the_assumed_rate():
     h = np.array([1.0, 0.5])
     exact, b = 3.25, -0.7
     values = exact + b * h**4
-    assert report.richardson(values[0], values[1], 2.0, 4) == pytest.approx(exact, rel=1e-14)
+    assert accuracy_report.richardson(values[0], values[1], 2.0, 4) == pytest.approx(exact, rel=1e-14)
 
 
 def test_relative_errors():
-    assert report.relative_error(1.01, 1.0) == pytest.approx(0.01)
-    assert math.isnan(report.relative_error(1.0, 0.0))
-    assert report.max_relative_deviation([1.0, -2.2], [1.0, -2.0]) == pytest.approx(0.1)
+    assert accuracy_report.relative_error(1.01, 1.0) == pytest.approx(0.01)
+    assert math.isnan(accuracy_report.relative_error(1.0, 0.0))
+    assert accuracy_report.max_relative_deviation([1.0, -2.2], [1.0, -2.0]) == pytest.approx(0.1)
 
 
 def _row(stage, wall, error, **knobs):
@@ -48,9 +48,9 @@ def _row(stage, wall, error, **knobs):
 
 def test_cheapest_picks_the_least_wall_time_that_is_accurate_enough():
     rows = [_row("field", 1.0, 1e-1), _row("field", 2.0, 1e-3), _row("field", 5.0, 1e-4)]
-    assert report.cheapest(rows, 1e-2).wall_time_s == 2.0
-    assert report.cheapest(rows, 1e-3).wall_time_s == 2.0
-    assert report.cheapest(rows, 1e-5) is None
+    assert accuracy_report.cheapest(rows, 1e-2).wall_time_s == 2.0
+    assert accuracy_report.cheapest(rows, 1e-3).wall_time_s == 2.0
+    assert accuracy_report.cheapest(rows, 1e-5) is None
 
 
 def _synthetic_rows():
@@ -75,18 +75,18 @@ def _synthetic_rows():
 
 def test_recommend_picks_the_cheapest_combination_within_the_target():
     rows = _synthetic_rows()
-    loose = report.recommend(rows, 1e-2)
+    loose = accuracy_report.recommend(rows, 1e-2)
     assert loose.field["degree"] == 2 and loose.field["mesh_size_mm"] == 1.0
     assert loose.sample_rate_hz == 20000.0
     assert loose.positions == 17            # 9 positions cannot come out of the adaptive surrogate
     assert loose.predicted_error == pytest.approx(2e-3 + 8e-4 + 2e-3)
     assert loose.predicted_cost_s == pytest.approx(2.0 / 3 * 9 + 0.02)
-    strict = report.recommend(rows, 1e-3)
+    strict = accuracy_report.recommend(rows, 1e-3)
     # 0.5 mm + 17 positions + 80 kHz (9.5e-4) is cheaper than 0.5 mm + 33 positions
     assert strict.field["mesh_size_mm"] == 0.5 and strict.sample_rate_hz == 80000.0
     assert strict.positions == 17 and strict.predicted_error <= 1e-3
     assert strict.note == ""
-    tighter = report.recommend(rows, 3e-4)
+    tighter = accuracy_report.recommend(rows, 3e-4)
     assert tighter.positions == 33 and tighter.predicted_error <= 3e-4
     assert tighter.field["tolerance"] < 4e-3       # forces the refinement beyond 17 positions
 
@@ -94,17 +94,17 @@ def test_recommend_picks_the_cheapest_combination_within_the_target():
 def test_surrogate_tolerance_forces_enough_positions():
     rows = [r for r in _synthetic_rows() if r.stage == "surrogate"]
     # precompute refines 9 -> 17 while e(9) > tol, then 17 -> 33 while e(17) > tol
-    assert report.surrogate_tolerance(rows, 17, 3.3e-3) == pytest.approx(3.3e-3)
-    assert report.surrogate_tolerance(rows, 33, 3.3e-4) == pytest.approx(3.3e-4)   # < e(9)
-    assert report.surrogate_tolerance(rows, 33, 1e-2) == pytest.approx(2e-3)       # e(9) / 2
-    assert report.surrogate_tolerance(rows, 65, 1e-2) == pytest.approx(1e-4)       # e(17) / 2
+    assert accuracy_report.surrogate_tolerance(rows, 17, 3.3e-3) == pytest.approx(3.3e-3)
+    assert accuracy_report.surrogate_tolerance(rows, 33, 3.3e-4) == pytest.approx(3.3e-4)   # < e(9)
+    assert accuracy_report.surrogate_tolerance(rows, 33, 1e-2) == pytest.approx(2e-3)       # e(9) / 2
+    assert accuracy_report.surrogate_tolerance(rows, 65, 1e-2) == pytest.approx(1e-4)       # e(17) / 2
     # the 5-level is below the adaptive start (9) and never constrains the tolerance
-    assert report.surrogate_tolerance(rows, 17, 1e-1) == pytest.approx(1e-1)
+    assert accuracy_report.surrogate_tolerance(rows, 17, 1e-1) == pytest.approx(1e-1)
 
 
 def test_recommend_falls_back_and_says_so():
     rows = _synthetic_rows()
-    rec = report.recommend(rows, 1e-5)
+    rec = accuracy_report.recommend(rows, 1e-5)
     assert "no measured combination" in rec.note
     assert rec.field["mesh_size_mm"] == 0.5 and rec.positions == 33
     assert rec.sample_rate_hz == 80000.0
@@ -117,27 +117,27 @@ def test_recommended_field_settings_choose_the_loosest_sufficient_target():
             Recommendation(1e-3, {"method": "axisymmetric", "degree": 2, "mesh_size_mm": 0.5,
                                   "far_field": "kelvin", "domain_radius_mm": 20.0,
                                   "tolerance": 3e-4}, 80000.0, 5e-4, 9.0)]
-    assert report.recommended_field_settings(0.05, recs)["degree"] == 1
-    assert report.recommended_field_settings(1e-2, recs)["degree"] == 1
-    mid = report.recommended_field_settings(5e-3, recs)
+    assert accuracy_report.recommended_field_settings(0.05, recs)["degree"] == 1
+    assert accuracy_report.recommended_field_settings(1e-2, recs)["degree"] == 1
+    mid = accuracy_report.recommended_field_settings(5e-3, recs)
     assert mid["degree"] == 2 and mid["mesh_size_mm"] == 0.5
     assert mid["tolerance"] == pytest.approx(3e-4)             # the verified threshold
-    tight = report.recommended_field_settings(1e-5, recs)
+    tight = accuracy_report.recommended_field_settings(1e-5, recs)
     assert tight["mesh_size_mm"] == pytest.approx(0.5 * (1e-2) ** 0.25, rel=1e-2)
     assert tight["tolerance"] == pytest.approx(3e-6)
-    assert report.recommended_sample_rate(1e-5, recs) == pytest.approx(80000.0 * 100)
+    assert accuracy_report.recommended_sample_rate(1e-5, recs) == pytest.approx(80000.0 * 100)
     # every returned block is a valid [field] section
     for tol in (0.05, 5e-3, 1e-5):
-        scene = default_scene().with_values(field=report.recommended_field_settings(tol, recs))
+        scene = default_scene().with_values(field=accuracy_report.recommended_field_settings(tol, recs))
         assert scene.field.degree in (1, 2)
 
 
 def test_recommended_field_settings_default_calibration_and_bad_input():
-    block = report.recommended_field_settings(1e-3)
+    block = accuracy_report.recommended_field_settings(1e-3)
     default_scene().with_values(field=block)          # validates
     for bad in (0.0, -1e-3, 1.5, float("nan")):
         with pytest.raises(SceneError, match="tolerance"):
-            report.recommended_field_settings(bad)
+            accuracy_report.recommended_field_settings(bad)
 
 
 def test_scene_with_recommended_keeps_explicit_keys():
@@ -145,23 +145,23 @@ def test_scene_with_recommended_keeps_explicit_keys():
 
     scene = parse_scene("[field]\ntolerance = 0.01\ndegree = 1\n")
     recs = report_calibration_entries()
-    chosen = report.scene_with_recommended(scene, recs)
+    chosen = accuracy_report.scene_with_recommended(scene, recs)
     assert chosen.field.degree == 1                   # explicit key wins
     assert chosen.field.tolerance == pytest.approx(recs[0]["field"]["tolerance"])
-    free = report.scene_with_recommended(parse_scene("[field]\ntolerance = 0.001\n"), recs)
+    free = accuracy_report.scene_with_recommended(parse_scene("[field]\ntolerance = 0.001\n"), recs)
     assert free.field.mesh_size == pytest.approx(recs[1]["field"]["mesh_size_mm"] * 1e-3)
     assert free.field.tolerance == pytest.approx(recs[1]["field"]["tolerance"])
 
 
 def report_calibration_entries():
-    return sorted(report.default_recommendations(), key=lambda r: -r["target"])
+    return sorted(accuracy_report.default_recommendations(), key=lambda r: -r["target"])
 
 
 def test_field_setting_labels_and_blocks():
     s = FieldSetting(degree=1, mesh_size_mm=2.0, far_field="robin", domain_radius_mm=40.0)
     assert "robin" in s.label and "R=40mm" in s.label
     assert default_scene().with_values(field=s.field_block()).field.far_field == "robin"
-    assert report.solves_needed(9) == 5 and report.solves_needed(9, symmetric=False) == 9
+    assert accuracy_report.solves_needed(9) == 5 and accuracy_report.solves_needed(9, symmetric=False) == 9
 
 
 # ---------------------------------------------------------------------------
@@ -297,7 +297,7 @@ def test_report_bad_scene_is_a_clear_error(tmp_path, cli):
 
 
 def test_importing_the_report_loads_no_heavy_stack(python):
-    code = ("import sys, tengfield.report, tengfield.report.output, tengfield.commands.report; "
+    code = ("import sys, tengfield.accuracy_report, tengfield.accuracy_report.output, tengfield.commands.report; "
             "print(any(m in sys.modules for m in ('dolfinx', 'gmsh', 'pyvista', 'petsc4py')))")
     proc = subprocess.run([python, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert proc.stdout.strip() == "False", proc.stderr

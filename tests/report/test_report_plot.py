@@ -10,8 +10,8 @@ import pytest
 from matplotlib.figure import Figure
 
 from tengfield.quantities import describe, quantity
-from tengfield.report import Report, Row, make_plan, markdown, write_report
-from tengfield.report.plan import ERROR_KEYS, QUANTITIES
+from tengfield.accuracy_report import Report, Row, make_plan, markdown, write_report
+from tengfield.accuracy_report.plan import ERROR_KEYS, QUANTITIES
 from tengfield.scene import default_scene
 
 

@@ -42,23 +42,25 @@ def test_run_refuses_bad_jobs_before_any_work(jobs, error):
     assert "tengfield.run(jobs=" in text and "--jobs" not in text and "\n" not in text
 
 
-def test_run_study_names_a_bad_spec_and_jobs():
-    from tengfield.uncertainty import run_study
-
-    with pytest.raises(TypeError, match=r"run_study\(spec='abc'\): expected an UncertaintySpec"):
-        run_study(tf.default_scene(), spec="abc")
-    with pytest.raises(TypeError, match=r"run_study\(jobs='2'\): expected a whole number"):
-        run_study(tf.default_scene(), jobs="2")
+def test_uncertainty_names_a_bad_spec_and_jobs():
+    """Messages name the verb as the user calls it (``tf.uncertainty``)."""
+    with pytest.raises(TypeError, match=r"^tengfield\.uncertainty\(spec='abc'\): expected an "
+                                        r"UncertaintySpec"):
+        tf.uncertainty(tf.default_scene(), spec="abc")
+    with pytest.raises(TypeError, match=r"^tengfield\.uncertainty\(jobs='2'\): expected a "
+                                        r"whole number"):
+        tf.uncertainty(tf.default_scene(), jobs="2")
 
 
 def test_design_entry_points_name_their_arguments():
-    from tengfield.design import evaluate
-    from tengfield.design.search import DesignResult, check_optimum
+    from tengfield.design_study import evaluate
+    from tengfield.design_study.search import DesignResult, check_optimum
 
     with pytest.raises(TypeError, match=r"tengfield.design\(scene=None\): expected a "
                                         r"tengfield.Scene"):
         tf.design(None)
-    with pytest.raises(TypeError, match=r"design.evaluate\(spec=None\): expected a DesignSpec"):
+    with pytest.raises(TypeError, match=r"design_study\.evaluate\(spec=None\): expected a "
+                                        r"DesignSpec"):
         evaluate(tf.default_scene(), None, {"stroke_mm": 2.0})
     with pytest.raises(TypeError, match=r"check_optimum\(result=None\)"):
         check_optimum(None)

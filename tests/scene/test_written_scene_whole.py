@@ -63,7 +63,7 @@ def test_every_section_of_a_study_scene_survives_write_and_load(tmp_path):
 
 def test_the_written_study_scene_passes_its_own_checks(tmp_path):
     """`tengfield scene` on the written file: the study it carries is still valid."""
-    from tengfield.uncertainty import uncertainty_spec
+    from tengfield.uncertainty_study import uncertainty_spec
 
     path = tmp_path / "study.toml"
     path.write_text(STUDY_SCENE)

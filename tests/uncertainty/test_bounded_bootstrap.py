@@ -8,9 +8,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from tengfield.uncertainty.sampling import input_values, unit_samples
-from tengfield.uncertainty.spec import Distribution, UncertaintySpec
-from tengfield.uncertainty.statistics import (BOOTSTRAP_RESAMPLES, bootstrap_bytes,
+from tengfield.uncertainty_study.sampling import input_values, unit_samples
+from tengfield.uncertainty_study.spec import Distribution, UncertaintySpec
+from tengfield.uncertainty_study.statistics import (BOOTSTRAP_RESAMPLES, bootstrap_bytes,
                                               sobol_indices)
 
 
@@ -63,7 +63,7 @@ def test_indices_match_salib_and_the_intervals_its_bootstrap():
 
 
 def test_the_resamples_follow_the_stated_rule():
-    from tengfield.uncertainty.statistics import bootstrap_resamples
+    from tengfield.uncertainty_study.statistics import bootstrap_resamples
 
     assert bootstrap_resamples(16) == bootstrap_resamples(32768) == 1000
     assert bootstrap_resamples(65536) == 512

@@ -9,8 +9,8 @@ from band_scene import band_scene
 from tengfield.errors import SceneError
 from tengfield.pipeline import run
 from tengfield.scene import load_scene
-from tengfield.uncertainty import run_study
-from tengfield.uncertainty.spec import uncertainty_spec
+from tengfield.uncertainty_study import run_study
+from tengfield.uncertainty_study.spec import uncertainty_spec
 
 STUDY = """[uncertainty]
 samples = 20

@@ -11,9 +11,9 @@ import pytest
 
 from tengfield.errors import DynamicsError, SceneError
 from tengfield.scene import default_scene, parse_scene
-from tengfield.uncertainty import run_study, uncertainty_spec
-from tengfield.uncertainty.sampling import input_values
-from tengfield.uncertainty.spec import TAIL, Distribution, UncertaintySpec
+from tengfield.uncertainty_study import run_study, uncertainty_spec
+from tengfield.uncertainty_study.sampling import input_values
+from tengfield.uncertainty_study.spec import TAIL, Distribution, UncertaintySpec
 
 UVLO = '[circuit]\nkind = "rectifier"\npmic = "uvlo"\n'
 

@@ -6,7 +6,7 @@ import pytest
 
 from tengfield.errors import SceneError
 from tengfield.scene import default_scene
-from tengfield.uncertainty import uncertainty_spec
+from tengfield.uncertainty_study import uncertainty_spec
 
 RESTITUTION = {"contact.restitution": {"distribution": "uniform", "low": 0.05, "high": 0.5}}
 

@@ -11,8 +11,8 @@ import pytest
 
 import plate_model
 from helpers import mpi_env
-from tengfield.uncertainty import run_study
-from tengfield.uncertainty.evaluation import CHUNK_EVALUATIONS, Group, chunked
+from tengfield.uncertainty_study import run_study
+from tengfield.uncertainty_study.evaluation import CHUNK_EVALUATIONS, Group, chunked
 
 SIGMA = "device.surface_charge_uC_per_m2"
 

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from tengfield.uncertainty.sampling import input_values, unit_samples
-from tengfield.uncertainty.spec import Distribution, UncertaintySpec
-from tengfield.uncertainty.statistics import (distribution_statistics, parse_percentile,
+from tengfield.uncertainty_study.sampling import input_values, unit_samples
+from tengfield.uncertainty_study.spec import Distribution, UncertaintySpec
+from tengfield.uncertainty_study.statistics import (distribution_statistics, parse_percentile,
                                               percentile_score, regime_fractions,
                                               sobol_indices)
 
@@ -88,7 +88,7 @@ def test_percentile_interval_covers_the_true_percentile_95_percent_of_the_time()
     least 95 % of them (binomial ranks: conservative), and narrows with more points."""
     from scipy import stats
 
-    from tengfield.uncertainty.statistics import percentile_interval
+    from tengfield.uncertainty_study.statistics import percentile_interval
 
     rng = np.random.default_rng(4)
     true = stats.norm.ppf(0.10)

@@ -8,7 +8,7 @@ import pytest
 
 import plate_model
 from tengfield.pipeline import run
-from tengfield.uncertainty import evaluation, run_study
+from tengfield.uncertainty_study import evaluation, run_study
 
 pytestmark = pytest.mark.slow
 
@@ -74,8 +74,8 @@ def test_a_peak_equal_to_its_peak_to_peak_everywhere_is_shown_once():
     """Q_SC of the real device starts from 0 at the lower plate: its peak is its
     peak-to-peak in every evaluation and the figure shows it once; the bipolar
     current's peak differs and is shown; one differing evaluation keeps the panel."""
-    from tengfield.uncertainty.evaluation import Evaluations
-    from tengfield.uncertainty.study import shown_outputs
+    from tengfield.uncertainty_study.evaluation import Evaluations
+    from tengfield.uncertainty_study.study import shown_outputs
 
     def rows(q_peak_last):
         return [{Q: 1.0, "peak.Q_sc_C": 1.0, "peak_to_peak.I_sc_A": 2.0, "peak.I_sc_A": 1.2},
@@ -128,7 +128,7 @@ def test_an_evaluation_equals_the_run_of_its_scene(tmp_path):
 
 
 def test_a_candidates_percentile_score_is_its_worse_case_decile(tmp_path):
-    from tengfield.uncertainty import candidate_percentile, uncertainty_spec
+    from tengfield.uncertainty_study import candidate_percentile, uncertainty_spec
 
     scene = scene_with({SIGMA: {"distribution": "uniform", "low": -30.0, "high": -10.0}},
                        samples=64, method="monte-carlo")

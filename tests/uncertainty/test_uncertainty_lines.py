@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from tengfield.uncertainty.output import nominal_outside_warnings, summary_lines
+from tengfield.uncertainty_study.output import nominal_outside_warnings, summary_lines
 
 
 def study(nominal, draws):

@@ -6,10 +6,10 @@ import pytest
 
 import plate_model
 from tengfield.errors import SceneError
-from tengfield.uncertainty import run_study, uncertainty_spec
-from tengfield.uncertainty.cost import (EVALUATION_BYTES, SURROGATE_BYTES, WorkCost,
+from tengfield.uncertainty_study import run_study, uncertainty_spec
+from tengfield.uncertainty_study.cost import (EVALUATION_BYTES, SURROGATE_BYTES, WorkCost,
                                         check_cost, study_cost)
-from tengfield.uncertainty.sampling import study_values
+from tengfield.uncertainty_study.sampling import study_values
 
 BALL = "device.ball_diameter_mm"
 

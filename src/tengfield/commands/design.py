@@ -48,9 +48,9 @@ def register(sub) -> None:
 def _run(args) -> int:
     import warnings
 
-    from ..design import design, parse_design_section
-    from ..design.answer import answer_lines
-    from ..design.spec import default_design_section
+    from ..design_study import design, parse_design_section
+    from ..design_study.answer import answer_lines
+    from ..design_study.spec import default_design_section
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
@@ -74,12 +74,12 @@ def _run(args) -> int:
           f"infeasible, {counts['skipped']} skipped) in {result.wall_time:.1f} s on "
           f"{result.ranks} rank(s)", file=sys.stderr)
     print("\n".join(answer_lines(result)))
-    from ..design.answer import best_breakdown_band, breakdown_band_lines   # issue #38
+    from ..design_study.answer import best_breakdown_band, breakdown_band_lines   # issue #38
     for line in breakdown_band_lines(result, best_breakdown_band(result,
                                                                  cache_dir=args.cache_dir)):
         print(line)
     sys.stdout.flush()
-    from ..design.answer import design_warnings
+    from ..design_study.answer import design_warnings
     for text in design_warnings(result):    # one `tengfield: warning: ...` line each
         warnings.warn(text, UserWarning, stacklevel=1)
     print("wrote " + ", ".join(map(str, written)))

@@ -36,19 +36,20 @@ def register(sub) -> None:
 
 
 def _resolved_charge(scene, comm):
-    """The scene with ``[device] surface_charge_uC_per_m2 = "breakdown"`` replaced by
+    """The scene with ``σ = "breakdown"`` replaced by
     -sigma_max (from the cached surrogate's breakdown lines, computed once if missing),
     so the solve is at the charge a run would use; any other scene as it is."""
-    from .. import breakdown
+    from .. import air_breakdown
+    from ..run_surrogate import surrogate_for_run
     from ..scene import check_field
 
-    if not breakdown.uses_breakdown_charge(scene):
+    if not air_breakdown.uses_breakdown_charge(scene):
         return scene
     check_field(scene)
-    scene, _, _, _ = breakdown.obtain_run_table(scene, comm=comm if comm.size > 1 else None,
-                                                progress=True)
+    scene, _, _, _ = surrogate_for_run(scene, comm=comm if comm.size > 1 else None,
+                                       progress=True)
     if comm.rank == 0:
-        print(breakdown.charge_line(scene))
+        print(air_breakdown.charge_line(scene))
     return scene
 
 

@@ -5,6 +5,7 @@ identifiability notes, iterations, wall time), DIR/fit.png (measured vs fitted
 with residuals) and DIR/fitted.toml (the scene with the fitted values).
 """
 from __future__ import annotations
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 
 def register(sub) -> None:
@@ -29,7 +30,7 @@ def register(sub) -> None:
                              "terminal name each tool quantity")
     p.add_argument("--free", metavar="NAME[,NAME...]", default=None,
                    help="free parameters (overrides [fit.parameters]; bounds and starts from "
-                        "there or the defaults): surface_charge_uC_per_m2, "
+                        f"there or the defaults): {SURFACE_CHARGE_KEY}, "
                         "parallel_capacitance_pF, restitution, load_ohm, time_shift_s, "
                         "amplitude_scale")
     p.add_argument("--loss", default=None,

@@ -25,7 +25,7 @@ def register(sub) -> None:
 def _report(args) -> int:
     from mpi4py import MPI
 
-    from ..report import build_report
+    from ..accuracy_report import build_report
     from ..scene import load_scene
 
     scene = load_scene(args.scene)

@@ -22,11 +22,11 @@ def register(sub) -> None:
 
 def check_sections(scene) -> None:
     """The sections only one command reads, checked by that command's own validator
-    (raises SceneError): ``[design]`` (design/spec.py), ``[fit]`` (fit/spec.py),
-    ``[uncertainty]`` (uncertainty/spec.py). The other sections ([device] ...
+    (raises SceneError): ``[design]`` (design_study/spec.py), ``[fit]`` (fit/spec.py),
+    ``[uncertainty]`` (uncertainty_study/spec.py). The other sections ([device] ...
     [breakdown], [array], [reference]) are checked when the scene is built."""
     if "design" in scene.raw:
-        from ..design.spec import parse_design_section
+        from ..design_study.spec import parse_design_section
 
         parse_design_section(scene)
     if "fit" in scene.raw:
@@ -34,7 +34,7 @@ def check_sections(scene) -> None:
 
         parse_fit_section(scene)
     if "uncertainty" in scene.raw:
-        from ..uncertainty.spec import uncertainty_spec
+        from ..uncertainty_study.spec import uncertainty_spec
 
         uncertainty_spec(scene)
 

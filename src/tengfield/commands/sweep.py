@@ -54,7 +54,7 @@ def register(sub) -> None:
 def _run(args) -> int:
     from ..errors import SceneError
     from ..scene import load_scene
-    from ..breakdown import charge_line, uses_breakdown_charge
+    from ..air_breakdown import charge_line, uses_breakdown_charge
     from .._mpi import check_jobs
     from ..sweep import check_sweep_size, extension_line, parse_vary, sweep_study
 

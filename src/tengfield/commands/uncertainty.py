@@ -36,10 +36,10 @@ def register(sub) -> None:
 def _run(args) -> int:
     from .._mpi import check_jobs, world_if_parallel
     from ..scene import load_scene
-    from ..uncertainty import run_study, uncertainty_spec
-    from ..uncertainty.output import summary_lines
+    from ..uncertainty_study import run_study, uncertainty_spec
+    from ..uncertainty_study.output import summary_lines
 
-    from ..uncertainty.spec import default_uncertainty_section
+    from ..uncertainty_study.spec import default_uncertainty_section
 
     scene = load_scene(args.scene)
     comm = world_if_parallel()
@@ -57,7 +57,7 @@ def _run(args) -> int:
         return 0
     for category, message in study.evaluations.warnings:
         warnings.warn(message, category, stacklevel=1)
-    from ..uncertainty.output import nominal_outside_warnings
+    from ..uncertainty_study.output import nominal_outside_warnings
 
     for message in nominal_outside_warnings(study):
         warnings.warn(message, RuntimeWarning, stacklevel=1)

@@ -18,6 +18,7 @@ from .output import fitted_scene_dict, write_fit_outputs
 from .solve import FitError, FitResult, fit_targets, fit_trace
 from .spec import (PARAMETERS, FitSpec, Target, Trace, parse_fit_section, parse_targets,
                    read_trace)
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 __all__ = ["calibrate", "reference_surrogate", "fit_trace", "fit_targets", "FitResult",
            "FitError", "FitSpec", "Trace", "Target", "PARAMETERS", "parse_fit_section",
@@ -51,15 +52,15 @@ def _reference_table(scene, *, cache_dir=None, solve=None, comm=None, progress=F
 
 def breakdown_check(scene, table, result: FitResult) -> None:
     """A fitted σ beyond the scene's air-breakdown limit σ_max (from the same surrogate's
-    gap lines, :func:`tengfield.breakdown.scene_breakdown`): one warning naming both, a
+    gap lines, :func:`tengfield.air_breakdown.scene_breakdown`): one warning naming both, a
     note, and ``result.breakdown``. Nothing when σ is not fitted or the surrogate has no
     gap lines (3D solver, a custom solve)."""
     import warnings
 
-    name = "surface_charge_uC_per_m2"
+    name = SURFACE_CHARGE_KEY
     if name not in result.values or table.line_potential is None:
         return
-    from ..breakdown import scene_breakdown
+    from ..air_breakdown import scene_breakdown
 
     limit = scene_breakdown(scene, table)
     sigma = result.values[name] * 1e-6
@@ -117,7 +118,7 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
 
 def _default_target_parameters(targets) -> list[str]:
     """σ, and C_p when a voltage is among the targets."""
-    names = ["surface_charge_uC_per_m2"]
+    names = [SURFACE_CHARGE_KEY]
     if any(t.quantity == "V" for t in targets):
         names.append("parallel_capacitance_pF")
     return names

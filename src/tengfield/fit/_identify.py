@@ -9,6 +9,7 @@ import numpy as np
 
 from ._problem import _best_charge_scale, _optimise, _Problem, _Space
 from .spec import FitSpec
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: |correlation| above which two parameters are reported as not separately identifiable
 NOT_SEPARABLE = 0.995
@@ -77,7 +78,7 @@ def _uncertainty(problem: _Problem, u, residual, noise_given: bool, loss: str):
             if abs(c) > NOT_SEPARABLE:
                 identifiable[names[i]] = identifiable[names[j]] = False
                 hint = ""
-                if {names[i], names[j]} == {"surface_charge_uC_per_m2", "parallel_capacitance_pF"}:
+                if {names[i], names[j]} == {SURFACE_CHARGE_KEY, "parallel_capacitance_pF"}:
                     hint = (": a voltage read through C_p fixes only sigma / (C_T + C_p); "
                             "add a charge-mode (Q) trace or fix C_p")
                 notes.append(f"{pair} are not separately identifiable from these data "

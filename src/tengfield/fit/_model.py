@@ -21,6 +21,7 @@ import numpy as np
 from ..electrical import (circuit_for, extreme_times, extremes, load_waveforms, steady_start,
                           terminal_waveforms)
 from ..surrogate import OnAxisCurves
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: quantities a fit compares, with the waveform key per circuit kind
 QUANTITIES = ("V", "Q", "I")
@@ -138,7 +139,7 @@ class ForwardModel:
         return self.scene.with_values(**changes)
 
     def charge_scale(self, values: dict) -> float:
-        sigma = values.get("surface_charge_uC_per_m2")
+        sigma = values.get(SURFACE_CHARGE_KEY)
         sigma = self.scene.device.surface_charge if sigma is None else float(sigma) * 1e-6
         return sigma / self.reference_sigma
 

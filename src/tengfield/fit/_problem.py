@@ -10,6 +10,7 @@ from scipy.optimize import least_squares
 
 from ._model import ForwardModel
 from .spec import FitSpec, Parameter
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 
 class _Space:
@@ -67,7 +68,7 @@ class _Problem:
         J = np.empty((r0.size, u.size))
         h = 1e-4
         for k, name in enumerate(self.space.names):
-            if name == "surface_charge_uC_per_m2":
+            if name == SURFACE_CHARGE_KEY:
                 sigma = self.values(u)[name]
                 if sigma != 0.0:
                     # exact: the model is linear in σ (peak values in |σ|), so the secant
@@ -98,7 +99,7 @@ def _optimise(problem: _Problem, u0, spec: FitSpec, max_nfev=None):
 def _best_charge_scale(problem: _Problem, u) -> np.ndarray:
     """``u`` with σ (if free) set to its least-squares value at the other parameters
     (closed form: the residual is affine in σ)."""
-    name = "surface_charge_uC_per_m2"
+    name = SURFACE_CHARGE_KEY
     space = problem.space
     if name not in space.names:
         return u

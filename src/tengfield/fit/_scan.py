@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from ..errors import TengfieldError
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: grid sizes of the start scan over the parameters that change the dynamics
 SCAN_POINTS = {"restitution": 13, "amplitude_scale": 9}
@@ -24,7 +25,7 @@ def _start_scan(model, trace, params, start, weights, quantities, candidates: in
     by_name = {p.name: p for p in params}
     shift = by_name.get("time_shift_s")
     scan_shift = shift is not None and not shift.start_given
-    sigma = by_name.get("surface_charge_uC_per_m2")
+    sigma = by_name.get(SURFACE_CHARGE_KEY)
     grids = []
     for name, points in SCAN_POINTS.items():
         if name in by_name:

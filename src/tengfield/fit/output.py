@@ -5,10 +5,11 @@ from pathlib import Path
 
 from .._files import scene_dir, scene_toml, write_json, write_text
 from .._files import figure_file
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
 SCENE_KEYS = {
-    "surface_charge_uC_per_m2": ("device", "surface_charge_uC_per_m2"),
+    SURFACE_CHARGE_KEY: ("device", SURFACE_CHARGE_KEY),
     # the instrument's C_p (issue #39: [circuit] parallel_capacitance_pF is its old name)
     "parallel_capacitance_pF": ("instrument", "capacitance_pF"),
     "restitution": ("contact", "restitution"),

@@ -18,7 +18,7 @@ Scene syntax (every key optional)::
     noise = 0.02                  # 1-sigma noise, in `unit` (optional: else estimated)
 
     [fit.parameters]              # the free parameters, in scene-file units
-    surface_charge_uC_per_m2 = {start = -20.0, min = -100.0, max = 0.0}
+    <σ's key> = {start = -20.0, min = -100.0, max = 0.0}   # SURFACE_CHARGE_KEY, µC/m^2
     parallel_capacitance_pF = {min = 0.0, max = 1000.0}
     time_shift_s = {}             # defaults: start from cross-correlation, bounds [0, 2 periods]
 
@@ -39,12 +39,13 @@ from ..electrical import CIRCUITS, Circuit, circuit_for
 from ..errors import SceneError, header_described, same_name_in_file
 from ..scene.recorded import (HEADER_TIME_UNITS, Export, check_magnitude, check_time_steps,
                               read_export, split_unit)
+from ..scene.schema import SURFACE_CHARGE_KEY
 from ..scene.schema import suggest as _suggest
 from .compared import INFIXES, LETTERS, MEASURED_KEYS
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
-    "surface_charge_uC_per_m2": ((-200.0, 200.0), "linear", "µC/m^2", "ball surface charge σ"),
+    SURFACE_CHARGE_KEY: ((-200.0, 200.0), "linear", "µC/m^2", "ball surface charge σ"),
     "parallel_capacitance_pF": ((0.0, 1.0e5), "linear", "pF", "instrument + cable capacitance C_p"),
     "restitution": ((0.0, 0.99), "linear", "", "coefficient of restitution e"),
     "load_ohm": ((1.0, 1.0e14), "log", "ohm", "load resistance R"),
@@ -233,7 +234,7 @@ def _parameters(scene, raw, free) -> list[Parameter]:
         names = list(free)
         raw = {name: raw.get(name, {}) for name in names}
     elif not raw:
-        raw = {"surface_charge_uC_per_m2": {}, "time_shift_s": {}}
+        raw = {SURFACE_CHARGE_KEY: {}, "time_shift_s": {}}
     params = []
     period = scene.excitation.period
     for name, entry in raw.items():
@@ -276,7 +277,7 @@ def _parameters(scene, raw, free) -> list[Parameter]:
         start = _number(f"{where}.start", entry["start"], lo, hi) if given else _scene_value(scene, name)
         if start is not None:
             start = min(max(start, lo), hi)
-        if name == "surface_charge_uC_per_m2" and start == 0.0:
+        if name == SURFACE_CHARGE_KEY and start == 0.0:
             raise SceneError(f"{where}.start = 0: a zero charge gives no signal to scale; "
                              "start from a non-zero value in [min, max]")
         params.append(Parameter(name, start, lo, hi, transform, given))
@@ -285,7 +286,7 @@ def _parameters(scene, raw, free) -> list[Parameter]:
 
 def _scene_value(scene, name: str) -> float | None:
     """The scene's own value of a fit parameter (file units); None for the time shift."""
-    return {"surface_charge_uC_per_m2": scene.device.surface_charge * 1e6 or -1.0,
+    return {SURFACE_CHARGE_KEY: scene.device.surface_charge * 1e6 or -1.0,
             "parallel_capacitance_pF": scene.circuit.parallel_capacitance * 1e12,
             "restitution": scene.contact.restitution,
             "load_ohm": scene.circuit.load,

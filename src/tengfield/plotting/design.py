@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import new_figure, save_figure
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: [design.vary] key -> axis label (others: the key's name with its unit suffix)
 KEY_LABELS = {
@@ -16,7 +17,7 @@ KEY_LABELS = {
     "tube_inner_radius_mm": "tube inner radius [mm]",
     "tube_outer_radius_mm": "tube outer radius [mm]",
     "plate_thickness_mm": "plate thickness [mm]",
-    "surface_charge_uC_per_m2": "σ [µC/m²]",
+    SURFACE_CHARGE_KEY: "σ [µC/m²]",
     "ball_density_kg_per_m3": "ball density [kg/m³]",
     "load_ohm": "load R [Ω]",
 }
@@ -40,8 +41,8 @@ def plot_design(result, path, **options):
 
 def design_figure(result, *, units: dict[str, str], names: dict[str, str] | None = None,
                   scales: dict | None = None, on_bound=()):
-    """The figure of a :class:`tengfield.design.DesignResult` (design.png). ``units``: objective -> its
-    SI unit; ``names``: objective -> its words (the quantity table's); ``scales``: objective -> (label, factor) of the readable unit (value x factor;
+    """The figure of a :class:`tengfield.design_study.DesignResult` (design.png). ``units``:
+    objective -> its SI unit; ``names``: objective -> its words (the quantity table's); ``scales``: objective -> (label, factor) of the readable unit (value x factor;
     default the SI unit); ``on_bound``: [(key, "lower" | "upper", bound)] the best sits on
     (passed in: plotting stays below the packages whose results it draws)."""
     spec = result.spec

@@ -18,7 +18,7 @@ def plot_stage(path: Path, rows: list, stage: str, title: str, targets=(1e-2, 1e
 def stage_figure(rows: list, stage: str, title: str, targets=(1e-2, 1e-3), *,
                  ylabel: str = "relative error"):
     """Log-log error against wall time for one stage of ``tengfield report`` (``rows``:
-    :class:`tengfield.report.plan.Row`; one marker series per group), titled ``title``,
+    :class:`tengfield.accuracy_report.plan.Row`; one marker series per group), titled ``title``,
     the y axis ``ylabel`` (the report names the errors' quantities); a matplotlib Figure."""
     fig = new_figure((6.4, 4.2), dpi=100)
     ax = fig.subplots()

@@ -37,6 +37,7 @@ from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUG
 from .schema import renamed as _renamed
 from .schema import show
 from .._mpi import launched_rank as _launched_rank
+from .schema import SURFACE_CHARGE_KEY
 
 
 @dataclass(frozen=True)
@@ -637,9 +638,9 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
     problems += shape_field_problems(dev, fld)
     if (isinstance(data.get("device"), dict)
-            and data["device"].get("surface_charge_uC_per_m2") == "breakdown"
+            and data["device"].get(SURFACE_CHARGE_KEY) == "breakdown"
             and not fld.has_gap_lines):
-        problems.append(f'[device] surface_charge_uC_per_m2 = "breakdown" needs the gap lines '
+        problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown" needs the gap lines '
                         f'of the axisymmetric field solver (the ball on the axis); [field] '
                         f'method = {fld.method!r}, ball_offset_mm = {fld.ball_offset * 1e3:g} '
                         f'has none: use method = "axisymmetric" with ball_offset_mm = 0, or give '

@@ -303,6 +303,7 @@ def as_scene(scene, function: str) -> Scene:
                                 f"{{'excitation': {{'frequency_hz': 30.0}}}}")
             data[sec] = {k: _python_value(v) for k, v in values.items()}
         return Scene.from_dict(data)
-    raise TypeError(f"tengfield.{function}: expected a tengfield.Scene (tengfield."
-                    f"default_scene(), tengfield.load_scene(path)) or a dict of scene "
-                    f"sections, got {type(scene).__name__}")
+    shown = repr(scene) if len(repr(scene)) <= 60 else repr(scene)[:57] + "..."
+    raise TypeError(f"tengfield.{function}(scene={shown}): expected a tengfield.Scene "
+                    f"(tengfield.default_scene(), tengfield.load_scene(path)) or a dict of "
+                    f"scene sections, got {type(scene).__name__}")

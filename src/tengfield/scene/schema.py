@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 
 from .._mpi import launched_rank as _launched_rank
 from ..errors import SceneError
+from ..quantities import SURFACE_CHARGE_KEY   # σ's key, spelled once (base layer)
 from .limits import MAX_HARMONICS
 from .shapes import SHAPES
 
@@ -24,6 +25,20 @@ from .shapes import SHAPES
 #: inputs; part of the surrogate cache hash. 2: the ball's surface charge left the
 #: hash (a surrogate is scaled to the scene's sigma, issue #28)
 FIELD_SCHEMA = 2
+
+
+#: the same key as "section.key" (``--set``, ``[uncertainty.vary]``, ``[design.vary]``)
+SURFACE_CHARGE_SETTING = f"device.{SURFACE_CHARGE_KEY}"
+
+
+def stated_surface_charge(scene):
+    """``[device]`` :data:`SURFACE_CHARGE_KEY` as the scene states it (``scene.raw``, file
+    units): a number [µC/m²], the keyword ``"breakdown"``, or None when it is left to the
+    default. The one place that reads the key off a scene (its SI value is
+    ``scene.device.surface_charge`` [C/m²])."""
+    raw = scene.raw if isinstance(scene.raw, dict) else {}
+    device = raw.get("device")
+    return device.get(SURFACE_CHARGE_KEY) if isinstance(device, dict) else None
 
 
 class Key(NamedTuple):
@@ -93,7 +108,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # also the keyword "breakdown" (KEYWORD_VALUES). Not a field key: every charge of
         # the field is linear in sigma, so a cached surrogate is scaled to the scene's sigma
         # (tengfield.surrogate.at_surface_charge) and a sigma-only change solves nothing
-        "surface_charge_uC_per_m2": Key("surface_charge", float, -8.0, 1e-6, _rng(-1e4, 1e4)),
+        SURFACE_CHARGE_KEY: Key("surface_charge", float, -8.0, 1e-6, _rng(-1e4, 1e4)),
         "cells": Key("cells", int, 1, 1, _rng(1, 10**7)),
         # 3D motion (issue #13): gravity tilted by tilt from -z toward tilt_azimuth
         "tilt_deg": Key("tilt", float, 0.0, _DEG, _rng(0.0, 180.0)),
@@ -269,7 +284,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                                _rng(0.0, 100.0)),
         "seed": Key("seed", int, 0, 1, _rng(0, 2**32 - 1)),
     },
-    # air breakdown (issue #23; tengfield.breakdown, tengfield.paschen): Paschen constants
+    # air breakdown (issue #23; tengfield.air_breakdown, tengfield.paschen): Paschen constants
     # of air (Raizer 1991, Table 4.1) and the pressure. They change the breakdown check
     # made from the surrogate's lines, not the field solve.
     "breakdown": {
@@ -336,15 +351,15 @@ HASH_NAMES = {("device", "stroke_mm"): "gap_mm"}
 
 #: Keys that also accept the string "auto", resolved to a number at load.
 AUTO_KEYS = {("field", "domain_radius_mm")}
-#: the stand-in sigma [uC/m^2] of surface_charge_uC_per_m2 = "breakdown" before sigma_max is known
+#: the stand-in sigma [uC/m^2] of SURFACE_CHARGE_KEY = "breakdown" before sigma_max is known
 BREAKDOWN_PLACEHOLDER_UC = -1.0
 #: keys that also take one keyword: (keyword, the number it stands for at load)
-KEYWORD_VALUES = {("device", "surface_charge_uC_per_m2"): ("breakdown", BREAKDOWN_PLACEHOLDER_UC)}
+KEYWORD_VALUES = {("device", SURFACE_CHARGE_KEY): ("breakdown", BREAKDOWN_PLACEHOLDER_UC)}
 #: keys of [excitation] that hold one entry per component with kind = "harmonics"
 HARMONIC_KEYS = ("frequency_hz", "amplitude_mm", "acceleration_m_per_s2", "phase_deg")
 #: Sections passed through unvalidated to ``scene.raw`` (each is validated by
 #: the package that reads it: ``[fit]`` by :mod:`tengfield.fit`, ``[design]`` by
-#: :mod:`tengfield.design`, ``[uncertainty]`` by :mod:`tengfield.uncertainty`).
+#: :mod:`tengfield.design_study`, ``[uncertainty]`` by :mod:`tengfield.uncertainty_study`).
 PASSTHROUGH_SECTIONS = ("fit", "design", "uncertainty")
 
 

@@ -26,6 +26,7 @@ from .refinement import (SolveFunction, precompute, precompute_radial, radial_ac
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
 from .store import read_radial_table, read_table, write_radial_table, write_table
 from .table import SurrogateError, SurrogateTable, at_ball_charge
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 
 def default_cache_dir() -> Path:
@@ -120,7 +121,7 @@ def solved_scene(scene):
     if scene.device.surface_charge != 0.0:
         return scene
     from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC
-    return scene.with_values(device={"surface_charge_uC_per_m2": BREAKDOWN_PLACEHOLDER_UC})
+    return scene.with_values(device={SURFACE_CHARGE_KEY: BREAKDOWN_PLACEHOLDER_UC})
 
 
 def _at_scene_charge(table, scene, reason: str):

@@ -17,6 +17,7 @@ import time
 
 from .. import __version__
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars;
 #: 3: the breakdown lines' mesh check stored only where it was solved (no NaN in a file)
@@ -66,8 +67,8 @@ def legacy_field_hash(scene) -> str:
     inputs = scene.field_inputs()
     inputs["schema"] = 1
     inputs["device"] = {**inputs["device"],
-                        "surface_charge_uC_per_m2": scene.to_dict()["device"][
-                            "surface_charge_uC_per_m2"]}
+                        SURFACE_CHARGE_KEY: scene.to_dict()["device"][
+                            SURFACE_CHARGE_KEY]}
     blob = json.dumps(inputs, sort_keys=True, default=float).encode()
     return hashlib.sha256(blob).hexdigest()
 

@@ -189,7 +189,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
     axisymmetric solver.
     """
-    # the breakdown lines (tengfield.breakdown) come with the default axisymmetric solves
+    # the breakdown lines (tengfield.air_breakdown) come with the default axisymmetric solves
     lines = (solve is None and scene.field.has_gap_lines
              if breakdown_lines is None else bool(breakdown_lines))
     if solve is None:

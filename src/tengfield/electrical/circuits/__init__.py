@@ -64,7 +64,7 @@ class Circuit:
     #: the waveforms.csv columns (name, unit) of V, Q and I that ``tengfield fit``
     #: compares a measured run with when ``[fit.columns]`` is absent
     fit_columns: dict = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
-    #: the circuit states whose breakdown limit binds (tengfield.breakdown): all three
+    #: the circuit states whose breakdown limit binds (tengfield.air_breakdown): all three
     #: for a load or a rectifier (its transferred charge lies between the open ones)
     breakdown_states: tuple[str, ...] = ("open", "open-top", "short")
 

@@ -353,11 +353,11 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
 
 
 def announce_cost(scene, spec, say: bool) -> None:
-    """Count the design's work before any of it (:func:`~tengfield.design.spec.design_cost`),
+    """Count the design's work before any of it (:func:`~tengfield.design_study.spec.design_cost`),
     refuse it in one line past ``[design] max_field_solves`` or the memory at hand, and
     with ``say`` (where the progress bar shows: a terminal, rank 0, not quiet) print the
     count on stderr (issue #43.6)."""
-    from ..uncertainty.cost import check_cost
+    from ..uncertainty_study.cost import check_cost
     from .spec import design_cost
 
     cost = design_cost(scene, spec)

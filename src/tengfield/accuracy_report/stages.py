@@ -3,7 +3,7 @@
 :class:`_Solver` does every field solve once (farmed over the ranks by
 :meth:`_Solver.prefetch`); :func:`field_rows`, :func:`surrogate_rows`,
 :func:`dynamics_rows` and :func:`circuit_rows` measure each stage's error
-against its reference (see :mod:`tengfield.report.study`).
+against its reference (see :mod:`tengfield.accuracy_report.study`).
 """
 from __future__ import annotations
 

@@ -138,8 +138,9 @@ def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
 def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: int | None = None,
               cache_dir=None, solve: Callable | None = None, simulate: Callable | None = None,
               progress: bool = False) -> Study:
-    """The study of ``scene``'s ``[uncertainty]`` section (or ``spec``). Its work is
-    counted first (:func:`~tengfield.uncertainty.cost.study_cost`) and refused past
+    """``tf.uncertainty(scene)``: the study of ``scene``'s ``[uncertainty]`` section (or
+    ``spec``). Its work is counted first
+    (:func:`~tengfield.uncertainty_study.cost.study_cost`) and refused past
     ``[uncertainty] max_field_solves`` or the memory at hand; with ``progress`` the count
     is printed (stderr, rank 0) before the work starts."""
     import sys
@@ -149,10 +150,10 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
     from ..scene import as_scene
     from .cost import check_cost, study_cost
 
-    function = "tengfield.uncertainty.run_study"
-    scene = as_scene(scene, "uncertainty.run_study")
+    function = "tengfield.uncertainty"   # the verb, as the user calls it
+    scene = as_scene(scene, "uncertainty")
     check_instance(function, spec, "spec", UncertaintySpec, "an UncertaintySpec "
-                   "(tengfield.uncertainty.uncertainty_spec(scene)) or None", allow_none=True)
+                   "(tengfield.uncertainty_study.uncertainty_spec(scene)) or None", allow_none=True)
     jobs = check_jobs_argument(function, jobs, comm)
     spec = spec or uncertainty_spec(scene)
     values = study_values(spec)
@@ -171,7 +172,7 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
 def candidate_percentile(candidate, spec: UncertaintySpec, objective: str, percentile: float, *,
                          cache_dir=None, solve=None, simulate=None) -> tuple[float, int]:
     """``(score, evaluations)``: the ``percentile``-th percentile of the output
-    ``objective`` (an :func:`~tengfield.uncertainty.evaluation.output_quantities` name,
+    ``objective`` (an :func:`~tengfield.uncertainty_study.evaluation.output_quantities` name,
     e.g. ``"load.mean_power_W"``) of the design candidate's scene over the study
     ``spec`` (Monte Carlo or Sobol points alike), on this process (``comm=None``,
     one job: the design farms the candidates)."""

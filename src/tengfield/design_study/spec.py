@@ -41,7 +41,7 @@ from dataclasses import field as _field
 
 from ..errors import SceneError
 from .._registry import lookup
-from ..scene.schema import RENAMED_KEYS, SCHEMA
+from ..scene.schema import RENAMED_KEYS, SCHEMA, SURFACE_CHARGE_KEY
 from ..scene.schema import convert as _convert
 
 #: objective -> the output quantity it scores (tengfield.quantities: name, unit, label);
@@ -203,7 +203,7 @@ def _whole(key: str, value, lo: int, hi: int) -> int:
 
 def _aggregate(value) -> tuple[str, float | None]:
     """(aggregate, percentile or None): "mean", "min" or "pNN" with 0 < NN < 100."""
-    from ..uncertainty.statistics import parse_percentile
+    from ..uncertainty_study.statistics import parse_percentile
 
     allowed = ", ".join(map(repr, AGGREGATES)) + ' or "pNN" (0 < NN < 100, e.g. "p10")'
     try:
@@ -225,7 +225,7 @@ ROBUST_FIXED = ("excitation.frequency_hz", "excitation.amplitude_mm", "circuit.l
 
 def _robust_study(scene, spec: DesignSpec):
     """The validated ``[uncertainty]`` study a percentile aggregate is taken over."""
-    from ..uncertainty.spec import uncertainty_spec
+    from ..uncertainty_study.spec import uncertainty_spec
 
     where = f"[design] aggregate = {spec.aggregate!r}"
     raw = scene.raw.get("uncertainty")
@@ -246,7 +246,7 @@ def _robust_study(scene, spec: DesignSpec):
             raise SceneError(f"[uncertainty.vary] {key!r} with {where}: the design sets this "
                              "key (a [design.vary] key, the band's excitation and run, the "
                              "load); allowed: the other numeric keys (e.g. "
-                             "device.surface_charge_uC_per_m2, contact.restitution)")
+                             f"device.{SURFACE_CHARGE_KEY}, contact.restitution)")
     return study
 
 
@@ -529,22 +529,22 @@ def parse_design_section(scene, overrides: dict | None = None) -> DesignSpec:
 
 def design_cost(scene, spec: DesignSpec):
     """What the design ``spec`` of ``scene`` will do at most, counted before any of it
-    (issue #43.6; :class:`tengfield.uncertainty.cost.WorkCost`): ``candidates`` x band
+    (issue #43.6; :class:`tengfield.uncertainty_study.cost.WorkCost`): ``candidates`` x band
     points evaluations (x the ``[uncertainty]`` draws for a percentile aggregate), one
     field solve per candidate when a geometry key is varied (else one; none for an
     uncharged ball), a dynamics run per evaluation."""
-    from ..uncertainty.cost import EVALUATION_BYTES, SURROGATE_BYTES, WorkCost
-    from ..uncertainty.evaluation import is_field_key
+    from ..uncertainty_study.cost import EVALUATION_BYTES, SURROGATE_BYTES, WorkCost
+    from ..uncertainty_study.evaluation import is_field_key
 
     band = max(len(spec.band), 1)
     draws = 1
     if spec.uncertainty is not None:
-        from ..uncertainty.sampling import study_values
+        from ..uncertainty_study.sampling import study_values
         draws = len(study_values(spec.uncertainty))
     evaluations = spec.candidates * band * draws
     keys = [f"{OTHER_VARY.get(key, 'device')}.{key}" for key in spec.vary]
     geometry = any(is_field_key(key, scene.device.shape) for key in keys)
-    charged = scene.device.ball_charge != 0.0 or "surface_charge_uC_per_m2" in spec.vary
+    charged = scene.device.ball_charge != 0.0 or SURFACE_CHARGE_KEY in spec.vary
     solves = 0 if not charged else (spec.candidates if geometry else 1)
     if spec.uncertainty is not None and charged:
         solves *= max(1, draws if any(is_field_key(k, scene.device.shape)

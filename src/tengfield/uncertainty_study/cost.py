@@ -102,7 +102,8 @@ def study_cost(scene, spec, values) -> WorkCost:
     solved."""
     import numpy as np
 
-    from .evaluation import SIGMA_KEY, is_electrical, is_field_key
+    from ..scene.schema import SURFACE_CHARGE_SETTING
+    from .evaluation import is_electrical, is_field_key
     from .statistics import bootstrap_bytes
 
     keys = spec.keys
@@ -111,7 +112,7 @@ def study_cost(scene, spec, values) -> WorkCost:
     groups = len({tuple(row) for row in values[:, dynamic]}) if dynamic else (1 if len(values)
                                                                             else 0)
     geometry = [j for j, k in enumerate(keys) if is_field_key(k, scene.device.shape)]
-    charged = scene.device.ball_charge != 0.0 or SIGMA_KEY in keys
+    charged = scene.device.ball_charge != 0.0 or SURFACE_CHARGE_SETTING in keys
     if not charged:
         solves = 0
     elif geometry:

@@ -51,9 +51,6 @@ SIDES = ("lower", "upper")
 CHECK_MARGIN = 1.25
 #: dense grid of the minimum over z (plus the sampled positions)
 DENSE_POINTS = 801
-#: surface charge density used for the field solves of [device]
-#: surface_charge_uC_per_m2 = "breakdown" before σ_max is known [C/m^2]
-PLACEHOLDER_SIGMA = -1e-6
 
 
 @dataclass

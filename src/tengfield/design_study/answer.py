@@ -1,6 +1,6 @@
 """The design's answer, stated: what to build, how much it gives, what it rests on.
 
-Pure functions of a :class:`~tengfield.design.search.DesignResult` (numbers and text,
+Pure functions of a :class:`~tengfield.design_study.search.DesignResult` (numbers and text,
 no files): :func:`design_answer` (the best design and the runner-up: every varied key,
 the shape's derived length (the tube's plate spacing h = stroke + ball diameter, the
 shell's stroke = cavity - ball diameter), the sizes that followed, σ, the load, the
@@ -15,6 +15,7 @@ import numpy as np
 
 from .candidate import followed_geometry
 from .spec import BENCH_MAX_LOAD_OHM, LOG_KEYS, OBJECTIVES, OTHER_VARY, periodic
+from ..scene.schema import SURFACE_CHARGE_KEY, stated_surface_charge
 
 #: a varied value within this fraction of its range from an end is "on the bound"
 BOUND_FRACTION = 0.02
@@ -142,9 +143,9 @@ def describe(result, row) -> dict:
         else {}
     derived = derived_length(result, {**base, **device_values, **followed})
     obj = result.spec.objective
-    sigma = row.get("surface_charge_uC_per_m2", math.nan)
+    sigma = row.get(SURFACE_CHARGE_KEY, math.nan)
     if not (isinstance(sigma, float) and math.isfinite(sigma)):
-        sigma = base.get("surface_charge_uC_per_m2")
+        sigma = base.get(SURFACE_CHARGE_KEY)
     error = row["objective_error"]
     dyn = row.get("dynamics_error", {}).get(obj, 0.0)
     pct = row["objectives"].get(obj, {}).get("percentile_error", 0.0)
@@ -153,9 +154,8 @@ def describe(result, row) -> dict:
         derived["key"]: derived["value_mm"], "derived_length": derived,
         "changed": {k: {"from": base[k], "to": v} for k, v in followed.items()
                     if v != base[k]},
-        "surface_charge_uC_per_m2": sigma,
-        "breakdown": result.scene.raw.get("device", {}).get("surface_charge_uC_per_m2")
-        == "breakdown",
+        SURFACE_CHARGE_KEY: sigma,
+        "breakdown": stated_surface_charge(result.scene) == "breakdown",
         "load": _load(result, row),
         "objective": row["objective"], "objective_error": error,
         "field_error": error - dyn - pct, "dynamics_error": dyn,
@@ -288,7 +288,7 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
     if d["changed"]:
         lines.append("  changed to follow: " + ", ".join(
             f"{k} {c['from']:g} -> {c['to']:g}" for k, c in d["changed"].items()))
-    sigma = d["surface_charge_uC_per_m2"]
+    sigma = d[SURFACE_CHARGE_KEY]
     lines.append(f"  σ = {sigma:.4g} µC/m^2" + (" (the air-breakdown limit of this geometry)"
                                               if d["breakdown"] else " (the scene's)"))
     load = d["load"]
@@ -375,14 +375,14 @@ SIGMA_POWER = {"charge": 1, "voltage": 1, "current": 1, "power": 2, "power_densi
 
 
 def best_breakdown_band(result, *, cache_dir=None) -> dict | None:
-    """With ``[device] surface_charge_uC_per_m2 = "breakdown"``: the best design's objective
+    """With ``σ = "breakdown"``: the best design's objective
     at the edges of its breakdown band (docs/breakdown.md), ``{"lower", "estimate",
     "upper"}`` aggregated over the band points like the objective, and the σ edges of
     each band point [µC/m²] (its own trajectory). None when not asked for (another σ,
     no feasible design, a percentile aggregate, an objective not a power of σ). Reads
     the best geometry's surrogate from ``cache_dir`` (the design's) and reruns its
     dynamics at each band point (seconds)."""
-    from ..breakdown import obtain_breakdown_table, scene_band, scene_breakdown
+    from ..air_breakdown import obtain_breakdown_table, scene_band, scene_breakdown
     from .candidate import aggregate_values, band_scene, candidate_scene
 
     best, spec = result.best, result.spec

@@ -2,7 +2,7 @@
 
 :class:`FieldSetting` (one discretisation of the field solve), :class:`Row`
 (one accuracy level of one stage), :class:`Plan` and :func:`make_plan` (what
-:func:`tengfield.report.build_report` measures), and the pure pieces every
+:func:`tengfield.accuracy_report.build_report` measures), and the pure pieces every
 stage uses: relative errors, Richardson extrapolation, the cheapest row.
 All numbers are SI; errors are relative (|x − x_ref| / |x_ref|).
 """

@@ -7,7 +7,8 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from .band import scene_band
-from .charge import obtain_breakdown_table, scene_breakdown, scene_sigma, uses_breakdown_charge
+from .charge import (obtain_breakdown_table, scene_breakdown, scene_surface_charge,
+                     uses_breakdown_charge)
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
 from .._files import figure_file
 
@@ -15,7 +16,7 @@ def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     """What ``tengfield breakdown`` prints (with ``band``: σ_max over the γ range and one
     line per edge of the band saying what it assumes)."""
     b = result.binding
-    sigma = scene_sigma(scene, result)
+    sigma = scene_surface_charge(scene, result)
     lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2 (relative error estimate "
              f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
              f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
@@ -44,7 +45,7 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    sigma = scene_sigma(scene, result)
+    sigma = scene_surface_charge(scene, result)
     data = result.to_json(sigma)
     data.update({"scene": scene.source, "field_hash": scene.field_hash(),
                  "field_stage": field_status,
@@ -85,11 +86,18 @@ class BreakdownStudy(BreakdownResult):
 
 def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = False,
           solve=None) -> BreakdownStudy:
-    """``tengfield breakdown`` from Python: the scene (a path, TOML text or Scene), its
-    surrogate with breakdown lines (cached), :func:`scene_breakdown`. Returns a
+    """``tf.breakdown(scene)``, ``tengfield breakdown`` from Python: the scene (a Scene, a
+    scene file's path, or None: the default scene), its surrogate with breakdown lines
+    (cached), :func:`scene_breakdown` (``states``: the circuit states checked, default
+    the scene's; :data:`STATES` all of them, the CLI's ``--states all``). Returns a
     :class:`BreakdownResult` with ``.summary``, ``.plot()`` and ``.write(out_dir)``."""
-    from ..scene import check_field, load_scene
+    import os
 
+    from ..scene import check_field, load_scene
+    from ..scene.parse import check_scene_argument
+
+    if not isinstance(scene, (str, os.PathLike)) and scene is not None:
+        check_scene_argument("tengfield.breakdown", scene)
     scene = load_scene(scene)
     check_field(scene)
     table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,

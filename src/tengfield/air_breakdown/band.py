@@ -1,6 +1,6 @@
 """The charge a device holds, as a band (issue #38; docs/breakdown.md, pure numpy).
 
-The static limit σ_max (:func:`tengfield.breakdown.evaluate`) assumes a gap breaks
+The static limit σ_max (:func:`tengfield.air_breakdown.evaluate`) assumes a gap breaks
 down as soon as its voltage exceeds Paschen's V_b. A real gap needs a free electron
 in its over-stressed volume to start the avalanche (statistical time lag, Laue's law:
 P(no breakdown after t) = exp(−∫ rate dt)), and a sub-mm gap a ball crosses in

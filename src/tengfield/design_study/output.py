@@ -9,7 +9,7 @@ from .answer import (aggregate_words, band_table_lines, chosen_band_point, descr
                      design_answer, on_bounds,
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
-from ..scene.schema import update_section
+from ..scene.schema import SURFACE_CHARGE_KEY, update_section
 from .spec import OBJECTIVES, OTHER_VARY, objective_label, periodic
 from .._files import figure_file
 
@@ -40,7 +40,8 @@ def csv_columns(result) -> list[str]:
     cols += [f"{spec.objective}_spread_per_band_point", "windows",
              "regimes", "upper_contact_fraction", "upper_contacts_per_period",
              *(["load_ohm"] if "load_ohm" not in spec.vary else []),   # varied: a column above
-             "device_volume_m3", "surface_charge_uC_per_m2", "field_relative_error", "interpolation_error", "positions",
+             "device_volume_m3", SURFACE_CHARGE_KEY, "field_relative_error",
+             "interpolation_error", "positions",
              "field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s", "reason",
              "field_hash"]
     return cols
@@ -83,7 +84,7 @@ def csv_record(result, row) -> dict:
                 "windows": row.get("windows", []), "regimes": row["regimes"], "upper_contact_fraction": row["upper_contact_fraction"],
                 "upper_contacts_per_period": row["upper_contacts_per_period"],
                 "load_ohm": row["load_ohm"], "device_volume_m3": row["device_volume_m3"],
-                "surface_charge_uC_per_m2": row.get("surface_charge_uC_per_m2"),
+                SURFACE_CHARGE_KEY: row.get(SURFACE_CHARGE_KEY),
                 "field_relative_error": row["field_error"],
                 "interpolation_error": row["interpolation_error"], "positions": row["positions"],
                 "field_status": row["field_status"], "field_wall_s": row["wall_s"]["field"],
@@ -138,7 +139,7 @@ def design_summary(result) -> dict:
             if spec.geometry == "follow" else {},
             **{k: answer["best"][k] for k in (answer["best"]["derived_length"]["key"],
                                               "derived_length", "changed",
-                                              "surface_charge_uC_per_m2", "breakdown", "load",
+                                              SURFACE_CHARGE_KEY, "breakdown", "load",
                                               "field_error", "dynamics_error", "band_points")},
             "on_bound": [{"key": k, "bound": side, "value": b}
                          for k, side, b in on_bounds(result, best)]},
@@ -180,7 +181,7 @@ def best_scene_dict(result) -> dict:
     its followed geometry, (for a power objective) the matched load, (for harvested power)
     the rectifier, the chosen band point as a sine ``[excitation]`` (a random or harmonics
     excitation is kept as given) and the run a band point was scored on (settle + window
-    periods) at the band point :func:`~tengfield.design.answer.chosen_band_point` names
+    periods) at the band point :func:`~tengfield.design_study.answer.chosen_band_point` names
     (nearest the band's centre among those where the design scored non-zero):
     ``tengfield run`` on it gives the design's value there."""
     best = result.best

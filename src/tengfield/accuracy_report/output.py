@@ -1,6 +1,6 @@
 """Files of ``tengfield report``: report.md, one PNG per stage, recommended scene files.
 
-Kept apart from :mod:`tengfield.report.study` and the modules it runs (the
+Kept apart from :mod:`tengfield.accuracy_report.study` and the modules it runs (the
 measurement: ``plan``, ``stages``, ``recommend``) so that the
 measurement stays free of I/O and plotting; report.csv and report.json are
 written by :mod:`tengfield.io`.
@@ -95,7 +95,8 @@ def markdown(report, images: dict) -> str:
                      f"{rec.predicted_error:.2g} | {errs} | {rec.measured_wall_time_s:.3g} | "
                      f"{'yes' if rec.reached else 'NO'} |" + (f" {rec.note}" if rec.note else ""))
     lines += ["", "Use them: `tengfield run recommended-0.001.toml` (this scene with the block "
-              "below), or in Python `tengfield.report.recommended_field_settings(tolerance)`.", ""]
+              "below), or in Python "
+              "`tengfield.accuracy_report.recommended_field_settings(tolerance)`.", ""]
     for rec in report.recommendations:
         lines += [f"```toml\n# target {rec.target:g}", "[field]"]
         lines += [f"{k} = {toml_value(v)}" for k, v in rec.field.items()]

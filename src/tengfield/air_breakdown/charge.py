@@ -1,11 +1,12 @@
 """The charge a run uses: the scene's σ, or −σ_max for ``[device]
-surface_charge_uC_per_m2 = "breakdown"``, decided in one place for run, sweep, field,
-design, the ensemble and uncertainty (:func:`obtain_run_table`), with the surrogate
-scaled to it (charges are linear in σ: no new field solve)."""
+σ = "breakdown"`` (:func:`resolve_for_run`), with the surrogate
+scaled to it (charges are linear in σ: no new field solve); the run's surrogate at that
+charge is :func:`tengfield.run_surrogate.surrogate_for_run`'s."""
 from __future__ import annotations
 
 from ..paschen import Paschen
 from .limit import BreakdownResult, evaluate, lines_from_table
+from ..scene.schema import SURFACE_CHARGE_KEY, stated_surface_charge
 
 
 def scene_states(scene) -> tuple[str, ...]:
@@ -18,9 +19,8 @@ def scene_states(scene) -> tuple[str, ...]:
 
 
 def uses_breakdown_charge(scene) -> bool:
-    """True when ``[device] surface_charge_uC_per_m2 = "breakdown"``."""
-    return (scene.raw.get("device", {}) if isinstance(scene.raw, dict) else {}).get(
-        "surface_charge_uC_per_m2") == "breakdown"
+    """True when ``σ = "breakdown"``."""
+    return stated_surface_charge(scene) == "breakdown"
 
 
 def scene_breakdown(scene, table, states=None) -> BreakdownResult:
@@ -82,37 +82,22 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
     return table, outcome
 
 
-def scene_sigma(scene, result: BreakdownResult) -> float:
+def scene_surface_charge(scene, result: BreakdownResult) -> float:
     """The σ [C/m²] a scene runs with: its own, or −σ_max for ``"breakdown"``."""
     return -result.sigma_max if uses_breakdown_charge(scene) else scene.device.surface_charge
 
 
-def obtain_run_table(scene, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
-                     command_line: str = "", write: bool = True):
-    """``(scene, table, outcome, result)``: the surrogate a command that uses the charge
-    runs with (``run``, ``sweep``, ``field``), at that charge: with ``"breakdown"`` the
-    surrogate with its lines (:func:`obtain_breakdown_table`) and the scene and table at
-    σ = −σ_max, otherwise the scene's own (:func:`resolve_for_run`; ``result`` None
-    when the table has no lines). The one place that decides it."""
-    from ..surrogate import obtain_table
-
-    obtain = obtain_breakdown_table if uses_breakdown_charge(scene) else obtain_table
-    table, outcome = obtain(scene, cache_dir=cache_dir, comm=comm, solve=solve,
-                            progress=progress, command_line=command_line, write=write)
-    scene, table, result = resolve_for_run(scene, table, comm)
-    return scene, table, outcome, result
-
-
 def charge_line(scene) -> str:
-    """What ``sweep`` and ``field`` print for a scene resolved by :func:`obtain_run_table`
+    """What ``sweep`` and ``field`` print for a scene resolved by
+    :func:`tengfield.run_surrogate.surrogate_for_run`
     from ``"breakdown"``: the σ it runs with."""
     return (f"surface charge: -sigma_max = {scene.device.surface_charge * 1e6:.4g} µC/m^2 "
-            f'(air-breakdown limit, [device] surface_charge_uC_per_m2 = "breakdown")')
+            f'(air-breakdown limit, [device] {SURFACE_CHARGE_KEY} = "breakdown")')
 
 
 def resolve_for_run(scene, table, comm=None):
     """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
-    surface_charge_uC_per_m2 = "breakdown"`` the scene gets σ = −σ_max and the table is
+    σ = "breakdown"`` the scene gets σ = −σ_max and the table is
     scaled to it (no new field solve); otherwise both are returned as they are.
     ``result`` is None when the table has no breakdown lines. Rank 0 of ``comm`` warns
     once when |σ| exceeds σ_max."""
@@ -122,7 +107,7 @@ def resolve_for_run(scene, table, comm=None):
         if uses_breakdown_charge(scene):   # never run at the stand-in sigma
             from ..errors import TengfieldError
             raise TengfieldError(
-                '[device] surface_charge_uC_per_m2 = "breakdown": the surrogate has no '
+                f'[device] {SURFACE_CHARGE_KEY} = "breakdown": the surrogate has no '
                 "breakdown lines (made by the 3D solver or a custom solve), so sigma_max is "
                 "unknown; give sigma in µC/m^2 or use [field] method = \"axisymmetric\"")
         return scene, table, None
@@ -131,12 +116,12 @@ def resolve_for_run(scene, table, comm=None):
         from ..surrogate.table import at_ball_charge
 
         sigma = -result.sigma_max
-        scene = scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
+        scene = scene.with_values(device={SURFACE_CHARGE_KEY: sigma * 1e6})
         table = at_ball_charge(table, scene.device.ball_charge)   # whatever σ it was solved at
     elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
         b = result.binding
         warnings.warn(
-            f"[device] surface_charge_uC_per_m2 = {scene.device.surface_charge * 1e6:g} exceeds "
+            f"[device] {SURFACE_CHARGE_KEY} = {scene.device.surface_charge * 1e6:g} exceeds "
             f"the air-breakdown limit sigma_max = {result.sigma_max * 1e6:.3g} µC/m^2 "
             f"({b.state}, {b.side} gap {b.gap * 1e3:.3g} mm at z = {b.position * 1e3:.3g} mm): "
             "the gap would discharge first (tengfield breakdown; \"breakdown\" runs at the limit)",

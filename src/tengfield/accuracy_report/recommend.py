@@ -170,7 +170,7 @@ def scene_with_recommended(scene, recommendations=None):
 
 def default_recommendations() -> list[dict]:
     """The recommendations measured by ``tengfield report`` on the embedded default
-    scene (``tengfield/report/calibration.json``; how to regenerate: its ``about``)."""
+    scene (``tengfield/accuracy_report/calibration.json``; how to regenerate: its ``about``)."""
     import json
     from importlib import resources
 

@@ -4,7 +4,7 @@ input values by each distribution's inverse CDF.
 
 Sobol indices do not change under a monotone map of each input, so the Saltelli matrices
 are drawn on [0, 1]^D and mapped afterwards; the order of the rows is SALib's (A, AB_1 ..
-AB_D, B per base sample), which :func:`tengfield.uncertainty.statistics.sobol_indices`
+AB_D, B per base sample), which :func:`tengfield.uncertainty_study.statistics.sobol_indices`
 expects back.
 """
 from __future__ import annotations

@@ -1,15 +1,15 @@
 """Error against run time for every stage, and the cheapest settings for a target accuracy.
 
 ``tengfield report`` (docs/report.md). The measurement (pure: no files, no
-plots) lives in :mod:`tengfield.report.study` (:func:`build_report`, the
-verification), :mod:`tengfield.report.stages` (each stage's rows),
-:mod:`tengfield.report.plan` (settings, plan, rows, error arithmetic) and
-:mod:`tengfield.report.recommend` (the recommendation logic); the files it
-writes in :mod:`tengfield.report.output`, the default recommendations in
+plots) lives in :mod:`tengfield.accuracy_report.study` (:func:`build_report`, the
+verification), :mod:`tengfield.accuracy_report.stages` (each stage's rows),
+:mod:`tengfield.accuracy_report.plan` (settings, plan, rows, error arithmetic) and
+:mod:`tengfield.accuracy_report.recommend` (the recommendation logic); the files it
+writes in :mod:`tengfield.accuracy_report.output`, the default recommendations in
 ``calibration.json`` (:func:`default_recommendations`). This package
 re-exports the public names::
 
-    from tengfield.report import build_report, write_report, recommended_field_settings
+    from tengfield.accuracy_report import build_report, write_report, recommended_field_settings
 """
 from __future__ import annotations
 

@@ -30,9 +30,9 @@ applies them to the keys a scene file does not set.
 
 All numbers are SI; errors are relative (|x − x_ref| / |x_ref|).
 
-The settings and the plan live in :mod:`tengfield.report.plan`, the
-measurement of each stage in :mod:`tengfield.report.stages`, the
-recommendation logic in :mod:`tengfield.report.recommend`; this module runs
+The settings and the plan live in :mod:`tengfield.accuracy_report.plan`, the
+measurement of each stage in :mod:`tengfield.accuracy_report.stages`, the
+recommendation logic in :mod:`tengfield.accuracy_report.recommend`; this module runs
 them in order (:func:`build_report`) and verifies the recommendations.
 """
 from __future__ import annotations
@@ -162,7 +162,8 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
 
 def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = None,
                  progress: bool = False, solve=None, farm_comm=None) -> Report:
-    """Measure every stage of ``scene`` at several accuracy levels (see the module docstring).
+    """``tf.report(scene)``: measure every stage of ``scene`` at several accuracy levels
+    (see the module docstring); ``fast``: the CI-sized plan (``tengfield report --fast``).
 
     ``comm``: communicator of each field solve (default ``MPI.COMM_SELF``);
     ``solve``: the field solver (default :func:`tengfield.field.solve_position`,
@@ -175,7 +176,9 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     on whichever rank ran the job).
     """
     from .._console import progress_bar
+    from ..scene.parse import check_scene_argument
 
+    check_scene_argument("tengfield.report", scene)
     if comm is None:
         from mpi4py import MPI
         comm = MPI.COMM_SELF

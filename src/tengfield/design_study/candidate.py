@@ -19,6 +19,7 @@ import numpy as np
 from .. import electrical
 from ..errors import TengfieldError
 from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, band_run, periodic
+from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
 #: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
@@ -58,15 +59,15 @@ def followed_geometry(base_device: dict, values: dict) -> dict:
 def candidate_charge(scene, table=None):
     """``(scene, table)`` at the ball's surface charge density σ a candidate is scored at.
 
-    THE one place that decides it: the scene's own ``[device] surface_charge_uC_per_m2``
-    (or its varied value); with ``surface_charge_uC_per_m2 = "breakdown"`` each geometry
+    THE one place that decides it: the scene's own ``σ``
+    (or its varied value); with ``σ = "breakdown"`` each geometry
     at its own air-breakdown limit, σ = −σ_max from its surrogate's gap lines
-    (:func:`tengfield.breakdown.resolve_for_run`: the table is rescaled, no new field
+    (:func:`tengfield.air_breakdown.resolve_for_run`: the table is rescaled, no new field
     solve), so designs are compared at charges they can hold. Raises
     :class:`~tengfield.errors.TengfieldError` when the limit is asked for and the surrogate
     has no gap lines.
     """
-    from ..breakdown import resolve_for_run, uses_breakdown_charge
+    from ..air_breakdown import resolve_for_run, uses_breakdown_charge
 
     if table is None or not uses_breakdown_charge(scene):
         return scene, table
@@ -187,12 +188,12 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     from .._args import check_instance
     from ..scene.parse import check_scene_argument
     from ..dynamics import simulate as default_simulate
-    from ..breakdown import obtain_breakdown_table, uses_breakdown_charge
+    from ..air_breakdown import obtain_breakdown_table, uses_breakdown_charge
 
-    check_scene_argument("design.evaluate", base, "base")
-    check_instance("design.evaluate", spec, "spec", DesignSpec,
-                   "a DesignSpec (tengfield.design.parse_design_section(scene))")
-    check_instance("design.evaluate", values, "values", dict, "a dict of varied keys")
+    check_scene_argument("design_study.evaluate", base, "base")
+    check_instance("design_study.evaluate", spec, "spec", DesignSpec,
+                   "a DesignSpec (tengfield.design_study.parse_design_section(scene))")
+    check_instance("design_study.evaluate", values, "values", dict, "a dict of varied keys")
     from ..surrogate import TerminalCurves, obtain_table
     from ..surrogate.table import at_ball_charge
 
@@ -203,7 +204,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
            "regimes": [], "upper_contacts_per_period": [], "upper_contact_fraction": math.nan,
            "load_ohm": None, "field_hash": "", "field_error": math.nan,
            "interpolation_error": math.nan, "field_status": "", "positions": 0,
-           "device_volume_m3": math.nan, "surface_charge_uC_per_m2": math.nan,
+           "device_volume_m3": math.nan, SURFACE_CHARGE_KEY: math.nan,
            "wall_s": {"field": 0.0, "dynamics": 0.0, "circuit": 0.0}}
     try:
         scene = candidate_scene(base, spec, values)
@@ -278,7 +279,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
         if charged is not scene:   # the band scenes at the charge the geometry can hold
             scene = charged        # (the motion does not depend on the charge)
             points = [band_scene(scene, spec, f, a) for f, a in spec.band]
-        row["surface_charge_uC_per_m2"] = scene.device.surface_charge * 1e6
+        row[SURFACE_CHARGE_KEY] = scene.device.surface_charge * 1e6
         curves = TerminalCurves(table, scene.circuit.reference)
     # circuit
     start = time.perf_counter()
@@ -355,14 +356,14 @@ ROBUST_OUTPUTS = {"power": "load.mean_power_W", "power_density": "load.power_den
 
 def robust_values(spec, points, row, *, cache_dir=None, solve=None, simulate=None) -> dict:
     """``[design] aggregate = "pNN"``: at each band point the study of ``[uncertainty]``
-    (:func:`tengfield.uncertainty.study.candidate_percentiles`, on this process) on the
+    (:func:`tengfield.uncertainty_study.study.candidate_percentiles`, on this process) on the
     candidate's band scene, with the matched (or varied) load of the nominal search kept
     for power objectives and the ``[circuit]`` rectifier for harvested power ->
     ``{"objectives": {objective: {"band_percentiles", "band_intervals", "band_nominal",
     "percentile_error"}}, "evaluations", "field_solves"}`` (field_solves: surrogates the
     studies did not find in the cache; 0 when the candidate's own was cached). The percentile error: the half-widths of the
     percentiles' 95 % intervals combined over the band as sqrt(sum s^2) / n."""
-    from ..uncertainty.study import candidate_percentiles
+    from ..uncertainty_study.study import candidate_percentiles
 
     power = [o for o in spec.objectives if o in ("power", "power_density")]
 

@@ -4,7 +4,7 @@ Samples are grouped by their dynamics-relevant inputs (every varied key except �
 ``[circuit]`` keys): one group runs the dynamics once and obtains
 its surrogate once (cached by the field hash, at the group's reference σ). Every
 evaluation in the group then only runs the electrical stage with the table scaled to its
-own σ (:func:`tengfield.breakdown.scaled_table`: every charge is linear in σ, C does not
+own σ (:func:`tengfield.air_breakdown.scaled_table`: every charge is linear in σ, C does not
 depend on it) and its own circuit values: σ alone is a scaling, no field solve and no new
 dynamics. Geometry keys give one field solve per distinct geometry (phase 1, farmed over
 the workers before the groups, so two workers never solve the same geometry).
@@ -27,10 +27,11 @@ from .._json import regime_dict
 from ..quantities import summary_keys
 from ..surrogate.cache import solved_scene
 from .spec import UncertaintySpec, band_sigma, draws_from_band, sections_of
+from ..scene.schema import (SURFACE_CHARGE_KEY, SURFACE_CHARGE_SETTING,
+                            stated_surface_charge)
 
-SIGMA_KEY = "device.surface_charge_uC_per_m2"
 #: sections whose keys change neither the dynamics nor the field: the electrical stage only
-#: (a [breakdown] key can change σ itself, with surface_charge_uC_per_m2 = "breakdown": it
+#: (a [breakdown] key can change σ itself, with σ = "breakdown": it
 #: forms groups like a dynamics key)
 ELECTRICAL_SECTIONS = ("circuit",)
 #: summary blocks whose numeric leaves are an evaluation's outputs (``block.name``), and
@@ -93,7 +94,7 @@ def changes_field(values: dict, shape: str = "tube") -> bool:
 
 def is_electrical(key: str) -> bool:
     """True for a key that changes only the electrical stage (σ, circuit)."""
-    return key == SIGMA_KEY or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
+    return key == SURFACE_CHARGE_SETTING or key.split(".", 1)[0] in ELECTRICAL_SECTIONS
 
 
 @dataclass
@@ -145,22 +146,22 @@ def _obtain(scene, cache_dir, solve):
     """``(scene at its charge, table, status, σ_max [C/m²] or None)`` of ``scene``'s
     surrogate (σ_max: its air-breakdown limit, None without gap lines): from this
     process's memory when an earlier group had the same field (status "cached"), else
-    from the cache or a field solve (:func:`tengfield.breakdown.obtain_run_table`)."""
+    from the cache or a field solve (:func:`tengfield.run_surrogate.surrogate_for_run`)."""
     import json
 
-    from ..breakdown import obtain_run_table
+    from ..run_surrogate import surrogate_for_run
 
     raw = scene.to_dict()
     key = (str(cache_dir), scene.field_hash(), json.dumps(raw["breakdown"], sort_keys=True),
-           repr(scene.raw.get("device", {}).get("surface_charge_uC_per_m2")),
+           repr(stated_surface_charge(scene)),
            solve is None)
     if key in _OBTAINED:   # the same field and charge rule: THIS scene at that charge
         sigma, table, sigma_max = _OBTAINED[key]
         resolved = scene if scene.device.surface_charge == sigma and not \
-            isinstance(scene.raw.get("device", {}).get("surface_charge_uC_per_m2"), str) \
-            else scene.with_values(device={"surface_charge_uC_per_m2": sigma * 1e6})
+            isinstance(stated_surface_charge(scene), str) \
+            else scene.with_values(device={SURFACE_CHARGE_KEY: sigma * 1e6})
         return resolved, table, "cached", sigma_max
-    resolved, table, outcome, limit = obtain_run_table(scene, cache_dir=cache_dir, solve=solve)
+    resolved, table, outcome, limit = surrogate_for_run(scene, cache_dir=cache_dir, solve=solve)
     sigma_max = None if limit is None else float(limit.sigma_max)
     if len(_OBTAINED) >= _OBTAINED_MAX:
         _OBTAINED.clear()
@@ -203,7 +204,7 @@ def _group_task(task):
     Returns ``(rows, field hash or None, cache status, warnings)``; a row is
     ``(index, outputs, regime, above)``, ``above``: |σ| beyond the air-breakdown limit
     of its geometry (None when the table has no gap lines)."""
-    from ..breakdown import scaled_table
+    from ..air_breakdown import scaled_table
 
     scene, group, cache_dir, solve, simulate, study = task
     simulate = simulate or _default_simulate()
@@ -219,7 +220,8 @@ def _group_task(task):
             _DYNAMICS.clear()          # chunks of a group are consecutive tasks: keep one
             _DYNAMICS[memo] = dynamics
         table, at, sigma_table, sigma_max = None, base, 0.0, None
-        charged = base.device.ball_charge != 0.0 or any(SIGMA_KEY in v for _, v in group.members)
+        charged = base.device.ball_charge != 0.0 or any(SURFACE_CHARGE_SETTING in v
+                                                         for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
             ref = solved_scene(base)
             digest = ref.field_hash()
@@ -229,8 +231,9 @@ def _group_task(task):
         band = _group_band(scene, at, table, dynamics)   # σ from the breakdown band
         for index, values in group.members:
             with _tagged({**group.dynamic, **values}, [(index, values)]):
-                if band is not None and SIGMA_KEY in values:
-                    values = {**values, SIGMA_KEY: band_sigma(band, values[SIGMA_KEY])}
+                if band is not None and SURFACE_CHARGE_SETTING in values:
+                    values = {**values, SURFACE_CHARGE_SETTING: band_sigma(
+                        band, values[SURFACE_CHARGE_SETTING])}
                 point = at.with_values(**sections_of(values)) if values else at
                 scaled = None
                 if table is not None and point.device.ball_charge != 0.0:
@@ -246,13 +249,13 @@ def _group_band(scene, at, table, dynamics):
     draws σ from it (docs/breakdown.md), else None."""
     if not draws_from_band(scene) or table is None:
         return None
-    from ..breakdown import compute_band, lines_from_table, scene_states
-    from ..breakdown.band import Seeds, trajectory_of
+    from ..air_breakdown import compute_band, lines_from_table, scene_states
+    from ..air_breakdown.band import Seeds, trajectory_of
     from ..paschen import Paschen
 
     if table.line_potential is None:
         from ..errors import TengfieldError
-        raise TengfieldError(f'[uncertainty.vary] "{SIGMA_KEY}" = {{ distribution = '
+        raise TengfieldError(f'[uncertainty.vary] "{SURFACE_CHARGE_SETTING}" = {{ distribution = '
                              '"breakdown-band" }: the surrogate has no breakdown lines (3D '
                              'solver); use [field] method = "axisymmetric"')
     return compute_band(lines_from_table(table, at), Paschen.from_scene(at), scene_states(at),
@@ -337,7 +340,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     nominal = Group({}, [(-1, {})])
     # phase 1: each distinct geometry's surrogate once (at the group's reference σ)
     geometry: dict[str, object] = {}
-    if scene.device.ball_charge != 0.0 or SIGMA_KEY in keys:
+    if scene.device.ball_charge != 0.0 or SURFACE_CHARGE_SETTING in keys:
         for group in [nominal, *groups]:
             if group.dynamic and not changes_field(group.dynamic, scene.device.shape):
                 continue       # the nominal geometry (no field key varied): no scene built
@@ -380,7 +383,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
         messages.append((RuntimeWarning, f"{beyond} of {len(values)} evaluations have |sigma| "
                          "above the air-breakdown limit sigma_max of their geometry (the gap "
                          "would discharge first; tengfield breakdown): keep the draws of "
-                         f"{SIGMA_KEY} within it"))
+                         f"{SURFACE_CHARGE_SETTING} within it"))
     distinct = list(dict.fromkeys(messages))
     return Evaluations(rows=rows, regimes=regimes, nominal=nominal_out,
                        nominal_regime=nominal_regime, field_solves=len(solved),

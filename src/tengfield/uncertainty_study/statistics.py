@@ -68,7 +68,7 @@ def bootstrap_bytes(samples: int) -> int:
 
 def sobol_indices(keys: list[str], values, seed: int = 0) -> dict:
     """First-order and total Sobol indices of one output from its values at SALib's
-    Saltelli points (:func:`tengfield.uncertainty.sampling.unit_samples`, method
+    Saltelli points (:func:`tengfield.uncertainty_study.sampling.unit_samples`, method
     "sobol", in that order): ``{key: {"S1", "S1_conf", "ST", "ST_conf"}}``, the
     ``_conf`` values the half-widths of the bootstrap 95 % intervals. Raises
     ValueError for an output with missing values or no variance (no index exists).

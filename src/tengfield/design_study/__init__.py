@@ -1,6 +1,7 @@
-"""Design: the device geometry that serves a given vibration best (``tengfield design``).
+"""The design study: the device geometry that serves a given vibration best (``tengfield
+design``, ``tf.design(scene)``).
 
-``[design]`` (:mod:`tengfield.design.spec`) names the objective (power density into the
+``[design]`` (:mod:`tengfield.design_study.spec`) names the objective (power density into the
 matched load, power, Q_SC, harvested power, or the stroke), the band of excitations it
 is aggregated over (mean or worst case; or ``"p10"``: a percentile over the scene's
 ``[uncertainty.vary]`` at each band point, then the band's mean), the keys to vary and
@@ -31,13 +32,3 @@ __all__ = ["design", "DesignResult", "DesignSpec", "parse_design_section", "eval
            "design_summary", "OBJECTIVES", "design_answer", "design_warnings", "answer_lines",
            "chosen_band_point"]
 
-
-class _CallableModule(__import__("types").ModuleType):
-    """``tf.design(scene)`` calls :func:`design`; ``tf.design.evaluate`` etc. stay reachable
-    (the package and the function share the name ``tengfield.design``)."""
-
-    def __call__(self, scene, **kwargs) -> DesignResult:
-        return design(scene, **kwargs)
-
-
-__import__("sys").modules[__name__].__class__ = _CallableModule

@@ -3,8 +3,9 @@
 * :mod:`.limit` the physics (pure numpy): the gap lines, their voltages per unit σ in
   each circuit state, σ_max (:func:`evaluate`, :class:`BreakdownResult`), the energies
   at σ_max;
-* :mod:`.charge` the charge a run uses (its σ, or −σ_max for ``"breakdown"``) and the
-  surrogate at it (:func:`obtain_run_table`, the one place that decides it);
+* :mod:`.charge` the charge a run uses (its σ, or −σ_max for ``"breakdown"``:
+  :func:`resolve_for_run`; the run's surrogate at it is
+  :func:`tengfield.run_surrogate.surrogate_for_run`'s);
 * :mod:`.band` the charge a device holds as a band (lower, seed-limited estimate,
   upper) from the field and the trajectory (issue #38);
 * :mod:`.output` what ``tengfield breakdown`` prints and writes.
@@ -13,20 +14,20 @@ from __future__ import annotations
 
 from .band import (Band, Seeds, Trajectory, band_summary, compute_band, scene_band,
                    trajectory_of)
-from .charge import (charge_line, obtain_breakdown_table, obtain_run_table, resolve_for_run,
-                     scaled_table, scene_breakdown, scene_sigma, scene_states, summary_block,
-                     uses_breakdown_charge)
-from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, PLACEHOLDER_SIGMA, SIDES, STATE_TEXT,
+from .charge import (charge_line, obtain_breakdown_table, resolve_for_run,
+                     scaled_table, scene_breakdown, scene_states, scene_surface_charge,
+                     summary_block, uses_breakdown_charge)
+from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, SIDES, STATE_TEXT,
                     STATES, Binding, BreakdownResult, Lines, electrode_potentials, evaluate,
                     gap_voltages, limited_energy, lines_from_table)
 from .output import BreakdownStudy, study, summary_lines, write_outputs
 
 __all__ = ["study", "Band", "Seeds", "Trajectory", "band_summary", "compute_band", "scene_band",
            "trajectory_of",
-           "CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "PLACEHOLDER_SIGMA", "SIDES",
+           "CHECK_MARGIN", "CSV_COLUMNS", "DENSE_POINTS", "SIDES",
            "STATE_TEXT", "STATES", "Binding", "BreakdownResult", "Lines", "charge_line",
            "electrode_potentials", "evaluate", "gap_voltages", "limited_energy",
-           "lines_from_table", "obtain_breakdown_table", "obtain_run_table",
-           "resolve_for_run", "scaled_table", "scene_breakdown", "scene_sigma",
+           "lines_from_table", "obtain_breakdown_table",
+           "resolve_for_run", "scaled_table", "scene_breakdown", "scene_surface_charge",
            "scene_states", "summary_block", "summary_lines", "uses_breakdown_charge",
            "write_outputs"]

@@ -8,9 +8,9 @@ scene schema, in the file's units) to a distribution:
 * ``{ distribution = "lognormal", median = .., factor = .. }`` (``factor``: the
   geometric standard deviation, > 1; ln x is normal with mean ln(median), std ln(factor))
 * ``{ distribution = "triangular", low = .., mode = .., high = .. }``
-* ``"device.surface_charge_uC_per_m2" = { distribution = "breakdown-band" }`` (σ only,
+* ``"device.σ" = { distribution = "breakdown-band" }`` (σ only,
   issue #38): σ log-uniform between the edges of the breakdown band of each geometry
-  (:mod:`tengfield.breakdown.band`); the study's column holds the draw's place in the
+  (:mod:`tengfield.air_breakdown.band`); the study's column holds the draw's place in the
   band, u in (0, 1): σ = −lower·(upper/lower)^u
 
 :func:`uncertainty_spec` validates it the way every scene key is validated (one-line
@@ -27,8 +27,9 @@ from dataclasses import dataclass, field
 
 from .._mpi import launched_rank
 from ..errors import SceneError
-from ..scene.schema import (HARMONIC_KEYS, RENAMED_KEYS, SCHEMA, fmt_range, show,
-                            suggest)
+from ..scene.schema import (HARMONIC_KEYS, RENAMED_KEYS, SCHEMA, SURFACE_CHARGE_KEY,
+                            SURFACE_CHARGE_SETTING, fmt_range, show,
+                            stated_surface_charge, suggest)
 
 SECTION = "uncertainty"
 METHODS = ("sobol", "monte-carlo")
@@ -36,9 +37,8 @@ METHODS = ("sobol", "monte-carlo")
 DISTRIBUTIONS = {"uniform": ("low", "high"), "normal": ("mean", "std"),
                  "lognormal": ("median", "factor"), "triangular": ("low", "mode", "high"),
                  "breakdown-band": ()}
-#: the distribution drawn from each geometry's breakdown band, and the key it takes
+#: the distribution drawn from each geometry's breakdown band (σ only: SURFACE_CHARGE_SETTING)
 BAND = "breakdown-band"
-BAND_KEY = "device.surface_charge_uC_per_m2"
 KEYS = ("samples", "method", "seed", "vary", "max_field_solves")
 DEFAULTS = {"samples": 256, "method": "sobol", "seed": 0, "max_field_solves": 1000}
 #: the tail probability whose quantiles must lie inside the key's allowed range
@@ -166,8 +166,9 @@ def _distribution(key: str, given) -> Distribution:
         choices = ", ".join(repr(k) for k in DISTRIBUTIONS)
         raise SceneError(f"{where}: distribution = {show(kind)} is not allowed: choose one of "
                          f"{choices}" + (suggest(kind, DISTRIBUTIONS) if isinstance(kind, str) else ""))
-    if kind == BAND and key != BAND_KEY:
-        raise SceneError(f"{where}: distribution = {show(kind)} is for {BAND_KEY!r} only "
+    if kind == BAND and key != SURFACE_CHARGE_SETTING:
+        raise SceneError(f"{where}: distribution = {show(kind)} is for "
+                         f"{SURFACE_CHARGE_SETTING!r} only "
                          "(the breakdown band of each geometry)")
     names = DISTRIBUTIONS[kind]
     for name in given:
@@ -349,13 +350,13 @@ def uncertainty_spec(scene, required: bool = True) -> UncertaintySpec | None:
 def draws_from_band(scene) -> bool:
     """Whether the scene's ``[uncertainty.vary]`` draws σ from the breakdown band."""
     vary = (scene.raw.get(SECTION) or {}).get("vary") if isinstance(scene.raw, dict) else None
-    given = vary.get(BAND_KEY) if isinstance(vary, dict) else None
+    given = vary.get(SURFACE_CHARGE_SETTING) if isinstance(vary, dict) else None
     return isinstance(given, dict) and given.get("distribution") == BAND
 
 
 def band_sigma(band, place: float) -> float:
     """σ [µC/m², negative: PTFE] at ``place`` u in [0, 1] of ``band`` (a
-    :class:`tengfield.breakdown.Band`): log-uniform, −lower·(upper/lower)^u."""
+    :class:`tengfield.air_breakdown.Band`): log-uniform, −lower·(upper/lower)^u."""
     return -1e6 * band.lower * (band.upper / band.lower) ** float(place)
 
 
@@ -411,12 +412,12 @@ def default_uncertainty_section(scene) -> tuple[dict, str]:
     with N = :data:`DEFAULT_SAMPLES`."""
     vary = {"contact.restitution": {"distribution": "uniform", "low": DEFAULT_RESTITUTION[0],
                                     "high": DEFAULT_RESTITUTION[1]}}
-    sigma = scene.raw.get("device", {}).get("surface_charge_uC_per_m2",
-                                            scene.device.surface_charge * 1e6)
+    stated = stated_surface_charge(scene)
+    sigma = scene.device.surface_charge * 1e6 if stated is None else stated
     if isinstance(sigma, (int, float)) and not isinstance(sigma, bool) and sigma != 0.0:
         low, high = sorted(float(f"{sigma * f:.6g}") for f in DEFAULT_SIGMA_FACTORS)
-        vary = {"device.surface_charge_uC_per_m2": {"distribution": "uniform", "low": low,
-                                                    "high": high}, **vary}
+        vary = {SURFACE_CHARGE_SETTING: {"distribution": "uniform", "low": low,
+                                         "high": high}, **vary}
     section = {"samples": DEFAULT_SAMPLES, "method": "sobol", "seed": 1, "vary": vary}
     said = (f"{scene.source} has no [uncertainty]: a default study of "
             + " and ".join(f"{k} uniform in [{v['low']:g}, {v['high']:g}]"
