@@ -372,3 +372,17 @@ def figure_file(stem: str) -> str:
     """A figure's file name: ``stem`` with the format's suffix (``waveforms.png``, or
     ``waveforms.pdf`` under ``--figure-format pdf``)."""
     return f"{stem}.{_FIGURE_OUTPUT['format']}"
+
+
+def write_figure(function, *data, path: str | Path, figures=None, **kwargs) -> Path:
+    """Draw ``function(*data, path, **kwargs)`` (a ``plot_*`` saver) here, atomically (a
+    full disk leaves no 0-byte figure behind), or send it to ``figures`` (a
+    :class:`tengfield.plotting.process.FigureProcess`: complete after its ``finish()``);
+    returns ``path``."""
+    writable_target(path)
+    if figures is None:
+        with atomic_path(path) as tmp:
+            function(*data, tmp, **kwargs)
+    else:
+        figures.draw(function, *data, path, **kwargs)
+    return Path(path)

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._files import (atomic_path, figure_file, writable_target, write_csv, write_json,
-                     write_rows)
+from ._files import (atomic_path, figure_file, writable_target, write_csv,  # noqa: F401
+                     write_figure, write_json, write_rows)
 from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
 from .plotting.waveforms import run_title
 from .dynamics.output import (EXTRA_COLUMNS, MAP_COLUMNS, _trajectory_without,  # noqa: F401
@@ -78,7 +78,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
     out.mkdir(parents=True, exist_ok=True)
     written = []
     if plots:
-        from .plotting.waveforms import plot_surrogate, plot_waveforms, visited_positions
+        from .plotting.waveforms import plot_waveforms, visited_positions
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
         # a streamed run (tengfield.electrical.stream) kept them: its columns are not held
         source = getattr(result.waveforms, "tail", None) or result.waveforms
@@ -97,10 +97,11 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
                 title=run_title(result) + ", whole run: min/max per time bin",
                 parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
-            written.append(_figure(figures, plot_surrogate, result.table, result.curves,
-                                   path=out / figure_file("surrogate"), cells=result.scene.device.cells,
-                                   visited=visited_positions(result.dynamics),
-                                   error_estimate=result.summary.get("surrogate_error_estimate")))
+            from .surrogate.output import write_surrogate_figure
+            written.append(write_surrogate_figure(
+                result.table, result.curves, out, cells=result.scene.device.cells,
+                visited=visited_positions(result.dynamics), figures=figures,
+                error_estimate=result.summary.get("surrogate_error_estimate")))
         written += write_harvest_plots(result, out, figures=figures)
     rows = (getattr(result, "extras", None) or {}).get("ensemble_rows")
     if rows:
@@ -196,36 +197,31 @@ class _WithoutRead:
 
 
 def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
-    """Draw ``function(*data, path, **kwargs)`` here, or send it to ``figures``; returns
-    ``path``."""
-    writable_target(path)
-    if figures is None:      # atomically: a full disk leaves no 0-byte figure behind
-        with atomic_path(path) as tmp:
-            function(*data, tmp, **kwargs)
-    else:
-        figures.draw(function, *data, path, **kwargs)
-    return Path(path)
+    """:func:`tengfield._files.write_figure` (drawn here or sent to ``figures``)."""
+    return write_figure(function, *data, path=path, figures=figures, **kwargs)
 
 
 def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
     """charging.png (rectifier), vq.png (load or rectifier) and array.png (an
     ``[array]`` run) of a :class:`tengfield.pipeline.RunResult`, where they apply
-    (``figures``: as for :func:`write_run_outputs`)."""
+    (``figures``: as for :func:`write_run_outputs`): the store record's and the array's
+    through the writers their own ``.write`` calls (:mod:`tengfield.harvest.output`)."""
+    from .harvest.output import write_array_figure, write_charging_figure
     from .plotting import harvest as hp
 
     extras = getattr(result, "extras", {}) or {}
     written = []
     if extras.get("_fine") is not None:
-        written.append(_figure(figures, hp.plot_charging, extras["_fine"], result.scene,
-                               path=out / figure_file("charging"), title=run_title(result)))
+        written.append(write_charging_figure(extras["_fine"], out, scene=result.scene,
+                                             title=run_title(result), figures=figures))
     if extras.get("_vq"):
         written.append(_figure(figures, hp.plot_vq, extras["_vq"],
                                result.summary.get("energy_per_cycle", {}), path=out / figure_file("vq"),
                                title=run_title(result)))
     if extras.get("_array") is not None:
-        written.append(_figure(figures, hp.plot_array, extras["_array"],
-                               result.summary.get("array", {}), path=out / figure_file("array"),
-                               title=run_title(result)))
+        written.append(write_array_figure(extras["_array"], out,
+                                          summary=result.summary.get("array", {}),
+                                          title=run_title(result), figures=figures))
     return written
 
 

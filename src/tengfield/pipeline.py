@@ -238,7 +238,7 @@ def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
     result = RunResult(scene=scene, waveforms=stage.waveforms, summary=summary,
                        dynamics=dynamics, table=table, curves=curves,
                        peaks=stage.peak_to_peak, stages=stages, peak=stage.peak)
-    result.extras = stage.extras
+    result.extras = _with_scene(stage.extras, scene)
     return result
 
 
@@ -482,8 +482,20 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
     result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
                        dynamics=dynamics, table=table, curves=curves, peaks=peaks,
                        stages=stages, peak=peak)
-    result.extras = {"_array": arr, "_fine": arr.fine}
+    result.extras = _with_scene({"_array": arr, "_fine": arr.fine}, scene)
     return result
+
+
+def _with_scene(extras: dict, scene) -> dict:
+    """``extras`` with the store record (``_fine``, a HarvestResult) knowing the scene it
+    ran with (its ``.scene``, which ``.write`` draws charging.png with)."""
+    import dataclasses
+
+    fine = extras.get("_fine")
+    if (dataclasses.is_dataclass(fine) and getattr(fine, "scene", False) is None
+            and "scene" in {f.name for f in dataclasses.fields(fine)}):
+        extras = {**extras, "_fine": dataclasses.replace(fine, scene=scene)}
+    return extras
 
 
 def _measured_comparison(summary, scene) -> None:

@@ -93,6 +93,8 @@ class SurrogateTable(SolveRecord):
     stroke: float
     line_potential: np.ndarray | None = None
     line_check: np.ndarray | None = None
+    #: the scene solved (set by ``precompute`` and ``obtain_table``), else None
+    scene: object = field(default=None, repr=False, compare=False)
 
     @property
     def summary(self) -> dict:
@@ -112,6 +114,13 @@ class SurrogateTable(SolveRecord):
         from ..plotting.waveforms import surrogate_figure
 
         return surrogate_figure(self, TerminalCurves(self, reference))
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write surrogate.h5 (what ``tengfield precompute -o`` writes) and, with ``plots``,
+        surrogate.png (what ``tengfield run`` draws) to ``out_dir``; returns the paths."""
+        from .output import write_surrogate_files
+
+        return write_surrogate_files(self, out_dir, plots=plots)
 
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")
