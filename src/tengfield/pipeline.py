@@ -104,13 +104,23 @@ class RunResult:
         R || C_p); only with ``[circuit] parallel_capacitance_pF`` > 0 (else KeyError)."""
         return self.waveforms[electrical.READ_COLUMN]
 
-    def write(self, out_dir, plots: bool = True) -> list:
+    def write(self, out_dir, plots: bool = True, *, spice: bool = False,
+              figures=None) -> list:
         """Write what ``tengfield run -o out_dir`` writes (waveforms.csv, summary.json,
-        trajectory/impacts files and, with ``plots``, the PNGs); returns the paths."""
+        trajectory/impacts files and, with ``plots``, the PNGs; with ``spice`` teng.lib, as
+        ``--spice``); returns the paths. ``figures``: a
+        :class:`tengfield.plotting.process.FigureProcess` drawing the figures (complete
+        after its ``finish()``), as the CLI passes."""
         from .io import write_dynamics_outputs, write_run_outputs
 
-        written = write_run_outputs(self, out_dir, plots=plots)
-        return written + write_dynamics_outputs(self, out_dir, plots=plots)
+        written = write_run_outputs(self, out_dir, plots=plots, figures=figures)
+        written += write_dynamics_outputs(self, out_dir, plots=plots, figures=figures)
+        if spice:
+            from pathlib import Path
+
+            from .spice import export
+            written.append(export(self, Path(out_dir) / "teng.lib"))
+        return written
 
     def plot(self, *, last_periods: float | None = 5.0):
         """The waveforms figure (a matplotlib Figure; a notebook shows it): V_OC, Q_SC, I_SC

@@ -3,7 +3,8 @@ breakdown.csv and breakdown.png (the figure through :mod:`tengfield.plotting`)."
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+from typing import Any
 from pathlib import Path
 
 from .band import scene_band
@@ -74,17 +75,26 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
 @dataclass
 class BreakdownStudy(BreakdownResult):
     """The :class:`BreakdownResult` of :func:`study`, with :meth:`write`."""
+    #: how the surrogate was obtained (:class:`tengfield.surrogate.CacheOutcome`)
+    field_outcome: Any = field(default=None, repr=False, compare=False)
 
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield breakdown -o out_dir`` writes (the band of the scene's
         own trajectory included); returns the paths."""
-        band = scene_band(self.scene, self)
-        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band,
+        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=self.band,
                              field_status=self.field_status)
+
+    @property
+    def band(self):
+        """The band of the charge along the scene's own trajectory (its dynamics run once,
+        on first use): breakdown.json's ``band``."""
+        if "_band" not in self.__dict__:
+            self.__dict__["_band"] = scene_band(self.scene, self)
+        return self.__dict__["_band"]
 
 
 def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = False,
-          solve=None) -> BreakdownStudy:
+          solve=None, command_line: str = "") -> BreakdownStudy:
     """``tengfield breakdown`` from Python: the scene (a path, TOML text or Scene), its
     surrogate with breakdown lines (cached), :func:`scene_breakdown`. Returns a
     :class:`BreakdownResult` with ``.summary``, ``.plot()`` and ``.write(out_dir)``."""
@@ -93,7 +103,8 @@ def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = Fal
     scene = load_scene(scene)
     check_field(scene)
     table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
-                                            progress=progress, solve=solve)
+                                            progress=progress, solve=solve,
+                                            command_line=command_line)
     result = scene_breakdown(scene, table, states)
     values = {f.name: getattr(result, f.name) for f in fields(result) if f.init}
-    return BreakdownStudy(**{**values, "field_status": outcome.status})
+    return BreakdownStudy(**{**values, "field_status": outcome.status, "field_outcome": outcome})

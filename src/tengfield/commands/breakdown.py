@@ -29,22 +29,17 @@ def _run(args) -> int:
     from pathlib import Path
 
     from .. import breakdown
-    from ..scene import check_field, load_scene
+    from ..scene import load_scene
 
-    scene = load_scene(args.scene)
-    check_field(scene)
     comm = world_if_parallel()
-    table, outcome = breakdown.obtain_breakdown_table(scene, cache_dir=args.cache_dir, comm=comm,
-                                                      progress=True, command_line=command_line())
+    states = breakdown.STATES if args.states == "all" else None
+    result = breakdown.study(load_scene(args.scene), states=states, cache_dir=args.cache_dir,
+                             comm=comm, progress=True, command_line=command_line())
     if comm is not None and comm.rank != 0:
         return 0
-    states = breakdown.STATES if args.states == "all" else None
-    result = breakdown.scene_breakdown(scene, table, states)
-    band = breakdown.scene_band(scene, result)   # the scene's own trajectory (dynamics)
-    out = Path(args.output)
-    written = breakdown.write_outputs(result, scene, out, plots=not args.no_plots,
-                                      field_status=outcome.status, band=band)
-    for line in breakdown.summary_lines(result, scene, band):
+    written = result.write(Path(args.output), plots=not args.no_plots)
+    scene, outcome = result.scene, result.field_outcome
+    for line in breakdown.summary_lines(result, scene, result.band):
         print(line)
     print(f"field: {outcome.status} ({outcome.wall_time:.2f} s), {outcome.path}")
     print("wrote " + ", ".join(str(p) for p in written))
