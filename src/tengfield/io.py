@@ -4,9 +4,10 @@
   plots of ``tengfield run`` (:func:`write_run_outputs`);
 * ``trajectory.csv``, ``impacts.csv`` (3D: ``contacts.csv``) and the trajectory
   figures of the dynamics (:func:`write_dynamics_files`);
-* ``map.csv`` (:func:`write_map_csv`), ``sweep.csv`` (:func:`write_sweep_csv`);
-* ``report.csv`` and ``report.json`` (:func:`write_report_csv`,
-  :func:`write_report_json`).
+* ``map.csv`` (:func:`write_map_csv`, from :mod:`tengfield.dynamics.output`).
+
+sweep.csv is written by ``SweepResult.write`` (:mod:`tengfield.sweep`), report.csv
+and report.json by :mod:`tengfield.report.output`: each result's files beside it.
 
 Numbers are SI with the unit in the column name. The time column of
 ``waveforms.csv`` is written with 17 significant digits (``%.17g``, exact
@@ -14,24 +15,22 @@ round trip) so that the samples of a long run stay distinct; the other
 waveform columns with 10. The dynamics files (1D and 3D trajectories,
 impacts, contacts) hold every double as its shortest round-trip decimal.
 
-How one file is written is :mod:`tengfield._files` (its :func:`atomic_path`,
+How one file is written is :mod:`tengfield.files` (its :func:`atomic_path`,
 :func:`writable_target`, :func:`write_csv` and :func:`write_json` are importable
 from here too): the tables of numbers (waveforms, dynamics, ensemble) by
 :func:`write_csv`, Apache Arrow's compiled writer, in place after
 :func:`writable_target` (inside the staging directory of ``-o DIR``); JSON,
-``map.csv``, ``sweep.csv`` and ``report.csv`` (:func:`~tengfield._files.write_rows`)
+``map.csv``, ``sweep.csv`` and ``report.csv`` (:func:`~tengfield.files.write_rows`)
 atomically.
 """
 from __future__ import annotations
 
 import json
-import math
-import os
 from pathlib import Path
 
 import numpy as np
 
-from ._files import (atomic_path, figure_file, writable_target, write_csv,  # noqa: F401
+from .files import (atomic_path, figure_file, writable_target, write_csv,  # noqa: F401
                      write_figure, write_json, write_rows)
 from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
 from .plotting.waveforms import run_title
@@ -128,9 +127,9 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
 def run_tables_format(result, *, warn: bool = False) -> str:
     """``"hdf5"`` (one run.h5 holding waveforms, trajectory and impacts) if ``[run]
     output_format = "hdf5"`` or the run has more samples than a CSV table may
-    (:data:`tengfield.io_hdf5.MAX_CSV_ROWS`; with ``warn``, one warning says so), else
+    (:data:`tengfield.files.hdf5.MAX_CSV_ROWS`; with ``warn``, one warning says so), else
     ``"csv"``."""
-    from .io_hdf5 import MAX_CSV_ROWS
+    from .files.hdf5 import MAX_CSV_ROWS
 
     if result.scene.run.output_format == "hdf5":
         return "hdf5"
@@ -146,7 +145,7 @@ def run_tables_format(result, *, warn: bool = False) -> str:
     return "csv"
 
 
-#: the HDF5 file of ``[run] output_format = "hdf5"`` (tengfield.io_hdf5)
+#: the HDF5 file of ``[run] output_format = "hdf5"`` (tengfield.files.hdf5)
 HDF5_FILE = "run.h5"
 
 
@@ -155,9 +154,9 @@ def write_run_hdf5(path: str | Path, result) -> Path:
     columns of waveforms.csv), ``trajectory`` (the dynamics' columns; those equal to a
     waveform column are hard links to it), ``impacts`` (3D: and ``contacts``), every
     column with its ``units``; summary.json and the scene text as file attributes
-    (:mod:`tengfield.io_hdf5`)."""
+    (:mod:`tengfield.files.hdf5`)."""
     from ._json import jsonable
-    from .io_hdf5 import write_tables
+    from .files.hdf5 import write_tables
     from . import __version__
 
     waveforms = result.waveforms
@@ -197,7 +196,7 @@ class _WithoutRead:
 
 
 def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
-    """:func:`tengfield._files.write_figure` (drawn here or sent to ``figures``)."""
+    """:func:`tengfield.files.write_figure` (drawn here or sent to ``figures``)."""
     return write_figure(function, *data, path=path, figures=figures, **kwargs)
 
 
@@ -256,61 +255,6 @@ def _same_times(result) -> bool:
         return True
     a, b = np.asarray(a), np.asarray(b)
     return a is b or (a.shape == b.shape and bool(np.array_equal(a, b)))
-
-
-# ---------------------------------------------------------------------------
-# tengfield sweep
-def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
-    """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty)."""
-    from .sweep import SWEEP_COLUMNS
-
-    return write_rows(path, SWEEP_COLUMNS, (["" if row.get(k) is None else row[k]
-                                             for k in SWEEP_COLUMNS] for row in rows))
-
-
-# ---------------------------------------------------------------------------
-# tengfield report
-REPORT_COLUMNS = ["stage", "setting", "wall_time_s", "error_max", "error_V_oc", "error_Q_sc",
-                  "error_I_sc", "error_P_load", "error_V_load", "error_position", "knobs",
-                  "reference", "note"]
-
-
-def format_number(x) -> str:
-    """4 significant digits; empty for None, NaN and inf."""
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return ""
-    return f"{x:.4g}"
-
-
-def report_row_record(row) -> dict:
-    """A CSV/JSON record of one :class:`tengfield.report.Row`."""
-    rec = {"stage": row.stage, "setting": row.setting, "wall_time_s": row.wall_time_s,
-           "error_max": row.error, "error_position": row.error_position,
-           "knobs": json.dumps(row.knobs, sort_keys=True), "reference": row.reference,
-           "note": row.note}
-    for q in ("V_oc", "Q_sc", "I_sc", "P_load", "V_load"):
-        rec[f"error_{q}"] = row.errors.get(q, math.nan)
-    return rec
-
-
-def write_report_csv(path: str | Path, report) -> Path:
-    """``report.csv``: one line per measured row of a :class:`tengfield.report.Report`."""
-    records = (report_row_record(row) for row in report.rows)
-    return write_rows(path, REPORT_COLUMNS, ([format_number(v) if isinstance(v, float) else v
-                                              for v in (rec[k] for k in REPORT_COLUMNS)]
-                                             for rec in records))
-
-
-def write_report_json(path: str | Path, report) -> Path:
-    """``report.json``: rows (with knobs and errors), references and recommendations."""
-    import dataclasses
-
-    data = {"scene": report.scene.source, "fast": report.fast, "wall_time_s": report.wall_time_s,
-            "references": report.references, "trajectory": report.trajectory,
-            "rows": [report_row_record(r) | {"knobs": r.knobs, "errors": r.errors}
-                     for r in report.rows],
-            "recommendations": [dataclasses.asdict(r) for r in report.recommendations]}
-    return write_json(path, data)
 
 
 # ---------------------------------------------------------------------------

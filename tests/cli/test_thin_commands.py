@@ -1,6 +1,6 @@
 """The CLI commands are thin (issue #41): parse, call the verb, ``result.write(...)``.
 No ``commands/*.py`` calls a file writer of its own (a ``write_*`` function of
-``io``, ``_files`` or a package's ``output`` module): the files a command writes are
+``io``, ``files`` or a package's ``output`` module): the files a command writes are
 the ones its result's ``.write`` writes from Python."""
 from __future__ import annotations
 

@@ -12,7 +12,7 @@ import pytest
 
 from tengfield import _mpi, cli
 from tengfield.plotting.process import Drawing, FigureProcess
-from tengfield.outputs import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
+from tengfield.files.directory import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
 
 
 def snapshot(directory: Path) -> dict[str, str]:

@@ -10,7 +10,7 @@ from pathlib import Path
 from .band import scene_band
 from .charge import obtain_breakdown_table, scene_breakdown, scene_sigma, uses_breakdown_charge
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
-from .._files import figure_file
+from ..files import figure_file
 
 def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     """What ``tengfield breakdown`` prints (with ``band``: σ_max over the γ range and one
@@ -41,7 +41,7 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
     (with ``band``: breakdown.json's ``band`` and its panel in the figure)."""
     from pathlib import Path
 
-    from .._files import atomic_path, write_csv, write_json
+    from ..files import atomic_path, write_csv, write_figure, write_json
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -66,9 +66,8 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
             drawn = -result.sigma_max
             title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
                      f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
-        with atomic_path(out / figure_file("breakdown")) as tmp:
-            plot_breakdown(result, drawn, tmp, title=title, band=band)
-        written.append(out / figure_file("breakdown"))
+        written.append(write_figure(plot_breakdown, result, drawn, title=title, band=band,
+                                    path=out / figure_file("breakdown")))
     return written
 
 

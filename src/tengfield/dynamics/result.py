@@ -131,7 +131,7 @@ class DynamicsResult:
         its ``finish()``), as the CLI passes."""
         from pathlib import Path
 
-        from .._files import write_json
+        from ..files import write_json
         from .output import write_dynamics_files
 
         out = Path(out_dir)

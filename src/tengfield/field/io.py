@@ -24,7 +24,7 @@ def field_json(result, reference: str, potentials=None) -> dict:
 
 def write_field_json(path, result, reference: str, potentials=None) -> None:
     """Write :func:`field_json` to ``path`` (call on one rank; atomic, strict JSON)."""
-    from .._files import write_json
+    from ..files import write_json
 
     write_json(path, field_json(result, reference, potentials))
 
@@ -91,7 +91,7 @@ def _draw_position(result, path, reference: str, potentials) -> None:
 
 def figure_window(size: tuple[int, int]) -> tuple[int, int]:
     """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``."""
-    from .._files import figure_dpi
+    from ..files import figure_dpi
 
     scale = figure_dpi(120.0) / 120.0
     return tuple(max(200, round(n * scale)) for n in size)

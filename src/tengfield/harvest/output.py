@@ -1,12 +1,12 @@
 """The figures of a rectifier's store and of an ``[array]``: charging.png
 (:class:`~tengfield.harvest.HarvestResult`) and array.png
 (:class:`~tengfield.array.ArrayResult`), as ``tengfield run`` draws them; every file
-through :mod:`tengfield._files`."""
+through :mod:`tengfield.files`."""
 from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import figure_file, write_figure
+from ..files import figure_file, write_figure
 
 
 def _scene_of(result, scene):

@@ -22,21 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from .. import lumped, terminals
-from ..errors import TengfieldError
+from ..errors import SurrogateError, TengfieldError  # noqa: F401 - its home was here
 from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
-
-
-class SurrogateError(TengfieldError, RuntimeError):
-    """A surrogate file is missing, partial, corrupt or for another scene.
-
-    ``path`` (if any) names the file and ``reason`` says what is wrong with it
-    (the message without the path).
-    """
-
-    def __init__(self, message: str, *, path=None, reason: str | None = None):
-        super().__init__(message)
-        self.path = None if path is None else str(path)
-        self.reason = reason if reason is not None else message
 
 
 #: the per-position arrays of a table (all of length ``count``)
