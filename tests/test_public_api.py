@@ -264,7 +264,7 @@ def test_harvest_and_array_write_what_the_run_command_writes(tmp_path, cached, r
     scene = tf.load_scene(path)
     obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)   # the CLI's surrogate
     result = tf.run(scene, cache_dir=cached)
-    fine, array = result.extras["_fine"], result.extras["_array"]
+    fine, array = result.harvest, result.array
     assert fine.scene is scene and array.scene is scene
     assert [p.name for p in fine.write(tmp_path / "harvest")] == ["charging.png"]
     assert [p.name for p in array.write(tmp_path / "array")] == ["array.png"]

@@ -4,10 +4,11 @@
   plots of ``tengfield run`` (:func:`write_run_outputs`);
 * ``trajectory.csv``, ``impacts.csv`` (3D: ``contacts.csv``) and the trajectory
   figures of the dynamics (:func:`write_dynamics_files`);
-* ``map.csv`` (:func:`write_map_csv`, from :mod:`tengfield.dynamics.output`).
+* ``map.csv`` (:func:`write_map_csv`, from :mod:`tengfield.dynamics.output`),
+  ``sweep.csv`` (:func:`write_sweep_csv`, :mod:`tengfield.sweep`'s, handed on).
 
-sweep.csv is written by ``SweepResult.write`` (:mod:`tengfield.sweep`), report.csv
-and report.json by :mod:`tengfield.report.output`: each result's files beside it.
+* ``report.csv`` and ``report.json`` (:func:`write_report_csv`,
+  :func:`write_report_json`; the report's other files: :mod:`tengfield.report.output`).
 
 Numbers are SI with the unit in the column name. The time column of
 ``waveforms.csv`` is written with 17 significant digits (``%.17g``, exact
@@ -26,6 +27,7 @@ atomically.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -255,6 +257,61 @@ def _same_times(result) -> bool:
         return True
     a, b = np.asarray(a), np.asarray(b)
     return a is b or (a.shape == b.shape and bool(np.array_equal(a, b)))
+
+
+# ---------------------------------------------------------------------------
+# tengfield sweep
+def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
+    """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty);
+    :func:`tengfield.sweep.write_sweep_csv`, the one writer ``SweepResult.write`` uses."""
+    from .sweep import write_sweep_csv as write
+
+    return write(path, rows)
+
+
+# ---------------------------------------------------------------------------
+# tengfield report
+REPORT_COLUMNS = ["stage", "setting", "wall_time_s", "error_max", "error_V_oc", "error_Q_sc",
+                  "error_I_sc", "error_P_load", "error_V_load", "error_position", "knobs",
+                  "reference", "note"]
+
+
+def format_number(x) -> str:
+    """4 significant digits; empty for None, NaN and inf."""
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return ""
+    return f"{x:.4g}"
+
+
+def report_row_record(row) -> dict:
+    """A CSV/JSON record of one :class:`tengfield.report.Row`."""
+    rec = {"stage": row.stage, "setting": row.setting, "wall_time_s": row.wall_time_s,
+           "error_max": row.error, "error_position": row.error_position,
+           "knobs": json.dumps(row.knobs, sort_keys=True), "reference": row.reference,
+           "note": row.note}
+    for q in ("V_oc", "Q_sc", "I_sc", "P_load", "V_load"):
+        rec[f"error_{q}"] = row.errors.get(q, math.nan)
+    return rec
+
+
+def write_report_csv(path: str | Path, report) -> Path:
+    """``report.csv``: one line per measured row of a :class:`tengfield.report.Report`."""
+    records = (report_row_record(row) for row in report.rows)
+    return write_rows(path, REPORT_COLUMNS, ([format_number(v) if isinstance(v, float) else v
+                                              for v in (rec[k] for k in REPORT_COLUMNS)]
+                                             for rec in records))
+
+
+def write_report_json(path: str | Path, report) -> Path:
+    """``report.json``: rows (with knobs and errors), references and recommendations."""
+    import dataclasses
+
+    data = {"scene": report.scene.source, "fast": report.fast, "wall_time_s": report.wall_time_s,
+            "references": report.references, "trajectory": report.trajectory,
+            "rows": [report_row_record(r) | {"knobs": r.knobs, "errors": r.errors}
+                     for r in report.rows],
+            "recommendations": [dataclasses.asdict(r) for r in report.recommendations]}
+    return write_json(path, data)
 
 
 # ---------------------------------------------------------------------------

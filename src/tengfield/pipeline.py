@@ -94,6 +94,18 @@ class RunResult:
     I_sc = _column("I_sc_A", "Short-circuit current [A], lower -> upper through the circuit.")
 
     @property
+    def harvest(self):
+        """The rectifier's store record (:class:`tengfield.harvest.HarvestResult`, its
+        ``.write`` gives charging.png), or None without a rectifier."""
+        return self.extras.get("_fine")
+
+    @property
+    def array(self):
+        """The ``[array]``'s :class:`tengfield.array.ArrayResult` (its ``.write`` gives
+        array.png), or None without an array."""
+        return self.extras.get("_array")
+
+    @property
     def peak_to_peak(self) -> dict[str, float]:
         """Peak-to-peak values (the same dict as ``peaks``)."""
         return self.peaks

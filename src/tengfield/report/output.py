@@ -2,66 +2,19 @@
 
 Kept apart from :mod:`tengfield.report.study` and the modules it runs (the
 measurement: ``plan``, ``stages``, ``recommend``) so that the
-measurement stays free of I/O and plotting; report.csv and report.json here too
-(:func:`write_report_csv`, :func:`write_report_json`). Every file through
-:mod:`tengfield.files`.
+measurement stays free of I/O and plotting; report.csv and report.json are
+written by :mod:`tengfield.io`. Every file through :mod:`tengfield.files`.
 """
 from __future__ import annotations
 
-import json
-import math
 from pathlib import Path
 
-from ..files import (figure_file, scene_dir, scene_toml, toml_value, write_figure, write_json,
-                     write_rows, write_text)
+from ..files import figure_file, scene_dir, scene_toml, toml_value, write_figure, write_text
+from ..io import format_number as _num
+from ..io import write_report_csv, write_report_json
 from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
                    error_words)
 
-
-REPORT_COLUMNS = ["stage", "setting", "wall_time_s", "error_max", "error_V_oc", "error_Q_sc",
-                  "error_I_sc", "error_P_load", "error_V_load", "error_position", "knobs",
-                  "reference", "note"]
-
-
-def format_number(x) -> str:
-    """4 significant digits; empty for None, NaN and inf."""
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return ""
-    return f"{x:.4g}"
-
-
-def report_row_record(row) -> dict:
-    """A CSV/JSON record of one :class:`tengfield.report.Row`."""
-    rec = {"stage": row.stage, "setting": row.setting, "wall_time_s": row.wall_time_s,
-           "error_max": row.error, "error_position": row.error_position,
-           "knobs": json.dumps(row.knobs, sort_keys=True), "reference": row.reference,
-           "note": row.note}
-    for q in ("V_oc", "Q_sc", "I_sc", "P_load", "V_load"):
-        rec[f"error_{q}"] = row.errors.get(q, math.nan)
-    return rec
-
-
-def write_report_csv(path: str | Path, report) -> Path:
-    """``report.csv``: one line per measured row of a :class:`tengfield.report.Report`."""
-    records = (report_row_record(row) for row in report.rows)
-    return write_rows(path, REPORT_COLUMNS, ([format_number(v) if isinstance(v, float) else v
-                                              for v in (rec[k] for k in REPORT_COLUMNS)]
-                                             for rec in records))
-
-
-def write_report_json(path: str | Path, report) -> Path:
-    """``report.json``: rows (with knobs and errors), references and recommendations."""
-    import dataclasses
-
-    data = {"scene": report.scene.source, "fast": report.fast, "wall_time_s": report.wall_time_s,
-            "references": report.references, "trajectory": report.trajectory,
-            "rows": [report_row_record(r) | {"knobs": r.knobs, "errors": r.errors}
-                     for r in report.rows],
-            "recommendations": [dataclasses.asdict(r) for r in report.recommendations]}
-    return write_json(path, data)
-
-
-_num = format_number
 
 
 def scene_text(scene, sections: dict, header: str) -> str:

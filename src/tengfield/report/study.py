@@ -71,7 +71,7 @@ class Report:
         import tempfile
         from pathlib import Path
 
-        from .output import write_report_json
+        from ..io import write_report_json
 
         with tempfile.TemporaryDirectory() as tmp:
             path = write_report_json(Path(tmp) / "report.json", self)
