@@ -217,6 +217,9 @@ def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
     from tengfield.surrogate import obtain_table
 
     table, _ = obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)
+    assert table.scene is scene
+    assert [p.name for p in table.write(tmp_path / "table", plots=False)] == ["surrogate.h5"]
+    assert sorted(p.name for p in (tmp_path / "table").iterdir()) == ["surrogate.h5"]
     summary = table.summary
     json.dumps(summary, allow_nan=True)
     assert summary["positions_m"] == pytest.approx(list(table.positions))
