@@ -9,7 +9,7 @@ import warnings
 
 import numpy as np
 import plate_model as fx
-from helpers import assert_labelled
+from helpers import assert_labelled, assert_png
 import pytest
 from matplotlib.figure import Figure
 
@@ -117,17 +117,24 @@ def test_breakdown_face_and_cli_files(tmp_path, run_cli):
     assert_same_files(tmp_path / "api", tmp_path / "cli")
 
 
-def assert_same_files(a, b, timing=()):
+def assert_same_files(a, b, timing=(), *, summary_timing=False, binary=()):
     """The same result files (the CLI's own dot-files: its lock, manifest and command line
-    aside); CSV and JSON files with the same bytes (JSON: apart from the ``timing`` keys)."""
+    aside); CSV and JSON files with the same bytes (JSON: apart from the ``timing`` keys;
+    ``summary_timing``: apart from every ``*wall_time*`` key at any depth); the files named
+    in ``binary`` with the same size."""
     def results(d):
         return sorted(p.name for p in d.iterdir() if not p.name.startswith("."))
 
     names = results(a)
     assert names == results(b)
     for name in names:
-        if name.endswith(".csv"):
+        if name in binary:
+            assert (a / name).stat().st_size == (b / name).stat().st_size, name
+        elif name.endswith(".csv"):
             assert (a / name).read_bytes() == (b / name).read_bytes(), name
+        elif name.endswith(".json") and summary_timing:
+            left, right = (json.loads((d / name).read_text()) for d in (a, b))
+            assert _without_wall_times(left) == _without_wall_times(right), name
         elif name.endswith(".json"):
             if not timing:
                 assert (a / name).read_bytes() == (b / name).read_bytes(), name
@@ -220,6 +227,9 @@ def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
     from tengfield.surrogate import obtain_table
 
     table, _ = obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)
+    assert table.scene is scene
+    assert [p.name for p in table.write(tmp_path / "table", plots=False)] == ["surrogate.h5"]
+    assert sorted(p.name for p in (tmp_path / "table").iterdir()) == ["surrogate.h5"]
     summary = table.summary
     json.dumps(summary, allow_nan=True)
     assert summary["positions_m"] == pytest.approx(list(table.positions))
@@ -230,8 +240,12 @@ def test_surrogate_table_and_field_position_face(scene, cached, tmp_path):
     position = fx.plate_model_solve(scene, 1e-3)
     face = position.summary
     assert face == position.to_json()
-    written = position.write(tmp_path / "field")
+    written = position.write(tmp_path / "field", plots=False)
+    assert [p.name for p in written] == ["field.json"]
     assert json.loads(written[0].read_text())["position_m"] == pytest.approx(1e-3)
+    with pytest.raises(ValueError, match="keep_solution=True"):   # no solution, no figures
+        position.write(tmp_path / "figures")
+    assert not (tmp_path / "figures").exists()                     # nothing half written
 
 
 def test_fit_face(cached, tmp_path):
@@ -248,3 +262,92 @@ def test_fit_face(cached, tmp_path):
     written = json.loads((tmp_path / "out" / "fit.json").read_text())
     assert written.pop("scene") == scene.source
     assert written.keys() == summary.keys()
+
+
+def test_harvest_and_array_write_what_the_run_command_writes(tmp_path, cached, run_cli):
+    """A rectifier [array] run: its store record writes charging.png and the array
+    array.png through the writers the CLI's run uses; the run's files are the CLI's, the
+    CSV bytes equal (summary.json apart from the wall times)."""
+    from tengfield.surrogate import obtain_table
+
+    path = tmp_path / "scene.toml"
+    path.write_text("[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 4000.0\n"
+                    "[circuit]\nkind = \"rectifier\"\nstorage_capacitance_uF = 1e-4\n"
+                    "[array]\ncells = 3\ninitial_phase_spread_deg = 60.0\nseed = 3\n")
+    scene = tf.load_scene(path)
+    obtain_table(scene, cache_dir=cached, solve=fx.plate_model_solve)   # the CLI's surrogate
+    result = tf.run(scene, cache_dir=cached)
+    fine, array = result.harvest, result.array
+    assert fine.scene is scene and array.scene is scene
+    assert [p.name for p in fine.write(tmp_path / "harvest")] == ["charging.png"]
+    assert [p.name for p in array.write(tmp_path / "array")] == ["array.png"]
+    assert fine.write(tmp_path / "none", plots=False) == []
+    assert_png(tmp_path / "harvest" / "charging.png")
+    assert_png(tmp_path / "array" / "array.png")
+    with pytest.raises(ValueError, match="needs its scene"):
+        import dataclasses
+        dataclasses.replace(fine, scene=None).write(tmp_path / "orphan")
+    result.write(tmp_path / "api")
+    done = run_cli("run", path, "--cache-dir", cached, "-o", tmp_path / "cli")
+    assert done.returncode == 0, done.stderr
+    names = {p.name for p in (tmp_path / "cli").iterdir()}
+    assert {"charging.png", "array.png"} <= names
+    assert (tmp_path / "api" / "waveforms.csv").read_bytes() == \
+        (tmp_path / "cli" / "waveforms.csv").read_bytes()
+    assert_same_files(tmp_path / "api", tmp_path / "cli", summary_timing=True)
+
+
+def _without_wall_times(data):
+    """``data`` without its timings (``*wall_time*``, ``*solve_time*``: they differ run to
+    run)."""
+    if isinstance(data, dict):
+        return {k: _without_wall_times(v) for k, v in data.items()
+                if "wall_time" not in k and "solve_time" not in k}
+    if isinstance(data, list):
+        return [_without_wall_times(v) for v in data]
+    return data
+
+
+@pytest.mark.field
+def test_surrogate_table_write_is_what_precompute_and_run_write(tmp_path, run_cli):
+    """``SurrogateTable.write``: surrogate.h5 with the numbers ``tengfield precompute -o``
+    writes (a coarse P1 field) and surrogate.png."""
+    from tengfield.surrogate import read_table
+
+    path = tmp_path / "scene.toml"
+    path.write_text(fx.SMALL_SCENE)
+    cli_file = tmp_path / "cli" / "surrogate.h5"
+    done = run_cli("precompute", path, "-o", cli_file)
+    assert done.returncode == 0, done.stderr
+    table = read_table(cli_file)
+    table.scene = tf.load_scene(path)
+    written = table.write(tmp_path / "api")
+    assert [p.name for p in written] == ["surrogate.h5", "surrogate.png"]
+    assert_png(written[1])
+    again = read_table(written[0], expected_hash=table.scene.field_hash())
+    for name in ("positions", "capacitance", "induced_charge", "wall_time"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(table, name), err_msg=name)
+    assert again.provenance == table.provenance
+
+
+@pytest.mark.field
+def test_field_position_write_is_what_the_field_command_writes(tmp_path, run_cli):
+    """``OpenCircuit.write`` / ``PositionResult.write``: field.json, potential.xdmf (+ .h5)
+    and field.png, as ``tengfield field`` writes them (coarse P1 mesh)."""
+    import pyvista  # noqa: F401 - before dolfinx, as the CLI does
+    from mpi4py import MPI
+
+    from tengfield.field import open_circuit
+
+    path = tmp_path / "scene.toml"
+    path.write_text("[field]\nmesh_size_mm = 1.5\ndegree = 1\n")
+    done = run_cli("field", path, "--position-mm", "1.5", "-o", tmp_path / "cli")
+    assert done.returncode == 0, done.stderr
+    state = open_circuit(tf.load_scene(path), 1.5e-3, comm=MPI.COMM_SELF, keep_solution=True)
+    assert state.result.scene.source == tf.load_scene(path).source
+    written = state.write(tmp_path / "api")
+    assert [p.name for p in written] == ["field.json", "potential.xdmf", "field.png"]
+    assert_png(tmp_path / "api" / "field.png")
+    assert state.summary == json.loads((tmp_path / "api" / "field.json").read_text())
+    assert_same_files(tmp_path / "api", tmp_path / "cli", summary_timing=True,
+                      binary=("potential.h5",))

@@ -40,6 +40,7 @@ import os
 import sys
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -191,6 +192,8 @@ class ArrayResult:
     peaks: dict = field(default_factory=dict)
     #: peak max |x| of the same quantities over the same instants
     peak: dict = field(default_factory=dict)
+    #: the scene run (set by :func:`run_array`), else None
+    scene: Any = field(default=None, repr=False, compare=False)
 
     @property
     def t(self) -> np.ndarray:
@@ -202,6 +205,13 @@ class ArrayResult:
         from .plotting.harvest import array_figure
 
         return array_figure(self, self.summary)
+
+    def write(self, out_dir, plots: bool = True, *, title: str = "") -> list:
+        """Write what ``tengfield run`` writes of the array beside the run's tables:
+        array.png (with ``plots``); returns the paths."""
+        from .harvest.output import write_array_files
+
+        return write_array_files(self, out_dir, plots=plots, title=title)
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
@@ -264,7 +274,7 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                        phases_deg=relative, period=scene.excitation.period,
                        summary=result["summary"], fine=result.get("fine"),
                        load=result.get("load"), peaks=result["peaks"]["peak_to_peak"],
-                       peak=result["peaks"]["peak"])
+                       peak=result["peaks"]["peak"], scene=scene)
 
 
 class _Sampled:

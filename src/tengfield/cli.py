@@ -7,7 +7,7 @@ handlers, so ``tengfield dynamics`` never loads dolfinx or gmsh.
 What every command gets from here, without code of its own:
 
 * ``-o DIR`` is created/checked before any computation and written
-  all-or-nothing through :class:`tengfield.outputs.StagedOutput` (``-o FILE``:
+  all-or-nothing through :class:`tengfield.files.directory.StagedOutput` (``-o FILE``:
   its directory is checked);
 * ``--jobs`` is bounded to ``[1, 4 x cores]``;
 * bad input (:class:`~tengfield.errors.TengfieldError`) is one line
@@ -95,7 +95,7 @@ def _apply_settings(args) -> None:
     them applied, checked as the same keys in the file (raises SceneError); ``--dpi``
     and ``--figure-format``: how every figure of the command is saved (checked here,
     before any output exists; reset by every call)."""
-    from ._files import set_figure_dpi, set_figure_format
+    from .files import set_figure_dpi, set_figure_format
 
     try:
         set_figure_dpi(getattr(args, "dpi", None))
@@ -194,13 +194,13 @@ def _run_command(parser: argparse.ArgumentParser, args) -> int:
     target = getattr(args, action.dest, None) if action is not None else None
     if target is None:
         return int(args.func(args) or 0)
-    from .outputs import StagedOutput, ensure_file_parent
+    from .files.directory import StagedOutput, ensure_file_parent
 
     option = action.option_strings[0]
     if action.metavar == "FILE":
         ensure_file_parent(target, option)
         return int(args.func(args) or 0)
-    from ._files import record_command, refuse_another_commands_directory
+    from .files.directory import record_command, refuse_another_commands_directory
 
     refuse_another_commands_directory(target, args.command, option)
     staged = StagedOutput(target, option=option)
@@ -538,7 +538,7 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
     if failed is not None:
         return failed.code
     if target is not None:
-        from .outputs import ensure_directory, ensure_file_parent
+        from .files.directory import ensure_directory, ensure_file_parent
 
         option = action.option_strings[0]
         try:   # every rank: a node-local path must exist where each rank looks
@@ -569,7 +569,7 @@ def _agreed_run(parser: argparse.ArgumentParser, argv, world) -> int:
     if not all_arrived(control, None if mine is None else FAILURE_GRACE_S):
         # the others are blocked in the command (waiting for this rank): say why, end all
         if isinstance(staged, _OnAnotherRank):   # rank 0, blocked, is killed
-            from .outputs import drop_staging
+            from .files.directory import drop_staging
             drop_staging(staged.staging, target, bool(created))
         elif staged is not None:
             staged.abort()
@@ -603,12 +603,12 @@ def _open_staging(control, args, action, created: bool):
     """Under mpirun: rank 0 opens -o DIR's staging directory (lock, recovery) and every
     rank writes into it (``args``' -o is set to it; rank 0 moves the set into place when
     every rank succeeded). Returns (rank 0's StagedOutput or None, the failed outcome)."""
-    from .outputs import StagedOutput
+    from .files.directory import StagedOutput
 
     staged, mine, where = None, None, None
     if control.rank == 0:
         try:
-            from ._files import record_command, refuse_another_commands_directory
+            from .files.directory import record_command, refuse_another_commands_directory
 
             refuse_another_commands_directory(getattr(args, action.dest), args.command,
                                               action.option_strings[0])

@@ -59,3 +59,16 @@ def same_name_in_file(name: str, header) -> str:
     by_fold = {folded(c): c for c in plain}
     close = difflib.get_close_matches(folded(name), list(by_fold), n=1, cutoff=0.8)
     return f" (did you mean {by_fold[close[0]]!r}?)" if close and folded(name) else ""
+
+
+class SurrogateError(TengfieldError, RuntimeError):
+    """A surrogate file is missing, partial, corrupt or for another scene.
+
+    ``path`` (if any) names the file and ``reason`` says what is wrong with it
+    (the message without the path).
+    """
+
+    def __init__(self, message: str, *, path=None, reason: str | None = None):
+        super().__init__(message)
+        self.path = None if path is None else str(path)
+        self.reason = reason if reason is not None else message

@@ -4,9 +4,11 @@
   plots of ``tengfield run`` (:func:`write_run_outputs`);
 * ``trajectory.csv``, ``impacts.csv`` (3D: ``contacts.csv``) and the trajectory
   figures of the dynamics (:func:`write_dynamics_files`);
-* ``map.csv`` (:func:`write_map_csv`), ``sweep.csv`` (:func:`write_sweep_csv`);
+* ``map.csv`` (:func:`write_map_csv`, from :mod:`tengfield.dynamics.output`),
+  ``sweep.csv`` (:func:`write_sweep_csv`, :mod:`tengfield.sweep`'s, handed on).
+
 * ``report.csv`` and ``report.json`` (:func:`write_report_csv`,
-  :func:`write_report_json`).
+  :func:`write_report_json`; the report's other files: :mod:`tengfield.accuracy_report.output`).
 
 Numbers are SI with the unit in the column name. The time column of
 ``waveforms.csv`` is written with 17 significant digits (``%.17g``, exact
@@ -14,25 +16,24 @@ round trip) so that the samples of a long run stay distinct; the other
 waveform columns with 10. The dynamics files (1D and 3D trajectories,
 impacts, contacts) hold every double as its shortest round-trip decimal.
 
-How one file is written is :mod:`tengfield._files` (its :func:`atomic_path`,
+How one file is written is :mod:`tengfield.files` (its :func:`atomic_path`,
 :func:`writable_target`, :func:`write_csv` and :func:`write_json` are importable
 from here too): the tables of numbers (waveforms, dynamics, ensemble) by
 :func:`write_csv`, Apache Arrow's compiled writer, in place after
 :func:`writable_target` (inside the staging directory of ``-o DIR``); JSON,
-``map.csv``, ``sweep.csv`` and ``report.csv`` (:func:`~tengfield._files.write_rows`)
+``map.csv``, ``sweep.csv`` and ``report.csv`` (:func:`~tengfield.files.write_rows`)
 atomically.
 """
 from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 
 import numpy as np
 
-from ._files import (atomic_path, figure_file, writable_target, write_csv, write_json,
-                     write_rows)
+from .files import (atomic_path, figure_file, writable_target, write_csv,  # noqa: F401
+                     write_figure, write_json, write_rows)
 from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
 from .plotting.waveforms import run_title
 from .dynamics.output import (EXTRA_COLUMNS, MAP_COLUMNS, _trajectory_without,  # noqa: F401
@@ -78,7 +79,7 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
     out.mkdir(parents=True, exist_ok=True)
     written = []
     if plots:
-        from .plotting.waveforms import plot_surrogate, plot_waveforms, visited_positions
+        from .plotting.waveforms import plot_waveforms, visited_positions
         shown = 5.0 * result.scene.excitation.period       # the last 5 periods, readable
         # a streamed run (tengfield.electrical.stream) kept them: its columns are not held
         source = getattr(result.waveforms, "tail", None) or result.waveforms
@@ -97,10 +98,11 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
                 title=run_title(result) + ", whole run: min/max per time bin",
                 parallel_capacitance_pF=result.scene.circuit.parallel_capacitance * 1e12))
         if result.curves is not None:
-            written.append(_figure(figures, plot_surrogate, result.table, result.curves,
-                                   path=out / figure_file("surrogate"), cells=result.scene.device.cells,
-                                   visited=visited_positions(result.dynamics),
-                                   error_estimate=result.summary.get("surrogate_error_estimate")))
+            from .surrogate.output import write_surrogate_figure
+            written.append(write_surrogate_figure(
+                result.table, result.curves, out, cells=result.scene.device.cells,
+                visited=visited_positions(result.dynamics), figures=figures,
+                error_estimate=result.summary.get("surrogate_error_estimate")))
         written += write_harvest_plots(result, out, figures=figures)
     rows = (getattr(result, "extras", None) or {}).get("ensemble_rows")
     if rows:
@@ -127,9 +129,9 @@ def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
 def run_tables_format(result, *, warn: bool = False) -> str:
     """``"hdf5"`` (one run.h5 holding waveforms, trajectory and impacts) if ``[run]
     output_format = "hdf5"`` or the run has more samples than a CSV table may
-    (:data:`tengfield.io_hdf5.MAX_CSV_ROWS`; with ``warn``, one warning says so), else
+    (:data:`tengfield.files.hdf5.MAX_CSV_ROWS`; with ``warn``, one warning says so), else
     ``"csv"``."""
-    from .io_hdf5 import MAX_CSV_ROWS
+    from .files.hdf5 import MAX_CSV_ROWS
 
     if result.scene.run.output_format == "hdf5":
         return "hdf5"
@@ -145,7 +147,7 @@ def run_tables_format(result, *, warn: bool = False) -> str:
     return "csv"
 
 
-#: the HDF5 file of ``[run] output_format = "hdf5"`` (tengfield.io_hdf5)
+#: the HDF5 file of ``[run] output_format = "hdf5"`` (tengfield.files.hdf5)
 HDF5_FILE = "run.h5"
 
 
@@ -154,9 +156,9 @@ def write_run_hdf5(path: str | Path, result) -> Path:
     columns of waveforms.csv), ``trajectory`` (the dynamics' columns; those equal to a
     waveform column are hard links to it), ``impacts`` (3D: and ``contacts``), every
     column with its ``units``; summary.json and the scene text as file attributes
-    (:mod:`tengfield.io_hdf5`)."""
+    (:mod:`tengfield.files.hdf5`)."""
     from ._json import jsonable
-    from .io_hdf5 import write_tables
+    from .files.hdf5 import write_tables
     from . import __version__
 
     waveforms = result.waveforms
@@ -196,36 +198,31 @@ class _WithoutRead:
 
 
 def _figure(figures, function, *data, path: Path, **kwargs) -> Path:
-    """Draw ``function(*data, path, **kwargs)`` here, or send it to ``figures``; returns
-    ``path``."""
-    writable_target(path)
-    if figures is None:      # atomically: a full disk leaves no 0-byte figure behind
-        with atomic_path(path) as tmp:
-            function(*data, tmp, **kwargs)
-    else:
-        figures.draw(function, *data, path, **kwargs)
-    return Path(path)
+    """:func:`tengfield.files.write_figure` (drawn here or sent to ``figures``)."""
+    return write_figure(function, *data, path=path, figures=figures, **kwargs)
 
 
 def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
     """charging.png (rectifier), vq.png (load or rectifier) and array.png (an
     ``[array]`` run) of a :class:`tengfield.pipeline.RunResult`, where they apply
-    (``figures``: as for :func:`write_run_outputs`)."""
+    (``figures``: as for :func:`write_run_outputs`): the store record's and the array's
+    through the writers their own ``.write`` calls (:mod:`tengfield.harvest.output`)."""
+    from .harvest.output import write_array_figure, write_charging_figure
     from .plotting import harvest as hp
 
     extras = getattr(result, "extras", {}) or {}
     written = []
     if extras.get("_fine") is not None:
-        written.append(_figure(figures, hp.plot_charging, extras["_fine"], result.scene,
-                               path=out / figure_file("charging"), title=run_title(result)))
+        written.append(write_charging_figure(extras["_fine"], out, scene=result.scene,
+                                             title=run_title(result), figures=figures))
     if extras.get("_vq"):
         written.append(_figure(figures, hp.plot_vq, extras["_vq"],
                                result.summary.get("energy_per_cycle", {}), path=out / figure_file("vq"),
                                title=run_title(result)))
     if extras.get("_array") is not None:
-        written.append(_figure(figures, hp.plot_array, extras["_array"],
-                               result.summary.get("array", {}), path=out / figure_file("array"),
-                               title=run_title(result)))
+        written.append(write_array_figure(extras["_array"], out,
+                                          summary=result.summary.get("array", {}),
+                                          title=run_title(result), figures=figures))
     return written
 
 
@@ -265,11 +262,11 @@ def _same_times(result) -> bool:
 # ---------------------------------------------------------------------------
 # tengfield sweep
 def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
-    """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty)."""
-    from .sweep import SWEEP_COLUMNS
+    """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty);
+    :func:`tengfield.sweep.write_sweep_csv`, the one writer ``SweepResult.write`` uses."""
+    from .sweep import write_sweep_csv as write
 
-    return write_rows(path, SWEEP_COLUMNS, (["" if row.get(k) is None else row[k]
-                                             for k in SWEEP_COLUMNS] for row in rows))
+    return write(path, rows)
 
 
 # ---------------------------------------------------------------------------

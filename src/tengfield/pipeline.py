@@ -95,6 +95,18 @@ class RunResult:
     I_sc = _column("I_sc_A", "Short-circuit current [A], lower -> upper through the circuit.")
 
     @property
+    def harvest(self):
+        """The rectifier's store record (:class:`tengfield.harvest.HarvestResult`, its
+        ``.write`` gives charging.png), or None without a rectifier."""
+        return self.extras.get("_fine")
+
+    @property
+    def array(self):
+        """The ``[array]``'s :class:`tengfield.array.ArrayResult` (its ``.write`` gives
+        array.png), or None without an array."""
+        return self.extras.get("_array")
+
+    @property
     def peak_to_peak(self) -> dict[str, float]:
         """Peak-to-peak values (the same dict as ``peaks``)."""
         return self.peaks
@@ -105,13 +117,23 @@ class RunResult:
         R || C_p); only with ``[circuit] parallel_capacitance_pF`` > 0 (else KeyError)."""
         return self.waveforms[electrical.READ_COLUMN]
 
-    def write(self, out_dir, plots: bool = True) -> list:
+    def write(self, out_dir, plots: bool = True, *, spice: bool = False,
+              figures=None) -> list:
         """Write what ``tengfield run -o out_dir`` writes (waveforms.csv, summary.json,
-        trajectory/impacts files and, with ``plots``, the PNGs); returns the paths."""
+        trajectory/impacts files and, with ``plots``, the PNGs; with ``spice`` teng.lib, as
+        ``--spice``); returns the paths. ``figures``: a
+        :class:`tengfield.plotting.process.FigureProcess` drawing the figures (complete
+        after its ``finish()``), as the CLI passes."""
         from .io import write_dynamics_outputs, write_run_outputs
 
-        written = write_run_outputs(self, out_dir, plots=plots)
-        return written + write_dynamics_outputs(self, out_dir, plots=plots)
+        written = write_run_outputs(self, out_dir, plots=plots, figures=figures)
+        written += write_dynamics_outputs(self, out_dir, plots=plots, figures=figures)
+        if spice:
+            from pathlib import Path
+
+            from .spice import export
+            written.append(export(self, Path(out_dir) / "teng.lib"))
+        return written
 
     def plot(self, *, last_periods: float | None = 5.0):
         """The waveforms figure (a matplotlib Figure; a notebook shows it): V_OC, Q_SC, I_SC
@@ -239,7 +261,7 @@ def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
     result = RunResult(scene=scene, waveforms=stage.waveforms, summary=summary,
                        dynamics=dynamics, table=table, curves=curves,
                        peaks=stage.peak_to_peak, stages=stages, peak=stage.peak)
-    result.extras = stage.extras
+    result.extras = _with_scene(stage.extras, scene)
     return result
 
 
@@ -483,8 +505,20 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
     result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
                        dynamics=dynamics, table=table, curves=curves, peaks=peaks,
                        stages=stages, peak=peak)
-    result.extras = {"_array": arr, "_fine": arr.fine}
+    result.extras = _with_scene({"_array": arr, "_fine": arr.fine}, scene)
     return result
+
+
+def _with_scene(extras: dict, scene) -> dict:
+    """``extras`` with the store record (``_fine``, a HarvestResult) knowing the scene it
+    ran with (its ``.scene``, which ``.write`` draws charging.png with)."""
+    import dataclasses
+
+    fine = extras.get("_fine")
+    if (dataclasses.is_dataclass(fine) and getattr(fine, "scene", False) is None
+            and "scene" in {f.name for f in dataclasses.fields(fine)}):
+        extras = {**extras, "_fine": dataclasses.replace(fine, scene=scene)}
+    return extras
 
 
 def _measured_comparison(summary, scene) -> None:

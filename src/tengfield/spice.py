@@ -116,7 +116,7 @@ def subcircuit(result, *, title: str = "") -> str:
 
 def export(result, path) -> Path:
     """Write the subcircuit ``teng`` of ``result`` to ``path`` (``teng.lib``); returns it."""
-    from ._files import write_text
+    from .files import write_text
 
     path = Path(path)
     write_text(path, subcircuit(result, title=str(getattr(getattr(result, "scene", None),

@@ -5,7 +5,7 @@ peak-to-peak values as ``tengfield run`` (:func:`tengfield.electrical.terminal_p
 steady window, samples and impact instants) and the mean power into each
 load; :func:`sweep` runs it over a frequency x amplitude grid in worker
 processes, or over the ranks of an MPI job (``mpirun -n N tengfield sweep``,
-:func:`run_tasks`). ``tengfield.io.write_sweep_csv`` writes the rows.
+:func:`run_tasks`). :func:`write_sweep_csv` writes the rows (sweep.csv).
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import numpy as np
 from . import electrical
 from ._json import regime_dict
 from .quantities import TERMINAL, column_name
-from ._files import figure_file
+from .files import figure_file
 
 #: the terminal statistics of a sweep row: (column, statistic, short name), names from
 #: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
@@ -552,23 +552,29 @@ class SweepResult(SweepRows):
         --vary; one ``sweep_<key>.png`` per varied key) in ``out_dir``; the paths written."""
         from pathlib import Path
 
-        from ._files import atomic_path, write_rows
+        from .files import write_figure
         from .plotting import save_figure
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        columns = self.columns
-        write_rows(out / "sweep.csv", columns, (["" if row.get(k) is None else row[k]
-                                                 for k in columns] for row in self))
-        written = [out / "sweep.csv"]
+        written = [write_sweep_csv(out / "sweep.csv", self, self.columns)]
         if plots:
             names = self.figure_names() if self.vary else {None: figure_file("sweep")}
             for key, name in names.items():
-                with atomic_path(out / name) as tmp:
-                    save_figure(self.plot(key), tmp, dpi=120)
-                written.append(out / name)
+                written.append(write_figure(save_figure, self.plot(key), dpi=120,
+                                            path=out / name))
         return written
 
+
+
+def write_sweep_csv(path, rows, columns=None):
+    """``sweep.csv``: ``columns`` (default :data:`SWEEP_COLUMNS`) of every row (None ->
+    an empty cell), atomically; returns the path."""
+    from .files import write_rows
+
+    columns = SWEEP_COLUMNS if columns is None else columns
+    return write_rows(path, columns, (["" if row.get(k) is None else row[k] for k in columns]
+                                      for row in rows))
 
 def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes=None,
                 loads=(), cache_dir=None, solve: Callable | None = None,

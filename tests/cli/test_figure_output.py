@@ -89,7 +89,7 @@ def test_an_unknown_format_is_one_line_and_writes_nothing(tmp_path, run_cli):
 
 
 def test_figure_names_follow_the_format():
-    from tengfield._files import figure_file, set_figure_format
+    from tengfield.files import figure_file, set_figure_format
 
     try:
         set_figure_format("PDF")

@@ -10,7 +10,7 @@ import pytest
 
 import tengfield as tf
 from tengfield import io as tio
-from tengfield import io_hdf5
+from tengfield.files import hdf5 as io_hdf5
 from tengfield.surrogate.store import _import_h5py
 
 import plate_model as fx

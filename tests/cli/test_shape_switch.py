@@ -60,7 +60,7 @@ def test_shell_keys_on_a_tube_are_named_in_one_warning(tmp_path, capsys):
 def test_a_tools_own_file_of_every_key_does_not_warn(tmp_path, capsys):
     """A file of every key at its default (report's recommended-*.toml, scene.to_dict())
     holds the shell's keys at their defaults: not a user's value, no warning."""
-    from tengfield._files import scene_toml
+    from tengfield.files import scene_toml
 
     path = tmp_path / "every.toml"
     path.write_text(scene_toml(load_scene(None).to_dict()))

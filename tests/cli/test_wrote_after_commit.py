@@ -7,7 +7,7 @@ import os
 
 import pytest
 
-from tengfield import outputs
+from tengfield.files import directory as outputs
 from tengfield.cli import main
 
 SHORT = "[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 2000\n"
@@ -57,7 +57,8 @@ def test_wrote_follows_the_move_and_names_the_files_there(tmp_path, capsys, monk
 
 DRIVER = '''
 import errno, sys
-from tengfield import cli, outputs
+from tengfield import cli
+from tengfield.files import directory as outputs
 from tengfield.commands import dynamics
 
 real_map = dynamics._run_map

@@ -213,7 +213,7 @@ def test_fitted_toml_of_a_recorded_excitation_runs_from_the_output_folder(tmp_pa
 
 
 def test_scene_toml_writes_file_keys_resolvable_from_anywhere(tmp_path):
-    from tengfield._files import scene_dir, scene_toml
+    from tengfield.files import scene_dir, scene_toml
     import tomllib
 
     base = tmp_path / "a" / "b"

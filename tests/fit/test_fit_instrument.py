@@ -64,7 +64,7 @@ def test_a_fitted_capacitance_is_written_as_the_instruments(given, tmp_path):
     import warnings
 
     from tengfield.fit.output import fitted_scene_dict
-    from tengfield._files import scene_toml
+    from tengfield.files import scene_toml
 
     scene = tf.default_scene().with_values(**given)
     result = types.SimpleNamespace(values={"parallel_capacitance_pF": 250.0})

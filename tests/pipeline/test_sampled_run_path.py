@@ -9,7 +9,7 @@ import pytest
 
 import tengfield as tf
 from tengfield import io as tio
-from tengfield import io_hdf5
+from tengfield.files import hdf5 as io_hdf5
 from tengfield.dynamics import columns
 from tengfield.electrical import stream
 

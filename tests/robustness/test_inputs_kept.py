@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from tengfield._files import note_input
-from tengfield.outputs import OutputError, StagedOutput
+from tengfield.files import note_input
+from tengfield.files.directory import OutputError, StagedOutput
 
 SHORT = "[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 2000\n"
 RECORDED = ('[excitation]\nkind = "recorded"\nfile = "trajectory.csv"\ntime_column = "time_s"\n'

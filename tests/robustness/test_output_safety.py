@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from tengfield import cli
-from tengfield.outputs import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
+from tengfield.files.directory import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
 
 
 def run_main(argv, capsys):
@@ -232,7 +232,7 @@ def test_kill_9_in_the_middle_of_the_move_is_rolled_back_next_time(tmp_path, cli
     script = textwrap.dedent(f"""
         import os, signal
         from pathlib import Path
-        from tengfield.outputs import StagedOutput
+        from tengfield.files.directory import StagedOutput
         real = os.replace
         def dying(src, dst, *a, **k):   # killed as the last new file goes into place
             if Path(dst) == Path({str(out / "c.txt")!r}):

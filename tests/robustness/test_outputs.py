@@ -12,7 +12,7 @@ import pytest
 
 from tengfield import _mpi, cli
 from tengfield.plotting.process import Drawing, FigureProcess
-from tengfield.outputs import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
+from tengfield.files.directory import LOCK_NAME, MANIFEST_NAME, STAGING_PREFIX, OutputError, StagedOutput
 
 
 def snapshot(directory: Path) -> dict[str, str]:
@@ -121,7 +121,7 @@ def test_a_full_disk_without_a_file_name_names_the_directory(tmp_path, short_sce
                                                              monkeypatch):
     """A write error that carries no file name (a PNG or JSON flushed onto a full disk:
     OSError(28) only) names the output directory, not nothing."""
-    import tengfield.io as writers
+    import tengfield.files as writers       # the one home of write_json (issue #41)
 
     out_dir = tmp_path / "out"
     assert run_main(["dynamics", short_scene, "-o", out_dir], capsys)[0] == 0

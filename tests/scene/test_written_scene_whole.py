@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tengfield._files import scene_toml
+from tengfield.files import scene_toml
 from tengfield.scene import load_scene, parse_scene
 from tengfield.scene.schema import SCHEMA
 

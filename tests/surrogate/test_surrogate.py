@@ -398,11 +398,11 @@ def test_unwritable_cache_warns_once_and_returns_the_table(tmp_path, monkeypatch
         cache_dir.mkdir()
         cache_dir.chmod(0o555)
         if os.geteuid() == 0:   # root writes anyway: the kernel's answer to others
-            from tengfield.surrogate import store
+            from tengfield.files import atomic
 
             def refuse(*args, **kwargs):
                 raise PermissionError(13, "Permission denied", str(cache_dir))
-            monkeypatch.setattr(store.tempfile, "mkstemp", refuse)
+            monkeypatch.setattr(atomic.tempfile, "mkstemp", refuse)
         named = surrogate.cache_path(scene, cache_dir)
     else:
         surrogate.cache_path(scene, cache_dir).mkdir(parents=True)

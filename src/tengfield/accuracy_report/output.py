@@ -3,18 +3,17 @@
 Kept apart from :mod:`tengfield.accuracy_report.study` and the modules it runs (the
 measurement: ``plan``, ``stages``, ``recommend``) so that the
 measurement stays free of I/O and plotting; report.csv and report.json are
-written by :mod:`tengfield.io`.
+written by :mod:`tengfield.io`. Every file through :mod:`tengfield.files`.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import atomic_path, scene_dir, scene_toml, toml_value, write_text
+from ..files import figure_file, scene_dir, scene_toml, toml_value, write_figure, write_text
 from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
 from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
                    error_words)
-from .._files import figure_file
 
 
 
@@ -115,9 +114,7 @@ def write_report(report, out_dir) -> list[Path]:
                write_report_json(out / "report.json", report)]
     images = {}
     for stage, fig in report.stage_figures().items():    # the figures a notebook gets
-        with atomic_path(out / figure_file(stage)) as tmp:
-            save_figure(fig, tmp, dpi=100)
-        images[stage] = out / figure_file(stage)
+        images[stage] = write_figure(save_figure, fig, dpi=100, path=out / figure_file(stage))
         written.append(images[stage])
     for rec in report.recommendations:
         path = out / f"recommended-{rec.target:g}.toml"

@@ -3,14 +3,15 @@ breakdown.csv and breakdown.png (the figure through :mod:`tengfield.plotting`)."
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+from typing import Any
 from pathlib import Path
 
 from .band import scene_band
 from .charge import (obtain_breakdown_table, scene_breakdown, scene_surface_charge,
                      uses_breakdown_charge)
 from .limit import CSV_COLUMNS, STATE_TEXT, BreakdownResult
-from .._files import figure_file
+from ..files import figure_file
 
 def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     """What ``tengfield breakdown`` prints (with ``band``: σ_max over the γ range and one
@@ -41,7 +42,7 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
     (with ``band``: breakdown.json's ``band`` and its panel in the figure)."""
     from pathlib import Path
 
-    from .._files import atomic_path, write_csv, write_json
+    from ..files import atomic_path, write_csv, write_figure, write_json
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -66,26 +67,34 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
             drawn = -result.sigma_max
             title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
                      f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
-        with atomic_path(out / figure_file("breakdown")) as tmp:
-            plot_breakdown(result, drawn, tmp, title=title, band=band)
-        written.append(out / figure_file("breakdown"))
+        written.append(write_figure(plot_breakdown, result, drawn, title=title, band=band,
+                                    path=out / figure_file("breakdown")))
     return written
 
 
 @dataclass
 class BreakdownStudy(BreakdownResult):
     """The :class:`BreakdownResult` of :func:`study`, with :meth:`write`."""
+    #: how the surrogate was obtained (:class:`tengfield.surrogate.CacheOutcome`)
+    field_outcome: Any = field(default=None, repr=False, compare=False)
 
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield breakdown -o out_dir`` writes (the band of the scene's
         own trajectory included); returns the paths."""
-        band = scene_band(self.scene, self)
-        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=band,
+        return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=self.band,
                              field_status=self.field_status)
+
+    @property
+    def band(self):
+        """The band of the charge along the scene's own trajectory (its dynamics run once,
+        on first use): breakdown.json's ``band``."""
+        if "_band" not in self.__dict__:
+            self.__dict__["_band"] = scene_band(self.scene, self)
+        return self.__dict__["_band"]
 
 
 def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = False,
-          solve=None) -> BreakdownStudy:
+          solve=None, command_line: str = "") -> BreakdownStudy:
     """``tf.breakdown(scene)``, ``tengfield breakdown`` from Python: the scene (a Scene, a
     scene file's path, or None: the default scene), its surrogate with breakdown lines
     (cached), :func:`scene_breakdown` (``states``: the circuit states checked, default
@@ -101,7 +110,8 @@ def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = Fal
     scene = load_scene(scene)
     check_field(scene)
     table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
-                                            progress=progress, solve=solve)
+                                            progress=progress, solve=solve,
+                                            command_line=command_line)
     result = scene_breakdown(scene, table, states)
     values = {f.name: getattr(result, f.name) for f in fields(result) if f.init}
-    return BreakdownStudy(**{**values, "field_status": outcome.status})
+    return BreakdownStudy(**{**values, "field_status": outcome.status, "field_outcome": outcome})

@@ -29,22 +29,17 @@ def _run(args) -> int:
     from pathlib import Path
 
     from .. import air_breakdown
-    from ..scene import check_field, load_scene
+    from ..scene import load_scene
 
-    scene = load_scene(args.scene)
-    check_field(scene)
     comm = world_if_parallel()
-    table, outcome = air_breakdown.obtain_breakdown_table(
-        scene, cache_dir=args.cache_dir, comm=comm, progress=True, command_line=command_line())
+    states = air_breakdown.STATES if args.states == "all" else None
+    result = air_breakdown.study(load_scene(args.scene), states=states, cache_dir=args.cache_dir,
+                                   comm=comm, progress=True, command_line=command_line())
     if comm is not None and comm.rank != 0:
         return 0
-    states = air_breakdown.STATES if args.states == "all" else None
-    result = air_breakdown.scene_breakdown(scene, table, states)
-    band = air_breakdown.scene_band(scene, result)   # the scene's own trajectory (dynamics)
-    out = Path(args.output)
-    written = air_breakdown.write_outputs(result, scene, out, plots=not args.no_plots,
-                                      field_status=outcome.status, band=band)
-    for line in air_breakdown.summary_lines(result, scene, band):
+    written = result.write(Path(args.output), plots=not args.no_plots)
+    scene, outcome = result.scene, result.field_outcome
+    for line in air_breakdown.summary_lines(result, scene, result.band):
         print(line)
     print(f"field: {outcome.status} ({outcome.wall_time:.2f} s), {outcome.path}")
     print("wrote " + ", ".join(str(p) for p in written))

@@ -54,7 +54,6 @@ def _run_dynamics(args) -> int:
 
 def _dynamics(args, figures) -> int:
     from ..dynamics import simulate
-    from ..io import write_dynamics_files, write_json
     from ..scene import load_scene
     from ..scene.limits import check_steady_window
 
@@ -70,11 +69,8 @@ def _dynamics(args, figures) -> int:
             raise SceneError(f"--duration-s = {number_text(args.duration_s)}: {exc}") from None
     result = simulate(scene)
     out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
-    summary = dict(result.summary)
-    summary["scene"] = scene.source
-    write_json(out / "summary.json", summary)
-    write_dynamics_files(result, scene, out, plots=not args.no_plots, figures=figures)
+    result.write(out, plots=not args.no_plots, figures=figures)
+    summary = result.summary
     if figures is not None:
         figures.finish()
     from ..dynamics.regime import regime_label

@@ -58,7 +58,7 @@ def _run(args) -> int:
     from mpi4py import MPI
 
     from ..errors import FieldError
-    from ..field import check_position, resolve_method
+    from ..field import check_position, resolve_method, solve_position
     from ..scene import load_scene
 
     comm = MPI.COMM_WORLD
@@ -88,27 +88,26 @@ def _run(args) -> int:
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     plot = not args.no_plot
-    serial = field_method(method).serial   # solved and drawn on rank 0, or by all ranks
-    if serial:
-        # a small problem: solved and drawn on rank 0, the outcome shared
-        result, potentials = _on_rank_zero(
+    if field_method(method).serial:
+        # a small problem: solved and written on rank 0, the outcome shared
+        result, potentials, written = _on_rank_zero(
             comm, lambda: _axisymmetric(scene, position, reference, out, plot=plot))
     else:
-        result, potentials = _three_d(scene, position, out, comm, plot=plot), None
+        result = solve_position(scene, position, comm=comm, method="3d", keep_solution=plot)
+        potentials = None
+        written = result.write(out, plots=plot, reference=reference)     # collective
+        result.solution = None
+        if plot and comm.size > 1 and comm.rank == 0:
+            print("tengfield: field.png of a 3D run is drawn in serial runs only; "
+                  "potential.xdmf holds psi_lower, psi_upper", file=sys.stderr)
     if comm.rank == 0:
         from ..field import io
 
-        io.write_field_json(out / "field.json", result, reference, potentials)
         for line in io.summary_lines(result, reference, potentials):
             print(line)
         problem = io.accuracy_problem(result, scene)
         if problem is not None:   # one line, as the surrogate's (refinement.warn_problems)
             warnings.warn(problem, RuntimeWarning, stacklevel=1)
-        written = [out / "field.json"]
-        if plot:
-            written += [out / "potential.xdmf"]
-            if serial or comm.size == 1:   # field.png of one rank
-                written.append(out / "field.png")
         print("wrote " + ", ".join(str(w) for w in written))
     return 0
 
@@ -143,46 +142,14 @@ def _on_rank_zero(comm, work):
 
 
 def _axisymmetric(scene, position, reference, out, *, plot: bool):
+    """The open circuit at ``position`` on this process, its files written
+    (``OpenCircuit.write``); the result without its solution, the potentials, the paths."""
     from mpi4py import MPI
 
-    from ..field import io, open_circuit, plot as field_plot
+    from ..field import open_circuit
 
     state = open_circuit(scene, position, comm=MPI.COMM_SELF, method="axisymmetric",
                          reference=reference, keep_solution=plot)
-    result = state.result
-    if plot:
-        io.write_xdmf(out / "potential.xdmf", result.solution, state.potentials)
-        field_plot.render_potential_png(
-            out / "field.png", result.solution, state.potential_values(),
-            window_size=_window((1400, 1100)),
-            title=(f"potential, ball's bottom at z = {position * 1e3:.3g} mm, "
-                   f"V_OC = {state.V_oc:.4g} V ({reference})"))
-    result.solution = None   # stays on rank 0
-    return result, state.potentials
-
-
-def _window(size: tuple[int, int]) -> tuple[int, int]:
-    """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``."""
-    from .._files import figure_dpi
-
-    scale = figure_dpi(120.0) / 120.0
-    return tuple(max(200, round(n * scale)) for n in size)
-
-
-def _three_d(scene, position, out, comm, *, plot: bool):
-    from ..field import io, plot as field_plot, solve_position
-
-    result = solve_position(scene, position, comm=comm, method="3d", keep_solution=plot)
-    if plot:
-        io.write_xdmf(out / "potential.xdmf", result.solution)   # collective
-        if comm.size == 1:
-            field_plot.render_weighting_png_3d(
-                out / "field.png", result.solution, scene.device,
-                window_size=_window((1200, 1100)),
-                title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
-                       f"z = {position * 1e3:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
-        elif comm.rank == 0:
-            print("tengfield: field.png of a 3D run is drawn in serial runs only; "
-                  "potential.xdmf holds psi_lower, psi_upper", file=sys.stderr)
-    result.solution = None
-    return result
+    written = state.write(out, plots=plot)
+    state.result.solution = None   # stays on rank 0
+    return state.result, state.potentials, written

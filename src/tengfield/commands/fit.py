@@ -53,7 +53,7 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from ..fit import calibrate, write_fit_outputs
+    from ..fit import calibrate
     from ..scene import load_scene
 
     scene = load_scene(args.scene)
@@ -67,7 +67,7 @@ def _run(args) -> int:
     free = [n.strip() for n in args.free.split(",") if n.strip()] if args.free else None
     result = calibrate(scene, measured=args.measured, targets=args.targets, free=free,
                        cache_dir=args.cache_dir, progress=True, overrides=overrides or None)
-    written = write_fit_outputs(scene, result, args.output, plots=not args.no_plots)
+    written = result.write(args.output, plots=not args.no_plots)
     print_result(result)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0

@@ -50,7 +50,7 @@ def check_max_positions(value: int | None) -> int:
 
 def _run(args) -> int:
     from .. import surrogate
-    from ..outputs import ensure_file_parent
+    from ..files.directory import ensure_file_parent
     from ..scene import load_scene
 
     scene = load_scene(args.scene)

@@ -46,7 +46,6 @@ def _run(args) -> int:
 
 
 def _run_scene(args, comm, figures) -> int:
-    from ..io import write_dynamics_outputs, write_run_outputs
     from ..pipeline import run
     from ..scene import load_scene
 
@@ -55,14 +54,8 @@ def _run_scene(args, comm, figures) -> int:
     result = run(scene, comm=comm, cache_dir=args.cache_dir, progress=True,
                  command_line=command_line(), jobs=args.jobs)
     if comm is None or comm.rank == 0:
-        plots = not args.no_plots
-        written = write_run_outputs(result, args.output, plots=plots, figures=figures)
-        written += write_dynamics_outputs(result, args.output, plots=plots, figures=figures)
-        if getattr(args, "spice", False):
-            from pathlib import Path
-
-            from ..spice import export
-            written.append(export(result, Path(args.output) / "teng.lib"))
+        written = result.write(args.output, plots=not args.no_plots,
+                               spice=getattr(args, "spice", False), figures=figures)
         if figures is not None:
             figures.finish()
         print_summary(result.summary)

@@ -64,7 +64,7 @@ def toml_text(data: dict, header: str = "") -> str:
     """``{section: {key: value or sub-table}}`` as TOML: ``header`` as comment lines, each
     table's values, then its sub-tables (``[design.vary]``); a None value (a key left
     unset) as a comment."""
-    from .._files import toml_value
+    from ..files import toml_value
 
     lines = [f"# {line}" for line in header.splitlines()]
 

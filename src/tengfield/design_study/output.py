@@ -4,14 +4,14 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import atomic_path, scene_dir, scene_toml, write_json, write_rows, write_text
+from ..files import scene_dir, write_figure, scene_toml, write_json, write_rows, write_text
 from .answer import (aggregate_words, band_table_lines, chosen_band_point, describe,
                      design_answer, on_bounds,
                      point_label, readable_unit)
 from .candidate import band_run, followed_geometry
 from ..scene.schema import SURFACE_CHARGE_KEY, update_section
 from .spec import OBJECTIVES, OTHER_VARY, objective_label, periodic
-from .._files import figure_file
+from ..files import figure_file
 
 
 def _band_label(f: float, a: float, kind: str = "sine") -> str:
@@ -273,7 +273,6 @@ def write_design_outputs(result, out_dir, *, plots: bool = True) -> list[Path]:
         written.append(out / "best.toml")
     if plots:
         from ..plotting.design import plot_design
-        with atomic_path(out / figure_file("design")) as tmp:
-            plot_design(result, tmp, **plot_options(result))
-        written.append(out / figure_file("design"))
+        written.append(write_figure(plot_design, result, path=out / figure_file("design"),
+                                    **plot_options(result)))
     return written

@@ -21,7 +21,7 @@ from ..scene.constants import G
 from .impact import Restitution, integrate
 from .regime import classify
 from .result import REGIMES, Regime
-from .._files import figure_file
+from ..files import figure_file
 
 #: At most this many grid points in one map (result arrays ~130 bytes per point).
 MAX_MAP_POINTS = 4_000_000
@@ -72,7 +72,7 @@ class MapResult:
         map.png; returns the paths."""
         from pathlib import Path
 
-        from .._files import writable_target
+        from ..files import writable_target
         from .output import write_map_csv
         from ..plotting.dynamics import plot_regime_map
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import figure_file, writable_target, write_csv, write_rows
+from ..files import figure_file, writable_target, write_csv, write_rows
 
 
 def dynamics_tables(dynamics, scene) -> dict:

@@ -124,12 +124,14 @@ class DynamicsResult:
         """JSON-ready summary (the CLI's summary.json, without its ``scene`` path)."""
         return Summary(self._summary_fields())
 
-    def write(self, out_dir, plots: bool = True) -> list:
+    def write(self, out_dir, plots: bool = True, *, figures=None) -> list:
         """Write what ``tengfield dynamics -o out_dir`` writes (summary.json, trajectory.csv,
-        impacts.csv and, with ``plots``, trajectory.png); returns the paths."""
+        impacts.csv and, with ``plots``, trajectory.png); returns the paths. ``figures``: a
+        :class:`tengfield.plotting.process.FigureProcess` drawing the figure (complete after
+        its ``finish()``), as the CLI passes."""
         from pathlib import Path
 
-        from .._files import write_json
+        from ..files import write_json
         from .output import write_dynamics_files
 
         out = Path(out_dir)
@@ -137,7 +139,8 @@ class DynamicsResult:
         summary = dict(self.summary)
         summary["scene"] = getattr(self.scene, "source", None)
         paths = [write_json(out / "summary.json", summary)]
-        return paths + list(write_dynamics_files(self, self.scene, out, plots=plots))
+        return paths + list(write_dynamics_files(self, self.scene, out, plots=plots,
+                                                 figures=figures))
 
     def _summary_fields(self) -> dict:
         plates = self.impacts.plate

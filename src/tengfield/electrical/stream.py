@@ -23,7 +23,7 @@ carries its state from chunk to chunk and its
   time, the steady window and the tail found by bisection), whose other columns are
   computed again on request (whole, cached: memory proportional to the run, for the
   library user who asks) and whose :meth:`~StreamedWaveforms.chunks` feed run.h5 a chunk
-  at a time (:func:`tengfield.io_hdf5.write_tables`).
+  at a time (:func:`tengfield.files.hdf5.write_tables`).
 
 The numbers equal the whole-record computation: the same samples, the same terminal
 and the same integrator steps (columns and extremes bit-identical; the energy sums to

@@ -135,5 +135,7 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
     if estimate is not None:
         check_memory(scene, estimate)
     from .cells import cell_of   # the cell's own solver (field/cells: CELLS)
-    return cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen, offset=offset,
-                                      **overrides)
+    result = cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen,
+                                        offset=offset, **overrides)
+    result.scene = scene
+    return result

@@ -24,9 +24,77 @@ def field_json(result, reference: str, potentials=None) -> dict:
 
 def write_field_json(path, result, reference: str, potentials=None) -> None:
     """Write :func:`field_json` to ``path`` (call on one rank; atomic, strict JSON)."""
-    from .._files import write_json
+    from ..files import write_json
 
     write_json(path, field_json(result, reference, potentials))
+
+
+#: the files of one position: ``tengfield field`` and ``PositionResult.write``
+FIELD_JSON, POTENTIAL_XDMF, FIELD_PNG = "field.json", "potential.xdmf", "field.png"
+
+
+def write_position_files(result, out_dir, *, reference: str = "floating", potentials=None,
+                         plots: bool = True) -> list:
+    """What ``tengfield field`` writes for one position ``result`` (a
+    :class:`~tengfield.field.result.PositionResult`) into ``out_dir``: field.json
+    (:func:`field_json`, with the open-circuit ``potentials`` [V] when given) and, with
+    ``plots``, potential.xdmf (:func:`write_xdmf`) and field.png (the axisymmetric
+    potential, or the 3D weighting potential of a serial solve). ``plots`` needs the kept
+    solution (``keep_solution=True``). Collective on a 3D solution's communicator (the
+    XDMF file); field.json and field.png come from its rank 0. Returns the paths written."""
+    from pathlib import Path
+
+    out = Path(out_dir)
+    solution = result.solution
+    if plots and solution is None:
+        raise ValueError("PositionResult.write(plots=True) draws potential.xdmf and field.png "
+                         "from the solution: solve with keep_solution=True, or pass "
+                         "plots=False for field.json alone")
+    comm = None if solution is None else solution.mesh.comm
+    three_d = solution is not None and field_method(solution.method).dimension == 3
+    rank = 0 if comm is None or not three_d else comm.rank
+    if rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    if comm is not None and three_d:
+        comm.barrier()
+    written = []
+    if plots:
+        write_xdmf(out / POTENTIAL_XDMF, solution, potentials)      # collective in 3D
+        written.append(out / POTENTIAL_XDMF)
+        if not three_d or comm.size == 1:   # a figure needs the whole mesh on one process
+            _draw_position(result, out / FIELD_PNG, reference, potentials)
+            written.append(out / FIELD_PNG)
+    if rank == 0:
+        write_field_json(out / FIELD_JSON, result, reference, potentials)
+    return [out / FIELD_JSON] + written
+
+
+def _draw_position(result, path, reference: str, potentials) -> None:
+    """field.png: the open-circuit potential (axisymmetric) or ψ_upper (3D)."""
+    from . import plot as field_plot
+
+    solution, z = result.solution, result.position * 1e3
+    if field_method(solution.method).dimension == 3:
+        field_plot.render_weighting_png_3d(
+            path, solution, result.scene.device, window_size=figure_window((1200, 1100)),
+            title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
+                   f"z = {z:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
+        return
+    potentials = (0.0, 0.0) if potentials is None else potentials
+    v_oc = float(potentials[0] - potentials[1])
+    field_plot.render_potential_png(
+        path, solution, solution.potential_values(potentials),
+        window_size=figure_window((1400, 1100)),
+        title=(f"potential, ball's bottom at z = {z:.3g} mm, V_OC = {v_oc:.4g} V "
+               f"({reference})"))
+
+
+def figure_window(size: tuple[int, int]) -> tuple[int, int]:
+    """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``."""
+    from ..files import figure_dpi
+
+    scale = figure_dpi(120.0) / 120.0
+    return tuple(max(200, round(n * scale)) for n in size)
 
 
 def write_xdmf(path, solution, potentials=None) -> None:

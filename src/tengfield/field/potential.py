@@ -57,6 +57,20 @@ class OpenCircuit:
         """V_OC = V_lower - V_upper [V]."""
         return float(self.potentials[0] - self.potentials[1])
 
+    @property
+    def summary(self) -> dict:
+        """JSON-ready: field.json's content (the position, C_T for ``reference``, the
+        open-circuit potentials)."""
+        from .io import field_json
+
+        return field_json(self.result, self.reference, self.potentials)
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write what ``tengfield field`` writes (field.json with the open-circuit potentials,
+        potential.xdmf and field.png of φ); returns the paths."""
+        return self.result.write(out_dir, plots, reference=self.reference,
+                                 potentials=self.potentials)
+
     def potential_values(self) -> np.ndarray:
         """Local dof values of φ [V] on ``result.solution.space`` (needs keep_solution)."""
         if self.result.solution is None:

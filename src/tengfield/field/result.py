@@ -130,6 +130,8 @@ class PositionResult:
     info: dict[str, Any] = field(default_factory=dict)
     induced_fraction: np.ndarray | None = None
     solution: FieldSolution | None = field(default=None, repr=False, compare=False)
+    #: the scene solved (set by :func:`tengfield.field.solve_position`), else None
+    scene: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(2, 2)
@@ -177,18 +179,17 @@ class PositionResult:
         another reference's)."""
         return self.to_json()
 
-    def write(self, out_dir, plots: bool = True, *, reference: str = "floating") -> list:
-        """Write field.json (as ``tengfield field`` does, without the open-circuit
-        potentials it adds) to ``out_dir``; returns the paths. ``plots``: accepted for the
-        common face (field.png and potential.xdmf need the kept solution: the CLI)."""
-        from pathlib import Path
+    def write(self, out_dir, plots: bool = True, *, reference: str = "floating",
+              potentials=None) -> list:
+        """Write what ``tengfield field`` writes for this position to ``out_dir``: field.json
+        (``reference``'s C_T; the open-circuit ``potentials`` [V] when given, as
+        :meth:`OpenCircuit.write <tengfield.field.potential.OpenCircuit.write>` gives them)
+        and, with ``plots``, potential.xdmf and field.png (they need the solution:
+        ``keep_solution=True``); returns the paths."""
+        from .io import write_position_files
 
-        from .io import write_field_json
-
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        write_field_json(out / "field.json", self, reference)
-        return [out / "field.json"]
+        return write_position_files(self, out_dir, reference=reference, potentials=potentials,
+                                    plots=plots)
 
     def to_json(self, reference: str = "floating") -> dict:
         """The content of ``field.json`` (SI, keys carry the unit)."""

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import scene_dir, scene_toml, write_json, write_text
-from .._files import figure_file
+from ..files import scene_dir, scene_toml, write_json, write_text
+from ..files import figure_file
 from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: where each fitted parameter goes in the scene file (time_shift_s has no scene key)
@@ -19,7 +19,7 @@ SCENE_KEYS = {
 
 def fitted_scene_dict(scene, result) -> dict:
     """``scene.raw`` with the fitted values, every section whole ([fit], [design.vary],
-    [uncertainty.vary] ... kept: issue #43.1; :func:`tengfield._files.scene_toml` writes
+    [uncertainty.vary] ... kept: issue #43.1; :func:`tengfield.files.scene_toml` writes
     the sub-tables)."""
     import copy
 

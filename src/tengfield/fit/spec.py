@@ -313,7 +313,7 @@ def read_trace(path, spec: FitSpec) -> Trace:
     scene's CSV reader, :func:`tengfield.scene.recorded.read_table`)."""
     name = str(path)
     what = f"--measured {name!r}"
-    from ..io_hdf5 import is_hdf5, read_waveform_table
+    from ..files.hdf5 import is_hdf5, read_waveform_table
 
     if is_hdf5(name):     # tengfield run's own run.h5: its /waveforms table (SI columns)
         table = read_waveform_table(name, what, max_rows=MAX_TRACE_ROWS)

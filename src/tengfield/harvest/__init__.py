@@ -45,7 +45,8 @@ in :mod:`tengfield.harvest._kernel`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -192,6 +193,8 @@ class HarvestResult:
     #: [s] absolute time of ``time`` = 0: ``time`` and ``threshold_times`` are on the run's
     #: own axis (``[initial] time_s`` subtracted), the step lengths exact at any origin
     time_origin: float = 0.0
+    #: the scene run (its ``[circuit]``: the chip's UVLO levels in charging.png), else None
+    scene: Any = field(default=None, repr=False, compare=False)
 
     @property
     def t(self) -> np.ndarray:
@@ -218,6 +221,13 @@ class HarvestResult:
         ax.set_ylabel("U store [V]")
         ax.grid(alpha=0.3)
         return fig
+
+    def write(self, out_dir, plots: bool = True, *, scene=None, title: str = "") -> list:
+        """Write what ``tengfield run`` writes of the store record: charging.png (with
+        ``plots``; ``scene``: default ``self.scene``); returns the paths."""
+        from .output import write_harvest_files
+
+        return write_harvest_files(self, out_dir, plots=plots, scene=scene, title=title)
 
     def balance(self) -> dict:
         """Energy accounts at the end of the run [J] and the residuals of the three

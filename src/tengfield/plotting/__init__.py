@@ -2,8 +2,8 @@
 returns the matplotlib Figure (``*_figure``, used by the results' ``plot()``) and a
 ``plot_*`` that saves it (:func:`save_figure`, used by the CLI)."""
 
-# --dpi lives beside --figure-format, with the file names it shapes (tengfield._files)
-from .._files import DPI_RANGE, figure_dpi, set_figure_dpi  # noqa: F401
+# --dpi lives beside --figure-format, with the file names it shapes (tengfield.files.figures)
+from ..files import DPI_RANGE, figure_dpi, set_figure_dpi  # noqa: F401
 
 
 

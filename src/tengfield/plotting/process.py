@@ -129,7 +129,7 @@ class FigureProcess:
         message = None
         if self._proc is not None:
             try:
-                from .._files import _FIGURE_OUTPUT   # --dpi, for the child too
+                from ..files.figures import _FIGURE_OUTPUT   # --dpi, for the child too
                 message = _pack((function.__module__, function.__qualname__, args, kwargs,
                                  _FIGURE_OUTPUT["dpi"]))
             except Exception:  # noqa: BLE001 - not picklable: drawn here
@@ -234,7 +234,7 @@ def _serve(stdin, stdout) -> int:
             return 0
         module, qualname, args, kwargs, dpi = job
         try:
-            from .._files import set_figure_dpi
+            from ..files import set_figure_dpi
             set_figure_dpi(dpi)
             function = importlib.import_module(module)
             for part in qualname.split("."):

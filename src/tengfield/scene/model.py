@@ -253,7 +253,7 @@ class Run:
     settle_periods: int
     sample_rate: float     # [Hz]
     realisations: int = 1  # independent seeds of a random excitation
-    output_format: str = "csv"   # "csv" | "hdf5" (tengfield.io_hdf5; auto past the CSV bound)
+    output_format: str = "csv"   # "csv" | "hdf5" (tengfield.files.hdf5; auto past the CSV bound)
 
     def __post_init__(self):
         check_section("run", self, "Run")

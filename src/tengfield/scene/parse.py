@@ -15,7 +15,7 @@ import warnings
 from importlib import resources
 from pathlib import Path
 
-from .._files import file_kind, note_input
+from ..files import file_kind, note_input
 from .._mpi import launched_rank
 from ..errors import SceneError
 from .limits import MAX_SCENE_BYTES, MAX_TOML_DEPTH

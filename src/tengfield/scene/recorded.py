@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import file_kind, note_input
+from ..files import file_kind, note_input
 from ..errors import SceneError, header_described, same_name_in_file
 from .constants import G
 from .limits import (MAX_PSD_ROWS, MAX_RECORDED_ACCELERATION, MAX_RECORDED_BYTES,
@@ -84,7 +84,7 @@ def read_text(name: str, base_dir: Path | None, what: str, max_bytes: int) -> st
     """The UTF-8 text of file ``name`` (:func:`resolve_input`): a missing file, one of
     more than ``max_bytes`` bytes or one that cannot be read or decoded is a one-line
     SceneError starting with ``what``. The file is noted as an input of the command
-    (:func:`tengfield._files.note_input`: never replaced by its outputs)."""
+    (:func:`tengfield.files.note_input`: never replaced by its outputs)."""
     path = resolve_input(name, base_dir, what)
     note_input(path)
     try:

@@ -204,7 +204,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # independent realisations of a random excitation (issue #25; tengfield.ensemble)
         "realisations": Key("realisations", int, 1, 1, _rng(1, 100000)),
         # the tables of `tengfield run`: CSV files, or one HDF5 file (run.h5); a run past
-        # the CSV bound (tengfield.io_hdf5.MAX_CSV_ROWS) writes HDF5 with a warning
+        # the CSV bound (tengfield.files.hdf5.MAX_CSV_ROWS) writes HDF5 with a warning
         "output_format": Key("output_format", str, "csv", None, _choice("csv", "hdf5")),
     },
     # field-only: a bad value fails only where a field stage runs (check_field)

@@ -178,11 +178,13 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     if table is not None:
         warn_accuracy(table, comm)      # as when it was computed: a cache hit is no excuse
         table, reason = _at_scene_charge(table, scene, reason)
+        table.scene = scene
         return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
     table = precompute(solved_scene(scene), comm=comm, solve=solve, progress=progress,
                        command_line=command_line)
     stored = store_in_cache(path, table, comm) if write else False
     table, _ = _at_scene_charge(table, scene, reason)
+    table.scene = scene
     return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)
 
 

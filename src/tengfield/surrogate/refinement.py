@@ -292,7 +292,8 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
                     **({"breakdown_line_angles_deg": list(_line_angles())} if lines else {}),
                     "field_error_rule": rule, "solver_fingerprint": solver_fingerprint(),
-                    **({"mesh_placements": placed} if sum(placed.values()) else {})})
+                    **({"mesh_placements": placed} if sum(placed.values()) else {})},
+        scene=scene)
     warn_accuracy(table, comm)
     return table
 

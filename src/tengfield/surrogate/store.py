@@ -1,7 +1,7 @@
 """The surrogates on disk, on the axis and over (z, r): the HDF5 format, with checksums
 and structure checks.
 
-:func:`write_table` writes atomically (temporary file + ``os.replace``);
+:func:`write_table` (:mod:`.output`) writes atomically (temporary file + ``os.replace``);
 every data array is stored with HDF5's Fletcher-32 filter and the SHA-256
 of its bytes, and the scalars with a SHA-256 of their own. :func:`read_table`
 trusts a file only if it is complete, of this format, for the expected
@@ -15,82 +15,22 @@ the same rules (:func:`write_radial_table`, :func:`read_radial_table`,
 """
 from __future__ import annotations
 
-import hashlib
-import io
 import json
 import os
-import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from ..files.hdf5 import array_digest, scalars_digest, write_checked_file  # noqa: F401
+from .layout import (ARRAYS, ARRAYS_ZR, LINE_CHECK_INDEX, OPTIONAL_ARRAYS,  # noqa: F401
+                     OPTIONAL_SCALARS_ZR, SCALAR_TYPES, SCALAR_TYPES_ZR, SCALARS, SCALARS_ZR,
+                     _SHAPES, typed_scalars)
+from .output import write_table  # noqa: F401 - written beside the figure, read here
 from .provenance import FORMAT_VERSION, FORMAT_VERSION_ZR
 from .table import GRID_TAILS, RadialTable, SurrogateError, SurrogateTable
 
-#: table attribute -> HDF5 dataset name (unit-suffixed)
-ARRAYS = {"positions": "positions_m", "capacitance": "capacitance_F",
-          "induced_charge": "induced_charge_C", "dofs": "dofs", "cells": "cells",
-          "wall_time": "wall_time_s", "solve_time": "solve_time_s",
-          "field_error": "field_relative_error_estimate"}
-#: table attribute -> HDF5 file attribute, covered by ``scalars_sha256``
-SCALARS = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
-           "interpolation_error": "interpolation_error_estimate", "tolerance": "tolerance",
-           "converged": "converged", "field_hash": "field_hash", "method": "method",
-           "degree": "degree"}
-#: table attribute -> type of its value (the scalars' checksum is of the typed values)
-SCALAR_TYPES = {"ball_charge": float, "stroke": float, "interpolation_error": float,
-                "tolerance": float, "converged": bool, "field_hash": str, "method": str,
-                "degree": int}
-#: optional arrays (table attribute -> dataset), written when present: the breakdown
-#: lines' basis potentials (a file without them is still a valid surrogate)
-OPTIONAL_ARRAYS = {"line_potential": "breakdown_line_potential",
-                   "line_check": "breakdown_line_potential_check"}
-#: the positions (indices into ``positions_m``) where the lines' mesh check was solved:
-#: ``breakdown_line_potential_check`` holds only those rows, so every number in a file
-#: is finite (in memory, ``SurrogateTable.line_check`` has NaN rows where it was not)
-LINE_CHECK_INDEX = "breakdown_line_potential_check_index"
-_SHAPES = {"positions": (), "capacitance": (2, 2), "induced_charge": (2,), "dofs": (),
-           "cells": (), "wall_time": (), "solve_time": (), "field_error": ()}
-
-#: table attribute -> HDF5 dataset name
-ARRAYS_ZR = {"positions": "positions_m", "offsets": "offsets_m",
-             "capacitance": "capacitance_F", "induced_charge": "induced_charge_C",
-             "dofs": "dofs", "cells": "cells", "wall_time": "wall_time_s",
-             "solve_time": "solve_time_s", "field_error": "field_relative_error_estimate"}
-#: table attribute -> HDF5 file attribute (covered by ``scalars_sha256``)
-SCALARS_ZR = {"ball_charge": "ball_charge_C", "stroke": "stroke_m",
-              "max_offset": "max_offset_m", "interpolation_error": "interpolation_error_estimate",
-              "tolerance": "tolerance", "converged": "converged", "field_hash": "field_hash",
-              "method": "method", "degree": "degree", "mesh_size": "mesh_size_m"}
-#: table attribute -> type of its value: the 1-D surrogate's and the 3D ones
-SCALAR_TYPES_ZR = {**SCALAR_TYPES, "max_offset": float, "mesh_size": float}
-#: scalars written only when not at their default (a tube's file stays as it was):
-#: table attribute -> (file attribute, type, default)
-OPTIONAL_SCALARS_ZR = {"offset_coordinate": ("offset_coordinate", str, "radial")}
-
-
 # ---------------------------------------------------------------------------
 # checksums and structure
-def array_digest(array) -> str:
-    """SHA-256 of an array's dtype, shape and bytes (little-endian, C order)."""
-    a = np.ascontiguousarray(array)
-    a = a.astype(a.dtype.newbyteorder("<"), copy=False)
-    digest = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
-    digest.update(a.tobytes())
-    return digest.hexdigest()
-
-
-def typed_scalars(values, types: dict) -> dict:
-    """``{attr: types[attr](values[attr])}``: the scalars as written, read and checksummed."""
-    return {attr: kind(values[attr]) for attr, kind in types.items()}
-
-
-def scalars_digest(values: dict) -> str:
-    """SHA-256 of the scalar attributes (canonical JSON; NaN written as ``NaN``)."""
-    return hashlib.sha256(json.dumps(values, sort_keys=True).encode()).hexdigest()
-
-
 def check_shapes(arrays: dict) -> None:
     """Raise :class:`SurrogateError` unless the per-position ``arrays`` (table attribute
     -> array) have one length and the shapes of :data:`ARRAYS`."""
@@ -153,92 +93,11 @@ def check_table(table: SurrogateTable) -> None:
 # ---------------------------------------------------------------------------
 # HDF5 file
 def _import_h5py():
-    """``h5py``, which must be the distribution's build (Debian's python3-h5py).
+    """``h5py``, Debian's build (:func:`tengfield.files.hdf5.import_h5py`; a pip wheel
+    beside dolfinx is a :class:`SurrogateError`)."""
+    from ..files.hdf5 import import_h5py
 
-    A pip wheel of h5py bundles its own HDF5; imported after dolfinx has loaded
-    the system HDF5 it fails ("Not a datatype") or corrupts files. ``make setup``
-    removes such a wheel from the venv; this names the problem if one is back.
-    """
-    import h5py
-
-    bundled = Path(h5py.__file__).resolve().parents[1] / "h5py.libs"
-    if bundled.exists() and any(name.startswith("dolfinx") for name in sys.modules):
-        raise SurrogateError(
-            f"the h5py at {Path(h5py.__file__).parent} is a pip wheel with its own HDF5, "
-            "which clashes with the HDF5 dolfinx loads: `pip uninstall h5py` in the venv "
-            "(Debian's python3-h5py is used), e.g. by running `make setup`")
-    return h5py
-
-
-def write_checked_file(path: str | Path, arrays: dict, scalars: dict, scalar_names: dict,
-                       attrs: dict) -> Path:
-    """Write a surrogate file atomically (temporary file + ``os.replace``): ``arrays``
-    (dataset name -> array) each with a Fletcher-32 filter and its SHA-256 (attribute
-    ``sha256``), ``scalars`` (table attribute -> typed value, :func:`typed_scalars`) as
-    the file attributes ``scalar_names[attr]`` with their ``scalars_sha256``, the
-    further file attributes ``attrs`` and the ``complete`` flag set last. Raises
-    ``OSError`` if it cannot be written (nothing is left behind)."""
-    h5py = _import_h5py()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # HDF5 builds the file in memory; the disk sees only plain writes. A full disk then is
-    # an OSError (ENOSPC) like any other; an HDF5 file whose flush failed on a full disk
-    # raised "Slist already enabled?" and crashed the interpreter (issue #30.14).
-    buffer = io.BytesIO()
-    with h5py.File(buffer, "w") as f:
-        f.attrs["complete"] = False
-        for name, data in arrays.items():
-            dataset = f.create_dataset(name, data=data, fletcher32=True,
-                                       chunks=data.shape if data.size else None)
-            dataset.attrs["sha256"] = array_digest(data)
-        for attr, name in scalar_names.items():
-            f.attrs[name] = scalars[attr]
-        f.attrs["scalars_sha256"] = scalars_digest(scalars)
-        for name, value in attrs.items():
-            f.attrs[name] = value
-        f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
-        f.flush()
-        f.attrs["complete"] = True
-    image = buffer.getbuffer()
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(image)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:   # name the file (a bare "No space left on device" names none)
-        Path(tmp).unlink(missing_ok=True)
-        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def write_table(path: str | Path, table: SurrogateTable) -> Path:
-    """Write ``table`` to HDF5 atomically (:func:`write_checked_file`: every array
-    with a Fletcher-32 filter and its SHA-256, checksummed scalars). Raises
-    ``OSError`` if the file cannot be written (nothing is left behind)."""
-    arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS.items()}
-    arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 2)
-    for attr, name in OPTIONAL_ARRAYS.items():
-        if getattr(table, attr, None) is not None:
-            arrays[name] = np.asarray(getattr(table, attr), dtype=float)
-    if OPTIONAL_ARRAYS["line_check"] in arrays:
-        check = arrays[OPTIONAL_ARRAYS["line_check"]]
-        solved = np.flatnonzero(np.all(np.isfinite(check), axis=tuple(range(1, check.ndim))))
-        if solved.size:
-            arrays[OPTIONAL_ARRAYS["line_check"]] = check[solved]
-            arrays[LINE_CHECK_INDEX] = solved.astype(np.int64)
-        else:   # solved nowhere: as if absent (HDF5 filters refuse empty datasets)
-            del arrays[OPTIONAL_ARRAYS["line_check"]]
-    scalars = typed_scalars(vars(table), SCALAR_TYPES)
-    return write_checked_file(path, arrays, scalars, SCALARS, {
-        "format_version": FORMAT_VERSION,
-        "provenance": json.dumps(table.provenance, default=str),
-        "scene_text": table.provenance.get("scene_text", ""),
-        "command_line": table.provenance.get("command_line", "")})
+    return import_h5py(SurrogateError)
 
 
 def _read_checked(f, name: str) -> np.ndarray:
@@ -436,7 +295,7 @@ def check_radial_table(table: RadialTable) -> None:
 
 def write_radial_table(path, table: RadialTable) -> Path:
     """Write ``table`` to HDF5 atomically with the 1-D surrogate's checksums
-    (:func:`write_checked_file`). Raises ``OSError`` if it
+    (:func:`tengfield.files.hdf5.write_checked_file`). Raises ``OSError`` if it
     cannot (nothing is left behind)."""
     arrays = {name: np.asarray(getattr(table, attr)) for attr, name in ARRAYS_ZR.items()}
     arrays["error_history"] = np.asarray(table.error_history, dtype=float).reshape(-1, 3)
@@ -447,7 +306,7 @@ def write_radial_table(path, table: RadialTable) -> Path:
             scalars[attr], names[attr] = kind(getattr(table, attr)), name
     return write_checked_file(path, arrays, scalars, names, {
         "format_version": FORMAT_VERSION_ZR, "kind": "zr",
-        "provenance": json.dumps(table.provenance, default=str)})
+        "provenance": json.dumps(table.provenance, default=str)}, error=SurrogateError)
 
 
 def _check_format_zr(attrs) -> None:

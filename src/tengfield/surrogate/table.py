@@ -22,21 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from .. import lumped, terminals
-from ..errors import TengfieldError
+from ..errors import SurrogateError, TengfieldError  # noqa: F401 - its home was here
 from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
-
-
-class SurrogateError(TengfieldError, RuntimeError):
-    """A surrogate file is missing, partial, corrupt or for another scene.
-
-    ``path`` (if any) names the file and ``reason`` says what is wrong with it
-    (the message without the path).
-    """
-
-    def __init__(self, message: str, *, path=None, reason: str | None = None):
-        super().__init__(message)
-        self.path = None if path is None else str(path)
-        self.reason = reason if reason is not None else message
 
 
 #: the per-position arrays of a table (all of length ``count``)
@@ -93,6 +80,8 @@ class SurrogateTable(SolveRecord):
     stroke: float
     line_potential: np.ndarray | None = None
     line_check: np.ndarray | None = None
+    #: the scene solved (set by ``precompute`` and ``obtain_table``), else None
+    scene: object = field(default=None, repr=False, compare=False)
 
     @property
     def summary(self) -> dict:
@@ -112,6 +101,13 @@ class SurrogateTable(SolveRecord):
         from ..plotting.waveforms import surrogate_figure
 
         return surrogate_figure(self, TerminalCurves(self, reference))
+
+    def write(self, out_dir, plots: bool = True) -> list:
+        """Write surrogate.h5 (what ``tengfield precompute -o`` writes) and, with ``plots``,
+        surrogate.png (what ``tengfield run`` draws) to ``out_dir``; returns the paths."""
+        from .output import write_surrogate_files
+
+        return write_surrogate_files(self, out_dir, plots=plots)
 
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")

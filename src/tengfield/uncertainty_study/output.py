@@ -1,13 +1,13 @@
 """uncertainty.csv, uncertainty.json and uncertainty.png of a study, and the lines
-``tengfield uncertainty`` prints (every file through :mod:`tengfield._files`)."""
+``tengfield uncertainty`` prints (every file through :mod:`tengfield.files`)."""
 from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import atomic_path, write_json, write_rows
+from ..files import write_figure, write_json, write_rows
 from .._json import jsonable
 from .statistics import dominant_input
-from .._files import figure_file
+from ..files import figure_file
 
 
 def csv_rows(study) -> tuple[list[str], list[list]]:
@@ -33,9 +33,8 @@ def write_outputs(study, out, *, plots: bool = True) -> list[Path]:
                write_json(out / "uncertainty.json", jsonable(study.summary))]
     if plots:
         from ..plotting import save_figure
-        with atomic_path(out / figure_file("uncertainty")) as tmp:
-            save_figure(study.plot(), tmp, dpi=110)     # the figure a notebook gets
-        written.append(out / figure_file("uncertainty"))
+        written.append(write_figure(save_figure, study.plot(), dpi=110,  # a notebook's figure
+                                    path=out / figure_file("uncertainty")))
     return written
 
 

@@ -20,7 +20,7 @@ change):
    lists them; only plain names inside ``DIR``, regular files reached through real
    directories: never "../x", "/x" or a symlink's target), so the directory always
    holds one complete set. A file the command read (its scene, a recorded excitation,
-   a PSD table, fit's measured trace: :func:`tengfield._files.note_input`) is never
+   a PSD table, fit's measured trace: :func:`tengfield.files.atomic.note_input`) is never
    removed (it stays, no longer listed) nor replaced (one error line, nothing written);
 4. on any failure (exception, full disk, Ctrl-C) the staging directory is
    removed and the previous set stays as it was.
@@ -40,9 +40,9 @@ import stat
 import tempfile
 from pathlib import Path
 
-from ._files import file_kind as _kind
-from ._files import forget_inputs, input_named
-from .errors import OutputError
+from ..errors import OutputError
+from .atomic import file_kind as _kind
+from .atomic import forget_inputs, input_named
 
 LOCK_NAME = ".tengfield.lock"
 MANIFEST_NAME = ".tengfield-manifest.json"
@@ -139,7 +139,7 @@ def ensure_file_parent(path: str | Path, option: str = "-o") -> Path:
         raise OutputError(f"{where} is {_kind(st.st_mode)}, not a regular file: give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     ensure_directory(parent, option=f"{where}: directory")
-    try:   # the temporary name surrogate.store.write_checked_file uses: 14 bytes longer
+    try:   # the temporary name files.atomic.write_bytes uses: 14 bytes longer
         fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
         os.close(fd)
         os.unlink(probe)
@@ -479,3 +479,41 @@ def _read_journal(staging: Path) -> list[tuple[str, bool]] | None:
         if name == MANIFEST_NAME or _plain_name(name) is not None:
             plain.append((name, bool(move.get("staged"))))
     return plain
+
+
+# ---------------------------------------------------------------------------
+# whose files an output directory holds (issue #42)
+#: in -o DIR: the name of the tengfield command whose files DIR holds (written with them)
+COMMAND_RECORD = ".tengfield-command"
+
+
+def record_command(staging: str | Path, command: str) -> None:
+    """Note in the staging directory of ``-o DIR`` which command writes its files (moved
+    into DIR with them, listed in its manifest)."""
+    Path(staging, COMMAND_RECORD).write_text(command + "\n")
+
+
+def refuse_another_commands_directory(target: str | Path, command: str,
+                                      option: str = "-o") -> None:
+    """Raise :class:`~tengfield.errors.OutputError` (one line) when ``-o DIR`` holds the
+    files of a different tengfield command: writing there would remove them (a
+    directory keeps one command's complete set). Nothing is checked for a DIR with no
+    record (new, or not written by tengfield)."""
+    record = Path(target, COMMAND_RECORD)
+    try:
+        owner = record.read_text().strip() if record.is_file() else ""
+    except OSError:
+        return
+    if not owner or owner == command:
+        return
+    manifest = Path(target, ".tengfield-manifest.json")
+    try:
+        names = [n for n in json.loads(manifest.read_text()).get("files", [])
+                 if n != COMMAND_RECORD and Path(target, n).is_file()]
+    except (OSError, ValueError, AttributeError):
+        names = []
+    shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    raise OutputError(f"{option} {str(target)!r} holds the files of `tengfield {owner}`"
+                      + (f" ({shown})" if shown else "")
+                      + f"; `tengfield {command}` would replace them: nothing was written; "
+                        f"choose another {option} directory")

@@ -20,15 +20,20 @@ In pandas (no PyTables needed)::
     with h5py.File("out/run.h5", "r") as f:
         waveforms = pd.DataFrame({name: f["waveforms"][name][()] for name in f["waveforms"]})
 
-``h5py`` is Debian's build (:func:`tengfield.surrogate.store._import_h5py`); it is
+``h5py`` is Debian's build (:func:`import_h5py`); it is
 imported only when a file is written.
 """
 from __future__ import annotations
 
+import hashlib
+import io
+import json
 import os
 from pathlib import Path
 
 import numpy as np
+
+from .atomic import write_bytes
 
 #: The largest table written as CSV (rows): what tengfield reads back as a recorded
 #: excitation or a measured trace (tengfield.scene.limits.MAX_RECORDED_ROWS,
@@ -56,9 +61,29 @@ def unit_of(column: str) -> str:
     return "1"
 
 
+def import_h5py(error=RuntimeError):
+    """``h5py``, which must be the distribution's build (Debian's python3-h5py): raises
+    ``error`` (one line) for a pip wheel imported beside dolfinx.
+
+    A pip wheel of h5py bundles its own HDF5; imported after dolfinx has loaded
+    the system HDF5 it fails ("Not a datatype") or corrupts files. ``make setup``
+    removes such a wheel from the venv; this names the problem if one is back.
+    """
+    import sys
+
+    import h5py
+
+    bundled = Path(h5py.__file__).resolve().parents[1] / "h5py.libs"
+    if bundled.exists() and any(name.startswith("dolfinx") for name in sys.modules):
+        raise error(
+            f"the h5py at {Path(h5py.__file__).parent} is a pip wheel with its own HDF5, "
+            "which clashes with the HDF5 dolfinx loads: `pip uninstall h5py` in the venv "
+            "(Debian's python3-h5py is used), e.g. by running `make setup`")
+    return h5py
+
+
 def _h5py():
-    from .surrogate.store import _import_h5py
-    return _import_h5py()
+    return import_h5py()
 
 
 def _sampled(column) -> bool:
@@ -264,8 +289,8 @@ def read_waveform_table(path: str | Path, what: str, *, max_rows: int) -> Wavefo
     """The numeric columns of ``path``'s ``/waveforms`` group (a run.h5 of tengfield
     run), as a table of a measured trace; a file without it, more than ``max_rows``
     samples, or one HDF5 cannot read: one-line SceneError starting with ``what``."""
-    from ._files import note_input
-    from .errors import SceneError
+    from ..errors import SceneError
+    from .atomic import note_input
 
     h5py = _h5py()
     note_input(Path(path))
@@ -290,3 +315,50 @@ def read_waveform_table(path: str | Path, what: str, *, max_rows: int) -> Wavefo
     if len({len(v) for v in columns.values()}) > 1:
         raise SceneError(f"{what}: the /waveforms columns differ in length")
     return WaveformTable(what, columns)
+
+
+# ---------------------------------------------------------------------------
+# checked files (the surrogates: tengfield.surrogate.store reads them)
+def array_digest(array) -> str:
+    """SHA-256 of an array's dtype, shape and bytes (little-endian, C order)."""
+    a = np.ascontiguousarray(array)
+    a = a.astype(a.dtype.newbyteorder("<"), copy=False)
+    digest = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
+    digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
+def scalars_digest(values: dict) -> str:
+    """SHA-256 of the scalar attributes (canonical JSON; NaN written as ``NaN``)."""
+    return hashlib.sha256(json.dumps(values, sort_keys=True).encode()).hexdigest()
+
+
+def write_checked_file(path: str | Path, arrays: dict, scalars: dict, scalar_names: dict,
+                       attrs: dict, *, error=RuntimeError) -> Path:
+    """Write a checked HDF5 file (the surrogates') atomically (temporary file + ``os.replace``): ``arrays``
+    (dataset name -> array) each with a Fletcher-32 filter and its SHA-256 (attribute
+    ``sha256``), ``scalars`` (attribute -> typed value) as
+    the file attributes ``scalar_names[attr]`` with their ``scalars_sha256``, the
+    further file attributes ``attrs`` and the ``complete`` flag set last. Raises
+    ``OSError`` if it cannot be written (nothing is left behind); ``error`` for an h5py
+    that cannot be used (:func:`import_h5py`)."""
+    h5py = import_h5py(error)
+    # HDF5 builds the file in memory; the disk sees only plain writes. A full disk then is
+    # an OSError (ENOSPC) like any other; an HDF5 file whose flush failed on a full disk
+    # raised "Slist already enabled?" and crashed the interpreter (issue #30.14).
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        f.attrs["complete"] = False
+        for name, data in arrays.items():
+            dataset = f.create_dataset(name, data=data, fletcher32=True,
+                                       chunks=data.shape if data.size else None)
+            dataset.attrs["sha256"] = array_digest(data)
+        for attr, name in scalar_names.items():
+            f.attrs[name] = scalars[attr]
+        f.attrs["scalars_sha256"] = scalars_digest(scalars)
+        for name, value in attrs.items():
+            f.attrs[name] = value
+        f.attrs["written_with"] = f"h5py {h5py.__version__}, HDF5 {h5py.version.hdf5_version}"
+        f.flush()
+        f.attrs["complete"] = True
+    return write_bytes(path, buffer.getbuffer())
