@@ -14,6 +14,9 @@ export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 # 'Unable to find reachable pairing between local and remote interfaces' for every
 # mpirun in a container or chroot that shares the host's interfaces)
 export OMPI_MCA_btl_tcp_if_include := lo
+# a rank waiting in MPI yields its core (Open MPI busy-polls otherwise): the test suite runs
+# mpirun -n 2 beside other processes on this 2-core machine (pytest, the CI's containers)
+export OMPI_MCA_mpi_yield_when_idle := 1
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 

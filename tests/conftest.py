@@ -34,6 +34,7 @@ def cli_environment(**extra) -> dict:
     env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
     env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
     env.setdefault("OMPI_MCA_btl_tcp_if_include", "lo")    # one machine (Makefile)
+    env.setdefault("OMPI_MCA_mpi_yield_when_idle", "1")    # share the cores (Makefile)
     env.update({k: str(v) for k, v in extra.items()})
     return env
 

@@ -17,7 +17,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def mpi_env():
     return dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
+                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_mpi_yield_when_idle="1",
+                MPLBACKEND="Agg",
                 PYTHONPATH=os.pathsep.join(p for p in (str(ROOT / "src"),
                                                        os.environ.get("PYTHONPATH")) if p))
 
