@@ -344,6 +344,7 @@ class Solve3DSettings:
     far_field: str = "robin"
     estimate_error: bool = True
     mesh_options: tuple = ()            # extra MeshSettings fields, (("rim_factor", 0.2),)
+    mesh_motion: str = "remesh"         # "move": reference meshes moved (field/moving3d.py)
 
     def mesh_settings(self, coarsen: float = 1.0) -> MeshSettings:
         return MeshSettings(size=self.mesh_size * coarsen, domain_radius=self.domain_radius,
@@ -441,13 +442,23 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
     (mesh and ψ functions) of the (nearest) meshed position.
     """
     start = time.perf_counter()
+    # [field] mesh_motion = "move": reference meshes moved to the positions (field/moving3d.py)
+    moving = settings.mesh_motion == "move" and not keep_solution
+    if moving:
+        from . import moving3d
+        solve_one = moving3d.solve_cell
+    else:
+        solve_one = solve_cell
+    placed = []
 
     def solve_here(z: float, with_estimate: bool, r: float = offset):
-        sol = solve_cell(cell, z, r, settings, comm=comm, offset_angle=offset_angle)
+        sol = solve_one(cell, z, r, settings, comm=comm, offset_angle=offset_angle)
+        placed.append(getattr(sol, "placement", None))
         sol.estimate = math.nan
         if with_estimate:
-            coarse = solve_cell(cell, z, r, settings, comm=comm, coarsen=2.0,
-                                offset_angle=offset_angle)
+            coarse = solve_one(cell, z, r, settings, comm=comm, coarsen=2.0,
+                               offset_angle=offset_angle)
+            placed.append(getattr(coarse, "placement", None))
             sol.estimate = (contact.relative_change(coarse, sol)
                             / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0))
         return sol
@@ -494,6 +505,10 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         "assembly_time_s": pot.assembly_time,
         "mpi_size": comm.size,
     })
+    if moving:
+        info["mesh_motion"] = "move"
+        info["mesh_placements"] = {key: sum(p[key] for p in placed if p)
+                                   for key in ("moved", "meshed")}
     solution = None
     if keep_solution:
         cm = fine.cell_mesh
@@ -530,7 +545,8 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
     # mesh_size_mm as written, or the default scaled to the device's features, as in 2D
     settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                domain_radius=fld.domain_radius, far_field=fld.far_field,
-                               estimate_error=estimate_error)
+                               estimate_error=estimate_error,
+                               mesh_motion=getattr(fld, "mesh_motion", "remesh"))
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
                          surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
                          keep_solution=keep_solution)

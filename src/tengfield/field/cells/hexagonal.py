@@ -68,7 +68,8 @@ class Hexagonal:
         fld = scene.field
         settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                    domain_radius=fld.domain_radius, far_field=fld.far_field,
-                                   estimate_error=options.get("estimate_error", True))
+                                   estimate_error=options.get("estimate_error", True),
+                                   mesh_motion=getattr(fld, "mesh_motion", "remesh"))
         return solve_cell_3d(self.cell, position, offset=offset,
                              surface_charge=scene.device.surface_charge, settings=settings,
                              comm=comm, keep_solution=options.get("keep_solution", False))
