@@ -21,12 +21,13 @@ do not depend on the order of the solves).
 The reference of a position is a function of the position alone (so a table's numbers do
 not depend on the order of its solves or on the ranks):
 
-* spherical shell: the ball-wall gap ``g = R - |c|`` (R = a - d/2) on the ladder of
-  :func:`tengfield.field.moving.reference_position` (g_min, 4 g_min, 16 g_min, ... and R,
-  the cavity's centre), and the direction of ``c`` (its polar angle from -z) on steps of
+* spherical shell: the ball-wall gap ``g = R - |c|`` (R = a - d/2) on a ladder
+  (:func:`shell_rung`: g_min, 4 g_min, 16 g_min, ... below R/2, and R, the ball at the
+  cavity's centre), and the direction of ``c`` (its polar angle from -z) on steps of
   about ``g_rung / R`` rad (a step of the rung's gap along the wall; one direction at the
   centre), at the position's own azimuth;
-* tube and honeycomb: the nearer plate's gap on the same ladder, at the position's own
+* tube and honeycomb: the nearer plate's gap on the ladder of
+  :func:`tengfield.field.moving.reference_position`, at the position's own
   offset and angle (one reference per offset r, per rung).
 
 A move is accepted only if every tetrahedron keeps its orientation, its volume changes by
@@ -47,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from . import contact
-from .moving import QUALITY_BOUND, reference_position
+from .moving import LADDER_FACTOR, QUALITY_BOUND, reference_position
 
 #: reference meshes (with their solvers) kept in this process, the least recently used
 #: released first (a 10 mm shell at P2 / 1.5 mm: ~54k dofs each)
@@ -85,13 +86,14 @@ def fixed_distance(cell, x: np.ndarray) -> np.ndarray:
 
 def blending_weight(cell, x: np.ndarray, centre) -> np.ndarray:
     """w(x) for the geometry nodes ``x`` (n, 3) [m] of ``cell`` with the ball at ``centre``:
-    1 in the ball, 0 on and beyond the cavity's walls, ``d_fixed / (d_fixed + d_ball)``
-    between."""
+    1 in the ball, 0 on and beyond the cavity's walls (within 1e-9 of the electrode
+    spacing: a wall node meshed off the sphere by rounding does not move either),
+    ``d_fixed / (d_fixed + d_ball)`` between."""
     d_fixed = fixed_distance(cell, x)
     d_ball = np.maximum(np.linalg.norm(x - np.asarray(centre, dtype=float), axis=1)
                         - 0.5 * cell.ball_diameter, 0.0)
     w = np.zeros(len(x))
-    inside = d_fixed > 0.0
+    inside = d_fixed > 1e-9 * cell.electrode_spacing   # nodes on a wall (to rounding) stay
     w[inside] = d_fixed[inside] / (d_fixed[inside] + d_ball[inside])
     return w
 
@@ -108,6 +110,19 @@ def tetrahedron_measures(x: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, n
     return volume, quality
 
 
+def shell_rung(gap: float, minimum_gap: float, top: float) -> float:
+    """The shell's reference gap [m] for a ball-wall ``gap``: the ladder
+    ``g_min · LADDER_FACTOR^k`` below ``top / 2`` and ``top`` (R: the ball at the cavity's
+    centre), the rung nearest in ratio."""
+    ladder, rung = [], minimum_gap
+    while rung < 0.5 * top:
+        ladder.append(rung)
+        rung *= LADDER_FACTOR
+    ladder.append(top)
+    near = max(gap, minimum_gap)
+    return min(ladder, key=lambda rung: abs(math.log(near / rung)))
+
+
 def reference_centre(cell, centre: np.ndarray, offset_angle: float) -> tuple[tuple, np.ndarray]:
     """``(key, c_ref)``: the reference a ball at (meshed) ``centre`` [m] is moved from (the
     module docstring's rule; a function of the position alone)."""
@@ -116,8 +131,7 @@ def reference_centre(cell, centre: np.ndarray, offset_angle: float) -> tuple[tup
     if _is_shell(cell):
         big_r = cell.cavity_radius - cell.ball_radius
         gap = big_r - float(np.linalg.norm(c))
-        rung = reference_position(SimpleNamespace(gap_lower=gap, gap_upper=2 * big_r - gap),
-                                  g_min)
+        rung = shell_rung(gap, g_min, big_r)
         if rung >= big_r * (1 - 1e-9):
             return ("shell", round(rung / g_min, 6)), np.zeros(3)
         theta = math.atan2(math.hypot(c[0], c[1]), -c[2])
