@@ -179,3 +179,28 @@ def test_the_moved_zr_table_agrees_with_the_remeshed_one_within_its_error_estima
     assert np.all(np.isfinite(bound))
     assert np.all(change <= bound), (change, bound)
     moving3d.clear()
+
+
+@field
+@pytest.mark.mpi
+def test_moved_solves_on_two_ranks_give_the_serial_numbers():
+    """The reference, its move and the quality check are collective: a moved solve on
+    COMM_WORLD equals the same moved solve on COMM_SELF."""
+    from mpi4py import MPI
+
+    from tengfield.field import moving3d
+    from tengfield.field.solver3d import Solve3DSettings
+
+    cell = _shell_cell()
+    settings = Solve3DSettings(degree=1, mesh_size=3e-3, domain_radius=4 * cell.outer_radius,
+                               far_field="kelvin", estimate_error=False, mesh_motion="move")
+    out = {}
+    for name, comm in (("world", MPI.COMM_WORLD), ("self", MPI.COMM_SELF)):
+        moving3d.clear()
+        out[name] = [moving3d.solve_cell(cell, z, r, settings, comm=comm)
+                     for z, r in ((1.5e-3, 0.0), (1.2e-3, 0.4e-3))]
+        assert out[name][1].placement == {"moved": 1, "meshed": 0}
+    for world, serial in zip(out["world"], out["self"]):
+        np.testing.assert_allclose(world.capacitance, serial.capacitance, rtol=1e-7)
+        np.testing.assert_allclose(world.induced_fraction, serial.induced_fraction, rtol=1e-7)
+    moving3d.clear()

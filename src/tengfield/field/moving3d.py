@@ -25,7 +25,9 @@ not depend on the order of its solves or on the ranks):
   (:func:`shell_rung`: g_min, 4 g_min, 16 g_min, ... below R/2, and R, the ball at the
   cavity's centre), and the direction of ``c`` (its polar angle from -z) on steps of
   about ``g_rung / R`` rad (a step of the rung's gap along the wall; one direction at the
-  centre), at the position's own azimuth;
+  centre; the position's own direction at the contact anchors' rungs g_min and 4 g_min,
+  so the anchors are meshed or stretched along their radius, never slid), at the
+  position's own azimuth;
 * tube and honeycomb: the nearer plate's gap on the ladder of
   :func:`tengfield.field.moving.reference_position`, at the position's own
   offset and angle (one reference per offset r, per rung).
@@ -55,6 +57,9 @@ from .moving import LADDER_FACTOR, QUALITY_BOUND, reference_position
 MAX_REFERENCES = 12
 #: the direction step of the shell's references, in units of the rung's gap over R
 DIRECTION_STEP = 1.0
+#: the shell's rungs up to this many g_min (the contact anchors' scale) sit at the
+#: position's own direction: the contact rule's anchors are never slid along the wall
+CONTACT_RUNGS = 4.0
 #: positions placed by moving a reference mesh, and gmsh meshings (references and the
 #: positions a move would have spoilt)
 COUNTS = {"moved": 0, "meshed": 0}
@@ -135,9 +140,14 @@ def reference_centre(cell, centre: np.ndarray, offset_angle: float) -> tuple[tup
         if rung >= big_r * (1 - 1e-9):
             return ("shell", round(rung / g_min, 6)), np.zeros(3)
         theta = math.atan2(math.hypot(c[0], c[1]), -c[2])
-        steps = math.ceil(math.pi / min(0.5 * math.pi, DIRECTION_STEP * rung / big_r))
-        k = int(round(theta / (math.pi / steps)))
-        theta_ref = k * math.pi / steps
+        if rung <= CONTACT_RUNGS * g_min * (1 + 1e-9):
+            # the contact rule's anchors (g_min, 2 g_min, 4 g_min along one radius): their
+            # references at the anchors' own direction, the middle one stretched radially
+            k, steps, theta_ref = round(theta, 12), 0, theta
+        else:
+            steps = math.ceil(math.pi / min(0.5 * math.pi, DIRECTION_STEP * rung / big_r))
+            k = int(round(theta / (math.pi / steps)))
+            theta_ref = k * math.pi / steps
         phi = math.atan2(c[1], c[0]) if math.hypot(c[0], c[1]) > 0.0 else offset_angle
         rho = big_r - rung
         ref = np.array([rho * math.sin(theta_ref) * math.cos(phi),
