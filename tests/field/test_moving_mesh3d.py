@@ -92,7 +92,7 @@ def test_a_move_that_would_crush_or_invert_cells_is_refused_and_meshed(monkeypat
 
     cell = _shell_cell()
     settings = Solve3DSettings(degree=1, mesh_size=3e-3, domain_radius=4 * cell.outer_radius,
-                               far_field="kelvin", estimate_error=False, mesh_motion="move")
+                               far_field="kelvin", estimate_error=False)
     moving3d.clear()
     first = moving3d.solve_cell(cell, 1.2e-3, 0.3e-3, settings, comm=MPI.COMM_SELF)
     assert first.placement == {"moved": 1, "meshed": 1}
@@ -125,7 +125,7 @@ def test_the_moved_mesh_moves_the_ball_rigidly_and_not_the_electrodes():
 
     cell = _shell_cell()
     settings = Solve3DSettings(degree=1, mesh_size=3e-3, domain_radius=4 * cell.outer_radius,
-                               far_field="kelvin", estimate_error=False, mesh_motion="move")
+                               far_field="kelvin", estimate_error=False)
     moving3d.clear()
     moving3d.solve_cell(cell, 1.5e-3, 0.0, settings, comm=MPI.COMM_SELF)   # the reference
     ref = next(iter(moving3d._references.values()))
@@ -160,9 +160,11 @@ def test_moved_solves_agree_with_remeshed_ones_within_their_error_estimates():
     moving3d.clear()
     for motion in ("remesh", "move"):
         settings = Solve3DSettings(degree=1, mesh_size=3e-3, far_field="kelvin",
-                                   domain_radius=4 * cell.outer_radius, mesh_motion=motion)
+                                   domain_radius=4 * cell.outer_radius)
+        solve_one = moving3d.placer(motion)
         results[motion] = [solve_cell_3d(cell, z, offset=r, surface_charge=-8e-6,
-                                         settings=settings, comm=MPI.COMM_SELF)
+                                         settings=settings, comm=MPI.COMM_SELF,
+                                         solve_one=solve_one)
                            for z, r in positions]
     placed = [r.info["mesh_placements"] for r in results["move"]]
     assert placed[1]["moved"] >= 1 and placed[-1]["moved"] >= 1
@@ -188,7 +190,7 @@ def test_moved_solves_on_two_ranks_give_the_serial_numbers():
 
     cell = _shell_cell()
     settings = Solve3DSettings(degree=1, mesh_size=3e-3, domain_radius=4 * cell.outer_radius,
-                               far_field="kelvin", estimate_error=False, mesh_motion="move")
+                               far_field="kelvin", estimate_error=False)
     out = {}
     for name, comm in (("world", MPI.COMM_WORLD), ("self", MPI.COMM_SELF)):
         moving3d.clear()

@@ -375,6 +375,13 @@ def solve_cell(cell, position: float, offset: float, settings, *, comm, coarsen:
     return sol
 
 
+def placer(mesh_motion: str):
+    """The ``solve_one`` of :func:`tengfield.field.solver3d.solve_cell_3d` for ``[field]
+    mesh_motion``: :func:`solve_cell` for "move", None (gmsh at every position) for
+    "remesh"."""
+    return solve_cell if mesh_motion == "move" else None
+
+
 def release_references() -> None:
     """Forget every reference mesh, their solvers destroyed (a table is done)."""
     while _references:

@@ -344,7 +344,6 @@ class Solve3DSettings:
     far_field: str = "robin"
     estimate_error: bool = True
     mesh_options: tuple = ()            # extra MeshSettings fields, (("rim_factor", 0.2),)
-    mesh_motion: str = "remesh"         # "move": reference meshes moved (field/moving3d.py)
 
     def mesh_settings(self, coarsen: float = 1.0) -> MeshSettings:
         return MeshSettings(size=self.mesh_size * coarsen, domain_radius=self.domain_radius,
@@ -428,7 +427,7 @@ def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float
 
 def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
                   surface_charge: float, settings: Solve3DSettings, comm,
-                  keep_solution: bool = False) -> PositionResult:
+                  keep_solution: bool = False, solve_one=None) -> PositionResult:
     """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell`, a :class:`HexagonalCell`
     or a :class:`~tengfield.field.cells.SphericalShell`: any cell with the 3D model's
     methods ``placement_3d``, ``contact_rule_3d``, ``extent_3d``, ``occ_parts``,
@@ -439,16 +438,16 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
     closer than ``g_min`` to an electrode follows the contact rule of
     :mod:`tengfield.field.contact` (the axisymmetric solver's). With
     ``keep_solution``, ``result.solution`` is the :class:`FieldSolution`
-    (mesh and ψ functions) of the (nearest) meshed position.
+    (mesh and ψ functions) of the (nearest) meshed position. ``solve_one``: a
+    :func:`solve_cell` of the same signature that places each mesh otherwise
+    (:func:`tengfield.field.moving3d.solve_cell`, ``[field] mesh_motion = "move"``:
+    ``info["mesh_placements"]`` says how); None meshes every position with gmsh.
     """
     start = time.perf_counter()
-    # [field] mesh_motion = "move": reference meshes moved to the positions (field/moving3d.py)
-    moving = settings.mesh_motion == "move" and not keep_solution
-    if moving:
-        from . import moving3d
-        solve_one = moving3d.solve_cell
-    else:
-        solve_one = solve_cell
+    # [field] mesh_motion = "move": the caller passes field/moving3d.py's solve_cell, which
+    # places the ball by moving a reference mesh (a kept solution is always meshed)
+    moving = solve_one is not None and not keep_solution
+    solve_one = solve_one if moving else solve_cell
     placed = []
 
     def solve_here(z: float, with_estimate: bool, r: float = offset):
@@ -525,7 +524,8 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
 
 
 def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,
-                      estimate_error: bool = True, keep_solution: bool = False) -> PositionResult:
+                      estimate_error: bool = True, keep_solution: bool = False,
+                      solve_one=None) -> PositionResult:
     """3D solve of the scene's device with the ball at gap ``position`` [m].
 
     ``offset`` [m] (lateral, along +x) defaults to ``[field] ball_offset_mm``.
@@ -545,8 +545,7 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
     # mesh_size_mm as written, or the default scaled to the device's features, as in 2D
     settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                domain_radius=fld.domain_radius, far_field=fld.far_field,
-                               estimate_error=estimate_error,
-                               mesh_motion=getattr(fld, "mesh_motion", "remesh"))
+                               estimate_error=estimate_error)
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
                          surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
-                         keep_solution=keep_solution)
+                         keep_solution=keep_solution, solve_one=solve_one)

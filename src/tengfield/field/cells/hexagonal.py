@@ -63,16 +63,17 @@ class Hexagonal:
             raise FieldError(f"unknown 3D solver option(s) {sorted(unknown)}; allowed: "
                              "estimate_error, keep_solution")
         from ..geometry_axisymmetric import base_mesh_size
+        from ..moving3d import placer
         from ..solver3d import Solve3DSettings, solve_cell_3d
 
         fld = scene.field
         settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                    domain_radius=fld.domain_radius, far_field=fld.far_field,
-                                   estimate_error=options.get("estimate_error", True),
-                                   mesh_motion=getattr(fld, "mesh_motion", "remesh"))
+                                   estimate_error=options.get("estimate_error", True))
         return solve_cell_3d(self.cell, position, offset=offset,
                              surface_charge=scene.device.surface_charge, settings=settings,
-                             comm=comm, keep_solution=options.get("keep_solution", False))
+                             comm=comm, keep_solution=options.get("keep_solution", False),
+                             solve_one=placer(getattr(fld, "mesh_motion", "remesh")))
 
     #: ``[field] method`` -> its solver: a 3D cell (the shape's ``field_methods``)
     field_models = {"3d": _solve_3d}

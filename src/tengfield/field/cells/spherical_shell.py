@@ -136,14 +136,16 @@ class SphericalShell:
         ``offset`` [m] (at most :meth:`admissible_offset`), at angle ``offset_angle``
         [rad] from +x; the far-field sphere :attr:`far_radius`; ``mesh_motion = "move"``:
         reference meshes moved to the position (:mod:`tengfield.field.moving3d`)."""
+        from ..moving3d import placer
         from ..solver3d import Solve3DSettings, solve_cell_3d
 
         settings = Solve3DSettings(degree=degree, mesh_size=mesh_size,
                                    domain_radius=self.far_radius, far_field=far_field,
-                                   estimate_error=estimate_error, mesh_motion=mesh_motion)
+                                   estimate_error=estimate_error)
         return solve_cell_3d(self, position, offset=offset, offset_angle=offset_angle,
                              surface_charge=sigma, settings=settings, comm=comm,
-                             keep_solution=keep_solution)
+                             keep_solution=keep_solution,
+                             solve_one=placer(mesh_motion))
 
     def __post_init__(self) -> None:
         for key, value in (("cavity_diameter_mm", self.cavity_diameter),
