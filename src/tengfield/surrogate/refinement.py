@@ -281,8 +281,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         bar.n = bar.total
         bar.close()
     if getattr(scene.field, "mesh_motion", "remesh") == "move":   # the table is done:
-        from ..field import moving   # its reference meshes and their solvers are freed
+        from ..field import moving, moving3d   # its reference meshes and solvers are freed
         moving.release_references()
+        moving3d.release_references()   # a 3D table (the honeycomb's)
     rule = (_field_error_rule(sample_at, "", "at the other positions") if sampled
             else "measured at every position")
     table = dataclasses.replace(
