@@ -38,7 +38,8 @@ __all__ = ["PositionResult", "FieldSolution", "solve_position", "open_circuit",
 #: only these: io.py, plot.py, potential.py and result.py write, draw or
 #: post-process and may change without invalidating stored solves.
 SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py", "contact.py",
-                  "geometry3d.py", "geometry_axisymmetric.py", "moving.py", "solver3d.py",
+                  "geometry3d.py", "geometry_axisymmetric.py", "moving.py", "moving3d.py",
+                  "solver3d.py",
                   "cells/__init__.py", "cells/_methods.py", "cells/hexagonal.py",
                   "cells/shell_model.py",
                   "cells/shell_model3d.py", "cells/solve.py",

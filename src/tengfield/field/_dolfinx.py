@@ -254,11 +254,11 @@ def geometry_degree(mesh) -> int:
     return int(mesh.geometry.cmap.degree)
 
 
-def cell_vertex_nodes(mesh) -> np.ndarray:
-    """(local cells, 3) rows of ``mesh.geometry.x`` holding each triangle's vertices
-    (a curved cell's geometry nodes list its vertices first)."""
+def cell_vertex_nodes(mesh, vertices: int = 3) -> np.ndarray:
+    """(local cells, ``vertices``) rows of ``mesh.geometry.x`` holding each cell's vertices
+    (3: triangles, 4: tetrahedra; a curved cell's geometry nodes list its vertices first)."""
     cells = np.arange(num_local_cells(mesh), dtype=np.int32)
-    return np.ascontiguousarray(_rows(mesh.geometry.dofmap, cells)[:, :3])
+    return np.ascontiguousarray(_rows(mesh.geometry.dofmap, cells)[:, :vertices])
 
 
 def submesh(mesh, cells) -> object:
@@ -364,12 +364,16 @@ def assemble_matrix(a, bcs=()):
     return A
 
 
-def assemble_matrix_into(A, a) -> None:
+def assemble_matrix_into(A, a, bcs=()) -> None:
     """Assemble the compiled bilinear form ``a`` into the existing matrix ``A`` (the same
     sparsity: a moved mesh), its entries zeroed first (``assemble_matrix``'s
-    ``PETSc.Mat`` overload, the same in 0.5 and 0.9)."""
+    ``PETSc.Mat`` overload, the same in 0.5 and 0.9); rows/cols of ``bcs`` get a unit
+    diagonal, as :func:`assemble_matrix`."""
     A.zeroEntries()
-    dolfinx.fem.petsc.assemble_matrix(A, a)
+    if bcs:
+        dolfinx.fem.petsc.assemble_matrix(A, a, bcs=list(bcs))
+    else:
+        dolfinx.fem.petsc.assemble_matrix(A, a)
     A.assemble()
 
 

@@ -427,7 +427,7 @@ def load_cell_mesh(path, *, comm, ball_centre=(0.0, 0.0, 0.0), meshed_gap: float
 
 def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
                   surface_charge: float, settings: Solve3DSettings, comm,
-                  keep_solution: bool = False) -> PositionResult:
+                  keep_solution: bool = False, solve_one=None) -> PositionResult:
     """A :class:`PositionResult` for ``cell`` (a :class:`CylindricalCell`, a :class:`HexagonalCell`
     or a :class:`~tengfield.field.cells.SphericalShell`: any cell with the 3D model's
     methods ``placement_3d``, ``contact_rule_3d``, ``extent_3d``, ``occ_parts``,
@@ -438,16 +438,26 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
     closer than ``g_min`` to an electrode follows the contact rule of
     :mod:`tengfield.field.contact` (the axisymmetric solver's). With
     ``keep_solution``, ``result.solution`` is the :class:`FieldSolution`
-    (mesh and ψ functions) of the (nearest) meshed position.
+    (mesh and ψ functions) of the (nearest) meshed position. ``solve_one``: a
+    :func:`solve_cell` of the same signature that places each mesh otherwise
+    (:func:`tengfield.field.moving3d.solve_cell`, ``[field] mesh_motion = "move"``:
+    ``info["mesh_placements"]`` says how); None meshes every position with gmsh.
     """
     start = time.perf_counter()
+    # [field] mesh_motion = "move": the caller passes field/moving3d.py's solve_cell, which
+    # places the ball by moving a reference mesh (a kept solution is always meshed)
+    moving = solve_one is not None and not keep_solution
+    solve_one = solve_one if moving else solve_cell
+    placed = []
 
     def solve_here(z: float, with_estimate: bool, r: float = offset):
-        sol = solve_cell(cell, z, r, settings, comm=comm, offset_angle=offset_angle)
+        sol = solve_one(cell, z, r, settings, comm=comm, offset_angle=offset_angle)
+        placed.append(getattr(sol, "placement", None))
         sol.estimate = math.nan
         if with_estimate:
-            coarse = solve_cell(cell, z, r, settings, comm=comm, coarsen=2.0,
-                                offset_angle=offset_angle)
+            coarse = solve_one(cell, z, r, settings, comm=comm, coarsen=2.0,
+                               offset_angle=offset_angle)
+            placed.append(getattr(coarse, "placement", None))
             sol.estimate = (contact.relative_change(coarse, sol)
                             / (2.0 ** OBSERVED_ORDER[settings.degree] - 1.0))
         return sol
@@ -494,6 +504,10 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         "assembly_time_s": pot.assembly_time,
         "mpi_size": comm.size,
     })
+    if moving:
+        info["mesh_motion"] = "move"
+        info["mesh_placements"] = {key: sum(p[key] for p in placed if p)
+                                   for key in ("moved", "meshed")}
     solution = None
     if keep_solution:
         cm = fine.cell_mesh
@@ -510,7 +524,8 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
 
 
 def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,
-                      estimate_error: bool = True, keep_solution: bool = False) -> PositionResult:
+                      estimate_error: bool = True, keep_solution: bool = False,
+                      solve_one=None) -> PositionResult:
     """3D solve of the scene's device with the ball at gap ``position`` [m].
 
     ``offset`` [m] (lateral, along +x) defaults to ``[field] ball_offset_mm``.
@@ -533,4 +548,4 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
                                estimate_error=estimate_error)
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
                          surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
-                         keep_solution=keep_solution)
+                         keep_solution=keep_solution, solve_one=solve_one)

@@ -281,8 +281,9 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         bar.n = bar.total
         bar.close()
     if getattr(scene.field, "mesh_motion", "remesh") == "move":   # the table is done:
-        from ..field import moving   # its reference meshes and their solvers are freed
+        from ..field import moving, moving3d   # its reference meshes and solvers are freed
         moving.release_references()
+        moving3d.release_references()   # a 3D table (the honeycomb's)
     rule = (_field_error_rule(sample_at, "", "at the other positions") if sampled
             else "measured at every position")
     table = dataclasses.replace(
@@ -454,6 +455,7 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
             bar.update(n)
 
     solved: dict = {}
+    placed = {"moved": 0, "meshed": 0}
     by_place: dict = {}   # the solves by the ball's (z, r): a scaled grid's ends share one
     measured = math.nan
 
@@ -479,6 +481,9 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
             bar.total += len(tasks)
             bar.refresh()
         farmed = farm(comm, tasks, work, progress=advance)
+        for r in farmed:   # how the solves' meshes were placed (#40, mesh_motion = "move")
+            for key, count in (getattr(r, "info", None) or {}).get("mesh_placements", {}).items():
+                placed[key] = placed.get(key, 0) + int(count)
         if sampled:
             farmed, measured = _sampled_field_errors(farmed, [t[2] for t in tasks], measured)
         by_place.update(zip(places, farmed))
@@ -519,6 +524,9 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
         solve_grid(z_next, r_next)
     if bar is not None:
         bar.close()
+    if getattr(scene.field, "mesh_motion", "remesh") == "move":   # the table is done:
+        from ..field import moving3d   # its reference meshes and their solvers are freed
+        moving3d.release_references()
     rule = (_field_error_rule(sample_z, f" on the axis and at r = {largest:.6g} m", "elsewhere")
             if sampled else "measured at every point")
     table = grid(z_now, r_now)
@@ -530,7 +538,8 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
                                tolerance=tolerance),
         provenance={**provenance(scene, command_line), "mirror_symmetry": symmetric,
                     "field_error_rule": rule, "solver_fingerprint": solver_fingerprint(),
-                    "kind": "zr"})
+                    "kind": "zr",
+                    **({"mesh_placements": placed} if sum(placed.values()) else {})})
     warn_problems(radial_accuracy_problems(table), comm, stacklevel=2)
     return table
 

@@ -63,6 +63,7 @@ class Hexagonal:
             raise FieldError(f"unknown 3D solver option(s) {sorted(unknown)}; allowed: "
                              "estimate_error, keep_solution")
         from ..geometry_axisymmetric import base_mesh_size
+        from ..moving3d import placer
         from ..solver3d import Solve3DSettings, solve_cell_3d
 
         fld = scene.field
@@ -71,7 +72,8 @@ class Hexagonal:
                                    estimate_error=options.get("estimate_error", True))
         return solve_cell_3d(self.cell, position, offset=offset,
                              surface_charge=scene.device.surface_charge, settings=settings,
-                             comm=comm, keep_solution=options.get("keep_solution", False))
+                             comm=comm, keep_solution=options.get("keep_solution", False),
+                             solve_one=placer(getattr(fld, "mesh_motion", "remesh")))
 
     #: ``[field] method`` -> its solver: a 3D cell (the shape's ``field_methods``)
     field_models = {"3d": _solve_3d}

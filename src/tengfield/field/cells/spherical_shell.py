@@ -112,7 +112,9 @@ class SphericalShell:
         fld = scene.field
         return self.solve_3d(position, offset=offset, sigma=scene.device.surface_charge,
                              mesh_size=base_mesh_size(scene), degree=fld.degree,
-                             far_field=fld.far_field, comm=comm, **options)
+                             far_field=fld.far_field, comm=comm,
+                             **{"mesh_motion": getattr(fld, "mesh_motion", "remesh"),
+                                **options})
 
     #: ``[field] method`` -> its solver (the names of the shape's ``field_methods``)
     field_models = {"axisymmetric": _solve_axisymmetric, "3d": _solve_scene_3d}
@@ -127,11 +129,14 @@ class SphericalShell:
 
     def solve_3d(self, position: float, *, offset: float = 0.0, offset_angle: float = 0.0,
                  sigma: float, mesh_size: float, degree: int = 2, far_field: str = "kelvin",
-                 comm, estimate_error: bool = True, keep_solution: bool = False):
+                 comm, estimate_error: bool = True, keep_solution: bool = False,
+                 mesh_motion: str = "remesh"):
         """A 3D solve (:func:`tengfield.field.solver3d.solve_cell_3d`, the tube's solver on
         :mod:`.shell_model3d`'s model) with the ball at gap ``position`` [m] and lateral
         ``offset`` [m] (at most :meth:`admissible_offset`), at angle ``offset_angle``
-        [rad] from +x; the far-field sphere :attr:`far_radius`."""
+        [rad] from +x; the far-field sphere :attr:`far_radius`; ``mesh_motion = "move"``:
+        reference meshes moved to the position (:mod:`tengfield.field.moving3d`)."""
+        from ..moving3d import placer
         from ..solver3d import Solve3DSettings, solve_cell_3d
 
         settings = Solve3DSettings(degree=degree, mesh_size=mesh_size,
@@ -139,7 +144,8 @@ class SphericalShell:
                                    estimate_error=estimate_error)
         return solve_cell_3d(self, position, offset=offset, offset_angle=offset_angle,
                              surface_charge=sigma, settings=settings, comm=comm,
-                             keep_solution=keep_solution)
+                             keep_solution=keep_solution,
+                             solve_one=placer(mesh_motion))
 
     def __post_init__(self) -> None:
         for key, value in (("cavity_diameter_mm", self.cavity_diameter),

@@ -38,8 +38,10 @@ class Tube:
         return solve_position_axisymmetric(scene, position, comm=comm, **options)
 
     def _solve_3d(self, scene, position: float, *, comm, offset: float, **options):
+        from ..moving3d import placer
         from ..solver3d import solve_position_3d
-        return solve_position_3d(scene, position, offset=offset, comm=comm, **options)
+        return solve_position_3d(scene, position, offset=offset, comm=comm,
+                                 solve_one=placer(getattr(scene.field, "mesh_motion", "remesh")), **options)
 
     #: ``[field] method`` -> its solver (the names of ``scene.shapes.tube.Tube.field_methods``)
     field_models = {"axisymmetric": _solve_axisymmetric, "3d": _solve_3d}
