@@ -39,7 +39,8 @@ its new place and size rigidly with the blending weight) instead of meshing it: 
 compiled forms, dofs, sparsity and restriction are the template's, the operator and
 the ball's load are assembled again. A map is accepted only if every triangle keeps
 its orientation and its shape quality (4√3·area / Σ edge²) within
-:data:`QUALITY_BOUND` of the template's; otherwise the rung is meshed (counted
+:data:`MAP_QUALITY_BOUND` of the quality gmsh meshed it with (a chain of maps
+cannot drift); otherwise the rung is meshed (counted
 ``map_refused``). ``TENGFIELD_MESH_MAPPING=0`` turns the mapping off (to measure it).
 A mapped geometry's numbers depend on the template it was mapped from by the
 discretisation error only (``tests/field/test_mapped_mesh.py``).
@@ -70,6 +71,9 @@ MAX_KEYS = 4
 #: were done (the references and the positions a move would have spoilt), how many
 #: references were mapped from another geometry's, and how many maps were refused
 COUNTS = {"moved": 0, "meshed": 0, "mapped": 0, "map_refused": 0}
+#: smallest factor by which a mapped triangle's shape quality may fall against the one
+#: its gmsh mesh had (a chain of maps is measured against the meshed original)
+MAP_QUALITY_BOUND = 2.0
 #: templates kept for mapping (released references, one per family and rung)
 MAX_TEMPLATES = 32
 #: the map is the identity outside the box (tube) or disk (shell) of this fraction of
@@ -93,6 +97,7 @@ class Reference:
     area0: np.ndarray        # signed areas as meshed
     centre: float            # the ball centre's z as meshed [m]
     placed_at: float = np.nan  # the centre's z now [m]
+    quality0: np.ndarray | None = None  # shape quality per triangle as gmsh meshed it
     family: tuple | None = None  # geometry_family: what a mapped geometry shares
     rung: tuple | None = None    # reference_rung's rung: (side, index or "half")
 
@@ -135,7 +140,8 @@ def _new_reference(dx_api, lay, disc) -> Reference:
     triangles = dx_api.cell_vertex_nodes(disc.mesh)
     return Reference(lay=lay, disc=disc, x0=x0, weight=blending_weight(x0, lay),
                      triangles=triangles, area0=signed_areas(x0, triangles),
-                     centre=lay.ball_centre_z, placed_at=lay.ball_centre_z)
+                     centre=lay.ball_centre_z, placed_at=lay.ball_centre_z,
+                     quality0=shape_quality(x0, triangles))
 
 
 def reference_position(lay, minimum_gap: float) -> float:
@@ -324,10 +330,10 @@ def shape_quality(x: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 
 def mapping_ok(template: Reference, x: np.ndarray) -> bool:
     """Whether the mapped nodes ``x`` keep every triangle's orientation and its shape
-    quality within :data:`QUALITY_BOUND` of the template's."""
-    ratio = shape_quality(x, template.triangles) / shape_quality(template.x0,
-                                                                  template.triangles)
-    return bool(np.all(ratio > 1.0 / QUALITY_BOUND))
+    quality within :data:`MAP_QUALITY_BOUND` of the quality gmsh meshed it with (the
+    template's, or the mesh it was itself mapped from's)."""
+    ratio = shape_quality(x, template.triangles) / template.quality0
+    return bool(np.all(ratio > 1.0 / MAP_QUALITY_BOUND))
 
 
 def mapping_enabled() -> bool:
@@ -356,7 +362,7 @@ def _mapped_reference(dx_api, family, rung, lay, reassemble) -> Reference | None
     return Reference(lay=lay, disc=disc, x0=x, weight=blending_weight(x, lay),
                      triangles=template.triangles, area0=signed_areas(x, template.triangles),
                      centre=lay.ball_centre_z, placed_at=lay.ball_centre_z,
-                     family=family, rung=rung)
+                     quality0=template.quality0, family=family, rung=rung)
 
 
 def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
