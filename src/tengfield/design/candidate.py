@@ -265,6 +265,9 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
                     table, outcome = obtain(scene, cache_dir=cache_dir, comm=None,
                                             solve=solve)
                 row["field_status"] = outcome.status
+                if outcome.status in ("computed", "recomputed"):   # how its meshes were
+                    row["mesh_placements"] = dict(          # placed (moved, meshed, mapped)
+                        (table.provenance or {}).get("mesh_placements") or {})
                 if tables is not None:
                     tables[key] = table
         except TengfieldError as exc:
