@@ -291,7 +291,7 @@ def map_nodes(x: np.ndarray, old, new) -> np.ndarray | None:
     def mapped(r, z):
         return region(r, z, old, new)
 
-    r, z = x[:, 0], x[:, 1]
+    r, z = x[:, 0].copy(), x[:, 1].copy()
     out = mapped(r, z)
     if out is None:
         return None
