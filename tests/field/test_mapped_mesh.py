@@ -8,24 +8,11 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers import assert_tables_agree_within_estimates
 
 from tengfield.scene import default_scene
 
 field = pytest.mark.field
-
-
-def _agree_within_estimates(mapped, remeshed):
-    """Max relative change of C and q at every position against both error estimates."""
-    np.testing.assert_allclose(mapped.positions, remeshed.positions, rtol=0, atol=1e-15)
-    n = len(remeshed.positions)
-    scale_c = np.abs(remeshed.capacitance).reshape(n, -1).max(axis=1)
-    scale_q = np.abs(remeshed.induced_charge).max(axis=1)
-    change = np.maximum(
-        np.abs(mapped.capacitance - remeshed.capacitance).reshape(n, -1).max(axis=1) / scale_c,
-        np.abs(mapped.induced_charge - remeshed.induced_charge).max(axis=1) / scale_q)
-    bound = np.minimum(mapped.field_error, remeshed.field_error)
-    assert np.all(change <= bound), (change, bound)
-    return change
 
 
 def _tube(**device):
@@ -172,7 +159,7 @@ def test_mapped_tube_tables_agree_with_remeshed_ones_within_their_error_estimate
     assert mapped.provenance["mesh_placements"]["mapped"] == moving.COUNTS["mapped"]
     assert moving.COUNTS["meshed"] - meshed_before <= mapped.provenance["mesh_placements"][
         "meshed"]
-    _agree_within_estimates(mapped, remeshed)
+    assert_tables_agree_within_estimates(mapped, remeshed)
     moving.clear()
 
 
@@ -190,5 +177,5 @@ def test_mapped_shell_tables_agree_with_remeshed_ones_within_their_error_estimat
         mapped = surrogate.precompute(second.with_values(field={"mesh_motion": "move"}))
         remeshed = surrogate.precompute(second)
     assert mapped.provenance["mesh_placements"]["mapped"] >= 4
-    _agree_within_estimates(mapped, remeshed)
+    assert_tables_agree_within_estimates(mapped, remeshed)
     moving.clear()
