@@ -89,7 +89,8 @@ def main() -> None:
               f"{cost['dynamics']:.2f} s, circuit {cost['circuit']:.2f} s; counts "
               f"{summary['counts']}; meshes {cost.get('mesh_placements')}")
         best = summary["best"]
-        print(f"  best: gap_mm = {best['gap_mm']}, ball_diameter_mm = {best['ball_diameter_mm']}, "
+        print(f"  best: stroke_mm = {best.get('stroke_mm', best.get('gap_mm'))}, "
+              f"ball_diameter_mm = {best['ball_diameter_mm']}, "
               f"{best['objective']:.4g} +- {best['objective_error']:.2g} W/m^3")
     if args.serial:
         t1 = runs["serial"][0]["wall_s"]
