@@ -28,10 +28,6 @@ DESIGN_DEGREE = 2
 DESIGN_MESH_MAX_MM = 1.0
 DESIGN_MESH_BALL_FRACTION = 0.2
 DESIGN_TOLERANCE = 0.02
-#: candidates' meshes moved with the ball and mapped from the previous candidate's
-#: (field/moving.py): their numbers differ from remeshed ones by the discretisation
-#: error, well inside the coarse setting's estimate (docs/design.md)
-DESIGN_MESH_MOTION = "move"
 #: matched-load scan: decades either side of 1 / (2 pi f C_T), grid points, Brent's tolerance
 LOAD_DECADES = 1.5
 LOAD_GRID = 7
@@ -44,7 +40,7 @@ def design_field_settings(ball_diameter_mm: float) -> dict:
     """``[field]`` keys of the coarse design setting for a ball of this diameter."""
     return {"degree": DESIGN_DEGREE,
             "mesh_size_mm": float(f"{min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION * ball_diameter_mm):.6g}"),
-            "tolerance": DESIGN_TOLERANCE, "mesh_motion": DESIGN_MESH_MOTION}
+            "tolerance": DESIGN_TOLERANCE}
 
 
 def followed_geometry(base_device: dict, values: dict) -> dict:
@@ -206,7 +202,8 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
            "band_spread": {}, "dynamics_error": {}, "windows": [],
            "regimes": [], "upper_contacts_per_period": [], "upper_contact_fraction": math.nan,
            "load_ohm": None, "field_hash": "", "field_error": math.nan,
-           "interpolation_error": math.nan, "field_status": "", "positions": 0,
+           "interpolation_error": math.nan, "field_status": "", "mesh_placements": {},
+           "positions": 0,
            "device_volume_m3": math.nan, "surface_charge_uC_per_m2": math.nan,
            "wall_s": {"field": 0.0, "dynamics": 0.0, "circuit": 0.0}}
     try:
