@@ -114,3 +114,19 @@ def assert_labelled(fig) -> None:
         assert not _RAW_KEY.search(text), f"a raw scene key in {text!r}"
         assert "cell(s)" not in text, text
         assert not _ASCII_UNITS.search(text), f"an ASCII unit in {text!r}"
+
+
+def assert_tables_agree_within_estimates(table, reference) -> np.ndarray:
+    """Two surrogate tables of one geometry (moved or mapped meshes against remeshed
+    ones) agree at every position: the largest relative change of C and q is within
+    both tables' field error estimates there. Returns the changes."""
+    np.testing.assert_allclose(table.positions, reference.positions, rtol=0, atol=1e-15)
+    n = len(reference.positions)
+    scale_c = np.abs(reference.capacitance).reshape(n, -1).max(axis=1)
+    scale_q = np.abs(reference.induced_charge).max(axis=1)
+    change = np.maximum(
+        np.abs(table.capacitance - reference.capacitance).reshape(n, -1).max(axis=1) / scale_c,
+        np.abs(table.induced_charge - reference.induced_charge).max(axis=1) / scale_q)
+    bound = np.minimum(table.field_error, reference.field_error)
+    assert np.all(change <= bound), (change, bound)
+    return change

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers import assert_tables_agree_within_estimates
 
 from tengfield.scene import default_scene
 
@@ -104,15 +105,7 @@ def test_the_moved_table_agrees_with_the_remeshed_one_within_its_error_estimate(
     assert len(set_up) == len(set(set_up)) == moving.COUNTS["meshed"]
     moving.clear()
     assert not any(key.startswith(tuple(set_up)) for key in dx_api.PETSc.Options().getAll())
-    np.testing.assert_allclose(moved.positions, remeshed.positions, rtol=0, atol=1e-15)
-    n = len(remeshed.positions)
-    scale_c = np.abs(remeshed.capacitance).reshape(n, -1).max(axis=1)
-    scale_q = np.abs(remeshed.induced_charge).max(axis=1)
-    change = np.maximum(
-        np.abs(moved.capacitance - remeshed.capacitance).reshape(n, -1).max(axis=1) / scale_c,
-        np.abs(moved.induced_charge - remeshed.induced_charge).max(axis=1) / scale_q)
-    bound = np.minimum(moved.field_error, remeshed.field_error)
-    assert np.all(change <= bound), (change, bound)
+    assert_tables_agree_within_estimates(moved, remeshed)
 
 
 @field

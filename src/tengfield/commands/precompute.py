@@ -94,7 +94,9 @@ def _run(args) -> int:
               f"sum of solve times {table.total_solve_wall_time:.1f} s")
         placed = (table.provenance or {}).get("mesh_placements")
         if placed and placed.get("moved"):   # [field] mesh_motion = "move" (issue #40)
+            mapped = (f", {placed['mapped']} reference meshes mapped from another "
+                      "geometry's" if placed.get("mapped") else "")
             print(f"meshes: {placed['moved']} positions moved with the ball, "
-                  f"{placed['meshed']} gmsh meshings")
+                  f"{placed['meshed']} gmsh meshings{mapped}")
         print(f"wrote {target}")
     return 0

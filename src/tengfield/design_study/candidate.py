@@ -203,7 +203,8 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
            "band_spread": {}, "dynamics_error": {}, "windows": [],
            "regimes": [], "upper_contacts_per_period": [], "upper_contact_fraction": math.nan,
            "load_ohm": None, "field_hash": "", "field_error": math.nan,
-           "interpolation_error": math.nan, "field_status": "", "positions": 0,
+           "interpolation_error": math.nan, "field_status": "", "mesh_placements": {},
+           "positions": 0,
            "device_volume_m3": math.nan, SURFACE_CHARGE_KEY: math.nan,
            "wall_s": {"field": 0.0, "dynamics": 0.0, "circuit": 0.0}}
     try:
@@ -262,6 +263,9 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
                     table, outcome = obtain(scene, cache_dir=cache_dir, comm=None,
                                             solve=solve)
                 row["field_status"] = outcome.status
+                if outcome.status in ("computed", "recomputed"):   # how its meshes were
+                    row["mesh_placements"] = dict(          # placed (moved, meshed, mapped)
+                        (table.provenance or {}).get("mesh_placements") or {})
                 if tables is not None:
                     tables[key] = table
         except TengfieldError as exc:

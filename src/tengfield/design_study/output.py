@@ -108,6 +108,11 @@ def cost_split(result) -> dict:
                                                                           "recomputed")]
     split["field_per_new_geometry"] = sum(solved) / len(solved) if solved else 0.0
     split["new_geometries"] = len(solved)
+    placed = {"moved": 0, "meshed": 0, "mapped": 0}   # [field] mesh_motion = "move"
+    for r in done:
+        for key, count in (r.get("mesh_placements") or {}).items():
+            placed[key] = placed.get(key, 0) + int(count)
+    split["mesh_placements"] = placed
     split["candidates"] = len(done)
     if result.spec.percentile is not None:   # the studies of a percentile aggregate
         robust = [r for r in done if "robust" in r]

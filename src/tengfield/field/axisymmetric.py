@@ -129,14 +129,18 @@ class Discretisation:
     solver: dict | None = None  # a reference mesh's {kind: (K, KSP, prefix)}, set up once
     placement: str = "meshed"   # "moved": a reference mesh moved here (field/moving.py)
     meshings: int = 1           # gmsh meshings the last placement of this mesh took
+    mappings: int = 0           # references mapped from another geometry's (moving.py)
+    far_weight: tuple | None = None  # (Constant κ/R of the far boundary term, κ)
 
 
 def placements(*discs) -> dict:
-    """``{"moved": n, "meshed": m}`` over the meshes of one solve (info["mesh_placements"]):
-    how many were reference meshes moved there, how many gmsh meshings it took."""
+    """``{"moved": n, "meshed": m, "mapped": k}`` over the meshes of one solve
+    (info["mesh_placements"]): how many were reference meshes moved there, how many gmsh
+    meshings it took, how many references were mapped from another geometry's."""
     discs = [d for d in discs if d is not None]
     return {"moved": sum(1 for d in discs if d.placement == "moved"),
-            "meshed": sum(int(d.meshings) for d in discs)}
+            "meshed": sum(int(d.meshings) for d in discs),
+            "mapped": sum(int(d.mappings) for d in discs)}
 
 
 
@@ -153,8 +157,10 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     r = ufl.SpatialCoordinate(mesh)[0]
     a = eps_r * ufl.inner(ufl.grad(u), ufl.grad(v)) * r * dx
     kappa = far_field_weight(far_field, lay.table)
-    if kappa:
-        a += (kappa / lay.domain_radius) * u * v * r * ds(geometry.FACET_TAGS["far_boundary"])
+    far_weight = None
+    if kappa:   # κ/R a constant of the form: a mapped geometry (moving.py) sets its R
+        far_weight = (dx_api.constant(mesh, kappa / lay.domain_radius), kappa)
+        a += far_weight[0] * u * v * r * ds(geometry.FACET_TAGS["far_boundary"])
     a_form = dx_api.form(a)
     load_form = dx_api.form(v("+") * r("+") * dS(geometry.FACET_TAGS["ball_surface"]))
     A = dx_api.assemble_matrix(a_form)
@@ -181,7 +187,7 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     P = dx_api.matrix_from_csr(comm, (n_full, n_red), indptr, indices, data)
     return Discretisation(mesh, cell_tags, facet_tags, V, A, ball_load, P, n_red,
                           lower.astype(np.int64), upper.astype(np.int64), grounded, degree,
-                          (a_form, load_form))
+                          (a_form, load_form), far_weight=far_weight)
 
 
 def reassemble(dx_api, disc: Discretisation) -> None:
@@ -387,7 +393,8 @@ def solve_by_contact_rule(position: float, anchors, stroke: float, solve_at_gap,
     result.info["contact_extrapolation_error"] = rule["error"]
     if all("mesh_placements" in r.info for r in solves):   # every anchor's meshes
         result.info["mesh_placements"] = {
-            key: sum(r.info["mesh_placements"][key] for r in solves) for key in ("moved", "meshed")}
+            key: sum(r.info["mesh_placements"].get(key, 0) for r in solves)
+            for key in ("moved", "meshed", "mapped")}
     result.info["contact_exponent"] = rule["exponent"]
     for r in solves:
         r.__dict__.pop("extras", None)
@@ -412,11 +419,14 @@ def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool
     from . import moving as motion
 
     key = (scene.field_hash(), geometry.base_mesh_size(scene), grading_size)
-    return motion.placed(key, geometry.layout(scene, position, **extra),
-                         lambda z: geometry.layout(scene, z, **extra),
+    lay = geometry.layout(scene, position, **extra)
+    family = motion.geometry_family(lay, permittivity=eps, degree=fld.degree,
+                                    far_field=fld.far_field, grading_size=grading_size)
+    return motion.placed(key, lay, lambda z: geometry.layout(scene, z, **extra),
                          lambda z: mesh_and_discretise(z)[1],
                          lambda disc: reassemble(dx_api, disc), dx_api,
-                         minimum_gap=contact.minimum_gap(scene.device.plate_spacing))
+                         minimum_gap=contact.minimum_gap(scene.device.plate_spacing),
+                         family=family)
 
 
 def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,

@@ -27,6 +27,24 @@ were placed (``info["mesh_placements"]``), a table sums them (its provenance's
 contact rule's anchors g, 2g, 4g) follow the same rule: the first is meshed, the
 others are the rungs or moves of them. :data:`COUNTS` says how often each happened in this process.
 
+Across geometries (design and uncertainty candidates that differ only in their
+dimensions): a reference mesh released when its table is done is kept as a template of
+its *family* (:func:`geometry_family`: the shape, the topology, the far field, the
+permittivities, the mesh size and degree; not the dimensions). A new geometry of the
+same family places a rung's reference by mapping the template of the same rung
+(:func:`map_nodes`: a piecewise-linear map per region, in r and z for the tube, in
+radius and polar angle for the shell, that puts every interface on its new position
+and blends back to the identity before the far boundary, then the ball corrected to
+its new place and size rigidly with the blending weight) instead of meshing it: the
+compiled forms, dofs, sparsity and restriction are the template's, the operator and
+the ball's load are assembled again. A map is accepted only if every triangle keeps
+its orientation and its shape quality (4√3·area / Σ edge²) within
+:data:`MAP_QUALITY_BOUND` of the quality gmsh meshed it with (a chain of maps
+cannot drift); otherwise the rung is meshed (counted
+``map_refused``). ``TENGFIELD_MESH_MAPPING=0`` turns the mapping off (to measure it).
+A mapped geometry's numbers depend on the template it was mapped from by the
+discretisation error only (``tests/field/test_mapped_mesh.py``).
+
 The numbers differ from a remeshed solve by the discretisation error (the tables
 agree within their error estimates: ``tests/field/test_moving_mesh.py``), so
 ``mesh_motion = "move"`` is part of the field hash; "remesh" (the default) leaves the
@@ -36,6 +54,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -48,11 +67,23 @@ LADDER_FACTOR = 4.0
 #: reference meshes kept per (scene, mesh size) in this process, and keys kept
 MAX_REFERENCES = 6
 MAX_KEYS = 4
-#: how many positions were placed by moving a reference mesh, and how many gmsh
-#: meshings were done (the references and the positions a move would have spoilt)
-COUNTS = {"moved": 0, "meshed": 0}
+#: how many positions were placed by moving a reference mesh, how many gmsh meshings
+#: were done (the references and the positions a move would have spoilt), how many
+#: references were mapped from another geometry's, and how many maps were refused
+COUNTS = {"moved": 0, "meshed": 0, "mapped": 0, "map_refused": 0}
+#: smallest factor by which a mapped triangle's shape quality may fall against the one
+#: its gmsh mesh had (a chain of maps is measured against the meshed original)
+MAP_QUALITY_BOUND = 2.0
+#: templates kept for mapping (released references, one per family and rung)
+MAX_TEMPLATES = 32
+#: the map is the identity outside the box (tube) or disk (shell) of this fraction of
+#: the domain radius: the far boundary and the Kelvin image never move
+MAP_REACH = 0.7
+#: environment switch: "0" turns the mapping across geometries off
+MAPPING_ENV = "TENGFIELD_MESH_MAPPING"
 
 _references: OrderedDict = OrderedDict()
+_templates: OrderedDict = OrderedDict()   # (family, rung) -> Reference, solver released
 
 
 @dataclass
@@ -66,6 +97,9 @@ class Reference:
     area0: np.ndarray        # signed areas as meshed
     centre: float            # the ball centre's z as meshed [m]
     placed_at: float = np.nan  # the centre's z now [m]
+    quality0: np.ndarray | None = None  # shape quality per triangle as gmsh meshed it
+    family: tuple | None = None  # geometry_family: what a mapped geometry shares
+    rung: tuple | None = None    # reference_rung's rung: (side, index or "half")
 
 
 def blending_weight(x: np.ndarray, lay) -> np.ndarray:
@@ -106,7 +140,8 @@ def _new_reference(dx_api, lay, disc) -> Reference:
     triangles = dx_api.cell_vertex_nodes(disc.mesh)
     return Reference(lay=lay, disc=disc, x0=x0, weight=blending_weight(x0, lay),
                      triangles=triangles, area0=signed_areas(x0, triangles),
-                     centre=lay.ball_centre_z, placed_at=lay.ball_centre_z)
+                     centre=lay.ball_centre_z, placed_at=lay.ball_centre_z,
+                     quality0=shape_quality(x0, triangles))
 
 
 def reference_position(lay, minimum_gap: float) -> float:
@@ -115,6 +150,13 @@ def reference_position(lay, minimum_gap: float) -> float:
     last rung half the stroke) nearest to that side's gap in ratio. A function of the
     position alone, so a table's numbers do not depend on the order of its solves or
     on how the positions were spread over the ranks."""
+    return reference_rung(lay, minimum_gap)[0]
+
+
+def reference_rung(lay, minimum_gap: float) -> tuple[float, tuple]:
+    """``(gap [m], rung)`` of :func:`reference_position`, ``rung`` = (side, k) for the
+    k-th ladder gap or (side, "half"): what a mapped geometry's reference shares with
+    its template."""
     stroke = lay.gap_lower + lay.gap_upper
     near = max(min(lay.gap_lower, lay.gap_upper), minimum_gap)
     half = 0.5 * stroke
@@ -123,33 +165,238 @@ def reference_position(lay, minimum_gap: float) -> float:
         ladder.append(rung)
         rung *= LADDER_FACTOR
     ladder.append(half)
-    best = min(ladder, key=lambda rung: abs(math.log(near / rung)))
-    return best if lay.gap_lower <= lay.gap_upper else stroke - best
+    k = min(range(len(ladder)), key=lambda i: abs(math.log(near / ladder[i])))
+    lower = lay.gap_lower <= lay.gap_upper
+    name = ("lower" if lower else "upper", "half" if k == len(ladder) - 1 else k)
+    return (ladder[k] if lower else stroke - ladder[k]), name
+
+
+def geometry_family(lay, **settings) -> tuple:
+    """What two geometries must share for one's mesh to be mapped onto the other's: the
+    shape and its topology (walls, table, the electrode rim against the bore and the
+    tube's outside; the shell's band or none), the far field (domain radius, inversion
+    centre, Kelvin shift) and the mesh rule (mesh size, grading exponent), plus
+    ``settings`` (permittivities, degree, grading size...). Not the dimensions."""
+    # the domain radius scales with the device (map_nodes scales the far field and the
+    # Kelvin image with it) unless a Robin condition's 1/R is compiled into the forms
+    radius = float(lay.domain_radius) if settings.get("far_field") == "robin" else None
+    common = (type(lay).__name__, bool(lay.walls), bool(lay.table), bool(lay.kelvin),
+              radius, float(lay.inversion_centre_z),
+              float(lay.mesh_size), float(lay.grading_exponent))
+    if hasattr(lay, "cavity_radius"):
+        topology = (lay.band > 0.0,)
+    else:
+        topology = (int(np.sign(lay.electrode_radius - lay.tube_inner_radius)),
+                    int(np.sign(lay.electrode_radius - lay.tube_outer_radius)),
+                    lay.tube_inner_radius < lay.tube_outer_radius)
+    return common + topology + tuple(sorted((k, repr(v)) for k, v in settings.items()))
+
+
+def _breaks(old: list, new: list):
+    """Sorted breakpoints (old, new) of a piecewise-linear map, or None when the new
+    ones are not in the old ones' order (the map would fold)."""
+    pairs = sorted(set(zip(old, new)))
+    o, n = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+    if np.any(np.diff(o) <= 0.0) or np.any(np.diff(n) <= 0.0):
+        return None
+    return o, n
+
+
+def _piecewise(x: np.ndarray, breaks) -> np.ndarray:
+    """The piecewise-linear map through ``breaks`` (old, new), the identity outside them."""
+    old, new = breaks
+    return np.where((x < old[0]) | (x > old[-1]), x, np.interp(x, old, new))
+
+
+def _ramp(value: np.ndarray, one: float, zero: float) -> np.ndarray:
+    """1 for value <= one, falling linearly to 0 at value >= zero."""
+    return np.clip((zero - value) / (zero - one), 0.0, 1.0)
+
+
+def _map_tube(r, z, old, new):
+    """The tube's region map: piecewise-linear in r (axis, electrode rim, bore, outside)
+    and in z (plate bottoms, electrode planes, plate tops), each displacement blended to
+    0 outside the device's rows/columns, the identity outside the box of
+    :data:`MAP_REACH` x the domain radius."""
+    reach = MAP_REACH * old.domain_radius
+    zK = old.inversion_centre_z
+    size = max(max(lay.tube_outer_radius, lay.electrode_radius,
+                   abs(lay.z_lower - lay.plate_thickness - zK),
+                   abs(lay.z_upper + lay.plate_thickness - zK)) for lay in (old, new))
+    if size >= 0.9 * reach:
+        return None
+    radial = _breaks([0.0, old.electrode_radius, old.tube_inner_radius, old.tube_outer_radius,
+                      reach],
+                     [0.0, new.electrode_radius, new.tube_inner_radius, new.tube_outer_radius,
+                      reach])
+    axial = _breaks([zK - reach, old.z_lower - old.plate_thickness, old.z_lower, old.z_upper,
+                     old.z_upper + old.plate_thickness, zK + reach],
+                    [zK - reach, new.z_lower - new.plate_thickness, new.z_lower, new.z_upper,
+                     new.z_upper + new.plate_thickness, zK + reach])
+    if radial is None or axial is None:
+        return None
+    dr = _piecewise(r, radial) - r
+    dz = _piecewise(z, axial) - z
+    outside = max(old.tube_outer_radius, old.electrode_radius)
+    bottom, top = old.z_lower - old.plate_thickness, old.z_upper + old.plate_thickness
+    rows = np.minimum(_ramp(bottom - z, 0.0, bottom - zK + reach),
+                      _ramp(z - top, 0.0, zK + reach - top))
+    return r + dr * rows, z + dz * _ramp(r, outside, reach)
+
+
+def _map_shell(r, z, old, new):
+    """The shell's region map: piecewise-linear in the distance to the cavity's centre
+    (cavity, outside of the shell) and in the polar angle (the band's edges), the angle's
+    change blended to 0 beyond the shell, the identity beyond :data:`MAP_REACH` x the
+    domain radius."""
+    reach = MAP_REACH * old.domain_radius
+    if max(old.outer_radius, new.outer_radius) >= 0.9 * reach:
+        return None
+    radial = _breaks([0.0, old.cavity_radius, old.outer_radius, reach],
+                     [0.0, new.cavity_radius, new.outer_radius, reach])
+    edge_old = math.asin(min(0.5 * old.band / old.cavity_radius, 1.0))
+    edge_new = math.asin(min(0.5 * new.band / new.cavity_radius, 1.0))
+    polar = _breaks([-0.5 * math.pi, -edge_old, edge_old, 0.5 * math.pi],
+                    [-0.5 * math.pi, -edge_new, edge_new, 0.5 * math.pi])
+    if radial is None or polar is None:
+        return None
+    rho = np.hypot(r, z)
+    theta = np.arctan2(z, r)
+    rho_new = _piecewise(rho, radial)
+    theta_new = theta + (_piecewise(theta, polar) - theta) * _ramp(rho, old.outer_radius,
+                                                                    reach)
+    return rho_new * np.cos(theta_new), rho_new * np.sin(theta_new)
+
+
+def map_nodes(x: np.ndarray, old, new) -> np.ndarray | None:
+    """The nodes ``x`` (n, >= 2: r, z) of a mesh of layout ``old`` placed on the geometry
+    of layout ``new`` (same :func:`geometry_family`), or None when the map would fold.
+    The region map (:func:`_map_tube`, :func:`_map_shell`) puts every interface on its
+    new position; then the ball, which the region map may have distorted, is put rigidly
+    on its new centre at its new size: each node moves by ``w(x) · c(p(x))``, w the
+    blending weight of ``old`` (1 in the ball, 0 on and outside the cavity's walls), p
+    the nearest point of the ball and c the correction there."""
+    region = _map_shell if hasattr(old, "cavity_radius") else _map_tube
+    x = np.array(x, dtype=float, copy=True)
+    scale_far = new.domain_radius / old.domain_radius
+    if scale_far != 1.0:   # the whole model scaled first (the far field, the Kelvin image)
+        if old.inversion_centre_z != 0.0 or new.inversion_centre_z != 0.0:
+            return None
+        image = x[:, 1] > 1.25 * old.domain_radius
+        x[:, 0] *= scale_far
+        x[:, 1] = np.where(image, new.shift + scale_far * (x[:, 1] - old.shift),
+                           scale_far * x[:, 1])
+        old = _scaled_layout(old, scale_far)
+
+    def mapped(r, z):
+        return region(r, z, old, new)
+
+    r, z = x[:, 0].copy(), x[:, 1].copy()
+    out = mapped(r, z)
+    if out is None:
+        return None
+    dr, dz = r, z - old.ball_centre_z
+    dist = np.hypot(dr, dz)
+    pull = np.minimum(1.0, old.ball_radius / np.maximum(dist, 1e-300))
+    pr, pz = dr * pull, old.ball_centre_z + dz * pull          # nearest ball point
+    scale = new.ball_radius / old.ball_radius
+    region_r, region_z = mapped(pr, pz)
+    corr_r = scale * pr - region_r
+    corr_z = new.ball_centre_z + scale * (pz - old.ball_centre_z) - region_z
+    w = blending_weight(x, old)
+    y = x
+    y[:, 0] = out[0] + w * corr_r
+    y[:, 1] = out[1] + w * corr_z
+    y[r == 0.0, 0] = 0.0   # the axis stays the axis
+    return y
+
+
+def _scaled_layout(lay, factor: float):
+    """``lay`` scaled by ``factor`` about the origin (its inversion centre)."""
+    lengths = ["ball_radius", "ball_centre_z", "domain_radius", "shift", "gap_lower",
+               "gap_upper", "requested_gap", "effective_gap"]
+    lengths += (["cavity_radius", "outer_radius", "band"] if hasattr(lay, "cavity_radius")
+                else ["plate_spacing", "plate_thickness", "electrode_radius",
+                      "tube_inner_radius", "tube_outer_radius"])
+    return dataclasses.replace(lay, **{k: factor * getattr(lay, k) for k in lengths})
+
+
+def shape_quality(x: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """4√3·area / Σ edge² per triangle (1 equilateral, 0 degenerate; signed)."""
+    a, b, c = (x[triangles[:, k], :2] for k in range(3))
+    edges = sum(np.sum((p - q) ** 2, axis=1) for p, q in ((a, b), (b, c), (c, a)))
+    return 4.0 * math.sqrt(3.0) * signed_areas(x, triangles) / edges
+
+
+def mapping_ok(template: Reference, x: np.ndarray) -> bool:
+    """Whether the mapped nodes ``x`` keep every triangle's orientation and its shape
+    quality within :data:`MAP_QUALITY_BOUND` of the quality gmsh meshed it with (the
+    template's, or the mesh it was itself mapped from's)."""
+    ratio = shape_quality(x, template.triangles) / template.quality0
+    return bool(np.all(ratio > 1.0 / MAP_QUALITY_BOUND))
+
+
+def mapping_enabled() -> bool:
+    return os.environ.get(MAPPING_ENV, "1") != "0"
+
+
+def _mapped_reference(dx_api, family, rung, lay, reassemble) -> Reference | None:
+    """A reference for ``lay`` mapped from the template of ``(family, rung)`` (taken
+    from the templates), or None (no template, or the map refused: the template kept)."""
+    template = _templates.pop((family, rung), None)
+    if template is None:
+        return None
+    x = map_nodes(template.x0, template.lay, lay)
+    if x is None or not mapping_ok(template, x):
+        COUNTS["map_refused"] += 1
+        _templates[(family, rung)] = template
+        return None
+    disc = template.disc
+    disc.mesh.geometry.x[:, :2] = x[:, :2]
+    if getattr(disc, "far_weight", None) is not None:   # the far boundary term's κ/R
+        constant, kappa = disc.far_weight
+        constant.value = kappa / lay.domain_radius
+    reassemble(disc)
+    disc.solver = {}
+    COUNTS["mapped"] += 1
+    return Reference(lay=lay, disc=disc, x0=x, weight=blending_weight(x, lay),
+                     triangles=template.triangles, area0=signed_areas(x, template.triangles),
+                     centre=lay.ball_centre_z, placed_at=lay.ball_centre_z,
+                     quality0=template.quality0, family=family, rung=rung)
 
 
 def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
-           minimum_gap: float):
+           minimum_gap: float, family: tuple | None = None):
     """``(layout, Discretisation)`` with the ball where ``lay`` puts it: the reference
     mesh of ``key`` at :func:`reference_position` (meshed on first use:
     ``layout_at(z)`` -> layout, ``mesh_and_discretise(z)`` -> Discretisation) moved
     there when the quality bound allows, else the position meshed on its own.
     ``reassemble(disc)`` assembles the operator and the ball's load again on the moved
-    mesh."""
+    mesh. With ``family`` (:func:`geometry_family`) a missing reference is first mapped
+    from a template of the same family and rung (:func:`map_nodes`), and released
+    references become templates."""
     refs = _references.setdefault(key, {})
     _references.move_to_end(key)
     while len(_references) > MAX_KEYS:
         for old in _references.popitem(last=False)[1].values():
-            _release(dx_api, old)
-    z_ref = reference_position(lay, minimum_gap)
+            _retire(dx_api, old)
+    z_ref, rung = reference_rung(lay, minimum_gap)
     slot = round(z_ref / minimum_gap, 6)
     ref = refs.get(slot)
     fresh = ref is None
+    mapped = False
     if fresh:
         ref_lay = layout_at(z_ref)
-        ref = _new_reference(dx_api, ref_lay, mesh_and_discretise(z_ref))
+        if family is not None and mapping_enabled():
+            ref = _mapped_reference(dx_api, family, rung, ref_lay, reassemble)
+            mapped = ref is not None
+        if ref is None:
+            ref = _new_reference(dx_api, ref_lay, mesh_and_discretise(z_ref))
+        ref.family, ref.rung = family, rung
         refs[slot] = ref
         if len(refs) > MAX_REFERENCES:
-            _release(dx_api, refs.pop(next(iter(refs))))
+            _retire(dx_api, refs.pop(next(iter(refs))))
+    meshed_here = int(fresh and not mapped)
     shift = lay.ball_centre_z - ref.centre
     if shift == 0.0 or quality_ok(ref, shift):
         if ref.placed_at != lay.ball_centre_z:
@@ -157,10 +404,11 @@ def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
             x[:, 1] = ref.x0[:, 1] + shift * ref.weight
             reassemble(ref.disc)
             ref.placed_at = lay.ball_centre_z
-        COUNTS["meshed"] += int(fresh)
+        COUNTS["meshed"] += meshed_here
         COUNTS["moved"] += int(shift != 0.0)
         ref.disc.placement = "moved" if shift != 0.0 else "reference"
-        ref.disc.meshings = int(fresh)
+        ref.disc.meshings = meshed_here
+        ref.disc.mappings = int(mapped)
         moved = dataclasses.replace(ref.lay, ball_centre_z=lay.ball_centre_z,
                                     gap_lower=lay.gap_lower, gap_upper=lay.gap_upper,
                                     requested_gap=lay.requested_gap,
@@ -168,8 +416,9 @@ def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
         return moved, ref.disc
     disc = mesh_and_discretise(lay.requested_gap)   # the move would spoil the mesh
     disc.placement = "meshed"
-    disc.meshings = 1 + int(fresh)
-    COUNTS["meshed"] += 1 + int(fresh)
+    disc.meshings = 1 + meshed_here
+    disc.mappings = int(mapped)
+    COUNTS["meshed"] += 1 + meshed_here
     return lay, disc
 
 
@@ -182,17 +431,32 @@ def _release(dx_api, ref: Reference) -> None:
     ref.disc.solver = None
 
 
+def _retire(dx_api, ref: Reference) -> None:
+    """Release ``ref``'s solvers and keep it as the template of its family and rung
+    (when it has a family), the oldest templates forgotten past :data:`MAX_TEMPLATES`."""
+    _release(dx_api, ref)
+    if ref.family is None:
+        return
+    _templates[(ref.family, ref.rung)] = ref
+    _templates.move_to_end((ref.family, ref.rung))
+    while len(_templates) > MAX_TEMPLATES:
+        _templates.popitem(last=False)
+
+
 def clear() -> None:
-    """Forget every reference mesh (their solvers destroyed) and the counts."""
+    """Forget every reference mesh (their solvers destroyed), every template and the
+    counts."""
     release_references()
-    COUNTS.update(moved=0, meshed=0)
+    _templates.clear()
+    COUNTS.update(moved=0, meshed=0, mapped=0, map_refused=0)
 
 
 def release_references() -> None:
-    """Forget every reference mesh, their solvers destroyed (a table is done)."""
+    """Release every reference mesh, their solvers destroyed (a table is done); those
+    with a family stay as templates for mapping (:func:`placed`)."""
     if _references:
         from . import _dolfinx as dx_api
         for refs in _references.values():
             for ref in refs.values():
-                _release(dx_api, ref)
+                _retire(dx_api, ref)
     _references.clear()

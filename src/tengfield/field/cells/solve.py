@@ -99,9 +99,13 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         from .. import moving as motion
         from ..axisymmetric import reassemble
         key = (repr(cell), size, grading, degree, far_field, domain_radius)
-        return motion.placed(key, layout_at(position), layout_at, lambda z: meshed(z)[1],
+        lay = layout_at(position)
+        family = motion.geometry_family(lay, cell=type(cell).__name__, permittivity=eps,
+                                        degree=degree, far_field=far_field, grading_size=grading)
+        return motion.placed(key, lay, layout_at, lambda z: meshed(z)[1],
                              lambda disc: reassemble(dx_api, disc), dx_api,
-                             minimum_gap=contact.minimum_gap(cell.electrode_spacing))
+                             minimum_gap=contact.minimum_gap(cell.electrode_spacing),
+                             family=family)
 
     lay, disc = discretised(mesh_size, grading_size)
     mesh = disc.mesh
