@@ -17,9 +17,6 @@ from tengfield.scene.schema import (KEYWORD_VALUES, SCHEMA, SURFACE_CHARGE_KEY,
 SRC = Path(__file__).resolve().parents[2] / "src" / "tengfield"
 LITERAL = "surface_charge_uC_per_m2"
 HOME = "quantities.py"
-#: files another piece of #41 (the shape registry) rewrites at the same time; they move to
-#: the constant with it. Each must still hold the literal, so the list cannot go stale.
-PENDING = {"field/cells/hexagonal.py"}
 
 
 def test_the_key_is_spelled_once_in_src():
@@ -27,9 +24,8 @@ def test_the_key_is_spelled_once_in_src():
                for path in sorted(SRC.rglob("*.py")) if LITERAL in path.read_text()}
     assert spelled.pop(HOME, 0) == 1, f"{HOME} spells {LITERAL!r} once: SURFACE_CHARGE_KEY"
     assert "import SURFACE_CHARGE_KEY" in (SRC / "scene" / "schema.py").read_text()
-    stray = sorted(set(spelled) - PENDING)
+    stray = sorted(spelled)
     assert not stray, f"{LITERAL!r} spelled outside {HOME} (use SURFACE_CHARGE_KEY): {stray}"
-    assert PENDING <= set(spelled), "a pending file uses the constant now: drop it from PENDING"
 
 
 def test_the_constant_names_the_schema_key_of_the_surface_charge():

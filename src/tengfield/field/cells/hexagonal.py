@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import FieldError
+from ...quantities import SURFACE_CHARGE_KEY
 from ...scene.limits import mesh_features
 from ...scene.shapes import hexagonal as hexagonal_shape
 from ._methods import solve_with
@@ -132,7 +133,7 @@ class Hexagonal:
 
     def breakdown_feet(self, ball_centre_z: float, angles_deg) -> dict:
         raise FieldError("shape = 'hexagonal' has no breakdown lines (3D solves): give "
-                         "[device] surface_charge_uC_per_m2 as a number")
+                         f"[device] {SURFACE_CHARGE_KEY} as a number")
 
     def mesh_features(self) -> dict[str, float]:
         return mesh_features(self.scene.device, self.scene.field.environment)
