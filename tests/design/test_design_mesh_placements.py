@@ -3,7 +3,7 @@ meshings and maps of the candidates whose field this run computed, summed; candi
 whose table came from the cache or the memo add nothing."""
 from types import SimpleNamespace
 
-from tengfield.design.output import cost_split
+from tengfield.design_study.output import cost_split
 
 
 def _row(status, placements):
