@@ -47,10 +47,9 @@ run: setup
 
 test: setup test-serial test-mpi
 
-# the serial suite in one process by default: on this 2-core CI machine `-n 2` was not
-# faster (1848 tests: 33 min wall and 54 CPU min under load; 1594 tests took 21 min 42 s in
-# one process at the previous stop);
-# TEST_JOBS=N spreads it over N pytest-xdist workers (a file's tests on one worker, in order)
+# the serial suite in one process by default; TEST_JOBS=N spreads it over N pytest-xdist
+# workers (a file's tests on one worker, in order; the longest files first:
+# tests/conftest.py LONG_FIRST). CI (.ci/run) runs TEST_JOBS=2 beside its containers
 TEST_JOBS ?= 1
 XDIST = $(if $(filter-out 0 1,$(TEST_JOBS)),-n $(TEST_JOBS) --dist loadfile,)
 
