@@ -2,7 +2,7 @@
 
     python benchmarks/farm_efficiency.py [--frequencies 20] [--amplitudes 10] [--ranks 2]
 
-Times the grid of :func:`tengfield.sweep.sweep` (default scene, its cached
+Times the grid of :func:`tengfield.sweeps.sweep` (default scene, its cached
 surrogate, loads 1e6/1e8/1e10 ohm) once serially in this process and once
 under ``mpirun -n RANKS`` (this file with ``--worker``), both after a warm-up
 point per process (numba and import caches loaded) and without the
@@ -47,7 +47,7 @@ def _cpu() -> float:
 
 
 def _timed_point(task):
-    from tengfield import sweep
+    from tengfield import sweeps as sweep
 
     start, cpu = time.perf_counter(), time.process_time()
     rows = sweep.sweep_point(*task)
@@ -56,7 +56,7 @@ def _timed_point(task):
 
 def _measure(comm, args):
     """(rows, wall [s], cpu [s] of this process, (wall, cpu) [s] of each point it ran)."""
-    from tengfield import sweep
+    from tengfield import sweeps as sweep
     from tengfield.scene import default_scene
     from tengfield.surrogate import obtain_table
 

@@ -48,10 +48,11 @@ _LAZY = {
     "uncertainty": ("tengfield.uncertainty_study", "run_study"),
     "breakdown": ("tengfield.air_breakdown", "study"),
     "report": ("tengfield.accuracy_report", "build_report"),
+    "sweep": ("tengfield.sweeps", "study"),
 }
 
 __all__ = ["Scene", "default_scene", "load_scene", "parse_scene", "SceneError",
-           "TengfieldError", "DynamicsError", "FieldError", "__version__", "sweep",
+           "TengfieldError", "DynamicsError", "FieldError", "__version__",
            *(name for name in _LAZY if name != "map")]   # tf.map: never shadow the builtin on *
 
 

@@ -5,7 +5,7 @@
 * ``trajectory.csv``, ``impacts.csv`` (3D: ``contacts.csv``) and the trajectory
   figures of the dynamics (:func:`write_dynamics_files`);
 * ``map.csv`` (:func:`write_map_csv`, from :mod:`tengfield.dynamics.output`),
-  ``sweep.csv`` (:func:`write_sweep_csv`, :mod:`tengfield.sweep`'s, handed on).
+  ``sweep.csv`` (:func:`write_sweep_csv`, :mod:`tengfield.sweeps`'s, handed on).
 
 * ``report.csv`` and ``report.json`` (:func:`write_report_csv`,
   :func:`write_report_json`; the report's other files: :mod:`tengfield.accuracy_report.output`).
@@ -262,9 +262,9 @@ def _same_times(result) -> bool:
 # ---------------------------------------------------------------------------
 # tengfield sweep
 def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
-    """``sweep.csv``: the ``tengfield.sweep.SWEEP_COLUMNS`` of every row (None -> empty);
-    :func:`tengfield.sweep.write_sweep_csv`, the one writer ``SweepResult.write`` uses."""
-    from .sweep import write_sweep_csv as write
+    """``sweep.csv``: the ``tengfield.sweeps.SWEEP_COLUMNS`` of every row (None -> empty);
+    :func:`tengfield.sweeps.write_sweep_csv`, the one writer ``SweepResult.write`` uses."""
+    from .sweeps import write_sweep_csv as write
 
     return write(path, rows)
 

@@ -349,7 +349,7 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     surrogate is built here once, with ``solve`` (default the field solver), before the
     others run: each of them that moves would otherwise solve the field for itself."""
     from ._console import progress_bar
-    from .sweep import run_tasks
+    from .sweeps import run_tasks
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:

@@ -52,7 +52,7 @@ def test_a_bad_sweep_point_is_refused_before_the_surrogate(tmp_path, capsys, mon
 
 def test_sweep_library_names_the_bad_point():
     from tengfield.scene import default_scene
-    from tengfield.sweep import check_grid
+    from tengfield.sweeps import check_grid
 
     check_grid(default_scene(), [20.0, 30.0], [1e-3])
     with pytest.raises(SceneError, match=r"sweep point frequency_hz = 0.0001, amplitude_mm = 1: "
@@ -65,7 +65,7 @@ def test_sweep_extends_the_run_where_settling_leaves_no_window():
     5 Hz). Those points run settle_periods + 10 periods (10 = the steady periods the
     scene has at its own 20 Hz), the others keep duration_s; one line says which."""
     from tengfield.scene import default_scene
-    from tengfield.sweep import check_grid, extension_line, point_scene
+    from tengfield.sweeps import check_grid, extension_line, point_scene
 
     scene = default_scene()
     check_grid(scene, [5.0, 50.0], [0.5e-3, 3e-3])          # refused before this change

@@ -85,7 +85,7 @@ def test_dynamics_and_map_plots_are_figures():
 @pytest.mark.slow
 def test_sweep_rows_plot(tmp_path):
     from tengfield import surrogate
-    from tengfield.sweep import sweep
+    from tengfield.sweeps import sweep
 
     scene = fx.scene_with(**SHORT)
     table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)

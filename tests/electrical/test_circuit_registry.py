@@ -30,7 +30,7 @@ def test_every_entry_is_a_circuit_with_known_keys():
 
 def test_no_kind_chains_outside_the_registry():
     # pipeline, array, io and sweep ask the entry, not `circuit.kind == ...`
-    for name in ("pipeline.py", "array.py", "io.py", "sweep.py"):
+    for name in ("pipeline.py", "array.py", "io.py", "sweeps.py"):
         text = (SRC / name).read_text()
         assert "circuit.kind ==" not in text and "kind == \"rectifier\"" not in text, name
 

@@ -195,7 +195,7 @@ def test_the_table_names_every_output(cache):
     assert quantities.column_name("I_sc_A", "peak") == "I_sc_peak_A"
     assert quantities.axis_label("Q_sc_C") == "Q_SC [nC]"
     from tengfield.ensemble import ENSEMBLE_COLUMNS, realisation_row
-    from tengfield.sweep import SWEEP_COLUMNS
+    from tengfield.sweeps import SWEEP_COLUMNS
     for table in (ENSEMBLE_COLUMNS, SWEEP_COLUMNS):
         assert {"V_oc_pp_V", "Q_sc_pp_C", "I_sc_pp_A", "I_sc_peak_A", "V_read_pp_V"} <= set(table)
     row = realisation_row(0, 0, r.summary)

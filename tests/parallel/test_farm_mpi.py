@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from tengfield import surrogate
-from tengfield import sweep as sweep_module
+from tengfield import sweeps as sweep_module
 from tengfield.errors import SceneError
 
 import plate_model as fx

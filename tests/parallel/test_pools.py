@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from tengfield import _pool, array
-from tengfield import sweep as sweep_module
+from tengfield import sweeps as sweep_module
 from tengfield.dynamics import regime_map
 
 import plate_model as fx

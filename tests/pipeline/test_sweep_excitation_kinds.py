@@ -8,7 +8,7 @@ import pytest
 
 from tengfield.errors import SceneError
 from tengfield.scene import parse_scene
-from tengfield.sweep import check_grid
+from tengfield.sweeps import check_grid
 
 SCENES = {
     "random": '[excitation]\nkind = "random"\nband_hz = [10.0, 100.0]\n'

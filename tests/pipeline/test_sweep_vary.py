@@ -12,10 +12,10 @@ import pytest
 
 import tengfield as tf
 from tengfield import surrogate
-from tengfield import sweep as sweep_module
+from tengfield import sweeps as sweep_module
 from tengfield.errors import SceneError
 from tengfield.scene import parse_scene
-from tengfield.sweep import parse_vary, vary_points
+from tengfield.sweeps import parse_vary, vary_points
 
 import plate_model as fx
 

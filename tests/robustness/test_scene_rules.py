@@ -97,7 +97,7 @@ def test_a_long_or_invisible_choice_is_shown_short_and_escaped(value):
 
 def test_a_failing_sweep_point_is_named(monkeypatch):
     """#30 item 20: an error inside one point of a sweep names the point."""
-    import tengfield.sweep as sweep_module
+    import tengfield.sweeps as sweep_module
     from tengfield.errors import DynamicsError
     from tengfield.scene import default_scene
 

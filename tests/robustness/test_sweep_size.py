@@ -8,7 +8,7 @@ import pytest
 
 from tengfield.errors import SceneError
 from tengfield.scene import default_scene
-from tengfield.sweep import check_grid
+from tengfield.sweeps import check_grid
 
 
 def _one_line(proc, *needles):
@@ -36,7 +36,7 @@ def test_too_many_loads_are_refused(run_cli, tmp_path):
 
 
 def test_sweep_work_in_samples_is_bounded():
-    from tengfield.sweep import check_sweep_size
+    from tengfield.sweeps import check_sweep_size
 
     scene = default_scene().with_values(run={"duration_s": 100.0, "sample_rate_hz": 20000.0})
     with pytest.raises(SceneError, match=r"sweep work = 10000 points .* allowed <= 1e\+10"):

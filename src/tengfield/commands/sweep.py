@@ -56,7 +56,7 @@ def _run(args) -> int:
     from ..scene import load_scene
     from ..air_breakdown import charge_line, uses_breakdown_charge
     from .._mpi import check_jobs
-    from ..sweep import check_sweep_size, extension_line, parse_vary, sweep_study
+    from ..sweeps import check_sweep_size, extension_line, parse_vary, sweep_study
 
     scene = load_scene(args.scene)
     vary = dict(parse_vary(text) for text in args.vary)

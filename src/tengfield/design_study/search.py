@@ -14,7 +14,7 @@ geometry is a repeated candidate (scored once, its surrogate cached by field has
    improve the best beyond its error bar, else shrinks by 0.8; it stops at the budget,
    at the resolution, or after three rounds without a new candidate.
 
-Each round's candidates are farmed (:func:`tengfield.sweep.run_tasks`: the MPI task
+Each round's candidates are farmed (:func:`tengfield.sweeps.run_tasks`: the MPI task
 farm over ``comm``'s ranks; on one machine ``jobs`` worker processes that live for the
 whole search, so dolfinx and the JIT caches load once per worker, not once per round)
 and every rank takes the same next decision from the gathered rows: the result depends
@@ -222,7 +222,7 @@ class _Workers:
             self._stack.__exit__(*exc)
 
     def map(self, work, tasks, progress):
-        from ..sweep import run_tasks
+        from ..sweeps import run_tasks
 
         if self.pool is None:   # the MPI farm over comm's ranks, or a loop
             return run_tasks(work, tasks, comm=self.comm, jobs=1, progress=progress)

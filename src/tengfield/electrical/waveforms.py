@@ -1,6 +1,6 @@
 """The waveform core: the one place that turns z(t) into V_OC, Q_SC, I_SC.
 
-Every consumer (:func:`tengfield.pipeline.run`, :mod:`tengfield.sweep`,
+Every consumer (:func:`tengfield.pipeline.run`, :mod:`tengfield.sweeps`,
 :mod:`tengfield.array`, :mod:`tengfield.accuracy_report`, :mod:`tengfield.fit`, the
 demos) calls these functions, so they give the same numbers for the same scene;
 what a circuit does with the terminal is in :mod:`tengfield.electrical.circuits`:

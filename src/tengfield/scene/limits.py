@@ -24,7 +24,7 @@ MAX_SAMPLES = 2e7
 MIN_SAMPLES = 2
 #: Output samples of an ensemble, ``realisations x duration_s x sample_rate_hz``: each
 #: realisation runs the dynamics and the circuit over every sample, as a sweep point
-#: does (tengfield.sweep.MAX_SWEEP_WORK, the same 1e10: ~20 min of circuit alone).
+#: does (tengfield.sweeps.MAX_SWEEP_WORK, the same 1e10: ~20 min of circuit alone).
 MAX_ENSEMBLE_WORK = 1e10
 #: Excitation periods per run, ``duration_s x frequency_hz``: 1e6 is 14 h at 20 Hz.
 MAX_PERIODS = 1e6

@@ -328,12 +328,12 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
                    simulate: Callable | None = None, progress: bool = False) -> Evaluations:
     """Every evaluation of ``values`` (``(evaluations, D)``, file units, columns in
     ``spec.keys`` order) and the scene's nominal run, spread over the ranks of ``comm``
-    (``mpirun -n N``, :func:`tengfield.sweep.run_tasks`) or ``jobs`` processes; the
+    (``mpirun -n N``, :func:`tengfield.sweeps.run_tasks`) or ``jobs`` processes; the
     outcome does not depend on how the work was spread.
 
     ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
     from .._console import progress_bar
-    from ..sweep import run_tasks
+    from ..sweeps import run_tasks
 
     keys = spec.keys
     groups = groups_of(keys, values)

@@ -649,13 +649,19 @@ def _file_axis(values, scale: float, name: str, log: bool = False):
 def study(scene, *, vary: dict | None = None, frequency_hz=None, amplitude_mm=None,
           load_ohm=(), cache_dir=None, jobs: int | None = None, comm=None,
           progress: bool = False, solve: Callable | None = None) -> SweepResult:
-    """``tf.sweep(scene, ...)``: :func:`sweep_study` in file units, as ``tengfield sweep``
+    """``tf.sweep(scene, ...)`` (a plain function: the module is ``tengfield.sweeps``):
+    :func:`sweep_study` in file units, as ``tengfield sweep``
     takes them: ``vary={"device.stroke_mm": "1:5:9", "circuit.load_ohm": [1e6, 1e8]}``,
     ``frequency_hz`` [Hz] and ``amplitude_mm`` [mm] (lists, one number or
     ``"START:STOP:N"``), ``load_ohm`` [ohm]. Returns a :class:`SweepResult` (rows,
     ``.plot(key)``, ``.write(out_dir)``)."""
-    from .scene import load_scene
+    import os
 
+    from .scene import load_scene
+    from .scene.parse import check_scene_argument
+
+    if not isinstance(scene, (str, os.PathLike)) and scene is not None:
+        check_scene_argument("tengfield.sweep", scene)
     scene = load_scene(scene)
     loads = _file_axis(load_ohm, 1.0, "load_ohm", log=True) if load_ohm is not None else ()
     return sweep_study(scene, vary=vary,
@@ -664,15 +670,3 @@ def study(scene, *, vary: dict | None = None, frequency_hz=None, amplitude_mm=No
                        loads=loads or (),
                        cache_dir=cache_dir, solve=solve, jobs=jobs, comm=comm,
                        progress=progress)
-
-
-class _CallableModule(__import__("types").ModuleType):
-    """``tf.sweep(scene, vary=..., frequency_hz=..., amplitude_mm=...)`` calls :func:`study`;
-    ``tengfield.sweep.sweep(scene, table, frequencies, amplitudes)`` (SI, one table) and
-    the rest of the module stay as they were."""
-
-    def __call__(self, scene, **kwargs) -> SweepResult:
-        return study(scene, **kwargs)
-
-
-__import__("sys").modules[__name__].__class__ = _CallableModule
