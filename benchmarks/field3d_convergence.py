@@ -29,14 +29,15 @@ def run(out: Path, quick: bool, full: bool = False) -> None:
     from mpi4py import MPI
 
     from tengfield import terminals
-    from tengfield.field import geometry3d, solver3d
+    from tengfield.field import solver3d
+    from tengfield.field.cells import plate_model3d
     from tengfield.scene import default_scene
 
     from tengfield.field import solve_position
 
     comm = MPI.COMM_WORLD
     scene = default_scene()
-    cell = geometry3d.cylindrical_cell(scene.device)
+    cell = plate_model3d.cylindrical_cell(scene.device)
     z = 1.0e-3
     keys = ["C_ll", "C_lu", "C_uu", "q_lower", "q_upper", "C_T"]
 

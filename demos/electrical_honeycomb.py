@@ -52,7 +52,7 @@ def equal_area_radius(apothem: float) -> float:
 
 
 def honeycomb_scene(fast: bool):
-    from tengfield.field.geometry3d import HexagonalCell
+    from tengfield.field.cells.plate_model3d import HexagonalCell
 
     cell = HexagonalCell()
     bore = equal_area_radius(cell.inner_apothem)

@@ -80,7 +80,7 @@ def test_python_callers_see_the_digits_too():
     from tengfield.field.cells.shell_model3d import _check
     from tengfield.field.cells.solve import solve_cell_position
     from tengfield.field.geometry3d import check_position as check_3d
-    from tengfield.field.geometry3d import cylindrical_cell
+    from tengfield.field.cells.plate_model3d import cylindrical_cell
     from tengfield.scene import default_scene
 
     scene = default_scene()                                   # stroke 3 mm

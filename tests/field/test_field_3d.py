@@ -16,10 +16,12 @@ pytest.importorskip("gmsh")
 
 from tengfield.errors import FieldError  # noqa: E402
 from tengfield.field import geometry3d, solver3d  # noqa: E402
+from tengfield.field.cells import plate_model3d  # noqa: E402
+from tengfield.field.cells import tube as tube_cell  # noqa: E402
 from tengfield.scene import default_scene  # noqa: E402
 
-PAPER = geometry3d.cylindrical_cell(default_scene().device)
-HONEYCOMB = geometry3d.HexagonalCell()
+PAPER = plate_model3d.cylindrical_cell(default_scene().device)
+HONEYCOMB = plate_model3d.HexagonalCell()
 P2 = solver3d.Solve3DSettings(degree=2, mesh_size=1.5e-3, domain_radius=20e-3, far_field="kelvin",
                               estimate_error=False)
 
@@ -198,7 +200,7 @@ def test_grounded_table_is_refused_by_the_3d_path():
     from mpi4py import MPI
     scene = default_scene().with_values(field={"environment": "grounded-table"})
     with pytest.raises(FieldError, match="environment"):
-        solver3d.solve_position_3d(scene, 1e-3, comm=MPI.COMM_SELF)
+        tube_cell.solve_position_3d(scene, 1e-3, comm=MPI.COMM_SELF)
 
 
 @pytest.mark.slow

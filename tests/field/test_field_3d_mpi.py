@@ -38,7 +38,8 @@ def test_degree2_offaxis_world_equals_self():
     from mpi4py import MPI
 
     from tengfield.field import solver3d
-    from tengfield.field.geometry3d import MeshSettings, cylindrical_cell
+    from tengfield.field.cells.plate_model3d import cylindrical_cell
+    from tengfield.field.geometry3d import MeshSettings
     from tengfield.scene import default_scene
 
     cell = cylindrical_cell(default_scene().device)

@@ -51,6 +51,7 @@ def test_an_explicit_mesh_size_is_used_as_written_for_a_large_spacing():
 
 def test_the_3d_solver_uses_an_explicit_mesh_size_as_written(monkeypatch):
     from tengfield.field import solver3d
+    from tengfield.field.cells import tube as tube_cell
 
     seen = {}
 
@@ -59,11 +60,11 @@ def test_the_3d_solver_uses_an_explicit_mesh_size_as_written(monkeypatch):
         return None
 
     monkeypatch.setattr(solver3d, "solve_cell_3d", capture)
-    solver3d.solve_position_3d(scene_of(FAR, mesh_size_mm=4.0), 0.198, offset=0.1e-3,
-                               comm=None)
+    tube_cell.solve_position_3d(scene_of(FAR, mesh_size_mm=4.0), 0.198, offset=0.1e-3,
+                                comm=None)
     assert seen["size"] == 4e-3
-    solver3d.solve_position_3d(scene_of(scaled(3.0, stroke_mm=6.0)), 3e-3, offset=0.1e-3,
-                               comm=None)
+    tube_cell.solve_position_3d(scene_of(scaled(3.0, stroke_mm=6.0)), 3e-3, offset=0.1e-3,
+                                comm=None)
     assert seen["size"] == pytest.approx(1e-3, rel=1e-12)   # the default, scaled
 
 

@@ -18,10 +18,11 @@ pytest.importorskip("dolfinx")
 pytest.importorskip("gmsh")
 
 from tengfield.field import geometry3d, solver3d  # noqa: E402
+from tengfield.field.cells import plate_model3d  # noqa: E402
 
 MESHES = Path(__file__).resolve().parents[2] / "meshes"
 REFERENCE = json.loads((MESHES / "reference.json").read_text())
-CASES = geometry3d.reference_cases()
+CASES = plate_model3d.reference_cases()
 
 
 @pytest.mark.slow
@@ -48,7 +49,7 @@ def test_stored_mesh_measures_match_the_exact_geometry(name):
     radius = 0.5 * case.cell.ball_diameter
     assert groups["ball"]["measure"] == pytest.approx(4 / 3 * math.pi * radius**3, rel=0.08)
     assert groups["ball_surface"]["measure"] == pytest.approx(4 * math.pi * radius**2, rel=0.05)
-    if isinstance(case.cell, geometry3d.CylindricalCell):
+    if isinstance(case.cell, plate_model3d.CylindricalCell):
         electrode = math.pi * case.cell.electrode_radius**2
     else:
         electrode = 2 * math.sqrt(3) * case.cell.inner_apothem**2
@@ -87,7 +88,7 @@ def test_size_expressions_hold_plain_numbers_only():
     expr = geometry3d._gap_size(_Scalar(1e-4), (_Scalar(1.8e-20), np.float64(3e-4), -0.003))
     assert "np" not in expr
     assert expr == "0.0001 + 0.35*sqrt((x-(1.8e-20))^2+(y-(0.0003))^2+(z-(-0.003))^2)"
-    assert geometry3d._num(_Scalar(0.1)) == "0.1"
+    assert geometry3d.eval_number(_Scalar(0.1)) == "0.1"
 
 
 @pytest.mark.slow

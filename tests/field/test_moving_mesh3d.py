@@ -21,7 +21,7 @@ def _shell_cell():
 
 
 def _tube_cell():
-    from tengfield.field.geometry3d import cylindrical_cell
+    from tengfield.field.cells.plate_model3d import cylindrical_cell
     return cylindrical_cell(default_scene().device)
 
 

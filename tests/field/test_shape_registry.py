@@ -13,7 +13,7 @@ from tengfield.field import resolve_method
 from tengfield.field.cells import CELLS, cell_of
 from tengfield.field.cells._methods import solve_with
 from tengfield.field.cells.contact_surfaces import contact_surfaces
-from tengfield.field.geometry3d import cylindrical_cell
+from tengfield.field.cells.plate_model3d import cylindrical_cell
 from tengfield.scene import Scene
 from tengfield.scene.shapes import SHAPES, field_method, shape_of
 from tengfield.scene.shapes.methods import FIELD_METHODS

@@ -317,7 +317,7 @@ def test_a_hexagonal_scene_solves_the_honeycomb_cell_to_the_bit():
     from mpi4py import MPI
 
     from tengfield.field import solve_position
-    from tengfield.field.geometry3d import HexagonalCell
+    from tengfield.field.cells.plate_model3d import HexagonalCell
     from tengfield.field.solver3d import Solve3DSettings, solve_cell_3d
 
     scene = Scene.from_dict(HEXAGONAL)

@@ -41,6 +41,7 @@ SOLVER_SOURCES = ("__init__.py", "_dolfinx.py", "axisymmetric.py", "breakdown.py
                   "geometry3d.py", "geometry_axisymmetric.py", "moving.py", "moving3d.py",
                   "solver3d.py",
                   "cells/__init__.py", "cells/_methods.py", "cells/hexagonal.py",
+                  "cells/plate_model3d.py",
                   "cells/shell_model.py",
                   "cells/shell_model3d.py", "cells/solve.py",
                   "cells/spherical_shell.py", "cells/tube.py")

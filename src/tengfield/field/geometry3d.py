@@ -1,14 +1,12 @@
-"""3D gmsh geometries of one BB-TENG cell (OCC kernel), SI units.
+"""The 3D gmsh model of one BB-TENG cell (OCC kernel), SI units: the builder, the
+placement rules and the mesh settings every 3D cell shares.
 
-Two cells are built here:
-
-* :class:`CylindricalCell`: the paper's device (Table 1): a dielectric ball
-  between two thin disk electrodes on the inner faces of two PMMA end
-  plates, inside a PMMA tube. Built from ``scene.device`` with
-  :func:`cylindrical_cell`.
-* :class:`HexagonalCell`: one cell of the Fig. 10 honeycomb (PLA walls,
-  hexagonal tube and plates, hexagonal electrodes covering the cell floor,
-  a 5 mm ball and Δh = 2 mm).
+:func:`build_model` asks the cell for its parts (``placement_3d``, ``contact_rule_3d``,
+``extent_3d``, ``occ_parts``, ``rim_distance_expr``, ``gap_refinements_3d``): each
+shape answers in its own module of :mod:`tengfield.field.cells` (the tube's and the
+honeycomb's :class:`~tengfield.field.cells.plate_model3d.CylindricalCell` and
+:class:`~tengfield.field.cells.plate_model3d.HexagonalCell` in ``plate_model3d.py``,
+the spherical shell's in ``shell_model3d.py``); nothing here names a shape.
 
 Coordinates: the origin is the centre of the cell, z is the tube axis, the
 lower electrode lies in the plane ``z = -h/2`` and the upper one in
@@ -27,11 +25,6 @@ Electrodes are zero-thickness conductor surfaces embedded in the mesh
 walls have εr = 1), ``air``; surfaces ``ball_surface``,
 ``electrode_lower``, ``electrode_upper``, ``far_boundary``.
 
-:func:`build_model` asks the cell for its parts (``placement_3d``,
-``contact_rule_3d``, ``extent_3d``, ``occ_parts``, ``rim_distance_expr``,
-``gap_refinements_3d``), so another cell shape brings its own: the spherical shell's
-are in :mod:`tengfield.field.cells.shell_model3d`.
-
 gmsh is imported inside the functions that need it.
 """
 from __future__ import annotations
@@ -45,8 +38,6 @@ import numpy as np
 
 from ..errors import FieldError, show_number
 from ..scene.shapes import enclosure
-from ..scene.shapes import hexagonal as hexagonal_shape
-from ..scene.shapes import tube as tube_shape
 
 # The z → 0 / z → Δh rule is :mod:`tengfield.field.contact` (one rule for both
 # solvers): no mesh has a ball-electrode gap below ``MIN_GAP_FRACTION · h``.
@@ -57,207 +48,6 @@ VOLUME_GROUPS = ("ball", "walls", "air")
 SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
 
 _model_counter = itertools.count()
-
-
-# -- what build_model asks a cell between two plates (the tube and the honeycomb);
-# -- the spherical shell answers the same questions in field/cells/shell_model3d.py
-def _plate_cell_placement(cell, position: float, offset: float,
-                          offset_angle: float = 0.0) -> tuple[np.ndarray, float]:
-    """(ball centre [m], meshed gap [m]) for gap ``position`` and lateral ``offset`` [m]."""
-    return ball_centre(cell, position, offset, offset_angle), meshed_gap(cell, position)
-
-
-def _plate_cell_contact_rule(cell, position: float, offset: float,
-                             offset_angle: float = 0.0) -> dict | None:
-    """The contact rule of :func:`contact_anchors` (along z, at the same offset):
-    ``None`` when ``position`` is meshable, else ``{"coordinate", "anchors", "span",
-    "place"}`` for :func:`tengfield.field.contact.extrapolate_to_contact`
-    (``place(z) -> (position, offset)``)."""
-    anchors = contact_anchors(cell, position)
-    if anchors is None:
-        return None
-    return {"coordinate": position, "anchors": anchors, "span": cell.stroke,
-            "place": lambda z: (z, offset)}
-
-
-def _plate_cell_extent(cell, offset: float) -> float:
-    """Radius [m] around the origin the device and an offset ball fit in."""
-    return cell.bounding_radius + offset
-
-
-def _plate_cell_gap_refinements(cell, centre, size: float, ball_factor: float) -> list:
-    """``[(s_min [m], point [m])]``: the gaps the mesh refines (the ball's poles to the
-    plates, the lateral gap to the wall when smaller than ``ball_factor · size``)."""
-    h = size
-    radius = 0.5 * cell.ball_diameter
-    half = 0.5 * cell.electrode_spacing
-    x0, y0, zc = (float(c) for c in centre)
-    out = []
-    for z_pole, z_plane in ((zc - radius, -half), (zc + radius, half)):
-        gap = abs(z_pole - z_plane)
-        s_min = min(max(0.5 * gap, 0.02 * h), ball_factor * h)
-        z_mid = 0.5 * (z_pole + z_plane)
-        out.append((s_min, (x0, y0, z_mid)))
-    lateral = _lateral_gap(cell, centre)
-    if lateral is not None and lateral[0] < ball_factor * h:
-        gap, mid = lateral
-        out.append((max(0.5 * gap, 0.02 * h), mid))
-    return out
-
-
-def _plates_and_bore(cell, occ, solid, outer: float, inner: float) -> list[int]:
-    """The wall volumes of a cell between two plates (none when εr = 1): the two plates
-    and the tube, ``solid(size, z0, height)`` a prism of the cross-section (a cylinder
-    of radius ``size``, a hexagonal prism of apothem ``size``) from ``z0`` up."""
-    if cell.wall_permittivity == 1.0:
-        return []
-    half, t = 0.5 * cell.electrode_spacing, cell.plate_thickness
-    walls = [solid(outer, -half - t, t), solid(outer, half, t)]
-    tube, _ = occ.cut([(3, solid(outer, -half, 2 * half))], [(3, solid(inner, -half, 2 * half))])
-    return walls + [tag for _, tag in tube]
-
-
-def _plane_rims(cell, lateral: str) -> str:
-    """Distance to the nearest rim of two plane electrodes at z = ±h/2 whose in-plane
-    distance to the rim is the MathEval expression ``lateral``."""
-    half = 0.5 * cell.electrode_spacing
-    axial = f"min(abs(z-{_num(half)}),abs(z+{_num(half)}))"
-    return f"sqrt({lateral}^2+{axial}^2)"
-
-
-class _PlateCell:
-    """What the tube and the honeycomb share: the ball between two plane electrodes
-    h = d + Δh apart; the 3D model's placement, contact rule, extent and gap sizes."""
-    placement_3d = _plate_cell_placement
-    contact_rule_3d = _plate_cell_contact_rule
-    extent_3d = _plate_cell_extent
-    gap_refinements_3d = _plate_cell_gap_refinements
-
-    @property
-    def electrode_spacing(self) -> float:
-        """h = d + Δh [m]."""
-        return self.ball_diameter + self.stroke
-
-    def outline(self) -> list[np.ndarray]:
-        """(r, z) polylines [m] for plots, r >= 0 (mirrored by the plot): the lower and the
-        upper electrode, then the plates' and the bore's outline (``outline_radii``)."""
-        h, t = 0.5 * self.electrode_spacing, self.plate_thickness
-        electrode, inner, outer = self.outline_radii
-        return [np.array([[0.0, -h], [electrode, -h]]), np.array([[0.0, h], [electrode, h]]),
-                np.array([[0.0, -h - t], [outer, -h - t], [outer, h + t], [0.0, h + t]]),
-                np.array([[0.0, -h], [inner, -h], [inner, h], [0.0, h]])]
-
-
-@dataclass(frozen=True)
-class CylindricalCell(_PlateCell):
-    """The paper's device: round tube, round plates, disk electrodes (SI)."""
-    ball_diameter: float        # d [m]
-    stroke: float               # Δh = h - d [m]
-    electrode_radius: float     # [m]
-    tube_inner_radius: float    # [m]
-    tube_outer_radius: float    # [m], also the plates' radius
-    plate_thickness: float      # [m]
-    ball_permittivity: float    # relative
-    wall_permittivity: float    # relative; 1 leaves tube and plates out
-
-    @property
-    def bounding_radius(self) -> float:
-        """Radius of the smallest origin-centred sphere holding the device [m]."""
-        return tube_shape.bounding_radius_of(self.tube_outer_radius,
-                                             0.5 * self.electrode_spacing + self.plate_thickness)
-
-    @property
-    def max_offset(self) -> float:
-        """Largest lateral ball offset that keeps the ball inside the tube [m]."""
-        return self.tube_inner_radius - 0.5 * self.ball_diameter
-
-    def occ_parts(self, occ) -> tuple[list[int], list[int]]:
-        """Add the electrodes (two disks) and, unless εr = 1, the plates and the tube
-        to the OCC model: ``([lower, upper] surface tags, wall volume tags)``."""
-        half = 0.5 * self.electrode_spacing
-        rim = self.electrode_radius
-        electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in (-half, half)]
-        def cylinder(radius, z0, height):
-            return occ.addCylinder(0, 0, z0, 0, 0, height, radius)
-
-        return electrodes, _plates_and_bore(self, occ, cylinder, self.tube_outer_radius,
-                                            self.tube_inner_radius)
-
-    def rim_distance_expr(self) -> str:
-        """gmsh MathEval expression of the distance [m] to the nearest disk rim (exact)."""
-        lateral = f"(sqrt(x*x+y*y)-{_num(self.electrode_radius)})"
-        return _plane_rims(self, lateral)
-
-    def lateral_wall(self, direction) -> float:
-        """Distance [m] from the axis to the tube's inner wall along ``direction`` (unit, xy)."""
-        return self.tube_inner_radius
-
-    @property
-    def outline_radii(self) -> tuple[float, float, float]:
-        """(electrode, bore, outside) radii [m] of the plot's outline."""
-        return self.electrode_radius, self.tube_inner_radius, self.tube_outer_radius
-
-
-@dataclass(frozen=True)
-class HexagonalCell(_PlateCell):
-    """One cell of the Fig. 10 honeycomb (SI).
-
-    Hexagons have two flats parallel to the x axis; "apothem" is the
-    distance from the axis to a flat. The electrodes cover the cell floor
-    and ceiling (the inner hexagon). Defaults: the paper's shipboard
-    honeycomb (5 mm PTFE ball, Δh = 2 mm, 3D-printed PLA, εr ≈ 3); the
-    cell's lateral size and wall/plate thickness are not given in the paper
-    and are chosen here (0.5 mm lateral clearance, 1 mm walls, 2 mm plates).
-    """
-    ball_diameter: float = 5.0e-3
-    stroke: float = 2.0e-3
-    inner_apothem: float = 3.0e-3
-    wall_thickness: float = 1.0e-3
-    plate_thickness: float = 2.0e-3
-    ball_permittivity: float = 2.1
-    wall_permittivity: float = 3.0
-
-    @property
-    def outer_apothem(self) -> float:
-        return self.inner_apothem + self.wall_thickness
-
-    @property
-    def outline_radii(self) -> tuple[float, float, float]:
-        """(electrode, bore, outside) of the plot's outline [m]: the section through two
-        flats (the electrodes cover the bore)."""
-        return self.inner_apothem, self.inner_apothem, self.outer_apothem
-
-    @property
-    def bounding_radius(self) -> float:
-        return hexagonal_shape.bounding_radius_of(
-            self.outer_apothem, 0.5 * self.electrode_spacing + self.plate_thickness)
-
-    @property
-    def max_offset(self) -> float:
-        return self.inner_apothem - 0.5 * self.ball_diameter
-
-    def occ_parts(self, occ) -> tuple[list[int], list[int]]:
-        """Add the hexagonal electrodes and, unless εr = 1, the plates and the hexagonal
-        tube: ``([lower, upper] surface tags, wall volume tags)``."""
-        half = 0.5 * self.electrode_spacing
-        electrodes = [_hexagon(occ, self.inner_apothem, z) for z in (-half, half)]
-        def prism(apothem, z0, height):
-            return _hex_prism(occ, apothem, z0, height)
-
-        return electrodes, _plates_and_bore(self, occ, prism, self.outer_apothem,
-                                            self.inner_apothem)
-
-    def rim_distance_expr(self) -> str:
-        """gmsh MathEval distance [m] to the nearest hexagon rim (exact off the corners)."""
-        c = _num(math.cos(math.pi / 6))
-        lateral = (f"(max(abs(y),max(abs(0.5*y+{c}*x),abs(0.5*y-{c}*x)))"
-                   f"-{_num(self.inner_apothem)})")
-        return _plane_rims(self, lateral)
-
-    def lateral_wall(self, direction) -> float:
-        """Distance [m] from the axis to the hexagonal bore along ``direction`` (unit, xy)."""
-        normals = [(0.0, 1.0), (math.cos(math.pi / 6), 0.5), (-math.cos(math.pi / 6), 0.5)]
-        return self.inner_apothem / max(abs(direction @ np.array(n)) for n in normals)
 
 
 @dataclass(frozen=True)
@@ -292,15 +82,6 @@ class MeshSettings:
             raise FieldError(f"mesh_size_mm = {self.size * 1e3!r} is out of range: allowed (0, 100] mm")
         if self.order not in (1, 2):
             raise FieldError(f"degree = {self.order!r}: the 3D mesh order must be 1 or 2")
-
-
-def cylindrical_cell(device) -> CylindricalCell:
-    """The paper's device from a scene's ``[device]`` section (:class:`tengfield.scene.Device`)."""
-    return CylindricalCell(
-        ball_diameter=device.ball_diameter, stroke=device.stroke,
-        electrode_radius=device.electrode_radius, tube_inner_radius=device.tube_inner_radius,
-        tube_outer_radius=device.tube_outer_radius, plate_thickness=device.plate_thickness,
-        ball_permittivity=device.ball_permittivity, wall_permittivity=device.wall_permittivity)
 
 
 def minimum_gap(cell) -> float:
@@ -457,35 +238,7 @@ def _untangle_curved_elements() -> None:
         gmsh.model.mesh.optimize("HighOrder")
 
 
-def _hexagon(occ, apothem: float, z: float) -> int:
-    """A plane hexagonal surface in the plane ``z`` (flats parallel to x)."""
-    corner = apothem / math.cos(math.pi / 6)
-    pts = [occ.addPoint(corner * math.cos(a), corner * math.sin(a), z)
-           for a in np.arange(6) * math.pi / 3]
-    lines = [occ.addLine(pts[i], pts[(i + 1) % 6]) for i in range(6)]
-    return occ.addPlaneSurface([occ.addCurveLoop(lines)])
-
-
-def _hex_prism(occ, apothem: float, z0: float, height: float) -> int:
-    out = occ.extrude([(2, _hexagon(occ, apothem, z0))], 0, 0, height)
-    return next(tag for dim, tag in out if dim == 3)
-
-
-def _lateral_gap(cell, centre):
-    """(gap [m], midpoint [m]) between an off-axis ball and the tube wall it
-    approaches, or None for an on-axis ball or a cell without walls."""
-    offset = math.hypot(centre[0], centre[1])
-    if offset == 0.0 or cell.wall_permittivity == 1.0:
-        return None
-    direction = np.array([centre[0], centre[1]]) / offset
-    wall = cell.lateral_wall(direction)
-    radius = 0.5 * cell.ball_diameter
-    gap = wall - offset - radius
-    mid = offset + radius + 0.5 * gap
-    return gap, (float(mid * direction[0]), float(mid * direction[1]), float(centre[2]))
-
-
-def _num(value) -> str:
+def eval_number(value) -> str:
     """A number in a gmsh MathEval expression: the shortest round-trip decimal of a
     plain float (numpy 2's repr writes ``np.float64(...)``, which gmsh's parser rejects
     by aborting the process)."""
@@ -494,8 +247,8 @@ def _num(value) -> str:
 
 def _gap_size(s_min, point) -> str:
     """MathEval size [m] growing from ``s_min`` at ``point`` (x, y, z) [m] with slope 0.35."""
-    x, y, z = (_num(c) for c in point)
-    return f"{_num(s_min)} + 0.35*sqrt((x-({x}))^2+(y-({y}))^2+(z-({z}))^2)"
+    x, y, z = (eval_number(c) for c in point)
+    return f"{eval_number(s_min)} + 0.35*sqrt((x-({x}))^2+(y-({y}))^2+(z-({z}))^2)"
 
 
 def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -> None:
@@ -509,8 +262,8 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     power = 1.0 - RIM_EXPONENT / settings.order
     reach = 0.25 * cell.electrode_spacing
     rim = fld.add("MathEval")
-    fld.setString(rim, "F", f"max({_num(settings.rim_floor * h)}, "
-                            f"{_num(h)}*({cell.rim_distance_expr()}/{_num(reach)})^{_num(power)})")
+    fld.setString(rim, "F", f"max({eval_number(settings.rim_floor * h)}, "
+                            f"{eval_number(h)}*({cell.rim_distance_expr()}/{eval_number(reach)})^{eval_number(power)})")
     fields.append(rim)
 
     ball_dist = fld.add("Distance")
@@ -533,41 +286,13 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
 
     device_r = cell.bounding_radius
     far = fld.add("MathEval")
-    fld.setString(far, "F", f"max({_num(h)}, {_num(h)} + {_num(settings.growth)}"
-                            f"*(sqrt(x^2+y^2+z^2) - {_num(device_r)}))")
+    fld.setString(far, "F", f"max({eval_number(h)}, {eval_number(h)} + {eval_number(settings.growth)}"
+                            f"*(sqrt(x^2+y^2+z^2) - {eval_number(device_r)}))")
     fields.append(far)
 
     total = fld.add("Min")
     fld.setNumbers(total, "FieldsList", fields)
     fld.setAsBackgroundMesh(total)
-
-
-# ---------------------------------------------------------------------------
-# reference cases (meshes/ holds their meshes and statistics)
-
-@dataclass(frozen=True)
-class ReferenceCase:
-    """A geometry, a ball placement and mesh settings whose mesh lives in ``meshes/``."""
-    name: str
-    cell: CylindricalCell | HexagonalCell
-    position: float                 # z [m]
-    offset: float                   # [m], along +x
-    settings: MeshSettings
-    surface_charge: float = -8.0e-6  # σ [C/m²]
-
-
-def reference_cases() -> dict[str, ReferenceCase]:
-    """The reference geometries: the paper's device with an off-axis ball
-    (Table 1, z = 1.5 mm, offset 0.3 mm) and one honeycomb cell (Fig. 10,
-    z = 1 mm, on axis); coarse first-order meshes (size 2 mm, R = 20 mm)."""
-    paper = CylindricalCell(ball_diameter=7e-3, stroke=3e-3, electrode_radius=4e-3,
-                            tube_inner_radius=4e-3, tube_outer_radius=5.5e-3, plate_thickness=2e-3,
-                            ball_permittivity=2.1, wall_permittivity=2.6)
-    coarse = MeshSettings(size=2e-3, domain_radius=20e-3, order=1)
-    return {
-        "paper_device": ReferenceCase("paper_device", paper, 1.5e-3, 0.3e-3, coarse),
-        "honeycomb_cell": ReferenceCase("honeycomb_cell", HexagonalCell(), 1.0e-3, 0.0, coarse),
-    }
 
 
 def mesh_statistics() -> dict:

@@ -53,7 +53,7 @@ import numpy as np
 from ..errors import FieldError
 from ..scene.constants import EPS0
 from . import contact
-from .geometry3d import MeshSettings, build_model, cylindrical_cell, unique_model_name
+from .geometry3d import MeshSettings, build_model, unique_model_name
 from .result import FieldSolution, PositionResult
 
 #: Observed convergence order of C and q under uniform refinement, by degree
@@ -521,31 +521,3 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         dofs=pot.dofs, cells=pot.cells, method="3d", degree=settings.degree,
         wall_time=time.perf_counter() - start, relative_error_estimate=estimate,
         solve_time=solve_time, info=info, induced_fraction=fraction, solution=solution)
-
-
-def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,
-                      estimate_error: bool = True, keep_solution: bool = False,
-                      solve_one=None) -> PositionResult:
-    """3D solve of the scene's device with the ball at gap ``position`` [m].
-
-    ``offset`` [m] (lateral, along +x) defaults to ``[field] ball_offset_mm``.
-    Discretisation from ``[field]``: ``degree``, ``mesh_size_mm``,
-    ``domain_radius_mm``, ``far_field`` ("kelvin" is the low-order exact
-    Dirichlet-to-Neumann condition in 3D). ``environment = "grounded-table"``
-    is not supported by the 3D path (FieldError).
-    """
-    fld = scene.field
-    if fld.environment != "free-space":
-        raise FieldError(f"[field] environment = {fld.environment!r} is not supported by the 3D "
-                         "solver: allowed 'free-space' (use method = 'axisymmetric' for "
-                         "'grounded-table')")
-    offset = fld.ball_offset if offset is None else offset
-    from .geometry_axisymmetric import base_mesh_size
-
-    # mesh_size_mm as written, or the default scaled to the device's features, as in 2D
-    settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
-                               domain_radius=fld.domain_radius, far_field=fld.far_field,
-                               estimate_error=estimate_error)
-    return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
-                         surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
-                         keep_solution=keep_solution, solve_one=solve_one)

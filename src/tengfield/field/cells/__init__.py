@@ -49,7 +49,7 @@ honeycomb's 3D cell. The 3D gmsh model is built by
 :func:`tengfield.field.geometry3d.build_model` from the 3D cell's answers
 (``placement_3d``, ``contact_rule_3d``, ``extent_3d``, ``occ_parts``,
 ``rim_distance_expr``, ``gap_refinements_3d``): the tube's and the honeycomb's in
-``geometry3d.py``, the shell's in :mod:`.shell_model3d`. docs/architecture.md ("Where a
+``plate_model3d.py``, the shell's in :mod:`.shell_model3d`. docs/architecture.md ("Where a
 new cell shape goes") and docs/spherical_shell.md say what is left.
 """
 from __future__ import annotations

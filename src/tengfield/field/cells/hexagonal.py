@@ -1,6 +1,6 @@
 """The honeycomb cell of Fig. 10 as a :class:`~tengfield.field.cells.Cell`
 (``[device] shape = "hexagonal"``): an adapter over
-:class:`tengfield.field.geometry3d.HexagonalCell` and the 3D solver (nothing of the
+:class:`tengfield.field.cells.plate_model3d.HexagonalCell` and the 3D solver (nothing of the
 honeycomb is re-implemented here).
 
 The tube's keys are read with the hexagon's meaning: ``tube_inner_radius_mm`` is the
@@ -45,8 +45,8 @@ class Hexagonal:
 
     @property
     def cell(self):
-        """The :class:`~tengfield.field.geometry3d.HexagonalCell` of the scene."""
-        from ..geometry3d import HexagonalCell
+        """The :class:`~tengfield.field.cells.plate_model3d.HexagonalCell` of the scene."""
+        from .plate_model3d import HexagonalCell
 
         dev = self.scene.device
         return HexagonalCell(ball_diameter=dev.ball_diameter, stroke=dev.stroke,

@@ -100,7 +100,7 @@ def placement(shell, position: float, offset: float,
 def contact_rule(shell, position: float, offset: float, offset_angle: float = 0.0):
     """``None`` when the ball-wall gap is at least ``g_min``; else the anchors (g_min,
     2 g_min, 4 g_min) of the gap along the ball's radius and ``place(g) -> (position,
-    offset)`` of each (see :func:`tengfield.field.geometry3d._plate_cell_contact_rule`)."""
+    offset)`` of each (see :func:`tengfield.field.cells.plate_model3d._plate_cell_contact_rule`)."""
     _check(shell, position, offset)
     c = _centre(shell, position, offset, offset_angle)
     big_r = centre_radius(shell)

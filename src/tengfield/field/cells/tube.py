@@ -2,7 +2,8 @@
 is :mod:`tengfield.scene.shapes.tube`; this is the :class:`~tengfield.field.cells.Cell`
 the field stages ask, with :data:`Tube.field_models`, the table of its field methods
 (the (r, z) solver of :mod:`tengfield.field.axisymmetric`, the 3D one of
-:mod:`tengfield.field.solver3d`) that ``[field] method`` resolves through.
+:mod:`tengfield.field.solver3d` on the :class:`~.plate_model3d.CylindricalCell`,
+:func:`solve_position_3d`) that ``[field] method`` resolves through.
 
 Geometry: the electrodes are the discs ``z = ±h/2, r <= a`` (h = plate spacing),
 the tube's inner wall is the cylinder ``r = r_i``; the ball moves in
@@ -15,10 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...errors import FieldError
 from ...scene.limits import mesh_features
 from ...scene.shapes import tube as tube_shape
 from ._methods import solve_with
 from .contact_surfaces import tube_surfaces
+from .plate_model3d import cylindrical_cell
 
 
 @dataclass(frozen=True)
@@ -39,7 +42,6 @@ class Tube:
 
     def _solve_3d(self, scene, position: float, *, comm, offset: float, **options):
         from ..moving3d import placer
-        from ..solver3d import solve_position_3d
         return solve_position_3d(scene, position, offset=offset, comm=comm,
                                  solve_one=placer(getattr(scene.field, "mesh_motion", "remesh")), **options)
 
@@ -153,3 +155,33 @@ class Tube:
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         from ..geometry_axisymmetric import build_model
         return build_model(gmsh, layout, geometry_order=geometry_order)
+
+
+def solve_position_3d(scene, position: float, *, offset: float | None = None, comm,
+                      estimate_error: bool = True, keep_solution: bool = False,
+                      solve_one=None) -> PositionResult:
+    """3D solve of the scene's tube (:class:`~.plate_model3d.CylindricalCell`) with the
+    ball at gap ``position`` [m] (:func:`tengfield.field.solver3d.solve_cell_3d`).
+
+    ``offset`` [m] (lateral, along +x) defaults to ``[field] ball_offset_mm``.
+    Discretisation from ``[field]``: ``degree``, ``mesh_size_mm``,
+    ``domain_radius_mm``, ``far_field`` ("kelvin" is the low-order exact
+    Dirichlet-to-Neumann condition in 3D). ``environment = "grounded-table"``
+    is not supported by the 3D path (FieldError).
+    """
+    fld = scene.field
+    if fld.environment != "free-space":
+        raise FieldError(f"[field] environment = {fld.environment!r} is not supported by the 3D "
+                         "solver: allowed 'free-space' (use method = 'axisymmetric' for "
+                         "'grounded-table')")
+    offset = fld.ball_offset if offset is None else offset
+    from ..geometry_axisymmetric import base_mesh_size
+    from ..solver3d import Solve3DSettings, solve_cell_3d
+
+    # mesh_size_mm as written, or the default scaled to the device's features, as in 2D
+    settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
+                               domain_radius=fld.domain_radius, far_field=fld.far_field,
+                               estimate_error=estimate_error)
+    return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
+                         surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
+                         keep_solution=keep_solution, solve_one=solve_one)

@@ -4,7 +4,7 @@ The tube's keys with the hexagon's meaning (``tube_inner_radius_mm`` /
 ``tube_outer_radius_mm``: the bore's and the outside's apothems, axis to a flat),
 electrodes over the whole bore; 3D field solves only (``[field] method = "3d"``), 1-D
 dynamics (its walls are not described for the 3D contact model yet). Its field model:
-:mod:`tengfield.field.cells.hexagonal` (the gmsh model in ``field/geometry3d.py``).
+:mod:`tengfield.field.cells.hexagonal` (the gmsh model in ``field/cells/plate_model3d.py``).
 
 This module is the worked example of docs/architecture.md ("A new shape"): one module
 here, its field model in field/cells/, one line in each registry.
@@ -24,7 +24,7 @@ COS30 = math.cos(math.pi / 6)
 
 def bounding_radius_of(outer_apothem: float, half_height: float) -> float:
     """The honeycomb's bounding radius [m]: hypot(outer corner radius, half the spacing +
-    a plate); the scene's device and the 3D cell (field/geometry3d.py) both ask this."""
+    a plate); the scene's device and the 3D cell (field/cells/plate_model3d.py) both ask this."""
     return math.hypot(outer_apothem / COS30, half_height)
 
 

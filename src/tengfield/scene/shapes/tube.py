@@ -17,7 +17,7 @@ NAME = "tube"
 
 def bounding_radius_of(outer_radius: float, half_height: float) -> float:
     """The tube's bounding radius [m]: hypot(outer radius, half the spacing + a plate);
-    the scene's device and the 3D cell (field/geometry3d.py) both ask this one formula."""
+    the scene's device and the 3D cell (field/cells/plate_model3d.py) both ask this one formula."""
     return math.hypot(outer_radius, half_height)
 
 
