@@ -19,6 +19,14 @@ if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
+# pyvista before dolfinx in every test process (VTK's text rendering aborts the process
+# in the reverse order: an in-process field.png, e.g. ``PositionResult.write``, drawn
+# by a pytest-xdist worker whose earlier tests had imported dolfinx; docs/field.md)
+try:
+    import pyvista  # noqa: F401,E402
+except ImportError:   # the fast tier without the plotting stack
+    pass
+
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 DEMOS = ROOT / "demos"
