@@ -4,7 +4,7 @@ from numba's cache, so that every worker forked from the server starts with them
 it did when the pools forked the calling process itself)."""
 from __future__ import annotations
 
-from . import array, circuit, sweep  # noqa: F401 - the tasks' modules
+from . import array, lumped, sweeps  # noqa: F401 - the tasks' modules
 from .dynamics import impact, mapping, table  # noqa: F401
 
 

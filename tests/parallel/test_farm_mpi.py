@@ -180,7 +180,7 @@ def test_failure_on_one_rank_of_a_sweep_aborts_every_rank(tmp_path, python):
         sys.path.insert(0, {str(Path(__file__).resolve().parent)!r})       # this file
         from mpi4py import MPI
         import plate_model as fx
-        from tengfield import surrogate, sweep
+        from tengfield import surrogate, sweeps as sweep
 
         comm = MPI.COMM_WORLD
         scene = fx.scene_with(run={{"duration_s": 1.0}})

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import tengfield as tf
-from tengfield import electrical, io, accuracy_report, sweep
+from tengfield import accuracy_report, electrical, io, sweeps
 
 import plate_model as fx
 
@@ -41,7 +41,7 @@ def test_run_sweep_and_report_agree_with_cells_and_parallel_capacitance(cached):
     assert result.dynamics.impacts.time.size > 4          # impacts inside the window
     ran = result.peaks
 
-    (row,) = sweep.sweep_point(scene, result.table, scene.excitation.frequency,
+    (row,) = sweeps.sweep_point(scene, result.table, scene.excitation.frequency,
                                scene.excitation.amplitude)
     swept = {"V_oc": row["V_oc_pp_V"], "Q_sc": row["Q_sc_pp_C"], "I_sc": row["I_sc_pp_A"]}
 
@@ -70,7 +70,7 @@ def test_sweep_power_equals_the_run_with_that_load(cached):
     scene = scene_with_cells_and_instrument()
     loaded = scene_with_cells_and_instrument(kind="load", load_ohm=load)
     result = tf.run(loaded, cache_dir=cached, solve=fx.plate_model_solve)
-    (row,) = sweep.sweep_point(scene, result.table, scene.excitation.frequency,
+    (row,) = sweeps.sweep_point(scene, result.table, scene.excitation.frequency,
                                scene.excitation.amplitude, loads=(load,))
     power = result.summary["load"]["mean_power_W"]
     assert power > 0
