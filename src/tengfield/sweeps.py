@@ -655,14 +655,9 @@ def study(scene, *, vary: dict | None = None, frequency_hz=None, amplitude_mm=No
     ``frequency_hz`` [Hz] and ``amplitude_mm`` [mm] (lists, one number or
     ``"START:STOP:N"``), ``load_ohm`` [ohm]. Returns a :class:`SweepResult` (rows,
     ``.plot(key)``, ``.write(out_dir)``)."""
-    import os
+    from .scene.parse import verb_scene
 
-    from .scene import load_scene
-    from .scene.parse import check_scene_argument
-
-    if not isinstance(scene, (str, os.PathLike)) and scene is not None:
-        check_scene_argument("tengfield.sweep", scene)
-    scene = load_scene(scene)
+    scene = verb_scene("tengfield.sweep", scene)
     loads = _file_axis(load_ohm, 1.0, "load_ohm", log=True) if load_ohm is not None else ()
     return sweep_study(scene, vary=vary,
                        frequencies=_file_axis(frequency_hz, 1.0, "frequency_hz"),

@@ -100,14 +100,10 @@ def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = Fal
     (cached), :func:`scene_breakdown` (``states``: the circuit states checked, default
     the scene's; :data:`STATES` all of them, the CLI's ``--states all``). Returns a
     :class:`BreakdownResult` with ``.summary``, ``.plot()`` and ``.write(out_dir)``."""
-    import os
+    from ..scene import check_field
+    from ..scene.parse import verb_scene
 
-    from ..scene import check_field, load_scene
-    from ..scene.parse import check_scene_argument
-
-    if not isinstance(scene, (str, os.PathLike)) and scene is not None:
-        check_scene_argument("tengfield.breakdown", scene)
-    scene = load_scene(scene)
+    scene = verb_scene("tengfield.breakdown", scene)
     check_field(scene)
     table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
                                             progress=progress, solve=solve,

@@ -287,6 +287,15 @@ def check_scene_argument(function: str, scene, name: str = "scene") -> Scene:
     return scene
 
 
+def verb_scene(function: str, scene) -> Scene:
+    """The scene a verb taking a scene file's path was given (``tf.breakdown``,
+    ``tf.sweep``): a :class:`Scene`, a path or ``None`` (the default scene), else one
+    TypeError naming the verb (:func:`check_scene_argument`)."""
+    if not isinstance(scene, (str, os.PathLike)) and scene is not None:
+        check_scene_argument(function, scene)
+    return load_scene(scene)
+
+
 def as_scene(scene, function: str) -> Scene:
     """``scene`` itself, or the scene of a dict of sections (``{"excitation":
     {"frequency_hz": 30.0}, ...}``, file-level keys; the rest default); a
