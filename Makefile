@@ -48,9 +48,9 @@ run: setup
 test: setup test-serial test-mpi
 
 # the serial suite in one process by default; TEST_JOBS=N spreads it over N pytest-xdist
-# workers (a file's tests on one worker, in order; the longest files first:
-# tests/conftest.py LONG_FIRST). On this 2-core machine that was not faster beside CI's
-# containers, and one worker once never ended (.ci/run), so CI runs it in one process
+# workers (a file's tests on one worker, in order). On this 2-core machine that was not
+# faster beside CI's containers, and one worker once never ended (.ci/run), so CI runs
+# it in one process
 TEST_JOBS ?= 1
 XDIST = $(if $(filter-out 0 1,$(TEST_JOBS)),-n $(TEST_JOBS) --dist loadfile,)
 

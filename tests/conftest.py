@@ -75,23 +75,6 @@ def _is_release_dependent(item) -> bool:
     return bool(in_folder) and item.get_closest_marker("slow") is None
 
 
-#: the files that take longest (minutes: measured with ``--durations``), run first so that
-#: under ``-n N`` (pytest-xdist, ``--dist loadfile``: a file's tests on one worker, in order)
-#: the short files fill the workers at the end instead of one long file running alone
-LONG_FIRST = (
-    "test_demos.py", "field/test_spherical_shell_3d.py", "test_readme_quickstart.py",
-    "report/test_report.py", "pipeline/test_pipeline.py", "electrical/test_stream_memory.py",
-    "pipeline/test_sweep_vary_cli.py", "pipeline/test_sampled_run_path.py",
-    "field/test_field_3d.py", "field/test_shell_scene.py", "pipeline/test_shell_studies.py",
-    "surrogate/test_surrogate_zr.py",
-)
-
-
-def _long_rank(item) -> int:
-    relative = Path(str(item.fspath)).resolve().relative_to(ROOT / "tests").as_posix()
-    return LONG_FIRST.index(relative) if relative in LONG_FIRST else len(LONG_FIRST)
-
-
 @pytest.hookimpl(tryfirst=True)   # before ``-m`` selects by marker
 def pytest_collection_modifyitems(config, items):
     """Every fast test in :data:`RELEASE_FOLDERS` or marked ``field``, every test in
@@ -102,8 +85,6 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if _is_release_dependent(item):
             item.add_marker(pytest.mark.release)
-    if getattr(config.option, "numprocesses", None):   # -n N: the long files first
-        items.sort(key=_long_rank)    # stable: each file's tests keep their order
     if os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE"):
         return
     mpi = [item for item in items if item.get_closest_marker("mpi")]
