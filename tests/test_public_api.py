@@ -116,8 +116,11 @@ def test_breakdown_face_and_cli_files(tmp_path, run_cli):
         result = tf.breakdown(path, cache_dir=cache)
         summary = check_face(result, tmp_path / "api", expected_files={"breakdown.json",
                                                                        "breakdown.png"})
+    # third-party deprecations (ffcx's np.product under NumPy 1.25 on Debian 12) aside
+    ours = [w for w in caught if not (issubclass(w.category, DeprecationWarning)
+                                      and "tengfield" not in str(w.filename))]
     assert all(issubclass(w.category, RuntimeWarning) and "field error estimate" in
-               str(w.message) for w in caught), [str(w.message) for w in caught]
+               str(w.message) for w in ours), [(str(w.message), w.filename) for w in ours]
     assert result.scene.source == tf.load_scene(path).source
     assert summary == result.to_json()
     done = run_cli("breakdown", path, "--cache-dir", cache, "-o", tmp_path / "cli")
