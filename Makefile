@@ -20,7 +20,7 @@ export OMPI_MCA_mpi_yield_when_idle := 1
 export PYVISTA_OFF_SCREEN := true
 export MPLBACKEND := Agg
 
-.PHONY: setup system run test test-serial test-mpi test-release test-release-serial test-fast bench clean
+.PHONY: setup system run test test-serial test-mpi test-release test-release-serial test-image test-image-serial test-fast bench clean
 
 setup: $(STAMP)
 
@@ -54,16 +54,28 @@ test: setup test-serial test-mpi
 TEST_JOBS ?= 1
 XDIST = $(if $(filter-out 0 1,$(TEST_JOBS)),-n $(TEST_JOBS) --dist loadfile,)
 
+# TEST_SELECT: a pytest -m expression for the serial suite, empty = every test. .ci/run gives
+# the host "not image": the slow tests of tests/conftest.py's IMAGE_SHARE run in the Debian 13
+# image instead (make test-image), so that each CI runs every test on Debian 12 or 13 once
+# and the host and the image share the two cores
+TEST_SELECT ?=
+
 test-serial: setup
-	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) tests
+	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) $(if $(TEST_SELECT),-m "$(TEST_SELECT)",) tests
 
 # what differs between Debian releases (marker `release`, tests/conftest.py: field,
-# surrogate, cli, parallel, the Quick start), then the MPI tier: the Debian 13 image's
-# share of CI (scripts/test-container), the host's `make test` running everything
+# surrogate, cli, parallel, the Quick start), then the MPI tier
 test-release: setup test-release-serial test-mpi
 
 test-release-serial: setup
 	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) -m release tests
+
+# the Debian 13 image's share of CI (scripts/test-container): what differs between releases
+# and the slow tests the host leaves to it (marker `image`), then the MPI tier
+test-image: setup test-image-serial test-mpi
+
+test-image-serial: setup
+	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) -m "release or image" tests
 
 # the fast tier (no subprocess CLI runs, demos, 3D fields or tests over ~1 s): minutes
 test-fast: setup

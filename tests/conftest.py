@@ -65,8 +65,34 @@ RELEASE_SLOW = (
 )
 
 
+#: the slow tests that CI runs in the Debian 13 image instead of on the host (a file, or a
+#: ``file::test``): ``.ci/run`` gives the host's ``make test`` ``TEST_SELECT="not image"``
+#: and the image runs ``make test-image`` (``-m "release or image"``), so every test still
+#: runs on Debian 12 or 13 in each CI run and the two halves share the machine's two cores
+#: (tests/test_ci_split.py holds both expressions to that). ``make test`` by hand runs
+#: everything. Release-dependent tests in these files stay on both.
+IMAGE_SHARE = (
+    "test_demos.py",                                # the demos, serial and under mpirun
+    # the spherical shell, the second cell: its slow 3D and (z, r) work
+    "field/test_spherical_shell_3d.py",
+    "field/test_shell_scene.py",
+    "surrogate/test_surrogate_zr.py",
+    "dynamics/motion3d/test_shell_cli.py",
+    "pipeline/test_shell_studies.py",
+)
+
+
+def _relative(item) -> Path:
+    return Path(str(item.fspath)).resolve().relative_to(ROOT / "tests")
+
+
+def _in_image_share(item) -> bool:
+    relative = _relative(item).as_posix()
+    return relative in IMAGE_SHARE or f"{relative}::{item.originalname}" in IMAGE_SHARE
+
+
 def _is_release_dependent(item) -> bool:
-    relative = Path(str(item.fspath)).resolve().relative_to(ROOT / "tests")
+    relative = _relative(item)
     if relative.name in RELEASE_FILES:
         return True
     if f"{relative.as_posix()}::{item.originalname}" in RELEASE_SLOW:
@@ -78,13 +104,16 @@ def _is_release_dependent(item) -> bool:
 @pytest.hookimpl(tryfirst=True)   # before ``-m`` selects by marker
 def pytest_collection_modifyitems(config, items):
     """Every fast test in :data:`RELEASE_FOLDERS` or marked ``field``, every test in
-    :data:`RELEASE_FILES` and those of :data:`RELEASE_SLOW` are marked ``release`` too. ``mpi`` tests need ``mpirun -n 2``: outside mpirun they are
+    :data:`RELEASE_FILES` and those of :data:`RELEASE_SLOW` are marked ``release`` too; the
+    other tests of :data:`IMAGE_SHARE` ``image``. ``mpi`` tests need ``mpirun -n 2``: outside mpirun they are
     deselected, so that a ``-m`` given on the command line (``-m "not slow"``, the fast
     tier) replacing the ``-m 'not mpi'`` of pyproject's addopts still leaves them out of a
     serial run."""
     for item in items:
         if _is_release_dependent(item):
             item.add_marker(pytest.mark.release)
+        elif _in_image_share(item):
+            item.add_marker(pytest.mark.image)
     if os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE"):
         return
     mpi = [item for item in items if item.get_closest_marker("mpi")]
