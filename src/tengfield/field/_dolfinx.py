@@ -40,6 +40,13 @@ import tempfile
 
 import numpy as np
 
+# VTK's core library before dolfinx's: in the reverse order VTK's first std::regex (its
+# text rendering, a field.png drawn in the process of a solve) aborts the process on
+# Debian 12 (libstdc++ symbols bound to the ones dolfinx's libraries brought). 0.1 s;
+# nothing when pyvista/VTK is not installed.
+with contextlib.suppress(ImportError):
+    import vtkmodules.vtkCommonCore  # noqa: F401
+
 import dolfinx
 import dolfinx.fem.petsc
 import dolfinx.geometry
