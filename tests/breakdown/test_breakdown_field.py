@@ -16,7 +16,8 @@ from tengfield.surrogate import read_table
 
 pytestmark = pytest.mark.slow
 
-COARSE = {"degree": 1, "mesh_size_mm": 1.0, "tolerance": 0.03}
+#: coarse on purpose: P1 at 1 mm has a field error estimate of ~0.08, within this tolerance
+COARSE = {"degree": 1, "mesh_size_mm": 1.0, "tolerance": 0.1}
 
 
 def coarse(**device):
@@ -111,7 +112,7 @@ def test_mesh_convergence_of_sigma_max(cache):
     values, estimates = [], []
     for h in (1.0, 0.5, 0.25):
         scene = default_scene().with_values(field={"degree": 1, "mesh_size_mm": h,
-                                                   "tolerance": 0.03})
+                                                   "tolerance": COARSE["tolerance"]})
         table, _ = air_breakdown.obtain_breakdown_table(scene, cache_dir=cache)
         res = air_breakdown.scene_breakdown(scene, table, air_breakdown.STATES)
         values.append(res.sigma_max)
@@ -148,7 +149,7 @@ def test_breakdown_run_uses_minus_sigma_max_and_warns_above_it(cache):
 
 def test_cli_breakdown_writes_its_files(tmp_path, cache):
     scene = tmp_path / "s.toml"
-    scene.write_text("[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.03\n"
+    scene.write_text("[field]\ndegree = 1\nmesh_size_mm = 1.0\ntolerance = 0.1\n"
                      "[breakdown]\npressure_kPa = 90\n")
     out = tmp_path / "out"
     exe = str(Path(sys.executable).with_name("tengfield"))

@@ -128,8 +128,9 @@ def test_cli_refuses_in_one_line_and_warns_in_one_line(tmp_path, run_cli, cli_en
         head + "[circuit]\n" + "".join(f"{k} = {v!r}\n".replace("'", '"')
                                        for k, v in CHIP.items())
         + "storage_capacitance_uF = 2.1e-6\n")
-    tf.run(tf.load_scene(tmp_path / "small.toml"), cache_dir=tmp_path / "cache",
-           solve=fx.plate_model_solve)                       # fills the surrogate cache
+    with pytest.warns(RuntimeWarning, match="rectifier: numerical_dissipation_J"):
+        tf.run(tf.load_scene(tmp_path / "small.toml"), cache_dir=tmp_path / "cache",
+               solve=fx.plate_model_solve)                   # fills the surrogate cache
     proc = run_cli("run", "small.toml", "-o", "out", "--no-plots", cwd=tmp_path, env=env,
                    timeout=600)
     assert proc.returncode == 0, proc.stderr
