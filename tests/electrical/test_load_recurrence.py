@@ -34,11 +34,11 @@ def test_load_response_is_the_scheme_bit_for_bit_across_impacts():
     """Random Q_SC, I_SC, C_T on a grid with repeated times (impacts: a zero-length step)
     and R C from far below to far above the step: the same numbers as the loop."""
     rng = np.random.default_rng(41)
-    t = np.sort(rng.uniform(0.0, 0.05, 3000))
-    t[1000:1003] = t[1000]                                 # an impact, a repeated time
+    t = np.sort(rng.uniform(0.0, 0.05, 1000))
+    t[400:403] = t[400]                                    # an impact, a repeated time
     q_sc = 1e-9 * np.sin(2 * np.pi * 20.0 * t) + 1e-11 * rng.standard_normal(t.size)
     i_sc = 2e-9 * np.pi * 20.0 * np.cos(2 * np.pi * 20.0 * t)
-    i_sc[1001:] *= -0.5                                    # the current jumps at the impact
+    i_sc[401:] *= -0.5                                     # the current jumps at the impact
     c_t = 4e-13 * (1.0 + 0.1 * rng.random(t.size))
     for load_ohm, c_p, q0 in ((1e3, 0.0, 0.0), (1e9, 5e-12, 2e-10), (1e15, 1e-10, -1e-10)):
         got = lumped.load_response(t, q_sc, i_sc, c_t, load_ohm, c_p, initial_load_charge=q0)
