@@ -29,7 +29,7 @@ import time
 
 #: the modules holding ``@njit(cache=True)`` kernels
 KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.dynamics.motion3d._kernel",
-                  "tengfield.harvest._kernel", "tengfield.array")
+                  "tengfield.harvest._kernel", "tengfield.array", "tengfield.lumped")
 
 _SHORT_3D = """
 [contact]
@@ -43,7 +43,7 @@ settle_periods = 1
 def _workloads() -> None:
     import numpy as np
 
-    from . import array, harvest
+    from . import array, harvest, lumped
     from .dynamics import regime_map, simulate
     from .scene import default_scene, parse_scene
 
@@ -63,6 +63,8 @@ def _workloads() -> None:
                     storage_capacitance=1e-6, chip=harvest.PowerChip(),
                     diode=harvest.Diode(model="shockley"))
     harvest.Diode().path_current(np.array([0.0, 1.0]))
+    # the load ODE (a [circuit] kind = "load" or "series-rc")
+    lumped.load_response(t, q, 2e-9 * np.pi * 20.0 * np.cos(2 * np.pi * 20.0 * t), c, 1e9)
     # an array's cells: many trajectories sampled in one call, then the splines
     from .dynamics.impact import TrajectoryBundle
     cell, _ = array.cell_trajectory(scene, (0.0, 0.9, 0.0))
