@@ -371,7 +371,7 @@ def test_the_zr_surrogate_reproduces_a_held_out_direct_3d_solve(tmp_path_factory
     dev_q = abs(float(curves.charge(z, r)) - q_sc) / np.max(np.abs(q_grid))
     dev_c = abs(float(curves.capacitance(z, r)) - c_t) / np.max(np.abs(c_grid))
     assert 0.0 < table.interpolation_error < 0.3
-    assert max(dev_q, dev_c) <= table.interpolation_error   # measured 1.4e-2 <= 9.5e-2
+    assert max(dev_q, dev_c) <= table.interpolation_error   # measured 1.6e-2 <= 9.7e-2 (5 mm)
 
 
 #: the shell's scene file: SHELL_KEYS with 3D solves at a coarse mesh (P1, 5 mm: the CLI
