@@ -171,6 +171,20 @@ def _announce(scene, solves: int, comm, *, method, what: str, mesh_size=None,
           file=sys.stderr, flush=True)
 
 
+def check_tabulated_offset(scene) -> None:
+    """A table of the whole stroke at ``[field] ball_offset_mm``: a cell that cannot hold
+    that offset at every height (the spherical shell: only the axis at the ends of its
+    stroke) refuses it here, before any solve (its ``check_tabulated_offset`` raises
+    :class:`FieldError`); a cell without that method holds any offset it meshes."""
+    offset = float(getattr(scene.field, "ball_offset", 0.0) or 0.0)
+    if offset == 0.0:
+        return
+    from ..field.cells import cell_of
+    check = getattr(cell_of(scene), "check_tabulated_offset", None)
+    if check is not None:
+        check(offset)
+
+
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
@@ -199,6 +213,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
         solve_comm = MPI.COMM_SELF
     if field_error not in FIELD_ERROR_MODES:
         raise ValueError(f"field_error = {field_error!r}: choose one of {FIELD_ERROR_MODES}")
+    check_tabulated_offset(scene)
     stroke = scene.device.stroke
     tolerance = scene.field.tolerance
     count = int(initial_positions)

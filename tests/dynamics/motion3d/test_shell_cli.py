@@ -6,25 +6,9 @@ import json
 
 import numpy as np
 import pytest
-from shell_model import SHELL, shell_device_toml  # noqa: F401
+from shell_zr_run import SHELL_3D, ZR_FIELD, ZR_GRID, shell_zr_run
 
 from tengfield.cli import main
-
-SHELL_3D = shell_device_toml() + """\
-[excitation]
-frequency_hz = 20
-amplitude_mm = 3
-amplitude_x_mm = 1
-phase_x_deg = 60
-
-[contact]
-model = "3d"
-
-[run]
-duration_s = 0.4
-settle_periods = 2
-sample_rate_hz = 5000
-"""
 
 
 @pytest.fixture
@@ -59,28 +43,21 @@ def test_dynamics_of_the_ball_in_the_shell_writes_its_files_and_figures(shell_fi
 
 @pytest.mark.slow
 @pytest.mark.field
-def test_run_joins_the_shells_3d_contact_to_its_zr_surrogate(shell_file, tmp_path, monkeypatch):
+def test_run_joins_the_shells_3d_contact_to_its_zr_surrogate(tmp_path_factory):
     """`tengfield run` of the ball rolling and bouncing in the shell: the 3D contact's (z, r)
     path feeds the shell's (z, r) surrogate (offsets scaled to the cavity at each height),
-    anchored on the axisymmetric one; figures on. The (z, r) table is built small here
-    (P1, 5 mm, one round of 5 heights x 3 offsets: 3 heights solved by the mirror symmetry,
-    the ends on the axis; gmsh's meshing is most of each solve) instead of the default
-    (P2, 1.5 mm, from 17 x 3 up to 33 x 9: ~17 min on one core): the join is under test,
-    not the table's accuracy. (This 5-height grid hit a gmsh HXT meshing failure at 4 mm,
-    in the coarse mesh of an error estimate; 4.5 and 5 mm mesh it.)"""
-    import functools
-
-    from tengfield import pipeline
-
-    monkeypatch.setattr(pipeline, "obtain_radial_table", functools.partial(
-        pipeline.obtain_radial_table, initial_positions=3, max_positions=5, max_offsets=3))
-    shell_file.write_text(SHELL_3D.replace("[run]", "[field]\nmesh_size_mm = 2\ndegree = 1\n"
-                                           "radial_mesh_size_mm = 5\nradial_degree = 1\n\n[run]"))
-    out = tmp_path / "run"
-    assert main(["run", str(shell_file), "-o", str(out), "--cache-dir", str(tmp_path / "cache")]) == 0
+    anchored on the axisymmetric one; figures on. The (z, r) table is built small
+    (tests/shell_zr_run.py: P1, 5 mm, one round of 5 x 3): the join is under test, not
+    the table's accuracy. The run is shared with test_spherical_shell_3d.py's held-out
+    check of the same table (issue #41); its table is computed by this run ("ran")."""
+    scene_file, out, cache = shell_zr_run(tmp_path_factory)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["stages"]["field_zr"]["status"] == "ran"
-    assert "1-D surrogate on the axis" in summary["stages"]["field_zr"]["details"]["curves"]
+    details = summary["stages"]["field_zr"]["details"]
+    assert "1-D surrogate on the axis" in details["curves"]
+    assert details["grid"] == [ZR_GRID["max_positions"], ZR_GRID["max_offsets"]]
+    assert details["mesh_size_mm"] == pytest.approx(ZR_FIELD["radial_mesh_size_mm"])
+    assert details["degree"] == ZR_FIELD["radial_degree"]
     for name in ("waveforms.png", "surrogate.png", "trajectory3d.png", "trajectory.png"):
         assert (out / name).stat().st_size > 10_000, name
     with open(out / "waveforms.csv", newline="") as f:

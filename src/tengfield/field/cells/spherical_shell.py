@@ -348,6 +348,14 @@ class SphericalShell:
         from .shell_model3d import placement
         return placement(self, position, offset, offset_angle)
 
+    def check_tabulated_offset(self, offset: float) -> None:
+        """Refuse (:class:`FieldError`, one line naming the allowed range) a table of the
+        whole stroke at the fixed lateral ``offset`` [m]: the cavity holds only the axis
+        at the ends of the stroke (asked by :func:`tengfield.surrogate.precompute` before
+        any solve)."""
+        for position in (0.0, self.stroke):
+            self.placement_3d(position, offset)
+
     def contact_rule_3d(self, position: float, offset: float, offset_angle: float = 0.0):
         from .shell_model3d import contact_rule
         return contact_rule(self, position, offset, offset_angle)
