@@ -13,7 +13,8 @@ def test_on_axis_3d_equals_axisymmetric_within_the_estimates(position_mm):
 
     The 3D solve is the scene's tube at P2, 1.5 mm, its rims' grading floored at
     0.1 * size (the default 0.05: twice the CPU); its own error estimate (the same
-    solve at 3 mm) carries the coarser rims into the tolerance."""
+    solve at 3 mm) carries the coarser rims into the tolerance (measured at z = 0:
+    estimate 3.4 %, largest deviation 1.9 %; 3.7 % and 1.4 % at the default floor)."""
     from mpi4py import MPI
 
     from tengfield.field import solve_position, solver3d
