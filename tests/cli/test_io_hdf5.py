@@ -137,10 +137,12 @@ def test_the_papers_15_minute_record_runs_in_hdf5_with_bounded_memory(tmp_path, 
     import subprocess
 
     scene = tmp_path / "s.toml"
-    env = cli_env(TENGFIELD_CACHE_DIR=str(tmp_path / "cache"))
+    env = cli_env()
     # VmHWM: this process's own peak (a child's ru_maxrss also counts the pytest process's
     # RSS at the fork). The field's surrogate first (its solves, dolfinx and gmsh are not what is measured:
-    # a cold cache adds them to the peak), then the 15 minutes from the cached surrogate
+    # a cold cache adds them to the peak), then the 15 minutes from the cached surrogate. The
+    # user's cache (as test_cli_run_in_hdf5_with_figures, the same default field): usually
+    # a hit, no field solve at all; a cold cache computes it here as before
     scene.write_text("[run]\nduration_s = 1\n")
     warm = subprocess.run([python, "-m", "tengfield.cli", "run", str(scene), "--no-plots",
                            "-o", str(tmp_path / "warm")], capture_output=True, text=True,

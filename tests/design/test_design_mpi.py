@@ -196,11 +196,13 @@ method = "monte-carlo"
 """
 
 
-@pytest.mark.slow   # real field solves (4 geometries) three times: serial, --jobs 2, mpirun
+@pytest.mark.slow   # real field solves (4 geometries) once, then cached: serial, --jobs 2, mpirun
 def test_cli_p10_design_serial_jobs_and_mpirun_write_the_same_rows(tmp_path, run_cli):
     """aggregate = "p10" end to end (figures on): the study of each candidate reuses its
     cached surrogate (no further field solve), the sample count is stated, and serial,
-    --jobs 2 and mpirun -n 2 write the same design.csv."""
+    --jobs 2 and mpirun -n 2 write the same design.csv. The two parallel runs read the
+    serial run's cache (their studies are what differs; the field solves farmed over
+    ranks from an empty cache are test_cli_design_end_to_end_and_mpirun_gives_the_serial_files')."""
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")
     scene = tmp_path / "robust.toml"
@@ -219,11 +221,11 @@ def test_cli_p10_design_serial_jobs_and_mpirun_write_the_same_rows(tmp_path, run
     assert best["objective"] < best["robust"]["nominal"]   # the worse decile of σ and e
     assert (tmp_path / "serial" / "design.png").stat().st_size > 10_000
     jobs = run_cli("design", scene, "-o", tmp_path / "jobs", "--cache-dir",
-                   tmp_path / "cache-jobs", "--jobs", "2")
+                   tmp_path / "cache-serial", "--jobs", "2")
     assert jobs.returncode == 0, jobs.stderr
     parallel = subprocess.run(
         ["mpirun", "-n", "2", sys.executable, "-m", "tengfield.cli", "design", str(scene),
-         "-o", str(tmp_path / "mpi"), "--cache-dir", str(tmp_path / "cache-mpi")],
+         "-o", str(tmp_path / "mpi"), "--cache-dir", str(tmp_path / "cache-serial")],
         env=env(), capture_output=True, text=True, timeout=900)
     assert parallel.returncode == 0, parallel.stderr
     want = rows_of(tmp_path / "serial" / "design.csv")

@@ -61,7 +61,7 @@ def test_field_command_3d_on_two_ranks_equals_serial(tmp_path, field_cli, cli_co
     if mpirun is None:
         pytest.skip("mpirun not installed")
     scene = tmp_path / "coarse3d.toml"
-    scene.write_text("[field]\nmesh_size_mm = 2.0\ndegree = 1\n")
+    scene.write_text("[field]\nmesh_size_mm = 3.0\ndegree = 1\n")   # coarse: the same path
     args = [str(scene), "--method", "3d", "--position-mm", "1.5", "--offset-mm", "0.2"]
     serial = field_cli(*args, "-o", str(tmp_path / "serial"), cwd=tmp_path)
     assert serial.returncode == 0, serial.stderr[-3000:]
