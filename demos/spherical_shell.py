@@ -13,7 +13,8 @@ Then the shell under 3-axis vibration (``shell-3axis``): the same 1.5 mm / 20 Hz
 vertical drive plus 1.5 mm along x and y (90° apart, a circular table motion), the ball
 in 3D (``[contact] model = "3d"``: Hertz contact on the spherical wall, friction, spin),
 rolling and bouncing around the cavity; its field is the shell's (z, r) surrogate
-anchored on the axisymmetric one (fast: P1 at 4 mm to 5 %; full: the default P2 at 1.5 mm).
+anchored on the axisymmetric one (fast: P1 at 4 mm to 5 % on a 5 x 3 grid; full: the
+default P2 at 1.5 mm).
 Writes ``spherical_shell.png`` (Q_SC(z) and C_T(z) of both cells on the axis; Q_SC(t)
 and V_OC(t) over two periods, all three runs).
 
@@ -57,8 +58,13 @@ def scenes(fast: bool) -> dict:
 
 
 def radial_settings(fast: bool) -> dict:
-    """The (z, r) surrogate's settings: fast P1 at 4 mm to 5 %, full the default (P2, 1.5 mm, 1e-3)."""
-    return {"mesh_size_mm": 4.0, "degree": 1, "tolerance": 0.05} if fast else {}
+    """The (z, r) surrogate's settings: full the default (P2, 1.5 mm, 1e-2); fast P1 at
+    4 mm to 5 %, starting from 3 heights instead of 9: its first refinement, a 5 x 3 grid
+    of 3D solves (the ball's z-dependence is the axisymmetric table's, the 3D solves give
+    only its change with r), is already within the 5 % (0.42 nC as with 17 x 3; 0.44 nC
+    with a 3 mm table of 33 x 9). The 3D meshing is most of the demo's time."""
+    return ({"mesh_size_mm": 4.0, "degree": 1, "tolerance": 0.05, "initial_positions": 3}
+            if fast else {})
 
 
 def outputs(scene, cache_dir, fast: bool = True) -> dict:
@@ -76,7 +82,7 @@ def outputs(scene, cache_dir, fast: bool = True) -> dict:
     axis = getattr(r.curves, "axis", r.curves)    # a 3D run's curves: the axis + the r change
     lateral = {}
     if "field_zr" in r.stages:
-        motion = r.dynamics.summary()
+        motion = r.dynamics.summary
         lateral = {"max_radial_offset_mm": motion["max_radial_offset_mm"],
                    "mean_radial_offset_mm": motion["mean_radial_offset_mm"],
                    "zr_grid": r.stages["field_zr"].details["grid"]}

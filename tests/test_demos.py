@@ -11,10 +11,14 @@ and dolfinx's ``python/demo/test.py``.
   surrogate cache each), and the field demos (those that build surrogates: importing
   ``electrical_common``, calling ``obtain_table`` / ``surrogate_curves``, or marked
   ``field=True``) once more as a script under ``mpirun -n 2`` (exit code 0, figures
-  written by rank 0).
+  written by rank 0); the heavy ones of :data:`MPIRUN_FROM_CACHE` from a copy of the
+  surrogate cache of their in-process run (their fields solved once in this file).
 """
 from __future__ import annotations
 
+import contextlib
+import importlib.util
+import io
 import math
 import re
 import shutil
@@ -268,7 +272,7 @@ def check_spherical_shell(run):
 
 @pins("fit_paper", *(f"fit_paper_{case}/fit.png" for case in "ABC"))
 def check_fit_paper(run):
-    import electrical_common      # on sys.path (load_demo); the module fit_paper imported
+    import electrical_common      # on sys.path (the demos put it there), as fit_paper used it
 
     numbers = run.numbers
     # the hand computation of docs/demos.md on the same surrogate
@@ -361,15 +365,49 @@ def test_demo_has_pinned_numbers(demo):
         "tests/test_demos.py asserting one or two of the physics numbers its main() returns")
 
 
+#: the field demos whose ``mpirun`` run starts from a copy of the surrogate cache their
+#: in-process run filled (:func:`in_process_runs`), so their fields are solved once in this
+#: file, not twice: under mpirun they still run every stage on both ranks (the cache read
+#: on rank 0 and broadcast, the design's candidates and the runs farmed over the ranks,
+#: rank 0 writing), and the parallel field solves they would repeat are held elsewhere:
+#: the design's by ``tests/design/test_design_mpi.py`` (real solves, ``mpirun -n 2`` gives
+#: the serial files), the (z, r) table's by ``tests/surrogate/test_surrogate_zr.py``
+#: (2 ranks equal serial) and the 3D solve's by ``tests/field/test_field_3d_mpi.py``;
+#: breakdown_limit's five axisymmetric tables are the farm (``surrogate.precompute`` over
+#: the ranks) that the electrical demos' mpirun runs below solve afresh.
+#: The other field demos' fields cost about a second: they solve them again.
+MPIRUN_FROM_CACHE = ("breakdown_limit", "design_ship", "spherical_shell")
+
+
+@pytest.fixture(scope="module")
+def in_process_runs(tmp_path_factory):
+    """``run(demo) -> DemoRun``: ``main(["--fast", "-o", DIR, "--cache-dir", DIR/cache])``
+    in-process (``demos/`` on ``sys.path``, stdout captured), once per demo in this module."""
+    runs: dict[str, DemoRun] = {}
+
+    def run(demo: Path) -> DemoRun:
+        if demo.stem not in runs:
+            out = tmp_path_factory.mktemp(f"demo_{demo.stem}")
+            printed = io.StringIO()
+            with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(printed):
+                mp.syspath_prepend(str(DEMOS))
+                mp.setattr(sys, "argv", [demo.name])
+                spec = importlib.util.spec_from_file_location(f"demo_{demo.stem}", demo)
+                module = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(module)
+                numbers = module.main(demo_argv(demo, out))
+            runs[demo.stem] = DemoRun(demo.stem, numbers, printed.getvalue(), out, out / "cache")
+        return runs[demo.stem]
+    return run
+
+
 @pytest.mark.parametrize("demo", demo_params(DEMO_PATHS))
-def test_demo(demo, tmp_path, load_demo, capsys, monkeypatch):
+def test_demo(demo, in_process_runs):
     """``main(["--fast", "-o", TMP, "--cache-dir", TMP/cache])`` in-process, then its pins."""
     if demo.stem not in DEMO_CHECKS:
         pytest.fail(f"demos/{demo.name} has no pinned numbers (test_demo_has_pinned_numbers)")
     pinned = DEMO_CHECKS[demo.stem]
-    monkeypatch.setattr(sys, "argv", [demo.name])
-    numbers = load_demo(demo.stem).main(demo_argv(demo, tmp_path))
-    run = DemoRun(demo.stem, numbers, capsys.readouterr().out, tmp_path, tmp_path / "cache")
+    run = in_process_runs(demo)
     for png in pinned.pngs:
         assert png_size(run, png) > 0
     pinned.check(run)
@@ -383,11 +421,14 @@ def mpirun_env(cli_env) -> dict:
 
 
 @pytest.mark.parametrize("demo", demo_params([p for p in DEMO_PATHS if solves_fields(p)]))
-def test_field_demo_under_mpirun(demo, tmp_path, python, cli_env):
+def test_field_demo_under_mpirun(demo, tmp_path, python, cli_env, in_process_runs):
     """``mpirun -n 2 python demos/NAME.py --fast ...`` (the field solves spread over the two
-    ranks, rank 0 writes): exit code 0 and every figure written."""
+    ranks, rank 0 writes): exit code 0 and every figure written. The demos of
+    :data:`MPIRUN_FROM_CACHE` start from their in-process run's surrogates."""
     if shutil.which("mpirun") is None:
         pytest.skip("mpirun not installed")
+    if demo.stem in MPIRUN_FROM_CACHE:
+        shutil.copytree(in_process_runs(demo).cache_dir, tmp_path / "cache")
     proc = subprocess.run(["timeout", "890", "mpirun", "-n", "2", python, str(demo),
                            *demo_argv(demo, tmp_path)], cwd=tmp_path, env=mpirun_env(cli_env),
                           capture_output=True, text=True, timeout=900)
