@@ -1,6 +1,5 @@
 """Fixtures shared by the whole suite: the interpreter, the CLI in a subprocess, the
 default scene of the analytic plate model (``tests/plate_model.py``)."""
-import importlib.util
 import os
 import subprocess
 import sys
@@ -29,7 +28,6 @@ except ImportError:   # the fast tier without the plotting stack
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
-DEMOS = ROOT / "demos"
 
 
 def cli_environment(**extra) -> dict:
@@ -161,17 +159,3 @@ def plate_solve():
     """The analytic stand-in for ``solve_position`` (``plate_model.plate_model_solve``)."""
     import plate_model
     return plate_model.plate_model_solve
-
-
-@pytest.fixture
-def load_demo(monkeypatch):
-    """``load_demo(name)`` -> the module ``demos/name.py``, freshly imported with ``demos/``
-    on ``sys.path`` for this test only; its ``main(argv)`` returns the demo's numbers."""
-    monkeypatch.syspath_prepend(str(DEMOS))
-
-    def load(name):
-        spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        return module
-    return load
