@@ -241,7 +241,7 @@ def test_map(quick_start, clone):
     out = where / output_of(line)
     check_outputs(out, ("map.csv", "map.png"))
     with open(out / "map.csv", newline="") as f:
-        assert len(list(csv.DictReader(f))) == 100 * 100
+        assert len(list(csv.DictReader(f))) == 66 * 50      # 5:70:66 Hz x 0.1:5:50 mm
 
 
 def test_field(quick_start, clone):
