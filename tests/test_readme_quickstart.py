@@ -241,7 +241,7 @@ def test_map(quick_start, clone):
     out = where / output_of(line)
     check_outputs(out, ("map.csv", "map.png"))
     with open(out / "map.csv", newline="") as f:
-        assert len(list(csv.DictReader(f))) == 100 * 100
+        assert len(list(csv.DictReader(f))) == 66 * 50      # 5:70:66 Hz x 0.1:5:50 mm
 
 
 def test_field(quick_start, clone):
@@ -318,9 +318,14 @@ def test_design(quick_start, clone):
     """`design my.toml` on the scene without [design] (its templates are commented): a
     default study, announced in one line."""
     line = line_of("design")
-    where, _ = ran(quick_start, clone, "design")
-    check_outputs(where / output_of(line), ("design.csv", "design.json", "design.png",
-                                            "best.toml"))
+    where, proc = ran(quick_start, clone, "design")
+    out = where / output_of(line)
+    check_outputs(out, ("design.csv", "design.json", "design.png", "best.toml"))
+    # the line's --candidates 8 (a first look) is the budget the study says and spends
+    said = [ln for ln in proc.stderr.splitlines() if "has no [design]: a default study" in ln]
+    assert len(said) == 1 and "8 candidates" in said[0], proc.stderr
+    with open(out / "design.csv", newline="") as f:
+        assert 4 <= len(list(csv.DictReader(f))) <= 8
 
 
 def test_uncertainty(quick_start, clone):
