@@ -29,7 +29,7 @@ import time
 
 #: the modules holding ``@njit(cache=True)`` kernels
 KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.dynamics.motion3d._kernel",
-                  "tengfield.harvest._kernel", "tengfield.array", "tengfield.lumped")
+                  "tengfield.harvest._kernel", "tengfield.array", "tengfield._lumped_kernel")
 
 _SHORT_3D = """
 [contact]

@@ -30,12 +30,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-try:  # numba is a hard dependency of tengfield; the fallback keeps imports light in docs builds
-    from numba import njit
-except ImportError:  # pragma: no cover
-    def njit(*args, **kwargs):
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
-
 
 def scale_cells(q_sc, dq_sc_dz, c_t, dc_t_dz, cells: int):
     """One cell's terminal quantities -> ``cells`` identical cells in parallel.
@@ -78,20 +72,6 @@ def _psi(x):
     series = 0.5 - x / 3.0 + x * x / 8.0 - x**3 / 30.0
     exact = (-np.expm1(-safe) - safe * np.exp(-safe)) / (safe * safe)
     return np.where(small, series, exact)
-
-
-@njit(cache=True)
-def _deficit_recurrence(decay, source, start):
-    """D_0 = ``start``, D_{k+1} = ``decay[k]`` D_k + ``source[k]`` [C]: the linear
-    recurrence of :func:`load_response`, O(n), compiled (a Python loop costs ~1 µs a
-    sample); the same operations in the same order, so the same numbers."""
-    deficit = np.empty(decay.size + 1)
-    deficit[0] = start
-    d = start
-    for k in range(decay.size):
-        d = decay[k] * d + source[k]
-        deficit[k + 1] = d
-    return deficit
 
 
 @dataclass(frozen=True)
@@ -156,7 +136,9 @@ def load_response(times, q_sc, i_sc, c_t, load_ohm: float, parallel_capacitance:
     gain_start = x * psi                    # weight of f0
     gain_end = x * (phi1 - psi)             # weight of f1
     source = gain_start * forcing[:-1] + gain_end * forcing[1:]
-    deficit = _deficit_recurrence(decay, source, float(q_sc[0] - initial_load_charge))
+    from ._lumped_kernel import deficit_recurrence   # numba: loaded when a load is solved
+
+    deficit = deficit_recurrence(decay, source, float(q_sc[0] - initial_load_charge))
     voltage = deficit / c_total
     current = voltage / load_ohm
     return LoadResponse(voltage=voltage, current=current, power=voltage * current,

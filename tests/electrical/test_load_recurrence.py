@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tengfield import _warmup, lumped
+from tengfield import _lumped_kernel, _warmup, lumped
 
 
 def reference_deficit(t, q_sc, i_sc, c_total, load_ohm, initial_load_charge=0.0):
@@ -25,9 +25,9 @@ def reference_deficit(t, q_sc, i_sc, c_total, load_ohm, initial_load_charge=0.0)
 def test_the_recurrence_is_a_compiled_kernel_the_warm_up_compiles():
     from numba.core.registry import CPUDispatcher
 
-    assert isinstance(lumped._deficit_recurrence, CPUDispatcher)
-    assert "tengfield.lumped" in _warmup.KERNEL_MODULES
-    assert lumped._deficit_recurrence in _warmup.kernels()
+    assert isinstance(_lumped_kernel.deficit_recurrence, CPUDispatcher)
+    assert "tengfield._lumped_kernel" in _warmup.KERNEL_MODULES
+    assert _lumped_kernel.deficit_recurrence in _warmup.kernels()
 
 
 def test_load_response_is_the_scheme_bit_for_bit_across_impacts():
