@@ -61,7 +61,7 @@ XDIST = $(if $(filter-out 0 1,$(TEST_JOBS)),-n $(TEST_JOBS) --dist loadfile,)
 TEST_SELECT ?=
 
 test-serial: setup
-	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) $(if $(TEST_SELECT),-m "$(TEST_SELECT)",) tests
+	$(PY) -m pytest -q -p no:cacheprovider --durations=25 $(XDIST) $(if $(TEST_SELECT),-m "$(TEST_SELECT)",) tests
 
 # what differs between Debian releases (marker `release`, tests/conftest.py: field,
 # surrogate, cli, parallel, the Quick start), then the MPI tier
@@ -75,7 +75,7 @@ test-release-serial: setup
 test-image: setup test-image-serial test-mpi
 
 test-image-serial: setup
-	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) -m "release or image" tests
+	$(PY) -m pytest -q -p no:cacheprovider --durations=25 $(XDIST) -m "release or image" tests
 
 # the fast tier (no subprocess CLI runs, demos, 3D fields or tests over ~1 s): minutes
 test-fast: setup
