@@ -409,10 +409,13 @@ class SignalExit:
         self._finish(signum)
 
     def _watch(self, read_end: int) -> None:
-        while True:
-            data = os.read(read_end, 1)
-            if data:
-                break
+        """Blocks until a signal's byte arrives, or the pipe's end (:meth:`uninstall`
+        closed its write end): then it leaves (it used to read EOF again and again, a
+        core spun for the rest of the process after every in-process use)."""
+        data = os.read(read_end, 1)            # b"" only at the end of the pipe
+        if not data:
+            os.close(read_end)
+            return
         self._moving.acquire(timeout=2.0)      # a move into place under way ends first
         self._finish(data[0])
 
