@@ -176,7 +176,7 @@ def check_tabulated_offset(scene) -> None:
     that offset at every height (the spherical shell: only the axis at the ends of its
     stroke) refuses it here, before any solve (its ``check_tabulated_offset`` raises
     :class:`FieldError`); a cell without that method holds any offset it meshes."""
-    offset = float(getattr(scene.field, "ball_offset", 0.0) or 0.0)
+    offset = scene.field.ball_offset
     if offset == 0.0:
         return
     from ..field.cells import cell_of
