@@ -1,9 +1,10 @@
-"""Across geometries (issue #40, ``[field] mesh_motion = "move"``): a geometry that
-differs from one already meshed only in its dimensions places its reference meshes by
-mapping the earlier one's (field/moving.py: ``map_nodes``). The mapped nodes land on the
-new interfaces exactly, a map that would spoil the mesh is refused (meshed instead, and
-counted), and the tables of mapped geometries agree with remeshed ones within each
-table's error estimate (tube and spherical shell)."""
+"""Across geometries (issue #40, ``[field] mesh_motion = "move"``): a geometry places its
+reference meshes by mapping the mesh of its canonical geometry (its lengths on a
+logarithmic grid, field/moving.py: ``canonical_length``, ``map_nodes``). The mapped
+nodes land on the new interfaces exactly, a map that would spoil the mesh is refused
+(meshed instead, and counted), a candidate's numbers do not depend on which candidates
+were solved before it, and the tables of mapped geometries agree with remeshed ones
+within each table's error estimate (tube and spherical shell)."""
 import warnings
 
 import numpy as np
@@ -105,35 +106,102 @@ def test_a_mapping_puts_the_shells_cavity_band_and_ball_on_their_new_places():
                                rtol=1e-12)
 
 
+def test_the_canonical_grid_is_within_five_percent_and_a_function_of_the_value_alone():
+    """Random lengths from 10 µm to 1 m: the canonical length is a power of the grid's
+    ratio in mm, within sqrt(ratio) of the value, the same for any value of its cell,
+    and the tube's and the shell's canonical geometries keep their shapes' rules."""
+    from tengfield.field.axisymmetric import canonical_device
+    from tengfield.field.cells.spherical_shell import SphericalShell
+    from tengfield.field.moving import CANONICAL_RATIO, canonical_length
+
+    rng = np.random.default_rng(40)
+    for value in 10.0 ** rng.uniform(-5.0, 0.0, 400):
+        c = canonical_length(value)
+        k = np.log(c * 1e3) / np.log(CANONICAL_RATIO)
+        assert abs(k - round(k)) < 1e-4   # 6 significant digits
+        assert 1.0 / np.sqrt(CANONICAL_RATIO) - 1e-6 <= c / value <= np.sqrt(CANONICAL_RATIO) + 1e-6
+        assert canonical_length(c) == c
+        assert canonical_length(-value) == -c
+    assert canonical_length(0.0) == 0.0
+    device = default_scene().device
+    a = canonical_device(device)
+    b = canonical_device(_tube(ball_diameter_mm=7.05, tube_inner_radius_mm=4.02,
+                               electrode_radius_mm=4.02, tube_outer_radius_mm=5.52).device)
+    assert a == b                                  # one cell: one canonical geometry
+    assert a.electrode_radius == a.tube_inner_radius   # the inset 0 stays 0
+    assert a.tube_inner_radius > a.ball_radius
+    shell = SphericalShell(cavity_diameter=20e-3, shell_thickness=2e-3, electrode_band=2e-3,
+                           ball_diameter=17e-3, domain_radius=0.1).canonical()
+    assert shell.domain_radius is None
+    assert abs(shell.stroke / 3e-3 - 1.0) < 0.05   # the stroke is snapped, not the ball
+
+
 @field
 @pytest.mark.slow
-def test_a_map_that_would_spoil_the_mesh_is_refused_meshed_and_counted():
-    """A ball grown from 7 mm to 9.9 mm in a bore of 5 mm would crush the cells between
-    it and the bore: the reference is meshed by gmsh instead, and ``map_refused`` says so;
-    a modest change is mapped."""
+def test_a_candidates_numbers_do_not_depend_on_the_candidates_solved_before_it():
+    """Three tubes, two of them in one canonical cell (they share its template): solved
+    in either order, in one process, every number is the same to the bit; the shared
+    template is meshed once."""
     from mpi4py import MPI
 
     from tengfield.field import moving, solve_position
 
+    scenes = {"a": _tube(), "b": _tube(ball_diameter_mm=7.6, stroke_mm=3.4,
+                                       tube_inner_radius_mm=4.3, electrode_radius_mm=4.3,
+                                       tube_outer_radius_mm=5.8),
+              "c": _tube(ball_diameter_mm=7.5, stroke_mm=3.35, tube_inner_radius_mm=4.25,
+                         electrode_radius_mm=4.25, tube_outer_radius_mm=5.75)}
+
+    def run(order):
+        moving.clear()
+        numbers = {}
+        for name in order:
+            scene = scenes[name].with_values(field={"mesh_motion": "move"})
+            results = [solve_position(scene, z, comm=MPI.COMM_SELF, estimate_error=False)
+                       for z in (0.4e-3, 1.5e-3)]
+            moving.release_references()
+            numbers[name] = [(r.capacitance.tolist(), r.induced_fraction.tolist())
+                             for r in results]
+        return numbers, dict(moving.COUNTS)
+
+    forward, counts = run("abc")
+    backward, _ = run("cba")
     moving.clear()
-    base = _tube()
+    assert forward == backward
+    assert counts["mapped"] == 6 and counts["map_refused"] == 0
+    assert counts["meshed"] == 4    # the templates: a's cell and b's = c's, 2 rungs each
+    assert forward["b"] != forward["c"]
+
+
+@field
+@pytest.mark.slow
+def test_a_map_that_would_spoil_the_mesh_is_refused_meshed_and_counted(monkeypatch):
+    """A quality bound no map can meet: the reference is meshed by gmsh for the
+    candidate itself (after its canonical template), and ``map_refused`` says so; with
+    the bound as shipped the same candidate is mapped, and a second candidate of the
+    same canonical cell meshes nothing."""
+    from mpi4py import MPI
+
+    from tengfield.field import moving, solve_position
+
     settings = dict(comm=MPI.COMM_SELF, estimate_error=False)
 
     def move(scene):
         return scene.with_values(field={"mesh_motion": "move"})
-    first = solve_position(move(base), 1.5e-3, **settings)
-    moving.release_references()          # the table is done: its meshes become templates
-    assert first.info["mesh_placements"]["meshed"] == 1
-    crushed = solve_position(move(_tube(ball_diameter_mm=9.9, tube_inner_radius_mm=5.0,
-                                        electrode_radius_mm=5.0, tube_outer_radius_mm=6.0)),
-                             1.5e-3, **settings)
-    assert crushed.info["mesh_placements"] == {"moved": 0, "meshed": 1, "mapped": 0}
+    moving.clear()
+    monkeypatch.setattr(moving, "MAP_QUALITY_BOUND", 1.0 + 1e-9)
+    refused = solve_position(move(_tube(ball_diameter_mm=7.4)), 1.5e-3, **settings)
+    assert refused.info["mesh_placements"] == {"moved": 0, "meshed": 2, "mapped": 0}
     assert moving.COUNTS["map_refused"] == 1
-    moving.release_references()
-    near = solve_position(move(_tube(ball_diameter_mm=7.4)), 1.5e-3, **settings)
-    assert near.info["mesh_placements"]["mapped"] == 1
-    assert near.info["mesh_placements"]["meshed"] == 0
-    assert moving.COUNTS["mapped"] == 1
+    monkeypatch.undo()
+    moving.clear()
+    first = solve_position(move(_tube(ball_diameter_mm=7.4)), 1.5e-3, **settings)
+    moving.release_references()          # the table is done: its template is kept
+    assert first.info["mesh_placements"] == {"moved": 0, "meshed": 1, "mapped": 1}
+    near = solve_position(move(_tube(ball_diameter_mm=7.41)), 1.5e-3, **settings)
+    assert near.info["mesh_placements"] == {"moved": 0, "meshed": 0, "mapped": 1}
+    assert moving.COUNTS == {"moved": 0, "meshed": 1, "mapped": 2, "map_refused": 0}
+    np.testing.assert_allclose(near.capacitance, refused.capacitance, rtol=2e-2)
     moving.clear()
 
 
@@ -141,7 +209,8 @@ def test_a_map_that_would_spoil_the_mesh_is_refused_meshed_and_counted():
 @pytest.mark.slow
 def test_mapped_tube_tables_agree_with_remeshed_ones_within_their_error_estimates():
     """Stroke and ball diameter (the design's keys) changed: the second geometry's table
-    comes from the first's meshes mapped, and agrees with its own remeshed table."""
+    comes from its canonical geometry's meshes mapped, and agrees with its own remeshed
+    table."""
     from tengfield import surrogate
     from tengfield.field import moving
 
@@ -152,11 +221,12 @@ def test_mapped_tube_tables_agree_with_remeshed_ones_within_their_error_estimate
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         surrogate.precompute(first)
-        meshed_before = moving.COUNTS["meshed"]
+        meshed_before, mapped_before = moving.COUNTS["meshed"], moving.COUNTS["mapped"]
         mapped = surrogate.precompute(second.with_values(field={"mesh_motion": "move"}))
         remeshed = surrogate.precompute(second)
-    assert moving.COUNTS["mapped"] >= 4
-    assert mapped.provenance["mesh_placements"]["mapped"] == moving.COUNTS["mapped"]
+    assert moving.COUNTS["mapped"] - mapped_before >= 4
+    assert mapped.provenance["mesh_placements"]["mapped"] == (moving.COUNTS["mapped"]
+                                                              - mapped_before)
     assert moving.COUNTS["meshed"] - meshed_before <= mapped.provenance["mesh_placements"][
         "meshed"]
     assert_tables_agree_within_estimates(mapped, remeshed)

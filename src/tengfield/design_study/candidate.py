@@ -23,12 +23,15 @@ from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: the design's field settings (``[design] field = "coarse"``): degree 2, base mesh
 #: min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION x d), surrogate tolerance
-#: DESIGN_TOLERANCE (9 -> 17 positions). Field error estimate measured 1.1e-2 (d = 5 mm)
-#: and 1.6e-2 (d = 10 mm at 1.43 mm); docs/design.md
+#: DESIGN_TOLERANCE (9 -> 17 positions), meshes moved with the ball and mapped from the
+#: candidate's canonical geometry (DESIGN_MESH_MOTION; field/moving.py: a function of
+#: the candidate alone). Field error estimate measured 1.1e-2 (d = 5 mm) and 1.6e-2
+#: (d = 10 mm at 1.43 mm); docs/design.md
 DESIGN_DEGREE = 2
 DESIGN_MESH_MAX_MM = 1.0
 DESIGN_MESH_BALL_FRACTION = 0.2
 DESIGN_TOLERANCE = 0.02
+DESIGN_MESH_MOTION = "move"
 #: matched-load scan: decades either side of 1 / (2 pi f C_T), grid points, Brent's tolerance
 LOAD_DECADES = 1.5
 LOAD_GRID = 7
@@ -41,7 +44,7 @@ def design_field_settings(ball_diameter_mm: float) -> dict:
     """``[field]`` keys of the coarse design setting for a ball of this diameter."""
     return {"degree": DESIGN_DEGREE,
             "mesh_size_mm": float(f"{min(DESIGN_MESH_MAX_MM, DESIGN_MESH_BALL_FRACTION * ball_diameter_mm):.6g}"),
-            "tolerance": DESIGN_TOLERANCE}
+            "tolerance": DESIGN_TOLERANCE, "mesh_motion": DESIGN_MESH_MOTION}
 
 
 def followed_geometry(base_device: dict, values: dict) -> dict:

@@ -172,7 +172,8 @@ def design_summary(result) -> dict:
             "band": [{"frequency_hz": f, "excitation": result.scene.excitation.kind}
                      for f, _ in spec.band]})},
         "field_settings": ("coarse: degree 2, mesh_size_mm = min(1, 0.2 x ball diameter), "
-                           "tolerance 0.02 (17 positions)") if spec.field == "coarse"
+                           "tolerance 0.02 (17 positions), meshes moved and mapped from each "
+                           "candidate's canonical geometry") if spec.field == "coarse"
         else "the scene's [field]",
         "rounds": result.rounds,
         "wall_time_s": result.wall_time, "ranks": result.ranks, "jobs": result.jobs,

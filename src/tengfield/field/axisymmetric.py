@@ -44,11 +44,12 @@ from __future__ import annotations
 
 import math
 import time
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import FieldError
+from ..errors import FieldError, TengfieldError
 from ..scene.constants import EPS0
 from . import contact
 from . import geometry_axisymmetric as geometry
@@ -401,12 +402,33 @@ def solve_by_contact_rule(position: float, anchors, stroke: float, solve_at_gap,
     return result
 
 
+def canonical_device(device):
+    """The tube ``device`` on the canonical grid (:func:`tengfield.field.moving.canonical_length`)
+    of its independent lengths: the ball's diameter, the stroke, the radial clearance
+    (bore - ball radius), the wall (outer - inner radius), the electrode's inset (bore -
+    electrode radius, signed) and the plates' thickness; None when that device is
+    impossible. The geometry a candidate's meshes are mapped from (docs/field.md)."""
+    from .moving import canonical_length as grid
+
+    d = grid(device.ball_diameter)
+    bore = 0.5 * d + grid(device.tube_inner_radius - device.ball_radius)
+    try:
+        return dataclasses.replace(
+            device, ball_diameter=d, stroke=grid(device.stroke), tube_inner_radius=bore,
+            tube_outer_radius=bore + grid(device.tube_outer_radius - device.tube_inner_radius),
+            electrode_radius=bore - grid(device.tube_inner_radius - device.electrode_radius),
+            plate_thickness=grid(device.plate_thickness))
+    except (TengfieldError, ValueError):
+        return None
+
+
 def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool,
                 grading_size: float | None = None):
     """``(layout, Discretisation)`` of ``scene`` with the ball at ``position``: meshed
     (gmsh), or with ``moving`` a reference mesh of the same scene and mesh size moved
     there (:func:`tengfield.field.moving.placed`, which meshes when the move would
-    spoil the mesh)."""
+    spoil the mesh), a missing reference mapped from the mesh of the scene's canonical
+    geometry (:func:`canonical_device`)."""
     fld = scene.field
     extra = {} if grading_size is None else {"grading_size": grading_size}
 
@@ -420,13 +442,47 @@ def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool
 
     key = (scene.field_hash(), geometry.base_mesh_size(scene), grading_size)
     lay = geometry.layout(scene, position, **extra)
-    family = motion.geometry_family(lay, permittivity=eps, degree=fld.degree,
-                                    far_field=fld.far_field, grading_size=grading_size)
+    settings = dict(degree=fld.degree, far_field=fld.far_field, grading_size=grading_size)
+    family = motion.geometry_family(lay, permittivity=eps, **settings)
+
+    def canonical(rung):
+        """The canonical geometry at ``rung``: (key, layout, family, mesh()) or None."""
+        device = canonical_device(scene.device)
+        if device is None:
+            return None
+        z = motion.rung_gap(device.stroke, contact.minimum_gap(device.plate_spacing), rung)
+        if z is None:
+            return None
+        options = dict(extra, mesh_size=lay.mesh_size,
+                       domain_radius=motion.canonical_domain_radius(lay.domain_radius,
+                                                                    fld.far_field))
+        try:
+            lay_c = geometry.layout(_Canonical(device, fld), z, **options)
+        except FieldError:
+            return None
+        eps_c = permittivities(device, lay_c)
+
+        def mesh():
+            meshed = mesh_model(lambda gmsh: geometry.build_model(gmsh, lay_c, geometry_order=2),
+                                comm, lambda exc: geometry.meshing_failure(scene, exc))
+            return discretise(dx_api, *meshed, lay_c, eps_c, fld.degree, fld.far_field)
+        lengths = (device.ball_diameter, device.stroke, device.tube_inner_radius,
+                   device.tube_outer_radius, device.electrode_radius, device.plate_thickness)
+        return ((lengths, z, tuple(sorted(options.items()))), lay_c,
+                motion.geometry_family(lay_c, permittivity=eps_c, **settings), mesh)
+
     return motion.placed(key, lay, lambda z: geometry.layout(scene, z, **extra),
                          lambda z: mesh_and_discretise(z)[1],
                          lambda disc: reassemble(dx_api, disc), dx_api,
                          minimum_gap=contact.minimum_gap(scene.device.plate_spacing),
-                         family=family)
+                         family=family, canonical=canonical)
+
+
+@dataclass(frozen=True)
+class _Canonical:
+    """What :func:`geometry_axisymmetric.layout` reads of a scene, for a canonical device."""
+    device: object
+    field: object
 
 
 def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,

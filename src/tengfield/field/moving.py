@@ -28,22 +28,25 @@ contact rule's anchors g, 2g, 4g) follow the same rule: the first is meshed, the
 others are the rungs or moves of them. :data:`COUNTS` says how often each happened in this process.
 
 Across geometries (design and uncertainty candidates that differ only in their
-dimensions): a reference mesh released when its table is done is kept as a template of
-its *family* (:func:`geometry_family`: the shape, the topology, the far field, the
-permittivities, the mesh size and degree; not the dimensions). A new geometry of the
-same family places a rung's reference by mapping the template of the same rung
+dimensions): the reference of a rung is not meshed for the candidate but *mapped* from
+the mesh of its **canonical geometry** (:func:`canonical_length`: every length of the
+geometry rounded to a logarithmic grid of ratio :data:`CANONICAL_RATIO`, so at most
+~5 % away), meshed once per process for that rung and kept as a *template* of its
+*family* (:func:`geometry_family`: the shape, the topology, the far field, the
+permittivities, the mesh size and degree; not the dimensions). The map
 (:func:`map_nodes`: a piecewise-linear map per region, in r and z for the tube, in
-radius and polar angle for the shell, that puts every interface on its new position
-and blends back to the identity before the far boundary, then the ball corrected to
-its new place and size rigidly with the blending weight) instead of meshing it: the
-compiled forms, dofs, sparsity and restriction are the template's, the operator and
-the ball's load are assembled again. A map is accepted only if every triangle keeps
-its orientation and its shape quality (4√3·area / Σ edge²) within
-:data:`MAP_QUALITY_BOUND` of the quality gmsh meshed it with (a chain of maps
-cannot drift); otherwise the rung is meshed (counted
-``map_refused``). ``TENGFIELD_MESH_MAPPING=0`` turns the mapping off (to measure it).
-A mapped geometry's numbers depend on the template it was mapped from by the
-discretisation error only (``tests/field/test_mapped_mesh.py``).
+radius and polar angle for the shell, that puts every interface on its new position and
+blends back to the identity before the far boundary, then the ball corrected to its new
+place and size rigidly with the blending weight) keeps the template's compiled forms,
+dofs, sparsity and restriction; the operator and the ball's load are assembled again.
+A map is accepted only if every triangle keeps its orientation and its shape quality
+(4√3·area / Σ edge²) within :data:`MAP_QUALITY_BOUND` of the quality gmsh meshed the
+template with; otherwise the rung is meshed for the candidate itself (counted
+``map_refused``). Every candidate is mapped from the canonical mesh of its own
+dimensions, never from another candidate's, so its numbers are a function of the
+candidate alone: the same in any order, on any number of ranks
+(``tests/field/test_mapped_mesh.py``). ``TENGFIELD_MESH_MAPPING=0`` turns the mapping
+off (to measure it).
 
 The numbers differ from a remeshed solve by the discretisation error (the tables
 agree within their error estimates: ``tests/field/test_moving_mesh.py``), so
@@ -74,8 +77,12 @@ COUNTS = {"moved": 0, "meshed": 0, "mapped": 0, "map_refused": 0}
 #: smallest factor by which a mapped triangle's shape quality may fall against the one
 #: its gmsh mesh had (a chain of maps is measured against the meshed original)
 MAP_QUALITY_BOUND = 2.0
-#: templates kept for mapping (released references, one per family and rung)
-MAX_TEMPLATES = 32
+#: templates kept for mapping (canonical meshes, one per family, rung and canonical
+#: geometry; the least recently used forgotten)
+MAX_TEMPLATES = 48
+#: ratio between neighbouring values of the canonical lengths' logarithmic grid: a
+#: candidate's lengths are at most sqrt(1.1) - 1 ≈ 4.9 % from its canonical geometry's
+CANONICAL_RATIO = 1.1
 #: the map is the identity outside the box (tube) or disk (shell) of this fraction of
 #: the domain radius: the far boundary and the Kelvin image never move
 MAP_REACH = 0.7
@@ -83,7 +90,7 @@ MAP_REACH = 0.7
 MAPPING_ENV = "TENGFIELD_MESH_MAPPING"
 
 _references: OrderedDict = OrderedDict()
-_templates: OrderedDict = OrderedDict()   # (family, rung) -> Reference, solver released
+_templates: OrderedDict = OrderedDict()   # (family, rung, canonical key) -> Reference
 
 
 @dataclass
@@ -100,6 +107,7 @@ class Reference:
     quality0: np.ndarray | None = None  # shape quality per triangle as gmsh meshed it
     family: tuple | None = None  # geometry_family: what a mapped geometry shares
     rung: tuple | None = None    # reference_rung's rung: (side, index or "half")
+    template: tuple | None = None  # (key, canonical Reference) the mesh was mapped from
 
 
 def blending_weight(x: np.ndarray, lay) -> np.ndarray:
@@ -153,22 +161,59 @@ def reference_position(lay, minimum_gap: float) -> float:
     return reference_rung(lay, minimum_gap)[0]
 
 
-def reference_rung(lay, minimum_gap: float) -> tuple[float, tuple]:
-    """``(gap [m], rung)`` of :func:`reference_position`, ``rung`` = (side, k) for the
-    k-th ladder gap or (side, "half"): what a mapped geometry's reference shares with
-    its template."""
-    stroke = lay.gap_lower + lay.gap_upper
-    near = max(min(lay.gap_lower, lay.gap_upper), minimum_gap)
+def _ladder(stroke: float, minimum_gap: float) -> list[float]:
+    """The reference gaps [m] on one side: g, g·LADDER_FACTOR, ... below half the
+    stroke, then half the stroke."""
     half = 0.5 * stroke
     ladder, rung = [], minimum_gap
     while rung < half * (1.0 - 1e-9):
         ladder.append(rung)
         rung *= LADDER_FACTOR
     ladder.append(half)
+    return ladder
+
+
+def reference_rung(lay, minimum_gap: float) -> tuple[float, tuple]:
+    """``(gap [m], rung)`` of :func:`reference_position`, ``rung`` = (side, k) for the
+    k-th ladder gap or (side, "half"): what a mapped geometry's reference shares with
+    its template."""
+    stroke = lay.gap_lower + lay.gap_upper
+    near = max(min(lay.gap_lower, lay.gap_upper), minimum_gap)
+    ladder = _ladder(stroke, minimum_gap)
     k = min(range(len(ladder)), key=lambda i: abs(math.log(near / ladder[i])))
     lower = lay.gap_lower <= lay.gap_upper
     name = ("lower" if lower else "upper", "half" if k == len(ladder) - 1 else k)
     return (ladder[k] if lower else stroke - ladder[k]), name
+
+
+def rung_gap(stroke: float, minimum_gap: float, rung: tuple) -> float | None:
+    """The gap [m] of ``rung`` (:func:`reference_rung`) on a geometry of this stroke and
+    smallest meshed gap, or None when its ladder has no such rung."""
+    ladder = _ladder(stroke, minimum_gap)
+    side, k = rung
+    if k == "half":
+        gap = ladder[-1]
+    elif k < len(ladder) - 1:
+        gap = ladder[k]
+    else:
+        return None
+    return gap if side == "lower" else stroke - gap
+
+
+def canonical_length(value: float) -> float:
+    """``value`` [m] rounded to the canonical grid: the nearest power of
+    :data:`CANONICAL_RATIO` in millimetres (6 significant digits; the sign kept, 0 stays
+    0), so within ~4.9 % of it. A function of the value alone."""
+    if value == 0.0 or not math.isfinite(value):
+        return value
+    k = round(math.log(abs(value) * 1e3) / math.log(CANONICAL_RATIO))
+    return math.copysign(float(f"{CANONICAL_RATIO ** k:.6g}") * 1e-3, value)
+
+
+def canonical_domain_radius(radius: float, far_field: str) -> float:
+    """The canonical geometry's far-field radius [m]: on the grid, except for a Robin
+    far field, whose 1/R is compiled into the forms (part of the family)."""
+    return radius if far_field == "robin" else canonical_length(radius)
 
 
 def geometry_family(lay, **settings) -> tuple:
@@ -340,17 +385,32 @@ def mapping_enabled() -> bool:
     return os.environ.get(MAPPING_ENV, "1") != "0"
 
 
-def _mapped_reference(dx_api, family, rung, lay, reassemble) -> Reference | None:
-    """A reference for ``lay`` mapped from the template of ``(family, rung)`` (taken
-    from the templates), or None (no template, or the map refused: the template kept)."""
-    template = _templates.pop((family, rung), None)
+def _canonical_reference(dx_api, family, rung, lay, canonical, reassemble
+                         ) -> tuple[Reference | None, int]:
+    """``(reference, gmsh meshings)``: a reference for ``lay`` mapped from the template
+    of its canonical geometry at ``rung`` (meshed now when this process has none), or
+    None (no canonical geometry of the same family, or the map refused: the template
+    kept). ``canonical(rung)`` -> ``(key, layout, family, mesh())`` of the canonical
+    geometry at that rung, or None."""
+    got = canonical(rung)
+    if got is None:
+        return None, 0
+    key, lay_c, family_c, mesh_c = got
+    if family_c != family:
+        return None, 0
+    tkey = (family, rung, key)
+    template = _templates.pop(tkey, None)
+    meshings = 0
     if template is None:
-        return None
+        template = _new_reference(dx_api, lay_c, mesh_c())
+        template.disc.solver = None
+        template.family, template.rung = family, rung
+        meshings = 1
     x = map_nodes(template.x0, template.lay, lay)
     if x is None or not mapping_ok(template, x):
         COUNTS["map_refused"] += 1
-        _templates[(family, rung)] = template
-        return None
+        _keep_template(tkey, template)
+        return None, meshings
     disc = template.disc
     disc.mesh.geometry.x[:, :2] = x[:, :2]
     if getattr(disc, "far_weight", None) is not None:   # the far boundary term's κ/R
@@ -362,19 +422,30 @@ def _mapped_reference(dx_api, family, rung, lay, reassemble) -> Reference | None
     return Reference(lay=lay, disc=disc, x0=x, weight=blending_weight(x, lay),
                      triangles=template.triangles, area0=signed_areas(x, template.triangles),
                      centre=lay.ball_centre_z, placed_at=lay.ball_centre_z,
-                     quality0=template.quality0, family=family, rung=rung)
+                     quality0=template.quality0, family=family, rung=rung,
+                     template=(tkey, template)), meshings
+
+
+def _keep_template(tkey, template: Reference) -> None:
+    """Keep ``template`` (its solvers released) for mapping, the least recently used
+    forgotten past :data:`MAX_TEMPLATES`."""
+    _templates[tkey] = template
+    _templates.move_to_end(tkey)
+    while len(_templates) > MAX_TEMPLATES:
+        _templates.popitem(last=False)
 
 
 def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
-           minimum_gap: float, family: tuple | None = None):
+           minimum_gap: float, family: tuple | None = None, canonical=None):
     """``(layout, Discretisation)`` with the ball where ``lay`` puts it: the reference
     mesh of ``key`` at :func:`reference_position` (meshed on first use:
     ``layout_at(z)`` -> layout, ``mesh_and_discretise(z)`` -> Discretisation) moved
     there when the quality bound allows, else the position meshed on its own.
     ``reassemble(disc)`` assembles the operator and the ball's load again on the moved
-    mesh. With ``family`` (:func:`geometry_family`) a missing reference is first mapped
-    from a template of the same family and rung (:func:`map_nodes`), and released
-    references become templates."""
+    mesh. With ``family`` (:func:`geometry_family`) and ``canonical`` (``rung`` ->
+    ``(key, layout, family, mesh())`` of the canonical geometry at that rung, or None) a
+    missing reference is first mapped from the canonical geometry's template
+    (:func:`map_nodes`; the template meshed on first use)."""
     refs = _references.setdefault(key, {})
     _references.move_to_end(key)
     while len(_references) > MAX_KEYS:
@@ -385,18 +456,20 @@ def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
     ref = refs.get(slot)
     fresh = ref is None
     mapped = False
+    meshed_here = 0   # gmsh meshings for this placement (a template's included)
     if fresh:
         ref_lay = layout_at(z_ref)
-        if family is not None and mapping_enabled():
-            ref = _mapped_reference(dx_api, family, rung, ref_lay, reassemble)
+        if family is not None and canonical is not None and mapping_enabled():
+            ref, meshed_here = _canonical_reference(dx_api, family, rung, ref_lay, canonical,
+                                                    reassemble)
             mapped = ref is not None
         if ref is None:
             ref = _new_reference(dx_api, ref_lay, mesh_and_discretise(z_ref))
+            meshed_here += 1
         ref.family, ref.rung = family, rung
         refs[slot] = ref
         if len(refs) > MAX_REFERENCES:
             _retire(dx_api, refs.pop(next(iter(refs))))
-    meshed_here = int(fresh and not mapped)
     shift = lay.ball_centre_z - ref.centre
     if shift == 0.0 or quality_ok(ref, shift):
         if ref.placed_at != lay.ball_centre_z:
@@ -432,15 +505,12 @@ def _release(dx_api, ref: Reference) -> None:
 
 
 def _retire(dx_api, ref: Reference) -> None:
-    """Release ``ref``'s solvers and keep it as the template of its family and rung
-    (when it has a family), the oldest templates forgotten past :data:`MAX_TEMPLATES`."""
+    """Release ``ref``'s solvers; a reference mapped from a canonical template gives the
+    template (its mesh, whose nodes the next map overwrites) back."""
     _release(dx_api, ref)
-    if ref.family is None:
-        return
-    _templates[(ref.family, ref.rung)] = ref
-    _templates.move_to_end((ref.family, ref.rung))
-    while len(_templates) > MAX_TEMPLATES:
-        _templates.popitem(last=False)
+    if ref.template is not None:
+        _keep_template(*ref.template)
+        ref.template = None
 
 
 def clear() -> None:
@@ -452,8 +522,8 @@ def clear() -> None:
 
 
 def release_references() -> None:
-    """Release every reference mesh, their solvers destroyed (a table is done); those
-    with a family stay as templates for mapping (:func:`placed`)."""
+    """Release every reference mesh, their solvers destroyed (a table is done); the
+    canonical templates they were mapped from are kept for mapping (:func:`placed`)."""
     if _references:
         from . import _dolfinx as dx_api
         for refs in _references.values():

@@ -102,10 +102,36 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         lay = layout_at(position)
         family = motion.geometry_family(lay, cell=type(cell).__name__, permittivity=eps,
                                         degree=degree, far_field=far_field, grading_size=grading)
+        settings = dict(cell=type(cell).__name__, degree=degree, far_field=far_field,
+                        grading_size=grading)
+
+        def canonical(rung):
+            """The canonical cell at ``rung``: (key, layout, family, mesh()) or None."""
+            other = cell.canonical()
+            if other is None:
+                return None
+            z = motion.rung_gap(other.stroke, contact.minimum_gap(other.electrode_spacing),
+                                rung)
+            if z is None:
+                return None
+            options = dict(common, domain_radius=motion.canonical_domain_radius(
+                lay.domain_radius, far_field))
+            try:
+                lay_c = other.axisymmetric_layout(z, mesh_size=size, grading_size=grading,
+                                                  **options)
+            except FieldError:
+                return None
+
+            def mesh():
+                lay_m, *mesh_c = build_mesh(other, z, comm, mesh_size=size,
+                                            grading_size=grading, **options)
+                return discretise(dx_api, *mesh_c, lay_m, eps, degree, far_field)
+            return ((repr(other), size, grading, tuple(sorted(options.items())), z), lay_c,
+                    motion.geometry_family(lay_c, permittivity=eps, **settings), mesh)
         return motion.placed(key, lay, layout_at, lambda z: meshed(z)[1],
                              lambda disc: reassemble(dx_api, disc), dx_api,
                              minimum_gap=contact.minimum_gap(cell.electrode_spacing),
-                             family=family)
+                             family=family, canonical=canonical)
 
     lay, disc = discretised(mesh_size, grading_size)
     mesh = disc.mesh

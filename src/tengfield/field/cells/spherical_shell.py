@@ -316,6 +316,24 @@ class SphericalShell:
                 arc(a, -phi0, phi0), arc(b, -0.5 * math.pi, 0.5 * math.pi)]
 
     # -- field ---------------------------------------------------------------------
+    def canonical(self) -> "SphericalShell | None":
+        """This shell on the canonical grid (:func:`tengfield.field.moving.canonical_length`)
+        of its independent lengths: the cavity, the stroke (cavity - ball), the shell's
+        thickness and the band; None when that shell is impossible. The geometry a
+        candidate's meshes are mapped from (docs/field.md)."""
+        from dataclasses import replace
+
+        from ..moving import canonical_length as grid
+
+        cavity = grid(self.cavity_diameter)
+        try:
+            return replace(self, cavity_diameter=cavity, domain_radius=None,
+                           ball_diameter=cavity - grid(self.stroke),
+                           shell_thickness=grid(self.shell_thickness),
+                           electrode_band=grid(self.electrode_band))
+        except (FieldError, ValueError):
+            return None
+
     def axisymmetric_layout(self, position: float, *, mesh_size: float, degree: int = 2,
                             domain_radius: float | None = None, far_field: str = "kelvin",
                             grading_size: float | None = None):
