@@ -9,6 +9,8 @@ that misses ``require`` comes back ``"infeasible"`` without a field solve.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import math
 import time
 import warnings
@@ -115,7 +117,10 @@ def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
 
 
 def _load_power(point, dynamics, curves, load: float) -> float:
-    loaded = point.with_values(circuit={"kind": "load", "load_ohm": float(load)})
+    # the section replaced (its own checks run), not the whole scene parsed again: the
+    # load scan asks ~40 loads per candidate
+    loaded = dataclasses.replace(point, circuit=dataclasses.replace(
+        point.circuit, kind="load", load=float(load)))
     return float(electrical.steady_load(loaded, dynamics, curves)["mean_power_W"])
 
 

@@ -495,8 +495,8 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
     fld = scene.field
     # the scene's mesh_size_mm as written, or its default scaled to the device's features
     size = geometry.base_mesh_size(scene)
-    half = scene.with_values(field={"mesh_size_mm": 0.5e3 * size})
     if estimate_error:   # refuse before any meshing if the finer mesh would not fit
+        half = scene.with_values(field={"mesh_size_mm": 0.5e3 * size})
         geometry.check_mesh_budget(geometry.layout(half, position, grading_size=size),
                                    fld.degree, mesh_size_mm=size * 1e3, refinement=2.0)
     moving = getattr(fld, "mesh_motion", "remesh") == "move" and not keep_solution
