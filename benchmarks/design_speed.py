@@ -9,10 +9,12 @@ and circuit (matched-load scan), and the load average.
     .venv/bin/python benchmarks/design_speed.py [--candidates 200] [--ranks 2] [--serial]
 
 ``--ranks N`` runs ``mpirun -n N tengfield design``; ``--serial`` also runs the same
-study on one process for the parallel efficiency T1 / (N T_N). ``--mesh-motion move``
-moves the candidates' meshes with the ball and maps them across geometries
-(field/moving.py); ``TENGFIELD_MESH_MAPPING=0`` in the environment then measures the
-moves without the mapping.
+study on one process for the parallel efficiency T1 / (N T_N). The design's coarse
+field (the default) moves the candidates' meshes with the ball and maps them from each
+candidate's canonical geometry (field/moving.py); ``--mesh-motion remesh`` runs the same
+field settings remeshed (``[design] field = "scene"`` with the coarse keys written in
+``[field]``: degree 2, 1 mm, tolerance 0.02), for the comparison.
+``TENGFIELD_MESH_MAPPING=0`` in the environment measures the moves without the mapping.
 """
 from __future__ import annotations
 
@@ -66,17 +68,23 @@ def main() -> None:
     ap.add_argument("--candidates", type=int, default=200)
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--serial", action="store_true", help="also time one process (--jobs 1)")
-    ap.add_argument("--mesh-motion", choices=("remesh", "move"), default="remesh",
-                    help="[field] mesh_motion of the scene (move: meshes moved with the "
-                         "ball and mapped across candidates)")
+    ap.add_argument("--mesh-motion", choices=("remesh", "move"), default="move",
+                    help="move: the design's coarse field (meshes moved with the ball and "
+                         "mapped from canonical geometries); remesh: the same settings "
+                         "remeshed for every position")
     args = ap.parse_args()
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
                PYTHONPATH=str(ROOT / "src"))
     work = Path(tempfile.mkdtemp(prefix="design-bench-"))
     scene = work / "study.toml"
-    field = f'[field]\nmesh_motion = "{args.mesh_motion}"\n'
-    scene.write_text(SCENE.format(candidates=args.candidates, field=field))
+    # every ball here is >= 5 mm: the coarse mesh size min(1 mm, d / 5) is 1 mm
+    field = ("" if args.mesh_motion == "move" else
+             '[field]\ndegree = 2\nmesh_size_mm = 1.0\ntolerance = 0.02\nmesh_motion = "remesh"\n')
+    text = SCENE.format(candidates=args.candidates, field=field)
+    if args.mesh_motion == "remesh":
+        text = text.replace("seed = 1\n", 'seed = 1\nfield = "scene"\n')
+    scene.write_text(text)
     cli = [sys.executable, "-m", "tengfield.cli", "design", str(scene)]
     runs = {}
     runs[f"mpirun -n {args.ranks}"] = (run(["mpirun", "-n", str(args.ranks), *cli, "-o",

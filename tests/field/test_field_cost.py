@@ -111,9 +111,58 @@ def test_a_solver_allocation_failure_is_one_line():
     prefix = dx.unique_prefix("starved")
     with pytest.raises(FieldError) as failed:   # MUMPS allowed 1 MB of workspace
         dx.create_ksp(MPI.COMM_SELF, M, prefix=prefix, symmetric=True,
-                      options={"mat_mumps_icntl_23": 1})
+                      options={"pc_factor_mat_solver_type": "mumps",
+                               "mat_mumps_icntl_23": 1})
     text = str(failed.value)
     assert "\n" not in text and "ran out of memory" in text and f"{n * n} unknowns" in text
+    assert "MUMPS LDLT" in text
+    assert not any(key.startswith(prefix) for key in dx.PETSc.Options().getAll())
+
+
+@field
+def test_the_serial_symmetric_solver_is_cholmod_and_matches_mumps_and_fails_in_one_line():
+    """One process, a symmetric operator: CHOLMOD (SuiteSparse, in Debian 12's and 13's
+    PETSc) solves a 2D Laplacian as MUMPS LDLT does (to 1e-12), the refactorisation of
+    new values too; an indefinite matrix is one line naming the solver."""
+    import scipy.sparse as sp
+
+    from tengfield.field import _dolfinx as dx
+
+    assert dx.direct_solver(MPI.COMM_SELF, symmetric=True) == "cholmod"
+    assert dx.direct_solver(MPI.COMM_SELF, symmetric=False) == "mumps"
+    n = 40
+    one = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(n, n))
+    A = (sp.kron(sp.identity(n), one) + sp.kron(one, sp.identity(n))).tocsr()
+    rng = np.random.default_rng(7)
+    b = rng.standard_normal(n * n)
+    solutions = {}
+    for package in ("cholmod", "mumps"):
+        M = dx.matrix_from_csr(MPI.COMM_SELF, A.shape, A.indptr, A.indices, A.data)
+        prefix = dx.unique_prefix(package)
+        ksp = dx.create_ksp(MPI.COMM_SELF, M, prefix=prefix, symmetric=True,
+                            options={"pc_factor_mat_solver_type": package})
+        assert ksp.getPC().getFactorSolverType() == package
+        first = dx.solve(ksp, dx.vector(MPI.COMM_SELF, b)).array.copy()
+        M.scale(2.0)                                   # new values, the same pattern
+        dx.refactor(ksp, M, symmetric=True)
+        second = dx.solve(ksp, dx.vector(MPI.COMM_SELF, b)).array.copy()
+        solutions[package] = (first, second)
+        ksp.destroy()
+        dx.clear_options(prefix)
+    scale = np.abs(solutions["mumps"][0]).max()
+    np.testing.assert_allclose(solutions["cholmod"][0], solutions["mumps"][0], rtol=0,
+                               atol=1e-12 * scale)
+    np.testing.assert_allclose(solutions["cholmod"][1], 0.5 * solutions["cholmod"][0],
+                               rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(A @ solutions["cholmod"][0], b, atol=1e-10)
+    indefinite = A - 4.0 * sp.identity(n * n, format="csr")
+    M = dx.matrix_from_csr(MPI.COMM_SELF, A.shape, indefinite.indptr, indefinite.indices,
+                           indefinite.data)
+    prefix = dx.unique_prefix("indefinite")
+    with pytest.raises(FieldError) as failed:
+        dx.create_ksp(MPI.COMM_SELF, M, prefix=prefix, symmetric=True)
+    text = str(failed.value)
+    assert "\n" not in text and "CHOLMOD" in text and f"{n * n} unknowns" in text
     assert not any(key.startswith(prefix) for key in dx.PETSc.Options().getAll())
 
 

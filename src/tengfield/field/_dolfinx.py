@@ -434,11 +434,13 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
 
     kind = "direct": LU factorisation with MUMPS (factored once at setUp, then
     reused for every right-hand side); with ``symmetric=True`` (``A`` must be
-    symmetric; it is marked so) an LDLᵀ factorisation instead, and on one
-    process with the approximate-minimum-degree ordering: for the 2D meshes of
-    the axisymmetric solver (13k-80k dofs) that factors 2.2-3x faster than
-    LU with MUMPS's default (METIS) ordering, which costs more to compute than
-    it saves at that size (``benchmarks/pipeline_speed.py --cost-split``).
+    symmetric; it is marked so) a Cholesky / LDLᵀ factorisation instead: on one
+    process SuiteSparse's CHOLMOD (:func:`direct_solver`; for the axisymmetric
+    solver's 2D meshes it factors ~15 % and refactors a moved mesh's values
+    ~20 % faster than MUMPS LDLᵀ, and its back-substitution is 3-4x faster:
+    MUMPS has a fixed cost per solve at this size), else MUMPS LDLᵀ, on one
+    process with the approximate-minimum-degree ordering (2.2-3x faster than
+    MUMPS's default METIS ordering at 13k-80k dofs).
     kind = "cg-amg": CG preconditioned by hypre BoomerAMG (set up once, on
     ``preconditioner_matrix`` if given).
     ``options`` adds or overrides PETSc options (without the prefix).
@@ -450,8 +452,9 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
         if symmetric:
             A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
             values["pc_type"] = "cholesky"
+            values["pc_factor_mat_solver_type"] = direct_solver(comm, symmetric=True)
             if comm.size == 1:
-                values["mat_mumps_icntl_7"] = 0   # AMD ordering
+                values["mat_mumps_icntl_7"] = 0   # AMD ordering (when MUMPS)
     elif kind == "cg-amg":
         values = {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
                   "ksp_rtol": rtol, "ksp_atol": 0.0, "ksp_max_it": 2000}
@@ -471,8 +474,42 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
         ksp.destroy()
         clear_options(prefix)
         from ..errors import FieldError
-        raise FieldError(solver_failure(exc, kind, A.getSize()[0], symmetric)) from None
+        raise FieldError(solver_failure(exc, kind, A.getSize()[0], symmetric,
+                                        solver=values.get("pc_factor_mat_solver_type"))
+                         ) from None
     return ksp
+
+
+_CHOLMOD: list = []   # [bool] once probed
+
+
+def direct_solver(comm, *, symmetric: bool) -> str:
+    """The factorisation package of a direct solve: ``"cholmod"`` for a symmetric
+    operator on one process when this PETSc has SuiteSparse (probed once on a 2 x 2
+    matrix: Debian 12's and 13's do), else ``"mumps"``."""
+    if not symmetric or comm.size != 1:
+        return "mumps"
+    if not _CHOLMOD:
+        A = PETSc.Mat().createAIJ([2, 2], nnz=1, comm=PETSc.COMM_SELF)
+        for i in range(2):
+            A.setValue(i, i, 1.0)
+        A.assemble()
+        A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        try:
+            ksp.setOperators(A, A)
+            ksp.setType("preonly")
+            pc = ksp.getPC()
+            pc.setType("cholesky")
+            pc.setFactorSolverType("cholmod")
+            ksp.setUp()
+            _CHOLMOD.append(True)
+        except PETSc.Error:
+            _CHOLMOD.append(False)
+        finally:
+            ksp.destroy()
+            A.destroy()
+    return "cholmod" if _CHOLMOD[0] else "mumps"
 
 
 def refactor(ksp, K, *, kind: str = "direct", symmetric: bool = False) -> None:
@@ -485,24 +522,31 @@ def refactor(ksp, K, *, kind: str = "direct", symmetric: bool = False) -> None:
         ksp.setUp()
     except PETSc.Error as exc:
         from ..errors import FieldError
-        raise FieldError(solver_failure(exc, kind, K.getSize()[0], symmetric)) from None
+        raise FieldError(solver_failure(exc, kind, K.getSize()[0], symmetric,
+                                        solver=ksp.getPC().getFactorSolverType())) from None
 
 
 #: MUMPS INFOG(1) codes of a failed allocation or too small a workspace (its manual, §8)
 MUMPS_MEMORY_CODES = (-8, -9, -11, -13, -14, -15, -17, -19, -20, -27)
 
 
-def solver_failure(exc, kind: str, unknowns: int, symmetric: bool = False) -> str:
+def solver_failure(exc, kind: str, unknowns: int, symmetric: bool = False,
+                   solver: str | None = "mumps") -> str:
     """One line for a PETSc failure while factoring / setting up the preconditioner of a
-    field solve (issue #43 item 4: MUMPS' ``INFOG(1)=-13`` was a raw traceback)."""
+    field solve (issue #43 item 4: MUMPS' ``INFOG(1)=-13`` was a raw traceback).
+    ``solver``: the factorisation package of a direct solve."""
     import re
 
     text = str(exc)
     for line in (getattr(exc, "args", None) or ()):
         text += f" {line}"
     code = re.search(r"INFOG\(1\)\s*=\s*(-?\d+)", text)
-    solver = ("MUMPS LDLT" if symmetric else "MUMPS LU") if kind == "direct" else \
-        "CG + BoomerAMG"
+    if kind != "direct":
+        solver = "CG + BoomerAMG"
+    elif solver == "cholmod":
+        solver = "CHOLMOD Cholesky"
+    else:
+        solver = "MUMPS LDLT" if symmetric else "MUMPS LU"
     memory = getattr(exc, "ierr", None) == 55 or (
         code is not None and int(code.group(1)) in MUMPS_MEMORY_CODES)
     what = (f"ran out of memory (MUMPS INFOG(1) = {code.group(1)})" if code and memory
