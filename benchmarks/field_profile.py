@@ -5,7 +5,7 @@ which solver, how many dofs), the rest (A P products, C and q, Python), and, for
 axisymmetric case, the whole default surrogate (the field stage of ``tengfield run``:
 17 positions, 9 solved) with its fitting; beside it a bare PETSc solve of the same size
 (the floor: a 5-point Laplacian with as many unknowns, factored and solved by the same
-MUMPS LDLᵀ, or CG + BoomerAMG for 3D).
+CHOLMOD Cholesky as the solver's serial direct solves, or CG + BoomerAMG for 3D).
 
 Cold: a fresh form-compiler cache (``XDG_CACHE_HOME`` in a new directory) and a fresh
 surrogate cache; warm: the same process run again on the caches the cold one filled.
@@ -103,7 +103,8 @@ class Profile:
 
 
 def floor_seconds(unknowns: int, kind: str) -> float:
-    """Wall time of a bare PETSc factor + 2 solves (kind "direct": MUMPS LDLᵀ, AMD) or
+    """Wall time of a bare PETSc factor + 2 solves (kind "direct": the package of the
+    solver's serial symmetric solves, ``_dolfinx.direct_solver``: CHOLMOD) or
     CG + BoomerAMG set-up + 2 solves of a Laplacian with ``unknowns`` unknowns
     (5-point stencil in 2D, 7-point in 3D): the floor of a solve of that size."""
     import numpy as np
@@ -130,8 +131,10 @@ def floor_seconds(unknowns: int, kind: str) -> float:
     opts = PETSc.Options()
     if kind == "direct":
         M.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        from tengfield.field._dolfinx import direct_solver
+        package = direct_solver(PETSc.COMM_SELF, symmetric=True)
         for k, v in {"ksp_type": "preonly", "pc_type": "cholesky",
-                     "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 0}.items():
+                     "pc_factor_mat_solver_type": package, "mat_mumps_icntl_7": 0}.items():
             opts[f"floor_{k}"] = v
     else:
         for k, v in {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
@@ -187,7 +190,7 @@ def child(case: str) -> dict:
     named = sum(v for k, v in profile.seconds.items() if k not in ("imports", "other"))
     profile.seconds["other"] = work - named
     out.update(seconds=profile.seconds, total=imports + work, dofs=int(res.dofs),
-               solvers=[f"{'MUMPS LDLT' if k == 'direct' else 'CG + BoomerAMG'} x {len(v)} "
+               solvers=[f"{'CHOLMOD / MUMPS LDLT' if k == 'direct' else 'CG + BoomerAMG'} x {len(v)} "
                              f"({min(v)}-{max(v)} unknowns)" for k, v in profile.solver.items()], one_solve=res.wall_time)
     return out
 

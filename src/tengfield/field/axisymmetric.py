@@ -29,7 +29,7 @@ Far field, for the sphere of radius R around the inversion centre:
 
 Dirichlet values and gluing are both expressed through P: the full vector is
 ``ψ = P x + g`` (g: electrode values), so one operator ``K = Pᵀ A P`` is
-factored once (MUMPS) and reused for every right-hand side.
+factored once (CHOLMOD on one process, else MUMPS) and reused for every right-hand side.
 
 Error estimate: the geometry is meshed again with half the mesh size (all
 graded sizes halve too) and solved with the same degree; with the measured
@@ -567,7 +567,7 @@ def solve_position_axisymmetric(scene, position: float, *, comm, **options) -> P
     Options: ``estimate_error`` (default True: solve again with half the mesh
     size), ``source_solve`` (also solve for the potential of the ball charge,
     needed for plots), ``keep_solution`` (serial only: keep mesh and potentials
-    in ``result.solution``), ``linear_solver`` ("direct" MUMPS or "cg-amg").
+    in ``result.solution``), ``linear_solver`` ("direct": CHOLMOD / MUMPS, or "cg-amg").
     """
     from . import _dolfinx  # noqa: F401 - on every rank: PETSc initialises collectively
 
