@@ -557,6 +557,17 @@ def solver_failure(exc, kind: str, unknowns: int, symmetric: bool = False,
             "[field] mesh_size_mm, lower degree, or run where more memory is free")
 
 
+def release_garbage(comm) -> None:
+    """Destroy the PETSc objects Python has collected on ``comm`` (collective on it: a
+    mesh's own communicator, which dolfinx duplicates). petsc4py (3.18 on Debian 12,
+    3.22 on 13) defers their destruction to ``garbage_cleanup``, so a process that
+    solves position after position without it keeps every vector and matrix it ever
+    made (measured: 1.1 MB per 13k-dof solve)."""
+    cleanup = getattr(PETSc, "garbage_cleanup", None)
+    if cleanup is not None:
+        cleanup(comm)
+
+
 def clear_options(prefix: str) -> None:
     """Remove the options set under ``prefix`` (keeps the global options table small)."""
     opts = PETSc.Options()

@@ -543,6 +543,8 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
         induced_fraction=sol.induced_fraction)
     if keep_solution:
         result.solution = field_solution(dx_api, disc, sol, lay)
+    from .moving import done_with
+    done_with(dx_api, disc, finer, moving=moving)   # PETSc frees nothing by itself
     return result
 
 

@@ -177,6 +177,8 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         solve_time=sol.solve_time, info=info, induced_fraction=sol.induced_fraction)
     if keep_solution:
         result.solution = field_solution(dx_api, disc, sol, lay)
+    from ..moving import done_with
+    done_with(dx_api, disc, finer, moving=moving)   # PETSc frees nothing by itself
     return result
 
 
