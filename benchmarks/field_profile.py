@@ -125,14 +125,14 @@ def floor_seconds(unknowns: int, kind: str) -> float:
                                                  A.indices.astype(PETSc.IntType), A.data),
                               comm=PETSc.COMM_SELF)
     M.assemble()
+    from tengfield.field._dolfinx import direct_solver   # the solver's package (probed once)
+    package = direct_solver(PETSc.COMM_SELF, symmetric=True)
     start = time.perf_counter()
     ksp = PETSc.KSP().create(PETSc.COMM_SELF)
     ksp.setOptionsPrefix("floor_")
     opts = PETSc.Options()
     if kind == "direct":
         M.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-        from tengfield.field._dolfinx import direct_solver
-        package = direct_solver(PETSc.COMM_SELF, symmetric=True)
         for k, v in {"ksp_type": "preonly", "pc_type": "cholesky",
                      "pc_factor_mat_solver_type": package, "mat_mumps_icntl_7": 0}.items():
             opts[f"floor_{k}"] = v
