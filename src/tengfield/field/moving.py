@@ -71,11 +71,12 @@ LADDER_FACTOR = 4.0
 MAX_REFERENCES = 6
 MAX_KEYS = 4
 #: how many positions were placed by moving a reference mesh, how many gmsh meshings
-#: were done (the references and the positions a move would have spoilt), how many
-#: references were mapped from another geometry's, and how many maps were refused
+#: were done (the references, the canonical templates and the positions a move would
+#: have spoilt), how many references were mapped from a canonical geometry's mesh, and
+#: how many maps were refused
 COUNTS = {"moved": 0, "meshed": 0, "mapped": 0, "map_refused": 0}
 #: smallest factor by which a mapped triangle's shape quality may fall against the one
-#: its gmsh mesh had (a chain of maps is measured against the meshed original)
+#: gmsh meshed the canonical template with
 MAP_QUALITY_BOUND = 2.0
 #: templates kept for mapping (canonical meshes, one per family, rung and canonical
 #: geometry; the least recently used forgotten)
