@@ -330,6 +330,36 @@ def test_the_cell_route_reproduces_the_tube_solver_to_the_bit(z):
 
 
 @field
+def test_the_cell_route_maps_the_tubes_canonical_mesh_as_the_tube_solver_does():
+    """With ``mesh_motion = "move"`` the tube cell's route maps its reference from the
+    same canonical tube (``Tube.canonical``) as solve_position: the same numbers to the
+    bit, and one map each; every cell declares the hooks (``canonical``,
+    ``check_tabulated_offset``)."""
+    from mpi4py import MPI
+
+    from tengfield.field import moving, solve_position
+    from tengfield.field.cells import Cell, Hexagonal, Tube
+    from tengfield.scene import default_scene
+
+    scene = default_scene().with_values(field={"mesh_size_mm": 2.0, "mesh_motion": "move"})
+    moving.clear()
+    direct = solve_position(scene, 1.5e-3, comm=MPI.COMM_SELF, method="axisymmetric",
+                            estimate_error=False)
+    moving.clear()
+    via = solve(Tube(scene), 1.5e-3, sigma=scene.device.surface_charge, mesh_size=2e-3,
+                degree=scene.field.degree, far_field=scene.field.far_field,
+                domain_radius=scene.field.domain_radius, mesh_motion="move")
+    moving.clear()
+    assert direct.info["mesh_placements"]["mapped"] == via.info["mesh_placements"]["mapped"] == 1
+    assert np.array_equal(via.capacitance, direct.capacitance)
+    assert np.array_equal(via.induced_fraction, direct.induced_fraction)
+    canon = Tube(scene).canonical()
+    assert canon.device.ball_diameter == pytest.approx(6.7275e-3, rel=1e-9)
+    assert Hexagonal(default_scene()).canonical() is None
+    assert isinstance(canon, Cell)
+
+
+@field
 @pytest.mark.slow
 @pytest.mark.parametrize("ball_permittivity", [1.0, 2.1])
 def test_concentric_ball_potential_and_lines(ball_permittivity):

@@ -453,8 +453,8 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
             A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
             values["pc_type"] = "cholesky"
             values["pc_factor_mat_solver_type"] = direct_solver(comm, symmetric=True)
-            if comm.size == 1:
-                values["mat_mumps_icntl_7"] = 0   # AMD ordering (when MUMPS)
+            if comm.size == 1 and values["pc_factor_mat_solver_type"] == "mumps":
+                values["mat_mumps_icntl_7"] = 0   # AMD ordering
     elif kind == "cg-amg":
         values = {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
                   "ksp_rtol": rtol, "ksp_atol": 0.0, "ksp_max_it": 2000}
@@ -563,9 +563,7 @@ def release_garbage(comm) -> None:
     3.22 on 13) defers their destruction to ``garbage_cleanup``, so a process that
     solves position after position without it keeps every vector and matrix it ever
     made (measured: 1.1 MB per 13k-dof solve)."""
-    cleanup = getattr(PETSc, "garbage_cleanup", None)
-    if cleanup is not None:
-        cleanup(comm)
+    PETSc.garbage_cleanup(comm)
 
 
 def clear_options(prefix: str) -> None:

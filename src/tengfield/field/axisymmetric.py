@@ -328,10 +328,14 @@ def build_mesh(scene, position: float, comm, **layout_overrides):
     lay = geometry.layout(scene, position, **layout_overrides)
     geometry.check_mesh_budget(lay, scene.field.degree,
                                mesh_size_mm=geometry.base_mesh_size(scene) * 1e3)
-    mesh, cell_tags, facet_tags = mesh_model(
-        lambda gmsh: geometry.build_model(gmsh, lay, geometry_order=2), comm,
-        lambda exc: geometry.meshing_failure(scene, exc))
-    return lay, mesh, cell_tags, facet_tags
+    return (lay, *mesh_layout(lay, comm, scene))
+
+
+def mesh_layout(lay, comm, scene):
+    """(mesh, cell_tags, facet_tags) of the layout ``lay`` (on ``comm``); a gmsh failure
+    is one line naming ``scene``'s keys."""
+    return mesh_model(lambda gmsh: geometry.build_model(gmsh, lay, geometry_order=2), comm,
+                      lambda exc: geometry.meshing_failure(scene, exc))
 
 
 def solve_serial(scene, position: float, comm, **options) -> PositionResult:
@@ -422,6 +426,13 @@ def canonical_device(device):
         return None
 
 
+def canonical_scene(scene):
+    """What :func:`geometry_axisymmetric.layout` reads of ``scene`` (its ``device`` and
+    ``field``) with the device on the canonical grid (:func:`canonical_device`), or None."""
+    device = canonical_device(scene.device)
+    return None if device is None else _Canonical(device, scene.field)
+
+
 def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool,
                 grading_size: float | None = None):
     """``(layout, Discretisation)`` of ``scene`` with the ball at ``position``: meshed
@@ -447,9 +458,10 @@ def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool
 
     def canonical(rung):
         """The canonical geometry at ``rung``: (key, layout, family, mesh()) or None."""
-        device = canonical_device(scene.device)
-        if device is None:
+        canon = canonical_scene(scene)
+        if canon is None:
             return None
+        device = canon.device
         z = motion.rung_gap(device.stroke, contact.minimum_gap(device.plate_spacing), rung)
         if z is None:
             return None
@@ -457,15 +469,14 @@ def discretised(dx_api, scene, position: float, comm, eps: dict, *, moving: bool
                        domain_radius=motion.canonical_domain_radius(lay.domain_radius,
                                                                     fld.far_field))
         try:
-            lay_c = geometry.layout(_Canonical(device, fld), z, **options)
+            lay_c = geometry.layout(canon, z, **options)
         except FieldError:
             return None
         eps_c = permittivities(device, lay_c)
 
         def mesh():
-            meshed = mesh_model(lambda gmsh: geometry.build_model(gmsh, lay_c, geometry_order=2),
-                                comm, lambda exc: geometry.meshing_failure(scene, exc))
-            return discretise(dx_api, *meshed, lay_c, eps_c, fld.degree, fld.far_field)
+            return discretise(dx_api, *mesh_layout(lay_c, comm, scene), lay_c, eps_c,
+                              fld.degree, fld.far_field)
         lengths = (device.ball_diameter, device.stroke, device.tube_inner_radius,
                    device.tube_outer_radius, device.electrode_radius, device.plate_thickness)
         return ((lengths, z, tuple(sorted(options.items()))), lay_c,

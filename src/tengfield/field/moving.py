@@ -405,7 +405,6 @@ def _canonical_reference(dx_api, family, rung, lay, canonical, reassemble
     if template is None:
         template = _new_reference(dx_api, lay_c, mesh_c())
         template.disc.solver = None
-        template.family, template.rung = family, rung
         meshings = 1
     x = map_nodes(template.x0, template.lay, lay)
     if x is None or not mapping_ok(template, x):
@@ -504,13 +503,13 @@ def placed(key, lay, layout_at, mesh_and_discretise, reassemble, dx_api, *,
     return lay, disc
 
 
-def _release(dx_api, ref: Reference) -> None:
-    """Destroy the solvers the reference kept (and their PETSc options)."""
-    for K, ksp, prefix in (ref.disc.solver or {}).values():
+def _release(dx_api, disc) -> None:
+    """Destroy the solvers ``disc`` kept (and their PETSc options)."""
+    for K, ksp, prefix in (disc.solver or {}).values():
         ksp.destroy()
         K.destroy()
         dx_api.clear_options(prefix)
-    ref.disc.solver = None
+    disc.solver = None
 
 
 def discard(dx_api, disc) -> None:
@@ -520,11 +519,7 @@ def discard(dx_api, disc) -> None:
     remeshed design of 200 candidates), so every place that drops one calls this."""
     if disc is None:
         return
-    for K, ksp, prefix in (getattr(disc, "solver", None) or {}).values():
-        ksp.destroy()
-        K.destroy()
-        dx_api.clear_options(prefix)
-    disc.solver = None
+    _release(dx_api, disc)
     for name in ("A", "P"):
         matrix = getattr(disc, name, None)
         if matrix is not None:
@@ -550,7 +545,7 @@ def _retire(dx_api, ref: Reference) -> None:
     """Release ``ref``'s solvers; a reference mapped from a canonical template gives the
     template (its mesh, whose nodes the next map overwrites) back, any other is
     discarded."""
-    _release(dx_api, ref)
+    _release(dx_api, ref.disc)
     if ref.template is not None:
         _keep_template(*ref.template)
         ref.template = None

@@ -174,15 +174,13 @@ def _announce(scene, solves: int, comm, *, method, what: str, mesh_size=None,
 def check_tabulated_offset(scene) -> None:
     """A table of the whole stroke at ``[field] ball_offset_mm``: a cell that cannot hold
     that offset at every height (the spherical shell: only the axis at the ends of its
-    stroke) refuses it here, before any solve (its ``check_tabulated_offset`` raises
-    :class:`FieldError`); a cell without that method holds any offset it meshes."""
+    stroke) refuses it here, before any solve (its ``check_tabulated_offset``, a
+    :class:`~tengfield.field.cells.Cell` hook, raises :class:`FieldError`)."""
     offset = scene.field.ball_offset
     if offset == 0.0:
         return
     from ..field.cells import cell_of
-    check = getattr(cell_of(scene), "check_tabulated_offset", None)
-    if check is not None:
-        check(offset)
+    cell_of(scene).check_tabulated_offset(offset)
 
 
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,

@@ -121,6 +121,14 @@ class Cell(Protocol):
     def build_axisymmetric_model(self, gmsh, layout, *, geometry_order: int = 2) -> str:
         """Create and mesh the (r, z) model of ``layout``; returns its unique name."""
 
+    def canonical(self):
+        """This cell with its lengths on the canonical grid (the geometry whose (r, z)
+        meshes a candidate's are mapped from, :mod:`tengfield.field.moving`), or None."""
+
+    def check_tabulated_offset(self, offset: float) -> None:
+        """Refuse (FieldError, one line) a table of the whole stroke at the lateral
+        ``offset`` [m] the cell cannot hold at every height (asked before any solve)."""
+
 
     #: ``[field] method`` -> the solver ``(cell, scene, position, *, comm, offset,
     #: **options)`` (the names of the shape's ``field_methods``, scene/shapes/)

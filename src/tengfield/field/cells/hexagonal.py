@@ -141,6 +141,14 @@ class Hexagonal:
     def axisymmetric_layout(self, position: float, **settings):
         raise FieldError("shape = 'hexagonal' has no axisymmetric model (a 3D cell)")
 
+    def canonical(self) -> None:
+        """No (r, z) mesh to map: a 3D cell."""
+        return None
+
+    def check_tabulated_offset(self, offset: float) -> None:
+        """A table of the whole stroke at the lateral ``offset`` [m]: the honeycomb's
+        cell holds any offset its scene admits."""
+
     #: the cost estimate's (r, z) count is the tube's rule on the same keys (a 3D cell
     #: has no (r, z) model; asked only for an explicit "axisymmetric" estimate)
     estimated_axisymmetric_cells = Tube.estimated_axisymmetric_cells

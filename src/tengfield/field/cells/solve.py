@@ -100,10 +100,9 @@ def _solve_meshed(cell, position: float, comm, *, sigma: float, mesh_size: float
         from ..axisymmetric import reassemble
         key = (repr(cell), size, grading, degree, far_field, domain_radius)
         lay = layout_at(position)
-        family = motion.geometry_family(lay, cell=type(cell).__name__, permittivity=eps,
-                                        degree=degree, far_field=far_field, grading_size=grading)
         settings = dict(cell=type(cell).__name__, degree=degree, far_field=far_field,
                         grading_size=grading)
+        family = motion.geometry_family(lay, permittivity=eps, **settings)
 
         def canonical(rung):
             """The canonical cell at ``rung``: (key, layout, family, mesh()) or None."""

@@ -137,6 +137,17 @@ class Tube:
         """(r, z) polylines: the electrodes, the plates' and the tube's outlines."""
         return [np.array(line) for line in tube_shape.Tube.outline(self.device)]
 
+    def canonical(self) -> "Tube | None":
+        """The tube on the canonical grid of its lengths
+        (:func:`tengfield.field.axisymmetric.canonical_device`), or None."""
+        from ..axisymmetric import canonical_scene
+        scene = canonical_scene(self.scene)
+        return None if scene is None else Tube(scene)
+
+    def check_tabulated_offset(self, offset: float) -> None:
+        """A table of the whole stroke at the lateral ``offset`` [m]: the tube holds any
+        offset its scene admits (the scene refuses one that does not fit the bore)."""
+
     def axisymmetric_layout(self, position: float, *, mesh_size: float, degree: int = 2,
                             domain_radius: float | None = None, far_field: str = "kelvin",
                             grading_size: float | None = None):
