@@ -128,8 +128,12 @@ def test_the_ball_moves_rigidly_the_walls_stay_and_a_spoiling_move_is_meshed(mon
 def test_moved_solves_agree_with_remeshed_ones_within_their_error_estimates():
     """Positions of a (z, r) table of the 10 mm shell (coarse P1): at the centre (a
     reference), off the axis near it (moved), and touching the wall at the band (the contact rule's three anchors along the radius: two references, the
-    middle one stretched); moved and remeshed agree within the smaller of their error
-    estimates (the solver's coarse/fine estimate, with the contact extrapolation's)."""
+    middle one stretched); moved and remeshed agree within their error estimates (the
+    solver's coarse/fine estimate, with the contact extrapolation's): each is within
+    its own estimate of the exact value, so the two differ by at most the sum. The
+    smaller of the two alone held by chance on one gmsh set-up: on these coarse P1
+    meshes the touching position's remeshed value moves by 3-8 % with gmsh's
+    optimiser threshold (0.15-0.3), against estimates of 5-9 %."""
     from mpi4py import MPI
 
     from tengfield.field import moving3d
@@ -155,7 +159,7 @@ def test_moved_solves_agree_with_remeshed_ones_within_their_error_estimates():
         change = max(np.max(np.abs(a.capacitance - b.capacitance)) / np.max(np.abs(a.capacitance)),
                      np.max(np.abs(a.induced_charge - b.induced_charge))
                      / np.max(np.abs(a.induced_charge)))
-        bound = min(a.relative_error_estimate, b.relative_error_estimate)
+        bound = a.relative_error_estimate + b.relative_error_estimate
         assert change <= bound, (z, r, change, bound)
     moving3d.clear()
 
