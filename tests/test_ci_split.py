@@ -5,9 +5,9 @@ release-dependent ones by both."""
 import ast
 import itertools
 import re
+import subprocess
+import sys
 from pathlib import Path
-
-from _pytest.mark.expression import Expression
 
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
@@ -24,19 +24,48 @@ def _image_share():
     raise AssertionError("tests/conftest.py defines no IMAGE_SHARE")
 
 
-def _selects(expression: str, markers: set) -> bool:
-    return Expression.compile(expression).evaluate(lambda name: name in markers)
+MARKERS = ("release", "image", "slow", "field", "mpi")
 
 
-def test_every_test_runs_on_one_release_and_the_release_dependent_ones_on_both():
-    names = ("release", "image", "slow", "field", "mpi")
-    for size in range(len(names) + 1):
-        for markers in map(set, itertools.combinations(names, size)):
-            if {"release", "image"} <= markers:
-                continue     # conftest marks `image` only what is not `release` (below)
-            assert _selects(HOST, markers) or _selects(IMAGE, markers), markers
-            if "release" in markers:
-                assert _selects(HOST, markers) and _selects(IMAGE, markers), markers
+def _combinations():
+    """Every set of the suite's markers a test can carry (conftest never puts ``image``
+    on a ``release`` test: checked below)."""
+    for size in range(len(MARKERS) + 1):
+        for markers in itertools.combinations(MARKERS, size):
+            if not {"release", "image"} <= set(markers):
+                yield markers
+
+
+def _selected(tmp_path, expression: str) -> set:
+    """The marker sets whose test ``pytest -m expression`` selects: pytest itself
+    collects a generated file with one test per set (no private pytest API)."""
+    lines = ["import pytest", ""]
+    for k, markers in enumerate(_combinations()):
+        lines += [f"@pytest.mark.{m}" for m in markers]
+        lines += [f"def test_{k}():", "    pass", ""]
+    (tmp_path / "test_markers.py").write_text("\n".join(lines))
+    (tmp_path / "pytest.ini").write_text("[pytest]\nmarkers =\n" + "".join(
+        f"    {m}: -\n" for m in MARKERS))
+    out = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p",
+                          "no:cacheprovider", "-c", str(tmp_path / "pytest.ini"),
+                          "--rootdir", str(tmp_path), "-m", expression,
+                          str(tmp_path / "test_markers.py")],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode in (0, 5), out.stdout + out.stderr
+    chosen = {int(k) for k in re.findall(r"::test_(\d+)$", out.stdout, re.M)}
+    return {frozenset(m) for k, m in enumerate(_combinations()) if k in chosen}
+
+
+def test_every_test_runs_on_one_release_and_the_release_dependent_ones_on_both(tmp_path):
+    host = _selected(tmp_path, HOST)
+    image = _selected(tmp_path, IMAGE)
+    for markers in map(frozenset, _combinations()):
+        assert markers in host or markers in image, set(markers)
+        if "release" in markers:
+            assert markers in host and markers in image, set(markers)
+    # the expressions do select: the host leaves the image's share to the image
+    assert frozenset({"image"}) not in host and frozenset({"image"}) in image
+    assert frozenset() in host and frozenset() not in image
 
 
 def test_conftest_marks_image_only_what_is_not_release_dependent():
