@@ -14,7 +14,7 @@ import tengfield as tf
 from tengfield import electrical
 from tengfield.design_study import (candidate_scene, design, evaluate, followed_geometry,
                               parse_design_section, write_design_outputs)
-from tengfield.design_study.candidate import _load_power, band_scene
+from tengfield.design_study.candidate import _load_power, band_scene, loaded_scene
 from tengfield.errors import SceneError
 from tengfield.surrogate import TerminalCurves, precompute
 
@@ -141,6 +141,20 @@ def test_power_density_is_the_band_mean_of_the_matched_load_power_per_volume(cac
     # the error bar: 3 x (field + surrogate error estimate) of the objective
     eps = row["field_error"] + row["interpolation_error"]
     assert row["objective_error"] == pytest.approx(3 * eps * row["objective"])
+
+
+@pytest.mark.parametrize("circuit", [{}, {"kind": "rectifier", "load_ohm": 5e6},
+                                     {"kind": "series-rc", "series_capacitance_pF": 47.0}])
+def test_the_load_scans_scene_is_the_scene_with_that_load(circuit):
+    """The scan's fast copy (no parsing) equals ``with_values`` in its circuit and in the
+    values as given (``raw``: what a written scene shows)."""
+    point = fx.scene_with(circuit=circuit) if circuit else fx.scene_with()
+    given = json.dumps(point.raw, sort_keys=True)
+    fast = loaded_scene(point, 3.3e7)
+    slow = point.with_values(circuit={"kind": "load", "load_ohm": 3.3e7})
+    assert fast.circuit == slow.circuit and fast.circuit.load == 3.3e7
+    assert fast.raw == slow.raw and fast.to_dict() == slow.to_dict()
+    assert point.circuit.load != 3.3e7 and json.dumps(point.raw, sort_keys=True) == given
 
 
 def test_worst_case_aggregate_is_the_smallest_band_value(cache):

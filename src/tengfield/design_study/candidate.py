@@ -116,11 +116,22 @@ def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
         excitation={"frequency_hz": frequency, "amplitude_mm": amplitude * 1e3}, run=run)
 
 
+def loaded_scene(point, load: float):
+    """``point`` with ``[circuit] kind = "load"``, ``load_ohm = load`` [ohm]: what
+    ``point.with_values(circuit=...)`` gives, without parsing the whole scene again (the
+    load scan asks ~40 loads per candidate): the section replaced (its own checks run),
+    and the values as given (``raw``) with it."""
+    from ..scene.schema import update_section
+
+    raw = dict(point.raw)
+    raw["circuit"] = dict(raw.get("circuit", {}))
+    update_section(raw, "circuit", {"kind": "load", "load_ohm": float(load)})
+    return dataclasses.replace(point, circuit=dataclasses.replace(
+        point.circuit, kind="load", load=float(load)), raw=raw)
+
+
 def _load_power(point, dynamics, curves, load: float) -> float:
-    # the section replaced (its own checks run), not the whole scene parsed again: the
-    # load scan asks ~40 loads per candidate
-    loaded = dataclasses.replace(point, circuit=dataclasses.replace(
-        point.circuit, kind="load", load=float(load)))
+    loaded = loaded_scene(point, load)
     return float(electrical.steady_load(loaded, dynamics, curves)["mean_power_W"])
 
 
