@@ -138,13 +138,22 @@ def test_the_canonical_grid_is_within_five_percent_and_a_function_of_the_value_a
 
 @field
 @pytest.mark.slow
-def test_a_candidates_numbers_do_not_depend_on_the_candidates_solved_before_it():
+def test_a_candidates_numbers_do_not_depend_on_the_candidates_solved_before_it(monkeypatch):
     """Three tubes, two of them in one canonical cell (they share its template): solved
     in either order, in one process, every number is the same to the bit; the shared
-    template is meshed once."""
+    template is meshed once, and its solver is set up once (the second tube refactors
+    it: the same symbolic analysis, the same numbers as a solver of its own)."""
     from mpi4py import MPI
 
-    from tengfield.field import moving, solve_position
+    from tengfield.field import _dolfinx, moving, solve_position
+
+    created = []
+    create_ksp = _dolfinx.create_ksp
+
+    def counted(*args, **kwargs):
+        created.append(args[1].getSize()[0])
+        return create_ksp(*args, **kwargs)
+    monkeypatch.setattr(_dolfinx, "create_ksp", counted)
 
     scenes = {"a": _tube(), "b": _tube(ball_diameter_mm=7.6, stroke_mm=3.4,
                                        tube_inner_radius_mm=4.3, electrode_radius_mm=4.3,
@@ -165,7 +174,9 @@ def test_a_candidates_numbers_do_not_depend_on_the_candidates_solved_before_it()
         return numbers, dict(moving.COUNTS)
 
     forward, counts = run("abc")
+    assert len(created) == 4     # one solver per template, not one per mapped reference
     backward, _ = run("cba")
+    assert len(created) == 8
     moving.clear()
     assert forward == backward
     assert counts["mapped"] == 6 and counts["map_refused"] == 0
