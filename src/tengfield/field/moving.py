@@ -31,8 +31,8 @@ Across geometries (design and uncertainty candidates that differ only in their
 dimensions): the reference of a rung is not meshed for the candidate but *mapped* from
 the mesh of its **canonical geometry** (:func:`canonical_length`: every length of the
 geometry rounded to a logarithmic grid of ratio :data:`CANONICAL_RATIO`, so at most
-~5 % away), meshed once per process for that rung and kept as a *template* of its
-*family* (:func:`geometry_family`: the shape, the topology, the far field, the
+~5 % away), meshed once per process for that rung and kept (with the solver its first map set
+up, refactored by the next) as a *template* of its *family* (:func:`geometry_family`: the shape, the topology, the far field, the
 permittivities, the mesh size and degree; not the dimensions). The map
 (:func:`map_nodes`: a piecewise-linear map per region, in r and z for the tube, in
 radius and polar angle for the shell, that puts every interface on its new position and
@@ -81,6 +81,10 @@ MAP_QUALITY_BOUND = 2.0
 #: templates kept for mapping (canonical meshes, one per family, rung and canonical
 #: geometry; the least recently used forgotten)
 MAX_TEMPLATES = 256
+#: templates that keep their solver (the most recently used; the others keep only
+#: their mesh): each kept solver holds a factorisation and ~4 PETSc options, and PETSc's
+#: options database holds at most 512 (past it every new solver fails)
+MAX_TEMPLATE_SOLVERS = 48
 #: ratio between neighbouring values of the canonical lengths' logarithmic grid: a
 #: candidate's lengths are at most sqrt(1.1) - 1 ≈ 4.9 % from its canonical geometry's
 CANONICAL_RATIO = 1.1
@@ -440,6 +444,11 @@ def _keep_template(tkey, template: Reference) -> None:
     _templates.move_to_end(tkey)
     while len(_templates) > MAX_TEMPLATES:
         _forget(_templates.popitem(last=False)[1])
+    with_solver = [t for t in _templates.values() if t.disc.solver]
+    if len(with_solver) > MAX_TEMPLATE_SOLVERS:
+        from . import _dolfinx as dx_api
+        for oldest in with_solver[:len(with_solver) - MAX_TEMPLATE_SOLVERS]:
+            _release(dx_api, oldest.disc)
 
 
 def _forget(template: Reference) -> None:
