@@ -31,8 +31,8 @@ Across geometries (design and uncertainty candidates that differ only in their
 dimensions): the reference of a rung is not meshed for the candidate but *mapped* from
 the mesh of its **canonical geometry** (:func:`canonical_length`: every length of the
 geometry rounded to a logarithmic grid of ratio :data:`CANONICAL_RATIO`, so at most
-~5 % away), meshed once per process for that rung and kept (with the solver its first map set
-up, refactored by the next) as a *template* of its *family* (:func:`geometry_family`: the shape, the topology, the far field, the
+~5 % away), meshed once per process for that rung and kept as a *template* of its
+*family* (:func:`geometry_family`: the shape, the topology, the far field, the
 permittivities, the mesh size and degree; not the dimensions). The map
 (:func:`map_nodes`: a piecewise-linear map per region, in r and z for the tube, in
 radius and polar angle for the shell, that puts every interface on its new position and
@@ -81,10 +81,6 @@ MAP_QUALITY_BOUND = 2.0
 #: templates kept for mapping (canonical meshes, one per family, rung and canonical
 #: geometry; the least recently used forgotten)
 MAX_TEMPLATES = 256
-#: templates that keep their solver (the most recently used; the others keep only
-#: their mesh): each kept solver holds a factorisation and ~4 PETSc options, and PETSc's
-#: options database holds at most 512 (past it every new solver fails)
-MAX_TEMPLATE_SOLVERS = 48
 #: ratio between neighbouring values of the canonical lengths' logarithmic grid: a
 #: candidate's lengths are at most sqrt(1.1) - 1 ≈ 4.9 % from its canonical geometry's
 CANONICAL_RATIO = 1.1
@@ -421,11 +417,7 @@ def _canonical_reference(dx_api, family, rung, lay, canonical, reassemble
         constant, kappa = disc.far_weight
         constant.value = kappa / lay.domain_radius
     reassemble(disc)
-    # the template's solver, when an earlier map set one up, is kept with it: the same
-    # sparsity, so the first solve factors the new values with its symbolic analysis
-    # (ordering) kept (~8 ms against ~28 ms for a new solver at the design's meshes;
-    # the analysis is a function of the sparsity alone: the same numbers)
-    disc.solver = disc.solver or {}
+    disc.solver = {}
     COUNTS["mapped"] += 1
     return Reference(lay=lay, disc=disc, x0=x, weight=blending_weight(x, lay),
                      triangles=template.triangles, area0=signed_areas(x, template.triangles),
@@ -435,8 +427,8 @@ def _canonical_reference(dx_api, family, rung, lay, canonical, reassemble
 
 
 def _keep_template(tkey, template: Reference) -> None:
-    """Keep ``template`` (with the solver its maps set up) for mapping, the least
-    recently used forgotten (discarded, its solver destroyed) past :data:`MAX_TEMPLATES`."""
+    """Keep ``template`` (its solvers released) for mapping, the least recently used
+    forgotten (discarded) past :data:`MAX_TEMPLATES`."""
     old = _templates.get(tkey)
     if old is not None and old is not template:
         _forget(old)
@@ -444,11 +436,6 @@ def _keep_template(tkey, template: Reference) -> None:
     _templates.move_to_end(tkey)
     while len(_templates) > MAX_TEMPLATES:
         _forget(_templates.popitem(last=False)[1])
-    with_solver = [t for t in _templates.values() if t.disc.solver]
-    if len(with_solver) > MAX_TEMPLATE_SOLVERS:
-        from . import _dolfinx as dx_api
-        for oldest in with_solver[:len(with_solver) - MAX_TEMPLATE_SOLVERS]:
-            _release(dx_api, oldest.disc)
 
 
 def _forget(template: Reference) -> None:
@@ -555,9 +542,10 @@ def done_with(dx_api, *discs, moving: bool) -> None:
 
 
 def _retire(dx_api, ref: Reference) -> None:
-    """A reference mapped from a canonical template gives the template back (its mesh,
-    whose nodes the next map overwrites, with its solver: the next map refactors it);
-    any other is discarded, its solvers destroyed."""
+    """Release ``ref``'s solvers; a reference mapped from a canonical template gives the
+    template (its mesh, whose nodes the next map overwrites) back, any other is
+    discarded."""
+    _release(dx_api, ref.disc)
     if ref.template is not None:
         _keep_template(*ref.template)
         ref.template = None
@@ -576,8 +564,7 @@ def clear() -> None:
 
 def release_references() -> None:
     """Release every reference mesh, their solvers destroyed (a table is done); the
-    canonical templates they were mapped from are kept for mapping (:func:`placed`),
-    each with its solver."""
+    canonical templates they were mapped from are kept for mapping (:func:`placed`)."""
     if _references:
         from . import _dolfinx as dx_api
         for refs in _references.values():
