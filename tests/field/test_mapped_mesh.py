@@ -249,3 +249,31 @@ def test_mapped_shell_tables_agree_with_remeshed_ones_within_their_error_estimat
     assert mapped.provenance["mesh_placements"]["mapped"] >= 4
     assert_tables_agree_within_estimates(mapped, remeshed)
     moving.clear()
+
+
+def test_the_solvers_kept_alive_fit_in_petscs_options_database():
+    """PETSc's options database holds at most 512 entries and every live solver keeps
+    its own (a design of 200 candidates failed with "Number of options 512" when every
+    canonical template kept its solver, tried and reverted): the axisymmetric and the
+    3D references' kept solvers take at most half of it."""
+    from petsc4py import PETSc
+
+    from tengfield.field import _dolfinx, moving, moving3d
+
+    def options_per_solver(kind):
+        A = PETSc.Mat().createAIJ([2, 2], nnz=1, comm=PETSc.COMM_SELF)
+        for i in range(2):
+            A.setValue(i, i, 1.0)
+        A.assemble()
+        prefix = _dolfinx.unique_prefix("options_count")
+        ksp = _dolfinx.create_ksp(PETSc.COMM_SELF, A, prefix=prefix, kind=kind, symmetric=True)
+        count = sum(key.startswith(prefix) for key in PETSc.Options().getAll())
+        ksp.destroy()
+        A.destroy()
+        _dolfinx.clear_options(prefix)
+        return count
+
+    direct, amg = options_per_solver("direct"), options_per_solver("cg-amg")
+    assert direct >= 3 and amg >= 3
+    kept = moving.MAX_REFERENCES * moving.MAX_KEYS * direct + moving3d.MAX_REFERENCES * amg
+    assert kept <= 256, kept
