@@ -25,6 +25,14 @@ def _tube_cell():
     return cylindrical_cell(default_scene().device)
 
 
+def _change(a, b) -> float:
+    """Largest change of C and of q from solve ``a`` to solve ``b``, relative to ``a``'s
+    largest magnitude of each."""
+    return max(np.max(np.abs(a.capacitance - b.capacitance)) / np.max(np.abs(a.capacitance)),
+               np.max(np.abs(a.induced_charge - b.induced_charge))
+               / np.max(np.abs(a.induced_charge)))
+
+
 def test_the_blending_weight_moves_the_ball_rigidly_and_holds_the_walls():
     from tengfield.field.moving3d import blending_weight
 
@@ -156,9 +164,7 @@ def test_moved_solves_agree_with_remeshed_ones_within_their_error_estimates():
     assert placed[1]["moved"] >= 1 and placed[-1]["moved"] >= 1
     assert "mesh_placements" not in results["remesh"][0].info
     for (z, r), a, b in zip(positions, results["remesh"], results["move"]):
-        change = max(np.max(np.abs(a.capacitance - b.capacitance)) / np.max(np.abs(a.capacitance)),
-                     np.max(np.abs(a.induced_charge - b.induced_charge))
-                     / np.max(np.abs(a.induced_charge)))
+        change = _change(a, b)
         bound = a.relative_error_estimate + b.relative_error_estimate
         assert change <= bound, (z, r, change, bound)
     moving3d.clear()
@@ -192,9 +198,7 @@ def test_honeycomb_moved_solves_agree_with_remeshed_ones_within_their_error_esti
     placed = [r.info["mesh_placements"] for r in results["move"]]
     assert placed[1]["moved"] >= 1 and placed[2]["moved"] >= 1
     for z, a, b in zip(positions, results["remesh"], results["move"]):
-        change = max(np.max(np.abs(a.capacitance - b.capacitance)) / np.max(np.abs(a.capacitance)),
-                     np.max(np.abs(a.induced_charge - b.induced_charge))
-                     / np.max(np.abs(a.induced_charge)))
+        change = _change(a, b)
         assert 0.0 < a.relative_error_estimate < 0.05
         assert change <= a.relative_error_estimate + b.relative_error_estimate, (z, change)
 
