@@ -66,9 +66,10 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
         return [{**base, "load_ohm": None, "P_mean_W": None, "power_density_W_per_m3": None}]
     rows = []
     volume = point.device.cell_volume * point.device.cells
+    grid = electrical.LoadGrid(point, dynamics, curves)   # shared by the loads
     for load in loads:
         loaded = point.with_values(circuit={"kind": "load", "load_ohm": float(load)})
-        result = electrical.steady_load(loaded, dynamics, curves)
+        result = electrical.steady_load(loaded, dynamics, curves, grid=grid)
         rows.append({**base, "load_ohm": float(load), "P_mean_W": result["mean_power_W"],
                      "power_density_W_per_m3": result["mean_power_W"] / volume})
     return rows

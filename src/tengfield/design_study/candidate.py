@@ -130,9 +130,9 @@ def loaded_scene(point, load: float):
         point.circuit, kind="load", load=float(load)), raw=raw)
 
 
-def _load_power(point, dynamics, curves, load: float) -> float:
+def _load_power(point, dynamics, curves, load: float, grid=None) -> float:
     loaded = loaded_scene(point, load)
-    return float(electrical.steady_load(loaded, dynamics, curves)["mean_power_W"])
+    return float(electrical.steady_load(loaded, dynamics, curves, grid=grid)["mean_power_W"])
 
 
 def matched_load(points, dynamics, curves, aggregate: str,
@@ -150,11 +150,14 @@ def matched_load(points, dynamics, curves, aggregate: str,
     f = float(np.mean([p.excitation.frequency for p in points]))
     centre = math.log10(1.0 / (2 * math.pi * f * c_t))
     cache: dict[float, list[float]] = {}
+    # each point's load-independent grid, built once for the scan (the same numbers)
+    grids = [electrical.LoadGrid(p, d, curves) for p, d in zip(points, dynamics)]
 
     def powers(log_r: float) -> list[float]:
         key = round(float(log_r), 12)
         if key not in cache:
-            cache[key] = [_load_power(p, d, curves, 10.0**key) for p, d in zip(points, dynamics)]
+            cache[key] = [_load_power(p, d, curves, 10.0**key, g)
+                          for p, d, g in zip(points, dynamics, grids)]
         return cache[key]
 
     def score(log_r: float) -> float:

@@ -12,7 +12,7 @@ then ``electrical.terminal_peaks(...)``, ``electrical.steady_load(...)``.
 """
 from .circuits import (CIRCUITS, Circuit, CircuitRun, SpreadCircuit, all_columns, circuit_for,
                        no_load)
-from .circuits.load import LOAD_COLUMNS, load_waveforms, relaxation_times, steady_load
+from .circuits.load import LOAD_COLUMNS, LoadGrid, load_waveforms, relaxation_times, steady_load
 from .circuits.rectifier import (CHUNK_VALUES, RECTIFIER_COLUMNS, concat_results,
                                  rectifier_grid, rectifier_summary, rectifier_waveforms)
 from .circuits.rectifier_store import (NUMERICAL_DISSIPATION_WARN, check_store_resolution,

@@ -54,15 +54,18 @@ def load_waveforms(scene, dynamics, curves, *, window_start: float | None = None
                            None if window_start is None else window_start - origin)
 
 
-def _load_waveforms(scene, dynamics, curves, window_start) -> dict:
-    """:func:`load_waveforms` on the run's own axis (``window_start`` after the origin)."""
+def _load_waveforms(scene, dynamics, curves, window_start, grid: "LoadGrid | None" = None
+                    ) -> dict:
+    """:func:`load_waveforms` on the run's own axis (``window_start`` after the origin);
+    ``grid``: a :class:`LoadGrid` of the same run kept for a scan over loads."""
     n_cells = scene.device.cells
     c_p = scene.circuit.parallel_capacitance
     load = scene.circuit.load
     if curves is None:
         return no_charge(dynamics)
     c_min = float(np.min(curves.capacitance_samples)) * n_cells + c_p
-    grid, fine, output_index = fine_terminal(scene, dynamics, curves, load * c_min)
+    grid, fine, output_index = (LoadGrid(scene, dynamics, curves) if grid is None
+                                else grid).fine(load * c_min)
     response = lumped.load_response(grid, fine["Q_sc"], fine["I_sc"], fine["C_T"], load, c_p)
     delivered = lumped.delivered_power(response.voltage, fine["I_sc"], fine["dC_T_dt"])
     stored = lumped.stored_energy(response.voltage, fine["C_T"], c_p)
@@ -88,27 +91,64 @@ def fine_terminal(scene, dynamics, curves, time_constant: float):
     :func:`relaxation_times` of ``time_constant`` [s] after the start and each impact),
     the terminal waveforms there (:func:`scene_terminal_waveforms`) and the indices of
     the output samples in it."""
-    t = elapsed_times(dynamics)
-    origin = time_origin(dynamics)
-    impacts = impact_elapsed(dynamics, t[0], t[-1])
-    output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    extra = relaxation_times(np.concatenate([[t[0]], impacts]), time_constant, output_step, t[-1])
-    gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
-    gap_extra, vel_extra, _ = (sample_elapsed(dynamics, extra) if extra.size
-                               else (np.empty(0),) * 3)
-    grid = np.concatenate([t, impacts, impacts, extra])
-    gap = np.concatenate([np.asarray(dynamics.gap, dtype=float), gap_pre, gap_post, gap_extra])
-    vel = np.concatenate([np.asarray(dynamics.gap_velocity, dtype=float), vel_pre, vel_post,
-                          vel_extra])
-    # equal times: pre-impact (0) before an output sample (1) before post-impact (2)
-    tag = np.concatenate([np.ones(t.size), np.zeros(impacts.size), np.full(impacts.size, 2.0),
-                          np.full(extra.size, 3.0)])
-    order = np.lexsort((tag, grid))
-    grid, gap, vel = grid[order], gap[order], vel[order]
-    output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
-    fine = scene_terminal_waveforms(scene, curves, gap, vel,
-                                    *_radial(dynamics, curves, origin + grid))
-    return grid, fine, output_index
+    return LoadGrid(scene, dynamics, curves).fine(time_constant)
+
+
+class LoadGrid:
+    """The part of :func:`fine_terminal`'s grid that no load changes (the output times and
+    every impact twice, with their terminal waveforms), kept for a scan over loads:
+    :meth:`fine` adds one time constant's :func:`relaxation_times` and gives
+    :func:`fine_terminal`'s arrays, bitwise (the waveforms are pointwise in time).
+    ``scene`` gives ``[device] cells`` and ``[circuit] parallel_capacitance_pF``, which
+    every load of the scan shares."""
+
+    def __init__(self, scene, dynamics, curves):
+        self.scene, self.dynamics, self.curves = scene, dynamics, curves
+        t = elapsed_times(dynamics)
+        self.t = t
+        self.origin = time_origin(dynamics)
+        impacts = impact_elapsed(dynamics, t[0], t[-1])
+        self.starts = np.concatenate([[t[0]], impacts])
+        self.output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+        gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
+        self.grid = np.concatenate([t, impacts, impacts])
+        self.gap = np.concatenate([np.asarray(dynamics.gap, dtype=float), gap_pre, gap_post])
+        self.vel = np.concatenate([np.asarray(dynamics.gap_velocity, dtype=float), vel_pre,
+                                   vel_post])
+        # equal times: pre-impact (0) before an output sample (1) before post-impact (2)
+        self.tag = np.concatenate([np.ones(t.size), np.zeros(impacts.size),
+                                   np.full(impacts.size, 2.0)])
+        self.terminal = self._terminal(self.grid, self.gap, self.vel)
+        self._no_extra = None     # fine() of a time constant that adds no point
+
+    def _terminal(self, grid, gap, vel) -> dict:
+        return scene_terminal_waveforms(self.scene, self.curves, gap, vel,
+                                        *_radial(self.dynamics, self.curves, self.origin + grid))
+
+    def fine(self, time_constant: float):
+        """:func:`fine_terminal`'s ``(grid, terminal, output_index)`` for ``time_constant``
+        [s]."""
+        t = self.t
+        extra = relaxation_times(self.starts, time_constant, self.output_step, t[-1])
+        if extra.size == 0 and self._no_extra is not None:
+            grid, fine, output_index = self._no_extra
+            return grid.copy(), {k: v.copy() for k, v in fine.items()}, output_index.copy()
+        gap_extra, vel_extra, _ = (sample_elapsed(self.dynamics, extra) if extra.size
+                                   else (np.empty(0),) * 3)
+        grid = np.concatenate([self.grid, extra])
+        tag = np.concatenate([self.tag, np.full(extra.size, 3.0)])
+        order = np.lexsort((tag, grid))
+        output_index = np.flatnonzero(order < t.size)   # order[...] of outputs is increasing
+        terminal = self.terminal
+        if extra.size:
+            more = self._terminal(extra, gap_extra, vel_extra)
+            terminal = {k: np.concatenate([v, more[k]]) for k, v in terminal.items()}
+        fine = {k: v[order] for k, v in terminal.items()}
+        grid = grid[order]
+        if extra.size == 0:
+            self._no_extra = (grid, fine, output_index)
+            return grid.copy(), {k: v.copy() for k, v in fine.items()}, output_index.copy()
+        return grid, fine, output_index
 
 
 def window_energies(dynamics, grid, window_start, dissipated_power, delivered_power,
@@ -245,11 +285,13 @@ def streamed_load(dynamics, chunked, reduced) -> tuple[dict, dict]:
     return {"energy_balance_relative_residual": balance_residual(load)}, data
 
 
-def steady_load(scene, dynamics, curves) -> dict:
-    """:func:`load_waveforms` with energies over the :func:`steady_window`."""
+def steady_load(scene, dynamics, curves, *, grid: "LoadGrid | None" = None) -> dict:
+    """:func:`load_waveforms` with energies over the :func:`steady_window`. ``grid``: a
+    :class:`LoadGrid` of ``dynamics`` kept for a scan over loads (its scene's cells and
+    C_p are ``scene``'s), the same numbers sooner."""
     t = elapsed_times(dynamics)
     mask, _ = steady_window(t, scene)
-    return _load_waveforms(scene, dynamics, curves, t[mask][0])
+    return _load_waveforms(scene, dynamics, curves, t[mask][0], grid)
 
 
 def resistive_loop(scene, load: dict, t, period: float) -> tuple[dict, tuple]:
