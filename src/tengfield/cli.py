@@ -38,6 +38,7 @@ from . import __version__
 from ._console import (CLOSED_PIPE_STATUS, PipeSafeStdout, configure_output,
                        python_only_stdout, set_quiet)
 from ._mpi import launched_size
+from ._threads import limit_blas_threads
 from .errors import SceneError, TengfieldError
 
 # command modules, in the order `tengfield --help` lists them
@@ -315,6 +316,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None = None) -> int:
     configure_output()
+    limit_blas_threads()
     parser = build_parser()
     argv = _take_quiet(argv)
     if launched_size() > 1:
