@@ -3,9 +3,10 @@
 tengfield runs in parallel by processes: MPI ranks, its process pools and the figure
 process. numpy's bundled OpenBLAS starts a thread per core for a vector of more than a
 few thousand entries, and on a machine whose cores those processes already keep busy
-the threads wait for each other: a dot product of 20k entries measured 5 µs alone and
-84 µs to 5.7 ms beside busy processes on the 2-core machine, and the 200-candidate
-design under ``mpirun -n 2`` ran 0.85x as long with one BLAS thread (docs/design.md).
+the threads wait for each other: on the 2-core machine a dot product of 20k entries
+measured 5 µs alone, 84 µs beside one busy process and up to 5.7 ms beside two; a
+60-candidate design under ``mpirun -n 2`` ran 0.97x as long with one BLAS thread
+(paired runs, docs/design.md).
 The library itself leaves the threads alone: a notebook keeps its own setting.
 """
 from __future__ import annotations
