@@ -27,6 +27,11 @@ PACKAGES=(
   libglu1-mesa libgl1 libegl1 libosmesa6 libxrender1 libxcursor1 libxft2
   libxinerama1 libxext6 libx11-6 libxi6 libxrandr2
   ngspice   # the SPICE tests (tests/electrical/test_spice*.py) and examples/teng_load.cir
+  # OpenBLAS, one thread, as the system BLAS and LAPACK (Debian's alternatives rank it
+  # above the reference BLAS): CHOLMOD's and MUMPS's dense kernels; the 60-candidate
+  # design ran 0.92x and the cold field stage 0.94x as long (docs/field.md). One thread:
+  # tengfield is parallel by processes (MPI ranks, pools)
+  libopenblas0-serial
   git make
 )
 
