@@ -20,11 +20,14 @@ BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THR
 
 def limit_blas_threads(environ=os.environ) -> bool:
     """One BLAS thread in this process and in the processes it starts, unless the user
-    set one of :data:`BLAS_THREAD_VARIABLES`; whether the limit was applied."""
+    set one of :data:`BLAS_THREAD_VARIABLES`; whether the limit was set (without
+    threadpoolctl, in a venv made before it was a dependency: the children's only)."""
     if any(name in environ for name in BLAS_THREAD_VARIABLES):
         return False
     environ["OPENBLAS_NUM_THREADS"] = "1"      # what pools and the figure process inherit
-    from threadpoolctl import threadpool_limits   # this process: its BLAS is loaded
-
+    try:   # this process: numpy's BLAS is loaded already (a dependency since issue #40;
+        from threadpoolctl import threadpool_limits   # a venv made before lacks it)
+    except ImportError:
+        return True
     threadpool_limits(1, user_api="blas")
     return True

@@ -57,3 +57,11 @@ def test_a_cli_run_starts_its_children_with_one_blas_thread(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], env=clean, capture_output=True,
                          text=True, check=True)
     assert "CHILD 1" in out.stdout
+
+
+def test_a_venv_without_threadpoolctl_still_runs_and_limits_the_children(monkeypatch):
+    """A venv made before threadpoolctl was a dependency: no crash, the variable set."""
+    monkeypatch.setitem(sys.modules, "threadpoolctl", None)   # import raises ImportError
+    environ = {}
+    assert limit_blas_threads(environ) is True
+    assert environ == {"OPENBLAS_NUM_THREADS": "1"}
