@@ -77,3 +77,13 @@ def test_info_outside_a_git_checkout(tmp_path, monkeypatch):
 
     monkeypatch.setattr(info, "package_root", lambda: tmp_path)
     assert info.git_commit() == "not a git checkout"
+
+
+def test_info_names_the_blas_the_factorisations_run_on(run_cli):
+    """A bug report says which BLAS PETSc (CHOLMOD, MUMPS) and numpy loaded, with their
+    threads: OpenBLAS on this stack (scripts/install-system.sh), one thread in the CLI."""
+    proc = run_cli("info")
+    assert proc.returncode == 0, proc.stderr
+    blas = next(ln for ln in proc.stdout.splitlines() if ln.startswith("BLAS"))
+    assert "openblas" in blas and "reference BLAS" not in blas
+    assert "threads" not in blas          # "1 thread" each

@@ -35,6 +35,38 @@ def git_commit() -> str:
     return head[:12] + (", modified (uncommitted changes)" if changed else "")
 
 
+def blas_libraries() -> str:
+    """The BLAS libraries this process has loaded (numpy's; PETSc's, which CHOLMOD and
+    MUMPS run on): each that threadpoolctl knows as ``api version, N thread(s) (file)``,
+    any other ``libblas`` by its file (the reference BLAS: the factorisations ~8 %
+    slower end to end, docs/field.md)."""
+    import os
+
+    parts, known = [], set()
+    try:
+        from threadpoolctl import threadpool_info
+        for lib in threadpool_info():
+            if lib.get("user_api") != "blas":
+                continue
+            path = os.path.realpath(lib["filepath"])
+            known.add(os.path.dirname(path))
+            threads = lib.get("num_threads")
+            parts.append(f"{lib.get('internal_api')} {lib.get('version')}, {threads} "
+                         f"thread{'s' if threads != 1 else ''} ({path})")
+    except Exception:  # noqa: BLE001 - report, never fail
+        pass
+    try:
+        with open("/proc/self/maps") as maps:
+            mapped = {line.split()[-1] for line in maps if "/" in line}
+    except OSError:
+        mapped = set()
+    for path in sorted(mapped):
+        name = os.path.basename(path)
+        if name.startswith("libblas.so") and os.path.dirname(os.path.realpath(path)) not in known:
+            parts.append(f"{'reference BLAS' if '/blas/' in path else 'other'} ({path})")
+    return "; ".join(parts) or "none loaded"
+
+
 def versions() -> dict[str, str]:
     """Versions of tengfield and of every library it may use ('missing' if absent)."""
     from .. import __version__
@@ -56,6 +88,7 @@ def versions() -> dict[str, str]:
         out["PETSc"] = petsc_version()
     except Exception:  # noqa: BLE001
         pass
+    out["BLAS"] = blas_libraries()
     try:
         from mpi4py import MPI
         out["MPI library"] = MPI.Get_library_version().replace("\x00", "").splitlines()[0].strip()
