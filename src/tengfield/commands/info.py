@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import platform
 import subprocess
 from pathlib import Path
@@ -40,8 +41,6 @@ def blas_libraries() -> str:
     MUMPS run on): each that threadpoolctl knows as ``api version, N thread(s) (file)``,
     any other ``libblas`` by its file (the reference BLAS: the factorisations ~8 %
     slower end to end, docs/field.md)."""
-    import os
-
     parts, known = [], set()
     try:
         from threadpoolctl import threadpool_info

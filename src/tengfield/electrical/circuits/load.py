@@ -112,13 +112,13 @@ class LoadGrid:
         self.output_step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
         gap_pre, vel_pre, gap_post, vel_post = _impact_states(scene, dynamics, impacts)
         self.grid = np.concatenate([t, impacts, impacts])
-        self.gap = np.concatenate([np.asarray(dynamics.gap, dtype=float), gap_pre, gap_post])
-        self.vel = np.concatenate([np.asarray(dynamics.gap_velocity, dtype=float), vel_pre,
-                                   vel_post])
+        gap = np.concatenate([np.asarray(dynamics.gap, dtype=float), gap_pre, gap_post])
+        vel = np.concatenate([np.asarray(dynamics.gap_velocity, dtype=float), vel_pre,
+                              vel_post])
         # equal times: pre-impact (0) before an output sample (1) before post-impact (2)
         self.tag = np.concatenate([np.ones(t.size), np.zeros(impacts.size),
                                    np.full(impacts.size, 2.0)])
-        self.terminal = self._terminal(self.grid, self.gap, self.vel)
+        self.terminal = self._terminal(self.grid, gap, vel)
         self._no_extra = None     # fine() of a time constant that adds no point
 
     def _terminal(self, grid, gap, vel) -> dict:
