@@ -167,6 +167,34 @@ def test_the_serial_symmetric_solver_is_cholmod_and_matches_mumps_and_fails_in_o
 
 
 @field
+def test_the_serial_factorisation_is_cholmods_simplicial_one():
+    """CHOLMOD is told to factor simplicially (``mat_cholmod_factor simplicial``): on the
+    axisymmetric solver's 2D P2 operators (13k-23k unknowns) its set-up and two solves
+    took 24-40 ms against 34-58 ms for the supernodal factorisation CHOLMOD picked by
+    itself (its own default, ``Common.supernodal`` 1: AUTO); issue #40."""
+    import re
+
+    import scipy.sparse as sp
+
+    from tengfield.field import _dolfinx as dx
+
+    n = 30
+    one = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(n, n))
+    A = (sp.kron(sp.identity(n), one) + sp.kron(one, sp.identity(n))).tocsr()
+    M = dx.matrix_from_csr(MPI.COMM_SELF, A.shape, A.indptr, A.indices, A.data)
+    prefix = dx.unique_prefix("simplicial")
+    ksp = dx.create_ksp(MPI.COMM_SELF, M, prefix=prefix, symmetric=True)
+    try:
+        text = dx.factor_description(ksp)
+    finally:
+        ksp.destroy()
+        dx.clear_options(prefix)
+    assert "package used to perform factorization: cholmod" in text, text
+    setting = re.search(r"Common\.supernodal\s+(\d+)", text)
+    assert setting is not None and setting.group(1) == "0", text   # 0: CHOLMOD_SIMPLICIAL
+
+
+@field
 def test_the_factorisations_run_on_openblas():
     """The BLAS and LAPACK that PETSc (CHOLMOD, MUMPS) loads are OpenBLAS's
     (scripts/install-system.sh installs libopenblas0-serial; Debian's alternatives rank

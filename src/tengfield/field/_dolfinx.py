@@ -435,10 +435,12 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
     kind = "direct": LU factorisation with MUMPS (factored once at setUp, then
     reused for every right-hand side); with ``symmetric=True`` (``A`` must be
     symmetric; it is marked so) a Cholesky / LDLᵀ factorisation instead: on one
-    process SuiteSparse's CHOLMOD (:func:`direct_solver`; for the axisymmetric
-    solver's 2D meshes it factors ~15 % and refactors a moved mesh's values
-    ~20 % faster than MUMPS LDLᵀ, and its back-substitution is 3-4x faster:
-    MUMPS has a fixed cost per solve at this size), else MUMPS LDLᵀ, on one
+    process SuiteSparse's CHOLMOD (:func:`direct_solver`), simplicial (LDLᵀ column by
+    column, no supernodes: on the axisymmetric solver's 2D P2 operators of 13k-23k
+    unknowns its set-up and two solves took 24-40 ms against 34-58 ms for the
+    supernodal factorisation CHOLMOD chose by itself, and it factors a moved mesh's
+    values ~40 % faster; its back-substitution is 3-5x faster than MUMPS', which has a
+    fixed cost per solve at this size), else MUMPS LDLᵀ, on one
     process with the approximate-minimum-degree ordering (2.2-3x faster than
     MUMPS's default METIS ordering at 13k-80k dofs).
     kind = "cg-amg": CG preconditioned by hypre BoomerAMG (set up once, on
@@ -455,6 +457,8 @@ def create_ksp(comm, A, *, prefix: str, kind: str = "direct", rtol: float = 1e-1
             values["pc_factor_mat_solver_type"] = direct_solver(comm, symmetric=True)
             if comm.size == 1 and values["pc_factor_mat_solver_type"] == "mumps":
                 values["mat_mumps_icntl_7"] = 0   # AMD ordering
+            if values["pc_factor_mat_solver_type"] == "cholmod":
+                values["mat_cholmod_factor"] = "simplicial"   # see above
     elif kind == "cg-amg":
         values = {"ksp_type": "cg", "pc_type": "hypre", "pc_hypre_type": "boomeramg",
                   "ksp_rtol": rtol, "ksp_atol": 0.0, "ksp_max_it": 2000}
@@ -510,6 +514,26 @@ def direct_solver(comm, *, symmetric: bool) -> str:
             ksp.destroy()
             A.destroy()
     return "cholmod" if _CHOLMOD[0] else "mumps"
+
+
+def factor_description(ksp) -> str:
+    """PETSc's own description of the factorisation ``ksp`` holds (its factor matrix
+    viewed with the ASCII info format: the package and, for CHOLMOD, its run parameters)."""
+    import os
+    import tempfile
+
+    factor = ksp.getPC().getFactorMatrix()
+    handle, path = tempfile.mkstemp(prefix="tengfield-factor-", suffix=".txt")
+    os.close(handle)
+    try:
+        viewer = PETSc.Viewer().createASCII(path, comm=factor.getComm())
+        viewer.pushFormat(PETSc.Viewer.Format.ASCII_INFO)
+        factor.view(viewer)
+        viewer.destroy()
+        with open(path) as text:
+            return text.read()
+    finally:
+        os.unlink(path)
 
 
 def refactor(ksp, K, *, kind: str = "direct", symmetric: bool = False) -> None:
