@@ -504,31 +504,33 @@ def check_attribute(sec: str, key: str, spec: Key, value, owner: str) -> None:
     checked against its key: SceneError naming the attribute, the key in file units and
     the allowed range. Bounds are compared in SI (``bound x factor``, as :func:`convert`
     scales a file value), so every value :func:`convert` returns passes."""
-    where = f"{owner}.{spec.attr} = {show(value)}"
+    def where() -> str:   # only for a message: a valid value is checked without it
+        return f"{owner}.{spec.attr} = {show(value)}"
+
     if spec.type is str:
         if not isinstance(value, str):
-            raise SceneError(f"{where}: expected a string ([{sec}] {key})")
+            raise SceneError(f"{where()}: expected a string ([{sec}] {key})")
         if spec.check and value not in spec.check[1]:
             allowed = ", ".join(repr(o) for o in spec.check[1])
-            raise SceneError(f"{where} ([{sec}] {key}) is not allowed: choose one of {allowed}"
+            raise SceneError(f"{where()} ([{sec}] {key}) is not allowed: choose one of {allowed}"
                              + suggest(value, spec.check[1]))
         return
     items = value if spec.type is tuple else (value,)
     if spec.type is tuple and not isinstance(value, tuple):
-        raise SceneError(f"{where}: expected a tuple of numbers ([{sec}] {key})")
+        raise SceneError(f"{where()}: expected a tuple of numbers ([{sec}] {key})")
     for x in items:
         number = Integral if spec.type is int else Real
         if isinstance(x, bool) or not isinstance(x, number):
             kind = "a whole number" if spec.type is int else "a number"
-            raise SceneError(f"{where}: expected {kind} ([{sec}] {key})")
+            raise SceneError(f"{where()}: expected {kind} ([{sec}] {key})")
         if not math.isfinite(x):
-            raise SceneError(f"{where} is not finite ([{sec}] {key}: allowed "
+            raise SceneError(f"{where()} is not finite ([{sec}] {key}: allowed "
                              f"{fmt_range(spec.check)})")
         _, lo, hi, lo_open, hi_open = spec.check[:5]
         f = spec.factor if spec.type is not int else 1
         lo, hi = lo * f, hi * f
         if x < lo or x > hi or (lo_open and x == lo) or (hi_open and x == hi):
-            raise SceneError(f"{where} is out of range: [{sec}] {key} = {x / f:g} is allowed "
+            raise SceneError(f"{where()} is out of range: [{sec}] {key} = {x / f:g} is allowed "
                              f"{fmt_range(spec.check)}")
 
 
