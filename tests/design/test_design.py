@@ -460,3 +460,37 @@ def test_the_old_stroke_key_is_read_once_under_its_new_name(tmp_path):
     with pytest.raises(SceneError, match=r"\[design.vary\] gap_mm and stroke_mm are the same "
                                          r"key \(gap_mm is its old name\): give stroke_mm only"):
         parse_design_section(both)
+
+
+def test_bundles_keep_a_canonical_geometrys_candidates_together_within_a_share():
+    """Random keys (None: a candidate without a canonical geometry): every index once,
+    one key per bundle, no bundle past ceil(n / workers), the largest first; a key's
+    candidates in as few bundles as the share allows."""
+    from tengfield.design_study.search import bundles
+
+    rng = np.random.default_rng(40)
+    for _ in range(200):
+        n, workers = int(rng.integers(1, 40)), int(rng.integers(1, 5))
+        keys = [None if rng.random() < 0.1 else int(rng.integers(0, 6)) for _ in range(n)]
+        out = bundles(keys, workers)
+        share = -(-n // workers)
+        assert sorted(i for b in out for i in b) == list(range(n))
+        assert all(len(b) <= share and b == sorted(b) for b in out)
+        assert all(len({keys[i] for i in b}) == 1 for b in out)
+        assert [len(b) for b in out] == sorted((len(b) for b in out), reverse=True)
+        for key in {k for k in keys if k is not None}:
+            count = keys.count(key)
+            assert sum(1 for b in out if keys[b[0]] == key) == -(-count // share)
+
+
+def test_the_candidates_of_one_canonical_tube_share_a_mapping_group():
+    """Two tubes within the canonical grid's rounding share the group; a ball 20 %
+    smaller does not."""
+    from tengfield.field import mapping_group
+    from tengfield.scene import default_scene
+
+    base = default_scene()
+    near = base.with_values(device={"ball_diameter_mm": base.device.ball_diameter * 1e3 * 1.001})
+    far = base.with_values(device={"ball_diameter_mm": base.device.ball_diameter * 1e3 * 0.8})
+    assert mapping_group(base) is not None and mapping_group(base) == mapping_group(near)
+    assert mapping_group(far) != mapping_group(base)

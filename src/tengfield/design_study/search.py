@@ -189,6 +189,45 @@ def _evaluate_task(task):
                     tables=_TABLES)
 
 
+def _evaluate_bundle(tasks):
+    """:func:`_evaluate_task` of each task of one bundle (:func:`bundles`), in order."""
+    return [_evaluate_task(task) for task in tasks]
+
+
+def bundles(keys: list, workers: int) -> list[list[int]]:
+    """The indices ``0..len(keys)-1`` in bundles for ``workers`` processes: indices of
+    one key (:func:`tengfield.field.mapping_group`: the candidates whose meshes are mapped
+    from one canonical geometry, which a process meshes once) together, each bundle at
+    most ``ceil(n / workers)`` long (no process gets more than its share), the largest
+    first (the farm deals the dearest first); a key of None is a bundle of its own.
+    Every index once; within a bundle in increasing order."""
+    n = len(keys)
+    share = max(1, -(-n // max(workers, 1)))
+    groups: dict = {}
+    out: list[list[int]] = []
+    for i, key in enumerate(keys):
+        if key is None:
+            out.append([i])
+        else:
+            groups.setdefault(key, []).append(i)
+    for members in groups.values():
+        out.extend(members[j:j + share] for j in range(0, len(members), share))
+    return sorted(out, key=lambda b: (-len(b), b[0]))
+
+
+def _mapping_group(base, spec, values):
+    """:func:`tengfield.field.mapping_group` of a candidate's scene (None when the
+    candidate is impossible: evaluate says why)."""
+    from ..errors import TengfieldError
+    from ..field import mapping_group
+    from .candidate import candidate_scene
+
+    try:
+        return mapping_group(candidate_scene(base, spec, values))
+    except (TengfieldError, ValueError):
+        return None
+
+
 def _quiet_worker() -> None:
     """A worker's stderr carries tengfield's lines only (no ffcx/setuptools JIT chatter)."""
     from .._console import configure_output
@@ -206,6 +245,9 @@ class _Workers:
 
         self.comm, self.pool, self._stack = comm, None, None
         self.jobs = 1 if size_of(comm) > 1 else max(1, jobs or os.cpu_count() or 1)
+        #: how many processes evaluate candidates at once, and whether more than one
+        self.count = max(size_of(comm), self.jobs)
+        self.parallel = self.count > 1
 
     def __enter__(self):
         if self.jobs > 1:   # spawned (fresh interpreters); an interrupted or failed study
@@ -231,6 +273,18 @@ class _Workers:
             results.append(result)
             progress(1)
         return results
+
+
+def _bundle_progress(update, sizes: list[int]):
+    """A farm's progress callback (``n`` more tasks started; the farm deals them in
+    order) that advances ``update`` by the candidates of those bundles."""
+    started = [0]
+
+    def advance(n: int) -> None:
+        first = started[0]
+        started[0] = min(first + int(n), len(sizes))
+        update(sum(sizes[first:started[0]]))
+    return advance
 
 
 def progress_bar(total: int, enabled: bool):
@@ -286,7 +340,18 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
         if not fresh:
             return 0
         tasks = [(scene, spec, v, cache_dir, solve, simulate) for v in fresh]
-        results = workers.map(_evaluate_task, tasks, bar.update)
+        if workers.parallel:
+            # one canonical geometry's candidates in one process: its templates are
+            # meshed once (the rows do not depend on where a candidate ran)
+            groups = bundles([_mapping_group(scene, spec, v) for v in fresh], workers.count)
+            done = workers.map(_evaluate_bundle, [[tasks[i] for i in b] for b in groups],
+                               _bundle_progress(bar.update, [len(b) for b in groups]))
+            results = [None] * len(tasks)
+            for members, outcome in zip(groups, done):
+                for i, row in zip(members, outcome):
+                    results[i] = row
+        else:
+            results = workers.map(_evaluate_task, tasks, bar.update)
         for values, row in zip(fresh, results):
             row = {"index": len(rows), "phase": phase, **row}
             seen[space.key(values)] = row["index"]

@@ -97,6 +97,25 @@ def resolve_method(scene, method: str | None = None, offset: float = 0.0) -> str
     return method
 
 
+def mapping_group(scene):
+    """A hashable key shared by the scenes whose (r, z) reference meshes are mapped from
+    the same canonical geometry (:mod:`tengfield.field.moving`: a process meshes that
+    geometry's templates once and maps every such scene from them), or None (no
+    canonical geometry: the hexagonal cell, an impossible one). Pure: no dolfinx, no
+    gmsh. The design search keeps the candidates of one group in one process
+    (:func:`tengfield.design_study.search.bundles`): the numbers do not depend on it."""
+    from ..errors import TengfieldError
+    from .cells import cell_of
+
+    try:
+        canonical = cell_of(scene).canonical()
+    except (TengfieldError, ValueError):
+        return None
+    if canonical is None:
+        return None
+    return (scene.device.shape, repr(getattr(canonical, "device", canonical)))
+
+
 def solve_position(scene, position: float, *, comm, offset: float | None = None,
                    method: str | None = None, **overrides) -> PositionResult:
     """Capacitance matrix and induced charges with the ball at gap ``position`` [m].
