@@ -523,17 +523,14 @@ def factor_description(ksp) -> str:
     import tempfile
 
     factor = ksp.getPC().getFactorMatrix()
-    handle, path = tempfile.mkstemp(prefix="tengfield-factor-", suffix=".txt")
-    os.close(handle)
-    try:
+    with tempfile.TemporaryDirectory(prefix="tengfield-factor-") as scratch:
+        path = os.path.join(scratch, "factor.txt")   # PETSc's viewer writes, we read
         viewer = PETSc.Viewer().createASCII(path, comm=factor.getComm())
         viewer.pushFormat(PETSc.Viewer.Format.ASCII_INFO)
         factor.view(viewer)
         viewer.destroy()
         with open(path) as text:
             return text.read()
-    finally:
-        os.unlink(path)
 
 
 def refactor(ksp, K, *, kind: str = "direct", symmetric: bool = False) -> None:
