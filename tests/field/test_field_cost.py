@@ -98,15 +98,21 @@ def test_the_zr_table_settings_come_from_the_scene():
                                                  "degree": 2, "tolerance": pytest.approx(1e-2)}
 
 
-@field
-def test_a_solver_allocation_failure_is_one_line():
+def laplacian_2d(n: int):
+    """The 5-point Laplacian of an n x n grid (CSR, n² unknowns, symmetric positive
+    definite)."""
     import scipy.sparse as sp
 
+    one = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(n, n))
+    return (sp.kron(sp.identity(n), one) + sp.kron(one, sp.identity(n))).tocsr()
+
+
+@field
+def test_a_solver_allocation_failure_is_one_line():
     from tengfield.field import _dolfinx as dx
 
     n = 120
-    one = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(n, n))
-    A = (sp.kron(sp.identity(n), one) + sp.kron(one, sp.identity(n))).tocsr()
+    A = laplacian_2d(n)
     M = dx.matrix_from_csr(MPI.COMM_SELF, A.shape, A.indptr, A.indices, A.data)
     prefix = dx.unique_prefix("starved")
     with pytest.raises(FieldError) as failed:   # MUMPS allowed 1 MB of workspace
@@ -131,8 +137,7 @@ def test_the_serial_symmetric_solver_is_cholmod_and_matches_mumps_and_fails_in_o
     assert dx.direct_solver(MPI.COMM_SELF, symmetric=True) == "cholmod"
     assert dx.direct_solver(MPI.COMM_SELF, symmetric=False) == "mumps"
     n = 40
-    one = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(n, n))
-    A = (sp.kron(sp.identity(n), one) + sp.kron(one, sp.identity(n))).tocsr()
+    A = laplacian_2d(n)
     rng = np.random.default_rng(7)
     b = rng.standard_normal(n * n)
     solutions = {}
@@ -174,13 +179,10 @@ def test_the_serial_factorisation_is_cholmods_simplicial_one():
     itself (its own default, ``Common.supernodal`` 1: AUTO); issue #40."""
     import re
 
-    import scipy.sparse as sp
-
     from tengfield.field import _dolfinx as dx
 
     n = 30
-    one = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(n, n))
-    A = (sp.kron(sp.identity(n), one) + sp.kron(one, sp.identity(n))).tocsr()
+    A = laplacian_2d(n)
     M = dx.matrix_from_csr(MPI.COMM_SELF, A.shape, A.indptr, A.indices, A.data)
     prefix = dx.unique_prefix("simplicial")
     ksp = dx.create_ksp(MPI.COMM_SELF, M, prefix=prefix, symmetric=True)

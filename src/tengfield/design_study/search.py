@@ -245,9 +245,8 @@ class _Workers:
 
         self.comm, self.pool, self._stack = comm, None, None
         self.jobs = 1 if size_of(comm) > 1 else max(1, jobs or os.cpu_count() or 1)
-        #: how many processes evaluate candidates at once, and whether more than one
+        #: how many processes evaluate candidates at once
         self.count = max(size_of(comm), self.jobs)
-        self.parallel = self.count > 1
 
     def __enter__(self):
         if self.jobs > 1:   # spawned (fresh interpreters); an interrupted or failed study
@@ -278,12 +277,12 @@ class _Workers:
 def _bundle_progress(update, sizes: list[int]):
     """A farm's progress callback (``n`` more tasks started; the farm deals them in
     order) that advances ``update`` by the candidates of those bundles."""
-    started = [0]
+    started = 0
 
     def advance(n: int) -> None:
-        first = started[0]
-        started[0] = min(first + int(n), len(sizes))
-        update(sum(sizes[first:started[0]]))
+        nonlocal started
+        first, started = started, min(started + int(n), len(sizes))
+        update(sum(sizes[first:started]))
     return advance
 
 
@@ -340,7 +339,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
         if not fresh:
             return 0
         tasks = [(scene, spec, v, cache_dir, solve, simulate) for v in fresh]
-        if workers.parallel:
+        if workers.count > 1:
             # one canonical geometry's candidates in one process: its templates are
             # meshed once (the rows do not depend on where a candidate ran)
             groups = bundles([_mapping_group(scene, spec, v) for v in fresh], workers.count)
