@@ -9,8 +9,8 @@ the one the block writes (``scene --default > my.toml``, the full default scene)
 has no ``OMPI_ALLOW_RUN_AS_ROOT*`` variables (a fresh root shell): the block's own
 ``export`` line sets them, and each line runs after the block's ``export`` lines before
 it, as one shell running the block would (issue #42). Each line must
-exit 0 with only tengfield's own lines on stderr, and write the files README's
-"Outputs" table lists (non-empty, PNGs decode, CSVs without ``nan``).
+exit 0 with only tengfield's own lines on stderr, and write the files the "Outputs"
+table of docs/commands.md lists (non-empty, PNGs decode, CSVs without ``nan``).
 
 Beyond the block, on a small scene made from my.toml (0.3 s, coarse field): a 3D run
 with a lateral drive, a rectifier run and an ``[array]`` with spread, all figures on.
