@@ -29,7 +29,8 @@ import time
 
 #: the modules holding ``@njit(cache=True)`` kernels
 KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.dynamics.motion3d._kernel",
-                  "tengfield.harvest._kernel", "tengfield.array", "tengfield._lumped_kernel")
+                  "tengfield.harvest._kernel", "tengfield.array", "tengfield._lumped_kernel",
+                  "tengfield.source._kernel")
 
 _SHORT_3D = """
 [contact]
@@ -65,6 +66,9 @@ def _workloads() -> None:
     harvest.Diode().path_current(np.array([0.0, 1.0]))
     # the load ODE (a [circuit] kind = "load" or "series-rc")
     lumped.load_response(t, q, 2e-9 * np.pi * 20.0 * np.cos(2 * np.pi * 20.0 * t), c, 1e9)
+    # the ball's contact charging ([charge] model = "contact")
+    from .source._kernel import contact_recurrence
+    contact_recurrence(np.ones(3), np.full(3, 1e-3), -1e-9, 1.0, 0.0)
     # an array's cells: many trajectories sampled in one call, then the splines
     from .dynamics.impact import TrajectoryBundle
     cell, _ = array.cell_trajectory(scene, (0.0, 0.9, 0.0))

@@ -1,0 +1,2 @@
+"""The device as a source: the charge the ball carries over a run (issue #52: contact
+electrification, ``charge``), the layer the terminal model builds on (issue #51)."""
