@@ -77,3 +77,104 @@ def test_a_slow_front_end_reads_the_integral_of_a_sine():
         exact = _exact_first_order(t, np.sin(w * t), tau)
         np.testing.assert_allclose(y, exact, rtol=1e-9, atol=1e-12 * np.max(np.abs(exact)))
         assert np.max(np.abs(y)) == pytest.approx(2.0 / (w * tau), rel=1e-2)
+
+
+# ---------------------------------------------------------------------------
+# item 3: a quantity the reader leaves unchanged keeps its impact extremes
+@pytest.mark.parametrize("rate", [2000.0, 20000.0])
+def test_an_input_resistance_alone_leaves_the_charge_and_current_peaks(cache, rate):
+    """R_in loads the voltage only (Q and I are read in short circuit): Q_read and I_read
+    equal Q_SC and I_SC row by row, and so do their peaks, which take the extremes just
+    before and after the impacts at any sample rate (they were 0.920 x the I_SC peak at
+    2 kHz, 0.985 at 20 kHz)."""
+    run = {**RUN, "sample_rate_hz": rate}
+    r = tf.run(fx.scene_with(run=run, instrument={"input_resistance_ohm": 1e8}),
+               cache_dir=cache, solve=fx.plate_model_solve)
+    w = r.waveforms
+    np.testing.assert_array_equal(w["I_read_A"], w["I_sc_A"])
+    np.testing.assert_array_equal(w["Q_read_C"], w["Q_sc_C"])
+    for name, terminal in (("I_read", "I_sc"), ("Q_read", "Q_sc")):
+        assert r.peak[name] == pytest.approx(r.peak[terminal], rel=1e-12), name
+        assert r.peaks[name] == pytest.approx(r.peaks[terminal], rel=1e-12), name
+    # the loaded voltage is continuous at the impacts: its samples alone
+    v = np.asarray(w["V_read_V"])[electrical.steady_window(r.t, r.scene)[0]]
+    assert r.peak["V_read"] == pytest.approx(np.max(np.abs(v)), rel=1e-12)
+
+
+def test_a_filter_still_takes_its_samples_alone(cache):
+    """With a bandwidth the read current is not I_SC: its peak is its samples' own."""
+    r = tf.run(fx.scene_with(run=RUN, instrument={"input_resistance_ohm": 1e8,
+                                                  "bandwidth_hz": 300.0}),
+               cache_dir=cache, solve=fx.plate_model_solve)
+    i = np.asarray(r.waveforms["I_read_A"])[electrical.steady_window(r.t, r.scene)[0]]
+    assert r.peak["I_read"] == pytest.approx(np.max(np.abs(i)), rel=1e-12)
+    assert r.peak["I_read"] < r.peak["I_sc"]
+
+
+# ---------------------------------------------------------------------------
+# item 6: the smallest input resistance the scene allows
+def test_the_smallest_input_resistance_reads_its_limit_without_warnings(cache):
+    """R_in -> 0 (1e-300 ohm, allowed): the instrument shorts the terminal, V = R_in I_SC
+    to double precision (R_in (C_T + C_p) is 1e-310 s against 2e-4 s steps); no numpy
+    overflow, no NaN ("peak n/a" and an empty column before)."""
+    r_in = 1e-300
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)     # numpy's overflow, invalid
+        r = tf.run(fx.scene_with(run=RUN, instrument={"input_resistance_ohm": r_in}),
+                   cache_dir=cache, solve=fx.plate_model_solve)
+    v = np.asarray(r.waveforms["V_read_V"])
+    i = np.asarray(r.waveforms["I_sc_A"])
+    assert np.all(np.isfinite(v))
+    np.testing.assert_allclose(v, r_in * i, rtol=1e-6, atol=0)
+    assert r.peak["V_read"] == pytest.approx(r_in * np.max(np.abs(
+        i[electrical.steady_window(r.t, r.scene)[0]])), rel=1e-6)
+
+
+@pytest.mark.parametrize("r_in", [1e-30, 1e-3, 1.0])
+def test_a_small_input_resistance_is_the_quasi_static_voltage(cache, r_in):
+    """Between the limit and the exponential integrator the voltage is continuous:
+    R_in (C_T + C_p) << the step gives V = R_in I_SC to 1e-6 either way."""
+    r = tf.run(fx.scene_with(run=RUN, instrument={"input_resistance_ohm": r_in}),
+               cache_dir=cache, solve=fx.plate_model_solve)
+    v = np.asarray(r.waveforms["V_read_V"])[10:]
+    i = np.asarray(r.waveforms["I_sc_A"])[10:]
+    np.testing.assert_allclose(v, r_in * i, rtol=1e-6, atol=1e-6 * r_in * np.max(np.abs(i)))
+
+
+# ---------------------------------------------------------------------------
+# item 8: the peaks of a scene whose instrument has not read yet
+def test_the_peaks_of_an_unread_instrument_scene_are_the_terminals(cache):
+    """sweep and report ask terminal_extremes for the dynamics alone (no read columns):
+    with only [instrument] capacitance_pF it ended in KeyError: 'Q_read'."""
+    scene = fx.scene_with(run=RUN, instrument={"capacitance_pF": 338.0})
+    r = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    curves = TerminalCurves(r.table, scene.circuit.reference)
+    got = electrical.terminal_extremes(r.scene, r.dynamics, curves)
+    for name in ("V_oc", "Q_sc", "I_sc"):
+        assert got["peak"][name] == pytest.approx(r.peak[name], rel=1e-12)
+        assert got["peak_to_peak"][name] == pytest.approx(r.peaks[name], rel=1e-12)
+    assert got["peak"]["V_read"] == pytest.approx(r.peak["V_read"], rel=1e-12)
+    assert electrical.terminal_peaks(r.scene, r.dynamics, curves)["Q_sc"] == \
+        pytest.approx(r.peaks["Q_sc"], rel=1e-12)
+
+
+@pytest.mark.slow
+def test_sweep_varies_the_instruments_capacitance_end_to_end(tmp_path, run_cli):
+    """`tengfield sweep --vary instrument.capacitance_pF=100,338 --jobs 2` on the base
+    scene, figures on: two rows, the same V_OC, Q_SC, I_SC (C_p does not touch them)."""
+    import csv
+
+    scene = tmp_path / "base.toml"
+    scene.write_text(BASE)
+    out = run_cli("sweep", scene, "--vary", "instrument.capacitance_pF=100,338",
+                  "--jobs", "2", "-o", tmp_path / "out")
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "Traceback" not in out.stderr
+    rows = list(csv.DictReader(open(tmp_path / "out" / "sweep.csv")))
+    assert len(rows) == 2
+    pngs = [p for p in (tmp_path / "out").iterdir() if p.suffix == ".png"]
+    assert pngs
+    columns = [c for c in rows[0] if c.startswith("V_oc") or c.startswith("Q_sc")]
+    assert columns
+    for c in columns:
+        assert rows[0][c] == rows[1][c] and rows[0][c] != ""

@@ -237,6 +237,14 @@ class Reader:
         q = np.asarray(columns["Q_sc_C"], dtype=float)
         i = np.asarray(columns["I_sc_A"], dtype=float)
         c = np.asarray(c_t, dtype=float)
+        r_in = self.instrument.input_resistance
+        if _quasi_static(t, self.previous, r_in * np.max(c + self.c_p)):
+            v = r_in * i                 # the R_in -> 0 limit, exact to double precision
+            if self.previous is None:    # the start: the open-circuit voltage, as the
+                v[0] = q[0] / (c[0] + self.c_p)     # integrator's (no charge through R_in)
+            self.previous = (float(t[-1]), float(q[-1]), float(i[-1]), float(c[-1]),
+                             float(q[-1] - (c[-1] + self.c_p) * v[-1]))
+            return v
         if self.previous is None:
             response = lumped.load_response(t, q, i, c, self.instrument.input_resistance,
                                              self.c_p)
@@ -252,9 +260,50 @@ class Reader:
         return v
 
 
+#: R_in (C_T + C_p) below this fraction of every step: the voltage is R_in I_SC (the
+#: exponential integrator's answer differs from it by this fraction, below a double's
+#: rounding; beyond it 1 / (R_in C) overflows: R_in = 1e-300 ohm gave NaN)
+QUASI_STATIC_FRACTION = 1e-17
+
+
+def _quasi_static(t, previous, time_constant_max: float) -> bool:
+    """Is the loaded voltage along ``t`` [s] (after the ``previous`` sample, if any) its
+    quasi-static limit R_in I_SC: the longest R_in (C_T + C_p) [s] below
+    :data:`QUASI_STATIC_FRACTION` of every step (a step of zero length, an impact's
+    repeated instant, keeps the integrator; the first sample alone is its start value)."""
+    times = t if previous is None else np.r_[previous[0], t]
+    steps = np.diff(times)
+    if steps.size == 0:          # the first sample alone: its start value, no step
+        return True
+    return bool(np.min(steps) > 0.0
+                and time_constant_max < QUASI_STATIC_FRACTION * float(np.min(steps)))
+
+
 def has_read(scene) -> bool:
     """Does a run of ``scene`` write ``V_read_V`` (C_p > 0, or an ``[instrument]``)?"""
     return scene.circuit.parallel_capacitance > 0.0 or scene.instrument.given
+
+
+def as_terminal(scene, read_at_samples: bool = False) -> dict[str, str]:
+    """``{read quantity: terminal quantity}`` of the read quantities ``scene``'s reader
+    leaves as the terminal's own, row by row (their extremes are the terminal's, impacts
+    included): Q_read and I_read (read in short circuit, R_in does not touch them) without
+    a bandwidth, an aperture or a sample rate; V_read with none of these and no R_in
+    either, unless it is a circuit's voltage (``read_at_samples``: continuous at the
+    impacts, taken at its samples). The deprecated C_p alone: V_read, Q_SC / (C_T + C_p)."""
+    inst = scene.instrument
+    chain_is_identity = inst.bandwidth == 0.0 and inst.aperture == 0.0 \
+        and inst.sample_rate == 0.0
+    if inst.given and not chain_is_identity:
+        return {}
+    out = {}
+    for name in read_names(scene):
+        if name == "V_read":
+            if not read_at_samples and (not inst.given or inst.input_resistance == 0.0):
+                out[name] = "V_read"
+        else:
+            out[name] = READ_COLUMNS[name][1].rpartition("_")[0]    # Q_sc_C -> Q_sc
+    return out
 
 
 def read_names(scene) -> tuple[str, ...]:
