@@ -48,11 +48,11 @@ def _exact_first_order(t, x, tau):
 
 
 @settings(max_examples=60, deadline=None)
-@given(log_bandwidth=st.floats(-12.0, 9.0), steps=st.integers(2, 40),
+@given(log_bandwidth=st.floats(-12.0, 12.0), steps=st.integers(2, 40),
        seed=st.integers(0, 2**31 - 1))
 def test_the_first_order_filter_is_its_closed_form_at_any_bandwidth(log_bandwidth, steps,
                                                                     seed):
-    """1e-12 ... 1e9 Hz: the filtered samples of a piecewise-linear input agree with the
+    """1e-12 ... 1e12 Hz (the key's range): the filtered samples of a piecewise-linear input agree with the
     exact solution to a few ulp of the input (they lost 1e-4 of it at 1e-9 Hz)."""
     rng = np.random.default_rng(seed)
     t = np.cumsum(rng.uniform(1e-5, 1e-3, steps))
