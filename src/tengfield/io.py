@@ -34,7 +34,7 @@ import numpy as np
 
 from .files import (atomic_path, figure_file, writable_target, write_csv,  # noqa: F401
                      write_figure, write_json, write_rows)
-from .electrical import READ_COLUMN, WAVEFORM_COLUMNS, all_columns
+from .electrical import READ_COLUMN, READ_COLUMNS, WAVEFORM_COLUMNS, all_columns  # noqa: F401
 from .plotting.waveforms import run_title
 from .dynamics.output import (EXTRA_COLUMNS, MAP_COLUMNS, _trajectory_without,  # noqa: F401
                                dynamics_tables, trajectory_columns, write_contacts_csv,
@@ -50,12 +50,9 @@ VALUE_FORMAT = "%.10g"
 # ---------------------------------------------------------------------------
 # tengfield run
 def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
-    """CSV with the columns of ``WAVEFORM_COLUMNS`` (+ ``V_read_V``, the voltage read
-    through C_p, when present; + the circuit's columns present, in the registry's
-    order: :func:`tengfield.electrical.all_columns`); a streamed run's a chunk at a
-    time."""
-    read = [READ_COLUMN, "Q_read_C", "I_read_A"]     # with an instrument
-    columns = WAVEFORM_COLUMNS + [c for c in read + all_columns() if c in waveforms]
+    """CSV with the columns of :func:`waveform_columns` (those run.h5 holds too); a
+    streamed run's a chunk at a time."""
+    columns = waveform_columns(waveforms)
     formats = {c: TIME_FORMAT if i == 0 else VALUE_FORMAT for i, c in enumerate(columns)}
     if hasattr(waveforms, "chunks"):   # a streamed run (tengfield.electrical.stream)
         for k, chunk in enumerate(waveforms.chunks()):
@@ -64,6 +61,15 @@ def write_waveforms_csv(path: str | Path, waveforms: dict) -> Path:
         return Path(path)
     data = np.column_stack([waveforms[c] for c in columns])   # one dtype, as numpy.savetxt
     return write_csv(path, columns, list(data.T), formats=formats)
+
+
+def waveform_columns(waveforms) -> list[str]:
+    """The columns of a run's waveforms table, in order, for waveforms.csv and run.h5
+    alike: ``WAVEFORM_COLUMNS``, the read ones present (``V_read_V``, ``Q_read_C``,
+    ``I_read_A``: through C_p or an ``[instrument]``), the circuit's present (the
+    registry's order, :func:`tengfield.electrical.all_columns`)."""
+    read = [column for column, _ in READ_COLUMNS.values()]
+    return WAVEFORM_COLUMNS + [c for c in read + all_columns() if c in waveforms]
 
 
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
@@ -162,9 +168,9 @@ def write_run_hdf5(path: str | Path, result) -> Path:
     from . import __version__
 
     waveforms = result.waveforms
-    columns = WAVEFORM_COLUMNS + [c for c in all_columns() if c in waveforms]
+    columns = waveform_columns(waveforms)
     if hasattr(waveforms, "chunks"):   # a streamed run: written a chunk at a time
-        tables = {"waveforms": _WithoutRead(waveforms, columns)}
+        tables = {"waveforms": _Columns(waveforms, columns)}
     else:
         tables = {"waveforms": {c: waveforms[c] for c in columns}}
     tables.update(dynamics_tables(result.dynamics, result.scene))
@@ -176,7 +182,7 @@ def write_run_hdf5(path: str | Path, result) -> Path:
                   "to waveform columns are hard links"})
 
 
-class _WithoutRead:
+class _Columns:
     """The chunked columns of a streamed run that run.h5 writes (``columns``, in order)."""
 
     def __init__(self, waveforms, columns):
@@ -247,7 +253,7 @@ def write_dynamics_outputs(result, out_dir: str | Path, *, plots: bool,
 
 def _waveform_columns(result) -> list[str]:
     """The columns :func:`write_waveforms_csv` writes for ``result``."""
-    return WAVEFORM_COLUMNS + [c for c in all_columns() if c in result.waveforms]
+    return waveform_columns(result.waveforms)
 
 
 def _same_times(result) -> bool:

@@ -275,3 +275,38 @@ def test_a_streamed_run_writes_the_same_waveforms_csv(tmp_path, monkeypatch):
     text = (tmp_path / "streamed" / "waveforms.csv").read_bytes()
     assert text == (tmp_path / "whole" / "waveforms.csv").read_bytes()
     assert text.count(b"time_s") == 1 and text.count(b"\n") == len(whole.t) + 1
+
+
+@pytest.mark.parametrize("streamed", [False, True], ids=["whole", "streamed"])
+def test_run_h5_holds_the_read_columns_of_the_csv(tmp_path, monkeypatch, streamed):
+    """Issue 54 item 1: run.h5 holds the columns waveforms.csv holds, the instrument's read
+    ones included (V_read_V, Q_read_C, I_read_A were dropped; also by the streamed run.h5
+    of a long run)."""
+    import csv
+
+    from tengfield.dynamics import columns
+    from tengfield.electrical import stream
+
+    scene = fx.scene_with(run={"duration_s": 1.0, "settle_periods": 2},
+                          instrument={"capacitance_pF": 338.0, "bandwidth_hz": 300.0})
+    whole = tf.run(scene, cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    tio.write_run_outputs(whole, tmp_path / "csv", plots=False)
+    with open(tmp_path / "csv" / "waveforms.csv") as fh:
+        header = next(csv.reader(fh))
+    assert {"V_read_V", "Q_read_C", "I_read_A"} <= set(header)
+    if streamed:
+        monkeypatch.setattr(stream, "STREAM_ROWS", 100)
+        monkeypatch.setattr(stream, "CHUNK_ROWS", 3000)
+        monkeypatch.setattr(columns, "LAZY_ROWS", 100)
+    result = tf.run(scene.with_values(run={"output_format": "hdf5"}),
+                    cache_dir=tmp_path / "cache", solve=fx.plate_model_solve)
+    assert isinstance(result.waveforms, stream.StreamedWaveforms) == streamed
+    tio.write_run_outputs(result, tmp_path / "h5", plots=False)
+    tables = io_hdf5.read_tables(tmp_path / "h5" / "run.h5")
+    assert list(tables["waveforms"]) == header
+    for column in ("V_read_V", "Q_read_C", "I_read_A"):
+        np.testing.assert_allclose(tables["waveforms"][column], whole.waveforms[column],
+                                   rtol=0, atol=1e-9 * np.max(np.abs(whole.waveforms[column])))
+    with h5py.File(tmp_path / "h5" / "run.h5", "r") as f:
+        assert f["waveforms/V_read_V"].attrs["units"] == "V"
+        assert f["waveforms/Q_read_C"].attrs["units"] == "C"

@@ -43,9 +43,16 @@ def time_constant(bandwidth: float) -> float:
 
 
 class FirstOrder:
-    """τ dy/dt = x - y, integrated exactly for x linear between samples:
-    over a step h with slope s = (x1 - x0) / h,
-    y1 = x1 - s τ + (y0 - x0 + s τ) e^(-h/τ). Starts at rest on the first input
+    """τ dy/dt = x - y, integrated exactly for x linear between samples: over a step h,
+    u = h / τ,
+
+        y1 = e^(-u) y0 + u ψ(u) x0 + u (φ1(u) - ψ(u)) x1,
+
+    φ1(u) = (1 - e^(-u)) / u, ψ(u) = (1 - e^(-u) (1 + u)) / u² (the load's exponential
+    integrator, :func:`tengfield.lumped.load_response`, with its cancellation-free φ1 and
+    ψ): the same as y1 = x1 - s τ + (y0 - x0 + s τ) e^(-u) with s = (x1 - x0) / h, without
+    cancelling s τ against s τ e^(-u) (at f_c = 1e-9 Hz that form lost 1e-4 of the input).
+    A step of zero length (a jump of x) keeps y. Starts at rest on the first input
     (y = x: the instrument has been reading the device in its reference state).
     ``tau`` = 0: y = x."""
 
@@ -64,14 +71,11 @@ class FirstOrder:
         else:                               # from the previous call's last sample
             t0, x0, first = self.last
             tt, xx = np.r_[t0, t], np.r_[x0, x]
-        h = np.diff(tt)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.where(h > 0, np.diff(xx) / np.where(h > 0, h, 1.0), 0.0)
-        decay = np.exp(-h / self.tau)
-        target = xx[1:] - slope * self.tau        # the particular solution at the step's end
-        # y0 - x0 + s τ = y0 + offset; a step of zero length (a jump of x) keeps y
-        offset = np.where(h > 0, slope * self.tau - xx[:-1], -xx[1:])
-        steps = _recurrence(decay, target + offset * decay, first)
+        u = np.diff(tt) / self.tau                    # >= 0; 0: a jump of x, y kept
+        psi = lumped._psi(u)
+        weight_start = u * psi
+        weight_end = u * (lumped._phi1(u) - psi)
+        steps = _recurrence(np.exp(-u), weight_start * xx[:-1] + weight_end * xx[1:], first)
         y = np.r_[first, steps] if self.last is None else steps
         self.last = (float(t[-1]), float(x[-1]), float(y[-1]))
         return y
@@ -79,19 +83,20 @@ class FirstOrder:
 
 def _recurrence(decay, source, first: float) -> np.ndarray:
     """y_k = decay_k y_(k-1) + source_k from y_(-1) = ``first``: by SciPy's compiled
-    ``lfilter`` when the steps are equal (the run's output samples: decay the same to
-    1e-12), else a loop."""
-    if decay.size and np.max(np.abs(decay - decay[0])) <= 1e-12 * abs(decay[0]):
+    ``lfilter`` when the steps are equal (the run's output samples: the decays the same to
+    1e-12 of 1 - decay, what the step takes off y), else by the load's compiled recurrence
+    (:func:`tengfield._lumped_kernel.deficit_recurrence`). Equal to 1e-12 of the decay
+    alone was not enough: at f_c = 1e-10 Hz the decays of unequal steps differ by 1e-13,
+    as large as 1 - decay itself."""
+    if decay.size and np.max(np.abs(decay - decay[0])) <= 1e-12 * (1.0 - decay[0]):
         from scipy.signal import lfilter
         d = float(decay[0])
         out, _ = lfilter([1.0], [1.0, -d], source, zi=[d * first])
         return out
-    out = np.empty(decay.size)
-    prev = first
-    for k in range(decay.size):                  # linear recurrence, O(n)
-        prev = decay[k] * prev + source[k]
-        out[k] = prev
-    return out
+    from .._lumped_kernel import deficit_recurrence   # numba: loaded when needed
+
+    return deficit_recurrence(np.ascontiguousarray(decay, dtype=float),
+                              np.ascontiguousarray(source, dtype=float), float(first))[1:]
 
 
 class Aperture:
@@ -232,6 +237,14 @@ class Reader:
         q = np.asarray(columns["Q_sc_C"], dtype=float)
         i = np.asarray(columns["I_sc_A"], dtype=float)
         c = np.asarray(c_t, dtype=float)
+        r_in = self.instrument.input_resistance
+        if _quasi_static(t, self.previous, r_in * np.max(c + self.c_p)):
+            v = r_in * i                 # the R_in -> 0 limit, exact to double precision
+            if self.previous is None:    # the start: the open-circuit voltage, as the
+                v[0] = q[0] / (c[0] + self.c_p)     # integrator's (no charge through R_in)
+            self.previous = (float(t[-1]), float(q[-1]), float(i[-1]), float(c[-1]),
+                             float(q[-1] - (c[-1] + self.c_p) * v[-1]))
+            return v
         if self.previous is None:
             response = lumped.load_response(t, q, i, c, self.instrument.input_resistance,
                                              self.c_p)
@@ -247,9 +260,50 @@ class Reader:
         return v
 
 
+#: R_in (C_T + C_p) below this fraction of every step: the voltage is R_in I_SC (the
+#: exponential integrator's answer differs from it by this fraction, below a double's
+#: rounding; beyond it 1 / (R_in C) overflows: R_in = 1e-300 ohm gave NaN)
+QUASI_STATIC_FRACTION = 1e-17
+
+
+def _quasi_static(t, previous, time_constant_max: float) -> bool:
+    """Is the loaded voltage along ``t`` [s] (after the ``previous`` sample, if any) its
+    quasi-static limit R_in I_SC: the longest R_in (C_T + C_p) [s] below
+    :data:`QUASI_STATIC_FRACTION` of every step (a step of zero length, an impact's
+    repeated instant, keeps the integrator; the first sample alone is its start value)."""
+    times = t if previous is None else np.r_[previous[0], t]
+    steps = np.diff(times)
+    if steps.size == 0:          # the first sample alone: its start value, no step
+        return True
+    return bool(np.min(steps) > 0.0
+                and time_constant_max < QUASI_STATIC_FRACTION * float(np.min(steps)))
+
+
 def has_read(scene) -> bool:
     """Does a run of ``scene`` write ``V_read_V`` (C_p > 0, or an ``[instrument]``)?"""
     return scene.circuit.parallel_capacitance > 0.0 or scene.instrument.given
+
+
+def as_terminal(scene, read_at_samples: bool = False) -> dict[str, str]:
+    """``{read quantity: terminal quantity}`` of the read quantities ``scene``'s reader
+    leaves as the terminal's own, row by row (their extremes are the terminal's, impacts
+    included): Q_read and I_read (read in short circuit, R_in does not touch them) without
+    a bandwidth, an aperture or a sample rate; V_read with none of these and no R_in
+    either, unless it is a circuit's voltage (``read_at_samples``: continuous at the
+    impacts, taken at its samples). The deprecated C_p alone: V_read, Q_SC / (C_T + C_p)."""
+    inst = scene.instrument
+    chain_is_identity = inst.bandwidth == 0.0 and inst.aperture == 0.0 \
+        and inst.sample_rate == 0.0
+    if inst.given and not chain_is_identity:
+        return {}
+    out = {}
+    for name in read_names(scene):
+        if name == "V_read":
+            if not read_at_samples and (not inst.given or inst.input_resistance == 0.0):
+                out[name] = "V_read"
+        else:
+            out[name] = READ_COLUMNS[name][1].rpartition("_")[0]    # Q_sc_C -> Q_sc
+    return out
 
 
 def read_names(scene) -> tuple[str, ...]:

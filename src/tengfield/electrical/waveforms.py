@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from .. import lumped
-from .instrument import READ_COLUMNS, Reader, has_read, read_names
+from .instrument import READ_COLUMNS, Reader, as_terminal, has_read, read_names
 
 #: ∫ y dx by the trapezoidal rule: numpy 2's name (numpy 1 has only ``trapz``, which
 #: numpy 2 deprecates)
@@ -216,14 +216,13 @@ def peak_quantities(scene) -> dict[str, str]:
 
 def impact_names(scene, read_at_samples: bool = False) -> dict[str, str]:
     """``{peak quantity: terminal quantity}`` of the quantities whose extremes are also
-    sought just before and after every impact: the terminal's, and a read one only when it
-    is the terminal's own (an ideal instrument; not a circuit's voltage, continuous at the
-    impacts). A filtered reading is taken at its samples alone."""
+    sought just before and after every impact: the terminal's, and each read one the
+    reader leaves as the terminal's own (:func:`.instrument.as_terminal`: Q_read and
+    I_read with an input resistance alone too, which loads only the voltage; not a
+    circuit's voltage, continuous at the impacts). A filtered reading is taken at its
+    samples alone."""
     out = {name: name for name in PEAK_QUANTITIES}
-    ideal = not scene.instrument.given or scene.instrument.ideal
-    for name in read_names(scene):
-        if ideal and not (name == "V_read" and read_at_samples):
-            out[name] = {"Q_read": "Q_sc", "I_read": "I_sc"}.get(name, name)
+    out.update(as_terminal(scene, read_at_samples))
     return out
 
 
@@ -359,7 +358,8 @@ def terminal_extremes(scene, dynamics, curves, waveforms: dict | None = None, *,
     mask, _ = steady_window(t, scene)
     values = {name: [np.asarray(waveforms[column])[mask]]
               for name, column in quantities.items()}
-    at_impacts = impact_names(scene, read_at_samples)
+    # the quantities of this table only (sweep and report ask before the instrument reads)
+    at_impacts = {n: s for n, s in impact_names(scene, read_at_samples).items() if n in values}
     found = impact_values(scene, dynamics, curves, t[mask][0], t[-1], set(at_impacts.values()))
     for name, source in at_impacts.items():
         if source in found:

@@ -14,11 +14,14 @@ the circuit entry's ``fit_columns``).
 * :data:`INFIXES`: a target name's infix -> its statistic (``"pp" ->
   "peak_to_peak"``), from ``STATISTICS``;
 * :func:`compared_key`: the dotted key of the tool quantity (``peak_to_peak.V_read_V``);
-* :func:`compared`: that key, its words and unit, as fit.json writes them.
+* :func:`compared`: that key, its words and unit, as fit.json writes them;
+* :func:`model_columns`: the column of a run's waveforms table (CSV or run.h5) that holds
+  what the model compares, which a measured trace without ``[fit.columns]`` is read from.
 """
 from __future__ import annotations
 
 from ..electrical import circuit_for
+from ..electrical.instrument import as_terminal
 from ..quantities import MEASURED, STATISTICS, describe, quantity, tool_key
 
 
@@ -60,3 +63,20 @@ def compared(letter: str, statistic: str, scene, parallel_capacitance: float) ->
     name = key.rpartition(".")[2]
     return {"tool_key": key, "tool_label": describe(key, unit=False),
             "tool_unit": quantity(name).unit}
+
+
+def model_columns(scene) -> dict[str, tuple[str, bool]]:
+    """``{V|Q|I: (column, same)}``: the column of a tengfield run's waveforms (CSV or
+    run.h5) holding what the model of ``scene`` compares (:func:`compared_key` at the
+    scene's C_p: ``V_read_V``, ``Q_read_C``, ``I_read_A`` through an ``[instrument]``),
+    and whether the circuit's own column (``fit_columns``: ``V_oc_V``, ``Q_sc_C``...)
+    holds the same numbers (a quantity the instrument leaves as the terminal's,
+    :func:`tengfield.electrical.instrument.as_terminal`: Q and I through C_p alone)."""
+    entry = circuit_for(scene)
+    same = as_terminal(scene)
+    out = {}
+    for letter, (own, _) in entry.fit_columns.items():
+        column = compared_key(letter, "", scene, scene.circuit.parallel_capacitance)
+        name = column.rpartition("_")[0]
+        out[letter] = (column, column == own or same.get(name) == own.rpartition("_")[0])
+    return out

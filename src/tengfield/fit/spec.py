@@ -37,11 +37,12 @@ import numpy as np
 from ..dynamics.excitation import excitation_kind as _excitation
 from ..electrical import CIRCUITS, Circuit, circuit_for
 from ..errors import SceneError, header_described, same_name_in_file
+from ..quantities import describe
 from ..scene.recorded import (HEADER_TIME_UNITS, Export, check_magnitude, check_time_steps,
                               read_export, split_unit)
 from ..scene.schema import SURFACE_CHARGE_KEY
 from ..scene.schema import suggest as _suggest
-from .compared import INFIXES, LETTERS, MEASURED_KEYS
+from .compared import INFIXES, LETTERS, MEASURED_KEYS, model_columns
 
 #: the free parameters a fit knows: (default bounds, transform, unit, meaning)
 PARAMETERS = {
@@ -149,6 +150,9 @@ class FitSpec:
     parameters: list[Parameter] = field(default_factory=list)
     #: columns used without [fit.columns]: :func:`run_columns` of the scene's circuit
     default_columns: dict = field(default_factory=lambda: dict(RUN_COLUMNS))
+    #: {V|Q|I: (column, same)}: the run's column of what the model compares, and whether
+    #: the default column holds the same numbers (:func:`~.compared.model_columns`)
+    model_columns: dict = field(default_factory=dict)
 
 
 def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
@@ -191,6 +195,7 @@ def parse_fit_section(scene, free: list[str] | None = None) -> FitSpec:
         spec.bootstrap = _whole_number("[fit] bootstrap", raw["bootstrap"], 0, 10000,
                                        "a whole number of replicas")
     spec.default_columns = dict(run_columns(scene.circuit.kind))
+    spec.model_columns = model_columns(scene)
     spec.columns = _columns(raw.get("columns"), spec.default_columns) if "columns" in raw \
         else None
     spec.parameters = _parameters(scene, raw.get("parameters"), free)
@@ -334,6 +339,7 @@ def read_trace(path, spec: FitSpec) -> Trace:
         defaults = dict(spec.default_columns)
         if defaults.get("V", ("",))[0] == "V_oc_V" and "V_read_V" in header:
             defaults["V"] = ("V_read_V", "V")   # a run read through C_p: the model's V
+        defaults = _read_defaults(defaults, spec.model_columns, header, what)
         columns = [Column(q, c, u, None) for q, (c, u) in defaults.items() if c in header]
         if not columns:
             raise SceneError(f"{what} has none of the columns "
@@ -371,6 +377,28 @@ def read_trace(path, spec: FitSpec) -> Trace:
         check_magnitude(values[c.quantity], MAX_TRACE_VALUE[c.quantity], what,
                         f"column {c.column!r} (SI)", RUN_COLUMNS[c.quantity][1])
     return Trace(name, time, values, columns)
+
+
+def _read_defaults(defaults: dict, model: dict, header, what: str) -> dict:
+    """``defaults`` ({V|Q|I: (column, unit)}) with the column of what the model compares
+    where the file has it (``model``: :func:`~.compared.model_columns`; a run's
+    ``V_read_V``, ``Q_read_C``, ``I_read_A`` for a model read through an ``[instrument]``).
+    A file with only the terminal's own column where the reading differs from it (the
+    ideal V_OC against a voltage read through C_p: kV against ~1 V) is refused in one
+    line: ``[fit.columns]`` names a column to compare anyway."""
+    out = dict(defaults)
+    for q, (want, same) in model.items():
+        if q not in out or out[q][0] == want:
+            continue
+        column, unit = out[q]
+        if want in header:
+            out[q] = (want, unit)
+        elif column in header and not same:
+            raise SceneError(
+                f"{what} has {column} but not {want}, the {describe(want, unit=False)} the "
+                f"model compares: give a trace read by the same [instrument] (a run's "
+                f"{want}), or name the column in [fit.columns.{q}] to compare it anyway")
+    return out
 
 
 def _time_factor(spec: FitSpec, layout, column: str, what: str) -> float:
