@@ -326,6 +326,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     check_scene_argument("tengfield.design", scene)
     jobs = check_jobs_argument("tengfield.design", jobs, comm)
     spec = parse_design_section(scene, overrides)
+    check_design_combination(scene, spec)
     announce_cost(scene, spec, progress_shown(progress, comm))
     _TABLES.clear()
     space = _Space(spec)
@@ -414,6 +415,23 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
                         wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,
                         rounds=rounds)
+
+
+def check_design_combination(scene, spec) -> None:
+    """Refuse in one line, before the first solve, what no candidate can run: σ =
+    "breakdown" (or breakdown-band draws of a percentile aggregate) without the gap
+    lines of the field solver (:func:`tengfield.air_breakdown.check_gap_lines`, the
+    check ``run`` makes), instead of skipping every candidate."""
+    from ..air_breakdown import check_gap_lines, uses_breakdown_charge
+    from ..quantities import SURFACE_CHARGE_KEY
+    from ..uncertainty_study.spec import check_study_combination
+
+    if not any(OBJECTIVES[o][2] for o in spec.objectives):   # no field: no charge needed
+        return
+    if uses_breakdown_charge(scene):
+        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"')
+    if spec.percentile is not None:       # each candidate's [uncertainty] draws
+        check_study_combination(scene)
 
 
 def announce_cost(scene, spec, say: bool) -> None:

@@ -354,6 +354,23 @@ def draws_from_band(scene) -> bool:
     return isinstance(given, dict) and given.get("distribution") == BAND
 
 
+#: a breakdown-band draw as messages name it
+BAND_DRAW = f'[uncertainty.vary] "{SURFACE_CHARGE_SETTING}" = {{ distribution = "{BAND}" }}'
+
+
+def check_study_combination(scene) -> None:
+    """Refuse in one line, before the first solve, a study whose charge needs the
+    breakdown gap lines its field solver does not give (breakdown-band draws, or σ =
+    "breakdown"): :func:`tengfield.air_breakdown.check_gap_lines`, the check ``run``
+    makes (``design`` asks it too)."""
+    from ..air_breakdown import check_gap_lines, uses_breakdown_charge
+
+    if draws_from_band(scene):
+        check_gap_lines(scene, BAND_DRAW)
+    elif uses_breakdown_charge(scene):
+        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"')
+
+
 def band_sigma(band, place: float) -> float:
     """σ [µC/m², negative: PTFE] at ``place`` u in [0, 1] of ``band`` (a
     :class:`tengfield.air_breakdown.Band`): log-uniform, −lower·(upper/lower)^u."""

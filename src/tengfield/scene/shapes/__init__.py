@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from ..._registry import lookup
 from ...errors import SceneError
+from ...quantities import SURFACE_CHARGE_KEY
 from . import methods
 from .hexagonal import Hexagonal
 from .spherical_shell import SphericalShell
@@ -94,6 +95,33 @@ def check_shape_scene(scene) -> None:
         raise SceneError(f"[contact] model = '3d' is not available for shape = {dev.shape!r} "
                          "yet (the contact on the hexagonal wall is not done): use 'impact' "
                          "or 'soft'")
+
+
+def gap_lines_problem(dev, fld) -> str | None:
+    """Why a field solve of ``dev`` with ``fld`` (``[field]``) samples no breakdown gap
+    lines (None: it does): the resolved method's entry says (``"auto"`` through the
+    shape's ``field_methods``: the honeycomb's is "3d"). The one rule every user of the
+    lines asks before its first solve (a run's σ = "breakdown", ``tengfield breakdown``,
+    ``design``, ``uncertainty``'s breakdown-band draws)."""
+    try:
+        method = field_method(dev.shape, fld.method, fld.ball_offset)
+    except SceneError as exc:
+        return str(exc)
+    if methods.FIELD_METHODS[method].gap_lines and fld.ball_offset == 0.0:
+        return None
+    offered = [m for m in shape_of(dev.shape).field_methods if methods.FIELD_METHODS[m].gap_lines]
+    number = f"give [device] {SURFACE_CHARGE_KEY} as a number"
+    fix = (f'use [field] method = "{offered[0]}" with ball_offset_mm = 0, or {number}'
+           if offered else f"shape = {dev.shape!r} has 3D solves only: {number}")
+    return (f"the breakdown gap lines come from the axisymmetric field solver (the ball on "
+            f"the axis): shape = {dev.shape!r}, [field] method = {fld.method!r}, "
+            f"ball_offset_mm = {fld.ball_offset * 1e3:g} has none; {fix}")
+
+
+def has_gap_lines(dev, fld) -> bool:
+    """Whether a field solve of ``dev`` with ``fld`` samples the breakdown gap lines
+    (:func:`gap_lines_problem` is None)."""
+    return gap_lines_problem(dev, fld) is None
 
 
 def shape_field_problems(dev, fld) -> list[str]:
