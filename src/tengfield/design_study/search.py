@@ -62,10 +62,22 @@ class DesignResult:
     ranks: int = 1
     jobs: int | None = None
     rounds: list = field(default_factory=list)
+    #: the cache the candidates' surrogates went to (the best's band reads it back)
+    cache_dir: object = None
 
     @property
     def best(self) -> dict | None:
         return self.rows[self.ranking[0]] if self.ranking else None
+
+    def breakdown_band(self) -> dict | None:
+        """With σ = "breakdown": the best design's objective over its breakdown band
+        (:func:`tengfield.design_study.answer.best_breakdown_band`; None otherwise), what
+        the terminal prints and design.json's ``best_breakdown_band``; computed once."""
+        if not hasattr(self, "_breakdown_band"):
+            from .answer import best_breakdown_band
+
+            self._breakdown_band = best_breakdown_band(self, cache_dir=self.cache_dir)
+        return self._breakdown_band
 
     def best_scene(self):
         """The base scene with the best candidate's geometry (``[design]`` dropped)."""
@@ -414,7 +426,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
         bar.close()
     return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
                         wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,
-                        rounds=rounds)
+                        rounds=rounds, cache_dir=cache_dir)
 
 
 def check_design_combination(scene, spec) -> None:

@@ -173,8 +173,10 @@ def _distribution(key: str, given) -> Distribution:
     names = DISTRIBUTIONS[kind]
     for name in given:
         if name != "distribution" and name not in names:
+            takes = f"it takes {', '.join(names)}" if names else (
+                "it takes no parameters (each geometry's band gives the range)")
             raise SceneError(f"{where}: unknown parameter {name!r} of a {kind} distribution"
-                             + suggest(name, names) + f"; it takes {', '.join(names)}")
+                             + suggest(name, names) + f"; {takes}")
     missing = [n for n in names if n not in given]
     if missing:
         raise SceneError(f"{where}: a {kind} distribution needs {', '.join(names)} "
