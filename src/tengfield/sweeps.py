@@ -457,8 +457,11 @@ def vary_problem(key: str, points, loads=()) -> str | None:
     if any(e.has_load and name in e.keys for e in entries):
         return None
     kinds = sorted({s.circuit.kind for _, s in points})
-    return (f"[circuit] kind = {', '.join(map(repr, kinds))} does not report it in a sweep "
-            "row (a row holds the load's power of a kind that has a load)")
+    reported = sorted({k for e in entries if e.has_load for k in e.keys})
+    reads = (f"the rows report {', '.join(reported)}" if reported else
+             "no varied kind has a load, whose power a row reports")
+    return (f"[circuit] kind = {', '.join(map(repr, kinds))} does not report {name} in a "
+            f"sweep row ({reads})")
 
 
 def check_vary_reaches(vary: dict, points, loads=()) -> None:

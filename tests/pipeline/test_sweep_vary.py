@@ -308,11 +308,14 @@ def no_solve(*args, **kwargs):
     (SHORT, {"array.cells": [0, 4]}, (), "[array] cells are run by tengfield run"),
     (SHORT, {"run.output_format": ["csv", "hdf5"]}, (), "the format of run's tables"),
     (SHORT, {"circuit.kind": ["open", "short"]}, (), "no kind varied has a load"),
-    (SHORT, {"circuit.load_ohm": [1e6, 1e8]}, (), "kind = 'open' does not report it"),
+    (SHORT, {"circuit.load_ohm": [1e6, 1e8]}, (), "kind = 'open' does not report load_ohm"),
+    (LOADED, {"circuit.series_capacitance_pF": [10, 100]}, (),
+     "kind = 'load' does not report series_capacitance_pF in a sweep row (the rows report "
+     "load_ohm)"),
     (LOADED, {"circuit.load_ohm": [1e6, 1e8]}, [1e8], "the --load-ohm axis sets the circuit"),
     (SHORT, {"circuit.kind": ["load", "open"]}, [1e8], "the --load-ohm axis sets the circuit"),
     ('[circuit]\nkind = "rectifier"\n' + SHORT, {"circuit.storage_capacitance_uF": [1, 10]}, (),
-     "kind = 'rectifier' does not report it"),
+     "kind = 'rectifier' does not report storage_capacitance_uF"),
     (SHORT, {"breakdown.gamma": [0.01, 0.1]}, (), 'only with [device] surface_charge_uC_per_m2'
                                                   ' = "breakdown"'),
 ])
