@@ -43,16 +43,17 @@ def scaled_table(table, factor: float):
     return scaled_charges(table, factor)
 
 
-def check_gap_lines(scene, needed_by: str) -> None:
+def check_gap_lines(scene, needed_by: str, alternative: str = "") -> None:
     """Refuse, in one line before any work, a scene whose field solves give no breakdown
     gap lines when ``needed_by`` (what asks: "the breakdown check", σ = "breakdown", a
     breakdown-band draw) needs them: the one check of ``run`` (the scene's field
     problems), ``breakdown``, ``design`` and ``uncertainty``
-    (:func:`tengfield.scene.shapes.gap_lines_problem`)."""
+    (:func:`tengfield.scene.shapes.gap_lines_problem`; ``alternative``: what else the
+    asker can do, said after the fix)."""
     from ..errors import SceneError
     from ..scene.shapes import gap_lines_problem
 
-    problem = gap_lines_problem(scene.device, scene.field)   # a refused [field]: its line
+    problem = gap_lines_problem(scene.device, scene.field, alternative)  # a refused [field]: its line
     if problem is not None:
         raise SceneError(f"{needed_by}: {problem}")
 

@@ -436,12 +436,13 @@ def check_design_combination(scene, spec) -> None:
     check ``run`` makes), instead of skipping every candidate."""
     from ..air_breakdown import check_gap_lines, uses_breakdown_charge
     from ..quantities import SURFACE_CHARGE_KEY
+    from ..scene.shapes import NUMERIC_SIGMA
     from ..uncertainty_study.spec import check_study_combination
 
     if not any(OBJECTIVES[o][2] for o in spec.objectives):   # no field: no charge needed
         return
     if uses_breakdown_charge(scene):
-        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"')
+        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"', NUMERIC_SIGMA)
     if spec.percentile is not None:       # each candidate's [uncertainty] draws
         check_study_combination(scene)
 

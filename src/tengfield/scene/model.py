@@ -30,7 +30,7 @@ from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_ar
                      check_steady_window, check_vibration_work, check_work, field_problems,
                      show_number)
 from .recorded import read_psd, read_recorded
-from .shapes import (check_shape_scene, gap_lines_problem, shape_field_inputs,
+from .shapes import (NUMERIC_SIGMA, check_shape_scene, gap_lines_problem, shape_field_inputs,
                      shape_field_problems, shape_of)
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
                      SCHEMA, check_section, convert, harmonic_components, suggest,
@@ -638,7 +638,7 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
     fld = Field(**fvals)
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
     problems += shape_field_problems(dev, fld)
-    lines_problem = gap_lines_problem(dev, fld)
+    lines_problem = gap_lines_problem(dev, fld, NUMERIC_SIGMA)
     if (isinstance(data.get("device"), dict)
             and data["device"].get(SURFACE_CHARGE_KEY) == "breakdown" and lines_problem):
         problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown": {lines_problem}')

@@ -366,11 +366,12 @@ def check_study_combination(scene) -> None:
     "breakdown"): :func:`tengfield.air_breakdown.check_gap_lines`, the check ``run``
     makes (``design`` asks it too)."""
     from ..air_breakdown import check_gap_lines, uses_breakdown_charge
+    from ..scene.shapes import NUMERIC_SIGMA
 
     if draws_from_band(scene):
-        check_gap_lines(scene, BAND_DRAW)
+        check_gap_lines(scene, BAND_DRAW, "draw sigma from another distribution")
     elif uses_breakdown_charge(scene):
-        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"')
+        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"', NUMERIC_SIGMA)
 
 
 def band_sigma(band, place: float) -> float:
