@@ -626,9 +626,12 @@ class SweepResult(SweepRows):
     varied keys lead each row) with ``scene``, ``vary`` (the varied keys), ``summary``,
     :meth:`plot` and :meth:`write` (what ``tengfield sweep`` writes)."""
 
-    def __init__(self, rows, *, scene=None, vary=(), surrogates=None):
+    def __init__(self, rows, *, scene=None, vary=(), surrogates=None, loads=None):
         super().__init__(rows)
         self.scene, self.vary, self.surrogates = scene, list(vary), dict(surrogates or {})
+        #: the --load-ohm axis [ohm] (empty: none, a row's load is its point's own
+        #: circuit's, a function of the varied keys; None: not said)
+        self.loads = None if loads is None else tuple(loads)
 
     @property
     def columns(self) -> list[str]:
@@ -732,7 +735,7 @@ def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes
     finally:
         bar.close()
     return SweepResult((row for rows in results for row in rows), scene=scene,
-                       vary=list(vary), surrogates=counts)
+                       vary=list(vary), surrogates=counts, loads=loads)
 
 
 def _file_axis(values, scale: float, name: str, log: bool = False):

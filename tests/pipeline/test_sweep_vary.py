@@ -278,6 +278,12 @@ def test_a_varied_load_reaches_each_row_as_the_run_at_that_load(tmp_path):
             alone.summary["load"]["power_density_W_per_m3"], rel=1e-12)
         assert r["Q_sc_pp_C"] == pytest.approx(
             alone.summary["peak_to_peak"]["Q_sc_C"], rel=1e-12)
+    # the figure: each row's load is its point's (no --load-ohm axis), one line per panel
+    fig = rows.plot("circuit.load_ohm")
+    assert len(fig.axes) == 4 and fig.axes[3].get_ylabel() == "mean power P [µW]"
+    for ax in fig.axes:
+        assert len(ax.lines) == 1 and len(ax.lines[0].get_xdata()) == 2
+    np.testing.assert_allclose(fig.axes[3].lines[0].get_ydata(), np.array(power) * 1e6)
 
 
 def test_a_varied_kind_reaches_the_rows_and_series_rc_is_its_own_circuit(tmp_path):
