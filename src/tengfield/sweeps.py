@@ -16,7 +16,7 @@ import numpy as np
 
 from . import electrical
 from ._json import regime_dict
-from .quantities import TERMINAL, column_name
+from .quantities import SURFACE_CHARGE_KEY, TERMINAL, column_name
 from .files import figure_file
 
 #: the terminal statistics of a sweep row: (column, statistic, short name), names from
@@ -400,6 +400,82 @@ def point_label(values: dict) -> str:
     return ", ".join(f"{k} = {text(v)}" for k, v in values.items())
 
 
+#: sections no sweep row reads (a --vary of their keys would change nothing): why
+NOT_READ = {"fit": "[fit] is tengfield fit's (a sweep fits nothing)",
+            "design": "[design] is tengfield design's (a sweep searches nothing)",
+            "uncertainty": "[uncertainty] is tengfield uncertainty's (a sweep draws nothing)",
+            "reference": "[reference] holds measured values run compares with (a sweep row "
+                         "has no comparison)",
+            "array": "[array] cells are run by tengfield run (a sweep point is one cell; "
+                     "[device] cells scales it)"}
+#: keys of a read section that no sweep row reads: why
+KEYS_NOT_READ = {"run.realisations": "a sweep point is one realisation",
+                 "run.output_format": "it is the format of run's tables (sweep writes "
+                                      "sweep.csv)"}
+#: [circuit] keys every row reads: the reference state, the instrument's capacitance
+CIRCUIT_READ = ("reference", "parallel_capacitance_pF")
+#: what a --vary can reach, said with each refusal
+VARIABLE = ("vary keys of [device], [excitation], [contact], [initial], [run], [field], "
+            "[instrument], [breakdown] (with sigma = \"breakdown\"), [circuit] reference, or "
+            "the load's keys with a [circuit] kind that has a load ({kinds}) and no --load-ohm")
+
+
+def _loaded_kinds() -> list[str]:
+    from .electrical import CIRCUITS
+
+    return [name for name, entry in CIRCUITS.items() if entry.has_load]
+
+
+def vary_problem(key: str, points, loads=()) -> str | None:
+    """Why a ``--vary`` of ``key`` reaches no row of the sweep of ``points`` (``[(values,
+    point scene)]``) with ``loads`` (None: it does, each point's scene carries it to the
+    outputs). A row holds the terminal outputs of each point's dynamics and field, and
+    the mean power of its circuit's load (a ``--load-ohm`` axis: the R ∥ C_p load at each
+    of those loads, whatever the kind)."""
+    from .air_breakdown import uses_breakdown_charge
+    from .electrical import circuit_for
+
+    section, name = key.split(".", 1)
+    if section in NOT_READ:
+        return NOT_READ[section]
+    if key in KEYS_NOT_READ:
+        return KEYS_NOT_READ[key]
+    if section == "breakdown" and not any(uses_breakdown_charge(s) for _, s in points):
+        return ("[breakdown] sets the air-breakdown limit, which a sweep row uses only with "
+                f"[device] {SURFACE_CHARGE_KEY} = \"breakdown\"")
+    if section != "circuit" or name in CIRCUIT_READ:
+        return None
+    if len(loads):
+        return ("the --load-ohm axis sets the circuit of every row (the R || C_p load at "
+                "each load), so [circuit] " + name + " changes nothing; drop --load-ohm")
+    entries = [circuit_for(s) for _, s in points]
+    if name == "kind":
+        if any(e.has_load for e in entries):
+            return None
+        return ("no kind varied has a load, and a row holds the terminal outputs (the "
+                "same for every kind) and the load's power")
+    if any(e.has_load and name in e.keys for e in entries):
+        return None
+    kinds = sorted({s.circuit.kind for _, s in points})
+    reported = sorted({k for e in entries if e.has_load for k in e.keys})
+    reads = (f"the rows report {', '.join(reported)}" if reported else
+             "no varied kind has a load, whose power a row reports")
+    return (f"[circuit] kind = {', '.join(map(repr, kinds))} does not report {name} in a "
+            f"sweep row ({reads})")
+
+
+def check_vary_reaches(vary: dict, points, loads=()) -> None:
+    """Refuse, in one line before any work, a varied key that reaches no row
+    (:func:`vary_problem`): naming the key, why, and what can be varied."""
+    from .errors import SceneError
+
+    for key in vary:
+        problem = vary_problem(key, points, loads)
+        if problem is not None:
+            raise SceneError(f"--vary {key}: {problem}; "
+                             + VARIABLE.format(kinds=", ".join(map(repr, _loaded_kinds()))))
+
+
 def vary_points(scene, vary: dict, frequencies=None, amplitudes=None) -> list[tuple[dict, object]]:
     """``[(values, point scene)]`` over the product of ``vary`` ({``"section.key"``:
     values in file units}; the first key outermost), each scene built from ``scene``
@@ -494,6 +570,33 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
     return out, counts
 
 
+def own_load_point(scene, table, frequency=None, amplitude=None) -> list[dict]:
+    """The row of a varied point whose ``[circuit]`` has a load and no ``--load-ohm``
+    axis: its terminal outputs, its own ``load_ohm`` and the mean power and power density
+    of its circuit (``series-rc``'s R + C_s too) from the stage ``tengfield run`` uses
+    (:func:`tengfield.pipeline.electrical_stage`), so the row is that run's summary.
+    ``frequency`` [Hz], ``amplitude`` [m] None: the point's own excitation."""
+    from .pipeline import electrical_stage
+    from .surrogate import TerminalCurves
+
+    point = scene if frequency is None and amplitude is None else \
+        point_scene(scene, frequency, amplitude)
+    dynamics = _default_simulate()(point)
+    stage = electrical_stage(point, dynamics, TerminalCurves(table, point.circuit.reference),
+                             table)
+    regime = regime_dict(dynamics.regime) or {}
+    exc = point.excitation
+    row = {"frequency_hz": float(exc.frequency if frequency is None else frequency),
+           "amplitude_mm": float(exc.amplitude if amplitude is None else amplitude) * 1e3,
+           "regime": regime.get("regime", ""), "period": regime.get("period", 0)}
+    for column, stat, name in TERMINAL_COLUMNS:
+        row[column] = getattr(stage, stat).get(name)
+    load = stage.summary.get("load") or {}
+    row.update(load_ohm=float(point.circuit.load), P_mean_W=load.get("mean_power_W"),
+               power_density_W_per_m3=load.get("power_density_W_per_m3"))
+    return [row]
+
+
 def _vary_task(args):
     """One point of a varied sweep: its rows, each led by the varied values; a one-line
     error (a TengfieldError) names the varied values of the point it happened at."""
@@ -501,7 +604,9 @@ def _vary_task(args):
 
     values, scene, table, frequency, amplitude, loads = args
     try:
-        if frequency is None and amplitude is None:
+        if values and not len(loads) and electrical.circuit_for(scene).has_load:
+            rows = own_load_point(scene, table, frequency, amplitude)
+        elif frequency is None and amplitude is None:
             rows = sweep_point(scene, table, None, None, loads)
         else:
             rows = _sweep_task((scene, table, frequency, amplitude, loads))
@@ -521,9 +626,12 @@ class SweepResult(SweepRows):
     varied keys lead each row) with ``scene``, ``vary`` (the varied keys), ``summary``,
     :meth:`plot` and :meth:`write` (what ``tengfield sweep`` writes)."""
 
-    def __init__(self, rows, *, scene=None, vary=(), surrogates=None):
+    def __init__(self, rows, *, scene=None, vary=(), surrogates=None, loads=None):
         super().__init__(rows)
         self.scene, self.vary, self.surrogates = scene, list(vary), dict(surrogates or {})
+        #: the --load-ohm axis [ohm] (empty: none, a row's load is its point's own
+        #: circuit's, a function of the varied keys; None: not said)
+        self.loads = None if loads is None else tuple(loads)
 
     @property
     def columns(self) -> list[str]:
@@ -607,6 +715,7 @@ def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes
     loads = tuple(float(x) for x in loads)
     if vary:
         points = vary_points(scene, vary, freqs, amps)
+        check_vary_reaches(vary, points, loads)
     else:
         check_grid(scene, _axis(scene, freqs, "frequency"), _axis(scene, amps, "amplitude"))
         points = [({}, scene)]
@@ -626,7 +735,7 @@ def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes
     finally:
         bar.close()
     return SweepResult((row for rows in results for row in rows), scene=scene,
-                       vary=list(vary), surrogates=counts)
+                       vary=list(vary), surrogates=counts, loads=loads)
 
 
 def _file_axis(values, scale: float, name: str, log: bool = False):

@@ -148,6 +148,9 @@ def test_scene_gamma_outside_the_range_widens_it():
                                 "grounded-lower", triangle(2e-3), (1e-4, 0.1), bandmod.Seeds())
     assert band.gamma_lower == 0.5
     assert band.lower <= band.estimate <= band.upper
+    # the range said (terminal, breakdown.json) is the one the edges were taken over
+    assert band.gamma_range == (1e-4, 0.5) and band.to_json()["gamma_range"] == [1e-4, 0.5]
+    assert "gamma in [0.0001, 0.5]" in bandmod.gamma_line(band)
 
 
 def test_trajectory_block_at_the_scene_sigma():
@@ -204,7 +207,8 @@ def test_breakdown_keys_of_the_band(tmp_path):
     assert bandmod.Seeds.from_scene(scene).ion_density == pytest.approx(1e8)
 
 
-@pytest.mark.parametrize("kind, linear", [("open", True), ("rectifier", False)])
+@pytest.mark.parametrize("kind, linear", [("open", True), ("load", True), ("series-rc", True),
+                                          ("rectifier", False)])
 def test_a_runs_band_block_and_which_circuits_scale(kind, linear):
     """band_summary on the planar lines and a prescribed trajectory (plate_model's
     FakeDynamics): the band, the trajectory at the run's σ and, for σ = "breakdown", the
@@ -230,5 +234,6 @@ def test_a_runs_band_block_and_which_circuits_scale(kind, linear):
                                            (result.sigma_max * 1e6), rel=1e-12)
     else:
         assert block["outputs"]["available"] is False
+        assert "diodes" not in block["outputs"]["reason"]   # the entry says, not a name
     # a scene sigma that is not "breakdown": no outputs' band
     assert "outputs" not in bandmod.band_summary(summary, at, at, result, FakeDynamics(at))

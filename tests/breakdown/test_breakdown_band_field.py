@@ -55,12 +55,17 @@ def test_edges_are_ordered_for_every_cell(make, cache):
 
 
 @pytest.mark.parametrize("circuit", [{"parallel_capacitance_pF": 338.0},
-                                     {"kind": "load", "load_ohm": 1e8}], ids=["C_p", "load"])
+                                     {"kind": "load", "load_ohm": 1e8},
+                                     {"kind": "series-rc", "load_ohm": 1e8,
+                                      "series_capacitance_pF": 100.0}],
+                         ids=["C_p", "load", "series-rc"])
 def test_breakdown_band_equals_the_runs_at_each_edge(circuit, cache):
     scene = tube(circuit=circuit).with_values(device={"surface_charge_uC_per_m2": "breakdown"})
     summary = run(scene, cache_dir=cache).summary
     outputs = summary["breakdown_band"]
     assert "peak_to_peak.Q_sc_C" in outputs and "peak.I_sc_A" in outputs
+    if circuit.get("kind") in ("load", "series-rc"):     # the load's power, ∝ sigma^2
+        assert "load.mean_power_W" in outputs
     edges = summary["breakdown"]["band"]
     assert edges["lower_uC_per_m2"] <= edges["estimate_uC_per_m2"] <= edges["upper_uC_per_m2"]
     path = summary["breakdown"]["trajectory"]

@@ -33,9 +33,13 @@ def test_the_best_design_reports_its_objective_over_the_band(tmp_path):
         assert band[edge] == pytest.approx(
             row["objective"] * edges[edge] / (limit.sigma_max * 1e6), rel=1e-9)
     assert band["lower"] <= row["objective"] <= band["upper"]
+    # design.json holds what the terminal prints (docs/design.md)
+    result.cache_dir = tmp_path
+    assert result.summary["best_breakdown_band"] == band
     line = breakdown_band_lines(result, band)[0]
     assert line.startswith("  charge over the breakdown band (lower / estimate / upper): ")
     # not asked for: another sigma
     plain = DesignResult(scene=default_scene().with_values(design=scene.raw["design"]),
                          spec=spec, rows=result.rows, ranking=[0])
     assert best_breakdown_band(plain, cache_dir=tmp_path) is None
+    assert plain.summary["best_breakdown_band"] is None

@@ -176,7 +176,7 @@ def test_nothing_to_vary_is_refused():
 def test_figure_per_key_is_labelled_in_words_and_units(tmp_path):
     rows = tf.sweep(short_scene(), vary={"device.surface_charge_uC_per_m2": [-10, -20],
                                          "circuit.kind": ["load", "open"]},
-                    load_ohm=[1e8], cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
+                    cache_dir=tmp_path, solve=fx.plate_model_solve, jobs=1)
     fig = rows.plot("device.surface_charge_uC_per_m2")
     labels = [ax.get_xlabel() for ax in fig.axes]
     assert labels and all(label == "[device] σ [µC/m²]" for label in labels)
@@ -253,3 +253,85 @@ def test_vary_that_is_not_a_dict_is_a_type_error_naming_it():
     with pytest.raises(TypeError, match=r"sweep\(vary='device.stroke_mm=1:5:9'\): expected a "
                                         r"dict"):
         tf.sweep(short_scene(), vary="device.stroke_mm=1:5:9")
+
+
+# ---------------------------------------------------------------------------
+# issue 54.4: a varied key takes effect (reaches the rows) or is refused before any work
+LOADED = '[circuit]\nkind = "load"\n' + SHORT
+
+
+def test_a_varied_load_reaches_each_row_as_the_run_at_that_load(tmp_path):
+    """The README's ``--vary circuit.load_ohm=1e6,1e8 --set circuit.kind=load``: each row
+    has its own load and the mean power ``tengfield run`` reports at that load."""
+    from tengfield.pipeline import run
+
+    scene = parse_scene(LOADED)
+    cached_plate_tables([scene], tmp_path)
+    rows = tf.sweep(scene, vary={"circuit.load_ohm": [1e6, 1e8]}, cache_dir=tmp_path, jobs=1)
+    assert [r["load_ohm"] for r in rows] == [1e6, 1e8]
+    power = [r["P_mean_W"] for r in rows]
+    assert power[0] > 0 and power[1] > 10 * power[0]
+    for r in rows:
+        alone = run(scene.with_values(circuit={"load_ohm": r["load_ohm"]}), cache_dir=tmp_path)
+        assert r["P_mean_W"] == pytest.approx(alone.summary["load"]["mean_power_W"], rel=1e-12)
+        assert r["power_density_W_per_m3"] == pytest.approx(
+            alone.summary["load"]["power_density_W_per_m3"], rel=1e-12)
+        assert r["Q_sc_pp_C"] == pytest.approx(
+            alone.summary["peak_to_peak"]["Q_sc_C"], rel=1e-12)
+    # the figure: each row's load is its point's (no --load-ohm axis), one line per panel
+    fig = rows.plot("circuit.load_ohm")
+    assert len(fig.axes) == 4 and fig.axes[3].get_ylabel() == "mean power P [µW]"
+    for ax in fig.axes:
+        assert len(ax.lines) == 1 and len(ax.lines[0].get_xdata()) == 2
+    np.testing.assert_allclose(fig.axes[3].lines[0].get_ydata(), np.array(power) * 1e6)
+
+
+def test_a_varied_kind_reaches_the_rows_and_series_rc_is_its_own_circuit(tmp_path):
+    scene = short_scene()
+    cached_plate_tables([scene], tmp_path)
+    rows = tf.sweep(scene, vary={"circuit.kind": ["load", "open", "series-rc"]},
+                    cache_dir=tmp_path, jobs=1)
+    load, open_, series = rows
+    assert load["P_mean_W"] > 0 and open_["P_mean_W"] is None and open_["load_ohm"] is None
+    # R + C_s (100 pF) is not the R || C_p load: another power at the same R
+    assert series["P_mean_W"] > 0 and series["P_mean_W"] != pytest.approx(load["P_mean_W"])
+    assert load["Q_sc_pp_C"] == open_["Q_sc_pp_C"] == series["Q_sc_pp_C"]
+    capacitors = tf.sweep(parse_scene('[circuit]\nkind = "series-rc"\n' + SHORT),
+                          vary={"circuit.series_capacitance_pF": [10.0, 1000.0]},
+                          cache_dir=tmp_path, jobs=1)
+    assert capacitors[0]["P_mean_W"] != pytest.approx(capacitors[1]["P_mean_W"], rel=1e-3)
+
+
+def no_solve(*args, **kwargs):
+    raise AssertionError("a field solve ran before the varied keys were checked")
+
+
+@pytest.mark.parametrize("scene_text, vary, loads, expected", [
+    (SHORT, {"fit.free": ["a", "b"]}, (), "[fit] is tengfield fit's"),
+    (SHORT, {"design.candidates": [4, 8]}, (), "[design] is tengfield design's"),
+    (SHORT, {"uncertainty.vary.x": [1, 2]}, (), "[uncertainty] is tengfield uncertainty's"),
+    (SHORT, {"reference.V_pp_V": [1.0, 2.0]}, (), "[reference] holds measured values"),
+    (SHORT, {"array.cells": [0, 4]}, (), "[array] cells are run by tengfield run"),
+    (SHORT, {"run.output_format": ["csv", "hdf5"]}, (), "the format of run's tables"),
+    (SHORT, {"circuit.kind": ["open", "short"]}, (), "no kind varied has a load"),
+    (SHORT, {"circuit.load_ohm": [1e6, 1e8]}, (), "kind = 'open' does not report load_ohm"),
+    (LOADED, {"circuit.series_capacitance_pF": [10, 100]}, (),
+     "kind = 'load' does not report series_capacitance_pF in a sweep row (the rows report "
+     "load_ohm)"),
+    (LOADED, {"circuit.load_ohm": [1e6, 1e8]}, [1e8], "the --load-ohm axis sets the circuit"),
+    (SHORT, {"circuit.kind": ["load", "open"]}, [1e8], "the --load-ohm axis sets the circuit"),
+    ('[circuit]\nkind = "rectifier"\n' + SHORT, {"circuit.storage_capacitance_uF": [1, 10]}, (),
+     "kind = 'rectifier' does not report storage_capacitance_uF"),
+    (SHORT, {"breakdown.gamma": [0.01, 0.1]}, (), 'only with [device] surface_charge_uC_per_m2'
+                                                  ' = "breakdown"'),
+])
+def test_a_key_that_reaches_no_row_is_refused_in_one_line_before_any_work(
+        tmp_path, scene_text, vary, loads, expected):
+    with pytest.raises(SceneError) as err:
+        tf.sweep(parse_scene(scene_text), vary=vary, load_ohm=loads, cache_dir=tmp_path,
+                 solve=no_solve, jobs=1)
+    text = str(err.value)
+    key = next(iter(vary))
+    assert text.startswith(f"--vary {key}: ") and expected in text, text
+    assert "vary keys of [device], [excitation]" in text and "\n" not in text
+    assert not any(tmp_path.iterdir())

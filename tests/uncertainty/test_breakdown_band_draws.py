@@ -34,8 +34,10 @@ def test_band_draws_are_for_sigma_only_and_take_no_parameters(tmp_path):
     with pytest.raises(SceneError, match="is for 'device.surface_charge_uC_per_m2' only"):
         uncertainty_spec(scene_file(tmp_path, vary='"contact.restitution" = { distribution = '
                                                    '"breakdown-band" }'))
-    with pytest.raises(SceneError, match="unknown parameter 'low'"):
+    with pytest.raises(SceneError, match="unknown parameter 'low'") as err:
         uncertainty_spec(scene_file(tmp_path, vary=BAND.replace("}", ", low = 1 }")))
+    assert str(err.value).endswith("; it takes no parameters (each geometry's band gives the "
+                                   "range)"), str(err.value)
 
 
 @pytest.mark.slow

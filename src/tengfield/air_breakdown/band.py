@@ -50,8 +50,6 @@ REFINE = 4
 MAX_SAMPLES = 2**15
 #: the output quantities a band is given for, and how they scale with σ
 LINEAR_QUANTITIES = ("V_oc_V", "Q_sc_C", "I_sc_A", "V_read_V")
-#: circuits whose outputs are linear in σ (a rectifier's diodes are not)
-LINEAR_CIRCUITS = ("open", "short", "load")
 #: volume ionisation S_v [1/(m^3 s)] and small ions n_ion [1/m^3] (the scene's defaults)
 DEFAULT_SEED_RATE = 10.0e6
 DEFAULT_ION_DENSITY = 500.0e6
@@ -317,7 +315,10 @@ def compute_band(lines: Lines, paschen: Paschen, states, reference: str,
         volume = track.over_stressed_volume(estimate * (1 + 1e-9))
         i = int(np.argmax(volume)) if np.any(volume > 0) else int(np.argmax(track.ratio(1.0)))
         gap = float(track.smaller_gap[i])
-    return Band(lower=lower, estimate=estimate, upper=upper, gamma_range=tuple(gamma_range),
+    # the range the edges were taken over: [breakdown] gamma_range widened to hold the
+    # scene's gamma (a gamma = 0.5 outside 1e-4 ... 0.1 is an edge's own gamma)
+    return Band(lower=lower, estimate=estimate, upper=upper,
+                gamma_range=(gammas[0], gammas[-1]),
                 gamma=paschen.gamma, gamma_lower=gamma_lower, gamma_upper=gamma_upper,
                 seeds=seeds, lower_position=static[gamma_lower].binding.position,
                 lower_gap=static[gamma_lower].binding.gap, upper_position=z_wide,
@@ -417,10 +418,12 @@ def band_summary(summary: dict, scene, given, result, dynamics) -> dict:
     sigma = scene.device.surface_charge
     out = {"band": band.to_json(), "trajectory": trajectory_block(band, sigma)}
     if uses_breakdown_charge(given):
-        linear = scene.circuit.kind in LINEAR_CIRCUITS
+        from ..electrical import circuit_for
+
+        linear = circuit_for(scene).linear_in_charge     # the entry says, not its name
         out["outputs"] = output_band(summary, band, sigma, linear)
         if not linear:
             out["outputs"] = {"available": False,
                               "reason": f"[circuit] kind = {scene.circuit.kind!r} is not "
-                                        "linear in sigma (its diodes): run at each edge's sigma"}
+                                        "linear in sigma: run at each edge's sigma"}
     return out

@@ -43,6 +43,21 @@ def scaled_table(table, factor: float):
     return scaled_charges(table, factor)
 
 
+def check_gap_lines(scene, needed_by: str, alternative: str = "") -> None:
+    """Refuse, in one line before any work, a scene whose field solves give no breakdown
+    gap lines when ``needed_by`` (what asks: "the breakdown check", σ = "breakdown", a
+    breakdown-band draw) needs them: the one check of ``run`` (the scene's field
+    problems), ``breakdown``, ``design`` and ``uncertainty``
+    (:func:`tengfield.scene.shapes.gap_lines_problem`; ``alternative``: what else the
+    asker can do, said after the fix)."""
+    from ..errors import SceneError
+    from ..scene.shapes import gap_lines_problem
+
+    problem = gap_lines_problem(scene.device, scene.field, alternative)  # a refused [field]: its line
+    if problem is not None:
+        raise SceneError(f"{needed_by}: {problem}")
+
+
 def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool = False,
                            command_line: str = "", write: bool = True, solve=None):
     """The scene's surrogate (:func:`tengfield.surrogate.obtain_table`, cached) with its
@@ -54,12 +69,8 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
 
     from ..surrogate import obtain_table, precompute, store_in_cache
 
-    if solve is None and not scene.field.has_gap_lines:
-        from ..errors import TengfieldError   # refused before minutes of 3D solves
-        raise TengfieldError(
-            f"the breakdown check needs the gap lines of the axisymmetric field solver (the "
-            f"ball on the axis): [field] method = {scene.field.method!r}, ball_offset_mm = "
-            f"{scene.field.ball_offset * 1e3:g} has none; use method = \"axisymmetric\"")
+    if solve is None:
+        check_gap_lines(scene, "the breakdown check")   # before minutes of 3D solves
     if scene.device.surface_charge == 0.0:
         # the per-sigma gap voltages need the induced-charge fractions q / q_ball, which
         # an uncharged ball does not give: its table is the stand-in sigma's (everything
@@ -68,7 +79,7 @@ def obtain_breakdown_table(scene, *, cache_dir=None, comm=None, progress: bool =
         scene = solved_scene(scene)
     table, outcome = obtain_table(scene, cache_dir=cache_dir, comm=comm, solve=solve,
                                   progress=progress, command_line=command_line, write=write)
-    if table.line_potential is None and solve is None:   # has_gap_lines (above)
+    if table.line_potential is None and solve is None:   # check_gap_lines (above)
         start = time.perf_counter()
         if comm is None or comm.rank == 0:
             warnings.warn(f"cached surrogate {outcome.path} has no breakdown lines, recomputing",

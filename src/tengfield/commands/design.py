@@ -74,9 +74,8 @@ def _run(args) -> int:
           f"infeasible, {counts['skipped']} skipped) in {result.wall_time:.1f} s on "
           f"{result.ranks} rank(s)", file=sys.stderr)
     print("\n".join(answer_lines(result)))
-    from ..design_study.answer import best_breakdown_band, breakdown_band_lines   # issue #38
-    for line in breakdown_band_lines(result, best_breakdown_band(result,
-                                                                 cache_dir=args.cache_dir)):
+    from ..design_study.answer import breakdown_band_lines   # issue #38
+    for line in breakdown_band_lines(result, result.breakdown_band()):
         print(line)
     sys.stdout.flush()
     from ..design_study.answer import design_warnings

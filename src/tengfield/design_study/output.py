@@ -150,6 +150,7 @@ def design_summary(result) -> dict:
                          for k, side, b in on_bounds(result, best)]},
         "runner_up": answer["runner_up"],
         "best_toml_band_point": answer.get("best_toml_band_point"),
+        "best_breakdown_band": result.breakdown_band(),
         "warnings": answer["warnings"],
         "confidence": result.confidence(),
         "error_bar_rule": "objective x factor x (largest field error estimate + surrogate "

@@ -62,10 +62,22 @@ class DesignResult:
     ranks: int = 1
     jobs: int | None = None
     rounds: list = field(default_factory=list)
+    #: the cache the candidates' surrogates went to (the best's band reads it back)
+    cache_dir: object = None
 
     @property
     def best(self) -> dict | None:
         return self.rows[self.ranking[0]] if self.ranking else None
+
+    def breakdown_band(self) -> dict | None:
+        """With σ = "breakdown": the best design's objective over its breakdown band
+        (:func:`tengfield.design_study.answer.best_breakdown_band`; None otherwise), what
+        the terminal prints and design.json's ``best_breakdown_band``; computed once."""
+        if not hasattr(self, "_breakdown_band"):
+            from .answer import best_breakdown_band
+
+            self._breakdown_band = best_breakdown_band(self, cache_dir=self.cache_dir)
+        return self._breakdown_band
 
     def best_scene(self):
         """The base scene with the best candidate's geometry (``[design]`` dropped)."""
@@ -326,6 +338,7 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     check_scene_argument("tengfield.design", scene)
     jobs = check_jobs_argument("tengfield.design", jobs, comm)
     spec = parse_design_section(scene, overrides)
+    check_design_combination(scene, spec)
     announce_cost(scene, spec, progress_shown(progress, comm))
     _TABLES.clear()
     space = _Space(spec)
@@ -413,7 +426,25 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
         bar.close()
     return DesignResult(scene=scene, spec=spec, rows=rows, ranking=_ranking(rows),
                         wall_time=time.perf_counter() - start, ranks=size_of(comm), jobs=jobs,
-                        rounds=rounds)
+                        rounds=rounds, cache_dir=cache_dir)
+
+
+def check_design_combination(scene, spec) -> None:
+    """Refuse in one line, before the first solve, what no candidate can run: σ =
+    "breakdown" (or breakdown-band draws of a percentile aggregate) without the gap
+    lines of the field solver (:func:`tengfield.air_breakdown.check_gap_lines`, the
+    check ``run`` makes), instead of skipping every candidate."""
+    from ..air_breakdown import check_gap_lines, uses_breakdown_charge
+    from ..quantities import SURFACE_CHARGE_KEY
+    from ..scene.shapes import NUMERIC_SIGMA
+    from ..uncertainty_study.spec import check_study_combination
+
+    if not any(OBJECTIVES[o][2] for o in spec.objectives):   # no field: no charge needed
+        return
+    if uses_breakdown_charge(scene):
+        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"', NUMERIC_SIGMA)
+    if spec.percentile is not None:       # each candidate's [uncertainty] draws
+        check_study_combination(scene)
 
 
 def announce_cost(scene, spec, say: bool) -> None:

@@ -46,13 +46,16 @@ def vary_figure(result, key: str):
     from .design import key_label
 
     rows = list(result)
-    loads = sorted({r["load_ohm"] for r in rows if r.get("load_ohm") is not None})
+    # no --load-ohm axis: a row's load is its point's own circuit's (a varied key), no axis
+    own = getattr(result, "loads", None) == ()
+    loads = [] if own else sorted({r["load_ohm"] for r in rows if r.get("load_ohm") is not None})
     others = [k for k in result.vary if k != key] + ["frequency_hz", "amplitude_mm"]
-    first = [r for r in rows if r.get("load_ohm") == (loads[0] if loads else None)]
+    first = rows if own else [r for r in rows
+                              if r.get("load_ohm") == (loads[0] if loads else None)]
     panels = [(column_name(n, "peak_to_peak"), axis_label(n, statistic="peak_to_peak"),
                QUANTITIES[n].display_scale, _groups(first, others), others) for n in TERMINAL]
-    if loads:
-        with_load = others + ["load_ohm"]
+    if loads or (own and any(r.get("P_mean_W") is not None for r in rows)):
+        with_load = others + ([] if own else ["load_ohm"])
         panels.append(("P_mean_W", "mean power P [µW]", 1e6, _groups(rows, with_load),
                        with_load))
     values = []

@@ -30,7 +30,8 @@ from .limits import (RefusedField as _RefusedField, auto_domain_radius, check_ar
                      check_steady_window, check_vibration_work, check_work, field_problems,
                      show_number)
 from .recorded import read_psd, read_recorded
-from .shapes import check_shape_scene, shape_field_inputs, shape_field_problems, shape_of
+from .shapes import (NUMERIC_SIGMA, check_shape_scene, gap_lines_problem, shape_field_inputs,
+                     shape_field_problems, shape_of)
 from .schema import (AUTO_KEYS, FIELD_KEYS, FIELD_SCHEMA, HASH_NAMES, PASSTHROUGH_SECTIONS,
                      SCHEMA, check_section, convert, harmonic_components, suggest,
                      update_section, with_defaults)
@@ -277,13 +278,6 @@ class Field:
 
     def __post_init__(self):
         check_section("field", self, "Field")
-
-    @property
-    def has_gap_lines(self) -> bool:
-        """True when the surrogate's solver is the axisymmetric one (the ball on the axis,
-        method not "3d"): the only one that samples the breakdown gap lines."""
-        return self.method != "3d" and self.ball_offset == 0.0
-
 
 
 @dataclass(frozen=True)
@@ -538,6 +532,13 @@ class Scene:
         return self.field.problems if isinstance(self.field, _RefusedField) else ()
 
     @property
+    def has_gap_lines(self) -> bool:
+        """Whether this scene's field solves sample the breakdown gap lines (the resolved
+        ``[field] method``'s entry: the axisymmetric one, the ball on the axis;
+        :func:`tengfield.scene.shapes.gap_lines_problem` says why not)."""
+        return gap_lines_problem(self.device, self.field) is None
+
+    @property
     def is_axisymmetric(self) -> bool:
         """On-axis ball in a body of revolution: the field is 2D (r, z)."""
         return self.field.ball_offset == 0.0
@@ -637,14 +638,10 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
     fld = Field(**fvals)
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
     problems += shape_field_problems(dev, fld)
+    lines_problem = gap_lines_problem(dev, fld, NUMERIC_SIGMA)
     if (isinstance(data.get("device"), dict)
-            and data["device"].get(SURFACE_CHARGE_KEY) == "breakdown"
-            and not fld.has_gap_lines):
-        problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown" needs the gap lines '
-                        f'of the axisymmetric field solver (the ball on the axis); [field] '
-                        f'method = {fld.method!r}, ball_offset_mm = {fld.ball_offset * 1e3:g} '
-                        f'has none: use method = "axisymmetric" with ball_offset_mm = 0, or give '
-                        f'sigma in uC/m^2')
+            and data["device"].get(SURFACE_CHARGE_KEY) == "breakdown" and lines_problem):
+        problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown": {lines_problem}')
     instrument = _instrument(data, values, source, warn)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]),
                  initial=Initial(**values["initial"]), run=Run(**values["run"]),

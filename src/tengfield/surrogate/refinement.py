@@ -202,7 +202,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     axisymmetric solver.
     """
     # the breakdown lines (tengfield.air_breakdown) come with the default axisymmetric solves
-    lines = (solve is None and scene.field.has_gap_lines
+    lines = (solve is None and scene.has_gap_lines
              if breakdown_lines is None else bool(breakdown_lines))
     if solve is None:
         solve = _default_solver()

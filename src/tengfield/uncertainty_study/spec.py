@@ -173,8 +173,10 @@ def _distribution(key: str, given) -> Distribution:
     names = DISTRIBUTIONS[kind]
     for name in given:
         if name != "distribution" and name not in names:
+            takes = f"it takes {', '.join(names)}" if names else (
+                "it takes no parameters (each geometry's band gives the range)")
             raise SceneError(f"{where}: unknown parameter {name!r} of a {kind} distribution"
-                             + suggest(name, names) + f"; it takes {', '.join(names)}")
+                             + suggest(name, names) + f"; {takes}")
     missing = [n for n in names if n not in given]
     if missing:
         raise SceneError(f"{where}: a {kind} distribution needs {', '.join(names)} "
@@ -352,6 +354,24 @@ def draws_from_band(scene) -> bool:
     vary = (scene.raw.get(SECTION) or {}).get("vary") if isinstance(scene.raw, dict) else None
     given = vary.get(SURFACE_CHARGE_SETTING) if isinstance(vary, dict) else None
     return isinstance(given, dict) and given.get("distribution") == BAND
+
+
+#: a breakdown-band draw as messages name it
+BAND_DRAW = f'[uncertainty.vary] "{SURFACE_CHARGE_SETTING}" = {{ distribution = "{BAND}" }}'
+
+
+def check_study_combination(scene) -> None:
+    """Refuse in one line, before the first solve, a study whose charge needs the
+    breakdown gap lines its field solver does not give (breakdown-band draws, or σ =
+    "breakdown"): :func:`tengfield.air_breakdown.check_gap_lines`, the check ``run``
+    makes (``design`` asks it too)."""
+    from ..air_breakdown import check_gap_lines, uses_breakdown_charge
+    from ..scene.shapes import NUMERIC_SIGMA
+
+    if draws_from_band(scene):
+        check_gap_lines(scene, BAND_DRAW, "draw sigma from another distribution")
+    elif uses_breakdown_charge(scene):
+        check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"', NUMERIC_SIGMA)
 
 
 def band_sigma(band, place: float) -> float:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .evaluation import Evaluations, evaluate_study, main_outputs
 from .sampling import study_values
-from .spec import UncertaintySpec, uncertainty_spec
+from .spec import UncertaintySpec, check_study_combination, uncertainty_spec
 from .statistics import (distribution_statistics, dominant_input, percentile_interval,
                          percentile_score, regime_fractions, sobol_indices)
 
@@ -156,6 +156,7 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
                    "(tengfield.uncertainty_study.uncertainty_spec(scene)) or None", allow_none=True)
     jobs = check_jobs_argument(function, jobs, comm)
     spec = spec or uncertainty_spec(scene)
+    check_study_combination(scene)
     values = study_values(spec)
     cost = study_cost(scene, spec, values)
     check_cost(cost, field_limit=spec.max_field_solves,

@@ -64,6 +64,10 @@ class Circuit:
     #: the waveforms.csv columns (name, unit) of V, Q and I that ``tengfield fit``
     #: compares a measured run with when ``[fit.columns]`` is absent
     fit_columns: dict = {"V": ("V_oc_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_sc_A", "A")}
+    #: every output is linear in the ball's charge (σ): the breakdown band scales a run's
+    #: outputs to its edges (σ, power σ²) instead of running at each; False where
+    #: something nonlinear sits in the circuit (a rectifier's diodes)
+    linear_in_charge: bool = True
     #: the circuit states whose breakdown limit binds (tengfield.air_breakdown): all three
     #: for a load or a rectifier (its transferred charge lies between the open ones)
     breakdown_states: tuple[str, ...] = ("open", "open-top", "short")

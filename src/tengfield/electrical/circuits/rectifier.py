@@ -199,6 +199,7 @@ def summary_block(scene, numbers: dict, curves=None, max_gap=None) -> dict:
 
 class Rectifier(Circuit):
     name = "rectifier"
+    linear_in_charge = False     # its diodes
     columns = tuple(RECTIFIER_COLUMNS)
     keys = ("diode", "diode_forward_voltage_V", "diode_saturation_current_A",
             "diode_emission_coefficient", "diode_series_resistance_ohm",

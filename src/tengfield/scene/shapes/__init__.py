@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from ..._registry import lookup
 from ...errors import SceneError
+from ...quantities import SURFACE_CHARGE_KEY
 from . import methods
 from .hexagonal import Hexagonal
 from .spherical_shell import SphericalShell
@@ -94,6 +95,41 @@ def check_shape_scene(scene) -> None:
         raise SceneError(f"[contact] model = '3d' is not available for shape = {dev.shape!r} "
                          "yet (the contact on the hexagonal wall is not done): use 'impact' "
                          "or 'soft'")
+
+
+def gap_lines_problem(dev, fld, alternative: str = "") -> str | None:
+    """Why a field solve of ``dev`` with ``fld`` (``[field]``) samples no breakdown gap
+    lines (None: it does): the resolved method's entry says (``"auto"`` through the
+    shape's ``field_methods``: the honeycomb's is "3d"). The one rule every user of the
+    lines asks before its first solve (a run's σ = "breakdown", ``tengfield breakdown``,
+    ``design``, ``uncertainty``'s breakdown-band draws); ``alternative``: what else the
+    asker can do (e.g. give σ as a number), said after the fix."""
+    try:
+        method = field_method(dev.shape, fld.method, fld.ball_offset)
+    except SceneError as exc:
+        return str(exc)
+    if methods.FIELD_METHODS[method].gap_lines and fld.ball_offset == 0.0:
+        return None
+    offered = [m for m in shape_of(dev.shape).field_methods if methods.FIELD_METHODS[m].gap_lines]
+    if offered:
+        fix = f'use [field] method = "{offered[0]}" with ball_offset_mm = 0' + (
+            f", or {alternative}" if alternative else "")
+    else:
+        fix = f"shape = {dev.shape!r} has 3D solves only" + (
+            f": {alternative}" if alternative else "")
+    return (f"the breakdown gap lines come from the axisymmetric field solver (the ball on "
+            f"the axis): shape = {dev.shape!r}, [field] method = {fld.method!r}, "
+            f"ball_offset_mm = {fld.ball_offset * 1e3:g} has none; {fix}")
+
+
+#: what an asker of the lines that states σ can do instead (gap_lines_problem's alternative)
+NUMERIC_SIGMA = f"give [device] {SURFACE_CHARGE_KEY} as a number"
+
+
+def has_gap_lines(dev, fld) -> bool:
+    """Whether a field solve of ``dev`` with ``fld`` samples the breakdown gap lines
+    (:func:`gap_lines_problem` is None)."""
+    return gap_lines_problem(dev, fld) is None
 
 
 def shape_field_problems(dev, fld) -> list[str]:

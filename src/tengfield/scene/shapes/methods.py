@@ -24,11 +24,14 @@ class FieldMethod:
     #: small enough to solve (and draw) on one rank, the outcome shared
     #: (``tengfield field``); else collective over the communicator
     serial: bool
+    #: its solve samples the breakdown gap lines (tengfield.field.breakdown): the ball's
+    #: charge limit and band (``[device] σ = "breakdown"``, ``tengfield breakdown``)
+    gap_lines: bool = False
 
 
 #: ``[field] method`` -> its entry (the scene file's names)
 FIELD_METHODS = {"axisymmetric": FieldMethod("axisymmetric", on_axis_only=True, dimension=2,
-                                             serial=True),
+                                             serial=True, gap_lines=True),
                  "3d": FieldMethod("3d", on_axis_only=False, dimension=3, serial=False)}
 
 AUTO = "auto"
