@@ -2,7 +2,7 @@
 
 The cases (``pinning.CASES``): the default run, a load read through an instrument, the
 rectifier into a small store and with UVLO, an ``[array]``, the breakdown band, a
-design, an uncertainty study, the spherical shell, a recorded and a random excitation,
+design, an uncertainty study, the spherical shell, the honeycomb cell (3D, coarse), a recorded and a random excitation,
 a fit and a SPICE export, each run by the CLI as a user runs it, figures on. On the
 release that pinned them (``pinned-dolfinx-<version>.json``) every number holds within
 a relative 1e-9; on another release the field solves differ by round-off of another
