@@ -110,7 +110,8 @@ def tables(result, *, start_up: bool = False) -> dict:
     if scene is None or waveforms is None:
         raise TypeError(f"spice: expected a run's result (tengfield.run), got "
                         f"{type(result).__name__}")
-    t = waveforms["time_s"]
+    source = getattr(waveforms, "source_of", None)     # a streamed run's own column
+    t = source("time_s") if source is not None else waveforms["time_s"]
     rows = len(t)
     if "C_T_F" not in waveforms:
         raise SpiceError("the run has no C_T_F column (a run of this tengfield has one)")
@@ -222,14 +223,14 @@ def _pwl(name: str, node: str, t, values, scale: float = 1.0, repeat: float = 0.
 def header_lines(result, tab: dict) -> list[str]:
     """The netlist's comment lines: the scene and its ``--set`` settings (each escaped:
     :func:`tengfield.files.one_line`), the model, what repeats and from where."""
-    from .files import comment_lines
+    from .files import comment_lines, one_line
 
     scene = result.scene
     t = tab["time_s"]
     dv, dc = tab["closing"]
     lines = ["tengfield SPICE model of a TENG",
-             f"scene: {scene.source}"]
-    lines += [f"--set {s}" for s in getattr(scene, "settings", ())]
+             f"scene: {one_line(scene.source)}"]
+    lines += [f"--set {one_line(s)}" for s in getattr(scene, "settings", ())]
     lines += ["V(p,n) = V_OC(t) - Q/C_T(t), Q = integral of the current out of pin p",
               f"periodic: {tab['period_words']}; the period {tab['period_s']:.9g} s (the run's "
               f"t = {tab['taken_from_s']:.9g} .. {tab['taken_from_s'] + tab['period_s']:.9g} s) "

@@ -39,8 +39,8 @@ def one_line(text) -> str:
 _ESCAPES = {"\\": "\\\\", "\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
-def _escaped(c: str) -> str:
-    if c in _ESCAPES:
+def _escaped(c: str, backslash: bool = True) -> str:
+    if c in _ESCAPES and (backslash or c != "\\"):
         return _ESCAPES[c]
     if c.isprintable():
         return c
@@ -111,10 +111,14 @@ def _file_value(key: str, value, base_dir: Path | None):
 
 
 def comment_lines(header: str, prefix: str) -> list[str]:
-    """``header``'s lines (split at ``\\n`` only), each escaped by :func:`one_line` and
-    behind ``prefix`` (``"# "`` in TOML, ``"* "`` in a netlist): a comment whatever a
-    quoted name held."""
-    return [prefix + one_line(line) for line in str(header).split("\n")] if header else []
+    """``header``'s lines (split at ``\\n`` only) behind ``prefix`` (``"# "`` in TOML,
+    ``"* "`` in a netlist), each with :func:`one_line`'s escapes of what is not printable
+    (a backslash kept: a name the writer quoted through :func:`one_line` reads the same):
+    a comment whatever a name quoted without it held."""
+    if not header:
+        return []
+    return [prefix + "".join(_escaped(c, backslash=False) for c in line)
+            for line in str(header).split("\n")]
 
 
 def scene_toml(data: dict, header: str = "", *, base_dir: str | Path | None = None) -> str:
