@@ -57,8 +57,9 @@ SUBCIRCUIT = "teng"
 PINS = ("p", "n")
 #: PWL points per line of the netlist
 POINTS_PER_LINE = 4
-#: the simulator's relative tolerance teng.lib sets (``.options reltol``; see subcircuit)
+#: the simulator's tolerances teng.lib sets (``.options reltol trtol``; see subcircuit)
 RELTOL = 1e-5
+TRTOL = 1.0
 
 
 class SpiceError(TengfieldError, ValueError):
@@ -138,6 +139,11 @@ def tables(result, *, start_up: bool = False) -> dict:
         t_s, v_s, c_s = _points(result, waveforms, t, t0, 0.0, settle)
         times = np.concatenate([t_s[:-1], times])
         v, c = np.concatenate([v_s[:-1], v]), np.concatenate([c_s[:-1], c])
+    # a row within round-off of the repeat point or the period's end would print as the
+    # same time (non-increasing PWL points): the later point (the table's own) is kept
+    printed = [_time(x) for x in times]
+    keep = np.array([a != b for a, b in zip(printed[:-1], printed[1:])] + [True])
+    times, v, c = times[keep], v[keep], c[keep]
     if not np.all(np.isfinite(c)) or np.any(c <= 0):
         raise SpiceError("C_T_F is not finite and positive (an uncharged ball, or one that "
                          "never leaves the lower plate: no field solved): nothing to export")
@@ -250,10 +256,11 @@ def subcircuit(result, *, start_up: bool = False) -> str:
     tab = tables(result, start_up=start_up)
     t, repeat = tab["time_s"], tab["repeat_s"]
     head = header_lines(result, tab) + [
-        "* V_OC - Q/C_T cancels to the volts across the pins from kV: ngspice's default",
-        "* reltol (1e-3) errs by percent once the period repeats (its PWL repeats do not",
-        "* restart the step at the table's points); 1e-5 keeps the load voltage within 1 %",
-        f".options reltol={RELTOL:g}",
+        "* V_OC - Q/C_T cancels kV to the volts across the pins: at ngspice's default",
+        "* tolerances (reltol 1e-3, trtol 7) the load voltage errs by tens of % once the",
+        "* period repeats (its PWL repeats do not restart the step at the table's points);",
+        f"* reltol {RELTOL:g} and trtol {TRTOL:g} keep it within 1 % (a later .options wins)",
+        f".options reltol={RELTOL:g} trtol={TRTOL:g}",
         f".subckt {SUBCIRCUIT} {' '.join(PINS)}"]
     body = _pwl("Vvoc", "voc", t, tab["V_oc_V"], repeat=repeat)
     body += _pwl("Vct", "ct", t, tab["C_T_F"], 1e12, repeat=repeat)      # C_T in pF
