@@ -81,16 +81,19 @@ def check_exportable(scene) -> None:
 def steady_period(result) -> tuple[float, str]:
     """``(P [s], words)``: the period the device repeats, the regime's (k excitation
     periods) when it has one and the steady window holds it, else one excitation period
-    (said: an approximation for a chaotic or unsettled motion or a noisy or recorded
-    drive; the rest regime repeats trivially)."""
+    (said: an approximation for a chaotic or unsettled motion or a drive that does not
+    repeat each period, :func:`tengfield.dynamics.excitation.repeats_each_period`; the
+    rest regime repeats trivially)."""
     scene = result.scene
     exc = scene.excitation
     period = exc.period
     regime = (getattr(result, "summary", None) or {}).get("regime") or {}
     name, k = regime.get("regime") or "?", int(regime.get("period") or 0)
-    if exc.has_noise or exc.kind == "recorded":
-        return period, (f"the drive ([excitation] kind = {exc.kind!r}) is not periodic: its "
-                        "last excitation period repeated, an approximation")
+    from .dynamics.excitation import repeats_each_period
+
+    if not repeats_each_period(scene):
+        return period, (f"the drive ([excitation] kind = {exc.kind!r}) does not repeat each "
+                        "period: its last excitation period repeated, an approximation")
     if name == "rest":
         return period, "regime rest: one excitation period repeated"
     if name in ("chaos", "not-settled") or k < 1:
