@@ -148,8 +148,10 @@ def tables(result, *, start_up: bool = False) -> dict:
     keep = np.array([a != b for a, b in zip(printed[:-1], printed[1:])] + [True])
     times, v, c = times[keep], v[keep], c[keep]
     if not np.all(np.isfinite(c)) or np.any(c <= 0):
-        raise SpiceError("C_T_F is not finite and positive (an uncharged ball, or one that "
-                         "never leaves the lower plate: no field solved): nothing to export")
+        raise SpiceError("--spice: the run has no C_T(t) (the ball never leaves the lower "
+                         "plate, or is uncharged: no field was solved), so there is no device "
+                         "to export; leave out --spice, or drive the ball off the plate "
+                         "([excitation] amplitude_mm, frequency_hz)")
     return {"time_s": times, "V_oc_V": v, "C_T_F": c, "repeat_s": origin,
             "period_s": period, "taken_from_s": taken, "start_up_s": origin,
             "period_words": words, "closing": closing}

@@ -111,3 +111,17 @@ def test_a_streamed_runs_export_reads_no_whole_column(tmp_path, monkeypatch):
     monkeypatch.setattr(stream.StreamedWaveforms, "chunks", whole_column)
     for options in ({}, {"start_up": True}):
         assert spice.subcircuit(streamed, **options) == spice.subcircuit(whole, **options)
+
+
+def test_a_ball_at_rest_with_spice_is_one_line(tmp_path, run_cli):
+    """No lift-off, no field solved: C_T(t) is unknown; one line after the run (its
+    regime is known only then), no traceback and no -o."""
+    path = _scene(tmp_path, "base.toml")
+    out = tmp_path / "out"
+    proc = run_cli("run", path, "--set", "excitation.amplitude_mm=0.05", "--spice", "-o", out,
+                   "--cache-dir", tmp_path / "cache")
+    assert proc.returncode == 2, proc.stderr[-3000:]
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("tengfield: error: --spice: the run has "
+                                                   "no C_T(t)"), lines
+    assert not out.exists()
