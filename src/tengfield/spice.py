@@ -1,7 +1,7 @@
 """The device as a SPICE subcircuit (issue #39): ``tengfield run ... --spice`` and
-:func:`export` write ``teng.lib``, a subcircuit ``teng`` with two pins for ngspice and
-LTspice, so a user's own circuit (a converter, a PMIC, a multiplier) runs on the device a
-run computed.
+:func:`export` write ``teng.lib``, a subcircuit ``teng`` with two pins for ngspice (its
+PWL repeat ``r=``; LTspice spells a repeat ``PWL REPEAT FOREVER (...) ENDREPEAT``), so a
+user's own circuit (a converter, a PMIC, a multiplier) runs on the device a run computed.
 
 The model is the standard one of a TENG (Niu et al. 2013): between its pins
 

@@ -48,6 +48,14 @@ def test_a_scene_name_with_newlines_puts_no_live_line_into_teng_lib(tmp_path, ru
                    for line in text.splitlines())
     assert "* scene: " + spice_name(path) + " with --set" in text
     assert "* --set run.sample_rate_hz=20000" in text
+    out_start = tmp_path / "out-start-up"
+    proc = run_cli("run", path, "--set", "run.sample_rate_hz=20000", "--spice-start-up",
+                   "--no-plots", "-o", out_start, "--cache-dir", cache)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    settle = load_scene(path).run.settle_periods * load_scene(path).excitation.period
+    start_text = (out_start / "teng.lib").read_text()
+    assert f"* start-up: t = 0 .. {settle:.9g} s is the run's own start" in start_text
+    assert f"+ ) r={settle:.12g}" in start_text
     if NGSPICE is None:
         return
     waveforms = np.genfromtxt(out / "waveforms.csv", delimiter=",", names=True)
