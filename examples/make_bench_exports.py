@@ -76,7 +76,8 @@ SPICE_LOAD_OHM, SPICE_DURATION_S, SPICE_RATE_HZ = 1e8, 0.5, 10000.0
 
 
 def write_spice(lib: Path, netlist: Path) -> None:
-    """examples/teng.lib (the default scene's device, 0.5 s) and examples/teng_load.cir
+    """examples/teng.lib (the default scene's device: its 0.2 s start-up, then its period
+    repeated) and examples/teng_load.cir
     (it on a 100 Mohm resistor: ``cd examples && ngspice -b teng_load.cir``)."""
     from tengfield import spice
 
@@ -85,7 +86,7 @@ def write_spice(lib: Path, netlist: Path) -> None:
         run={"duration_s": SPICE_DURATION_S, "settle_periods": 4,
              "sample_rate_hz": SPICE_RATE_HZ})
     r = tf.run(scene)
-    spice.export(r, lib)
+    spice.export(r, lib, start_up=True)     # from rest, as the run: then its period repeated
     netlist.write_text(spice.load_netlist(SPICE_LOAD_OHM, float(r.t[-1] - r.t[0]),
                                           float(r.t[1] - r.t[0])))
 

@@ -118,21 +118,22 @@ class RunResult:
         return self.waveforms[electrical.READ_COLUMN]
 
     def write(self, out_dir, plots: bool = True, *, spice: bool = False,
-              figures=None) -> list:
+              spice_start_up: bool = False, figures=None) -> list:
         """Write what ``tengfield run -o out_dir`` writes (waveforms.csv, summary.json,
         trajectory/impacts files and, with ``plots``, the PNGs; with ``spice`` teng.lib, as
-        ``--spice``); returns the paths. ``figures``: a
+        ``--spice``: the steady period repeated; ``spice_start_up`` also the run's start-up
+        before it, as ``--spice-start-up``); returns the paths. ``figures``: a
         :class:`tengfield.plotting.process.FigureProcess` drawing the figures (complete
         after its ``finish()``), as the CLI passes."""
         from .io import write_dynamics_outputs, write_run_outputs
 
         written = write_run_outputs(self, out_dir, plots=plots, figures=figures)
         written += write_dynamics_outputs(self, out_dir, plots=plots, figures=figures)
-        if spice:
+        if spice or spice_start_up:
             from pathlib import Path
 
             from .spice import export
-            written.append(export(self, Path(out_dir) / "teng.lib"))
+            written.append(export(self, Path(out_dir) / "teng.lib", start_up=spice_start_up))
         return written
 
     def plot(self, *, last_periods: float | None = 5.0):

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..files import figure_file, scene_dir, scene_toml, toml_value, write_figure, write_text
+from ..files import (figure_file, one_line, scene_dir, scene_toml, toml_value, write_figure,
+                     write_text)
 from ..io import format_number as _num
 from ..io import write_report_csv, write_report_json
 from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
@@ -33,7 +34,7 @@ def markdown(report, images: dict) -> str:
     sc = report.scene
     lines = [f"# tengfield report: error against run time{' (fast mode)' if report.fast else ''}",
              "",
-             f"Scene: `{sc.source}` — {sc.excitation.frequency:g} Hz, "
+             f"Scene: `{one_line(sc.source)}` — {sc.excitation.frequency:g} Hz, "
              f"A = {sc.excitation.amplitude * 1e3:g} mm, Δh = {sc.device.stroke * 1e3:g} mm, "
              f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{sc.circuit.reference}`; "
              f"regime {report.trajectory.get('regime', '?')}. Total wall time "
@@ -119,7 +120,7 @@ def write_report(report, out_dir) -> list[Path]:
     for rec in report.recommendations:
         path = out / f"recommended-{rec.target:g}.toml"
         write_text(path, scene_text(report.scene, rec.scene_sections(),
-                                   f"{report.scene.source} with the cheapest settings measured by "
+                                   f"{one_line(report.scene.source)} with the cheapest settings measured by "
                                    f"`tengfield report`\nto reach {rec.target:g} on the peak-to-peak "
                                    f"{error_symbols()} (measured: {rec.measured_error:.2g})"))
         written.append(path)

@@ -27,8 +27,12 @@ def register(sub) -> None:
                         "the measured ones and the %% difference (docs/outputs.md)")
     p.add_argument("--spice", action="store_true",
                    help="also write DIR/teng.lib: the device as a SPICE subcircuit 'teng' "
-                        "(two pins; V_OC(t) and C_T(t) tables) for ngspice and LTspice "
-                        "(README, 'Simulate your own circuit')")
+                        "(two pins; V_OC(t) and C_T(t) tables of the steady period, "
+                        "repeated for ever: PWL r=) for ngspice "
+                        "(README, 'Simulate your own circuit'; docs/outputs.md)")
+    p.add_argument("--spice-start-up", action="store_true",
+                   help="as --spice, with the run's start-up (t = 0 .. settle_periods "
+                        "periods, from rest) before the repeated period")
     p.set_defaults(func=_run)
 
 
@@ -50,12 +54,18 @@ def _run_scene(args, comm, figures) -> int:
     from ..scene import load_scene
 
     scene = with_measured(load_scene(args.scene), getattr(args, "reference", None))
+    spice = getattr(args, "spice", False) or getattr(args, "spice_start_up", False)
+    if spice:
+        from ..spice import check_exportable
+        check_exportable(scene)           # before the work (issue #54.13)
     # [run] realisations > 1: the library runs the ensemble (result.ensemble, ensemble_rows)
     result = run(scene, comm=comm, cache_dir=args.cache_dir, progress=True,
                  command_line=command_line(), jobs=args.jobs)
     if comm is None or comm.rank == 0:
         written = result.write(args.output, plots=not args.no_plots,
-                               spice=getattr(args, "spice", False), figures=figures)
+                               spice=spice,
+                               spice_start_up=getattr(args, "spice_start_up", False),
+                               figures=figures)
         if figures is not None:
             figures.finish()
         print_summary(result.summary)

@@ -40,6 +40,7 @@ def check_sections(scene) -> None:
 
 
 def _run(args) -> int:
+    from ..files import one_line
     from ..scene import default_text, load_scene
 
     if args.default or args.scene is None:
@@ -54,8 +55,8 @@ def _run(args) -> int:
     if args.json:
         print(json.dumps(data, indent=2))
     else:
-        sys.stdout.write(toml_text(data, f"tengfield scene: {scene.source}, every key "
-                                         "checked, in file units"))
+        sys.stdout.write(toml_text(data, f"tengfield scene: {one_line(scene.source)}, every "
+                                         "key checked, in file units"))
     print(f"# field hash {scene.field_hash()}", file=sys.stderr)
     return 0
 
@@ -64,9 +65,9 @@ def toml_text(data: dict, header: str = "") -> str:
     """``{section: {key: value or sub-table}}`` as TOML: ``header`` as comment lines, each
     table's values, then its sub-tables (``[design.vary]``); a None value (a key left
     unset) as a comment."""
-    from ..files import toml_value
+    from ..files import comment_lines, toml_value
 
-    lines = [f"# {line}" for line in header.splitlines()]
+    lines = comment_lines(header, "# ")
 
     def table(name: str, values: dict) -> None:
         lines.extend(["", f"[{name}]"])

@@ -4,7 +4,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..files import scene_dir, write_figure, scene_toml, write_json, write_rows, write_text
+from ..files import (one_line, scene_dir, write_figure, scene_toml, write_json, write_rows,
+                     write_text)
 from .answer import (aggregate_words, band_table_lines, chosen_band_point, describe,
                      design_answer, on_bounds,
                      point_label, readable_unit)
@@ -234,7 +235,7 @@ def best_toml_header(result) -> str:
     n = len(spec.band)
     why = "the band point nearest the band's centre where the design scores non-zero" \
         if value != 0 else "no band point scores non-zero: the largest"
-    return (f"best design of `tengfield design` on {result.scene.source}\n"
+    return (f"best design of `tengfield design` on {one_line(result.scene.source)}\n"
             f"{objective} ({aggregate_words(spec)} {n} band point{'s' * (n != 1)}) = "
             f"{best['objective']:.6g} +- {best['objective_error']:.2g} {unit}\n"
             + ", ".join(f"{k} = {v:g}" for k, v in best["values"].items())

@@ -262,6 +262,18 @@ class StreamedWaveforms(Mapping):
         for _, _, cols in self._run.chunks():
             yield cols
 
+    def terminal_rows(self, i0: int, i1: int) -> dict[str, np.ndarray]:
+        """``{"time_s", "V_oc_V", "C_T_F"}`` of the rows ``i0:i1`` only (the values of the
+        whole columns, bit for bit: the terminal is evaluated sample by sample), without a
+        pass over the run: the SPICE export's start-up and steady period
+        (:mod:`tengfield.spice`) of a run of any length."""
+        dyn = self._run.dynamics
+        terminal = scene_terminal_waveforms(self._run.scene, self._run.curves,
+                                            np.asarray(dyn.gap[i0:i1], dtype=float),
+                                            np.asarray(dyn.gap_velocity[i0:i1], dtype=float))
+        return {"time_s": np.asarray(dyn.t[i0:i1], dtype=float), "V_oc_V": terminal["V_oc"],
+                "C_T_F": terminal["C_T"]}
+
 
 def streamed_stage(scene, dynamics, curves) -> tuple:
     """``(waveforms, ran, extremes, reduced)`` of a streamed run: the

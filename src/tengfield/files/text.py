@@ -1,7 +1,9 @@
 """Text files, written atomically (:func:`tengfield.files.atomic.atomic_path`):
 :func:`write_text`, :func:`write_json` (strict JSON, NaN -> null) and
 :func:`scene_toml` (a scene dict as TOML: fitted, recommended and best scenes, every
-section whole, sub-tables included)."""
+section whole, sub-tables included); :func:`one_line`, the one escaping of a
+user-supplied text (a scene's path, a ``--set``) quoted into a comment, a header or a
+title line of any file (issue #54.2)."""
 from __future__ import annotations
 
 import json
@@ -19,6 +21,32 @@ def write_text(path: str | Path, text: str) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_text(text)
     return path
+
+
+def one_line(text) -> str:
+    """``text`` (a scene's path, a ``--set`` setting, any user-supplied name or value) as
+    one printable line, to quote into a line of a file (a netlist or TOML comment, a
+    Markdown line, a header): a backslash is written ``\\\\``, a newline ``\\n``, a
+    carriage return ``\\r``, a tab ``\\t``, any other character that is not printable
+    (controls, the Unicode line and paragraph separators, format characters)
+    ``\\xNN``, ``\\uNNNN`` or ``\\UNNNNNNNN``, as Python's string escapes; the rest as
+    it is. So a quoted name can neither end the line it is in nor start a live one
+    (issue #54.2: a scene file named ``run\\nRleak out 0 1k\\n*.toml`` put a resistor
+    into teng.lib)."""
+    return "".join(_escaped(c) for c in str(text))
+
+
+_ESCAPES = {"\\": "\\\\", "\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def _escaped(c: str, backslash: bool = True) -> str:
+    if c in _ESCAPES and (backslash or c != "\\"):
+        return _ESCAPES[c]
+    if c.isprintable():
+        return c
+    code = ord(c)
+    return (f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000
+            else f"\\U{code:08x}")
 
 
 def write_json(path: str | Path, data) -> Path:
@@ -82,6 +110,17 @@ def _file_value(key: str, value, base_dir: Path | None):
     return os.path.abspath(os.path.join(os.fspath(base_dir), value))
 
 
+def comment_lines(header: str, prefix: str) -> list[str]:
+    """``header``'s lines (split at ``\\n`` only) behind ``prefix`` (``"# "`` in TOML,
+    ``"* "`` in a netlist), each with :func:`one_line`'s escapes of what is not printable
+    (a backslash kept: a name the writer quoted through :func:`one_line` reads the same):
+    a comment whatever a name quoted without it held."""
+    if not header:
+        return []
+    return [prefix + "".join(_escaped(c, backslash=False) for c in line)
+            for line in str(header).split("\n")]
+
+
 def scene_toml(data: dict, header: str = "", *, base_dir: str | Path | None = None) -> str:
     """TOML text of a scene dict (``{section: {key: value}}``): ``header`` as comment
     lines, then one table per section, each written whole: its scalars, then each
@@ -92,7 +131,7 @@ def scene_toml(data: dict, header: str = "", *, base_dir: str | Path | None = No
     scene's relative file names (``file``, ``psd_file``) resolve from
     (:func:`scene_dir`); they are written as absolute paths, since the written scene
     lives elsewhere (in ``-o``)."""
-    lines = [f"# {line}" for line in header.splitlines()]
+    lines = comment_lines(header, "# ")
     base = None if base_dir is None else Path(base_dir)
 
     def table(path: list[str], values: dict) -> None:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..files import scene_dir, scene_toml, write_json, write_text
+from ..files import one_line, scene_dir, scene_toml, write_json, write_text
 from ..files import figure_file
 from ..scene.schema import SURFACE_CHARGE_KEY
 
@@ -43,7 +43,7 @@ def write_fit_outputs(scene, result, out_dir, *, plots: bool = True) -> list[Pat
     summary = {"scene": scene.source, **result.as_dict()}
     write_json(out / "fit.json", summary)
     written = [out / "fit.json"]
-    lines = [f"fitted by `tengfield fit` from {scene.source} ({result.mode})"]
+    lines = [f"fitted by `tengfield fit` from {one_line(scene.source)} ({result.mode})"]
     for name in result.names:
         se = result.standard_errors[name]
         lines.append(f"{name} = {result.values[name]:.6g} +- {se:.3g}"

@@ -424,7 +424,8 @@ class Reference:
 @dataclass(frozen=True)
 class Scene:
     """One BB-TENG and how it is driven: the sections as SI dataclasses, the file-level
-    values as given (``raw``), where they came from (``source``, ``text``)."""
+    values as given (``raw``), where they came from (``source``, ``text``, and the
+    ``--set`` settings applied to it in order, ``settings``: what teng.lib's header names)."""
     device: Device
     excitation: Excitation
     contact: Contact
@@ -439,6 +440,7 @@ class Scene:
     raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
     source: str = dataclasses.field(compare=False, repr=False, default="<default>")
     text: str = dataclasses.field(compare=False, repr=False, default="")
+    settings: tuple = dataclasses.field(compare=False, repr=False, default=())
 
     def __post_init__(self):
         """The rules between sections (the field's are checked by :func:`check_field`)."""
@@ -490,7 +492,8 @@ class Scene:
             _one_capacitance(data, sec, values)
             update_section(data, sec, values)
         base = Path(self.source).parent if self.source not in ("<default>", "<dict>") else None
-        scene = build(data, base_dir=base, source=self.source, text=self.text, warn=False)
+        scene = build(data, base_dir=base, source=self.source, text=self.text, warn=False,
+                      settings=self.settings)
         if "field" in sections:   # explicit field settings: refuse bad ones at once
             check_field(scene)
         return scene
@@ -575,7 +578,7 @@ def _auto_mm(value_si: float) -> float:
 
 
 def build(data: dict, *, base_dir: Path | None, source: str, text: str,
-          warn: bool = True) -> Scene:
+          warn: bool = True, settings: tuple = ()) -> Scene:
     """A :class:`Scene` from file-level values by section (a parsed scene file, or
     :meth:`Scene.with_values`): unknown sections and keys refused, every value checked
     and turned into SI, the files it names read (relative to ``base_dir``). A renamed
@@ -650,7 +653,7 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                  breakdown=Breakdown(**values["breakdown"]),
                  reference=Reference(**values["reference"]), instrument=instrument,
                  raw=copy.deepcopy(given_names),
-                 source=source, text=text)
+                 source=source, text=text, settings=tuple(settings))
 
 
 def _instrument(data: dict, values: dict, source: str, warn: bool) -> Instrument:

@@ -227,7 +227,8 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
         data["device"] = switched_shape(data["device"], shape_before, shape, set_device_keys)
     base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
     source = scene.source if scene.source != "<default>" else "<default scene>"
-    scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False)
+    scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False,
+                  settings=(*scene.settings, *settings))
     check_rules(scene)      # the rules between keys, as for the file
     return scene
 
