@@ -329,6 +329,33 @@ def compute_band(lines: Lines, paschen: Paschen, states, reference: str,
                 static_by_gamma={g: static[g].sigma_max for g in gammas})
 
 
+def edge_ratios(result, band: Band, points: int = 301) -> dict:
+    """Each edge's max over lines of |V_gap| / V_b against the ball position z [m] over the
+    positions its trajectory visits, with V_b at the edge's own γ (``lower`` at
+    ``gamma_lower``, ``estimate`` at the scene's, ``upper`` at ``gamma_upper``): lower
+    touches 1 at its binding position, upper at the widest gap (its minimum), each once
+    (a function of z: the ball's way up and down fall on one curve). Returns
+    ``{"z": z, edge: (γ, ratio)}``; empty without a trajectory."""
+    if band.track is None or result.lines is None:
+        return {}
+    track, lines = band.track, result.lines
+    z = np.linspace(float(np.min(track.position)), float(np.max(track.position)), points)
+    for known in (band.lower_position, band.upper_position):
+        if z[0] <= known <= z[-1]:
+            z = np.union1d(z, [known])       # the binding positions on the curve exactly
+    gammas = {"lower": band.gamma_lower, "estimate": band.gamma, "upper": band.gamma_upper}
+    out = {"z": z}
+    for edge, sigma in band.edges().items():
+        paschen = result.paschen.with_gamma(gammas[edge])
+        threshold = np.full(z.size, np.inf)
+        for state in result.states:
+            limits = _dense_minimum(lines, paschen, state, result.reference, z)[2]
+            threshold = np.minimum(threshold, np.min(limits.reshape(z.size, -1), axis=1))
+        with np.errstate(divide="ignore"):
+            out[edge] = (gammas[edge], sigma / threshold)
+    return out
+
+
 def _seed_limited(track: StressTrack, seeds: Seeds, start: float, upper: float):
     """The smallest σ in [start, upper] whose expected seeded breakdowns per second reach
     the criterion (a scan, then bisection), or ``upper`` when they do not."""
