@@ -18,8 +18,11 @@ def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     line per edge of the band saying what it assumes)."""
     b = result.binding
     sigma = scene_surface_charge(scene, result)
-    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2 (relative error estimate "
-             f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
+    gamma = ("" if getattr(result.paschen, "curve", "") == "empirical"
+             else f" at gamma {result.paschen.gamma:g}")
+    lines = [f"static limit sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2{gamma} (relative "
+             f"error estimate {result.relative_error_estimate:.2g}), "
+             f"{result.paschen.pressure / 1e3:.6g} kPa",
              f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
              f"{math.degrees(b.angle):.0f} deg, ball at z = {b.position * 1e3:.4g} mm: gap "
              f"{b.gap * 1e3:.4g} mm, V_b = {b.breakdown_voltage:.4g} V ({b.regime})"]
