@@ -75,6 +75,8 @@ _RAW_KEY = re.compile(r"\b(device|contact|excitation|circuit|instrument|run|fiel
                       r"energy_per_cycle|load|rectifier)\.[a-z_0-9]+", re.I)
 #: unit spellings of a terminal, not of a figure: the quantity table writes µ, ², ³, Ω
 _ASCII_UNITS = re.compile(r"\b(uC|uW|uA|uJ|uF|nC/m\^2)\b|/m\^[23]|\bohm\b")
+#: a terminal's caret power in a unit ("µW/cm^3"): a figure writes cm³ (mathtext aside)
+_CARET_POWER = re.compile(r"[a-zµ]\^-?[0-9]")
 
 
 def figure_texts(fig) -> list[str]:
@@ -114,6 +116,7 @@ def assert_labelled(fig) -> None:
         assert not _RAW_KEY.search(text), f"a raw scene key in {text!r}"
         assert "cell(s)" not in text, text
         assert not _ASCII_UNITS.search(text), f"an ASCII unit in {text!r}"
+        assert "$" in text or not _CARET_POWER.search(text), f"a caret power in {text!r}"
     assert_no_offsets(fig)
     assert_legends_clear(fig)
 

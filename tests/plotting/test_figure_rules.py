@@ -125,3 +125,14 @@ def test_a_histogram_of_a_constant_is_drawn_at_its_value_without_an_offset():
     assert_no_offsets(fig)
     low, high = ax.get_xlim()
     assert low < 1.047587481 < high and high - low > 0.05
+
+
+def test_figure_units_have_superscripts_the_terminal_keeps_carets():
+    """design.png's axis read "µW/cm^3" (the terminal's spelling)."""
+    from tengfield.design_study.answer import readable_unit
+    from tengfield.quantities import axis_label, figure_unit
+
+    label, _ = readable_unit("W/m^3", 1.0)
+    assert label == "µW/cm^3" and figure_unit(label) == "µW/cm³"
+    assert axis_label("power_density_W_per_m3") == "P/V [W/m³]"
+    assert figure_unit("1/cm^3/s") == "1/cm³/s" and figure_unit("m^-1") == "m⁻¹"
