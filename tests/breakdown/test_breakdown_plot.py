@@ -22,6 +22,6 @@ def test_breakdown_result_plot_is_the_breakdown_figure(tmp_path):
     assert f"σ_max = {result.sigma_max * 1e6:.3g} µC/m²" in fig._suptitle.get_text()
     assert "−" + f"{result.sigma_max * 1e6:.3g}" in result.plot()._suptitle.get_text()
     air_breakdown.write_outputs(result, scene, tmp_path / "cli", plots=True)
-    fig.savefig(tmp_path / "notebook.png", dpi=130)
+    fig.savefig(tmp_path / "notebook.png", dpi=120)     # breakdown.png's dpi
     assert (tmp_path / "notebook.png").read_bytes() == \
         (tmp_path / "cli" / "breakdown.png").read_bytes()
