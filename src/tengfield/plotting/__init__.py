@@ -207,7 +207,10 @@ def tidy_figure(fig, renderer) -> None:
         if moved:
             from matplotlib.layout_engine import ConstrainedLayoutEngine
             if not isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine):
-                fig.tight_layout()
+                import warnings
+                with warnings.catch_warnings():       # an axes tight_layout cannot fit
+                    warnings.simplefilter("ignore", UserWarning)
+                    fig.tight_layout()
     finally:
         fig._tidying = False
 
