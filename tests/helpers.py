@@ -75,6 +75,8 @@ _RAW_KEY = re.compile(r"\b(device|contact|excitation|circuit|instrument|run|fiel
                       r"energy_per_cycle|load|rectifier)\.[a-z_0-9]+", re.I)
 #: unit spellings of a terminal, not of a figure: the quantity table writes µ, ², ³, Ω
 _ASCII_UNITS = re.compile(r"\b(uC|uW|uA|uJ|uF|nC/m\^2)\b|/m\^[23]|\bohm\b")
+#: a terminal's caret power in a unit ("µW/cm^3"): a figure writes cm³ (mathtext aside)
+_CARET_POWER = re.compile(r"[a-zµ]\^-?[0-9]")
 
 
 def figure_texts(fig) -> list[str]:
@@ -114,6 +116,83 @@ def assert_labelled(fig) -> None:
         assert not _RAW_KEY.search(text), f"a raw scene key in {text!r}"
         assert "cell(s)" not in text, text
         assert not _ASCII_UNITS.search(text), f"an ASCII unit in {text!r}"
+        assert "$" in text or not _CARET_POWER.search(text), f"a caret power in {text!r}"
+    assert_no_offsets(fig)
+    assert_legends_clear(fig)
+
+
+def _drawn(fig):
+    fig.canvas.draw()
+    return fig.canvas.get_renderer()
+
+
+def _line_points(ax):
+    """Display coordinates of the data vertices of ``ax``'s lines and markers (reference
+    lines such as axhline left out)."""
+    points = []
+    for line in ax.get_lines():
+        if line.get_transform() is ax.transData and line.get_visible():
+            xy = np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
+            points.append(ax.transData.transform(xy[np.all(np.isfinite(xy), axis=1)]))
+    for coll in ax.collections:
+        offsets = np.asarray(coll.get_offsets(), dtype=float)
+        if offsets.size and coll.get_offset_transform() is ax.transData and len(offsets) > 1:
+            points.append(ax.transData.transform(offsets))
+    return np.concatenate(points) if points else np.empty((0, 2))
+
+
+def assert_no_offsets(fig) -> None:
+    """No axis carries an offset or scale text ("1e−6+1.2556572e3", "1e−6" over a J axis):
+    the unit in its label is then not the unit of its ticks, and a quantity constant to
+    rounding would be drawn as a trend. Equal tick labels (a constant drawn at too many
+    digits) fail too."""
+    _drawn(fig)
+    for ax in fig.axes:
+        if not ax.get_visible() or not ax.axison:
+            continue
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            offset = axis.get_offset_text().get_text()
+            assert not offset.strip(), \
+                f"{name} axis of {ax.get_title() or ax.get_ylabel()!r} has the offset {offset!r}"
+            ticks = [t.get_text() for t in axis.get_ticklabels() if t.get_text().strip()]
+            assert len(set(ticks)) == len(ticks), f"{name} axis repeats tick labels {ticks}"
+
+
+def assert_legends_clear(fig) -> None:
+    """No legend inside an axes covers a data point of it (lines' vertices, markers)."""
+    renderer = _drawn(fig)
+    for ax in fig.axes:
+        legend = ax.get_legend()
+        if legend is None or not legend.get_visible():
+            continue
+        box = legend.get_window_extent(renderer)
+        xy = _line_points(ax)
+        inside = ((xy[:, 0] > box.x0 + 1) & (xy[:, 0] < box.x1 - 1)
+                  & (xy[:, 1] > box.y0 + 1) & (xy[:, 1] < box.y1 - 1))
+        assert not np.any(inside), \
+            f"the legend of {ax.get_title() or ax.get_ylabel()!r} covers {int(inside.sum())} data points"
+
+
+#: a number and its unit on a terminal line: "I_SC = 56.87 nA", "E = 3.4 µJ"
+_TERMINAL_VALUE = r"{symbol}\b[^,;\n]*?[−\-+]?[0-9][0-9.]*(?:e[−\-+]?[0-9]+)? ([^\s,;:()]+)"
+
+
+def assert_units_as_terminal(fig, lines) -> None:
+    """Each axis label "SYMBOL ... [unit]" whose symbol the terminal ``lines`` print with
+    a unit ("I_SC peak [nA]: ..." or "I_SC = 56.87 nA") uses the terminal's unit (µJ on
+    both, not J on the figure)."""
+    text = "\n".join(lines)
+    for ax in fig.axes:
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            m = re.match(r"(\S+).*\[([^\]]+)\]\s*$", label)
+            if not m:
+                continue
+            symbol = re.escape(m.group(1))
+            said = (re.search(rf"(?m)^\s*{symbol}\b[^\n\[:]*\[([^\]]+)\]", text)
+                    or re.search(_TERMINAL_VALUE.format(symbol=symbol), text))
+            if said:
+                assert said.group(1).replace("^2", "²") == m.group(2), \
+                    f"{label!r}: the terminal says {said.group(0)!r}"
 
 
 def assert_tables_agree_within_estimates(table, reference) -> np.ndarray:

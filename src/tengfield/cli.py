@@ -76,8 +76,8 @@ def build_parser() -> argparse.ArgumentParser:
         if any(a.dest in ("no_plots", "no_plot") for a in command._actions):  # noqa: SLF001
             command.add_argument(
                 "--figure-format", default="png", metavar="png|pdf|svg",
-                help="format of the figures written (default png; field.png, drawn by "
-                     "pyvista, stays a PNG)")
+                help="format of the figures written (default png; tengfield field, whose "
+                     "field.png pyvista draws, offers png only)")
             command.add_argument(
                 "--dpi", type=float, default=None, metavar="N",
                 help="resolution of the figures written [dots per inch] (default: each "
@@ -95,7 +95,8 @@ def _apply_settings(args) -> None:
     """``--set section.key=value``: the command gets the scene (file or default) with
     them applied, checked as the same keys in the file (raises SceneError); ``--dpi``
     and ``--figure-format``: how every figure of the command is saved (checked here,
-    before any output exists; reset by every call)."""
+    before any output exists, also against a command's own ``figure_formats``; reset by
+    every call)."""
     from .files import set_figure_dpi, set_figure_format
 
     try:
@@ -103,6 +104,13 @@ def _apply_settings(args) -> None:
         set_figure_format(getattr(args, "figure_format", "png"))
     except ValueError as exc:
         raise SceneError(str(exc)) from None
+    only = getattr(args, "figure_formats", None)     # a command whose figures have one format
+    fmt = str(getattr(args, "figure_format", "png")).lower().lstrip(".")
+    drawn = not (getattr(args, "no_plot", False) or getattr(args, "no_plots", False))
+    if only and fmt not in only and drawn:
+        raise SceneError(f"--figure-format {fmt!r} is not offered by tengfield {args.command}: "
+                         f"its figures are drawn by pyvista as {', '.join(only)} only "
+                         f"(omit --figure-format, or --no-plots)")
     settings = getattr(args, "settings", None)
     if settings:
         from .scene import load_scene, with_settings

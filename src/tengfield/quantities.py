@@ -213,11 +213,23 @@ def column_name(name: str, statistic: str) -> str:
     return f"{q.short}_{STATISTICS[statistic][1]}{suffix}"
 
 
+_POWERS = {"^2": "²", "^3": "³", "^-1": "⁻¹", "^-2": "⁻²", "^-3": "⁻³"}
+
+
+def figure_unit(unit: str) -> str:
+    """A unit as a figure writes it: the terminal's carets as superscripts
+    (``"µW/cm^3"`` -> ``"µW/cm³"``, ``"W/m^3"`` -> ``"W/m³"``); the terminal keeps ^."""
+    for caret, superscript in sorted(_POWERS.items(), key=lambda kv: -len(kv[0])):
+        unit = unit.replace(caret, superscript)
+    return unit
+
+
 def axis_label(name: str, *, statistic: str = "") -> str:
-    """A figure's axis label: ``"Q_SC [nC]"`` (``statistic``: ``"Q_SC peak-to-peak [nC]"``)."""
+    """A figure's axis label: ``"Q_SC [nC]"`` (``statistic``: ``"Q_SC peak-to-peak [nC]"``),
+    the unit in figure style (:func:`figure_unit`: ``"P/V [W/m³]"``)."""
     q = quantity(name)
     words = {"peak_to_peak": " peak-to-peak", "peak": " peak"}.get(statistic, "")
-    return f"{q.symbol}{words} [{q.display_unit}]"
+    return f"{q.symbol}{words} [{figure_unit(q.display_unit)}]"
 
 
 def display(name: str, value) -> str:

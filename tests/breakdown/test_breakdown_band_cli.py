@@ -35,7 +35,7 @@ def test_breakdown_writes_the_band_and_mpirun_agrees(tmp_path, run_cli, cli_comm
     assert 0.0 < data["trajectory"]["peak_gap_voltage_over_breakdown"] < 1.0   # -8 uC/m^2
     assert (tmp_path / "serial" / "breakdown.png").stat().st_size > 10_000
     out = proc.stdout.splitlines()
-    assert any(line.startswith("sigma_max over gamma in [0.0001, 0.1]: ") for line in out)
+    assert any(line.startswith("static limit sigma_max by gamma in [0.0001, 0.1]: ") for line in out)
     for edge in ("lower", "estimate", "upper"):
         assert sum(line.strip().startswith(edge + " ") for line in out) == 1, proc.stdout
     if shutil.which("mpirun") is None:

@@ -20,8 +20,8 @@ def test_breakdown_result_plot_is_the_breakdown_figure(tmp_path):
     assert left.get_xlabel() == "gap length along the line [mm]"
     assert right.get_ylabel() == "|V_gap| / V_b (worst line)"
     assert f"σ_max = {result.sigma_max * 1e6:.3g} µC/m²" in fig._suptitle.get_text()
-    assert "-" + f"{result.sigma_max * 1e6:.3g}" in result.plot()._suptitle.get_text()
+    assert "−" + f"{result.sigma_max * 1e6:.3g}" in result.plot()._suptitle.get_text()
     air_breakdown.write_outputs(result, scene, tmp_path / "cli", plots=True)
-    fig.savefig(tmp_path / "notebook.png", dpi=130)
+    fig.savefig(tmp_path / "notebook.png", dpi=120)     # breakdown.png's dpi
     assert (tmp_path / "notebook.png").read_bytes() == \
         (tmp_path / "cli" / "breakdown.png").read_bytes()

@@ -99,3 +99,22 @@ def test_figure_names_follow_the_format():
     assert figure_file("waveforms") == "waveforms.png"
     with pytest.raises(ValueError, match="allowed png, pdf, svg"):
         set_figure_format("eps")
+
+
+@pytest.mark.parametrize("fmt", ["pdf", "svg"])
+def test_field_refuses_a_format_its_pyvista_figure_cannot_be(tmp_path, run_cli, fmt):
+    """``field --figure-format pdf`` wrote field.png silently (issue #53): one line, before
+    any work, naming the format and what to do; with --no-plots nothing is drawn, so it
+    passes the check."""
+    proc = run_cli("field", "--position-mm", "1.5", "--figure-format", fmt,
+                   "-o", tmp_path / "out", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == (
+        f"tengfield: error: --figure-format '{fmt}' is not offered by tengfield field: its "
+        "figures are drawn by pyvista as png only (omit --figure-format, or --no-plots)")
+    assert not (tmp_path / "out").exists()
+    from types import SimpleNamespace
+    from tengfield.cli import _apply_settings
+    _apply_settings(SimpleNamespace(figure_format=fmt, figure_formats=("png",), no_plot=True,
+                                    command="field", dpi=None, settings=[]))
+    _apply_settings(SimpleNamespace(figure_format="png", dpi=None, settings=[]))

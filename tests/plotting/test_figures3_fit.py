@@ -39,7 +39,7 @@ def test_trace_fit_is_paper_sized_with_symbols_and_a_labelled_residual_axis():
     width, height = fig.get_size_inches()
     assert width >= 7.0 and height >= 5.0
     title = fig.axes[0].get_title()
-    assert "σ = −35.8" in title and "µC/m²" in title and "e = 0.62" in title
+    assert "σ = −35.78 ± 0.41 µC/m²" in title and "restitution e = 0.620 ± 0.013" in title
     assert "surface_charge_uC_per_m2" not in title
     assert fig.axes[1].get_ylabel() == "residual [V]"
 
@@ -59,4 +59,24 @@ def test_targets_draw_measured_with_error_bars_against_fitted_per_target():
         assert np.isclose(low, measured - sigma) and np.isclose(high, measured + sigma)
         fitted_y = [ln.get_ydata()[0] for ln in ax.get_lines() if ln.get_label() == "fitted"]
         assert np.allclose(fitted_y, [fitted])
-    assert "σ = −35.8" in fig._suptitle.get_text()
+    assert "σ = −35.78 ± 0.41 µC/m²" in fig._suptitle.get_text()
+
+
+def test_fitted_values_are_rounded_to_their_errors_a_zero_shown_as_0():
+    """Issue #53: "t_0 = 2.51e−19 ± 2.6e-06 s" and "σ = −8 ± 0.002" (the fitted −7.9971,
+    read as the start value) in fit.png's title."""
+    from tengfield.plotting.fit import value_with_error
+
+    assert value_with_error(2.51e-19, 2.62e-6, "s") == "0 ± 2.6 µs"
+    assert value_with_error(-7.9971, 0.00202, "µC/m²") == "−7.9971 ± 0.0020 µC/m²"
+    assert value_with_error(-8.0, 1.1e-6, "µC/m²") == "−8 ± 1.1×10⁻⁶ µC/m²"
+    assert value_with_error(3e-3, 2e-4, "s") == "3.00 ± 0.20 ms"
+    assert value_with_error(-35.8, 12.0) == "−36 ± 12"
+    result = _trace()
+    result.names = ["surface_charge_uC_per_m2", "time_shift_s"]
+    result.values = {"surface_charge_uC_per_m2": -7.9971, "time_shift_s": 2.51206e-19}
+    result.standard_errors = {"surface_charge_uC_per_m2": 0.00202, "time_shift_s": 2.62e-6}
+    result.identifiable = {"surface_charge_uC_per_m2": True, "time_shift_s": True}
+    title = fit_figure(result).axes[0].get_title()
+    assert title == "σ = −7.9971 ± 0.0020 µC/m²; t_0 = 0 ± 2.6 µs"
+    assert "e-0" not in title and "e−" not in title

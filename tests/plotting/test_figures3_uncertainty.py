@@ -2,6 +2,8 @@
 units, tick labels inside the figure."""
 from __future__ import annotations
 
+import numpy as np
+
 from tengfield.scene import default_scene
 from tengfield.uncertainty_study import uncertainty_spec
 from tengfield.uncertainty_study.evaluation import Evaluations
@@ -41,3 +43,43 @@ def test_inputs_and_outputs_are_labelled_with_symbols_and_units_and_fit_the_figu
         box = ax.get_tightbbox(renderer)
         assert box.x0 >= frame.x0 - 0.5 and box.x1 <= frame.x1 + 0.5, ax.get_xlabel()
         assert box.y0 >= frame.y0 - 0.5 and box.y1 <= frame.y1 + 0.5, ax.get_xlabel()
+
+
+I = "peak.I_sc_A"
+E = "energy_per_cycle.max_energy_per_cycle_J"
+
+
+def _units_study() -> Study:
+    """A current in nA and an energy in µJ: outputs the figure once drew in µA and in J
+    with a 1e−6 offset, while the terminal said nA (the run's) and µJ."""
+    scene = default_scene().with_values(uncertainty={"samples": 16, "method": "sobol", "seed": 1,
+                                                     "vary": {
+        SIGMA: {"distribution": "normal", "mean": -20.0, "std": 2.0},
+        REST: {"distribution": "uniform", "low": 0.05, "high": 0.5}}})
+    spec = uncertainty_spec(scene)
+    values = study_values(spec)
+    rows = [{I: 7e-9 * abs(s) * (1 - e / 3), E: 1.2e-7 * s * s * (1 - e / 3)} for s, e in values]
+    ev = Evaluations(rows, ["period-1"] * len(rows), {I: 7e-9 * 8, E: 1.2e-7 * 64},
+                     "period-1", 0, 1, 1, [])
+    return Study(spec, values, ev, summarise(scene, spec, values, ev))
+
+
+def test_units_are_the_terminals_no_offsets_and_sobol_bars_within_0_and_1():
+    from helpers import assert_labelled, assert_units_as_terminal
+    from tengfield.uncertainty_study.output import summary_lines
+
+    study = _units_study()
+    fig = study.plot()
+    labels = [ax.get_xlabel() for ax in fig.axes]
+    assert "I_SC peak [nA]" in labels and "E_CMEO [µJ]" in labels
+    lines = summary_lines(study)
+    assert any(line.startswith("  I_SC peak [nA]: ") for line in lines), lines
+    assert_units_as_terminal(fig, lines)
+    assert_labelled(fig)             # no offset text ("1e−6"), legends off the data
+    for ax in fig.axes:
+        if ax.get_ylabel() != "share of variance":
+            continue
+        assert ax.get_ylim() == (0.0, 1.05)
+        for coll in ax.collections:  # the error bars' segments
+            for seg in coll.get_segments():
+                assert np.all(seg[:, 1] >= -1e-12) and np.all(seg[:, 1] <= 1 + 1e-12)

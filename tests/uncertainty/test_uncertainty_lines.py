@@ -25,7 +25,8 @@ def test_the_label_agrees_with_the_unit():
     lines = summary_lines(study(7.396e-8, [7.0e-8, 7.5e-8, 8.0e-8]))
     line = [ln for ln in lines if "nominal" in ln][0]
     assert "I_sc_A" not in line and "peak_to_peak." not in line
-    assert line.strip().startswith("I_SC peak-to-peak [µA]: nominal 0.07396, median")
+    # nA, as tengfield run prints I_SC (issue #53: the uncertainty said µA, the figure nA)
+    assert line.strip().startswith("I_SC peak-to-peak [nA]: nominal 73.96, median")
     assert "not-settled 50%" in lines[-1]
 
 

@@ -29,6 +29,12 @@ def scene_text(scene, sections: dict, header: str) -> str:
                       base_dir=scene_dir(scene.source))
 
 
+def table_row(cells) -> str:
+    """One Markdown table row of ``cells``: a cell's ``|`` escaped and its line breaks as
+    spaces, so that a note never adds a cell or ends the table."""
+    return "| " + " | ".join(str(c).replace("|", "\\|").replace("\n", " ") for c in cells) + " |"
+
+
 def markdown(report, images: dict) -> str:
     """The text of report.md."""
     sc = report.scene
@@ -63,9 +69,9 @@ def markdown(report, images: dict) -> str:
                       + " | ".join(f"error {error_symbol(e)}" for e in CIRCUIT_ERRORS) + " |",
                       "|---|---|---|" + "---|" * len(CIRCUIT_ERRORS)]
             for r in rows:
-                lines.append(f"| {r.setting} | {r.knobs['time_constant_s']:.2g} | "
-                             f"{r.wall_time_s:.3g} | "
-                             + " | ".join(_num(r.errors.get(e)) for e in CIRCUIT_ERRORS) + " |")
+                lines.append(table_row([r.setting, f"{r.knobs['time_constant_s']:.2g}",
+                                        f"{r.wall_time_s:.3g}"]
+                                       + [_num(r.errors.get(e)) for e in CIRCUIT_ERRORS]))
             continue
         extra = " | error C, q |" if stage == "field" else " |"
         head = ("| setting | wall time [s] | "
@@ -77,7 +83,7 @@ def markdown(report, images: dict) -> str:
             entries.append(_num(r.error))
             if stage == "field":
                 entries.append(_num(r.error_position))
-            lines.append("| " + " | ".join(entries) + " |")
+            lines.append(table_row(entries))
     lines += ["", "## Cheapest settings for a target accuracy", "",
               "Every combination of a measured field level, surrogate size and sampling rate "
               "competes; the cheapest one whose errors add up to at most the target is chosen. "
@@ -85,15 +91,17 @@ def markdown(report, images: dict) -> str:
               "`[field] tolerance`, which may refine beyond the chosen size) and measured "
               "against the overall reference.", "",
               "| target | [field] | sample_rate_hz | positions | predicted error | measured error "
-              f"({error_symbols()}) | wall time [s] | reached |", "|---|---|---|---|---|---|---|---|"]
+              f"({error_symbols()}) | wall time [s] | reached | note |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for rec in report.recommendations:
         f = rec.field
         field_text = (f"{f['method']}, degree {f['degree']}, mesh {f['mesh_size_mm']:g} mm, "
                       f"{f['far_field']}, tolerance {f['tolerance']:g}")
         errs = ", ".join(_num(rec.measured_errors.get(q)) for q in QUANTITIES)
-        lines.append(f"| {rec.target:g} | {field_text} | {rec.sample_rate_hz:g} | {rec.positions} | "
-                     f"{rec.predicted_error:.2g} | {errs} | {rec.measured_wall_time_s:.3g} | "
-                     f"{'yes' if rec.reached else 'NO'} |" + (f" {rec.note}" if rec.note else ""))
+        lines.append(table_row([f"{rec.target:g}", field_text, f"{rec.sample_rate_hz:g}",
+                                rec.positions, f"{rec.predicted_error:.2g}", errs,
+                                f"{rec.measured_wall_time_s:.3g}",
+                                "yes" if rec.reached else "NO", rec.note or ""]))
     lines += ["", "Use them: `tengfield run recommended-0.001.toml` (this scene with the block "
               "below), or in Python "
               "`tengfield.accuracy_report.recommended_field_settings(tolerance)`.", ""]

@@ -230,37 +230,49 @@ class Band:
 
 
 def assumption_lines(band: Band) -> dict:
-    """One line per edge: what it assumes."""
+    """One line per edge: what it assumes, said against the static limit σ_max (the
+    Paschen rule without seeds at the critical gap) so that no two numbers on one
+    screen read as the same thing: the estimate is the seeded value *above* the static
+    limit at the same γ; upper is the static limit at the widest gap (not at the
+    critical gap, whose static limit at that γ is given beside it)."""
+    by = band.static_by_gamma
     if band.paschen_curve == "empirical":   # γ does not enter the measured curve
         words = {k: "the empirical air curve" for k in ("lower", "estimate", "upper")}
+        at_upper = at_estimate = band.static_at_gamma
     else:
         words = {"lower": f"gamma = {band.gamma_lower:g}", "estimate": f"gamma = {band.gamma:g}",
                  "upper": f"gamma = {band.gamma_upper:g}"}
+        at_upper = by.get(band.gamma_upper, math.nan)
+        at_estimate = band.static_at_gamma
     return {
-        "lower": f"lower    {band.lower * 1e6:.4g} µC/m^2: breaks down the moment the critical "
-                 f"gap ({band.lower_gap * 1e3:.3g} mm) exceeds Paschen's V_b, "
-                 f"{words['lower']} (a seed electron always present)",
-        "estimate": f"estimate {band.estimate * 1e6:.4g} µC/m^2: {band.seeds.breakdowns_per_s:g} "
+        "lower": f"lower    {band.lower * 1e6:.4g} µC/m^2: the static limit (breaks down the "
+                 f"moment the critical gap ({band.lower_gap * 1e3:.3g} mm) exceeds Paschen's "
+                 f"V_b), {words['lower']} (a seed electron always present)",
+        "estimate": f"estimate {band.estimate * 1e6:.4g} µC/m^2: seeded, at or above the static "
+                    f"limit {at_estimate * 1e6:.4g} of the same gamma: "
+                    f"{band.seeds.breakdowns_per_s:g} "
                     f"seeded breakdown(s) per second from S_v = {band.seeds.seed_rate * 1e-6:g} "
                     f"/cm^3/s and n_ion = {band.seeds.ion_density * 1e-6:g} /cm^3 in the "
                     f"over-stressed volume along the trajectory, {words['estimate']} "
                     f"({band.estimate_rule})",
-        "upper": f"upper    {band.upper * 1e6:.4g} µC/m^2: breaks down even where the smaller "
+        "upper": f"upper    {band.upper * 1e6:.4g} µC/m^2: the static limit where the smaller "
                  f"gap is widest along the trajectory ({band.upper_gap * 1e3:.3g} mm), "
-                 f"{words['upper']}"}
+                 f"{words['upper']} (at the critical gap this gamma's static limit is "
+                 f"{at_upper * 1e6:.4g}): breaks down even there"}
 
 
 def gamma_line(band: Band) -> str:
-    """``tengfield breakdown``'s line: σ_max over the γ range and at the scene's γ."""
+    """``tengfield breakdown``'s line: the static limit σ_max at each γ taken (the
+    range's ends and the scene's), none of them an edge of the band but lower."""
     by = band.static_by_gamma
     if band.paschen_curve == "empirical":
-        return (f"sigma_max = {band.static_at_gamma * 1e6:.4g} µC/m^2 (empirical air curve: "
-                "gamma does not enter)")
-    lo, hi = min(by, key=by.get), max(by, key=by.get)
-    return (f"sigma_max over gamma in [{band.gamma_range[0]:g}, {band.gamma_range[1]:g}]: "
-            f"{by[lo] * 1e6:.4g} (gamma {lo:g}) to {by[hi] * 1e6:.4g} µC/m^2 (gamma {hi:g}); "
-            f"at the scene's gamma {band.gamma:g}: {band.static_at_gamma * 1e6:.4g} µC/m^2 "
-            f"({band.paschen_curve})")
+        return (f"static limit sigma_max = {band.static_at_gamma * 1e6:.4g} µC/m^2 (empirical "
+                "air curve: gamma does not enter)")
+    each = ", ".join(f"{by[g] * 1e6:.4g} at gamma {g:g}"
+                     + (" (the scene's)" if g == band.gamma else "")
+                     for g in sorted(by, reverse=True))
+    return (f"static limit sigma_max by gamma in [{band.gamma_range[0]:g}, "
+            f"{band.gamma_range[1]:g}]: {each} µC/m^2 ({band.paschen_curve})")
 
 
 def _gammas(paschen: Paschen, gamma_range) -> list[float]:
@@ -328,6 +340,33 @@ def compute_band(lines: Lines, paschen: Paschen, states, reference: str,
                                    else {}),
                 paschen_curve=paschen.curve, track=track,
                 static_by_gamma={g: static[g].sigma_max for g in gammas})
+
+
+def edge_ratios(result, band: Band, points: int = 301) -> dict:
+    """Each edge's max over lines of |V_gap| / V_b against the ball position z [m] over the
+    positions its trajectory visits, with V_b at the edge's own γ (``lower`` at
+    ``gamma_lower``, ``estimate`` at the scene's, ``upper`` at ``gamma_upper``): lower
+    touches 1 at its binding position, upper at the widest gap (its minimum), each once
+    (a function of z: the ball's way up and down fall on one curve). Returns
+    ``{"z": z, edge: (γ, ratio)}``; empty without a trajectory."""
+    if band.track is None or result.lines is None:
+        return {}
+    track, lines = band.track, result.lines
+    z = np.linspace(float(np.min(track.position)), float(np.max(track.position)), points)
+    for known in (band.lower_position, band.upper_position):
+        if z[0] <= known <= z[-1]:
+            z = np.union1d(z, [known])       # the binding positions on the curve exactly
+    gammas = {"lower": band.gamma_lower, "estimate": band.gamma, "upper": band.gamma_upper}
+    out = {"z": z}
+    for edge, sigma in band.edges().items():
+        paschen = result.paschen.with_gamma(gammas[edge])
+        threshold = np.full(z.size, np.inf)
+        for state in result.states:
+            limits = _dense_minimum(lines, paschen, state, result.reference, z)[2]
+            threshold = np.minimum(threshold, np.min(limits.reshape(z.size, -1), axis=1))
+        with np.errstate(divide="ignore"):
+            out[edge] = (gammas[edge], sigma / threshold)
+    return out
 
 
 def _seed_limited(track: StressTrack, seeds: Seeds, start: float, upper: float):

@@ -18,8 +18,11 @@ def summary_lines(result: BreakdownResult, scene, band=None) -> list[str]:
     line per edge of the band saying what it assumes)."""
     b = result.binding
     sigma = scene_surface_charge(scene, result)
-    lines = [f"sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2 (relative error estimate "
-             f"{result.relative_error_estimate:.2g}), {result.paschen.pressure / 1e3:.6g} kPa",
+    gamma = ("" if getattr(result.paschen, "curve", "") == "empirical"
+             else f" at gamma {result.paschen.gamma:g}")
+    lines = [f"static limit sigma_max = {result.sigma_max * 1e6:.4g} µC/m^2{gamma} (relative "
+             f"error estimate {result.relative_error_estimate:.2g}), "
+             f"{result.paschen.pressure / 1e3:.6g} kPa",
              f"binds: {b.state} ({STATE_TEXT[b.state]}), {b.side} gap, line at "
              f"{math.degrees(b.angle):.0f} deg, ball at z = {b.position * 1e3:.4g} mm: gap "
              f"{b.gap * 1e3:.4g} mm, V_b = {b.breakdown_voltage:.4g} V ({b.regime})"]
@@ -62,14 +65,20 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
     written.append(out / "breakdown.csv")
     if plots:
         from ..plotting.breakdown import plot_breakdown
-        drawn, title = sigma, None
-        if sigma == 0.0:   # an uncharged ball has no gap voltages: draw them at the limit
-            drawn = -result.sigma_max
-            title = (f"air breakdown: sigma_max = {result.sigma_max * 1e6:.3g} uC/m2 (the "
-                     f"scene's sigma is 0: gap voltages drawn at -sigma_max)")
+        drawn, title = drawn_charge(result, sigma)
         written.append(write_figure(plot_breakdown, result, drawn, title=title, band=band,
                                     path=out / figure_file("breakdown")))
     return written
+
+
+def drawn_charge(result: BreakdownResult, sigma: float) -> tuple:
+    """The σ [C/m²] breakdown.png draws the gap voltages at (the scene's; an uncharged
+    ball has none: −σ_max) and the title saying so (None: the figure's own)."""
+    if sigma != 0.0:
+        return sigma, None
+    return -result.sigma_max, (f"air breakdown: static limit σ_max = "
+                               f"{result.sigma_max * 1e6:.3g} µC/m² (the scene's σ is 0: gap "
+                               f"voltages drawn at −σ_max)")
 
 
 @dataclass
@@ -83,6 +92,17 @@ class BreakdownStudy(BreakdownResult):
         own trajectory included); returns the paths."""
         return write_outputs(self, self.scene, Path(out_dir), plots=plots, band=self.band,
                              field_status=self.field_status)
+
+    def plot(self, sigma: float | None = None, *, title: str | None = None):
+        """breakdown.png as a matplotlib Figure, its three panels: the gap voltages at
+        ``sigma`` [C/m²] (default: the scene's, as the file draws them) against Paschen's
+        curve, their ratio to it over the stroke, and the band along the trajectory."""
+        from ..plotting.breakdown import breakdown_figure
+
+        if sigma is None:
+            sigma, drawn_title = drawn_charge(self, scene_surface_charge(self.scene, self))
+            title = title or drawn_title
+        return breakdown_figure(self, sigma, title=title, band=self.band)
 
     @property
     def band(self):

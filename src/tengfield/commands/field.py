@@ -32,7 +32,9 @@ def register(sub) -> None:
                    help="two-terminal reference (default [circuit] reference)")
     p.add_argument("--no-plots", "--no-plot", dest="no_plot", action="store_true",
                    help="skip potential.xdmf and field.png")
-    p.set_defaults(func=_run)
+    # field.png is drawn by pyvista, a PNG only: --figure-format pdf/svg is refused in
+    # one line before any work (it wrote a PNG silently)
+    p.set_defaults(func=_run, figure_formats=("png",))
 
 
 def _resolved_charge(scene, comm):

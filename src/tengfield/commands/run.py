@@ -130,9 +130,9 @@ def band_lines(summary: dict) -> list[str]:
         return []
     lines = [f"  band: lower {band['lower_uC_per_m2']:.4g}, estimate "
              f"{band['estimate_uC_per_m2']:.4g}, upper {band['upper_uC_per_m2']:.4g} µC/m^2"
-             + (f"; along the trajectory max |V_gap|/V_b = "
-                f"{path['peak_gap_voltage_over_breakdown']:.3g} at this sigma, above 1 for "
-                f"{path['time_above_breakdown_s']:.3g} of {path.get('over_s', 0.0):.3g} s"
+             + (f"; over the {path.get('over_s', 0.0):.3g} s steady window of the trajectory "
+                f"max |V_gap|/V_b = {path['peak_gap_voltage_over_breakdown']:.3g} at this "
+                f"sigma, above 1 for {path['time_above_breakdown_s']:.3g} s of it"
                 if path else "")]
     lines += [f"    {text}" for text in band.get("assumptions", {}).values()]
     outputs = summary.get("breakdown_band") or {}
@@ -238,7 +238,7 @@ def print_summary(summary: dict) -> None:
         print(line + f" (FOM_S = {energy['figure_of_merit_structural']:.4g})")
     bd = summary.get("breakdown")
     if bd and bd.get("available"):
-        print(f"air breakdown: sigma_max = {bd['sigma_max_uC_per_m2']:.4g} µC/m^2, "
+        print(f"air breakdown: static limit sigma_max = {bd['sigma_max_uC_per_m2']:.4g} µC/m^2, "
               f"|sigma| / sigma_max = {bd['margin']:.3g} (sigma = {bd['sigma_uC_per_m2']:.4g} "
               f"µC/m^2, from the {bd['sigma_from']})")
         for line in band_lines(summary):

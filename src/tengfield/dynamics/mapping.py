@@ -89,8 +89,8 @@ class MapResult:
         """map.png's title (restitution, stroke, periods per point)."""
         if self.scene is None:
             return f"regimes, {self.periods} periods per point"
-        return (f"regimes, e = {self.scene.contact.restitution:g}, dh = "
-                f"{self.scene.device.stroke * 1e3:g} mm, {self.periods} periods per point")
+        return (f"regimes, restitution {self.scene.contact.restitution:g}, "
+                f"Δh = {self.scene.device.stroke * 1e3:g} mm, {self.periods} periods per point")
 
     def plot(self, *, title: str | None = None):
         """The regime map (a matplotlib Figure; ``tengfield map`` saves it as map.png)."""

@@ -112,11 +112,9 @@ def write_dynamics_files(dynamics, scene, out_dir: str | Path, *, plots: bool,
     drawing = None
     if plots:
         from .excitation import excitation_kind
-        from ..plotting.dynamics import draw_trajectory, plot_trajectory3d, trajectory_figure
-        exc = scene.excitation
-        title = (f"{exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
-                 f"e = {scene.contact.restitution:g}" if excitation_kind(scene).periodic
-                 else "recorded excitation")
+        from ..plotting.dynamics import (draw_trajectory, motion_words, plot_trajectory3d,
+                                         trajectory_figure)
+        title = motion_words(scene) if excitation_kind(scene).periodic else "recorded excitation"
         data = trajectory_figure(dynamics, max_periods=max_periods, title=title)
         for name in (figure_file("trajectory"), figure_file("trajectory3d")) if three_d else (figure_file("trajectory"),):
             writable_target(out / name)

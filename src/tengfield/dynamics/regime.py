@@ -149,8 +149,9 @@ def regime_label(name: str, period: int, *, settled_by_s: float | None = None,
     """How a regime is said in one line: ``"bounce, period 2"``, ``"chaos (aperiodic)"``
     (a chaotic window has no period: ``period`` 0), ``"rest"``, ``"not settled in 20 s
     (aperiodic)"``; with the settling check's lengths [s] (:func:`settled_regime`) and
-    the run's ``duration_s``, how it was checked (``"settled by 2 s, checked on a run of
-    4 s; the 1 s run is still settling"``)."""
+    the run's ``duration_s``, how it was checked: the runs compared (``"this run's regime:
+    the same on a run of 2 s"``; ``"found on a run of 2 s, the same on 4 s; the 1 s run is
+    still settling"``)."""
     if name == "not-settled":
         within = checked_to_s or duration_s
         return (f"not settled in {within:g} s (aperiodic)" if within
@@ -164,10 +165,14 @@ def regime_label(name: str, period: int, *, settled_by_s: float | None = None,
     if name == "chaos" and checked_to_s:
         text += f", over a run of {checked_to_s:g} s"
     elif settled_by_s is not None and checked_to_s:
-        text += f" (settled by {settled_by_s:g} s, checked on a run of {checked_to_s:g} s"
-        if duration_s is not None and settled_by_s > duration_s * (1 + 1e-9):
-            text += f"; the {duration_s:g} s run is still settling: raise [run] duration_s"
-        text += ")"
+        # settled_by_s is the length of the run whose window shows the regime (the run or
+        # a doubling of it), not a settling time: said as the runs compared
+        if duration_s is not None and settled_by_s <= duration_s * (1 + 1e-9):
+            text += (f" (this run's regime: the same on a run of {checked_to_s:g} s)")
+        else:
+            text += (f" (found on a run of {settled_by_s:g} s, the same on {checked_to_s:g} s"
+                     + (f"; the {duration_s:g} s run is still settling: raise [run] "
+                        "duration_s" if duration_s is not None else "") + ")")
     return text
 
 

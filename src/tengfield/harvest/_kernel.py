@@ -102,7 +102,11 @@ def _cell_after(v, c, u_new, h, model, forward, i_sat, n_vt, r_series):
         if not (lo < new < hi):
             new = 0.5 * (lo + hi)
             newton = False
-        if (newton and abs(new - x) <= 1e-14 * (abs(new) + 1e-3)) \
+        # a Newton step that barely moves is a root only where the residual is small
+        # too: at no transfer (i_A ~ -I_s) the law's slope is ~1e13 and the step tiny
+        # with a residual of volts (issue #53: a 1.6 V spike of a Shockley bridge)
+        if (newton and abs(new - x) <= 1e-14 * (abs(new) + 1e-3)
+                and abs(res) <= 1e-9 * (abs(x) + 1e-3)) \
                 or hi - lo <= 1e-14 * (abs(new) + 1e-3):
             return sign * new
         x = new

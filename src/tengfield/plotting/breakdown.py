@@ -11,47 +11,55 @@ _COLOURS = {"open": "tab:blue", "open-top": "tab:green", "short": "tab:red"}
 def plot_breakdown(result, sigma: float, path, *, title: str | None = None,
                    band=None) -> None:
     """breakdown.png: :func:`breakdown_figure` saved to ``path``."""
-    save_figure(breakdown_figure(result, sigma, title=title, band=band), path, dpi=130)
+    save_figure(breakdown_figure(result, sigma, title=title, band=band), path, dpi=120)
 
 
 _EDGE_STYLE = {"lower": ("tab:blue", ":"), "estimate": ("tab:orange", "-"),
                "upper": ("tab:red", "--")}
 
 
-def _band_panel(ax, band) -> None:
-    """|V_gap| / V_b of the worst line along the trajectory (the scene's γ) against the
-    ball's smaller gap, with σ at each of the band's three levels."""
-    track = band.track
-    smaller = track.smaller_gap
+def _band_panel(ax, result, band) -> None:
+    """Each edge of the band: |V_gap| / V_b of the worst line against the ball position
+    over the positions its trajectory visits, V_b at the edge's own γ
+    (:func:`tengfield.air_breakdown.band.edge_ratios`): lower touches 1 where it binds
+    (the critical gap), upper where the smaller gap is widest, the estimate crosses it."""
+    from ..air_breakdown.band import edge_ratios
+
+    curves = edge_ratios(result, band)
+    z = curves["z"] * 1e3
+    empirical = band.paschen_curve == "empirical"
     for edge, sigma in band.edges().items():
         colour, ls = _EDGE_STYLE[edge]
-        ax.plot(smaller * 1e3, track.ratio(sigma), color=colour, ls=ls, lw=1.0,
-                label=f"{edge}: {sigma * 1e6:.3g} µC/m²")
+        gamma, ratio = curves[edge]
+        at = "" if empirical else f", γ = {gamma:g}"
+        ax.plot(z, ratio, color=colour, ls=ls, lw=1.6,
+                label=f"{edge}: {sigma * 1e6:.3g} µC/m²{at}")
     ax.axhline(1.0, color="k", lw=1.0)
-    for gap_m, text in ((band.lower_gap, "lower binds"), (band.upper_gap, "upper binds")):
-        if np.isfinite(gap_m):
-            ax.axvline(gap_m * 1e3, color="0.6", lw=0.8, ls=":")
-            ax.text(gap_m * 1e3, 1.0, f" {text}", fontsize=7, color="0.4", rotation=90,
-                    va="bottom")
-    ax.set_xlabel("ball's smaller gap along the trajectory [mm]")
-    ax.set_ylabel("|V_gap| / V_b (worst line, scene's gamma)")
-    ax.set_title("the band along the trajectory", fontsize=9)
+    for position, edge in ((band.lower_position, "lower"), (band.upper_position, "upper")):
+        if np.isfinite(position) and z[0] <= position * 1e3 <= z[-1]:
+            ax.plot([position * 1e3], [1.0], "o", color=_EDGE_STYLE[edge][0], mfc="none",
+                    ms=7)
+    ax.set_xlabel("ball position z along the trajectory [mm]")
+    ax.set_ylabel("|V_gap| / V_b (worst line, the edge's γ)")
+    ax.set_title("the band: each edge reaches 1 where it binds (○)", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(True, alpha=0.3)
 
 
 def breakdown_figure(result, sigma: float, *, title: str | None = None, band=None):
     """Left: |σ ΔV| of the axial gaps (and the binding line) against their length over the
-    stroke, with Paschen's curve; middle: the largest |σ ΔV| / V_b over the lines against
-    the ball position; right (with a ``band`` that has a trajectory): |V_gap|/V_b along the
-    trajectory at the band's three σ. ``sigma`` [C/m²]: the scene's (or -σ_max). The
-    binding point is marked."""
+    stroke, with Paschen's curve; right: the largest |σ ΔV| / V_b over the lines against
+    the ball position; below (with a ``band`` that has a trajectory): each edge of the
+    band along the trajectory (:func:`_band_panel`). ``sigma`` [C/m²]: the scene's (or
+    -σ_max). The binding point is marked."""
     third = band is not None and band.track is not None
-    fig = new_figure((16.0 if third else 11.0, 4.6), layout="constrained")
-    axes = fig.subplots(1, 3 if third else 2)
-    left, right = axes[0], axes[1]
+    fig = new_figure((11.0, 8.2 if third else 4.6), layout="constrained")
     if third:
-        _band_panel(axes[2], band)
+        panels = fig.subplot_mosaic([["left", "right"], ["band", "band"]])
+        left, right = panels["left"], panels["right"]
+        _band_panel(panels["band"], result, band)
+    else:
+        left, right = fig.subplots(1, 2)
     paschen = result.paschen
     d = np.geomspace(1e-6, 2e-2, 400)
     left.loglog(d * 1e3, paschen.voltage(d), color="k", lw=2.0,
@@ -90,8 +98,7 @@ def breakdown_figure(result, sigma: float, *, title: str | None = None, band=Non
     v_at = s * abs(b.dv_per_sigma)
     left.plot([b.gap * 1e3], [v_at], "o", color="k", ms=7, mfc="none")
     left.plot([b.gap * 1e3], [b.breakdown_voltage], "*", color="k", ms=11,
-              label=f"binds: σ_max = {result.sigma_max * 1e6:.3g} µC/m² ({b.state}, {b.side} "
-                    f"gap, z = {b.position * 1e3:.3g} mm)")
+              label=f"binds: {b.state}, {b.side} gap, z = {b.position * 1e3:.3g} mm")
     left.set_xlabel("gap length along the line [mm]")
     left.set_ylabel("voltage across the gap [V]")
     left.set_xlim(d[0] * 1e3, d[-1] * 1e3)
@@ -102,8 +109,15 @@ def breakdown_figure(result, sigma: float, *, title: str | None = None, band=Non
     right.set_xlabel("ball position z [mm]")
     right.set_ylabel("|V_gap| / V_b (worst line)")
     right.set_yscale("log")
+    from matplotlib.ticker import FuncFormatter
+    plain = FuncFormatter(lambda v, _: f"{v:g}")      # 0.2, 0.3, 1: not 2×10⁻¹
+    right.yaxis.set_major_formatter(plain)
+    right.yaxis.set_minor_formatter(plain)
     right.legend(fontsize=7)
     right.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or f"air breakdown at σ = {sigma * 1e6:.3g} µC/m²: "
-                 f"σ_max = {result.sigma_max * 1e6:.3g} µC/m²", fontsize=10)
+    fig.suptitle(title or f"air breakdown at σ = {sigma * 1e6:.3g} µC/m²: static limit ".replace("-", "−")
+                 +
+                 f"σ_max = {result.sigma_max * 1e6:.3g} µC/m²"
+                 + ("" if getattr(result.paschen, "curve", "") == "empirical"
+                    else f" (γ = {result.paschen.gamma:g})"), fontsize=10)
     return fig

@@ -51,7 +51,10 @@ def design_figure(result, *, units: dict[str, str], names: dict[str, str] | None
     obj = spec.objective
     scales = scales or {}
     names = names or {}
+    from ..quantities import figure_unit
+
     label, factor = scales.get(obj, (units[obj], 1.0))
+    label = figure_unit(label)                      # µW/cm³ on the figure (µW/cm^3 printed)
     ylabel = f"{names.get(obj, obj)} [{label}]"
     ok = [r for r in rows if r["status"] == "ok"]
     infeasible = [r for r in rows if r["status"] == "infeasible"]
@@ -151,6 +154,7 @@ def design_figure(result, *, units: dict[str, str], names: dict[str, str] | None
     if pareto:
         a, b = spec.objectives[:2]
         (la, fa), (lb, fb) = scales.get(a, (units[a], 1.0)), scales.get(b, (units[b], 1.0))
+        la, lb = figure_unit(la), figure_unit(lb)
         ax2 = axes[-1]
         xa = [r["objectives"][a]["value"] * fa for r in ok]
         yb = [r["objectives"][b]["value"] * fb for r in ok]

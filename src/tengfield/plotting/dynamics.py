@@ -47,6 +47,15 @@ class TrajectoryFigure:
     shell: bool = False          # a spherical shell: the "plates" are the cavity wall
 
 
+def motion_words(scene, *, stroke: bool = False) -> str:
+    """The excitation and contact of ``scene`` as a figure's title names them:
+    "A = 1.5 mm, 20 Hz, restitution 0.1" (with ``stroke``: ", Δh = 3 mm" too)."""
+    exc = scene.excitation
+    words = (f"A = {exc.amplitude * 1e3:g} mm, {exc.frequency:g} Hz, "
+             f"restitution {scene.contact.restitution:g}")
+    return words + (f", Δh = {scene.device.stroke * 1e3:g} mm" if stroke else "")
+
+
 def trajectory_figure(result, *, title: str | None = None,
                       max_periods: float | None = None) -> TrajectoryFigure:
     """The numbers of :func:`plot_trajectory` (``result`` a DynamicsResult)."""

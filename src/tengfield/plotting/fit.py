@@ -2,6 +2,7 @@
 against the targets (a :class:`tengfield.fit.FitResult`)."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -91,16 +92,61 @@ def _unit(result, q: str) -> str:
     return quantity(name).display_unit
 
 
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+#: SI prefixes a time in seconds is shown with (t_0 = 0 ± 2.6 µs, not 2.6e-06 s)
+_TIME_PREFIXES = ((1.0, "s"), (1e-3, "ms"), (1e-6, "µs"), (1e-9, "ns"))
+
+
+def _two_digits(x: float) -> str:
+    """``x`` to 2 significant digits, a power of ten as ×10⁻⁶ (no "e-06")."""
+    text = f"{x:.2g}"
+    if 1e-4 <= abs(x) < 1e5:         # fixed point, its second digit kept (0.20, not 0.2)
+        text = f"{x:.{max(1 - math.floor(math.log10(abs(x))), 0)}f}"
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}×10{str(int(exponent)).translate(_SUPERSCRIPT)}"
+    return text.replace("-", "\u2212")
+
+
+def value_with_error(value: float, error: float, unit: str = "") -> str:
+    """``"−35.80 ± 0.41 µC/m²"``: ``value`` rounded to the digits its standard ``error``
+    carries (2 significant digits of the error; past 6 digits of the value, 4: ``−8 ±
+    1.1×10⁻⁶``), a value within a hundredth of its error shown as 0 (a t_0 of 2.5e-19 s
+    ± 2.6 µs is 0); a time in seconds with the SI prefix of its error."""
+    if unit == "s" and math.isfinite(error) and error > 0:
+        size = max(abs(value), error)
+        for factor, prefix in _TIME_PREFIXES:
+            if size >= factor or factor == _TIME_PREFIXES[-1][0]:
+                value, error, unit = value / factor, error / factor, prefix
+                break
+    if not (math.isfinite(error) and error > 0):
+        shown = f"{value:.3g}"
+        spread = ""
+    else:
+        if abs(value) < 0.01 * error:
+            shown = "0"
+        else:
+            decimals = 1 - math.floor(math.log10(error))
+            digits = (math.floor(math.log10(abs(value))) + 1 + decimals) if value else 0
+            shown = (f"{value:.{max(decimals, 0)}f}" if 0 < digits <= 6 or decimals <= 0
+                     else f"{value:.4g}")
+        spread = f" ± {_two_digits(error)}"
+    shown = shown.replace("-", "\u2212")
+    return f"{shown}{spread}" + (f" {unit}" if unit else "")
+
+
 def _title(result) -> str:
-    """``σ = −35.8 ± 0.41 µC/m²; e = 0.62 ± 0.013`` (symbols and units of
-    :data:`tengfield.quantities.SCENE_SYMBOLS`), two parameters a line."""
+    """The fitted values: ``σ = −35.80 ± 0.41 µC/m²; restitution e = 0.620 ± 0.013``
+    (symbols and units of :data:`tengfield.quantities.SCENE_SYMBOLS`, each value rounded
+    to its standard error: :func:`value_with_error`), two parameters a line."""
     from ..quantities import scene_symbol
 
     parts = []
     for name in result.names:
         se = result.standard_errors[name]
         flag = "" if result.identifiable[name] else " (n.i.)"
-        symbol, unit, _ = scene_symbol(name) or (name, "", "")
-        value = f"{result.values[name]:.3g}".replace("-", "\u2212")
-        parts.append(f"{symbol} = {value} ± {se:.2g}" + (f" {unit}" if unit else "") + flag)
+        symbol, unit, words = scene_symbol(name) or (name, "", "")
+        if not unit and words and len(symbol) == 1:     # e: "restitution e"
+            symbol = f"{words} {symbol}"
+        parts.append(f"{symbol} = {value_with_error(result.values[name], se, unit)}" + flag)
     return "\n".join("; ".join(parts[i:i + 2]) for i in range(0, len(parts), 2))

@@ -5,8 +5,9 @@ import math
 
 from . import new_figure
 
-#: most lines one panel draws (one per setting of the other axes); past it, the first ones
-MAX_LINES = 8
+#: past this many lines in a panel (one per setting of the other axes) their colours run
+#: along a colour map (the default cycle repeats after 10)
+CYCLE_LINES = 10
 
 
 def _number(value) -> bool:
@@ -14,7 +15,7 @@ def _number(value) -> bool:
 
 
 def _text(value) -> str:
-    return f"{value:g}" if _number(value) else str(value)
+    return f"{value:.4g}" if _number(value) else str(value)
 
 
 def _legend_text(key: str, value) -> str:
@@ -40,9 +41,11 @@ def vary_figure(result, key: str):
     """Peak-to-peak V_OC, Q_SC, I_SC (at the first load; they do not depend on it) and,
     with loads, the mean power against the values of the varied scene key ``key`` (its
     label and unit as design.png names them), one line per setting of the other varied
-    keys, frequency, amplitude (and load, in the power panel): at most :data:`MAX_LINES`,
-    said in the title when more."""
+    keys, frequency, amplitude (and load, in the power panel): every setting drawn
+    (past :data:`CYCLE_LINES` in colours along a map)."""
     from ..quantities import QUANTITIES, TERMINAL, axis_label, column_name
+    from matplotlib import cm
+
     from .design import key_label
 
     rows = list(result)
@@ -64,29 +67,39 @@ def vary_figure(result, key: str):
             values.append(row[key])
     numeric = all(_number(v) for v in values)
     position = {v: (float(v) if numeric else i) for i, v in enumerate(values)}
-    fig = new_figure((4 * len(panels), 3.6))
+    fig = new_figure((4 * len(panels) + 1.5, 3.6), layout="constrained")
     axes = fig.subplots(1, len(panels))
+    decades = numeric and all(float(v) > 0 for v in values) and len(values) > 2 \
+        and max(float(v) for v in values) >= 100 * min(float(v) for v in values)
+    shared = None      # the legend every terminal panel shares: once, beside the figure
     section, _, name = key.rpartition(".")
-    more = 0
     for ax, (column, label, factor, groups, names) in zip(axes, panels):
         varying = [k for i, k in enumerate(names) if len({g[i] for g in groups}) > 1]
-        more = max(more, len(groups))
-        for setting, members in list(groups.items())[:MAX_LINES]:
+        colours = (None if len(groups) <= CYCLE_LINES else
+                   [cm.viridis(i / (len(groups) - 1)) for i in range(len(groups))])
+        for n, (setting, members) in enumerate(groups.items()):
             pts = sorted((position[r[key]], r[column]) for r in members
                          if r.get(column) is not None and math.isfinite(r[column]))
             words = ", ".join(_legend_text(k, v) for k, v in zip(names, setting)
                               if k in varying)
             ax.plot([p[0] for p in pts], [p[1] * factor for p in pts], "o-", ms=3,
-                    label=words or None)
+                    label=words or None, color=None if colours is None else colours[n])
+        if decades:        # a key spanning decades (a load R): a log axis
+            ax.set_xscale("log")
         ax.set_xlabel(f"[{section}] {key_label(name)}")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         if not numeric:
             ax.set_xticks(range(len(values)), [_text(v) for v in values])
         if varying and len(groups) > 1:
-            ax.legend(fontsize=7)
-    note = f" (first {MAX_LINES} of {more} settings per panel)" if more > MAX_LINES else ""
+            labels = ax.get_legend_handles_labels()
+            if shared is None:
+                shared = labels
+            elif labels[1] != shared[1]:      # the power panel's loads: its own legend
+                ax.legend(fontsize=7, ncol=1 if len(groups) <= CYCLE_LINES else 2)
+    if shared is not None:
+        fig.legend(*shared, loc="outside right upper", fontsize=7,
+                   ncol=1 if len(shared[1]) <= 2 * CYCLE_LINES else 2)
     at = f", Q_SC/V_OC/I_SC at load R = {_text(loads[0])} Ω" if len(loads) > 1 else ""
-    fig.suptitle(f"sweep over {key_label(name)}{at}{note}", fontsize=10)
-    fig.tight_layout()
+    fig.suptitle(f"sweep over {key_label(name)}{at}", fontsize=10)
     return fig

@@ -9,13 +9,22 @@ import numpy as np
 
 from . import new_figure, save_figure
 
-#: display unit of an output by its name's unit suffix: (suffix, unit text, scale)
-_UNITS = (("_V", "V", 1.0), ("_C", "nC", 1e9), ("_A", "µA", 1e6), ("_W", "µW", 1e6),
+#: display unit of an output the quantity table leaves in SI (or does not hold), by its
+#: name's unit suffix: (suffix, unit text, scale); I_SC as the run prints it (nA)
+_UNITS = (("_V", "V", 1.0), ("_C", "nC", 1e9), ("_A", "nA", 1e9), ("_W", "µW", 1e6),
           ("_J", "µJ", 1e6))
 
 
 def display_unit(name: str) -> tuple[str, float]:
-    """(unit text, scale) to show output ``name`` in."""
+    """(unit text, scale) output ``name`` is shown in, on the terminal and on
+    uncertainty.png alike: the quantity table's display unit (``peak.I_sc_A``: nA, as
+    ``tengfield run`` prints it), else by the unit suffix (an SI energy in µJ)."""
+    from ..quantities import QUANTITIES
+
+    leaf = name.rpartition(".")[2]
+    q = QUANTITIES.get(leaf)
+    if q is not None and q.display_unit not in ("", "1") and q.display_scale != 1.0:
+        return q.display_unit, q.display_scale
     for suffix, unit, scale in _UNITS:
         if name.endswith(suffix):
             return unit, scale
@@ -23,18 +32,35 @@ def display_unit(name: str) -> tuple[str, float]:
 
 
 def output_axis(name: str) -> tuple[str, float]:
-    """(axis label, SI -> shown factor) of output ``name``: a quantity-table output
-    (``peak_to_peak.Q_sc_C``) as ``"Q_SC peak-to-peak [nC]"``; others by unit suffix."""
-    from ..quantities import QUANTITIES, axis_label
+    """(axis label, SI -> shown factor) of output ``name``, in :func:`display_unit`'s
+    unit: a quantity-table output (``peak_to_peak.Q_sc_C``) as
+    ``"Q_SC peak-to-peak [nC]"``; others by unit suffix."""
+    from ..quantities import QUANTITIES
 
     stat, _, leaf = name.rpartition(".")
+    unit, scale = display_unit(name)
     if leaf in QUANTITIES:          # a statistic's or a block's (energy_per_cycle) output
         q = QUANTITIES[leaf]
         if q.display_unit in ("", "1"):                  # dimensionless: FOM_S
             return q.symbol, q.display_scale
-        return axis_label(leaf, statistic=stat), q.display_scale
-    unit, scale = display_unit(name)
+        words = {"peak_to_peak": " peak-to-peak", "peak": " peak"}.get(stat, "")
+        return f"{q.symbol}{words} [{unit}]", scale
     return (f"{name} [{unit}]" if unit else name), scale
+
+
+#: a Sobol index is a share of variance: its bootstrap interval is drawn within [0, 1]
+#: (a bootstrap of a few samples can reach past either end; the JSON keeps it whole)
+SHARE_RANGE = (0.0, 1.0)
+
+
+def share_error_bars(value: float, half_width: float) -> tuple[float, float]:
+    """(below, above) of a Sobol index's 95 % interval ``value ± half_width`` clipped
+    to :data:`SHARE_RANGE` (the value itself clipped too: an estimate of 1.19 is drawn
+    at 1)."""
+    shown = min(max(value, SHARE_RANGE[0]), SHARE_RANGE[1])
+    low = min(max(value - half_width, SHARE_RANGE[0]), shown)
+    high = max(min(value + half_width, SHARE_RANGE[1]), shown)
+    return shown - low, high - shown
 
 
 def plot_uncertainty(rows: list[dict], summary: dict, path: str | Path) -> Path:
@@ -80,20 +106,24 @@ def uncertainty_figure(rows: list[dict], summary: dict):
             if indices:
                 x = np.arange(len(inputs))
                 for offset, which, colour in ((-0.2, "S1", "C2"), (0.2, "ST", "C3")):
-                    ax.bar(x + offset, [indices[k][which] for k in inputs], width=0.4,
-                           yerr=[indices[k][which + "_conf"] for k in inputs], capsize=3,
-                           color=colour, alpha=0.75, label=which)
+                    raw = [indices[k][which] for k in inputs]
+                    bars = [share_error_bars(v, indices[k][which + "_conf"])
+                            for k, v in zip(inputs, raw)]
+                    ax.bar(x + offset, [min(max(v, 0.0), 1.0) for v in raw], width=0.4,
+                           yerr=np.array(bars).T, capsize=3, color=colour, alpha=0.75,
+                           label=which)
                 ax.set_xticks(x)
                 ax.set_xticklabels([scene_label(k) for k in inputs], fontsize=7, rotation=15 if len(inputs) > 2 else 0,
                                    ha="right" if len(inputs) > 2 else "center")
-                ax.set_ylim(min(0.0, ax.get_ylim()[0]), max(1.05, ax.get_ylim()[1]))
+                ax.set_ylim(0.0, 1.05)
                 ax.legend(fontsize=7, loc="best")
             else:
                 ax.text(0.5, 0.5, summary.get("notes", {}).get(name, "no Sobol indices"),
                         ha="center", va="center", fontsize=8, transform=ax.transAxes)
             ax.set_ylabel("share of variance", fontsize=8)
             ax.grid(alpha=0.3, axis="y")
-    bars = "; bars: Sobol S1 / ST with bootstrap 95 % intervals" if sobol else ""
+    bars = ("; bars: Sobol S1 / ST with bootstrap 95 % intervals (within [0, 1])"
+            if sobol else "")
     fig.suptitle(f"uncertainty: {summary['evaluations']} evaluations ({summary['method']}, "
                  f"N = {summary['samples']}){bars}", fontsize=9)
     return fig

@@ -275,9 +275,32 @@ def _signed(value: float) -> str:
     return f"{value:g}".replace("-", "−")
 
 
+def circuit_words(scene) -> list[str]:
+    """The circuit's and the instrument's numbers a run's waveforms depend on: the load
+    R (Ω, kΩ, MΩ, GΩ), the circuit's parallel C_p and the instrument's C_p [pF]."""
+    circuit = scene.circuit
+    words = []
+    if getattr(circuit, "kind", "") in ("load", "series-rc") and getattr(circuit, "load", 0.0) > 0:
+        words.append(f"R = {_ohms(circuit.load)}")
+    instrument = getattr(scene, "instrument", None)
+    c_p = getattr(instrument, "capacitance", 0.0) or getattr(circuit, "parallel_capacitance", 0.0)
+    if c_p > 0:
+        words.append(f"C_p = {c_p * 1e12:.3g} pF")
+    return words
+
+
+def _ohms(value: float) -> str:
+    """A resistance with its SI prefix: 10 MΩ, 4.7 kΩ, 50 Ω."""
+    for factor, prefix in ((1e9, "G"), (1e6, "M"), (1e3, "k")):
+        if value >= factor:
+            return f"{value / factor:.3g} {prefix}Ω"
+    return f"{value:.3g} Ω"
+
+
 def run_title(result) -> str:
     """The title of a run's figures: the device (σ [µC/m²], stroke Δh [mm]), the
-    excitation, the cell count when > 1, the reference and the regime."""
+    excitation, the cell count when > 1, the load R and C_p (:func:`circuit_words`),
+    the reference and the regime."""
     exc, dev = result.scene.excitation, result.scene.device
     regime = result.summary.get("regime") or {}
     name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
@@ -285,5 +308,5 @@ def run_title(result) -> str:
              f"Δh = {dev.stroke * 1e3:g} mm", f"{exc.frequency:g} Hz",
              f"A = {exc.amplitude * 1e3:g} mm",
              cells_phrase(result.summary.get("cells", dev.cells)),
-             result.scene.circuit.reference, name]
+             *circuit_words(result.scene), result.scene.circuit.reference, name]
     return ", ".join(p for p in parts if p)
