@@ -80,7 +80,7 @@ IMAGE_SHARE = (
     "surrogate/test_surrogate_zr.py",
     "dynamics/motion3d/test_shell_cli.py",
     "pipeline/test_shell_studies.py",
-    # every ```python block of the docs as scripts (~15 min; where VTK >= 9.4 would warn)
+    # every ```python block of the docs as scripts (minutes: README.md alone 110 s)
     "test_docs_python.py",
 )
 
