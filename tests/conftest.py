@@ -52,7 +52,10 @@ def cli_environment(**extra) -> dict:
 #: host's ``make test`` runs every test); so are the files below (the Quick start, the
 #: warm-up) and the slow tests of :data:`RELEASE_SLOW` (one per code path that differs)
 RELEASE_FOLDERS = ("field", "surrogate", "cli", "parallel")
-RELEASE_FILES = ("test_readme_quickstart.py", "test_warmup.py")
+RELEASE_FILES = ("test_readme_quickstart.py", "test_warmup.py",
+                 # Python as researchers run it (docs/python.md): multiprocessing, VTK's
+                 # window and the Jupyter stack differ between Python 3.11 and 3.13
+                 "test_scripts_without_guard.py", "test_notebooks.py")
 RELEASE_SLOW = (
     "field/test_field_3d.py::test_offset_direction_does_not_matter_in_a_round_tube",  # 3D
     "field/test_spherical_shell_3d.py::test_the_3d_solve_on_the_axis_equals_the_axisymmetric_one",
@@ -77,6 +80,8 @@ IMAGE_SHARE = (
     "surrogate/test_surrogate_zr.py",
     "dynamics/motion3d/test_shell_cli.py",
     "pipeline/test_shell_studies.py",
+    # every ```python block of the docs as scripts (minutes: README.md alone 110 s)
+    "test_docs_python.py",
 )
 
 

@@ -32,6 +32,9 @@ import importlib
 __version__ = "0.1.0"
 
 from .errors import DynamicsError, FieldError, SceneError, TengfieldError  # noqa: E402
+from ._console import headless_vtk as _headless_vtk  # noqa: E402
+
+_headless_vtk()   # a script's or notebook's field.png: no X-server warning on stderr
 from .scene import Scene, default_scene, load_scene, parse_scene  # noqa: E402
 
 #: public name -> (module, attribute), imported on first access

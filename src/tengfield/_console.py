@@ -64,6 +64,16 @@ def _showwarning(message, category, filename, lineno, file=None, line=None):
         pass
 
 
+def headless_vtk() -> None:
+    """Without a display, ask VTK for its headless EGL window first: VTK (>= 9.4
+    wheels) would try X first and print "bad X server connection" on stderr before
+    falling back. Called by :func:`configure_output` (the CLI) and by ``import
+    tengfield`` (scripts, notebooks: their field.png renders quietly too); VTK reads it
+    when a render window is made. A display, or the user's own setting, is left alone."""
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+
 def configure_output() -> None:
     """Quiet stderr: only tengfield's own lines (see the module docstring).
 
@@ -73,10 +83,7 @@ def configure_output() -> None:
     # the CLI only renders PNG files: never ask for an X server (VTK's
     # "bad X server connection"); pyvista reads this at import
     os.environ["PYVISTA_OFF_SCREEN"] = "true"
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        # no display: VTK (>= 9.4 wheels) would try X first and print "bad X server
-        # connection" before falling back; ask for the headless EGL window first
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    headless_vtk()
     root = logging.getLogger()
     if not any(isinstance(h, _QuietHandler) for h in root.handlers):
         # a handler on the root first: ffcx's logging.basicConfig() then adds none,

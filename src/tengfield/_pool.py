@@ -14,17 +14,88 @@ and ``report``'s task lists, an ``[array]``'s cells), :func:`pool_context`:
   per process, that never initialises MPI; it imports :data:`PRELOAD` (the tasks'
   modules, numpy, numba and the impact map's kernels) once, and every worker is forked
   from it with those loaded, instead of importing them again as ``spawn`` workers do.
+
+Workers never run the caller's ``__main__`` (:func:`_without_main`): multiprocessing's
+``spawn`` and ``forkserver`` workers re-import the main script (its
+``init_main_from_path``) or module (``init_main_from_name``) before they unpickle
+their task, which re-runs a script without an ``if __name__ == "__main__":`` guard
+(its ``tf.map`` then starts workers from a worker: "An attempt has been made to start
+a new process before the current process has finished its bootstrapping phase", over
+and over), fails on ``python -`` (``runpy.run_path('<stdin>')``) and re-runs
+``ipykernel_launcher`` in a notebook. The pools' tasks are tengfield's own functions,
+so a worker needs tengfield only. A worker that cannot start, or dies, ends the pool
+with one :class:`PoolError` line instead of a pool that waits or starts workers again.
 """
 from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import multiprocessing.context
+import multiprocessing.spawn
 import os
 import sys
+import threading
+
+from .errors import TengfieldError
 
 #: Imported once by the fork server (see the module docstring); nothing in it
 #: initialises MPI or dolfinx, or starts a thread.
 PRELOAD = ["tengfield._pool_preload"]
+
+
+class PoolError(TengfieldError, RuntimeError):
+    """A worker process of a pool could not start or stopped (one line for the CLI)."""
+
+
+_launching = threading.local()   # set while this thread starts one of our workers
+_prepare = multiprocessing.spawn.get_preparation_data
+
+
+def _preparation_data(name):
+    """multiprocessing's preparation data of a new ``spawn``/``forkserver`` process,
+    without the caller's main script or module while one of our workers starts."""
+    data = _prepare(name)
+    if getattr(_launching, "active", False):
+        data.pop("init_main_from_path", None)
+        data.pop("init_main_from_name", None)
+    return data
+
+
+def _without_main() -> None:
+    """Install :func:`_preparation_data` (once): it drops the ``__main__`` entries only
+    for the processes our contexts start (a thread-local flag set by their ``start``),
+    so the caller's own multiprocessing is left as it was."""
+    if multiprocessing.spawn.get_preparation_data is not _preparation_data:
+        multiprocessing.spawn.get_preparation_data = _preparation_data
+
+
+class _WorkerStart:
+    """Mixin of our workers' Process classes: the start (the preparation data is made
+    synchronously in ``start`` by the thread starting the worker) runs flagged."""
+
+    def start(self):
+        previous = getattr(_launching, "active", False)
+        _launching.active = True
+        try:
+            super().start()
+        finally:
+            _launching.active = previous
+
+
+class _ForkServerProcess(_WorkerStart, multiprocessing.context.ForkServerProcess):
+    pass
+
+
+class _SpawnProcess(_WorkerStart, multiprocessing.context.SpawnProcess):
+    pass
+
+
+class _ForkServerContext(multiprocessing.context.ForkServerContext):
+    Process = _ForkServerProcess
+
+
+class _SpawnContext(multiprocessing.context.SpawnContext):
+    Process = _SpawnProcess
 
 
 def _threads() -> int:
@@ -65,8 +136,12 @@ def start_method() -> str:
 def pool_context(method: str | None = None):
     """The multiprocessing context a pool is created with: :func:`start_method` (or
     ``method``), a fork server preloading :data:`PRELOAD`."""
-    context = multiprocessing.get_context(method or start_method())
-    if context.get_start_method() == "forkserver":
+    method = method or start_method()
+    if method == "fork":
+        return multiprocessing.get_context("fork")
+    _without_main()
+    context = {"forkserver": _ForkServerContext, "spawn": _SpawnContext}[method]()
+    if method == "forkserver":
         context.set_forkserver_preload(PRELOAD)
     return context
 
@@ -84,6 +159,27 @@ def start_early(jobs: int | None) -> None:
         forkserver.ensure_running()
 
 
+def _drain_tasks(pool) -> None:
+    """Read, and drop, the tasks still in the pipe to a broken pool's dead workers.
+
+    Python 3.11's executor, once a worker died, joins the thread that feeds the tasks to
+    the workers, which blocks for ever on a full pipe nobody reads (a sweep's tasks carry
+    their scene): the caller would wait in ``shutdown`` for good. A daemon thread here
+    empties that pipe until the executor closes it."""
+    reader = getattr(getattr(pool, "_call_queue", None), "_reader", None)
+    if reader is None:
+        return
+
+    def drain():
+        try:
+            while True:
+                reader.recv_bytes()
+        except (EOFError, OSError, ValueError):
+            pass
+
+    threading.Thread(target=drain, name="tengfield-pool-drain", daemon=True).start()
+
+
 @contextlib.contextmanager
 def process_pool(jobs: int, method: str | None = None, initializer=None):
     """A ``ProcessPoolExecutor`` of ``jobs`` workers on :func:`pool_context` (``method``:
@@ -92,11 +188,18 @@ def process_pool(jobs: int, method: str | None = None, initializer=None):
     terminated and the tasks not started are cancelled: no worker goes on computing,
     or outlives the command (``with ProcessPoolExecutor`` would wait for every task)."""
     from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
 
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=pool_context(method),
                                initializer=initializer)
     try:
-        yield pool
+        try:
+            yield pool
+        except BrokenProcessPool as exc:
+            _drain_tasks(pool)
+            raise PoolError(f"a worker process of the {jobs}-worker pool could not start "
+                            f"or stopped ({exc}); run with jobs=1 (--jobs 1) to see "
+                            "its error") from exc
     except BaseException:
         for process in list((getattr(pool, "_processes", None) or {}).values()):
             process.terminate()

@@ -337,6 +337,12 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     start = time.perf_counter()
     check_scene_argument("tengfield.design", scene)
     jobs = check_jobs_argument("tengfield.design", jobs, comm)
+    if "design" not in scene.raw:   # the default study, as ``tengfield design`` runs it
+        from .spec import default_design_section
+        section, said = default_design_section(scene, (overrides or {}).get("candidates"))
+        scene = scene.with_values(design=section)
+        if progress_shown(progress, comm):
+            print(f"tengfield: {said}", file=sys.stderr, flush=True)
     spec = parse_design_section(scene, overrides)
     check_design_combination(scene, spec)
     announce_cost(scene, spec, progress_shown(progress, comm))

@@ -225,9 +225,9 @@ def regime_map(scene, frequencies_hz, amplitudes_m, *, jobs: int | None = None,
             for task in tasks:
                 store(_chunk(task))
         else:
-            from .._pool import pool_context
-            with pool_context().Pool(min(jobs, len(tasks))) as pool:
-                for results in pool.imap_unordered(_chunk, tasks):
+            from .._pool import process_pool   # a worker that fails ends it (one line)
+            with process_pool(min(jobs, len(tasks))) as pool:
+                for results in pool.map(_chunk, tasks):
                     store(results)
     finally:
         bar.close()

@@ -27,6 +27,7 @@ def new_figure(figsize, **kwargs):
 
     fig = TidyFigure(figsize=figsize, **kwargs)
     FigureCanvasAgg(fig)
+    _shown_in_notebooks(Figure)
     return fig
 
 
@@ -213,6 +214,31 @@ def tidy_figure(fig, renderer) -> None:
                     fig.tight_layout()
     finally:
         fig._tidying = False
+
+def _shown_in_notebooks(figure_class) -> None:
+    """In an IPython kernel (Jupyter) where pyplot was never imported, a Figure made
+    without pyplot would show as ``<Figure size ...>``: register the PNG display that
+    ``%matplotlib inline`` registers (only if none is; nothing outside IPython)."""
+    import sys
+
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    if shell is None or not hasattr(shell, "display_formatter"):
+        return
+    png = shell.display_formatter.formatters.get("image/png")
+    if png is None or _has(png, figure_class):
+        return
+    from IPython.core.pylabtools import print_figure
+
+    png.for_type(figure_class, lambda fig: print_figure(fig, "png", bbox_inches="tight"))
+
+
+def _has(formatter, figure_class) -> bool:
+    try:
+        formatter.lookup_by_type(figure_class)
+        return True
+    except KeyError:
+        return False
 
 
 def save_figure(fig, path, dpi: float):

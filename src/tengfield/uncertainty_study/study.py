@@ -155,6 +155,12 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
     check_instance(function, spec, "spec", UncertaintySpec, "an UncertaintySpec "
                    "(tengfield.uncertainty_study.uncertainty_spec(scene)) or None", allow_none=True)
     jobs = check_jobs_argument(function, jobs, comm)
+    if spec is None and "uncertainty" not in scene.raw:   # as ``tengfield uncertainty``
+        from .spec import default_uncertainty_section
+        section, said = default_uncertainty_section(scene)
+        scene = scene.with_values(uncertainty=section)
+        if progress and rank_of(comm) == 0:
+            print(f"tengfield: {said}", file=sys.stderr, flush=True)
     spec = spec or uncertainty_spec(scene)
     check_study_combination(scene)
     values = study_values(spec)
