@@ -69,7 +69,8 @@ def waveform_columns(waveforms) -> list[str]:
     ``I_read_A``: through C_p or an ``[instrument]``), the circuit's present (the
     registry's order, :func:`tengfield.electrical.all_columns`)."""
     read = [column for column, _ in READ_COLUMNS.values()]
-    return WAVEFORM_COLUMNS + [c for c in read + all_columns() if c in waveforms]
+    source = ["q_ball_C"]   # the ball's charge, where the contacts make it ([charge])
+    return WAVEFORM_COLUMNS + [c for c in read + all_columns() + source if c in waveforms]
 
 
 def write_run_outputs(result, out_dir: str | Path, *, plots: bool = True,
@@ -221,6 +222,11 @@ def write_harvest_plots(result, out: Path, *, figures=None) -> list[Path]:
     if extras.get("_fine") is not None:
         written.append(write_charging_figure(extras["_fine"], out, scene=result.scene,
                                              title=run_title(result), figures=figures))
+    if extras.get("_charge_record") is not None:   # [charge] model = "contact"
+        from .plotting.ball_charge import plot_ball_charge
+        written.append(_figure(figures, plot_ball_charge, extras["_charge_record"],
+                               result.summary.get("charge", {}),
+                               path=out / figure_file("ball_charge"), title=run_title(result)))
     if extras.get("_vq"):
         written.append(_figure(figures, hp.plot_vq, extras["_vq"],
                                result.summary.get("energy_per_cycle", {}), path=out / figure_file("vq"),

@@ -231,16 +231,121 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
         check_field(scene)                # before the dynamics, not after
     electrical.circuit_for(scene).check(scene)   # e.g. a store the step cannot resolve
 
+    if scene.charge.from_contacts:
+        check_contact_charge(scene)
     dynamics = _dynamics_stage(scene, simulate or _default_simulate(), stages)
     hashed = scene   # as loaded: its field hash, its σ (may be "breakdown")
-    scene, table, curves, limit = _field_stage(
-        scene, dynamics, stages, cache_dir=cache_dir, comm=comm, solve=solve,
-        progress=progress, command_line=command_line, write_cache=write_cache,
-        radial_settings=radial_settings)
+    field_options = dict(cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
+                         command_line=command_line, write_cache=write_cache,
+                         radial_settings=radial_settings)
+    charged = None
+    if scene.charge.from_contacts:
+        scene, table, curves, limit, charged = _contact_charge_stage(
+            scene, dynamics, stages, **field_options)
+    else:
+        scene, table, curves, limit = _field_stage(scene, dynamics, stages, **field_options)
     if scene.array.cells > 0:
         return _run_array(scene, dynamics, curves, table, stages, comm, progress)
     stage = electrical_stage(scene, dynamics, curves, table, stages)
-    return _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
+    if charged is not None:
+        _with_contact_charge(stage, dynamics, charged)
+    result = _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
+    if charged is not None and isinstance(result.summary.get("breakdown"), dict) \
+            and "sigma_from" in result.summary["breakdown"]:
+        result.summary["breakdown"]["sigma_from"] = "contacts (the steady charge)"
+    return result
+
+
+# ---------------------------------------------------------------------------
+# [charge] model = "contact" (issue #52; tengfield.source)
+#: the waveforms column of the ball's charge [C] (a run whose contacts make it)
+BALL_CHARGE_COLUMN = "q_ball_C"
+
+
+def check_contact_charge(scene) -> None:
+    """Refuse, before the work and in one line, what ``[charge] model = "contact"`` does
+    not run yet: an ``[array]`` (its cells' own impacts would each charge their ball) and a
+    ball that leaves the axis (the (z, r) surrogate per unit charge)."""
+    from .errors import SceneError
+
+    if scene.array.cells > 0:
+        raise SceneError('[charge] model = "contact" with [array] cells = '
+                         f"{scene.array.cells}: not supported yet (each cell's ball would "
+                         'charge on its own impacts); use [charge] model = "constant" '
+                         "for an array")
+    if scene.contact.model == "3d":
+        raise SceneError('[charge] model = "contact" with [contact] model = "3d": not '
+                         "supported yet (the ball off the axis); allowed: [contact] model "
+                         '= "impact" or "soft"')
+
+
+def _contact_charge_stage(scene, dynamics, stages, **field_options):
+    """``(scene, table, curves, limit, charged)`` of a run whose contacts charge the ball:
+    the surrogate at a reference charge (sigma_eq), the air-breakdown cap of ``[charge]
+    discharge`` (the band of the run's own trajectory, no field solve more), the charge
+    history along the impacts (``stages["charge"]``), the scene at its steady charge
+    (what the summary's sigma-dependent blocks use) and :class:`ContactCurves`."""
+    import math
+    import warnings
+
+    from .errors import TengfieldError
+    from .source.contacts import charge_summary, run_history
+    from .source.terminal import ContactCurves, ContactTerminal
+    from .surrogate.table import at_ball_charge
+
+    charge = scene.charge
+    reference_sigma = charge.equilibrium if charge.equilibrium != 0.0 else charge.initial
+    field_scene = scene.with_values(device={SURFACE_CHARGE_KEY: reference_sigma * 1e6})
+    with warnings.catch_warnings():   # sigma_eq beyond the limit is expected: the cap holds
+        warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
+        field_scene, table, curves, limit = _field_stage(field_scene, dynamics, stages,
+                                                         **field_options)
+    start = time.perf_counter()
+    cap = math.inf
+    if charge.discharge != "none":
+        if limit is None and table is not None:
+            raise TengfieldError(
+                f'[charge] discharge = {charge.discharge!r} needs the air-breakdown lines of '
+                'the surrogate (the axisymmetric solver makes them; this one has none): set '
+                '[charge] discharge = "none" or [field] method = "axisymmetric"')
+        if limit is not None:
+            if charge.discharge == "static":
+                cap = float(limit.sigma_max)
+            else:
+                from .air_breakdown import scene_band
+                cap = float(scene_band(field_scene, limit, dynamics).edges()[charge.discharge])
+    from .electrical import time_origin
+    impacts = dynamics.impacts
+    history, upper, law, areas = run_history(scene, impacts,
+                                             np.asarray(impacts.time, dtype=float)
+                                             - time_origin(dynamics), cap)
+    elapsed = electrical.elapsed_times(dynamics)
+    duration = float(elapsed[-1])
+    window_start = float(elapsed[electrical.steady_window_index(elapsed, scene)[0]])
+    block = charge_summary(history, law, cap_level=charge.discharge, duration=duration,
+                           areas=areas, window_start=window_start)
+    steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
+    stages["charge"] = Stage("ran", f"{history.contacts} contacts, [charge] model = 'contact'",
+                             time.perf_counter() - start, {"contacts": history.contacts})
+    run_scene = scene.with_values(device={SURFACE_CHARGE_KEY: steady / law.ball_area * 1e6})
+    if table is None or steady == 0.0 and history.start == 0.0 and not history.contacts:
+        return run_scene, None, None, limit, (history, block)
+    terminal = ContactTerminal(table, history, upper, scene.circuit.reference)
+    curves = ContactCurves(terminal, steady)
+    if steady != 0.0:
+        table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
+    return run_scene, table, curves, limit, (history, block)
+
+
+def _with_contact_charge(stage, dynamics, charged) -> None:
+    """The ball's charge column and summary.json's ``charge`` block."""
+    history, block = charged
+    stage.waveforms[BALL_CHARGE_COLUMN] = history.at(electrical.elapsed_times(dynamics))
+    stage.summary["charge"] = _jsonable(block)
+    from .source.contacts import charge_record
+    stage.extras["_charge_history"] = history
+    stage.extras["_charge_record"] = charge_record(
+        history, block["ball_area_m2"], float(electrical.elapsed_times(dynamics)[-1]))
 
 
 def _dynamics_stage(scene, simulate, stages):

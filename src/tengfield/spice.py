@@ -208,7 +208,7 @@ def _with_impacts(result, out: dict) -> dict:
         return out
     _, _, gap, velocity = electrical.impact_states(scene, dynamics,
                                                    impacts + electrical.time_origin(dynamics))
-    at = electrical.scene_terminal_waveforms(scene, curves, gap, velocity)
+    at = electrical.scene_terminal_waveforms(scene, curves, gap, velocity, times=impacts)
     times = np.concatenate([t, impacts])
     order = np.argsort(times, kind="stable")
     keep = np.r_[True, np.diff(times[order]) > 0]

@@ -19,8 +19,9 @@ def scene_states(scene) -> tuple[str, ...]:
 
 
 def uses_breakdown_charge(scene) -> bool:
-    """True when ``σ = "breakdown"``."""
-    return stated_surface_charge(scene) == "breakdown"
+    """True when ``σ = "breakdown"`` or ``[charge] model = "breakdown"``."""
+    return (stated_surface_charge(scene) == "breakdown"
+            or getattr(getattr(scene, "charge", None), "model", "") == "breakdown")
 
 
 def scene_breakdown(scene, table, states=None) -> BreakdownResult:

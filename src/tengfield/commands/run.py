@@ -219,6 +219,9 @@ def print_summary(summary: dict) -> None:
                          duration_s=regime.get("regime_run_s") or None)
     print(f"regime: {label} "
           f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
+    if summary.get("charge"):
+        from ..source.contacts import charge_line
+        print(charge_line(summary["charge"]))
     for line in terminal_lines(summary):
         print(line)
     if summary.get("load"):

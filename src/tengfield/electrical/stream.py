@@ -40,6 +40,7 @@ import numpy as np
 from .circuits import circuit_for
 from .instrument import READ_COLUMNS, Reader, has_read
 from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times, impact_names,
+                        time_origin,
                         impact_values, peak_quantities, scene_terminal_waveforms,
                         steady_window_index)
 
@@ -106,7 +107,11 @@ class StreamedRun:
         for i0, i1 in chunk_bounds(self.rows, self.chunk_rows):
             gap = np.asarray(dyn.gap[i0:i1], dtype=float)
             velocity = np.asarray(dyn.gap_velocity[i0:i1], dtype=float)
-            terminal = scene_terminal_waveforms(scene, self.curves, gap, velocity)
+            terminal = scene_terminal_waveforms(
+                scene, self.curves, gap, velocity,
+                times=np.asarray(dyn.elapsed[i0:i1], dtype=float)
+                if getattr(dyn, "elapsed", None) is not None else
+                np.asarray(dyn.t[i0:i1], dtype=float) - time_origin(dyn))
             out = {"time_s": np.asarray(dyn.t[i0:i1], dtype=float), "gap_m": gap,
                    "gap_velocity_m_per_s": velocity,
                    "table_m": np.asarray(dyn.table[i0:i1], dtype=float),
@@ -270,7 +275,9 @@ class StreamedWaveforms(Mapping):
         dyn = self._run.dynamics
         terminal = scene_terminal_waveforms(self._run.scene, self._run.curves,
                                             np.asarray(dyn.gap[i0:i1], dtype=float),
-                                            np.asarray(dyn.gap_velocity[i0:i1], dtype=float))
+                                            np.asarray(dyn.gap_velocity[i0:i1], dtype=float),
+                                            times=np.asarray(dyn.t[i0:i1], dtype=float)
+                                            - time_origin(dyn))
         return {"time_s": np.asarray(dyn.t[i0:i1], dtype=float), "V_oc_V": terminal["V_oc"],
                 "C_T_F": terminal["C_T"]}
 

@@ -118,7 +118,7 @@ def impact_elapsed(dynamics, start: float, end: float) -> np.ndarray:
 # waveforms
 def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
                        parallel_capacitance: float = 0.0, radial=None,
-                       radial_velocity=None) -> dict[str, np.ndarray]:
+                       radial_velocity=None, times=None) -> dict[str, np.ndarray]:
     """Open-circuit voltage, short-circuit charge and current along a trajectory.
 
     ``curves``: the :class:`tengfield.surrogate.Curves` of ONE cell, or None when
@@ -132,19 +132,35 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
     ``C_T`` [F] and ``dC_T_dt`` [F/s]. For (z, r) curves (``curves.radial``)
     ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0) enter, and
     ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` (:meth:`tengfield.surrogate.Curves.evaluate_many`).
+    ``times`` [s] (the run's own axis) of the samples: what a ball charged by its contacts
+    needs (:class:`tengfield.source.terminal.ContactCurves`, ``[charge] model =
+    "contact"``), whose charge depends on the time as well as the gap.
     """
     gap = np.asarray(gap, dtype=float)
     if curves is None:
         zero = np.zeros_like(gap)
         return {"V_oc": zero, "V_read": zero.copy(), "Q_sc": zero.copy(), "I_sc": zero.copy(),
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
-    q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial, radial_velocity,
-                                                  cells=cells)
+    if getattr(curves, "contact", False):   # the charge follows the contacts: q(t)
+        q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, cells=cells,
+                                                      times=times)
+    else:
+        q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial,
+                                                      radial_velocity, cells=cells)
     v_oc = lumped.open_circuit_voltage(q_sc, c_t)
     v_read = v_oc if parallel_capacitance == 0.0 else \
         lumped.open_circuit_voltage(q_sc, c_t, parallel_capacitance)
     return {"V_oc": v_oc, "V_read": v_read,
             "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
+
+
+def terminal_charge(curves, times, gap):
+    """Q_SC [C] of one cell at the run's ``times`` [s] and gaps ``gap`` [m]: ``curves``'
+    Q_SC(z), or, for a ball charged by its contacts, the charge history's
+    (:meth:`tengfield.source.terminal.ContactCurves.charge_at`)."""
+    if getattr(curves, "contact", False):
+        return curves.charge_at(times, gap)
+    return curves.charge(gap)
 
 
 def terminal_waveforms_zr(curves, gap, gap_velocity, radial, radial_velocity, *,
@@ -157,12 +173,12 @@ def terminal_waveforms_zr(curves, gap, gap_velocity, radial, radial_velocity, *,
 
 
 def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
-                             radial_velocity=None) -> dict[str, np.ndarray]:
+                             radial_velocity=None, *, times=None) -> dict[str, np.ndarray]:
     """:func:`terminal_waveforms` with ``[device] cells`` and ``[circuit]
-    parallel_capacitance_pF`` of ``scene``."""
+    parallel_capacitance_pF`` of ``scene`` (``times``: the samples' on the run's axis)."""
     return terminal_waveforms(curves, gap, gap_velocity, cells=scene.device.cells,
                               parallel_capacitance=scene.circuit.parallel_capacitance,
-                              radial=radial, radial_velocity=radial_velocity)
+                              radial=radial, radial_velocity=radial_velocity, times=times)
 
 
 def _radial(dynamics, curves, times=None):
@@ -183,7 +199,8 @@ def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
     gap = np.asarray(dynamics.gap, dtype=float)
     velocity = np.asarray(dynamics.gap_velocity, dtype=float)
     terminal = scene_terminal_waveforms(scene, curves, gap, velocity,
-                                        *_radial(dynamics, curves))
+                                        *_radial(dynamics, curves),
+                                        times=elapsed_times(dynamics))
     table = getattr(dynamics, "table", None)
     out = {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
            "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
@@ -388,7 +405,8 @@ def impact_values(scene, dynamics, curves, start: float, end: float, names) -> d
         scene, curves, np.concatenate([gap_pre, gap_post]),
         np.concatenate([vel_pre, vel_post]),
         *_radial(dynamics, curves, time_origin(dynamics)
-                 + np.concatenate([impacts - eps, impacts + eps])))
+                 + np.concatenate([impacts - eps, impacts + eps])),
+        times=np.concatenate([impacts - eps, impacts + eps]))
     return {name: extra[name] for name in names}
 
 

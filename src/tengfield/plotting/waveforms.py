@@ -304,7 +304,11 @@ def run_title(result) -> str:
     exc, dev = result.scene.excitation, result.scene.device
     regime = result.summary.get("regime") or {}
     name = regime.get("regime", regime.get("name", "")) if isinstance(regime, dict) else ""
-    parts = [f"σ = {_signed(dev.surface_charge * 1e6)} µC/m²",
+    charge = result.summary.get("charge") if isinstance(result.summary, dict) else None
+    sigma = (f"σ from contacts (steady {charge['steady_uC_per_m2']:.3g} µC/m²)"
+             if isinstance(charge, dict) and charge.get("model") == "contact"
+             else f"σ = {_signed(dev.surface_charge * 1e6)} µC/m²")
+    parts = [sigma,
              f"Δh = {dev.stroke * 1e3:g} mm", f"{exc.frequency:g} Hz",
              f"A = {exc.amplitude * 1e3:g} mm",
              cells_phrase(result.summary.get("cells", dev.cells)),

@@ -10,6 +10,6 @@ CSV reader), ``limits`` (work, size and mesh limits), ``constants`` (G, EPS0).
 from ..errors import SceneError  # noqa: F401
 from .constants import EPS0, G  # noqa: F401
 from .model import (Array, Breakdown, Circuit, Contact, Device, Excitation, Field,  # noqa: F401
-                    Initial, Instrument, Reference, Run, Scene, check_field)
+                    Initial, Instrument, Reference, Charge, Run, Scene, check_field)
 from .parse import (as_scene, default_scene, default_text, load_scene,  # noqa: F401
                     parse_scene, with_settings)

@@ -372,6 +372,31 @@ class Breakdown:
 
 
 @dataclass(frozen=True)
+class Charge:
+    """``[charge]``: how the ball gets its charge (:mod:`tengfield.source`,
+    docs/charge.md). ``model``: "constant" ([device] surface_charge), "breakdown" (its
+    air-breakdown limit) or "contact" (impact by impact); for "contact" ``equilibrium``
+    sigma_eq [C/m^2] (signed), ``efficiency`` eta in (0, 1], ``initial`` sigma at the start
+    [C/m^2], ``leakage_time`` tau [s] (0: none) and ``discharge``, the air-breakdown level
+    that caps |sigma| ("estimate", "lower", "upper" of the band, "static": sigma_max at
+    [breakdown] gamma, "none")."""
+    model: str = "constant"
+    equilibrium: float = -113e-6
+    efficiency: float = 1.0
+    initial: float = 0.0
+    leakage_time: float = 0.0
+    discharge: str = "estimate"
+
+    def __post_init__(self):
+        check_section("charge", self, "Charge")
+
+    @property
+    def from_contacts(self) -> bool:
+        """The contacts make the charge (``model = "contact"``)."""
+        return self.model == "contact"
+
+
+@dataclass(frozen=True)
 class Instrument:
     """``[instrument]``: what the bench's electrometer or scope records (SI; 0 means none
     for each, :mod:`tengfield.electrical.instrument`): ``capacitance`` C_p [F] across the
@@ -437,6 +462,7 @@ class Scene:
     breakdown: Breakdown = Breakdown()
     reference: Reference = Reference()
     instrument: Instrument = Instrument()
+    charge: Charge = Charge()
     raw: dict = dataclasses.field(compare=False, repr=False, default_factory=dict)
     source: str = dataclasses.field(compare=False, repr=False, default="<default>")
     text: str = dataclasses.field(compare=False, repr=False, default="")
@@ -642,9 +668,19 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
     problems += field_problems(dev, fld, explicit=set(data.get("field", {})))
     problems += shape_field_problems(dev, fld)
     lines_problem = gap_lines_problem(dev, fld, NUMERIC_SIGMA)
-    if (isinstance(data.get("device"), dict)
-            and data["device"].get(SURFACE_CHARGE_KEY) == "breakdown" and lines_problem):
-        problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown": {lines_problem}')
+    stated_sigma = data["device"].get(SURFACE_CHARGE_KEY) if isinstance(data.get("device"), dict) \
+        else None
+    charge_model = values["charge"]["model"]
+    if stated_sigma == "breakdown" and charge_model == "contact":
+        raise SceneError(f'{source}: [device] {SURFACE_CHARGE_KEY} = "breakdown" and [charge] '
+                         'model = "contact" contradict each other: the contacts make the '
+                         "charge and [charge] discharge caps it (allowed there: "
+                         + ", ".join(repr(c) for c in SCHEMA["charge"]["discharge"].check[1])
+                         + f"); drop [device] {SURFACE_CHARGE_KEY}")
+    if (stated_sigma == "breakdown" or charge_model == "breakdown") and lines_problem:
+        problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown": {lines_problem}'
+                        if stated_sigma == "breakdown" else
+                        f'[charge] model = "breakdown": {lines_problem}')
     instrument = _instrument(data, values, source, warn)
     return Scene(device=dev, excitation=exc, contact=Contact(**values["contact"]),
                  initial=Initial(**values["initial"]), run=Run(**values["run"]),
@@ -652,6 +688,7 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                  circuit=Circuit(**values["circuit"]), array=Array(**values["array"]),
                  breakdown=Breakdown(**values["breakdown"]),
                  reference=Reference(**values["reference"]), instrument=instrument,
+                 charge=Charge(**values["charge"]),
                  raw=copy.deepcopy(given_names),
                  source=source, text=text, settings=tuple(settings))
 

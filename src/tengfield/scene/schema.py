@@ -306,6 +306,22 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "breakdowns_per_s": Key("breakdowns_per_s", float, 1.0, 1.0,
                                 _rng(0.0, 1e9, lo_open=True)),
     },
+    # the ball's charge (issue #52; tengfield.source, docs/charge.md): "constant" is
+    # [device] surface_charge_uC_per_m2 (a number, or "breakdown": its air-breakdown
+    # limit); "breakdown" the same as surface_charge_uC_per_m2 = "breakdown"; "contact"
+    # makes it impact by impact (Hertz's area at each impact's speed with [contact]'s
+    # moduli, the condenser law toward equilibrium_uC_per_m2, leakage, the air-breakdown
+    # cap of discharge). Not field keys: the field is linear in the ball's charge.
+    "charge": {
+        "model": Key("model", str, "constant", None, _choice("constant", "breakdown", "contact")),
+        "equilibrium_uC_per_m2": Key("equilibrium", float, -113.0, 1e-6, _rng(-1e4, 1e4)),
+        "efficiency": Key("efficiency", float, 1.0, 1.0, _rng(0.0, 1.0, lo_open=True)),
+        "initial_uC_per_m2": Key("initial", float, 0.0, 1e-6, _rng(-1e4, 1e4)),
+        "leakage_time_s": Key("leakage_time", float, 0.0, 1.0,
+                              _rng(0.0, 1e12, why="0: no leakage")),
+        "discharge": Key("discharge", str, "estimate", None,
+                         _choice("estimate", "lower", "upper", "static", "none")),
+    },
     # the bench's instrument (issue #39; tengfield.electrical.instrument, docs/outputs.md):
     # what an electrometer or a scope records. Optional: without the section nothing of a
     # run changes. 0 means "none" for each key (no input resistance: infinite, as an

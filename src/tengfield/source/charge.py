@@ -119,7 +119,11 @@ class ChargeHistory:
         (default: the mean of the last tenth of the contacts), None if never."""
         if steady is None:
             steady = self.steady()
-        if steady == 0.0 or not self.contacts:
+        if steady == 0.0:
+            return None
+        if abs(self.start) >= fraction * abs(steady):
+            return 0.0                    # the ball starts there
+        if not self.contacts:
             return None
         reached = np.nonzero(np.abs(self.after) >= fraction * abs(steady))[0]
         return float(self.times[reached[0]] - self.t0) if reached.size else None

@@ -123,7 +123,8 @@ class LoadGrid:
 
     def _terminal(self, grid, gap, vel) -> dict:
         return scene_terminal_waveforms(self.scene, self.curves, gap, vel,
-                                        *_radial(self.dynamics, self.curves, self.origin + grid))
+                                        *_radial(self.dynamics, self.curves, self.origin + grid),
+                                        times=grid)
 
     def fine(self, time_constant: float):
         """:func:`fine_terminal`'s ``(grid, terminal, output_index)`` for ``time_constant``
@@ -257,7 +258,8 @@ class LoadChunks:
         order = np.lexsort((tag, grid))
         grid, gap, vel = grid[order], gap[order], vel[order]
         output_index = np.flatnonzero(order < t.size)
-        return grid, scene_terminal_waveforms(scene, self.curves, gap, vel), output_index
+        return grid, scene_terminal_waveforms(scene, self.curves, gap, vel, times=grid), \
+            output_index
 
     def numbers(self) -> dict:
         """Mean power [W], the energy books [J] over the window, integration points,

@@ -15,7 +15,8 @@ import math
 import numpy as np
 
 from ..cycle import last_period, loop_area
-from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, steady_window, time_origin
+from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, steady_window,
+                         terminal_charge, time_origin)
 from . import Circuit, CircuitRun, SpreadCircuit
 from .rectifier_store import (check_store_resolution, first_crossing, harvester_options,
                               warn_numerical_dissipation)
@@ -55,7 +56,7 @@ def rectifier_waveforms(scene, dynamics, curves) -> dict:
     for start in range(0, grid.size, rows):
         times = grid[start:start + rows]
         gap, _, _ = sample_elapsed(dynamics, times)
-        q = curves.charge(gap) * n if curves is not None else np.zeros_like(gap)
+        q = terminal_charge(curves, times, gap) * n if curves is not None else np.zeros_like(gap)
         c = curves.capacitance(gap) * n if curves is not None else np.full_like(gap, 1e-12)
         parts.append(run.advance(times, q, c))
     fine = concat_results(parts)

@@ -10,7 +10,8 @@ import math
 
 import numpy as np
 
-from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, time_origin
+from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, terminal_charge,
+                         time_origin)
 from .rectifier_store import check_store_resolution, first_crossing, harvester_options
 
 
@@ -58,7 +59,7 @@ class RectifierChunks:
         grid, output_index = grid[order], np.flatnonzero(order < t_out.size)
         gap, _, _ = sample_elapsed(self.dynamics, grid)
         cells = self.scene.device.cells
-        res = self.harvester.advance(grid, self.curves.charge(gap) * cells,
+        res = self.harvester.advance(grid, terminal_charge(self.curves, grid, gap) * cells,
                                      self.curves.capacitance(gap) * cells)
         self._reduce(res)
         self.points += res.time.size
