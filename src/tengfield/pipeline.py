@@ -323,7 +323,8 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
     duration = float(elapsed[-1])
     window_start = float(elapsed[electrical.steady_window_index(elapsed, scene)[0]])
     block = charge_summary(history, law, cap_level=charge.discharge, duration=duration,
-                           areas=areas, window_start=window_start)
+                           areas=areas, window_start=window_start,
+                           period=_contact_period(scene))
     steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
     stages["charge"] = Stage("ran", f"{history.contacts} contacts, [charge] model = 'contact'",
                              time.perf_counter() - start, {"contacts": history.contacts})
@@ -335,6 +336,15 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
     if steady != 0.0:
         table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
     return run_scene, table, curves, limit, (history, block)
+
+
+def _contact_period(scene) -> float:
+    """The period [s] the contacts repeat with: a sine's (or the harmonics' fundamental,
+    when the components are its multiples); 0 for a recorded or random table."""
+    exc = scene.excitation
+    if exc.kind == "sine" or (exc.kind == "harmonics" and not exc.has_noise):
+        return float(exc.period)
+    return 0.0
 
 
 def _with_contact_charge(stage, dynamics, charged) -> None:

@@ -45,8 +45,8 @@ def ball_charge_figure(record: dict, block: dict, *, title: str = ""):
         area = block["ball_area_m2"]
         start = block["end_of_run_uC_per_m2"] * 1e-6 * area
         q_u = approach["unclipped_C"]
-        q = q_u - (q_u - start) * approach["rho"] ** (approach["contact_rate_per_s"]
-                                                      * (later - t_end))
+        q = q_u - (q_u - start) * approach["per_stretch"] ** ((later - t_end)
+                                                             / approach["stretch_s"])
         cap = block.get("cap_uC_per_m2")
         if cap is not None:
             q = np.clip(q, -cap * 1e-6 * area, cap * 1e-6 * area)

@@ -54,59 +54,75 @@ def run_history(scene, impacts, elapsed_times, cap: float = math.inf) -> tuple:
 
 
 def steady_state(history: ChargeHistory, law: ContactCharging, areas, window_start: float,
-                 duration: float) -> dict:
+                 duration: float, period: float = 0.0) -> dict:
     """The charge the run's steady contacts hold the ball at, and when it gets there.
 
-    Over the contacts of the steady window (times >= ``window_start`` [s]) a contact maps
-    q -> (1 - k) d q + k q_eq (k = eta S/A, d the leakage since the last contact); their
-    mean map's fixed point q* = <k> q_eq / (1 - rho), rho = <(1 - k) d>, capped at the
-    cap, is the steady charge (exact for equal contacts: docs/charge.md). The 90 % rise
-    time is the history's where the run reached it, else extrapolated from the run's end
-    along the geometric approach rho^n at the window's contact rate. Returns
-    ``steady`` [C], ``rise_time`` [s] or None, ``extrapolated`` and ``end`` (q at the end)."""
+    A contact maps q -> (1 - k) q + k q_eq (k = eta S/A) and leakage between contacts
+    q -> d q, so the contacts of one stretch of time compose to an affine map
+    q -> P q + Q. Over the last whole number of excitation ``period`` s of the steady
+    window (the whole window when the excitation has no period) its fixed point
+    q* = Q / (1 - P) is the charge at the stretch's start once the run is steady, and
+    the steady charge is the mean charge just after the stretch's contacts from q*
+    (exact for any periodic pattern of contacts: chatter, period-n bounce), capped at the
+    cap. The 90 % rise time is the history's where the run reached it, else extrapolated
+    from the run's end along the geometric approach P^(t / stretch). Returns ``steady``
+    [C], ``rise_time`` [s] or None, ``extrapolated``, ``end`` (q at the end) and
+    ``approach`` (P, the stretch [s], the uncapped fixed point [C]) where extrapolated."""
+    from ._kernel import contact_recurrence
+
     times = history.times
     end = float(history.at(duration)) if history.contacts else float(history.start)
-    in_window = times >= window_start
-    if not np.any(in_window):
+    span = duration - window_start
+    if period > 0.0 and span >= period:
+        span = math.floor(span / period * (1.0 + 1e-12)) * period
+    first = duration - span
+    inside = (times >= first) & (times <= duration)
+    if not np.any(inside) or span <= 0.0:
         return {"steady": end, "rise_time": None, "extrapolated": False, "end": end}
     A = law.ball_area
-    k = np.minimum(1.0, law.efficiency * np.asarray(areas, dtype=float)[in_window] / A)
-    previous = np.concatenate(([0.0], times))[:-1][in_window]
-    gaps = times[in_window] - previous
-    decay = np.exp(-gaps / law.leakage_time) if law.leakage_time > 0.0 else np.ones_like(gaps)
-    rho = float(np.mean((1.0 - k) * decay))
+    k = np.minimum(1.0, law.efficiency * np.asarray(areas, dtype=float)[inside] / A)
+    at = times[inside]
+    gaps = np.diff(np.concatenate(([first], at)))
+    tau = law.leakage_time
+    decay = np.exp(-gaps / tau) if tau > 0.0 else np.ones_like(gaps)
+    tail = math.exp(-(duration - at[-1]) / tau) if tau > 0.0 else 1.0
     q_eq = law.equilibrium * A
-    unclipped = float(np.mean(k)) * q_eq / (1.0 - rho) if rho < 1.0 else float(end)
+    P = float(np.prod((1.0 - k) * decay)) * tail
+    Q = float(contact_recurrence(decay, k, q_eq, math.inf, 0.0)[1][-1]) * tail
+    if P >= 1.0:
+        return {"steady": end, "rise_time": None, "extrapolated": False, "end": end}
+    unclipped = Q / (1.0 - P)
+    after = contact_recurrence(decay, k, q_eq, math.inf, unclipped)[1]
     cap = law.cap * A
-    steady = float(np.clip(unclipped, -cap, cap))
+    steady = float(np.clip(np.mean(after), -cap, cap))
     if steady == 0.0:
         return {"steady": 0.0, "rise_time": None, "extrapolated": False, "end": end}
     target = 0.9 * steady
-    reached = np.nonzero(np.abs(history.after) >= abs(target))[0]
     if abs(history.start) >= abs(target):
         return {"steady": steady, "rise_time": 0.0, "extrapolated": False, "end": end}
+    reached = np.nonzero(np.abs(history.after) >= abs(target))[0]
     if reached.size:
         return {"steady": steady, "rise_time": float(times[reached[0]]), "extrapolated": False,
                 "end": end}
-    rate = np.count_nonzero(in_window) / max(duration - window_start, 1e-300)
     left, needed = unclipped - end, unclipped - target
-    if rho <= 0.0 or rho >= 1.0 or left == 0.0 or needed / left <= 0.0:
+    if P <= 0.0 or left == 0.0 or needed / left <= 0.0:
         return {"steady": steady, "rise_time": None, "extrapolated": True, "end": end}
-    more = math.log(needed / left) / math.log(rho)
-    return {"steady": steady, "rise_time": duration + max(more, 0.0) / rate,
-            "extrapolated": True, "end": end,
-            "approach": {"rho": rho, "contact_rate_per_s": rate, "unclipped_C": unclipped}}
+    more = math.log(needed / left) / math.log(P) * span
+    return {"steady": steady, "rise_time": duration + max(more, 0.0), "extrapolated": True,
+            "end": end, "approach": {"per_stretch": P, "stretch_s": span,
+                                     "unclipped_C": unclipped}}
 
 
 def charge_summary(history: ChargeHistory, law: ContactCharging, *, cap_level: str,
-                   duration: float, areas=None, window_start: float = 0.0) -> dict:
+                   duration: float, areas=None, window_start: float = 0.0,
+                   period: float = 0.0) -> dict:
     """summary.json's ``charge`` block (SI, densities in µC/m^2): the steady charge
     (:func:`steady_state`), the rise time to 90 % of it, the charge at the run's end, the
     contacts, the mean gain per contact, the shares of sigma_eq and of the cap reached, and
     what binds the steady charge."""
     A = law.ball_area
     state = steady_state(history, law, np.zeros(history.contacts) if areas is None else areas,
-                         window_start, duration)
+                         window_start, duration, period)
     steady = state["steady"]
     gains = history.gains
     eq = law.equilibrium
