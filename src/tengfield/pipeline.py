@@ -259,7 +259,7 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
 # ---------------------------------------------------------------------------
 # [charge] model = "contact" (issue #52; tengfield.source)
 #: the waveforms column of the ball's charge [C] (a run whose contacts make it)
-BALL_CHARGE_COLUMN = "q_ball_C"
+from .electrical.stream import BALL_CHARGE_COLUMN  # noqa: E402
 
 
 def check_contact_charge(scene) -> None:
@@ -350,7 +350,8 @@ def _contact_period(scene) -> float:
 def _with_contact_charge(stage, dynamics, charged) -> None:
     """The ball's charge column and summary.json's ``charge`` block."""
     history, block = charged
-    stage.waveforms[BALL_CHARGE_COLUMN] = history.at(electrical.elapsed_times(dynamics))
+    if not hasattr(stage.waveforms, "chunks"):   # a streamed run's chunks carry it
+        stage.waveforms[BALL_CHARGE_COLUMN] = history.at(electrical.elapsed_times(dynamics))
     stage.summary["charge"] = _jsonable(block)
     from .source.contacts import charge_record
     stage.extras["_charge_history"] = history

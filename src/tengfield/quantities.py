@@ -85,6 +85,10 @@ QUANTITIES: dict[str, Quantity] = dict([
     _q("C_T_F", "F", "C_T", "device capacitance C_T",
        "C_T(z) of the surrogate x cells (V = V_OC - Q / C_T; the SPICE model's table)",
        "pF", 1e12),
+    _q("q_ball_C", "C", "q_ball", "ball charge q",
+       "the charge the contacts make (Hertz area x the condenser law, leakage, the "
+       "air-breakdown cap), after a contact at its instant", "nC", 1e9,
+       when="[charge] model = \"contact\""),
     _q("V_load_V", "V", "V_load", "load voltage", "the load ODE, R || C_p",
        when="[circuit] kind = \"load\" or \"series-rc\""),
     _q("I_load_A", "A", "I_load", "load current", "V_load / R", "nA", 1e9,

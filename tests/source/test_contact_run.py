@@ -276,3 +276,50 @@ def test_the_rise_time_extrapolated_past_a_short_run_is_the_long_runs(cache):
     assert short["share_of_steady_at_end"] < 0.8
     assert short["steady_uC_per_m2"] == pytest.approx(long["steady_uC_per_m2"], rel=1e-6)
     assert short["rise_time_90_s"] == pytest.approx(long["rise_time_90_s"], rel=0.02)
+
+
+@pytest.mark.slow
+def test_a_ten_minute_run_streams_the_charge_and_equals_the_constant_model_at_equilibrium(cache):
+    """600 s at 20 Hz (1.2 M samples: the streamed electrical stage): the charge column is in
+    every chunk, and a ball at sigma_eq gives the constant model's peaks (1e-12)."""
+    run = {"duration_s": 600.0, "settle_periods": 10, "sample_rate_hz": 2000.0}
+    constant = tf.run(fx.scene_with(run=run, device={"surface_charge_uC_per_m2": -20.0}),
+                      cache_dir=cache, solve=fx.plate_model_solve)
+    contact = tf.run(fx.scene_with(run=run, charge={
+        "model": "contact", "equilibrium_uC_per_m2": -20.0, "initial_uC_per_m2": -20.0,
+        "discharge": "none"}), cache_dir=cache, solve=fx.plate_model_solve)
+    assert hasattr(contact.waveforms, "chunks")
+    for name, value in constant.peaks.items():
+        assert contact.peaks[name] == pytest.approx(value, rel=1e-12), name
+    q = -20e-6 * math.pi * contact.scene.device.ball_diameter ** 2
+    for chunk in contact.waveforms.chunks():
+        assert np.all(chunk["q_ball_C"] == pytest.approx(q, rel=1e-12))
+    assert contact.summary["charge"]["contacts"] > 10_000
+
+
+@pytest.mark.slow
+def test_mpirun_writes_the_serial_runs_files(tmp_path, cli_command, cli_env):
+    """``mpirun -n 2 tengfield run`` of a contact-charged scene: waveforms.csv and the charge
+    block byte for byte / number for number the serial run's."""
+    import shutil
+
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed")
+    scene = tmp_path / "contact.toml"
+    scene.write_text(fx.SMALL_SCENE + '\n[charge]\nmodel = "contact"\n')
+    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
+                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
+                  TENGFIELD_CACHE_DIR=tmp_path / "cache")
+    env.pop("OMPI_COMM_WORLD_SIZE", None)
+    serial = subprocess.run(cli_command("run", scene, "-o", tmp_path / "one"),
+                            capture_output=True, text=True, env=env, timeout=600)
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    two = subprocess.run([mpirun, "-n", "2", *cli_command("run", scene, "-o", tmp_path / "two")],
+                         capture_output=True, text=True, env=env, timeout=600)
+    assert two.returncode == 0, two.stderr[-3000:]
+    assert (tmp_path / "one" / "waveforms.csv").read_bytes() == \
+        (tmp_path / "two" / "waveforms.csv").read_bytes()
+    one_block = json.loads((tmp_path / "one" / "summary.json").read_text())["charge"]
+    two_block = json.loads((tmp_path / "two" / "summary.json").read_text())["charge"]
+    assert one_block == two_block

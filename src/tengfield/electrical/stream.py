@@ -44,6 +44,9 @@ from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times, impact_nam
                         impact_values, peak_quantities, scene_terminal_waveforms,
                         steady_window_index)
 
+#: the ball's charge column of a run whose contacts make it (tengfield.pipeline)
+BALL_CHARGE_COLUMN = "q_ball_C"
+
 #: runs with more output samples than this (52 s at 20 kHz) stream their electrical stage
 STREAM_ROWS = 1 << 20
 #: output rows per chunk (one of run.h5's chunks): ~30 MB of temporaries
@@ -91,6 +94,8 @@ class StreamedRun:
         if scene.instrument.given:
             self.columns += [c for c, _ in READ_COLUMNS.values() if c != READ_COLUMN]
         self.columns += list(self.entry.columns)
+        if getattr(curves, "contact", False):    # [charge] model = "contact": q(t)
+            self.columns.append(BALL_CHARGE_COLUMN)
         self.read_at_samples = READ_COLUMN in self.columns and \
             self.entry.read_column in self.entry.columns
 
@@ -127,6 +132,9 @@ class StreamedRun:
                 out[READ_COLUMN] = out[self.entry.read_column]
             if reader is not None:     # the instrument's state, carried too
                 out.update(reader.read(self.elapsed[i0:i1], out, out["C_T_F"]))
+            if BALL_CHARGE_COLUMN in self.columns:
+                out[BALL_CHARGE_COLUMN] = self.curves.terminal.ball_charge(
+                    np.asarray(self.elapsed[i0:i1], dtype=float))
             self._last_circuit = load
             yield i0, i1, out
 

@@ -307,8 +307,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 _rng(0.0, 1e9, lo_open=True)),
     },
     # the ball's charge (issue #52; tengfield.source, docs/charge.md): "constant" is
-    # [device] surface_charge_uC_per_m2 (a number, or "breakdown": its air-breakdown
-    # limit); "breakdown" the same as surface_charge_uC_per_m2 = "breakdown"; "contact"
+    # [device]'s SURFACE_CHARGE_KEY (a number, or "breakdown": its air-breakdown
+    # limit); "breakdown" the same as that key = "breakdown"; "contact"
     # makes it impact by impact (Hertz's area at each impact's speed with [contact]'s
     # moduli, the condenser law toward equilibrium_uC_per_m2, leakage, the air-breakdown
     # cap of discharge). Not field keys: the field is linear in the ball's charge.

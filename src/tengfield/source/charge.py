@@ -111,7 +111,8 @@ class ChargeHistory:
         last_q = np.where(i >= 0, self.after[np.maximum(i, 0)] if self.times.size else self.start,
                           self.start)
         if self.leakage_time > 0.0:
-            last_q = last_q * np.exp(-(t - last_t) / self.leakage_time)
+            with np.errstate(over="ignore"):   # tau -> 0: all leaked (exp(-inf) = 0)
+                last_q = last_q * np.exp(-(t - last_t) / self.leakage_time)
         return np.clip(last_q, -self.cap, self.cap)
 
     def rise_time(self, fraction: float = 0.9, steady: float | None = None) -> float | None:
@@ -152,7 +153,8 @@ def charge_history(law: ContactCharging, times, areas, t0: float = 0.0) -> Charg
     q_cap = law.cap * A
     k = np.minimum(1.0, law.efficiency * areas / A)
     if law.leakage_time > 0.0:
-        decay = np.exp(-np.diff(np.concatenate(([t0], times))) / law.leakage_time)
+        with np.errstate(over="ignore"):
+            decay = np.exp(-np.diff(np.concatenate(([t0], times))) / law.leakage_time)
     else:
         decay = np.ones_like(times)
     from ._kernel import contact_recurrence

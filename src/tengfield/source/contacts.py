@@ -84,8 +84,9 @@ def steady_state(history: ChargeHistory, law: ContactCharging, areas, window_sta
     at = times[inside]
     gaps = np.diff(np.concatenate(([first], at)))
     tau = law.leakage_time
-    decay = np.exp(-gaps / tau) if tau > 0.0 else np.ones_like(gaps)
-    tail = math.exp(-(duration - at[-1]) / tau) if tau > 0.0 else 1.0
+    with np.errstate(over="ignore"):
+        decay = np.exp(-gaps / tau) if tau > 0.0 else np.ones_like(gaps)
+        tail = float(np.exp(-(duration - at[-1]) / tau)) if tau > 0.0 else 1.0
     q_eq = law.equilibrium * A
     P = float(np.prod((1.0 - k) * decay)) * tail
     Q = float(contact_recurrence(decay, k, q_eq, math.inf, 0.0)[1][-1]) * tail
