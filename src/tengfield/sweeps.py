@@ -545,7 +545,9 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
     tables = {} if tables is None else tables
     counts = {"computed": 0, "cached": 0, "reused": 0, "geometries": 0}
     out = []
+    from .source import refuse_contact_charge
     for values, scene in points:
+        refuse_contact_charge(scene, "tengfield sweep")   # a varied [charge] model too
         try:
             key = scene.field_hash()
         except SceneError as exc:
@@ -698,6 +700,8 @@ def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes
     ranks, or ``jobs`` worker processes) and every rank returns every row.
     ``on_surrogates(counts, [(scene, table)])``: called (on every rank) once the
     surrogates are at hand (the CLI's lines)."""
+    from .source import refuse_contact_charge
+    refuse_contact_charge(scene, "tengfield sweep")
     from ._console import progress_bar
     from ._mpi import check_jobs
     from .errors import SceneError

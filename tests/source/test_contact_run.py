@@ -323,3 +323,21 @@ def test_mpirun_writes_the_serial_runs_files(tmp_path, cli_command, cli_env):
     one_block = json.loads((tmp_path / "one" / "summary.json").read_text())["charge"]
     two_block = json.loads((tmp_path / "two" / "summary.json").read_text())["charge"]
     assert one_block == two_block
+
+
+@pytest.mark.parametrize("study", ["sweep", "design", "uncertainty", "breakdown", "fit",
+                                   "report"])
+def test_the_studies_that_would_hold_the_charge_constant_refuse_it_in_one_line(study, tmp_path):
+    """Until each study runs the contacts' charge it refuses ``[charge] model = "contact"``
+    before any work, rather than running at a constant charge without saying so."""
+    scene = tmp_path / "contact.toml"
+    scene.write_text(fx.SMALL_SCENE + '\n[charge]\nmodel = "contact"\n')
+    extra = {"sweep": ["--frequency-hz", "18:20:2", "--amplitude-mm", "1.5"],
+             "fit": ["--target", "V_pp_V=4.2"]}.get(study, [])
+    proc = subprocess.run([sys.executable, "-m", "tengfield.cli", study, str(scene), *extra,
+                           "-o", str(tmp_path / "out")], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode != 0
+    assert 'model = "contact" is not supported by tengfield ' + study in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -329,6 +329,8 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     over its ranks (every rank returns the same result); else ``jobs`` worker processes.
     ``solve``/``simulate`` replace the field solver and the dynamics (tests);
     ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
+    from ..source import refuse_contact_charge
+    refuse_contact_charge(scene, "tengfield design")
     from .._args import check_jobs_argument
     from .._console import progress_shown
     from ..scene.parse import check_scene_argument

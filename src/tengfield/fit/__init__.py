@@ -88,6 +88,8 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
     ``overrides`` sets ``[fit]`` keys (e.g. ``{"loss": "huber", "profile": True}``).
     ``solve``/``simulate`` replace the field solver and the dynamics (tests).
     """
+    from ..source import refuse_contact_charge
+    refuse_contact_charge(scene, "tengfield fit")
     if (measured is None) == (targets is None):
         raise FitError("give either a measured trace or targets, not both")
     if overrides:
