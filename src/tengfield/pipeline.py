@@ -273,10 +273,12 @@ def check_contact_charge(scene) -> None:
                          f"{scene.array.cells}: not supported yet (each cell's ball would "
                          'charge on its own impacts); use [charge] model = "constant" '
                          "for an array")
-    if scene.contact.model == "3d":
-        raise SceneError('[charge] model = "contact" with [contact] model = "3d": not '
-                         "supported yet (the ball off the axis); allowed: [contact] model "
-                         '= "impact" or "soft"')
+    from .dynamics.models import MODELS, model_of
+    if model_of(scene).lateral:
+        on_axis = ", ".join(repr(name) for name, entry in MODELS.items() if not entry.lateral)
+        raise SceneError('[charge] model = "contact" with [contact] model = '
+                         f'"{scene.contact.model}": not supported yet (the ball off the '
+                         f"axis); allowed: [contact] model = {on_axis}")
 
 
 def _contact_charge_stage(scene, dynamics, stages, **field_options):
@@ -339,12 +341,10 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
 
 
 def _contact_period(scene) -> float:
-    """The period [s] the contacts repeat with: a sine's (or the harmonics' fundamental,
-    when the components are its multiples); 0 for a recorded or random table."""
-    exc = scene.excitation
-    if exc.kind == "sine" or (exc.kind == "harmonics" and not exc.has_noise):
-        return float(exc.period)
-    return 0.0
+    """The period [s] the contacts repeat with: the drive's where the table motion repeats
+    each period (a sine; harmonics of one fundamental, no noise); 0 otherwise."""
+    from .dynamics.excitation import repeats_each_period
+    return float(scene.excitation.period) if repeats_each_period(scene) else 0.0
 
 
 def _with_contact_charge(stage, dynamics, charged) -> None:
