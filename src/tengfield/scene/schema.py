@@ -443,8 +443,16 @@ def with_defaults(raw: dict) -> dict:
         if sec in OPTIONAL_SECTIONS and sec not in raw:
             continue
         given = renamed_section(sec, raw.get(sec, {}))
-        full[sec] = {k: given.get(k, spec.default) for k, spec in keys.items()}
+        # a deprecated key only where the scene gives it: a printed scene loads back
+        # (issue 54 item 7: [instrument] capacitance_pF beside the old key's default)
+        full[sec] = {k: given.get(k, spec.default) for k, spec in keys.items()
+                     if (sec, k) not in DEPRECATED_KEYS or k in given}
     return full
+
+
+#: keys still read under a newer spelling elsewhere (a warning says which): left out of a
+#: scene printed with its defaults unless the scene gives them
+DEPRECATED_KEYS = frozenset({("circuit", "parallel_capacitance_pF")})
 
 
 def convert(sec: str, key: str, value, spec: Key):
