@@ -27,6 +27,7 @@ Importing tengfield loads neither dolfinx, gmsh nor numba: ``run``,
 """
 from __future__ import annotations
 
+from . import _early_interrupt  # noqa: F401 - first: Ctrl-C during the CLI's imports
 import importlib
 
 __version__ = "0.1.0"

@@ -328,12 +328,16 @@ def _main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     argv = _take_quiet(argv)
     if launched_size() > 1:
+        from ._early_interrupt import hand_back
+        hand_back()   # _mpi's own SIGINT/SIGTERM handling from here
         return _main_under_mpirun(parser, argv, _launched_world())
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
     try:
+        from ._early_interrupt import hand_back
+        hand_back()   # from here an interrupt is caught here and cleaned up
         with _sigterm_as_interrupt():
             _apply_settings(args)
             return _run_command(parser, args)

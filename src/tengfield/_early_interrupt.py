@@ -1,0 +1,44 @@
+"""Ctrl-C before the command line has set itself up (issue 54 item 14): while ``tengfield``
+(or ``python -m tengfield.cli``) is still importing, SIGINT prints the one line a later
+interrupt prints and exits 130, instead of a KeyboardInterrupt traceback from the middle
+of an import. A library user (a script, a notebook) keeps Python's own KeyboardInterrupt:
+the handler is put in place only when this process is the command line, and
+:func:`tengfield.cli.main` hands SIGINT back to Python once it can clean up."""
+from __future__ import annotations
+
+import os
+import signal
+import sys
+
+
+def _is_command_line() -> bool:
+    argv = list(getattr(sys, "orig_argv", ()) or ())
+    if "-m" in argv[:-1]:
+        return argv[argv.index("-m") + 1] in ("tengfield", "tengfield.cli")
+    return bool(sys.argv) and os.path.basename(sys.argv[0]) == "tengfield"
+
+
+def _interrupted(signum, frame):   # noqa: ARG001 - the signal handler's signature
+    os.write(2, b"tengfield: interrupted\n")
+    os._exit(130)
+
+
+def install() -> None:
+    """The quick exit on SIGINT, for the command line's start-up only."""
+    if _is_command_line() and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        try:
+            signal.signal(signal.SIGINT, _interrupted)
+        except ValueError:     # not the main thread: leave it
+            pass
+
+
+def hand_back() -> None:
+    """Python's KeyboardInterrupt again (the command line's own handling takes over)."""
+    try:
+        if signal.getsignal(signal.SIGINT) is _interrupted:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+    except ValueError:
+        pass
+
+
+install()

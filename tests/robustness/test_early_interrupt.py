@@ -1,0 +1,40 @@
+"""Issue 54 item 14: Ctrl-C while the command line is still importing prints the one line a
+later interrupt prints and exits 130 (a 20-line KeyboardInterrupt traceback before). The
+first ~0.05 s are Python's own start-up (site.py), before any tengfield code runs."""
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+import plate_model as fx
+
+
+@pytest.mark.parametrize("delay", [0.1, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0])
+def test_an_interrupt_during_start_up_is_one_line_and_exit_130(delay, tmp_path, cli_command,
+                                                              cli_env):
+    scene = tmp_path / "small.toml"
+    scene.write_text(fx.SMALL_SCENE)
+    proc = subprocess.Popen(cli_command("run", scene, "-o", tmp_path / "out"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=cli_env(TENGFIELD_CACHE_DIR=tmp_path / "cache"))
+    time.sleep(delay)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:       # finished before the signal: nothing to see
+        pytest.skip("the run ended before the interrupt")
+    assert proc.returncode == 130, err[-2000:]
+    assert "Traceback" not in err, err[-2000:]
+    assert err.strip().splitlines()[-1] == "tengfield: interrupted"
+
+
+def test_a_library_user_keeps_pythons_keyboard_interrupt():
+    """``import tengfield`` in a script or a notebook leaves SIGINT to Python."""
+    code = ("import signal, tengfield, tengfield.cli; "
+            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.stdout.strip() == "True", out.stderr
