@@ -671,6 +671,20 @@ def _needs_field(scene, gap) -> tuple[bool, str]:
     return True, ""
 
 
+def _rest_reason(regime: dict | None, scene) -> None:
+    """A ball at rest under a sine below lift-off: ``regime["reason"]`` (why, and the
+    lift-off amplitude and frequency) and ``regime["liftoff"]`` (the numbers;
+    :func:`tengfield.dynamics.mapping.below_liftoff`)."""
+    if not regime or regime.get("regime") != "rest":
+        return
+    from .dynamics.mapping import below_liftoff
+
+    block = below_liftoff(scene)
+    if block is not None:
+        regime["reason"] = block.pop("reason")
+        regime["liftoff"] = block
+
+
 def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blocks,
              entry) -> dict:
     """summary.json; ``extremes``: ``{"peak_to_peak": {...}, "peak": {...}}`` by short
@@ -709,6 +723,7 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
         "load": None,
         "stages": stages,
     }
+    _rest_reason(summary["regime"], scene)
     if electrical.READ_COLUMN in waveforms:
         summary["V_read_rule"] = (
             "V_read_V: what an instrument of capacitance C_p = "

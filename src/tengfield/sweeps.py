@@ -87,14 +87,49 @@ def steady_periods(scene) -> int:
     return max(MIN_STEADY_PERIODS, int(run.duration * exc.frequency - run.settle_periods))
 
 
+def extended_duration(settle_periods: int, duration: float, frequency: float,
+                      steady: int) -> float:
+    """THE rule of a run too short for its settling: ``duration`` [s], or, where
+    ``settle_periods`` periods of ``frequency`` [Hz] fill it (no steady window),
+    ``settle_periods + steady`` periods of that frequency (a sweep point,
+    :func:`point_duration`; ``tengfield run``, :func:`extend_for_settling`)."""
+    if settle_periods / float(frequency) < duration:
+        return duration
+    return (settle_periods + steady) / float(frequency)
+
+
 def point_duration(scene, frequency: float) -> float:
     """The run length [s] of a sweep point at ``frequency`` [Hz]: ``[run] duration_s``,
     or, where ``settle_periods`` periods fill it (no steady window), extended to
     ``settle_periods + steady_periods(scene)`` periods of that frequency."""
     run = scene.run
-    if run.settle_periods / float(frequency) < run.duration:
-        return run.duration
-    return (run.settle_periods + steady_periods(scene)) / float(frequency)
+    return extended_duration(run.settle_periods, run.duration, frequency, steady_periods(scene))
+
+
+def extend_for_settling(base, settings, error):
+    """``(scene, block)`` of ``tengfield run`` with ``--set`` ``settings`` on ``base``
+    (the scene before them) whose settling fills the run (``error``: the
+    :class:`~tengfield.scene.limits.SteadyWindowError` they gave): ``[run] duration_s``
+    extended by the rule a sweep point gets (:func:`extended_duration`, with the steady
+    periods ``base`` has: the run at 8 Hz is the sweep's point at 8 Hz), applied as one
+    more ``--set run.duration_s``; ``block``: summary.json's ``run_extended`` (its
+    ``reason`` is the terminal line). A ``--set run.duration_s`` of the user's own is
+    kept: the error is raised again."""
+    from .scene.parse import parse_setting, with_settings
+
+    if any(parse_setting(text)[0] == ["run", "duration_s"] for text in settings):
+        raise error
+    frequency = 1.0 / error.period
+    steady = steady_periods(base)
+    duration = float(f"{extended_duration(error.settle_periods, error.duration, frequency, steady):.12g}")
+    scene = with_settings(base, [*settings, f"run.duration_s={duration!r}"])
+    reason = (f"run: [run] settle_periods = {error.settle_periods} leaves no steady window in "
+              f"duration_s = {error.duration:g} s at {frequency:g} Hz: extended to "
+              f"duration_s = {duration:g} s (settle_periods + {steady} steady periods, as "
+              "sweep extends its points)")
+    return scene, {"duration_s": duration, "stated_duration_s": error.duration,
+                   "settle_periods": error.settle_periods, "steady_periods": steady,
+                   "reason": reason}
 
 
 def point_scene(scene, frequency: float, amplitude: float):
