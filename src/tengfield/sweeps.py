@@ -23,13 +23,18 @@ from .files import figure_file
 #: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
 TERMINAL_COLUMNS = [(column_name(name, stat), stat, name[:name.rindex("_")])
                     for stat in ("peak_to_peak", "peak") for name in (*TERMINAL, "V_read_V")]
+#: the load columns of sweep.csv (a --load-ohm axis): the numbers `tengfield run
+#: --set circuit.kind=load` reports at that load (its summary's ``load`` block), and the
+#: rms of the resistor's voltage and current, sqrt(P_mean R) and sqrt(P_mean / R)
+LOAD_SWEEP_COLUMNS = ["V_load_pp_V", "I_load_pp_A", "V_load_rms_V", "I_load_rms_A"]
 #: columns of ``sweep.csv`` (one row per grid point and load); ``V_read_*`` empty without
 #: an instrument (``[circuit] parallel_capacitance_pF`` = 0)
 SWEEP_COLUMNS = (["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period"]
                  + [column_name(n, "peak_to_peak") for n in TERMINAL]   # the first columns,
                  + ["P_mean_W", "power_density_W_per_m3"]                # kept in place
                  + [c for c, _, _ in TERMINAL_COLUMNS if c not in
-                    [column_name(n, "peak_to_peak") for n in TERMINAL]])
+                    [column_name(n, "peak_to_peak") for n in TERMINAL]]
+                 + LOAD_SWEEP_COLUMNS)
 
 
 def _default_simulate():
@@ -65,14 +70,32 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     if not len(loads):
         return [{**base, "load_ohm": None, "P_mean_W": None, "power_density_W_per_m3": None}]
     rows = []
-    volume = point.device.cell_volume * point.device.cells
     grid = electrical.LoadGrid(point, dynamics, curves)   # shared by the loads
+    t = electrical.elapsed_times(dynamics)
     for load in loads:
         loaded = point.with_values(circuit={"kind": "load", "load_ohm": float(load)})
         result = electrical.steady_load(loaded, dynamics, curves, grid=grid)
-        rows.append({**base, "load_ohm": float(load), "P_mean_W": result["mean_power_W"],
-                     "power_density_W_per_m3": result["mean_power_W"] / volume})
+        rows.append({**base, **load_columns(loaded, result, t)})
     return rows
+
+
+def load_columns(loaded, result, t) -> dict:
+    """A sweep row's load columns of one :func:`~tengfield.electrical.steady_load`
+    ``result`` of the scene ``loaded`` (``[circuit] kind = "load"``) on the run's time
+    axis ``t``: through the load block a run writes (``load_block``: the same window,
+    the same numbers)."""
+    from .electrical.circuits.load import load_block
+
+    mask, _ = electrical.steady_window(t, loaded)
+    block = load_block(loaded, result, {"time_s": t, "V_load_V": result["V_load"],
+                                        "I_load_A": result["I_load"]}, mask)
+    r, power = float(loaded.circuit.load), float(block["mean_power_W"])
+    return {"load_ohm": r, "P_mean_W": power,
+            "power_density_W_per_m3": block["power_density_W_per_m3"],
+            "V_load_pp_V": block["V_load_peak_to_peak_V"],
+            "I_load_pp_A": block["I_load_peak_to_peak_A"],
+            "V_load_rms_V": math.sqrt(max(power, 0.0) * r),
+            "I_load_rms_A": math.sqrt(max(power, 0.0) / r)}
 
 
 #: fewest steady periods of a point whose run is extended (:func:`point_duration`)

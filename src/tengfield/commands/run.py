@@ -242,6 +242,12 @@ def print_summary(summary: dict) -> None:
         load = summary["load"]
         print(f"load {summary['circuit']['load_ohm']:.3g} ohm: mean power "
               f"{load['mean_power_W'] * 1e6:.4g} µW, {load['power_density_W_per_m3']:.4g} W/m^3")
+    matched = summary.get("matched_load")
+    if matched:
+        print(f"matched load {matched['load_ohm']:.3g} ohm: mean power "
+              f"{matched['mean_power_W'] * 1e6:.4g} µW, "
+              f"{matched['power_density_W_per_m3']:.4g} W/m^3 (the resistor taking the most; "
+              "from this run's Q_SC, C_T, no field solve)")
     energy = summary.get("energy_per_cycle")
     if energy:
         line = (f"energy per cycle: CMEO bound (the device's most) "
