@@ -114,8 +114,16 @@ def _apply_settings(args) -> None:
     settings = getattr(args, "settings", None)
     if settings:
         from .scene import load_scene, with_settings
+        from .scene.limits import SteadyWindowError
 
-        args.scene = with_settings(load_scene(args.scene), settings)
+        base = load_scene(args.scene)
+        try:
+            args.scene = with_settings(base, settings)
+        except SteadyWindowError as exc:
+            extend = getattr(args, "extend_settling", None)   # run: as sweep does (#53)
+            if extend is None:
+                raise
+            args.scene, args.settling_extended = extend(base, settings, exc)
 
 
 #: a staging directory's part of a path, left out of an error line (it names DIR)

@@ -212,12 +212,47 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     result = run_one(scene, comm=comm, cache_dir=cache_dir, solve=solve, simulate=simulate,
                      progress=progress, command_line=command_line, write_cache=write_cache,
                      radial_settings=radial_settings)
+    _matched_load_summary(result)
     if scene.run.realisations > 1:
         rows, block = run_ensemble(scene, result, comm=comm, jobs=jobs, cache_dir=cache_dir,
                                    progress=progress, solve=solve)
         result.summary["ensemble"] = block
         result.extras["ensemble_rows"] = rows
     return result
+
+
+def _matched_load_summary(result) -> None:
+    """summary.json's ``matched_load``: the resistor that takes the most mean power from
+    this run's own Q_SC(t), C_T(t) and motion, and that power (no field solve, no new
+    dynamics: :func:`tengfield.electrical.matched.matched_load`, the scan ``tengfield
+    design`` makes), or None with ``matched_load_reason``."""
+    summary = result.summary
+    reason = None
+    if result.curves is None:
+        reason = "no charge moves (Q_SC = 0): no load takes power"
+    elif result.scene.array.cells > 0:
+        reason = "an [array]: its cells' loads are the array's (array.png, summary array)"
+    elif hasattr(result.waveforms, "chunks"):
+        reason = ("a long run streamed a chunk at a time: the load scan would hold the whole "
+                  "run; run a shorter duration_s for it")
+    if reason is not None:
+        summary["matched_load"] = None
+        summary["matched_load_reason"] = reason
+        return
+    from .electrical.matched import matched_load
+
+    start = time.perf_counter()
+    scene = result.scene
+    load, (power,) = matched_load([scene], [result.dynamics], result.curves, "mean")
+    volume = scene.device.cell_volume * scene.device.cells
+    summary["matched_load"] = _jsonable({
+        "load_ohm": load, "mean_power_W": power,
+        "power_density_W_per_m3": power / volume,
+        "rule": "the resistor (with the circuit's C_p across it) taking the most mean power "
+                "over the steady window of this run's own Q_SC(t), C_T(t) (no field solve): "
+                "a log grid around 1 / (2 pi f C_T), then a bounded scalar search to 0.01 "
+                "decade (the load circuit's integrator at each R)",
+        "wall_time_s": time.perf_counter() - start})
 
 
 def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
@@ -682,6 +717,20 @@ def _needs_field(scene, gap) -> tuple[bool, str]:
     return True, ""
 
 
+def _rest_reason(regime: dict | None, scene) -> None:
+    """A ball at rest under a sine below lift-off: ``regime["reason"]`` (why, and the
+    lift-off amplitude and frequency) and ``regime["liftoff"]`` (the numbers;
+    :func:`tengfield.dynamics.mapping.below_liftoff`)."""
+    if not regime or regime.get("regime") != "rest":
+        return
+    from .dynamics.mapping import below_liftoff
+
+    block = below_liftoff(scene)
+    if block is not None:
+        regime["reason"] = block.pop("reason")
+        regime["liftoff"] = block
+
+
 def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blocks,
              entry) -> dict:
     """summary.json; ``extremes``: ``{"peak_to_peak": {...}, "peak": {...}}`` by short
@@ -720,6 +769,7 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
         "load": None,
         "stages": stages,
     }
+    _rest_reason(summary["regime"], scene)
     if electrical.READ_COLUMN in waveforms:
         summary["V_read_rule"] = (
             "V_read_V: what an instrument of capacitance C_p = "

@@ -23,13 +23,18 @@ from .files import figure_file
 #: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
 TERMINAL_COLUMNS = [(column_name(name, stat), stat, name[:name.rindex("_")])
                     for stat in ("peak_to_peak", "peak") for name in (*TERMINAL, "V_read_V")]
+#: the load columns of sweep.csv (a --load-ohm axis): the numbers `tengfield run
+#: --set circuit.kind=load` reports at that load (its summary's ``load`` block), and the
+#: rms of the resistor's voltage and current, sqrt(P_mean R) and sqrt(P_mean / R)
+LOAD_SWEEP_COLUMNS = ["V_load_pp_V", "I_load_pp_A", "V_load_rms_V", "I_load_rms_A"]
 #: columns of ``sweep.csv`` (one row per grid point and load); ``V_read_*`` empty without
 #: an instrument (``[circuit] parallel_capacitance_pF`` = 0)
 SWEEP_COLUMNS = (["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period"]
                  + [column_name(n, "peak_to_peak") for n in TERMINAL]   # the first columns,
                  + ["P_mean_W", "power_density_W_per_m3"]                # kept in place
                  + [c for c, _, _ in TERMINAL_COLUMNS if c not in
-                    [column_name(n, "peak_to_peak") for n in TERMINAL]])
+                    [column_name(n, "peak_to_peak") for n in TERMINAL]]
+                 + LOAD_SWEEP_COLUMNS)
 
 
 def _default_simulate():
@@ -65,14 +70,32 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     if not len(loads):
         return [{**base, "load_ohm": None, "P_mean_W": None, "power_density_W_per_m3": None}]
     rows = []
-    volume = point.device.cell_volume * point.device.cells
     grid = electrical.LoadGrid(point, dynamics, curves)   # shared by the loads
+    t = electrical.elapsed_times(dynamics)
     for load in loads:
         loaded = point.with_values(circuit={"kind": "load", "load_ohm": float(load)})
         result = electrical.steady_load(loaded, dynamics, curves, grid=grid)
-        rows.append({**base, "load_ohm": float(load), "P_mean_W": result["mean_power_W"],
-                     "power_density_W_per_m3": result["mean_power_W"] / volume})
+        rows.append({**base, **load_columns(loaded, result, t)})
     return rows
+
+
+def load_columns(loaded, result, t) -> dict:
+    """A sweep row's load columns of one :func:`~tengfield.electrical.steady_load`
+    ``result`` of the scene ``loaded`` (``[circuit] kind = "load"``) on the run's time
+    axis ``t``: through the load block a run writes (``load_block``: the same window,
+    the same numbers)."""
+    from .electrical.circuits.load import load_block
+
+    mask, _ = electrical.steady_window(t, loaded)
+    block = load_block(loaded, result, {"time_s": t, "V_load_V": result["V_load"],
+                                        "I_load_A": result["I_load"]}, mask)
+    r, power = float(loaded.circuit.load), float(block["mean_power_W"])
+    return {"load_ohm": r, "P_mean_W": power,
+            "power_density_W_per_m3": block["power_density_W_per_m3"],
+            "V_load_pp_V": block["V_load_peak_to_peak_V"],
+            "I_load_pp_A": block["I_load_peak_to_peak_A"],
+            "V_load_rms_V": math.sqrt(max(power, 0.0) * r),
+            "I_load_rms_A": math.sqrt(max(power, 0.0) / r)}
 
 
 #: fewest steady periods of a point whose run is extended (:func:`point_duration`)
@@ -87,14 +110,49 @@ def steady_periods(scene) -> int:
     return max(MIN_STEADY_PERIODS, int(run.duration * exc.frequency - run.settle_periods))
 
 
+def extended_duration(settle_periods: int, duration: float, frequency: float,
+                      steady: int) -> float:
+    """THE rule of a run too short for its settling: ``duration`` [s], or, where
+    ``settle_periods`` periods of ``frequency`` [Hz] fill it (no steady window),
+    ``settle_periods + steady`` periods of that frequency (a sweep point,
+    :func:`point_duration`; ``tengfield run``, :func:`extend_for_settling`)."""
+    if settle_periods / float(frequency) < duration:
+        return duration
+    return (settle_periods + steady) / float(frequency)
+
+
 def point_duration(scene, frequency: float) -> float:
     """The run length [s] of a sweep point at ``frequency`` [Hz]: ``[run] duration_s``,
     or, where ``settle_periods`` periods fill it (no steady window), extended to
     ``settle_periods + steady_periods(scene)`` periods of that frequency."""
     run = scene.run
-    if run.settle_periods / float(frequency) < run.duration:
-        return run.duration
-    return (run.settle_periods + steady_periods(scene)) / float(frequency)
+    return extended_duration(run.settle_periods, run.duration, frequency, steady_periods(scene))
+
+
+def extend_for_settling(base, settings, error):
+    """``(scene, block)`` of ``tengfield run`` with ``--set`` ``settings`` on ``base``
+    (the scene before them) whose settling fills the run (``error``: the
+    :class:`~tengfield.scene.limits.SteadyWindowError` they gave): ``[run] duration_s``
+    extended by the rule a sweep point gets (:func:`extended_duration`, with the steady
+    periods ``base`` has: the run at 8 Hz is the sweep's point at 8 Hz), applied as one
+    more ``--set run.duration_s``; ``block``: summary.json's ``run_extended`` (its
+    ``reason`` is the terminal line). A ``--set run.duration_s`` of the user's own is
+    kept: the error is raised again."""
+    from .scene.parse import parse_setting, with_settings
+
+    if any(parse_setting(text)[0] == ["run", "duration_s"] for text in settings):
+        raise error
+    frequency = 1.0 / error.period
+    steady = steady_periods(base)
+    duration = float(f"{extended_duration(error.settle_periods, error.duration, frequency, steady):.12g}")
+    scene = with_settings(base, [*settings, f"run.duration_s={duration!r}"])
+    reason = (f"run: [run] settle_periods = {error.settle_periods} leaves no steady window in "
+              f"duration_s = {error.duration:g} s at {frequency:g} Hz: extended to "
+              f"duration_s = {duration:g} s (settle_periods + {steady} steady periods, as "
+              "sweep extends its points)")
+    return scene, {"duration_s": duration, "stated_duration_s": error.duration,
+                   "settle_periods": error.settle_periods, "steady_periods": steady,
+                   "reason": reason}
 
 
 def point_scene(scene, frequency: float, amplitude: float):

@@ -225,7 +225,7 @@ def test_concurrent_writer_gets_a_clear_error(tmp_path, short_scene, capsys):
     finally:
         holder.abort()
     assert run_main(["dynamics", short_scene, "-o", out_dir], capsys)[0] == 0   # lock released
-    assert (out_dir / LOCK_NAME).exists()
+    assert not (out_dir / LOCK_NAME).exists()     # and removed (issue #53)
 
 
 # -- #8.16 CLI side and #8.12 with real processes: Ctrl-C while writing, a second writer ---

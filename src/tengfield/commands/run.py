@@ -33,7 +33,14 @@ def register(sub) -> None:
     p.add_argument("--spice-start-up", action="store_true",
                    help="as --spice, with the run's start-up (t = 0 .. settle_periods "
                         "periods, from rest) before the repeated period")
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, extend_settling=_extend_settling)
+
+
+def _extend_settling(base, settings, error):
+    """A ``--set`` frequency whose settle_periods fill duration_s: the run extended as a
+    sweep point is (:func:`tengfield.sweeps.extend_for_settling`; the CLI calls it)."""
+    from ..sweeps import extend_for_settling
+    return extend_for_settling(base, settings, error)
 
 
 def _run(args) -> int:
@@ -58,9 +65,15 @@ def _run_scene(args, comm, figures) -> int:
     if spice:
         from ..spice import check_exportable
         check_exportable(scene)           # before the work (issue #54.13)
+    extended = getattr(args, "settling_extended", None)
+    if extended and (comm is None or comm.rank == 0):
+        import sys
+        print(extended["reason"], file=sys.stderr, flush=True)   # as sweep's line
     # [run] realisations > 1: the library runs the ensemble (result.ensemble, ensemble_rows)
     result = run(scene, comm=comm, cache_dir=args.cache_dir, progress=True,
                  command_line=command_line(), jobs=args.jobs)
+    if extended:
+        result.summary["run_extended"] = extended
     if comm is None or comm.rank == 0:
         written = result.write(args.output, plots=not args.no_plots,
                                spice=spice,
@@ -218,7 +231,8 @@ def print_summary(summary: dict) -> None:
                          checked_to_s=regime.get("regime_checked_to_s") or 0.0,
                          duration_s=regime.get("regime_run_s") or None)
     print(f"regime: {label} "
-          f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)")
+          f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)"
+          + (f": {regime['reason']}" if regime.get("reason") else ""))
     if summary.get("charge"):
         from ..source.contacts import charge_line
         print(charge_line(summary["charge"]))
@@ -228,6 +242,12 @@ def print_summary(summary: dict) -> None:
         load = summary["load"]
         print(f"load {summary['circuit']['load_ohm']:.3g} ohm: mean power "
               f"{load['mean_power_W'] * 1e6:.4g} µW, {load['power_density_W_per_m3']:.4g} W/m^3")
+    matched = summary.get("matched_load")
+    if matched:
+        print(f"matched load {matched['load_ohm']:.3g} ohm: mean power "
+              f"{matched['mean_power_W'] * 1e6:.4g} µW, "
+              f"{matched['power_density_W_per_m3']:.4g} W/m^3 (the resistor taking the most; "
+              "from this run's Q_SC, C_T, no field solve)")
     energy = summary.get("energy_per_cycle")
     if energy:
         line = (f"energy per cycle: CMEO bound (the device's most) "

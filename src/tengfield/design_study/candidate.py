@@ -19,6 +19,8 @@ from typing import Callable
 import numpy as np
 
 from .. import electrical
+from ..electrical.matched import (LOAD_DECADES, LOAD_GRID, LOAD_XATOL_DECADES,  # noqa: F401
+                                  load_power as _load_power, loaded_scene, matched_load)
 from ..errors import TengfieldError
 from .spec import OBJECTIVES, OTHER_VARY, DesignSpec, band_run, periodic
 from ..scene.schema import SURFACE_CHARGE_KEY
@@ -34,10 +36,6 @@ DESIGN_MESH_MAX_MM = 1.0
 DESIGN_MESH_BALL_FRACTION = 0.2
 DESIGN_TOLERANCE = 0.02
 DESIGN_MESH_MOTION = "move"
-#: matched-load scan: decades either side of 1 / (2 pi f C_T), grid points, Brent's tolerance
-LOAD_DECADES = 1.5
-LOAD_GRID = 7
-LOAD_XATOL_DECADES = 0.01
 #: windows an irregular (chaotic) band point is scored over: its spread enters the error bar
 DYNAMICS_WINDOWS = 3
 
@@ -114,76 +112,6 @@ def band_scene(scene, spec: DesignSpec, frequency: float, amplitude: float):
         return scene.with_values(run=run)
     return scene.with_values(
         excitation={"frequency_hz": frequency, "amplitude_mm": amplitude * 1e3}, run=run)
-
-
-def loaded_scene(point, load: float):
-    """``point`` with ``[circuit] kind = "load"``, ``load_ohm = load`` [ohm]: what
-    ``point.with_values(circuit=...)`` gives, without parsing the whole scene again (the
-    load scan asks ~40 loads per candidate): the section replaced (its own checks run),
-    and the values as given (``raw``) with it."""
-    from ..scene.schema import update_section
-
-    raw = dict(point.raw)
-    raw["circuit"] = dict(raw.get("circuit", {}))
-    update_section(raw, "circuit", {"kind": "load", "load_ohm": float(load)})
-    return dataclasses.replace(point, circuit=dataclasses.replace(
-        point.circuit, kind="load", load=float(load)), raw=raw)
-
-
-def _load_power(point, dynamics, curves, load: float, grid=None) -> float:
-    loaded = loaded_scene(point, load)
-    return float(electrical.steady_load(loaded, dynamics, curves, grid=grid)["mean_power_W"])
-
-
-def matched_load(points, dynamics, curves, aggregate: str,
-                 bounds: tuple | None = None) -> tuple[float, list[float]]:
-    """(R [ohm], powers [W] per point) maximising the aggregate mean power of ``points``
-    (band scenes with their ``dynamics``) into one resistor: a log grid of LOAD_GRID
-    loads over +- LOAD_DECADES around 1 / (2 pi f C_T) (f, C_T: means over the points),
-    then Brent's bounded search (scipy) between the best grid point's neighbours.
-    ``bounds`` ([design] load_ohm, [ohm]): every load searched lies in [lo, hi]."""
-    from scipy.optimize import minimize_scalar
-
-    n_cells = points[0].device.cells
-    c_t = float(np.mean(curves.capacitance_samples)) * n_cells \
-        + points[0].circuit.parallel_capacitance
-    f = float(np.mean([p.excitation.frequency for p in points]))
-    centre = math.log10(1.0 / (2 * math.pi * f * c_t))
-    cache: dict[float, list[float]] = {}
-    # each point's load-independent grid, built once for the scan (the same numbers)
-    grids = [electrical.LoadGrid(p, d, curves) for p, d in zip(points, dynamics)]
-
-    def powers(log_r: float) -> list[float]:
-        key = round(float(log_r), 12)
-        if key not in cache:
-            cache[key] = [_load_power(p, d, curves, 10.0**key, g)
-                          for p, d, g in zip(points, dynamics, grids)]
-        return cache[key]
-
-    def score(log_r: float) -> float:
-        p = powers(log_r)
-        return float(np.mean(p) if aggregate == "mean" else np.min(p))
-
-    floor, ceiling = (math.log10(bounds[0]), math.log10(bounds[1])) if bounds else \
-        (-math.inf, math.inf)
-    start, stop = max(centre - LOAD_DECADES, floor), min(centre + LOAD_DECADES, ceiling)
-    if start >= stop:   # the range lies wholly on one side of 1 / (2 pi f C_T): all of it
-        start, stop = floor, ceiling
-    grid = np.linspace(start, stop, LOAD_GRID)
-    scores = [score(x) for x in grid]
-    k = int(np.argmax(scores))
-    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, LOAD_GRID - 1)]
-    if k in (0, LOAD_GRID - 1):   # the optimum at the grid's edge: widen once
-        lo, hi = (grid[0] - 2 * LOAD_DECADES, grid[1]) if k == 0 else \
-            (grid[-2], grid[-1] + 2 * LOAD_DECADES)
-        lo, hi = max(lo, floor), min(hi, ceiling)
-    if all(s == 0 for s in scores):
-        x = min(max(centre, floor), ceiling)
-        return 10.0**x, powers(x)
-    best = minimize_scalar(lambda x: -score(x), bounds=(lo, hi), method="bounded",
-                           options={"xatol": LOAD_XATOL_DECADES})
-    x = float(best.x) if -best.fun >= scores[k] else float(grid[k])
-    return 10.0**x, powers(x)
 
 
 def aggregate_values(values, how: str) -> float:

@@ -241,6 +241,36 @@ def liftoff_amplitude(frequency_hz, g: float = G):
     return g / w**2
 
 
+def liftoff_frequency(amplitude_m, g: float = G):
+    """Analytic lift-off frequency f = sqrt(g / A) / (2 pi) [Hz] of an amplitude [m]
+    (the inverse of :func:`liftoff_amplitude`)."""
+    return np.sqrt(g / np.asarray(amplitude_m, dtype=float)) / (2.0 * np.pi)
+
+
+def below_liftoff(scene, g: float = G) -> dict | None:
+    """Why a sine-driven ball stays at rest, or None: the table's peak acceleration
+    A (2 pi f)^2 below g (Gamma < 1: the plate never pulls away from the ball), with the
+    lift-off amplitude at this frequency and the lift-off frequency at this amplitude.
+    Only for a periodic excitation kind (one frequency, one amplitude)."""
+    from .excitation import excitation_kind
+
+    exc = scene.excitation
+    if not excitation_kind(scene).periodic or exc.frequency <= 0.0:
+        return None
+    peak = exc.amplitude * (2.0 * math.pi * exc.frequency) ** 2
+    if peak >= g:
+        return None
+    a_lift = float(liftoff_amplitude(exc.frequency, g))
+    f_lift = float(liftoff_frequency(exc.amplitude, g)) if exc.amplitude > 0 else None
+    reason = (f"the ball never lifts off: the table's peak acceleration A (2 pi f)^2 = "
+              f"{peak:.3g} m/s^2 is below g = {g:.3g} m/s^2 (Gamma = {peak / g:.3g}); it "
+              f"lifts off at amplitude_mm > {a_lift * 1e3:.3g} at {exc.frequency:g} Hz"
+              + (f" or at frequency_hz > {f_lift:.3g} at {exc.amplitude * 1e3:g} mm"
+                 if f_lift is not None else ""))
+    return {"reason": reason, "peak_table_acceleration_m_per_s2": peak, "gamma": peak / g,
+            "liftoff_amplitude_mm": a_lift * 1e3, "liftoff_frequency_hz": f_lift}
+
+
 def _file_axis(values, scale: float, name: str) -> np.ndarray:
     """A grid axis in file units (a list, one number or ``"START:STOP:N"``) -> SI."""
     if isinstance(values, str) and values.count(":") == 2:

@@ -19,11 +19,15 @@ change):
    wrote there and this one did not are removed (``DIR/.tengfield-manifest.json``
    lists them; only plain names inside ``DIR``, regular files reached through real
    directories: never "../x", "/x" or a symlink's target), so the directory always
-   holds one complete set. A file the command read (its scene, a recorded excitation,
+   holds one complete set. A file in ``DIR`` that tengfield did not write (not in the
+   manifest: a user's own ``summary.json``) is never replaced silently: it is kept as
+   ``NAME.orig`` (``NAME.orig.2``, ... when taken), one warning line naming both
+   (:func:`foreign_files`). A file the command read (its scene, a recorded excitation,
    a PSD table, fit's measured trace: :func:`tengfield.files.atomic.note_input`) is never
    removed (it stays, no longer listed) nor replaced (one error line, nothing written);
 4. on any failure (exception, full disk, Ctrl-C) the staging directory is
-   removed and the previous set stays as it was.
+   removed and the previous set stays as it was; the lock file goes when the command
+   ends (a command that finds it unlinked under its lock takes the lock again).
 
 ``-o FILE`` options (``tengfield precompute``) get the checks of step 1 on the
 file's directory, and the file must be a regular file or a new path (a FIFO,
@@ -38,6 +42,7 @@ import os
 import shutil
 import stat
 import tempfile
+import warnings
 from pathlib import Path
 
 from ..errors import OutputError
@@ -227,8 +232,10 @@ class StagedOutput:
         keep = False
         try:
             staged = self._staged_names()
-            stale = sorted(self._read_manifest() - set(staged))
+            previous = self._read_manifest()
+            stale = sorted(previous - set(staged))
             moves = self._plan(staged, stale)
+            kept = _keep_foreign(self.target, foreign_files(self.target, staged, previous))
             (self.staging / MANIFEST_NAME).write_text(
                 json.dumps({"files": staged}, indent=1) + "\n")
             tx = self.staging / TX_NAME
@@ -242,8 +249,14 @@ class StagedOutput:
                     self._move(name, is_staged, tx / OLD_NAME)
             except BaseException:
                 keep = not self._undo(self.staging)
+                for _, copy in kept:          # the user's file is back in its place
+                    copy.unlink(missing_ok=True)
                 raise
             (tx / JOURNAL_NAME).unlink()     # the commit point: the new set is in place
+            for name, copy in kept:
+                warnings.warn(f"{self.option} {str(self.target)!r}: {name!r} there was not "
+                              f"written by tengfield: kept it as {copy.name!r} (the new "
+                              f"{name!r} is this command's)", UserWarning, stacklevel=2)
             return [self.target / name for name in staged]
         finally:
             self._cleanup(keep=keep)
@@ -373,7 +386,7 @@ class StagedOutput:
             shutil.rmtree(leftover, ignore_errors=True)
 
     # -- helpers --------------------------------------------------------------------
-    def _lock(self) -> None:
+    def _lock(self, _retries: int = 20) -> None:
         import fcntl
 
         path = self.target / LOCK_NAME
@@ -398,12 +411,31 @@ class StagedOutput:
             raise OutputError(f"{self.option} {str(self.target)!r} is being written by another "
                               f"tengfield command (pid {holder}); wait for it or choose another "
                               "directory") from None
+        now = _lstat(path)
+        if now is None or (now.st_ino, now.st_dev) != (os.fstat(fd).st_ino, os.fstat(fd).st_dev):
+            # the command that held it removed the file as it ended: the lock is the
+            # path's file, take it again
+            os.close(fd)
+            if _retries <= 0:
+                raise OutputError(f"{where}: {LOCK_NAME} keeps being replaced: another "
+                                  "process is writing there; choose another directory")
+            return self._lock(_retries - 1)
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         self._lock_fd = fd
 
     def _unlock(self) -> None:
+        """Remove the lock file (no ``.tengfield.lock`` stays after a command: a command
+        that opened it meanwhile finds it unlinked and takes the new one, :meth:`_lock`)
+        and release the lock."""
         if self._lock_fd is not None:
+            path = self.target / LOCK_NAME
+            try:
+                now, mine = _lstat(path), os.fstat(self._lock_fd)
+                if now is not None and (now.st_ino, now.st_dev) == (mine.st_ino, mine.st_dev):
+                    path.unlink()
+            except OSError:
+                pass
             os.close(self._lock_fd)   # closing releases the flock
             self._lock_fd = None
 
@@ -424,6 +456,51 @@ class StagedOutput:
         if not isinstance(files, list):
             return set()
         return {name for name in files if _plain_name(name) is not None}
+
+
+def foreign_files(target: Path, staged: list[str], previous: set[str]) -> list[str]:
+    """The names among ``staged`` whose destination in ``target`` holds a file (or a
+    symlink) tengfield did not write: not in the ``previous`` command's manifest."""
+    foreign = []
+    for name in staged:
+        if name in previous or name.split("/")[0].startswith(".tengfield"):
+            continue
+        if not _parents_are_directories(target, name):
+            continue
+        st = _lstat(target / name)
+        if st is not None and (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+            foreign.append(name)
+    return foreign
+
+
+def _keep_foreign(target: Path, names: list[str]) -> list[tuple[str, Path]]:
+    """A copy of each of ``names`` in ``target`` beside it as ``NAME.orig`` (a hard link,
+    or a copy where the file system has none; a symlink as a symlink), so the commit's
+    replacement loses nothing: ``[(name, copy)]``."""
+    kept = []
+    try:
+        for name in names:
+            src = target / name
+            copy = src.with_name(src.name + ".orig")
+            n = 2
+            while _lstat(copy) is not None:
+                copy = src.with_name(f"{src.name}.orig.{n}")
+                n += 1
+            if stat.S_ISLNK(os.lstat(src).st_mode):
+                os.symlink(os.readlink(src), copy)
+            else:
+                try:
+                    os.link(src, copy, follow_symlinks=False)
+                except OSError:
+                    shutil.copy2(src, copy, follow_symlinks=False)
+            kept.append((name, copy))
+    except OSError as exc:
+        for _, copy in kept:
+            copy.unlink(missing_ok=True)
+        raise OutputError(f"-o {str(target)!r}: {name!r} there was not written by tengfield "
+                          f"and could not be kept ({_reason(exc)}): nothing was replaced; "
+                          "move it or choose another directory") from None
+    return kept
 
 
 def drop_staging(staging: str | Path, target: str | Path, created: bool) -> None:

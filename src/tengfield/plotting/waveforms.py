@@ -224,17 +224,22 @@ def plot_sweep(rows: list[dict], path: str | Path) -> Path:
 
 
 def sweep_figure(rows: list[dict]):
-    """Peak-to-peak V_OC, Q_SC, I_SC against frequency (one line per amplitude),
-    and mean load power against load resistance when the sweep has loads."""
+    """Peak-to-peak V_OC, Q_SC, I_SC against frequency (one line per amplitude; left out
+    when the sweep has one frequency: a single dot on no axis), and with loads the load's
+    peak-to-peak voltage and current and its mean power against the resistance R (log
+    axes; one line per excitation)."""
     freqs = sorted({r["frequency_hz"] for r in rows})
     amps = sorted({r["amplitude_mm"] for r in rows})
     loads = sorted({r["load_ohm"] for r in rows if r.get("load_ohm") is not None})
     from ..quantities import QUANTITIES, TERMINAL, axis_label, column_name
     panels = [(column_name(n, "peak_to_peak"), axis_label(n, statistic="peak_to_peak"),
                QUANTITIES[n].display_scale) for n in TERMINAL]
-    ncols = len(panels) + (1 if loads else 0)
+    if loads and len(freqs) == 1:
+        panels = []                   # against R only: one frequency is no axis
+    panels_r = load_panels() if loads else []
+    ncols = len(panels) + len(panels_r)
     fig = new_figure((4 * ncols, 3.4))
-    axes = fig.subplots(1, ncols)
+    axes = list(np.atleast_1d(fig.subplots(1, ncols)))
     first_load = loads[0] if loads else None
     for ax, (key, label, factor) in zip(axes, panels):
         for amp in amps:
@@ -245,24 +250,42 @@ def sweep_figure(rows: list[dict]):
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
-    if loads:
-        ax = axes[-1]
+    if panels:
+        axes[0].legend(fontsize=7)
+    for ax, (key, label, factor) in zip(axes[len(panels):], panels_r):
         for f in freqs:
             for amp in amps:
-                pts = sorted((r["load_ohm"], r["P_mean_W"]) for r in rows
+                pts = sorted((r["load_ohm"], r[key]) for r in rows
                              if r["frequency_hz"] == f and r["amplitude_mm"] == amp
-                             and r["P_mean_W"] > 0)   # a ball at rest delivers nothing
+                             and r.get("load_ohm") is not None
+                             and (r.get(key) or 0.0) > 0)   # a ball at rest: nothing
                 if pts:
-                    ax.loglog([p[0] for p in pts], [p[1] * 1e6 for p in pts], "o-", ms=3,
-                              label=f"{f:g} Hz, {amp:g} mm")
-        ax.set_xlabel("load [Ω]")
-        ax.set_ylabel("mean power [µW]")
+                    ax.plot([p[0] for p in pts], [p[1] * factor for p in pts], "o-", ms=3,
+                            label=f"{f:g} Hz, A = {amp:g} mm")
+        ax.set_xscale("log")
+        y = [v for line in ax.get_lines() for v in line.get_ydata()]
+        if y and max(y) > 10.0 * min(y):    # a decade or more: log; less: plain ticks
+            ax.set_yscale("log")
+        ax.set_xlabel("load R [Ω]")
+        ax.set_ylabel(label)
         ax.grid(alpha=0.3, which="both")
-        if len(freqs) * len(amps) <= 8:
-            ax.legend(fontsize=7)
+    if panels_r and len(freqs) * len(amps) <= 8 and axes[len(panels)].get_lines():
+        axes[len(panels)].legend(fontsize=7)
     fig.tight_layout()
     return fig
+
+
+#: the panels of a load sweep, against R: (sweep.csv column, the quantity, its statistic)
+_LOAD_PANELS = [("V_load_pp_V", "V_load_V", "peak_to_peak"),
+                ("I_load_pp_A", "I_load_A", "peak_to_peak"), ("P_mean_W", "mean_power_W", None)]
+
+
+def load_panels() -> list[tuple[str, str, float]]:
+    """(sweep.csv column, axis label, display scale) of a load sweep's panels, names and
+    units from :mod:`tengfield.quantities` (the terminal's)."""
+    from ..quantities import QUANTITIES, axis_label
+    return [(column, axis_label(name, statistic=stat) if stat else axis_label(name),
+             QUANTITIES[name].display_scale) for column, name, stat in _LOAD_PANELS]
 
 
 def cells_phrase(cells: int) -> str:

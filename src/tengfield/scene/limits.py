@@ -136,6 +136,16 @@ PAPER_SHELL_FEATURES = {"electrode_band_mm": 4.0e-3, "shell_thickness_mm": 1.5e-
 
 
 # ---------------------------------------------------------------------------
+class SteadyWindowError(SceneError):
+    """:func:`check_steady_window`'s refusal, with its numbers (``settle_periods``,
+    ``period`` [s], ``duration`` [s]): ``tengfield run`` extends such a run as a sweep
+    does (:func:`tengfield.sweeps.extend_for_settling`)."""
+
+    def __init__(self, message: str, settle_periods: int, period: float, duration: float):
+        super().__init__(message)
+        self.settle_periods, self.period, self.duration = settle_periods, period, duration
+
+
 def check_steady_window(exc, settle_periods: int, duration: float,
                         name: str = "duration_s") -> None:
     """Refuse a run of ``duration`` [s] that ends before its regime window starts (after
@@ -144,9 +154,13 @@ def check_steady_window(exc, settle_periods: int, duration: float,
     the message names the duration (a scene key, an option)."""
     settle = settle_periods * exc.period
     if settle >= duration:
-        raise SceneError(
+        raise SteadyWindowError(
             f"[run] settle_periods = {settle_periods} leaves no steady window: "
-            f"settle_periods / frequency_hz = {settle:g} s must be < {name} = {duration:g}")
+            f"settle_periods / frequency_hz = {settle:g} s must be < {name} = {duration:g}"
+            + (f" (set [run] duration_s > {settle:g} or settle_periods < "
+               f"{duration / exc.period:g}; `tengfield run` with --set extends the run "
+               "itself)" if name == "duration_s" else ""),
+            settle_periods, exc.period, duration)
 
 
 def past(value: float, limit: float) -> str:

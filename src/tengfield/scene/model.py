@@ -627,6 +627,9 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
         for key in data[sec]:
             if key not in SCHEMA[sec]:
                 raise SceneError(f"{source}: unknown key [{sec}] {key}" + suggest(key, SCHEMA[sec]))
+    if warn:   # a length in metres where mm is asked (the file's keys; --set's: with_settings)
+        from .plausible import warn_metres_for_mm
+        warn_metres_for_mm(data)
     components = None
     if isinstance(data.get("excitation"), dict) and data["excitation"].get("kind") == "harmonics":
         # the lists stay in scene.raw (with_values, to_dict, the written scene); the

@@ -227,6 +227,8 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
         data["device"] = switched_shape(data["device"], shape_before, shape, set_device_keys)
     base = Path(scene.source).parent if scene.source not in ("<default>", "<dict>") else None
     source = scene.source if scene.source != "<default>" else "<default scene>"
+    from .plausible import warn_metres_for_mm
+    warn_metres_for_mm(data, keys={tuple(parse_setting(t)[0]) for t in settings})
     scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False,
                   settings=(*scene.settings, *settings))
     check_rules(scene)      # the rules between keys, as for the file
