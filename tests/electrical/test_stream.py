@@ -54,9 +54,21 @@ def _same_numbers(a, b, path="", rel=1e-12):
 
 
 def _summary_without_timing(summary):
+    """The summary without its stages and without the matched load: a streamed run does
+    not scan loads (it would hold the whole run; it says so in ``matched_load_reason``,
+    checked in :func:`_streamed_has_no_matched_load`), the whole run does."""
     out = dict(summary)
     stages = {k: dict(v) for k, v in out.pop("stages").items()}
+    out.pop("matched_load", None)
+    out.pop("matched_load_reason", None)
     return out, stages
+
+
+def _streamed_has_no_matched_load(whole, streamed):
+    assert streamed.summary["matched_load"] is None
+    assert "streamed" in streamed.summary["matched_load_reason"]
+    if whole.curves is not None and whole.scene.array.cells == 0:
+        assert whole.summary["matched_load"]["load_ohm"] > 0
 
 
 @pytest.mark.parametrize("sections", [
@@ -92,6 +104,7 @@ def test_streamed_equals_whole(cache, monkeypatch, sections, chunk_rows):
     assert streamed.peak == whole.peak
     a, sa = _summary_without_timing(whole.summary)
     b, sb = _summary_without_timing(streamed.summary)
+    _streamed_has_no_matched_load(whole, streamed)
     _same_numbers(a, b)
     assert sa["circuit"]["status"] == sb["circuit"]["status"]
     # the last 5 periods kept whole: the rows waveforms.png draws
@@ -168,6 +181,7 @@ def test_streamed_rectifier_equals_whole(cache, monkeypatch, circuit, chunk_rows
     assert streamed.peaks == whole.peaks
     a, _ = _summary_without_timing(whole.summary)
     b, _ = _summary_without_timing(streamed.summary)
+    _streamed_has_no_matched_load(whole, streamed)
     _same_numbers(a, b)
     rect = streamed.summary["rectifier"]
     if circuit is SMALL_CHIP:

@@ -98,6 +98,9 @@ def test_field_command_refuses_the_device_divided_by_100(tmp_path, run_cli):
                    tmp_path / "out", cwd=tmp_path)
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("tengfield: error: "), done.stderr
-    assert "ball_diameter_mm + stroke_mm = 0.1 mm" in lines[0]
+    # the lengths are also implausible as mm: one warning line says so, one error refuses
+    assert len(lines) == 2 and lines[0].startswith("tengfield: warning: "), done.stderr
+    assert "lengths look like metres" in lines[0]
+    assert lines[1].startswith("tengfield: error: "), done.stderr
+    assert "ball_diameter_mm + stroke_mm = 0.1 mm" in lines[1]
     assert not (tmp_path / "out").exists()

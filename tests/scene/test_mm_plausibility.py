@@ -63,3 +63,12 @@ def test_the_cli_line(capsys):
     assert lines == ["tengfield: warning: [excitation] amplitude_mm = 0.0015 mm is 1.5 µm, "
                      "below the 0.005 mm plausible for it: if it was meant in metres, it "
                      "is amplitude_mm = 1.5"]
+
+
+def test_a_whole_device_in_metres_is_one_line():
+    text = "[device]\nstroke_mm = 0.0015\nball_diameter_mm = 0.008\nplate_thickness_mm = 0.001\n"
+    lines = caught(lambda: parse_scene(text))
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("3 lengths look like metres: ")
+    for key, mm in [("stroke_mm", "1.5"), ("ball_diameter_mm", "8"), ("plate_thickness_mm", "1")]:
+        assert f"{key} = {mm}" in lines[0]

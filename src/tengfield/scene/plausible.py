@@ -3,8 +3,8 @@
 ``stroke_mm = 0.0015`` is a legal 1.5 µm stroke, and the run then gives rest and zeros
 with no word. :func:`warn_metres_for_mm` is the one check for every ``*_mm`` key of the
 schema: a non-zero value below the key's plausibility bound (:data:`PLAUSIBLE_MM`,
-default :data:`PLAUSIBLE_MM_DEFAULT`) gets one warning line naming the key, the value
-and what it would be in mm if it was meant in metres. It is a warning, not a refusal:
+default :data:`PLAUSIBLE_MM_DEFAULT`) is named with its value and what it would be in
+mm if it was meant in metres, all such keys of one scene in one warning line. It is a warning, not a refusal:
 such a value may be meant.
 """
 from __future__ import annotations
@@ -53,6 +53,7 @@ def warn_metres_for_mm(data: dict, keys=None) -> None:
         return
     from .schema import SCHEMA
 
+    texts = []
     for section, values in data.items():
         if section not in SCHEMA or not isinstance(values, dict):
             continue
@@ -61,4 +62,14 @@ def warn_metres_for_mm(data: dict, keys=None) -> None:
                 continue
             text = implausible_mm(section, key, value) if key in SCHEMA[section] else None
             if text is not None:
-                warnings.warn(text, UserWarning, stacklevel=3)
+                texts.append(text)
+    if texts:
+        warnings.warn(_one_line(texts), UserWarning, stacklevel=3)
+
+
+def _one_line(texts: list[str]) -> str:
+    """One warning for several keys (a whole device typed in metres): the first in full,
+    the others after it, ``;``-separated, so a refusal that follows stays readable."""
+    if len(texts) == 1:
+        return texts[0]
+    return f"{len(texts)} lengths look like metres: " + "; ".join(texts)
