@@ -318,61 +318,23 @@ def check_contact_charge(scene) -> None:
 
 def _contact_charge_stage(scene, dynamics, stages, **field_options):
     """``(scene, table, curves, limit, charged)`` of a run whose contacts charge the ball:
-    the surrogate at a reference charge (sigma_eq), the air-breakdown cap of ``[charge]
+    the surrogate at a reference charge (sigma_eq, :func:`tengfield.contact_run.field_scene`),
+    then :func:`tengfield.contact_run.contact_source`: the air-breakdown cap of ``[charge]
     discharge`` (the band of the run's own trajectory, no field solve more), the charge
     history along the impacts (``stages["charge"]``), the scene at its steady charge
     (what the summary's sigma-dependent blocks use) and :class:`ContactCurves`."""
-    import math
     import warnings
 
-    from .errors import TengfieldError
-    from .source.contacts import charge_summary, run_history
-    from .source.terminal import ContactCurves, ContactTerminal
-    from .surrogate.table import at_ball_charge
+    from .contact_run import contact_source, field_scene
 
-    charge = scene.charge
-    reference_sigma = charge.equilibrium if charge.equilibrium != 0.0 else charge.initial
-    field_scene = scene.with_values(device={SURFACE_CHARGE_KEY: reference_sigma * 1e6})
     with warnings.catch_warnings():   # sigma_eq beyond the limit is expected: the cap holds
         warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
-        field_scene, table, curves, limit = _field_stage(field_scene, dynamics, stages,
-                                                         **field_options)
-    start = time.perf_counter()
-    cap = math.inf
-    if charge.discharge != "none":
-        if limit is None and table is not None:
-            raise TengfieldError(
-                f'[charge] discharge = {charge.discharge!r} needs the air-breakdown lines of '
-                'the surrogate (the axisymmetric solver makes them; this one has none): set '
-                '[charge] discharge = "none" or [field] method = "axisymmetric"')
-        if limit is not None:
-            if charge.discharge == "static":
-                cap = float(limit.sigma_max)
-            else:
-                from .air_breakdown import scene_band
-                cap = float(scene_band(field_scene, limit, dynamics).edges()[charge.discharge])
-    from .electrical import time_origin
-    impacts = dynamics.impacts
-    history, upper, law, areas = run_history(scene, impacts,
-                                             np.asarray(impacts.time, dtype=float)
-                                             - time_origin(dynamics), cap)
-    elapsed = electrical.elapsed_times(dynamics)
-    duration = float(elapsed[-1])
-    window_start = float(elapsed[electrical.steady_window_index(elapsed, scene)[0]])
-    block = charge_summary(history, law, cap_level=charge.discharge, duration=duration,
-                           areas=areas, window_start=window_start,
-                           period=_contact_period(scene))
-    steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
-    stages["charge"] = Stage("ran", f"{history.contacts} contacts, [charge] model = 'contact'",
-                             time.perf_counter() - start, {"contacts": history.contacts})
-    run_scene = scene.with_values(device={SURFACE_CHARGE_KEY: steady / law.ball_area * 1e6})
-    if table is None or steady == 0.0 and history.start == 0.0 and not history.contacts:
-        return run_scene, None, None, limit, (history, block)
-    terminal = ContactTerminal(table, history, upper, scene.circuit.reference)
-    curves = ContactCurves(terminal, steady)
-    if steady != 0.0:
-        table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
-    return run_scene, table, curves, limit, (history, block)
+        _, table, _, limit = _field_stage(field_scene(scene), dynamics, stages,
+                                          **field_options)
+    run = contact_source(scene, dynamics, table, limit, period=_contact_period(scene))
+    stages["charge"] = Stage("ran", f"{run.history.contacts} contacts, [charge] model = "
+                             "'contact'", run.wall_time_s, {"contacts": run.history.contacts})
+    return run.scene, run.table, run.curves, run.limit, run.charged
 
 
 def _contact_period(scene) -> float:

@@ -382,3 +382,10 @@ def compare_measured(summary: dict, measured: dict[str, float]) -> dict | None:
                     "[instrument] capacitance_pF > 0), with a load's voltage without one, "
                     "else with nothing; with an [instrument] a charge or current with the "
                     "read one (Q_read_C, I_read_A)"}
+
+
+#: the outputs of a study whose contacts make the charge (``[charge] model = "contact"``:
+#: the summary's ``charge`` block) as the terminal and the figures name them (the values
+#: are shown in these units: the block's own)
+CHARGE_LABELS = {"charge.steady_uC_per_m2": "steady ball charge σ [µC/m²]",
+                 "charge.rise_time_90_s": "rise time to 90 % of it [s]"}

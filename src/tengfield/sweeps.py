@@ -10,6 +10,7 @@ processes, or over the ranks of an MPI job (``mpirun -n N tengfield sweep``,
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Callable, Sequence
 
 import numpy as np
@@ -58,7 +59,9 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     point = scene if frequency is None and amplitude is None else \
         point_scene(scene, frequency, amplitude)
     dynamics = simulate(point)
-    curves = TerminalCurves(table, point.circuit.reference)
+    point, curves, charge = _point_charge(point, dynamics, table)
+    if curves is None:
+        curves = TerminalCurves(table, point.circuit.reference)
     extremes = electrical.terminal_extremes(point, dynamics, curves)
     regime = regime_dict(dynamics.regime) or {}
     exc = point.excitation
@@ -67,6 +70,7 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
             "regime": regime.get("regime", ""), "period": regime.get("period", 0)}
     for column, stat, name in TERMINAL_COLUMNS:
         base[column] = extremes[stat].get(name)
+    base.update(charge)
     if not len(loads):
         return [{**base, "load_ohm": None, "P_mean_W": None, "power_density_W_per_m3": None}]
     rows = []
@@ -77,6 +81,20 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
         result = electrical.steady_load(loaded, dynamics, curves, grid=grid)
         rows.append({**base, **load_columns(loaded, result, t)})
     return rows
+
+
+def _point_charge(point, dynamics, table):
+    """``(point, curves, charge columns)`` of a sweep point: with ``[charge] model =
+    "contact"`` the point at its steady charge, its :class:`ContactCurves` and the
+    :data:`~tengfield.contact_run.CHARGE_COLUMNS` (the charge its contacts make along
+    this point's own trajectory, :func:`tengfield.contact_run.contact_source`, the
+    numbers ``tengfield run`` gives); otherwise the point, None and no columns."""
+    if not point.charge.from_contacts:
+        return point, None, {}
+    from .contact_run import charge_columns, contact_source
+
+    run = contact_source(point, dynamics, table)
+    return run.scene, run.curves, charge_columns(run.block)
 
 
 def load_columns(loaded, result, t) -> dict:
@@ -474,7 +492,8 @@ KEYS_NOT_READ = {"run.realisations": "a sweep point is one realisation",
 CIRCUIT_READ = ("reference", "parallel_capacitance_pF")
 #: what a --vary can reach, said with each refusal
 VARIABLE = ("vary keys of [device], [excitation], [contact], [initial], [run], [field], "
-            "[instrument], [breakdown] (with sigma = \"breakdown\"), [circuit] reference, or "
+            "[instrument], [breakdown] (with sigma = \"breakdown\"), [charge] (with model = "
+            "\"contact\"), [circuit] reference, or "
             "the load's keys with a [circuit] kind that has a load ({kinds}) and no --load-ohm")
 
 
@@ -498,6 +517,11 @@ def vary_problem(key: str, points, loads=()) -> str | None:
         return NOT_READ[section]
     if key in KEYS_NOT_READ:
         return KEYS_NOT_READ[key]
+    if section == "charge" and name != "model" and not any(
+            s.charge.from_contacts for _, s in points):
+        return ("[charge] " + name + " acts only with [charge] model = \"contact\" (the "
+                "charge the contacts make); this sweep's charge is "
+                + ", ".join(sorted({repr(s.charge.model) for _, s in points})))
     if section == "breakdown" and not any(uses_breakdown_charge(s) for _, s in points):
         return ("[breakdown] sets the air-breakdown limit, which a sweep row uses only with "
                 f"[device] {SURFACE_CHARGE_KEY} = \"breakdown\"")
@@ -600,34 +624,63 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
     from .errors import SceneError
     from .surrogate.table import at_ball_charge
 
+    from .contact_run import field_scene, reference_sigma
+
     tables = {} if tables is None else tables
     counts = {"computed": 0, "cached": 0, "reused": 0, "geometries": 0}
     out = []
-    from .source import refuse_contact_charge
     for values, scene in points:
-        refuse_contact_charge(scene, "tengfield sweep")   # a varied [charge] model too
         try:
             key = scene.field_hash()
         except SceneError as exc:
             raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
         memo = tables.get(key)
+        if scene.charge.from_contacts:   # the geometry's table at any non-zero charge
+            _check_contact_point(scene, values)
+            if reference_sigma(scene) == 0.0:
+                out.append((scene, None))
+                continue
+            if memo is not None and memo.ball_charge != 0.0:
+                out.append((scene, memo))
+                counts["reused"] += 1
+                continue
+            scene_at = field_scene(scene)
+        else:
+            scene_at = scene
         if memo is not None and not uses_breakdown_charge(scene) \
                 and scene.device.ball_charge != 0.0 and memo.ball_charge != 0.0:
             out.append((scene, at_ball_charge(memo, scene.device.ball_charge)))
             counts["reused"] += 1
             continue
         try:
-            resolved, table, outcome, _ = surrogate_for_run(
-                scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
-                command_line=command_line)
+            with warnings.catch_warnings():   # sigma_eq beyond the limit: the cap holds
+                if scene_at is not scene:
+                    warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown.*")
+                resolved, table, outcome, _ = surrogate_for_run(
+                    scene_at, cache_dir=cache_dir, comm=comm, solve=solve,
+                    progress=progress, command_line=command_line)
         except SceneError as exc:
             raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
         if key not in tables:
             counts["geometries"] += 1
         tables.setdefault(key, table)
         counts["computed" if outcome.status == "computed" else "cached"] += 1
-        out.append((resolved, table))
+        out.append((scene if scene_at is not scene else resolved, table))
     return out, counts
+
+
+def _check_contact_point(scene, values) -> None:
+    """What a contact run refuses (an [array], a ball off the axis), named with the
+    point (:func:`tengfield.pipeline.check_contact_charge`, the run's check)."""
+    from .errors import SceneError
+    from .pipeline import check_contact_charge
+
+    try:
+        check_contact_charge(scene)
+    except SceneError as exc:
+        if not values:
+            raise
+        raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
 
 
 def own_load_point(scene, table, frequency=None, amplitude=None) -> list[dict]:
@@ -642,8 +695,16 @@ def own_load_point(scene, table, frequency=None, amplitude=None) -> list[dict]:
     point = scene if frequency is None and amplitude is None else \
         point_scene(scene, frequency, amplitude)
     dynamics = _default_simulate()(point)
-    stage = electrical_stage(point, dynamics, TerminalCurves(table, point.circuit.reference),
-                             table)
+    charge = {}
+    if point.charge.from_contacts:
+        from .contact_run import charge_columns, contact_source
+
+        run = contact_source(point, dynamics, table)
+        point, curves, table, charge = run.scene, run.curves, run.table, \
+            charge_columns(run.block)
+    else:
+        curves = TerminalCurves(table, point.circuit.reference)
+    stage = electrical_stage(point, dynamics, curves, table)
     regime = regime_dict(dynamics.regime) or {}
     exc = point.excitation
     row = {"frequency_hz": float(exc.frequency if frequency is None else frequency),
@@ -654,6 +715,7 @@ def own_load_point(scene, table, frequency=None, amplitude=None) -> list[dict]:
     load = stage.summary.get("load") or {}
     row.update(load_ohm=float(point.circuit.load), P_mean_W=load.get("mean_power_W"),
                power_density_W_per_m3=load.get("power_density_W_per_m3"))
+    row.update(charge)
     return [row]
 
 
@@ -695,8 +757,12 @@ class SweepResult(SweepRows):
 
     @property
     def columns(self) -> list[str]:
-        """sweep.csv's columns: the varied keys, then :data:`SWEEP_COLUMNS`."""
-        return [*self.vary, *SWEEP_COLUMNS]
+        """sweep.csv's columns: the varied keys, then :data:`SWEEP_COLUMNS`, then the
+        charge's (:data:`~tengfield.contact_run.CHARGE_COLUMNS`) where the contacts make it."""
+        from .contact_run import CHARGE_COLUMNS
+
+        charge = [c for c in CHARGE_COLUMNS if any(c in row for row in self)]
+        return [*self.vary, *SWEEP_COLUMNS, *charge]
 
     @property
     def summary(self) -> dict:
@@ -758,8 +824,6 @@ def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes
     ranks, or ``jobs`` worker processes) and every rank returns every row.
     ``on_surrogates(counts, [(scene, table)])``: called (on every rank) once the
     surrogates are at hand (the CLI's lines)."""
-    from .source import refuse_contact_charge
-    refuse_contact_charge(scene, "tengfield sweep")
     from ._console import progress_bar
     from ._mpi import check_jobs
     from .errors import SceneError

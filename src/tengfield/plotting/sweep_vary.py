@@ -38,8 +38,9 @@ def _groups(rows, others) -> dict[tuple, list]:
 
 
 def vary_figure(result, key: str):
-    """Peak-to-peak V_OC, Q_SC, I_SC (at the first load; they do not depend on it) and,
-    with loads, the mean power against the values of the varied scene key ``key`` (its
+    """Peak-to-peak V_OC, Q_SC, I_SC (at the first load; they do not depend on it),
+    the steady ball charge where the contacts make it, and, with loads, the mean power
+    against the values of the varied scene key ``key`` (its
     label and unit as design.png names them), one line per setting of the other varied
     keys, frequency, amplitude (and load, in the power panel): every setting drawn
     (past :data:`CYCLE_LINES` in colours along a map)."""
@@ -61,6 +62,10 @@ def vary_figure(result, key: str):
         with_load = others + ([] if own else ["load_ohm"])
         panels.append(("P_mean_W", "mean power P [µW]", 1e6, _groups(rows, with_load),
                        with_load))
+    if any(r.get("sigma_steady_uC_per_m2") is not None for r in first):
+        # [charge] model = "contact": the steady charge the contacts make at each setting
+        panels.append(("sigma_steady_uC_per_m2", "steady ball charge σ [µC/m²]", 1.0,
+                       _groups(first, others), others))
     values = []
     for row in rows:
         if row[key] not in values:

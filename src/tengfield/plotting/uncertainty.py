@@ -37,6 +37,10 @@ def output_axis(name: str) -> tuple[str, float]:
     ``"Q_SC peak-to-peak [nC]"``; others by unit suffix."""
     from ..quantities import QUANTITIES
 
+    from ..quantities import CHARGE_LABELS
+
+    if name in CHARGE_LABELS:       # the contact charge's: units as named, shown as SI
+        return CHARGE_LABELS[name], 1.0
     stat, _, leaf = name.rpartition(".")
     unit, scale = display_unit(name)
     if leaf in QUANTITIES:          # a statistic's or a block's (energy_per_cycle) output

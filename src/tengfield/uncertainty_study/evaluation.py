@@ -33,7 +33,7 @@ from ..scene.schema import (SURFACE_CHARGE_KEY, SURFACE_CHARGE_SETTING,
 #: sections whose keys change neither the dynamics nor the field: the electrical stage only
 #: (a [breakdown] key can change σ itself, with σ = "breakdown": it
 #: forms groups like a dynamics key)
-ELECTRICAL_SECTIONS = ("circuit",)
+ELECTRICAL_SECTIONS = ("circuit", "charge")
 #: summary blocks whose numeric leaves are an evaluation's outputs (``block.name``), and
 #: numeric top-level summary keys; the quantity table (tengfield/quantities.py) can
 #: replace both through :func:`output_quantities`
@@ -43,7 +43,16 @@ OUTPUT_TOP_LEVEL = ("V_read_V",)
 #: the outputs shown in the figure and the terminal, in this order: the quantity table's
 #: summary keys (peak-to-peak and peak of V_OC, Q_SC, I_SC, V read through C_p, then the
 #: block numbers such as the load's mean power)
-MAIN_OUTPUTS = tuple(summary_keys(instrument=True))
+MAIN_OUTPUTS = (*summary_keys(instrument=True),
+                # [charge] model = "contact": the steady charge and how long it takes
+                "charge.steady_uC_per_m2", "charge.rise_time_90_s")
+
+
+#: the outputs of the ``charge`` block (``[charge] model = "contact"``): the steady σ
+#: [µC/m²], the rise time to 90 % of it [s], the shares of σ_eq and of the cap reached,
+#: the mean gain per contact [C] (its inputs, η, τ, σ_eq, are not outputs)
+OUTPUT_CHARGE = ("steady_uC_per_m2", "rise_time_90_s", "share_of_equilibrium",
+                 "share_of_cap", "mean_delta_per_contact_C")
 
 
 def output_quantities(summary: dict) -> dict[str, float]:
@@ -65,6 +74,10 @@ def output_quantities(summary: dict) -> dict[str, float]:
     for block in OUTPUT_BLOCKS:
         if isinstance(summary.get(block), dict):
             walk(block, summary[block])
+    charge = summary.get("charge")
+    if isinstance(charge, dict):
+        for name in OUTPUT_CHARGE:
+            walk(f"charge.{name}", charge.get(name))
     return out
 
 
@@ -175,6 +188,8 @@ def _field_task(task):
     error names the draw of the first group with this geometry)."""
     scene, cache_dir, solve, values = task
     with warnings.catch_warnings(record=True) as caught, _tagged(values, None):
+        if scene.charge.from_contacts:   # at σ_eq, which the cap may hold below
+            warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
         _, _, status, _ = _obtain(scene, cache_dir, solve)
     return scene.field_hash(), status, _caught(caught)
 
@@ -185,16 +200,21 @@ def _caught(caught) -> list:
     return [(w.category, str(w.message)) for w in caught]
 
 
-def _outputs(scene, dynamics, table) -> tuple[dict, str]:
+def _outputs(scene, dynamics, table, curves=None, charge=None) -> tuple[dict, str]:
     """The run's electrical stage and summary for ``scene`` with ``dynamics`` and
     ``table`` (already at the scene's σ; None: no field needed), as
-    :func:`tengfield.pipeline.run` computes them after its field stage."""
+    :func:`tengfield.pipeline.run` computes them after its field stage; ``curves``:
+    the terminal curves where they are not the table's (a contact run's), ``charge``:
+    its ``charge`` block."""
     from ..pipeline import electrical_stage
     from ..surrogate import TerminalCurves
 
-    curves = TerminalCurves(table, scene.circuit.reference) if table is not None else None
+    if curves is None and table is not None:
+        curves = TerminalCurves(table, scene.circuit.reference)
     electrical.circuit_for(scene).check(scene)
     summary = electrical_stage(scene, dynamics, curves, table).summary
+    if charge is not None:
+        summary["charge"] = charge
     regime = (regime_dict(getattr(dynamics, "regime", None)) or {}).get("regime", "")
     return output_quantities(summary), regime
 
@@ -220,14 +240,25 @@ def _group_task(task):
             _DYNAMICS.clear()          # chunks of a group are consecutive tasks: keep one
             _DYNAMICS[memo] = dynamics
         table, at, sigma_table, sigma_max = None, base, 0.0, None
-        charged = base.device.ball_charge != 0.0 or any(SURFACE_CHARGE_SETTING in v
-                                                         for _, v in group.members)
+        contact = base.charge.from_contacts
+        charged = base.device.ball_charge != 0.0 or contact or any(
+            SURFACE_CHARGE_SETTING in v for _, v in group.members)
         if charged and np.any(np.asarray(dynamics.gap, dtype=float) != 0.0):
-            ref = solved_scene(base)
+            if contact:     # the geometry's table at a reference charge (σ_eq)
+                from ..contact_run import field_scene
+                ref = solved_scene(field_scene(base))
+                warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown.*")
+            else:
+                ref = solved_scene(base)
             digest = ref.field_hash()
             ref_at, table, status, sigma_max = _obtain(ref, cache_dir, solve)
             sigma_table = ref_at.device.surface_charge
             at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
+        if contact:
+            for index, values in group.members:
+                with _tagged({**group.dynamic, **values}, [(index, values)]):
+                    rows.append((index, *_contact_outputs(at, values, dynamics, table), None))
+            return rows, digest, status, _caught(caught)
         band = _group_band(scene, at, table, dynamics)   # σ from the breakdown band
         for index, values in group.members:
             with _tagged({**group.dynamic, **values}, [(index, values)]):
@@ -242,6 +273,21 @@ def _group_task(task):
                     bool(abs(point.device.surface_charge) > sigma_max)
                 rows.append((index, *_outputs(point, dynamics, scaled), above))
     return rows, digest, status, _caught(caught)
+
+
+def _contact_outputs(at, values, dynamics, table) -> tuple[dict, str]:
+    """One evaluation of a scene whose contacts make the charge: the charge history of
+    its ``[charge]`` draws along the group's trajectory, then the run's electrical stage
+    at it (:func:`tengfield.contact_run.contact_source`, what ``tengfield run`` does)."""
+    import warnings as _warnings
+
+    from ..contact_run import contact_source
+
+    point = at.with_values(**sections_of(values)) if values else at
+    with _warnings.catch_warnings():   # the run's own: sigma_eq beyond the limit, the cap holds
+        _warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
+        run = contact_source(point, dynamics, table)
+    return _outputs(run.scene, dynamics, run.table, run.curves, run.block)
 
 
 def _group_band(scene, at, table, dynamics):
@@ -340,12 +386,14 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     nominal = Group({}, [(-1, {})])
     # phase 1: each distinct geometry's surrogate once (at the group's reference σ)
     geometry: dict[str, object] = {}
-    if scene.device.ball_charge != 0.0 or SURFACE_CHARGE_SETTING in keys:
+    contact = scene.charge.from_contacts
+    if scene.device.ball_charge != 0.0 or SURFACE_CHARGE_SETTING in keys or contact:
+        from ..contact_run import field_scene
         for group in [nominal, *groups]:
             if group.dynamic and not changes_field(group.dynamic, scene.device.shape):
                 continue       # the nominal geometry (no field key varied): no scene built
-            ref = solved_scene(scene.with_values(**sections_of(group.dynamic))
-                             if group.dynamic else scene)
+            at = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
+            ref = solved_scene(field_scene(at) if contact else at)   # contacts: at σ_eq
             geometry.setdefault(ref.field_hash(), (ref, group.dynamic))
     bar = progress_bar(len(geometry), "uncertainty: field solves", progress and len(geometry) > 1,
                        unit="geometry", comm=comm)

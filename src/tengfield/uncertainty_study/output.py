@@ -77,6 +77,10 @@ def output_label(name: str, unit: str = "") -> str:
     table does not hold)."""
     from ..quantities import QUANTITIES
 
+    from ..quantities import CHARGE_LABELS
+
+    if name in CHARGE_LABELS:
+        return CHARGE_LABELS[name]
     stat, _, base = name.rpartition(".")
     q = QUANTITIES.get(base)
     if q is None:

@@ -143,8 +143,6 @@ def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: in
     (:func:`~tengfield.uncertainty_study.cost.study_cost`) and refused past
     ``[uncertainty] max_field_solves`` or the memory at hand; with ``progress`` the count
     is printed (stderr, rank 0) before the work starts."""
-    from ..source import refuse_contact_charge
-    refuse_contact_charge(scene, "tengfield uncertainty")
     import sys
 
     from .._args import check_instance, check_jobs_argument

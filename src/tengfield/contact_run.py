@@ -1,0 +1,145 @@
+"""The ball's charge made by its contacts along one trajectory, for every command that
+runs a scene with ``[charge] model = "contact"`` (issue #52): ``run``, ``sweep`` (its
+points and ``--vary charge.*``) and ``uncertainty`` (``[uncertainty.vary]`` draws of
+``charge.*``) call :func:`contact_source` after their own field stage, so a study's row
+is the run's numbers.
+
+Given a scene, its trajectory and the surrogate table of its geometry (at any non-zero
+reference charge: Q_SC and the electrode charges are linear in the ball's charge), it
+returns the charge history along the impacts (:mod:`tengfield.source.contacts`), the
+summary's ``charge`` block, the scene at its steady charge (what the σ-dependent blocks
+use), the table at that charge and the :class:`~tengfield.source.terminal.ContactCurves`
+the circuits read. No field solve: the air-breakdown cap of ``[charge] discharge`` comes
+from the table's gap lines and the trajectory.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene.schema import SURFACE_CHARGE_KEY
+
+
+def reference_sigma(scene) -> float:
+    """The σ [C/m²] a contact scene's field is solved at: σ_eq, or the initial σ when
+    σ_eq = 0 (a ball that only leaks); 0 when both are 0 (no charge ever: no field)."""
+    charge = scene.charge
+    return float(charge.equilibrium if charge.equilibrium != 0.0 else charge.initial)
+
+
+def field_scene(scene):
+    """``scene`` at its :func:`reference_sigma` (the scene whose surrogate a contact run
+    uses; its field hash is the geometry's, σ is not in it)."""
+    return scene.with_values(device={SURFACE_CHARGE_KEY: reference_sigma(scene) * 1e6})
+
+
+@dataclass
+class ContactRun:
+    """What :func:`contact_source` gives: ``scene`` at the steady charge, ``table`` at
+    that charge (None: no field), ``curves`` (:class:`ContactCurves`, None without a
+    field), the ``history`` (:class:`~tengfield.source.contacts.ChargeHistory`) and the
+    summary's ``block``, ``limit`` (the breakdown limit of the geometry or None), the
+    ``wall_time_s`` of the history."""
+    scene: object
+    table: object
+    curves: object
+    history: object
+    block: dict
+    limit: object
+    wall_time_s: float
+
+    @property
+    def charged(self):
+        """``(history, block)``: what the run's outputs add (the q_ball_C column, the
+        ``charge`` block, ball_charge.png)."""
+        return self.history, self.block
+
+
+def discharge_cap(scene, limit, dynamics) -> float:
+    """The air-breakdown cap [C/m²] of ``[charge] discharge`` (inf for "none" or without
+    a limit): σ_max of the static states ("static"), else that edge of the breakdown band
+    of the trajectory (:func:`tengfield.air_breakdown.scene_band`)."""
+    charge = scene.charge
+    if charge.discharge == "none" or limit is None:
+        return math.inf
+    if charge.discharge == "static":
+        return float(limit.sigma_max)
+    from .air_breakdown import scene_band
+    return float(scene_band(scene, limit, dynamics).edges()[charge.discharge])
+
+
+def breakdown_limit(scene, table):
+    """The breakdown limit of ``table``'s geometry (None: the table has no gap lines)."""
+    if table is None or table.line_potential is None:
+        return None
+    from .air_breakdown.charge import scene_breakdown
+    return scene_breakdown(scene, table)
+
+
+def contact_source(scene, dynamics, table, limit=None, *, period: float | None = None
+                   ) -> ContactRun:
+    """The contact run of ``scene`` along ``dynamics`` with ``table`` (its geometry's
+    surrogate at a non-zero reference charge; None: no field needed, Q_SC = 0) and the
+    geometry's breakdown ``limit`` (None: taken from the table's gap lines when it has
+    them). ``period`` [s]: the period the contacts repeat with (default: the drive's
+    where it repeats each period, else 0)."""
+    import time
+
+    from . import electrical
+    from .errors import TengfieldError
+    from .source.contacts import charge_summary, run_history
+    from .source.terminal import ContactCurves, ContactTerminal
+    from .surrogate.table import at_ball_charge
+
+    start = time.perf_counter()
+    charge = scene.charge
+    reference = field_scene(scene)
+    if limit is None:
+        limit = breakdown_limit(reference, table)
+    if charge.discharge != "none" and limit is None and table is not None:
+        raise TengfieldError(
+            f'[charge] discharge = {charge.discharge!r} needs the air-breakdown lines of '
+            'the surrogate (the axisymmetric solver makes them; this one has none): set '
+            '[charge] discharge = "none" or [field] method = "axisymmetric"')
+    cap = discharge_cap(reference, limit, dynamics) if table is not None else math.inf
+    impacts = dynamics.impacts
+    history, upper, law, areas = run_history(
+        scene, impacts, np.asarray(impacts.time, dtype=float) - electrical.time_origin(dynamics),
+        cap)
+    elapsed = electrical.elapsed_times(dynamics)
+    window_start = float(elapsed[electrical.steady_window_index(elapsed, scene)[0]])
+    if period is None:
+        from .dynamics.excitation import repeats_each_period
+        period = float(scene.excitation.period) if repeats_each_period(scene) else 0.0
+    block = charge_summary(history, law, cap_level=charge.discharge,
+                           duration=float(elapsed[-1]), areas=areas,
+                           window_start=window_start, period=period)
+    steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
+    run_scene = scene.with_values(device={SURFACE_CHARGE_KEY: steady / law.ball_area * 1e6})
+    wall = time.perf_counter() - start
+    if table is None or steady == 0.0 and history.start == 0.0 and not history.contacts:
+        return ContactRun(run_scene, None, None, history, block, limit, wall)
+    if table.ball_charge == 0.0:
+        raise TengfieldError(
+            "[charge] model = \"contact\": the surrogate was made at a zero ball charge, "
+            "which carries no field per unit charge; solve it at [charge] "
+            "equilibrium_uC_per_m2 (tengfield.contact_run.field_scene)")
+    terminal = ContactTerminal(table, history, upper, scene.circuit.reference)
+    curves = ContactCurves(terminal, steady)
+    if steady != 0.0:
+        table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
+    return ContactRun(run_scene, table, curves, history, block, limit, wall)
+
+
+#: a study row's charge columns (sweep.csv, uncertainty's outputs), from the ``charge``
+#: block: the steady σ [µC/m²], the time to 90 % of it [s], what binds
+CHARGE_COLUMNS = ("sigma_steady_uC_per_m2", "rise_time_90_s", "charge_binds")
+
+
+def charge_columns(block: dict) -> dict:
+    """The :data:`CHARGE_COLUMNS` of a ``charge`` block."""
+    return {"sigma_steady_uC_per_m2": block.get("steady_uC_per_m2"),
+            "rise_time_90_s": block.get("rise_time_90_s"),
+            "charge_binds": block.get("binds")}
