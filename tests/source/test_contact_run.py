@@ -325,7 +325,7 @@ def test_mpirun_writes_the_serial_runs_files(tmp_path, cli_command, cli_env):
     assert one_block == two_block
 
 
-@pytest.mark.parametrize("study", ["design", "breakdown", "fit", "report"])
+@pytest.mark.parametrize("study", ["breakdown", "fit", "report"])
 def test_the_studies_that_would_hold_the_charge_constant_refuse_it_in_one_line(study, tmp_path):
     """Until each study runs the contacts' charge it refuses ``[charge] model = "contact"``
     before any work, rather than running at a constant charge without saying so."""

@@ -201,3 +201,82 @@ def test_mpirun_sweeps_the_serial_rows(tmp_path, cli_command, cli_env):
     assert two.returncode == 0, two.stderr[-3000:]
     assert (tmp_path / "one" / "sweep.csv").read_bytes() == \
         (tmp_path / "two" / "sweep.csv").read_bytes()
+
+
+def _design_scene(charge, **design_keys):
+    section = {"objective": "power", "candidates": 4, "seed": 1, "settle_periods": 10,
+               "window_periods": 10, "samples_per_period": 120,
+               "vary": {"stroke_mm": [1.0, 4.0]},
+               "excitation": {"frequency_hz": [20.0, 25.0], "amplitude_mm": [1.5]}}
+    section.update(design_keys)
+    return fx.scene_with(design=section, charge=charge)
+
+
+def test_a_design_scores_each_band_point_at_the_steady_charge_its_contacts_make(cache):
+    """``[charge] model = "contact"`` in ``design``: each candidate's band point is scored at
+    the plateau its own impacts reach (the steady charge along its trajectory), i.e. the
+    constant model at that sigma (1e-12); with leakage the plateau depends on the impacts,
+    so it differs from stroke to stroke and from band point to band point."""
+    from tengfield.design_study import evaluate, parse_design_section
+
+    scene = _design_scene({**CHARGE, "efficiency": 0.3, "leakage_time_s": 0.3},
+                          objective="charge")
+    result = tf.design(scene, cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    ok = [row for row in result.rows if row["status"] == "ok"]
+    assert len(ok) == 4
+    steady = [tuple(row["charge"]["steady_uC_per_m2"]) for row in ok]
+    assert len({s for band in steady for s in band}) == 8   # every point its own plateau
+    for band in steady:
+        assert all(-100.0 < s < 0.0 for s in band)          # leakage holds it below sigma_eq
+    row = ok[0]
+    spec = parse_design_section(scene)
+    for k, (f, a) in enumerate(spec.band):
+        constant = fx.scene_with(device={"surface_charge_uC_per_m2":
+                                         row["charge"]["steady_uC_per_m2"][k]},
+                                 design={**scene.raw["design"], "excitation": {
+                                     "frequency_hz": [f * 1.0], "amplitude_mm": [a * 1e3]}})
+        alone = evaluate(constant, parse_design_section(constant), row["values"],
+                         cache_dir=cache, solve=fx.plate_model_solve)
+        assert row["band_values"]["charge"][k] == pytest.approx(
+            alone["band_values"]["charge"][0], rel=1e-12)
+
+
+def test_a_contact_design_refuses_what_it_cannot_score_in_one_line(cache):
+    with pytest.raises(tf.TengfieldError, match=r'aggregate = "p10" with \[charge\] model = '
+                                                r'"contact": not supported yet'):
+        tf.design(_design_scene(CHARGE, aggregate="p10").with_values(uncertainty={
+            "samples": 16, "vary": {"contact.restitution": {"distribution": "uniform",
+                                                            "low": 0.4, "high": 0.6}}}),
+                  cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+    # a cap needs the breakdown lines: a 3D field has none (refused before the first solve)
+    with pytest.raises(tf.TengfieldError, match=r"\[charge\] discharge = 'estimate'"):
+        tf.design(_design_scene({"model": "contact"}).with_values(field={"method": "3d"}),
+                  cache_dir=cache, solve=fx.plate_model_solve, jobs=1)
+
+
+def test_cli_design_with_the_contact_charge_and_figures(tmp_path, cli_command, cli_env):
+    """``tengfield design`` end to end (the real field, coarse, the cap of the band's
+    estimate): the terminal names the steady charge each candidate is scored at and its
+    rise time, best.toml says how long a run takes to reach it, design.png is drawn."""
+    scene = tmp_path / "design.toml"
+    scene.write_text(CONTACT_SCENE.replace("efficiency = 0.3", "efficiency = 0.5\n"
+                                           "leakage_time_s = 1.0")
+                     + "[design]\nobjective = \"power\"\ncandidates = 4\nsettle_periods = 10\n"
+                     "window_periods = 10\n[design.vary]\nstroke_mm = [1.0, 4.0]\n"
+                     "[design.excitation]\nfrequency_hz = [20.0]\namplitude_mm = [1.5]\n")
+    done = subprocess.run(cli_command("design", scene, "-o", tmp_path / "out"),
+                          capture_output=True, text=True, timeout=900,
+                          env=cli_env(TENGFIELD_CACHE_DIR=tmp_path / "cache"))
+    assert done.returncode == 0, done.stderr
+    assert "(the steady charge its contacts make, at the band point; 90 % of it after" \
+        in done.stdout
+    best = (tmp_path / "out" / "best.toml").read_text()
+    assert "# [charge]: scored at the steady charge its contacts make there" in best
+    tf.load_scene(tmp_path / "out" / "best.toml")          # loads back
+    png = (tmp_path / "out" / "design.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+    best_block = json.loads((tmp_path / "out" / "design.json").read_text())["best"]
+    charge = best_block["charge"]
+    assert len(charge["steady_uC_per_m2"]) == 1 and charge["steady_uC_per_m2"][0] < 0
+    assert best_block["surface_charge_uC_per_m2"] == pytest.approx(
+        charge["steady_uC_per_m2"][0], rel=1e-12)

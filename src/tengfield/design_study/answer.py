@@ -156,6 +156,8 @@ def describe(result, row) -> dict:
                     if v != base[k]},
         SURFACE_CHARGE_KEY: sigma,
         "breakdown": stated_surface_charge(result.scene) == "breakdown",
+        # [charge] model = "contact": each band point's steady charge, its rise time
+        "charge": row.get("charge"),
         "load": _load(result, row),
         "objective": row["objective"], "objective_error": error,
         "field_error": error - dyn - pct, "dynamics_error": dyn,
@@ -289,8 +291,17 @@ def _design_lines(result, d: dict, title: str) -> list[str]:
         lines.append("  changed to follow: " + ", ".join(
             f"{k} {c['from']:g} -> {c['to']:g}" for k, c in d["changed"].items()))
     sigma = d[SURFACE_CHARGE_KEY]
-    lines.append(f"  σ = {sigma:.4g} µC/m^2" + (" (the air-breakdown limit of this geometry)"
-                                              if d["breakdown"] else " (the scene's)"))
+    charge = d.get("charge")
+    if charge:
+        rise = [r for r in charge["rise_time_90_s"] if r is not None]
+        lines.append(f"  σ = {sigma:.4g} µC/m^2 (the steady charge its contacts make, "
+                     + ("the band's mean" if len(charge["steady_uC_per_m2"]) > 1 else
+                        "at the band point")
+                     + (f"; 90 % of it after {max(rise):.3g} s" if rise else "") + ")")
+    else:
+        lines.append(f"  σ = {sigma:.4g} µC/m^2" + (
+            " (the air-breakdown limit of this geometry)" if d["breakdown"] else
+            " (the scene's)"))
     load = d["load"]
     if load["ohm"] is not None:
         ohms = load["ohm"] if isinstance(load["ohm"], list) else [load["ohm"]]

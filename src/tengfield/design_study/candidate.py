@@ -203,14 +203,20 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
             row["field_hash"] = key
             if tables is not None and key in tables:
                 # the key leaves sigma out (a surrogate scales): at this candidate's charge
-                table, row["field_status"] = at_ball_charge(tables[key],
-                                                            scene.device.ball_charge), "memo"
+                table, row["field_status"] = (
+                    tables[key] if scene.charge.from_contacts   # any reference charge
+                    else at_ball_charge(tables[key], scene.device.ball_charge)), "memo"
             else:
                 with warnings.catch_warnings():   # the coarse field's accuracy is reported
                     warnings.simplefilter("ignore", RuntimeWarning)   # as the error bar
                     obtain = obtain_breakdown_table if uses_breakdown_charge(scene) \
                         else obtain_table        # "breakdown": the surrogate with its lines
-                    table, outcome = obtain(scene, cache_dir=cache_dir, comm=None,
+                    solved = scene
+                    if scene.charge.from_contacts:   # the geometry at a reference charge
+                        from ..contact_run import field_scene
+                        from ..surrogate.cache import solved_scene
+                        solved = solved_scene(field_scene(scene))
+                    table, outcome = obtain(solved, cache_dir=cache_dir, comm=None,
                                             solve=solve)
                 row["field_status"] = outcome.status
                 if outcome.status in ("computed", "recomputed"):   # how its meshes were
@@ -235,6 +241,11 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
             points = [band_scene(scene, spec, f, a) for f, a in spec.band]
         row[SURFACE_CHARGE_KEY] = scene.device.surface_charge * 1e6
         curves = TerminalCurves(table, scene.circuit.reference)
+        if scene.charge.from_contacts:   # each band point at the charge its contacts make
+            try:
+                points, curves = _at_contact_charge(points, dynamics, table, row)
+            except TengfieldError as exc:
+                return {**row, "status": "skipped", "reason": f"charge: {exc}"}
     # circuit
     start = time.perf_counter()
     band_values: dict[str, list[float]] = {}
@@ -275,6 +286,37 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
     row["objective"] = row["objectives"][spec.objective]["value"]
     row["objective_error"] = row["objectives"][spec.objective]["error"]
     return row
+
+
+def _at_contact_charge(points, dynamics, table, row):
+    """``[charge] model = "contact"``: each band point scored at the steady charge its own
+    contacts make (:func:`tengfield.contact_run.contact_source` along its trajectory: the
+    plateau a device at that vibration reaches), ``(points at it, one curves per point)``;
+    ``row["charge"]``: each point's steady σ [µC/m²], its 90 % rise time [s] and what binds,
+    ``row[σ key]`` their mean."""
+    from ..contact_run import contact_source
+    from ..surrogate import TerminalCurves
+    from ..surrogate.table import at_ball_charge
+
+    at, curves, block = [], [], {"steady_uC_per_m2": [], "rise_time_90_s": [], "binds": []}
+    for point, motion in zip(points, dynamics):
+        with warnings.catch_warnings():   # sigma_eq beyond the limit: the cap holds
+            warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
+            run = contact_source(point, motion, table)
+        at.append(run.scene)
+        curves.append(TerminalCurves(at_ball_charge(table, run.scene.device.ball_charge),
+                                     point.circuit.reference))
+        for key in block:
+            block[key].append(run.block[key])
+    row["charge"] = block
+    row[SURFACE_CHARGE_KEY] = float(np.mean(block["steady_uC_per_m2"]))
+    return at, curves
+
+
+def _curves_of(curves, i):
+    """Band point ``i``'s terminal curves: one for every point, or each point's own (a
+    contact charge)."""
+    return curves[i] if isinstance(curves, list) else curves
 
 
 #: design.csv's field_status of a candidate decided by its dynamics alone
@@ -377,12 +419,13 @@ def _point_value(objective, point, dynamics, curves, volume, load) -> float:
 
 def _objective_values(objective, spec, scene, points, dynamics, curves, volume, row):
     if objective not in ("power", "power_density"):
-        return [_point_value(objective, p, d, curves, volume, None)
-                for p, d in zip(points, dynamics)]
+        return [_point_value(objective, p, d, _curves_of(curves, i), volume, None)
+                for i, (p, d) in enumerate(zip(points, dynamics))]
     # power / power_density into the matched (or the varied) resistive load
     if "load_ohm" in spec.vary:
         load = scene.circuit.load
-        powers = [_load_power(p, d, curves, load) for p, d in zip(points, dynamics)]
+        powers = [_load_power(p, d, _curves_of(curves, i), load)
+                  for i, (p, d) in enumerate(zip(points, dynamics))]
         row["load_ohm"] = load
     elif spec.load == "one":
         load, powers = matched_load(points, dynamics, curves, spec.band_aggregate,
@@ -390,8 +433,9 @@ def _objective_values(objective, spec, scene, points, dynamics, curves, volume, 
         row["load_ohm"] = load
     else:
         loads, powers = [], []
-        for p, d in zip(points, dynamics):
-            r, (power,) = matched_load([p], [d], curves, "mean", spec.load_range)
+        for i, (p, d) in enumerate(zip(points, dynamics)):
+            r, (power,) = matched_load([p], [d], _curves_of(curves, i), "mean",
+                                       spec.load_range)
             loads.append(r)
             powers.append(power)
         row["load_ohm"] = loads
@@ -437,7 +481,8 @@ def dynamics_spread(spec, points, dynamics, curves, volume, row, simulate) -> di
             if o == "stroke":
                 continue
             first = row["band_values"][o][i]
-            more = window_values(o, spec, p, curves, volume, _load_of(row, i), simulate)
+            more = window_values(o, spec, p, _curves_of(curves, i), volume, _load_of(row, i),
+                                 simulate)
             spread[o][i] = float(np.std([first, *more], ddof=1))
     return spread
 

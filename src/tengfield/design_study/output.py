@@ -139,6 +139,8 @@ def design_summary(result) -> dict:
             "regimes": best["regimes"], "upper_contact_fraction": best["upper_contact_fraction"],
             "load_ohm": best["load_ohm"],
             **({"robust": answer["best"]["robust"]} if "robust" in answer["best"] else {}),
+            # [charge] model = "contact": each band point's steady charge and rise time
+            **({"charge": answer["best"]["charge"]} if answer["best"].get("charge") else {}),
             "followed": followed_geometry(
                 result.scene.to_dict()["device"],
                 {k: v for k, v in best["values"].items() if k not in OTHER_VARY})
@@ -243,7 +245,21 @@ def best_toml_header(result) -> str:
             + "band table:\n" + "\n".join(band_table_lines(result, best)) + "\n"
             f"excitation and [run]: {point_label(f, a, kind)} ({why}), where the design "
             f"scored {objective} = {value:.6g} {unit}\n[field]: the scene's (the design used "
-            + ("coarse settings)" if spec.field == "coarse" else "these)"))
+            + ("coarse settings)" if spec.field == "coarse" else "these)")
+            + _contact_note(best, k))
+
+
+def _contact_note(best, k) -> str:
+    """best.toml's line for ``[charge] model = "contact"``: the design scored the plateau
+    (the steady charge the contacts make), which a run reaches after its rise time."""
+    charge = best.get("charge")
+    if not charge:
+        return ""
+    rise = charge["rise_time_90_s"][k]
+    return (f"\n[charge]: scored at the steady charge its contacts make there, "
+            f"{charge['steady_uC_per_m2'][k]:.4g} µC/m^2 ("
+            + ("reached after ~" + f"{rise:.3g} s of running: set [run] duration_s past it"
+               if rise is not None else "never reached") + " to see that value in a run)")
 
 
 def plot_scales(result) -> dict:

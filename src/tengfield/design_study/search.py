@@ -329,8 +329,6 @@ def design(scene, *, comm=None, jobs: int | None = None, cache_dir=None,
     over its ranks (every rank returns the same result); else ``jobs`` worker processes.
     ``solve``/``simulate`` replace the field solver and the dynamics (tests);
     ``overrides`` sets ``[design]`` keys (e.g. ``{"candidates": 40}``)."""
-    from ..source import refuse_contact_charge
-    refuse_contact_charge(scene, "tengfield design")
     from .._args import check_jobs_argument
     from .._console import progress_shown
     from ..scene.parse import check_scene_argument
@@ -453,6 +451,21 @@ def check_design_combination(scene, spec) -> None:
         check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"', NUMERIC_SIGMA)
     if spec.percentile is not None:       # each candidate's [uncertainty] draws
         check_study_combination(scene)
+    if scene.charge.from_contacts:
+        from ..errors import SceneError
+        from ..pipeline import check_contact_charge
+
+        check_contact_charge(scene)      # what a contact run refuses (an [array], 3D)
+        if spec.percentile is not None:
+            raise SceneError(
+                f'[design] aggregate = "p{spec.percentile:g}" with [charge] model = '
+                '"contact": not supported yet (a candidate is scored at the steady charge '
+                'its contacts make, a percentile study at the run\'s); use aggregate = '
+                '"mean" or "min", or [charge] model = "constant"')
+        if scene.charge.discharge != "none":
+            from ..air_breakdown import check_gap_lines
+            check_gap_lines(scene, f'[charge] discharge = {scene.charge.discharge!r}',
+                            '[charge] discharge = "none"')
 
 
 def announce_cost(scene, spec, say: bool) -> None:

@@ -49,23 +49,27 @@ def matched_load(points, dynamics, curves, aggregate: str,
     (band scenes with their ``dynamics``) into one resistor: a log grid of LOAD_GRID
     loads over +- LOAD_DECADES around 1 / (2 pi f C_T) (f, C_T: means over the points),
     then Brent's bounded search (scipy) between the best grid point's neighbours.
-    ``bounds`` ([design] load_ohm, [ohm]): every load searched lies in [lo, hi]."""
+    ``bounds`` ([design] load_ohm, [ohm]): every load searched lies in [lo, hi].
+    ``curves``: the terminal curves of every point, or a list of each point's own."""
     from scipy.optimize import minimize_scalar
 
+    # one curves object for every point, or each point's own (a charge that differs by
+    # point: the contacts' steady charge of each band point of a design)
+    per_point = list(curves) if isinstance(curves, (list, tuple)) else [curves] * len(points)
     n_cells = points[0].device.cells
-    c_t = float(np.mean(curves.capacitance_samples)) * n_cells \
+    c_t = float(np.mean(per_point[0].capacitance_samples)) * n_cells \
         + points[0].circuit.parallel_capacitance
     f = float(np.mean([p.excitation.frequency for p in points]))
     centre = math.log10(1.0 / (2 * math.pi * f * c_t))
     cache: dict[float, list[float]] = {}
     # each point's load-independent grid, built once for the scan (the same numbers)
-    grids = [LoadGrid(p, d, curves) for p, d in zip(points, dynamics)]
+    grids = [LoadGrid(p, d, c) for p, d, c in zip(points, dynamics, per_point)]
 
     def powers(log_r: float) -> list[float]:
         key = round(float(log_r), 12)
         if key not in cache:
-            cache[key] = [load_power(p, d, curves, 10.0**key, g)
-                          for p, d, g in zip(points, dynamics, grids)]
+            cache[key] = [load_power(p, d, c, 10.0**key, g)
+                          for p, d, c, g in zip(points, dynamics, per_point, grids)]
         return cache[key]
 
     def score(log_r: float) -> float:
