@@ -476,7 +476,7 @@ class Scene:
                              " is out of range: "
                              f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] stroke_mm)")
         check_steady_window(exc, run.settle_periods, run.duration)
-        check_work(exc, run)
+        check_work(exc, run, self.instrument)
         check_vibration_work(exc, run)
         if run.realisations > 1 and not exc.has_noise:
             raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "
