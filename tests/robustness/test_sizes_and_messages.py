@@ -45,3 +45,73 @@ def test_the_sample_limit_is_allowed_by_the_scene_and_by_the_run():
     check_samples(scene, 1000.0)      # 2e7 samples: the limit itself (refused here before)
     with pytest.raises(SceneError, match=r"= 20000020 samples: allowed <= 2e\+07 "):
         check_samples(scene, 1000.001)
+
+
+# -- 54.11: every figure's pixels are bounded; --dpi is refused past it before the work --
+def _commands_with_dpi():
+    from tengfield import cli
+
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")   # noqa: SLF001
+    for name, command in sub.choices.items():
+        actions = command._actions                                   # noqa: SLF001
+        if any(a.option_strings == ["--dpi"] for a in actions):
+            required = [arg for a in actions if a.required and a.option_strings
+                        for arg in (a.option_strings[0], "1")]
+            positional = [a for a in actions if not a.option_strings and a.required
+                          and a.nargs not in ("?", "*")]
+            groups = [g for g in command._mutually_exclusive_groups if g.required]  # noqa: SLF001
+            required += [arg for g in groups for arg in (g._group_actions[0].option_strings[0],  # noqa: SLF001
+                                                         "x")]
+            yield name, required + ["x"] * len(positional)
+
+
+def test_several_commands_take_dpi():
+    names = {name for name, _ in _commands_with_dpi()}
+    assert {"run", "field", "sweep", "dynamics", "design", "uncertainty"} <= names
+
+
+@pytest.mark.parametrize("name, extra", list(_commands_with_dpi()))
+def test_every_command_refuses_a_dpi_past_the_pixel_bound_before_the_work(name, extra,
+                                                                          tmp_path, capsys):
+    from tengfield import cli
+    from tengfield.files.figures import DPI_RANGE, MAX_FIGURE_PIXELS
+
+    assert MAX_FIGURE_PIXELS == 50e6 and DPI_RANGE == (20.0, 683.0)
+    out = tmp_path / "out"
+    code = cli.main([name, *extra, "-o", str(out), "--dpi", "1200"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert err[0] == ("tengfield: error: --dpi 1200 is out of range: allowed [20, 683] dots "
+                      "per inch (a figure is at most 50 megapixels; the largest, field.png, "
+                      "would be 14000 x 11000 px here)")
+    assert not out.exists()
+
+
+def test_field_png_at_the_highest_dpi_stays_within_the_bound():
+    from tengfield.field.io import figure_window
+    from tengfield.files import set_figure_dpi
+
+    try:
+        set_figure_dpi(683)
+        w, h = figure_window((1400, 1100))
+    finally:
+        set_figure_dpi(None)
+    assert w * h <= 50e6 and (w, h) == (7968, 6261)
+    with pytest.raises(ValueError, match=r"^--dpi 684 is out of range: allowed \[20, 683\]"):
+        set_figure_dpi(684)     # one more dot per inch: field.png past 50 megapixels
+
+
+def test_a_figure_grown_past_the_bound_is_drawn_within_it_with_one_warning(tmp_path):
+    from PIL import Image
+
+    from tengfield import plotting
+
+    fig = plotting.new_figure((40.0, 10.0))
+    fig.subplots().plot([0, 1], [0, 1])
+    with pytest.warns(RuntimeWarning, match=r"^wide.png: 40 x 10 in at 600 dpi would be 24000 x "
+                                            r"6000 px \(144 megapixels\): drawn at 353 dpi "
+                                            r"\(allowed <= 50 megapixels per figure\)"):
+        plotting.save_figure(fig, tmp_path / ".wide.tmp-77.png", 600)
+    with Image.open(tmp_path / ".wide.tmp-77.png") as image:
+        assert image.size[0] * image.size[1] <= 50e6
