@@ -115,3 +115,86 @@ def test_a_figure_grown_past_the_bound_is_drawn_within_it_with_one_warning(tmp_p
         plotting.save_figure(fig, tmp_path / ".wide.tmp-77.png", 600)
     with Image.open(tmp_path / ".wide.tmp-77.png") as image:
         assert image.size[0] * image.size[1] <= 50e6
+
+
+# -- 54.16: messages name what the user wrote -------------------------------------------
+def test_a_toml_date_in_set_names_the_key():
+    from tengfield.scene.parse import parse_setting
+
+    with pytest.raises(SceneError, match=r"^--set: \[run\] duration_s = 1979-05-27 \(a TOML "
+                                         r"date/time\): no scene key takes a date"):
+        parse_setting("run.duration_s=1979-05-27")
+
+
+def test_set_on_an_absent_uncertainty_entry_says_it_has_no_distribution():
+    from tengfield.scene import default_scene, with_settings
+    from tengfield.uncertainty_study.spec import uncertainty_spec
+
+    scene = with_settings(default_scene(), ['uncertainty.vary."contact.restitution".low=0.1'])
+    with pytest.raises(SceneError) as err:
+        uncertainty_spec(scene)
+    text = str(err.value)
+    assert text.startswith("[uncertainty.vary] 'contact.restitution': no distribution given "
+                           "(only low = 0.1;"), text
+    assert "None" not in text and "'uniform'" in text
+
+
+@pytest.mark.parametrize("fit, text", [
+    ("[fit.parameters]\nsurface_charge_uC_per_m2 = {min = nan}\n",
+     "[fit.parameters] surface_charge_uC_per_m2.min = nan: expected a finite number"),
+    ("[fit.parameters]\nrestitution = {max = inf}\n",
+     "[fit.parameters] restitution.max = inf: expected a finite number in [0, 1]"),
+    ("[fit.columns.V]\nnoise = nan\n",
+     "[fit.columns.V] noise = nan: expected a finite number in (0, inf)"),
+    ("[fit.parameters]\nload_ohm = {min = -inf}\n",
+     "[fit.parameters] load_ohm.min = -inf: expected a finite number in (0, inf)"),
+])
+def test_nan_and_inf_in_fit_are_finite_numbers_with_the_keys_own_range(fit, text):
+    from tengfield.fit.spec import parse_fit_section
+
+    with pytest.raises(SceneError) as err:
+        parse_fit_section(parse_scene(fit))
+    assert str(err.value) == text and "[-inf, inf]" not in str(err.value)
+
+
+def test_a_list_of_lists_in_vary_is_a_list_of_values_and_errors_name_vary():
+    from tengfield.sweeps import parse_vary
+
+    assert parse_vary("device.stroke_mm=[[2, 3], [4]]") == ("device.stroke_mm", [[2, 3], [4]])
+    assert parse_vary("device.stroke_mm=1,2,4") == ("device.stroke_mm", [1, 2, 4])
+    assert parse_vary("circuit.kind=load,open") == ("circuit.kind", ["load", "open"])
+    with pytest.raises(SceneError, match=r"^--vary 'device.stroke_mm=\[1, 2': '\[1, 2' is no "
+                                         r"TOML value"):
+        parse_vary("device.stroke_mm=[1, 2")
+
+
+def test_a_time_unit_the_header_contradicts_is_one_line(run_cli, tmp_path):
+    import math
+
+    rows = "\n".join(f"{i * 0.2:.3f},{100 * math.sin(2 * math.pi * 20 * i * 0.2e-3):.5f}"
+                     for i in range(400))
+    (tmp_path / "tr.csv").write_text("t [ms],V_oc_V\n" + rows + "\n")
+    (tmp_path / "s.toml").write_text('[fit]\ntime_column = "t"\ntime_unit = "s"\n' + BASE)
+    proc = run_cli("fit", "s.toml", "-o", tmp_path / "out", "--measured", "tr.csv",
+                   cwd=tmp_path, timeout=300)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert lines == ["tengfield: error: --measured 'tr.csv': the header gives the time column "
+                     "'t' the unit 'ms', but [fit] time_unit = 's': they disagree; drop the "
+                     "key (the header's unit is used) or write the header's"], proc.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_deprecated_capacitance_warns_via_set_as_in_a_file():
+    from tengfield.scene import default_scene, with_settings
+
+    with pytest.warns(FutureWarning, match=r"^--set circuit.parallel_capacitance_pF: \[circuit\] "
+                                           r"parallel_capacitance_pF is now \[instrument\] "
+                                           r"capacitance_pF: write --set "
+                                           r"instrument.capacitance_pF=338 "):
+        scene = with_settings(default_scene(), ["circuit.parallel_capacitance_pF=338"])
+    assert scene.instrument.capacitance == pytest.approx(338e-12)
+    with pytest.warns(FutureWarning, match=r"^<string>: \[circuit\] parallel_capacitance_pF is "
+                                           r"now \[instrument\] capacitance_pF: write "
+                                           r"\[instrument\] capacitance_pF = 338 "):
+        parse_scene("[circuit]\nparallel_capacitance_pF = 338\n")
