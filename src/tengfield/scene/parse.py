@@ -35,13 +35,24 @@ def default_scene() -> Scene:
     return parse_scene(default_text(), source="<default>")
 
 
+def _is_toml_text(text: str) -> bool:
+    """A str ``load_scene`` reads as TOML rather than as a file name: it holds a line
+    break, or a ``=`` or starts with ``[`` and names no existing file."""
+    if "\n" in text:
+        return True
+    return ("=" in text or text.lstrip().startswith("[")) and not os.path.exists(text)
+
+
 def load_scene(path: "str | Path | Scene | None") -> Scene:
-    """Read a scene file; ``None`` gives the embedded default scene; a :class:`Scene`
-    is returned as it is (the CLI hands its commands a scene with ``--set`` applied)."""
+    """Read a scene file, or TOML text (a str with a line break, a ``key = value``, a
+    ``[section]``, naming no existing file); ``None`` gives the embedded default scene; a
+    :class:`Scene` is returned as it is (the CLI hands its commands a scene with ``--set`` applied)."""
     if isinstance(path, Scene):
         return path
     if path is None:
         return default_scene()
+    if isinstance(path, str) and _is_toml_text(path):   # the README's "or TOML text"
+        return parse_scene(path, source="<TOML text>")
     from .._args import check_path_argument
     check_path_argument("tengfield.load_scene", path)
     p = Path(path)
