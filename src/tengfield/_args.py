@@ -80,3 +80,66 @@ def check_path_argument(function: str, path, name: str = "path"):
         raise SceneError(f"{function}({name}={_shown(path)}): an empty file name; give a "
                          ".toml file")
     return path
+
+
+# -- the general checks of a public entry point's arguments (issue #54.17) -------------
+def names(function: str, value, name: str, *, allow_none: bool = True) -> list[str] | None:
+    """``value`` a list of names: a ``str`` is ONE name (never its characters), else an
+    iterable of ``str``; None where allowed. TypeError naming ``function`` and ``name``."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, (bytes, bytearray, dict)) or not hasattr(value, "__iter__"):
+        raise TypeError(f"{function}({name}={_shown(value)}): expected a name or a list of "
+                        f"names (str), got {type(value).__name__}")
+    items = list(value)
+    for item in items:
+        if not isinstance(item, str):
+            raise TypeError(f"{function}({name}={_shown(value)}): expected names (str), got "
+                            f"{_shown(item)} ({type(item).__name__})")
+    return items
+
+
+def path(function: str, value, name: str, *, allow_none: bool = False, what: str = "a path"):
+    """``value`` a file or folder name: a non-empty ``str`` or ``os.PathLike`` (None where
+    allowed); returns it as a :class:`pathlib.Path` (or None)."""
+    from pathlib import Path
+
+    if value is None and allow_none:
+        return None
+    if isinstance(value, (bytes, bytearray)) or not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{function}({name}={_shown(value)}): expected {what} (str or "
+                        f"pathlib.Path){' or None' if allow_none else ''}, got "
+                        f"{type(value).__name__}")
+    if not os.fspath(value).strip():
+        raise SceneError(f"{function}({name}={_shown(value)}): an empty name; expected {what}")
+    return Path(value)
+
+
+def flag(function: str, value, name: str) -> bool:
+    """``value`` True or False (numpy's bool too); a string such as ``"no"`` is refused,
+    never taken as true."""
+    if isinstance(value, bool) or type(value).__name__ == "bool_":
+        return bool(value)
+    raise TypeError(f"{function}({name}={_shown(value)}): expected True or False, got "
+                    f"{type(value).__name__}")
+
+
+def number(function: str, value, name: str, *, low: float = -math.inf, high: float = math.inf,
+           low_open: bool = False, high_open: bool = False, allow_none: bool = False):
+    """``value`` a finite real number (not a bool, not a string) in the interval, ends open
+    or closed as given; None where allowed. Returns a float."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise TypeError(f"{function}({name}={_shown(value)}): expected a number"
+                        f"{' or None' if allow_none else ''}, got {type(value).__name__}")
+    x = float(value)
+    inside = (math.isfinite(x) and (x > low if low_open else x >= low)
+              and (x < high if high_open else x <= high))
+    if not inside:
+        interval = f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+        raise SceneError(f"{function}({name}={_shown(value)}) is out of range: allowed "
+                         f"{interval}")
+    return x

@@ -125,8 +125,14 @@ class RunResult:
         before it, as ``--spice-start-up``); returns the paths. ``figures``: a
         :class:`tengfield.plotting.process.FigureProcess` drawing the figures (complete
         after its ``finish()``), as the CLI passes."""
+        from ._args import flag, path
         from .io import write_dynamics_outputs, write_run_outputs
 
+        where = "tengfield.RunResult.write"
+        out_dir = path(where, out_dir, "out_dir", what="a folder name")
+        plots = flag(where, plots, "plots")
+        spice, spice_start_up = flag(where, spice, "spice"), flag(where, spice_start_up,
+                                                                   "spice_start_up")
         written = write_run_outputs(self, out_dir, plots=plots, figures=figures)
         written += write_dynamics_outputs(self, out_dir, plots=plots, figures=figures)
         if spice or spice_start_up:
@@ -141,7 +147,11 @@ class RunResult:
         (and the load's V and P) against time with the gap, over the last ``last_periods``
         excitation periods (None: the whole run). ``tengfield run`` saves this figure as
         waveforms.png (5 periods)."""
+        from ._args import number
         from .plotting.waveforms import run_title, waveforms_figure   # the edge, on use
+
+        last_periods = number("tengfield.RunResult.plot", last_periods, "last_periods", low=0.0,
+                              low_open=True, allow_none=True)
 
         waveforms, title = self.waveforms, run_title(self)
         tail = getattr(waveforms, "tail", None)     # a streamed run kept its last 5 periods
@@ -205,10 +215,12 @@ def run(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     surrogate a ball leaving the axis needs (default: its 1.5 mm, P2; a different
     setting is a different cache file).
     """
-    from ._args import check_jobs_argument
+    from ._args import check_jobs_argument, path
     from .scene import as_scene
     scene = as_scene(scene, "run")
     jobs = check_jobs_argument("tengfield.run", jobs, comm)   # before any work
+    cache_dir = path("tengfield.run", cache_dir, "cache_dir", allow_none=True,
+                     what="a folder name")
     result = run_one(scene, comm=comm, cache_dir=cache_dir, solve=solve, simulate=simulate,
                      progress=progress, command_line=command_line, write_cache=write_cache,
                      radial_settings=radial_settings)

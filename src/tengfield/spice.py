@@ -281,11 +281,27 @@ def subcircuit(result, *, start_up: bool = False) -> str:
 def export(result, path, *, start_up: bool = False) -> Path:
     """Write the subcircuit ``teng`` of ``result`` to ``path`` (``teng.lib``); returns it.
     ``start_up``: the run's start-up before the repeated period (module docstring)."""
+    from ._args import check_instance, flag, path as path_argument
     from .files import write_text
+    from .pipeline import RunResult
 
-    path = Path(path)
+    check_instance("tengfield.spice.export", result, "result", RunResult,
+                   "a run's result (tengfield.run(scene))")
+    path = path_argument("tengfield.spice.export", path, "path", what="a file name")
+    start_up = flag("tengfield.spice.export", start_up, "start_up")
+    check_folder("tengfield.spice.export", path)
     write_text(path, subcircuit(result, start_up=start_up))
     return path
+
+
+def check_folder(function: str, path: Path) -> None:
+    """The folder ``path`` is written into exists: else one line naming the function and
+    the folder (never the temporary file an atomic write would have made there)."""
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        from .errors import OutputError
+        raise OutputError(f"{function}(path={str(path)!r}): the folder {str(folder)!r} does "
+                          "not exist; create it first, or write into an existing one")
 
 
 def load_netlist(load_ohm: float, stop_s: float, step_s: float, *, library: str = "teng.lib",

@@ -420,12 +420,24 @@ def parse_vary(text: str) -> tuple[str, list]:
     if not eq or key.count(".") < 1 or not all(key.split(".")) or not value:
         raise SceneError(f"--vary {text!r}: write section.key=START:STOP:N or "
                          "section.key=v1,v2,..., e.g. --vary device.stroke_mm=1:5:9")
+    if key == "circuit.parallel_capacitance_pF":   # deprecated: said once, as by --set
+        from .scene.model import warn_deprecated_capacitance
+        warn_deprecated_capacitance(value, option="--vary", stacklevel=3)
     values = _range_values(value, f"--vary {text!r}")
     if values is not None:
         return key, values
-    items = value[1:-1] if value.startswith("[") and value.endswith("]") else value
-    values = [parse_setting(f"{key}={item.strip()}")[1] for item in items.split(",")
-              if item.strip()]
+    listed = value if value.startswith("[") and value.endswith("]") else f"[{value}]"
+    try:   # a TOML list of the values (each may itself be a list: [[20, 1], [40, 0.5]])
+        values = parse_setting(f"{key}={listed}", option="--vary")[1]
+    except SceneError:
+        values = None
+    if not isinstance(values, list):
+        # bare words (kind=load,open or [load, open]): each value its own --set text
+        items = value[1:-1] if value.startswith("[") and value.endswith("]") else value
+        if "[" in items or "]" in items:   # nested lists that are no TOML: said as written
+            parse_setting(f"{key}={value}", option="--vary")
+        values = [parse_setting(f"{key}={item.strip()}", option="--vary")[1]
+                  for item in items.split(",") if item.strip()]
     if not values:
         raise SceneError(f"--vary {text!r}: no values; write section.key=v1,v2,...")
     return key, values
@@ -587,7 +599,8 @@ def vary_points(scene, vary: dict, frequencies=None, amplitudes=None) -> list[tu
     for combo in itertools.product(*vary.values()):
         values = dict(zip(vary, combo))
         try:
-            point = with_settings(scene, [f"{k}={_toml_value(v)}" for k, v in values.items()])
+            point = with_settings(scene, [f"{k}={_toml_value(v)}" for k, v in values.items()],
+                                  warn=False)   # a deprecated key: said once, by parse_vary
         except TypeError as exc:
             raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
         except SceneError as exc:

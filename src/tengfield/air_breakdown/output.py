@@ -125,7 +125,11 @@ def study(scene, *, states=None, cache_dir=None, comm=None, progress: bool = Fal
     from ..scene import check_field
     from ..scene.parse import verb_scene
 
+    from .._args import names, path
     scene = verb_scene("tengfield.breakdown", scene)
+    states = names("tengfield.breakdown", states, "states")   # "open": one state
+    cache_dir = path("tengfield.breakdown", cache_dir, "cache_dir", allow_none=True,
+                     what="a folder name")
     check_field(scene)
     table, outcome = obtain_breakdown_table(scene, cache_dir=cache_dir, comm=comm,
                                             progress=progress, solve=solve,

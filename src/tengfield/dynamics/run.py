@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import DynamicsError, SceneError
 from ..scene.constants import G
-from ..scene.limits import MAX_SAMPLES, check_steady_window  # MAX_SAMPLES: also for simulate(duration=)
+from ..scene.limits import MAX_SAMPLES, check_steady_window, run_samples  # noqa: F401 - MAX_SAMPLES: also for simulate(duration=)
 from . import columns as _columns
 from .excitation import table_from_scene
 from .regime import classify
@@ -36,12 +36,9 @@ def _sample_count(scene, duration: float) -> int:
 
 
 def check_samples(scene, duration: float) -> None:
-    """Refuse a run whose samples would not fit (MAX_SAMPLES), before integrating."""
-    count = duration * scene.run.sample_rate
-    if not count < MAX_SAMPLES:
-        raise SceneError(f"duration_s x sample_rate_hz = {duration:g} x "
-                         f"{scene.run.sample_rate:g} = {count:.3g} samples: allowed <= "
-                         f"{MAX_SAMPLES:.0e} (lower [run] sample_rate_hz or duration_s)")
+    """Refuse a run whose samples would not fit (MAX_SAMPLES, the scene's own bound:
+    :func:`~tengfield.scene.limits.run_samples`), before integrating."""
+    run_samples(scene.run, duration)
 
 
 def sample_times(scene, duration: float) -> np.ndarray:

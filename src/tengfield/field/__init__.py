@@ -139,6 +139,11 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
         solver (both: ``estimate_error``, ``keep_solution`` (result.solution);
         axisymmetric also ``source_solve``, ``linear_solver``).
     """
+    from .._args import number
+    from ..scene.parse import check_scene_argument
+    check_scene_argument("tengfield.solve_position", scene)
+    position = number("tengfield.solve_position", position, "position")   # [m]; its range below
+    offset = number("tengfield.solve_position", offset, "offset", allow_none=True)
     field_values = {k: overrides.pop(k) for k in list(overrides) if k in FIELD_OVERRIDES}
     if offset is not None:
         field_values["ball_offset_mm"] = offset * 1e3

@@ -90,10 +90,14 @@ def _draw_position(result, path, reference: str, potentials) -> None:
 
 
 def figure_window(size: tuple[int, int]) -> tuple[int, int]:
-    """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``."""
+    """field.png's pixel size: ``size`` at the figures' own 120 dpi, scaled by ``--dpi``
+    (within the figures' pixel bound, :func:`tengfield.files.figures.check_figure_pixels`)."""
     from ..files import figure_dpi
+    from ..files.figures import check_figure_pixels
 
-    scale = figure_dpi(120.0) / 120.0
+    dpi = check_figure_pixels("field.png", (size[0] / 120.0, size[1] / 120.0),
+                              figure_dpi(120.0))
+    scale = dpi / 120.0
     return tuple(max(200, round(n * scale)) for n in size)
 
 

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import os
+import re
 import stat
 import tempfile
 from contextlib import contextmanager
@@ -77,6 +78,17 @@ def writable_target(path: str | Path) -> Path:
         raise OutputError(f"{str(path)!r} is {file_kind(st.st_mode)}, not a regular file: "
                           "nothing was written there")
     return path
+
+
+def target_name(path) -> str:
+    """The file name a user asked for, of a path :func:`atomic_path` handed out
+    (``.waveforms.tmp-123.png`` -> ``waveforms.png``) or of any other path; "the figure"
+    for a file object (messages name the file, never a temporary one)."""
+    if not isinstance(path, (str, os.PathLike)):
+        return "the figure"
+    name = os.path.basename(os.fspath(path))
+    match = re.fullmatch(r"\.(.+)\.tmp-\d+(\.[^.]*)?", name)
+    return match.group(1) + (match.group(2) or "") if match else name
 
 
 @contextmanager

@@ -88,8 +88,13 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
     ``overrides`` sets ``[fit]`` keys (e.g. ``{"loss": "huber", "profile": True}``).
     ``solve``/``simulate`` replace the field solver and the dynamics (tests).
     """
+    from .._args import names, path
     from ..source import refuse_contact_charge
     refuse_contact_charge(scene, "tengfield fit")
+    targets = names("tengfield.calibrate", targets, "targets")   # "Q_pp_nC=0.3": one target
+    free = names("tengfield.calibrate", free, "free")            # one name, not its letters
+    cache_dir = path("tengfield.calibrate", cache_dir, "cache_dir", allow_none=True,
+                     what="a folder name")
     if (measured is None) == (targets is None):
         raise FitError("give either a measured trace or targets, not both")
     if overrides:

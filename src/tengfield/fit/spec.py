@@ -88,12 +88,39 @@ MAX_SHIFT_PERIODS = 100
 MAX_TRACE_TIME = 1e12
 
 
-def _number(where: str, value, lo=-math.inf, hi=math.inf) -> float:
+def _interval(lo: float, hi: float, lo_open: bool = False, hi_open: bool = False) -> str:
+    """``[lo, hi]`` as a message writes it (an infinite end open: ``(0, inf)``)."""
+    left = "(" if lo_open or lo == -math.inf else "["
+    right = ")" if hi_open or hi == math.inf else "]"
+    return f"{left}{lo:g}, {hi:g}{right}"
+
+
+def _number(where: str, value, lo=-math.inf, hi=math.inf, lo_open: bool = False,
+            hi_open: bool = False) -> float:
+    """``value`` a finite number in the key's range (the ends open as given); a NaN or an
+    infinity is "expected a finite number", with the range when it bounds anything."""
+    bounded = lo != -math.inf or hi != math.inf
+    interval = _interval(lo, hi, lo_open, hi_open)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SceneError(f"{where} = {value!r}: expected a finite number in [{lo:g}, {hi:g}]")
-    if not lo <= value <= hi:
-        raise SceneError(f"{where} = {value!r} is out of range: allowed [{lo:g}, {hi:g}]")
+        raise SceneError(f"{where} = {value!r}: expected a finite number"
+                         + (f" in {interval}" if bounded else ""))
+    inside = (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi)
+    if not inside:
+        raise SceneError(f"{where} = {value!r} is out of range: allowed {interval}")
     return float(value)
+
+
+#: the range of a free parameter's bounds (min, max), by name: (lo, hi, lo_open, hi_open);
+#: a log-scaled parameter's are above 0, the others any finite number
+BOUND_RANGES = {"restitution": (0.0, 1.0, False, False),
+                "parallel_capacitance_pF": (0.0, math.inf, False, True),
+                "amplitude_scale": (0.0, math.inf, True, True)}
+
+
+def _bound_range(name: str, transform: str) -> tuple:
+    if name in BOUND_RANGES:
+        return BOUND_RANGES[name]
+    return (0.0, math.inf, True, True) if transform == "log" else (-math.inf, math.inf, True, True)
 
 
 def _refuse_unknown_keys(entry: dict, keys: tuple, where: str, separator: str) -> None:
@@ -222,9 +249,7 @@ def _columns(raw, defaults: dict = RUN_COLUMNS) -> list[Column]:
                              + ", ".join(map(repr, UNITS[quantity])) + _suggest(unit, UNITS[quantity]))
         noise = None
         if "noise" in entry:
-            noise = _number(f"{where} noise", entry["noise"], -math.inf, math.inf)
-            if noise <= 0:
-                raise SceneError(f"{where} noise = {entry['noise']!r} is out of range: allowed (0, inf)")
+            noise = _number(f"{where} noise", entry["noise"], 0.0, math.inf, lo_open=True)
             noise *= UNITS[quantity][unit]
         columns.append(Column(quantity, column, unit, noise, unit_given="unit" in entry))
     return columns
@@ -253,25 +278,17 @@ def _parameters(scene, raw, free) -> list[Parameter]:
         (lo, hi), transform, _, _ = PARAMETERS[name]
         if name == "time_shift_s":
             lo, hi = 0.0, 2.0 * period
-        lo = _number(f"{where}.min", entry["min"]) if "min" in entry else lo
-        hi = _number(f"{where}.max", entry["max"]) if "max" in entry else hi
+        allowed = _bound_range(name, transform)
+        lo = _number(f"{where}.min", entry["min"], *allowed) if "min" in entry else lo
+        hi = _number(f"{where}.max", entry["max"], *allowed) if "max" in entry else hi
         if not lo < hi:
             raise SceneError(f"{where}: min = {lo:g} must be < max = {hi:g}")
-        if transform == "log" and lo <= 0:
-            raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
         if name == "time_shift_s" and hi - lo > MAX_SHIFT_PERIODS * period:
             raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] s span {(hi - lo) / period:.3g} "
                              f"periods: allowed at most {MAX_SHIFT_PERIODS} periods "
                              f"({MAX_SHIFT_PERIODS * period:g} s; in a steady state shifts one "
                              "period apart are equivalent)")
-        if name == "restitution":
-            if lo < 0 or hi > 1:
-                raise SceneError(f"{where}: bounds [{lo:g}, {hi:g}] are out of range: allowed [0, 1]")
-        if name == "parallel_capacitance_pF" and lo < 0:
-            raise SceneError(f"{where}.min = {lo:g} is out of range: allowed [0, inf)")
         if name == "amplitude_scale":
-            if lo <= 0:
-                raise SceneError(f"{where}.min = {lo:g} is out of range: allowed (0, inf)")
             if not _excitation(scene).periodic:
                 raise SceneError(f"{where}: only a sine excitation can be scaled "
                                  f"([excitation] kind = {scene.excitation.kind!r})")
@@ -401,10 +418,22 @@ def _read_defaults(defaults: dict, model: dict, header, what: str) -> dict:
     return out
 
 
+def _disagree(what: str, column: str, header_unit: str, key: str) -> None:
+    """The one refusal of a unit the scene gives that the trace's header contradicts (a
+    header ``t [ms]`` read as seconds fitted nothing: "no signal at the start values")."""
+    raise SceneError(f"{what}: the header gives {column} the unit {header_unit!r}, but "
+                     f"{key}: they disagree; drop the key (the header's unit is used) or "
+                     "write the header's")
+
+
 def _time_factor(spec: FitSpec, layout, column: str, what: str) -> float:
     """Seconds per unit of the trace's time column: ``[fit] time_unit`` when given, else
     the header's (``TIME [ms]``), else s."""
     unit = layout.units.get(column, "")
+    if spec.time_unit_given and unit in HEADER_TIME_UNITS \
+            and HEADER_TIME_UNITS[unit] != TIME_UNITS[spec.time_unit]:
+        _disagree(what, f"the time column {column!r}", unit, f"[fit] time_unit = "
+                  f"{spec.time_unit!r}")
     if spec.time_unit_given or not unit:
         return TIME_UNITS[spec.time_unit]
     if unit not in HEADER_TIME_UNITS:
@@ -418,9 +447,12 @@ def _header_unit(c: Column, layout, what: str) -> Column:
     """``c`` with the unit its header gives (``CH1(V)``, ``Q [nC]``) unless ``[fit.columns]``
     gave one."""
     unit = layout.units.get(c.column, "")
+    unit = {"µV": "uV", "µC": "uC", "µA": "uA"}.get(unit, unit)
+    if c.unit_given and unit in UNITS[c.quantity] and unit != c.unit:
+        _disagree(what, f"column {c.column!r}", unit,
+                  f"[fit.columns.{c.quantity}] unit = {c.unit!r}")
     if c.unit_given or not unit:
         return c
-    unit = {"µV": "uV", "µC": "uC", "µA": "uA"}.get(unit, unit)
     if unit not in UNITS[c.quantity]:
         raise SceneError(f"{what}: the header gives column {c.column!r} a unit tengfield does "
                          f"not know for {c.quantity}: expected one of "

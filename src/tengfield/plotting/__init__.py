@@ -246,5 +246,8 @@ def save_figure(fig, path, dpi: float):
     ``plot()`` return in a notebook) to the PNG ``path`` at ``dpi`` (or the command
     line's ``--dpi``); returns ``path``. Every ``plot_*(..., path)`` is its
     ``*_figure`` core saved here, so the CLI's PNG and ``plot()`` are one figure."""
-    fig.savefig(path, dpi=figure_dpi(dpi))
+    from ..files.atomic import target_name
+    from ..files.figures import check_figure_pixels
+    fig.savefig(path, dpi=check_figure_pixels(target_name(path), fig.get_size_inches(),
+                                              figure_dpi(dpi)))
     return path

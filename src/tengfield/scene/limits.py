@@ -170,19 +170,47 @@ def past(value: float, limit: float) -> str:
     return text if text != f"{limit:.3g}" else f"{value:.12g}"
 
 
-def check_work(exc, run) -> None:
-    """Refuse runs whose sample or event count would exhaust memory (product named)."""
-    samples = run.duration * run.sample_rate
+def refuse_past(count: float, limit: float, expression: str, noun: str, hint: str,
+                key: str = "") -> None:
+    """The one bound of a size the user sets (samples, readings): ``count`` up to
+    ``limit`` is allowed, the limit itself included (1e-12 of it: rounding of the
+    product), past it one SceneError ``{key: }{expression} = {count} {noun}: allowed <=
+    {limit} ({hint})`` (``key`` names the key and value the bound is on, when one key is
+    to change)."""
+    if count > limit * (1.0 + 1e-12):
+        raise SceneError(f"{key + ': ' if key else ''}{expression} = {past(count, limit)} "
+                         f"{noun}: allowed <= {limit:.3g} ({hint})")
+
+
+def run_samples(run, duration: float | None = None) -> None:
+    """``duration_s x sample_rate_hz`` of a run (``duration``: another span than
+    ``[run] duration_s``, e.g. ``simulate(duration=...)``) within [MIN_SAMPLES,
+    MAX_SAMPLES]."""
+    duration = run.duration if duration is None else duration
+    samples = duration * run.sample_rate
     if samples < MIN_SAMPLES:
         raise SceneError(
-            f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
+            f"[run] duration_s x sample_rate_hz = {duration:g} x {run.sample_rate:g} = "
             f"{samples:.3g} samples: allowed >= {MIN_SAMPLES:g} (the run's output needs "
             "samples to report)")
-    if samples > MAX_SAMPLES * (1.0 + 1e-12):   # 1000 s x 20 kHz is the limit, not past it
-        raise SceneError(
-            f"[run] duration_s x sample_rate_hz = {run.duration:g} x {run.sample_rate:g} = "
-            f"{past(samples, MAX_SAMPLES)} samples: allowed <= {MAX_SAMPLES:.3g} (lower "
-            "sample_rate_hz or split the run)")
+    # 1000 s x 20 kHz is the limit, not past it
+    refuse_past(samples, MAX_SAMPLES, f"[run] duration_s x sample_rate_hz = {duration:g} x "
+                f"{run.sample_rate:g}", "samples", "lower sample_rate_hz or split the run")
+
+
+def check_work(exc, run, instrument=None) -> None:
+    """Refuse runs whose sample, reading or event count would exhaust memory (product
+    named)."""
+    run_samples(run)
+    if instrument is not None and instrument.sample_rate > 0.0:
+        # the readings of a run are taken (and held) as one array each, as its samples
+        rate = instrument.sample_rate
+        refuse_past(run.duration * rate, MAX_SAMPLES,
+                    f"[run] duration_s x [instrument] sample_rate_hz = {run.duration:g} x "
+                    f"{rate:g}", "readings",
+                    f"for this run sample_rate_hz <= {MAX_SAMPLES / run.duration:.3g}, or 0: "
+                    "a reading at every output sample",
+                    key=f"[instrument] sample_rate_hz = {rate:g}")
     periods = run.duration * exc.frequency
     if periods > MAX_PERIODS:
         raise SceneError(

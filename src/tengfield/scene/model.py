@@ -476,7 +476,7 @@ class Scene:
                              " is out of range: "
                              f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] stroke_mm)")
         check_steady_window(exc, run.settle_periods, run.duration)
-        check_work(exc, run)
+        check_work(exc, run, self.instrument)
         check_vibration_work(exc, run)
         if run.realisations > 1 and not exc.has_noise:
             raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "
@@ -696,6 +696,25 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                  source=source, text=text, settings=tuple(settings))
 
 
+def warn_deprecated_capacitance(value, source: str = "", *, option: str = "",
+                                stacklevel: int = 2) -> None:
+    """The one warning of ``[circuit] parallel_capacitance_pF`` (its name before issue
+    #39), for a file (``source``) and for an option (``option``: ``--set``, ``--vary``;
+    what to write is that option then). A 0 (every key at its default: scene.to_dict(),
+    report's recommended-*.toml) is not a user's value: no warning; under mpirun rank 0's
+    only."""
+    if value in (0, 0.0) or _launched_rank() != 0:
+        return
+    if option:
+        source = f"{option} circuit.parallel_capacitance_pF"
+    shown = value if isinstance(value, str) else show(value)   # --vary's text as written
+    write = (f"{option} instrument.capacitance_pF={shown}" if option
+             else f"[instrument] capacitance_pF = {show(value)}")
+    warnings.warn(f"{source}: [circuit] parallel_capacitance_pF is now [instrument] "
+                  f"capacitance_pF: write {write} (the old key is read until the next "
+                  "release)", FutureWarning, stacklevel=stacklevel)
+
+
 def _instrument(data: dict, values: dict, source: str, warn: bool) -> Instrument:
     """The ``[instrument]`` of a scene being built; its ``capacitance_pF`` becomes the
     circuit's C_p (``values["circuit"]["parallel_capacitance"]``, which every circuit
@@ -706,12 +725,8 @@ def _instrument(data: dict, values: dict, source: str, warn: bool) -> Instrument
     old_given = "parallel_capacitance_pF" in circuit
     # a file of every key at its default (scene.to_dict(), report's recommended-*.toml)
     # holds the old key at 0 (no instrument): not a user's value, no warning
-    if (old_given and warn and _launched_rank() == 0
-            and circuit["parallel_capacitance_pF"] not in (0, 0.0)):
-        warnings.warn(f"{source}: [circuit] parallel_capacitance_pF is now [instrument] "
-                      f"capacitance_pF: write [instrument] capacitance_pF = "
-                      f"{show(circuit['parallel_capacitance_pF'])} (the old key is read until "
-                      "the next release)", FutureWarning, stacklevel=4)
+    if old_given and warn:
+        warn_deprecated_capacitance(circuit["parallel_capacitance_pF"], source, stacklevel=5)
     inst = dict(values["instrument"])
     if section is not None and "capacitance_pF" in section:
         if old_given and values["circuit"]["parallel_capacitance"] != inst["capacitance"]:

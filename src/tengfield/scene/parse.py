@@ -35,13 +35,24 @@ def default_scene() -> Scene:
     return parse_scene(default_text(), source="<default>")
 
 
+def _is_toml_text(text: str) -> bool:
+    """A str ``load_scene`` reads as TOML rather than as a file name: it holds a line
+    break, or a ``=`` or starts with ``[`` and names no existing file."""
+    if "\n" in text:
+        return True
+    return ("=" in text or text.lstrip().startswith("[")) and not os.path.exists(text)
+
+
 def load_scene(path: "str | Path | Scene | None") -> Scene:
-    """Read a scene file; ``None`` gives the embedded default scene; a :class:`Scene`
-    is returned as it is (the CLI hands its commands a scene with ``--set`` applied)."""
+    """Read a scene file, or TOML text (a str with a line break, a ``key = value``, a
+    ``[section]``, naming no existing file); ``None`` gives the embedded default scene; a
+    :class:`Scene` is returned as it is (the CLI hands its commands a scene with ``--set`` applied)."""
     if isinstance(path, Scene):
         return path
     if path is None:
         return default_scene()
+    if isinstance(path, str) and _is_toml_text(path):   # the README's "or TOML text"
+        return parse_scene(path, source="<TOML text>")
     from .._args import check_path_argument
     check_path_argument("tengfield.load_scene", path)
     p = Path(path)
@@ -138,17 +149,19 @@ def check_rules(scene: Scene) -> None:
                       "by [contact] damping_model)", RuntimeWarning, stacklevel=3)
 
 
-def parse_setting(text: str) -> tuple[list[str], object]:
+def parse_setting(text: str, option: str = "--set") -> tuple[list[str], object]:
     """``section.key=value`` (``--set``) -> (``["section", "key"]``, value). The value is
     read as a TOML value (``30``, ``1e8``, ``"rectifier"``, ``[1.0, 4.0]``, ``true``);
-    a bare word that is no TOML value is a string (``kind=rectifier``)."""
+    a bare word that is no TOML value is a string (``kind=rectifier``). Messages name
+    ``option``, the command-line option the text came from (``--vary`` reads its values
+    here too)."""
     if "\n" in text or "\r" in text:   # TOML would read the first line and drop the rest
-        raise SceneError(f"--set {text.splitlines()[0][:80]!r}...: the value holds a line "
+        raise SceneError(f"{option} {text.splitlines()[0][:80]!r}...: the value holds a line "
                          "break; allowed one line (a list as [a, b], a string in quotes)")
     name, eq, value = _split_setting(text)
     path = _key_path(name)
     if not eq or path is None or len(path) < 2 or not all(path):
-        raise SceneError(f"--set {text!r}: write section.key=value, e.g. "
+        raise SceneError(f"{option} {text!r}: write section.key=value, e.g. "
                          "--set excitation.frequency_hz=30 (a dotted key quoted: "
                          "--set 'uncertainty.vary.\"contact.restitution\".high=0.8')")
     value = value.strip()
@@ -156,10 +169,13 @@ def parse_setting(text: str) -> tuple[list[str], object]:
         parsed = tomllib.loads(f"v = {value}")["v"]
     except (tomllib.TOMLDecodeError, ValueError, OverflowError, RecursionError):
         if not re.fullmatch(r"[A-Za-z0-9_+\-./]+", value or "?"):
-            raise SceneError(f"--set {text!r}: {value!r} is no TOML value (numbers as "
+            raise SceneError(f"{option} {text!r}: {value!r} is no TOML value (numbers as "
                              "written, strings in quotes, lists as [a, b])") from None
         parsed = value
-    _check_values({"v": parsed}, "--set")
+    nested = parsed
+    for part in reversed(path):   # the key's own name in the message ([run] duration_s)
+        nested = {part: nested}
+    _check_values(nested, option)
     return path, parsed
 
 
@@ -194,10 +210,11 @@ def _key_path(name: str) -> list[str] | None:
     return path
 
 
-def with_settings(scene: Scene, settings: list[str]) -> Scene:
+def with_settings(scene: Scene, settings: list[str], warn: bool = True) -> Scene:
     """``scene`` with the ``--set section.key=value`` settings applied, in order, each
     checked as the same key in the file would be (unknown keys with the did-you-mean,
-    values with their range)."""
+    values with their range). ``warn``: a deprecated key's warning (a sweep's points: said
+    once, by ``--vary``)."""
     data = copy.deepcopy(scene.raw)
     shape_before = (data.get("device") or {}).get("shape", "tube")
     set_device_keys = set()
@@ -212,6 +229,9 @@ def with_settings(scene: Scene, settings: list[str]) -> Scene:
             data[path[0]] = dict(data.get(path[0]) or {})
             update_section(data, path[0], {new: value})
             continue
+        if tuple(path) == ("circuit", "parallel_capacitance_pF") and warn:   # deprecated
+            from .model import warn_deprecated_capacitance
+            warn_deprecated_capacitance(value, option="--set", stacklevel=3)
         node = data
         for part in path[:-1]:
             child = node.setdefault(part, {})

@@ -162,6 +162,13 @@ def _distribution(key: str, given) -> Distribution:
         raise SceneError(f"{where} = {show(given)}: expected a table, e.g. "
                          '{ distribution = "uniform", low = 0.1, high = 0.5 }')
     kind = given.get("distribution")
+    if "distribution" not in given:   # a --set of one parameter on an entry the scene lacks
+        choices = ", ".join(repr(k) for k in DISTRIBUTIONS)
+        have = ", ".join(f"{k} = {show(v)}" for k, v in given.items())
+        raise SceneError(f"{where}: no distribution given (only {have}; a --set changes "
+                         "an entry the scene has, it makes none): give distribution, one of "
+                         f"{choices}, and its parameters, e.g. --set 'uncertainty.vary."
+                         f"\"{key}\"={{distribution = \"uniform\", low = ..., high = ...}}'")
     if kind not in DISTRIBUTIONS:
         choices = ", ".join(repr(k) for k in DISTRIBUTIONS)
         raise SceneError(f"{where}: distribution = {show(kind)} is not allowed: choose one of "
