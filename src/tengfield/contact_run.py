@@ -116,6 +116,11 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
     block = charge_summary(history, law, cap_level=charge.discharge,
                            duration=float(elapsed[-1]), areas=areas,
                            window_start=window_start, period=period)
+    block["relative_humidity_percent"] = charge.relative_humidity * 100.0
+    if charge.relative_humidity > 0.0:   # sigma_eq, tau above are the humid ones
+        from .humidity import LAW, breakdown_factor
+        block["humidity_law"] = LAW
+        block["breakdown_voltage_factor"] = breakdown_factor(charge.relative_humidity)
     steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
     run_scene = scene.with_values(device={SURFACE_CHARGE_KEY: steady / law.ball_area * 1e6})
     wall = time.perf_counter() - start

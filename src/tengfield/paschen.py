@@ -123,12 +123,19 @@ class Paschen:
     @classmethod
     def from_scene(cls, scene) -> "Paschen":
         """The scene's ``[breakdown]`` constants (defaults: air at 1 atm) and its device's
-        longest path (``scene.device.longest_path``: each cell shape's own)."""
+        longest path (``scene.device.longest_path``: each cell shape's own); B at a
+        contact run's ``[charge] relative_humidity_percent`` (:mod:`tengfield.humidity`:
+        the given B is dry air's)."""
         bd = getattr(scene, "breakdown", None)
         path = scene.device.longest_path if getattr(scene, "device", None) else math.inf
+        charge = getattr(scene, "charge", None)
+        humid = 1.0     # [charge] relative_humidity_percent of a contact run: B rises
+        if charge is not None and charge.from_contacts and charge.relative_humidity > 0.0:
+            from .humidity import breakdown_factor
+            humid = breakdown_factor(charge.relative_humidity)
         if bd is None:
-            return cls(longest_path=path)
-        return cls(A=bd.paschen_A, B=bd.paschen_B, gamma=bd.gamma,
+            return cls(B=AIR_B * humid, longest_path=path)
+        return cls(A=bd.paschen_A, B=bd.paschen_B * humid, gamma=bd.gamma,
                    pressure=bd.pressure, longest_path=path, curve=bd.paschen)
 
     def with_gamma(self, gamma: float) -> "Paschen":

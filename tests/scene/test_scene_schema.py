@@ -18,6 +18,7 @@ DEFAULT_FIELD_HASH = "b60e9f08787bcb2dcfe3f4759b8cac5b3bf8488ea49dd5adb3b2c65053
 #: keys whose change needs other keys set to build a valid scene (in both scenes compared)
 RECORDED = {"kind": "recorded", "file": "table.csv"}
 COMPANIONS = {
+    ("charge", "relative_humidity_percent"): {"model": "contact"},   # RH acts with contacts
     ("excitation", "file"): dict(RECORDED),
     ("excitation", "time_column"): dict(RECORDED),
     ("excitation", "signal_column"): dict(RECORDED),

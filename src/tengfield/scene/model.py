@@ -386,6 +386,9 @@ class Charge:
     initial: float = 0.0
     leakage_time: float = 0.0
     discharge: str = "estimate"
+    #: relative humidity in [0, 1] (the file's percent / 100): sigma_eq, tau and Paschen's
+    #: B follow :mod:`tengfield.humidity`'s assumed law; 0 = dry, the constants as given
+    relative_humidity: float = 0.0
 
     def __post_init__(self):
         check_section("charge", self, "Charge")
@@ -680,6 +683,17 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                          "charge and [charge] discharge caps it (allowed there: "
                          + ", ".join(repr(c) for c in SCHEMA["charge"]["discharge"].check[1])
                          + f"); drop [device] {SURFACE_CHARGE_KEY}")
+    humidity = values["charge"]["relative_humidity"]
+    if humidity > 0.0 and charge_model != "contact":
+        raise SceneError(f"{source}: [charge] relative_humidity_percent = {humidity * 100:g} "
+                         f'acts only with [charge] model = "contact" (this scene\'s is '
+                         f"{charge_model!r}): the humidity law moves the contacts' sigma_eq, "
+                         'tau and the cap; set model = "contact" or drop the key')
+    if humidity > 0.0 and values["breakdown"]["paschen"] == "empirical":
+        raise SceneError(f"{source}: [charge] relative_humidity_percent = {humidity * 100:g} "
+                         'with [breakdown] paschen = "empirical": the humidity law raises '
+                         "Townsend's B, and the empirical table is lab air's as measured; "
+                         'use paschen = "townsend" or relative_humidity_percent = 0')
     if (stated_sigma == "breakdown" or charge_model == "breakdown") and lines_problem:
         problems.append(f'[device] {SURFACE_CHARGE_KEY} = "breakdown": {lines_problem}'
                         if stated_sigma == "breakdown" else

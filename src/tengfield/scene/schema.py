@@ -321,6 +321,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
                               _rng(0.0, 1e12, why="0: no leakage")),
         "discharge": Key("discharge", str, "estimate", None,
                          _choice("estimate", "lower", "upper", "static", "none")),
+        # tengfield.humidity: an assumed law on sigma_eq, tau and Paschen's B (0: dry air,
+        # the constants as given)
+        "relative_humidity_percent": Key("relative_humidity", float, 0.0, 0.01,
+                                         _rng(0.0, 100.0, why="0: dry air, the given "
+                                              "constants")),
     },
     # the bench's instrument (issue #39; tengfield.electrical.instrument, docs/outputs.md):
     # what an electrometer or a scope records. Optional: without the section nothing of a

@@ -13,12 +13,17 @@ from .charge import (ChargeHistory, ContactCharging, charge_history, effective_m
 
 def contact_law(scene, cap: float = math.inf) -> ContactCharging:
     """The condenser law of ``scene``'s ``[charge]`` on its ball (A = pi d^2), capped at
-    ``cap`` [C/m^2] (the air-breakdown level of ``[charge] discharge``; inf: none)."""
+    ``cap`` [C/m^2] (the air-breakdown level of ``[charge] discharge``; inf: none);
+    sigma_eq and tau at ``relative_humidity_percent`` (:mod:`tengfield.humidity`)."""
+    from ..humidity import humid_equilibrium, humid_leakage_time
+
     charge, device = scene.charge, scene.device
-    return ContactCharging(equilibrium=charge.equilibrium, efficiency=charge.efficiency,
+    rh = charge.relative_humidity          # 0: dry, the values as given
+    return ContactCharging(equilibrium=humid_equilibrium(charge.equilibrium, rh),
+                           efficiency=charge.efficiency,
                            ball_area=math.pi * device.ball_diameter ** 2,
-                           initial=charge.initial, leakage_time=charge.leakage_time,
-                           cap=cap)
+                           initial=charge.initial,
+                           leakage_time=humid_leakage_time(charge.leakage_time, rh), cap=cap)
 
 
 def contact_modulus(scene) -> float:
