@@ -130,9 +130,14 @@ def shown_outputs(keys, evaluations: Evaluations) -> list[str]:
 
 
 def nominal_inputs(scene, spec: UncertaintySpec) -> dict:
-    """The scene's own value of every varied key (file units)."""
+    """The scene's own value of every varied key (file units): a deprecated key the
+    scene does not give (``circuit.parallel_capacitance_pF``, left out of its printed
+    form) at the schema's default."""
+    from ..scene.schema import SCHEMA
+
     full = scene.to_dict()
-    return {d.key: full[d.section][d.name] for d in spec.inputs}
+    return {d.key: full[d.section].get(d.name, SCHEMA[d.section][d.name].default)
+            for d in spec.inputs}
 
 
 def run_study(scene, spec: UncertaintySpec | None = None, *, comm=None, jobs: int | None = None,
