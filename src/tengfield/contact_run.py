@@ -138,6 +138,25 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
     return ContactRun(run_scene, table, curves, history, block, limit, wall)
 
 
+def check_contact_charge(scene) -> None:
+    """Refuse, before the work and in one line, what ``[charge] model = "contact"`` does
+    not run yet: an ``[array]`` (its cells' own impacts would each charge their ball) and a
+    ball that leaves the axis (the (z, r) surrogate per unit charge)."""
+    from .errors import SceneError
+
+    if scene.array.cells > 0:
+        raise SceneError('[charge] model = "contact" with [array] cells = '
+                         f"{scene.array.cells}: not supported yet (each cell's ball would "
+                         'charge on its own impacts); use [charge] model = "constant" '
+                         "for an array")
+    from .dynamics.models import MODELS, model_of
+    if model_of(scene).lateral:
+        on_axis = ", ".join(repr(name) for name, entry in MODELS.items() if not entry.lateral)
+        raise SceneError('[charge] model = "contact" with [contact] model = '
+                         f'"{scene.contact.model}": not supported yet (the ball off the '
+                         f"axis); allowed: [contact] model = {on_axis}")
+
+
 #: a study row's charge columns (sweep.csv, uncertainty's outputs), from the ``charge``
 #: block: the steady σ [µC/m²], the time to 90 % of it [s], what binds
 CHARGE_COLUMNS = ("sigma_steady_uC_per_m2", "rise_time_90_s", "charge_binds")

@@ -5,7 +5,7 @@
 * ``trajectory.csv``, ``impacts.csv`` (3D: ``contacts.csv``) and the trajectory
   figures of the dynamics (:func:`write_dynamics_files`);
 * ``map.csv`` (:func:`write_map_csv`, from :mod:`tengfield.dynamics.output`),
-  ``sweep.csv`` (:func:`write_sweep_csv`, :mod:`tengfield.sweeps`'s, handed on).
+  ``sweep.csv`` (:func:`write_sweep_csv`, with its columns :data:`SWEEP_COLUMNS`).
 
 * ``report.csv`` and ``report.json`` (:func:`write_report_csv`,
   :func:`write_report_json`; the report's other files: :mod:`tengfield.accuracy_report.output`).
@@ -31,6 +31,8 @@ import math
 from pathlib import Path
 
 import numpy as np
+
+from .quantities import TERMINAL, column_name
 
 from .files import (atomic_path, figure_file, writable_target, write_csv,  # noqa: F401
                      write_figure, write_json, write_rows)
@@ -273,12 +275,32 @@ def _same_times(result) -> bool:
 
 # ---------------------------------------------------------------------------
 # tengfield sweep
-def write_sweep_csv(path: str | Path, rows: list[dict]) -> Path:
-    """``sweep.csv``: the ``tengfield.sweeps.SWEEP_COLUMNS`` of every row (None -> empty);
-    :func:`tengfield.sweeps.write_sweep_csv`, the one writer ``SweepResult.write`` uses."""
-    from .sweeps import write_sweep_csv as write
+#: the terminal statistics of a sweep row: (column, statistic, short name), names from
+#: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
+TERMINAL_COLUMNS = [(column_name(name, stat), stat, name[:name.rindex("_")])
+                    for stat in ("peak_to_peak", "peak") for name in (*TERMINAL, "V_read_V")]
+#: the load columns of sweep.csv (a --load-ohm axis): the numbers `tengfield run
+#: --set circuit.kind=load` reports at that load (its summary's ``load`` block), and the
+#: rms of the resistor's voltage and current, sqrt(P_mean R) and sqrt(P_mean / R)
+LOAD_SWEEP_COLUMNS = ["V_load_pp_V", "I_load_pp_A", "V_load_rms_V", "I_load_rms_A"]
+#: columns of ``sweep.csv`` (one row per grid point and load); ``V_read_*`` empty without
+#: an instrument (``[circuit] parallel_capacitance_pF`` = 0)
+SWEEP_COLUMNS = (["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period"]
+                 + [column_name(n, "peak_to_peak") for n in TERMINAL]   # the first columns,
+                 + ["P_mean_W", "power_density_W_per_m3"]                # kept in place
+                 + [c for c, _, _ in TERMINAL_COLUMNS if c not in
+                    [column_name(n, "peak_to_peak") for n in TERMINAL]]
+                 + LOAD_SWEEP_COLUMNS)
 
-    return write(path, rows)
+
+def write_sweep_csv(path, rows, columns=None):
+    """``sweep.csv``: ``columns`` (default :data:`SWEEP_COLUMNS`) of every row (None ->
+    an empty cell), atomically; returns the path."""
+    from .files import write_rows
+
+    columns = SWEEP_COLUMNS if columns is None else columns
+    return write_rows(path, columns, (["" if row.get(k) is None else row[k] for k in columns]
+                                      for row in rows))
 
 
 # ---------------------------------------------------------------------------

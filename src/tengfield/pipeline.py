@@ -309,23 +309,7 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
 from .electrical.stream import BALL_CHARGE_COLUMN  # noqa: E402
 
 
-def check_contact_charge(scene) -> None:
-    """Refuse, before the work and in one line, what ``[charge] model = "contact"`` does
-    not run yet: an ``[array]`` (its cells' own impacts would each charge their ball) and a
-    ball that leaves the axis (the (z, r) surrogate per unit charge)."""
-    from .errors import SceneError
-
-    if scene.array.cells > 0:
-        raise SceneError('[charge] model = "contact" with [array] cells = '
-                         f"{scene.array.cells}: not supported yet (each cell's ball would "
-                         'charge on its own impacts); use [charge] model = "constant" '
-                         "for an array")
-    from .dynamics.models import MODELS, model_of
-    if model_of(scene).lateral:
-        on_axis = ", ".join(repr(name) for name, entry in MODELS.items() if not entry.lateral)
-        raise SceneError('[charge] model = "contact" with [contact] model = '
-                         f'"{scene.contact.model}": not supported yet (the ball off the '
-                         f"axis); allowed: [contact] model = {on_axis}")
+from .contact_run import check_contact_charge  # noqa: E402,F401 - the run's own check
 
 
 def _contact_charge_stage(scene, dynamics, stages, **field_options):
@@ -475,7 +459,7 @@ def run_ensemble(scene, first, *, comm=None, jobs: int | None = None, cache_dir=
     surrogate is built here once, with ``solve`` (default the field solver), before the
     others run: each of them that moves would otherwise solve the field for itself."""
     from ._console import progress_bar
-    from .sweeps import run_tasks
+    from ._farm import run_tasks
 
     seeds = realisation_seeds(scene.excitation.seed, scene.run.realisations)
     if len(seeds) > 1 and first.table is None and scene.device.ball_charge != 0.0:

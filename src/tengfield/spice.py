@@ -278,15 +278,22 @@ def subcircuit(result, *, start_up: bool = False) -> str:
     return "\n".join(head + body) + "\n"
 
 
+#: what a run's result holds that the export reads (tengfield.pipeline.RunResult)
+RUN_RESULT_PARTS = ("scene", "dynamics", "waveforms", "summary", "curves", "peaks")
+
+
 def export(result, path, *, start_up: bool = False) -> Path:
     """Write the subcircuit ``teng`` of ``result`` to ``path`` (``teng.lib``); returns it.
     ``start_up``: the run's start-up before the repeated period (module docstring)."""
-    from ._args import check_instance, flag, path as path_argument
+    from ._args import flag, path as path_argument
     from .files import write_text
-    from .pipeline import RunResult
 
-    check_instance("tengfield.spice.export", result, "result", RunResult,
-                   "a run's result (tengfield.run(scene))")
+    # a run's result by what it holds (tengfield.pipeline.RunResult, which exports
+    # through this module: no import of it here)
+    if not all(hasattr(result, name) for name in RUN_RESULT_PARTS):
+        raise TypeError(f"tengfield.spice.export(result={type(result).__name__}): expected a "
+                        "run's result (tengfield.run(scene)), got "
+                        f"{type(result).__name__}")
     path = path_argument("tengfield.spice.export", path, "path", what="a file name")
     start_up = flag("tengfield.spice.export", start_up, "start_up")
     check_folder("tengfield.spice.export", path)

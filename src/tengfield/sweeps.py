@@ -17,25 +17,12 @@ import numpy as np
 
 from . import electrical
 from ._json import regime_dict
-from .quantities import SURFACE_CHARGE_KEY, TERMINAL, column_name
+from .quantities import SURFACE_CHARGE_KEY, TERMINAL, column_name  # noqa: F401
 from .files import figure_file
 
-#: the terminal statistics of a sweep row: (column, statistic, short name), names from
-#: :mod:`tengfield.quantities` (``V_oc_pp_V``, ..., ``I_sc_peak_A``, ``V_read_pp_V``)
-TERMINAL_COLUMNS = [(column_name(name, stat), stat, name[:name.rindex("_")])
-                    for stat in ("peak_to_peak", "peak") for name in (*TERMINAL, "V_read_V")]
-#: the load columns of sweep.csv (a --load-ohm axis): the numbers `tengfield run
-#: --set circuit.kind=load` reports at that load (its summary's ``load`` block), and the
-#: rms of the resistor's voltage and current, sqrt(P_mean R) and sqrt(P_mean / R)
-LOAD_SWEEP_COLUMNS = ["V_load_pp_V", "I_load_pp_A", "V_load_rms_V", "I_load_rms_A"]
-#: columns of ``sweep.csv`` (one row per grid point and load); ``V_read_*`` empty without
-#: an instrument (``[circuit] parallel_capacitance_pF`` = 0)
-SWEEP_COLUMNS = (["frequency_hz", "amplitude_mm", "load_ohm", "regime", "period"]
-                 + [column_name(n, "peak_to_peak") for n in TERMINAL]   # the first columns,
-                 + ["P_mean_W", "power_density_W_per_m3"]                # kept in place
-                 + [c for c, _, _ in TERMINAL_COLUMNS if c not in
-                    [column_name(n, "peak_to_peak") for n in TERMINAL]]
-                 + LOAD_SWEEP_COLUMNS)
+#: the columns of sweep.csv and its writer live with the other tables (tengfield.io)
+from .io import (LOAD_SWEEP_COLUMNS, SWEEP_COLUMNS, TERMINAL_COLUMNS,  # noqa: E402,F401
+                 write_sweep_csv)
 
 
 def _default_simulate():
@@ -215,45 +202,7 @@ def _sweep_task(args):
         raise named from None
 
 
-def run_tasks(work: Callable, tasks: Sequence, *, comm=None, jobs: int | None = None,
-              progress: Callable[[int], None] | None = None, mp_context: str | None = None) -> list:
-    """``[work(task) for task in tasks]``, in order, spread over the workers at hand.
-
-    * ``comm`` with more than one rank (``mpirun -n N``): the MPI task farm
-      :func:`tengfield._mpi.farm` (dynamic schedule, every rank returns the
-      whole list, an exception on any rank aborts all ranks with its message);
-      ``jobs`` must be None or 1 (:func:`tengfield._mpi.check_jobs`).
-    * otherwise ``jobs`` worker processes (default: all cores; ``work`` and
-      the tasks must be picklable; ``mp_context``: a start method, default
-      tengfield's one, :func:`tengfield._pool.pool_context`), or a plain loop for
-      one job or one task.
-
-    ``progress(n)``: called with the number of further tasks done (rank 0 only
-    under MPI). Used by :func:`sweep`; ``tengfield map`` can use it too.
-    """
-    import os
-
-    from ._mpi import check_jobs, farm, size_of
-
-    check_jobs(jobs, comm)
-    tasks = list(tasks)
-    if size_of(comm) > 1:
-        return farm(comm, tasks, work, progress=progress)
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
-    results = []
-    if jobs == 1:
-        for task in tasks:
-            results.append(work(task))
-            if progress is not None:
-                progress(1)
-        return results
-    from ._pool import process_pool
-    with process_pool(jobs, mp_context) as pool:
-        for result in pool.map(work, tasks):
-            results.append(result)
-            if progress is not None:
-                progress(1)
-    return results
+from ._farm import run_tasks  # noqa: E402,F401 - the farm every study uses
 
 
 #: Grid points (frequencies x amplitudes) of one sweep: each runs the scene's dynamics
@@ -686,7 +635,7 @@ def _check_contact_point(scene, values) -> None:
     """What a contact run refuses (an [array], a ball off the axis), named with the
     point (:func:`tengfield.pipeline.check_contact_charge`, the run's check)."""
     from .errors import SceneError
-    from .pipeline import check_contact_charge
+    from .contact_run import check_contact_charge
 
     try:
         check_contact_charge(scene)
@@ -814,15 +763,6 @@ class SweepResult(SweepRows):
         return written
 
 
-
-def write_sweep_csv(path, rows, columns=None):
-    """``sweep.csv``: ``columns`` (default :data:`SWEEP_COLUMNS`) of every row (None ->
-    an empty cell), atomically; returns the path."""
-    from .files import write_rows
-
-    columns = SWEEP_COLUMNS if columns is None else columns
-    return write_rows(path, columns, (["" if row.get(k) is None else row[k] for k in columns]
-                                      for row in rows))
 
 def sweep_study(scene, *, vary: dict | None = None, frequencies=None, amplitudes=None,
                 loads=(), cache_dir=None, solve: Callable | None = None,

@@ -67,8 +67,18 @@ def write_outputs(result: BreakdownResult, scene, out, *, plots: bool = True,
         from ..plotting.breakdown import plot_breakdown
         drawn, title = drawn_charge(result, sigma)
         written.append(write_figure(plot_breakdown, result, drawn, title=title, band=band,
+                                    ratios=_edge_curves(result, band),
                                     path=out / figure_file("breakdown")))
     return written
+
+
+def _edge_curves(result, band):
+    """The band panel's curves (:func:`tengfield.air_breakdown.band.edge_ratios`), None
+    without a band along a trajectory."""
+    if band is None or band.track is None:
+        return None
+    from .band import edge_ratios
+    return edge_ratios(result, band)
 
 
 def drawn_charge(result: BreakdownResult, sigma: float) -> tuple:
@@ -102,7 +112,9 @@ class BreakdownStudy(BreakdownResult):
         if sigma is None:
             sigma, drawn_title = drawn_charge(self, scene_surface_charge(self.scene, self))
             title = title or drawn_title
-        return breakdown_figure(self, sigma, title=title, band=self.band)
+        band = self.band
+        return breakdown_figure(self, sigma, title=title, band=band,
+                                ratios=_edge_curves(self, band))
 
     @property
     def band(self):

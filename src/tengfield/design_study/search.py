@@ -275,7 +275,7 @@ class _Workers:
             self._stack.__exit__(*exc)
 
     def map(self, work, tasks, progress):
-        from ..sweeps import run_tasks
+        from .._farm import run_tasks
 
         if self.pool is None:   # the MPI farm over comm's ranks, or a loop
             return run_tasks(work, tasks, comm=self.comm, jobs=1, progress=progress)
@@ -453,7 +453,7 @@ def check_design_combination(scene, spec) -> None:
         check_study_combination(scene)
     if scene.charge.from_contacts:
         from ..errors import SceneError
-        from ..pipeline import check_contact_charge
+        from ..contact_run import check_contact_charge
 
         check_contact_charge(scene)      # what a contact run refuses (an [array], 3D)
         if spec.percentile is not None:

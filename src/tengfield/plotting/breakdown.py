@@ -9,23 +9,22 @@ _COLOURS = {"open": "tab:blue", "open-top": "tab:green", "short": "tab:red"}
 
 
 def plot_breakdown(result, sigma: float, path, *, title: str | None = None,
-                   band=None) -> None:
+                   band=None, ratios=None) -> None:
     """breakdown.png: :func:`breakdown_figure` saved to ``path``."""
-    save_figure(breakdown_figure(result, sigma, title=title, band=band), path, dpi=120)
+    save_figure(breakdown_figure(result, sigma, title=title, band=band, ratios=ratios), path,
+                dpi=120)
 
 
 _EDGE_STYLE = {"lower": ("tab:blue", ":"), "estimate": ("tab:orange", "-"),
                "upper": ("tab:red", "--")}
 
 
-def _band_panel(ax, result, band) -> None:
+def _band_panel(ax, band, curves) -> None:
     """Each edge of the band: |V_gap| / V_b of the worst line against the ball position
-    over the positions its trajectory visits, V_b at the edge's own γ
-    (:func:`tengfield.air_breakdown.band.edge_ratios`): lower touches 1 where it binds
-    (the critical gap), upper where the smaller gap is widest, the estimate crosses it."""
-    from ..air_breakdown.band import edge_ratios
-
-    curves = edge_ratios(result, band)
+    over the positions its trajectory visits, V_b at the edge's own γ (``curves``:
+    :func:`tengfield.air_breakdown.band.edge_ratios`, computed by the caller): lower
+    touches 1 where it binds (the critical gap), upper where the smaller gap is widest,
+    the estimate crosses it."""
     z = curves["z"] * 1e3
     empirical = band.paschen_curve == "empirical"
     for edge, sigma in band.edges().items():
@@ -46,18 +45,20 @@ def _band_panel(ax, result, band) -> None:
     ax.grid(True, alpha=0.3)
 
 
-def breakdown_figure(result, sigma: float, *, title: str | None = None, band=None):
+def breakdown_figure(result, sigma: float, *, title: str | None = None, band=None,
+                     ratios=None):
     """Left: |σ ΔV| of the axial gaps (and the binding line) against their length over the
     stroke, with Paschen's curve; right: the largest |σ ΔV| / V_b over the lines against
     the ball position; below (with a ``band`` that has a trajectory): each edge of the
-    band along the trajectory (:func:`_band_panel`). ``sigma`` [C/m²]: the scene's (or
+    band along the trajectory (:func:`_band_panel`, ``ratios``: its edges' curves,
+    :func:`tengfield.air_breakdown.band.edge_ratios`). ``sigma`` [C/m²]: the scene's (or
     -σ_max). The binding point is marked."""
-    third = band is not None and band.track is not None
+    third = band is not None and band.track is not None and bool(ratios)
     fig = new_figure((11.0, 8.2 if third else 4.6), layout="constrained")
     if third:
         panels = fig.subplot_mosaic([["left", "right"], ["band", "band"]])
         left, right = panels["left"], panels["right"]
-        _band_panel(panels["band"], result, band)
+        _band_panel(panels["band"], band, ratios)
     else:
         left, right = fig.subplots(1, 2)
     paschen = result.paschen

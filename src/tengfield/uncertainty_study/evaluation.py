@@ -379,7 +379,7 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
 
     ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
     from .._console import progress_bar
-    from ..sweeps import run_tasks
+    from .._farm import run_tasks
 
     keys = spec.keys
     groups = groups_of(keys, values)
