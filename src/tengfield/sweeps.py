@@ -478,10 +478,10 @@ def vary_problem(key: str, points, loads=()) -> str | None:
         return NOT_READ[section]
     if key in KEYS_NOT_READ:
         return KEYS_NOT_READ[key]
-    if section == "charge" and name != "model" and not any(
-            s.charge.from_contacts for _, s in points):
-        return ("[charge] " + name + " acts only with [charge] model = \"contact\" (the "
-                "charge the contacts make); this sweep's charge is "
+    from .charge_models import charge_model_of, models_reading
+    if section == "charge" and not any(charge_model_of(s).reads(name) for _, s in points):
+        return ("[charge] " + name + " acts only with [charge] model = " + models_reading(name)
+                + " (tengfield.charge_models); this sweep's charge is "
                 + ", ".join(sorted({repr(s.charge.model) for _, s in points})))
     if section == "breakdown" and not any(uses_breakdown_charge(s) for _, s in points):
         return ("[breakdown] sets the air-breakdown limit, which a sweep row uses only with "

@@ -19,9 +19,10 @@ def scene_states(scene) -> tuple[str, ...]:
 
 
 def uses_breakdown_charge(scene) -> bool:
-    """True when ``σ = "breakdown"`` or ``[charge] model = "breakdown"``."""
-    return (stated_surface_charge(scene) == "breakdown"
-            or getattr(getattr(scene, "charge", None), "model", "") == "breakdown")
+    """True when ``σ = "breakdown"`` or ``[charge] model = "breakdown"`` (the charge
+    model's entry, :data:`tengfield.charge_models.CHARGE_MODELS`)."""
+    from ..charge_models import charge_model_of
+    return charge_model_of(scene).at_breakdown_limit
 
 
 def scene_breakdown(scene, table, states=None) -> BreakdownResult:

@@ -89,8 +89,8 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
     ``solve``/``simulate`` replace the field solver and the dynamics (tests).
     """
     from .._args import names, path
-    from ..source import refuse_contact_charge
-    refuse_contact_charge(scene, "tengfield fit")
+    from ..charge_models import check_command
+    check_command(scene, "fit")   # a charge model it runs
     targets = names("tengfield.calibrate", targets, "targets")   # "Q_pp_nC=0.3": one target
     free = names("tengfield.calibrate", free, "free")            # one name, not its letters
     cache_dir = path("tengfield.calibrate", cache_dir, "cache_dir", allow_none=True,

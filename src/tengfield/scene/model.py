@@ -395,8 +395,10 @@ class Charge:
 
     @property
     def from_contacts(self) -> bool:
-        """The contacts make the charge (``model = "contact"``)."""
-        return self.model == "contact"
+        """The contacts make the charge (the model's entry in
+        :data:`tengfield.charge_models.CHARGE_MODELS`: ``"contact"``)."""
+        from ..charge_models import charge_model
+        return charge_model(self.model).from_contacts
 
 
 @dataclass(frozen=True)
@@ -684,7 +686,8 @@ def build(data: dict, *, base_dir: Path | None, source: str, text: str,
                          + ", ".join(repr(c) for c in SCHEMA["charge"]["discharge"].check[1])
                          + f"); drop [device] {SURFACE_CHARGE_KEY}")
     humidity = values["charge"]["relative_humidity"]
-    if humidity > 0.0 and charge_model != "contact":
+    from ..charge_models import charge_model as charge_entry
+    if humidity > 0.0 and not charge_entry(charge_model).reads("relative_humidity_percent"):
         raise SceneError(f"{source}: [charge] relative_humidity_percent = {humidity * 100:g} "
                          f'acts only with [charge] model = "contact" (this scene\'s is '
                          f"{charge_model!r}): the humidity law moves the contacts' sigma_eq, "

@@ -250,11 +250,12 @@ def _check_key(key: str, scene=None) -> str:
         kind = {str: "a text key", int: "a whole-number key", tuple: "a list key"}[spec.type]
         raise SceneError(f"{where}: [{sec}] {name} is {kind}; only numeric (real-valued) keys "
                          "can be varied")
-    if sec == "charge" and scene is not None and not scene.charge.from_contacts:
+    from ..charge_models import charge_model_of, models_reading
+    if sec == "charge" and scene is not None and not charge_model_of(scene).reads(name):
         raise SceneError(f"{where}: [charge] {name} acts only with [charge] model = "
-                         f"\"contact\" (the charge the contacts make); this scene's is "
-                         f"{scene.charge.model!r}: set [charge] model = \"contact\" or vary "
-                         f"{SURFACE_CHARGE_SETTING!r}")
+                         f"{models_reading(name)} (tengfield.charge_models); this scene's is "
+                         f"{scene.charge.model!r}: set [charge] model = {models_reading(name)} "
+                         f"or vary {SURFACE_CHARGE_SETTING!r}")
     # kept: 'harmonics' is the one kind whose HARMONIC_KEYS are lists (the schema's own rule)
     if (sec == "excitation" and name in HARMONIC_KEYS and scene is not None
             and scene.excitation.kind == "harmonics"):
