@@ -51,14 +51,8 @@ def check_fraction(function: str, value, name: str, *, low: float = 0.0, high: f
     or closed as given)."""
     if isinstance(value, bool) or not isinstance(value, Real):
         raise TypeError(f"{function}({name}={_shown(value)}): expected a number")
-    x = float(value)
-    inside = (math.isfinite(x) and (x > low if low_open else x >= low)
-              and (x < high if high_open else x <= high))
-    if not inside:
-        interval = f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
-        raise SceneError(f"{function}({name}={_shown(value)}) is out of range: allowed "
-                         f"{interval}")
-    return x
+    return number(function, value, name, low=low, high=high, low_open=low_open,
+                  high_open=high_open)
 
 
 def check_count(function: str, value, name: str, least: int = 1) -> int:
