@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import shlex
 import sys
+from pathlib import Path  # a scene argument is a file name, never TOML text
 
 
 def scene_command(sub, name: str, *, help: str, description: str, output: str | None):
@@ -10,7 +11,7 @@ def scene_command(sub, name: str, *, help: str, description: str, output: str | 
     ``output=None``: no ``-o``, the command adds its own); ``description``: the
     command module's docstring or a sentence (reST quotes dropped)."""
     p = sub.add_parser(name, help=help, description=description.replace("``", ""))
-    p.add_argument("scene", nargs="?", help="scene file (default: the embedded default scene)")
+    p.add_argument("scene", nargs="?", type=Path, help="scene file (default: the embedded default scene)")
     if output is not None:
         p.add_argument("-o", "--output", default=output, metavar="DIR",
                        help=f"output directory (created; default ./{output})")

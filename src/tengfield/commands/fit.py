@@ -5,6 +5,9 @@ identifiability notes, iterations, wall time), DIR/fit.png (measured vs fitted
 with residuals) and DIR/fitted.toml (the scene with the fitted values).
 """
 from __future__ import annotations
+
+from pathlib import Path  # a scene argument is a file name, never TOML text
+
 from ..scene.schema import SURFACE_CHARGE_KEY
 
 
@@ -14,8 +17,9 @@ def register(sub) -> None:
         description="Least-squares calibration of the scene's [fit] parameters to a measured "
                     "CSV (--measured) or to scalar peak values (--targets), reusing one field "
                     "surrogate. Writes fit.json, fit.png and fitted.toml to DIR.")
-    p.add_argument("scene", nargs="?", help="scene file with a [fit] section (default: the "
-                                            "embedded default scene)")
+    p.add_argument("scene", nargs="?", type=Path,
+                   help="scene file with a [fit] section (default: the "
+                        "embedded default scene)")
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--measured", metavar="FILE.csv",
                         help="measured trace: a header row, a time column and V / Q / I columns "

@@ -1,6 +1,8 @@
 """``tengfield scene``: write out or check a scene file."""
 from __future__ import annotations
 
+from pathlib import Path  # a scene argument is a file name, never TOML text
+
 import json
 import sys
 
@@ -13,7 +15,7 @@ def register(sub) -> None:
                                    "[fit] and [uncertainty] included) and prints every key in "
                                    "file units as TOML, a scene file that loads back to the "
                                    "same scene (--json: as JSON).")
-    p.add_argument("scene", nargs="?", help="scene file to check")
+    p.add_argument("scene", nargs="?", type=Path, help="scene file to check")
     p.add_argument("--default", action="store_true", help="print the commented default scene")
     p.add_argument("--json", action="store_true",
                    help="print the checked scene as JSON instead of TOML")

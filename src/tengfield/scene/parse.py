@@ -36,11 +36,12 @@ def default_scene() -> Scene:
 
 
 def _is_toml_text(text: str) -> bool:
-    """A str ``load_scene`` reads as TOML rather than as a file name: it holds a line
-    break, or a ``=`` or starts with ``[`` and names no existing file."""
-    if "\n" in text:
-        return True
-    return ("=" in text or text.lstrip().startswith("[")) and not os.path.exists(text)
+    """A str ``load_scene`` reads as TOML rather than as a file name: it names no
+    existing file and holds a line break, a ``=`` or starts with ``[`` (the command line
+    hands a ``Path``: always a file name)."""
+    if os.path.exists(text):
+        return False
+    return "\n" in text or "=" in text or text.lstrip().startswith("[")
 
 
 def load_scene(path: "str | Path | Scene | None") -> Scene:
