@@ -68,11 +68,9 @@ def charge_model(name: str) -> ChargeModel:
 def charge_model_of(scene) -> ChargeModel:
     """The entry a scene runs with: ``[charge] model``, or ``"breakdown"`` where
     ``[device]``'s σ = ``"breakdown"`` says so."""
-    from .quantities import SURFACE_CHARGE_KEY
+    from .quantities import stated_surface_charge
 
-    raw = getattr(scene, "raw", None)   # the σ as stated (the scene file's, not SI)
-    device = raw.get("device") if isinstance(raw, dict) else None
-    if isinstance(device, dict) and device.get(SURFACE_CHARGE_KEY) == "breakdown":
+    if stated_surface_charge(scene) == "breakdown":
         return CHARGE_MODELS["breakdown"]
     charge = getattr(scene, "charge", None)
     return charge_model(getattr(charge, "model", "constant"))

@@ -131,6 +131,17 @@ TERMINAL = ("V_oc_V", "Q_sc_C", "I_sc_A")
 #: the scene's schema (:data:`tengfield.scene.schema.SURFACE_CHARGE_KEY`) share it.
 SURFACE_CHARGE_KEY = "surface_charge_uC_per_m2"
 
+
+def stated_surface_charge(scene):
+    """``[device]`` :data:`SURFACE_CHARGE_KEY` as the scene states it (``scene.raw``, file
+    units): a number [µC/m²], the keyword ``"breakdown"``, or None when it is left to the
+    default. The one place that reads the key off a scene (its SI value is
+    ``scene.device.surface_charge`` [C/m²])."""
+    raw = getattr(scene, "raw", None) if isinstance(getattr(scene, "raw", None), dict) else {}
+    device = raw.get("device")
+    return device.get(SURFACE_CHARGE_KEY) if isinstance(device, dict) else None
+
+
 #: scene/fit parameter key (its section's prefix, ``device.``, dropped) -> (symbol, shown
 #: unit, words for a unitless one). Figures label a scene key with these (issue #42).
 SCENE_SYMBOLS: dict[str, tuple[str, str, str]] = {

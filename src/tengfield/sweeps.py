@@ -40,15 +40,11 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     ``amplitude`` None: the scene's own excitation as it is (a ``--vary`` sweep without
     those axes).
     """
-    from .surrogate import TerminalCurves
-
     simulate = simulate or _default_simulate()
     point = scene if frequency is None and amplitude is None else \
         point_scene(scene, frequency, amplitude)
     dynamics = simulate(point)
-    point, curves, charge = _point_charge(point, dynamics, table)
-    if curves is None:
-        curves = TerminalCurves(table, point.circuit.reference)
+    point, curves, _, charge = _point_charge(point, dynamics, table)
     extremes = electrical.terminal_extremes(point, dynamics, curves)
     regime = regime_dict(dynamics.regime) or {}
     exc = point.excitation
@@ -71,17 +67,19 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
 
 
 def _point_charge(point, dynamics, table):
-    """``(point, curves, charge columns)`` of a sweep point: with ``[charge] model =
-    "contact"`` the point at its steady charge, its :class:`ContactCurves` and the
-    :data:`~tengfield.contact_run.CHARGE_COLUMNS` (the charge its contacts make along
-    this point's own trajectory, :func:`tengfield.contact_run.contact_source`, the
-    numbers ``tengfield run`` gives); otherwise the point, None and no columns."""
+    """``(point, curves, table, charge columns)`` of a sweep point: with ``[charge] model
+    = "contact"`` the point at its steady charge, its :class:`ContactCurves`, the table at
+    that charge and the :data:`~tengfield.contact_run.CHARGE_COLUMNS` (the charge its
+    contacts make along this point's own trajectory,
+    :func:`tengfield.contact_run.contact_source`, the numbers ``tengfield run`` gives);
+    otherwise the point, its :class:`TerminalCurves`, the table and no columns."""
     if not point.charge.from_contacts:
-        return point, None, {}
+        from .surrogate import TerminalCurves
+        return point, TerminalCurves(table, point.circuit.reference), table, {}
     from .contact_run import charge_columns, contact_source
 
     run = contact_source(point, dynamics, table)
-    return run.scene, run.curves, charge_columns(run.block)
+    return run.scene, run.curves, run.table, charge_columns(run.block)
 
 
 def load_columns(loaded, result, t) -> dict:
@@ -652,20 +650,11 @@ def own_load_point(scene, table, frequency=None, amplitude=None) -> list[dict]:
     (:func:`tengfield.pipeline.electrical_stage`), so the row is that run's summary.
     ``frequency`` [Hz], ``amplitude`` [m] None: the point's own excitation."""
     from .pipeline import electrical_stage
-    from .surrogate import TerminalCurves
 
     point = scene if frequency is None and amplitude is None else \
         point_scene(scene, frequency, amplitude)
     dynamics = _default_simulate()(point)
-    charge = {}
-    if point.charge.from_contacts:
-        from .contact_run import charge_columns, contact_source
-
-        run = contact_source(point, dynamics, table)
-        point, curves, table, charge = run.scene, run.curves, run.table, \
-            charge_columns(run.block)
-    else:
-        curves = TerminalCurves(table, point.circuit.reference)
+    point, curves, table, charge = _point_charge(point, dynamics, table)
     stage = electrical_stage(point, dynamics, curves, table)
     regime = regime_dict(dynamics.regime) or {}
     exc = point.excitation

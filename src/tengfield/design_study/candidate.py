@@ -294,15 +294,14 @@ def _at_contact_charge(points, dynamics, table, row):
     plateau a device at that vibration reaches), ``(points at it, one curves per point)``;
     ``row["charge"]``: each point's steady σ [µC/m²], its 90 % rise time [s] and what binds,
     ``row[σ key]`` their mean."""
-    from ..contact_run import contact_source
+    from ..contact_run import breakdown_limit, contact_source, field_scene
     from ..surrogate import TerminalCurves
     from ..surrogate.table import at_ball_charge
 
     at, curves, block = [], [], {"steady_uC_per_m2": [], "rise_time_90_s": [], "binds": []}
+    limit = breakdown_limit(field_scene(points[0]), table)   # one geometry: once
     for point, motion in zip(points, dynamics):
-        with warnings.catch_warnings():   # sigma_eq beyond the limit: the cap holds
-            warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
-            run = contact_source(point, motion, table)
+        run = contact_source(point, motion, table, limit)
         at.append(run.scene)
         curves.append(TerminalCurves(at_ball_charge(table, run.scene.device.ball_charge),
                                      point.circuit.reference))

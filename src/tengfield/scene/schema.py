@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 from .._mpi import launched_rank as _launched_rank
 from ..errors import SceneError
 from ..quantities import SURFACE_CHARGE_KEY   # σ's key, spelled once (base layer)
+from ..quantities import stated_surface_charge  # noqa: F401 - read off a scene once
 from .limits import MAX_HARMONICS
 from .shapes import SHAPES
 
@@ -29,16 +30,6 @@ FIELD_SCHEMA = 2
 
 #: the same key as "section.key" (``--set``, ``[uncertainty.vary]``, ``[design.vary]``)
 SURFACE_CHARGE_SETTING = f"device.{SURFACE_CHARGE_KEY}"
-
-
-def stated_surface_charge(scene):
-    """``[device]`` :data:`SURFACE_CHARGE_KEY` as the scene states it (``scene.raw``, file
-    units): a number [µC/m²], the keyword ``"breakdown"``, or None when it is left to the
-    default. The one place that reads the key off a scene (its SI value is
-    ``scene.device.surface_charge`` [C/m²])."""
-    raw = scene.raw if isinstance(scene.raw, dict) else {}
-    device = raw.get("device")
-    return device.get(SURFACE_CHARGE_KEY) if isinstance(device, dict) else None
 
 
 class Key(NamedTuple):

@@ -279,14 +279,10 @@ def _contact_outputs(at, values, dynamics, table) -> tuple[dict, str]:
     """One evaluation of a scene whose contacts make the charge: the charge history of
     its ``[charge]`` draws along the group's trajectory, then the run's electrical stage
     at it (:func:`tengfield.contact_run.contact_source`, what ``tengfield run`` does)."""
-    import warnings as _warnings
-
     from ..contact_run import contact_source
 
     point = at.with_values(**sections_of(values)) if values else at
-    with _warnings.catch_warnings():   # the run's own: sigma_eq beyond the limit, the cap holds
-        _warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
-        run = contact_source(point, dynamics, table)
+    run = contact_source(point, dynamics, table)
     return _outputs(run.scene, dynamics, run.table, run.curves, run.block)
 
 
