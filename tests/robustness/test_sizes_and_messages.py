@@ -198,3 +198,65 @@ def test_the_deprecated_capacitance_warns_via_set_as_in_a_file():
                                            r"now \[instrument\] capacitance_pF: write "
                                            r"\[instrument\] capacitance_pF = 338 "):
         parse_scene("[circuit]\nparallel_capacitance_pF = 338\n")
+
+
+# -- 54.16: a reader slower than the steady window is one line, before the work --------
+@pytest.mark.parametrize("rate, count", [("2", 0), ("5", 1)])
+def test_a_reader_with_fewer_than_two_readings_in_the_window_is_one_line(rate, count,
+                                                                         run_cli, tmp_path):
+    scene = tmp_path / "base.toml"
+    scene.write_text(BASE)
+    out = tmp_path / "out"
+    proc = run_cli("run", scene, "-o", out, "--set", f"instrument.sample_rate_hz={rate}",
+                   timeout=120)
+    assert proc.returncode == 2, proc.stderr[-2000:]     # was exit 0 with "Q_read peak 0 nC"
+    errors = [line for line in proc.stderr.splitlines() if "error" in line]
+    assert len(errors) == 1 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert errors[0].startswith(f"tengfield: error: [instrument] sample_rate_hz = {rate}: "
+                                f"{count} reading(s) in the steady window t = 0.1 to 0.3 s")
+    assert "allowed sample_rate_hz >= 10 for this window" in errors[0]
+    assert not out.exists()
+
+
+def test_the_window_count_is_the_readers_own():
+    """:func:`window_readings` counts the instants :class:`SampleHold` reads at: fed its
+    own time axis, the distinct readings at or after the window's start are the count."""
+    import numpy as np
+    from hypothesis import given, settings, strategies as st
+
+    from tengfield.electrical.instrument import SampleHold
+    from tengfield.scene.limits import window_readings
+
+    @settings(max_examples=60, deadline=None)
+    @given(st.floats(0.5, 400.0), st.floats(0.0, 0.8), st.floats(0.05, 1.0))
+    def check(rate, start_fraction, duration):
+        t = np.linspace(0.0, duration, 4001)
+        held = SampleHold(rate)(t, t)           # each reading holds its own instant
+        start = start_fraction * duration
+        read = np.unique(held[t >= start])
+        inside = read[read >= start - 1e-9 / rate]
+        assert window_readings(start, duration, rate) == inside.size
+
+    check()
+
+
+def test_exactly_two_readings_in_the_window_run():
+    with pytest.warns(RuntimeWarning, match="Nyquist"):     # 0.1333 and 0.2667 s
+        scene = parse_scene(BASE + "[instrument]\nsample_rate_hz = 7.5\n")
+    assert scene.instrument.sample_rate == 7.5
+
+
+def test_a_reader_below_nyquist_warns_once():
+    import warnings
+
+    from tengfield.scene import with_settings
+
+    with pytest.warns(RuntimeWarning, match=r"^\[instrument\] sample_rate_hz = 13 takes 0\.65 "
+                                            r"reading\(s\) per period of \[excitation\] "
+                                            r"frequency_hz = 20, fewer than 2 \(Nyquist\)"):
+        scene = parse_scene(BASE + "[instrument]\nsample_rate_hz = 13\n")
+    with warnings.catch_warnings(record=True) as caught:   # --set on it: said once already
+        warnings.simplefilter("always")
+        with_settings(scene, ["run.duration_s=0.4"])
+        parse_scene(BASE + "[instrument]\nsample_rate_hz = 40\n")   # 2 per period: no word
+    assert not [w for w in caught if "Nyquist" in str(w.message)]

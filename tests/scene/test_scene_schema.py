@@ -57,6 +57,8 @@ ALTERNATIVES = {
     ("excitation", "psd_file"): ["psd2.csv"],
     ("excitation", "band_hz"): [[10.0, 200.0]],
     ("field", "domain_radius_mm"): [25.0],
+    # a reader takes at least 2 readings in the steady window (1 Hz would take fewer)
+    ("instrument", "sample_rate_hz"): [1000.0],
 }
 
 

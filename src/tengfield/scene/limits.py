@@ -211,6 +211,7 @@ def check_work(exc, run, instrument=None) -> None:
                     f"for this run sample_rate_hz <= {MAX_SAMPLES / run.duration:.3g}, or 0: "
                     "a reading at every output sample",
                     key=f"[instrument] sample_rate_hz = {rate:g}")
+        check_readings_in_window(exc, run, rate)
     periods = run.duration * exc.frequency
     if periods > MAX_PERIODS:
         raise SceneError(
@@ -218,6 +219,41 @@ def check_work(exc, run, instrument=None) -> None:
             f"{exc.frequency:g} = {periods:.3g} excitation periods (about "
             f"{EVENTS_PER_PERIOD_ESTIMATE * periods:.3g} impact-map events at "
             f"{EVENTS_PER_PERIOD_ESTIMATE} per period): allowed <= {MAX_PERIODS:.3g} periods")
+
+
+#: readings an ``[instrument]`` must take inside the steady window: a peak-to-peak
+#: needs two (fewer read a held value: peaks of 0, or of the ball at rest)
+MIN_WINDOW_READINGS = 2
+
+
+def window_readings(start: float, end: float, rate: float) -> int:
+    """Readings k / ``rate`` (k = 0, 1, ...: the reader's instants on the run's own axis,
+    :class:`tengfield.electrical.instrument.SampleHold`) in [``start``, ``end``] [s]
+    (1e-9 of a reading period: rounding, as the reader's)."""
+    first = math.ceil(start * rate - 1e-9)
+    last = math.floor(end * rate + 1e-9)
+    return max(0, last - first + 1)
+
+
+def check_readings_in_window(exc, run, rate: float) -> None:
+    """Refuse an ``[instrument] sample_rate_hz`` that takes fewer than
+    :data:`MIN_WINDOW_READINGS` readings in the steady window (after ``[run]
+    settle_periods`` periods, to ``duration_s``): its peaks would be a held reading's (0
+    from the ball at rest) with no word. Only when the run has a steady window
+    (:func:`check_steady_window` refuses the others first)."""
+    start = run.settle_periods * exc.period
+    end = run.duration
+    if start >= end:
+        return
+    count = window_readings(start, end, rate)
+    if count < MIN_WINDOW_READINGS:
+        needed = MIN_WINDOW_READINGS / (end - start)
+        raise SceneError(
+            f"[instrument] sample_rate_hz = {rate:g}: {count} reading(s) in the steady window "
+            f"t = {start:.4g} to {end:.4g} s (after [run] settle_periods = "
+            f"{run.settle_periods} periods): the read peaks need at least "
+            f"{MIN_WINDOW_READINGS}; allowed sample_rate_hz >= {needed:.3g} for this window, "
+            "or 0 (a reading at every output sample), or a longer [run] duration_s")
 
 
 def check_ensemble_work(run) -> None:

@@ -113,12 +113,14 @@ def parse_scene(text: str, *, source: str = "<string>", base_dir: Path | None = 
 MAX_SEED = 2**32 - 1
 
 
-def check_rules(scene: Scene) -> None:
+def check_rules(scene: Scene, before: Scene | None = None) -> None:
     """What a scene file says that a command would refuse or leave out later, said when
     the file is read (``tengfield scene`` included): an [array] with a contact model other
     than the impact map (the rule of :func:`tengfield.array.check_array_scene`), ensemble
-    seeds past 2^32 - 1 (they wrapped to 0, 1, ...), and penetration_max_mm with the
-    Hertz law (it only shapes the power law's damping: one warning)."""
+    seeds past 2^32 - 1 (they wrapped to 0, 1, ...), and two warnings: penetration_max_mm
+    with the Hertz law (it only shapes the power law's damping) and an ``[instrument]``
+    sample rate below twice the excitation's frequency (its readings alias; not again
+    for ``--set`` on a file, ``before``, that gave the same rate and frequency)."""
     if scene.array.cells > 0 and scene.contact.model != "impact":
         raise SceneError(f"[contact] model = {scene.contact.model!r}: [array] runs need the "
                          "impact map (model = 'impact')")
@@ -142,6 +144,18 @@ def check_rules(scene: Scene) -> None:
         warnings.warn(f"[device] {', '.join(others)} left out: key(s) of another shape than "
                       f"shape = {scene.device.shape!r} (set [device] shape to use them)",
                       RuntimeWarning, stacklevel=3)
+    rate, exc = scene.instrument.sample_rate, scene.excitation
+    said = before is not None and (before.instrument.sample_rate,
+                                   before.excitation.frequency) == (rate, exc.frequency)
+    if 0.0 < rate < 2.0 * exc.frequency and exc.kind != "random" and not said \
+            and launched_rank() == 0:
+        import warnings      # below Nyquist: the readings alias (a refusal: too few of them)
+        warnings.warn(
+            f"[instrument] sample_rate_hz = {rate:g} takes {rate / exc.frequency:.3g} "
+            f"reading(s) per period of [excitation] frequency_hz = {exc.frequency:g}, "
+            "fewer than 2 (Nyquist): the read columns and their peaks alias the device's "
+            f"(sample_rate_hz >= {2.0 * exc.frequency:g} resolves the period)",
+            RuntimeWarning, stacklevel=3)
     contact = scene.contact
     if contact.law == "hertz" and contact.penetration_max > 0.0:
         import warnings
@@ -250,9 +264,10 @@ def with_settings(scene: Scene, settings: list[str], warn: bool = True) -> Scene
     source = scene.source if scene.source != "<default>" else "<default scene>"
     from .plausible import warn_metres_for_mm
     warn_metres_for_mm(data, keys={tuple(parse_setting(t)[0]) for t in settings})
+    before = scene
     scene = build(data, base_dir=base, source=f"{source} with --set", text="", warn=False,
                   settings=(*scene.settings, *settings))
-    check_rules(scene)      # the rules between keys, as for the file
+    check_rules(scene, before)      # the rules between keys, as for the file
     return scene
 
 
