@@ -137,3 +137,22 @@ def number(function: str, value, name: str, *, low: float = -math.inf, high: flo
         raise SceneError(f"{function}({name}={_shown(value)}) is out of range: allowed "
                          f"{interval}")
     return x
+
+
+def checked_write(method):
+    """The one check of every result's ``write(out_dir, plots=True, ...)``: ``out_dir`` a
+    folder name, ``plots`` True or False (a string such as ``"no"`` is refused, nothing
+    drawn), TypeError naming ``tengfield.<Result>.write`` and the argument; the method
+    gets a :class:`pathlib.Path` and a bool. Marks the method (``checks_arguments``) so a
+    test can find a result whose ``write`` lacks it."""
+    import functools
+
+    @functools.wraps(method)
+    def write(self, out_dir, plots=True, *args, **kwargs):
+        where = f"tengfield.{type(self).__name__}.write"
+        out_dir = path(where, out_dir, "out_dir", what="a folder name")
+        plots = flag(where, plots, "plots")
+        return method(self, out_dir, plots, *args, **kwargs)
+
+    write.checks_arguments = True
+    return write

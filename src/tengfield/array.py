@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from ._args import checked_write
 from . import electrical
 from .errors import SceneError
 
@@ -206,6 +207,7 @@ class ArrayResult:
 
         return array_figure(self, self.summary)
 
+    @checked_write
     def write(self, out_dir, plots: bool = True, *, title: str = "") -> list:
         """Write what ``tengfield run`` writes of the array beside the run's tables:
         array.png (with ``plots``); returns the paths."""

@@ -25,6 +25,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ._args import checked_write
 from . import electrical
 from ._json import jsonable as _jsonable
 from ._json import regime_dict
@@ -117,6 +118,7 @@ class RunResult:
         R || C_p); only with ``[circuit] parallel_capacitance_pF`` > 0 (else KeyError)."""
         return self.waveforms[electrical.READ_COLUMN]
 
+    @checked_write
     def write(self, out_dir, plots: bool = True, *, spice: bool = False,
               spice_start_up: bool = False, figures=None) -> list:
         """Write what ``tengfield run -o out_dir`` writes (waveforms.csv, summary.json,
@@ -125,12 +127,10 @@ class RunResult:
         before it, as ``--spice-start-up``); returns the paths. ``figures``: a
         :class:`tengfield.plotting.process.FigureProcess` drawing the figures (complete
         after its ``finish()``), as the CLI passes."""
-        from ._args import flag, path
+        from ._args import flag
         from .io import write_dynamics_outputs, write_run_outputs
 
         where = "tengfield.RunResult.write"
-        out_dir = path(where, out_dir, "out_dir", what="a folder name")
-        plots = flag(where, plots, "plots")
         spice, spice_start_up = flag(where, spice, "spice"), flag(where, spice_start_up,
                                                                    "spice_start_up")
         written = write_run_outputs(self, out_dir, plots=plots, figures=figures)

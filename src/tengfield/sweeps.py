@@ -15,6 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ._args import checked_write
 from . import electrical
 from ._json import regime_dict
 from .quantities import SURFACE_CHARGE_KEY, TERMINAL, column_name  # noqa: F401
@@ -733,6 +734,7 @@ class SweepResult(SweepRows):
         """{varied key: its figure's file name} (``sweep_device.stroke_mm.png``)."""
         return {key: figure_file(f"sweep_{key}") for key in self.vary}
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """sweep.csv and the figures (sweep.png when frequency x amplitude is swept without
         --vary; one ``sweep_<key>.png`` per varied key) in ``out_dir``; the paths written."""

@@ -144,3 +144,60 @@ def test_load_scene_takes_toml_text_as_the_readme_says(tmp_path):
     assert tf.load_scene(str(f)).contact.restitution == 0.3      # a file name is still a file
     with pytest.raises(SceneError, match=r"does not exist"):
         tf.load_scene(str(tmp_path / "missing.toml"))
+
+
+def _result_classes():
+    """Every class of tengfield's modules with a ``write(self, out_dir, ...)`` method
+    (a result's face): found by walking the package, so a new result is checked too."""
+    import importlib
+    import inspect
+    import pkgutil
+
+    import tengfield
+
+    skip = ("tengfield.cli", "tengfield._early_interrupt", "tengfield._warmup",
+            "tengfield._pool_preload")
+    found = {}
+    for info in pkgutil.walk_packages(tengfield.__path__, "tengfield."):
+        if info.name.startswith(skip) or ".commands" in info.name:
+            continue
+        module = importlib.import_module(info.name)
+        for _, cls in inspect.getmembers(module, inspect.isclass):
+            write = cls.__dict__.get("write")
+            if cls.__module__ != info.name or write is None:
+                continue
+            params = list(inspect.signature(write).parameters)
+            if params[:2] == ["self", "out_dir"]:
+                found[f"{cls.__module__}.{cls.__qualname__}"] = cls
+    return found
+
+
+def test_every_results_write_is_checked():
+    classes = _result_classes()
+    assert len(classes) >= 14, sorted(classes)     # run, sweep, dynamics, map, field, ...
+    unchecked = [name for name, cls in classes.items()
+                 if not getattr(cls.__dict__["write"], "checks_arguments", False)]
+    assert not unchecked, unchecked
+
+
+@pytest.mark.parametrize("name", sorted(_result_classes()))
+def test_each_results_write_names_a_bad_folder_and_a_plots_that_is_no_bool(name, tmp_path):
+    cls = _result_classes()[name]
+    result = cls.__new__(cls)        # no __init__: the check comes before the result is read
+    short = cls.__name__
+    with pytest.raises(TypeError, match=rf"^tengfield\.{short}\.write\(out_dir=123\): "
+                                        r"expected a folder name \(str or pathlib\.Path\)"):
+        result.write(123)
+    with pytest.raises(TypeError, match=rf"^tengfield\.{short}\.write\(plots='no'\): "
+                                        r"expected True or False"):
+        result.write(tmp_path / "out", plots="no")
+    assert not (tmp_path / "out").exists()     # nothing drawn, nothing written
+
+
+def test_calibrate_names_a_measured_that_is_no_file_name(monkeypatch):
+    from tengfield import fit
+
+    monkeypatch.setattr(fit, "_reference_table", _never)
+    with pytest.raises(TypeError, match=r"^tengfield\.calibrate\(measured=5\): expected a "
+                                        r"measured trace's file name"):
+        tf.calibrate(tf.default_scene(), measured=5)

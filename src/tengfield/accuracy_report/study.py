@@ -42,6 +42,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from .._args import checked_write
 from .. import electrical
 from .plan import (STAGE_TITLES, TARGETS, FieldSetting, Plan, make_plan, peak_errors,
                    solves_needed, stage_error_label)
@@ -77,6 +78,7 @@ class Report:
             path = write_report_json(Path(tmp) / "report.json", self)
             return json.loads(Path(path).read_text())
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield report -o out_dir`` writes; returns the paths (the stage
         PNGs are part of the report: ``plots`` is accepted for the common face)."""

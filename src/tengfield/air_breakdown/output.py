@@ -7,6 +7,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 from pathlib import Path
 
+from .._args import checked_write
 from .band import scene_band
 from .charge import (obtain_breakdown_table, scene_breakdown, scene_surface_charge,
                      uses_breakdown_charge)
@@ -97,6 +98,7 @@ class BreakdownStudy(BreakdownResult):
     #: how the surrogate was obtained (:class:`tengfield.surrogate.CacheOutcome`)
     field_outcome: Any = field(default=None, repr=False, compare=False)
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield breakdown -o out_dir`` writes (the band of the scene's
         own trajectory included); returns the paths."""

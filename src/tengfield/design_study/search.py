@@ -30,6 +30,7 @@ from typing import Callable
 
 import numpy as np
 
+from .._args import checked_write
 from .candidate import evaluate
 from .spec import LOG_KEYS, OBJECTIVES, DesignSpec, parse_design_section, vary_spec
 
@@ -92,6 +93,7 @@ class DesignResult:
 
         return design_summary(self)
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield design -o out_dir`` writes; returns the paths."""
         from .output import write_design_outputs

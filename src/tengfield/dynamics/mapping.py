@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._args import checked_write
 from ..errors import DynamicsError, SceneError
 from .._mpi import check_jobs, farm, size_of
 from ..scene.constants import G
@@ -67,6 +68,7 @@ class MapResult:
                 "regimes": {str(n): int(c) for n, c in zip(names, counts)},
                 "failed": int(np.sum(self.error != ""))}
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield map -o out_dir`` writes: map.csv and, with ``plots``,
         map.png; returns the paths."""

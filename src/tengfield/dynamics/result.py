@@ -6,6 +6,7 @@ from typing import Any, Callable, ClassVar
 
 import numpy as np
 
+from .._args import checked_write
 from .._face import Summary
 
 #: plate index of a contact -> its name
@@ -124,6 +125,7 @@ class DynamicsResult:
         """JSON-ready summary (the CLI's summary.json, without its ``scene`` path)."""
         return Summary(self._summary_fields())
 
+    @checked_write
     def write(self, out_dir, plots: bool = True, *, figures=None) -> list:
         """Write what ``tengfield dynamics -o out_dir`` writes (summary.json, trajectory.csv,
         impacts.csv and, with ``plots``, trajectory.png); returns the paths. ``figures``: a

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._args import checked_write
 from .. import terminals
 from .result import PositionResult
 
@@ -65,6 +66,7 @@ class OpenCircuit:
 
         return field_json(self.result, self.reference, self.potentials)
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield field`` writes (field.json with the open-circuit potentials,
         potential.xdmf and field.png of φ); returns the paths."""

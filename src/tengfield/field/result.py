@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .._args import checked_write
 from .. import terminals
 from .._json import jsonable as _jsonable
 from ..scene.shapes.methods import FIELD_METHODS
@@ -179,6 +180,7 @@ class PositionResult:
         another reference's)."""
         return self.to_json()
 
+    @checked_write
     def write(self, out_dir, plots: bool = True, *, reference: str = "floating",
               potentials=None) -> list:
         """Write what ``tengfield field`` writes for this position to ``out_dir``: field.json

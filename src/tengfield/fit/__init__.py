@@ -95,6 +95,8 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
     free = names("tengfield.calibrate", free, "free")            # one name, not its letters
     cache_dir = path("tengfield.calibrate", cache_dir, "cache_dir", allow_none=True,
                      what="a folder name")
+    measured = path("tengfield.calibrate", measured, "measured", allow_none=True,
+                    what="a measured trace's file name (CSV, or a run's run.h5)")
     if (measured is None) == (targets is None):
         raise FitError("give either a measured trace or targets, not both")
     if overrides:

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._args import checked_write
 from ..errors import TengfieldError
 from .spec import PARAMETERS
 
@@ -67,6 +68,7 @@ class FitResult:
         """The measured trace's times [s] (a trace fit), else None."""
         return self.measured.get("time")
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield fit -o out_dir`` writes; returns the paths."""
         from .output import write_fit_outputs

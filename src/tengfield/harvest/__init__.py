@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from .._args import checked_write
 from ..errors import SceneError
 from ._kernel import _harvest_kernel, _path_current
 
@@ -222,6 +223,7 @@ class HarvestResult:
         ax.grid(alpha=0.3)
         return fig
 
+    @checked_write
     def write(self, out_dir, plots: bool = True, *, scene=None, title: str = "") -> list:
         """Write what ``tengfield run`` writes of the store record: charging.png (with
         ``plots``; ``scene``: default ``self.scene``); returns the paths."""

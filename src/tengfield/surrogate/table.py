@@ -21,6 +21,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
+from .._args import checked_write
 from .. import lumped, terminals
 from ..errors import SurrogateError, TengfieldError  # noqa: F401 - its home was here
 from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
@@ -102,6 +103,7 @@ class SurrogateTable(SolveRecord):
 
         return surrogate_figure(self, TerminalCurves(self, reference))
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write surrogate.h5 (what ``tengfield precompute -o`` writes) and, with ``plots``,
         surrogate.png (what ``tengfield run`` draws) to ``out_dir``; returns the paths."""

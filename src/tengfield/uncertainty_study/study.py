@@ -12,6 +12,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .._args import checked_write
 from .evaluation import Evaluations, evaluate_study, main_outputs
 from .sampling import study_values
 from .spec import UncertaintySpec, check_study_combination, uncertainty_spec
@@ -29,6 +30,7 @@ class Study:
     summary: dict
     scene: Any = field(default=None, repr=False, compare=False)   # the scene studied
 
+    @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
         """Write what ``tengfield uncertainty -o out_dir`` writes; returns the paths."""
         from pathlib import Path
