@@ -9,7 +9,7 @@ A circuit state fixes the electrode potentials per unit σ:
 
 * ``open``: the terminals open, the electrodes keep the charges of the
   reference state (ball on the lower plate, terminals shorted):
-  ``V = C⁻¹ (Q_ref − q)`` (:func:`tengfield.field.potential.open_circuit_potentials`);
+  ``V = C⁻¹ (Q_ref − q)`` (the topology's ``open_potentials``, :mod:`tengfield.terminals`);
 * ``open-top``: the same with the charges of the short circuit at z = Δh (the
   other extreme of a load's charge: between the two, a load's transferred
   charge lies, and the gap voltages are linear in it);
@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from ..paschen import Paschen
+from ..terminals import topology
 
 #: circuit states checked: see the module docstring
 STATES = ("open", "open-top", "short")
@@ -129,22 +130,18 @@ def lines_from_table(table, scene) -> Lines:
 
 def electrode_potentials(lines: Lines, state: str, reference: str = "floating") -> np.ndarray:
     """[V_lower, V_upper] per unit σ [V per C/m²] at each sampled position, shape (n, 2)."""
-    from ..field.potential import open_circuit_potentials
-
     C = lines.capacitance
     q = lines.fractions * lines.ball_area
     q_ball = lines.ball_area
     n = lines.positions.size
     if state == "short":
-        if reference == "grounded-lower":
-            return np.zeros((n, 2))
-        common = (-q_ball - q.sum(axis=1)) / C.sum(axis=(1, 2))
-        return np.column_stack([common, common])
+        return topology(reference).short_potentials(C, q, q_ball)
     if state not in ("open", "open-top"):
         raise ValueError(f"state = {state!r}: choose one of {STATES}")
     ref = 0 if state == "open" else n - 1
-    return np.array([open_circuit_potentials(C[i], q[i], C[ref], q[ref], q_ball, reference)
-                     for i in range(n)])
+    wiring = topology(reference)
+    charges = wiring.reference_charges(C[ref], q[ref], q_ball)
+    return np.array([wiring.open_potentials(C[i], q[i], charges) for i in range(n)])
 
 
 def gap_voltages(lines: Lines, state: str, reference: str = "floating",

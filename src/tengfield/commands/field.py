@@ -9,6 +9,7 @@ import warnings
 from pathlib import Path
 
 from ..scene.shapes.methods import field_method
+from ..terminals import REFERENCES
 from ._common import scene_command
 from ._ranges import number_text
 
@@ -28,7 +29,7 @@ def register(sub) -> None:
                         "ball_offset_mm)")
     p.add_argument("--method", choices=("auto", "axisymmetric", "3d"), default=None,
                    help="solver (default [field] method)")
-    p.add_argument("--reference", choices=("floating", "grounded-lower"), default=None,
+    p.add_argument("--reference", choices=REFERENCES, default=None,
                    help="two-terminal reference (default [circuit] reference)")
     p.add_argument("--no-plots", "--no-plot", dest="no_plot", action="store_true",
                    help="skip potential.xdmf and field.png")

@@ -24,25 +24,16 @@ from .result import PositionResult
 
 
 def reference_charges(C_ref, q_ref, ball_charge: float, reference: str = "floating") -> np.ndarray:
-    """Electrode charges [Q_lower, Q_upper] [C] of the reference state (terminals shorted)."""
-    terminals._check_reference(reference)
-    C_ref = np.asarray(C_ref, dtype=float)
-    q_ref = np.asarray(q_ref, dtype=float)
-    if reference == "grounded-lower":
-        return q_ref.copy()  # both at V = 0
-    common = (-ball_charge - q_ref.sum()) / C_ref.sum()   # shorted pair at one potential
-    return C_ref @ np.array([common, common]) + q_ref
+    """Electrode charges [Q_lower, Q_upper] [C] of the reference state (terminals shorted):
+    the topology's (:data:`tengfield.terminals.TOPOLOGIES`)."""
+    return terminals.topology(reference).reference_charges(C_ref, q_ref, ball_charge)
 
 
 def open_circuit_potentials(C, q, C_ref, q_ref, ball_charge: float,
                             reference: str = "floating") -> np.ndarray:
     """[V_lower, V_upper] [V] with the terminals open, charges fixed at the reference state."""
-    C = np.asarray(C, dtype=float)
-    q = np.asarray(q, dtype=float)
-    Q = reference_charges(C_ref, q_ref, ball_charge, reference)
-    if reference == "grounded-lower":
-        return np.array([0.0, (Q[1] - q[1]) / C[1, 1]])
-    return np.linalg.solve(C, Q - q)
+    wiring = terminals.topology(reference)
+    return wiring.open_potentials(C, q, wiring.reference_charges(C_ref, q_ref, ball_charge))
 
 
 @dataclass

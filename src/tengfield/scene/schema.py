@@ -19,6 +19,7 @@ from .._mpi import launched_rank as _launched_rank
 from ..errors import SceneError
 from ..quantities import SURFACE_CHARGE_KEY   # σ's key, spelled once (base layer)
 from ..quantities import stated_surface_charge  # noqa: F401 - read off a scene once
+from ..terminals import REFERENCES   # the topologies' names (terminals.TOPOLOGIES)
 from .limits import MAX_HARMONICS
 from .shapes import SHAPES
 
@@ -240,7 +241,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # kind = "series-rc": C_s in series with load_ohm
         "series_capacitance_pF": Key("series_capacitance", float, 100.0, 1e-12,
                                      _rng(1e-6, 1e18, why="1 aF to 1 MF")),
-        "reference": Key("reference", str, "floating", None, _choice("floating", "grounded-lower")),
+        "reference": Key("reference", str, "floating", None, _choice(*REFERENCES)),
         "diode": Key("diode", str, "ideal", None, _choice("ideal", "shockley")),
         "diode_forward_voltage_V": Key("diode_forward_voltage", float, 0.0, 1.0, _rng(0.0, 100.0)),
         "diode_saturation_current_A": Key("diode_saturation_current", float, 1e-12, 1.0,

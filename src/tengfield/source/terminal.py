@@ -57,12 +57,7 @@ class ContactTerminal:
         q_u0 = terminals.upper_short_circuit_charge(C[0, 0, 0], C[0, 0, 1], C[0, 1, 1],
                                                     q[0, 0], q[0, 1], self.q_ref, reference)
         self.b0 = float(q_u0) / self.q_ref
-        if reference == "grounded-lower":
-            share = np.zeros(table.positions.size)
-        else:
-            c_l = C[:, 0, 0] + C[:, 0, 1]
-            c_u = C[:, 0, 1] + C[:, 1, 1]
-            share = c_u / (c_l + c_u)
+        share = terminals.topology(reference).upper_share(C[:, 0, 0], C[:, 0, 1], C[:, 1, 1])
         kind = "not-a-knot" if table.positions.size >= 4 else "natural"
         self._k = CubicSpline(table.positions, share, bc_type=kind)
         self._dk = self._k.derivative()
