@@ -78,13 +78,15 @@ def breakdown_limit(scene, table):
     return scene_breakdown(scene, table)
 
 
-def contact_source(scene, dynamics, table, limit=None, *, period: float | None = None
-                   ) -> ContactRun:
+def contact_source(scene, dynamics, table, limit=None, *, period: float | None = None,
+                   curves=None) -> ContactRun:
     """The contact run of ``scene`` along ``dynamics`` with ``table`` (its geometry's
     surrogate at a non-zero reference charge; None: no field needed, Q_SC = 0) and the
     geometry's breakdown ``limit`` (None: taken from the table's gap lines when it has
     them). ``period`` [s]: the period the contacts repeat with (default: the drive's
-    where it repeats each period, else 0)."""
+    where it repeats each period, else 0). ``curves``: the run's curves at the table's
+    charge where the ball leaves the axis (the (z, r) ones,
+    :class:`~tengfield.surrogate.table.AnchoredTerminalCurves`); None: on the axis."""
     import time
 
     from . import electrical
@@ -131,17 +133,23 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
             "[charge] model = \"contact\": the surrogate was made at a zero ball charge, "
             "which carries no field per unit charge; solve it at [charge] "
             "equilibrium_uC_per_m2 (tengfield.contact_run.field_scene)")
-    terminal = ContactTerminal(table, history, upper, scene.circuit.reference)
-    curves = ContactCurves(terminal, steady)
+    if curves is not None and curves.radial:     # [contact] model = "3d", off the axis
+        from .source.offaxis import OffAxisContactCurves, OffAxisContactTerminal
+        terminal = OffAxisContactTerminal(table, curves.zr.table, curves, history, upper,
+                                          scene.circuit.reference)
+        curves = OffAxisContactCurves(terminal, steady)
+    else:
+        terminal = ContactTerminal(table, history, upper, scene.circuit.reference)
+        curves = ContactCurves(terminal, steady)
     if steady != 0.0:
         table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
     return ContactRun(run_scene, table, curves, history, block, limit, wall)
 
 
-def check_contact_charge(scene) -> None:
+def check_contact_charge(scene, off_axis: bool = False) -> None:
     """Refuse, before the work and in one line, what ``[charge] model = "contact"`` does
-    not run yet: an ``[array]`` (its cells' own impacts would each charge their ball) and a
-    ball that leaves the axis (the (z, r) surrogate per unit charge)."""
+    not run yet: an ``[array]`` (its cells' own impacts would each charge their ball) and,
+    unless ``off_axis`` (``run``: its (z, r) curves), a ball that leaves the axis."""
     from .errors import SceneError
 
     if scene.array.cells > 0:
@@ -150,7 +158,7 @@ def check_contact_charge(scene) -> None:
                          'charge on its own impacts); use [charge] model = "constant" '
                          "for an array")
     from .dynamics.models import MODELS, model_of
-    if model_of(scene).lateral:
+    if model_of(scene).lateral and not off_axis:
         on_axis = ", ".join(repr(name) for name, entry in MODELS.items() if not entry.lateral)
         raise SceneError('[charge] model = "contact" with [contact] model = '
                          f'"{scene.contact.model}": not supported yet (the ball off the '

@@ -279,7 +279,7 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     electrical.circuit_for(scene).check(scene)   # e.g. a store the step cannot resolve
 
     if scene.charge.from_contacts:
-        check_contact_charge(scene)
+        check_contact_charge(scene, off_axis=True)   # run: the (z, r) curves
     dynamics = _dynamics_stage(scene, simulate or _default_simulate(), stages)
     hashed = scene   # as loaded: its field hash, its σ (may be "breakdown")
     field_options = dict(cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
@@ -325,9 +325,10 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
 
     with warnings.catch_warnings():   # sigma_eq beyond the limit is expected: the cap holds
         warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
-        _, table, _, limit = _field_stage(field_scene(scene), dynamics, stages,
-                                          **field_options)
-    run = contact_source(scene, dynamics, table, limit, period=_contact_period(scene))
+        _, table, curves, limit = _field_stage(field_scene(scene), dynamics, stages,
+                                               **field_options)
+    run = contact_source(scene, dynamics, table, limit, period=_contact_period(scene),
+                         curves=curves)
     stages["charge"] = Stage("ran", f"{run.history.contacts} contacts, [charge] model = "
                              "'contact'", run.wall_time_s, {"contacts": run.history.contacts})
     return run.scene, run.table, run.curves, run.limit, run.charged

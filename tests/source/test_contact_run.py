@@ -222,9 +222,6 @@ def test_what_contact_charging_does_not_run_yet_is_refused_before_the_work(cache
     with pytest.raises(tf.TengfieldError, match=r"\[array\] cells"):
         tf.run(fx.scene_with(run=RUN, array={"cells": 3}, charge={"model": "contact"}),
                cache_dir=cache, solve=fx.plate_model_solve)
-    with pytest.raises(tf.TengfieldError, match=r'\[contact\] model = "3d"'):
-        tf.run(fx.scene_with(run=RUN, contact={"model": "3d"}, charge={"model": "contact"}),
-               cache_dir=cache, solve=fx.plate_model_solve)
     with pytest.raises(tf.TengfieldError, match="contradict"):
         fx.scene_with(device={"surface_charge_uC_per_m2": "breakdown"},
                       charge={"model": "contact"})

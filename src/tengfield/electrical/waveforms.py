@@ -142,7 +142,8 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
         return {"V_oc": zero, "V_read": zero.copy(), "Q_sc": zero.copy(), "I_sc": zero.copy(),
                 "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
     if getattr(curves, "contact", False):   # the charge follows the contacts: q(t)
-        q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, cells=cells,
+        q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial,
+                                                      radial_velocity, cells=cells,
                                                       times=times)
     else:
         q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial,

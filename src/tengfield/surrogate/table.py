@@ -510,6 +510,7 @@ class RadialTerminalCurves(OffAxisCurves):
         if nz < 2 or nr < 2:
             raise SurrogateError(f"a (z, r) surrogate needs at least 2 x 2 points, got {nz} x {nr}")
         self.reference = reference
+        self.table = table       # its capacitance grid: the contact charge's share k(z, r)
         self.stroke = float(table.stroke)
         self.max_offset = float(table.max_offset)
         self.scaled = table.offset_coordinate == "scaled"
