@@ -262,12 +262,15 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         runs = [contact(_Sampled(cell[0], elapsed, electrical.time_origin(nominal), cell[3],
                                  absolute=nominal.t)) for cell in trajectories]
         cell_curves = [r.curves for r in runs]
-        if curves is None or any(c is None for c in cell_curves):
-            cell_curves = None   # no field (Q_SC = 0) or a ball that never charges
+        shaped = next((c for c in cell_curves + [curves] if c is not None), None)
+        if shaped is None:
+            cell_curves = None   # no field, or no ball ever charged: Q_SC = 0 everywhere
+        else:                    # a cell that never charges: Q_SC = 0, its C_T(z)
+            cell_curves = [_Uncharged(shaped) if c is None else c for c in cell_curves]
         charge = CellCharges(runs, inverse, weights)
-    if len(distinct) == 1:
-        result = _identical(scaled, nominal, cell_curves[0] if cell_curves else curves,
-                            paths[0], n)
+    if len(distinct) == 1:       # one cell's curves: the single-cell run's
+        result = _identical(scaled, nominal, runs[0].curves if contact is not None
+                            else curves, paths[0], n)
     else:
         result = _spread(scene, nominal, curves, paths, weights, elapsed,
                          [cell[2] for cell in trajectories], cells=cell_curves)
@@ -292,7 +295,8 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         "N_x_one_cell_value": result["reference_value"], "array_over_N_cells": ratio,
         "loss_to_phase_spread": 1.0 - ratio if math.isfinite(ratio) else math.nan,
         "phase_coherence": coherence,
-        "phase_std_deg": float(np.nanstd(relative)),
+        "phase_std_deg": float(np.nanstd(relative)) if np.isfinite(relative).any()
+        else math.nan,           # no cell with a fundamental (all at rest in the window)
         "phases_deg": [float(p) for p in relative],
         "phase_rule": "phase of the fundamental (excitation frequency) of each cell's Q_SC "
                       "over the steady window, minus the array's circular mean",
@@ -305,6 +309,21 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                        summary=result["summary"], fine=result.get("fine"),
                        load=result.get("load"), peaks=result["peaks"]["peak_to_peak"],
                        peak=result["peaks"]["peak"], scene=scene, charge=charge)
+
+
+class _Uncharged:
+    """The curves of an array cell whose ball never charges (no contacts, no initial
+    charge): Q_SC = I_SC = 0, C_T(z) of ``shaped`` (any cell's curves: C_T does not
+    depend on the charge)."""
+
+    def __init__(self, shaped):
+        self.shaped = shaped
+
+    def evaluate_many(self, z, z_rate, *, times=None):
+        zc = np.clip(np.asarray(z, dtype=float), 0.0, self.shaped.stroke)
+        zero = np.zeros_like(zc)
+        return zero, zero.copy(), self.shaped.capacitance(zc), \
+            self.shaped.capacitance_derivative(zc) * np.asarray(z_rate, dtype=float)
 
 
 class CellCharges:

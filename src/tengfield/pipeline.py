@@ -710,9 +710,18 @@ def _leaves_zero(gap) -> bool:
 def _needs_field(scene, gap) -> tuple[bool, str]:
     if scene.device.ball_charge == 0.0:
         return False, f"ball charge is zero ([device] {SURFACE_CHARGE_KEY} = 0): Q_SC = 0"
-    if not _leaves_zero(gap):
+    if not _leaves_zero(gap) and not _cells_differ(scene):
         return False, "the ball never leaves the lower electrode: Q_SC = 0 (reference state)"
     return True, ""
+
+
+def _cells_differ(scene) -> bool:
+    """Whether an ``[array]``'s cells may move unlike the nominal cell (any spread): a
+    nominal ball at rest then does not mean Q_SC = 0 (a cell launched by its initial
+    velocity bounces)."""
+    arr = scene.array
+    return arr.cells > 0 and (arr.phase_spread > 0.0 or arr.restitution_spread > 0.0
+                              or arr.velocity_spread > 0.0)
 
 
 def _rest_reason(regime: dict | None, scene) -> None:

@@ -23,7 +23,7 @@ def ball_charge_figure(record: dict, block: dict, *, title: str = ""):
     cells = record.get("cells") or []     # an [array]: the other cells' own histories
     for k, line in enumerate(cells):
         left.plot(record["grid_s"], line, color="0.7", lw=0.7,
-                  label=f"other cells ({len(cells)} of their histories)"
+                  label=f"the other cells ({len(cells)} distinct histories)"
                   if k == 0 else None)
     ball = "ball (leaks between contacts)" if block.get("leakage_time_s") else "ball"
     if "cell_count" in record:
