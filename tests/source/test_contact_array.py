@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import subprocess
 
 import numpy as np
@@ -115,10 +116,13 @@ def test_a_rectified_per_cell_array_stores_what_its_cells_store(cache):
     assert max(stored) > 1.05 * min(stored)          # the cells' charges differ
 
 
+@pytest.mark.slow
 def test_cli_run_of_a_contact_charged_array_with_figures(tmp_path, cli_command, cli_env):
-    """``tengfield run`` of a coarse real-field array: summary.json's charge block with
-    each cell's steady charge, ball_charge.png (the reported cell and the others) and
-    array.png drawn, the terminal's charge line."""
+    """``tengfield run`` of a coarse real-field array (the cap of each cell's own breakdown
+    band): summary.json's charge block with each cell's steady charge, ball_charge.png
+    (the reported cell and the others) and array.png drawn, the terminal's charge line;
+    ``mpirun -n 2`` (its own, empty cache) writes the serial waveforms.csv byte for byte
+    and the same charge block."""
     scene = tmp_path / "array.toml"
     scene.write_text(fx.SMALL_SCENE + '\n[charge]\nmodel = "contact"\nefficiency = 0.3\n'
                      "leakage_time_s = 0.1\n[array]\ncells = 3\nrestitution_spread = 0.3\n"
@@ -131,8 +135,23 @@ def test_cli_run_of_a_contact_charged_array_with_figures(tmp_path, cli_command, 
     cells = summary["charge"]["cells"]
     assert cells["count"] == 3 and len(cells["steady_uC_per_m2"]) == 3
     assert all(s < 0.0 for s in cells["steady_uC_per_m2"])
+    assert len(set(cells["steady_uC_per_m2"])) == 3
     assert f"(cell {cells['reported_cell']} of 3, the median; the cells' steady charge " \
         "from" in done.stdout
     for name in ("ball_charge.png", "array.png"):
         png = (tmp_path / "out" / name).read_bytes()
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed")
+    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
+                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
+                  TENGFIELD_CACHE_DIR=tmp_path / "cache-two")
+    env.pop("OMPI_COMM_WORLD_SIZE", None)
+    two = subprocess.run([mpirun, "-n", "2", *cli_command("run", scene, "-o", tmp_path / "two")],
+                         capture_output=True, text=True, timeout=600, env=env)
+    assert two.returncode == 0, two.stderr[-3000:]
+    assert (tmp_path / "two" / "waveforms.csv").read_bytes() == \
+        (tmp_path / "out" / "waveforms.csv").read_bytes()
+    assert json.loads((tmp_path / "two" / "summary.json").read_text())["charge"] == \
+        summary["charge"]
