@@ -90,12 +90,14 @@ def check_array_scene(scene) -> None:
         raise SceneError("[array] initial_phase_spread_deg needs [excitation] kind = 'sine'")
 
 
-def cell_trajectory(scene, draw, impacts: bool = False):
+def cell_trajectory(scene, draw, impacts: bool = False, contacts: bool = False):
     """(Trajectory, number of impacts) of one cell with ``draw`` = (phase, e, v0), and
-    with ``impacts`` its impact times [s] as a third element. The trajectory and the
-    times are on the run's own axis (seconds after ``[initial] time_s``, as
-    :func:`tengfield.dynamics.simulate` integrates: the precision does not depend on
-    the absolute time)."""
+    with ``impacts`` its impact times [s] as a third element; with ``contacts`` too its
+    :class:`~tengfield.dynamics.result.Impacts` (absolute times, plates, speeds: what
+    ``[charge] model = "contact"`` charges the cell's ball with) as a fourth. The
+    trajectory and the times are on the run's own axis (seconds after ``[initial]
+    time_s``, as :func:`tengfield.dynamics.simulate` integrates: the precision does not
+    depend on the absolute time)."""
     from .dynamics.impact import Restitution, integrate
     from .dynamics.run import run_span
     from .dynamics.excitation import table_from_scene
@@ -109,22 +111,32 @@ def cell_trajectory(scene, draw, impacts: bool = False):
                                  t_end=duration, gap0=scene.initial.gap,
                                  velocity0=float(draw[2]), period=exc.period, time_origin=t0)
     times = impacts[0]
+    if contacts:
+        from .dynamics.result import PLATE_NAMES, Impacts
+        plates = np.asarray(impacts[1])
+        names = PLATE_NAMES[plates] if plates.size else np.zeros(0, dtype="<U5")
+        record = Impacts(t0 + np.asarray(times, dtype=float), names,
+                         np.asarray(impacts[2], dtype=float).copy(),
+                         np.asarray(impacts[3], dtype=float).copy())
+        return traj, int(times.size), np.asarray(times, dtype=float).copy(), record
     if impacts_wanted:
         return traj, int(times.size), np.asarray(times, dtype=float).copy()
     return traj, int(times.size)
 
 
 def _simulate_block(args):
-    scene, draws, impacts = args
-    return [cell_trajectory(scene, d, impacts) for d in draws]
+    scene, draws, impacts, contacts = args
+    return [cell_trajectory(scene, d, impacts, contacts) for d in draws]
 
 
 def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
-                   progress: bool = False, impacts: bool = False) -> list:
+                   progress: bool = False, impacts: bool = False,
+                   contacts: bool = False) -> list:
     """(trajectory, number of impacts) of the distinct ``draws`` (rows), on ``jobs``
     processes (default: the machine's cores) or over the ranks of ``comm`` (size > 1);
     ``progress``: a tqdm bar on stderr when it is a terminal; ``impacts``: each with
-    its impact times as a third element (:func:`cell_trajectory`)."""
+    its impact times as a third element, ``contacts``: and its impacts' record as a
+    fourth (:func:`cell_trajectory`)."""
     from ._mpi import farm, rank_of, size_of
 
     n = len(draws)
@@ -141,18 +153,19 @@ def simulate_cells(scene, draws, *, jobs: int | None = None, comm=None,
     try:
         if size_of(comm) > 1:
             blocks = _blocks(draws, 4 * size_of(comm))
-            parts = farm(comm, [(scene, b, impacts) for b in blocks], _simulate_block,
+            parts = farm(comm, [(scene, b, impacts, contacts) for b in blocks], _simulate_block,
                          progress=(lambda k: bar.update(k * len(blocks[0])))
                          if bar is not None else None)
         else:
             jobs = min(jobs or os.cpu_count() or 1, n)
             if jobs <= 1 or n < 8:
-                return _simulate_block((scene, draws, impacts))
+                return _simulate_block((scene, draws, impacts, contacts))
             from ._pool import process_pool
             blocks = _blocks(draws, 4 * jobs)
             with process_pool(jobs) as pool:
                 parts = [done(p) for p in pool.map(_simulate_block,
-                                                   [(scene, b, impacts) for b in blocks])]
+                                                   [(scene, b, impacts, contacts)
+                                                    for b in blocks])]
     finally:
         if bar is not None:
             bar.close()
@@ -195,6 +208,8 @@ class ArrayResult:
     peak: dict = field(default_factory=dict)
     #: the scene run (set by :func:`run_array`), else None
     scene: Any = field(default=None, repr=False, compare=False)
+    #: the cells' contact charge (:class:`CellCharges`, ``[charge] model = "contact"``)
+    charge: Any = field(default=None, repr=False, compare=False)
 
     @property
     def t(self) -> np.ndarray:
@@ -217,18 +232,23 @@ class ArrayResult:
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
-              progress: bool = False) -> ArrayResult:
+              progress: bool = False, contact=None) -> ArrayResult:
     """The ``[array]`` of ``scene`` with the shared surrogate ``curves`` (None: Q_SC = 0)
     and the nominal cell's dynamics ``nominal`` (the unperturbed scene, whose
-    output times are the array's grid)."""
+    output times are the array's grid). ``contact``: with ``[charge] model = "contact"``,
+    a function of one cell's dynamics giving its
+    :class:`~tengfield.contact_run.ContactRun` (the charge its own impacts make); each
+    cell's terminals then follow its own charge history (``curves``: the nominal cell's,
+    the reference of array.png), and :attr:`ArrayResult.charge` holds the cells' runs."""
     check_array_scene(scene)
     n = scene.array.cells
     start = time.perf_counter()
     draws = draw_cells(scene)
     distinct, inverse = np.unique(draws, axis=0, return_inverse=True)
-    weights = np.bincount(inverse.reshape(-1), minlength=len(distinct)).astype(float)
+    inverse = inverse.reshape(-1)
+    weights = np.bincount(inverse, minlength=len(distinct)).astype(float)
     trajectories = simulate_cells(scene, distinct, jobs=jobs, comm=comm, progress=progress,
-                                  impacts=True)
+                                  impacts=True, contacts=contact is not None)
     dynamics_time = time.perf_counter() - start
     start = time.perf_counter()
     one = scene.with_values(device={"cells": 1}, array={"cells": 0, "connection": "parallel",
@@ -238,14 +258,27 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
     scaled = one.with_values(device={"cells": n})
     t = np.asarray(nominal.t, dtype=float)
     elapsed = electrical.elapsed_times(nominal)     # the run's own axis (cells integrate on it)
-    if len(distinct) == 1:
-        result = _identical(scaled, nominal, curves, trajectories[0][0], n)
+    paths = [cell[0] for cell in trajectories]
+    cell_curves = charge = None
+    if contact is not None:      # each distinct cell charged by its own impacts
+        runs = [contact(_Sampled(cell[0], elapsed, electrical.time_origin(nominal), cell[3],
+                                 absolute=nominal.t)) for cell in trajectories]
+        cell_curves = [r.curves for r in runs]
+        shaped = next((c for c in cell_curves + [curves] if c is not None), None)
+        if shaped is None:
+            cell_curves = None   # no field, or no ball ever charged: Q_SC = 0 everywhere
+        else:                    # a cell that never charges: Q_SC = 0, its C_T(z)
+            cell_curves = [_Uncharged(shaped) if c is None else c for c in cell_curves]
+        charge = CellCharges(runs, inverse, weights)
+    if len(distinct) == 1:       # one cell's curves: the single-cell run's
+        result = _identical(scaled, nominal, runs[0].curves if contact is not None
+                            else curves, paths[0], n)
     else:
-        result = _spread(scene, nominal, curves, [tr for tr, _, _ in trajectories], weights,
-                         elapsed, [imp for _, _, imp in trajectories])
+        result = _spread(scene, nominal, curves, paths, weights, elapsed,
+                         [cell[2] for cell in trajectories], cells=cell_curves)
     phases = (_phase_of(result["fundamental"]) if "fundamental" in result and curves is not None
-              else _phases(scene, curves, [tr for tr, _, _ in trajectories], elapsed))
-    cell_phases = phases[inverse.reshape(-1)]
+              else _phases(scene, cell_curves or curves, paths, elapsed))
+    cell_phases = phases[inverse]
     unit = np.exp(1j * np.deg2rad(cell_phases[np.isfinite(cell_phases)]))
     mean = np.angle(unit.mean()) if unit.size else 0.0
     relative = np.rad2deg(np.angle(np.exp(1j * (np.deg2rad(cell_phases) - mean))))
@@ -258,13 +291,14 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         "restitution_spread": arr.restitution_spread,
         "initial_velocity_spread_m_per_s": arr.velocity_spread, "seed": arr.seed,
         "distinct_dynamics": int(len(distinct)),
-        "impacts_per_cell_mean": float(np.average([k for _, k, _ in trajectories],
+        "impacts_per_cell_mean": float(np.average([cell[1] for cell in trajectories],
                                                   weights=weights)),
         "compared": result["compared"], "array_value": result["value"],
         "N_x_one_cell_value": result["reference_value"], "array_over_N_cells": ratio,
         "loss_to_phase_spread": 1.0 - ratio if math.isfinite(ratio) else math.nan,
         "phase_coherence": coherence,
-        "phase_std_deg": float(np.nanstd(relative)),
+        "phase_std_deg": float(np.nanstd(relative)) if np.isfinite(relative).any()
+        else math.nan,           # no cell with a fundamental (all at rest in the window)
         "phases_deg": [float(p) for p in relative],
         "phase_rule": "phase of the fundamental (excitation frequency) of each cell's Q_SC "
                       "over the steady window, minus the array's circular mean",
@@ -276,7 +310,65 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
                        phases_deg=relative, period=scene.excitation.period,
                        summary=result["summary"], fine=result.get("fine"),
                        load=result.get("load"), peaks=result["peaks"]["peak_to_peak"],
-                       peak=result["peaks"]["peak"], scene=scene)
+                       peak=result["peaks"]["peak"], scene=scene, charge=charge)
+
+
+class _Uncharged:
+    """The curves of an array cell whose ball never charges (no contacts, no initial
+    charge): Q_SC = I_SC = 0, C_T(z) of ``shaped`` (any cell's curves: C_T does not
+    depend on the charge)."""
+
+    def __init__(self, shaped):
+        self.shaped = shaped
+
+    def evaluate_many(self, z, z_rate, *, times=None):
+        zc = np.clip(np.asarray(z, dtype=float), 0.0, self.shaped.stroke)
+        zero = np.zeros_like(zc)
+        return zero, zero.copy(), self.shaped.capacitance(zc), \
+            self.shaped.capacitance_derivative(zc) * np.asarray(z_rate, dtype=float)
+
+
+class CellCharges:
+    """The contact charge of an array's cells (``[charge] model = "contact"``): ``runs``
+    (one :class:`~tengfield.contact_run.ContactRun` per distinct cell dynamics),
+    ``inverse`` (each cell's index into ``runs``) and ``weights`` (the cells of each)."""
+
+    def __init__(self, runs, inverse, weights):
+        self.runs, self.inverse, self.weights = runs, np.asarray(inverse), weights
+
+    @property
+    def representative(self) -> int:
+        """The distinct cell whose steady charge is the cells' median (the lower middle
+        one for an even count; the lowest cell index among equal charges)."""
+        steady = np.array([self.runs[j].block["steady_uC_per_m2"] for j in self.inverse])
+        order = np.argsort(steady, kind="stable")
+        return int(self.inverse[order[(steady.size - 1) // 2]])
+
+    def block(self) -> dict:
+        """summary.json's ``charge`` block of the array: the representative cell's block
+        (:attr:`representative`: every cell's when they share one dynamics), and
+        ``cells``: each cell's steady charge, rise time, contacts and what binds, and their
+        mean, min and max over the cells."""
+        j = self.representative
+        out = dict(self.runs[j].block)
+        per = [self.runs[k].block for k in self.inverse]
+        steady = np.array([b["steady_uC_per_m2"] for b in per], dtype=float)
+        first = int(np.flatnonzero(self.inverse == j)[0])
+        out["cells"] = {
+            "count": int(self.inverse.size), "distinct": len(self.runs),
+            "reported_cell": first,
+            "rule": "the block above is the cell (index reported_cell, from 0) whose steady "
+                    "charge is the cells' median; each cell's charge follows its own "
+                    "impacts with the same contact law",
+            "steady_mean_uC_per_m2": float(np.mean(steady)),
+            "steady_min_uC_per_m2": float(np.min(steady)),
+            "steady_max_uC_per_m2": float(np.max(steady)),
+            "steady_uC_per_m2": [float(v) for v in steady],
+            "rise_time_90_s": [b["rise_time_90_s"] for b in per],
+            "contacts": [int(b["contacts"]) for b in per],
+            "binds": [b["binds"] for b in per],
+        }
+        return out
 
 
 class _Sampled:
@@ -313,7 +405,10 @@ def _identical(scaled, nominal, curves, trajectory, n) -> dict:
 def _evaluate(curves, trajectories, times):
     """(Q_SC, C_T, I_SC) of every trajectory at ``times``: (rows, cells) arrays.
     ``trajectories``: a :class:`TrajectoryBundle` (one compiled call) or a list of
-    callables (one call each)."""
+    callables (one call each). ``curves``: the one surrogate of every cell, or a list of
+    one contact-charged cell's curves per trajectory (each follows its own charge
+    history: :class:`~tengfield.source.terminal.ContactCurves` at ``times`` on the run's
+    own axis)."""
     from .dynamics.impact import TrajectoryBundle
 
     if isinstance(trajectories, TrajectoryBundle):
@@ -326,6 +421,12 @@ def _evaluate(curves, trajectories, times):
     if curves is None:
         zero = np.zeros_like(z)
         return zero, np.full_like(z, 1e-15), zero
+    if isinstance(curves, (list, tuple)) or getattr(curves, "contact", False):
+        each = curves if isinstance(curves, (list, tuple)) else [curves] * z.shape[1]
+        q, c, i = np.empty_like(z), np.empty_like(z), np.empty_like(z)
+        for j, cell in enumerate(each):
+            q[:, j], i[:, j], c[:, j], _ = cell.evaluate_many(z[:, j], v[:, j], times=times)
+        return q, c, i
     q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), *curves.pieces(), curves.stroke)
     return q.reshape(z.shape), c.reshape(z.shape), i.reshape(z.shape)
 
@@ -359,10 +460,11 @@ def _spline_eval(z, v, knots, cq, cc, stroke):
     return q, c, i
 
 
-def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
+def _spread(scene, nominal, curves, trajectories, weights, t, impacts, cells=None) -> dict:
     """Cells with different dynamics, walked in time chunks; ``t``: the output times on
     the run's own axis (``nominal``'s elapsed times), ``impacts``: each trajectory's
-    impact times on that axis."""
+    impact times on that axis; ``cells``: each trajectory's own curves (the contact
+    charge), else None (``curves`` for every cell; ``curves`` is the nominal cell's)."""
     from .dynamics.impact import TrajectoryBundle
 
     n = float(np.sum(weights))
@@ -379,7 +481,7 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
     bundle = TrajectoryBundle(trajectories)      # every cell sampled in one call per chunk
     for lo in range(0, t.size, rows):
         times = t[lo:lo + rows]
-        q, c, i = _evaluate(curves, bundle, times)
+        q, c, i = _evaluate(cells or curves, bundle, times)
         rq, rc, ri = _evaluate(curves, [lambda x: electrical.sample_elapsed(nominal, x)], times)
         block = slice(lo, lo + times.size)
         fundamental += basis[block] @ q
@@ -397,7 +499,8 @@ def _spread(scene, nominal, curves, trajectories, weights, t, impacts) -> dict:
         columns[electrical.READ_COLUMN] = sums["Q"] / (sums["C"] + c_p)
     out = {"columns": columns, "fundamental": fundamental,
            "summary": {"grid": "output samples (no per-cell impact instants)"},
-           "peaks": _spread_peaks(scene, curves, bundle, weights, impacts, t, columns)}
+           "peaks": _spread_peaks(scene, cells or curves, bundle, weights, impacts, t,
+                                  columns)}
     compared = wired.finish(sums, ref, columns, mask)
     out["summary"].update(compared.pop("summary", {}))
     out.update(compared)

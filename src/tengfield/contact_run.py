@@ -148,16 +148,12 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
 
 def check_contact_charge(scene, off_axis: bool = False) -> None:
     """Refuse, before the work and in one line, what ``[charge] model = "contact"`` does
-    not run yet: an ``[array]`` (its cells' own impacts would each charge their ball) and,
-    unless ``off_axis`` (``run``: its (z, r) curves), a ball that leaves the axis."""
+    not run yet: unless ``off_axis`` (``run``: its (z, r) curves), a ball that leaves the
+    axis. An ``[array]`` runs (each cell's ball charged by its own impacts,
+    tengfield.array)."""
     from .errors import SceneError
-
-    if scene.array.cells > 0:
-        raise SceneError('[charge] model = "contact" with [array] cells = '
-                         f"{scene.array.cells}: not supported yet (each cell's ball would "
-                         'charge on its own impacts); use [charge] model = "constant" '
-                         "for an array")
     from .dynamics.models import MODELS, model_of
+
     if model_of(scene).lateral and not off_axis:
         on_axis = ", ".join(repr(name) for name, entry in MODELS.items() if not entry.lateral)
         raise SceneError('[charge] model = "contact" with [contact] model = '

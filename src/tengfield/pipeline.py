@@ -285,14 +285,15 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     field_options = dict(cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
                          command_line=command_line, write_cache=write_cache,
                          radial_settings=radial_settings)
-    charged = None
+    charged = cell_contact = None
     if scene.charge.from_contacts:
-        scene, table, curves, limit, charged = _contact_charge_stage(
+        scene, table, curves, limit, charged, cell_contact = _contact_charge_stage(
             scene, dynamics, stages, **field_options)
     else:
         scene, table, curves, limit = _field_stage(scene, dynamics, stages, **field_options)
     if scene.array.cells > 0:
-        return _run_array(scene, dynamics, curves, table, stages, comm, progress)
+        return _run_array(scene, dynamics, curves, table, stages, comm, progress,
+                          contact=cell_contact)
     stage = electrical_stage(scene, dynamics, curves, table, stages)
     if charged is not None:
         _with_contact_charge(stage, dynamics, charged)
@@ -313,12 +314,16 @@ from .contact_run import check_contact_charge  # noqa: E402,F401 - the run's own
 
 
 def _contact_charge_stage(scene, dynamics, stages, **field_options):
-    """``(scene, table, curves, limit, charged)`` of a run whose contacts charge the ball:
+    """``(scene, table, curves, limit, charged, cell)`` of a run whose contacts charge the
+    ball:
     the surrogate at a reference charge (sigma_eq, :func:`tengfield.contact_run.field_scene`),
     then :func:`tengfield.contact_run.contact_source`: the air-breakdown cap of ``[charge]
     discharge`` (the band of the run's own trajectory, no field solve more), the charge
     history along the impacts (``stages["charge"]``), the scene at its steady charge
-    (what the summary's sigma-dependent blocks use) and :class:`ContactCurves`."""
+    (what the summary's sigma-dependent blocks use) and :class:`ContactCurves`; ``cell``:
+    the same for another trajectory (an ``[array]`` cell's dynamics -> its
+    :class:`~tengfield.contact_run.ContactRun`: the same law, table and limit, its own
+    impacts and breakdown band)."""
     import warnings
 
     from .contact_run import contact_source, field_scene
@@ -327,11 +332,14 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
         warnings.filterwarnings("ignore", message=".*exceeds the air-breakdown limit.*")
         _, table, curves, limit = _field_stage(field_scene(scene), dynamics, stages,
                                                **field_options)
-    run = contact_source(scene, dynamics, table, limit, period=_contact_period(scene),
-                         curves=curves)
+    period = _contact_period(scene)
+    run = contact_source(scene, dynamics, table, limit, period=period, curves=curves)
     stages["charge"] = Stage("ran", f"{run.history.contacts} contacts, [charge] model = "
                              "'contact'", run.wall_time_s, {"contacts": run.history.contacts})
-    return run.scene, run.table, run.curves, run.limit, run.charged
+
+    def cell(cell_dynamics):
+        return contact_source(scene, cell_dynamics, table, run.limit, period=period)
+    return run.scene, run.table, run.curves, run.limit, run.charged, cell
 
 
 def _contact_period(scene) -> float:
@@ -563,16 +571,19 @@ def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:
     return out
 
 
-def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunResult:
+def _run_array(scene, dynamics, curves, table, stages, comm, progress,
+               contact=None) -> RunResult:
     """``[array]``: every cell its own dynamics (tengfield.array), one surrogate. The
     nominal cell's columns are whole arrays (a long run's sampled ones are built:
-    tengfield.array holds its outputs whole)."""
+    tengfield.array holds its outputs whole). ``contact``: ``[charge] model = "contact"``,
+    one cell's dynamics -> its :class:`~tengfield.contact_run.ContactRun` (each cell
+    charged by its own impacts)."""
     from .array import run_array
     from .dynamics.columns import with_arrays
     dynamics = with_arrays(dynamics)
 
     start = time.perf_counter()
-    arr = run_array(scene, curves, dynamics, comm=comm, progress=progress)
+    arr = run_array(scene, curves, dynamics, comm=comm, progress=progress, contact=contact)
     waveforms = arr.columns
     block = dict(arr.summary)
     rect = block.pop("rectifier", None)
@@ -612,12 +623,40 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress) -> RunRes
     if rect is not None:
         summary["rectifier"] = rect
     summary["array"] = block
+    extras = {"_array": arr, "_fine": arr.fine}
+    if arr.charge is not None:      # each cell's ball charged by its own impacts
+        summary["charge"] = arr.charge.block()
+        extras.update(_array_charge_record(arr.charge, dynamics))
     _measured_comparison(summary, scene)
     result = RunResult(scene=scene, waveforms=waveforms, summary=_jsonable(summary),
                        dynamics=dynamics, table=table, curves=curves, peaks=peaks,
                        stages=stages, peak=peak)
-    result.extras = _with_scene({"_array": arr, "_fine": arr.fine}, scene)
+    result.extras = _with_scene(extras, scene)
     return result
+
+
+#: at most this many other distinct cells' charge histories drawn in an array's
+#: ball_charge.png (beside the reported cell's)
+ARRAY_CHARGE_LINES = 24
+
+
+def _array_charge_record(charge, dynamics) -> dict:
+    """ball_charge.png's record of an ``[array]``: the reported cell's (the median steady
+    charge, :class:`tengfield.array.CellCharges`) with the other distinct cells' sigma(t)
+    (up to :data:`ARRAY_CHARGE_LINES`, evenly chosen) drawn beside it."""
+    from .source.contacts import charge_record
+
+    duration = float(electrical.elapsed_times(dynamics)[-1])
+    j = charge.representative
+    area = charge.runs[j].block["ball_area_m2"]
+    record = charge_record(charge.runs[j].history, area, duration)
+    others = [k for k in range(len(charge.runs)) if k != j]
+    if len(others) > ARRAY_CHARGE_LINES:
+        others = [others[int(i)] for i in np.linspace(0, len(others) - 1, ARRAY_CHARGE_LINES)]
+    record["cells"] = [charge.runs[k].history.at(record["grid_s"]) / area * 1e6
+                       for k in others]
+    record["cell_count"] = int(charge.inverse.size)
+    return {"_charge_history": charge.runs[j].history, "_charge_record": record}
 
 
 def _with_scene(extras: dict, scene) -> dict:
@@ -671,9 +710,18 @@ def _leaves_zero(gap) -> bool:
 def _needs_field(scene, gap) -> tuple[bool, str]:
     if scene.device.ball_charge == 0.0:
         return False, f"ball charge is zero ([device] {SURFACE_CHARGE_KEY} = 0): Q_SC = 0"
-    if not _leaves_zero(gap):
+    if not _leaves_zero(gap) and not _cells_differ(scene):
         return False, "the ball never leaves the lower electrode: Q_SC = 0 (reference state)"
     return True, ""
+
+
+def _cells_differ(scene) -> bool:
+    """Whether an ``[array]``'s cells may move unlike the nominal cell (any spread): a
+    nominal ball at rest then does not mean Q_SC = 0 (a cell launched by its initial
+    velocity bounces)."""
+    arr = scene.array
+    return arr.cells > 0 and (arr.phase_spread > 0.0 or arr.restitution_spread > 0.0
+                              or arr.velocity_spread > 0.0)
 
 
 def _rest_reason(regime: dict | None, scene) -> None:

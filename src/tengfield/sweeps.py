@@ -631,7 +631,7 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
 
 
 def _check_contact_point(scene, values) -> None:
-    """What a contact run refuses (an [array], a ball off the axis), named with the
+    """What a contact run refuses (a ball off the axis), named with the
     point (:func:`tengfield.pipeline.check_contact_charge`, the run's check)."""
     from .errors import SceneError
     from .contact_run import check_contact_charge

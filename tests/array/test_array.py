@@ -192,3 +192,30 @@ def test_trajectory_bundle_equals_each_trajectory_bit_for_bit():
                                  array.draw_cells(scene)[:1], jobs=1)[0][0]
     with pytest.raises(ValueError, match="differ in stroke"):
         TrajectoryBundle([trajectories[0], other])
+
+
+@pytest.mark.parametrize("charge", [None, {"model": "contact", "discharge": "none",
+                                           "equilibrium_uC_per_m2": -100.0,
+                                           "efficiency": 0.3}])
+def test_cells_launched_while_the_nominal_ball_rests_have_their_output(cache, charge):
+    """Below lift-off the nominal ball rests (no field needed for it), but a cell with an
+    initial velocity bounces: the array's Q_SC(t) is the sum of its cells' single runs
+    (each at its draw), not 0 (the field is solved for the array's cells)."""
+    import math
+
+    exc = {"frequency_hz": 20.0, "amplitude_mm": 0.3}       # 4.7 m/s^2 < g
+    extra = {"charge": charge} if charge else {}
+    scene = fx.scene_with(run=SHORT_RUN, excitation=exc, array={
+        "cells": 3, "initial_velocity_spread_m_per_s": 0.3, "seed": 1}, **extra)
+    arr = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
+    assert arr.stages["field"].status != "skipped"
+    total = 0.0
+    for d in array.draw_cells(scene):
+        cell = fx.scene_with(run=SHORT_RUN, excitation={**exc, "phase_deg": math.degrees(d[0])},
+                             contact={"restitution": float(d[1])},
+                             initial={"velocity_m_per_s": float(d[2])}, **extra)
+        total = total + np.asarray(tf.run(cell, cache_dir=cache,
+                                          solve=fx.plate_model_solve).waveforms["Q_sc_C"])
+    assert np.max(np.abs(total)) > 1e-13
+    np.testing.assert_allclose(arr.waveforms["Q_sc_C"], total, rtol=0,
+                               atol=1e-9 * np.max(np.abs(total)))

@@ -280,3 +280,102 @@ def test_cli_design_with_the_contact_charge_and_figures(tmp_path, cli_command, c
     assert len(charge["steady_uC_per_m2"]) == 1 and charge["steady_uC_per_m2"][0] < 0
     assert best_block["surface_charge_uC_per_m2"] == pytest.approx(
         charge["steady_uC_per_m2"][0], rel=1e-12)
+
+
+def _mpi_env(cli_env, cache):
+    """The environment of a serial or ``mpirun -n 2`` CLI run (oversubscribed: the
+    machine has 2 cores shared with others), outside any mpirun of the caller."""
+    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
+                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
+                  TENGFIELD_CACHE_DIR=cache)
+    env.pop("OMPI_COMM_WORLD_SIZE", None)
+    return env
+
+
+@pytest.mark.slow
+def test_mpirun_uncertainty_writes_the_serial_csv_with_figures(tmp_path, cli_command,
+                                                               cli_env):
+    """``mpirun -n 2 tengfield uncertainty`` over the charging physics (eta, tau) with
+    ``[charge] model = "contact"``, figures on: the serial uncertainty.csv byte for byte.
+    The mpirun run starts from an empty cache: its field is solved in one rank's task
+    (PETSc initialised on every rank first; it hung there before)."""
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed")
+    scene = tmp_path / "contact.toml"
+    scene.write_text(CONTACT_SCENE + "[uncertainty]\nsamples = 16\nseed = 3\n"
+                     "[uncertainty.vary]\n"
+                     '"charge.efficiency" = { distribution = "uniform", low = 0.1, '
+                     "high = 0.6 }\n"
+                     '"charge.leakage_time_s" = { distribution = "uniform", low = 0.05, '
+                     "high = 1.0 }\n")
+    serial = subprocess.run(cli_command("uncertainty", scene, "-o", tmp_path / "one"),
+                            capture_output=True, text=True, timeout=600,
+                            env=_mpi_env(cli_env, tmp_path / "cache-one"))
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    two = subprocess.run([mpirun, "-n", "2", *cli_command("uncertainty", scene, "-o",
+                                                          tmp_path / "two")],
+                         capture_output=True, text=True, timeout=600,
+                         env=_mpi_env(cli_env, tmp_path / "cache-two"))
+    assert two.returncode == 0, two.stderr[-3000:]
+    one_csv = (tmp_path / "one" / "uncertainty.csv").read_bytes()
+    assert one_csv == (tmp_path / "two" / "uncertainty.csv").read_bytes()
+    with open(tmp_path / "one" / "uncertainty.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 16 * 4                       # Saltelli: N (k + 2), k = 2
+    steady = [float(row["charge.steady_uC_per_m2"]) for row in rows]
+    assert len(set(steady)) > 16 and all(s < 0.0 for s in steady)   # leakage: each its own
+    for name in ("one", "two"):
+        png = (tmp_path / name / "uncertainty.png").read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 50_000
+
+
+#: design.csv's columns that depend on the machine and the cache, not on the result
+#: (tests/design/test_design_mpi.py): whether the candidate's field was read or solved, and
+#: the wall times
+MACHINE_COLUMNS = ("field_status", "field_wall_s", "dynamics_wall_s", "circuit_wall_s")
+
+
+@pytest.mark.slow
+def test_mpirun_design_writes_the_serial_rows_with_figures(tmp_path, cli_command, cli_env):
+    """``mpirun -n 2 tengfield design`` with ``[charge] model = "contact"``, figures on:
+    design.csv equal to the serial one in every column but :data:`MACHINE_COLUMNS`
+    (compared as text, exactly), the same best candidate in design.json."""
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed")
+    scene = tmp_path / "design.toml"
+    scene.write_text(CONTACT_SCENE.replace("efficiency = 0.3", "efficiency = 0.5\n"
+                                           "leakage_time_s = 0.5")
+                     + "[design]\nobjective = \"power\"\ncandidates = 4\nbatch = 2\nseed = 2\n"
+                     "settle_periods = 10\nwindow_periods = 10\n[design.vary]\n"
+                     "stroke_mm = [1.0, 4.0]\n[design.excitation]\nfrequency_hz = [20.0]\n"
+                     "amplitude_mm = [1.5]\n")
+    serial = subprocess.run(cli_command("design", scene, "-o", tmp_path / "one", "--jobs",
+                                        "1"),
+                            capture_output=True, text=True, timeout=900,
+                            env=_mpi_env(cli_env, tmp_path / "cache-one"))
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    two = subprocess.run([mpirun, "-n", "2", *cli_command("design", scene, "-o",
+                                                          tmp_path / "two")],
+                         capture_output=True, text=True, timeout=900,
+                         env=_mpi_env(cli_env, tmp_path / "cache-two"))
+    assert two.returncode == 0, two.stderr[-3000:]
+
+    def rows_of(name):
+        with open(tmp_path / name / "design.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        return [{k: v for k, v in row.items() if k not in MACHINE_COLUMNS} for row in rows]
+
+    one, two_rows = rows_of("one"), rows_of("two")
+    assert len(one) == 4 and one == two_rows
+    assert sum(row["status"] == "ok" for row in one) == 4
+    # each stroke scored at its own plateau (leakage: the impacts set it), below sigma_eq
+    steady = [float(row["surface_charge_uC_per_m2"]) for row in one]
+    assert len(set(steady)) == 4 and all(-113.0 < s < 0.0 for s in steady)
+    best = [json.loads((tmp_path / name / "design.json").read_text())["best"]
+            for name in ("one", "two")]
+    assert best[0] == best[1] and best[0]["charge"]["steady_uC_per_m2"][0] < 0.0
+    for name in ("one", "two"):
+        png = (tmp_path / name / "design.png").read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000

@@ -457,7 +457,7 @@ def check_design_combination(scene, spec) -> None:
         from ..errors import SceneError
         from ..contact_run import check_contact_charge
 
-        check_contact_charge(scene)      # what a contact run refuses (an [array], 3D)
+        check_contact_charge(scene)      # what a contact run refuses (the ball off the axis)
         if spec.percentile is not None:
             raise SceneError(
                 f'[design] aggregate = "p{spec.percentile:g}" with [charge] model = '

@@ -20,8 +20,16 @@ def ball_charge_figure(record: dict, block: dict, *, title: str = ""):
     the levels sigma_eq, the cap and the steady charge. A matplotlib Figure."""
     fig = new_figure((10.0, 4.0))
     left, right = fig.subplots(1, 2)
-    left.plot(record["grid_s"], record["grid_uC_per_m2"], color="C0", lw=1.3,
-              label="ball (leaks between contacts)" if block.get("leakage_time_s") else "ball")
+    cells = record.get("cells") or []     # an [array]: the other cells' own histories
+    for k, line in enumerate(cells):
+        left.plot(record["grid_s"], line, color="0.7", lw=0.7,
+                  label=f"the other cells ({len(cells)} distinct histories)"
+                  if k == 0 else None)
+    ball = "ball (leaks between contacts)" if block.get("leakage_time_s") else "ball"
+    if "cell_count" in record:
+        ball = f"cell {block['cells']['reported_cell']} (median steady σ of " \
+               f"{record['cell_count']})"
+    left.plot(record["grid_s"], record["grid_uC_per_m2"], color="C0", lw=1.3, label=ball)
     contact = np.concatenate([[0], record["contact"]])
     after = np.concatenate([[record["start_uC_per_m2"]], record["after_uC_per_m2"]])
     right.plot(contact, after, color="C0", lw=1.3, label="just after each contact")

@@ -181,9 +181,16 @@ def charge_line(block: dict) -> str:
     end = block.get("share_of_steady_at_end")
     end_text = "" if end is None else \
         f", {block['end_of_run_uC_per_m2']:.4g} ({100 * end:.3g} %) at the run's end"
-    return (f"ball charge (contacts): steady {block['steady_uC_per_m2']:.4g} µC/m^2 "
+    line = (f"ball charge (contacts): steady {block['steady_uC_per_m2']:.4g} µC/m^2 "
             f"(limited by {block['binds']}){end_text}; 90 % at {rise_text}; "
             f"{block['contacts']} contacts")
+    cells = block.get("cells")
+    if cells:        # an [array]: the line above is one cell's
+        line = (f"{line} (cell {cells['reported_cell']} of {cells['count']}, the median; "
+                f"the cells' steady charge from {cells['steady_min_uC_per_m2']:.4g} to "
+                f"{cells['steady_max_uC_per_m2']:.4g} µC/m^2, mean "
+                f"{cells['steady_mean_uC_per_m2']:.4g})")
+    return line
 
 
 def charge_record(history, ball_area: float, duration: float, points: int = 4000) -> dict:

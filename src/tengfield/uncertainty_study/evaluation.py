@@ -374,8 +374,11 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
     outcome does not depend on how the work was spread.
 
     ``field_solves``: the distinct field hashes whose surrogate was not in the cache."""
+    import contextlib
+
     from .._console import progress_bar
     from .._farm import run_tasks
+    from .._mpi import size_of
 
     keys = spec.keys
     groups = groups_of(keys, values)
@@ -391,6 +394,12 @@ def evaluate_study(scene, spec: UncertaintySpec, values: np.ndarray, *, comm=Non
             at = scene.with_values(**sections_of(group.dynamic)) if group.dynamic else scene
             ref = solved_scene(field_scene(at) if contact else at)   # contacts: at σ_eq
             geometry.setdefault(ref.field_hash(), (ref, group.dynamic))
+    if geometry and solve is None and size_of(comm) > 1:
+        # every rank, before the farm: PETSc's initialisation (dolfinx's import) is
+        # collective on COMM_WORLD, and a geometry's solve runs in one rank's task (the
+        # others waited for it at the farm's end: mpirun -n 2 hung on a cold cache)
+        with contextlib.suppress(ImportError):
+            from ..field import _dolfinx  # noqa: F401
     bar = progress_bar(len(geometry), "uncertainty: field solves", progress and len(geometry) > 1,
                        unit="geometry", comm=comm)
     try:
