@@ -38,15 +38,39 @@ def contacts_of(scene, impacts, elapsed_times) -> tuple[np.ndarray, np.ndarray, 
     """``(times, areas, upper)`` of the impacts that touch an electrode: ``elapsed_times``
     [s] (the run's axis) of ``impacts`` (:class:`tengfield.dynamics.result.Impacts`),
     Hertz's area [m^2] at each one's normal speed (the speed before it), and whether it
-    was the upper electrode. Impacts at zero speed (resting contact) touch no new area."""
+    was the upper electrode (Hertz with the ball's equivalent radius on that electrode,
+    :func:`electrode_contact_radius`). Impacts at zero speed (resting contact) touch no
+    new area."""
     device = scene.device
     speed = np.asarray(impacts.speed_before, dtype=float)
-    areas = hertz_contact_area(device.ball_mass, device.ball_radius, speed,
-                               contact_modulus(scene))
     upper = np.asarray(impacts.plate) == "upper"
+    radius = electrode_contact_radius(scene)
+    modulus = contact_modulus(scene)
+    areas = np.where(upper,
+                     hertz_contact_area(device.ball_mass, radius["upper"], speed, modulus),
+                     hertz_contact_area(device.ball_mass, radius["lower"], speed, modulus))
     times = np.asarray(elapsed_times, dtype=float)
     order = np.argsort(times, kind="stable")
     return times[order], np.asarray(areas, dtype=float)[order], upper[order]
+
+
+def electrode_contact_radius(scene) -> dict[str, float]:
+    """Hertz's equivalent radius [m] of the ball on each electrode, ``{"lower", "upper"}``:
+    R on a flat plate, R a/(a − R) inside the spherical shell's concave electrodes (the 3D
+    contact's own rule, :func:`tengfield.dynamics.motion3d.contact.equivalent_radius`, over
+    the cell's contact surfaces); R for a cell whose walls are not described (the
+    honeycomb's flat plates)."""
+    from ..dynamics.motion3d.contact import equivalent_radius
+    from ..field.cells import cell_of
+    from ..field.cells.contact_surfaces import contact_surfaces
+
+    radius = scene.device.ball_radius
+    try:
+        surfaces = contact_surfaces(cell_of(scene)).surfaces
+    except ValueError:                 # no walls described: flat electrode plates
+        return {"lower": radius, "upper": radius}
+    return {s.name: equivalent_radius(radius, s) for s in surfaces
+            if s.name in ("lower", "upper")}
 
 
 def run_history(scene, impacts, elapsed_times, cap: float = math.inf) -> tuple:
