@@ -96,3 +96,31 @@ def test_the_studies_still_refuse_the_ball_off_the_axis():
     with pytest.raises(SceneError, match=r'^\[charge\] model = "contact" with \[contact\] '
                                          r'model = "3d": not supported yet'):
         check_contact_charge(scene)
+
+
+@pytest.mark.parametrize("charge", [None, CHARGE])
+def test_the_rectifier_takes_the_charge_off_the_axis(charge, tmp_path):
+    """The rectifier's bridge sees Q_SC(z, r) and C_T(z, r) at the ball's offset (it
+    crashed with a TypeError for the 3D ball off the axis, constant charge too): its input
+    at the output samples is the run's own Q_sc_C and C_T_F columns, the energy books
+    close, and a contact-charged ball at σ_eq stores what the constant one stores."""
+    from tengfield.electrical.waveforms import elapsed_times, sample_elapsed, terminal_state
+
+    extra = {"charge": {**charge, "initial_uC_per_m2": -20.0}} if charge else \
+        {"device": {"surface_charge_uC_per_m2": -20.0}}
+    out = _run(tmp_path, circuit={"kind": "rectifier"}, **extra)
+    t = elapsed_times(out.dynamics)
+    gap, _, _ = sample_elapsed(out.dynamics, t)
+    q, c = terminal_state(out.curves, out.dynamics, t, gap)
+    np.testing.assert_allclose(q, out.waveforms["Q_sc_C"], rtol=1e-9,
+                               atol=1e-9 * np.max(np.abs(q)))
+    np.testing.assert_allclose(c, out.waveforms["C_T_F"], rtol=1e-9)
+    assert np.ptp(radial_motion(out.dynamics)[0]) > 1e-4
+    residuals = out.summary["rectifier"]["energy_residuals"]
+    assert max(abs(v) for v in residuals.values()) < 1e-6, residuals
+    if charge:
+        constant = _run(tmp_path, circuit={"kind": "rectifier"},
+                        device={"surface_charge_uC_per_m2": -20.0})
+        np.testing.assert_allclose(out.waveforms["V_store_V"], constant.waveforms["V_store_V"],
+                                   rtol=1e-12, atol=1e-12 * np.max(np.abs(
+                                       constant.waveforms["V_store_V"])))

@@ -155,13 +155,28 @@ def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
             "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
 
 
-def terminal_charge(curves, times, gap):
-    """Q_SC [C] of one cell at the run's ``times`` [s] and gaps ``gap`` [m]: ``curves``'
-    Q_SC(z), or, for a ball charged by its contacts, the charge history's
+def terminal_state(curves, dynamics, times, gap) -> tuple[np.ndarray, np.ndarray]:
+    """``(Q_SC [C], C_T [F])`` of one cell at the run's ``times`` [s] (its own axis) and
+    gaps ``gap`` [m] of ``dynamics``: ``curves``' Q_SC(z) and C_T(z), at the ball's offset
+    r(t) where the curves are (z, r) ones (the 3D ball off the axis), and for a ball
+    charged by its contacts the charge history's
     (:meth:`tengfield.source.terminal.ContactCurves.charge_at`)."""
+    gap = np.asarray(gap, dtype=float)
+    offset = ()
+    if curves.radial:
+        offset = (_radial(dynamics, curves, time_origin(dynamics)
+                          + np.asarray(times, dtype=float))[0],)
     if getattr(curves, "contact", False):
-        return curves.charge_at(times, gap)
-    return curves.charge(gap)
+        charge = curves.charge_at(times, gap, *offset)
+    else:
+        charge = curves.charge(gap, *offset)
+    return charge, curves.capacitance(gap, *offset)
+
+
+def on_axis(curves) -> tuple:
+    """The extra arguments of ``curves``' functions for the ball on the axis: ``(0.0,)``
+    (r = 0) for (z, r) curves, none for curves of z alone."""
+    return (0.0,) if curves.radial else ()
 
 
 def terminal_waveforms_zr(curves, gap, gap_velocity, radial, radial_velocity, *,

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..cycle import last_period, loop_area
 from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, steady_window,
-                         terminal_charge, time_origin)
+                         on_axis, terminal_state, time_origin)
 from . import Circuit, CircuitRun, SpreadCircuit
 from .rectifier_store import (check_store_resolution, first_crossing, harvester_options,
                               warn_numerical_dissipation)
@@ -56,8 +56,11 @@ def rectifier_waveforms(scene, dynamics, curves) -> dict:
     for start in range(0, grid.size, rows):
         times = grid[start:start + rows]
         gap, _, _ = sample_elapsed(dynamics, times)
-        q = terminal_charge(curves, times, gap) * n if curves is not None else np.zeros_like(gap)
-        c = curves.capacitance(gap) * n if curves is not None else np.full_like(gap, 1e-12)
+        if curves is None:
+            q, c = np.zeros_like(gap), np.full_like(gap, 1e-12)
+        else:
+            q, c = terminal_state(curves, dynamics, times, gap)
+            q, c = q * n, c * n
         parts.append(run.advance(times, q, c))
     fine = concat_results(parts)
     return {"V_store_V": fine.store_voltage[output_index],
@@ -190,9 +193,10 @@ def summary_block(scene, numbers: dict, curves=None, max_gap=None) -> dict:
     }
     if curves is not None and max_gap is not None:
         n = scene.device.cells
-        q_max = float(curves.charge(max_gap)) * n
-        c_max = float(curves.capacitance(max_gap)) * n + c.parallel_capacitance
-        c_0 = float(curves.capacitance(0.0)) * n + c.parallel_capacitance
+        axis = on_axis(curves)           # the bound of the ball on the axis
+        q_max = float(curves.charge(max_gap, *axis)) * n
+        c_max = float(curves.capacitance(max_gap, *axis)) * n + c.parallel_capacitance
+        c_0 = float(curves.capacitance(0.0, *axis)) * n + c.parallel_capacitance
         out["saturation_voltage_V"] = saturation_voltage(abs(q_max), c_max, c_0,
                                                          c.diode_forward_voltage)
     return out

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, terminal_charge,
+from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, terminal_state,
                          time_origin)
 from .rectifier_store import check_store_resolution, first_crossing, harvester_options
 
@@ -59,8 +59,8 @@ class RectifierChunks:
         grid, output_index = grid[order], np.flatnonzero(order < t_out.size)
         gap, _, _ = sample_elapsed(self.dynamics, grid)
         cells = self.scene.device.cells
-        res = self.harvester.advance(grid, terminal_charge(self.curves, grid, gap) * cells,
-                                     self.curves.capacitance(gap) * cells)
+        charge, capacitance = terminal_state(self.curves, self.dynamics, grid, gap)
+        res = self.harvester.advance(grid, charge * cells, capacitance * cells)
         self._reduce(res)
         self.points += res.time.size
         return {"V_store_V": res.store_voltage[output_index],
