@@ -276,6 +276,8 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     stages: dict[str, Stage] = {}
     if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
         check_field(scene)                # before the dynamics, not after
+    from .surrogate.cache import check_electrodes
+    check_electrodes(scene)               # the single-electrode cell: `field` only, yet
     electrical.circuit_for(scene).check(scene)   # e.g. a store the step cannot resolve
 
     if scene.charge.from_contacts:

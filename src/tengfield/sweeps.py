@@ -621,6 +621,8 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
                     scene_at, cache_dir=cache_dir, comm=comm, solve=solve,
                     progress=progress, command_line=command_line)
         except SceneError as exc:
+            if not values:       # a frequency x amplitude sweep: every point's geometry
+                raise
             raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
         if key not in tables:
             counts["geometries"] += 1

@@ -28,7 +28,8 @@ Today's two:
 * ``"grounded-lower"``: the lower electrode is grounded (the paper's COMSOL set-up),
   ``C_T = C_uu``.
 
-A new topology is one class here and one entry in :data:`TOPOLOGIES`.
+A new topology is one class here and one entry in :data:`TOPOLOGIES`;
+:class:`LowerToGround` is the single-electrode cell's (one electrode, :func:`wiring`).
 """
 from __future__ import annotations
 
@@ -42,7 +43,24 @@ def _pair(C, q=None):
     return C if q is None else (C, np.asarray(q, dtype=float))
 
 
-class FloatingPair:
+class _Pair:
+    """The matrix form of a two-electrode topology (``C`` (..., 2, 2), ``q`` (..., 2))."""
+    electrodes = 2
+
+    def terminal_capacitance(self, C):
+        """C_T [F] of the matrices ``C``."""
+        C = np.asarray(C, dtype=float)
+        return self.capacitance(C[..., 0, 0], C[..., 0, 1], C[..., 1, 1])
+
+    def terminal_charge(self, C, q, ball_charge):
+        """The charge on the receiving terminal with the terminals shorted [C] (Q_u0):
+        Q_SC(z) is its change from the reference state."""
+        C, q = np.asarray(C, dtype=float), np.asarray(q, dtype=float)
+        return self.upper_short_charge(C[..., 0, 0], C[..., 0, 1], C[..., 1, 1], q[..., 0],
+                                       q[..., 1], ball_charge)
+
+
+class FloatingPair(_Pair):
     """Both electrodes are the terminals and float together: their total charge stays
     at the reference state's ``-q_ball`` (every charge the ball induces comes from the
     pair itself; the environment supplies none)."""
@@ -89,7 +107,7 @@ class FloatingPair:
         return np.column_stack([common, common])
 
 
-class GroundedLower:
+class GroundedLower(_Pair):
     """The lower electrode is grounded (V_lower = 0) and is one terminal; the upper is
     the other: the ground supplies every charge the lower electrode takes."""
     name = "grounded-lower"
@@ -121,10 +139,54 @@ class GroundedLower:
         return np.zeros((np.asarray(q).shape[0], 2))
 
 
-#: the terminal topologies by their ``[circuit] reference`` name
+class LowerToGround:
+    """The single-electrode cell (``[device] electrodes = "lower"``, Niu et al. 2014): the
+    terminals are the lower electrode and the ground (the environment: the far field or the
+    grounded table). ``V = V_lower`` (the ground at 0 V); Q_t is the charge moved from the
+    lower electrode to the ground, so a negative ball rising gives Q_SC > 0 as in the pair.
+    Matrices of one electrode: ``C`` (..., 1, 1), ``q`` (..., 1)."""
+    name = "lower-to-ground"
+    electrodes = 1
+    grounded_lower = False
+
+    def terminal_capacitance(self, C):
+        """C_T [F] = C_ll, the electrode's capacitance to the ground."""
+        return np.asarray(C, dtype=float)[..., 0, 0]
+
+    def terminal_charge(self, C, q, ball_charge):
+        """The ground's side with the terminals shorted (the electrode at 0 V holds its
+        induced charge q_l): −q_l [C]."""
+        return -np.asarray(q, dtype=float)[..., 0]
+
+    def reference_charges(self, C_ref, q_ref, ball_charge: float) -> np.ndarray:
+        """[Q_lower] [C] of the reference state: the electrode at 0 V."""
+        return np.asarray(q_ref, dtype=float).copy()
+
+    def open_potentials(self, C, q, charges) -> np.ndarray:
+        """[V_lower] [V] holding the electrode's reference charge (terminals open)."""
+        C, q = _pair(C, q)
+        return np.array([(np.asarray(charges, dtype=float)[0] - q[0]) / C[0, 0]])
+
+    def short_potentials(self, C, q, ball_charge) -> np.ndarray:
+        """The electrode at 0 V, shape (n, 1)."""
+        return np.zeros((np.asarray(q).shape[0], 1))
+
+
+#: the terminal topologies of the electrode pair by their ``[circuit] reference`` name
 TOPOLOGIES = {t.name: t for t in (FloatingPair(), GroundedLower())}
 #: their names, in the order the studies loop over them
 REFERENCES = tuple(TOPOLOGIES)
+#: the single-electrode cell's one topology
+SINGLE_ELECTRODE = LowerToGround()
+
+
+def wiring(reference: str, electrodes: int = 2):
+    """The topology of a cell of ``electrodes`` electrodes: the pair's ``reference``
+    (:data:`TOPOLOGIES`), or the single electrode's (:data:`SINGLE_ELECTRODE`, whatever
+    the reference: it has one)."""
+    if electrodes == 1:
+        return SINGLE_ELECTRODE
+    return topology(reference)
 
 
 def topology(reference: str):
@@ -153,3 +215,14 @@ def upper_short_circuit_charge(C_ll, C_lu, C_uu, q_l, q_u, ball_charge,
     wiring = topology(reference)
     C_ll, C_lu, C_uu, q_l, q_u = (np.asarray(x, dtype=float) for x in (C_ll, C_lu, C_uu, q_l, q_u))
     return wiring.upper_short_charge(C_ll, C_lu, C_uu, q_l, q_u, ball_charge)
+
+
+#: the electrodes' names, in the order of the field's matrices, by their count
+ELECTRODE_NAMES = {1: ("lower",), 2: ("lower", "upper")}
+
+
+def terminal_voltage(potentials) -> float:
+    """V = V_lower − V_upper [V] of the electrode ``potentials`` ([V_lower, V_upper]); the
+    single-electrode cell's [V_lower]: V_lower − 0 (the ground)."""
+    values = np.ravel(np.asarray(potentials, dtype=float))
+    return float(values[0] - (values[1] if values.size > 1 else 0.0))

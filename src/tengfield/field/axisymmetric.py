@@ -122,8 +122,7 @@ class Discretisation:
     ball_load: np.ndarray  # ∫_ball v r ds per dof (2π scaled out)
     P: object            # restriction, PETSc
     n_reduced: int
-    lower: np.ndarray    # electrode dofs
-    upper: np.ndarray
+    electrodes: tuple    # each electrode's dofs, in the layout's order (lower, upper)
     grounded: np.ndarray  # table / Dirichlet far boundary dofs
     degree: int = 1
     forms: tuple = ()    # compiled (operator, ball load): assembled again on a moved mesh
@@ -173,7 +172,8 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
             return np.zeros(0, dtype=np.int32)
         return dx_api.facet_dofs(V, facet_tags, geometry.FACET_TAGS[name])
 
-    lower, upper = dofs("electrode_lower"), dofs("electrode_upper")
+    names = getattr(lay, "electrodes", ("lower", "upper"))
+    electrodes = tuple(dofs(f"electrode_{name}").astype(np.int64) for name in names)
     grounded = [dofs("table"), dofs("table_image")]
     if far_field == "dirichlet":
         grounded.append(dofs("far_boundary"))
@@ -183,12 +183,12 @@ def discretise(dx_api, mesh, cell_tags, facet_tags, lay, permittivity: dict[str,
     if lay.kelvin:
         pairs = match_image_dofs(dx_api.dof_coordinates(V), dofs("far_boundary_image"),
                                  dofs("far_boundary"), lay.shift, lay.domain_radius)
-    fixed = np.unique(np.concatenate([lower, upper, grounded])).astype(np.int64)
+    fixed = np.unique(np.concatenate([*electrodes, grounded])).astype(np.int64)
     indptr, indices, data, n_red = restriction(n_full, fixed, pairs)
     P = dx_api.matrix_from_csr(comm, (n_full, n_red), indptr, indices, data)
     return Discretisation(mesh, cell_tags, facet_tags, V, A, ball_load, P, n_red,
-                          lower.astype(np.int64), upper.astype(np.int64), grounded, degree,
-                          (a_form, load_form), far_weight=far_weight)
+                          electrodes, grounded, degree, (a_form, load_form),
+                          far_weight=far_weight)
 
 
 def reassemble(dx_api, disc: Discretisation) -> None:
@@ -203,8 +203,8 @@ def reassemble(dx_api, disc: Discretisation) -> None:
 class Solution:
     """Potentials (full dof vectors) and the quantities derived from them (SI)."""
     capacitance: np.ndarray
-    induced_fraction: np.ndarray  # [q_lower, q_upper] / q_ball
-    weighting: list          # [ψ_lower, ψ_upper] as numpy arrays
+    induced_fraction: np.ndarray  # [q_lower, q_upper] / q_ball (one per electrode)
+    weighting: list          # [ψ_lower, ψ_upper] as numpy arrays (one per electrode)
     source: np.ndarray | None  # potential of the ball charge, electrodes grounded [V]
     source_charge: np.ndarray | None  # electrode charges of the source solve (reactions) [C]
     solve_time: float
@@ -215,7 +215,8 @@ class Solution:
 def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diameter: float, *,
                          source_solve: bool, linear_solver: str = "direct",
                          unit_source: bool = False) -> Solution:
-    """Both weighting potentials (and optionally the σ source) with one factorisation."""
+    """Every electrode's weighting potential (and optionally the σ source) with one
+    factorisation; the capacitance matrix and the induced fractions over the electrodes."""
     comm = disc.mesh.comm
     t0 = time.perf_counter()
     kept = disc.solver.get(linear_solver) if disc.solver is not None else None
@@ -235,7 +236,7 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
         return y.array + lift
 
     psis = []
-    for electrode in (disc.lower, disc.upper):
+    for electrode in disc.electrodes:
         g = np.zeros(n_full)
         g[electrode] = 1.0
         Ag = disc.A.createVecLeft()
@@ -268,14 +269,15 @@ def solve_discretisation(dx_api, disc: Discretisation, sigma: float, ball_diamet
         return y.array.copy()
 
     A_psi = [apply_A(p) for p in psis]
-    C = 2.0 * math.pi * EPS0 * np.array([[psis[j] @ A_psi[k] for k in range(2)] for j in range(2)])
+    n = len(psis)
+    C = 2.0 * math.pi * EPS0 * np.array([[psis[j] @ A_psi[k] for k in range(n)] for j in range(n)])
     C = 0.5 * (C + C.T)
     # q_k = -2π σ ∫_ball ψ_k r ds and q_ball = σ π d²: the fraction does not need σ
     fraction = -2.0 * np.array([disc.ball_load @ p for p in psis]) / ball_diameter**2
     if source is not None:
         # electrode charge = reaction of the source solve: 2π (ε0 A φ - σ b) on the electrode dofs
         residual = 2.0 * math.pi * (EPS0 * apply_A(source) - sigma * disc.ball_load)
-        source_charge = np.array([residual[disc.lower].sum(), residual[disc.upper].sum()])
+        source_charge = np.array([residual[dofs].sum() for dofs in disc.electrodes])
     ball_area = 2.0 * math.pi * float(disc.ball_load.sum())
     return Solution(C, fraction, psis, source, source_charge, solve_time, ball_area, unit)
 
@@ -562,7 +564,8 @@ def solve_meshed(scene, position: float, comm, *, estimate_error: bool = True,
 def field_solution(dx_api, disc: Discretisation, sol: Solution, lay) -> FieldSolution:
     """The public :class:`FieldSolution` of one axisymmetric discretisation."""
     weighting = tuple(dx_api.function(disc.V, psi, name=f"psi_{name}")
-                      for psi, name in zip(sol.weighting, ("lower", "upper")))
+                      for psi, name in zip(sol.weighting,
+                                           getattr(lay, "electrodes", ("lower", "upper"))))
     source = None if sol.source is None else dx_api.function(disc.V, sol.source,
                                                              name="phi_source_V")
     return FieldSolution(

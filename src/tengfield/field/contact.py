@@ -114,9 +114,13 @@ def relative_difference(values, reference) -> float:
 
 
 def compared_quantities(capacitance, induced_fraction) -> np.ndarray:
-    """[C_ll, C_lu, C_uu, q_lower/q_ball, q_upper/q_ball]: what the estimates compare."""
-    capacitance = np.asarray(capacitance, dtype=float).reshape(2, 2)
-    return np.array([*capacitance[np.triu_indices(2)], *np.ravel(induced_fraction)])
+    """[C_ll, C_lu, C_uu, q_lower/q_ball, q_upper/q_ball]: what the estimates compare (the
+    upper triangle of the capacitance matrix and the fractions, for any number of
+    electrodes: [C_ll, q_lower/q_ball] for the single-electrode cell)."""
+    fraction = np.ravel(np.asarray(induced_fraction, dtype=float))
+    n = fraction.size
+    capacitance = np.asarray(capacitance, dtype=float).reshape(n, n)
+    return np.array([*capacitance[np.triu_indices(n)], *fraction])
 
 
 def relative_change(value, reference) -> float:

@@ -101,6 +101,9 @@ class AxisymmetricLayout:
     mesh_size: float
     grading_exponent: float
     info: dict = field(default_factory=dict)
+    #: the conductors, in the order of the field's matrices (``[device] electrodes``):
+    #: ("lower", "upper"), or ("lower",) for the single-electrode cell (the upper plate bare)
+    electrodes: tuple = ("lower", "upper")
 
     @property
     def z_lower(self) -> float:
@@ -130,10 +133,15 @@ class AxisymmetricLayout:
                      np.array([[0.0, zu], [ro, zu], [ro, zu + t], [0.0, zu + t]]),
                      np.array([[ri, zl], [ro, zl], [ro, zu], [ri, zu], [ri, zl]])]
 
-        def on_electrode(r, z, tol):
-            return (np.abs(np.abs(z) - zu) < tol) & (np.abs(r) <= a)
+        heights = [z for name, z in (("lower", zl), ("upper", zu)) if name in self.electrodes]
 
-        return {"electrodes": [np.array([[0.0, zl], [a, zl]]), np.array([[0.0, zu], [a, zu]])],
+        def on_electrode(r, z, tol):
+            near = np.zeros(np.shape(z), dtype=bool)
+            for height in heights:
+                near |= np.abs(z - height) < tol
+            return near & (np.abs(r) <= a)
+
+        return {"electrodes": [np.array([[0.0, z], [a, z]]) for z in heights],
                 "walls": walls, "half_width": ro + 2e-3, "z_range": (zl - t - 1.5e-3, zu + t + 1.5e-3),
                 "on_electrode": on_electrode, "height_label": "the lower electrode",
                 "table_z": zl - t if self.table else None}
@@ -221,7 +229,8 @@ def layout(scene, position: float, *, degree: int | None = None, mesh_size: floa
         mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
         info={"device_extent_m": extent,
               "rim_reach_m": min(0.25 * h, GRADING_REACH * grading_size),
-              "bulk_length_m": min(extent, GRADING_REACH * grading_size)})
+              "bulk_length_m": min(extent, GRADING_REACH * grading_size)},
+        electrodes=dev.electrode_names)
 
 
 # ---------------------------------------------------------------------------
@@ -253,7 +262,7 @@ def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> st
                   (2, occ.addRectangle(0.0, zu, 0.0, ro, t)),
                   (2, occ.addRectangle(ri, zl, 0.0, ro - ri, zu - zl))]
     electrodes = [(1, occ.addLine(occ.addPoint(0.0, z, 0.0), occ.addPoint(a, z, 0.0)))
-                  for z in (zl, zu)]
+                  for name, z in (("lower", zl), ("upper", zu)) if name in lay.electrodes]
     _, children = occ.fragment([(2, domain)], tools + electrodes)
     # children[i]: the pieces of input i (domain, ball, walls..., electrodes)
     ball_parts = {tag for _, tag in children[1]}
@@ -285,13 +294,13 @@ def build_model(gmsh, lay: AxisymmetricLayout, *, geometry_order: int = 2) -> st
             groups["far_boundary"].append(c)
         elif lay.table and abs(y - zK) < tol:
             groups["table"].append(c)
-        elif abs(y - zl) < tol and bb[3] <= a + pad:
+        elif abs(y - zl) < tol and bb[3] <= a + pad and "lower" in lay.electrodes:
             groups["electrode_lower"].append(c)
-        elif abs(y - zu) < tol and bb[3] <= a + pad:
-            groups["electrode_upper"].append(c)
+        elif abs(y - zu) < tol and bb[3] <= a + pad and "upper" in lay.electrodes:
+            groups["electrode_upper"].append(c)   # (a bare plate's face is no electrode)
 
     register_groups(gmsh, groups, mids, kelvin_shift=None if image is None else lay.shift,
-                    what="axisymmetric", name=name)
+                    what="axisymmetric", name=name, electrodes=lay.electrodes)
 
     interfaces = []
     if wall_parts:
@@ -325,13 +334,15 @@ def surface_groups(gmsh, image, ball_parts, wall_parts) -> dict[str, list[int]]:
 
 
 def register_groups(gmsh, groups: dict, mids: dict, *, kelvin_shift: float | None, what: str,
-                    name: str) -> None:
+                    name: str, electrodes: tuple = ("lower", "upper")) -> None:
     """Check that the model has its required groups, pair the Kelvin image's arcs with the
     far boundary's (periodic, shifted by ``kelvin_shift``; None: no image) by their
     middles' heights ``mids``, and add the physical groups (:data:`CELL_TAGS`,
     :data:`FACET_TAGS`); ``what`` names the geometry in the messages (the tube's and the
-    spherical shell's models)."""
-    for key in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper", "far_boundary"):
+    spherical shell's models); ``electrodes``: the conductors the model has."""
+    required = ("ball", "air", "ball_surface", *(f"electrode_{e}" for e in electrodes),
+                "far_boundary")
+    for key in required:
         if not groups[key]:
             raise FieldError(f"{what} geometry: no {key!r} entity found (gmsh model {name})")
     if kelvin_shift is not None:

@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from ..scene.shapes.methods import field_method
+from ..terminals import terminal_voltage
 
 
 def field_json(result, reference: str, potentials=None) -> dict:
@@ -17,8 +18,8 @@ def field_json(result, reference: str, potentials=None) -> dict:
     known, the open-circuit potentials [V]."""
     data = result.to_json(reference)
     if potentials is not None:
-        data["open_circuit_potential_V"] = {"lower": float(potentials[0]),
-                                            "upper": float(potentials[1])}
+        data["open_circuit_potential_V"] = dict(zip(result.electrodes,
+                                                    (float(v) for v in potentials)))
     return data
 
 
@@ -80,13 +81,13 @@ def _draw_position(result, path, reference: str, potentials) -> None:
             title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
                    f"z = {z:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
         return
-    potentials = (0.0, 0.0) if potentials is None else potentials
-    v_oc = float(potentials[0] - potentials[1])
+    potentials = (0.0,) * len(result.electrodes) if potentials is None else potentials
+    v_oc = terminal_voltage(potentials)
     field_plot.render_potential_png(
         path, solution, solution.potential_values(potentials),
         window_size=figure_window((1400, 1100)),
         title=(f"potential, ball's bottom at z = {z:.3g} mm, V_OC = {v_oc:.4g} V "
-               f"({reference})"))
+               f"({result.wiring(reference).name})"))
 
 
 def figure_window(size: tuple[int, int]) -> tuple[int, int]:
@@ -155,19 +156,26 @@ def accuracy_problem(result, scene) -> str | None:
 def summary_lines(result, reference: str, potentials=None) -> list[str]:
     """Human-readable numbers of one position (for the CLI)."""
     fr = result.induced_fractions()
+    names = result.electrodes
+    letters = [n[0] for n in names]
+    C = result.capacitance
+    matrix = "   ".join(f"C_{letters[j]}{letters[k]} = {C[j, k] * 1e12:.6g} pF"
+                       for j in range(len(names)) for k in range(j, len(names)))
+    induced = "   ".join(f"q_{name} = {result.induced_charge[k] * 1e12:.6g} pC "
+                         f"({fr[k]:+.5f} q_ball)" for k, name in enumerate(names))
+    wired = result.wiring(reference).name
     lines = [
         f"position z = {result.position * 1e3:.4g} mm, offset = {result.offset * 1e3:.3g} mm, "
         f"method = {result.method}, degree = {result.degree}",
-        f"C_ll = {result.C_ll * 1e12:.6g} pF   C_lu = {result.C_lu * 1e12:.6g} pF   "
-        f"C_uu = {result.C_uu * 1e12:.6g} pF",
-        f"q_lower = {result.q_lower * 1e12:.6g} pC ({fr[0]:+.5f} q_ball)   "
-        f"q_upper = {result.q_upper * 1e12:.6g} pC ({fr[1]:+.5f} q_ball)   "
-        f"q_ball = {result.ball_charge * 1e12:.6g} pC",
-        f"C_T ({reference}) = {result.terminal_capacitance(reference) * 1e12:.6g} pF",
+        matrix,
+        f"{induced}   q_ball = {result.ball_charge * 1e12:.6g} pC",
+        f"C_T ({wired}) = {result.terminal_capacitance(reference) * 1e12:.6g} pF",
     ]
     if potentials is not None:
-        lines.append(f"open circuit: V_lower = {potentials[0]:.6g} V, V_upper = {potentials[1]:.6g} V, "
-                     f"V_OC = V_lower - V_upper = {potentials[0] - potentials[1]:.6g} V")
+        shown = ", ".join(f"V_{name} = {v:.6g} V" for name, v in zip(names, potentials))
+        difference = "V_lower - V_upper" if len(names) == 2 else "V_lower (the ground at 0 V)"
+        lines.append(f"open circuit: {shown}, V_OC = {difference} = "
+                     f"{terminal_voltage(potentials):.6g} V")
     est = result.relative_error_estimate
     lines.append(f"dofs = {result.dofs}, cells = {result.cells}, wall time = {result.wall_time:.3g} s "
                  f"(solve {result.solve_time:.3g} s), relative error estimate = "

@@ -25,14 +25,16 @@ from .result import PositionResult
 
 def reference_charges(C_ref, q_ref, ball_charge: float, reference: str = "floating") -> np.ndarray:
     """Electrode charges [Q_lower, Q_upper] [C] of the reference state (terminals shorted):
-    the topology's (:data:`tengfield.terminals.TOPOLOGIES`)."""
-    return terminals.topology(reference).reference_charges(C_ref, q_ref, ball_charge)
+    the topology's (:func:`tengfield.terminals.wiring`)."""
+    return terminals.wiring(reference, np.asarray(q_ref).size).reference_charges(
+        C_ref, q_ref, ball_charge)
 
 
 def open_circuit_potentials(C, q, C_ref, q_ref, ball_charge: float,
                             reference: str = "floating") -> np.ndarray:
-    """[V_lower, V_upper] [V] with the terminals open, charges fixed at the reference state."""
-    wiring = terminals.topology(reference)
+    """[V_lower, V_upper] [V] with the terminals open, charges fixed at the reference state
+    (one potential, [V_lower], for the single-electrode cell)."""
+    wiring = terminals.wiring(reference, np.asarray(q).size)
     return wiring.open_potentials(C, q, wiring.reference_charges(C_ref, q_ref, ball_charge))
 
 
@@ -47,7 +49,7 @@ class OpenCircuit:
     @property
     def V_oc(self) -> float:
         """V_OC = V_lower - V_upper [V]."""
-        return float(self.potentials[0] - self.potentials[1])
+        return terminals.terminal_voltage(self.potentials)
 
     @property
     def summary(self) -> dict:

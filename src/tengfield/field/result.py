@@ -73,7 +73,7 @@ class FieldSolution:
     def potential_values(self, potentials=(0.0, 0.0)) -> np.ndarray:
         """Local dof values of φ = φ_σ + V_lower ψ_lower + V_upper ψ_upper [V]
         (``potentials`` = [V_lower, V_upper]; φ_σ = 0 when there is no source)."""
-        phi = potentials[0] * self.weighting[0].x.array + potentials[1] * self.weighting[1].x.array
+        phi = sum(v * psi.x.array for v, psi in zip(potentials, self.weighting))
         if self.source is not None:
             phi = phi + self.source.x.array
         return np.asarray(phi, dtype=float)
@@ -135,27 +135,42 @@ class PositionResult:
     scene: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(2, 2)
-        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(2)
+        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(-1)
+        n = self.induced_charge.size            # the electrodes: 2 (the pair) or 1
+        if n not in terminals.ELECTRODE_NAMES:
+            raise ValueError(f"{n} electrodes: allowed 1 or 2")
+        self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(n, n)
         if self.induced_fraction is None:
             with np.errstate(invalid="ignore", divide="ignore"):
                 self.induced_fraction = self.induced_charge / self.ball_charge
-        self.induced_fraction = np.asarray(self.induced_fraction, dtype=float).reshape(2)
+        self.induced_fraction = np.asarray(self.induced_fraction, dtype=float).reshape(n)
         if self.method not in METHODS:
             raise ValueError(f"method = {self.method!r}: choose one of {METHODS}")
 
     # -- named entries ----------------------------------------------------
+    @property
+    def electrodes(self) -> tuple[str, ...]:
+        """The electrodes' names, in the order of the matrices: ("lower", "upper"), or
+        ("lower",) for the single-electrode cell."""
+        return terminals.ELECTRODE_NAMES[self.induced_charge.size]
+
+    def _upper(self, value):
+        if self.induced_charge.size < 2:
+            raise AttributeError("the single-electrode cell has no upper electrode "
+                                 "([device] electrodes = 'lower')")
+        return float(value())
+
     @property
     def C_ll(self) -> float:
         return float(self.capacitance[0, 0])
 
     @property
     def C_lu(self) -> float:
-        return float(self.capacitance[0, 1])
+        return self._upper(lambda: self.capacitance[0, 1])
 
     @property
     def C_uu(self) -> float:
-        return float(self.capacitance[1, 1])
+        return self._upper(lambda: self.capacitance[1, 1])
 
     @property
     def q_lower(self) -> float:
@@ -163,12 +178,18 @@ class PositionResult:
 
     @property
     def q_upper(self) -> float:
-        return float(self.induced_charge[1])
+        return self._upper(lambda: self.induced_charge[1])
 
     # -- derived ----------------------------------------------------------
+    def wiring(self, reference: str = "floating"):
+        """The topology of the terminals (:func:`tengfield.terminals.wiring`): the pair's
+        ``reference``, or the single electrode's to the ground."""
+        return terminals.wiring(reference, self.induced_charge.size)
+
     def terminal_capacitance(self, reference: str = "floating") -> float:
-        """C_T [F] between the terminals for ``reference`` ("floating" or "grounded-lower")."""
-        return float(terminals.terminal_capacitance(self.C_ll, self.C_lu, self.C_uu, reference))
+        """C_T [F] between the terminals for ``reference`` ("floating" or "grounded-lower";
+        the single-electrode cell: the electrode to the ground)."""
+        return float(self.wiring(reference).terminal_capacitance(self.capacitance))
 
     def induced_fractions(self) -> np.ndarray:
         """[q_lower, q_upper] / q_ball: each in [-1, 0] by the maximum principle."""
@@ -198,11 +219,13 @@ class PositionResult:
         return {
             "position_m": self.position,
             "offset_m": self.offset,
-            "capacitance_F": {"lower_lower": self.C_ll, "lower_upper": self.C_lu,
-                              "upper_upper": self.C_uu},
-            "induced_charge_C": {"lower": self.q_lower, "upper": self.q_upper},
+            "capacitance_F": {f"{a}_{b}": float(self.capacitance[j, k])
+                              for j, a in enumerate(self.electrodes)
+                              for k, b in enumerate(self.electrodes) if k >= j},
+            "induced_charge_C": {name: float(self.induced_charge[k])
+                                 for k, name in enumerate(self.electrodes)},
             "ball_charge_C": self.ball_charge,
-            "reference": reference,
+            "reference": self.wiring(reference).name,
             "C_T_F": self.terminal_capacitance(reference),
             "dofs": int(self.dofs),
             "cells": int(self.cells),

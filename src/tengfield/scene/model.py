@@ -63,10 +63,23 @@ class Device:
     cavity_diameter: float = 20e-3
     shell_thickness: float = 2e-3
     electrode_band: float = 2e-3
+    # "both" (the electrode pair) or "lower" (the single-electrode cell, issue #51)
+    electrodes: str = "both"
 
     def __post_init__(self):
         check_section("device", self, "Device")
         shape_of(self.shape).check(self)   # the shape's own rules (the tube's: ball fits)
+        offered = getattr(shape_of(self.shape), "electrode_sets", ("both",))
+        if self.electrodes not in offered:
+            raise SceneError(f"[device] electrodes = {self.electrodes!r} is not offered by "
+                             f"shape = {self.shape!r} yet: allowed "
+                             + ", ".join(repr(e) for e in offered))
+
+    @property
+    def electrode_names(self) -> tuple[str, ...]:
+        """The cell's electrodes, in the order of the field's matrices: ``("lower",
+        "upper")`` for the pair, ``("lower",)`` for the single-electrode cell."""
+        return ("lower",) if self.electrodes == "lower" else ("lower", "upper")
 
     @property
     def ball_radius(self) -> float:
@@ -480,6 +493,10 @@ class Scene:
             raise SceneError(f"[initial] gap_mm = {show_number(self.initial.gap * 1e3, dev.stroke * 1e3)}"
                              " is out of range: "
                              f"allowed [0, {dev.stroke * 1e3:g}] (the free stroke [device] stroke_mm)")
+        if dev.electrodes == "lower" and self.circuit.reference != "floating":
+            raise SceneError(f"[circuit] reference = {self.circuit.reference!r} with [device] "
+                             "electrodes = 'lower': the single-electrode cell has one "
+                             "topology, the electrode to the ground (leave reference out)")
         check_steady_window(exc, run.settle_periods, run.duration)
         check_work(exc, run, self.instrument)
         check_vibration_work(exc, run)
@@ -548,6 +565,8 @@ class Scene:
                                            HASH_NAMES)
         if out["field"].get("mesh_motion") == "remesh":   # the hash of every cache before #40
             del out["field"]["mesh_motion"]
+        if out["device"].get("electrodes") == "both":     # the pair's: the hash before #51
+            del out["device"]["electrodes"]
         return out
 
     def field_hash(self) -> str:

@@ -115,6 +115,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "cavity_diameter_mm": Key("cavity_diameter", float, 20.0, 1e-3, _LENGTH),
         "shell_thickness_mm": Key("shell_thickness", float, 2.0, 1e-3, _LENGTH),
         "electrode_band_mm": Key("electrode_band", float, 2.0, 1e-3, _LENGTH),
+        # the cell's electrodes (issue #51): "both" (the pair), "lower" (the single-electrode
+        # cell: the upper plate bare, the terminals the lower electrode and the ground). In
+        # the field hash only when not "both" (the pair's hash is the one before the key)
+        "electrodes": Key("electrodes", str, "both", None, _choice("both", "lower"), field=True),
     },
     "excitation": {
         "kind": Key("kind", str, "sine", None, _choice("sine", "recorded", "random", "harmonics")),

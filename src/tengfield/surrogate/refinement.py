@@ -183,6 +183,20 @@ def check_tabulated_offset(scene) -> None:
     cell_of(scene).check_tabulated_offset(offset)
 
 
+def check_electrodes(scene) -> None:
+    """Refuse, in one line, a surrogate of the single-electrode cell (``[device] electrodes
+    = "lower"``): ``tengfield field`` solves it (issue #51), the surrogate and everything
+    built on it (run, sweep, map's outputs, design, uncertainty, breakdown, fit, report,
+    precompute) take the electrode pair yet."""
+    if scene.device.electrodes != "both":
+        from ..errors import SceneError
+        raise SceneError(f"[device] electrodes = {scene.device.electrodes!r} (the "
+                         "single-electrode cell): `tengfield field` solves it; the surrogate "
+                         "and the commands built on it (run, sweep, map, design, uncertainty, "
+                         "breakdown, fit, report, precompute) are not supported yet: use "
+                         "electrodes = 'both'")
+
+
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
@@ -201,6 +215,7 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
     axisymmetric solver.
     """
+    check_electrodes(scene)
     # the breakdown lines (tengfield.air_breakdown) come with the default axisymmetric solves
     lines = (solve is None and scene.has_gap_lines
              if breakdown_lines is None else bool(breakdown_lines))
@@ -412,6 +427,7 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     the middle and next to the ends of the stroke, on the axis and at the wall;
     the largest x (1 + FIELD_ERROR_MARGIN) elsewhere) or "every".
     """
+    check_electrodes(scene)
     if solve is None:
         if scene.field.environment != "free-space":   # before any solve, on every rank
             raise FieldError(f"[field] environment = {scene.field.environment!r} is not "

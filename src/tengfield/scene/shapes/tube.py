@@ -39,6 +39,9 @@ class Tube:
     stroke_derived = False
     #: free-space cell only ([field] environment)
     free_space_only = False
+    #: the ``[device] electrodes`` it offers: the pair, or the lower electrode alone (the
+    #: single-electrode cell; axisymmetric field, ``tengfield field``)
+    electrode_sets = ("both", "lower")
     #: the (z, r) table's offsets: the radius itself
     #: (tengfield.surrogate.sampling.offset_coordinate)
     offset_coordinate = "radial"
