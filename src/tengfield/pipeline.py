@@ -276,8 +276,6 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     stages: dict[str, Stage] = {}
     if scene.device.ball_charge != 0.0:   # a field stage will run: refuse bad [field] values
         check_field(scene)                # before the dynamics, not after
-    from .surrogate.cache import check_electrodes
-    check_electrodes(scene)               # the single-electrode cell: `field` only, yet
     electrical.circuit_for(scene).check(scene)   # e.g. a store the step cannot resolve
 
     if scene.charge.from_contacts:
@@ -342,6 +340,13 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
     def cell(cell_dynamics):
         return contact_source(scene, cell_dynamics, table, run.limit, period=period)
     return run.scene, run.table, run.curves, run.limit, run.charged, cell
+
+
+def _wiring(scene):
+    """The terminals' topology of ``scene`` (:func:`tengfield.terminals.wiring`): the
+    pair's ``[circuit] reference``, or the single electrode's to the ground."""
+    from . import terminals
+    return terminals.wiring(scene.circuit.reference, len(scene.device.electrode_names))
 
 
 def _contact_period(scene) -> float:
@@ -762,9 +767,12 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
         "scene": scene.source,
         # no field stage ran for a scene whose field values are refused (uncharged ball)
         "field_hash": None if scene.field_problems else scene.field_hash(),
-        "reference": scene.circuit.reference,
-        "sign_convention": "V = V_lower - V_upper; Q_SC and currents lower -> upper through "
-                           "the external circuit; reference state: ball on the lower electrode",
+        "reference": _wiring(scene).name,
+        "sign_convention": ("V = V_lower - V_upper; Q_SC and currents lower -> upper through "
+                            "the external circuit; reference state: ball on the lower electrode")
+        if len(scene.device.electrode_names) == 2 else
+        ("V = V_lower (the ground at 0 V); Q_SC and currents lower electrode -> ground "
+         "through the external circuit; reference state: ball on the lower electrode"),
         "cells": scene.device.cells,
         "circuit": circuit_block,
         "window": {"start_s": float(t[first]), "end_s": float(t[-1]),

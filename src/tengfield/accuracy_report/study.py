@@ -181,14 +181,15 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
     check_command(scene, "report")   # a charge model it runs
     from .._console import progress_bar
     from ..scene.parse import check_scene_argument
-    from ..surrogate.cache import check_electrodes
 
     check_scene_argument("tengfield.report", scene)
-    check_electrodes(scene)          # the single-electrode cell has no surrogate yet
     if comm is None:
         from mpi4py import MPI
         comm = MPI.COMM_SELF
     plan = plan or make_plan(fast)
+    if scene.device.electrodes != "both" and plan.settings_3d:   # the 3D solver: the pair's
+        import dataclasses
+        plan = dataclasses.replace(plan, settings_3d=())
     started = time.perf_counter()
     total = _task_estimate(plan)
     bar = progress_bar(total, "report", progress, unit="task", comm=farm_comm)

@@ -449,8 +449,6 @@ def check_design_combination(scene, spec) -> None:
 
     if not any(OBJECTIVES[o][2] for o in spec.objectives):   # no field: no charge needed
         return
-    from ..surrogate.cache import check_electrodes
-    check_electrodes(scene)     # the single-electrode cell has no surrogate yet
     if uses_breakdown_charge(scene):
         check_gap_lines(scene, f'[device] {SURFACE_CHARGE_KEY} = "breakdown"', NUMERIC_SIGMA)
     if spec.percentile is not None:       # each candidate's [uncertainty] draws

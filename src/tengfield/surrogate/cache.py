@@ -171,7 +171,6 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
     written by rank 0 unless ``write`` is false; a cache that cannot be
     written gives a warning (:func:`store_in_cache`). Every rank returns the table.
     """
-    check_electrodes(scene)
     start = time.perf_counter()
     path = cache_path(scene, cache_dir)
     table, status, reason = load_cached(path, scene, comm)

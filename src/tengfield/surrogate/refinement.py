@@ -184,17 +184,15 @@ def check_tabulated_offset(scene) -> None:
 
 
 def check_electrodes(scene) -> None:
-    """Refuse, in one line, a surrogate of the single-electrode cell (``[device] electrodes
-    = "lower"``): ``tengfield field`` solves it (issue #51), the surrogate and everything
-    built on it (run, sweep, map's outputs, design, uncertainty, breakdown, fit, report,
-    precompute) take the electrode pair yet."""
+    """Refuse, in one line, a (z, r) surrogate of the single-electrode cell (``[device]
+    electrodes = "lower"``, issue #51): its field is the axisymmetric solver's; the 3D
+    solves of the (z, r) table (the ball off the axis) take the electrode pair yet."""
     if scene.device.electrodes != "both":
         from ..errors import SceneError
         raise SceneError(f"[device] electrodes = {scene.device.electrodes!r} (the "
-                         "single-electrode cell): `tengfield field` solves it; the surrogate "
-                         "and the commands built on it (run, sweep, map, design, uncertainty, "
-                         "breakdown, fit, report, precompute) are not supported yet: use "
-                         "electrodes = 'both'")
+                         "single-electrode cell): the ball off the axis (the (z, r) "
+                         "surrogate of 3D solves) is not supported yet; its runs keep the "
+                         "ball on the axis ([contact] model = 'impact' or 'soft')")
 
 
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
@@ -215,7 +213,6 @@ def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_co
     sample the breakdown lines (:mod:`tengfield.field.breakdown`); None: with the default
     axisymmetric solver.
     """
-    check_electrodes(scene)
     # the breakdown lines (tengfield.air_breakdown) come with the default axisymmetric solves
     lines = (solve is None and scene.has_gap_lines
              if breakdown_lines is None else bool(breakdown_lines))

@@ -68,9 +68,10 @@ def is_mirror_symmetric(scene) -> bool:
 
     Both plates are built alike (same thickness, electrode radius and
     material), so only the environment can break the mirror symmetry: a
-    grounded table under the lower plate does, free space does not.
+    grounded table under the lower plate does, free space does not; the single-electrode
+    cell (one electrode, the upper plate bare) is not symmetric.
     """
-    return scene.field.environment == "free-space"
+    return scene.field.environment == "free-space" and scene.device.electrodes == "both"
 
 
 def mirrored(result, stroke: float):

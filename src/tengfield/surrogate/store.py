@@ -36,7 +36,13 @@ def check_shapes(arrays: dict) -> None:
     -> array) have one length and the shapes of :data:`ARRAYS`."""
     positions = np.asarray(arrays["positions"])
     n = positions.shape[0] if positions.ndim == 1 else -1
+    induced = np.shape(arrays["induced_charge"])
+    electrodes = induced[1] if len(induced) == 2 and induced[1] in (1, 2) else 2
     for attr, tail in _SHAPES.items():
+        if attr == "capacitance":            # the pair's (2, 2), one electrode's (1, 1)
+            tail = (electrodes, electrodes)
+        elif attr == "induced_charge":
+            tail = (electrodes,)
         shape = np.shape(arrays[attr])
         if n < 0 or shape != (n, *tail):
             raise SurrogateError(f"array {ARRAYS[attr]!r} has shape {shape}, expected "
@@ -73,10 +79,13 @@ def check_table(table: SurrogateTable) -> None:
     C, q, Q = table.capacitance, table.induced_charge, float(table.ball_charge)
     if not (np.all(np.isfinite(C)) and np.all(np.isfinite(q)) and np.isfinite(Q)):
         raise SurrogateError("non-finite capacitance or charge")
-    c_ll, c_lu, c_ul, c_uu = C[:, 0, 0], C[:, 0, 1], C[:, 1, 0], C[:, 1, 1]
-    scale = np.maximum(np.abs(c_ll), np.abs(c_uu))
-    bad = ~((np.abs(c_lu - c_ul) <= 1e-12 * scale) & (c_ll > 0) & (c_uu > 0) & (c_lu < 0)
-            & (c_ll * c_uu - c_lu * c_ul > 0))
+    if C.shape[1] == 1:                 # the single-electrode cell: C_ll > 0
+        bad = ~(C[:, 0, 0] > 0)
+    else:
+        c_ll, c_lu, c_ul, c_uu = C[:, 0, 0], C[:, 0, 1], C[:, 1, 0], C[:, 1, 1]
+        scale = np.maximum(np.abs(c_ll), np.abs(c_uu))
+        bad = ~((np.abs(c_lu - c_ul) <= 1e-12 * scale) & (c_ll > 0) & (c_uu > 0) & (c_lu < 0)
+                & (c_ll * c_uu - c_lu * c_ul > 0))
     if np.any(bad):
         i = int(np.argmax(bad))
         raise SurrogateError(f"the capacitance matrix at z = {z[i]:.6g} m is not symmetric "

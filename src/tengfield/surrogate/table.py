@@ -117,8 +117,12 @@ class SurrogateTable(SolveRecord):
             if getattr(self, name) is not None:
                 setattr(self, name, np.asarray(getattr(self, name), dtype=float)[order])
         self.positions = np.asarray(self.positions, dtype=float)[order]
-        self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(-1, 2, 2)[order]
-        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(-1, 2)[order]
+        count = self.positions.size            # the electrodes: 2 (the pair) or 1
+        electrodes = np.asarray(self.induced_charge).size // count if count else 2
+        self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(
+            -1, electrodes, electrodes)[order]
+        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(
+            -1, electrodes)[order]
         for name in ("dofs", "cells"):
             setattr(self, name, np.asarray(getattr(self, name), dtype=np.int64)[order])
         for name in ("wall_time", "solve_time", "field_error"):
@@ -210,13 +214,15 @@ def _line_arrays(results: list) -> dict:
 def terminal_samples(table: SurrogateTable, reference: str = "floating"):
     """``(Q_SC, C_T)`` [C], [F] at the table's positions, one cell.
 
-    ``Q_SC(z) = Q_u0(z) - Q_u0(0)``: the table must contain z = 0.
+    ``Q_SC(z) = Q_u0(z) - Q_u0(0)``: the table must contain z = 0 (Q_u0: the charge on
+    the receiving terminal shorted, :meth:`tengfield.terminals.FloatingPair.terminal_charge`;
+    the single-electrode cell's ground side).
     """
     C = table.capacitance
     q = table.induced_charge
-    c_t = terminals.terminal_capacitance(C[:, 0, 0], C[:, 0, 1], C[:, 1, 1], reference)
-    q_u0 = terminals.upper_short_circuit_charge(C[:, 0, 0], C[:, 0, 1], C[:, 1, 1],
-                                                q[:, 0], q[:, 1], table.ball_charge, reference)
+    wiring = terminals.wiring(reference, q.shape[1])   # the pair's reference, or one electrode
+    c_t = wiring.terminal_capacitance(C)
+    q_u0 = wiring.terminal_charge(C, q, table.ball_charge)
     if table.positions[0] != 0.0:
         raise SurrogateError("the surrogate table has no position z = 0 (the reference state)")
     return q_u0 - q_u0[0], np.asarray(c_t, dtype=float)

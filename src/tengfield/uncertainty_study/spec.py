@@ -380,9 +380,6 @@ def check_study_combination(scene) -> None:
     makes (``design`` asks it too)."""
     from ..air_breakdown import check_gap_lines, uses_breakdown_charge
     from ..scene.shapes import NUMERIC_SIGMA
-    from ..surrogate.cache import check_electrodes
-
-    check_electrodes(scene)     # the single-electrode cell has no surrogate yet
     if draws_from_band(scene):
         check_gap_lines(scene, BAND_DRAW, "draw sigma from another distribution")
     elif uses_breakdown_charge(scene):
