@@ -190,7 +190,7 @@ def test_the_studies_run_the_single_electrode_cell_with_figures(tmp_path, run_cl
 
 @pytest.mark.parametrize("settings, needle", [
     (["charge.model=contact"], r'\[charge\] model = "contact" with \[device\] electrodes'),
-    (["device.surface_charge_uC_per_m2=breakdown"], r"single-electrode cell .* has none yet"),
+    (["contact.model=3d", "excitation.amplitude_x_mm=0.5"], r"the ball off the axis"),
 ])
 def test_what_the_single_electrode_cell_does_not_run_yet_is_one_line(settings, needle,
                                                                       tmp_path):
@@ -237,3 +237,30 @@ def test_mpirun_runs_and_sweeps_the_single_electrode_cell_as_serial(tmp_path, cl
             assert proc.returncode == 0, (command, ranks, proc.stderr[-3000:])
             files.append((out / written).read_bytes())
         assert files[0] == files[1], command
+
+
+def test_the_single_electrodes_breakdown_limit_has_its_own_gap_lines(tmp_path, run_cli):
+    """The gap lines of one electrode: only the lower side is a gap (the upper faces the
+    bare plate); a run at σ = "breakdown" peaks at |V_gap| / V_b = 1 there (within the
+    trajectory's sampling), the limit binds on the lower gap, and `tengfield breakdown`
+    writes its files with figures."""
+    scene = tmp_path / "single.toml"
+    scene.write_text(SMALL + '[device]\nelectrodes = "lower"\nsurface_charge_uC_per_m2 = '
+                     '"breakdown"\n')
+    out = tmp_path / "run"
+    proc = run_cli("run", scene, "-o", out, "--cache-dir", tmp_path / "cache", timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    block = json.loads((out / "summary.json").read_text())["breakdown"]
+    assert block["binding"]["gap"] == "lower"
+    assert -block["sigma_uC_per_m2"] == pytest.approx(block["sigma_max_uC_per_m2"], rel=1e-12)
+    ratio = block["trajectory"]["peak_gap_voltage_over_breakdown"]
+    assert 0.99 < ratio <= 1.0 + 1e-9, ratio
+    binding = block["binding"]
+    assert binding["gap_voltage_at_sigma_max_V"] == pytest.approx(binding["breakdown_voltage_V"],
+                                                                  rel=1e-9)
+    out = tmp_path / "breakdown"
+    proc = run_cli("breakdown", scene, "-o", out, "--cache-dir", tmp_path / "cache",
+                   timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert (out / "breakdown.png").stat().st_size > 10_000
+    assert "upper gap" not in proc.stdout

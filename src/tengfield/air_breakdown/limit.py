@@ -39,7 +39,8 @@ from typing import Any
 import numpy as np
 
 from ..paschen import Paschen
-from ..terminals import topology
+from ..terminals import topology  # noqa: F401 - the pair's by name
+from ..terminals import wiring as terminals_wiring
 
 #: circuit states checked: see the module docstring
 STATES = ("open", "open-top", "short")
@@ -115,8 +116,9 @@ def lines_from_table(table, scene) -> Lines:
     angles = table.provenance.get("breakdown_line_angles_deg", LINE_ANGLES_DEG)
     dev = scene.device
     q_ball = float(table.ball_charge)
+    electrodes = np.asarray(table.induced_charge).shape[1]
     fractions = (np.asarray(table.induced_charge) / q_ball if q_ball != 0.0
-                 else np.full((table.count, 2), np.nan))
+                 else np.full((table.count, electrodes), np.nan))
     field_error = np.asarray(table.field_error, dtype=float)
     return Lines(positions=np.asarray(table.positions), capacitance=np.asarray(table.capacitance),
                  fractions=fractions, ball_area=math.pi * dev.ball_diameter**2,
@@ -125,21 +127,24 @@ def lines_from_table(table, scene) -> Lines:
                  electrode_radius=dev.electrode_radius, check=table.line_check,
                  line_lengths=getattr(cell_of(scene), "line_lengths", None),
                  field_error=float(np.nanmax(field_error)) if np.any(np.isfinite(field_error))
-                 else 0.0)
+                 else 0.0,
+                 # the single-electrode cell: the upper side faces the bare plate, no gap
+                 sides=(True, True) if electrodes == 2 else (True, False))
 
 
 def electrode_potentials(lines: Lines, state: str, reference: str = "floating") -> np.ndarray:
-    """[V_lower, V_upper] per unit σ [V per C/m²] at each sampled position, shape (n, 2)."""
+    """[V_lower, V_upper] per unit σ [V per C/m²] at each sampled position, shape (n, 2)
+    ((n, 1): the single-electrode cell's [V_lower])."""
     C = lines.capacitance
     q = lines.fractions * lines.ball_area
     q_ball = lines.ball_area
     n = lines.positions.size
+    wiring = terminals_wiring(reference, q.shape[1])   # the pair's, or one electrode's
     if state == "short":
-        return topology(reference).short_potentials(C, q, q_ball)
+        return wiring.short_potentials(C, q, q_ball)
     if state not in ("open", "open-top"):
         raise ValueError(f"state = {state!r}: choose one of {STATES}")
     ref = 0 if state == "open" else n - 1
-    wiring = topology(reference)
     charges = wiring.reference_charges(C[ref], q[ref], q_ball)
     return np.array([wiring.open_potentials(C[i], q[i], charges) for i in range(n)])
 
@@ -149,8 +154,8 @@ def gap_voltages(lines: Lines, state: str, reference: str = "floating",
     """ΔV = φ(surface point) − V_electrode per unit σ [V per C/m²], shape (n, 2, lines)."""
     basis = lines.basis if basis is None else basis
     V = electrode_potentials(lines, state, reference)
-    phi = basis[..., 0] + V[:, None, None, 0] * basis[..., 1] + V[:, None, None, 1] * basis[..., 2]
-    return phi - V[:, :, None]
+    phi = basis[..., 0] + sum(V[:, None, None, k] * basis[..., 1 + k] for k in range(V.shape[1]))
+    return phi - V[:, :, None]    # one electrode: the upper side's (no gap) is left out
 
 
 #: gaps shorter than this [m] are taken as closed: the field solves do not resolve them

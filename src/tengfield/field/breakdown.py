@@ -58,7 +58,7 @@ def line_basis(dx_api, disc, unit_source, weighting, lay, angles_deg=LINE_ANGLES
     order = np.argsort(polar)
     polar, dofs = polar[order], dofs[order]
     theta = np.radians(np.asarray(angles_deg, dtype=float))
-    out = np.empty((2, theta.size, 3))
+    out = np.empty((2, theta.size, 1 + len(weighting)))   # [φ_1, ψ_k for each electrode]
     for k, vector in enumerate((unit_source, *weighting)):
         values = np.asarray(vector)[dofs]
         out[0, :, k] = np.interp(theta, polar, values)

@@ -91,10 +91,11 @@ def breakdown_figure(result, sigma: float, *, title: str | None = None, band=Non
                             label=f"{state}, {side} gap (axis)")
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = s / curve["limit"]          # |σ ΔV| / V_b per line
-        right.plot(z * 1e3, np.max(ratio[:, 0, :], axis=1), color=colour, ls="-",
-                   label=f"{state}, lower gap")
-        right.plot(z * 1e3, np.max(ratio[:, 1, :], axis=1), color=colour, ls="--",
-                   label=f"{state}, upper gap")
+        for k, (side, ls) in enumerate((("lower", "-"), ("upper", "--"))):
+            if not np.any(np.isfinite(ratio[:, k, :])):   # no gap there (one electrode)
+                continue
+            right.plot(z * 1e3, np.max(ratio[:, k, :], axis=1), color=colour, ls=ls,
+                       label=f"{state}, {side} gap")
     b = result.binding
     v_at = s * abs(b.dv_per_sigma)
     left.plot([b.gap * 1e3], [v_at], "o", color="k", ms=7, mfc="none")

@@ -220,12 +220,13 @@ def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) ->
     if "line_check" in arrays:
         arrays["line_check"] = _expand_line_check(arrays["line_check"],
                                                   arrays.pop("line_check_index", None), n)
+    basis = 1 + np.shape(arrays["induced_charge"])[1]   # [φ_1, ψ_k per electrode]
     for attr in OPTIONAL_ARRAYS:
         if attr in arrays:
             shape = np.shape(arrays[attr])
-            if len(shape) != 4 or shape[0] != n or shape[1] != 2 or shape[3] != 3:
+            if len(shape) != 4 or shape[0] != n or shape[1] != 2 or shape[3] != basis:
                 raise SurrogateError(f"array {OPTIONAL_ARRAYS[attr]!r} has shape {shape}, "
-                                     f"expected ({n}, 2, lines, 3)")
+                                     f"expected ({n}, 2, lines, {basis})")
     if "line_potential" in arrays and not np.all(np.isfinite(arrays["line_potential"])):
         raise SurrogateError("non-finite breakdown line potentials")
     table = SurrogateTable(**arrays, **scalars, provenance=provenance_data,

@@ -108,10 +108,6 @@ def gap_lines_problem(dev, fld, alternative: str = "") -> str | None:
         method = field_method(dev.shape, fld.method, fld.ball_offset)
     except SceneError as exc:
         return str(exc)
-    if getattr(dev, "electrodes", "both") != "both":
-        return ("the breakdown gap lines are sampled for the electrode pair: the "
-                "single-electrode cell ([device] electrodes = 'lower') has none yet"
-                + (f"; {alternative}" if alternative else ""))
     if methods.FIELD_METHODS[method].gap_lines and fld.ball_offset == 0.0:
         return None
     offered = [m for m in shape_of(dev.shape).field_methods if methods.FIELD_METHODS[m].gap_lines]
