@@ -75,10 +75,17 @@ class MeshSettings:
     to the far-field sphere.
 
     ``grading`` (``[field] mesh_grading``): ``"uniform"`` keeps ``size`` everywhere
-    inside the device's bounding sphere (the zones above only refine); ``"graded"``
-    lets the size grow away from the zones that decide C and q (the gaps, the rims,
-    the ball) up to ``bulk_factor · size`` in the rest of the device, and from there
+    inside the device's bounding sphere (the zones above only refine). ``"graded"``
+    puts the dofs where the error of C and q is (measured, docs/field3d.md "Graded
+    meshes": at fine meshes the elements at the rims' floor decide it): the rims'
+    floor is ``graded_rim_floor · size``, the zones above are sized from
+    ``feature_factor · size`` instead of ``size``, and away from them the size grows up
+    to ``bulk_factor · feature_factor · size`` in the rest of the device and from there
     by ``growth`` per unit distance to the far sphere (see :func:`_size_fields`).
+
+    Study knobs (``Solve3DSettings.mesh_options``; no scene key): ``rim_factor`` scales
+    the rims' grading (``rim_factor · size · (ρ/L)^…``), ``rim_power`` replaces its
+    exponent ``1 - α/p`` when > 0 (docs/field3d.md, "Graded meshes").
     """
     size: float
     domain_radius: float
@@ -88,14 +95,15 @@ class MeshSettings:
     growth: float = 0.3
     grading: str = "uniform"
     bulk_factor: float = 4.0
+    feature_factor: float = 2.0
+    graded_rim_floor: float = 0.02
     rim_factor: float = 1.0
     rim_power: float = 0.0
-    rim_slope: float = 0.0
 
     def __post_init__(self):
         # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
         for name in ("size", "domain_radius", "rim_floor", "ball_factor", "growth", "bulk_factor",
-                     "rim_factor", "rim_power", "rim_slope"):
+                     "feature_factor", "graded_rim_floor", "rim_factor", "rim_power"):
             object.__setattr__(self, name, float(getattr(self, name)))
         if not (self.size > 0 and math.isfinite(self.size)):
             raise FieldError(f"mesh_size_mm = {self.size * 1e3!r} is out of range: allowed (0, 100] mm")
@@ -285,15 +293,19 @@ GRADED_BALL_SLOPE = 0.4
 
 def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -> None:
     """Background size [m]: the Min of the rim, ball-surface, gap and bulk/far-field
-    gradings. ``"uniform"``: the bulk is ``size`` inside the device's bounding sphere;
-    ``"graded"``: the bulk is ``bulk_factor · size``, and the ball's Threshold grows
-    from ``ball_factor · size`` to it with slope :data:`GRADED_BALL_SLOPE` (the rims'
-    radical grading and the gaps' linear growth reach it by themselves)."""
+    gradings. ``"uniform"``: the zones are sized from ``size``, the rims floored at
+    ``rim_floor · size``, the bulk is ``size`` inside the device's bounding sphere.
+    ``"graded"``: the zones are sized from ``h = feature_factor · size``, the rims
+    floored at ``graded_rim_floor · size``, the bulk is ``bulk_factor · h``, and the
+    ball's Threshold grows from ``ball_factor · h`` to it with slope
+    :data:`GRADED_BALL_SLOPE` (the rims' radical grading and the gaps' linear growth
+    reach it by themselves)."""
     import gmsh
 
     fld = gmsh.model.mesh.field
-    h = settings.size
     graded = settings.grading == "graded"
+    h = settings.size * (settings.feature_factor if graded else 1.0)
+    floor = settings.size * (settings.graded_rim_floor if graded else settings.rim_floor)
     bulk = settings.bulk_factor * h if graded else h
     fields = []
 
@@ -301,15 +313,9 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     reach = 0.25 * cell.electrode_spacing
     rim = fld.add("MathEval")
     rho = f"({cell.rim_distance_expr()})"
-    if settings.rim_slope > 0:
-        # radical up to the reach L, then linear: h + slope (ρ - L)
-        grading = (f"{eval_number(settings.rim_factor * h)}*(min({rho}, {eval_number(reach)})"
-                   f"/{eval_number(reach)})^{eval_number(power)} + {eval_number(settings.rim_slope)}"
-                   f"*max(0, {rho} - {eval_number(reach)})")
-    else:
-        grading = (f"{eval_number(settings.rim_factor * h)}*({rho}/{eval_number(reach)})"
-                   f"^{eval_number(power)}")
-    fld.setString(rim, "F", f"max({eval_number(settings.rim_floor * h)}, {grading})")
+    grading = (f"{eval_number(settings.rim_factor * h)}*({rho}/{eval_number(reach)})"
+               f"^{eval_number(power)}")
+    fld.setString(rim, "F", f"max({eval_number(floor)}, {grading})")
     fields.append(rim)
 
     ball_dist = fld.add("Distance")
@@ -325,8 +331,10 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     fld.setNumber(ball, "StopAtDistMax", 1)
     fields.append(ball)
 
-    # contact gaps: size grows linearly with the distance from the gap's midpoint
-    for s_min, point in cell.gap_refinements_3d(centre, h, settings.ball_factor):
+    # contact gaps: size grows linearly with the distance from the gap's midpoint (from at
+    # least 0.02 size at the closest point, at most the ball's surface size)
+    ball_factor = settings.ball_factor * (settings.feature_factor if graded else 1.0)
+    for s_min, point in cell.gap_refinements_3d(centre, settings.size, ball_factor):
         gap_field = fld.add("MathEval")
         fld.setString(gap_field, "F", _gap_size(s_min, point))
         fields.append(gap_field)
