@@ -95,7 +95,7 @@ class MeshSettings:
     growth: float = 0.3
     grading: str = "uniform"
     bulk_factor: float = 4.0
-    feature_factor: float = 2.0
+    feature_factor: float = 1.7
     graded_rim_floor: float = 0.02
     rim_factor: float = 1.0
     rim_power: float = 0.0
