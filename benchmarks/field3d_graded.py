@@ -13,6 +13,10 @@ printed, ~2e-5). Prints a markdown table and writes ``field3d_graded.csv``; ``up
 is recorded since the machine may be shared. Whole-process times are the CLI's
 (``tengfield field --set field.method=3d --set field.mesh_grading=... --position-mm 1.5``),
 timed from outside.
+
+``--own-mesh`` (issue #55 item 5, a study): instead, for each size and grading, solve the
+same mesh at P2 and P3 and compare ``|Q_P3 - Q_P2|`` (a P(k+1) estimate on the solve's own
+mesh) with the P2 error against the reference.
 """
 from __future__ import annotations
 
@@ -84,6 +88,52 @@ def run(sizes, gradings, position_mm: float, reference_mm: float, out: Path | No
     return rows
 
 
+def own_mesh(sizes, gradings, position_mm: float, reference_mm: float) -> list[dict]:
+    """P2 and P3 on one mesh: their errors against the axisymmetric reference and
+    ``max |Q_P3 - Q_P2| / |Q_P3|`` over C_ll, C_lu, C_uu, q_lower, q_upper."""
+    import numpy as np
+    from mpi4py import MPI
+
+    from tengfield.field import solve_position, solver3d
+    from tengfield.field.cells import plate_model3d
+    from tengfield.scene import default_scene
+
+    comm = MPI.COMM_SELF
+    scene = default_scene()
+    z = position_mm * 1e-3
+    axi = solve_position(scene, z, comm=comm, method="axisymmetric", mesh_size_mm=reference_mm)
+    reference = np.array([values(axi)[k] for k in KEYS[:5]])
+    cell = plate_model3d.cylindrical_cell(scene.device)
+    perm = solver3d.cell_permittivity(cell)
+    radius = scene.field.domain_radius
+    rows = []
+    for h in sizes:
+        for grading in gradings:
+            settings = solver3d.Solve3DSettings(degree=2, mesh_size=h * 1e-3, domain_radius=radius,
+                                                far_field="kelvin", mesh_grading=grading)
+            cell_mesh = solver3d.mesh_cell(cell, z, 0.0, settings.mesh_settings(), comm=comm)
+            found = {}
+            for degree in (2, 3):
+                start = time.perf_counter()
+                pot = solver3d.solve_weighting_potentials(cell_mesh, perm, degree=degree,
+                                                          far_field="kelvin", domain_radius=radius)
+                c = solver3d.capacitance_matrix(cell_mesh, pot, perm, far_field="kelvin",
+                                                domain_radius=radius)
+                q = -solver3d.ball_surface_means(cell_mesh, pot)
+                found[degree] = (np.array([c[0, 0], c[0, 1], c[1, 1], q[0], q[1]]), pot.dofs,
+                                 time.perf_counter() - start)
+            (v2, n2, t2), (v3, n3, t3) = found[2], found[3]
+            rows.append({"grading": grading, "mesh_size_mm": h, "dofs_p2": n2, "dofs_p3": n3,
+                         "wall_p2_s": t2, "wall_p3_s": t3,
+                         "err_p2": float(np.max(np.abs(v2 - reference) / np.abs(reference))),
+                         "err_p3": float(np.max(np.abs(v3 - reference) / np.abs(reference))),
+                         "own_mesh_estimate": float(np.max(np.abs(v3 - v2) / np.abs(v3)))})
+            r = rows[-1]
+            print(f"| {grading} | {h} | {n2} | {n3} | {t2:.1f} | {t3:.1f} | {r['err_p2']:.1e} | "
+                  f"{r['err_p3']:.1e} | {r['own_mesh_estimate']:.1e} |", flush=True)
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=float, nargs="+", default=[1.0, 0.7, 0.5],
@@ -93,7 +143,14 @@ def main() -> None:
     parser.add_argument("--reference-mm", type=float, default=0.25,
                         help="the axisymmetric reference's mesh_size_mm")
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--own-mesh", action="store_true",
+                        help="P2 against P3 on the same mesh (a P(k+1) error estimate)")
     args = parser.parse_args()
+    if args.own_mesh:
+        print("| grading | h [mm] | dofs P2 | dofs P3 | wall P2 [s] | wall P3 [s] | err P2 | "
+              "err P3 | abs(P3 - P2) |\n|---|---|---|---|---|---|---|---|---|")
+        own_mesh(args.sizes, args.gradings, args.position_mm, args.reference_mm)
+        return
     run(args.sizes, args.gradings, args.position_mm, args.reference_mm, args.out)
 
 
