@@ -53,6 +53,9 @@ _model_counter = itertools.count()
 #: are optimised after meshing (gmsh's default is 0.3; see :func:`build_model`)
 OPTIMIZE_THRESHOLD = 0.2
 
+#: ``[field] mesh_grading``: the allowed values (:class:`MeshSettings` ``grading``)
+MESH_GRADINGS = ("uniform", "graded")
+
 
 @dataclass(frozen=True)
 class MeshSettings:
@@ -70,6 +73,19 @@ class MeshSettings:
 
     Outside the device the size grows by ``growth`` per unit distance up
     to the far-field sphere.
+
+    ``grading`` (``[field] mesh_grading``): ``"uniform"`` keeps ``size`` everywhere
+    inside the device's bounding sphere (the zones above only refine). ``"graded"``
+    puts the dofs where the error of C and q is (measured, docs/field3d.md "Graded
+    meshes": at fine meshes the elements at the rims' floor decide it): the rims'
+    floor is ``graded_rim_floor · size``, the zones above are sized from
+    ``feature_factor · size`` instead of ``size``, and away from them the size grows up
+    to ``bulk_factor · feature_factor · size`` in the rest of the device and from there
+    by ``growth`` per unit distance to the far sphere (see :func:`_size_fields`).
+
+    Study knobs (``Solve3DSettings.mesh_options``; no scene key): ``rim_factor`` scales
+    the rims' grading (``rim_factor · size · (ρ/L)^…``), ``rim_power`` replaces its
+    exponent ``1 - α/p`` when > 0 (docs/field3d.md, "Graded meshes").
     """
     size: float
     domain_radius: float
@@ -77,15 +93,25 @@ class MeshSettings:
     rim_floor: float = 0.05
     ball_factor: float = 0.5
     growth: float = 0.3
+    grading: str = "uniform"
+    bulk_factor: float = 4.0
+    feature_factor: float = 1.7
+    graded_rim_floor: float = 0.02
+    rim_factor: float = 1.0
+    rim_power: float = 0.0
 
     def __post_init__(self):
         # plain floats: gmsh MathEval strings use repr(), and numpy 2 writes np.float64(...)
-        for name in ("size", "domain_radius", "rim_floor", "ball_factor", "growth"):
+        for name in ("size", "domain_radius", "rim_floor", "ball_factor", "growth", "bulk_factor",
+                     "feature_factor", "graded_rim_floor", "rim_factor", "rim_power"):
             object.__setattr__(self, name, float(getattr(self, name)))
         if not (self.size > 0 and math.isfinite(self.size)):
             raise FieldError(f"mesh_size_mm = {self.size * 1e3!r} is out of range: allowed (0, 100] mm")
         if self.order not in (1, 2):
             raise FieldError(f"degree = {self.order!r}: the 3D mesh order must be 1 or 2")
+        if self.grading not in MESH_GRADINGS:
+            raise FieldError(f"[field] mesh_grading = {self.grading!r} is not allowed: choose one of "
+                             + ", ".join(repr(g) for g in MESH_GRADINGS))
 
 
 def minimum_gap(cell) -> float:
@@ -260,19 +286,36 @@ def _gap_size(s_min, point) -> str:
     return f"{eval_number(s_min)} + 0.35*sqrt((x-({x}))^2+(y-({y}))^2+(z-({z}))^2)"
 
 
+#: ``grading = "graded"``: growth of the size per unit distance away from the ball surface
+#: (the ball's Threshold field) up to the bulk size
+GRADED_BALL_SLOPE = 0.4
+
+
 def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -> None:
-    """Background size: min of rim, ball-surface, gap and far-field gradings."""
+    """Background size [m]: the Min of the rim, ball-surface, gap and bulk/far-field
+    gradings. ``"uniform"``: the zones are sized from ``size``, the rims floored at
+    ``rim_floor · size``, the bulk is ``size`` inside the device's bounding sphere.
+    ``"graded"``: the zones are sized from ``h = feature_factor · size``, the rims
+    floored at ``graded_rim_floor · size``, the bulk is ``bulk_factor · h``, and the
+    ball's Threshold grows from ``ball_factor · h`` to it with slope
+    :data:`GRADED_BALL_SLOPE` (the rims' radical grading and the gaps' linear growth
+    reach it by themselves)."""
     import gmsh
 
     fld = gmsh.model.mesh.field
-    h = settings.size
+    graded = settings.grading == "graded"
+    h = settings.size * (settings.feature_factor if graded else 1.0)
+    floor = settings.size * (settings.graded_rim_floor if graded else settings.rim_floor)
+    bulk = settings.bulk_factor * h if graded else h
     fields = []
 
-    power = 1.0 - RIM_EXPONENT / settings.order
+    power = settings.rim_power or 1.0 - RIM_EXPONENT / settings.order
     reach = 0.25 * cell.electrode_spacing
     rim = fld.add("MathEval")
-    fld.setString(rim, "F", f"max({eval_number(settings.rim_floor * h)}, "
-                            f"{eval_number(h)}*({cell.rim_distance_expr()}/{eval_number(reach)})^{eval_number(power)})")
+    rho = f"({cell.rim_distance_expr()})"
+    grading = (f"{eval_number(settings.rim_factor * h)}*({rho}/{eval_number(reach)})"
+               f"^{eval_number(power)}")
+    fld.setString(rim, "F", f"max({eval_number(floor)}, {grading})")
     fields.append(rim)
 
     ball_dist = fld.add("Distance")
@@ -281,21 +324,24 @@ def _size_fields(cell, centre, settings: MeshSettings, ball_surfs, rim_curves) -
     ball = fld.add("Threshold")
     fld.setNumber(ball, "InField", ball_dist)
     fld.setNumber(ball, "SizeMin", settings.ball_factor * h)
-    fld.setNumber(ball, "SizeMax", h)
+    fld.setNumber(ball, "SizeMax", bulk)
     fld.setNumber(ball, "DistMin", 0.25 * h)
-    fld.setNumber(ball, "DistMax", 2.0 * h)
+    fld.setNumber(ball, "DistMax", (0.25 * h + (bulk - settings.ball_factor * h) / GRADED_BALL_SLOPE)
+                  if graded else 2.0 * h)
     fld.setNumber(ball, "StopAtDistMax", 1)
     fields.append(ball)
 
-    # contact gaps: size grows linearly with the distance from the gap's midpoint
-    for s_min, point in cell.gap_refinements_3d(centre, h, settings.ball_factor):
+    # contact gaps: size grows linearly with the distance from the gap's midpoint (from at
+    # least 0.02 size at the closest point, at most the ball's surface size)
+    ball_factor = settings.ball_factor * (settings.feature_factor if graded else 1.0)
+    for s_min, point in cell.gap_refinements_3d(centre, settings.size, ball_factor):
         gap_field = fld.add("MathEval")
         fld.setString(gap_field, "F", _gap_size(s_min, point))
         fields.append(gap_field)
 
     device_r = cell.bounding_radius
     far = fld.add("MathEval")
-    fld.setString(far, "F", f"max({eval_number(h)}, {eval_number(h)} + {eval_number(settings.growth)}"
+    fld.setString(far, "F", f"max({eval_number(bulk)}, {eval_number(bulk)} + {eval_number(settings.growth)}"
                             f"*(sqrt(x^2+y^2+z^2) - {eval_number(device_r)}))")
     fields.append(far)
 

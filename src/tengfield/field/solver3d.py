@@ -344,10 +344,12 @@ class Solve3DSettings:
     far_field: str = "robin"
     estimate_error: bool = True
     mesh_options: tuple = ()            # extra MeshSettings fields, (("rim_factor", 0.2),)
+    mesh_grading: str = "uniform"       # [field] mesh_grading: "uniform" or "graded"
 
     def mesh_settings(self, coarsen: float = 1.0) -> MeshSettings:
         return MeshSettings(size=self.mesh_size * coarsen, domain_radius=self.domain_radius,
-                            order=2 if self.degree >= 2 else 1, **dict(self.mesh_options))
+                            order=2 if self.degree >= 2 else 1, grading=self.mesh_grading,
+                            **dict(self.mesh_options))
 
 
 @dataclass

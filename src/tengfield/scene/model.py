@@ -288,6 +288,7 @@ class Field:
     radial_degree: int = 2
     radial_tolerance: float = 1e-2
     mesh_motion: str = "remesh"       # "move": one mesh per table moved with the ball
+    mesh_grading: str = "uniform"     # 3D meshes: "graded" coarsens away from gaps, rims, ball
 
     def __post_init__(self):
         check_section("field", self, "Field")
@@ -567,6 +568,8 @@ class Scene:
             del out["field"]["mesh_motion"]
         if out["device"].get("electrodes") == "both":     # the pair's: the hash before #51
             del out["device"]["electrodes"]
+        if out["field"].get("mesh_grading") == "uniform":  # the hash of every cache before #55
+            del out["field"]["mesh_grading"]
         return out
 
     def field_hash(self) -> str:

@@ -233,6 +233,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
         # field hash only when "move" (Scene.field_inputs): "remesh" keeps today's keys
         "mesh_motion": Key("mesh_motion", str, "remesh", None, _choice("remesh", "move"),
                            field=True),
+        # the 3D meshes (tengfield.field.geometry3d, issue #55): "uniform" keeps the base size
+        # in the whole device; "graded" lets it grow away from the gaps, the electrode rims
+        # and the ball. In the field hash only when "graded" (Scene.field_inputs)
+        "mesh_grading": Key("mesh_grading", str, "uniform", None, _choice("uniform", "graded"),
+                            field=True),
     },
     # kind = "rectifier": harvesting electronics (issue #11; tengfield.harvest); the
     # chip's defaults are the LTC3588-1's (docs/harvest.md)

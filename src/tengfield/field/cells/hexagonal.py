@@ -70,6 +70,7 @@ class Hexagonal:
         fld = scene.field
         settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                    domain_radius=fld.domain_radius, far_field=fld.far_field,
+                                   mesh_grading=getattr(fld, "mesh_grading", "uniform"),
                                    estimate_error=options.get("estimate_error", True))
         return solve_cell_3d(self.cell, position, offset=offset,
                              surface_charge=scene.device.surface_charge, settings=settings,

@@ -196,6 +196,7 @@ def solve_position_3d(scene, position: float, *, offset: float | None = None, co
     # mesh_size_mm as written, or the default scaled to the device's features, as in 2D
     settings = Solve3DSettings(degree=fld.degree, mesh_size=base_mesh_size(scene),
                                domain_radius=fld.domain_radius, far_field=fld.far_field,
+                               mesh_grading=getattr(fld, "mesh_grading", "uniform"),
                                estimate_error=estimate_error)
     return solve_cell_3d(cylindrical_cell(scene.device), position, offset=offset,
                          surface_charge=scene.device.surface_charge, settings=settings, comm=comm,
