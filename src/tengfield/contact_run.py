@@ -154,11 +154,6 @@ def check_contact_charge(scene, off_axis: bool = False) -> None:
     from .errors import SceneError
     from .dynamics.models import MODELS, model_of
 
-    if scene.device.electrodes != "both":
-        raise SceneError('[charge] model = "contact" with [device] electrodes = '
-                         f"{scene.device.electrodes!r}: not supported yet (the contacts' "
-                         "charge bookkeeping is the electrode pair's); use [charge] model = "
-                         '"constant" for the single-electrode cell')
     if model_of(scene).lateral and not off_axis:
         on_axis = ", ".join(repr(name) for name, entry in MODELS.items() if not entry.lateral)
         raise SceneError('[charge] model = "contact" with [contact] model = '

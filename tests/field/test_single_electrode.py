@@ -189,7 +189,6 @@ def test_the_studies_run_the_single_electrode_cell_with_figures(tmp_path, run_cl
 
 
 @pytest.mark.parametrize("settings, needle", [
-    (["charge.model=contact"], r'\[charge\] model = "contact" with \[device\] electrodes'),
     (["contact.model=3d", "excitation.amplitude_x_mm=0.5"], r"the ball off the axis"),
 ])
 def test_what_the_single_electrode_cell_does_not_run_yet_is_one_line(settings, needle,
@@ -264,3 +263,62 @@ def test_the_single_electrodes_breakdown_limit_has_its_own_gap_lines(tmp_path, r
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (out / "breakdown.png").stat().st_size > 10_000
     assert "upper gap" not in proc.stdout
+
+
+CONTACT = {"model": "contact", "equilibrium_uC_per_m2": -20.0, "efficiency": 0.3,
+           "discharge": "none"}
+
+
+def _small(**sections):
+    import tomllib
+
+    base = tomllib.loads(SMALL)
+    scene = default_scene().with_values(**{**base, **sections})
+    return with_settings(scene, SINGLE)
+
+
+def test_a_contact_charged_single_electrode_at_equilibrium_is_the_constant_run(tmp_path):
+    import tengfield as tf
+
+    constant = tf.run(_small(device={"surface_charge_uC_per_m2": -20.0}), cache_dir=tmp_path)
+    contact = tf.run(_small(charge={**CONTACT, "initial_uC_per_m2": -20.0}),
+                     cache_dir=tmp_path)
+    assert contact.summary["reference"] == "lower-to-ground"
+    for key in ("Q_sc_C", "I_sc_A", "V_oc_V"):
+        ours, theirs = contact.waveforms[key], constant.waveforms[key]
+        assert np.max(np.abs(ours - theirs)) <= 1e-12 * np.max(np.abs(theirs)), key
+
+
+def test_the_single_electrodes_wire_carries_what_the_electrode_gives_up(tmp_path):
+    """Bookkeeping of one electrode: shorted it holds q f_l(z) and it gives every contact's
+    gain to the ball, so the wire has carried Q_SC = f_l(0) q0 − f_l(z) q(t) − D(t) to the
+    ground (D: the gains); checked at the table's own positions against its fractions
+    (exact there), with leakage; the bare upper plate's impacts charge nothing; and I_SC is
+    dQ_SC/dt between contacts."""
+    import tengfield as tf
+    from tengfield.contact_run import contact_source, field_scene
+    from tengfield.surrogate import obtain_table
+
+    scene = _small(charge={**CONTACT, "leakage_time_s": 0.05, "initial_uC_per_m2": -5.0},
+                   excitation={"frequency_hz": 30.0, "amplitude_mm": 1.0})
+    out = tf.run(scene, cache_dir=tmp_path)
+    plates = np.asarray(out.dynamics.impacts.plate)
+    assert np.any(plates == "upper")                    # the ball does hit the bare plate
+    assert out.summary["charge"]["contacts"] == int(np.sum(plates == "lower"))
+    table, _ = obtain_table(field_scene(scene), cache_dir=tmp_path)
+    run = contact_source(scene, out.dynamics, table)
+    terminal, history = run.curves.terminal, run.history
+    fractions = table.induced_charge[:, 0] / table.ball_charge
+    t = np.linspace(0.0, scene.run.duration, table.positions.size)
+    q = history.at(t)
+    gained = np.array([np.sum(history.gains[history.times <= x]) for x in t])
+    expected = fractions[0] * history.start - fractions * q - gained
+    got = terminal.evaluate(t, table.positions, np.zeros_like(t))[0]
+    np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12 * np.max(np.abs(expected)))
+    time, charge, current = (out.waveforms[k] for k in ("time_s", "Q_sc_C", "I_sc_A"))
+    impacts = np.asarray(out.dynamics.impacts.time) - float(out.dynamics.t[0]) + float(time[0])
+    near = np.zeros_like(time, dtype=bool)
+    for c in impacts:
+        near |= np.abs(time - c) < 1.5 * (time[1] - time[0])
+    slope = np.gradient(charge, time)
+    assert np.median(np.abs(slope - current)[~near]) < 1e-3 * np.abs(current).max()

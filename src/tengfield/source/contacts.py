@@ -40,16 +40,19 @@ def contacts_of(scene, impacts, elapsed_times) -> tuple[np.ndarray, np.ndarray, 
     Hertz's area [m^2] at each one's normal speed (the speed before it), and whether it
     was the upper electrode (Hertz with the ball's equivalent radius on that electrode,
     :func:`electrode_contact_radius`). Impacts at zero speed (resting contact) touch no
-    new area."""
+    new area. The single-electrode cell's bare upper plate is no electrode: its impacts
+    are left out (the contact with a dielectric, like the tube wall's, is not modelled)."""
     device = scene.device
-    speed = np.asarray(impacts.speed_before, dtype=float)
-    upper = np.asarray(impacts.plate) == "upper"
+    plates = np.asarray(impacts.plate)
+    on_electrode = np.isin(plates, device.electrode_names)
+    speed = np.asarray(impacts.speed_before, dtype=float)[on_electrode]
+    upper = plates[on_electrode] == "upper"
     radius = electrode_contact_radius(scene)
     modulus = contact_modulus(scene)
     areas = np.where(upper,
                      hertz_contact_area(device.ball_mass, radius["upper"], speed, modulus),
                      hertz_contact_area(device.ball_mass, radius["lower"], speed, modulus))
-    times = np.asarray(elapsed_times, dtype=float)
+    times = np.asarray(elapsed_times, dtype=float)[on_electrode]
     order = np.argsort(times, kind="stable")
     return times[order], np.asarray(areas, dtype=float)[order], upper[order]
 

@@ -21,7 +21,16 @@ so one surrogate table, solved at any reference charge q_ref, gives every charge
   Q_ref(z) = q_ref (b(z) - b(0)) the constant-charge curve of the table at q_ref.
 
 With q = q0 = q_ref and nothing lost this is the constant model's Q_SC(z) exactly; C_T(z)
-does not depend on the charge. Between contacts
+does not depend on the charge.
+
+The single-electrode cell (one electrode, the terminals the electrode and the ground): the
+electrode shorted (at 0 V) holds q f_l(z) (f_l its induced fraction), and every contact
+gain is drawn from it (the bare upper plate charges nothing), so the charge the wire has
+carried from the electrode to the ground is
+
+    Q_SC(t) = (q(t)/q_ref) Q_ref(z) + (q(t) - q0) b(0) - D(t),   b(0) = -f_l(0),
+
+and between contacts I_SC = (q/q_ref) Q_ref'(z) z' + q' (Q_ref(z)/q_ref + b(0)). Between contacts
 I_SC = (q/q_ref) Q_ref'(z) z' - L k'(z) z' + q' (b(z) + k(z)), q' = -q/tau (leakage);
 the jump of Q_SC at a contact (one contact's gain times b + k at the ball, or the gain
 itself at the upper electrode) is a charge moved in an instant, seen in Q_SC and in the
@@ -54,10 +63,13 @@ class ContactTerminal:
             raise ValueError("the table's reference charge is 0: no charge per unit charge")
         self.history = history
         C, q = table.capacitance, table.induced_charge
-        q_u0 = terminals.upper_short_circuit_charge(C[0, 0, 0], C[0, 0, 1], C[0, 1, 1],
-                                                    q[0, 0], q[0, 1], self.q_ref, reference)
-        self.b0 = float(q_u0) / self.q_ref
-        share = terminals.topology(reference).upper_share(C[:, 0, 0], C[:, 0, 1], C[:, 1, 1])
+        wiring = terminals.wiring(reference, q.shape[1])
+        #: one electrode (the single-electrode cell): the contacts draw from the sending
+        #: electrode itself, Q_SC = (q/q_ref) Q_ref(z) + (q - q0) b(0) - D(t)
+        self.single = q.shape[1] == 1
+        self.b0 = float(wiring.terminal_charge(C[0], q[0], self.q_ref)) / self.q_ref
+        share = np.zeros(table.positions.size) if self.single else \
+            wiring.upper_share(C[:, 0, 0], C[:, 0, 1], C[:, 1, 1])
         kind = "not-a-knot" if table.positions.size >= 4 else "natural"
         self._k = CubicSpline(table.positions, share, bc_type=kind)
         self._dk = self._k.derivative()
@@ -96,8 +108,12 @@ class ContactTerminal:
         q_ref_curve = self.curves.charge(zc)
         k, dk = self._k(zc), self._dk(zc)
         scale = q / self.q_ref
-        q_sc = scale * q_ref_curve + (q - self.history.start) * self.b0 - k * lost \
-            + self.upper_gains(t)
+        if self.single:          # every gain is drawn from the electrode: D(t)
+            q_sc = scale * q_ref_curve + (q - self.history.start) * self.b0 \
+                - self._counted(self._gained, t)
+        else:
+            q_sc = scale * q_ref_curve + (q - self.history.start) * self.b0 - k * lost \
+                + self.upper_gains(t)
         tau = self.history.leakage_time
         q_rate = -q / tau if tau > 0.0 else np.zeros_like(q)
         dq_dt_z = scale * self.curves.charge_derivative(zc) - lost * dk
