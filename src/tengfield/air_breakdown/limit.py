@@ -39,7 +39,6 @@ from typing import Any
 import numpy as np
 
 from ..paschen import Paschen
-from ..terminals import topology  # noqa: F401 - the pair's by name
 from ..terminals import wiring as terminals_wiring
 
 #: circuit states checked: see the module docstring

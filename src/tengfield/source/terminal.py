@@ -21,7 +21,11 @@ so one surrogate table, solved at any reference charge q_ref, gives every charge
   Q_ref(z) = q_ref (b(z) - b(0)) the constant-charge curve of the table at q_ref.
 
 With q = q0 = q_ref and nothing lost this is the constant model's Q_SC(z) exactly; C_T(z)
-does not depend on the charge.
+does not depend on the charge. Between contacts
+I_SC = (q/q_ref) Q_ref'(z) z' - L k'(z) z' + q' (b(z) + k(z)), q' = -q/tau (leakage);
+the jump of Q_SC at a contact (one contact's gain times b + k at the ball, or the gain
+itself at the upper electrode) is a charge moved in an instant, seen in Q_SC and in the
+circuits' response, not as a finite I_SC sample.
 
 The single-electrode cell (one electrode, the terminals the electrode and the ground): the
 electrode shorted (at 0 V) holds q f_l(z) (f_l its induced fraction), and every contact
@@ -30,11 +34,7 @@ carried from the electrode to the ground is
 
     Q_SC(t) = (q(t)/q_ref) Q_ref(z) + (q(t) - q0) b(0) - D(t),   b(0) = -f_l(0),
 
-and between contacts I_SC = (q/q_ref) Q_ref'(z) z' + q' (Q_ref(z)/q_ref + b(0)). Between contacts
-I_SC = (q/q_ref) Q_ref'(z) z' - L k'(z) z' + q' (b(z) + k(z)), q' = -q/tau (leakage);
-the jump of Q_SC at a contact (one contact's gain times b + k at the ball, or the gain
-itself at the upper electrode) is a charge moved in an instant, seen in Q_SC and in the
-circuits' response, not as a finite I_SC sample.
+and between contacts I_SC = (q/q_ref) Q_ref'(z) z' + q' (Q_ref(z)/q_ref + b(0)).
 """
 from __future__ import annotations
 
