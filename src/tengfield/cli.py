@@ -353,20 +353,34 @@ def _main(argv: list[str] | None = None) -> int:
         print(f"tengfield: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("tengfield: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted()
     except OSError as exc:   # full disk, vanished directory...: a fault, not a bug report
         if _caused_by_interrupt(exc):
-            print("tengfield: interrupted", file=sys.stderr)
-            return 130
+            return _interrupted()
         where = f": {_STAGING_IN_PATH.sub('', str(exc.filename))}" if exc.filename else ""
         print(f"tengfield: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 1
     except Exception as exc:
         if _caused_by_interrupt(exc):   # Ctrl-C/SIGTERM inside a C callback (numba's
-            print("tengfield: interrupted", file=sys.stderr)   # unpickler): a SystemError
-            return 130                                          # wrapping the interrupt
+            return _interrupted()       # unpickler): a SystemError wrapping the interrupt
         raise
+
+
+def _interrupted() -> int:
+    """Say ``tengfield: interrupted`` and give 130, the exit code of a handled Ctrl-C."""
+    print("tengfield: interrupted", file=sys.stderr)
+    forget_unhandled_interrupt()
+    return 130
+
+
+def forget_unhandled_interrupt() -> None:
+    """Let a caught KeyboardInterrupt end the process with the exit code tengfield returns.
+
+    CPython marks a KeyboardInterrupt that leaves code run by ``exec`` of a string (as
+    :mod:`dataclasses` builds a class's methods while a module is imported) as unhandled,
+    even when a caller catches it, and then ends the process by SIGINT (exit -2) instead
+    of with ``sys.exit(130)``. Running a string again clears the mark."""
+    exec("pass")   # noqa: S102 - a constant string: clears the interpreter's mark
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:
@@ -417,6 +431,7 @@ def _outcome_of(exc: BaseException) -> _Outcome:
     if isinstance(exc, TengfieldError):
         return _Outcome(2, f"tengfield: error: {exc}")
     if isinstance(exc, KeyboardInterrupt):
+        forget_unhandled_interrupt()
         return _Outcome(130, "tengfield: interrupted")
     if isinstance(exc, OSError):
         where = f": {_STAGING_IN_PATH.sub('', str(exc.filename))}" if exc.filename else ""

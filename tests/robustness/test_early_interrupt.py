@@ -6,6 +6,7 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
+import textwrap
 import time
 
 import pytest
@@ -29,6 +30,34 @@ def test_an_interrupt_during_start_up_is_one_line_and_exit_130(delay, tmp_path, 
     assert proc.returncode == 130, err[-2000:]
     assert "Traceback" not in err, err[-2000:]
     assert err.strip().splitlines()[-1] == "tengfield: interrupted"
+
+
+@pytest.mark.parametrize("where", ["raise KeyboardInterrupt", "raise OSError(5, 'x')"])
+def test_an_interrupt_in_code_run_by_exec_still_exits_130(where, tmp_path, cli_env, python):
+    """A Ctrl-C that lands in code run by ``exec`` of a string (dataclasses builds a class's
+    methods so while a command imports its modules) made CPython end the process by SIGINT
+    (exit -2) after tengfield had caught it (1 in ~50 of the timed interrupts above), when
+    run as ``python -m`` (as here and in every CLI test)."""
+    script = tmp_path / "interrupted_cli.py"
+    script.write_text(textwrap.dedent(f"""\
+        import sys
+        from tengfield import cli
+
+        def command(parser, args):
+            try:
+                exec("raise KeyboardInterrupt")
+            except KeyboardInterrupt as exc:
+                if {where.startswith("raise OSError")!r}:
+                    {where} from exc
+                raise
+
+        cli._run_command = command
+        sys.exit(cli.main(["run", "scene.toml"]))
+        """))
+    out = subprocess.run([python, "-m", "interrupted_cli"], capture_output=True, text=True,
+                         env=cli_env(), cwd=tmp_path, timeout=120)
+    assert out.returncode == 130, out.stderr[-2000:]
+    assert out.stderr.strip().splitlines()[-1] == "tengfield: interrupted"
 
 
 def test_a_library_user_keeps_pythons_keyboard_interrupt():
