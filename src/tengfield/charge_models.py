@@ -48,7 +48,7 @@ CHARGE_MODELS: dict[str, ChargeModel] = {
     "contact": ChargeModel(
         "the charge the contacts make", from_contacts=True,
         keys=("equilibrium_uC_per_m2", "efficiency", "initial_uC_per_m2", "leakage_time_s",
-              "discharge", "relative_humidity_percent"),
+              "discharge", "relative_humidity_percent", "waveforms", "window_periods"),
         commands=("run", "sweep", "uncertainty", "design", "map", "field", "dynamics",
                   "precompute")),
 }

@@ -41,7 +41,9 @@ class ContactRun:
     that charge (None: no field), ``curves`` (:class:`ContactCurves`, None without a
     field), the ``history`` (:class:`~tengfield.source.contacts.ChargeHistory`) and the
     summary's ``block``, ``limit`` (the breakdown limit of the geometry or None), the
-    ``wall_time_s`` of the history."""
+    ``wall_time_s`` of the history, and ``dynamics``: the trajectory the electrical stage
+    runs along (:func:`electrical_window`: the run's last periods, or the whole run; the
+    impacts always the whole run's)."""
     scene: object
     table: object
     curves: object
@@ -49,6 +51,7 @@ class ContactRun:
     block: dict
     limit: object
     wall_time_s: float
+    dynamics: object = None
 
     @property
     def charged(self):
@@ -68,6 +71,60 @@ def discharge_cap(scene, limit, dynamics) -> float:
         return float(limit.sigma_max)
     from .air_breakdown import scene_band
     return float(scene_band(scene, limit, dynamics).edges()[charge.discharge])
+
+
+def electrical_window(scene, dynamics) -> tuple[int, dict]:
+    """``(index, block)``: the first sample of ``dynamics`` the electrical stage of a
+    contact run covers, and summary.json's ``charge.waveforms`` block.
+
+    The charge follows every impact of the run (cheap: the impact map), the circuit only
+    the samples it reports. ``[charge] waveforms`` = "steady": the run's last
+    ``[run] settle_periods`` + ``[charge] window_periods`` excitation periods (the
+    circuit's own settling, left out of the peaks as in any run, then the steady window),
+    the whole run when it is no longer; "start-up": the whole run, from the ball's
+    initial charge; "auto": "start-up" where the circuit fills a store from empty (a
+    rectifier: its charging is the run), "steady" otherwise."""
+    import bisect
+
+    from . import electrical
+
+    charge = scene.charge
+    mode = charge.waveforms
+    if mode == "auto":
+        mode = "start-up" if electrical.circuit_for(scene).fills_store else "steady"
+    elapsed = electrical.elapsed_times(dynamics)
+    n = len(elapsed)
+    first, end = float(elapsed[0]), float(elapsed[n - 1])
+    period = float(scene.excitation.period)
+    span = (scene.run.settle_periods + charge.window_periods) * period
+    index = 0
+    if mode == "steady" and end - first > span:
+        index = min(bisect.bisect_left(elapsed, end - span), n - 2)   # the first >= start
+    origin = electrical.time_origin(dynamics)
+    start = float(elapsed[index])
+    if index == 0:
+        rule = ("the whole run" + ("" if mode == "start-up" else
+                f": not longer than settle_periods + window_periods = "
+                f"{scene.run.settle_periods + charge.window_periods} periods"))
+    else:
+        rule = (f"the run's last settle_periods + window_periods = "
+                f"{scene.run.settle_periods} + {charge.window_periods} periods; the charge "
+                "follows every impact from the start ([charge] waveforms = \"start-up\" "
+                "for the whole run)")
+    block = {"mode": mode, "requested": charge.waveforms, "start_s": origin + start,
+             "end_s": origin + end, "whole_run": index == 0, "rule": rule}
+    return index, block
+
+
+def waveform_line(block: dict) -> str:
+    """The terminal's line of a contact run whose waveforms leave out the start-up
+    ('' when they cover the whole run)."""
+    window = block.get("waveforms") or {}
+    if not window or window.get("whole_run", True):
+        return ""
+    return (f"waveforms, peaks and figures: t = {window['start_s']:.6g} to "
+            f"{window['end_s']:.6g} s (the steady window; the start-up: [charge] "
+            'waveforms = "start-up")')
 
 
 def breakdown_limit(scene, table):
@@ -125,9 +182,16 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
         block["breakdown_voltage_factor"] = breakdown_factor(charge.relative_humidity)
     steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
     run_scene = scene.with_values(device={SURFACE_CHARGE_KEY: steady / law.ball_area * 1e6})
+    index, block["waveforms"] = electrical_window(scene, dynamics)
+    if index:
+        from .dynamics.columns import tail
+        view = tail(dynamics, index, window_start=block["waveforms"]["start_s"]
+                    + electrical.steady_start(scene))
+    else:
+        view = dynamics
     wall = time.perf_counter() - start
     if table is None or steady == 0.0 and history.start == 0.0 and not history.contacts:
-        return ContactRun(run_scene, None, None, history, block, limit, wall)
+        return ContactRun(run_scene, None, None, history, block, limit, wall, view)
     if table.ball_charge == 0.0:
         raise TengfieldError(
             "[charge] model = \"contact\": the surrogate was made at a zero ball charge, "
@@ -143,7 +207,7 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
         curves = ContactCurves(terminal, steady)
     if steady != 0.0:
         table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
-    return ContactRun(run_scene, table, curves, history, block, limit, wall)
+    return ContactRun(run_scene, table, curves, history, block, limit, wall, view)
 
 
 def check_contact_charge(scene, off_axis: bool = False) -> None:

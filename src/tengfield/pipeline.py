@@ -286,18 +286,22 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
                          command_line=command_line, write_cache=write_cache,
                          radial_settings=radial_settings)
     charged = cell_contact = None
+    whole = dynamics   # the electrical stage's may be its last periods (a contact run)
     if scene.charge.from_contacts:
-        scene, table, curves, limit, charged, cell_contact = _contact_charge_stage(
+        scene, table, curves, limit, charged, cell_contact, window = _contact_charge_stage(
             scene, dynamics, stages, **field_options)
     else:
         scene, table, curves, limit = _field_stage(scene, dynamics, stages, **field_options)
     if scene.array.cells > 0:
         return _run_array(scene, dynamics, curves, table, stages, comm, progress,
                           contact=cell_contact)
+    if charged is not None:
+        dynamics = window
     stage = electrical_stage(scene, dynamics, curves, table, stages)
     if charged is not None:
         _with_contact_charge(stage, dynamics, charged)
-    result = _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages)
+    result = _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages,
+                            whole=whole)
     if charged is not None and isinstance(result.summary.get("breakdown"), dict) \
             and "sigma_from" in result.summary["breakdown"]:
         result.summary["breakdown"]["sigma_from"] = "contacts (the steady charge)"
@@ -339,7 +343,7 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
 
     def cell(cell_dynamics):
         return contact_source(scene, cell_dynamics, table, run.limit, period=period)
-    return run.scene, run.table, run.curves, run.limit, run.charged, cell
+    return run.scene, run.table, run.curves, run.limit, run.charged, cell, run.dynamics
 
 
 def _wiring(scene):
@@ -364,8 +368,11 @@ def _with_contact_charge(stage, dynamics, charged) -> None:
     stage.summary["charge"] = _jsonable(block)
     from .source.contacts import charge_record
     stage.extras["_charge_history"] = history
-    stage.extras["_charge_record"] = charge_record(
-        history, block["ball_area_m2"], float(electrical.elapsed_times(dynamics)[-1]))
+    elapsed = electrical.elapsed_times(dynamics)   # the electrical stage's: maybe its end
+    record = charge_record(history, block["ball_area_m2"], float(elapsed[-1]))
+    if not block.get("waveforms", {}).get("whole_run", True):
+        record["window_s"] = (float(elapsed[0]), float(elapsed[-1]))
+    stage.extras["_charge_record"] = record
 
 
 def _dynamics_stage(scene, simulate, stages):
@@ -378,11 +385,14 @@ def _dynamics_stage(scene, simulate, stages):
     return dynamics
 
 
-def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages) -> RunResult:
-    """summary.json's breakdown and measured blocks, and the :class:`RunResult`."""
+def _summary_stage(scene, hashed, dynamics, table, curves, limit, stage, stages, *,
+                   whole=None) -> RunResult:
+    """summary.json's breakdown and measured blocks, and the :class:`RunResult`;
+    ``whole``: the whole run's trajectory where ``dynamics`` (the electrical stage's) is
+    its last periods (the breakdown band is the whole run's, as the contacts' cap)."""
     summary = stage.summary
     if table is not None:
-        _breakdown_summary(summary, scene, hashed, limit, dynamics)
+        _breakdown_summary(summary, scene, hashed, limit, dynamics if whole is None else whole)
     _measured_comparison(summary, scene)
     result = RunResult(scene=scene, waveforms=stage.waveforms, summary=summary,
                        dynamics=dynamics, table=table, curves=curves,

@@ -45,7 +45,7 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
     point = scene if frequency is None and amplitude is None else \
         point_scene(scene, frequency, amplitude)
     dynamics = simulate(point)
-    point, curves, _, charge = _point_charge(point, dynamics, table)
+    point, curves, _, charge, dynamics = _point_charge(point, dynamics, table)
     extremes = electrical.terminal_extremes(point, dynamics, curves)
     regime = regime_dict(dynamics.regime) or {}
     exc = point.excitation
@@ -68,19 +68,21 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
 
 
 def _point_charge(point, dynamics, table):
-    """``(point, curves, table, charge columns)`` of a sweep point: with ``[charge] model
-    = "contact"`` the point at its steady charge, its :class:`ContactCurves`, the table at
-    that charge and the :data:`~tengfield.contact_run.CHARGE_COLUMNS` (the charge its
-    contacts make along this point's own trajectory,
-    :func:`tengfield.contact_run.contact_source`, the numbers ``tengfield run`` gives);
-    otherwise the point, its :class:`TerminalCurves`, the table and no columns."""
+    """``(point, curves, table, charge columns, dynamics)`` of a sweep point: with
+    ``[charge] model = "contact"`` the point at its steady charge, its
+    :class:`ContactCurves`, the table at that charge, the
+    :data:`~tengfield.contact_run.CHARGE_COLUMNS` (the charge its contacts make along this
+    point's own trajectory, :func:`tengfield.contact_run.contact_source`, the numbers
+    ``tengfield run`` gives) and the trajectory its electrical stage covers (the run's
+    last periods, :func:`tengfield.contact_run.electrical_window`); otherwise the point,
+    its :class:`TerminalCurves`, the table, no columns and ``dynamics``."""
     if not point.charge.from_contacts:
         from .surrogate import TerminalCurves
-        return point, TerminalCurves(table, point.circuit.reference), table, {}
+        return point, TerminalCurves(table, point.circuit.reference), table, {}, dynamics
     from .contact_run import charge_columns, contact_source
 
     run = contact_source(point, dynamics, table)
-    return run.scene, run.curves, run.table, charge_columns(run.block)
+    return run.scene, run.curves, run.table, charge_columns(run.block), run.dynamics
 
 
 def load_columns(loaded, result, t) -> dict:
@@ -657,7 +659,7 @@ def own_load_point(scene, table, frequency=None, amplitude=None) -> list[dict]:
     point = scene if frequency is None and amplitude is None else \
         point_scene(scene, frequency, amplitude)
     dynamics = _default_simulate()(point)
-    point, curves, table, charge = _point_charge(point, dynamics, table)
+    point, curves, table, charge, dynamics = _point_charge(point, dynamics, table)
     stage = electrical_stage(point, dynamics, curves, table)
     regime = regime_dict(dynamics.regime) or {}
     exc = point.excitation

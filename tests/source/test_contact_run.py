@@ -275,14 +275,16 @@ def test_the_rise_time_extrapolated_past_a_short_run_is_the_long_runs(cache):
 
 @pytest.mark.slow
 def test_a_ten_minute_run_streams_the_charge_and_equals_the_constant_model_at_equilibrium(cache):
-    """600 s at 20 Hz (1.2 M samples: the streamed electrical stage): the charge column is in
-    every chunk, and a ball at sigma_eq gives the constant model's peaks (1e-12)."""
+    """600 s at 20 Hz with the start-up (1.2 M samples: the streamed electrical stage): the
+    charge column is in every chunk, and a ball at sigma_eq gives the constant model's
+    peaks (1e-12)."""
     run = {"duration_s": 600.0, "settle_periods": 10, "sample_rate_hz": 2000.0}
     constant = tf.run(fx.scene_with(run=run, device={"surface_charge_uC_per_m2": -20.0}),
                       cache_dir=cache, solve=fx.plate_model_solve)
     contact = tf.run(fx.scene_with(run=run, charge={
         "model": "contact", "equilibrium_uC_per_m2": -20.0, "initial_uC_per_m2": -20.0,
-        "discharge": "none"}), cache_dir=cache, solve=fx.plate_model_solve)
+        "discharge": "none", "waveforms": "start-up"}), cache_dir=cache,
+        solve=fx.plate_model_solve)
     assert hasattr(contact.waveforms, "chunks")
     for name, value in constant.peaks.items():
         assert contact.peaks[name] == pytest.approx(value, rel=1e-12), name

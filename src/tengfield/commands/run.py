@@ -234,8 +234,11 @@ def print_summary(summary: dict) -> None:
           f"(max gap {1e3 * (regime.get('max_gap_m') or 0):.3g} mm)"
           + (f": {regime['reason']}" if regime.get("reason") else ""))
     if summary.get("charge"):
+        from ..contact_run import waveform_line
         from ..source.contacts import charge_line
         print(charge_line(summary["charge"]))
+        if waveform_line(summary["charge"]):
+            print(waveform_line(summary["charge"]))
     for line in terminal_lines(summary):
         print(line)
     if summary.get("load"):

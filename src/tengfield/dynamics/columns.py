@@ -27,17 +27,21 @@ KEEP = 2
 
 #: the columns of a run: elapsed / absolute time, then the sampler's outputs in order
 COLUMNS = ("elapsed", "t", "gap", "gap_velocity", "table")
+#: the 3D model's other per-sample columns (tengfield.dynamics.motion3d.Motion3DResult)
+PER_SAMPLE_3D = ("x", "y", "radial", "velocity", "spin")
 
 
 class Samples:
-    """The shared source of a run's columns: ``count`` samples at ``i / rate`` [s] after
-    ``origin`` [s], ``sampler(elapsed) -> (gap, gap velocity, table)``; the last
+    """The shared source of a run's columns: ``count`` samples at ``(first + i) / rate``
+    [s] after ``origin`` [s] (``first``: the run's sample the columns start at, 0 but in a
+    :func:`tail`), ``sampler(elapsed) -> (gap, gap velocity, table)``; the last
     :data:`KEEP` ranges sampled are kept (a chunk each), so the three trajectory columns
     of a range cost one evaluation (and a circuit's chunk one row longer, another)."""
 
-    def __init__(self, count: int, rate: float, origin: float, sampler):
+    def __init__(self, count: int, rate: float, origin: float, sampler, first: int = 0):
         self.count, self.rate, self.origin, self.sampler = int(count), float(rate), \
             float(origin), sampler
+        self.first = int(first)
         self._kept: tuple = ()          # ((key, values), ...), replaced whole (threads)
 
     def __getstate__(self):
@@ -47,7 +51,7 @@ class Samples:
 
     def elapsed(self, index: np.ndarray) -> np.ndarray:
         """Elapsed times [s] of the integer sample indices ``index``."""
-        return index / self.rate
+        return (index + self.first if self.first else index) / self.rate
 
     def column(self, name: str, index: np.ndarray, key=None) -> np.ndarray:
         """Column ``name`` at the integer sample indices ``index`` (``key``: a hashable
@@ -73,12 +77,13 @@ class Samples:
         cover = getattr(self.sampler, "cover", None)
         if cover is None or index.size == 0:
             return self.sampler(np.ascontiguousarray(elapsed))
-        lo, hi = int(index.min()), int(index.max())
+        lo, hi, first = int(index.min()), int(index.max()), self.first
         a, b = cover(float(elapsed.min()), float(elapsed.max()))
-        j0 = 0 if not np.isfinite(a) else max(0, min(lo, int(np.floor(a * self.rate)) - 1))
+        j0 = 0 if not np.isfinite(a) else \
+            max(0, min(lo, int(np.floor(a * self.rate)) - 1 - first))
         j1 = self.count if not np.isfinite(b) else \
-            min(self.count, max(hi + 1, int(np.ceil(b * self.rate)) + 2))
-        values = self.sampler(np.ascontiguousarray(np.arange(j0, j1) / self.rate))
+            min(self.count, max(hi + 1, int(np.ceil(b * self.rate)) + 2 - first))
+        values = self.sampler(np.ascontiguousarray(self.elapsed(np.arange(j0, j1))))
         return tuple(np.asarray(x)[index - j0] for x in values)
 
 
@@ -178,11 +183,45 @@ class SampledColumn(NDArrayOperatorsMixin):
         return getattr(np.asarray(self), attr)
 
 
-def sampled_columns(count: int, rate: float, origin: float, sampler) -> dict:
+def sampled_columns(count: int, rate: float, origin: float, sampler, first: int = 0) -> dict:
     """``{name: SampledColumn}`` of :data:`COLUMNS` for ``count`` samples at ``rate`` [Hz]
-    after ``origin`` [s] of ``sampler(elapsed) -> (gap, gap velocity, table)``."""
-    samples = Samples(count, rate, origin, sampler)
+    after ``origin`` [s] of ``sampler(elapsed) -> (gap, gap velocity, table)``, from the
+    run's sample ``first`` on."""
+    samples = Samples(count, rate, origin, sampler, first)
     return {name: SampledColumn(samples, name) for name in COLUMNS}
+
+
+def tail(result, index: int, *, window_start: float | None = None):
+    """``result`` (a DynamicsResult, the 3D model's too) from its sample ``index`` on:
+    every per-sample column cut to ``[index:]`` (the same samples, on the run's own time
+    axis: ``elapsed`` still counts from the run's start), sampled on request while still
+    longer than :data:`LAZY_ROWS`; the impacts, the contact episodes, the regime and the
+    counts stay the whole run's. ``window_start`` [s, absolute]: the steady window of the
+    cut (default: the run's). ``index`` <= 0: ``result`` itself."""
+    import dataclasses
+
+    n, index = len(result.t), int(index)
+    if index <= 0:
+        return result
+    if index >= n:
+        raise ValueError(f"tail from sample {index}: the run has {n}")
+    changes: dict = {}
+    if is_sampled(result.t):
+        samples, count = result.t.samples, n - index
+        if count > LAZY_ROWS:
+            changes.update(sampled_columns(count, samples.rate, samples.origin,
+                                           samples.sampler, samples.first + index))
+        else:
+            changes.update({c: np.asarray(getattr(result, c)[index:], dtype=float)
+                            for c in COLUMNS})
+    else:
+        for name in COLUMNS + PER_SAMPLE_3D:
+            value = getattr(result, name, None)
+            if value is not None and len(value) == n:
+                changes[name] = np.asarray(value)[index:]
+    if window_start is not None:
+        changes["window_start"] = float(window_start)
+    return dataclasses.replace(result, **changes)
 
 
 def iter_chunks(column, size: int = CHUNK):

@@ -60,6 +60,10 @@ def ball_charge_figure(record: dict, block: dict, *, title: str = ""):
             q = np.clip(q, -cap * 1e-6 * area, cap * 1e-6 * area)
         left.plot(later, q / area * 1e6, color="C0", lw=1.1, ls=(0, (1, 1.5)),
                   label="extrapolated past the run")
+    window = record.get("window_s")   # the waveforms' steady window (the run's end)
+    if window is not None:
+        left.axvspan(window[0], window[1], color="C2", alpha=0.25, lw=0,
+                     label=f"waveforms.csv, peaks ({window[1] - window[0]:.3g} s)")
     rise = block.get("rise_time_90_s")
     if rise is not None and rise > 0.0:
         left.axvline(rise, color="0.5", lw=0.8)

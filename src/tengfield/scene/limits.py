@@ -198,9 +198,10 @@ def run_samples(run, duration: float | None = None) -> None:
                 f"{run.sample_rate:g}", "samples", "lower sample_rate_hz or split the run")
 
 
-def check_work(exc, run, instrument=None) -> None:
+def check_work(exc, run, instrument=None, window_periods: int | None = None) -> None:
     """Refuse runs whose sample, reading or event count would exhaust memory (product
-    named)."""
+    named). ``window_periods``: the steady window is at most that many periods at the
+    run's end (``[charge] window_periods`` of a contact run)."""
     run_samples(run)
     if instrument is not None and instrument.sample_rate > 0.0:
         # the readings of a run are taken (and held) as one array each, as its samples
@@ -211,7 +212,7 @@ def check_work(exc, run, instrument=None) -> None:
                     f"for this run sample_rate_hz <= {MAX_SAMPLES / run.duration:.3g}, or 0: "
                     "a reading at every output sample",
                     key=f"[instrument] sample_rate_hz = {rate:g}")
-        check_readings_in_window(exc, run, rate)
+        check_readings_in_window(exc, run, rate, window_periods)
     periods = run.duration * exc.frequency
     if periods > MAX_PERIODS:
         raise SceneError(
@@ -235,25 +236,31 @@ def window_readings(start: float, end: float, rate: float) -> int:
     return max(0, last - first + 1)
 
 
-def check_readings_in_window(exc, run, rate: float) -> None:
+def check_readings_in_window(exc, run, rate: float, window_periods: int | None = None
+                             ) -> None:
     """Refuse an ``[instrument] sample_rate_hz`` that takes fewer than
     :data:`MIN_WINDOW_READINGS` readings in the steady window (after ``[run]
-    settle_periods`` periods, to ``duration_s``): its peaks would be a held reading's (0
-    from the ball at rest) with no word. Only when the run has a steady window
-    (:func:`check_steady_window` refuses the others first)."""
+    settle_periods`` periods, to ``duration_s``; at most ``window_periods`` periods long
+    when given): its peaks would be a held reading's (0 from the ball at rest) with no
+    word. Only when the run has a steady window (:func:`check_steady_window` refuses the
+    others first)."""
     start = run.settle_periods * exc.period
     end = run.duration
     if start >= end:
         return
+    rule = f"after [run] settle_periods = {run.settle_periods} periods"
+    if window_periods is not None and end - start > window_periods * exc.period:
+        start = end - window_periods * exc.period
+        rule = f"the last [charge] window_periods = {window_periods} periods"
     count = window_readings(start, end, rate)
     if count < MIN_WINDOW_READINGS:
         needed = MIN_WINDOW_READINGS / (end - start)
         raise SceneError(
             f"[instrument] sample_rate_hz = {rate:g}: {count} reading(s) in the steady window "
-            f"t = {start:.4g} to {end:.4g} s (after [run] settle_periods = "
-            f"{run.settle_periods} periods): the read peaks need at least "
+            f"t = {start:.4g} to {end:.4g} s ({rule}): the read peaks need at least "
             f"{MIN_WINDOW_READINGS}; allowed sample_rate_hz >= {needed:.3g} for this window, "
-            "or 0 (a reading at every output sample), or a longer [run] duration_s")
+            "or 0 (a reading at every output sample), or a longer "
+            + ("[run] duration_s" if rule.startswith("after") else "[charge] window_periods"))
 
 
 def check_ensemble_work(run) -> None:

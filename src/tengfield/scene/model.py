@@ -403,6 +403,10 @@ class Charge:
     #: relative humidity in [0, 1] (the file's percent / 100): sigma_eq, tau and Paschen's
     #: B follow :mod:`tengfield.humidity`'s assumed law; 0 = dry, the constants as given
     relative_humidity: float = 0.0
+    #: what the electrical stage covers: "auto", "steady" (the last settle_periods +
+    #: window_periods excitation periods of the run) or "start-up" (the whole run)
+    waveforms: str = "auto"
+    window_periods: int = 50
 
     def __post_init__(self):
         check_section("charge", self, "Charge")
@@ -499,7 +503,10 @@ class Scene:
                              "electrodes = 'lower': the single-electrode cell has one "
                              "topology, the electrode to the ground (leave reference out)")
         check_steady_window(exc, run.settle_periods, run.duration)
-        check_work(exc, run, self.instrument)
+        # a contact run's waveforms may cover only its last periods (contact_run)
+        charge = self.charge
+        check_work(exc, run, self.instrument, window_periods=charge.window_periods
+                   if charge.from_contacts and charge.waveforms != "start-up" else None)
         check_vibration_work(exc, run)
         if run.realisations > 1 and not exc.has_noise:
             raise SceneError(f"[run] realisations = {run.realisations} needs a random excitation "

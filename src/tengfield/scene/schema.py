@@ -327,6 +327,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "relative_humidity_percent": Key("relative_humidity", float, 0.0, 0.01,
                                          _rng(0.0, 100.0, why="0: dry air, the given "
                                               "constants")),
+        # what the electrical stage covers (tengfield.contact_run.electrical_window): the
+        # last settle_periods + window_periods periods ("steady"), the whole run from the
+        # uncharged start ("start-up"), or "auto": "start-up" where a rectifier fills a
+        # store (its charging is the run), "steady" otherwise
+        "waveforms": Key("waveforms", str, "auto", None, _choice("auto", "steady", "start-up")),
+        "window_periods": Key("window_periods", int, 50, 1, _rng(1, 10**7)),
     },
     # the bench's instrument (issue #39; tengfield.electrical.instrument, docs/outputs.md):
     # what an electrometer or a scope records. Optional: without the section nothing of a

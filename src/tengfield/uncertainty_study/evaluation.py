@@ -283,7 +283,7 @@ def _contact_outputs(at, values, dynamics, table) -> tuple[dict, str]:
 
     point = at.with_values(**sections_of(values)) if values else at
     run = contact_source(point, dynamics, table)
-    return _outputs(run.scene, dynamics, run.table, run.curves, run.block)
+    return _outputs(run.scene, run.dynamics, run.table, run.curves, run.block)
 
 
 def _group_band(scene, at, table, dynamics):

@@ -68,6 +68,10 @@ class Circuit:
     #: outputs to its edges (σ, power σ²) instead of running at each; False where
     #: something nonlinear sits in the circuit (a rectifier's diodes)
     linear_in_charge: bool = True
+    #: the circuit fills a store from empty, so its output is the whole run's history:
+    #: a contact-charged run with ``[charge] waveforms = "auto"`` runs it over the whole
+    #: run (the start-up), not only over the steady window (tengfield.contact_run)
+    fills_store: bool = False
     #: the circuit states whose breakdown limit binds (tengfield.air_breakdown): all three
     #: for a load or a rectifier (its transferred charge lies between the open ones)
     breakdown_states: tuple[str, ...] = ("open", "open-top", "short")

@@ -204,6 +204,7 @@ def summary_block(scene, numbers: dict, curves=None, max_gap=None) -> dict:
 
 class Rectifier(Circuit):
     name = "rectifier"
+    fills_store = True
     linear_in_charge = False     # its diodes
     columns = tuple(RECTIFIER_COLUMNS)
     keys = ("diode", "diode_forward_voltage_V", "diode_saturation_current_A",
