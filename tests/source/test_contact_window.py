@@ -204,3 +204,21 @@ def test_cli_a_ten_minute_contact_run_writes_its_window_with_figures(tmp_path, r
         assert (tmp_path / "out" / name).stat().st_size > 10_000, name
     assert not (tmp_path / "out" / "run.h5").exists()
     assert math.isfinite(summary["peak_to_peak"]["V_oc_V"])
+
+
+def test_a_long_sweep_row_is_the_windowed_run_at_its_values(cache):
+    """A sweep point of a long contact scene takes the run's window: its row holds the
+    run's peak-to-peak values (1e-12), not the start-up's."""
+    from tengfield.sweeps import sweep_study
+
+    base = fx.scene_with(run=LONG, charge=RISING)
+    rows = sweep_study(base, vary={"charge.efficiency": [0.002, 0.01]}, cache_dir=cache,
+                       solve=fx.plate_model_solve)
+    for row in rows:
+        charge = {"efficiency": row["charge.efficiency"]}
+        run = _run(cache, charge={**RISING, **charge})
+        start_up = _run(cache, charge={**RISING, **charge, "waveforms": "start-up"})
+        for column, name in (("V_oc_pp_V", "V_oc_V"), ("Q_sc_pp_C", "Q_sc_C")):
+            assert row[column] == pytest.approx(run.summary["peak_to_peak"][name], rel=1e-12)
+            assert row[column] != pytest.approx(start_up.summary["peak_to_peak"][name],
+                                                rel=1e-3)
