@@ -232,14 +232,16 @@ class ArrayResult:
 
 
 def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
-              progress: bool = False, contact=None) -> ArrayResult:
+              progress: bool = False, contact=None, window: int = 0) -> ArrayResult:
     """The ``[array]`` of ``scene`` with the shared surrogate ``curves`` (None: Q_SC = 0)
     and the nominal cell's dynamics ``nominal`` (the unperturbed scene, whose
     output times are the array's grid). ``contact``: with ``[charge] model = "contact"``,
     a function of one cell's dynamics giving its
     :class:`~tengfield.contact_run.ContactRun` (the charge its own impacts make); each
     cell's terminals then follow its own charge history (``curves``: the nominal cell's,
-    the reference of array.png), and :attr:`ArrayResult.charge` holds the cells' runs."""
+    the reference of array.png), and :attr:`ArrayResult.charge` holds the cells' runs.
+    ``window``: the first sample of ``nominal`` the outputs cover (a contact run's
+    :func:`~tengfield.contact_run.electrical_window`; the charge follows every impact)."""
     check_array_scene(scene)
     n = scene.array.cells
     start = time.perf_counter()
@@ -270,6 +272,10 @@ def run_array(scene, curves, nominal, *, jobs: int | None = None, comm=None,
         else:                    # a cell that never charges: Q_SC = 0, its C_T(z)
             cell_curves = [_Uncharged(shaped) if c is None else c for c in cell_curves]
         charge = CellCharges(runs, inverse, weights)
+    if window:
+        from .dynamics.columns import tail
+        nominal = tail(nominal, window)
+        t, elapsed = t[window:], elapsed[window:]
     if len(distinct) == 1:       # one cell's curves: the single-cell run's
         result = _identical(scaled, nominal, runs[0].curves if contact is not None
                             else curves, paths[0], n)

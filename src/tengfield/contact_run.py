@@ -14,6 +14,7 @@ from the table's gap lines and the trajectory.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -41,9 +42,9 @@ class ContactRun:
     that charge (None: no field), ``curves`` (:class:`ContactCurves`, None without a
     field), the ``history`` (:class:`~tengfield.source.contacts.ChargeHistory`) and the
     summary's ``block``, ``limit`` (the breakdown limit of the geometry or None), the
-    ``wall_time_s`` of the history, and ``dynamics``: the trajectory the electrical stage
-    runs along (:func:`electrical_window`: the run's last periods, or the whole run; the
-    impacts always the whole run's)."""
+    ``wall_time_s`` of the history, the ``whole`` run's trajectory and the first sample
+    of its ``window`` (:func:`electrical_window`); :attr:`dynamics` is the trajectory the
+    electrical stage runs along."""
     scene: object
     table: object
     curves: object
@@ -51,7 +52,20 @@ class ContactRun:
     block: dict
     limit: object
     wall_time_s: float
-    dynamics: object = None
+    whole: object = None
+    window: int = 0
+
+    @functools.cached_property
+    def dynamics(self):
+        """The trajectory the electrical stage runs along: the run's last periods, or the
+        whole run (:func:`tengfield.dynamics.columns.tail`; the impacts always the whole
+        run's)."""
+        if not self.window:
+            return self.whole
+        from . import electrical
+        from .dynamics.columns import tail
+        return tail(self.whole, self.window, window_start=self.block["waveforms"]["start_s"]
+                    + electrical.steady_start(self.scene))
 
     @property
     def charged(self):
@@ -183,15 +197,9 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
     steady = block["steady_uC_per_m2"] * 1e-6 * law.ball_area
     run_scene = scene.with_values(device={SURFACE_CHARGE_KEY: steady / law.ball_area * 1e6})
     index, block["waveforms"] = electrical_window(scene, dynamics)
-    if index:
-        from .dynamics.columns import tail
-        view = tail(dynamics, index, window_start=block["waveforms"]["start_s"]
-                    + electrical.steady_start(scene))
-    else:
-        view = dynamics
     wall = time.perf_counter() - start
     if table is None or steady == 0.0 and history.start == 0.0 and not history.contacts:
-        return ContactRun(run_scene, None, None, history, block, limit, wall, view)
+        return ContactRun(run_scene, None, None, history, block, limit, wall, dynamics, index)
     if table.ball_charge == 0.0:
         raise TengfieldError(
             "[charge] model = \"contact\": the surrogate was made at a zero ball charge, "
@@ -207,7 +215,7 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
         curves = ContactCurves(terminal, steady)
     if steady != 0.0:
         table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
-    return ContactRun(run_scene, table, curves, history, block, limit, wall, view)
+    return ContactRun(run_scene, table, curves, history, block, limit, wall, dynamics, index)
 
 
 def check_contact_charge(scene, off_axis: bool = False) -> None:

@@ -596,11 +596,16 @@ def _run_array(scene, dynamics, curves, table, stages, comm, progress,
     one cell's dynamics -> its :class:`~tengfield.contact_run.ContactRun` (each cell
     charged by its own impacts)."""
     from .array import run_array
-    from .dynamics.columns import with_arrays
-    dynamics = with_arrays(dynamics)
+    from .dynamics.columns import tail, with_arrays
 
+    window = 0
+    if contact is not None:         # the cells' charge over the whole run, the circuit's
+        from .contact_run import electrical_window    # stage over its window
+        window, _ = electrical_window(scene, dynamics)
     start = time.perf_counter()
-    arr = run_array(scene, curves, dynamics, comm=comm, progress=progress, contact=contact)
+    arr = run_array(scene, curves, with_arrays(dynamics), comm=comm, progress=progress,
+                    contact=contact, window=window)
+    dynamics = with_arrays(tail(dynamics, window))
     waveforms = arr.columns
     block = dict(arr.summary)
     rect = block.pop("rectifier", None)
@@ -663,10 +668,12 @@ def _array_charge_record(charge, dynamics) -> dict:
     (up to :data:`ARRAY_CHARGE_LINES`, evenly chosen) drawn beside it."""
     from .source.contacts import charge_record
 
-    duration = float(electrical.elapsed_times(dynamics)[-1])
+    elapsed = electrical.elapsed_times(dynamics)   # the electrical stage's: maybe its end
     j = charge.representative
     area = charge.runs[j].block["ball_area_m2"]
-    record = charge_record(charge.runs[j].history, area, duration)
+    record = charge_record(charge.runs[j].history, area, float(elapsed[-1]))
+    if not charge.runs[j].block.get("waveforms", {}).get("whole_run", True):
+        record["window_s"] = (float(elapsed[0]), float(elapsed[-1]))
     others = [k for k in range(len(charge.runs)) if k != j]
     if len(others) > ARRAY_CHARGE_LINES:
         others = [others[int(i)] for i in np.linspace(0, len(others) - 1, ARRAY_CHARGE_LINES)]

@@ -222,3 +222,22 @@ def test_a_long_sweep_row_is_the_windowed_run_at_its_values(cache):
             assert row[column] == pytest.approx(run.summary["peak_to_peak"][name], rel=1e-12)
             assert row[column] != pytest.approx(start_up.summary["peak_to_peak"][name],
                                                 rel=1e-3)
+
+
+def test_an_array_of_contact_cells_covers_the_window_and_is_n_times_one_cell(cache):
+    """``[array]`` over the same 60 s: the cells charge over every impact, the array's
+    outputs cover the window, and N identical cells are N x the (windowed) single cell."""
+    one = _run(cache, charge=RISING)
+    array = _run(cache, charge=RISING, array={"cells": 3})
+    t = np.asarray(array.waveforms["time_s"])
+    np.testing.assert_array_equal(t, one.waveforms["time_s"])
+    assert t[0] == pytest.approx(58.5)
+    for column in ("Q_sc_C", "I_sc_A", "C_T_F"):
+        np.testing.assert_allclose(array.waveforms[column], 3.0 * one.waveforms[column],
+                                   rtol=1e-12, atol=0.0, err_msg=column)
+    assert array.summary["charge"]["contacts"] == one.summary["charge"]["contacts"] > 1000
+    assert array.extras["_charge_record"]["window_s"] == pytest.approx((58.5, 60.0))
+    spread = _run(cache, charge=RISING, array={"cells": 3, "restitution_spread": 0.2,
+                                               "seed": 2})
+    assert np.asarray(spread.waveforms["time_s"])[0] == pytest.approx(58.5)
+    assert np.all(np.isfinite(spread.waveforms["Q_sc_C"]))
