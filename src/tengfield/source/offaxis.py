@@ -30,18 +30,14 @@ from .terminal import ContactTerminal
 class _RadialShare(RadialTerminalCurves):
     """k(z, r) of a (z, r) table through the interpolation of its terminal curves (the
     same splines in (z, s = u²), clipping and chain rule): :meth:`charge` is k and
-    :meth:`charge_derivative` its gradient (dk/dz [1/m], dk/dr [1/m])."""
+    :meth:`charge_derivative` its gradient (dk/dz [1/m], dk/dr [1/m]); one spline, no
+    capacitance methods."""
 
     def __init__(self, table, reference: str):
-        from scipy.interpolate import RectBivariateSpline
-
-        super().__init__(table, reference)
+        self._axes(table, reference)
         C = np.asarray(table.capacitance, dtype=float)
-        share = np.asarray(terminals.topology(reference).upper_share(
-            C[..., 0, 0], C[..., 0, 1], C[..., 1, 1]), dtype=float)
-        nz, nr = share.shape
-        self._q = RectBivariateSpline(self.positions, self.offsets**2, share,
-                                      kx=min(3, nz - 1), ky=min(3, nr - 1), s=0)
+        self._q = self._spline(np.asarray(terminals.topology(reference).upper_share(
+            C[..., 0, 0], C[..., 0, 1], C[..., 1, 1]), dtype=float))
 
 
 class OffAxisContactTerminal(ContactTerminal):
@@ -77,19 +73,14 @@ class OffAxisContactTerminal(ContactTerminal):
         r = np.zeros_like(z) if r is None else np.asarray(r, dtype=float)
         z_rate = np.asarray(z_rate, dtype=float)
         r_rate = np.zeros_like(z) if r_rate is None else np.asarray(r_rate, dtype=float)
-        q = self.ball_charge(t)
-        lost = self.lost_to_air(t)
+        q, lost, scale = self.charge_state(t)
         q_ref_curve = self.offaxis.charge(z, r)
         dq_dz, dq_dr = self.offaxis.charge_derivative(z, r)
         k, dk_dz, dk_dr = self.share(z, r)
-        scale = q / self.q_ref
-        q_sc = scale * q_ref_curve + (q - self.history.start) * self.b0 - k * lost \
-            + self.upper_gains(t)
-        tau = self.history.leakage_time
-        q_rate = -q / tau if tau > 0.0 else np.zeros_like(q)
+        q_sc = self.short_circuit_charge(t, q, lost, scale, q_ref_curve, k)
         i_sc = scale * (dq_dz * z_rate + dq_dr * r_rate) \
             - lost * (dk_dz * z_rate + dk_dr * r_rate) \
-            + q_rate * (q_ref_curve / self.q_ref + self.b0 + k)
+            + self.leakage_current(q, q_ref_curve, k)
         c_t = self.offaxis.capacitance(z, r)
         dc_dz, dc_dr = self.offaxis.capacitance_derivative(z, r)
         return q_sc * cells, i_sc * cells, c_t * cells, (dc_dz * z_rate + dc_dr * r_rate) * cells

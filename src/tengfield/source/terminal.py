@@ -96,6 +96,27 @@ class ContactTerminal:
         """U(t) [C]: the charge the ball has taken from the upper electrode by ``t``."""
         return self._counted(self._upper_gained, t)
 
+    def charge_state(self, t) -> tuple:
+        """``(q, L, q/q_ref)`` at the run's times ``t`` [s]: the ball's charge [C], what it
+        has lost to the air [C], and the scale of the table's curves."""
+        q = self.ball_charge(t)
+        return q, self.lost_to_air(t), q / self.q_ref
+
+    def short_circuit_charge(self, t, q, lost, scale, q_ref_curve, k):
+        """Q_SC [C] at times ``t`` from the :meth:`charge_state` and the table's curve
+        Q_ref and share k at the ball (module docstring: the pair, the single electrode)."""
+        if self.single:          # every gain is drawn from the electrode: D(t)
+            return scale * q_ref_curve + (q - self.history.start) * self.b0 \
+                - self._counted(self._gained, t)
+        return scale * q_ref_curve + (q - self.history.start) * self.b0 - k * lost \
+            + self.upper_gains(t)
+
+    def leakage_current(self, q, q_ref_curve, k):
+        """The part of I_SC [A] the ball's leakage drives, q' (Q_ref/q_ref + b(0) + k)."""
+        tau = self.history.leakage_time
+        q_rate = -q / tau if tau > 0.0 else np.zeros_like(q)
+        return q_rate * (q_ref_curve / self.q_ref + self.b0 + k)
+
     def evaluate(self, t, z, z_rate, cells: int = 1) -> tuple:
         """``(Q_SC [C], I_SC [A], C_T [F], dC_T/dt [F/s])`` of ``cells`` cells in parallel
         at times ``t`` [s] (the run's axis), gaps ``z`` [m] and rates ``z_rate`` [m/s]."""
@@ -103,22 +124,13 @@ class ContactTerminal:
         z = np.asarray(z, dtype=float)
         z_rate = np.asarray(z_rate, dtype=float)
         zc = np.clip(z, 0.0, self.curves.stroke)
-        q = self.ball_charge(t)
-        lost = self.lost_to_air(t)
+        q, lost, scale = self.charge_state(t)
         q_ref_curve = self.curves.charge(zc)
         k, dk = self._k(zc), self._dk(zc)
-        scale = q / self.q_ref
-        if self.single:          # every gain is drawn from the electrode: D(t)
-            q_sc = scale * q_ref_curve + (q - self.history.start) * self.b0 \
-                - self._counted(self._gained, t)
-        else:
-            q_sc = scale * q_ref_curve + (q - self.history.start) * self.b0 - k * lost \
-                + self.upper_gains(t)
-        tau = self.history.leakage_time
-        q_rate = -q / tau if tau > 0.0 else np.zeros_like(q)
+        q_sc = self.short_circuit_charge(t, q, lost, scale, q_ref_curve, k)
         dq_dt_z = scale * self.curves.charge_derivative(zc) - lost * dk
         i_sc = lumped.short_circuit_current(dq_dt_z, z_rate) \
-            + q_rate * (q_ref_curve / self.q_ref + self.b0 + k)
+            + self.leakage_current(q, q_ref_curve, k)
         c_t = self.curves.capacitance(zc)
         dc = self.curves.capacitance_derivative(zc) * z_rate
         return q_sc * cells, i_sc * cells, c_t * cells, dc * cells

@@ -509,8 +509,16 @@ class RadialTerminalCurves(OffAxisCurves):
     """
 
     def __init__(self, table: RadialTable, reference: str = "floating"):
-        from scipy.interpolate import RectBivariateSpline
+        self._axes(table, reference)
+        self.charge_grid, self.capacitance_grid = terminal_grid(table, reference)
+        #: every tabulated value (flat), as ``TerminalCurves`` has (e.g. for C_T's range)
+        self.charge_samples = self.charge_grid.ravel()
+        self.capacitance_samples = self.capacitance_grid.ravel()
+        self._q = self._spline(self.charge_grid)
+        self._c = self._spline(self.capacitance_grid)
 
+    def _axes(self, table: RadialTable, reference: str) -> None:
+        """The grid of ``table`` (gaps, offsets, their coordinate) and the reference."""
         terminals._check_reference(reference)
         nz, nr = table.shape
         if nz < 2 or nr < 2:
@@ -522,14 +530,14 @@ class RadialTerminalCurves(OffAxisCurves):
         self.scaled = table.offset_coordinate == "scaled"
         self.positions = table.positions.copy()
         self.offsets = table.offsets.copy()
-        self.charge_grid, self.capacitance_grid = terminal_grid(table, reference)
-        #: every tabulated value (flat), as ``TerminalCurves`` has (e.g. for C_T's range)
-        self.charge_samples = self.charge_grid.ravel()
-        self.capacitance_samples = self.capacitance_grid.ravel()
-        s = self.offsets**2
-        kz, ks = min(3, nz - 1), min(3, nr - 1)
-        self._q = RectBivariateSpline(self.positions, s, self.charge_grid, kx=kz, ky=ks, s=0)
-        self._c = RectBivariateSpline(self.positions, s, self.capacitance_grid, kx=kz, ky=ks, s=0)
+
+    def _spline(self, grid):
+        """The tensor-product spline of ``grid`` (gaps x offsets) in (z, s = u²)."""
+        from scipy.interpolate import RectBivariateSpline
+
+        nz, nr = grid.shape
+        return RectBivariateSpline(self.positions, self.offsets**2, grid,
+                                   kx=min(3, nz - 1), ky=min(3, nr - 1), s=0)
 
     def _zs(self, z, r):
         z, r = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(r, dtype=float))
