@@ -28,6 +28,39 @@ def needs_mpirun():
         pytest.skip("mpirun not installed")
 
 
+def oversubscribed_env(cli_env, cache) -> dict:
+    """The environment of a serial or ``mpirun -n 2`` CLI run (``cli_env``: the fixture),
+    oversubscribed (the machine's 2 cores are shared with others), with its own cache
+    directory ``cache``, outside any mpirun of the caller."""
+    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
+                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
+                  TENGFIELD_CACHE_DIR=cache)
+    env.pop("OMPI_COMM_WORLD_SIZE", None)
+    return env
+
+
+def serial_and_mpirun(cli_command, cli_env, tmp_path, *args, serial=(), timeout=600,
+                      shared_cache=False):
+    """``tengfield args... -o tmp_path/one`` (with ``serial``: its own further arguments)
+    and ``mpirun -n 2 tengfield args... -o tmp_path/two``, each from an empty cache of
+    its own (``shared_cache``: one cache, the mpirun run reading what the serial one
+    wrote); both must exit 0. Skips without mpirun. Returns the two CompletedProcesses."""
+    import subprocess
+
+    needs_mpirun()
+    caches = ("cache",) * 2 if shared_cache else ("cache-one", "cache-two")
+    one = subprocess.run(cli_command(*args, "-o", tmp_path / "one", *serial),
+                         capture_output=True, text=True, timeout=timeout,
+                         env=oversubscribed_env(cli_env, tmp_path / caches[0]))
+    assert one.returncode == 0, one.stderr[-3000:]
+    two = subprocess.run([shutil.which("mpirun"), "-n", "2",
+                          *cli_command(*args, "-o", tmp_path / "two")],
+                         capture_output=True, text=True, timeout=timeout,
+                         env=oversubscribed_env(cli_env, tmp_path / caches[1]))
+    assert two.returncode == 0, two.stderr[-3000:]
+    return one, two
+
+
 def same_rows(a: list[dict], b: list[dict]) -> bool:
     """Row lists equal exactly (None and NaN compare equal to themselves)."""
     if len(a) != len(b):

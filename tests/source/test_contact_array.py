@@ -17,6 +17,7 @@ import tengfield as tf
 from tengfield.array import draw_cells
 
 import plate_model as fx
+from helpers import needs_mpirun, oversubscribed_env
 
 RUN = {"duration_s": 2.0, "settle_periods": 4, "sample_rate_hz": 2000.0}
 #: leakage: the steady charge depends on each cell's contacts (their rate and areas)
@@ -141,15 +142,11 @@ def test_cli_run_of_a_contact_charged_array_with_figures(tmp_path, cli_command, 
     for name in ("ball_charge.png", "array.png"):
         png = (tmp_path / "out" / name).read_bytes()
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
-    mpirun = shutil.which("mpirun")
-    if mpirun is None:
-        pytest.skip("mpirun not installed")
-    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
-                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
-                  TENGFIELD_CACHE_DIR=tmp_path / "cache-two")
-    env.pop("OMPI_COMM_WORLD_SIZE", None)
-    two = subprocess.run([mpirun, "-n", "2", *cli_command("run", scene, "-o", tmp_path / "two")],
-                         capture_output=True, text=True, timeout=600, env=env)
+    needs_mpirun()
+    two = subprocess.run([shutil.which("mpirun"), "-n", "2",
+                          *cli_command("run", scene, "-o", tmp_path / "two")],
+                         capture_output=True, text=True, timeout=600,
+                         env=oversubscribed_env(cli_env, tmp_path / "cache-two"))
     assert two.returncode == 0, two.stderr[-3000:]
     assert (tmp_path / "two" / "waveforms.csv").read_bytes() == \
         (tmp_path / "out" / "waveforms.csv").read_bytes()

@@ -23,6 +23,7 @@ from tengfield.source.terminal import ContactTerminal
 from tengfield.surrogate.table import table_from_results
 
 import plate_model as fx
+from helpers import serial_and_mpirun
 
 RUN = {"duration_s": 0.4, "settle_periods": 3, "sample_rate_hz": 5000.0}
 
@@ -298,23 +299,9 @@ def test_a_ten_minute_run_streams_the_charge_and_equals_the_constant_model_at_eq
 def test_mpirun_writes_the_serial_runs_files(tmp_path, cli_command, cli_env):
     """``mpirun -n 2 tengfield run`` of a contact-charged scene: waveforms.csv and the charge
     block byte for byte / number for number the serial run's."""
-    import shutil
-
-    mpirun = shutil.which("mpirun")
-    if mpirun is None:
-        pytest.skip("mpirun not installed")
     scene = tmp_path / "contact.toml"
     scene.write_text(fx.SMALL_SCENE + '\n[charge]\nmodel = "contact"\n')
-    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
-                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
-                  TENGFIELD_CACHE_DIR=tmp_path / "cache")
-    env.pop("OMPI_COMM_WORLD_SIZE", None)
-    serial = subprocess.run(cli_command("run", scene, "-o", tmp_path / "one"),
-                            capture_output=True, text=True, env=env, timeout=600)
-    assert serial.returncode == 0, serial.stderr[-3000:]
-    two = subprocess.run([mpirun, "-n", "2", *cli_command("run", scene, "-o", tmp_path / "two")],
-                         capture_output=True, text=True, env=env, timeout=600)
-    assert two.returncode == 0, two.stderr[-3000:]
+    serial_and_mpirun(cli_command, cli_env, tmp_path, "run", scene, shared_cache=True)
     assert (tmp_path / "one" / "waveforms.csv").read_bytes() == \
         (tmp_path / "two" / "waveforms.csv").read_bytes()
     one_block = json.loads((tmp_path / "one" / "summary.json").read_text())["charge"]

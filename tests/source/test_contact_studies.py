@@ -8,17 +8,15 @@ from __future__ import annotations
 
 import csv
 import json
-import shutil
 import subprocess
-import sys
 
-import numpy as np
 import pytest
 
 import tengfield as tf
 from tengfield.sweeps import sweep_study
 
 import plate_model as fx
+from helpers import serial_and_mpirun
 
 RUN = {"duration_s": 2.0, "settle_periods": 4, "sample_rate_hz": 2000.0}
 CHARGE = {"model": "contact", "discharge": "none", "equilibrium_uC_per_m2": -100.0}
@@ -183,22 +181,10 @@ def test_cli_sweep_and_uncertainty_of_the_contact_charge_with_figures(tmp_path, 
 def test_mpirun_sweeps_the_serial_rows(tmp_path, cli_command, cli_env):
     """``mpirun -n 2 tengfield sweep --vary charge.efficiency`` writes the serial sweep.csv
     byte for byte."""
-    mpirun = shutil.which("mpirun")
-    if mpirun is None:
-        pytest.skip("mpirun not installed")
     scene = tmp_path / "contact.toml"
     scene.write_text(CONTACT_SCENE)
-    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
-                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
-                  TENGFIELD_CACHE_DIR=tmp_path / "cache")
-    env.pop("OMPI_COMM_WORLD_SIZE", None)
-    args = ["sweep", scene, "--vary", "charge.efficiency=0.1:0.9:3", "--no-plots", "-o"]
-    serial = subprocess.run(cli_command(*args, tmp_path / "one"), capture_output=True,
-                            text=True, env=env, timeout=600)
-    assert serial.returncode == 0, serial.stderr[-3000:]
-    two = subprocess.run([mpirun, "-n", "2", *cli_command(*args, tmp_path / "two")],
-                         capture_output=True, text=True, env=env, timeout=600)
-    assert two.returncode == 0, two.stderr[-3000:]
+    serial_and_mpirun(cli_command, cli_env, tmp_path, "sweep", scene, "--vary",
+                      "charge.efficiency=0.1:0.9:3", "--no-plots", shared_cache=True)
     assert (tmp_path / "one" / "sweep.csv").read_bytes() == \
         (tmp_path / "two" / "sweep.csv").read_bytes()
 
@@ -282,16 +268,6 @@ def test_cli_design_with_the_contact_charge_and_figures(tmp_path, cli_command, c
         charge["steady_uC_per_m2"][0], rel=1e-12)
 
 
-def _mpi_env(cli_env, cache):
-    """The environment of a serial or ``mpirun -n 2`` CLI run (oversubscribed: the
-    machine has 2 cores shared with others), outside any mpirun of the caller."""
-    env = cli_env(OMPI_MCA_rmaps_base_oversubscribe="1", MPLBACKEND="Agg",
-                  PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe",
-                  TENGFIELD_CACHE_DIR=cache)
-    env.pop("OMPI_COMM_WORLD_SIZE", None)
-    return env
-
-
 @pytest.mark.slow
 def test_mpirun_uncertainty_writes_the_serial_csv_with_figures(tmp_path, cli_command,
                                                                cli_env):
@@ -299,9 +275,6 @@ def test_mpirun_uncertainty_writes_the_serial_csv_with_figures(tmp_path, cli_com
     ``[charge] model = "contact"``, figures on: the serial uncertainty.csv byte for byte.
     The mpirun run starts from an empty cache: its field is solved in one rank's task
     (PETSc initialised on every rank first; it hung there before)."""
-    mpirun = shutil.which("mpirun")
-    if mpirun is None:
-        pytest.skip("mpirun not installed")
     scene = tmp_path / "contact.toml"
     scene.write_text(CONTACT_SCENE + "[uncertainty]\nsamples = 16\nseed = 3\n"
                      "[uncertainty.vary]\n"
@@ -309,15 +282,7 @@ def test_mpirun_uncertainty_writes_the_serial_csv_with_figures(tmp_path, cli_com
                      "high = 0.6 }\n"
                      '"charge.leakage_time_s" = { distribution = "uniform", low = 0.05, '
                      "high = 1.0 }\n")
-    serial = subprocess.run(cli_command("uncertainty", scene, "-o", tmp_path / "one"),
-                            capture_output=True, text=True, timeout=600,
-                            env=_mpi_env(cli_env, tmp_path / "cache-one"))
-    assert serial.returncode == 0, serial.stderr[-3000:]
-    two = subprocess.run([mpirun, "-n", "2", *cli_command("uncertainty", scene, "-o",
-                                                          tmp_path / "two")],
-                         capture_output=True, text=True, timeout=600,
-                         env=_mpi_env(cli_env, tmp_path / "cache-two"))
-    assert two.returncode == 0, two.stderr[-3000:]
+    serial_and_mpirun(cli_command, cli_env, tmp_path, "uncertainty", scene)
     one_csv = (tmp_path / "one" / "uncertainty.csv").read_bytes()
     assert one_csv == (tmp_path / "two" / "uncertainty.csv").read_bytes()
     with open(tmp_path / "one" / "uncertainty.csv", newline="") as f:
@@ -341,9 +306,6 @@ def test_mpirun_design_writes_the_serial_rows_with_figures(tmp_path, cli_command
     """``mpirun -n 2 tengfield design`` with ``[charge] model = "contact"``, figures on:
     design.csv equal to the serial one in every column but :data:`MACHINE_COLUMNS`
     (compared as text, exactly), the same best candidate in design.json."""
-    mpirun = shutil.which("mpirun")
-    if mpirun is None:
-        pytest.skip("mpirun not installed")
     scene = tmp_path / "design.toml"
     scene.write_text(CONTACT_SCENE.replace("efficiency = 0.3", "efficiency = 0.5\n"
                                            "leakage_time_s = 0.5")
@@ -351,16 +313,8 @@ def test_mpirun_design_writes_the_serial_rows_with_figures(tmp_path, cli_command
                      "settle_periods = 10\nwindow_periods = 10\n[design.vary]\n"
                      "stroke_mm = [1.0, 4.0]\n[design.excitation]\nfrequency_hz = [20.0]\n"
                      "amplitude_mm = [1.5]\n")
-    serial = subprocess.run(cli_command("design", scene, "-o", tmp_path / "one", "--jobs",
-                                        "1"),
-                            capture_output=True, text=True, timeout=900,
-                            env=_mpi_env(cli_env, tmp_path / "cache-one"))
-    assert serial.returncode == 0, serial.stderr[-3000:]
-    two = subprocess.run([mpirun, "-n", "2", *cli_command("design", scene, "-o",
-                                                          tmp_path / "two")],
-                         capture_output=True, text=True, timeout=900,
-                         env=_mpi_env(cli_env, tmp_path / "cache-two"))
-    assert two.returncode == 0, two.stderr[-3000:]
+    serial_and_mpirun(cli_command, cli_env, tmp_path, "design", scene, serial=("--jobs", "1"),
+                      timeout=900)
 
     def rows_of(name):
         with open(tmp_path / name / "design.csv", newline="") as f:

@@ -21,7 +21,6 @@ from pathlib import Path
 
 from .._mpi import rank_of, size_of
 from .provenance import legacy_field_hash, radial_hash, solver_fingerprint
-from .refinement import check_electrodes  # noqa: F401 - the surrogate's check
 from .refinement import (SolveFunction, precompute, precompute_radial, radial_accuracy_problems,
                          warn_accuracy, warn_problems)
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
@@ -203,8 +202,8 @@ def obtain_radial_table(scene, *, cache_dir=None, comm=None, solve=None, progres
     ``(RadialTable, CacheOutcome)``, the rules of
     :func:`tengfield.surrogate.obtain_table` (rank 0 decides and broadcasts;
     an untrusted file is recomputed with a warning; an unwritable cache costs a
-    warning). ``refinement``: further keywords of :func:`precompute_radial`."""
-    check_electrodes(scene)
+    warning). ``refinement``: further keywords of :func:`precompute_radial` (which refuses
+    the single-electrode cell before any work)."""
     start = time.perf_counter()
     settings = {"mesh_size_mm": mesh_size_mm, "degree": degree, "tolerance": tolerance}
     path = radial_cache_path(scene, cache_dir, **settings)
