@@ -32,11 +32,32 @@ def install() -> None:
             pass
 
 
+#: SIGINT has arrived since :func:`hand_back` (the command line's own handling)
+_received = False
+
+
+def _recorded(signum, frame):   # noqa: ARG001 - the signal handler's signature
+    """Python's KeyboardInterrupt, remembering that it came: a C extension being imported
+    (numba's, numpy's C API) turns it into an ImportError with no cause to follow."""
+    global _received
+    _received = True
+    raise KeyboardInterrupt
+
+
+def received() -> bool:
+    """Whether SIGINT has arrived since :func:`hand_back`."""
+    return _received
+
+
 def hand_back() -> None:
-    """Python's KeyboardInterrupt again (the command line's own handling takes over)."""
+    """KeyboardInterrupt on SIGINT again, as Python's own handler raises it (the command
+    line's own handling takes over), remembered for :func:`received` (from now: each
+    command starts with none received)."""
+    global _received
+    _received = False
     try:
-        if signal.getsignal(signal.SIGINT) is _interrupted:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
+        if signal.getsignal(signal.SIGINT) in (_interrupted, signal.default_int_handler):
+            signal.signal(signal.SIGINT, _recorded)
     except ValueError:
         pass
 

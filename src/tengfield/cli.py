@@ -384,7 +384,11 @@ def forget_unhandled_interrupt() -> None:
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:
-    """True when ``exc`` was raised because of a KeyboardInterrupt (its cause or context)."""
+    """True when ``exc`` was raised because of a KeyboardInterrupt (its cause or context),
+    or after SIGINT arrived (a C extension's import turns it into an ImportError)."""
+    from ._early_interrupt import received
+    if received():
+        return True
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):

@@ -60,6 +60,37 @@ def test_an_interrupt_in_code_run_by_exec_still_exits_130(where, tmp_path, cli_e
     assert out.stderr.strip().splitlines()[-1] == "tengfield: interrupted"
 
 
+def test_an_interrupt_that_a_c_import_turns_into_an_import_error_exits_130(tmp_path, cli_env,
+                                                                          python):
+    """numba's import, interrupted inside numpy's C API, raises ``ImportError: numpy._core.
+    multiarray failed to import`` with no KeyboardInterrupt to follow (CI, stop 58): a
+    command that fails after SIGINT came says it was interrupted."""
+    script = tmp_path / "interrupted_import.py"
+    script.write_text(textwrap.dedent("""\
+        import os, signal, sys
+        from tengfield import cli
+
+        def command(parser, args):
+            failed = False
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                for _ in range(1000):
+                    pass
+            except KeyboardInterrupt:   # as C code does: the interrupt is gone
+                failed = True
+            if failed:
+                raise ImportError("numpy._core.multiarray failed to import")
+
+        cli._run_command = command
+        sys.exit(cli.main(["run", "scene.toml"]))
+        """))
+    out = subprocess.run([python, "-m", "interrupted_import"], capture_output=True,
+                         text=True, env=cli_env(), cwd=tmp_path, timeout=120)
+    assert out.returncode == 130, out.stderr[-2000:]
+    assert out.stderr.strip().splitlines()[-1] == "tengfield: interrupted"
+    assert "Traceback" not in out.stderr
+
+
 def test_a_library_user_keeps_pythons_keyboard_interrupt():
     """``import tengfield`` in a script or a notebook leaves SIGINT to Python."""
     code = ("import signal, tengfield, tengfield.cli; "
