@@ -36,16 +36,22 @@ def install() -> None:
 _received = False
 
 
-def _recorded(signum, frame):   # noqa: ARG001 - the signal handler's signature
-    """Python's KeyboardInterrupt, remembering that it came: a C extension being imported
-    (numba's, numpy's C API) turns it into an ImportError with no cause to follow."""
+def note_interrupt() -> None:
+    """Remember that an interrupt (SIGINT, or SIGTERM through the command line) came: a C
+    extension being imported (numba's, numpy's C API) turns its KeyboardInterrupt into an
+    ImportError with no cause to follow."""
     global _received
     _received = True
+
+
+def _recorded(signum, frame):   # noqa: ARG001 - the signal handler's signature
+    """Python's KeyboardInterrupt, remembered (:func:`note_interrupt`)."""
+    note_interrupt()
     raise KeyboardInterrupt
 
 
 def received() -> bool:
-    """Whether SIGINT has arrived since :func:`hand_back`."""
+    """Whether an interrupt has arrived since :func:`hand_back`."""
     return _received
 
 

@@ -290,6 +290,8 @@ def _sigterm_as_interrupt():
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
             os.kill(os.getpid(), signal.SIGTERM)
             return
+        from ._early_interrupt import note_interrupt
+        note_interrupt()
         raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGTERM, interrupt)

@@ -285,18 +285,19 @@ def run_one(scene, *, comm=None, cache_dir=None, solve: Callable | None = None,
     field_options = dict(cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
                          command_line=command_line, write_cache=write_cache,
                          radial_settings=radial_settings)
-    charged = cell_contact = None
+    charged = cell_contact = contact_run = None
     whole = dynamics   # the electrical stage's may be its last periods (a contact run)
     if scene.charge.from_contacts:
-        scene, table, curves, limit, charged, cell_contact, window = _contact_charge_stage(
-            scene, dynamics, stages, **field_options)
+        scene, table, curves, limit, charged, cell_contact, contact_run = \
+            _contact_charge_stage(scene, dynamics, stages, **field_options)
     else:
         scene, table, curves, limit = _field_stage(scene, dynamics, stages, **field_options)
     if scene.array.cells > 0:
         return _run_array(scene, dynamics, curves, table, stages, comm, progress,
-                          contact=cell_contact)
-    if charged is not None:
-        dynamics = window
+                          contact=cell_contact,
+                          window=0 if contact_run is None else contact_run.window)
+    if contact_run is not None:
+        dynamics = contact_run.dynamics
     stage = electrical_stage(scene, dynamics, curves, table, stages)
     if charged is not None:
         _with_contact_charge(stage, dynamics, charged)
@@ -343,7 +344,7 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
 
     def cell(cell_dynamics):
         return contact_source(scene, cell_dynamics, table, run.limit, period=period)
-    return run.scene, run.table, run.curves, run.limit, run.charged, cell, run.dynamics
+    return run.scene, run.table, run.curves, run.limit, run.charged, cell, run
 
 
 def _wiring(scene):
@@ -366,13 +367,21 @@ def _with_contact_charge(stage, dynamics, charged) -> None:
     if not hasattr(stage.waveforms, "chunks"):   # a streamed run's chunks carry it
         stage.waveforms[BALL_CHARGE_COLUMN] = history.at(electrical.elapsed_times(dynamics))
     stage.summary["charge"] = _jsonable(block)
-    from .source.contacts import charge_record
     stage.extras["_charge_history"] = history
-    elapsed = electrical.elapsed_times(dynamics)   # the electrical stage's: maybe its end
+    stage.extras["_charge_record"] = _charge_figure_record(history, block, dynamics)
+
+
+def _charge_figure_record(history, block, dynamics) -> dict:
+    """ball_charge.png's record of ``history`` to the end of ``dynamics`` (the electrical
+    stage's trajectory), with the window its waveforms cover (``window_s``) where that is
+    not the whole run."""
+    from .source.contacts import charge_record
+
+    elapsed = electrical.elapsed_times(dynamics)
     record = charge_record(history, block["ball_area_m2"], float(elapsed[-1]))
     if not block.get("waveforms", {}).get("whole_run", True):
         record["window_s"] = (float(elapsed[0]), float(elapsed[-1]))
-    stage.extras["_charge_record"] = record
+    return record
 
 
 def _dynamics_stage(scene, simulate, stages):
@@ -589,23 +598,21 @@ def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:
 
 
 def _run_array(scene, dynamics, curves, table, stages, comm, progress,
-               contact=None) -> RunResult:
+               contact=None, window: int = 0) -> RunResult:
     """``[array]``: every cell its own dynamics (tengfield.array), one surrogate. The
     nominal cell's columns are whole arrays (a long run's sampled ones are built:
     tengfield.array holds its outputs whole). ``contact``: ``[charge] model = "contact"``,
     one cell's dynamics -> its :class:`~tengfield.contact_run.ContactRun` (each cell
-    charged by its own impacts)."""
+    charged by its own impacts); ``window``: the first sample the outputs cover
+    (:func:`tengfield.contact_run.electrical_window`)."""
     from .array import run_array
     from .dynamics.columns import tail, with_arrays
 
-    window = 0
-    if contact is not None:         # the cells' charge over the whole run, the circuit's
-        from .contact_run import electrical_window    # stage over its window
-        window, _ = electrical_window(scene, dynamics)
     start = time.perf_counter()
-    arr = run_array(scene, curves, with_arrays(dynamics), comm=comm, progress=progress,
-                    contact=contact, window=window)
-    dynamics = with_arrays(tail(dynamics, window))
+    whole = with_arrays(dynamics)   # the cells' charge over the whole run, the outputs
+    arr = run_array(scene, curves, whole, comm=comm, progress=progress, contact=contact,
+                    window=window)                      # over its window
+    dynamics = tail(whole, window)
     waveforms = arr.columns
     block = dict(arr.summary)
     rect = block.pop("rectifier", None)
@@ -666,14 +673,9 @@ def _array_charge_record(charge, dynamics) -> dict:
     """ball_charge.png's record of an ``[array]``: the reported cell's (the median steady
     charge, :class:`tengfield.array.CellCharges`) with the other distinct cells' sigma(t)
     (up to :data:`ARRAY_CHARGE_LINES`, evenly chosen) drawn beside it."""
-    from .source.contacts import charge_record
-
-    elapsed = electrical.elapsed_times(dynamics)   # the electrical stage's: maybe its end
     j = charge.representative
     area = charge.runs[j].block["ball_area_m2"]
-    record = charge_record(charge.runs[j].history, area, float(elapsed[-1]))
-    if not charge.runs[j].block.get("waveforms", {}).get("whole_run", True):
-        record["window_s"] = (float(elapsed[0]), float(elapsed[-1]))
+    record = _charge_figure_record(charge.runs[j].history, charge.runs[j].block, dynamics)
     others = [k for k in range(len(charge.runs)) if k != j]
     if len(others) > ARRAY_CHARGE_LINES:
         others = [others[int(i)] for i in np.linspace(0, len(others) - 1, ARRAY_CHARGE_LINES)]

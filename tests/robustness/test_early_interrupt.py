@@ -60,20 +60,22 @@ def test_an_interrupt_in_code_run_by_exec_still_exits_130(where, tmp_path, cli_e
     assert out.stderr.strip().splitlines()[-1] == "tengfield: interrupted"
 
 
-def test_an_interrupt_that_a_c_import_turns_into_an_import_error_exits_130(tmp_path, cli_env,
-                                                                          python):
+@pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
+def test_an_interrupt_that_a_c_import_turns_into_an_import_error_exits_130(signame, tmp_path,
+                                                                          cli_env, python):
     """numba's import, interrupted inside numpy's C API, raises ``ImportError: numpy._core.
     multiarray failed to import`` with no KeyboardInterrupt to follow (CI, stop 58): a
-    command that fails after SIGINT came says it was interrupted."""
+    command that fails after SIGINT (or SIGTERM, which the command line turns into an
+    interrupt) came says it was interrupted."""
     script = tmp_path / "interrupted_import.py"
-    script.write_text(textwrap.dedent("""\
+    script.write_text(textwrap.dedent(f"""\
         import os, signal, sys
         from tengfield import cli
 
         def command(parser, args):
             failed = False
             try:
-                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), signal.{signame})
                 for _ in range(1000):
                     pass
             except KeyboardInterrupt:   # as C code does: the interrupt is gone

@@ -237,8 +237,9 @@ def print_summary(summary: dict) -> None:
         from ..contact_run import waveform_line
         from ..source.contacts import charge_line
         print(charge_line(summary["charge"]))
-        if waveform_line(summary["charge"]):
-            print(waveform_line(summary["charge"]))
+        window = waveform_line(summary["charge"])
+        if window:
+            print(window)
     for line in terminal_lines(summary):
         print(line)
     if summary.get("load"):
