@@ -59,6 +59,20 @@ class _Pair:
         return self.upper_short_charge(C[..., 0, 0], C[..., 0, 1], C[..., 1, 1], q[..., 0],
                                        q[..., 1], ball_charge)
 
+    def contact_share(self, C):
+        """k of the matrices ``C`` (:meth:`upper_share`): the share of a charge put on the
+        shorted electrodes that the receiving terminal takes."""
+        C = np.asarray(C, dtype=float)
+        return self.upper_share(C[..., 0, 0], C[..., 0, 1], C[..., 1, 1])
+
+    def contact_transfer(self, lost, from_upper, gained, share):
+        """What the ball's contacts have sent through the wire [C] (the contact charge,
+        :mod:`tengfield.source.terminal`): ``U − k L`` with L = ``lost`` (to the air),
+        U = ``from_upper`` (taken from the upper electrode), k = ``share``; ``gained`` (D,
+        every contact's gain) is not needed: a gain from the lower electrode moves no
+        charge through the wire of the pair."""
+        return from_upper - share * lost
+
 
 class FloatingPair(_Pair):
     """Both electrodes are the terminals and float together: their total charge stays
@@ -157,6 +171,15 @@ class LowerToGround:
         """The ground's side with the terminals shorted (the electrode at 0 V holds its
         induced charge q_l): −q_l [C]."""
         return -np.asarray(q, dtype=float)[..., 0]
+
+    def contact_share(self, C):
+        """k = 0: a charge lost to the air is the ground's business, not the wire's."""
+        return np.zeros_like(np.asarray(C, dtype=float)[..., 0, 0])
+
+    def contact_transfer(self, lost, from_upper, gained, share):
+        """−D [C]: every contact's gain is drawn from the one electrode (the bare upper
+        plate charges nothing), so the wire has carried it back from the ground."""
+        return -gained
 
     def reference_charges(self, C_ref, q_ref, ball_charge: float) -> np.ndarray:
         """[Q_lower] [C] of the reference state: the electrode at 0 V."""

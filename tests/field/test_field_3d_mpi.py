@@ -34,7 +34,11 @@ def test_stored_mesh_on_world_equals_serial_reference(name):
     np.testing.assert_allclose(sol.induced_fraction, ref["induced_fraction"], rtol=1e-7)
 
 
-def test_degree2_offaxis_world_equals_self():
+@pytest.mark.parametrize("electrodes", [("lower", "upper"), ("lower",)], ids=["pair", "single"])
+def test_degree2_offaxis_world_equals_self(electrodes):
+    """The pair and the single-electrode cell (issue #51: its upper plate bare)."""
+    import dataclasses
+
     from mpi4py import MPI
 
     from tengfield.field import solver3d
@@ -42,7 +46,7 @@ def test_degree2_offaxis_world_equals_self():
     from tengfield.field.geometry3d import MeshSettings
     from tengfield.scene import default_scene
 
-    cell = cylindrical_cell(default_scene().device)
+    cell = dataclasses.replace(cylindrical_cell(default_scene().device), electrodes=electrodes)
     settings = solver3d.Solve3DSettings(degree=2, mesh_size=2e-3, domain_radius=20e-3,
                                         far_field="kelvin", estimate_error=False)
     mesh_settings = MeshSettings(size=2e-3, domain_radius=20e-3, order=2)
@@ -55,5 +59,6 @@ def test_degree2_offaxis_world_equals_self():
     assert MPI.COMM_WORLD.size == 1 or world.cell_mesh.mesh.topology.index_map(3).size_local \
         < world.potentials.cells, "the mesh is not distributed"
     assert world.potentials.dofs == serial.potentials.dofs
+    assert world.capacitance.shape == (len(electrodes),) * 2
     np.testing.assert_allclose(world.capacitance, serial.capacitance, rtol=1e-7)
     np.testing.assert_allclose(world.induced_fraction, serial.induced_fraction, rtol=1e-7)

@@ -265,6 +265,24 @@ def test_recommendations_are_verified(fast_report):
 
 
 @pytest.mark.slow
+def test_the_single_electrode_cells_report_has_no_mirror_and_reaches_its_target(tmp_path, cli):
+    """The single-electrode cell (one electrode: no z -> Δh − z mirror) measured against
+    references solved at every position (the mirror's images had made its references
+    0.54 off), its 3D rows kept, its topology named; figures on."""
+    out = tmp_path / "single"
+    proc = cli(["report", "--fast", "--set", "device.electrodes=lower", "-o", str(out)])
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    data = json.loads((out / "report.json").read_text())
+    recs = {r["target"]: r for r in data["recommendations"]}
+    assert recs[1e-2]["reached"] and recs[1e-2]["measured_error"] <= 1e-2, recs[1e-2]
+    assert recs[1e-3]["measured_error"] < 1e-2, recs[1e-3]
+    assert _rows(data, "field", method="3d")
+    assert "reference `lower-to-ground`" in (out / "report.md").read_text()
+    for name in ("field.png", "surrogate.png", "dynamics.png", "circuit.png"):
+        assert (out / name).stat().st_size > 10_000, name
+
+
+@pytest.mark.slow
 def test_recommended_scene_reaches_its_target_through_tengfield_run(fast_report, tmp_path, cli):
     """`tengfield run recommended-0.01.toml` (a fresh cache, the real solver and its
     adaptive surrogate) lands within 1e-2 of the report's overall reference, with

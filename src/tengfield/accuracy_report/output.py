@@ -42,7 +42,7 @@ def markdown(report, images: dict) -> str:
              "",
              f"Scene: `{one_line(sc.source)}` — {sc.excitation.frequency:g} Hz, "
              f"A = {sc.excitation.amplitude * 1e3:g} mm, Δh = {sc.device.stroke * 1e3:g} mm, "
-             f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{sc.circuit.reference}`; "
+             f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{_topology(sc)}`; "
              f"regime {report.trajectory.get('regime', '?')}. Total wall time "
              f"{report.wall_time_s:.0f} s.",
              "",
@@ -136,3 +136,10 @@ def write_report(report, out_dir) -> list[Path]:
     write_text(md, markdown(report, images))
     written.append(md)
     return written
+
+
+def _topology(scene) -> str:
+    """The scene's terminal topology's name ("floating", "grounded-lower", or the single
+    electrode's "lower-to-ground")."""
+    from ..terminals import wiring
+    return wiring(scene.circuit.reference, len(scene.device.electrode_names)).name

@@ -27,7 +27,9 @@ class _Solver:
         self.scene = scene
         self.comm = comm
         self.stroke = scene.device.stroke
-        self.symmetric = scene.field.environment == "free-space"
+        from ..surrogate.sampling import is_mirror_symmetric
+        # a grounded table, or the single-electrode cell's one electrode, breaks the mirror
+        self.symmetric = is_mirror_symmetric(scene)
         self.cache: dict = {}
         self._solve = solve
         self.progress = progress

@@ -187,9 +187,6 @@ def build_report(scene, *, fast: bool = False, comm=None, plan: Plan | None = No
         from mpi4py import MPI
         comm = MPI.COMM_SELF
     plan = plan or make_plan(fast)
-    if scene.device.electrodes != "both" and plan.settings_3d:   # the 3D solver: the pair's
-        import dataclasses
-        plan = dataclasses.replace(plan, settings_3d=())
     started = time.perf_counter()
     total = _task_estimate(plan)
     bar = progress_bar(total, "report", progress, unit="task", comm=farm_comm)

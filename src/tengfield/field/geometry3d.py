@@ -23,7 +23,9 @@ Electrodes are zero-thickness conductor surfaces embedded in the mesh
 (the copper foil is thin compared with everything else). Physical groups
 (names, never point groups): volumes ``ball``, ``walls`` (absent when the
 walls have εr = 1), ``air``; surfaces ``ball_surface``,
-``electrode_lower``, ``electrode_upper``, ``far_boundary``.
+``electrode_<name>`` for each of the cell's electrodes (``electrode_lower``,
+``electrode_upper``; the single-electrode cell has no upper one: its upper plate is
+bare dielectric), ``far_boundary``.
 
 gmsh is imported inside the functions that need it.
 """
@@ -46,6 +48,14 @@ from .geometry_axisymmetric import RIM_EXPONENT  # noqa: E402  (no gmsh)
 
 VOLUME_GROUPS = ("ball", "walls", "air")
 SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
+#: the electrodes a cell lists (``cell.electrodes``) when it names none: the pair
+PAIR = ("lower", "upper")
+
+
+def electrode_names(cell) -> tuple[str, ...]:
+    """The cell's electrodes, in the order of the field's matrices (``cell.electrodes``:
+    ("lower", "upper"), or ("lower",) for the single-electrode cell)."""
+    return tuple(getattr(cell, "electrodes", PAIR))
 
 _model_counter = itertools.count()
 
@@ -206,8 +216,9 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
     # piece_map follows the order objects + tools
     ball_vols = [tag for _, tag in piece_map[1]]
     wall_vols = sorted({tag for pieces in piece_map[2:2 + len(walls)] for _, tag in pieces})
-    lower_surfs = [tag for _, tag in piece_map[2 + len(walls)]]
-    upper_surfs = [tag for _, tag in piece_map[3 + len(walls)]]
+    names = electrode_names(cell)
+    electrode_surfs = {f"electrode_{name}": [tag for _, tag in piece_map[2 + len(walls) + i]]
+                       for i, name in enumerate(names)}
     all_vols = [tag for _, tag in gmsh.model.getEntities(3)]
     air_vols = [v for v in all_vols if v not in ball_vols and v not in wall_vols]
     ball_surfs = [tag for _, tag in gmsh.model.getBoundary([(3, v) for v in ball_vols],
@@ -217,17 +228,18 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
 
     groups = {}
     for name, dim, tags in (("ball", 3, ball_vols), ("walls", 3, wall_vols), ("air", 3, air_vols),
-                            ("ball_surface", 2, ball_surfs), ("electrode_lower", 2, lower_surfs),
-                            ("electrode_upper", 2, upper_surfs), ("far_boundary", 2, far_surfs)):
+                            ("ball_surface", 2, ball_surfs),
+                            *((group, 2, tags) for group, tags in electrode_surfs.items()),
+                            ("far_boundary", 2, far_surfs)):
         if tags:
             groups[name] = gmsh.model.addPhysicalGroup(dim, tags, name=name)
-    missing = [n for n in ("ball", "air", "ball_surface", "electrode_lower", "electrode_upper",
-                           "far_boundary") if n not in groups]
+    missing = [n for n in ("ball", "air", "ball_surface", *electrode_surfs, "far_boundary")
+               if n not in groups]
     if missing:  # pragma: no cover - would be a gmsh/OCC regression
         raise FieldError(f"3D geometry: gmsh produced no entities for {', '.join(missing)}")
 
     _size_fields(cell, centre, settings, ball_surfs,
-                 [c for s in lower_surfs + upper_surfs
+                 [c for tags in electrode_surfs.values() for s in tags
                   for _, c in gmsh.model.getBoundary([(2, s)], oriented=False)])
     # OPTIMIZE_THRESHOLD: gmsh's tet optimiser after HXT works on every tet of quality
     # below it; at the default 0.3 it spends most of the meshing on the few tets along the

@@ -78,7 +78,9 @@ def _draw_position(result, path, reference: str, potentials) -> None:
     if field_method(solution.method).dimension == 3:
         field_plot.render_weighting_png_3d(
             path, solution, result.scene.device, window_size=figure_window((1200, 1100)),
-            title=(f"3D weighting potential psi_upper (1 V on the upper electrode), "
+            title=(("3D weighting potential psi_upper (1 V on the upper electrode), "
+                    if len(solution.weighting) > 1 else
+                    "3D weighting potential psi_lower (1 V on the one electrode), ") +
                    f"z = {z:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
         return
     potentials = (0.0,) * len(result.electrodes) if potentials is None else potentials

@@ -197,14 +197,15 @@ class Problem:
             a = a + dx_api.constant(mesh, 1.0 / settings.domain_radius) * u * v * ds(far_tag)
         self.rhs = dx_api.form(ufl.inner(dx_api.constant(mesh, 0.0), v) * ufl.dx)
         self.bilinear = dx_api.form(a)
+        self.conductors = [f"electrode_{name}" for name in cell_mesh.electrodes]
         dofs = {name: dx_api.facet_dofs(self.space, cell_mesh.facet_tags, cell_mesh.groups[name])
-                for name in ("electrode_lower", "electrode_upper")}
+                for name in self.conductors}
         if settings.far_field == "dirichlet":
             dofs["far_boundary"] = dx_api.facet_dofs(self.space, cell_mesh.facet_tags, far_tag)
         self.bcs = {active: [dx_api.dirichlet_bc(self.space, 1.0 if name == active else 0.0, d)
                              for name, d in dofs.items()]
-                    for active in ("electrode_lower", "electrode_upper")}
-        self.matrix = dx_api.assemble_matrix(self.bilinear, bcs=self.bcs["electrode_lower"])
+                    for active in self.conductors}
+        self.matrix = dx_api.assemble_matrix(self.bilinear, bcs=self.bcs[self.conductors[0]])
         self.operator, self.harmonics, self.weights = self.matrix, [], np.empty(0)
         if settings.far_field == "kelvin":   # the far sphere does not move: assembled once
             x = ufl.SpatialCoordinate(mesh)
@@ -230,7 +231,7 @@ class Problem:
         preconditioner is set up again at the next solve."""
         from . import _dolfinx as dx_api
 
-        dx_api.assemble_matrix_into(self.matrix, self.bilinear, self.bcs["electrode_lower"])
+        dx_api.assemble_matrix_into(self.matrix, self.bilinear, self.bcs[self.conductors[0]])
         self.assembled = False
 
     def solve(self):
@@ -247,7 +248,7 @@ class Problem:
             self.ksp.setUp()
             self.assembled = True
         potentials, iterations, moments = [], [], []
-        for active in ("electrode_lower", "electrode_upper"):
+        for active in self.conductors:
             b = dx_api.assemble_vector(self.rhs, self.bilinear, self.bcs[active])
             psi = dx_api.function(self.space, name=f"psi_{active.split('_')[1]}")
             try:
@@ -262,10 +263,10 @@ class Problem:
             moments.append([u.dot(dx_api.petsc_vector(psi)) for u in self.harmonics])
             iterations.append(self.ksp.getIterationNumber())
         return WeightingPotentials(
-            lower=potentials[0], upper=potentials[1], dofs=dx_api.num_dofs(self.space),
+            functions=tuple(potentials), dofs=dx_api.num_dofs(self.space),
             cells=dx_api.num_cells(self.cell_mesh.mesh), iterations=tuple(iterations),
             assembly_time=0.0, solve_time=time.perf_counter() - start,
-            harmonic_moments=np.array(moments).reshape(2, -1),
+            harmonic_moments=np.array(moments).reshape(len(potentials), -1),
             harmonic_weights=np.asarray(self.weights))
 
     def release(self) -> None:

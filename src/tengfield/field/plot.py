@@ -250,7 +250,8 @@ def trace_field_lines(Ex, Ey, xs, ys, seeds, *, step_length: float, max_steps: i
 def render_weighting_png_3d(path, solution, device, *, title: str,
                             window_size=(1200, 1100)) -> None:
     """3D runs: the weighting potential ψ_upper (dimensionless: the potential for
-    1 V on the upper electrode, 0 V on the lower one, uncharged ball) on the
+    1 V on the upper electrode, 0 V on the lower one, uncharged ball; the
+    single-electrode cell's ψ_lower) on the
     meridian plane through the axis and the ball centre, with equipotentials,
     the ball and the electrodes outlined. Serial meshes only (a plot needs the
     whole mesh on one process)."""
@@ -258,7 +259,9 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
 
     from . import _dolfinx as dx_api
 
-    psi = solution.weighting[1]
+    # the upper electrode's ψ; the single-electrode cell's one electrode (ψ_lower)
+    psi = solution.weighting[-1]
+    label = "psi_upper" if len(solution.weighting) > 1 else "psi_lower"
     topology, cell_types, points = dx_api.vtk_arrays(solution.space)
     grid = pv.UnstructuredGrid(topology, cell_types, points.copy())
     grid.point_data["psi"] = np.asarray(psi.x.array.real, dtype=float)
@@ -278,7 +281,7 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
 
     plotter = pv.Plotter(off_screen=True, window_size=window_size)
     plotter.set_background("white")
-    bar = dict(title="psi_upper (1)", vertical=True, position_x=0.84, position_y=0.15,
+    bar = dict(title=f"{label} (1)", vertical=True, position_x=0.84, position_y=0.15,
                height=0.7, width=0.05, title_font_size=22, label_font_size=18, fmt="%.2f",
                color="black", n_labels=6)
     plotter.add_mesh(flat, scalars="psi", cmap="viridis", clim=(0.0, 1.0),
@@ -286,13 +289,15 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
     contours = flat.contour(isosurfaces=np.linspace(0.05, 0.95, 19), scalars="psi")
     if contours.n_points:
         plotter.add_mesh(contours, color="white", line_width=1.0, opacity=0.6)
-    # walls (black), then the electrodes over them (copper: outline's first two), both halves
-    for k, line in [*list(enumerate(outline))[2:], *list(enumerate(outline))[:2]]:
+    # walls (black), then the electrodes over them (copper: the outline's first, one per
+    # potential), both halves
+    n = len(solution.weighting)
+    for k, line in [*list(enumerate(outline))[n:], *list(enumerate(outline))[:n]]:
         for side in (1.0, -1.0):
             xyz = np.column_stack([side * line[:, 0] * mm, line[:, 1] * mm,
                                    np.full(len(line), 0.05)])
-            plotter.add_mesh(pv.lines_from_points(xyz), line_width=6 if k < 2 else 1.5,
-                             color="#b87333" if k < 2 else "black")
+            plotter.add_mesh(pv.lines_from_points(xyz), line_width=6 if k < n else 1.5,
+                             color="#b87333" if k < n else "black")
     s_ball = (centre[0] * math.cos(angle) + centre[1] * math.sin(angle)) * mm
     ball = pv.Circle(radius=device.ball_radius * mm, resolution=128)
     ball.points += np.array([s_ball, centre[2] * mm, 0.05])

@@ -1,12 +1,14 @@
 """3D electrostatics of one BB-TENG cell (dolfinx via :mod:`._dolfinx`, gmsh OCC), SI units.
 
-For a ball position the two weighting potentials ψ_lower, ψ_upper solve
+For a ball position the weighting potential ψ_k of each of the cell's electrodes
+(ψ_lower, ψ_upper of the pair; ψ_lower alone for the single-electrode cell, whose
+upper plate is bare dielectric) solves
 
-    ∇·(εr ∇ψ_k) = 0,   ψ_k = 1 on electrode k, 0 on the other electrode,
+    ∇·(εr ∇ψ_k) = 0,   ψ_k = 1 on electrode k, 0 on every other electrode,
 
-with ε0 scaled out of the matrix (it multiplies the results). Both share one
+with ε0 scaled out of the matrix (it multiplies the results). They share one
 operator: it is assembled once and preconditioned once (CG + hypre
-BoomerAMG); the two right-hand sides differ only in the Dirichlet values.
+BoomerAMG); the right-hand sides differ only in the Dirichlet values.
 
 Far field (the air is a sphere of radius R centred on the cell):
 
@@ -77,12 +79,18 @@ class CellMesh:
     meshed_offset: float          # [m]
     mesh_time: float              # [s]
 
+    @property
+    def electrodes(self) -> tuple[str, ...]:
+        """The meshed electrodes' names, in the order of the field's matrices."""
+        return tuple(name for name in ("lower", "upper") if f"electrode_{name}" in self.groups)
+
 
 @dataclass
 class WeightingPotentials:
-    """ψ_lower, ψ_upper on one mesh, plus what the solve cost."""
-    lower: Any
-    upper: Any
+    """Every electrode's weighting potential on one mesh (``functions``, in the order of
+    the field's matrices: ψ_lower, ψ_upper; ψ_lower alone for the single electrode), plus
+    what the solve cost."""
+    functions: tuple
     dofs: int
     cells: int
     iterations: tuple[int, int]
@@ -92,6 +100,11 @@ class WeightingPotentials:
     #: so that the exterior energy beyond Robin is Σ_m w_m moment_jm moment_km.
     harmonic_moments: np.ndarray = None
     harmonic_weights: np.ndarray = None
+
+    @property
+    def lower(self):
+        """ψ_lower."""
+        return self.functions[0]
 
 
 def sphere_harmonics(x, max_degree: int = DTN_DEGREE):
@@ -217,8 +230,9 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
     rhs = dx_api.form(ufl.inner(dx_api.constant(mesh, 0.0), v) * ufl.dx)
     bilinear = dx_api.form(a)
 
+    conductors = [f"electrode_{name}" for name in cell_mesh.electrodes]
     dofs = {name: dx_api.facet_dofs(space, cell_mesh.facet_tags, cell_mesh.groups[name])
-            for name in ("electrode_lower", "electrode_upper")}
+            for name in conductors}
     if far_field == "dirichlet":
         dofs["far_boundary"] = dx_api.facet_dofs(space, cell_mesh.facet_tags, far_tag)
 
@@ -226,7 +240,7 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
         return [dx_api.dirichlet_bc(space, 1.0 if name == active else 0.0, d)
                 for name, d in dofs.items()]
 
-    matrix = dx_api.assemble_matrix(bilinear, bcs=bcs_for("electrode_lower"))
+    matrix = dx_api.assemble_matrix(bilinear, bcs=bcs_for(conductors[0]))
     operator, harmonic_vectors, weights = matrix, [], np.empty(0)
     if far_field == "kelvin":
         # exact exterior for the harmonics l = 1..DTN_DEGREE: a low-rank term on the far sphere
@@ -247,7 +261,7 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
                             preconditioner_matrix=matrix, options=AMG_OPTIONS)
     potentials, iterations, moments = [], [], []
     try:
-        for active in ("electrode_lower", "electrode_upper"):
+        for active in conductors:
             b = dx_api.assemble_vector(rhs, bilinear, bcs_for(active))
             psi = dx_api.function(space, name=f"psi_{active.split('_')[1]}")
             try:
@@ -269,25 +283,26 @@ def solve_weighting_potentials(cell_mesh: CellMesh, permittivity: dict[str, floa
             vec.destroy()
         dx_api.clear_options(prefix)
     solve_time = time.perf_counter() - start
-    return WeightingPotentials(lower=potentials[0], upper=potentials[1],
+    return WeightingPotentials(functions=tuple(potentials),
                                dofs=dx_api.num_dofs(space), cells=dx_api.num_cells(mesh),
                                iterations=tuple(iterations),
                                assembly_time=assembly_time, solve_time=solve_time,
-                               harmonic_moments=np.array(moments).reshape(2, -1),
+                               harmonic_moments=np.array(moments).reshape(len(potentials), -1),
                                harmonic_weights=np.asarray(weights))
 
 
 def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
                        permittivity: dict[str, float], *, far_field: str,
                        domain_radius: float) -> np.ndarray:
-    """Maxwell capacitance matrix [[C_ll, C_lu], [C_lu, C_uu]] [F] from the field energy."""
+    """Maxwell capacitance matrix [F] of the electrodes from the field energy: [[C_ll,
+    C_lu], [C_lu, C_uu]] for the pair, [[C_ll]] for the single electrode."""
     from . import _dolfinx as dx_api
 
     ufl = dx_api.ufl
     mesh = cell_mesh.mesh
     eps_r = permittivity_function(cell_mesh, permittivity)
     _, ds, _ = dx_api.measures(mesh, cell_mesh.cell_tags, cell_mesh.facet_tags)
-    psi = (potentials.lower, potentials.upper)
+    psi = potentials.functions
 
     def energy(a, b):
         form = eps_r * ufl.inner(ufl.grad(a), ufl.grad(b)) * ufl.dx
@@ -296,16 +311,18 @@ def capacitance_matrix(cell_mesh: CellMesh, potentials: WeightingPotentials,
                            * ds(cell_mesh.groups["far_boundary"]))
         return dx_api.assemble_scalar(dx_api.form(form), mesh.comm)
 
-    c = np.empty((2, 2))
+    n = len(psi)
+    c = np.empty((n, n))
     moments, weights = potentials.harmonic_moments, potentials.harmonic_weights
-    for j, k in ((0, 0), (0, 1), (1, 1)):
+    for j, k in ((j, k) for j in range(n) for k in range(j, n)):
         exterior = float(np.sum(weights * moments[j] * moments[k])) if weights is not None else 0.0
         c[j, k] = c[k, j] = EPS0 * (energy(psi[j], psi[k]) + exterior)
     return c
 
 
 def ball_surface_means(cell_mesh: CellMesh, potentials: WeightingPotentials) -> np.ndarray:
-    """[<ψ_lower>, <ψ_upper>]: means of the weighting potentials over the ball surface."""
+    """[<ψ_k>]: means of the electrodes' weighting potentials over the ball surface
+    ([<ψ_lower>, <ψ_upper>] for the pair)."""
     from . import _dolfinx as dx_api
 
     mesh = cell_mesh.mesh
@@ -316,7 +333,7 @@ def ball_surface_means(cell_mesh: CellMesh, potentials: WeightingPotentials) -> 
         return dx_api.assemble_scalar(dx_api.form(expr * dS), mesh.comm)
 
     area = integral(dx_api.constant(mesh, 1.0))
-    return np.array([integral(potentials.lower("+")) / area, integral(potentials.upper("+")) / area])
+    return np.array([integral(psi("+")) / area for psi in potentials.functions])
 
 
 def evaluate_at(function, point, comm=None) -> float:
@@ -356,7 +373,7 @@ class Solve3DSettings:
 class CellSolution:
     """Raw result of :func:`solve_cell`: numbers plus the mesh and potentials."""
     capacitance: np.ndarray
-    induced_fraction: np.ndarray     # [q_lower, q_upper] / q_ball = -<ψ_k>_ball
+    induced_fraction: np.ndarray     # [q_k] / q_ball = -<ψ_k>_ball, one per electrode
     cell_mesh: CellMesh
     potentials: WeightingPotentials
     estimate: float = math.nan       # relative error estimate (set by solve_cell_3d)
@@ -515,7 +532,7 @@ def solve_cell_3d(cell, position: float, *, offset: float = 0.0, offset_angle: f
         cm = fine.cell_mesh
         solution = FieldSolution(method="3d", mesh=cm.mesh, cell_tags=cm.cell_tags,
                                  facet_tags=cm.facet_tags, space=pot.lower.function_space,
-                                 weighting=(pot.lower, pot.upper), ball_centre=cm.ball_centre,
+                                 weighting=pot.functions, ball_centre=cm.ball_centre,
                                  geometry=cell, degree=settings.degree)
     return PositionResult(
         position=position, offset=offset, capacitance=capacitance,

@@ -35,9 +35,8 @@ class _RadialShare(RadialTerminalCurves):
 
     def __init__(self, table, reference: str):
         self._axes(table, reference)
-        C = np.asarray(table.capacitance, dtype=float)
-        self._q = self._spline(np.asarray(terminals.topology(reference).upper_share(
-            C[..., 0, 0], C[..., 0, 1], C[..., 1, 1]), dtype=float))
+        self._q = self._spline(np.asarray(terminals.wiring(
+            reference, table.electrodes).contact_share(table.capacitance), dtype=float))
 
 
 class OffAxisContactTerminal(ContactTerminal):

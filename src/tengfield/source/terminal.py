@@ -63,13 +63,11 @@ class ContactTerminal:
             raise ValueError("the table's reference charge is 0: no charge per unit charge")
         self.history = history
         C, q = table.capacitance, table.induced_charge
-        wiring = terminals.wiring(reference, q.shape[1])
-        #: one electrode (the single-electrode cell): the contacts draw from the sending
-        #: electrode itself, Q_SC = (q/q_ref) Q_ref(z) + (q - q0) b(0) - D(t)
-        self.single = q.shape[1] == 1
-        self.b0 = float(wiring.terminal_charge(C[0], q[0], self.q_ref)) / self.q_ref
-        share = np.zeros(table.positions.size) if self.single else \
-            wiring.upper_share(C[:, 0, 0], C[:, 0, 1], C[:, 1, 1])
+        #: the terminal topology: its ``contact_transfer`` says what the contacts send
+        #: through the wire (the pair: U − k L; the single electrode: −D)
+        self.wiring = terminals.wiring(reference, q.shape[1])
+        self.b0 = float(self.wiring.terminal_charge(C[0], q[0], self.q_ref)) / self.q_ref
+        share = self.wiring.contact_share(C)
         kind = "not-a-knot" if table.positions.size >= 4 else "natural"
         self._k = CubicSpline(table.positions, share, bc_type=kind)
         self._dk = self._k.derivative()
@@ -104,12 +102,11 @@ class ContactTerminal:
 
     def short_circuit_charge(self, t, q, lost, scale, q_ref_curve, k):
         """Q_SC [C] at times ``t`` from the :meth:`charge_state` and the table's curve
-        Q_ref and share k at the ball (module docstring: the pair, the single electrode)."""
-        if self.single:          # every gain is drawn from the electrode: D(t)
-            return scale * q_ref_curve + (q - self.history.start) * self.b0 \
-                - self._counted(self._gained, t)
-        return scale * q_ref_curve + (q - self.history.start) * self.b0 - k * lost \
-            + self.upper_gains(t)
+        Q_ref and share k at the ball (module docstring: the pair, the single electrode;
+        the topology's ``contact_transfer``)."""
+        return scale * q_ref_curve + (q - self.history.start) * self.b0 \
+            + self.wiring.contact_transfer(lost, self.upper_gains(t),
+                                           self._counted(self._gained, t), k)
 
     def leakage_current(self, q, q_ref_curve, k):
         """The part of I_SC [A] the ball's leakage drives, q' (Q_ref/q_ref + b(0) + k)."""

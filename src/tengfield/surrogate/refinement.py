@@ -183,18 +183,6 @@ def check_tabulated_offset(scene) -> None:
     cell_of(scene).check_tabulated_offset(offset)
 
 
-def check_electrodes(scene) -> None:
-    """Refuse, in one line, a (z, r) surrogate of the single-electrode cell (``[device]
-    electrodes = "lower"``, issue #51): its field is the axisymmetric solver's; the 3D
-    solves of the (z, r) table (the ball off the axis) take the electrode pair yet."""
-    if scene.device.electrodes != "both":
-        from ..errors import SceneError
-        raise SceneError(f"[device] electrodes = {scene.device.electrodes!r} (the "
-                         "single-electrode cell): the ball off the axis (the (z, r) "
-                         "surrogate of 3D solves) is not supported yet; its runs keep the "
-                         "ball on the axis ([contact] model = 'impact' or 'soft')")
-
-
 def precompute(scene, *, comm=None, solve: SolveFunction | None = None, solve_comm=None,
                initial_positions: int = INITIAL_POSITIONS, max_positions: int = MAX_POSITIONS,
                progress: bool = False, command_line: str = "",
@@ -424,7 +412,6 @@ def precompute_radial(scene, *, comm=None, solve=None, solve_comm=None,
     the middle and next to the ends of the stroke, on the axis and at the wall;
     the largest x (1 + FIELD_ERROR_MARGIN) elsewhere) or "every".
     """
-    check_electrodes(scene)
     if solve is None:
         if scene.field.environment != "free-space":   # before any solve, on every rank
             raise FieldError(f"[field] environment = {scene.field.environment!r} is not "

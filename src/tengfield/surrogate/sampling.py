@@ -79,6 +79,9 @@ def mirrored(result, stroke: float):
     (wall and solve times 0: nothing was solved)."""
     C = np.asarray(result.capacitance, dtype=float)
     q = np.asarray(result.induced_charge, dtype=float)
+    if q.size != 2:      # one electrode (the single-electrode cell) has no mirror image
+        raise ValueError(f"mirrored: a solve of {q.size} electrode(s) has no mirror image "
+                         "(the pair's z -> stroke - z swaps its two electrodes)")
     info = {**getattr(result, "info", {}), "mirrored_from": result.position}
     for key in ("breakdown_lines", "breakdown_lines_check"):   # sides and ψ's swap too
         if key in info:

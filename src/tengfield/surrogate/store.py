@@ -27,7 +27,7 @@ from .layout import (ARRAYS, ARRAYS_ZR, LINE_CHECK_INDEX, OPTIONAL_ARRAYS,  # no
                      _SHAPES, typed_scalars)
 from .output import write_table  # noqa: F401 - written beside the figure, read here
 from .provenance import FORMAT_VERSION, FORMAT_VERSION_ZR
-from .table import GRID_TAILS, RadialTable, SurrogateError, SurrogateTable
+from .table import GRID_TAILS, RadialTable, SurrogateError, SurrogateTable, grid_tails
 
 # ---------------------------------------------------------------------------
 # checksums and structure
@@ -277,8 +277,11 @@ def read_table(path: str | Path, expected_hash: str | None = None,
 # the (z, r) file
 def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
     """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
-    attribute -> array) has the shape ``(nz, nr, *tail)`` of :data:`GRID_TAILS`."""
-    for attr, tail in GRID_TAILS.items():
+    attribute -> array) has the shape ``(nz, nr, *tail)`` of :func:`grid_tails` (the
+    electrode count read from the induced charges: 2, or 1 for the single electrode)."""
+    electrodes = np.shape(arrays["induced_charge"])[-1] if np.ndim(arrays["induced_charge"]) == 3 \
+        else 2
+    for attr, tail in grid_tails(electrodes if electrodes in (1, 2) else 2).items():
         shape = np.shape(arrays[attr])
         if shape != (nz, nr, *tail):
             raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "

@@ -34,9 +34,17 @@ PER_POSITION = ("positions", "capacitance", "induced_charge", "dofs", "cells", "
 #: potentials of the breakdown lines (tengfield.field.breakdown), shape (n, 2, lines, 3),
 #: and the same on the error estimate's half-size mesh (NaN where not estimated)
 OPTIONAL_PER_POSITION = ("line_potential", "line_check")
-#: per-point arrays: trailing shape after (n_z, n_r)
+#: per-point arrays: trailing shape after (n_z, n_r), for the pair's two electrodes
+#: (:func:`grid_tails` for any count)
 GRID_TAILS = {"capacitance": (2, 2), "induced_charge": (2,), "dofs": (), "cells": (),
                "wall_time": (), "solve_time": (), "field_error": ()}
+
+
+def grid_tails(electrodes: int = 2) -> dict:
+    """:data:`GRID_TAILS` of a cell with ``electrodes`` electrodes (2: the pair, 1: the
+    single-electrode cell)."""
+    return {**GRID_TAILS, "capacitance": (electrodes, electrodes),
+            "induced_charge": (electrodes,)}
 
 
 @dataclass(kw_only=True)
@@ -379,8 +387,12 @@ class RadialTable(SolveRecord):
         self.positions = np.asarray(self.positions, dtype=float)
         self.offsets = np.asarray(self.offsets, dtype=float)
         grid = (self.positions.size, self.offsets.size)
-        self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(*grid, 2, 2)
-        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(*grid, 2)
+        points = grid[0] * grid[1]     # the electrodes: 2 (the pair) or 1
+        electrodes = np.asarray(self.induced_charge).size // points if points else 2
+        self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(
+            *grid, electrodes, electrodes)
+        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(
+            *grid, electrodes)
         for name in ("dofs", "cells"):
             setattr(self, name, np.asarray(getattr(self, name), dtype=np.int64).reshape(grid))
         for name in ("wall_time", "solve_time", "field_error"):
@@ -389,6 +401,11 @@ class RadialTable(SolveRecord):
     @property
     def shape(self) -> tuple[int, int]:
         return (int(self.positions.size), int(self.offsets.size))
+
+    @property
+    def electrodes(self) -> int:
+        """The cell's electrode count (2: the pair, 1: the single-electrode cell)."""
+        return int(self.induced_charge.shape[-1])
 
     @property
     def count(self) -> int:
@@ -458,10 +475,9 @@ def terminal_grid(table: RadialTable, reference: str = "floating"):
     """``(Q_SC, C_T)`` [C], [F] on the grid, shape (n_z, n_r), one cell, with
     ``Q_SC(z, r) = Q_u0(z, r) − Q_u0(0, 0)`` (the table must contain z = 0 and r = 0)."""
     C, q = table.capacitance, table.induced_charge
-    c_t = terminals.terminal_capacitance(C[..., 0, 0], C[..., 0, 1], C[..., 1, 1], reference)
-    q_u0 = terminals.upper_short_circuit_charge(C[..., 0, 0], C[..., 0, 1], C[..., 1, 1],
-                                                q[..., 0], q[..., 1], table.ball_charge,
-                                                reference)
+    wiring = terminals.wiring(reference, q.shape[-1])
+    c_t = wiring.terminal_capacitance(C)
+    q_u0 = wiring.terminal_charge(C, q, table.ball_charge)
     if table.positions[0] != 0.0 or table.offsets[0] != 0.0:
         raise SurrogateError("the (z, r) table has no point z = 0, r = 0 (the reference state)")
     return np.asarray(q_u0 - q_u0[0, 0], dtype=float), np.asarray(c_t, dtype=float)

@@ -54,7 +54,8 @@ class Hexagonal:
                              wall_thickness=dev.tube_outer_radius - dev.tube_inner_radius,
                              plate_thickness=dev.plate_thickness,
                              ball_permittivity=dev.ball_permittivity,
-                             wall_permittivity=dev.wall_permittivity)
+                             wall_permittivity=dev.wall_permittivity,
+                             electrodes=dev.electrode_names)
 
     def _solve_3d(self, scene, position: float, *, comm, offset: float, **options):
         """The 3D solve (:func:`tengfield.field.solver3d.solve_cell_3d`) at the scene's σ

@@ -110,11 +110,11 @@ class _PlateCell:
         return self.ball_diameter + self.stroke
 
     def outline(self) -> list[np.ndarray]:
-        """(r, z) polylines [m] for plots, r >= 0 (mirrored by the plot): the lower and the
-        upper electrode, then the plates' and the bore's outline (``outline_radii``)."""
+        """(r, z) polylines [m] for plots, r >= 0 (mirrored by the plot): the electrodes
+        (``electrodes``' order), then the plates' and the bore's outline (``outline_radii``)."""
         h, t = 0.5 * self.electrode_spacing, self.plate_thickness
         electrode, inner, outer = self.outline_radii
-        return [np.array([[0.0, -h], [electrode, -h]]), np.array([[0.0, h], [electrode, h]]),
+        return [*(np.array([[0.0, z], [electrode, z]]) for z in _electrode_planes(self)),
                 np.array([[0.0, -h - t], [outer, -h - t], [outer, h + t], [0.0, h + t]]),
                 np.array([[0.0, -h], [inner, -h], [inner, h], [0.0, h]])]
 
@@ -130,6 +130,9 @@ class CylindricalCell(_PlateCell):
     plate_thickness: float      # [m]
     ball_permittivity: float    # relative
     wall_permittivity: float    # relative; 1 leaves tube and plates out
+    #: the conductors, in the order of the field's matrices (``[device] electrodes``):
+    #: ("lower", "upper"), or ("lower",) for the single-electrode cell (the upper plate bare)
+    electrodes: tuple = ("lower", "upper")
 
     @property
     def bounding_radius(self) -> float:
@@ -143,11 +146,11 @@ class CylindricalCell(_PlateCell):
         return self.tube_inner_radius - 0.5 * self.ball_diameter
 
     def occ_parts(self, occ) -> tuple[list[int], list[int]]:
-        """Add the electrodes (two disks) and, unless εr = 1, the plates and the tube
-        to the OCC model: ``([lower, upper] surface tags, wall volume tags)``."""
-        half = 0.5 * self.electrode_spacing
+        """Add the electrodes (a disk per name of ``electrodes``) and, unless εr = 1, the
+        plates and the tube to the OCC model: ``(electrode surface tags in the order of
+        electrodes, wall volume tags)``."""
         rim = self.electrode_radius
-        electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in (-half, half)]
+        electrodes = [occ.addDisk(0, 0, z, rim, rim) for z in _electrode_planes(self)]
         def cylinder(radius, z0, height):
             return occ.addCylinder(0, 0, z0, 0, 0, height, radius)
 
@@ -187,6 +190,8 @@ class HexagonalCell(_PlateCell):
     plate_thickness: float = 2.0e-3
     ball_permittivity: float = 2.1
     wall_permittivity: float = 3.0
+    #: the conductors, in the order of the field's matrices (as :class:`CylindricalCell`)
+    electrodes: tuple = ("lower", "upper")
 
     @property
     def outer_apothem(self) -> float:
@@ -208,10 +213,10 @@ class HexagonalCell(_PlateCell):
         return self.inner_apothem - 0.5 * self.ball_diameter
 
     def occ_parts(self, occ) -> tuple[list[int], list[int]]:
-        """Add the hexagonal electrodes and, unless εr = 1, the plates and the hexagonal
-        tube: ``([lower, upper] surface tags, wall volume tags)``."""
-        half = 0.5 * self.electrode_spacing
-        electrodes = [_hexagon(occ, self.inner_apothem, z) for z in (-half, half)]
+        """Add the hexagonal electrodes (one per name of ``electrodes``) and, unless
+        εr = 1, the plates and the hexagonal tube: ``(electrode surface tags in the order
+        of electrodes, wall volume tags)``."""
+        electrodes = [_hexagon(occ, self.inner_apothem, z) for z in _electrode_planes(self)]
         def prism(apothem, z0, height):
             return _hex_prism(occ, apothem, z0, height)
 
@@ -231,13 +236,21 @@ class HexagonalCell(_PlateCell):
         return self.inner_apothem / max(abs(direction @ np.array(n)) for n in normals)
 
 
+def _electrode_planes(cell) -> list[float]:
+    """The planes z [m] of the cell's electrodes, in the order of ``cell.electrodes``: the
+    lower one at -h/2, the upper one at +h/2 (a bare plate has none)."""
+    half = 0.5 * cell.electrode_spacing
+    return [{"lower": -half, "upper": half}[name] for name in cell.electrodes]
+
+
 def cylindrical_cell(device) -> CylindricalCell:
     """The paper's device from a scene's ``[device]`` section (:class:`tengfield.scene.Device`)."""
     return CylindricalCell(
         ball_diameter=device.ball_diameter, stroke=device.stroke,
         electrode_radius=device.electrode_radius, tube_inner_radius=device.tube_inner_radius,
         tube_outer_radius=device.tube_outer_radius, plate_thickness=device.plate_thickness,
-        ball_permittivity=device.ball_permittivity, wall_permittivity=device.wall_permittivity)
+        ball_permittivity=device.ball_permittivity, wall_permittivity=device.wall_permittivity,
+        electrodes=device.electrode_names)
 
 
 def _hexagon(occ, apothem: float, z: float) -> int:

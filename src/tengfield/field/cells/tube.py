@@ -41,10 +41,6 @@ class Tube:
         return solve_position_axisymmetric(scene, position, comm=comm, **options)
 
     def _solve_3d(self, scene, position: float, *, comm, offset: float, **options):
-        if scene.device.electrodes != "both":
-            raise FieldError(f"[device] electrodes = {scene.device.electrodes!r}: the 3D "
-                             "solver takes the electrode pair; the single-electrode cell is "
-                             "solved axisymmetric ([field] method = 'axisymmetric')")
         from ..moving3d import placer
         return solve_position_3d(scene, position, offset=offset, comm=comm,
                                  solve_one=placer(getattr(scene.field, "mesh_motion", "remesh")), **options)

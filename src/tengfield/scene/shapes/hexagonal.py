@@ -39,6 +39,8 @@ class Hexagonal:
     stroke_derived = False
     free_space_only = True
     offset_coordinate = "radial"
+    #: the pair, or the lower electrode alone (the single-electrode cell, the ceiling bare)
+    electrode_sets = Tube.electrode_sets
     stroke = Tube.stroke
     followed = Tube.followed   # the apothems follow the ball as the tube's radii
     derived = Tube.derived

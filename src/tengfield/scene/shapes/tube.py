@@ -40,7 +40,7 @@ class Tube:
     #: free-space cell only ([field] environment)
     free_space_only = False
     #: the ``[device] electrodes`` it offers: the pair, or the lower electrode alone (the
-    #: single-electrode cell; axisymmetric field, ``tengfield field``)
+    #: single-electrode cell; both field methods, on and off the axis)
     electrode_sets = ("both", "lower")
     #: the (z, r) table's offsets: the radius itself
     #: (tengfield.surrogate.sampling.offset_coordinate)
