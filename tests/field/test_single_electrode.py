@@ -3,8 +3,8 @@ any list of electrodes, here one. The terminals are the lower electrode and the 
 (``tengfield.terminals.LowerToGround``). Physics: the isolated disk's C = 8 ε0 a; Q = −q ψ
 at the ball's centre; charge conservation between the electrode and the ground; the
 single electrode transfers less than the pair (Niu et al., Adv. Funct. Mater. 24:3332,
-2014); the shell, which lists its two caps only, refuses it in one line (its 3D and
-off-axis field: tests/field/test_single_electrode_3d.py)."""
+2014); every shape lists its electrodes (the 3D and off-axis field:
+tests/field/test_single_electrode_3d.py; the shell's: test_single_electrode_shell.py)."""
 import json
 import math
 
@@ -123,8 +123,7 @@ def test_the_field_command_writes_the_single_electrode_with_figures(tmp_path, ru
 
 @pytest.mark.parametrize("settings, needle", [
     (["device.electrodes=upper"], r"\[device\] electrodes = 'upper' is not allowed"),
-    (["device.shape=spherical-shell", "device.electrodes=lower"],
-     r"not offered by shape = 'spherical-shell' yet: allowed 'both'"),
+    (["device.electrodes=3"], r"\[device\] electrodes = 3: expected a string"),
     (SINGLE + ["circuit.reference=grounded-lower"], r"has one topology"),
 ])
 def test_bad_values_of_the_new_key_are_one_line(settings, needle):
@@ -189,16 +188,14 @@ def test_the_studies_run_the_single_electrode_cell_with_figures(tmp_path, run_cl
             assert out.stat().st_size > 0
 
 
-def test_what_the_single_electrode_cell_does_not_run_yet_is_one_line():
-    """The spherical shell lists its two caps only: its single-electrode cell is refused
-    in one line naming what it offers (the tube and the honeycomb offer both)."""
-    with pytest.raises(SceneError, match=r"not offered by shape = 'spherical-shell'.*"
-                                         r"allowed 'both'") as info:
-        with_settings(default_scene(), ["device.shape=spherical-shell"] + SINGLE)
-    assert "\n" not in str(info.value)
-    for shape in ("tube", "hexagonal"):
+def test_every_shape_lists_its_electrodes():
+    """The tube, the honeycomb and the spherical shell each offer the pair and the lower
+    electrode alone (the shell's: tests/field/test_single_electrode_shell.py)."""
+    for shape in ("tube", "hexagonal", "spherical-shell"):
         scene = with_settings(default_scene(), [f"device.shape={shape}"] + SINGLE)
         assert scene.device.electrode_names == ("lower",)
+        pair = with_settings(default_scene(), [f"device.shape={shape}"])
+        assert pair.device.electrode_names == ("lower", "upper")
 
 
 def test_the_pairs_field_hash_is_the_one_before_the_key():

@@ -66,6 +66,9 @@ class ShellLayout:
     table: bool = False
     inversion_centre_z: float = 0.0
     info: dict = field(default_factory=dict)
+    #: the conductors, in the order of the field's matrices: the two caps, or ("lower",)
+    #: for the single-electrode shell (its upper cap bare)
+    electrodes: tuple = ("lower", "upper")
 
     @property
     def z_lower(self) -> float:
@@ -85,12 +88,16 @@ class ShellLayout:
             return np.column_stack([radius * np.cos(phi), radius * np.sin(phi)])
 
         def on_electrode(r, z, tol):
-            return (np.abs(np.hypot(r, z) - a) < tol) & (np.abs(z) >= 0.5 * self.band)
+            near = np.abs(np.hypot(r, z) - a) < tol
+            lower = z <= -0.5 * self.band
+            return near & (lower | ((z >= 0.5 * self.band) & ("upper" in self.electrodes)))
 
-        walls = [arc(a, -phi0, phi0)] + ([arc(b, -0.5 * math.pi, 0.5 * math.pi)]
-                                         if self.walls else [])
+        single = "upper" not in self.electrodes
+        walls = [arc(a, -phi0, 0.5 * math.pi if single else phi0)] + (
+            [arc(b, -0.5 * math.pi, 0.5 * math.pi)] if self.walls else [])
         margin = 0.15 * b
-        return {"electrodes": [arc(a, -0.5 * math.pi, -phi0), arc(a, phi0, 0.5 * math.pi)],
+        caps = {"lower": arc(a, -0.5 * math.pi, -phi0), "upper": arc(a, phi0, 0.5 * math.pi)}
+        return {"electrodes": [caps[name] for name in self.electrodes],
                 "walls": walls, "half_width": b + margin, "z_range": (-b - margin, b + margin),
                 "on_electrode": on_electrode, "height_label": "the cavity's bottom"}
 
@@ -128,6 +135,7 @@ def layout(cell, position: float, *, mesh_size: float, degree: int = 2,
         walls=cell.wall_permittivity != 1.0, domain_radius=R, kelvin=far_field == "kelvin",
         shift=2.5 * R, gap_lower=gap, gap_upper=cell.stroke - gap, requested_gap=float(position),
         effective_gap=gap, mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
+        electrodes=tuple(getattr(cell, "electrodes", ("lower", "upper"))),
         info={"device_extent_m": b, "rim_reach_m": min(0.5 * a, GRADING_REACH * grading_size),
               "bulk_length_m": min(b, GRADING_REACH * grading_size)})
 
@@ -160,7 +168,10 @@ def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
         end = occ.addPoint(a * math.cos(hi), a * math.sin(hi), 0.0)
         return (1, occ.addCircleArc(start, centre, end))
 
-    electrodes = [arc(-0.5 * math.pi, -phi0), arc(phi0, 0.5 * math.pi)]
+    # the caps: the lower one, and the upper one unless it is bare (the single-electrode
+    # shell's: without walls nothing is there, with walls it is their face)
+    electrodes = [arc(-0.5 * math.pi, -phi0)] + ([arc(phi0, 0.5 * math.pi)]
+                                                 if "upper" in lay.electrodes else [])
     _, children = occ.fragment([(2, domain)], tools + electrodes)
     ball_parts = {tag for _, tag in children[1]}
     wall_parts = {tag for parts in children[2:2 + len(tools) - 1] for _, tag in parts}
@@ -193,7 +204,7 @@ def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
         elif abs(math.hypot(x, y) - a) < 1e3 * tol:
             if bb[4] <= -edge + pad:
                 groups["electrode_lower"].append(c)
-            elif bb[1] >= edge - pad:
+            elif bb[1] >= edge - pad and "upper" in lay.electrodes:
                 groups["electrode_upper"].append(c)
             else:
                 interfaces.append(c)   # the band
@@ -201,7 +212,7 @@ def build_model(gmsh, lay: ShellLayout, *, geometry_order: int = 2) -> str:
             interfaces.append(c)
 
     register_groups(gmsh, groups, mids, kelvin_shift=None if image is None else lay.shift,
-                    what="spherical shell", name=name)
+                    what="spherical shell", name=name, electrodes=lay.electrodes)
     _size_fields(gmsh, lay)
     gmsh.model.mesh.generate(2)
     if geometry_order > 1:

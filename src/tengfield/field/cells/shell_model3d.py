@@ -121,13 +121,15 @@ def contact_rule(shell, position: float, offset: float, offset_angle: float = 0.
 
 
 def occ_parts(shell, occ) -> tuple[list[int], list[int]]:
-    """Add the two electrode caps and (unless εr = 1) the hollow shell to the OCC model:
-    ``([lower, upper] surface tags, wall volume tags)``."""
+    """Add the electrode caps (one per name of ``shell.electrodes``: the lower, the upper)
+    and (unless εr = 1) the hollow shell to the OCC model: ``(electrode surface tags in
+    the order of electrodes, wall volume tags)``."""
     a, e = shell.cavity_radius, 0.5 * shell.electrode_band
     rim = math.sqrt(a * a - e * e)
     origin = occ.addPoint(0.0, 0.0, 0.0)
     electrodes = []
-    for sign in (-1.0, 1.0):
+    names = getattr(shell, "electrodes", ("lower", "upper"))
+    for sign in ({"lower": -1.0, "upper": 1.0}[name] for name in names):
         pole = occ.addPoint(0.0, 0.0, sign * a)
         edge = occ.addPoint(rim, 0.0, sign * e)
         arc = occ.addCircleArc(pole, origin, edge)

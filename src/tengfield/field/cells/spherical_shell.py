@@ -47,6 +47,10 @@ class SphericalShell:
     wall_permittivity: float = 1.0
     ball_permittivity: float = 2.1
     domain_radius: float | None = None
+    #: the conductors, in the order of the field's matrices (``[device] electrodes``):
+    #: the two caps ("lower", "upper"), or the lower cap alone ("lower",: the
+    #: single-electrode shell, its upper cap bare cavity wall)
+    electrodes: tuple = ("lower", "upper")
 
     name = "spherical-shell"
 
@@ -83,7 +87,7 @@ class SphericalShell:
                    electrode_band=dev.electrode_band, ball_diameter=dev.ball_diameter,
                    wall_permittivity=dev.wall_permittivity,
                    ball_permittivity=dev.ball_permittivity,
-                   domain_radius=scene.field.domain_radius)
+                   domain_radius=scene.field.domain_radius, electrodes=dev.electrode_names)
 
     def _solve_axisymmetric(self, scene, position: float, *, comm, offset: float,
                             **options):
@@ -304,16 +308,19 @@ class SphericalShell:
         return shell_shape.SphericalShell.mesh_features(self)
 
     def outline(self, points: int = 91) -> list[np.ndarray]:
-        """(r, z) polylines [m]: lower electrode, upper electrode (cavity surface), band,
-        the shell's outer surface."""
+        """(r, z) polylines [m]: the electrodes (``electrodes``' order: the lower and the
+        upper cap of the cavity surface), then the band (with a bare upper cap: the band
+        and that cap), the shell's outer surface."""
         a, b, phi0 = self.cavity_radius, self.outer_radius, self.rim_angle
 
         def arc(radius, lo, hi):
             phi = np.linspace(lo, hi, points)
             return np.column_stack([radius * np.cos(phi), radius * np.sin(phi)])
 
-        return [arc(a, -0.5 * math.pi, -phi0), arc(a, phi0, 0.5 * math.pi),
-                arc(a, -phi0, phi0), arc(b, -0.5 * math.pi, 0.5 * math.pi)]
+        caps = {"lower": arc(a, -0.5 * math.pi, -phi0), "upper": arc(a, phi0, 0.5 * math.pi)}
+        bare = arc(a, -phi0, 0.5 * math.pi if "upper" not in self.electrodes else phi0)
+        return [*(caps[name] for name in self.electrodes), bare,
+                arc(b, -0.5 * math.pi, 0.5 * math.pi)]
 
     # -- field ---------------------------------------------------------------------
     def canonical(self) -> "SphericalShell | None":

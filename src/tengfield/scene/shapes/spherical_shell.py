@@ -33,6 +33,9 @@ class SphericalShell:
     #: the (z, r) table's offsets are scaled to the admissible radius at each height
     #: (tengfield.surrogate.sampling.offset_coordinate)
     offset_coordinate = "scaled"
+    #: the two caps, or the lower cap alone (the single-electrode shell, its upper cap
+    #: bare: the terminals the lower cap and the ground)
+    electrode_sets = ("both", "lower")
 
     @staticmethod
     def stroke(device_values: dict, given: dict) -> float:
