@@ -86,6 +86,9 @@ IMAGE_SHARE = (
     "electrical/test_stream_memory.py",             # 4x longer runs, memory measured
     "source/test_contact_studies.py",               # contact charge in the studies, mpirun
     "design/test_design_mpi.py",                    # designs with real solves, mpirun
+    # 2026-12-06: the single-electrode cell's end-to-end runs off the axis and in the shell
+    "field/test_single_electrode_3d.py::test_run_takes_the_single_electrode_off_the_axis_with_figures",
+    "field/test_single_electrode_shell.py::test_a_run_of_the_single_electrode_shell_moves_less_than_the_pairs",
 )
 
 

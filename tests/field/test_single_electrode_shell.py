@@ -68,6 +68,7 @@ SMALL = ("[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 5000\n"
          "[field]\ndegree = 1\nmesh_size_mm = 1.5\ntolerance = 5e-2\n")
 
 
+@pytest.mark.slow
 def test_a_run_of_the_single_electrode_shell_moves_less_than_the_pairs(tmp_path, run_cli):
     """End to end with figures on: the single-electrode shell's run names its topology and
     moves less charge than the pair's (0.32 x measured), V_OC = Q_SC / C_T row by row."""
