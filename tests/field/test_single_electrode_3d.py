@@ -16,6 +16,8 @@ pytest.importorskip("gmsh")
 
 from mpi4py import MPI  # noqa: E402
 
+import zr_model  # noqa: E402
+
 from tengfield.field import solve_position  # noqa: E402
 from tengfield.scene import EPS0, default_scene, with_settings  # noqa: E402
 
@@ -94,36 +96,9 @@ def test_without_the_upper_electrode_the_lower_one_takes_more_of_the_image(shape
 #: the single-electrode tube shaken sideways, its ball charged by its contacts, the (z, r)
 #: table of real 3D solves coarse (P1, 3 mm): the join is under test, not the table's
 #: accuracy
-OFF_AXIS = """\
-[device]
-electrodes = "lower"
-
-[charge]
-model = "contact"
-equilibrium_uC_per_m2 = -20.0
-efficiency = 0.3
-
-[excitation]
-frequency_hz = 30.0
-amplitude_mm = 1.0
-amplitude_x_mm = 0.5
-phase_x_deg = 30.0
-
-[contact]
-model = "3d"
-
-[run]
-duration_s = 0.3
-settle_periods = 2
-sample_rate_hz = 5000.0
-
-[field]
-mesh_size_mm = 1.5
-degree = 1
-tolerance = 0.05
-radial_mesh_size_mm = 3.0
-radial_degree = 1
-"""
+OFF_AXIS = ('[device]\nelectrodes = "lower"\n\n[charge]\nmodel = "contact"\n'
+            "equilibrium_uC_per_m2 = -20.0\nefficiency = 0.3\n\n" + zr_model.LATERAL
+            + "radial_mesh_size_mm = 3.0\nradial_degree = 1\n")   # after LATERAL's [field]
 
 
 @pytest.mark.slow
