@@ -140,3 +140,30 @@ def test_run_takes_the_single_electrode_off_the_axis_with_figures(tmp_path):
     result = dataclasses.make_dataclass("R", ["scene", "summary"])(
         with_settings(default_scene(), SINGLE), summary)
     assert "lower-to-ground" in run_title(result) and "floating" not in run_title(result)
+
+
+@pytest.mark.slow
+def test_a_honeycomb_cell_of_one_electrode_moves_less_than_its_pair(tmp_path, run_cli):
+    """``tengfield run`` of the honeycomb cell (3D solves only) with its ceiling bare: its
+    17 positions are all solved (one electrode has no mirror image), it names its
+    topology, and it moves less charge than the pair's cell (0.64 x measured); figures on."""
+    def run(name, extra):
+        scene = tmp_path / f"{name}.toml"
+        scene.write_text(f'[device]\nshape = "hexagonal"\n{extra}\n' + HONEYCOMB_RUN)
+        out = tmp_path / name
+        proc = run_cli("run", scene, "-o", out, "--cache-dir", tmp_path / "cache",
+                       timeout=900)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return json.loads((out / "summary.json").read_text()), out
+
+    single, out = run("single", 'electrodes = "lower"')
+    pair, _ = run("pair", "")
+    assert single["reference"] == "lower-to-ground" and pair["reference"] == "floating"
+    assert (out / "waveforms.png").stat().st_size > 10_000
+    q_single, q_pair = single["peak_to_peak"]["Q_sc_C"], pair["peak_to_peak"]["Q_sc_C"]
+    assert 0.0 < q_single < 0.8 * q_pair, (q_single, q_pair)
+
+
+#: the honeycomb runs' coarse 3D field (P1, 2.5 mm: ~1 s a solve)
+HONEYCOMB_RUN = ("[run]\nduration_s = 0.3\nsettle_periods = 2\nsample_rate_hz = 5000\n"
+                 "[field]\nmesh_size_mm = 2.5\ndegree = 1\ntolerance = 0.2\n")
