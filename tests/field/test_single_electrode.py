@@ -319,3 +319,24 @@ def test_the_single_electrodes_wire_carries_what_the_electrode_gives_up(tmp_path
         near |= np.abs(time - c) < 1.5 * (time[1] - time[0])
     slope = np.gradient(charge, time)
     assert np.median(np.abs(slope - current)[~near]) < 1e-3 * np.abs(current).max()
+
+
+def test_a_pairs_mesh_is_never_mapped_onto_one_electrode():
+    """The mesh-mapping family (``[field] mesh_motion = "move"``: a canonical geometry's
+    template mapped onto another's) names the conductors: the pair's and the single
+    electrode's layouts of one geometry are of different families, the tube's and the
+    shell's."""
+    from tengfield.field import geometry_axisymmetric as geometry
+    from tengfield.field import moving
+    from tengfield.field.cells import cell_of
+
+    pair, single = default_scene(), with_settings(default_scene(), SINGLE)
+    families = [moving.geometry_family(geometry.layout(s, 1e-3)) for s in (pair, single)]
+    assert families[0] != families[1]
+    shell = ["device.shape=spherical-shell", "device.cavity_diameter_mm=20",
+             "device.ball_diameter_mm=8", "device.stroke_mm=12", "device.electrode_band_mm=2",
+             "device.shell_thickness_mm=2"]
+    layouts = [cell_of(with_settings(default_scene(), shell + extra)).axisymmetric_layout(
+        3e-3, mesh_size=1e-3) for extra in ([], SINGLE)]
+    assert layouts[1].electrodes == ("lower",)
+    assert moving.geometry_family(layouts[0]) != moving.geometry_family(layouts[1])

@@ -219,8 +219,8 @@ def canonical_domain_radius(radius: float, far_field: str) -> float:
 
 def geometry_family(lay, **settings) -> tuple:
     """What two geometries must share for one's mesh to be mapped onto the other's: the
-    shape and its topology (walls, table, the electrode rim against the bore and the
-    tube's outside; the shell's band or none), the far field (domain radius, inversion
+    shape and its topology (walls, table, the electrodes, the electrode rim against the
+    bore and the tube's outside; the shell's band or none), the far field (domain radius, inversion
     centre, Kelvin shift) and the mesh rule (mesh size, grading exponent), plus
     ``settings`` (permittivities, degree, grading size...). Not the dimensions."""
     # the domain radius scales with the device (map_nodes scales the far field and the
@@ -228,7 +228,9 @@ def geometry_family(lay, **settings) -> tuple:
     radius = float(lay.domain_radius) if settings.get("far_field") == "robin" else None
     common = (type(lay).__name__, bool(lay.walls), bool(lay.table), bool(lay.kelvin),
               radius, float(lay.inversion_centre_z),
-              float(lay.mesh_size), float(lay.grading_exponent))
+              float(lay.mesh_size), float(lay.grading_exponent),
+              # the conductors: a pair's mesh is never mapped onto one electrode's
+              tuple(getattr(lay, "electrodes", ("lower", "upper"))))
     if hasattr(lay, "cavity_radius"):
         topology = (lay.band > 0.0,)
     else:
