@@ -242,3 +242,24 @@ def assert_tables_agree_within_estimates(table, reference) -> np.ndarray:
     bound = np.minimum(table.field_error, reference.field_error)
     assert np.all(change <= bound), (change, bound)
     return change
+
+
+def single_and_pair_runs(run_cli, tmp_path, scene_text, *, timeout=900):
+    """``tengfield run`` (figures on, one cache) of the single-electrode cell and of the
+    pair: ``scene_text(extra)`` is the scene file with ``extra`` the ``[device]`` line
+    (``electrodes = "lower"`` or nothing); both must exit 0. Returns ``(single summary,
+    pair summary, the single run's output directory, its CompletedProcess)``."""
+    import json
+
+    runs = {}
+    for name, extra in (("single", 'electrodes = "lower"'), ("pair", "")):
+        scene = tmp_path / f"{name}.toml"
+        scene.write_text(scene_text(extra))
+        out = tmp_path / name
+        proc = run_cli("run", scene, "-o", out, "--cache-dir", tmp_path / "cache",
+                       timeout=timeout)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        runs[name] = (json.loads((out / "summary.json").read_text()), out, proc)
+    (single, out, proc), (pair, _, _) = runs["single"], runs["pair"]
+    assert single["reference"] == "lower-to-ground" and pair["reference"] == "floating"
+    return single, pair, out, proc

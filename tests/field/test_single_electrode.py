@@ -16,6 +16,8 @@ pytest.importorskip("gmsh")
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
+from helpers import single_and_pair_runs  # noqa: E402
+
 from tengfield import terminals  # noqa: E402
 from tengfield.errors import SceneError  # noqa: E402
 from tengfield.field import _dolfinx as dx_api  # noqa: E402
@@ -142,18 +144,9 @@ def test_a_run_of_the_single_electrode_cell_transfers_less_than_the_pairs(tmp_pa
     scene (Niu et al. 2014: 0.68 x here)."""
     import csv
 
-    def run(name, extra):
-        scene = tmp_path / f"{name}.toml"
-        scene.write_text(SMALL + extra)
-        out = tmp_path / name
-        proc = run_cli("run", scene, "-o", out, "--cache-dir", tmp_path / "cache",
-                       timeout=300)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        return proc, json.loads((out / "summary.json").read_text()), out
-
-    proc, single, out = run("single", '[device]\nelectrodes = "lower"\n')
-    _, pair, _ = run("pair", "")
-    assert single["reference"] == "lower-to-ground" and pair["reference"] == "floating"
+    single, pair, out, proc = single_and_pair_runs(
+        run_cli, tmp_path, lambda extra: SMALL + (f"[device]\n{extra}\n" if extra else ""),
+        timeout=300)
     assert "(lower-to-ground reference)" in proc.stdout
     assert (out / "waveforms.png").stat().st_size > 10_000
     assert (out / "surrogate.png").stat().st_size > 10_000

@@ -17,6 +17,7 @@ pytest.importorskip("gmsh")
 from mpi4py import MPI  # noqa: E402
 
 import zr_model  # noqa: E402
+from helpers import single_and_pair_runs  # noqa: E402
 
 from tengfield.field import solve_position  # noqa: E402
 from tengfield.scene import EPS0, default_scene, with_settings  # noqa: E402
@@ -147,18 +148,9 @@ def test_a_honeycomb_cell_of_one_electrode_moves_less_than_its_pair(tmp_path, ru
     """``tengfield run`` of the honeycomb cell (3D solves only) with its ceiling bare: its
     17 positions are all solved (one electrode has no mirror image), it names its
     topology, and it moves less charge than the pair's cell (0.64 x measured); figures on."""
-    def run(name, extra):
-        scene = tmp_path / f"{name}.toml"
-        scene.write_text(f'[device]\nshape = "hexagonal"\n{extra}\n' + HONEYCOMB_RUN)
-        out = tmp_path / name
-        proc = run_cli("run", scene, "-o", out, "--cache-dir", tmp_path / "cache",
-                       timeout=900)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        return json.loads((out / "summary.json").read_text()), out
-
-    single, out = run("single", 'electrodes = "lower"')
-    pair, _ = run("pair", "")
-    assert single["reference"] == "lower-to-ground" and pair["reference"] == "floating"
+    single, pair, out, _ = single_and_pair_runs(
+        run_cli, tmp_path, lambda extra: f'[device]\nshape = "hexagonal"\n{extra}\n'
+        + HONEYCOMB_RUN)
     assert (out / "waveforms.png").stat().st_size > 10_000
     q_single, q_pair = single["peak_to_peak"]["Q_sc_C"], pair["peak_to_peak"]["Q_sc_C"]
     assert 0.0 < q_single < 0.8 * q_pair, (q_single, q_pair)

@@ -5,7 +5,6 @@ Physics: Q = −q ψ(centre) for the one cap; removing the upper cap gives the l
 of the ball's image and a smaller self-capacitance; the 3D solve on the axis is the
 axisymmetric one within its estimate; a run moves less charge than the pair's (Niu et al.
 2014), with figures on."""
-import json
 
 import numpy as np
 import pytest
@@ -15,6 +14,7 @@ pytest.importorskip("gmsh")
 
 from mpi4py import MPI  # noqa: E402
 
+from helpers import single_and_pair_runs  # noqa: E402
 from shell_model import shell_device_toml  # noqa: E402
 from tengfield.field import _dolfinx as dx_api  # noqa: E402
 from tengfield.field import solve_position  # noqa: E402
@@ -74,18 +74,8 @@ def test_a_run_of_the_single_electrode_shell_moves_less_than_the_pairs(tmp_path,
     moves less charge than the pair's (0.32 x measured), V_OC = Q_SC / C_T row by row."""
     import csv
 
-    def run(name, extra):
-        scene = tmp_path / f"{name}.toml"
-        scene.write_text(shell_device_toml(extra=extra) + SMALL)
-        out = tmp_path / name
-        proc = run_cli("run", scene, "-o", out, "--cache-dir", tmp_path / "cache",
-                       timeout=600)
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        return json.loads((out / "summary.json").read_text()), out
-
-    single, out = run("single", 'electrodes = "lower"')
-    pair, _ = run("pair", "")
-    assert single["reference"] == "lower-to-ground" and pair["reference"] == "floating"
+    single, pair, out, _ = single_and_pair_runs(
+        run_cli, tmp_path, lambda extra: shell_device_toml(extra=extra) + SMALL, timeout=600)
     for name in ("waveforms.png", "surrogate.png"):
         assert (out / name).stat().st_size > 10_000, name
     q_single, q_pair = single["peak_to_peak"]["Q_sc_C"], pair["peak_to_peak"]["Q_sc_C"]
