@@ -26,7 +26,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ._args import checked_write
-from . import electrical
+from . import electrical, terminals
 from ._json import jsonable as _jsonable
 from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
@@ -345,13 +345,6 @@ def _contact_charge_stage(scene, dynamics, stages, **field_options):
     def cell(cell_dynamics):
         return contact_source(scene, cell_dynamics, table, run.limit, period=period)
     return run.scene, run.table, run.curves, run.limit, run.charged, cell, run
-
-
-def _wiring(scene):
-    """The terminals' topology of ``scene`` (:func:`tengfield.terminals.wiring`): the
-    pair's ``[circuit] reference``, or the single electrode's to the ground."""
-    from . import terminals
-    return terminals.wiring(scene.circuit.reference, len(scene.device.electrode_names))
 
 
 def _contact_period(scene) -> float:
@@ -786,7 +779,7 @@ def _summary(scene, dynamics, waveforms, stages, table, *, extremes, circuit_blo
         "scene": scene.source,
         # no field stage ran for a scene whose field values are refused (uncharged ball)
         "field_hash": None if scene.field_problems else scene.field_hash(),
-        "reference": _wiring(scene).name,
+        "reference": terminals.of_scene(scene).name,
         "sign_convention": ("V = V_lower - V_upper; Q_SC and currents lower -> upper through "
                             "the external circuit; reference state: ball on the lower electrode")
         if len(scene.device.electrode_names) == 2 else

@@ -212,6 +212,12 @@ def wiring(reference: str, electrodes: int = 2):
     return topology(reference)
 
 
+def of_scene(scene):
+    """The topology of ``scene``'s cell (:func:`wiring` of its ``[circuit] reference`` and
+    ``[device] electrodes``): what summary.json, the figures and the report name."""
+    return wiring(scene.circuit.reference, len(scene.device.electrode_names))
+
+
 def topology(reference: str):
     """The :data:`TOPOLOGIES` entry named ``reference``; ValueError naming the choices."""
     try:

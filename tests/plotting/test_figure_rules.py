@@ -92,7 +92,8 @@ def test_a_title_wider_than_its_figure_is_wrapped():
 def _run(kind="load", load=1e7, instrument_pf=338.0):
     scene = SimpleNamespace(
         excitation=SimpleNamespace(frequency=20.0, amplitude=1.5e-3),
-        device=SimpleNamespace(surface_charge=-8e-6, stroke=3e-3, cells=1),
+        device=SimpleNamespace(surface_charge=-8e-6, stroke=3e-3, cells=1,
+                              electrode_names=("lower", "upper")),
         circuit=SimpleNamespace(kind=kind, load=load, parallel_capacitance=0.0,
                                 reference="floating"),
         instrument=SimpleNamespace(capacitance=instrument_pf * 1e-12))

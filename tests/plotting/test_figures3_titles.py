@@ -9,7 +9,8 @@ from tengfield.plotting.waveforms import cells_phrase, run_title
 def _result(cells):
     scene = SimpleNamespace(
         excitation=SimpleNamespace(frequency=20.0, amplitude=0.5e-3),
-        device=SimpleNamespace(surface_charge=-8e-6, stroke=1.5e-3, cells=cells),
+        device=SimpleNamespace(surface_charge=-8e-6, stroke=1.5e-3, cells=cells,
+                               electrode_names=("lower", "upper")),
         circuit=SimpleNamespace(reference="floating"))
     return SimpleNamespace(scene=scene, summary={"cells": cells})
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from ..files import (figure_file, one_line, scene_dir, scene_toml, toml_value, write_figure,
                      write_text)
 from ..io import format_number as _num
+from ..terminals import of_scene
 from ..io import write_report_csv, write_report_json
 from .plan import (CIRCUIT_ERRORS, QUANTITIES, STAGE_TITLES, error_symbol, error_symbols,
                    error_words)
@@ -42,7 +43,7 @@ def markdown(report, images: dict) -> str:
              "",
              f"Scene: `{one_line(sc.source)}` — {sc.excitation.frequency:g} Hz, "
              f"A = {sc.excitation.amplitude * 1e3:g} mm, Δh = {sc.device.stroke * 1e3:g} mm, "
-             f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{_topology(sc)}`; "
+             f"d = {sc.device.ball_diameter * 1e3:g} mm, reference `{of_scene(sc).name}`; "
              f"regime {report.trajectory.get('regime', '?')}. Total wall time "
              f"{report.wall_time_s:.0f} s.",
              "",
@@ -137,9 +138,3 @@ def write_report(report, out_dir) -> list[Path]:
     written.append(md)
     return written
 
-
-def _topology(scene) -> str:
-    """The scene's terminal topology's name ("floating", "grounded-lower", or the single
-    electrode's "lower-to-ground")."""
-    from ..terminals import wiring
-    return wiring(scene.circuit.reference, len(scene.device.electrode_names)).name

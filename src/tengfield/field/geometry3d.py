@@ -48,14 +48,6 @@ from .geometry_axisymmetric import RIM_EXPONENT  # noqa: E402  (no gmsh)
 
 VOLUME_GROUPS = ("ball", "walls", "air")
 SURFACE_GROUPS = ("ball_surface", "electrode_lower", "electrode_upper", "far_boundary")
-#: the electrodes a cell lists (``cell.electrodes``) when it names none: the pair
-PAIR = ("lower", "upper")
-
-
-def electrode_names(cell) -> tuple[str, ...]:
-    """The cell's electrodes, in the order of the field's matrices (``cell.electrodes``:
-    ("lower", "upper"), or ("lower",) for the single-electrode cell)."""
-    return tuple(getattr(cell, "electrodes", PAIR))
 
 _model_counter = itertools.count()
 
@@ -216,9 +208,9 @@ def build_model(cell, position: float, offset: float, settings: MeshSettings, *,
     # piece_map follows the order objects + tools
     ball_vols = [tag for _, tag in piece_map[1]]
     wall_vols = sorted({tag for pieces in piece_map[2:2 + len(walls)] for _, tag in pieces})
-    names = electrode_names(cell)
+    # one surface per electrode the cell lists (``cell.electrodes``, the order of occ_parts)
     electrode_surfs = {f"electrode_{name}": [tag for _, tag in piece_map[2 + len(walls) + i]]
-                       for i, name in enumerate(names)}
+                       for i, name in enumerate(cell.electrodes)}
     all_vols = [tag for _, tag in gmsh.model.getEntities(3)]
     air_vols = [v for v in all_vols if v not in ball_vols and v not in wall_vols]
     ball_surfs = [tag for _, tag in gmsh.model.getBoundary([(3, v) for v in ball_vols],

@@ -76,11 +76,10 @@ def _draw_position(result, path, reference: str, potentials) -> None:
 
     solution, z = result.solution, result.position * 1e3
     if field_method(solution.method).dimension == 3:
+        _, name, where = field_plot.shown_weighting(solution)
         field_plot.render_weighting_png_3d(
             path, solution, result.scene.device, window_size=figure_window((1200, 1100)),
-            title=(("3D weighting potential psi_upper (1 V on the upper electrode), "
-                    if len(solution.weighting) > 1 else
-                    "3D weighting potential psi_lower (1 V on the one electrode), ") +
+            title=(f"3D weighting potential {name} (1 V on {where}), "
                    f"z = {z:.3g} mm, offset = {result.offset * 1e3:.3g} mm"))
         return
     potentials = (0.0,) * len(result.electrodes) if potentials is None else potentials

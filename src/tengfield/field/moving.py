@@ -230,7 +230,7 @@ def geometry_family(lay, **settings) -> tuple:
               radius, float(lay.inversion_centre_z),
               float(lay.mesh_size), float(lay.grading_exponent),
               # the conductors: a pair's mesh is never mapped onto one electrode's
-              tuple(getattr(lay, "electrodes", ("lower", "upper"))))
+              tuple(lay.electrodes))
     if hasattr(lay, "cavity_radius"):
         topology = (lay.band > 0.0,)
     else:

@@ -247,6 +247,14 @@ def trace_field_lines(Ex, Ey, xs, ys, seeds, *, step_length: float, max_steps: i
     return [np.vstack([b[::-1], f[1:]]) for b, f in zip(backward, forward)]
 
 
+def shown_weighting(solution) -> tuple:
+    """``(ψ, its name, what carries the 1 V)`` that a 3D field.png draws: the upper
+    electrode's ψ, or the single-electrode cell's one ψ_lower."""
+    if len(solution.weighting) > 1:
+        return solution.weighting[1], "psi_upper", "the upper electrode"
+    return solution.weighting[0], "psi_lower", "the one electrode"
+
+
 def render_weighting_png_3d(path, solution, device, *, title: str,
                             window_size=(1200, 1100)) -> None:
     """3D runs: the weighting potential ψ_upper (dimensionless: the potential for
@@ -259,9 +267,7 @@ def render_weighting_png_3d(path, solution, device, *, title: str,
 
     from . import _dolfinx as dx_api
 
-    # the upper electrode's ψ; the single-electrode cell's one electrode (ψ_lower)
-    psi = solution.weighting[-1]
-    label = "psi_upper" if len(solution.weighting) > 1 else "psi_lower"
+    psi, label, _ = shown_weighting(solution)
     topology, cell_types, points = dx_api.vtk_arrays(solution.space)
     grid = pv.UnstructuredGrid(topology, cell_types, points.copy())
     grid.point_data["psi"] = np.asarray(psi.x.array.real, dtype=float)

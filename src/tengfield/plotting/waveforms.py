@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..terminals import of_scene
 from . import new_figure, save_figure
 
 
@@ -335,12 +336,6 @@ def run_title(result) -> str:
              f"Δh = {dev.stroke * 1e3:g} mm", f"{exc.frequency:g} Hz",
              f"A = {exc.amplitude * 1e3:g} mm",
              cells_phrase(result.summary.get("cells", dev.cells)),
-             *circuit_words(result.scene), _topology_name(result), name]
+             *circuit_words(result.scene), of_scene(result.scene).name, name]
     return ", ".join(p for p in parts if p)
 
-
-def _topology_name(result) -> str:
-    """The run's terminal topology as its summary names it ("floating", "grounded-lower",
-    "lower-to-ground" for the single-electrode cell), else the scene's reference."""
-    summary = result.summary if isinstance(result.summary, dict) else {}
-    return str(summary.get("reference") or result.scene.circuit.reference)

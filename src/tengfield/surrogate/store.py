@@ -279,9 +279,9 @@ def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
     """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
     attribute -> array) has the shape ``(nz, nr, *tail)`` of :func:`grid_tails` (the
     electrode count read from the induced charges: 2, or 1 for the single electrode)."""
-    electrodes = np.shape(arrays["induced_charge"])[-1] if np.ndim(arrays["induced_charge"]) == 3 \
-        else 2
-    for attr, tail in grid_tails(electrodes if electrodes in (1, 2) else 2).items():
+    q = np.shape(arrays["induced_charge"])
+    electrodes = q[2] if len(q) == 3 and q[2] in (1, 2) else 2   # else refused as the pair's
+    for attr, tail in grid_tails(electrodes).items():
         shape = np.shape(arrays[attr])
         if shape != (nz, nr, *tail):
             raise SurrogateError(f"array {ARRAYS_ZR[attr]!r} has shape {shape}, expected "

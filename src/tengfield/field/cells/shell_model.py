@@ -135,7 +135,7 @@ def layout(cell, position: float, *, mesh_size: float, degree: int = 2,
         walls=cell.wall_permittivity != 1.0, domain_radius=R, kelvin=far_field == "kelvin",
         shift=2.5 * R, gap_lower=gap, gap_upper=cell.stroke - gap, requested_gap=float(position),
         effective_gap=gap, mesh_size=mesh_size, grading_exponent=RIM_EXPONENT / max(degree, 1),
-        electrodes=tuple(getattr(cell, "electrodes", ("lower", "upper"))),
+        electrodes=tuple(cell.electrodes),
         info={"device_extent_m": b, "rim_reach_m": min(0.5 * a, GRADING_REACH * grading_size),
               "bulk_length_m": min(b, GRADING_REACH * grading_size)})
 

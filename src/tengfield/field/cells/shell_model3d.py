@@ -128,8 +128,7 @@ def occ_parts(shell, occ) -> tuple[list[int], list[int]]:
     rim = math.sqrt(a * a - e * e)
     origin = occ.addPoint(0.0, 0.0, 0.0)
     electrodes = []
-    names = getattr(shell, "electrodes", ("lower", "upper"))
-    for sign in ({"lower": -1.0, "upper": 1.0}[name] for name in names):
+    for sign in ({"lower": -1.0, "upper": 1.0}[name] for name in shell.electrodes):
         pole = occ.addPoint(0.0, 0.0, sign * a)
         edge = occ.addPoint(rim, 0.0, sign * e)
         arc = occ.addCircleArc(pole, origin, edge)
