@@ -49,6 +49,24 @@ def test_the_comparison_sees_a_move_of_two_parts_in_a_billion():
     assert pinning.compare(pinned, {"summary.json:regime.period": 1.0}, 1e-9)   # one gone
 
 
+def test_a_round_off_residual_is_held_to_an_absolute_floor():
+    """The energy books' relative residuals are round-off (1e-16 .. 1e-15) when they
+    close: a move among those is no move, a residual that opens is one."""
+    key = "summary.json:rectifier.energy_residuals.store_residual"
+    pinned = {key: 2.156945100015432e-15}
+    assert not pinning.compare(pinned, {key: 5.728702132062453e-16}, 1e-9)
+    assert pinning.compare(pinned, {key: 3e-12}, 1e-9)
+    big = {"summary.json:stages.circuit.details.energy_balance_relative_residual": 6.2e-4}
+    assert pinning.compare(big, {k: v * (1 + 1e-8) for k, v in big.items()}, 1e-9)
+    corr = "fit.json:correlation.matrix.0.1"
+    assert not pinning.compare({corr: 1.8376389647549743e-06}, {corr: 1.8376388284800748e-06},
+                               1e-9)
+    assert pinning.compare({corr: 0.5}, {corr: 0.5 + 1e-9}, 1e-9)
+    numbers = pinning.numbers_of_json({"iterations": {"jacobian_evaluations": 6},
+                                       "parameters": {"iterations_s": 2.0}})
+    assert numbers == {"parameters.iterations_s": 2.0}     # the solver's path is not pinned
+
+
 def test_wall_times_and_paths_are_not_pinned():
     numbers = pinning.numbers_of_json({"stages": {"field": {"wall_time_s": 3.0}},
                                        "peak": {"V_oc_V": 2.0}, "path": "/x",
