@@ -47,6 +47,7 @@ import numpy as np
 from ._args import checked_write
 from . import electrical
 from .errors import SceneError
+from .source import Source
 
 #: cell-samples evaluated per chunk of the electrical stage (bounds the memory)
 CHUNK_VALUES = 1_000_000
@@ -430,8 +431,9 @@ def _evaluate(curves, trajectories, times):
     if isinstance(curves, (list, tuple)) or getattr(curves, "contact", False):
         each = curves if isinstance(curves, (list, tuple)) else [curves] * z.shape[1]
         q, c, i = np.empty_like(z), np.empty_like(z), np.empty_like(z)
-        for j, cell in enumerate(each):
-            q[:, j], i[:, j], c[:, j], _ = cell.evaluate_many(z[:, j], v[:, j], times=times)
+        for j, cell in enumerate(each):     # each cell's own source (its charge history)
+            own = Source(cell).terminal(times, z[:, j], v[:, j])
+            q[:, j], i[:, j], c[:, j] = own["Q_sc"], own["I_sc"], own["C_T"]
         return q, c, i
     q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), *curves.pieces(), curves.stroke)
     return q.reshape(z.shape), c.reshape(z.shape), i.reshape(z.shape)

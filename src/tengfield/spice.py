@@ -201,6 +201,7 @@ def _with_impacts(result, out: dict) -> dict:
             or scene.array.cells > 0):      # an array's cells have their own impacts
         return out
     from . import electrical
+    from .source import Source
     t = out["time_s"]
     impacts = electrical.impact_elapsed(dynamics, float(t[0]), float(t[-1]))
     impacts = impacts[(impacts > t[0]) & (impacts < t[-1])]
@@ -208,7 +209,7 @@ def _with_impacts(result, out: dict) -> dict:
         return out
     _, _, gap, velocity = electrical.impact_states(scene, dynamics,
                                                    impacts + electrical.time_origin(dynamics))
-    at = electrical.scene_terminal_waveforms(scene, curves, gap, velocity, times=impacts)
+    at = Source.of_scene(scene, curves, dynamics).terminal(impacts, gap, velocity)
     times = np.concatenate([t, impacts])
     order = np.argsort(times, kind="stable")
     keep = np.r_[True, np.diff(times[order]) > 0]

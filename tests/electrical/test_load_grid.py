@@ -66,8 +66,9 @@ def test_a_kept_grid_of_an_off_axis_run_gives_the_same_numbers(cache, tmp_path):
 def _grid_built_whole(scene, dynamics, curves, time_constant):
     """The integration grid as it was built before the kept grid: every point sorted
     first, the terminal waveforms evaluated on the sorted arrays."""
-    from tengfield.electrical.waveforms import (_impact_states, _radial, elapsed_times,
-                                                impact_elapsed, sample_elapsed)
+    from tengfield.electrical.waveforms import (_impact_states, elapsed_times, impact_elapsed,
+                                                sample_elapsed)
+    from tengfield.source import Source
 
     t = elapsed_times(dynamics)
     impacts = impact_elapsed(dynamics, t[0], t[-1])
@@ -83,8 +84,7 @@ def _grid_built_whole(scene, dynamics, curves, time_constant):
                           np.full(extra.size, 3.0)])
     order = np.lexsort((tag, grid))
     grid, gap, vel = grid[order], gap[order], vel[order]
-    fine = electrical.scene_terminal_waveforms(scene, curves, gap, vel,
-                                               *_radial(dynamics, curves, grid))
+    fine = Source.of_scene(scene, curves, dynamics).terminal(grid, gap, vel)
     return grid, fine, np.flatnonzero(order < t.size)
 
 

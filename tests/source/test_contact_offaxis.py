@@ -104,14 +104,15 @@ def test_the_rectifier_takes_the_charge_off_the_axis(charge, tmp_path):
     crashed with a TypeError for the 3D ball off the axis, constant charge too): its input
     at the output samples is the run's own Q_sc_C and C_T_F columns, the energy books
     close, and a contact-charged ball at σ_eq stores what the constant one stores."""
-    from tengfield.electrical.waveforms import elapsed_times, sample_elapsed, terminal_state
+    from tengfield.electrical.waveforms import elapsed_times, sample_elapsed
+    from tengfield.source import Source
 
     extra = {"charge": {**charge, "initial_uC_per_m2": -20.0}} if charge else \
         {"device": {"surface_charge_uC_per_m2": -20.0}}
     out = _run(tmp_path, circuit={"kind": "rectifier"}, **extra)
     t = elapsed_times(out.dynamics)
     gap, _, _ = sample_elapsed(out.dynamics, t)
-    q, c = terminal_state(out.curves, out.dynamics, t, gap)
+    q, c = Source.of_scene(out.scene, out.curves, out.dynamics).state(t, gap)
     np.testing.assert_allclose(q, out.waveforms["Q_sc_C"], rtol=1e-9,
                                atol=1e-9 * np.max(np.abs(q)))
     np.testing.assert_allclose(c, out.waveforms["C_T_F"], rtol=1e-9)

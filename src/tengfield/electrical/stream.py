@@ -37,12 +37,12 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ..source import Source
 from .circuits import circuit_for
 from .instrument import READ_COLUMNS, Reader, has_read
 from .waveforms import (READ_COLUMN, WAVEFORM_COLUMNS, elapsed_times, impact_names,
-                        time_origin,
-                        impact_values, peak_quantities, scene_terminal_waveforms,
-                        steady_window_index)
+                        impact_values, peak_quantities, steady_window_index,
+                        waveform_columns)
 
 #: the ball's charge column of a run whose contacts make it (tengfield.pipeline)
 BALL_CHARGE_COLUMN = "q_ball_C"
@@ -84,6 +84,8 @@ class StreamedRun:
     def __init__(self, scene, dynamics, curves):
         self.scene, self.dynamics, self.curves = scene, dynamics, curves
         self.entry = circuit_for(scene)
+        #: the device as a source along the run: the terminal, a chunk of rows at a time
+        self.source = Source.of_scene(scene, curves, dynamics)
         self.rows = len(dynamics.t)
         self.chunk_rows = CHUNK_ROWS
         self.elapsed = elapsed_times(dynamics)
@@ -109,21 +111,9 @@ class StreamedRun:
         load = self._circuit()       # the circuit's state, carried from chunk to chunk
         dyn, scene = self.dynamics, self.scene
         reader = Reader(scene, not self.read_at_samples) if scene.instrument.given else None
-        for i0, i1 in chunk_bounds(self.rows, self.chunk_rows):
-            gap = np.asarray(dyn.gap[i0:i1], dtype=float)
-            velocity = np.asarray(dyn.gap_velocity[i0:i1], dtype=float)
-            terminal = scene_terminal_waveforms(
-                scene, self.curves, gap, velocity,
-                times=np.asarray(dyn.elapsed[i0:i1], dtype=float)
-                if getattr(dyn, "elapsed", None) is not None else
-                np.asarray(dyn.t[i0:i1], dtype=float) - time_origin(dyn))
-            out = {"time_s": np.asarray(dyn.t[i0:i1], dtype=float), "gap_m": gap,
-                   "gap_velocity_m_per_s": velocity,
-                   "table_m": np.asarray(dyn.table[i0:i1], dtype=float),
-                   "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"],
-                   "I_sc_A": terminal["I_sc"], "C_T_F": terminal["C_T"]}
-            if READ_COLUMN in self.columns:
-                out[READ_COLUMN] = terminal["V_read"]
+        for i0, i1, terminal in self.source.chunks(self.chunk_rows):
+            out = waveform_columns(scene, np.asarray(dyn.t[i0:i1], dtype=float), terminal,
+                                   dyn.table[i0:i1])
             if load is not None:
                 out.update(load.chunk(i0, i1))
             elif self.entry.columns:            # Q_SC = 0: nothing moves
@@ -133,8 +123,7 @@ class StreamedRun:
             if reader is not None:     # the instrument's state, carried too
                 out.update(reader.read(self.elapsed[i0:i1], out, out["C_T_F"]))
             if BALL_CHARGE_COLUMN in self.columns:
-                out[BALL_CHARGE_COLUMN] = self.curves.terminal.ball_charge(
-                    np.asarray(self.elapsed[i0:i1], dtype=float))
+                out[BALL_CHARGE_COLUMN] = self.source.ball_charge(self.elapsed[i0:i1])
             self._last_circuit = load
             yield i0, i1, out
 
@@ -281,11 +270,7 @@ class StreamedWaveforms(Mapping):
         pass over the run: the SPICE export's start-up and steady period
         (:mod:`tengfield.spice`) of a run of any length."""
         dyn = self._run.dynamics
-        terminal = scene_terminal_waveforms(self._run.scene, self._run.curves,
-                                            np.asarray(dyn.gap[i0:i1], dtype=float),
-                                            np.asarray(dyn.gap_velocity[i0:i1], dtype=float),
-                                            times=np.asarray(dyn.t[i0:i1], dtype=float)
-                                            - time_origin(dyn))
+        terminal = self._run.source.rows(i0, i1)
         return {"time_s": np.asarray(dyn.t[i0:i1], dtype=float), "V_oc_V": terminal["V_oc"],
                 "C_T_F": terminal["C_T"]}
 

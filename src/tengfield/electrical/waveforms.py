@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from .. import lumped
+from ..source import Source, terminal_quantities
 from .instrument import READ_COLUMNS, Reader, as_terminal, has_read, read_names
 
 #: ∫ y dx by the trapezoidal rule: numpy 2's name (numpy 1 has only ``trapz``, which
@@ -115,62 +116,20 @@ def impact_elapsed(dynamics, start: float, end: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------
-# waveforms
+# waveforms: the device as a source (tengfield.source.Source) at the output samples
 def terminal_waveforms(curves, gap, gap_velocity, *, cells: int = 1,
                        parallel_capacitance: float = 0.0, radial=None,
                        radial_velocity=None, times=None) -> dict[str, np.ndarray]:
-    """Open-circuit voltage, short-circuit charge and current along a trajectory.
-
-    ``curves``: the :class:`tengfield.surrogate.Curves` of ONE cell, or None when
-    Q_SC is identically zero (then C_T is unknown and NaN). ``gap`` z(t) [m] and
-    ``gap_velocity`` dz/dt [m/s] are samples of the trajectory; ``cells``
-    identical cells are wired in parallel and read through
-    ``parallel_capacitance`` C_p [F]. Returns ``V_oc`` [V] (= Q_SC / C_T, the ideal
-    open-circuit voltage, whatever C_p), ``V_read`` [V] (= Q_SC / (C_T + C_p), what an
-    instrument of capacitance C_p reads; ``V_oc`` itself when C_p = 0), ``Q_sc`` [C],
-    ``I_sc`` = (dQ_SC/dz) dz/dt [A],
-    ``C_T`` [F] and ``dC_T_dt`` [F/s]. For (z, r) curves (``curves.radial``)
-    ``radial`` r(t) [m] and ``radial_velocity`` dr/dt [m/s] (default 0) enter, and
-    ``I_sc = dQ_SC/dz ż + dQ_SC/dr ṙ`` (:meth:`tengfield.surrogate.Curves.evaluate_many`).
-    ``times`` [s] (the run's own axis) of the samples: what a ball charged by its contacts
-    needs (:class:`tengfield.source.terminal.ContactCurves`, ``[charge] model =
-    "contact"``), whose charge depends on the time as well as the gap.
-    """
-    gap = np.asarray(gap, dtype=float)
-    if curves is None:
-        zero = np.zeros_like(gap)
-        return {"V_oc": zero, "V_read": zero.copy(), "Q_sc": zero.copy(), "I_sc": zero.copy(),
-                "C_T": np.full_like(gap, np.nan), "dC_T_dt": zero.copy()}
-    if getattr(curves, "contact", False):   # the charge follows the contacts: q(t)
-        q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial,
-                                                      radial_velocity, cells=cells,
-                                                      times=times)
-    else:
-        q_sc, i_sc, c_t, dc_dt = curves.evaluate_many(gap, gap_velocity, radial,
-                                                      radial_velocity, cells=cells)
-    v_oc = lumped.open_circuit_voltage(q_sc, c_t)
-    v_read = v_oc if parallel_capacitance == 0.0 else \
-        lumped.open_circuit_voltage(q_sc, c_t, parallel_capacitance)
-    return {"V_oc": v_oc, "V_read": v_read,
-            "Q_sc": q_sc, "I_sc": i_sc, "C_T": c_t, "dC_T_dt": dc_dt}
-
-
-def terminal_state(curves, dynamics, times, gap) -> tuple[np.ndarray, np.ndarray]:
-    """``(Q_SC [C], C_T [F])`` of one cell at the run's ``times`` [s] (its own axis) and
-    gaps ``gap`` [m] of ``dynamics``: ``curves``' Q_SC(z) and C_T(z), at the ball's offset
-    r(t) where the curves are (z, r) ones (the 3D ball off the axis), and for a ball
-    charged by its contacts the charge history's
-    (:meth:`tengfield.source.terminal.ContactCurves.charge_at`)."""
-    gap = np.asarray(gap, dtype=float)
-    offset = ()
-    if curves.radial:
-        offset = (_radial(dynamics, curves, time_origin(dynamics)
-                          + np.asarray(times, dtype=float))[0],)
-    if getattr(curves, "contact", False):
-        charge = curves.charge_at(times, gap, *offset)
-    else:
-        charge = curves.charge(gap, *offset)
-    return charge, curves.capacitance(gap, *offset)
+    """Open-circuit voltage, short-circuit charge and current along a trajectory:
+    :func:`tengfield.source.terminal_quantities` (the one definition; its keys
+    ``V_oc``, ``V_read``, ``Q_sc``, ``I_sc``, ``C_T``, ``dC_T_dt``). ``curves``: the
+    :class:`tengfield.surrogate.Curves` of ONE cell, or None when Q_SC is identically
+    zero (then C_T is unknown and NaN); ``cells`` identical cells in parallel read through
+    ``parallel_capacitance`` C_p [F]; ``radial``, ``radial_velocity`` for (z, r) curves;
+    ``times`` [s] (the run's own axis) where the ball's charge follows its contacts."""
+    return terminal_quantities(curves, gap, gap_velocity, cells=cells,
+                               parallel_capacitance=parallel_capacitance, radial=radial,
+                               radial_velocity=radial_velocity, times=times)
 
 
 def on_axis(curves) -> tuple:
@@ -191,34 +150,29 @@ def terminal_waveforms_zr(curves, gap, gap_velocity, radial, radial_velocity, *,
 def scene_terminal_waveforms(scene, curves, gap, gap_velocity, radial=None,
                              radial_velocity=None, *, times=None) -> dict[str, np.ndarray]:
     """:func:`terminal_waveforms` with ``[device] cells`` and ``[circuit]
-    parallel_capacitance_pF`` of ``scene`` (``times``: the samples' on the run's axis)."""
-    return terminal_waveforms(curves, gap, gap_velocity, cells=scene.device.cells,
-                              parallel_capacitance=scene.circuit.parallel_capacitance,
-                              radial=radial, radial_velocity=radial_velocity, times=times)
-
-
-def _radial(dynamics, curves, times=None):
-    """``(r, dr/dt)`` of ``dynamics`` (at its samples or at ``times``) when ``curves``
-    is a (z, r) surrogate, else ``(None, None)``."""
-    if curves is None or not curves.radial:
-        return None, None
-    from ..surrogate.offaxis import radial_motion
-    return radial_motion(dynamics, times)
+    parallel_capacitance_pF`` of ``scene`` (``times``: the samples' on the run's axis):
+    :meth:`tengfield.source.Source.terminal` of the scene's source."""
+    return Source.of_scene(scene, curves).terminal(times, gap, gap_velocity, radial,
+                                                   radial_velocity)
 
 
 def scene_waveforms(scene, dynamics, curves) -> dict[str, np.ndarray]:
     """The ``WAVEFORM_COLUMNS`` of ``dynamics`` (a DynamicsResult or anything with
     ``t, gap, gap_velocity, table``) for ``scene``: time, trajectory and the
-    terminal waveforms at the output samples; with ``[circuit]
-    parallel_capacitance_pF`` > 0 also ``V_read_V`` (the voltage read through C_p)."""
+    terminal waveforms at the output samples (:meth:`tengfield.source.Source.rows`);
+    with ``[circuit] parallel_capacitance_pF`` > 0 also ``V_read_V`` (the voltage read
+    through C_p)."""
     t = np.asarray(dynamics.t, dtype=float)
-    gap = np.asarray(dynamics.gap, dtype=float)
-    velocity = np.asarray(dynamics.gap_velocity, dtype=float)
-    terminal = scene_terminal_waveforms(scene, curves, gap, velocity,
-                                        *_radial(dynamics, curves),
-                                        times=elapsed_times(dynamics))
-    table = getattr(dynamics, "table", None)
-    out = {"time_s": t, "gap_m": gap, "gap_velocity_m_per_s": velocity,
+    terminal = Source.of_scene(scene, curves, dynamics).rows()
+    return waveform_columns(scene, t, terminal, getattr(dynamics, "table", None))
+
+
+def waveform_columns(scene, t, terminal: dict, table=None) -> dict[str, np.ndarray]:
+    """The ``WAVEFORM_COLUMNS`` (and ``V_read_V`` where the scene reads through C_p) of
+    output rows at times ``t`` [s] from a :meth:`tengfield.source.Source.rows` record
+    ``terminal`` and the table's displacement ``table`` [m] (None: zeros)."""
+    out = {"time_s": t, "gap_m": terminal["gap"],
+           "gap_velocity_m_per_s": terminal["gap_velocity"],
            "table_m": np.zeros_like(t) if table is None else np.asarray(table, dtype=float),
            "V_oc_V": terminal["V_oc"], "Q_sc_C": terminal["Q_sc"], "I_sc_A": terminal["I_sc"],
            "C_T_F": terminal["C_T"]}
@@ -417,12 +371,9 @@ def impact_values(scene, dynamics, curves, start: float, end: float, names) -> d
     if not gap_pre.size:
         return {}
     eps = IMPACT_OFFSET_PERIODS * scene.excitation.period
-    extra = scene_terminal_waveforms(
-        scene, curves, np.concatenate([gap_pre, gap_post]),
-        np.concatenate([vel_pre, vel_post]),
-        *_radial(dynamics, curves, time_origin(dynamics)
-                 + np.concatenate([impacts - eps, impacts + eps])),
-        times=np.concatenate([impacts - eps, impacts + eps]))
+    extra = Source.of_scene(scene, curves, dynamics).terminal(
+        np.concatenate([impacts - eps, impacts + eps]), np.concatenate([gap_pre, gap_post]),
+        np.concatenate([vel_pre, vel_post]))
     return {name: extra[name] for name in names}
 
 

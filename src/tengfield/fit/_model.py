@@ -1,8 +1,9 @@
 """The forward model of a fit: one surrogate, dynamics re-run only when needed.
 
-The ONLY place :mod:`tengfield.fit` imports the electrical helpers
-(``terminal_waveforms``, ``load_waveforms``, and the one peak rule: ``extreme_times``,
-``extremes``, ``steady_start``).
+The ONLY place :mod:`tengfield.fit` reads the device as a source
+(:class:`tengfield.source.Source`) and imports the electrical helpers
+(``load_waveforms``, and the one peak rule: ``extreme_times``, ``extremes``,
+``steady_start``).
 
 Electrostatics is linear in the ball's charge: Q_SC, I_SC and every voltage
 scale with σ while C_T does not. The surrogate is obtained once at a
@@ -18,8 +19,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..electrical import (circuit_for, extreme_times, extremes, load_waveforms, steady_start,
-                          terminal_waveforms)
+from ..electrical import circuit_for, extreme_times, extremes, load_waveforms, steady_start
+from ..source import Source
 from ..surrogate import OnAxisCurves
 from ..scene.schema import SURFACE_CHARGE_KEY
 
@@ -194,7 +195,8 @@ class ForwardModel:
         t = np.asarray(model_times, dtype=float)
         gap, velocity, _ = dynamics.sample(t)
         cells = self.scene.device.cells
-        terminal = terminal_waveforms(curves, gap, velocity, cells=cells, parallel_capacitance=c_p)
+        terminal = Source(curves, cells=cells, parallel_capacitance=c_p).terminal(None, gap,
+                                                                                  velocity)
         out = {"V": terminal["V_read"], "Q": terminal["Q_sc"], "I": terminal["I_sc"]}
         if circuit_for(self.scene).fit_load and ({"V", "I"} & set(quantities)):
             out.update(self._load(dynamics, curves, c_p, load, t))

@@ -12,9 +12,9 @@ import numpy as np
 
 from ... import lumped
 from ..cycle import cumulative, last_period, loop_area
-from ..waveforms import (IMPACT_OFFSET_PERIODS, _impact_states, _radial, elapsed_times,
-                         impact_elapsed, sample_elapsed, scene_terminal_waveforms, steady_window,
-                         time_origin, trapezoid)
+from ...source import Source
+from ..waveforms import (IMPACT_OFFSET_PERIODS, _impact_states, elapsed_times,
+                         impact_elapsed, sample_elapsed, steady_window, time_origin, trapezoid)
 from . import Circuit, CircuitRun, SpreadCircuit
 
 #: extra columns of ``waveforms.csv`` when a load is connected
@@ -89,7 +89,7 @@ def fine_terminal(scene, dynamics, curves, time_constant: float):
     """``(grid, terminal, output_index)``: the integration grid of a load on the run's own
     axis (the output times, every impact twice with its pre- and post-impact velocity,
     :func:`relaxation_times` of ``time_constant`` [s] after the start and each impact),
-    the terminal waveforms there (:func:`scene_terminal_waveforms`) and the indices of
+    the terminal waveforms there (:meth:`tengfield.source.Source.terminal`) and the indices of
     the output samples in it."""
     return LoadGrid(scene, dynamics, curves).fine(time_constant)
 
@@ -122,9 +122,7 @@ class LoadGrid:
         self._no_extra = None     # fine() of a time constant that adds no point
 
     def _terminal(self, grid, gap, vel) -> dict:
-        return scene_terminal_waveforms(self.scene, self.curves, gap, vel,
-                                        *_radial(self.dynamics, self.curves, self.origin + grid),
-                                        times=grid)
+        return Source.of_scene(self.scene, self.curves, self.dynamics).terminal(grid, gap, vel)
 
     def fine(self, time_constant: float):
         """:func:`fine_terminal`'s ``(grid, terminal, output_index)`` for ``time_constant``
@@ -179,6 +177,7 @@ class LoadChunks:
     def __init__(self, scene, dynamics, curves, window_start: float, first_rows: int,
                  time_constant: float | None = None):
         self.scene, self.dynamics, self.curves = scene, dynamics, curves
+        self.source = Source.of_scene(scene, curves, dynamics)
         self.window_start = window_start
         self.t = elapsed_times(dynamics)                  # the dynamics' own array, no copy
         n_cells, c_p = scene.device.cells, scene.circuit.parallel_capacitance
@@ -258,8 +257,7 @@ class LoadChunks:
         order = np.lexsort((tag, grid))
         grid, gap, vel = grid[order], gap[order], vel[order]
         output_index = np.flatnonzero(order < t.size)
-        return grid, scene_terminal_waveforms(scene, self.curves, gap, vel, times=grid), \
-            output_index
+        return grid, self.source.terminal(grid, gap, vel), output_index
 
     def numbers(self) -> dict:
         """Mean power [W], the energy books [J] over the window, integration points,

@@ -15,8 +15,9 @@ import math
 import numpy as np
 
 from ..cycle import last_period, loop_area
+from ...source import Source
 from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, steady_window,
-                         on_axis, terminal_state, time_origin)
+                         on_axis, time_origin)
 from . import Circuit, CircuitRun, SpreadCircuit
 from .rectifier_store import (check_store_resolution, first_crossing, harvester_options,
                               warn_numerical_dissipation)
@@ -49,18 +50,17 @@ def rectifier_waveforms(scene, dynamics, curves) -> dict:
 
     check_store_resolution(scene)
     grid, output_index = rectifier_grid(scene, dynamics)
-    n = scene.device.cells
+    source = Source.of_scene(scene, curves, dynamics)
     run = Harvester(1, time_origin=time_origin(dynamics), **harvester_options(scene))
     rows = max(2, CHUNK_VALUES)
     parts = []
     for start in range(0, grid.size, rows):
         times = grid[start:start + rows]
         gap, _, _ = sample_elapsed(dynamics, times)
-        if curves is None:
-            q, c = np.zeros_like(gap), np.full_like(gap, 1e-12)
+        if source.charged:
+            q, c = source.state(times, gap)
         else:
-            q, c = terminal_state(curves, dynamics, times, gap)
-            q, c = q * n, c * n
+            q, c = np.zeros_like(gap), np.full_like(gap, 1e-12)
         parts.append(run.advance(times, q, c))
     fine = concat_results(parts)
     return {"V_store_V": fine.store_voltage[output_index],

@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from ..waveforms import (elapsed_times, impact_elapsed, sample_elapsed, terminal_state,
-                         time_origin)
+from ...source import Source
+from ..waveforms import elapsed_times, impact_elapsed, sample_elapsed, time_origin
 from .rectifier_store import check_store_resolution, first_crossing, harvester_options
 
 
@@ -28,6 +28,7 @@ class RectifierChunks:
 
         check_store_resolution(scene)
         self.scene, self.dynamics, self.curves = scene, dynamics, curves
+        self.source = Source.of_scene(scene, curves, dynamics)
         self.t = elapsed_times(dynamics)
         self.impacts = impact_elapsed(dynamics, self.t[0], self.t[-1])
         self.harvester = Harvester(1, time_origin=time_origin(dynamics),
@@ -58,9 +59,8 @@ class RectifierChunks:
         order = np.argsort(grid, kind="stable")
         grid, output_index = grid[order], np.flatnonzero(order < t_out.size)
         gap, _, _ = sample_elapsed(self.dynamics, grid)
-        cells = self.scene.device.cells
-        charge, capacitance = terminal_state(self.curves, self.dynamics, grid, gap)
-        res = self.harvester.advance(grid, charge * cells, capacitance * cells)
+        charge, capacitance = self.source.state(grid, gap)
+        res = self.harvester.advance(grid, charge, capacitance)
         self._reduce(res)
         self.points += res.time.size
         return {"V_store_V": res.store_voltage[output_index],
