@@ -357,7 +357,7 @@ def _contact_period(scene) -> float:
 def _with_contact_charge(stage, dynamics, charged) -> None:
     """The ball's charge column and summary.json's ``charge`` block."""
     history, block = charged
-    if not hasattr(stage.waveforms, "chunks"):   # a streamed run's chunks carry it
+    if BALL_CHARGE_COLUMN not in stage.waveforms:   # the loop's chunks carry it
         stage.waveforms[BALL_CHARGE_COLUMN] = history.at(electrical.elapsed_times(dynamics))
     stage.summary["charge"] = _jsonable(block)
     stage.extras["_charge_history"] = history
@@ -519,75 +519,52 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
     """The circuit stage of :func:`run` for ``scene`` with ``dynamics`` and ``curves``
     (``table``/``curves`` None: no field needed): waveforms, summary (with the energy
     per cycle), peaks. ``stages`` (if given) gets its ``"circuit"`` entry. Used by
-    :func:`run` and by the uncertainty study (one electrical stage, not a copy)."""
+    :func:`run`, the sweeps and the uncertainty study (one electrical stage, not a copy).
+
+    The one electrical loop (:class:`tengfield.electrical.loop.Loop`) drives the circuit
+    over the source's chunks: a whole run is one chunk, a long one
+    (:func:`tengfield.electrical.stream.streams`) many, its waveforms a
+    :class:`~tengfield.electrical.stream.StreamedWaveforms`. The instrument, the peaks,
+    the summary and the energy per cycle are done once, here and in the loop."""
     stages = {} if stages is None else stages
     from .electrical import stream
-    if stream.streams(scene, dynamics, curves):
-        return _streamed_stage(scene, dynamics, curves, table, stages)
-    start = time.perf_counter()
-    entry = electrical.circuit_for(scene)
-    waveforms = electrical.scene_waveforms(scene, dynamics, curves)
-    ran = entry.run(scene, dynamics, curves)
-    waveforms.update(ran.columns)
-    # the instrument with a load: it reads the load's voltage across R || C_p
-    read_at_samples = electrical.READ_COLUMN in waveforms and entry.read_column in ran.columns
-    if read_at_samples:
-        waveforms[electrical.READ_COLUMN] = waveforms[entry.read_column]
-    # [instrument]: what it records (bandwidth, aperture, sample rate, R_in)
-    electrical.read_instrument(scene, dynamics, waveforms, loaded=not read_at_samples)
-    stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start, ran.details)
-    extremes = electrical.terminal_extremes(scene, dynamics, curves, waveforms,
-                                            read_at_samples=read_at_samples)
-    summary = _summary(scene, dynamics, waveforms, stages, table, extremes=extremes,
-                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask),
-                       entry=entry)
-    extras = {}
-    if curves is not None:
-        extras = _energy_per_cycle(scene, dynamics, curves, entry, ran)
-        summary.update(_jsonable({k: v for k, v in extras.items() if not k.startswith("_")}))
-    return ElectricalStage(waveforms, summary, extremes["peak_to_peak"], extremes["peak"], extras)
-
-
-def _streamed_stage(scene, dynamics, curves, table, stages) -> ElectricalStage:
-    """:func:`electrical_stage` of a long run, a chunk at a time
-    (:mod:`tengfield.electrical.stream`: the same numbers, memory bounded by the chunk);
-    ``waveforms`` is a :class:`~tengfield.electrical.stream.StreamedWaveforms`."""
-    from .electrical import stream
+    from .electrical.loop import Loop
 
     start = time.perf_counter()
-    entry = electrical.circuit_for(scene)
-    waveforms, ran, extremes, reduced = stream.streamed_stage(scene, dynamics, curves)
+    streamed = stream.streams(scene, dynamics, curves)
+    loop = stream.StreamedRun(scene, dynamics, curves) if streamed else \
+        Loop(scene, dynamics, curves)
+    reduced = loop.reduce()
+    entry = loop.entry
+    details: dict = {}
+    if streamed:
+        waveforms = stream.StreamedWaveforms(loop, reduced)
+        ran = loop.finish(reduced, f" (streamed: {loop.chunk_count} chunks of "
+                                   f"{loop.chunk_rows} rows)")
+        details["streamed_chunks"] = loop.chunk_count
+        t, mask = reduced["tail"]["_elapsed"], None     # the cycle's: the last periods
+    else:
+        waveforms = reduced["columns"]
+        ran = loop.finish(reduced)
+        t = loop.elapsed                  # the run's own axis: exact step lengths
+        mask, _ = electrical.steady_window(t, scene)
     stages["circuit"] = Stage(ran.status, ran.reason, time.perf_counter() - start,
-                              {**ran.details, "streamed_chunks": len(stream.chunk_bounds(
-                                  waveforms.rows, waveforms._run.chunk_rows))})
+                              {**ran.details, **details})
+    extremes = reduced["extremes"]
     summary = _summary(scene, dynamics, waveforms, stages, table, extremes=extremes,
-                       circuit_blocks=lambda mask: entry.summary(scene, ran, waveforms, mask),
+                       circuit_blocks=lambda window: entry.summary(scene, ran, waveforms,
+                                                                   window),
                        entry=entry)
-    extras: dict = {"_envelope": reduced["envelope"]}
+    extras: dict = {"_envelope": reduced["envelope"]} if streamed else {}
     if curves is not None:
-        tail = reduced["tail"]
-        out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, reduced["max_gap"])}
-        added = entry.cycle(scene, dynamics, curves, ran, tail["_elapsed"], None,
-                            reduced["max_gap"])
+        max_gap = reduced["max_gap"]
+        out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
+        added = entry.cycle(scene, dynamics, curves, ran, t, mask, max_gap)
         out["energy_per_cycle"].update(added.pop("energy_per_cycle", {}))
         out.update(added)
         extras.update(out)
         summary.update(_jsonable({k: v for k, v in out.items() if not k.startswith("_")}))
     return ElectricalStage(waveforms, summary, extremes["peak_to_peak"], extremes["peak"], extras)
-
-
-def _energy_per_cycle(scene, dynamics, curves, entry, ran) -> dict:
-    """Summary block ``energy_per_cycle`` (CMEO bound, FOM_S) with what the circuit
-    adds to it (:meth:`tengfield.electrical.Circuit.cycle`: its V-Q loops, ``_vq`` for
-    vq.png, further blocks such as ``rectifier``)."""
-    t = electrical.elapsed_times(dynamics)     # the run's own axis: exact step lengths
-    mask, _ = electrical.steady_window(t, scene)
-    max_gap = float(np.max(np.asarray(dynamics.gap, dtype=float)[mask]))
-    out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
-    added = entry.cycle(scene, dynamics, curves, ran, t, mask, max_gap)
-    out["energy_per_cycle"].update(added.pop("energy_per_cycle", {}))
-    out.update(added)
-    return out
 
 
 def _run_array(scene, dynamics, curves, table, stages, comm, progress,

@@ -6,10 +6,13 @@ it by itself, so a new circuit kind is one new module here (+ its key(s) in
 :mod:`tengfield.scene.schema` and the ``Circuit`` dataclass, and its tests and
 docs). Every place that used to ask ``scene.circuit.kind == ...`` asks the entry:
 
-* :func:`tengfield.pipeline.run`: :meth:`Circuit.check` before the dynamics,
-  :meth:`Circuit.run` (its ``columns`` of ``waveforms.csv`` and its stage text),
-  :meth:`Circuit.summary` (the ``load`` block), :meth:`Circuit.cycle` (the
-  energy-per-cycle numbers, its V-Q loops and further summary blocks);
+* :func:`tengfield.pipeline.run`: :meth:`Circuit.check` before the dynamics; the one
+  electrical loop (:mod:`tengfield.electrical.loop`, a whole run being one chunk)
+  drives :meth:`Circuit.start` (its state) and the state's ``chunk`` (its
+  ``columns`` of ``waveforms.csv`` over a chunk of output rows), then
+  :meth:`Circuit.finish` (its stage text and record); :meth:`Circuit.summary` (the
+  ``load`` block), :meth:`Circuit.cycle` (the energy-per-cycle numbers, its V-Q loops
+  and further summary blocks);
 * :mod:`tengfield.array`: :meth:`Circuit.array_identical` (cells without
   spread) and :meth:`Circuit.spread` (cells with their own dynamics);
 * :mod:`tengfield.io`: :func:`all_columns` (the column order of waveforms.csv).
@@ -81,14 +84,29 @@ class Circuit:
         keys, as the open circuit read through C_p does)."""
         return self.breakdown_states
 
-    # -- one run -------------------------------------------------------------
+    # -- one run: the contract the one loop drives (tengfield.electrical.loop) -----
     def check(self, scene) -> None:
         """Refuse a scene this circuit cannot run, before any work (SceneError)."""
 
-    def run(self, scene, dynamics, curves) -> CircuitRun:
-        """The circuit along ``dynamics`` (``curves`` None: Q_SC = 0)."""
+    def start(self, scene, dynamics, curves, window_start: float, chunk_rows: int):
+        """The circuit's state at the start of the run along ``dynamics`` (``curves`` None:
+        Q_SC = 0), or None when there is nothing to integrate (the closed forms, or no
+        charge moving). The state's ``chunk(i0, i1) -> {column: array}`` is a step over the
+        output rows ``i0:i1`` (fed every chunk in order, the state carried);
+        ``window_start`` [s] is the steady window's start on the run's own axis,
+        ``chunk_rows`` the loop's chunk (the whole run: one chunk)."""
+        return None
+
+    def finish(self, scene, dynamics, curves, state, record: dict, note: str) -> CircuitRun:
+        """The :class:`CircuitRun` after the last chunk: its stage text (``note`` ends it),
+        details and ``data`` (what :meth:`summary` and :meth:`cycle` read), from ``state``
+        (None where :meth:`start` gave none) and the loop's ``record``
+        (:meth:`tengfield.electrical.loop.Loop.reduce`: ``tail``, the columns over the
+        last periods, every row for a whole run, with ``_elapsed``;
+        ``column_peak_to_peak``, this kind's columns over the window; ``columns``, a whole
+        run's every column). No columns of its own: the loop has them."""
         return CircuitRun({}, f"kind = {scene.circuit.kind!r}: V_OC, Q_SC, I_SC in "
-                              "closed form; load ODE not run (no load)")
+                              f"closed form; load ODE not run (no load){note}")
 
     def summary(self, scene, run: CircuitRun, waveforms, mask) -> dict:
         """The ``load`` block of summary.json (and ``load_reason`` when there is none);
@@ -99,33 +117,9 @@ class Circuit:
         """What this circuit adds to the energy per cycle: ``energy_per_cycle`` (numbers
         beside the CMEO bound), ``_vq`` (the V-Q loops of vq.png), ``_fine`` (the
         record of charging.png) and further summary blocks. ``t``: the output times on
-        the run's own axis, ``mask`` its steady window, ``max_gap`` [m] the largest
-        gap in it."""
+        the run's own axis (a chunked run's last periods), ``mask`` its steady window
+        (None: a chunked run's ``t`` lies in it), ``max_gap`` [m] the largest gap in it."""
         return {}
-
-    # -- a long run, a chunk at a time (tengfield.electrical.stream) ------------
-    def can_stream(self, scene, curves) -> bool:
-        """Whether a long run of this kind may stream its electrical stage: the closed
-        forms (no columns of its own) may; an entry with columns says so itself, with
-        :meth:`chunked` and :meth:`streamed` (a new kind keeps whole arrays until then)."""
-        return not self.columns
-
-    def chunked(self, scene, dynamics, curves, window_start: float, chunk_rows: int):
-        """The circuit fed a chunk of output rows at a time (an object with
-        ``chunk(i0, i1) -> {column: array}``, its state carried), or None when there is
-        nothing to integrate; ``window_start`` [s] on the run's own axis."""
-        return None
-
-    def streamed(self, scene, dynamics, curves, chunked, reduced: dict,
-                 note: str) -> CircuitRun:
-        """The :class:`CircuitRun` of a streamed run from ``chunked`` after its last chunk
-        and ``reduced`` (:meth:`tengfield.electrical.stream.StreamedRun.reduce`: ``tail``,
-        the columns over the last periods with ``_elapsed``; ``column_peak_to_peak``, this
-        kind's columns over the window): no whole columns; ``data`` what :meth:`summary`
-        and :meth:`cycle` read. ``note`` ends the stage text."""
-        run = self.run(scene, dynamics, curves)          # closed forms: no columns
-        run.reason += note
-        return run
 
     # -- arrays (tengfield.array) -------------------------------------------
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:

@@ -272,9 +272,10 @@ class LoadChunks:
 
 
 def streamed_load(dynamics, chunked, reduced) -> tuple[dict, dict]:
-    """``(details, data)`` of a streamed load-like run: the numbers of ``chunked``
-    (:class:`LoadChunks`; None: Q_SC = 0), the window's peak-to-peak of its columns and
-    the columns of its last periods (the V-Q loop) from ``reduced``."""
+    """``(details, data)`` of a load-like run after the loop's last chunk
+    (:mod:`tengfield.electrical.loop`): the numbers of ``chunked`` (:class:`LoadChunks`;
+    None: Q_SC = 0), the window's peak-to-peak of its columns and the columns of its last
+    periods (every row of a whole run: the V-Q loop) from ``reduced``."""
     if chunked is None:                      # Q_SC = 0: nothing moves
         load = {k: v for k, v in no_charge(dynamics).items() if not isinstance(v, np.ndarray)}
     else:
@@ -357,14 +358,6 @@ class Load(Circuit):
     fit_load = True
     fit_columns = {"V": ("V_load_V", "V"), "Q": ("Q_sc_C", "C"), "I": ("I_load_A", "A")}
 
-    def run(self, scene, dynamics, curves) -> CircuitRun:
-        load = steady_load(scene, dynamics, curves)
-        return CircuitRun({"V_load_V": load["V_load"], "I_load_A": load["I_load"],
-                           "P_load_W": load["P_load"]},
-                          f"load ODE, R = {scene.circuit.load:g} ohm",
-                          {"energy_balance_relative_residual": balance_residual(load)},
-                          data=load)
-
     def summary(self, scene, run, waveforms, mask) -> dict:
         return {"load": load_block(scene, run.data, waveforms, mask)}
 
@@ -372,15 +365,12 @@ class Load(Circuit):
         numbers, loop = resistive_loop(scene, run.data, t, scene.excitation.period)
         return {"energy_per_cycle": numbers, "_vq": {"load": loop}}
 
-    def can_stream(self, scene, curves) -> bool:
-        return True
-
-    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+    def start(self, scene, dynamics, curves, window_start, chunk_rows):
         return None if curves is None else LoadChunks(scene, dynamics, curves, window_start,
                                                       chunk_rows)
 
-    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
-        details, data = streamed_load(dynamics, chunked, reduced)
+    def finish(self, scene, dynamics, curves, state, record, note) -> CircuitRun:
+        details, data = streamed_load(dynamics, state, record)
         return CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm{note}", details,
                           data=data)
 

@@ -216,41 +216,28 @@ class Rectifier(Circuit):
     def check(self, scene) -> None:
         check_store_resolution(scene)
 
-    def run(self, scene, dynamics, curves) -> CircuitRun:
-        if curves is None:
-            zero = np.zeros_like(np.asarray(dynamics.t, dtype=float))
-            return CircuitRun({c: zero.copy() for c in RECTIFIER_COLUMNS},
-                              "Q_SC = 0: nothing to rectify", status="skipped")
-        rect = rectifier_waveforms(scene, dynamics, curves)
-        books = rect["fine"].balance()
-        c = scene.circuit
-        return CircuitRun(
-            {col: rect[col] for col in RECTIFIER_COLUMNS},
-            f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} uF, "
-            f"pmic = {c.pmic!r}",
-            {"integration_points": int(rect["fine"].time.size),
-             "energy_balance_relative_residual": max(
-                 books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
-            data=rect)
-
-    def can_stream(self, scene, curves) -> bool:
-        return curves is not None            # Q_SC = 0: the whole path's zeros, skipped
-
-    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+    def start(self, scene, dynamics, curves, window_start, chunk_rows):
         from .rectifier_stream import RectifierChunks
-        return RectifierChunks(scene, dynamics, curves, window_start)
+        return None if curves is None else RectifierChunks(scene, dynamics, curves,
+                                                           window_start)
 
-    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
-        books = chunked.last.balance()
+    def finish(self, scene, dynamics, curves, state, record, note) -> CircuitRun:
+        if state is None:                  # the loop's zero columns
+            return CircuitRun({}, f"Q_SC = 0: nothing to rectify{note}", status="skipped")
+        books = state.last.balance()
         c = scene.circuit
+        if record.get("columns") is not None:   # a whole run: its whole record, one step
+            data = {"fine": state.last}
+        else:                                   # a chunked one: the reductions
+            data = {"fine": state.last_period(), "numbers": state.numbers(),
+                    "charging": state.charging()}
         return CircuitRun(
             {}, f"full bridge ({c.diode}) into {c.storage_capacitance * 1e6:g} uF, "
                 f"pmic = {c.pmic!r}{note}",
-            {"integration_points": int(chunked.points),
+            {"integration_points": int(state.points),
              "energy_balance_relative_residual": max(
                  books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
-            data={"fine": chunked.last_period(), "numbers": chunked.numbers(),
-                  "charging": chunked.charging()})
+            data=data)
 
     def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
         """The bridge's V-Q loop, summary.json's ``rectifier`` block and charging.png's

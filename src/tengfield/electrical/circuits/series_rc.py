@@ -19,8 +19,8 @@ import numpy as np
 
 from ... import lumped
 from . import Circuit, CircuitRun, SpreadCircuit
-from .load import (Load, LoadChunks, balance_residual, fine_terminal, load_block, no_charge,
-                   streamed_load, window_energies)
+from .load import (Load, LoadChunks, fine_terminal, load_block, no_charge, streamed_load,
+                   window_energies)
 from ..waveforms import elapsed_times, steady_window, trapezoid
 
 COLUMNS = ("V_load_V", "I_load_A", "P_load_W", "V_series_C_V")
@@ -111,14 +111,22 @@ class SeriesChunks(LoadChunks):
                          / (c_min + c.series_capacitance))
         self.time_constant = c.load * c_max * c.series_capacitance / (
             c_max + c.series_capacitance)
-        from ..stream import chunk_bounds
-        largest = max(float(np.max(self.fine(i0, i1)[1]["C_T"]))
-                      for i0, i1 in chunk_bounds(self.t.size, first_rows))
+        from ..loop import chunk_bounds
+        bounds = chunk_bounds(self.t.size, first_rows)
+        largest = -np.inf
+        self._kept = None           # a whole run's one grid, not evaluated twice
+        for i0, i1 in bounds:
+            fine = self.fine(i0, i1)
+            largest = max(largest, float(np.max(fine[1]["C_T"])))
+            if len(bounds) == 1:
+                self._kept = ((i0, i1), fine)
         self.deficit_form = c.series_capacitance >= DEFICIT_FORM_RATIO * (
             largest + c.parallel_capacitance)
 
     def chunk(self, i0: int, i1: int) -> dict:
-        grid, fine, output_index = self.fine(i0, i1)
+        kept = self._kept
+        grid, fine, output_index = kept[1] if kept is not None and kept[0] == (i0, i1) \
+            else self.fine(i0, i1)
         c = self.scene.circuit
         load, c_s = c.load, c.series_capacitance
         cap = np.asarray(fine["C_T"], dtype=float) + c.parallel_capacitance
@@ -157,25 +165,16 @@ class SeriesRC(Load):
     fit_load = False             # fit's forward model is the R ∥ C_p load, not R + C_s
     fit_columns = Circuit.fit_columns
 
-    def chunked(self, scene, dynamics, curves, window_start, chunk_rows):
+    def start(self, scene, dynamics, curves, window_start, chunk_rows):
         return None if curves is None else SeriesChunks(scene, dynamics, curves, window_start,
                                                         chunk_rows)
 
-    def streamed(self, scene, dynamics, curves, chunked, reduced, note) -> CircuitRun:
+    def finish(self, scene, dynamics, curves, state, record, note) -> CircuitRun:
         c = scene.circuit
-        details, data = streamed_load(dynamics, chunked, reduced)
+        details, data = streamed_load(dynamics, state, record)
         return CircuitRun({}, f"series R + C ODE, R = {c.load:g} ohm, "
                               f"C_s = {c.series_capacitance * 1e12:g} pF{note}", details,
                           data=data)
-
-    def run(self, scene, dynamics, curves) -> CircuitRun:
-        result = steady_series(scene, dynamics, curves)
-        c = scene.circuit
-        return CircuitRun(_columns(result),
-                          f"series R + C ODE, R = {c.load:g} ohm, "
-                          f"C_s = {c.series_capacitance * 1e12:g} pF",
-                          {"energy_balance_relative_residual": balance_residual(result)},
-                          data=result)
 
     def summary(self, scene, run, waveforms, mask) -> dict:
         return {"load": load_block(scene, run.data, waveforms, mask,
