@@ -32,6 +32,7 @@ from ._json import regime_dict
 from .electrical import LOAD_COLUMNS, WAVEFORM_COLUMNS  # noqa: F401 - the columns of r.waveforms
 from .ensemble import ensemble_block, realisation_row, realisation_seeds
 from .scene import check_field
+from .source import Source
 from .surrogate import (AnchoredTerminalCurves, SurrogateTable, TerminalCurves, leaves_axis,
                         obtain_radial_table)
 from .scene.schema import SURFACE_CHARGE_KEY
@@ -532,8 +533,8 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
 
     start = time.perf_counter()
     streamed = stream.streams(scene, dynamics, curves)
-    loop = stream.StreamedRun(scene, dynamics, curves) if streamed else \
-        Loop(scene, dynamics, curves)
+    source = Source.of_scene(scene, curves, dynamics)
+    loop = stream.StreamedRun(scene, source) if streamed else Loop(scene, source)
     reduced = loop.reduce()
     entry = loop.entry
     details: dict = {}
@@ -559,7 +560,7 @@ def electrical_stage(scene, dynamics, curves, table, stages: dict | None = None
     if curves is not None:
         max_gap = reduced["max_gap"]
         out: dict = {"energy_per_cycle": electrical.cmeo(scene, curves, max_gap)}
-        added = entry.cycle(scene, dynamics, curves, ran, t, mask, max_gap)
+        added = entry.cycle(scene, source, ran, t, mask, max_gap)
         out["energy_per_cycle"].update(added.pop("energy_per_cycle", {}))
         out.update(added)
         extras.update(out)

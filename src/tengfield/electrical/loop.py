@@ -52,15 +52,17 @@ def chunk_bounds(rows: int, size: int) -> list[tuple[int, int]]:
 
 
 class Loop:
-    """``scene``'s circuit along ``dynamics`` with ``curves`` (one cell; None: nothing
-    charged), a chunk of ``chunk_rows`` output rows at a time (None: one chunk, the whole
-    run). ``columns``: the waveforms' columns in the order the chunks give them."""
+    """``scene``'s circuit on ``source`` (a :class:`~tengfield.source.Source` along the
+    run's trajectory), a chunk of ``chunk_rows`` output rows at a time (None: one chunk,
+    the whole run). ``columns``: the waveforms' columns in the order the chunks give
+    them."""
 
-    def __init__(self, scene, dynamics, curves, chunk_rows: int | None = None):
-        self.scene, self.dynamics, self.curves = scene, dynamics, curves
-        self.entry = circuit_for(scene)
+    def __init__(self, scene, source: Source, chunk_rows: int | None = None):
         #: the device as a source along the run: the terminal, a chunk of rows at a time
-        self.source = Source.of_scene(scene, curves, dynamics)
+        self.source = source
+        self.scene, self.dynamics, self.curves = scene, source.dynamics, source.curves
+        dynamics = source.dynamics
+        self.entry = circuit_for(scene)
         self.rows = len(dynamics.t)
         self.chunk_rows = self.rows if chunk_rows is None else int(chunk_rows)
         self.elapsed = elapsed_times(dynamics)
@@ -88,8 +90,8 @@ class Loop:
 
     def _circuit(self):
         """A fresh state of the circuit (None: nothing to integrate)."""
-        return self.entry.start(self.scene, self.dynamics, self.curves,
-                                float(self.elapsed[self.window]), self.chunk_rows)
+        return self.entry.start(self.scene, self.source, float(self.elapsed[self.window]),
+                                self.chunk_rows)
 
     def chunks(self):
         """Yield ``(i0, i1, {column: array})`` for every chunk of output rows, in order
@@ -182,8 +184,7 @@ class Loop:
     def finish(self, reduced: dict, note: str = ""):
         """The circuit's :class:`~tengfield.electrical.circuits.CircuitRun` after the
         pass :meth:`reduce` made (``note`` ends its stage text)."""
-        return self.entry.finish(self.scene, self.dynamics, self.curves, reduced["circuit"],
-                                 reduced, note)
+        return self.entry.finish(self.scene, self.source, reduced["circuit"], reduced, note)
 
 
 class _Envelope:

@@ -55,10 +55,10 @@ def chunk_bounds(rows: int, size: int | None = None) -> list[tuple[int, int]]:
 
 
 class StreamedRun(Loop):
-    """The one loop of ``scene`` along ``dynamics`` in chunks of :data:`CHUNK_ROWS` rows."""
+    """The one loop of ``scene`` on ``source`` in chunks of :data:`CHUNK_ROWS` rows."""
 
-    def __init__(self, scene, dynamics, curves):
-        super().__init__(scene, dynamics, curves, CHUNK_ROWS)
+    def __init__(self, scene, source):
+        super().__init__(scene, source, CHUNK_ROWS)
 
 
 class StreamedWaveforms(Mapping):
@@ -121,16 +121,3 @@ class StreamedWaveforms(Mapping):
         terminal = self._run.source.rows(i0, i1)
         return {"time_s": np.asarray(dyn.t[i0:i1], dtype=float), "V_oc_V": terminal["V_oc"],
                 "C_T_F": terminal["C_T"]}
-
-
-def streamed_stage(scene, dynamics, curves) -> tuple:
-    """``(waveforms, ran, extremes, reduced)`` of a streamed run: the
-    :class:`StreamedWaveforms`, the circuit's
-    :class:`~tengfield.electrical.circuits.CircuitRun` (from the entry's ``finish``:
-    no whole columns), the peak blocks, and :meth:`Loop.reduce`'s record."""
-    run = StreamedRun(scene, dynamics, curves)
-    reduced = run.reduce()
-    waveforms = StreamedWaveforms(run, reduced)
-    note = f" (streamed: {run.chunk_count} chunks of {run.chunk_rows} rows)"
-    ran = run.finish(reduced, note)
-    return waveforms, ran, reduced["extremes"], reduced

@@ -88,16 +88,16 @@ class Circuit:
     def check(self, scene) -> None:
         """Refuse a scene this circuit cannot run, before any work (SceneError)."""
 
-    def start(self, scene, dynamics, curves, window_start: float, chunk_rows: int):
-        """The circuit's state at the start of the run along ``dynamics`` (``curves`` None:
-        Q_SC = 0), or None when there is nothing to integrate (the closed forms, or no
-        charge moving). The state's ``chunk(i0, i1) -> {column: array}`` is a step over the
+    def start(self, scene, source, window_start: float, chunk_rows: int):
+        """The circuit's state at the start of the run of ``source`` (a
+        :class:`tengfield.source.Source`: the trajectory, the curves, the terminal), or None
+        when there is nothing to integrate (the closed forms, or no charge moving). The state's ``chunk(i0, i1) -> {column: array}`` is a step over the
         output rows ``i0:i1`` (fed every chunk in order, the state carried);
         ``window_start`` [s] is the steady window's start on the run's own axis,
         ``chunk_rows`` the loop's chunk (the whole run: one chunk)."""
         return None
 
-    def finish(self, scene, dynamics, curves, state, record: dict, note: str) -> CircuitRun:
+    def finish(self, scene, source, state, record: dict, note: str) -> CircuitRun:
         """The :class:`CircuitRun` after the last chunk: its stage text (``note`` ends it),
         details and ``data`` (what :meth:`summary` and :meth:`cycle` read), from ``state``
         (None where :meth:`start` gave none) and the loop's ``record``
@@ -113,7 +113,7 @@ class Circuit:
         ``mask``: the steady window over the output samples."""
         return no_load(scene)
 
-    def cycle(self, scene, dynamics, curves, run: CircuitRun, t, mask, max_gap) -> dict:
+    def cycle(self, scene, source, run: CircuitRun, t, mask, max_gap) -> dict:
         """What this circuit adds to the energy per cycle: ``energy_per_cycle`` (numbers
         beside the CMEO bound), ``_vq`` (the V-Q loops of vq.png), ``_fine`` (the
         record of charging.png) and further summary blocks. ``t``: the output times on

@@ -174,10 +174,11 @@ class LoadChunks:
     window after ``window_start`` (the run's own axis). Feed every chunk in order to
     :meth:`chunk`; :meth:`numbers` then gives :func:`load_waveforms`' numbers."""
 
-    def __init__(self, scene, dynamics, curves, window_start: float, first_rows: int,
+    def __init__(self, scene, source: Source, window_start: float, first_rows: int,
                  time_constant: float | None = None):
+        dynamics, curves = source.dynamics, source.curves
         self.scene, self.dynamics, self.curves = scene, dynamics, curves
-        self.source = Source.of_scene(scene, curves, dynamics)
+        self.source = source
         self.window_start = window_start
         self.t = elapsed_times(dynamics)                  # the dynamics' own array, no copy
         n_cells, c_p = scene.device.cells, scene.circuit.parallel_capacitance
@@ -361,16 +362,15 @@ class Load(Circuit):
     def summary(self, scene, run, waveforms, mask) -> dict:
         return {"load": load_block(scene, run.data, waveforms, mask)}
 
-    def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
+    def cycle(self, scene, source, run, t, mask, max_gap) -> dict:
         numbers, loop = resistive_loop(scene, run.data, t, scene.excitation.period)
         return {"energy_per_cycle": numbers, "_vq": {"load": loop}}
 
-    def start(self, scene, dynamics, curves, window_start, chunk_rows):
-        return None if curves is None else LoadChunks(scene, dynamics, curves, window_start,
-                                                      chunk_rows)
+    def start(self, scene, source, window_start, chunk_rows):
+        return LoadChunks(scene, source, window_start, chunk_rows) if source.charged else None
 
-    def finish(self, scene, dynamics, curves, state, record, note) -> CircuitRun:
-        details, data = streamed_load(dynamics, state, record)
+    def finish(self, scene, source, state, record, note) -> CircuitRun:
+        details, data = streamed_load(source.dynamics, state, record)
         return CircuitRun({}, f"load ODE, R = {scene.circuit.load:g} ohm{note}", details,
                           data=data)
 

@@ -216,12 +216,11 @@ class Rectifier(Circuit):
     def check(self, scene) -> None:
         check_store_resolution(scene)
 
-    def start(self, scene, dynamics, curves, window_start, chunk_rows):
+    def start(self, scene, source, window_start, chunk_rows):
         from .rectifier_stream import RectifierChunks
-        return None if curves is None else RectifierChunks(scene, dynamics, curves,
-                                                           window_start)
+        return RectifierChunks(scene, source, window_start) if source.charged else None
 
-    def finish(self, scene, dynamics, curves, state, record, note) -> CircuitRun:
+    def finish(self, scene, source, state, record, note) -> CircuitRun:
         if state is None:                  # the loop's zero columns
             return CircuitRun({}, f"Q_SC = 0: nothing to rectify{note}", status="skipped")
         books = state.last.balance()
@@ -239,7 +238,7 @@ class Rectifier(Circuit):
                  books["terminal_residual"], books["bridge_residual"], books["store_residual"])},
             data=data)
 
-    def cycle(self, scene, dynamics, curves, run, t, mask, max_gap) -> dict:
+    def cycle(self, scene, source, run, t, mask, max_gap) -> dict:
         """The bridge's V-Q loop, summary.json's ``rectifier`` block and charging.png's
         record (no resistive-load loop: a rectifier run has no load to compare)."""
         period = scene.excitation.period
@@ -252,7 +251,7 @@ class Rectifier(Circuit):
         if numbers is None:
             numbers = record_numbers(scene, fine, float(t[mask][0]))
         return {"energy_per_cycle": {"rectifier_loop_area_J": vq["rectifier"][2]},
-                "rectifier": summary_block(scene, numbers, curves, max_gap),
+                "rectifier": summary_block(scene, numbers, source.curves, max_gap),
                 "_fine": run.data.get("charging", fine), "_vq": vq}
 
     def array_identical(self, scaled, dynamics, curves, waves) -> dict:

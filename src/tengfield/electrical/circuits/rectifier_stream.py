@@ -23,12 +23,13 @@ class RectifierChunks:
     (:meth:`numbers`), the last period of the record (the V-Q loop) and a min/max
     envelope of the store's voltage (charging.png). Feed every chunk in order."""
 
-    def __init__(self, scene, dynamics, curves, window_start: float, bins: int = 2000):
+    def __init__(self, scene, source: Source, window_start: float, bins: int = 2000):
         from ...harvest import Harvester
 
         check_store_resolution(scene)
-        self.scene, self.dynamics, self.curves = scene, dynamics, curves
-        self.source = Source.of_scene(scene, curves, dynamics)
+        dynamics = source.dynamics
+        self.scene, self.dynamics, self.curves = scene, dynamics, source.curves
+        self.source = source
         self.t = elapsed_times(dynamics)
         self.impacts = impact_elapsed(dynamics, self.t[0], self.t[-1])
         self.harvester = Harvester(1, time_origin=time_origin(dynamics),

@@ -100,13 +100,13 @@ class SeriesChunks(LoadChunks):
     grid (it chooses the form, as :func:`series_response` does on the whole grid), then
     the chosen form's state (D or Q) is carried from chunk to chunk."""
 
-    def __init__(self, scene, dynamics, curves, window_start, first_rows):
-        c = scene.circuit
+    def __init__(self, scene, source, window_start, first_rows):
+        c, curves = scene.circuit, source.curves
         c_min = float(np.min(curves.capacitance_samples)) * scene.device.cells \
             + c.parallel_capacitance
         c_max = float(np.max(curves.capacitance_samples)) * scene.device.cells \
             + c.parallel_capacitance
-        super().__init__(scene, dynamics, curves, window_start, first_rows,
+        super().__init__(scene, source, window_start, first_rows,
                          time_constant=c.load * c_min * c.series_capacitance
                          / (c_min + c.series_capacitance))
         self.time_constant = c.load * c_max * c.series_capacitance / (
@@ -165,13 +165,13 @@ class SeriesRC(Load):
     fit_load = False             # fit's forward model is the R ∥ C_p load, not R + C_s
     fit_columns = Circuit.fit_columns
 
-    def start(self, scene, dynamics, curves, window_start, chunk_rows):
-        return None if curves is None else SeriesChunks(scene, dynamics, curves, window_start,
-                                                        chunk_rows)
+    def start(self, scene, source, window_start, chunk_rows):
+        return SeriesChunks(scene, source, window_start, chunk_rows) if source.charged \
+            else None
 
-    def finish(self, scene, dynamics, curves, state, record, note) -> CircuitRun:
+    def finish(self, scene, source, state, record, note) -> CircuitRun:
         c = scene.circuit
-        details, data = streamed_load(dynamics, state, record)
+        details, data = streamed_load(source.dynamics, state, record)
         return CircuitRun({}, f"series R + C ODE, R = {c.load:g} ohm, "
                               f"C_s = {c.series_capacitance * 1e12:g} pF{note}", details,
                           data=data)
