@@ -190,7 +190,7 @@ def cost_split(scene_file: str | None) -> None:
         print(split.table())
     every, sampled = tables["every"], tables["sampled"]
     same = bool(np.array_equal(every.capacitance, sampled.capacitance)
-                and np.array_equal(every.induced_charge, sampled.induced_charge))
+                and np.array_equal(every.induced_fraction, sampled.induced_fraction))
     bounds = bool(np.all(sampled.field_error >= every.field_error))
     print(f"\nsame C and q: {same}; interpolation error {every.interpolation_error:.3g} / "
           f"{sampled.interpolation_error:.3g}; max field error {np.max(every.field_error):.4g} / "

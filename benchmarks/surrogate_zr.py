@@ -82,7 +82,7 @@ def main(argv=None) -> int:
     solves = int(np.count_nonzero(table.wall_time > 0.0))
     effect = {}
     for reference in terminals.REFERENCES:
-        q, c = radial.terminal_grid(table, reference)
+        q, c = radial.terminal_grid(table, reference, scene.device.ball_charge)
         v = np.divide(q, c)
         effect[reference] = {
             name: float(np.max(np.abs(x[:, -1] - x[:, 0])) / np.max(np.abs(x)))
@@ -104,16 +104,16 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     (out / "surrogate_zr.json").write_text(json.dumps(result, indent=2, default=float))
     print(json.dumps(result, indent=2, default=float))
-    _plot(table, out / "surrogate_zr.png")
+    _plot(table, scene.device.ball_charge, out / "surrogate_zr.png")
     return 0
 
 
-def _plot(table, path) -> None:
+def _plot(table, ball_charge, path) -> None:
     import matplotlib
     matplotlib.use("Agg")   # a script, not library code
     import matplotlib.pyplot as plt
 
-    curves = table.curves("floating")
+    curves = table.curves("floating", ball_charge)
     z = np.linspace(0.0, table.stroke, 301)
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     for r in np.linspace(0.0, table.max_offset, 4):

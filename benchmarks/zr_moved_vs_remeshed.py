@@ -58,11 +58,11 @@ def compare(coarse, fine):
     magnitude of each) and the sum of the two field error estimates."""
     iz, ir = shared_points(coarse, fine)
     c_f = fine.capacitance[np.ix_(iz, ir)]
-    q_f = fine.induced_charge[np.ix_(iz, ir)]
+    q_f = fine.induced_fraction[np.ix_(iz, ir)]
     change_c = np.abs(coarse.capacitance - c_f).max(axis=(2, 3)) \
         / np.abs(coarse.capacitance).max()
-    change_q = np.abs(coarse.induced_charge - q_f).max(axis=2) \
-        / np.abs(coarse.induced_charge).max()
+    change_q = np.abs(coarse.induced_fraction - q_f).max(axis=2) \
+        / np.abs(coarse.induced_fraction).max()
     change = np.maximum(change_c, change_q)
     bound = coarse.field_error + fine.field_error[np.ix_(iz, ir)]
     return change, bound

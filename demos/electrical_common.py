@@ -64,7 +64,7 @@ def surrogate_curves(scene, cache_dir=None, solve=None):
                                       solve=solve or _solve_without_estimate)
     print(f"  surrogate: {table.count} positions ({outcome.status}), "
           f"interpolation error estimate {table.interpolation_error:.2g}", file=sys.stderr)
-    return table, TerminalCurves(table, scene.circuit.reference)
+    return table, TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge)
 
 
 def measure(curves, dynamics, scene, *, parallel_capacitance: float | None = None) -> dict:

@@ -114,13 +114,9 @@ def load_sweep(scene, dynamics, table, loads, scale, c_p):
 
     The ball's charge is scaled by ``scale`` (σ_fit/σ): the induced charges
     are linear in σ, the capacitances do not depend on it."""
-    import dataclasses
-
     from tengfield.surrogate import TerminalCurves
 
-    scaled = TerminalCurves(dataclasses.replace(table, induced_charge=table.induced_charge * scale,
-                                                ball_charge=table.ball_charge * scale),
-                            scene.circuit.reference)
+    scaled = TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge * scale)
     mask, _ = electrical.steady_window(dynamics.t, scene)
     volume = scene.device.cell_volume * scene.device.cells
     mean, peak = [], []
@@ -145,7 +141,7 @@ def main(argv: list[str] | None = None) -> dict:
         from tengfield.surrogate import TerminalCurves
         geometry = "hexagonal 3D cell (isolated, degree 1, 1.2 mm)"
         table = hexagonal_table(cell, scene, args.cache_dir)
-        curves = TerminalCurves(table, scene.circuit.reference)
+        curves = TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge)
     dynamics = simulate(scene)
     ideal = measure(curves, dynamics, scene)
     i_peak = float(np.max(np.abs(ideal["waveforms"]["I_sc"][ideal["mask"]])))

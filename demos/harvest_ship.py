@@ -32,7 +32,6 @@ What is assumed (each a scene key, change them to study the question):
 """
 from __future__ import annotations
 
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -79,9 +78,7 @@ def main(argv: list[str] | None = None) -> dict:
     ideal = measure(curves, simulate(base), base)
     scale = PAPER["Q_sc"] / ideal["Q_sc"]
     sigma = base.device.surface_charge * scale
-    curves = TerminalCurves(dataclasses.replace(table, induced_charge=table.induced_charge * scale,
-                                                ball_charge=table.ball_charge * scale),
-                            base.circuit.reference)
+    curves = TerminalCurves(table, base.circuit.reference, base.device.ball_charge * scale)
 
     scene = harvest_scene(base, args.fast)
     nominal = simulate(scene)

@@ -235,10 +235,10 @@ def assert_tables_agree_within_estimates(table, reference) -> np.ndarray:
     np.testing.assert_allclose(table.positions, reference.positions, rtol=0, atol=1e-15)
     n = len(reference.positions)
     scale_c = np.abs(reference.capacitance).reshape(n, -1).max(axis=1)
-    scale_q = np.abs(reference.induced_charge).max(axis=1)
+    scale_q = np.abs(reference.induced_fraction).max(axis=1)
     change = np.maximum(
         np.abs(table.capacitance - reference.capacitance).reshape(n, -1).max(axis=1) / scale_c,
-        np.abs(table.induced_charge - reference.induced_charge).max(axis=1) / scale_q)
+        np.abs(table.induced_fraction - reference.induced_fraction).max(axis=1) / scale_q)
     bound = np.minimum(table.field_error, reference.field_error)
     assert np.all(change <= bound), (change, bound)
     return change

@@ -4,11 +4,11 @@ points and ``--vary charge.*``) and ``uncertainty`` (``[uncertainty.vary]`` draw
 ``charge.*``) call :func:`contact_source` after their own field stage, so a study's row
 is the run's numbers.
 
-Given a scene, its trajectory and the surrogate table of its geometry (at any non-zero
-reference charge: Q_SC and the electrode charges are linear in the ball's charge), it
+Given a scene, its trajectory and the surrogate table of its geometry (per unit ball
+charge: Q_SC and the electrode charges are linear in the ball's charge), it
 returns the charge history along the impacts (:mod:`tengfield.source.contacts`), the
 summary's ``charge`` block, the scene at its steady charge (what the σ-dependent blocks
-use), the table at that charge and the :class:`~tengfield.source.terminal.ContactCurves`
+use), the table and the :class:`~tengfield.source.terminal.ContactCurves`
 the circuits read. No field solve: the air-breakdown cap of ``[charge] discharge`` comes
 from the table's gap lines and the trajectory.
 """
@@ -38,8 +38,8 @@ def field_scene(scene):
 
 @dataclass
 class ContactRun:
-    """What :func:`contact_source` gives: ``scene`` at the steady charge, ``table`` at
-    that charge (None: no field), ``curves`` (:class:`ContactCurves`, None without a
+    """What :func:`contact_source` gives: ``scene`` at the steady charge, ``table`` (per
+    unit ball charge; None: no field), ``curves`` (:class:`ContactCurves`, None without a
     field), the ``history`` (:class:`~tengfield.source.contacts.ChargeHistory`) and the
     summary's ``block``, ``limit`` (the breakdown limit of the geometry or None), the
     ``wall_time_s`` of the history, the ``whole`` run's trajectory and the first sample
@@ -152,19 +152,19 @@ def breakdown_limit(scene, table):
 def contact_source(scene, dynamics, table, limit=None, *, period: float | None = None,
                    curves=None) -> ContactRun:
     """The contact run of ``scene`` along ``dynamics`` with ``table`` (its geometry's
-    surrogate at a non-zero reference charge; None: no field needed, Q_SC = 0) and the
+    surrogate, per unit ball charge; None: no field needed, Q_SC = 0) and the
     geometry's breakdown ``limit`` (None: taken from the table's gap lines when it has
     them). ``period`` [s]: the period the contacts repeat with (default: the drive's
-    where it repeats each period, else 0). ``curves``: the run's curves at the table's
-    charge where the ball leaves the axis (the (z, r) ones,
-    :class:`~tengfield.surrogate.table.AnchoredTerminalCurves`); None: on the axis."""
+    where it repeats each period, else 0). ``curves``: the run's curves where the ball
+    leaves the axis (the (z, r) ones,
+    :class:`~tengfield.surrogate.table.AnchoredTerminalCurves`, at any charge: their
+    (z, r) table is read); None: on the axis."""
     import time
 
     from . import electrical
     from .errors import TengfieldError
     from .source.contacts import charge_summary, run_history
     from .source.terminal import ContactCurves, ContactTerminal
-    from .surrogate.table import at_ball_charge
 
     start = time.perf_counter()
     charge = scene.charge
@@ -200,21 +200,14 @@ def contact_source(scene, dynamics, table, limit=None, *, period: float | None =
     wall = time.perf_counter() - start
     if table is None or steady == 0.0 and history.start == 0.0 and not history.contacts:
         return ContactRun(run_scene, None, None, history, block, limit, wall, dynamics, index)
-    if table.ball_charge == 0.0:
-        raise TengfieldError(
-            "[charge] model = \"contact\": the surrogate was made at a zero ball charge, "
-            "which carries no field per unit charge; solve it at [charge] "
-            "equilibrium_uC_per_m2 (tengfield.contact_run.field_scene)")
     if curves is not None and curves.radial:     # [contact] model = "3d", off the axis
         from .source.offaxis import OffAxisContactCurves, OffAxisContactTerminal
-        terminal = OffAxisContactTerminal(table, curves.zr.table, curves, history, upper,
+        terminal = OffAxisContactTerminal(table, curves.zr.table, history, upper,
                                           scene.circuit.reference)
         curves = OffAxisContactCurves(terminal, steady)
     else:
         terminal = ContactTerminal(table, history, upper, scene.circuit.reference)
         curves = ContactCurves(terminal, steady)
-    if steady != 0.0:
-        table = at_ball_charge(table, steady)   # the surrogate figure at the steady charge
     return ContactRun(run_scene, table, curves, history, block, limit, wall, dynamics, index)
 
 

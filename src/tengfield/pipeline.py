@@ -436,13 +436,14 @@ def _field_stage(scene, dynamics, stages, *, cache_dir, comm, solve, progress, c
             "method": table.method, "degree": table.degree,
             "max_relative_error_estimate": float(np.nanmax(table.field_error)),
             "max_dofs": int(table.dofs.max())})
-        curves = TerminalCurves(table, scene.circuit.reference)
+        curves = TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge)
         if leaves_axis(scene, dynamics):   # [contact] model = "3d", off the axis
             zr_table, zr_outcome = obtain_radial_table(
                 scene, cache_dir=cache_dir, comm=comm, solve=solve, progress=progress,
                 command_line=command_line, write=write_cache,
                 **(radial_settings or _radial_settings(scene)))
-            curves = AnchoredTerminalCurves(zr_table.curves(scene.circuit.reference), curves)
+            curves = AnchoredTerminalCurves(
+                zr_table.curves(scene.circuit.reference, scene.device.ball_charge), curves)
             stages["field_zr"] = Stage(
                 "cached" if zr_outcome.status == "cached" else "ran", zr_outcome.reason,
                 zr_outcome.wall_time, {

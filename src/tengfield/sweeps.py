@@ -70,7 +70,7 @@ def sweep_point(scene, table, frequency: float, amplitude: float,
 def _point_charge(point, dynamics, table):
     """``(point, curves, table, charge columns, dynamics)`` of a sweep point: with
     ``[charge] model = "contact"`` the point at its steady charge, its
-    :class:`ContactCurves`, the table at that charge, the
+    :class:`ContactCurves`, the table (per unit ball charge), the
     :data:`~tengfield.contact_run.CHARGE_COLUMNS` (the charge its contacts make along this
     point's own trajectory, :func:`tengfield.contact_run.contact_source`, the numbers
     ``tengfield run`` gives) and the trajectory its electrical stage covers (the run's
@@ -78,7 +78,8 @@ def _point_charge(point, dynamics, table):
     its :class:`TerminalCurves`, the table, no columns and ``dynamics``."""
     if not point.charge.from_contacts:
         from .surrogate import TerminalCurves
-        return point, TerminalCurves(table, point.circuit.reference), table, {}, dynamics
+        return (point, TerminalCurves(table, point.circuit.reference, point.device.ball_charge),
+                table, {}, dynamics)
     from .contact_run import charge_columns, contact_source
 
     run = contact_source(point, dynamics, table)
@@ -576,16 +577,16 @@ def _axis(scene, values, which: str) -> list:
 
 def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: bool = False,
                  command_line: str = "", tables: dict | None = None):
-    """Each point's ``(scene, table)`` at the charge it runs with
-    (:func:`tengfield.run_surrogate.surrogate_for_run`, the path of ``tengfield run``), and
+    """Each point's ``(scene, table)``: the scene at the charge it runs with, the table per
+    unit ball charge (:func:`tengfield.run_surrogate.surrogate_for_run`, the path of
+    ``tengfield run``), and
     ``{"computed": n, "cached": n, "reused": n, "geometries": n}``. Points of one geometry
     (one field hash) share one surrogate: the first obtains it (solved over ``comm``'s
-    ranks or read from the cache), the others reuse it at their own charge (``reused``,
-    no field solve: a σ or circuit key never solves a field)."""
+    ranks or read from the cache), the others reuse it (``reused``, no field solve: a σ or
+    circuit key never solves a field)."""
     from .air_breakdown import uses_breakdown_charge
     from .run_surrogate import surrogate_for_run
     from .errors import SceneError
-    from .surrogate.table import at_ball_charge
 
     from .contact_run import field_scene, reference_sigma
 
@@ -598,12 +599,12 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
         except SceneError as exc:
             raise SceneError(f"sweep point {point_label(values)}: {exc}") from None
         memo = tables.get(key)
-        if scene.charge.from_contacts:   # the geometry's table at any non-zero charge
+        if scene.charge.from_contacts:   # the geometry's table (per unit ball charge)
             _check_contact_point(scene, values)
             if reference_sigma(scene) == 0.0:
                 out.append((scene, None))
                 continue
-            if memo is not None and memo.ball_charge != 0.0:
+            if memo is not None:
                 out.append((scene, memo))
                 counts["reused"] += 1
                 continue
@@ -611,8 +612,8 @@ def point_tables(points, *, cache_dir=None, comm=None, solve=None, progress: boo
         else:
             scene_at = scene
         if memo is not None and not uses_breakdown_charge(scene) \
-                and scene.device.ball_charge != 0.0 and memo.ball_charge != 0.0:
-            out.append((scene, at_ball_charge(memo, scene.device.ball_charge)))
+                and scene.device.ball_charge != 0.0:
+            out.append((scene, memo))
             counts["reused"] += 1
             continue
         try:

@@ -128,7 +128,7 @@ def test_power_density_is_the_band_mean_of_the_matched_load_power_per_volume(cac
     assert row["objective"] == pytest.approx(np.mean(band), rel=1e-12)
     # the matched load maximises the band's mean power: 20 % either side gives less
     table = precompute(cand, solve=fx.plate_model_solve)
-    curves = TerminalCurves(table)
+    curves = TerminalCurves(table, cand.circuit.reference, cand.device.ball_charge)
     points = [band_scene(cand, spec, f, a) for f, a in spec.band]
     dyn = [tf.simulate(p) for p in points]
     load = row["load_ohm"]
@@ -166,7 +166,8 @@ def test_worst_case_aggregate_is_the_smallest_band_value(cache):
     # the charge is the run's Q_SC peak-to-peak at that band point
     cand = band_scene(candidate_scene(scene, parse_design_section(scene), {"stroke_mm": 2.0}),
                       parse_design_section(scene), 33.0, 1.0e-3)
-    curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve))
+    curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve),
+                            cand.circuit.reference, cand.device.ball_charge)
     assert band[1] == pytest.approx(
         electrical.terminal_peaks(cand, tf.simulate(cand), curves)["Q_sc"], rel=1e-12)
 
@@ -200,8 +201,10 @@ def test_the_charge_comes_from_one_function(monkeypatch, cache):
     scene = design_scene(objective="charge")
     spec = parse_design_section(scene)
     base = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
-    from tengfield.air_breakdown import scaled_table
-    monkeypatch.setattr(module, "candidate_charge", lambda s, t=None: (s, scaled_table(t, 2.0)))
+    def doubled_charge(s, t=None):   # the scene at twice its σ; the table (per unit) as is
+        return s.with_values(device={"surface_charge_uC_per_m2":
+                                     2e6 * s.device.surface_charge}), t
+    monkeypatch.setattr(module, "candidate_charge", doubled_charge)
     doubled = evaluate(scene, spec, {"stroke_mm": 2.0}, cache_dir=cache, solve=fx.plate_model_solve)
     assert doubled["objective"] == pytest.approx(2 * base["objective"], rel=1e-9)
 

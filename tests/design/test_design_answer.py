@@ -126,7 +126,8 @@ def test_a_chaotic_band_point_carries_its_spread_over_windows_in_the_error_bar(c
     from tengfield.surrogate import TerminalCurves, precompute
     cand = candidate_scene(scene, spec, {"stroke_mm": 4.0})
     point = band_scene(cand, spec, 20.0, 5.0e-3)
-    curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve))
+    curves = TerminalCurves(precompute(cand, solve=fx.plate_model_solve),
+                            cand.circuit.reference, cand.device.ball_charge)
     more = window_values("charge", spec, point, curves, 1.0, None, tf.simulate)
     assert spread == pytest.approx(np.std([row["objective"], *more], ddof=1), rel=1e-12)
     # it enters the ± beside the field and surrogate estimate

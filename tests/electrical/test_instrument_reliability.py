@@ -148,7 +148,7 @@ def test_the_peaks_of_an_unread_instrument_scene_are_the_terminals(cache):
     with only [instrument] capacitance_pF it ended in KeyError: 'Q_read'."""
     scene = fx.scene_with(run=RUN, instrument={"capacitance_pF": 338.0})
     r = tf.run(scene, cache_dir=cache, solve=fx.plate_model_solve)
-    curves = TerminalCurves(r.table, scene.circuit.reference)
+    curves = TerminalCurves(r.table, scene.circuit.reference, r.scene.device.ball_charge)
     got = electrical.terminal_extremes(r.scene, r.dynamics, curves)
     for name in ("V_oc", "Q_sc", "I_sc"):
         assert got["peak"][name] == pytest.approx(r.peak[name], rel=1e-12)

@@ -56,7 +56,7 @@ def test_a_kept_grid_of_an_off_axis_run_gives_the_same_numbers(cache, tmp_path):
     path.write_text(zx.LATERAL)
     scene = load_scene(path).with_values(run=SHORT_RUN)
     _, zr_table = zx.seed_cache(scene, cache)
-    curves = zr_table.curves(scene.circuit.reference)
+    curves = zr_table.curves(scene.circuit.reference, scene.device.ball_charge)
     assert curves.radial
     dynamics = simulate(scene)
     assert np.ptp(np.asarray(dynamics.gap)) > 0

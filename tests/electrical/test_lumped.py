@@ -124,7 +124,7 @@ def test_cells_scale_charge_current_capacitance_not_voltage():
     from tengfield.surrogate import precompute
     from tengfield.electrical import terminal_waveforms
     table = precompute(scene, solve=fx.plate_model_solve, solve_comm=object())
-    curves = table.curves("floating")
+    curves = table.curves("floating", scene.device.ball_charge)
     dyn = fx.FakeDynamics(scene, duration=0.1, sample_rate=2000)
     one = terminal_waveforms(curves, dyn.gap, dyn.gap_velocity, cells=1)
     five = terminal_waveforms(curves, dyn.gap, dyn.gap_velocity, cells=5)

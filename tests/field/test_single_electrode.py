@@ -298,7 +298,7 @@ def test_the_single_electrodes_wire_carries_what_the_electrode_gives_up(tmp_path
     table, _ = obtain_table(field_scene(scene), cache_dir=tmp_path)
     run = contact_source(scene, out.dynamics, table)
     terminal, history = run.curves.terminal, run.history
-    fractions = table.induced_charge[:, 0] / table.ball_charge
+    fractions = table.induced_fraction[:, 0]
     t = np.linspace(0.0, scene.run.duration, table.positions.size)
     q = history.at(t)
     gained = np.array([np.sum(history.gains[history.times <= x]) for x in t])

@@ -111,8 +111,12 @@ def test_the_scene_gives_the_shell_a_scaled_offset_coordinate():
 
 # ---------------------------------------------------------------------------
 # the scaled (z, r) table (fast: a synthetic table)
+SYNTHETIC_CHARGE = 1e-9   # [C]
+
+
 def _synthetic_table(nz=9, nr=5) -> RadialTable:
-    """A "scaled" table of smooth C(z, r) and q(z, r) (r the ball's real offset)."""
+    """A "scaled" table of smooth C(z, r) and q(z, r) / q_ball (r the ball's real offset),
+    the curves at :data:`SYNTHETIC_CHARGE`."""
     stroke, big_r = 12e-3, 6e-3
     z = sampling.lobatto_positions(stroke, nz)
     u = sampling.offset_positions(big_r, nr)
@@ -127,7 +131,7 @@ def _synthetic_table(nz=9, nr=5) -> RadialTable:
     cap = np.stack([np.stack([c_ll, c_lu], -1), np.stack([c_lu, c_uu], -1)], -2)
     grid = zz.shape
     return RadialTable(positions=z, offsets=u, capacitance=cap,
-                       induced_charge=np.stack([q_lower, q_upper], -1), ball_charge=1e-9,
+                       induced_fraction=np.stack([q_lower, q_upper], -1) / SYNTHETIC_CHARGE,
                        stroke=stroke, max_offset=big_r, dofs=np.ones(grid), cells=np.ones(grid),
                        wall_time=np.zeros(grid), solve_time=np.zeros(grid),
                        field_error=np.zeros(grid), offset_coordinate="scaled")
@@ -149,8 +153,8 @@ def test_scaled_offsets_map_the_cavity_onto_the_grid_and_back():
 
 def test_scaled_curves_interpolate_in_real_offsets_with_chain_rule_derivatives():
     table = _synthetic_table()
-    curves = RadialTerminalCurves(table)
-    q_grid, c_grid = terminal_grid(table)
+    curves = RadialTerminalCurves(table, "floating", SYNTHETIC_CHARGE)
+    q_grid, c_grid = terminal_grid(table, "floating", SYNTHETIC_CHARGE)
     # at the grid points (given as real offsets) the curves are the table's values
     zz, uu = np.meshgrid(table.positions, table.offsets, indexing="ij")
     rr = sampling.physical_offset(zz, uu, table.stroke, table.max_offset)
@@ -239,8 +243,8 @@ def test_the_shells_zr_table_solves_real_offsets_inside_the_cavity_once_each():
     assert len(walls) >= 3                                   # the u = R column: the wall
     check: list = []
     truth = _shell_model_solve(check)
-    curves = RadialTerminalCurves(table)
-    q_grid, c_grid = terminal_grid(table)
+    curves = RadialTerminalCurves(table, "floating", scene.device.ball_charge)
+    q_grid, c_grid = terminal_grid(table, "floating", scene.device.ball_charge)
     reference = truth(scene, 0.0)
     worst = 0.0
     for z in np.linspace(0.3e-3, stroke - 0.3e-3, 23):
@@ -351,22 +355,24 @@ def test_the_zr_surrogate_reproduces_a_held_out_direct_3d_solve(tmp_path_factory
     assert not table.converged
     assert table.max_offset == pytest.approx(6e-3)
     # the ends of the stroke are the axis at every u: one solve each, the same numbers
-    np.testing.assert_array_equal(table.induced_charge[0, 0], table.induced_charge[0, -1])
+    np.testing.assert_array_equal(table.induced_fraction[0, 0], table.induced_fraction[0, -1])
     np.testing.assert_array_equal(table.capacitance[-1, 0], table.capacitance[-1, 1])
-    curves = RadialTerminalCurves(table)
-    q_grid, c_grid = terminal_grid(table)
+    ball = scene.device.ball_charge
+    curves = RadialTerminalCurves(table, "floating", ball)
+    q_grid, c_grid = terminal_grid(table, "floating", ball)
     z = 4.1e-3
     r = 0.6 * SHELL.admissible_offset(z)
     direct = solve_position(scene, z, comm=_comm(), offset=r, method="3d",
                             estimate_error=False, **settings)
-    assert direct.ball_charge == pytest.approx(table.ball_charge, rel=1e-12)
+    assert direct.ball_charge == pytest.approx(ball, rel=1e-12)
     C, q = direct.capacitance, direct.induced_charge
 
     def upper_charge(C, q):
         return terminals.upper_short_circuit_charge(C[0, 0], C[0, 1], C[1, 1], q[0], q[1],
-                                                    table.ball_charge, "floating")
+                                                    ball, "floating")
 
-    q_sc = upper_charge(C, q) - upper_charge(table.capacitance[0, 0], table.induced_charge[0, 0])
+    q_sc = upper_charge(C, q) - upper_charge(table.capacitance[0, 0],
+                                             table.induced_charges(ball)[0, 0])
     c_t = terminals.terminal_capacitance(C[0, 0], C[0, 1], C[1, 1], "floating")
     dev_q = abs(float(curves.charge(z, r)) - q_sc) / np.max(np.abs(q_grid))
     dev_c = abs(float(curves.capacitance(z, r)) - c_t) / np.max(np.abs(c_grid))

@@ -34,7 +34,7 @@ def mpi_env():
 def assert_same_table(a, b):
     np.testing.assert_array_equal(a.positions, b.positions)
     np.testing.assert_array_equal(a.capacitance, b.capacitance)
-    np.testing.assert_array_equal(a.induced_charge, b.induced_charge)
+    np.testing.assert_array_equal(a.induced_fraction, b.induced_fraction)
     assert a.interpolation_error == b.interpolation_error
     assert a.error_history == b.error_history
 

@@ -172,13 +172,15 @@ def test_error_estimate_is_honest_against_direct_solves(tmp_path):
     worst = surrogate.held_out_error(table, held)
     assert worst <= table.interpolation_error
     for reference in terminals.REFERENCES:   # V_OC > 0 for a PTFE ball above z = 0
-        assert np.all(table.curves(reference).voltage(held.positions) > 0)
+        assert np.all(table.curves(reference, scene.device.ball_charge)
+                      .voltage(held.positions) > 0)
     # the mirror symmetry the surrogate exploits holds for the solver: z <-> Δh - z
     for direct in extra:
         image = solve_position(scene, scene.device.stroke - direct.position, comm=MPI.COMM_SELF)
         mirrored = surrogate.mirrored(image, scene.device.stroke)
         np.testing.assert_allclose(mirrored.capacitance, direct.capacitance, rtol=5e-3)
         np.testing.assert_allclose(mirrored.induced_charge, direct.induced_charge, rtol=5e-3)
+        np.testing.assert_allclose(mirrored.induced_fraction, direct.induced_fraction, rtol=5e-3)
 
 
 @pytest.mark.slow

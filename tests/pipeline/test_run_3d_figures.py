@@ -25,8 +25,8 @@ def test_surrogate_figure_of_zr_curves_shows_the_visited_offsets(tmp_path):
     path.write_text(LATERAL)
     scene = load_scene(path)
     table, zr_table = seed_cache(scene, tmp_path / "cache")
-    axis = TerminalCurves(table, "floating")
-    curves = AnchoredTerminalCurves(zr_table.curves("floating"), axis)
+    axis = TerminalCurves(table, "floating", scene.device.ball_charge)
+    curves = AnchoredTerminalCurves(zr_table.curves("floating", scene.device.ball_charge), axis)
     r_seen = 0.4 * curves.max_offset
     gap = np.linspace(0.0, curves.stroke, 50)
     visited = (gap, np.linspace(0.0, r_seen, 50))

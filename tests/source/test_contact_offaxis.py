@@ -70,7 +70,7 @@ def test_on_the_axis_the_off_axis_terminal_is_the_on_axis_one(tmp_path):
     history, upper, _, _ = run_history(
         scene, out.dynamics.impacts,
         np.asarray(out.dynamics.impacts.time) - float(out.dynamics.t[0]))
-    off = OffAxisContactTerminal(table, curves.zr.table, curves, history, upper)
+    off = OffAxisContactTerminal(table, curves.zr.table, history, upper)
     on = ContactTerminal(table, history, upper)
     t = np.linspace(0.0, 0.3, 301)
     z = np.linspace(0.0, table.stroke, t.size)

@@ -95,7 +95,7 @@ def test_the_wire_carries_what_the_electrode_gives_up_off_the_axis(tmp_path):
         scene, out.dynamics.impacts,
         np.asarray(out.dynamics.impacts.time) - float(out.dynamics.t[0]))
     assert not np.any(upper)          # the bare upper plate is no electrode
-    off = OffAxisContactTerminal(table, curves.zr.table, curves, history, upper)
+    off = OffAxisContactTerminal(table, curves.zr.table, history, upper)
     on = ContactTerminal(table, history, upper)
     assert off.wiring is terminals.SINGLE_ELECTRODE
     k, dk_dz, dk_dr = off.share(np.full(5, 1e-3), np.linspace(0.0, 4e-4, 5))

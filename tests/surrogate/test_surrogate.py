@@ -55,7 +55,7 @@ def test_error_estimate_is_honest(tolerance):
     assert table.converged and table.interpolation_error <= tolerance
     z = np.linspace(0, scene.device.stroke, 2001)
     for reference in terminals.REFERENCES:
-        curves = table.curves(reference)
+        curves = table.curves(reference, scene.device.ball_charge)
         q, c_t = model_terminals(scene, z, reference)
         err_q = np.abs(curves.charge(z) - q).max() / np.abs(q).max()
         err_c = np.abs(curves.capacitance(z) - c_t).max() / c_t.max()
@@ -84,12 +84,12 @@ def test_held_out_estimate_is_tight_for_the_set_it_belongs_to():
     coarse = model_table(scene.with_values(field={"tolerance": 0.5}))
     keep = np.isin(coarse.positions, surrogate.lobatto_positions(scene.device.stroke, coarse_count))
     coarse = surrogate.SurrogateTable(**{**coarse.__dict__, **{
-        k: getattr(coarse, k)[keep] for k in ("positions", "capacitance", "induced_charge", "dofs",
+        k: getattr(coarse, k)[keep] for k in ("positions", "capacitance", "induced_fraction", "dofs",
                                               "cells", "wall_time", "solve_time", "field_error")}})
     z = np.linspace(0, scene.device.stroke, 4001)
     true = 0.0
     for reference in terminals.REFERENCES:
-        curves = coarse.curves(reference)
+        curves = coarse.curves(reference, scene.device.ball_charge)
         q, c_t = model_terminals(scene, z, reference)
         true = max(true, np.abs(curves.charge(z) - q).max() / np.abs(q).max(),
                    np.abs(curves.capacitance(z) - c_t).max() / c_t.max(),
@@ -152,7 +152,7 @@ def test_a_cached_table_that_misses_its_tolerance_warns_again(tmp_path):
 def test_curves_reference_state_and_exact_derivative():
     scene = fx.scene_with(field={"tolerance": 1e-6})
     table = model_table(scene, max_positions=257)
-    curves = table.curves("floating")
+    curves = table.curves("floating", scene.device.ball_charge)
     assert curves.charge(0.0) == 0.0
     # PTFE (negative) ball rising: Q_SC > 0 and V_OC > 0 (terminals.py convention)
     z = np.linspace(0.1e-3, scene.device.stroke, 50)
@@ -168,10 +168,10 @@ def test_curves_reference_state_and_exact_derivative():
 def test_grounded_lower_reference_uses_c_uu(plate_default_scene):
     scene = plate_default_scene
     table = model_table(scene)
-    _, c_t = surrogate.terminal_samples(table, "grounded-lower")
+    _, c_t = surrogate.terminal_samples(table, "grounded-lower", scene.device.ball_charge)
     np.testing.assert_allclose(c_t, table.capacitance[:, 1, 1])
     with pytest.raises(ValueError, match="reference"):
-        table.curves("grounded-upper")
+        table.curves("grounded-upper", scene.device.ball_charge)
 
 
 def test_file_round_trip_is_atomic_and_complete(tmp_path, plate_default_scene):
@@ -182,7 +182,7 @@ def test_file_round_trip_is_atomic_and_complete(tmp_path, plate_default_scene):
     back = surrogate.read_table(path, expected_hash=scene.field_hash())
     np.testing.assert_array_equal(back.positions, table.positions)
     np.testing.assert_array_equal(back.capacitance, table.capacitance)
-    np.testing.assert_array_equal(back.induced_charge, table.induced_charge)
+    np.testing.assert_array_equal(back.induced_fraction, table.induced_fraction)
     assert back.interpolation_error == table.interpolation_error
     assert back.provenance["command_line"] == "tengfield precompute"
     assert "gmsh" in back.provenance["versions"]
@@ -260,7 +260,7 @@ def test_mirror_symmetry_halves_the_solves_and_matches_a_full_run():
                                 solve=solver, solve_comm=SOLVE_COMM)
     assert solver.calls == full.count == half.count
     np.testing.assert_allclose(half.capacitance, full.capacitance, rtol=1e-12)
-    np.testing.assert_allclose(half.induced_charge, full.induced_charge, rtol=1e-12)
+    np.testing.assert_allclose(half.induced_fraction, full.induced_fraction, rtol=1e-12)
 
 
 def test_contact_first_order():
@@ -466,15 +466,15 @@ def test_overwritten_induced_charge_is_not_trusted_and_recomputed(tmp_path, plat
     solver = fx.CountingSolver()
     table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=solver)
     path = surrogate.cache_path(scene, tmp_path)
-    _rewrite(path, "induced_charge_C", 5.0 * table.induced_charge, rehash=False)
-    with pytest.raises(SurrogateError, match="induced_charge_C.*checksum"):
+    _rewrite(path, "induced_fraction", 5.0 * table.induced_fraction, rehash=False)
+    with pytest.raises(SurrogateError, match="induced_fraction.*checksum"):
         surrogate.read_table(path)
     calls = solver.calls
     with pytest.warns(RuntimeWarning, match=r"cached surrogate .*s?urrogate-.*\.h5 not trusted "
                                             r"\(.*checksum.*\), recomputing"):
         again, outcome = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=solver)
     assert outcome.status == "recomputed" and solver.calls > calls
-    np.testing.assert_array_equal(again.induced_charge, table.induced_charge)
+    np.testing.assert_array_equal(again.induced_fraction, table.induced_fraction)
     _, outcome = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=solver)
     assert outcome.status == "cached"
 
@@ -535,7 +535,7 @@ def test_flipped_bits_in_the_file_bytes_are_caught(tmp_path):
     ("nan", "not strictly ascending|non-finite"),
     ("C not positive definite", "positive definite"),
     ("C_lu positive", "positive definite"),
-    ("charge above the ball's", "induced charges"),
+    ("charge above the ball's", "induced fractions"),
 ])
 def test_consistent_but_wrong_data_is_not_trusted(tmp_path, damage, reason, plate_default_scene):
     """Checksums recomputed after the damage (a writer bug, not a disk fault): the
@@ -543,7 +543,7 @@ def test_consistent_but_wrong_data_is_not_trusted(tmp_path, damage, reason, plat
     scene = plate_default_scene
     table, _ = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=fx.plate_model_solve)
     path = surrogate.cache_path(scene, tmp_path)
-    z, C, q = table.positions.copy(), table.capacitance.copy(), table.induced_charge.copy()
+    z, C, q = table.positions.copy(), table.capacitance.copy(), table.induced_fraction.copy()
     name, values = {
         "unsorted": ("positions_m", z[[1, 0, *range(2, z.size)]]),
         "duplicate": ("positions_m", np.concatenate([z[:3], z[2:3], z[4:]])),
@@ -551,7 +551,7 @@ def test_consistent_but_wrong_data_is_not_trusted(tmp_path, damage, reason, plat
         "nan": ("positions_m", np.where(np.arange(z.size) == 4, np.nan, z)),
         "C not positive definite": ("capacitance_F", C * np.array([[1.0, 3.0], [3.0, 1.0]])),
         "C_lu positive": ("capacitance_F", np.abs(C)),
-        "charge above the ball's": ("induced_charge_C", 3.0 * q),
+        "charge above the ball's": ("induced_fraction", 3.0 * q),
     }[damage]
     _rewrite(path, name, values, rehash=True)
     with pytest.raises(SurrogateError, match=reason):
@@ -573,14 +573,14 @@ def test_old_format_is_recomputed(tmp_path):
     with h5py.File(path, "r+") as f:
         f.attrs["format_version"] = 1
     with pytest.raises(SurrogateError, match=r"has format version 1, written by another "
-                                             r"tengfield version \(this one reads format \d+\)"):
+                                             r"tengfield version \(this one reads formats 3, \d+\)"):
         surrogate.read_table(path)   # a plain 1 (numpy 2 would print np.int64(1))
 
 
 def test_scalar_attributes_are_checksummed(tmp_path):
     _, table, path = _written(tmp_path)
     with h5py.File(path, "r+") as f:
-        f.attrs["ball_charge_C"] = 2.0 * table.ball_charge
+        f.attrs["stroke_m"] = 2.0 * table.stroke
     with pytest.raises(SurrogateError, match="scalar"):
         surrogate.read_table(path)
 
@@ -602,7 +602,7 @@ def test_sampled_field_error_is_no_looser_than_every_position(environment):
     sampled = surrogate.precompute(scene)
     np.testing.assert_array_equal(sampled.positions, every.positions)
     np.testing.assert_array_equal(sampled.capacitance, every.capacitance)
-    np.testing.assert_array_equal(sampled.induced_charge, every.induced_charge)
+    np.testing.assert_array_equal(sampled.induced_fraction, every.induced_fraction)
     assert sampled.interpolation_error == every.interpolation_error
     assert np.all(np.isfinite(sampled.field_error))
     assert np.all(sampled.field_error >= every.field_error)

@@ -1,5 +1,6 @@
-"""The ball's surface charge σ is not in the surrogate's cache key (issue #28): a σ-only
-change (value, sign, "breakdown", 0) is a cache hit, and every charge scales exactly."""
+"""The ball's surface charge σ is neither in the surrogate's cache key (issue #28) nor in
+its table (issue #51: per unit ball charge): a σ-only change (value, sign, "breakdown", 0)
+is a cache hit, and every charge scales exactly."""
 from __future__ import annotations
 
 import json
@@ -23,34 +24,36 @@ def test_a_sigma_only_change_is_a_cache_hit_with_charges_scaled(tmp_path):
     first, outcome = surrogate.obtain_table(scene, cache_dir=tmp_path, solve=solver)
     assert outcome.status == "computed" and solver.calls > 0
     calls = solver.calls
+    q_first = first.induced_charges(scene.device.ball_charge)
     for uc, factor in ((-20.0, 2.5), (8.0, -1.0), (-8.0, 1.0)):
-        table, outcome = surrogate.obtain_table(_sigma(scene, uc), cache_dir=tmp_path,
-                                                solve=solver)
+        at = _sigma(scene, uc)
+        table, outcome = surrogate.obtain_table(at, cache_dir=tmp_path, solve=solver)
         assert outcome.status == "cached" and solver.calls == calls, uc
-        np.testing.assert_allclose(table.induced_charge, factor * first.induced_charge,
-                                   rtol=1e-12, atol=0)
-        assert table.ball_charge == pytest.approx(factor * first.ball_charge, rel=1e-12)
+        np.testing.assert_array_equal(table.induced_fraction, first.induced_fraction)
+        np.testing.assert_allclose(table.induced_charges(at.device.ball_charge),
+                                   factor * q_first, rtol=1e-12, atol=0)
         np.testing.assert_array_equal(table.capacitance, first.capacitance)
         np.testing.assert_array_equal(table.field_error, first.field_error)
         assert table.interpolation_error == first.interpolation_error
-    assert "scaled from sigma = -8 to -20" in surrogate.obtain_table(
-        _sigma(scene, -20.0), cache_dir=tmp_path, solve=solver)[1].reason
     assert len(list(tmp_path.glob("surrogate-*.h5"))) == 1
 
 
-def test_an_uncharged_ball_is_solved_at_the_stand_in_and_scaled_to_zero(tmp_path):
+def test_an_uncharged_ball_is_solved_at_the_stand_in_and_charges_nothing(tmp_path):
+    uncharged = _sigma(fx.scene_with(), 0.0)
     solver = fx.CountingSolver()
-    table, outcome = surrogate.obtain_table(_sigma(fx.scene_with(), 0.0), cache_dir=tmp_path,
-                                            solve=solver)
+    table, outcome = surrogate.obtain_table(uncharged, cache_dir=tmp_path, solve=solver)
     assert outcome.status == "computed"
-    assert table.ball_charge == 0.0 and not np.any(table.induced_charge)
+    assert np.all(np.isfinite(table.induced_fraction)) and np.all(table.induced_fraction < 0)
+    assert not np.any(table.induced_charges(uncharged.device.ball_charge))
+    curves = surrogate.TerminalCurves(table, "floating", uncharged.device.ball_charge)
+    assert not np.any(curves.charge_samples) and np.all(curves.capacitance_samples > 0)
     stored = surrogate.read_table(surrogate.cache_path(fx.scene_with(), tmp_path))
-    assert stored.ball_charge != 0.0             # a table that can be scaled later
+    np.testing.assert_array_equal(stored.induced_fraction, table.induced_fraction)
     calls = solver.calls
     charged, outcome = surrogate.obtain_table(_sigma(fx.scene_with(), -8.0), cache_dir=tmp_path,
                                               solve=solver)
     assert outcome.status == "cached" and solver.calls == calls
-    assert charged.ball_charge == pytest.approx(fx.scene_with().device.ball_charge, rel=1e-12)
+    np.testing.assert_array_equal(charged.induced_fraction, table.induced_fraction)
 
 
 def test_a_run_at_another_sigma_scales_every_charge_output(tmp_path):
@@ -114,14 +117,14 @@ def test_a_surrogate_cached_by_an_older_tengfield_is_read_and_copied(tmp_path):
     got, outcome = surrogate.obtain_table(scene, cache_dir=tmp_path / "cache", solve=solver)
     assert solver.calls == calls
     assert outcome.status == "cached" and "older tengfield" in outcome.reason
-    np.testing.assert_array_equal(got.induced_charge, table.induced_charge)
+    np.testing.assert_array_equal(got.induced_fraction, table.induced_fraction)
     assert surrogate.cache_path(scene, tmp_path / "cache").is_file()
     # ... and its copy under today's key serves every sigma
     got, outcome = surrogate.obtain_table(_sigma(scene, -20.0), cache_dir=tmp_path / "cache",
                                           solve=solver)
     assert solver.calls == calls and outcome.status == "cached"
     assert "older" not in outcome.reason
-    np.testing.assert_allclose(got.induced_charge, 2.5 * table.induced_charge, rtol=1e-12)
+    np.testing.assert_array_equal(got.induced_fraction, table.induced_fraction)
 
 
 def test_the_default_scenes_legacy_key_is_the_old_field_hash():

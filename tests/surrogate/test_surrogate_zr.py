@@ -46,6 +46,7 @@ def table_of(scene, solve=zr_model_solve, **kw):
 
 
 SCENE = fx.scene_with()
+Q = SCENE.device.ball_charge      # the ball's charge [C] the curves are drawn for
 STROKE = SCENE.device.stroke
 R_MAX = surrogate.max_offset(SCENE.device)
 
@@ -60,7 +61,7 @@ def true_error(table, scene):
     zz, rr = dense(scene)
     worst = 0.0
     for reference in terminals.REFERENCES:
-        curves = table.curves(reference)
+        curves = table.curves(reference, scene.device.ball_charge)
         q, c_t = model_terminals(scene, zz, rr, reference)
         worst = max(worst, np.abs(curves.charge(zz, rr) - q).max() / np.abs(q).max(),
                     np.abs(curves.capacitance(zz, rr) - c_t).max() / c_t.max(),
@@ -132,7 +133,7 @@ def test_axis_is_the_one_dimensional_surrogate_and_flat_in_r():
                                  solve=zr_model_solve, solve_comm=SOLVE_COMM)
     z = np.linspace(0.0, STROKE, 301)
     for reference in terminals.REFERENCES:
-        zr, line = table.curves(reference), one_d.curves(reference)
+        zr, line = table.curves(reference, Q), one_d.curves(reference, Q)
         scale = np.abs(line.charge(z)).max()
         assert np.abs(zr.charge(z, 0.0) - line.charge(z)).max() <= 2e-4 * scale
         assert np.abs(zr.capacitance(z, 0.0) - line.capacitance(z)).max() \
@@ -149,7 +150,7 @@ def test_axis_is_the_one_dimensional_surrogate_and_flat_in_r():
 
 def test_derivatives_are_those_of_the_interpolant():
     table = table_of(SCENE, tolerance=1e-4)
-    curves = table.curves("floating")
+    curves = table.curves("floating", Q)
     rng = np.random.default_rng(5)
     z = rng.uniform(0.05, 0.95, 40) * STROKE
     r = rng.uniform(0.05, 0.95, 40) * R_MAX
@@ -179,7 +180,7 @@ def test_derivatives_are_those_of_the_interpolant():
 def test_waveforms_current_is_the_total_derivative():
     """I_sc = dQ/dz z' + dQ/dr r' is the time derivative of Q_sc along a path."""
     table = table_of(SCENE, tolerance=1e-4)
-    curves = table.curves("floating")
+    curves = table.curves("floating", Q)
     t = np.linspace(0.0, 0.1, 20001)
     w = 2 * np.pi * 20.0
     gap = 0.5 * STROKE * (1 - np.cos(w * t))
@@ -222,13 +223,14 @@ def test_mirror_symmetry_halves_the_solves_and_matches_a_full_run():
             c_ll, c_lu, c_uu, q_l, q_u = zr_model(SCENE, z, r)
             np.testing.assert_allclose(table.capacitance[i, j], [[c_ll, c_lu], [c_lu, c_uu]],
                                        rtol=1e-12)
-            np.testing.assert_allclose(table.induced_charge[i, j], [q_l, q_u], rtol=1e-12)
+            np.testing.assert_allclose(table.induced_fraction[i, j], np.array([q_l, q_u]) / Q,
+                                       rtol=1e-12)
     nz, nr = table.shape
     assert len(solver.points) == (nz // 2 + 1) * nr
     # z -> stroke - z swaps lower and upper at every offset
     np.testing.assert_allclose(table.capacitance[::-1, :, 1, 1], table.capacitance[:, :, 0, 0],
                                rtol=1e-12)
-    np.testing.assert_allclose(table.induced_charge[::-1, :, 1], table.induced_charge[:, :, 0],
+    np.testing.assert_allclose(table.induced_fraction[::-1, :, 1], table.induced_fraction[:, :, 0],
                                rtol=1e-12)
 
 
@@ -272,7 +274,7 @@ def test_file_round_trip_and_checks(tmp_path):
         surrogate.read_table(path)
 
 
-@pytest.mark.parametrize("name", ["capacitance_F", "induced_charge_C", "offsets_m"])
+@pytest.mark.parametrize("name", ["capacitance_F", "induced_fraction", "offsets_m"])
 def test_a_changed_array_is_caught(tmp_path, name):
     table = table_of(SCENE, tolerance=1e-3)
     path = surrogate.write_radial_table(tmp_path / "zr.h5", table)
@@ -309,7 +311,7 @@ def test_cache_hit_miss_and_corrupt(tmp_path):
     n = len(solver.points)
     again, outcome = surrogate.obtain_radial_table(SCENE, **kw)
     assert outcome.status == "cached" and len(solver.points) == n
-    np.testing.assert_array_equal(again.induced_charge, table.induced_charge)
+    np.testing.assert_array_equal(again.induced_fraction, table.induced_fraction)
     # another 3D discretisation is another file
     _, outcome = surrogate.obtain_radial_table(SCENE, **{**kw, "mesh_size_mm": 1.0})
     assert outcome.status == "computed"
@@ -347,7 +349,7 @@ def test_grounded_table_is_refused_before_any_solve_by_the_3d_solver():
 
 
 def test_outside_the_grid_is_clipped():
-    curves = table_of(SCENE, tolerance=1e-3).curves("floating")
+    curves = table_of(SCENE, tolerance=1e-3).curves("floating", Q)
     assert curves.charge(-1e-3, 0.0) == curves.charge(0.0, 0.0)
     assert curves.charge(STROKE + 1e-3, 2 * R_MAX) == curves.charge(STROKE, R_MAX)
     assert curves.capacitance(1e-3, -1e-4) == curves.capacitance(1e-3, 1e-4)
@@ -363,7 +365,7 @@ def test_two_ranks_equal_serial():
                                            max_positions=129, max_offsets=33)
     serial = table_of(SCENE, tolerance=1e-4)
     np.testing.assert_array_equal(parallel.capacitance, serial.capacitance)
-    np.testing.assert_array_equal(parallel.induced_charge, serial.induced_charge)
+    np.testing.assert_array_equal(parallel.induced_fraction, serial.induced_fraction)
     assert parallel.error_history == serial.error_history
 
 
@@ -391,10 +393,10 @@ def test_real_3d_axis_matches_the_axisymmetric_solver(tmp_path):
     axis_table = surrogate.table_from_results(axis, stroke=scene.device.stroke)
     check = surrogate.axis_check(table, axis_table)
     assert check["ok"], check
-    q = table.induced_charge
-    change = np.abs(q[:, -1] - q[:, 0]) / np.abs(table.ball_charge)
+    f = table.induced_fraction
+    change = np.abs(f[:, -1] - f[:, 0])
     assert change.max() < 0.02
-    curves = table.curves("floating")
+    curves = table.curves("floating", Q)
     zz = np.linspace(0.0, scene.device.stroke, 7)
     assert np.all(np.diff(curves.charge(zz, 0.5 * R_MAX)) != 0.0)
     assert np.all(curves.charge_derivative(zz, 0.0)[1] == 0.0)
@@ -411,6 +413,7 @@ def test_anchored_curves_are_the_axis_on_the_axis_and_the_3d_change_off_it():
         res = zr_model_solve(scene, position, **kw)
         res.capacitance = res.capacitance * 1.02
         res.induced_charge = res.induced_charge * 1.02
+        res.induced_fraction = res.induced_fraction * 1.02   # what the table reads
         return res
 
     table = table_of(SCENE, solve=biased, tolerance=1e-4)
@@ -418,11 +421,11 @@ def test_anchored_curves_are_the_axis_on_the_axis_and_the_3d_change_off_it():
                                 solve=fx.plate_model_solve, solve_comm=SOLVE_COMM)
     zz, rr = dense(SCENE)
     for reference in terminals.REFERENCES:
-        plain = table.curves(reference)
-        anchored = surrogate.AnchoredTerminalCurves(plain, axis.curves(reference))
+        plain = table.curves(reference, Q)
+        anchored = surrogate.AnchoredTerminalCurves(plain, axis.curves(reference, Q))
         q, c_t = model_terminals(SCENE, zz, rr, reference)
         z = zz[:, 0]
-        np.testing.assert_allclose(anchored.charge(z, 0.0), axis.curves(reference).charge(z),
+        np.testing.assert_allclose(anchored.charge(z, 0.0), axis.curves(reference, Q).charge(z),
                                    rtol=1e-14, atol=1e-14 * np.abs(q).max())
         err_plain = np.abs(plain.capacitance(zz, rr) - c_t).max() / c_t.max()
         err_anchor = np.abs(anchored.capacitance(zz, rr) - c_t).max() / c_t.max()
@@ -439,7 +442,8 @@ def test_anchored_curves_are_the_axis_on_the_axis_and_the_3d_change_off_it():
         out = electrical.terminal_waveforms_zr(anchored, zz[:, 3], 0 * z + 1.0, rr[:, 3], 0 * z)
         np.testing.assert_allclose(out["I_sc"], d_z[:, 3])
     with pytest.raises(ValueError, match="references differ"):
-        surrogate.AnchoredTerminalCurves(table.curves("floating"), axis.curves("grounded-lower"))
+        surrogate.AnchoredTerminalCurves(table.curves("floating", Q),
+                                         axis.curves("grounded-lower", Q))
 
 
 def test_radial_motion_at_given_times_and_leaving_the_axis():

@@ -116,7 +116,7 @@ def planned_solves(solver: _Solver, plan: Plan) -> list:
 
 def _curves(table, scene):
     from ..surrogate import TerminalCurves
-    return TerminalCurves(table, scene.circuit.reference)
+    return TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge)
 
 
 def _trajectory(scene, sample_rate: float | None = None, **contact):
@@ -147,14 +147,14 @@ def field_rows(solver: _Solver, plan: Plan, scene, trajectory, progress=None) ->
     t_coarse, t_fine = tables[coarse][0], tables[fine][0]
     ref_table = dataclasses.replace(
         t_fine, capacitance=richardson(t_coarse.capacitance, t_fine.capacitance, ratio, 4),
-        induced_charge=richardson(t_coarse.induced_charge, t_fine.induced_charge, ratio, 4))
+        induced_fraction=richardson(t_coarse.induced_fraction, t_fine.induced_fraction, ratio, 4))
     ref_peaks = electrical.terminal_peaks(scene, trajectory, _curves(ref_table, scene))
     reference = (f"Richardson extrapolation (h^4) of {coarse.label} and {fine.label} "
                  f"at the same {n} Lobatto positions")
     for setting, (table, wall) in tables.items():
         peaks = electrical.terminal_peaks(scene, trajectory, _curves(table, scene))
         pos_err = max(max_relative_deviation(table.capacitance, ref_table.capacitance),
-                      max_relative_deviation(table.induced_charge, ref_table.induced_charge))
+                      max_relative_deviation(table.induced_fraction, ref_table.induced_fraction))
         rows.append(Row("field", setting.label,
                         {**setting.field_block(), "positions": n,
                          "solves": solves_needed(n, solver.symmetric),

@@ -154,7 +154,8 @@ def verify(recommendation: Recommendation, scene, reference_peaks, solver: "_Sol
     dyn, dyn_wall, run_scene = _trajectory(chosen)
     wall = table.total_solve_wall_time + dyn_wall
     peaks = electrical.terminal_peaks(run_scene, dyn,
-                                      TerminalCurves(table, chosen.circuit.reference))
+                                      TerminalCurves(table, chosen.circuit.reference,
+                                                     chosen.device.ball_charge))
     errors = peak_errors(peaks, reference_peaks)
     worst = max(errors.values())
     return dataclasses.replace(recommendation, measured_error=worst, measured_errors=errors,

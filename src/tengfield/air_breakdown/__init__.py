@@ -15,7 +15,7 @@ from __future__ import annotations
 from .band import (Band, Seeds, Trajectory, band_summary, compute_band, scene_band,
                    trajectory_of)
 from .charge import (charge_line, check_gap_lines, obtain_breakdown_table, resolve_for_run,
-                     scaled_table, scene_breakdown, scene_states, scene_surface_charge,
+                     scene_breakdown, scene_states, scene_surface_charge,
                      summary_block, uses_breakdown_charge)
 from .limit import (CHECK_MARGIN, CSV_COLUMNS, DENSE_POINTS, SIDES, STATE_TEXT,
                     STATES, Binding, BreakdownResult, Lines, electrode_potentials, evaluate,
@@ -28,6 +28,6 @@ __all__ = ["study", "Band", "Seeds", "Trajectory", "band_summary", "compute_band
            "STATE_TEXT", "STATES", "Binding", "BreakdownResult", "Lines", "charge_line",
            "electrode_potentials", "evaluate", "gap_voltages", "limited_energy",
            "lines_from_table", "obtain_breakdown_table", "check_gap_lines",
-           "resolve_for_run", "scaled_table", "scene_breakdown", "scene_surface_charge",
+           "resolve_for_run", "scene_breakdown", "scene_surface_charge",
            "scene_states", "summary_block", "summary_lines", "uses_breakdown_charge",
            "write_outputs"]

@@ -1,7 +1,7 @@
 """The charge a run uses: the scene's σ, or −σ_max for ``[device]
-σ = "breakdown"`` (:func:`resolve_for_run`), with the surrogate
-scaled to it (charges are linear in σ: no new field solve); the run's surrogate at that
-charge is :func:`tengfield.run_surrogate.surrogate_for_run`'s."""
+σ = "breakdown"`` (:func:`resolve_for_run`); the surrogate is per unit ball charge
+(charges are linear in σ: no new field solve), the run's curves take the scene's charge
+(:func:`tengfield.run_surrogate.surrogate_for_run`)."""
 from __future__ import annotations
 
 from ..paschen import Paschen
@@ -34,15 +34,6 @@ def scene_breakdown(scene, table, states=None) -> BreakdownResult:
                       scene.circuit.reference, sigma)
     result.scene = scene
     return result
-
-
-def scaled_table(table, factor: float):
-    """The surrogate table with every charge scaled by ``factor`` (σ_new / σ_old): the
-    induced charges and the ball charge are linear in σ, C does not depend on it
-    (:func:`tengfield.surrogate.table.scaled_charges`)."""
-    from ..surrogate.table import scaled_charges
-
-    return scaled_charges(table, factor)
 
 
 def check_gap_lines(scene, needed_by: str, alternative: str = "") -> None:
@@ -110,8 +101,8 @@ def charge_line(scene) -> str:
 
 def resolve_for_run(scene, table, comm=None):
     """For :func:`tengfield.pipeline.run`: ``(scene, table, result)``. With ``[device]
-    σ = "breakdown"`` the scene gets σ = −σ_max and the table is
-    scaled to it (no new field solve); otherwise both are returned as they are.
+    σ = "breakdown"`` the scene gets σ = −σ_max (the table, per unit ball charge, serves
+    it as it is: no new field solve); otherwise both are returned as they are.
     ``result`` is None when the table has no breakdown lines. Rank 0 of ``comm`` warns
     once when |σ| exceeds σ_max."""
     import warnings
@@ -126,11 +117,11 @@ def resolve_for_run(scene, table, comm=None):
         return scene, table, None
     result = scene_breakdown(scene, table)
     if uses_breakdown_charge(scene):
-        from ..surrogate.table import at_ball_charge
-
         sigma = -result.sigma_max
         scene = scene.with_values(device={SURFACE_CHARGE_KEY: sigma * 1e6})
-        table = at_ball_charge(table, scene.device.ball_charge)   # whatever σ it was solved at
+        if getattr(table, "scene", None) is not None:   # the scene its figure is drawn for
+            import dataclasses
+            table = dataclasses.replace(table, scene=scene)   # the arrays shared, not copied
     elif result.margin(scene.device.surface_charge) > 1.0 and (comm is None or comm.rank == 0):
         b = result.binding
         warnings.warn(

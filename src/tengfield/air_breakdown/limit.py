@@ -114,10 +114,8 @@ def lines_from_table(table, scene) -> Lines:
                              "a custom solve): the breakdown check needs the axisymmetric solver")
     angles = table.provenance.get("breakdown_line_angles_deg", LINE_ANGLES_DEG)
     dev = scene.device
-    q_ball = float(table.ball_charge)
-    electrodes = np.asarray(table.induced_charge).shape[1]
-    fractions = (np.asarray(table.induced_charge) / q_ball if q_ball != 0.0
-                 else np.full((table.count, electrodes), np.nan))
+    fractions = np.asarray(table.induced_fraction, dtype=float)   # per unit ball charge
+    electrodes = fractions.shape[1]
     field_error = np.asarray(table.field_error, dtype=float)
     return Lines(positions=np.asarray(table.positions), capacitance=np.asarray(table.capacitance),
                  fractions=fractions, ball_area=math.pi * dev.ball_diameter**2,

@@ -65,8 +65,8 @@ def candidate_charge(scene, table=None):
     THE one place that decides it: the scene's own ``σ``
     (or its varied value); with ``σ = "breakdown"`` each geometry
     at its own air-breakdown limit, σ = −σ_max from its surrogate's gap lines
-    (:func:`tengfield.air_breakdown.resolve_for_run`: the table is rescaled, no new field
-    solve), so designs are compared at charges they can hold. Raises
+    (:func:`tengfield.air_breakdown.resolve_for_run`: the table, per unit ball charge,
+    serves it: no new field solve), so designs are compared at charges they can hold. Raises
     :class:`~tengfield.errors.TengfieldError` when the limit is asked for and the surrogate
     has no gap lines.
     """
@@ -74,8 +74,8 @@ def candidate_charge(scene, table=None):
 
     if table is None or not uses_breakdown_charge(scene):
         return scene, table
-    resolved, scaled, _ = resolve_for_run(scene, table)   # raises without gap lines
-    return resolved, scaled
+    resolved, table, _ = resolve_for_run(scene, table)   # raises without gap lines
+    return resolved, table
 
 
 def candidate_scene(base, spec: DesignSpec, values: dict):
@@ -145,7 +145,6 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
                    "a DesignSpec (tengfield.design_study.parse_design_section(scene))")
     check_instance("design_study.evaluate", values, "values", dict, "a dict of varied keys")
     from ..surrogate import TerminalCurves, obtain_table
-    from ..surrogate.table import at_ball_charge
 
     simulate = simulate or default_simulate
     row = {"values": dict(values), "status": "ok", "reason": "", "objectives": {},
@@ -202,10 +201,8 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
             key = scene.field_hash()
             row["field_hash"] = key
             if tables is not None and key in tables:
-                # the key leaves sigma out (a surrogate scales): at this candidate's charge
-                table, row["field_status"] = (
-                    tables[key] if scene.charge.from_contacts   # any reference charge
-                    else at_ball_charge(tables[key], scene.device.ball_charge)), "memo"
+                # the key and the table leave sigma out (per unit ball charge)
+                table, row["field_status"] = tables[key], "memo"
             else:
                 with warnings.catch_warnings():   # the coarse field's accuracy is reported
                     warnings.simplefilter("ignore", RuntimeWarning)   # as the error bar
@@ -240,7 +237,7 @@ def evaluate(base, spec: DesignSpec, values: dict, *, cache_dir=None,
             scene = charged        # (the motion does not depend on the charge)
             points = [band_scene(scene, spec, f, a) for f, a in spec.band]
         row[SURFACE_CHARGE_KEY] = scene.device.surface_charge * 1e6
-        curves = TerminalCurves(table, scene.circuit.reference)
+        curves = TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge)
         if scene.charge.from_contacts:   # each band point at the charge its contacts make
             try:
                 points, curves = _at_contact_charge(points, dynamics, table, row)
@@ -296,15 +293,14 @@ def _at_contact_charge(points, dynamics, table, row):
     ``row[σ key]`` their mean."""
     from ..contact_run import breakdown_limit, contact_source, field_scene
     from ..surrogate import TerminalCurves
-    from ..surrogate.table import at_ball_charge
 
     at, curves, block = [], [], {"steady_uC_per_m2": [], "rise_time_90_s": [], "binds": []}
     limit = breakdown_limit(field_scene(points[0]), table)   # one geometry: once
     for point, motion in zip(points, dynamics):
         run = contact_source(point, motion, table, limit)
         at.append(run.scene)
-        curves.append(TerminalCurves(at_ball_charge(table, run.scene.device.ball_charge),
-                                     point.circuit.reference))
+        curves.append(TerminalCurves(table, point.circuit.reference,
+                                     run.scene.device.ball_charge))
         for key in block:
             block[key].append(run.block[key])
     row["charge"] = block

@@ -36,7 +36,15 @@ def reference_surrogate(scene, *, cache_dir=None, solve=None, comm=None, progres
 
     table, sigma_ref, outcome = _reference_table(scene, cache_dir=cache_dir, solve=solve,
                                                  comm=comm, progress=progress)
-    return TerminalCurves(table, scene.circuit.reference), sigma_ref, outcome
+    return (TerminalCurves(table, scene.circuit.reference, _ball_charge(scene, sigma_ref)),
+            sigma_ref, outcome)
+
+
+def _ball_charge(scene, sigma: float) -> float:
+    """σ π d² [C]: the ball's charge at the surface charge ``sigma`` [C/m²] (the curves'
+    reference charge; the table is per unit ball charge)."""
+    import math
+    return sigma * math.pi * scene.device.ball_diameter**2
 
 
 def _reference_table(scene, *, cache_dir=None, solve=None, comm=None, progress=False):
@@ -114,7 +122,7 @@ def calibrate(scene, *, measured=None, targets=None, free=None, cache_dir=None, 
 
     table, sigma_ref, _ = _reference_table(scene, cache_dir=cache_dir, solve=solve, comm=comm,
                                            progress=progress)
-    curves = TerminalCurves(table, scene.circuit.reference)
+    curves = TerminalCurves(table, scene.circuit.reference, _ball_charge(scene, sigma_ref))
     if targets is not None:
         result = fit_targets(scene, curves, sigma_ref, goal, spec, simulate=simulate)
     else:

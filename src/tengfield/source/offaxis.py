@@ -2,7 +2,8 @@
 
 The bookkeeping of :mod:`tengfield.source.terminal` holds at every ball position, on the
 axis or off it: the field is linear in the ball's charge q and in the electrodes' total
-charge, so with the (z, r) curves of the run at the reference charge q_ref,
+charge, so with the (z, r) curves of the tables (per unit ball charge) at the reference
+charge q_ref (1 C, as on the axis),
 
     Q_SC(t) = (q/q_ref) Q_ref(z, r) + (q − q0) b(0, 0) − k(z, r) L(t) + U(t),
 
@@ -23,8 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import terminals
-from ..surrogate.table import OffAxisCurves, RadialTerminalCurves
-from .terminal import ContactTerminal
+from ..surrogate.table import AnchoredTerminalCurves, OffAxisCurves, RadialTerminalCurves
+from .terminal import ContactCurves, ContactTerminal
 
 
 class _RadialShare(RadialTerminalCurves):
@@ -40,19 +41,14 @@ class _RadialShare(RadialTerminalCurves):
 
 
 class OffAxisContactTerminal(ContactTerminal):
-    """:class:`ContactTerminal` with the ball off the axis: ``curves`` the run's (z, r)
-    curves at the table's reference charge (:class:`AnchoredTerminalCurves`: the axis
-    ``table``'s curves plus the (z, r) ``radial_table``'s change with r; both tables at
-    one reference charge)."""
+    """:class:`ContactTerminal` with the ball off the axis: its (z, r) curves at the
+    reference charge q_ref are :class:`AnchoredTerminalCurves` (the axis ``table``'s
+    curves plus the (z, r) ``radial_table``'s change with r, as a run's)."""
 
-    def __init__(self, table, radial_table, curves, history, upper,
-                 reference: str = "floating"):
+    def __init__(self, table, radial_table, history, upper, reference: str = "floating"):
         super().__init__(table, history, upper, reference)
-        q_zr = float(radial_table.ball_charge)
-        if not np.isclose(q_zr, self.q_ref, rtol=1e-12, atol=0.0):
-            raise ValueError(f"the (z, r) table's reference charge {q_zr:g} C differs from "
-                             f"the axis table's {self.q_ref:g} C")
-        self.offaxis = curves
+        self.offaxis = AnchoredTerminalCurves(
+            RadialTerminalCurves(radial_table, reference, self.q_ref), self.curves)
         self._share_zr = _RadialShare(radial_table, reference)
 
     def share(self, z, r) -> tuple:
@@ -99,7 +95,8 @@ class OffAxisContactCurves(OffAxisCurves):
         self.reference, self.stroke = base.reference, base.stroke
         self.max_offset = base.max_offset
         self.positions, self.offsets = base.positions, base.offsets
-        self.axis = getattr(base, "axis", None)
+        self.axis = ContactCurves(terminal, steady)   # on the axis at the steady charge too
+        self.ball_charge = float(steady)
         self.factor = steady / terminal.q_ref
         self.charge_grid = base.charge_grid * self.factor
         self.capacitance_grid = base.capacitance_grid

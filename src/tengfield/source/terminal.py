@@ -1,8 +1,9 @@
 """The terminal quantities of a ball whose charge changes contact by contact (issue #52).
 
 The field is linear in the ball's charge q and in the electrode pair's total charge Q_e,
-so one surrogate table, solved at any reference charge q_ref, gives every charge state
-(docs/charge.md, "Conservation"):
+so one surrogate table, per unit ball charge, gives every charge state (docs/charge.md,
+"Conservation"); its curves are taken at the reference charge q_ref = 1 C
+(:data:`~tengfield.surrogate.table.UNIT_CHARGE`: Q_ref per unit ball charge):
 
 * the upper electrode's short-circuit charge is Q_u0(z; q, Q_e) = q b(z) + k(z)(Q_e + q),
   with b(z) = Q_u0(z; q_ref, -q_ref)/q_ref (today's curve per unit charge) and k(z) the
@@ -41,15 +42,15 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lumped, terminals
-from ..surrogate.table import OnAxisCurves, TerminalCurves
+from ..surrogate.table import UNIT_CHARGE, OnAxisCurves, TerminalCurves
 
 
 class ContactTerminal:
     """The contact-charged ball's terminal quantities over time, for one cell on the axis.
 
-    ``table``: the surrogate table (any reference charge q_ref = ``table.ball_charge``,
-    non-zero); ``history``: the ball's :class:`~tengfield.source.charge.ChargeHistory` on
-    the run's own time axis (seconds after its start); ``upper``: a boolean per contact of
+    ``table``: the surrogate table (per unit ball charge: its curves at q_ref = 1 C,
+    :data:`~tengfield.surrogate.table.UNIT_CHARGE`); ``history``: the ball's
+    :class:`~tengfield.source.charge.ChargeHistory` on the run's own time axis (seconds after its start); ``upper``: a boolean per contact of
     the history, true where the ball touched the upper electrode; ``reference``: the
     terminal topology ("floating" or "grounded-lower")."""
 
@@ -57,16 +58,14 @@ class ContactTerminal:
         from scipy.interpolate import CubicSpline
 
         self.reference = reference
-        self.curves = TerminalCurves(table, reference)
-        self.q_ref = float(table.ball_charge)
-        if self.q_ref == 0.0:
-            raise ValueError("the table's reference charge is 0: no charge per unit charge")
+        self.q_ref = UNIT_CHARGE
+        self.curves = TerminalCurves(table, reference, self.q_ref)
         self.history = history
-        C, q = table.capacitance, table.induced_charge
+        C, f = table.capacitance, table.induced_fraction
         #: the terminal topology: its ``contact_transfer`` says what the contacts send
         #: through the wire (the pair: U − k L; the single electrode: −D)
-        self.wiring = terminals.wiring(reference, q.shape[1])
-        self.b0 = float(self.wiring.terminal_charge(C[0], q[0], self.q_ref)) / self.q_ref
+        self.wiring = terminals.wiring(reference, f.shape[1])
+        self.b0 = float(self.wiring.terminal_charge(C[0], f[0], 1.0))   # per unit charge
         share = self.wiring.contact_share(C)
         kind = "not-a-knot" if table.positions.size >= 4 else "natural"
         self._k = CubicSpline(table.positions, share, bc_type=kind)
@@ -147,6 +146,7 @@ class ContactCurves(OnAxisCurves):
         base = terminal.curves
         self.reference, self.stroke = base.reference, base.stroke
         self.positions = base.positions
+        self.ball_charge = float(steady)
         self.factor = steady / terminal.q_ref
         self.charge_samples = base.charge_samples * self.factor
         self.capacitance_samples = base.capacitance_samples
@@ -174,4 +174,4 @@ class ContactCurves(OnAxisCurves):
         if times is None:
             raise TypeError("ContactCurves.evaluate_many needs the times of the samples "
                             "(the charge changes contact by contact)")
-        return self.terminal.evaluate(times, z, z_rate, cells)
+        return self.terminal.evaluate(times, z, z_rate, cells=cells)

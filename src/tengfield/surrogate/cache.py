@@ -4,15 +4,15 @@ whether it is trusted.
 :func:`obtain_table` is the cache keyed by :meth:`tengfield.scene.Scene.field_hash`
 (and the solver fingerprint): rank 0 decides hit or miss and broadcasts the
 decision and the table, so the ranks never disagree. The ball's surface charge σ is
-not in the key: every charge of the field is linear in σ, so a table solved at one σ
-is scaled to the scene's (:func:`tengfield.surrogate.table.at_ball_charge`) and a
-σ-only change (value or sign) solves nothing. A file that is not trusted
+neither in the key nor in the table: every charge of the field is linear in σ, so a
+table holds the charges per unit ball charge (the induced fractions), the curves take
+the scene's ball charge (:class:`tengfield.surrogate.TerminalCurves`), and a σ-only
+change (value or sign) solves nothing. A file that is not trusted
 (:func:`tengfield.surrogate.store.read_table`) is recomputed (with a warning); a
 cache that cannot be written costs a warning, never the run.
 """
 from __future__ import annotations
 
-import math
 import os
 import time
 import warnings
@@ -25,7 +25,7 @@ from .refinement import (SolveFunction, precompute, precompute_radial, radial_ac
                          warn_accuracy, warn_problems)
 from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
 from .store import read_radial_table, read_table, write_radial_table, write_table
-from .table import SurrogateError, SurrogateTable, at_ball_charge
+from .table import SurrogateError, SurrogateTable
 from ..scene.schema import SURFACE_CHARGE_KEY
 
 
@@ -115,25 +115,14 @@ def store_in_cache(path: str | Path, table: SurrogateTable, comm=None, *, write=
 
 
 def solved_scene(scene):
-    """The scene a surrogate is solved for: ``scene`` itself, or (an uncharged ball, whose
-    table could not be scaled) the same scene at the stand-in σ
-    (``BREAKDOWN_PLACEHOLDER_UC``). The table is then scaled to the scene's own σ."""
+    """The scene a surrogate is solved for: ``scene`` itself, or (an uncharged ball) the
+    same scene at the stand-in σ (``BREAKDOWN_PLACEHOLDER_UC``): a solver may give the
+    fractions as charges divided by the ball's, which an uncharged ball has not. The
+    table is per unit charge either way (its cache key has no σ)."""
     if scene.device.surface_charge != 0.0:
         return scene
     from ..scene.schema import BREAKDOWN_PLACEHOLDER_UC
     return scene.with_values(device={SURFACE_CHARGE_KEY: BREAKDOWN_PLACEHOLDER_UC})
-
-
-def _at_scene_charge(table, scene, reason: str):
-    """``(table at the scene's σ, reason)``: a table solved at another σ is scaled and the
-    reason says from which σ."""
-    stored = float(table.ball_charge)
-    if float(scene.device.ball_charge) == stored:
-        return table, reason
-    stored_sigma = stored / (math.pi * scene.device.ball_diameter**2)
-    return (at_ball_charge(table, scene.device.ball_charge),
-            f"{reason}; charges scaled from sigma = {stored_sigma * 1e6:.6g} to "
-            f"{scene.device.surface_charge * 1e6:.6g} µC/m^2 (no field solve)")
 
 
 def _legacy(scene, path: Path, comm, write: bool):
@@ -177,13 +166,11 @@ def obtain_table(scene, *, cache_dir: str | Path | None = None, comm=None,
         table, status, reason = _legacy(scene, path, comm, write)
     if table is not None:
         warn_accuracy(table, comm)      # as when it was computed: a cache hit is no excuse
-        table, reason = _at_scene_charge(table, scene, reason)
         table.scene = scene
         return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
     table = precompute(solved_scene(scene), comm=comm, solve=solve, progress=progress,
                        command_line=command_line)
     stored = store_in_cache(path, table, comm) if write else False
-    table, _ = _at_scene_charge(table, scene, reason)
     table.scene = scene
     return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)
 
@@ -214,10 +201,8 @@ def obtain_radial_table(scene, *, cache_dir=None, comm=None, solve=None, progres
                                          expected_solver=solver_fingerprint()))
     if table is not None:
         warn_problems(radial_accuracy_problems(table), comm, stacklevel=2)
-        table, reason = _at_scene_charge(table, scene, reason)
         return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start)
     table = precompute_radial(solved_scene(scene), comm=comm, solve=solve, progress=progress,
                               command_line=command_line, **settings, **refinement)
     stored = store_in_cache(path, table, comm, write=write_radial_table) if write else False
-    table, _ = _at_scene_charge(table, scene, reason)
     return table, CacheOutcome(status, reason, str(path), time.perf_counter() - start, stored)

@@ -58,19 +58,25 @@ def write_surrogate_figure(table, curves, out_dir, *, cells: int = 1, visited=No
 
 
 def write_surrogate_files(table, out_dir, *, plots: bool = True,
-                          reference: str = "floating") -> list[Path]:
-    """surrogate.h5 (the table, as ``tengfield precompute -o`` writes it) and, with
-    ``plots``, surrogate.png (as ``tengfield run`` draws it: the scene's cells and
-    reference when the table knows its scene); returns the paths."""
+                          reference: str = "floating",
+                          ball_charge: float | None = None) -> list[Path]:
+    """surrogate.h5 (the table, as ``tengfield precompute -o`` writes it: per unit ball
+    charge) and, with ``plots``, surrogate.png (as ``tengfield run`` draws it: the scene's
+    cells, reference and ball charge [C] when the table knows its scene; ``ball_charge``
+    otherwise); returns the paths."""
     from ..files import writable_target
+    from .table import scene_ball_charge
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if plots:       # refused before anything is written when no ball charge is known
+        ball_charge = scene_ball_charge(table, ball_charge)
     written = [write_table(writable_target(out / SURROGATE_FILE), table)]
     if plots:
         scene = getattr(table, "scene", None)
         cells = 1 if scene is None else scene.device.cells
         if scene is not None:
             reference = scene.circuit.reference
-        written.append(write_surrogate_figure(table, table.curves(reference), out, cells=cells))
+        written.append(write_surrogate_figure(table, table.curves(reference, ball_charge), out,
+                                              cells=cells))
     return written

@@ -20,10 +20,18 @@ from .sampling import DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE
 from ..scene.schema import SURFACE_CHARGE_KEY
 
 #: 2: per-array checksums (Fletcher-32 + SHA-256) and a checksum of the scalars;
-#: 3: the breakdown lines' mesh check stored only where it was solved (no NaN in a file)
-FORMAT_VERSION = 3
-#: format of the (z, r) HDF5 file
-FORMAT_VERSION_ZR = 1
+#: 3: the breakdown lines' mesh check stored only where it was solved (no NaN in a file);
+#: 4: per unit ball charge (``induced_fraction``, no ``ball_charge_C``)
+FORMAT_VERSION = 4
+#: the 1-D formats still read: 3 (charges in C at its ball charge, converted on read)
+OLD_FORMAT_VERSIONS = (3,)
+#: format of the (z, r) HDF5 file (2: per unit ball charge, as the 1-D format 4)
+FORMAT_VERSION_ZR = 2
+#: the (z, r) formats still read: 1 (charges in C at its ball charge, converted on read)
+OLD_FORMAT_VERSIONS_ZR = (1,)
+#: the format number in the (z, r) cache key (:func:`radial_hash`): 1, the format the key
+#: was made with; a new format whose old files are converted on read keeps the key
+ZR_KEY_FORMAT = 1
 
 
 def solver_fingerprint() -> str:
@@ -78,7 +86,7 @@ def radial_hash(scene, *, mesh_size_mm: float = DEFAULT_MESH_SIZE_MM,
     """SHA-256 of the scene's field inputs plus the (z, r) surrogate's own settings
     (the cache key of :func:`obtain_radial_table`)."""
     inputs = {"field": scene.field_inputs(),
-              "zr": {"format": FORMAT_VERSION_ZR, "method": "3d",
+              "zr": {"format": ZR_KEY_FORMAT, "method": "3d",
                      "mesh_size_mm": float(mesh_size_mm), "degree": int(degree),
                      "tolerance": float(tolerance)}}
     return hashlib.sha256(json.dumps(inputs, sort_keys=True, default=float).encode()).hexdigest()

@@ -42,8 +42,8 @@ from .sampling import (DEFAULT_DEGREE, DEFAULT_MESH_SIZE_MM, DEFAULT_TOLERANCE, 
                        offset_positions, offset_refinement, physical_offset,
                        refinement_positions)
 from .table import (RadialTable, RadialTerminalCurves, SurrogateError, SurrogateTable,
-                    TerminalCurves, table_from_grid, table_from_results, terminal_grid,
-                    terminal_samples)
+                    TerminalCurves, UNIT_CHARGE, table_from_grid, table_from_results,
+                    terminal_grid, terminal_samples)
 
 SolveFunction = Callable[..., Any]
 #: positions without their own field error estimate get the largest sampled one
@@ -323,8 +323,8 @@ def held_out_error(coarse: SurrogateTable, held_out: SurrogateTable) -> float:
     union = coarse.merged(held_out)
     worst = 0.0
     for reference in terminals.REFERENCES:
-        curves = TerminalCurves(coarse, reference)
-        q_all, c_all = terminal_samples(union, reference)
+        curves = TerminalCurves(coarse, reference, UNIT_CHARGE)   # relative: any charge
+        q_all, c_all = terminal_samples(union, reference, UNIT_CHARGE)
         inside = np.isin(union.positions, held_out.positions)
         z = union.positions[inside]
         q_direct, c_direct = q_all[inside], c_all[inside]
@@ -352,8 +352,8 @@ def held_out_error_zr(coarse: RadialTable, fine: RadialTable) -> tuple[float, fl
     groups = {"all": held, "z": held & old_r, "r": held & old_z}
     worst = {name: (0.0 if np.any(mask) else math.nan) for name, mask in groups.items()}
     for reference in terminals.REFERENCES:
-        curves = RadialTerminalCurves(coarse, reference)
-        q_fine, c_fine = terminal_grid(fine, reference)
+        curves = RadialTerminalCurves(coarse, reference, UNIT_CHARGE)   # relative: any charge
+        q_fine, c_fine = terminal_grid(fine, reference, UNIT_CHARGE)
         v_fine = q_fine / c_fine
         q_coarse, c_coarse = curves.grid_values(zz, rr)
         deviations = [(q_coarse, q_fine), (c_coarse, c_fine),
@@ -380,8 +380,8 @@ def axis_check(table: RadialTable, axis_table: SurrogateTable) -> dict:
     z = table.positions
     deviation = 0.0
     for reference in terminals.REFERENCES:
-        q_grid, c_grid = terminal_grid(table, reference)
-        axis = TerminalCurves(axis_table, reference)
+        q_grid, c_grid = terminal_grid(table, reference, UNIT_CHARGE)
+        axis = TerminalCurves(axis_table, reference, UNIT_CHARGE)
         for ours, theirs in ((q_grid[:, 0], axis.charge(z)), (c_grid[:, 0], axis.capacitance(z))):
             scale = float(np.max(np.abs(theirs)))
             if scale > 0.0:

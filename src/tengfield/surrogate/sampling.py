@@ -76,9 +76,11 @@ def is_mirror_symmetric(scene) -> bool:
 
 def mirrored(result, stroke: float):
     """The solve at ``stroke - z`` implied by mirror symmetry: C_ll <-> C_uu, q_l <-> q_u
-    (wall and solve times 0: nothing was solved)."""
+    and f_l <-> f_u (the induced charges and fractions; wall and solve times 0: nothing
+    was solved)."""
     C = np.asarray(result.capacitance, dtype=float)
     q = np.asarray(result.induced_charge, dtype=float)
+    fraction = np.asarray(result.induced_fraction, dtype=float)
     if q.size != 2:      # one electrode (the single-electrode cell) has no mirror image
         raise ValueError(f"mirrored: a solve of {q.size} electrode(s) has no mirror image "
                          "(the pair's z -> stroke - z swaps its two electrodes)")
@@ -88,6 +90,7 @@ def mirrored(result, stroke: float):
             info[key] = np.asarray(info[key], dtype=float)[::-1][..., [0, 2, 1]].copy()
     return dataclasses.replace(result, position=stroke - result.position,
                                capacitance=C[::-1, ::-1].copy(), induced_charge=q[::-1].copy(),
+                               induced_fraction=fraction[::-1].copy(),
                                wall_time=0.0, solve_time=0.0,   # no solve of its own
                                info=info)
 

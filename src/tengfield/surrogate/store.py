@@ -8,7 +8,9 @@ trusts a file only if it is complete, of this format, for the expected
 scene and solver, every checksum matches and the data make sense
 (:func:`check_table`: positions sorted from 0 to the stroke, consistent
 shapes, finite values, each C symmetric positive definite with C_lu < 0,
-induced charges within the ball's charge). Where the files live and when one
+induced fractions in [-1, 0]). A file of the layout before the per-unit one (1-D
+format 3, (z, r) format 1: charges in C and the ball charge they were solved at) is
+read and converted (:func:`per_unit_charge`). Where the files live and when one
 is reused: :mod:`tengfield.surrogate.cache`. The (z, r) file (``kind = "zr"``) has
 the same rules (:func:`write_radial_table`, :func:`read_radial_table`,
 :func:`check_radial_table`: every offset's column passes :func:`check_table`).
@@ -22,11 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from ..files.hdf5 import array_digest, scalars_digest, write_checked_file  # noqa: F401
-from .layout import (ARRAYS, ARRAYS_ZR, LINE_CHECK_INDEX, OPTIONAL_ARRAYS,  # noqa: F401
-                     OPTIONAL_SCALARS_ZR, SCALAR_TYPES, SCALAR_TYPES_ZR, SCALARS, SCALARS_ZR,
-                     _SHAPES, typed_scalars)
+from .layout import (ARRAYS, ARRAYS_ZR, LINE_CHECK_INDEX, OLD_BALL_CHARGE,  # noqa: F401
+                     OLD_CHARGE_ARRAY, OPTIONAL_ARRAYS, OPTIONAL_SCALARS_ZR, SCALAR_TYPES,
+                     SCALAR_TYPES_ZR, SCALARS, SCALARS_ZR, _SHAPES, old_layout, typed_scalars)
 from .output import write_table  # noqa: F401 - written beside the figure, read here
-from .provenance import FORMAT_VERSION, FORMAT_VERSION_ZR
+from .provenance import (FORMAT_VERSION, FORMAT_VERSION_ZR, OLD_FORMAT_VERSIONS,
+                         OLD_FORMAT_VERSIONS_ZR)
 from .table import GRID_TAILS, RadialTable, SurrogateError, SurrogateTable, grid_tails
 
 # ---------------------------------------------------------------------------
@@ -36,12 +39,12 @@ def check_shapes(arrays: dict) -> None:
     -> array) have one length and the shapes of :data:`ARRAYS`."""
     positions = np.asarray(arrays["positions"])
     n = positions.shape[0] if positions.ndim == 1 else -1
-    induced = np.shape(arrays["induced_charge"])
+    induced = np.shape(arrays["induced_fraction"])
     electrodes = induced[1] if len(induced) == 2 and induced[1] in (1, 2) else 2
     for attr, tail in _SHAPES.items():
         if attr == "capacitance":            # the pair's (2, 2), one electrode's (1, 1)
             tail = (electrodes, electrodes)
-        elif attr == "induced_charge":
+        elif attr == "induced_fraction":
             tail = (electrodes,)
         shape = np.shape(arrays[attr])
         if n < 0 or shape != (n, *tail):
@@ -71,14 +74,14 @@ def check_table(table: SurrogateTable) -> None:
 
     Positions strictly ascending from 0 to the stroke, arrays of one length
     and the right shapes, finite values, each C symmetric positive definite
-    with C_lu < 0, each induced charge between 0 and minus the ball charge.
+    with C_lu < 0, each induced fraction (charge per unit ball charge) in [-1, 0] (to 1 %).
     """
     check_shapes({attr: getattr(table, attr) for attr in ARRAYS})
     z = table.positions
     check_axis(z, float(table.stroke), "position", "stroke")
-    C, q, Q = table.capacitance, table.induced_charge, float(table.ball_charge)
-    if not (np.all(np.isfinite(C)) and np.all(np.isfinite(q)) and np.isfinite(Q)):
-        raise SurrogateError("non-finite capacitance or charge")
+    C, fractions = table.capacitance, table.induced_fraction
+    if not (np.all(np.isfinite(C)) and np.all(np.isfinite(fractions))):
+        raise SurrogateError("non-finite capacitance or induced fraction")
     if C.shape[1] == 1:                 # the single-electrode cell: C_ll > 0
         bad = ~(C[:, 0, 0] > 0)
     else:
@@ -90,13 +93,32 @@ def check_table(table: SurrogateTable) -> None:
         i = int(np.argmax(bad))
         raise SurrogateError(f"the capacitance matrix at z = {z[i]:.6g} m is not symmetric "
                              "positive definite with C_lu < 0")
-    fractions = q / Q if Q != 0.0 else q
-    slack = 1e-2 if Q != 0.0 else 0.0
+    slack = 1e-2
     bad = np.any((fractions > slack) | (fractions < -1.0 - slack), axis=1)
     if np.any(bad):
         i = int(np.argmax(bad))
-        raise SurrogateError(f"the induced charges at z = {z[i]:.6g} m are not between 0 and "
-                             "minus the ball charge")
+        raise SurrogateError(f"the induced fractions at z = {z[i]:.6g} m are not between -1 "
+                             "and 0 (the induced charges not between 0 and minus the ball "
+                             "charge)")
+
+
+def per_unit_charge(arrays: dict, scalars: dict, version: int) -> dict:
+    """Convert, in place, what a file of the old layout (``version``: 1-D format 3, (z, r)
+    format 1) holds to today's: ``induced_fraction = induced_charge / ball_charge``
+    (the field is linear in the ball's charge), the ball charge dropped from the
+    scalars. Returns ``{"format": version, "ball_charge_C": Q}`` for the provenance.
+    :class:`SurrogateError` for a ball charge of 0 (the charges then say nothing per
+    unit charge) or a non-finite one."""
+    (charge_attr,) = OLD_CHARGE_ARRAY
+    (ball_attr,) = OLD_BALL_CHARGE
+    ball_charge = float(scalars.pop(ball_attr))
+    if ball_charge == 0.0 or not np.isfinite(ball_charge):
+        raise SurrogateError(
+            f"was written by an older tengfield (format {version}: charges in C) for a ball "
+            f"charge of {ball_charge!r} C, so it holds no charge per unit ball charge: solve "
+            "it again (tengfield precompute --force, or delete the file)")
+    arrays["induced_fraction"] = np.asarray(arrays.pop(charge_attr), dtype=float) / ball_charge
+    return {"format": int(version), "ball_charge_C": ball_charge}
 
 
 # ---------------------------------------------------------------------------
@@ -150,7 +172,9 @@ def read_checked_file(path: str | Path, *, check_format, array_names: dict, scal
                       optional_names: dict | None = None, optional_scalars: dict | None = None):
     """Read a file written by :func:`write_checked_file`; raise :class:`SurrogateError`
     (naming ``path``) unless it is complete, of the format ``check_format(attrs)``
-    accepts (it raises :class:`SurrogateError` otherwise), unchanged since written
+    accepts (it raises :class:`SurrogateError` otherwise; it returns the format version
+    when that is an old one, read by :func:`old_layout` and converted by
+    :func:`per_unit_charge`, else None), unchanged since written
     (checksums), sensible (``build(arrays, history, scalars, provenance)`` returns the
     table or raises) and (if given) for ``expected_hash`` (called ``hash_label`` in the
     message) made by the solver with fingerprint ``expected_solver``."""
@@ -166,7 +190,10 @@ def read_checked_file(path: str | Path, *, check_format, array_names: dict, scal
         with h5py.File(path, "r") as f:
             if not bool(f.attrs.get("complete", False)):
                 raise SurrogateError("is partial (complete flag unset)")
-            check_format(f.attrs)
+            old = check_format(f.attrs)
+            if old is not None:     # charges in C and their ball charge: converted below
+                array_names, scalar_names, scalar_types = old_layout(
+                    array_names, scalar_names, scalar_types)
             stored_hash = str(f.attrs["field_hash"])
             if expected_hash is not None and stored_hash != expected_hash:
                 raise SurrogateError(f"was made for {hash_label} {stored_hash[:12]}..., the "
@@ -183,12 +210,16 @@ def read_checked_file(path: str | Path, *, check_format, array_names: dict, scal
             if str(f.attrs.get("scalars_sha256", "")) != scalars_digest(scalars):
                 raise SurrogateError("scalar attributes do not match their checksum")
             provenance_text = str(f.attrs["provenance"])
+            converted = None if old is None else per_unit_charge(arrays, scalars, old)
     except SurrogateError as exc:
         raise fail(exc.reason) from None
     except Exception as exc:  # noqa: BLE001 - any read failure means "corrupt"
         raise fail(f"is corrupt or unreadable: {type(exc).__name__}: {exc}") from None
     try:
-        table = build(arrays, history, scalars, json.loads(provenance_text))
+        provenance_data = json.loads(provenance_text)
+        if converted is not None:   # where the fractions came from (not a table field)
+            provenance_data["converted_from"] = converted
+        table = build(arrays, history, scalars, provenance_data)
     except SurrogateError as exc:
         raise fail(f"holds inconsistent data: {exc.reason}") from None
     except Exception as exc:  # noqa: BLE001 - shapes that do not even build a table
@@ -205,11 +236,16 @@ def _plain(value):
     return value.item() if isinstance(value, np.generic) else value
 
 
-def _check_format(attrs) -> None:
+def _check_format(attrs) -> int | None:
+    """None for today's format, the version for an old one still read; else raise."""
     version = attrs.get("format_version")
+    if version is not None and int(version) in OLD_FORMAT_VERSIONS:
+        return int(version)
     if version is None or int(version) != FORMAT_VERSION:
+        readable = ", ".join(str(v) for v in (*OLD_FORMAT_VERSIONS, FORMAT_VERSION))
         raise SurrogateError(f"has format version {_plain(version)!r}, written by another "
-                             f"tengfield version (this one reads format {FORMAT_VERSION})")
+                             f"tengfield version (this one reads formats {readable})")
+    return None
 
 
 def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) -> SurrogateTable:
@@ -220,7 +256,7 @@ def _build_table(arrays: dict, history, scalars: dict, provenance_data: dict) ->
     if "line_check" in arrays:
         arrays["line_check"] = _expand_line_check(arrays["line_check"],
                                                   arrays.pop("line_check_index", None), n)
-    basis = 1 + np.shape(arrays["induced_charge"])[1]   # [φ_1, ψ_k per electrode]
+    basis = 1 + np.shape(arrays["induced_fraction"])[1]   # [φ_1, ψ_k per electrode]
     for attr in OPTIONAL_ARRAYS:
         if attr in arrays:
             shape = np.shape(arrays[attr])
@@ -278,8 +314,8 @@ def read_table(path: str | Path, expected_hash: str | None = None,
 def _check_grid_shapes(arrays: dict, nz: int, nr: int) -> None:
     """Raise :class:`SurrogateError` unless each per-point array of ``arrays`` (table
     attribute -> array) has the shape ``(nz, nr, *tail)`` of :func:`grid_tails` (the
-    electrode count read from the induced charges: 2, or 1 for the single electrode)."""
-    q = np.shape(arrays["induced_charge"])
+    electrode count read from the induced fractions: 2, or 1 for the single electrode)."""
+    q = np.shape(arrays["induced_fraction"])
     electrodes = q[2] if len(q) == 3 and q[2] in (1, 2) else 2   # else refused as the pair's
     for attr, tail in grid_tails(electrodes).items():
         shape = np.shape(arrays[attr])
@@ -322,11 +358,17 @@ def write_radial_table(path, table: RadialTable) -> Path:
         "provenance": json.dumps(table.provenance, default=str)}, error=SurrogateError)
 
 
-def _check_format_zr(attrs) -> None:
+def _check_format_zr(attrs) -> int | None:
+    """None for today's (z, r) format, the version for an old one still read; else raise."""
     version = attrs.get("format_version")
-    if str(attrs.get("kind", "")) != "zr" or version is None or int(version) != FORMAT_VERSION_ZR:
-        raise SurrogateError(f"is not a (z, r) surrogate of format {FORMAT_VERSION_ZR} "
+    zr = str(attrs.get("kind", "")) == "zr" and version is not None
+    if zr and int(version) in OLD_FORMAT_VERSIONS_ZR:
+        return int(version)
+    if not zr or int(version) != FORMAT_VERSION_ZR:
+        readable = " or ".join(str(v) for v in (*OLD_FORMAT_VERSIONS_ZR, FORMAT_VERSION_ZR))
+        raise SurrogateError(f"is not a (z, r) surrogate of format {readable} "
                              f"(kind {_plain(attrs.get('kind'))!r}, format {_plain(version)!r})")
+    return None
 
 
 def _build_radial_table(arrays: dict, history, scalars: dict,

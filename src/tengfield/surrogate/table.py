@@ -2,9 +2,13 @@
 on the axis (z) and off it (z, r).
 
 Per position: the Maxwell capacitance matrix ``C_ll, C_lu, C_uu`` [F] and
-the induced charges ``q_l, q_u`` [C] (sign conventions of
-:mod:`tengfield.terminals`). Cubic splines through the derived ``Q_SC(z)``
-[C] and ``C_T(z)`` [F] (for the chosen reference) give ``V_OC = Q_SC / C_T``
+the induced fractions ``f_l, f_u`` (dimensionless: the charge each grounded electrode
+carries per unit ball charge, ``q_k = f_k q_ball``, ``f_k = -ψ_k`` averaged over the ball,
+Shockley–Ramo; sign conventions of :mod:`tengfield.terminals`). A table holds no ball
+charge: the field is linear in it, so the curves take it as an argument
+(``TerminalCurves(table, reference, ball_charge)``), and tables of one geometry serve
+every σ. Cubic splines through the derived ``Q_SC(z)``
+[C] and ``C_T(z)`` [F] (for the chosen reference and ball charge) give ``V_OC = Q_SC / C_T``
 [V] and the exact derivatives ``dQ_SC/dz`` [C/m] and ``dC_T/dz`` [F/m] of
 the interpolant (never finite differences). :class:`SurrogateTable` and
 :class:`TerminalCurves` on the axis; :class:`RadialTable`,
@@ -27,8 +31,11 @@ from ..errors import SurrogateError, TengfieldError  # noqa: F401 - its home was
 from .sampling import grid_key, scaled_offset, scaled_offset_jacobian
 
 
+#: the ball charge [C] of curves per unit ball charge (Q_SC in C per C of the ball: the
+#: accuracy estimates, which are relative, and the contact-charge bookkeeping use them)
+UNIT_CHARGE = 1.0
 #: the per-position arrays of a table (all of length ``count``)
-PER_POSITION = ("positions", "capacitance", "induced_charge", "dofs", "cells", "wall_time",
+PER_POSITION = ("positions", "capacitance", "induced_fraction", "dofs", "cells", "wall_time",
                 "solve_time", "field_error")
 #: optional per-position arrays (None when the solver did not give them): the basis
 #: potentials of the breakdown lines (tengfield.field.breakdown), shape (n, 2, lines, 3),
@@ -36,7 +43,7 @@ PER_POSITION = ("positions", "capacitance", "induced_charge", "dofs", "cells", "
 OPTIONAL_PER_POSITION = ("line_potential", "line_check")
 #: per-point arrays: trailing shape after (n_z, n_r), for the pair's two electrodes
 #: (:func:`grid_tails` for any count)
-GRID_TAILS = {"capacitance": (2, 2), "induced_charge": (2,), "dofs": (), "cells": (),
+GRID_TAILS = {"capacitance": (2, 2), "induced_fraction": (2,), "dofs": (), "cells": (),
                "wall_time": (), "solve_time": (), "field_error": ()}
 
 
@@ -44,7 +51,7 @@ def grid_tails(electrodes: int = 2) -> dict:
     """:data:`GRID_TAILS` of a cell with ``electrodes`` electrodes (2: the pair, 1: the
     single-electrode cell)."""
     return {**GRID_TAILS, "capacitance": (electrodes, electrodes),
-            "induced_charge": (electrodes,)}
+            "induced_fraction": (electrodes,)}
 
 
 @dataclass(kw_only=True)
@@ -75,8 +82,9 @@ class SurrogateTable(SolveRecord):
     """Field solves at sampled positions (one cell, SI) and their provenance.
 
     ``capacitance[i]`` = [[C_ll, C_lu], [C_lu, C_uu]] [F] and
-    ``induced_charge[i]`` = [q_lower, q_upper] [C] at ``positions[i]`` [m]
-    (ascending). ``interpolation_error`` is the held-out relative error
+    ``induced_fraction[i]`` = [q_lower, q_upper] / q_ball (dimensionless, each in
+    [-1, 0]) at ``positions[i]`` [m] (ascending); no ball charge (:meth:`induced_charges`
+    gives the charges [C] at one). ``interpolation_error`` is the held-out relative error
     estimate (see :mod:`tengfield.surrogate.refinement`), ``field_error`` the
     field solver's per-position estimate (measured at a few positions and
     carried over to the others, see ``provenance["field_error_rule"]``);
@@ -84,8 +92,7 @@ class SurrogateTable(SolveRecord):
     """
     positions: np.ndarray
     capacitance: np.ndarray
-    induced_charge: np.ndarray
-    ball_charge: float
+    induced_fraction: np.ndarray
     stroke: float
     line_potential: np.ndarray | None = None
     line_check: np.ndarray | None = None
@@ -94,22 +101,30 @@ class SurrogateTable(SolveRecord):
 
     @property
     def summary(self) -> dict:
-        """JSON-ready: the solved positions [m], C_T-relevant matrices [F], charges [C],
-        the ball's charge [C], the stroke [m] and the accuracy figures."""
+        """JSON-ready: the solved positions [m], the capacitance matrices [F], the induced
+        fractions (charge per unit ball charge, dimensionless), the stroke [m] and the
+        accuracy figures."""
         return {"positions_m": self.positions.tolist(),
                 "capacitance_F": self.capacitance.tolist(),
-                "induced_charge_C": self.induced_charge.tolist(),
-                "ball_charge_C": float(self.ball_charge), "stroke_m": float(self.stroke),
+                "induced_fraction": self.induced_fraction.tolist(),
+                "stroke_m": float(self.stroke),
                 "method": self.method, "degree": int(self.degree),
                 "field_hash": self.field_hash, "converged": bool(self.converged),
                 "interpolation_error": float(self.interpolation_error),
                 "tolerance": float(self.tolerance)}
 
-    def plot(self, reference: str = "floating"):
-        """surrogate.png's figure: V_OC, Q_SC, C_T against z, solved positions as dots."""
+    def induced_charges(self, ball_charge: float) -> np.ndarray:
+        """[q_lower, q_upper] [C] per position for a ball carrying ``ball_charge`` [C]."""
+        return self.induced_fraction * float(ball_charge)
+
+    def plot(self, reference: str = "floating", ball_charge: float | None = None):
+        """surrogate.png's figure: V_OC, Q_SC, C_T against z, solved positions as dots, for
+        a ball carrying ``ball_charge`` [C] (None: the charge of the scene it was obtained
+        for, ``scene``)."""
         from ..plotting.waveforms import surrogate_figure
 
-        return surrogate_figure(self, TerminalCurves(self, reference))
+        return surrogate_figure(self, TerminalCurves(self, reference,
+                                                     scene_ball_charge(self, ball_charge)))
 
     @checked_write
     def write(self, out_dir, plots: bool = True) -> list:
@@ -126,10 +141,10 @@ class SurrogateTable(SolveRecord):
                 setattr(self, name, np.asarray(getattr(self, name), dtype=float)[order])
         self.positions = np.asarray(self.positions, dtype=float)[order]
         count = self.positions.size            # the electrodes: 2 (the pair) or 1
-        electrodes = np.asarray(self.induced_charge).size // count if count else 2
+        electrodes = np.asarray(self.induced_fraction).size // count if count else 2
         self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(
             -1, electrodes, electrodes)[order]
-        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(
+        self.induced_fraction = np.asarray(self.induced_fraction, dtype=float).reshape(
             -1, electrodes)[order]
         for name in ("dofs", "cells"):
             setattr(self, name, np.asarray(getattr(self, name), dtype=np.int64)[order])
@@ -145,8 +160,9 @@ class SurrogateTable(SolveRecord):
         """Sum of the per-position wall times [s] over all ranks (mirror images cost 0)."""
         return float(np.sum(self.wall_time))
 
-    def curves(self, reference: str = "floating") -> "TerminalCurves":
-        return TerminalCurves(self, reference)
+    def curves(self, reference: str, ball_charge: float) -> "TerminalCurves":
+        """:class:`TerminalCurves` for ``reference`` and a ball of ``ball_charge`` [C]."""
+        return TerminalCurves(self, reference, ball_charge)
 
     def subset(self, mask) -> "SurrogateTable":
         """The positions selected by the boolean ``mask``."""
@@ -167,26 +183,17 @@ class SurrogateTable(SolveRecord):
         return dataclasses.replace(self, **cat)
 
 
-def scaled_charges(table, factor: float):
-    """``table`` (a :class:`SurrogateTable` or :class:`RadialTable`) with every charge
-    times ``factor``: the induced charges q_l, q_u and the ball charge are linear in σ;
-    the capacitances, the breakdown lines' basis potentials (per unit σ) and the
-    relative error estimates do not depend on it. ``factor`` 1 returns ``table``."""
-    if factor == 1.0:
-        return table
-    return dataclasses.replace(table, induced_charge=np.asarray(table.induced_charge) * factor,
-                               ball_charge=float(table.ball_charge) * factor)
-
-
-def at_ball_charge(table, ball_charge: float):
-    """``table`` at the ball charge ``ball_charge`` [C] (σ π d²): a cached surrogate
-    solved at another σ, scaled (no field solve). The stored table's own ball charge
-    must be non-zero (:func:`tengfield.surrogate.obtain_table` never solves at σ = 0)."""
-    stored = float(table.ball_charge)
-    if stored == 0.0:
-        raise SurrogateError("the surrogate was solved for an uncharged ball; it cannot be "
-                             "scaled to another charge")
-    return scaled_charges(table, 1.0 if ball_charge == stored else ball_charge / stored)
+def scene_ball_charge(table, ball_charge: float | None = None) -> float:
+    """``ball_charge`` [C], or (None) the ball charge of the scene ``table`` was obtained
+    for (``table.scene``, set by :func:`tengfield.surrogate.obtain_table` and
+    ``precompute``); :class:`SurrogateError` when it knows none."""
+    if ball_charge is not None:
+        return float(ball_charge)
+    scene = getattr(table, "scene", None)
+    if scene is None:
+        raise SurrogateError("the surrogate table holds no ball charge (it is per unit "
+                             "charge) and knows no scene: give ball_charge [C]")
+    return float(scene.device.ball_charge)
 
 
 def table_from_results(results: list, *, stroke: float) -> SurrogateTable:
@@ -196,8 +203,7 @@ def table_from_results(results: list, *, stroke: float) -> SurrogateTable:
     return SurrogateTable(
         positions=[r.position for r in results],
         capacitance=[r.capacitance for r in results],
-        induced_charge=[r.induced_charge for r in results],
-        ball_charge=float(results[0].ball_charge),
+        induced_fraction=[r.induced_fraction for r in results],
         stroke=stroke,
         dofs=[r.dofs for r in results], cells=[r.cells for r in results],
         wall_time=[r.wall_time for r in results],
@@ -219,18 +225,20 @@ def _line_arrays(results: list) -> dict:
     return {"line_potential": np.stack(lines), "line_check": np.stack(check)}
 
 
-def terminal_samples(table: SurrogateTable, reference: str = "floating"):
-    """``(Q_SC, C_T)`` [C], [F] at the table's positions, one cell.
+def terminal_samples(table: SurrogateTable, reference: str, ball_charge: float):
+    """``(Q_SC, C_T)`` [C], [F] at the table's positions, one cell, the ball carrying
+    ``ball_charge`` [C] (1.0: Q_SC per unit ball charge).
 
     ``Q_SC(z) = Q_u0(z) - Q_u0(0)``: the table must contain z = 0 (Q_u0: the charge on
     the receiving terminal shorted, :meth:`tengfield.terminals.FloatingPair.terminal_charge`;
-    the single-electrode cell's ground side).
+    the single-electrode cell's ground side), linear in the ball's charge: per unit
+    charge from the fractions, times ``ball_charge``.
     """
     C = table.capacitance
-    q = table.induced_charge
-    wiring = terminals.wiring(reference, q.shape[1])   # the pair's reference, or one electrode
+    f = table.induced_fraction
+    wiring = terminals.wiring(reference, f.shape[1])   # the pair's reference, or one electrode
     c_t = wiring.terminal_capacitance(C)
-    q_u0 = wiring.terminal_charge(C, q, table.ball_charge)
+    q_u0 = wiring.terminal_charge(C, f, 1.0) * float(ball_charge)
     if table.positions[0] != 0.0:
         raise SurrogateError("the surrogate table has no position z = 0 (the reference state)")
     return q_u0 - q_u0[0], np.asarray(c_t, dtype=float)
@@ -246,9 +254,11 @@ class Curves(ABC):
     offset ``r`` [m] as well as the gap ``z`` [m], and the methods take ``(z, r)``,
     else ``(z)``; ``axis`` is the 1-D curves on the axis (None for bare (z, r) curves).
     ``positions`` [m] are the tabulated gaps; ``charge_samples`` [C] and
-    ``capacitance_samples`` [F] every tabulated value (e.g. for C_T's range).
+    ``capacitance_samples`` [F] every tabulated value (e.g. for C_T's range);
+    ``ball_charge`` [C] the ball's charge the charges are for.
     """
     reference: str
+    ball_charge: float
     stroke: float
     positions: np.ndarray
     charge_samples: np.ndarray
@@ -307,20 +317,24 @@ class OnAxisCurves(Curves):
 
 
 class TerminalCurves(OnAxisCurves):
-    """Smooth ``Q_SC(z)``, ``C_T(z)``, ``V_OC(z)`` of one cell for one reference.
+    """Smooth ``Q_SC(z)``, ``C_T(z)``, ``V_OC(z)`` of one cell for one reference and a
+    ball carrying ``ball_charge`` [C] (σ π d²; Q_SC and V_OC are proportional to it, C_T
+    does not depend on it).
 
     Cubic splines (not-a-knot) through the tabulated values; derivatives are
     those of the splines. ``z`` [m] outside [0, Δh] is clipped to the stroke.
     """
 
-    def __init__(self, table: SurrogateTable, reference: str = "floating"):
+    def __init__(self, table: SurrogateTable, reference: str, ball_charge: float):
         from scipy.interpolate import CubicSpline   # not at import: keeps `tengfield --help` fast
 
         terminals._check_reference(reference)
         self.reference = reference
+        self.ball_charge = float(ball_charge)
         self.stroke = float(table.stroke)
         self.positions = table.positions.copy()
-        self.charge_samples, self.capacitance_samples = terminal_samples(table, reference)
+        self.charge_samples, self.capacitance_samples = terminal_samples(
+            table, reference, self.ball_charge)
         if self.positions.size < 2:
             raise SurrogateError("a surrogate needs at least 2 positions")
         kind = "not-a-knot" if self.positions.size >= 4 else "natural"
@@ -363,8 +377,9 @@ class RadialTable(SolveRecord):
     """3D field solves on the grid ``positions`` x ``offsets`` (one cell, SI).
 
     ``capacitance[i, j]`` = [[C_ll, C_lu], [C_lu, C_uu]] [F] and
-    ``induced_charge[i, j]`` = [q_lower, q_upper] [C] at gap ``positions[i]``
-    [m] and radial offset ``offsets[j]`` [m] (both ascending, from 0).
+    ``induced_fraction[i, j]`` = [q_lower, q_upper] / q_ball (dimensionless) at gap
+    ``positions[i]`` [m] and radial offset ``offsets[j]`` [m] (both ascending, from 0);
+    no ball charge, as :class:`SurrogateTable`.
     ``error_history`` = [(n_z, n_r, estimate), ...]; ``mesh_size`` [m] and
     ``degree`` the 3D discretisation; ``field_hash`` the cache key
     (:func:`tengfield.surrogate.provenance.radial_hash`). The other fields: :class:`SolveRecord`.
@@ -372,8 +387,7 @@ class RadialTable(SolveRecord):
     positions: np.ndarray
     offsets: np.ndarray
     capacitance: np.ndarray
-    induced_charge: np.ndarray
-    ball_charge: float
+    induced_fraction: np.ndarray
     stroke: float
     max_offset: float
     method: str = field(default="3d", kw_only=True)
@@ -388,10 +402,10 @@ class RadialTable(SolveRecord):
         self.offsets = np.asarray(self.offsets, dtype=float)
         grid = (self.positions.size, self.offsets.size)
         points = grid[0] * grid[1]     # the electrodes: 2 (the pair) or 1
-        electrodes = np.asarray(self.induced_charge).size // points if points else 2
+        electrodes = np.asarray(self.induced_fraction).size // points if points else 2
         self.capacitance = np.asarray(self.capacitance, dtype=float).reshape(
             *grid, electrodes, electrodes)
-        self.induced_charge = np.asarray(self.induced_charge, dtype=float).reshape(
+        self.induced_fraction = np.asarray(self.induced_fraction, dtype=float).reshape(
             *grid, electrodes)
         for name in ("dofs", "cells"):
             setattr(self, name, np.asarray(getattr(self, name), dtype=np.int64).reshape(grid))
@@ -405,7 +419,7 @@ class RadialTable(SolveRecord):
     @property
     def electrodes(self) -> int:
         """The cell's electrode count (2: the pair, 1: the single-electrode cell)."""
-        return int(self.induced_charge.shape[-1])
+        return int(self.induced_fraction.shape[-1])
 
     @property
     def count(self) -> int:
@@ -417,16 +431,21 @@ class RadialTable(SolveRecord):
         """Sum of the per-point wall times [s] over all ranks (mirror images cost 0)."""
         return float(np.sum(self.wall_time))
 
-    def curves(self, reference: str = "floating") -> "RadialTerminalCurves":
-        return RadialTerminalCurves(self, reference)
+    def induced_charges(self, ball_charge: float) -> np.ndarray:
+        """[q_lower, q_upper] [C] per grid point for a ball carrying ``ball_charge`` [C]."""
+        return self.induced_fraction * float(ball_charge)
+
+    def curves(self, reference: str, ball_charge: float) -> "RadialTerminalCurves":
+        """:class:`RadialTerminalCurves` for ``reference`` and a ball of ``ball_charge`` [C]."""
+        return RadialTerminalCurves(self, reference, ball_charge)
 
     def column(self, j: int) -> SurrogateTable:
         """The 1-D :class:`SurrogateTable` at offset ``offsets[j]`` (its Q_SC is
         referred to z = 0 at that offset)."""
         return SurrogateTable(
             positions=self.positions, capacitance=self.capacitance[:, j],
-            induced_charge=self.induced_charge[:, j], ball_charge=self.ball_charge,
-            stroke=self.stroke, dofs=self.dofs[:, j], cells=self.cells[:, j],
+            induced_fraction=self.induced_fraction[:, j], stroke=self.stroke,
+            dofs=self.dofs[:, j], cells=self.cells[:, j],
             wall_time=self.wall_time[:, j], solve_time=self.solve_time[:, j],
             field_error=self.field_error[:, j], method=self.method, degree=self.degree)
 
@@ -461,8 +480,8 @@ def table_from_grid(solved: dict, positions, offsets, *, stroke: float,
     return RadialTable(
         positions=positions, offsets=offsets,
         capacitance=grid(lambda res: np.asarray(res.capacitance, dtype=float)),
-        induced_charge=grid(lambda res: np.asarray(res.induced_charge, dtype=float)),
-        ball_charge=float(first.ball_charge), stroke=float(stroke),
+        induced_fraction=grid(lambda res: np.asarray(res.induced_fraction, dtype=float)),
+        stroke=float(stroke),
         max_offset=float(largest_offset),
         dofs=grid(lambda res: res.dofs, np.int64), cells=grid(lambda res: res.cells, np.int64),
         wall_time=grid(lambda res: res.wall_time),
@@ -471,13 +490,14 @@ def table_from_grid(solved: dict, positions, offsets, *, stroke: float,
         method=str(first.method), degree=int(first.degree), offset_coordinate=offset_coordinate)
 
 
-def terminal_grid(table: RadialTable, reference: str = "floating"):
-    """``(Q_SC, C_T)`` [C], [F] on the grid, shape (n_z, n_r), one cell, with
-    ``Q_SC(z, r) = Q_u0(z, r) − Q_u0(0, 0)`` (the table must contain z = 0 and r = 0)."""
-    C, q = table.capacitance, table.induced_charge
-    wiring = terminals.wiring(reference, q.shape[-1])
+def terminal_grid(table: RadialTable, reference: str, ball_charge: float):
+    """``(Q_SC, C_T)`` [C], [F] on the grid, shape (n_z, n_r), one cell, the ball carrying
+    ``ball_charge`` [C], with ``Q_SC(z, r) = Q_u0(z, r) − Q_u0(0, 0)`` (the table must
+    contain z = 0 and r = 0)."""
+    C, f = table.capacitance, table.induced_fraction
+    wiring = terminals.wiring(reference, f.shape[-1])
     c_t = wiring.terminal_capacitance(C)
-    q_u0 = wiring.terminal_charge(C, q, table.ball_charge)
+    q_u0 = wiring.terminal_charge(C, f, 1.0) * float(ball_charge)
     if table.positions[0] != 0.0 or table.offsets[0] != 0.0:
         raise SurrogateError("the (z, r) table has no point z = 0, r = 0 (the reference state)")
     return np.asarray(q_u0 - q_u0[0, 0], dtype=float), np.asarray(c_t, dtype=float)
@@ -514,9 +534,9 @@ class OffAxisCurves(Curves):
 class RadialTerminalCurves(OffAxisCurves):
     """Smooth ``Q_SC(z, r)``, ``C_T(z, r)``, ``V_OC(z, r)`` of one cell for one reference.
 
-    The interface of :class:`tengfield.surrogate.TerminalCurves` with two
-    arguments: gap ``z`` [m] and radial offset ``r`` [m] (arrays broadcast;
-    z is clipped to [0, Δh], |r| to [0, r_max]). Tensor-product splines in
+    The interface of :class:`tengfield.surrogate.TerminalCurves` (a ball of
+    ``ball_charge`` [C]) with two arguments: gap ``z`` [m] and radial offset ``r`` [m]
+    (arrays broadcast; z is clipped to [0, Δh], |r| to [0, r_max]). Tensor-product splines in
     (z, s = r²), cubic where the grid has 4 or more values (else of degree
     count − 1); the derivatives are those of the splines, and ∂/∂r = 0 at
     r = 0 exactly. Q_SC is referred to the ball on the lower plate on the axis.
@@ -524,9 +544,11 @@ class RadialTerminalCurves(OffAxisCurves):
     clipped to r_max(z), the chain rule (:func:`scaled_offset_jacobian`); see :meth:`grid_values`.
     """
 
-    def __init__(self, table: RadialTable, reference: str = "floating"):
+    def __init__(self, table: RadialTable, reference: str, ball_charge: float):
         self._axes(table, reference)
-        self.charge_grid, self.capacitance_grid = terminal_grid(table, reference)
+        self.ball_charge = float(ball_charge)
+        self.charge_grid, self.capacitance_grid = terminal_grid(table, reference,
+                                                                self.ball_charge)
         #: every tabulated value (flat), as ``TerminalCurves`` has (e.g. for C_T's range)
         self.charge_samples = self.charge_grid.ravel()
         self.capacitance_samples = self.capacitance_grid.ravel()
@@ -616,8 +638,11 @@ class AnchoredTerminalCurves(OffAxisCurves):
                              f"{curves.reference!r} (z, r)")
         if not math.isclose(axis.stroke, curves.stroke, rel_tol=1e-12):
             raise ValueError("the axisymmetric and (z, r) surrogates have different strokes")
+        if axis.ball_charge != curves.ball_charge:
+            raise ValueError(f"ball charges differ: {axis.ball_charge:g} C (axis) and "
+                             f"{curves.ball_charge:g} C (z, r)")
         self.zr, self.axis = curves, axis
-        self.reference = curves.reference
+        self.reference, self.ball_charge = curves.reference, curves.ball_charge
         self.stroke, self.max_offset = curves.stroke, curves.max_offset
         self.positions, self.offsets = curves.positions, curves.offsets
         z = curves.positions[:, None]

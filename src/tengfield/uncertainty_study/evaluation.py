@@ -2,12 +2,12 @@
 
 Samples are grouped by their dynamics-relevant inputs (every varied key except σ and
 ``[circuit]`` keys): one group runs the dynamics once and obtains
-its surrogate once (cached by the field hash, at the group's reference σ). Every
-evaluation in the group then only runs the electrical stage with the table scaled to its
-own σ (:func:`tengfield.air_breakdown.scaled_table`: every charge is linear in σ, C does not
-depend on it) and its own circuit values: σ alone is a scaling, no field solve and no new
-dynamics. Geometry keys give one field solve per distinct geometry (phase 1, farmed over
-the workers before the groups, so two workers never solve the same geometry).
+its surrogate once (cached by the field hash; per unit ball charge). Every
+evaluation in the group then only runs the electrical stage with the table's curves at its
+own σ (every charge is linear in σ, C does not depend on it) and its own circuit values:
+σ alone is a scaling, no field solve and no new dynamics. Geometry keys give one field
+solve per distinct geometry (phase 1, farmed over the workers before the groups, so two
+workers never solve the same geometry).
 
 Nothing is written: an evaluation returns the run summary's numeric quantities
 (:func:`output_quantities`) and its regime.
@@ -202,7 +202,7 @@ def _caught(caught) -> list:
 
 def _outputs(scene, dynamics, table, curves=None, charge=None) -> tuple[dict, str]:
     """The run's electrical stage and summary for ``scene`` with ``dynamics`` and
-    ``table`` (already at the scene's σ; None: no field needed), as
+    ``table`` (per unit ball charge, its curves at the scene's σ; None: no field needed), as
     :func:`tengfield.pipeline.run` computes them after its field stage; ``curves``:
     the terminal curves where they are not the table's (a contact run's), ``charge``:
     its ``charge`` block."""
@@ -210,7 +210,7 @@ def _outputs(scene, dynamics, table, curves=None, charge=None) -> tuple[dict, st
     from ..surrogate import TerminalCurves
 
     if curves is None and table is not None:
-        curves = TerminalCurves(table, scene.circuit.reference)
+        curves = TerminalCurves(table, scene.circuit.reference, scene.device.ball_charge)
     electrical.circuit_for(scene).check(scene)
     summary = electrical_stage(scene, dynamics, curves, table).summary
     if charge is not None:
@@ -224,8 +224,6 @@ def _group_task(task):
     Returns ``(rows, field hash or None, cache status, warnings)``; a row is
     ``(index, outputs, regime, above)``, ``above``: |σ| beyond the air-breakdown limit
     of its geometry (None when the table has no gap lines)."""
-    from ..air_breakdown import scaled_table
-
     scene, group, cache_dir, solve, simulate, study = task
     simulate = simulate or _default_simulate()
     rows, digest, status = [], None, "skipped"
@@ -239,7 +237,7 @@ def _group_task(task):
             dynamics = simulate(base)
             _DYNAMICS.clear()          # chunks of a group are consecutive tasks: keep one
             _DYNAMICS[memo] = dynamics
-        table, at, sigma_table, sigma_max = None, base, 0.0, None
+        table, at, sigma_max = None, base, None
         contact = base.charge.from_contacts
         charged = base.device.ball_charge != 0.0 or contact or any(
             SURFACE_CHARGE_SETTING in v for _, v in group.members)
@@ -252,7 +250,6 @@ def _group_task(task):
                 ref = solved_scene(base)
             digest = ref.field_hash()
             ref_at, table, status, sigma_max = _obtain(ref, cache_dir, solve)
-            sigma_table = ref_at.device.surface_charge
             at = ref_at if ref is base else base     # σ = "breakdown": at -σ_max
         if contact:
             for index, values in group.members:
@@ -266,12 +263,10 @@ def _group_task(task):
                     values = {**values, SURFACE_CHARGE_SETTING: band_sigma(
                         band, values[SURFACE_CHARGE_SETTING])}
                 point = at.with_values(**sections_of(values)) if values else at
-                scaled = None
-                if table is not None and point.device.ball_charge != 0.0:
-                    scaled = scaled_table(table, point.device.surface_charge / sigma_table)
+                field = table if point.device.ball_charge != 0.0 else None   # none uncharged
                 above = None if sigma_max is None or table is None or band is not None else \
                     bool(abs(point.device.surface_charge) > sigma_max)
-                rows.append((index, *_outputs(point, dynamics, scaled), above))
+                rows.append((index, *_outputs(point, dynamics, field), above))
     return rows, digest, status, _caught(caught)
 
 
