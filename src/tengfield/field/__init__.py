@@ -152,7 +152,7 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
     offset = scene.field.ball_offset
     check_position(scene, position)
     chosen = resolve_method(scene, method, offset)
-    from .cost import check_memory, solve_cost   # before any meshing (issue #40)
+    from .cost import check_memory, check_tolerance, solve_cost   # before any meshing (#40)
     try:
         estimate = solve_cost(scene, method=chosen, position=position,
                               estimate_error=overrides.get("estimate_error", True))
@@ -160,6 +160,7 @@ def solve_position(scene, position: float, *, comm, offset: float | None = None,
         estimate = None
     if estimate is not None:
         check_memory(scene, estimate)
+        check_tolerance(scene, estimate)   # a 3D tolerance out of reach (issue #55)
     from .cells import cell_of   # the cell's own solver (field/cells: CELLS)
     result = cell_of(scene).solve_scene(scene, position, comm=comm, method=chosen,
                                         offset=offset, **overrides)

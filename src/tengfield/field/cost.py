@@ -38,6 +38,10 @@ SECONDS_PER_DOF_3D = 2.5e-4
 DOFS_3D_REFERENCE = 32.5e3
 MESH_SIZE_3D_REFERENCE = 2.0e-3
 DOFS_3D_EXPONENT = 2.55
+#: the dofs of a ``[field] mesh_grading = "graded"`` 3D mesh against the uniform one of
+#: the same size (the tube, P2: 0.49 at 0.5 mm, 0.54 at 0.7 mm, 0.60 at 1.0 mm;
+#: docs/field3d.md), for the shapes that grade their 3D meshes (``grades_3d``)
+GRADED_DOFS_SHARE = 0.49
 #: the paper's tube seen from its centre [m] (the 3D fit's device size)
 BOUNDING_RADIUS_REFERENCE = 8.9e-3
 #: share of the machine's memory that ``max_memory_gb = 0`` allows
@@ -83,9 +87,14 @@ def _axisymmetric_dofs(scene, position: float, mesh_size: float, grading_size=No
 
 
 def _dofs_3d(scene, mesh_size: float, degree: int) -> float:
+    from ..scene.shapes import shape_of
+
     radius = max(float(scene.device.bounding_radius), 1e-9)
     scale = radius / BOUNDING_RADIUS_REFERENCE
     dofs = DOFS_3D_REFERENCE * (MESH_SIZE_3D_REFERENCE * scale / mesh_size) ** DOFS_3D_EXPONENT
+    if scene.field.mesh_grading == "graded" and getattr(shape_of(scene.device.shape),
+                                                         "grades_3d", False):
+        dofs *= GRADED_DOFS_SHARE
     return dofs if degree >= 2 else dofs / 7.5
 
 
@@ -129,6 +138,80 @@ def check_memory(scene, cost: SolveCost) -> None:
         f"about {cost.memory_gb:.3g} GB ({cost.dofs:.3g} dofs"
         + (f" + {cost.check_dofs:.3g} for its error estimate" if cost.check_dofs else "")
         + f"): allowed <= {limit / 1e9:.3g} GB; raise max_memory_gb or mesh_size_mm")
+
+
+def expected_error_3d(scene, dofs: float, grading: str | None = None) -> float | None:
+    """The relative error [-] a P2 3D solve of ``dofs`` dofs of this scene's shape is
+    expected to reach with ``grading`` (default ``[field] mesh_grading``): the shape's
+    measured error against dofs (``error_3d``), None where it has none or the degree is
+    not 2. Rough (one device, one position), and said so."""
+    from ..scene.shapes import shape_of
+
+    table = getattr(shape_of(scene.device.shape), "error_3d", None)
+    grading = scene.field.mesh_grading if grading is None else grading
+    if not table or grading not in table or scene.field.degree != 2 or dofs <= 0:
+        return None
+    error, reference, rate = table[grading]
+    return error * (dofs / reference) ** -rate
+
+
+def dofs_for_error_3d(scene, error: float, grading: str | None = None) -> float | None:
+    """The dofs of a P2 3D solve expected to reach the relative ``error`` (the inverse of
+    :func:`expected_error_3d`), or None."""
+    from ..scene.shapes import shape_of
+
+    table = getattr(shape_of(scene.device.shape), "error_3d", None)
+    grading = scene.field.mesh_grading if grading is None else grading
+    if not table or grading not in table or scene.field.degree != 2 or error <= 0:
+        return None
+    measured, reference, rate = table[grading]
+    return reference * (measured / error) ** (1.0 / rate)
+
+
+def _memory_of(dofs: float) -> float:
+    """The peak bytes of a 3D solve of ``dofs`` with its twice-coarser estimate mesh."""
+    check = dofs * 2.0 ** -DOFS_3D_EXPONENT
+    return BASE_MEMORY_BYTES + BYTES_PER_DOF_3D * (dofs + check)
+
+
+def tolerance_problem(scene, cost: SolveCost) -> str | None:
+    """One line when a 3D solve of ``scene`` is not expected to reach ``[field]
+    tolerance`` within ``[field] max_memory_gb`` (the shape's measured error against dofs,
+    :func:`expected_error_3d`), naming what it is expected to reach, what reaching the
+    tolerance needs and, where the other grading would fit, that; None otherwise (an
+    axisymmetric solve, a shape or degree without a measurement, a tolerance in reach)."""
+    if field_method(cost.method).dimension != 3:
+        return None
+    tolerance = float(scene.field.tolerance)
+    expected = expected_error_3d(scene, cost.dofs)
+    needed = dofs_for_error_3d(scene, tolerance)
+    if expected is None or needed is None or expected <= tolerance:
+        return None
+    limit = memory_limit_bytes(scene)
+    if _memory_of(needed) <= limit:
+        return None
+    grading = scene.field.mesh_grading
+    line = (f"[field] tolerance = {tolerance:g}: a 3D solve of this scene is expected to "
+            f"end near {expected:.2g} ({_count(cost.dofs)} dofs, mesh_grading = {grading!r}; "
+            f"the measured error against dofs, docs/field3d.md); reaching {tolerance:g} "
+            f"needs ~{_count(needed)} dofs, ~{_memory_of(needed) / 1e9:.2g} GB, more than "
+            f"[field] max_memory_gb allows ({limit / 1e9:.3g} GB)")
+    for other in ("graded", "uniform"):
+        if other == grading:
+            continue
+        need = dofs_for_error_3d(scene, tolerance, other)
+        if need is not None and _memory_of(need) <= limit:
+            line += (f"; mesh_grading = {other!r} is expected to reach it with "
+                     f"~{_count(need)} dofs, ~{_memory_of(need) / 1e9:.2g} GB")
+    return line
+
+
+def check_tolerance(scene, cost: SolveCost) -> None:
+    """Warn (one line, before the work) when :func:`tolerance_problem` has one."""
+    problem = tolerance_problem(scene, cost)
+    if problem is not None:
+        import warnings
+        warnings.warn(problem, stacklevel=2)
 
 
 def describe(cost: SolveCost, solves: int, *, what: str = "field solves",

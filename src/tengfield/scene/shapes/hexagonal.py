@@ -39,6 +39,9 @@ class Hexagonal:
     stroke_derived = False
     free_space_only = True
     offset_coordinate = "radial"
+    #: its 3D meshes follow ``[field] mesh_grading`` (the tube's rules: field/cost.py); no
+    #: measured error against dofs (``error_3d``): no tolerance check before the work
+    grades_3d = True
     #: the pair, or the lower electrode alone (the single-electrode cell, the ceiling bare)
     electrode_sets = Tube.electrode_sets
     stroke = Tube.stroke
