@@ -363,7 +363,7 @@ def test_a_3d_tolerance_out_of_reach_within_the_memory_is_said_before_the_work(m
     solve is told too; a tolerance in reach, the axisymmetric solve: nothing."""
     import warnings
 
-    from tengfield.field import geometry3d, solve_position
+    from tengfield.field import solve_position
     from tengfield.field.cost import solve_cost, tolerance_problem
 
     limit = {"max_memory_gb": 16.0}
@@ -382,11 +382,13 @@ def test_a_3d_tolerance_out_of_reach_within_the_memory_is_said_before_the_work(m
     assert tolerance_problem(loose, solve_cost(loose, method="3d")) is None
     assert tolerance_problem(default_scene(), solve_cost(default_scene())) is None
 
-    def no_meshing(*args, **kwargs):
-        raise AssertionError("meshed")
-    monkeypatch.setattr(geometry3d, "build_model", no_meshing)
+    class NoSolve:
+        def solve_scene(self, *args, **kwargs):
+            raise AssertionError("solved")
+    from tengfield.field import cells
+    monkeypatch.setattr(cells, "cell_of", lambda scene: NoSolve())
     with warnings.catch_warnings(record=True) as caught, pytest.raises(AssertionError,
-                                                                    match="meshed"):
+                                                                    match="solved"):
         warnings.simplefilter("always")
         solve_position(_three_d(**limit), 1.5e-3, comm=MPI.COMM_SELF)
-    assert [str(w.message) for w in caught] == [line]     # said before the meshing
+    assert [str(w.message) for w in caught] == [line]     # said before the cell's solve
