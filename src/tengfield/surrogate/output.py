@@ -62,15 +62,15 @@ def write_surrogate_files(table, out_dir, *, plots: bool = True,
                           ball_charge: float | None = None) -> list[Path]:
     """surrogate.h5 (the table, as ``tengfield precompute -o`` writes it: per unit ball
     charge) and, with ``plots``, surrogate.png (as ``tengfield run`` draws it: the scene's
-    cells, reference and ball charge [C] when the table knows its scene; ``ball_charge``
-    otherwise); returns the paths."""
+    cells and reference when the table knows its scene, at ``ball_charge`` [C], which
+    ``plots`` needs: :meth:`SurrogateTable.write` gives its scene's); returns the paths."""
     from ..files import writable_target
-    from .table import scene_ball_charge
 
+    if plots and ball_charge is None:   # refused before anything is written
+        raise SurrogateError("surrogate.png needs a ball charge: the table is per unit "
+                             "charge; give ball_charge [C]")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    if plots:       # refused before anything is written when no ball charge is known
-        ball_charge = scene_ball_charge(table, ball_charge)
     written = [write_table(writable_target(out / SURROGATE_FILE), table)]
     if plots:
         scene = getattr(table, "scene", None)

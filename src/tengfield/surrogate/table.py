@@ -132,7 +132,9 @@ class SurrogateTable(SolveRecord):
         surrogate.png (what ``tengfield run`` draws) to ``out_dir``; returns the paths."""
         from .output import write_surrogate_files
 
-        return write_surrogate_files(self, out_dir, plots=plots)
+        # the figure's ball charge: the scene's (refused before anything is written)
+        return write_surrogate_files(self, out_dir, plots=plots,
+                                     ball_charge=scene_ball_charge(self) if plots else None)
 
     def __post_init__(self) -> None:
         order = np.argsort(self.positions, kind="stable")
