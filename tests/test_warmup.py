@@ -49,7 +49,7 @@ def test_warmup_fills_the_cache(warm_cache):
     assert len(index_files) == len(kernels) - 1, sorted(p.name for p in index_files)
     assert len(data_files) >= len(index_files)
     for name in ("run_impact_map", "sample_segments", "run_3d", "_harvest_kernel",
-                 "sample_many", "_spline_eval"):
+                 "sample_many", "spline_terminal"):
         assert any(f".{name}-" in p.name for p in index_files), name
 
 

@@ -29,7 +29,7 @@ import time
 
 #: the modules holding ``@njit(cache=True)`` kernels
 KERNEL_MODULES = ("tengfield.dynamics._kernel", "tengfield.dynamics.motion3d._kernel",
-                  "tengfield.harvest._kernel", "tengfield.array", "tengfield._lumped_kernel",
+                  "tengfield.harvest._kernel", "tengfield._lumped_kernel",
                   "tengfield.source._kernel")
 
 _SHORT_3D = """
@@ -73,9 +73,10 @@ def _workloads() -> None:
     from .dynamics.impact import TrajectoryBundle
     cell, _ = array.cell_trajectory(scene, (0.0, 0.9, 0.0))
     TrajectoryBundle([cell, cell])(np.linspace(0.1, 0.2, 50))
+    from .source._kernel import spline_terminal
     knots = np.linspace(0.0, 3e-3, 5)
     coeffs = np.zeros((4, knots.size - 1))
-    array._spline_eval(np.zeros(3), np.zeros(3), knots, coeffs, coeffs, 3e-3)
+    spline_terminal(np.zeros(3), np.zeros(3), knots, coeffs, coeffs, 3e-3)
 
 
 def kernels() -> list:

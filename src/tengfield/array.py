@@ -428,44 +428,13 @@ def _evaluate(curves, trajectories, times):
     if curves is None:
         zero = np.zeros_like(z)
         return zero, np.full_like(z, 1e-15), zero
-    if isinstance(curves, (list, tuple)) or getattr(curves, "contact", False):
-        each = curves if isinstance(curves, (list, tuple)) else [curves] * z.shape[1]
+    if isinstance(curves, (list, tuple)):     # each cell its own source (its charge history)
         q, c, i = np.empty_like(z), np.empty_like(z), np.empty_like(z)
-        for j, cell in enumerate(each):     # each cell's own source (its charge history)
-            own = Source(cell).terminal(times, z[:, j], v[:, j])
-            q[:, j], i[:, j], c[:, j] = own["Q_sc"], own["I_sc"], own["C_T"]
+        for j, cell in enumerate(curves):
+            q[:, j:j + 1], c[:, j:j + 1], i[:, j:j + 1] = Source(cell).each_cell(
+                times, z[:, j:j + 1], v[:, j:j + 1])
         return q, c, i
-    q, c, i = _spline_eval(z.reshape(-1), v.reshape(-1), *curves.pieces(), curves.stroke)
-    return q.reshape(z.shape), c.reshape(z.shape), i.reshape(z.shape)
-
-
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover
-    def njit(*args, **kwargs):
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
-
-
-@njit(cache=True)
-def _spline_eval(z, v, knots, cq, cc, stroke):
-    """Q_SC(z), C_T(z) and (dQ_SC/dz) v of the surrogate's cubic splines (their
-    piecewise coefficients ``cq``, ``cc`` on ``knots``), z clipped to [0, stroke]:
-    one interval search for the three."""
-    n = z.size
-    q = np.empty(n)
-    c = np.empty(n)
-    i = np.empty(n)
-    last = knots.size - 2
-    for k in range(n):
-        x = min(max(z[k], 0.0), stroke)
-        j = np.searchsorted(knots, x, side="right") - 1
-        j = min(max(j, 0), last)
-        d = x - knots[j]
-        q[k] = ((cq[0, j] * d + cq[1, j]) * d + cq[2, j]) * d + cq[3, j]
-        c[k] = ((cc[0, j] * d + cc[1, j]) * d + cc[2, j]) * d + cc[3, j]
-        slope = (3.0 * cq[0, j] * d + 2.0 * cq[1, j]) * d + cq[2, j]
-        i[k] = slope * v[k]
-    return q, c, i
+    return Source(curves).each_cell(times, z, v)
 
 
 def _spread(scene, nominal, curves, trajectories, weights, t, impacts, cells=None) -> dict:

@@ -120,3 +120,23 @@ def test_a_contact_charged_source_follows_its_history(cache):
     assert np.ptp(q) > 0.0                       # the contacts charge it
     np.testing.assert_array_equal(q, out.curves.terminal.ball_charge(t))
     np.testing.assert_array_equal(source.rows()["Q_sc"], np.asarray(out.waveforms["Q_sc_C"]))
+
+
+def test_each_cell_is_the_terminal_of_one_cell_per_column(result):
+    """An [array]'s cells with their own motion: the compiled splines over every column
+    give one cell's Q_SC, C_T, I_SC as :meth:`Source.terminal` does, column by column."""
+    source = Source(result.curves, result.dynamics)
+    rows = source.rows()
+    t = source.elapsed()
+    shift = np.roll(np.arange(t.size), 137)            # a second cell, another phase
+    gap = np.column_stack([rows["gap"], rows["gap"][shift]])
+    rate = np.column_stack([rows["gap_velocity"], rows["gap_velocity"][shift]])
+    q, c, i = source.each_cell(t, gap, rate)
+    assert q.shape == c.shape == i.shape == gap.shape
+    for j in range(2):
+        one = source.terminal(t, gap[:, j], rate[:, j])
+        scale = np.max(np.abs(one["Q_sc"]))
+        np.testing.assert_allclose(q[:, j], one["Q_sc"], rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(c[:, j], one["C_T"], rtol=1e-12)
+        np.testing.assert_allclose(i[:, j], one["I_sc"], rtol=0,
+                                   atol=1e-12 * np.max(np.abs(one["I_sc"])))

@@ -129,6 +129,27 @@ class Source:
                                    radial=radial, radial_velocity=radial_velocity,
                                    times=times)
 
+    def each_cell(self, times, gap, gap_velocity) -> tuple[np.ndarray, ...]:
+        """``(Q_SC [C], C_T [F], I_SC [A])`` of ONE cell at each column of ``gap`` [m] and
+        ``gap_velocity`` [m/s] ((rows, k) arrays: k cells with their own motion, an
+        ``[array]``'s) at ``times`` [s] (rows, the run's axis). A constant charge on the
+        axis: the surrogate's cubic splines (``curves.pieces()``) in one compiled pass over
+        every cell, the same splines as :meth:`terminal`; a ball charged by its contacts:
+        its history's curves, column by column."""
+        gap = np.asarray(gap, dtype=float)
+        gap_velocity = np.asarray(gap_velocity, dtype=float)
+        if self.contact:
+            q, c, i = np.empty_like(gap), np.empty_like(gap), np.empty_like(gap)
+            for j in range(gap.shape[1]):
+                one = terminal_quantities(self.curves, gap[:, j], gap_velocity[:, j],
+                                          times=times)
+                q[:, j], c[:, j], i[:, j] = one["Q_sc"], one["C_T"], one["I_sc"]
+            return q, c, i
+        from ._kernel import spline_terminal
+        q, c, i = spline_terminal(gap.reshape(-1), gap_velocity.reshape(-1),
+                                  *self.curves.pieces(), self.curves.stroke)
+        return q.reshape(gap.shape), c.reshape(gap.shape), i.reshape(gap.shape)
+
     def state(self, times, gap) -> tuple[np.ndarray, np.ndarray]:
         """``(Q_SC [C], C_T [F])`` of all the cells at ``times`` [s] (the run's axis) and
         gaps ``gap`` [m]: at the ball's offset r(t) for (z, r) curves, with the charge
