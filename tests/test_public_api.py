@@ -339,7 +339,7 @@ def test_surrogate_table_write_is_what_precompute_and_run_write(tmp_path, run_cl
     assert [p.name for p in written] == ["surrogate.h5", "surrogate.png"]
     assert_png(written[1])
     again = read_table(written[0], expected_hash=table.scene.field_hash())
-    for name in ("positions", "capacitance", "induced_charge", "wall_time"):
+    for name in ("positions", "capacitance", "induced_fraction", "wall_time"):
         np.testing.assert_array_equal(getattr(again, name), getattr(table, name), err_msg=name)
     assert again.provenance == table.provenance
 

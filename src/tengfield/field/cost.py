@@ -211,7 +211,7 @@ def check_tolerance(scene, cost: SolveCost) -> None:
     problem = tolerance_problem(scene, cost)
     if problem is not None:
         import warnings
-        warnings.warn(problem, stacklevel=2)
+        warnings.warn(problem, stacklevel=3)     # the caller of solve_position
 
 
 def describe(cost: SolveCost, solves: int, *, what: str = "field solves",
